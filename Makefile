@@ -1,0 +1,40 @@
+# The two commands of the README: `make demo` and `make test`. Everything they need is
+# installed here, into .venv (Python packages) and by scripts/ (Debian packages).
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+
+.PHONY: demo test lint typecheck pytest bench clean
+
+demo: $(VENV)/.stamp-run
+	$(BIN)/padt demo
+
+test: $(VENV)/.stamp-dev
+	bash scripts/install-chromium.sh
+	$(MAKE) lint typecheck pytest
+
+lint: $(VENV)/.stamp-dev
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+
+typecheck: $(VENV)/.stamp-dev
+	$(BIN)/mypy
+
+pytest: $(VENV)/.stamp-dev
+	$(BIN)/pytest -m "not slow"
+
+bench: $(VENV)/.stamp-run
+	$(BIN)/python -m tests.bench
+
+$(VENV)/.stamp-run: pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install -q -e .
+	touch $@
+
+$(VENV)/.stamp-dev: pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install -q -e '.[dev]'
+	touch $@ $(VENV)/.stamp-run
+
+clean:
+	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache

@@ -1,0 +1,164 @@
+"""The whole compiler: parse -> resolve -> check -> generate -> CRC -> artifact.
+
+`compile_sources` never raises for bad input: it returns every diagnostic it found, and an
+artifact only when there is no error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from backend.compiler import ast
+from backend.compiler.ast import key
+from backend.compiler.check import check
+from backend.compiler.diagnostics import CompileError, Diagnostic, error
+from backend.compiler.generate import class_name, generate_pou
+from backend.compiler.parse import parse_source
+from backend.compiler.resolve import PouSymbols, Resolved, resolve
+from backend.compiler.source import SourceFile, stdlib_sources
+from backend.compiler.types import FbType
+from runtime.artifact import (
+    Artifact,
+    PouCode,
+    ProgramConfig,
+    ResourceConfig,
+    VarInfo,
+    canonical_json,
+    crc32_hex,
+)
+
+
+@dataclass(frozen=True)
+class CompileResult:
+    diagnostics: tuple[Diagnostic, ...]
+    artifact: Artifact | None
+
+    @property
+    def ok(self) -> bool:
+        return self.artifact is not None
+
+
+def parse_all(sources: list[SourceFile]) -> tuple[list[ast.SourceUnit], list[Diagnostic]]:
+    units: list[ast.SourceUnit] = []
+    diagnostics: list[Diagnostic] = []
+    for source in sources:
+        try:
+            units.append(parse_source(source.name, source.text))
+        except CompileError as exc:
+            diagnostics.extend(exc.diagnostics)
+    return units, diagnostics
+
+
+def compile_sources(
+    sources: list[SourceFile],
+    *,
+    project: str = "project",
+    resource: ResourceConfig | None = None,
+    programs: list[ProgramConfig] | None = None,
+    config_file: str = "padt.toml",
+) -> CompileResult:
+    resource = resource or ResourceConfig(name="Resource1")
+    units, diagnostics = parse_all(sources)
+    user_pous = {key(p.name) for unit in units for p in unit.pous}
+    stdlib_units, stdlib_diagnostics = parse_all(stdlib_sources())
+    assert not stdlib_diagnostics, stdlib_diagnostics
+    for unit in stdlib_units:  # a user POU of the same name replaces the standard one
+        kept = tuple(p for p in unit.pous if key(p.name) not in user_pous)
+        units.append(replace(unit, pous=kept))
+
+    resolved = resolve(units)
+    diagnostics.extend(resolved.diagnostics)
+    diagnostics.extend(check(resolved))
+    if programs is None:
+        programs = _default_programs(units)
+    diagnostics.extend(_check_programs(resolved, programs, config_file))
+    diagnostics.sort()
+    if any(d.severity == "error" for d in diagnostics):
+        return CompileResult(tuple(diagnostics), None)
+
+    included = _included_pous(resolved, user_pous, programs)
+    codes = {name: _pou_code(resolved, resolved.pous[name]) for name in included}
+    program_configs = tuple(replace(p, crc=_program_crc(resolved, codes, p)) for p in programs)
+    artifact = Artifact(
+        project=project,
+        resource=resource,
+        pous=tuple(codes[name] for name in sorted(codes)),
+        programs=program_configs,
+    ).with_crc()
+    return CompileResult(tuple(diagnostics), artifact)
+
+
+def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:
+    """Without a configuration every PROGRAM runs as a user program named after its POU."""
+    pous = [p for unit in units for p in unit.pous if p.kind == "PROGRAM"]
+    return [ProgramConfig(name=p.name, pou=p.name, program_id=i) for i, p in enumerate(pous, 1)]
+
+
+def _check_programs(
+    resolved: Resolved, programs: list[ProgramConfig], config_file: str
+) -> list[Diagnostic]:
+    where = ast.Pos(config_file, 1, 1)
+    diagnostics: list[Diagnostic] = []
+    seen_ids: dict[int, str] = {}
+    for program in programs:
+        pou = resolved.pous.get(key(program.pou))
+        if pou is None or pou.kind != "PROGRAM":
+            message = f"user program '{program.name}': no PROGRAM '{program.pou}'"
+            diagnostics.append(error(where, message))
+        if program.program_id in seen_ids:
+            other = seen_ids[program.program_id]
+            message = f"program ID {program.program_id} of '{program.name}' is used by '{other}'"
+            diagnostics.append(error(where, message))
+        seen_ids[program.program_id] = program.name
+    if len(programs) > 32:
+        diagnostics.append(error(where, f"{len(programs)} user programs; at most 32"))
+    return diagnostics
+
+
+def _fb_dependencies(resolved: Resolved, name: str) -> list[str]:
+    """The POU keys `name` needs, itself included, in a fixed order."""
+    seen: list[str] = []
+    stack = [name]
+    while stack:
+        current = stack.pop()
+        if current in seen:
+            continue
+        seen.append(current)
+        for variable in resolved.pous[current].variables:
+            if isinstance(variable.type, FbType):
+                stack.append(key(variable.type.name))
+    return sorted(seen)
+
+
+def _included_pous(
+    resolved: Resolved, user_pous: set[str], programs: list[ProgramConfig]
+) -> list[str]:
+    wanted = sorted(user_pous) + [key(p.pou) for p in programs]
+    included: set[str] = set()
+    for name in wanted:
+        included.update(_fb_dependencies(resolved, name))
+    return sorted(included)
+
+
+def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
+    source = generate_pou(resolved, pou)
+    variables = tuple(
+        VarInfo(
+            name=v.name,
+            attr=v.attr,
+            type=v.type.name,
+            kind=v.kind,
+            retain=v.retain,
+            constant=v.constant,
+            location=v.location,
+        )
+        for v in pou.variables
+    )
+    return PouCode(pou.name, pou.kind, class_name(pou.name), source, crc32_hex(source), variables)
+
+
+def _program_crc(resolved: Resolved, codes: dict[str, PouCode], program: ProgramConfig) -> str:
+    """CRC of a user program: its code, the code of every FB it uses, and its parameters."""
+    parts = [codes[name].source for name in _fb_dependencies(resolved, key(program.pou))]
+    params = replace(program, crc="").__dict__
+    return crc32_hex(canonical_json({"code": parts, "parameters": params}))

@@ -1,0 +1,33 @@
+"""`padt ui`: serve the browser UI for one resource reached over Zenoh."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import threading
+
+from backend.resource_client import ResourceClient
+from frontend.app import PadtUi
+from runtime.zenoh_config import open_client
+
+DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--resource", required=True, help="resource to show")
+    parser.add_argument("--zenoh", default=DEFAULT_ZENOH, metavar="ENDPOINT")
+    parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
+    parser.add_argument("--port", type=int, default=8080, help="HTTP port (next free if busy)")
+
+
+def run(args: argparse.Namespace) -> int:
+    session = open_client(args.zenoh)
+    ui = PadtUi(ResourceClient(session, args.resource), host=args.host, port=args.port)
+    print(f"PADT UI: {ui.url}", flush=True)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    stop.wait()
+    ui.close()
+    session.close()
+    return 0

@@ -1,0 +1,80 @@
+"""`padt demo`: a Zenoh router, one runtime process with the embedded demo project loaded
+and running, and the browser UI; prints the URL. Ctrl-C stops all of it."""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import signal
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+from backend.project import compile_project, demo_project_path, load_project
+from backend.resource_client import ResourceClient
+from frontend.app import PadtUi
+from runtime.main import artifact_path
+from runtime.zenoh_config import open_client, open_router
+
+_PR_SET_PDEATHSIG = 1
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--host", default="127.0.0.1", help="address the UI listens on")
+    parser.add_argument("--port", type=int, default=8080, help="HTTP port of the UI")
+    parser.add_argument("--zenoh-port", type=int, default=7447, help="port of the Zenoh router")
+    parser.add_argument(
+        "--state-dir", type=Path, default=Path("state/demo"), help="the runtime's state folder"
+    )
+
+
+def _die_with_parent() -> None:
+    """In the child: get SIGTERM when the demo process dies, so nothing is left orphaned."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
+def run(args: argparse.Namespace) -> int:
+    project = load_project([demo_project_path()])
+    result = compile_project(project)
+    if result.artifact is None:  # the embedded project always compiles; guard all the same
+        for diagnostic in result.diagnostics:
+            print(diagnostic, file=sys.stderr)
+        return 1
+    resource = result.artifact.resource.name
+    target = artifact_path(args.state_dir)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(result.artifact.to_json())
+
+    endpoint = f"tcp/127.0.0.1:{args.zenoh_port}"
+    try:
+        router = open_router(endpoint)
+    except Exception as exc:  # zenoh reports a busy port as a plain exception
+        print(f"padt demo: cannot open the Zenoh router on {endpoint}: {exc}", file=sys.stderr)
+        print("padt demo: is another demo running? try --zenoh-port", file=sys.stderr)
+        return 1
+    command = [sys.executable, "-m", "padt.cli", "runtime", "--resource", resource]
+    command += ["--state-dir", str(args.state_dir), "--zenoh", endpoint]
+    runtime = subprocess.Popen(command, preexec_fn=_die_with_parent)
+    session = open_client(endpoint)
+    ui = PadtUi(ResourceClient(session, resource), host=args.host, port=args.port)
+    print(f"padt demo: resource {resource} (CRC {result.artifact.crc})", flush=True)
+    print(f"padt demo: open {ui.url}", flush=True)
+
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    while not stop.wait(0.5):
+        if runtime.poll() is not None:
+            print(f"padt demo: the runtime ended with code {runtime.returncode}", file=sys.stderr)
+            break
+    ui.close()
+    session.close()
+    runtime.terminate()
+    try:
+        runtime.wait(timeout=5)
+    except subprocess.TimeoutExpired:
+        runtime.kill()
+    router.close()
+    return 0

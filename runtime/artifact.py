@@ -1,0 +1,129 @@
+"""The compiled artifact: the versioned contract between the compiler and the runtime.
+
+An artifact is canonical JSON (sorted keys, no spaces): the generated Python source of
+every POU, the variable tables the runtime needs for OLT and context saving, the user
+programs with their parameters, and the CRCs. `docs/artifact.md` documents the format.
+The configuration CRC is a CRC-32 over the canonical JSON of everything but the CRC
+itself, so the runtime can check that what it received is exactly what was compiled.
+"""
+
+from __future__ import annotations
+
+import json
+import zlib
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+FORMAT = "padt-artifact"
+VERSION = 1
+
+
+class ArtifactError(ValueError):
+    """The artifact is malformed, of another version, or its CRC does not match."""
+
+
+@dataclass(frozen=True)
+class VarInfo:
+    name: str  # as declared in ST
+    attr: str  # attribute name in the generated class
+    type: str  # elementary type name, or the POU name of a function block
+    kind: str  # VAR, VAR_INPUT, VAR_OUTPUT, ...
+    retain: bool = False
+    constant: bool = False
+    location: str | None = None
+
+
+@dataclass(frozen=True)
+class PouCode:
+    name: str
+    kind: str  # PROGRAM | FUNCTION_BLOCK | FUNCTION
+    class_name: str
+    source: str
+    crc: str
+    variables: tuple[VarInfo, ...]
+
+
+@dataclass(frozen=True)
+class ProgramConfig:
+    """A user program: an instance of a PROGRAM POU scheduled on the resource."""
+
+    name: str
+    pou: str
+    program_id: int
+    priority: int = 0
+    crc: str = ""
+
+
+@dataclass(frozen=True)
+class ResourceConfig:
+    name: str
+    cycle_ms: int = 100
+    autostart: str = "off"  # off | cold | warm
+
+
+@dataclass(frozen=True)
+class Artifact:
+    project: str
+    resource: ResourceConfig
+    pous: tuple[PouCode, ...]
+    programs: tuple[ProgramConfig, ...]
+    crc: str = field(default="")
+    format: str = FORMAT
+    version: int = VERSION
+
+    def pou(self, name: str) -> PouCode:
+        for pou in self.pous:
+            if pou.name.upper() == name.upper():
+                return pou
+        raise ArtifactError(f"artifact has no POU '{name}'")
+
+    def body_json(self) -> str:
+        """Canonical JSON of everything the configuration CRC covers."""
+        data = asdict(self)
+        del data["crc"]
+        return canonical_json(data)
+
+    def with_crc(self) -> Artifact:
+        return Artifact(**{**self.__dict__, "crc": crc32_hex(self.body_json())})
+
+    def to_json(self) -> str:
+        return canonical_json(asdict(self))
+
+
+def canonical_json(data: Any) -> str:
+    return json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+
+
+def crc32_hex(text: str) -> str:
+    return f"{zlib.crc32(text.encode('utf-8')):08X}"
+
+
+def load_artifact(text: str | bytes) -> Artifact:
+    """Parse and verify an artifact; raises ArtifactError on anything wrong."""
+    try:
+        data = json.loads(text)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ArtifactError(f"artifact is not valid JSON: {exc}") from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise ArtifactError("not a padt artifact")
+    if data.get("version") != VERSION:
+        raise ArtifactError(f"artifact version {data.get('version')} is not {VERSION}")
+    try:
+        artifact = Artifact(
+            project=data["project"],
+            resource=ResourceConfig(**data["resource"]),
+            pous=tuple(
+                PouCode(
+                    **{**p, "variables": tuple(VarInfo(**v) for v in p["variables"])},
+                )
+                for p in data["pous"]
+            ),
+            programs=tuple(ProgramConfig(**p) for p in data["programs"]),
+            crc=data["crc"],
+        )
+    except (KeyError, TypeError) as exc:
+        raise ArtifactError(f"artifact is incomplete: {exc}") from None
+    expected = crc32_hex(artifact.body_json())
+    if artifact.crc != expected:
+        raise ArtifactError(f"artifact CRC {artifact.crc} does not match its content ({expected})")
+    return artifact

@@ -1,0 +1,41 @@
+"""Where the runtime takes its time from: a real clock in operation, a virtual one in
+simulation, single step and tests, so that runs are reproducible to the bit."""
+
+from __future__ import annotations
+
+import time
+from typing import Protocol
+
+
+class Clock(Protocol):
+    def now_ns(self) -> int: ...
+
+    def sleep_until(self, deadline_ns: int) -> None: ...
+
+
+class RealClock:
+    """Monotonic time; immune to changes of the wall clock."""
+
+    def now_ns(self) -> int:
+        return time.monotonic_ns()
+
+    def sleep_until(self, deadline_ns: int) -> None:
+        remaining = deadline_ns - time.monotonic_ns()
+        if remaining > 0:
+            time.sleep(remaining / 1e9)
+
+
+class VirtualClock:
+    """Time that moves only when told to: exactly one cycle interval per cycle."""
+
+    def __init__(self, start_ns: int = 0) -> None:
+        self._now = start_ns
+
+    def now_ns(self) -> int:
+        return self._now
+
+    def sleep_until(self, deadline_ns: int) -> None:
+        self._now = max(self._now, deadline_ns)
+
+    def advance(self, delta_ns: int) -> None:
+        self._now += delta_ns

@@ -1,0 +1,77 @@
+"""Start real processes for tests: a Zenoh router in the test process, `padt runtime`,
+`padt demo`; stop them all afterwards."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import zenoh
+
+from backend.project import compile_project, demo_project_path, load_project
+from backend.resource_client import ResourceClient, ResourceUnreachable
+from runtime.main import artifact_path
+from runtime.zenoh_config import open_client, open_router
+from tests.conftest import REPO
+
+
+def write_demo_artifact(state_dir: Path) -> str:
+    result = compile_project(load_project([demo_project_path()]))
+    assert result.artifact is not None
+    path = artifact_path(state_dir)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(result.artifact.to_json())
+    return result.artifact.crc
+
+
+def wait_until_answering(client: ResourceClient, timeout_s: float = 30) -> None:
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            client.command("status")
+            return
+        except ResourceUnreachable:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.1)
+
+
+@contextmanager
+def router(endpoint: str) -> Iterator[zenoh.Session]:
+    session = open_router(endpoint)
+    try:
+        yield session
+    finally:
+        session.close()
+
+
+@contextmanager
+def runtime_process(
+    resource: str, state_dir: Path, endpoint: str
+) -> Iterator[subprocess.Popen[bytes]]:
+    command = [sys.executable, "-m", "padt.cli", "runtime", "--resource", resource]
+    command += ["--state-dir", str(state_dir), "--zenoh", endpoint]
+    process = subprocess.Popen(command, cwd=REPO, env=dict(os.environ))
+    try:
+        yield process
+    finally:
+        process.terminate()
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+@contextmanager
+def client_session(endpoint: str) -> Iterator[zenoh.Session]:
+    session = open_client(endpoint)
+    try:
+        yield session
+    finally:
+        session.close()

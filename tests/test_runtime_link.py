@@ -1,0 +1,108 @@
+"""A runtime process driven over real Zenoh on 127.0.0.1: commands, values, liveliness."""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import zenoh
+
+from backend.resource_client import ResourceClient
+from runtime.keyspace import alive_key, command_key
+from tests.runtime_process import (
+    client_session,
+    router,
+    runtime_process,
+    wait_until_answering,
+    write_demo_artifact,
+)
+
+
+def test_start_stop_step_over_zenoh(tmp_path: Path, zenoh_endpoint: str) -> None:
+    crc = write_demo_artifact(tmp_path)
+    with (
+        router(zenoh_endpoint),
+        runtime_process("Tank1", tmp_path, zenoh_endpoint),
+        client_session(zenoh_endpoint) as session,
+    ):
+        client = ResourceClient(session, "Tank1")
+        wait_until_answering(client)
+        status = client.command("status")["status"]
+        assert status["state"] == "RUN"  # the demo project autostarts
+        assert status["crc"] == crc
+
+        stopped = client.command("stop")["status"]
+        assert stopped["state"] == "STOP/VALID CONFIGURATION"
+        before = client.command("values")
+        time.sleep(0.3)
+        assert client.command("values") == before  # nothing runs in STOP
+
+        client.command("step")
+        after = client.command("values")
+        assert after["cycle"] == before["cycle"] + 1
+        level_before = before["values"]["TankControl.level"]
+        pump = before["values"]["TankControl.pump"]
+        expected = level_before + (8 if pump else 0) - 3
+        assert after["values"]["TankControl.level"] == expected
+
+        assert client.command("start")["status"]["state"] == "RUN"
+        time.sleep(0.35)
+        assert client.command("values")["cycle"] >= after["cycle"] + 2
+
+
+def test_bad_commands_get_structured_errors(tmp_path: Path, zenoh_endpoint: str) -> None:
+    write_demo_artifact(tmp_path)
+    with (
+        router(zenoh_endpoint),
+        runtime_process("Tank1", tmp_path, zenoh_endpoint),
+        client_session(zenoh_endpoint) as session,
+    ):
+        client = ResourceClient(session, "Tank1")
+        wait_until_answering(client)
+        assert client.command("explode")["error"]["code"] == "unknown_command"
+        assert client.command("step")["error"]["code"] == "state"  # step needs STOP
+        for payload in (b"not json", b"[1, 2]", b"x" * 100_000):
+            replies = list(session.get(command_key("Tank1"), payload=payload, timeout=5))
+            sample = replies[0].ok
+            assert sample is not None
+            reply = json.loads(sample.payload.to_bytes())
+            assert reply["ok"] is False and reply["error"]["message"]
+        assert client.command("status")["status"]["state"] == "RUN"
+
+
+def test_values_are_pushed_and_liveliness_ends_with_the_process(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    write_demo_artifact(tmp_path)
+    events: list[str] = []
+    pushed: list[dict[str, Any]] = []
+    got_values = threading.Event()
+
+    def on_value(message: dict[str, Any]) -> None:
+        pushed.append(message)
+        if len(pushed) >= 3:
+            got_values.set()
+
+    with router(zenoh_endpoint), client_session(zenoh_endpoint) as session:
+        watcher = session.liveliness().declare_subscriber(
+            alive_key("Tank1"), lambda s: events.append(str(s.kind)), history=True
+        )
+        client = ResourceClient(session, "Tank1")
+        client.on_values(on_value)
+        with runtime_process("Tank1", tmp_path, zenoh_endpoint) as process:
+            wait_until_answering(client)
+            assert got_values.wait(10)
+            process.kill()  # no orderly shutdown: the token must vanish anyway
+            process.wait()
+            deadline = time.monotonic() + 5
+            while str(zenoh.SampleKind.DELETE) not in events and time.monotonic() < deadline:
+                time.sleep(0.05)
+        watcher.undeclare()
+        client.close()
+    assert events[0] == str(zenoh.SampleKind.PUT)
+    assert str(zenoh.SampleKind.DELETE) in events
+    cycles = [m["cycle"] for m in pushed[:3]]
+    assert cycles == sorted(cycles) and "TankControl.level" in pushed[0]["values"]
