@@ -1,0 +1,13 @@
+"""`make bench`: print the benchmark figures (no assertions; machines are shared and noisy)."""
+
+from __future__ import annotations
+
+from tests.bench import bench_compiler
+
+
+def main() -> None:
+    bench_compiler.main()
+
+
+if __name__ == "__main__":
+    main()
