@@ -6,10 +6,6 @@ import argparse
 import signal
 import threading
 
-from backend.resource_client import ResourceClient
-from frontend.app import PadtUi
-from runtime.zenoh_config import open_client
-
 DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
 
 
@@ -21,6 +17,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # imported here: `padt` must start fast for commands that never open a UI
+    from backend.resource_client import ResourceClient
+    from frontend.app import PadtUi
+    from runtime.zenoh_config import open_client
+
     session = open_client(args.zenoh)
     ui = PadtUi(ResourceClient(session, args.resource), host=args.host, port=args.port)
     print(f"PADT UI: {ui.url}", flush=True)

@@ -46,6 +46,12 @@ def _compile(args: argparse.Namespace) -> int:
     return 0 if result.ok else 1
 
 
+def _exec(args: argparse.Namespace) -> int:
+    from backend.run_once import run_entry
+
+    return run_entry(args.file, args.entry)
+
+
 def _runtime(args: argparse.Namespace) -> int:
     from runtime.main import run
 
@@ -78,6 +84,13 @@ def build_parser() -> argparse.ArgumentParser:
         "-o", "--output", type=Path, help="write the compiled artifact (JSON) to this file"
     )
     compile_.set_defaults(func=_compile)
+
+    exec_ = sub.add_parser(
+        "exec", help="compile one .st file and run its FUNCTION main (or --entry) once"
+    )
+    exec_.add_argument("file", type=Path, metavar="FILE.st")
+    exec_.add_argument("--entry", default="main", help="FUNCTION or PROGRAM to run")
+    exec_.set_defaults(func=_exec)
 
     from frontend.main import add_arguments as ui_arguments
     from padt.demo import add_arguments as demo_arguments

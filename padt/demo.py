@@ -11,12 +11,6 @@ import sys
 import threading
 from pathlib import Path
 
-from backend.project import compile_project, demo_project_path, load_project
-from backend.resource_client import ResourceClient
-from frontend.app import PadtUi
-from runtime.main import artifact_path
-from runtime.zenoh_config import open_client, open_router
-
 _PR_SET_PDEATHSIG = 1
 
 
@@ -36,6 +30,12 @@ def _die_with_parent() -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from backend.project import compile_project, demo_project_path, load_project
+    from backend.resource_client import ResourceClient
+    from frontend.app import PadtUi
+    from runtime.main import artifact_path
+    from runtime.zenoh_config import open_client, open_router
+
     project = load_project([demo_project_path()])
     result = compile_project(project)
     if result.artifact is None:  # the embedded project always compiles; guard all the same

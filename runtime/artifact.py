@@ -36,7 +36,7 @@ class VarInfo:
 @dataclass(frozen=True)
 class PouCode:
     name: str
-    kind: str  # PROGRAM | FUNCTION_BLOCK | FUNCTION
+    kind: str  # PROGRAM | FUNCTION_BLOCK | FUNCTION | STRUCT | GLOBALS
     class_name: str
     source: str
     crc: str
@@ -65,8 +65,10 @@ class ResourceConfig:
 class Artifact:
     project: str
     resource: ResourceConfig
-    pous: tuple[PouCode, ...]
+    pous: tuple[PouCode, ...]  # PROGRAM, FUNCTION_BLOCK, FUNCTION
     programs: tuple[ProgramConfig, ...]
+    types: tuple[PouCode, ...] = ()  # STRUCT classes
+    globals: PouCode | None = None  # the GLOBALS class (its instance is `_G`)
     crc: str = field(default="")
     format: str = FORMAT
     version: int = VERSION
@@ -98,6 +100,10 @@ def crc32_hex(text: str) -> str:
     return f"{zlib.crc32(text.encode('utf-8')):08X}"
 
 
+def _pou_code(data: dict[str, Any]) -> PouCode:
+    return PouCode(**{**data, "variables": tuple(VarInfo(**v) for v in data["variables"])})
+
+
 def load_artifact(text: str | bytes) -> Artifact:
     """Parse and verify an artifact; raises ArtifactError on anything wrong."""
     try:
@@ -112,13 +118,10 @@ def load_artifact(text: str | bytes) -> Artifact:
         artifact = Artifact(
             project=data["project"],
             resource=ResourceConfig(**data["resource"]),
-            pous=tuple(
-                PouCode(
-                    **{**p, "variables": tuple(VarInfo(**v) for v in p["variables"])},
-                )
-                for p in data["pous"]
-            ),
+            pous=tuple(_pou_code(p) for p in data["pous"]),
             programs=tuple(ProgramConfig(**p) for p in data["programs"]),
+            types=tuple(_pou_code(p) for p in data["types"]),
+            globals=_pou_code(data["globals"]) if data["globals"] is not None else None,
             crc=data["crc"],
         )
     except (KeyError, TypeError) as exc:

@@ -3,6 +3,7 @@ plus the flat variable paths used for OLT values."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,14 +21,46 @@ class VariablePath:
 class CodeImage:
     """The loaded code of one configuration; instances are created from it."""
 
-    def __init__(self, artifact: Artifact, system: SystemView) -> None:
+    def __init__(
+        self, artifact: Artifact, system: SystemView, printf: Callable[..., int] | None = None
+    ) -> None:
         self.artifact = artifact
         self.system = system
-        self._namespace = namespace(system)
-        self._pous = {pou.name.upper(): pou for pou in artifact.pous}
-        for pou in artifact.pous:
-            code = compile(pou.source, f"<{pou.kind} {pou.name}>", "exec")
-            exec(code, self._namespace)
+        self._namespace = namespace(system) if printf is None else namespace(system, printf)
+        self._pous = {pou.name.upper(): pou for pou in (*artifact.types, *artifact.pous)}
+        # Functions come last: their default arguments may read globals, which need the
+        # classes of structs and function blocks first.
+        classes = [*artifact.types, *(p for p in artifact.pous if p.kind != "FUNCTION")]
+        for unit in classes:
+            self._run(unit)
+        self.globals: Any = None
+        if artifact.globals is not None:
+            self._run(artifact.globals)
+            self.globals = self._namespace[artifact.globals.class_name]()
+            self._namespace["_G"] = self.globals
+        for unit in artifact.pous:
+            if unit.kind == "FUNCTION":
+                self._run(unit)
+
+    def _run(self, unit: PouCode) -> None:
+        code = compile(unit.source, f"<{unit.kind} {unit.name}>", "exec")
+        exec(code, self._namespace)
+
+    def register_program(self, pou_name: str, instance: Any) -> None:
+        """Make a program instance callable from ST by its POU name (`prog();`)."""
+        class_name = self._pous[pou_name.upper()].class_name
+        programs = self._namespace["_P"]
+        if not hasattr(programs, class_name):
+            setattr(programs, class_name, instance)
+
+    def program_instance(self, pou_name: str) -> Any:
+        class_name = self._pous[pou_name.upper()].class_name
+        return getattr(self._namespace["_P"], class_name)
+
+    def function(self, pou_name: str) -> Callable[..., Any]:
+        pou = self._pous[pou_name.upper()]
+        function: Callable[..., Any] = self._namespace[pou.class_name]
+        return function
 
     def new_instance(self, pou_name: str) -> Any:
         pou = self._pous[pou_name.upper()]

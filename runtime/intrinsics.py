@@ -7,8 +7,11 @@ of the other POUs). `docs/artifact.md` lists them; changing one is a new artifac
 from __future__ import annotations
 
 import builtins
+import copy
 import math
 import struct
+import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,6 +23,11 @@ class ProgramFault(Exception):
 class DivisionByZero(ProgramFault):
     def __init__(self) -> None:
         super().__init__("integer division by zero")
+
+
+class IndexOutOfRange(ProgramFault):
+    def __init__(self, index: int, low: int, high: int) -> None:
+        super().__init__(f"array index {index} outside {low}..{high}")
 
 
 @dataclass
@@ -76,7 +84,215 @@ def _f32(value: float) -> float:
         return math.copysign(math.inf, value)
 
 
-def namespace(system: SystemView) -> dict[str, Any]:
+def _ix(index: int, low: int, high: int) -> int:
+    """The list offset of an array index, or a program fault outside the bounds."""
+    if low <= index <= high:
+        return index - low
+    raise IndexOutOfRange(index, low, high)
+
+
+def _setbits(value: int, shift: int, width: int, part: int) -> int:
+    """`x.3 := TRUE`, `x.%B1 := 16#FF`: replace `width` bits at `shift` (two's complement
+    kept: the result has the sign of the original when the top bit is not touched)."""
+    mask = ((1 << width) - 1) << shift
+    return (value & ~mask) | ((int(part) << shift) & mask)
+
+
+def _init(target: Any, values: dict[str, Any]) -> Any:
+    """Apply a structure initializer `(a := 1, b := 2)` to a fresh object."""
+    for name, value in values.items():
+        setattr(target, name, value)
+    return target
+
+
+def _round(value: float) -> int:
+    """REAL to integer: to the nearest, halves away from zero (as IEC PLCs do)."""
+    if math.isnan(value) or math.isinf(value):
+        return 0
+    return math.floor(abs(value) + 0.5) * (1 if value >= 0 else -1)
+
+
+def _rol(value: int, n: int, bits: int) -> int:
+    n %= bits
+    return ((value << n) | (value >> (bits - n))) & ((1 << bits) - 1)
+
+
+def _ror(value: int, n: int, bits: int) -> int:
+    n %= bits
+    return ((value >> n) | (value << (bits - n))) & ((1 << bits) - 1)
+
+
+def _mux(k: int, *inputs: Any) -> Any:
+    if not 0 <= k < len(inputs):
+        raise IndexOutOfRange(k, 0, len(inputs) - 1)
+    return inputs[k]
+
+
+def _str_to_int(text: str) -> int:
+    cleaned = text.strip().replace("_", "")
+    try:
+        if "#" in cleaned:
+            base, _, digits = cleaned.partition("#")
+            return int(digits, int(base))
+        return int(float(cleaned)) if "." in cleaned or "e" in cleaned.lower() else int(cleaned)
+    except ValueError:
+        return 0
+
+
+def _str_to_real(text: str) -> float:
+    try:
+        return float(text.strip().replace("_", ""))
+    except ValueError:
+        return 0.0
+
+
+def _str_to_bool(text: str) -> bool:
+    return text.strip().upper() in ("TRUE", "1")
+
+
+def _real_to_str(value: float) -> str:
+    return repr(value)
+
+
+_TIME_UNITS = (
+    ("d", 86_400_000_000_000), ("h", 3_600_000_000_000), ("m", 60_000_000_000),
+    ("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000), ("ns", 1),
+)  # fmt: skip
+
+
+def _time_to_str(ns: int, prefix: str = "T#") -> str:
+    """TIME_TO_STRING: `T#1h2m3s4ms`, the largest units first, zero parts left out."""
+    if ns == 0:
+        return f"{prefix}0s"
+    sign, rest = ("-", -ns) if ns < 0 else ("", ns)
+    parts = []
+    for unit, size in _TIME_UNITS:
+        count, rest = divmod(rest, size)
+        if count:
+            parts.append(f"{count}{unit}")
+    return f"{prefix}{sign}{''.join(parts)}"
+
+
+def _date_to_str(ns: int, kind: str) -> str:
+    """DATE/TOD/DT to STRING: `D#2024-01-15`, `TOD#12:30:05`, `DT#2024-01-15-12:30:05`
+    (L-forms with their own prefixes)."""
+    import datetime
+
+    prefix = {"DATE": "D#", "LDATE": "LDATE#", "TOD": "TOD#", "LTOD": "LTOD#", "DT": "DT#"}.get(
+        kind, f"{kind}#"
+    )
+    moment = datetime.datetime(1970, 1, 1) + datetime.timedelta(microseconds=ns // 1000)
+    fraction = ns % 1_000_000_000
+    clock = moment.strftime("%H:%M:%S")
+    if fraction:
+        clock += f".{fraction:09d}".rstrip("0")
+    if kind in ("DATE", "LDATE"):
+        return f"{prefix}{moment.strftime('%Y-%m-%d')}"
+    if kind in ("TOD", "LTOD"):
+        return f"{prefix}{clock}"
+    return f"{prefix}{moment.strftime('%Y-%m-%d')}-{clock}"
+
+
+def _str_to_time(text: str) -> int:
+    """STRING_TO_TIME: an IEC duration literal (`T#1s`, `LTIME#5ns`) to nanoseconds."""
+    import re
+
+    units = {"d": 86_400_000_000_000, "h": 3_600_000_000_000, "m": 60_000_000_000,
+             "s": 1_000_000_000, "ms": 1_000_000, "us": 1_000, "ns": 1}  # fmt: skip
+    body = text.strip().partition("#")[2] or text.strip()
+    negative = body.startswith("-")
+    total = 0
+    for number, unit in re.findall(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(d|h|ms|m|s|us|ns)", body.lower()):
+        total += round(float(number.replace("_", "")) * units[unit])
+    return -total if negative else total
+
+
+# String functions: positions count from 1, as in IEC 61131-3. Out-of-range lengths are
+# clamped; an invalid position leaves the input unchanged (MID gives ''), as CODESYS does.
+def _left(text: str, n: int) -> str:
+    return text[: max(n, 0)]
+
+
+def _right(text: str, n: int) -> str:
+    return text[len(text) - n :] if n > 0 else ""
+
+
+def _mid(text: str, n: int, p: int) -> str:
+    if not 1 <= p <= len(text):
+        return ""
+    return text[p - 1 : p - 1 + max(n, 0)]
+
+
+def _insert(text: str, other: str, p: int) -> str:
+    if not 0 <= p <= len(text):
+        return text
+    return text[:p] + other + text[p:]
+
+
+def _delete(text: str, n: int, p: int) -> str:
+    if not 1 <= p <= len(text):
+        return text
+    return text[: p - 1] + text[p - 1 + max(n, 0) :]
+
+
+def _replace(text: str, other: str, n: int, p: int) -> str:
+    if not 1 <= p <= len(text):
+        return text
+    return text[: p - 1] + other + text[p - 1 + max(n, 0) :]
+
+
+def _find(text: str, other: str) -> int:
+    return text.find(other) + 1
+
+
+def _safe_math(function: Callable[[float], float], value: float) -> float:
+    try:
+        return function(value)
+    except (ValueError, OverflowError):
+        return math.nan
+
+
+def to_bytes(text: str) -> bytes:
+    """The bytes of a STRING value (one character per byte); characters beyond a byte can
+    only come from a WSTRING and are written as UTF-8."""
+    try:
+        return text.encode("latin-1")
+    except UnicodeEncodeError:
+        return b"".join(
+            ch.encode("latin-1") if ord(ch) < 256 else ch.encode("utf-8", "replace") for ch in text
+        )
+
+
+def _w2s(text: str) -> str:
+    """WSTRING (UTF-16 code units) to STRING (UTF-8 bytes); unpaired surrogates become
+    U+FFFD."""
+    units = b"".join(ord(ch).to_bytes(2, "little") for ch in text if ord(ch) < 0x10000)
+    return units.decode("utf-16-le", "replace").encode("utf-8").decode("latin-1")
+
+
+def _s2w(text: str) -> str:
+    """STRING (UTF-8 bytes) to WSTRING (UTF-16 code units)."""
+    decoded = to_bytes(text).decode("utf-8", "replace").encode("utf-16-le", "surrogatepass")
+    return "".join(
+        chr(int.from_bytes(decoded[i : i + 2], "little")) for i in range(0, len(decoded), 2)
+    )
+
+
+def _stdout_printf(fmt: str, *args: Any) -> int:
+    from runtime.printf import format_printf
+
+    data = to_bytes(format_printf(fmt, args))
+    sys.stdout.flush()
+    sys.stdout.buffer.write(data)
+    sys.stdout.buffer.flush()
+    return len(data)
+
+
+class Namespace:
+    """A plain attribute holder (`_P`: program instances by class name)."""
+
+
+def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -> dict[str, Any]:
     """A fresh global namespace for one resource's generated code."""
     return {
         # only what generated classes need: user code cannot reach open(), import, ...
@@ -85,6 +301,11 @@ def namespace(system: SystemView) -> dict[str, Any]:
             "float": float,
             "int": int,
             "abs": abs,
+            "len": len,
+            "max": max,
+            "min": min,
+            "range": range,
+            "str": str,
         },
         "__name__": "padt_generated",
         "_SYS": system,
@@ -94,4 +315,33 @@ def namespace(system: SystemView) -> dict[str, Any]:
         "_tdiv": _tdiv,
         "_pow": _pow,
         "_f32": _f32,
+        "_ix": _ix,
+        "_setbits": _setbits,
+        "_copy": copy.deepcopy,
+        "_init": _init,
+        "_round": _round,
+        "_rol": _rol,
+        "_ror": _ror,
+        "_mux": _mux,
+        "_str_to_int": _str_to_int,
+        "_str_to_real": _str_to_real,
+        "_str_to_bool": _str_to_bool,
+        "_real_to_str": _real_to_str,
+        "_time_to_str": _time_to_str,
+        "_date_to_str": _date_to_str,
+        "_str_to_time": _str_to_time,
+        "_w2s": _w2s,
+        "_ord": lambda ch: ord(ch[0]) if ch else 0,
+        "_s2w": _s2w,
+        "_left": _left,
+        "_right": _right,
+        "_mid": _mid,
+        "_insert": _insert,
+        "_delete": _delete,
+        "_replace": _replace,
+        "_find": _find,
+        "_math": math,
+        "_safe_math": _safe_math,
+        "_printf": printf,
+        "_P": Namespace(),
     }

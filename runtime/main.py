@@ -11,11 +11,8 @@ from pathlib import Path
 
 from runtime.artifact import ArtifactError, load_artifact
 from runtime.clock import RealClock
-from runtime.cycle_driver import CycleDriver
 from runtime.keyspace import valid_resource_name
-from runtime.link import ResourceLink
 from runtime.resource import Resource
-from runtime.zenoh_config import open_client
 
 DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
 log = logging.getLogger("padt.runtime")
@@ -57,6 +54,10 @@ def run(args: argparse.Namespace) -> int:
             log.error("stored configuration refused: %s", exc)
     if resource.artifact is not None and resource.artifact.resource.autostart != "off":
         resource.start()
+
+    from runtime.cycle_driver import CycleDriver
+    from runtime.link import ResourceLink
+    from runtime.zenoh_config import open_client
 
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):

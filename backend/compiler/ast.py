@@ -41,7 +41,40 @@ class StringType:
     pos: Pos
 
 
-TypeRef = NamedType | StringType
+@dataclass(frozen=True)
+class ArrayType:
+    ranges: tuple[tuple[Expr, Expr] | None, ...]  # None: an open range `*`
+    element: TypeRef
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class VariadicType:
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class EnumSpec:
+    base: str | None
+    values: tuple[tuple[str, Expr | None, Pos], ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class StructSpec:
+    members: tuple[VarDecl, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class SubrangeSpec:
+    base: str
+    low: Expr
+    high: Expr
+    pos: Pos
+
+
+TypeRef = NamedType | StringType | ArrayType | VariadicType | EnumSpec | StructSpec | SubrangeSpec
 
 
 # ---- expressions -------------------------------------------------------------------------
@@ -51,6 +84,8 @@ TypeRef = NamedType | StringType
 class IntLiteral:
     value: int
     pos: Pos
+    type_name: str | None = None  # `INT#5`
+    based: bool = False  # 16#FFFF: a bit pattern, which may stand for a negative value
 
 
 @dataclass(frozen=True)
@@ -58,23 +93,34 @@ class RealLiteral:
     value: float
     text: str
     pos: Pos
+    type_name: str | None = None
 
 
 @dataclass(frozen=True)
 class BoolLiteral:
     value: bool
     pos: Pos
+    type_name: str | None = None
 
 
 @dataclass(frozen=True)
 class TimeLiteral:
     nanoseconds: int
-    long: bool
+    type_name: str  # TIME, LTIME, DATE, TIME_OF_DAY, DATE_AND_TIME (and L-forms)
     pos: Pos
 
 
 @dataclass(frozen=True)
 class StringLiteral:
+    value: str
+    wide: bool
+    pos: Pos
+    type_name: str | None = None
+
+
+@dataclass(frozen=True)
+class EnumLiteral:
+    type_name: str
     value: str
     pos: Pos
 
@@ -89,6 +135,29 @@ class NameRef:
 class MemberRef:
     base: Expr
     member: str
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class IndexRef:
+    base: Expr
+    indices: tuple[Expr, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class BitRef:
+    """`x.3` or `x.%X3` (a bit), `x.%B1` / `%W` / `%D` (a byte, word, double word)."""
+
+    base: Expr
+    bit: int  # index of the part, counted in parts of `width` bits
+    pos: Pos
+    width: int = 1
+
+
+@dataclass(frozen=True)
+class Deref:
+    base: Expr
     pos: Pos
 
 
@@ -110,9 +179,10 @@ class Binary:
 @dataclass(frozen=True)
 class Argument:
     name: str | None  # None for a positional argument
-    value: Expr
+    value: Expr | None  # None only for an unconnected output `Q =>`
     is_output: bool  # `name => variable`
     pos: Pos
+    negated: bool = False  # `NOT Q => variable`
 
 
 @dataclass(frozen=True)
@@ -120,10 +190,24 @@ class Call:
     name: str
     args: tuple[Argument, ...]
     pos: Pos
+    receiver: Expr | None = None  # `instance.method(...)`
 
 
-Literal = IntLiteral | RealLiteral | BoolLiteral | TimeLiteral | StringLiteral
-Expr = Literal | NameRef | MemberRef | Unary | Binary | Call
+@dataclass(frozen=True)
+class ArrayInit:
+    items: tuple[tuple[Expr | None, Initializer], ...]  # (repeat count, value)
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class StructInit:
+    members: tuple[tuple[str, Initializer], ...]
+    pos: Pos
+
+
+Literal = IntLiteral | RealLiteral | BoolLiteral | TimeLiteral | StringLiteral | EnumLiteral
+Expr = Literal | NameRef | MemberRef | IndexRef | BitRef | Deref | Unary | Binary | Call
+Initializer = Expr | ArrayInit | StructInit
 
 
 # ---- statements --------------------------------------------------------------------------
@@ -132,7 +216,7 @@ Expr = Literal | NameRef | MemberRef | Unary | Binary | Call
 @dataclass(frozen=True)
 class Assign:
     target: Expr
-    value: Expr
+    value: Initializer
     pos: Pos
 
 
@@ -174,7 +258,27 @@ class For:
 
 
 @dataclass(frozen=True)
+class CaseRange:
+    low: Expr
+    high: Expr
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class Case:
+    selector: Expr
+    branches: tuple[tuple[tuple[Expr | CaseRange, ...], tuple[Statement, ...]], ...]
+    orelse: tuple[Statement, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
 class Exit:
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class Continue:
     pos: Pos
 
 
@@ -183,7 +287,7 @@ class Return:
     pos: Pos
 
 
-Statement = Assign | CallStatement | If | While | Repeat | For | Exit | Return
+Statement = Assign | CallStatement | If | Case | While | Repeat | For | Exit | Continue | Return
 
 
 # ---- declarations and POUs -----------------------------------------------------------------
@@ -193,7 +297,7 @@ Statement = Assign | CallStatement | If | While | Repeat | For | Exit | Return
 class VarDecl:
     name: str
     type: TypeRef
-    init: Expr | None
+    init: Initializer | None
     location: str | None
     pos: Pos
 
@@ -217,9 +321,18 @@ class Pou:
 
 
 @dataclass(frozen=True)
+class TypeDecl:
+    name: str
+    spec: TypeRef
+    init: Initializer | None
+    pos: Pos
+
+
+@dataclass(frozen=True)
 class SourceUnit:
     """One parsed source file."""
 
     file: str
     pous: tuple[Pou, ...]
     globals: tuple[VarBlock, ...] = field(default=())
+    types: tuple[TypeDecl, ...] = field(default=())

@@ -8,35 +8,104 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.diagnostics import Diagnostic
-from backend.compiler.infer import Scope
+from backend.compiler.infer import EnumValue, ProgramRef, Scope, is_external
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
-from backend.compiler.types import BOOL, ElementaryType, FbType, Type, assignable
+from backend.compiler.types import (
+    BOOL,
+    ArrayType,
+    ElementaryType,
+    EnumType,
+    FbType,
+    StructType,
+    Type,
+    assignable,
+    integer_like,
+)
 
-WRITABLE_MEMBER_KINDS = ("VAR_INPUT", "VAR_IN_OUT")
+WRITABLE_MEMBER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "MEMBER")
 
 
 def check(resolved: Resolved) -> list[Diagnostic]:
     diagnostics: list[Diagnostic] = []
+    if resolved.pous:
+        any_pou = resolved.sorted_pous()[0]
+        global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}))
+        for variable in resolved.globals:
+            check_initializer(global_scope, variable.type, variable.init)
+        diagnostics.extend(global_scope.diagnostics)
     for pou in resolved.sorted_pous():
+        if is_external(pou):
+            continue
         scope = Scope(resolved, pou)
-        _check_declarations(scope, pou)
+        for variable in pou.variables:
+            if variable.kind != "VAR_GLOBAL":
+                check_initializer(scope, variable.type, variable.init)
         _check_block(scope, pou.pou.body, loop_depth=0)
         diagnostics.extend(scope.diagnostics)
     return diagnostics
 
 
-def _check_declarations(scope: Scope, pou: PouSymbols) -> None:
-    for variable in pou.variables:
-        if variable.init is None:
-            continue
-        init_type = scope.type_of(variable.init)
-        if init_type is not None and not assignable(variable.type, init_type):
-            scope.report(variable.init.pos, _mismatch(variable.type, init_type))
-        elif isinstance(init_type, ElementaryType) and isinstance(variable.init, ast.IntLiteral):
-            _check_range(scope, variable.type, variable.init)
-    if pou.kind == "FUNCTION":
-        # The thin path compiles PROGRAMs and FUNCTION_BLOCKs; functions follow in full ST.
-        scope.report(pou.pou.pos, f"FUNCTION '{pou.name}' is not supported yet")
+def check_initializer(scope: Scope, target: Type, init: ast.Initializer | None) -> None:
+    if init is None:
+        return
+    if isinstance(init, ast.ArrayInit):
+        if not isinstance(target, ArrayType):
+            scope.report(init.pos, f"an array initializer cannot initialise {target.name}")
+            return
+        count = 0
+        for repeat, value in init.items:
+            times = 1
+            if repeat is not None:
+                if not isinstance(repeat, ast.IntLiteral):
+                    scope.report(repeat.pos, "repetition count must be an integer literal")
+                else:
+                    times = repeat.value
+            element_target: Type = target.element
+            if isinstance(value, ast.ArrayInit) and not isinstance(target.element, ArrayType):
+                for _, inner in value.items:  # a repeated group `n(a, b)`
+                    check_initializer(scope, element_target, inner)
+                count += times * len(value.items)
+                continue
+            check_initializer(scope, element_target, value)
+            count += times
+        if count > target.size:
+            scope.report(init.pos, f"{count} initial values for {target.size} elements")
+        return
+    if isinstance(init, ast.StructInit):
+        if not isinstance(target, StructType | FbType):
+            scope.report(init.pos, f"a structure initializer cannot initialise {target.name}")
+            return
+        members = (
+            scope.struct(target).by_key
+            if isinstance(target, StructType)
+            else scope.fb_symbols(target).by_key
+        )
+        for name, value in init.members:
+            member = members.get(key(name))
+            if member is None:
+                scope.report(init.pos, f"'{target.name}' has no member '{name}'")
+                continue
+            check_initializer(scope, member.type, value)
+        return
+    _check_value(scope, target, init)
+
+
+def _check_value(scope: Scope, target: Type, value: ast.Expr) -> None:
+    value_type = scope.type_of(value)
+    if value_type is None:
+        return
+    if not assignable(target, value_type):
+        scope.report(value.pos, _mismatch(target, value_type))
+    elif isinstance(value, ast.IntLiteral) and value.type_name is None:
+        _check_range(scope, target, value)
+
+
+def literal_fits(target: ElementaryType, literal: ast.IntLiteral) -> bool:
+    """A decimal literal must lie in the range; a based one (16#FFFF) is a bit pattern and
+    only has to fit the width."""
+    if literal.based and 0 <= literal.value < 1 << target.bits:
+        return True
+    return target.min <= literal.value <= target.max
 
 
 def _check_block(scope: Scope, body: tuple[ast.Statement, ...], loop_depth: int) -> None:
@@ -48,12 +117,10 @@ def _check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) ->
     match statement:
         case ast.Assign(target=target, value=value):
             target_type = _writable_target(scope, target)
-            value_type = scope.type_of(value)
-            if target_type is not None and value_type is not None:
-                if not assignable(target_type, value_type):
-                    scope.report(value.pos, _mismatch(target_type, value_type))
-                elif isinstance(value, ast.IntLiteral):
-                    _check_range(scope, target_type, value)
+            if target_type is not None:
+                check_initializer(scope, target_type, value)
+            elif not isinstance(value, ast.ArrayInit | ast.StructInit):
+                scope.type_of(value)
         case ast.CallStatement(call=call):
             _check_call_statement(scope, call)
         case ast.If(branches=branches, orelse=orelse):
@@ -61,6 +128,8 @@ def _check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) ->
                 _check_condition(scope, condition)
                 _check_block(scope, block, loop_depth)
             _check_block(scope, orelse, loop_depth)
+        case ast.Case():
+            _check_case(scope, statement, loop_depth)
         case ast.While(condition=condition, body=block):
             _check_condition(scope, condition)
             _check_block(scope, block, loop_depth + 1)
@@ -69,18 +138,49 @@ def _check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) ->
             _check_condition(scope, until)
         case ast.For():
             _check_for(scope, statement, loop_depth)
-        case ast.Exit(pos=pos):
+        case ast.Exit(pos=pos) | ast.Continue(pos=pos):
             if loop_depth == 0:
-                scope.report(pos, "EXIT outside of a loop")
+                word = "EXIT" if isinstance(statement, ast.Exit) else "CONTINUE"
+                scope.report(pos, f"{word} outside of a loop")
         case ast.Return():
             pass
 
 
+def _check_case(scope: Scope, case: ast.Case, loop_depth: int) -> None:
+    selector = scope.type_of(case.selector)
+    if selector is not None and integer_like(selector) is None:
+        scope.report(
+            case.selector.pos, f"CASE selector must be an integer or enum, not {selector.name}"
+        )
+    seen: dict[int, ast.Pos] = {}
+    for labels, body in case.branches:
+        for label in labels:
+            bounds = (label.low, label.high) if isinstance(label, ast.CaseRange) else (label, label)
+            values = [_case_label_value(scope, bound) for bound in bounds]
+            if values[0] is None or values[1] is None:
+                continue
+            for value in range(values[0], values[1] + 1) if values[1] - values[0] < 4096 else ():
+                if value in seen:
+                    scope.report(label.pos, f"CASE label {value} already used at {seen[value]}")
+                    break
+                seen[value] = label.pos
+        _check_block(scope, body, loop_depth)
+    _check_block(scope, case.orelse, loop_depth)
+
+
+def _case_label_value(scope: Scope, label: ast.Expr) -> int | None:
+    label_type = scope.type_of(label)
+    if label_type is None:
+        return None
+    if integer_like(label_type) is None:
+        scope.report(label.pos, f"CASE label must be an integer or enum, not {label_type.name}")
+        return None
+    return scope.constant_int(label)
+
+
 def _check_for(scope: Scope, loop: ast.For, loop_depth: int) -> None:
     counter = _writable_target(scope, ast.NameRef(loop.variable, loop.pos))
-    if counter is not None and not (
-        isinstance(counter, ElementaryType) and counter.category == "int"
-    ):
+    if counter is not None and not (isinstance(counter, ElementaryType) and counter.is_integer):
         scope.report(loop.pos, f"FOR counter '{loop.variable}' must be an integer")
     for bound in (loop.start, loop.stop, loop.step):
         if bound is None:
@@ -100,63 +200,84 @@ def _check_condition(scope: Scope, condition: ast.Expr) -> None:
 def _writable_target(scope: Scope, target: ast.Expr) -> Type | None:
     """Type of an assignment target, reporting anything that may not be written."""
     if isinstance(target, ast.NameRef):
-        variable = scope.variable(target.name)
-        if variable is None:
+        binding = scope.lookup(target.name)
+        if binding is None:
             scope.report(target.pos, f"'{target.name}' is not declared")
             return None
-        _check_own_variable_writable(scope, variable, target.pos)
-        return variable.type
+        if isinstance(binding, EnumValue | ProgramRef):
+            scope.report(target.pos, f"cannot assign to '{target.name}'")
+            return None
+        if binding.constant:
+            scope.report(target.pos, f"cannot assign to constant '{binding.name}'")
+        elif binding.kind == "VAR_INPUT" and scope.pou.kind != "FUNCTION":
+            scope.report(target.pos, f"cannot assign to input '{binding.name}'")
+        return binding.type
     if isinstance(target, ast.MemberRef):
+        base_type = scope.type_of(target.base)
         member = scope.member(target)
         if member is None:
             return None
-        if member.kind not in WRITABLE_MEMBER_KINDS:
-            scope.report(target.pos, f"output '{target.member}' cannot be written from outside")
+        if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS:
+            scope.report(
+                target.pos,
+                f"'{target.member}' of '{base_type.name}' cannot be written from outside",
+            )
+        if isinstance(base_type, StructType) and not _is_lvalue(target.base):
+            scope.report(target.pos, "cannot assign to a member of a value")
         return member.type
+    if isinstance(target, ast.IndexRef | ast.BitRef):
+        if isinstance(target.base, ast.NameRef | ast.MemberRef | ast.IndexRef | ast.BitRef):
+            _writable_target(scope, target.base)
+        return scope.type_of(target)
     scope.report(target.pos, "cannot assign to an expression")
     return None
 
 
-def _check_own_variable_writable(scope: Scope, variable: Variable, pos: ast.Pos) -> None:
-    if variable.constant:
-        scope.report(pos, f"cannot assign to constant '{variable.name}'")
-    elif variable.kind == "VAR_INPUT":
-        scope.report(pos, f"cannot assign to input '{variable.name}'")
+def _is_lvalue(expr: ast.Expr) -> bool:
+    return isinstance(expr, ast.NameRef | ast.MemberRef | ast.IndexRef)
 
 
 def _check_call_statement(scope: Scope, call: ast.Call) -> None:
-    instance = scope.variable(call.name)
-    if instance is None or not isinstance(instance.type, FbType):
-        scope.type_of(call)  # a function called as a statement: type it for its diagnostics
+    binding = scope.lookup(call.name) if call.receiver is None else None
+    if isinstance(binding, ProgramRef):
+        callee = binding.pou
+    elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
+        callee = scope.fb_symbols(binding.type)
+    else:
+        scope.type_of(call)  # a function called as a statement
         return
-    fb = scope.fb_symbols(instance.type)
-    for arg in call.args:
-        if arg.name is None:
-            scope.report(arg.pos, "function block arguments must be named (NAME := value)")
-            scope.type_of(arg.value)
+    for arg, param in scope.connect_arguments(callee, call):
+        if param is None:
+            if arg.value is not None:
+                scope.type_of(arg.value)
             continue
-        param = fb.by_key.get(key(arg.name))
-        wanted = ("VAR_OUTPUT",) if arg.is_output else WRITABLE_MEMBER_KINDS
-        if param is None or param.kind not in wanted:
-            role = "output" if arg.is_output else "input"
-            scope.report(arg.pos, f"'{fb.name}' has no {role} '{arg.name}'")
-            scope.type_of(arg.value)
+        if arg.is_output and param.kind == "VAR_INPUT":
+            scope.report(arg.pos, f"'{param.name}' of '{callee.name}' is an input, not an output")
             continue
-        if arg.is_output:
-            target_type = _writable_target(scope, arg.value)
-            if target_type is not None and not assignable(target_type, param.type):
-                scope.report(arg.value.pos, _mismatch(target_type, param.type))
-        else:
-            value_type = scope.type_of(arg.value)
-            if value_type is not None and not assignable(param.type, value_type):
-                scope.report(arg.value.pos, _mismatch(param.type, value_type))
+        _check_fb_argument(scope, callee, arg, param)
+
+
+def _check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Variable) -> None:
+    if arg.value is None:
+        return
+    if arg.is_output or param.kind == "VAR_OUTPUT":
+        target_type = _writable_target(scope, arg.value)
+        if target_type is not None and not assignable(target_type, param.type):
+            scope.report(arg.value.pos, _mismatch(target_type, param.type))
+        return
+    if param.kind == "VAR_IN_OUT" and not _is_lvalue(arg.value):
+        scope.report(arg.value.pos, f"in-out '{param.name}' needs a variable")
+    value_type = scope.type_of(arg.value)
+    if value_type is not None and not assignable(param.type, value_type):
+        scope.report(arg.value.pos, _mismatch(param.type, value_type))
 
 
 def _check_range(scope: Scope, target: Type, literal: ast.IntLiteral) -> None:
-    if not (isinstance(target, ElementaryType) and target.is_integer):
+    integer = target.base if isinstance(target, EnumType) else target
+    if not (isinstance(integer, ElementaryType) and integer.is_integer):
         return
-    if not target.min <= literal.value <= target.max:
-        scope.report(literal.pos, f"{literal.value} is out of range for {target.name}")
+    if not literal_fits(integer, literal):
+        scope.report(literal.pos, f"{literal.value} is out of range for {integer.name}")
 
 
 def _mismatch(target: Type, source: Type) -> str:

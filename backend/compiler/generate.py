@@ -1,58 +1,70 @@
-"""Stage 4, generate: one Python class (PROGRAM, FUNCTION_BLOCK) or function per POU.
+"""Stage 4, generate: Python source for every POU and user data type.
 
-The generated source is the compiled code: the runtime executes it with the intrinsics
-of `runtime.intrinsics` in scope, and the CRCs are taken over it. Integers are wrapped
-to their width only where the result is consumed (a store, a comparison, a division,
-an argument), never after each + - *, since wrapping commutes with those.
+PROGRAMs and FUNCTION_BLOCKs become classes (`POU_<NAME>`: variables as slots, `__call__`
+runs one cycle or call); FUNCTIONs become plain functions (`FN_<NAME>`) whose variables are
+Python locals; STRUCTs become small classes (`STRUCT_<NAME>`). Globals live on `_G`, program
+instances on `_P`. Integers are wrapped to their width only where a value is consumed (a
+store, a comparison, a division, an argument), never after each + - *, since wrapping
+commutes with those.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
-from backend.compiler import ast
+from backend.compiler import ast, builtins
 from backend.compiler.ast import key
-from backend.compiler.infer import Scope
-from backend.compiler.resolve import PouSymbols, Resolved, Variable
+from backend.compiler.builtins import convert_code, wrap_code
+from backend.compiler.infer import EnumValue, ProgramRef, Scope, is_external
+from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
     BOOL,
+    ArrayType,
     ElementaryType,
+    EnumType,
     FbType,
+    StructType,
     Type,
+    VariadicType,
+    integer_like,
 )
 
 INDENT = "    "
 _COMPARE = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
+LOCAL_KINDS = ("VAR_TEMP",)
+
+
+def _ident(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_]", "_", key(name))
 
 
 def class_name(pou_name: str) -> str:
-    return f"POU_{key(pou_name)}"
+    return f"POU_{_ident(pou_name)}"
 
 
-def default_value(var_type: Type) -> str:
-    if isinstance(var_type, FbType):
-        return f"{class_name(var_type.name)}()"
-    match var_type.category:
-        case "bool":
-            return "False"
-        case "real":
-            return "0.0"
-        case "string":
-            return "''"
-    return "0"
+def function_name(pou_name: str) -> str:
+    return f"FN_{_ident(pou_name)}"
 
 
-def wrap(code: str, var_type: ElementaryType) -> str:
-    """Bring an integer expression back into the range of its type (two's complement)."""
-    if var_type.category == "time" or (var_type.is_integer and var_type not in (ANY_INT,)):
-        mask = (1 << var_type.bits) - 1
-        if var_type.signed:
-            half = 1 << (var_type.bits - 1)
-            return f"((({code}) + {half} & {mask}) - {half})"
-        return f"(({code}) & {mask})"
-    return code
+def struct_class(struct_name: str) -> str:
+    return f"STRUCT_{_ident(struct_name)}"
+
+
+def is_aggregate(t: Type) -> bool:
+    return isinstance(t, ArrayType | StructType | FbType)
+
+
+def returns_tuple(pou: PouSymbols) -> bool:
+    """Functions with outputs or in-outs return (result, outputs..., in-outs...)."""
+    return any(v.kind in ("VAR_OUTPUT", "VAR_IN_OUT") for v in pou.variables)
+
+
+def tuple_members(pou: PouSymbols) -> list[Variable]:
+    outputs = [v for v in pou.variables if v.kind == "VAR_OUTPUT"]
+    return outputs + [v for v in pou.variables if v.kind == "VAR_IN_OUT"]
 
 
 @dataclass
@@ -65,66 +77,113 @@ class _Value:
 @dataclass
 class _Emitter:
     scope: Scope
-    local: bool  # a FUNCTION: variables are Python locals, not attributes of `s`
+    local: bool  # a FUNCTION: its variables are Python locals
     lines: list[str] = field(default_factory=list)
+    pre: list[str] = field(default_factory=list)  # hoisted statements for the next line
     temp_count: int = 0
+    in_globals: bool = False  # initialising GLOBALS itself: other globals are on `s`
 
     def emit(self, depth: int, line: str) -> None:
+        for hoisted in self.pre:
+            self.lines.append(INDENT * depth + hoisted)
+        self.pre.clear()
         self.lines.append(INDENT * depth + line)
 
     def temp(self) -> str:
         self.temp_count += 1
-        return f"_t{self.temp_count}"
+        return f"__t{self.temp_count}"
+
+    # ---- storage
+    def var_code(self, variable: Variable) -> str:
+        if variable.kind == "VAR_GLOBAL":
+            return f"{'s' if self.in_globals else '_G'}.{variable.attr}"
+        if self.local or variable.kind in LOCAL_KINDS or variable.kind == "RETURN":
+            return variable.attr
+        return f"s.{variable.attr}"
 
     # ---- expressions
-    def var_code(self, variable: Variable) -> str:
-        return variable.attr if self.local else f"s.{variable.attr}"
-
     def exact(self, expr: ast.Expr) -> _Value:
         value = self.expr(expr)
         if value.unwrapped and isinstance(value.type, ElementaryType):
-            return _Value(wrap(value.code, value.type), value.type)
+            return _Value(wrap_code(value.code, value.type), value.type)
         return value
 
     def expr(self, expr: ast.Expr) -> _Value:
         match expr:
             case ast.IntLiteral(value=v):
-                return _Value(repr(v), ANY_INT)
+                literal_type = _type(self.scope, expr)
+                if isinstance(literal_type, ElementaryType) and not literal_type.is_any_literal:
+                    v = wrap_constant(v, literal_type)
+                return _Value(repr(v), literal_type)
             case ast.RealLiteral(value=v):
-                return _Value(repr(v), ANY_REAL)
+                return _Value(repr(v), _type(self.scope, expr))
             case ast.BoolLiteral(value=v):
                 return _Value(repr(v), BOOL)
             case ast.TimeLiteral(nanoseconds=ns):
                 return _Value(repr(ns), _type(self.scope, expr))
             case ast.StringLiteral(value=v):
                 return _Value(repr(v), _type(self.scope, expr))
+            case ast.EnumLiteral():
+                return _Value(repr(self.scope.enum_literal_value(expr)), _type(self.scope, expr))
             case ast.NameRef(name=name):
-                variable = self.scope.variable(name)
-                assert variable is not None
-                return _Value(self.var_code(variable), variable.type)
-            case ast.MemberRef(base=base, member=_):
+                binding = self.scope.lookup(name)
+                if isinstance(binding, EnumValue):
+                    return _Value(repr(binding.value), binding.type)
+                if isinstance(binding, ProgramRef):
+                    return _Value(f"_P.{class_name(binding.pou.name)}", FbType(binding.pou.name))
+                assert binding is not None
+                return _Value(self.var_code(binding), binding.type)
+            case ast.MemberRef(base=base):
                 member = self.scope.member(expr)
                 assert member is not None
                 return _Value(f"{self.expr(base).code}.{member.attr}", member.type)
+            case ast.IndexRef():
+                return self._index(expr)
+            case ast.BitRef(base=base, bit=bit, width=width):
+                shifted = f"(({self.exact(base).code}) >> {bit * width})"
+                if width == 1:
+                    return _Value(f"({shifted} & 1 == 1)", BOOL)
+                return _Value(f"({shifted} & {(1 << width) - 1})", _type(self.scope, expr))
             case ast.Unary():
                 return self._unary(expr)
             case ast.Binary():
                 return self._binary(expr)
             case ast.Call():
-                return self._call(expr)
+                return self.call(expr)
         raise AssertionError(f"unhandled expression {expr!r}")
 
+    def _index(self, expr: ast.IndexRef) -> _Value:
+        base = self.expr(expr.base)
+        array = base.type
+        assert isinstance(array, ArrayType)
+        parts: list[str] = []
+        stride = 1
+        for index_expr, (low, high) in reversed(list(zip(expr.indices, array.dims, strict=True))):
+            constant = self.scope.constant_int(index_expr)
+            if constant is not None and low <= constant <= high:
+                offset = repr(constant - low)
+            else:
+                offset = f"_ix({self.exact(index_expr).code}, {low}, {high})"
+            parts.append(offset if stride == 1 else f"{offset} * {stride}")
+            stride *= high - low + 1
+        flat = " + ".join(reversed(parts))
+        return _Value(f"{base.code}[{flat}]", array.element)
+
     def _unary(self, expr: ast.Unary) -> _Value:
-        result = _elementary(self.scope, expr)
+        result = _type(self.scope, expr)
         operand = self.expr(expr.operand)
         if expr.op == "NOT":
             if result == BOOL:
                 return _Value(f"(not {operand.code})", BOOL)
+            assert isinstance(result, ElementaryType)
             return _Value(f"({self.exact(expr.operand).code} ^ {(1 << result.bits) - 1})", result)
-        return _Value(f"(-{operand.code})", result, result.category in ("int", "bits", "time"))
+        if expr.op == "+":
+            return operand
+        integral = isinstance(result, ElementaryType) and result.category != "real"
+        return _Value(f"(-{operand.code})", result, integral)
 
     def _binary(self, expr: ast.Binary) -> _Value:
-        result = _elementary(self.scope, expr)
+        result = _type(self.scope, expr)
         op = expr.op
         if op in _COMPARE:
             left, right = self.exact(expr.left), self.exact(expr.right)
@@ -133,18 +192,30 @@ class _Emitter:
             left, right = self.exact(expr.left), self.exact(expr.right)
             symbol = {"AND": "&", "&": "&", "OR": "|", "XOR": "^"}[op]
             return _Value(f"({left.code} {symbol} {right.code})", result)
-        integral = result.category in ("int", "bits", "time")
-        if op in ("+", "-", "*") and not (op == "*" and result.category == "time"):
+        assert isinstance(result, ElementaryType)
+        integral = result.category in ("int", "bits", "time", "date")
+        left_type = integer_like(_type(self.scope, expr.left)) or _type(self.scope, expr.left)
+        right_type = integer_like(_type(self.scope, expr.right)) or _type(self.scope, expr.right)
+        scaled = op == "*" and not (left_type == right_type or not integral)
+        if op in ("+", "-", "*") and not (scaled and result.category == "time"):
             left, right = self.expr(expr.left), self.expr(expr.right)
+            if result.category == "real":
+                code = f"({left.code} {op} {right.code})"
+                return _Value(f"_f32{code}" if result.bits == 32 else code, result)
             return _Value(f"({left.code} {op} {right.code})", result, integral)
         left, right = self.exact(expr.left), self.exact(expr.right)
         if op == "*":  # TIME * number
-            return _Value(f"int({left.code} * {right.code})", result, True)
+            return _Value(f"_round({left.code} * {right.code})", result, True)
         if op == "/":
             if result.category == "real":
-                return _Value(f"_fdiv({left.code}, {right.code})", result)
-            if result.category == "time":
-                return _Value(f"_tdiv({left.code}, {right.code})", result, True)
+                code = f"_fdiv({left.code}, {right.code})"
+                return _Value(f"_f32({code})" if result.bits == 32 else code, result)
+            if (
+                result.category == "time"
+                and isinstance(right_type, ElementaryType)
+                and (right_type.category == "real")
+            ):
+                return _Value(f"_round(_fdiv({left.code}, {right.code}))", result, True)
             return _Value(f"_idiv({left.code}, {right.code})", result, True)
         if op == "MOD":
             return _Value(f"_imod({left.code}, {right.code})", result)
@@ -152,21 +223,142 @@ class _Emitter:
             return _Value(f"_pow({left.code}, {right.code})", result)
         raise AssertionError(f"unhandled operator {op}")
 
-    def _call(self, call: ast.Call) -> _Value:
-        if key(call.name) == "__CURRENT_TIME":
-            return _Value("_SYS.now_ns", _type(self.scope, call))
-        raise AssertionError(f"unhandled call {call.name}")
+    # ---- calls
+    def call(self, call: ast.Call) -> _Value:
+        pou = self.scope.resolved.pous.get(key(call.name))
+        if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
+            return self._user_call(pou, call)
+        builtin = builtins.lookup(call.name)
+        assert builtin is not None, call.name
+        args = self.scope.builtin_arguments(builtin, call)
+        assert args is not None
+        values = [self.exact(arg) for arg in args]
+        result = _type(self.scope, call)
+        return _Value(
+            builtin.emit([v.code for v in values], [v.type for v in values], result), result
+        )
+
+    def _user_call(self, pou: PouSymbols, call: ast.Call) -> _Value:
+        assigned = {
+            key(param.name): arg
+            for arg, param in self.scope.connect_arguments(pou, call)
+            if param is not None
+        }
+        keywords: list[str] = []
+        for param in pou.parameters:
+            arg = assigned.get(key(param.name))
+            if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
+                continue
+            keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
+        code = f"{function_name(pou.name)}({', '.join(keywords)})"
+        result = pou.return_type or BOOL
+        if not returns_tuple(pou):
+            return _Value(code, result)
+        handle = self.temp()
+        self.pre.append(f"{handle} = {code}")
+        slots = {key(member.name): index for index, member in enumerate(tuple_members(pou), 1)}
+        # outputs are stored in the order the call names them (as CODESYS does)
+        for arg, connected in self.scope.connect_arguments(pou, call):
+            if connected is None or arg.value is None or key(connected.name) not in slots:
+                continue
+            if not _is_lvalue(arg.value):
+                continue
+            self.pre.append(self.store(arg.value, f"{handle}[{slots[key(connected.name)]}]"))
+        return _Value(f"{handle}[0]", result)
 
     def converted(self, target: Type, value_expr: ast.Expr) -> str:
         """Code for `value_expr` stored into a variable of type `target`."""
+        integer = integer_like(target)
+        if integer is not None and _type(self.scope, value_expr) == ANY_INT:
+            constant = self.scope.constant_int(value_expr)
+            if constant is not None:
+                return repr(wrap_constant(constant, integer))
         value = self.exact(value_expr)
-        if isinstance(target, ElementaryType) and target.category == "real":
-            source = value.type
-            if isinstance(source, ElementaryType) and source.category != "real":
-                return f"float({value.code})"
-            if target.bits == 32 and source != target:
-                return f"_f32({value.code})"
-        return value.code
+        source = value.type
+        if is_aggregate(target):
+            return f"_copy({value.code})" if _is_lvalue(value_expr) else value.code
+        if not isinstance(target, ElementaryType | EnumType):
+            return value.code
+        target_elem = target.base if isinstance(target, EnumType) else target
+        if isinstance(source, EnumType):
+            source = source.base
+        code = value.code
+        if isinstance(source, ElementaryType) and source != target_elem:
+            if source == ANY_INT and target_elem.is_integer:
+                code = wrap_code(code, target_elem) if value.unwrapped else code
+            elif not (source == ANY_REAL and target_elem == ANY_REAL):
+                code = convert_code(code, source, target_elem)
+        length = target_elem.length if target_elem.category == "string" else 0
+        short_literal = (
+            isinstance(value_expr, ast.StringLiteral) and len(value_expr.value) <= length
+        )
+        if length and not short_literal:
+            code = f"{code}[:{length}]"
+        return code
+
+    def initial(self, var_type: Type, init: ast.Initializer | None) -> str:
+        """Code that creates the initial value of a variable."""
+        if isinstance(init, ast.ArrayInit):
+            assert isinstance(var_type, ArrayType)
+            return self._array_initial(var_type, init)
+        if isinstance(init, ast.StructInit):
+            members = ", ".join(
+                f"{self._member_attr(var_type, name)!r}: "
+                + self.initial(self._member_type(var_type, name), value)
+                for name, value in init.members
+            )
+            return f"_init({self.initial(var_type, None)}, {{{members}}})"
+        if init is not None:
+            return self.converted(var_type, init)
+        match var_type:
+            case FbType(name=name):
+                return f"{class_name(name)}()"
+            case StructType(name=name):
+                return f"{struct_class(name)}()"
+            case EnumType():
+                info = self.scope.resolved.enums[key(var_type.name)]
+                first = next(iter(info.values.values()), ("", 0))
+                return repr(first[1])
+            case ArrayType(element=element):
+                if is_aggregate(element):
+                    return f"[{self.initial(element, None)} for _ in range({var_type.size})]"
+                return f"[{self.initial(element, None)}] * {var_type.size}"
+            case ElementaryType(category=category):
+                return {"bool": "False", "real": "0.0", "string": "''"}.get(category, "0")
+            case VariadicType():
+                return "()"
+        raise AssertionError(f"no initial value for {var_type!r}")
+
+    def _array_initial(self, array: ArrayType, init: ast.ArrayInit) -> str:
+        element = array.element
+        items: list[str] = []
+        for repeat, value in init.items:
+            times = repeat.value if isinstance(repeat, ast.IntLiteral) else 1
+            if isinstance(value, ast.ArrayInit) and not isinstance(element, ArrayType):
+                group = [self.initial(element, v) for _, v in value.items]
+                items.extend(group * times)
+            else:
+                items.extend([self.initial(element, value)] * times)
+        missing = array.size - len(items)
+        body = f"[{', '.join(items)}]"
+        if missing > 0:
+            filler = self.initial(array, None) if is_aggregate(element) else None
+            if filler is not None:
+                return f"{body} + {filler}[{len(items)}:]"
+            return f"{body} + [{self.initial(element, None)}] * {missing}"
+        return body
+
+    def _member_type(self, owner: Type, name: str) -> Type:
+        return self._member(owner, name).type
+
+    def _member_attr(self, owner: Type, name: str) -> str:
+        return self._member(owner, name).attr
+
+    def _member(self, owner: Type, name: str) -> Variable:
+        if isinstance(owner, StructType):
+            return self.scope.struct(owner).by_key[key(name)]
+        assert isinstance(owner, FbType)
+        return self.scope.fb_symbols(owner).by_key[key(name)]
 
     # ---- statements
     def block(self, statements: tuple[ast.Statement, ...], depth: int) -> None:
@@ -179,72 +371,242 @@ class _Emitter:
     def statement(self, statement: ast.Statement, depth: int) -> None:
         match statement:
             case ast.Assign(target=target, value=value):
-                target_type = _type(self.scope, target)
-                self.emit(depth, f"{self.expr(target).code} = {self.converted(target_type, value)}")
+                self.assign(target, value, depth)
             case ast.CallStatement(call=call):
                 self.call_statement(call, depth)
             case ast.If(branches=branches, orelse=orelse):
-                for index, (condition, body) in enumerate(branches):
-                    keyword = "if" if index == 0 else "elif"
-                    self.emit(depth, f"{keyword} {self.exact(condition).code}:")
-                    self.block(body, depth + 1)
-                if orelse:
-                    self.emit(depth, "else:")
-                    self.block(orelse, depth + 1)
+                self.if_statement(branches, orelse, depth)
+            case ast.Case():
+                self.case(statement, depth)
             case ast.While(condition=condition, body=body):
-                self.emit(depth, f"while {self.exact(condition).code}:")
+                condition_code = self.exact(condition).code
+                if self.pre:
+                    self.emit(depth, "while True:")
+                    self.emit(depth + 1, f"if not {condition_code}:")
+                    self.emit(depth + 2, "break")
+                else:
+                    self.emit(depth, f"while {condition_code}:")
                 self.block(body, depth + 1)
             case ast.Repeat(body=body, until=until):
-                self.emit(depth, "while True:")
-                self.block(body, depth + 1)
-                self.emit(depth + 1, f"if {self.exact(until).code}:")
-                self.emit(depth + 2, "break")
+                self.repeat(body, until, depth)
             case ast.For():
                 self.for_loop(statement, depth)
             case ast.Exit():
                 self.emit(depth, "break")
+            case ast.Continue():
+                self.emit(depth, "continue")
             case ast.Return():
-                self.emit(depth, "return")
+                self.emit(depth, self.return_line())
+
+    def return_line(self) -> str:
+        pou = self.scope.pou
+        if pou.kind != "FUNCTION":
+            return "return"
+        result = pou.by_key.get(key(pou.name))
+        result_code = result.attr if result is not None and result.kind == "RETURN" else "None"
+        if returns_tuple(pou):
+            members = ", ".join(v.attr for v in tuple_members(pou))
+            return f"return ({result_code}, {members})"
+        return f"return {result_code}"
+
+    def assign(self, target: ast.Expr, value: ast.Initializer, depth: int) -> None:
+        target_type = _type(self.scope, target)
+        if isinstance(value, ast.ArrayInit | ast.StructInit):
+            code = self.initial(target_type, value)
+        else:
+            code = self.converted(target_type, value)
+        self.emit(depth, self.store(target, code))
+
+    def store(self, target: ast.Expr, code: str) -> str:
+        """The statement that stores `code` (already converted) into `target`."""
+        target_type = _type(self.scope, target)
+        length = target_type.length if isinstance(target_type, ElementaryType) else 0
+        if length and not code.endswith(f"[:{length}]"):  # only strings have a length
+            code = f"{code}[:{length}]"
+        if isinstance(target, ast.BitRef):
+            base = self.expr(target.base)
+            shift, width = target.bit * target.width, target.width
+            updated = f"_setbits({base.code}, {shift}, {width}, {code})"
+            integer = integer_like(base.type)
+            return f"{base.code} = {wrap_code(updated, integer) if integer else updated}"
+        return f"{self.expr(target).code} = {code}"
+
+    def if_statement(
+        self, branches: tuple[tuple[ast.Expr, tuple[ast.Statement, ...]], ...],
+        orelse: tuple[ast.Statement, ...], depth: int,
+    ) -> None:  # fmt: skip
+        condition, body = branches[0]
+        self.emit(depth, f"if {self.exact(condition).code}:")
+        self.block(body, depth + 1)
+        for index, (condition, body) in enumerate(branches[1:], 1):
+            condition_code = self.exact(condition).code
+            if self.pre:
+                # calls hoisted out of this condition must run only when it is reached
+                hoisted, self.pre = self.pre, []
+                self.emit(depth, "else:")
+                self.pre = hoisted
+                self.emit(depth + 1, f"if {condition_code}:")
+                self.block(body, depth + 2)
+                if index + 1 < len(branches):
+                    self.emit(depth + 1, "else:")
+                    self.if_statement(branches[index + 1 :], orelse, depth + 2)
+                elif orelse:
+                    self.emit(depth + 1, "else:")
+                    self.block(orelse, depth + 2)
+                return
+            self.emit(depth, f"elif {condition_code}:")
+            self.block(body, depth + 1)
+        if orelse:
+            self.emit(depth, "else:")
+            self.block(orelse, depth + 1)
+
+    def case(self, case: ast.Case, depth: int) -> None:
+        selector = self.temp()
+        self.emit(depth, f"{selector} = {self.exact(case.selector).code}")
+        first = True
+        for labels, body in case.branches:
+            tests = []
+            for label in labels:
+                if isinstance(label, ast.CaseRange):
+                    low, high = self.exact(label.low).code, self.exact(label.high).code
+                    tests.append(f"{low} <= {selector} <= {high}")
+                else:
+                    tests.append(f"{selector} == {self.exact(label).code}")
+            self.emit(depth, f"{'if' if first else 'elif'} {' or '.join(tests)}:")
+            self.block(body, depth + 1)
+            first = False
+        if case.orelse:
+            if first:
+                self.emit(depth, "if True:")
+            else:
+                self.emit(depth, "else:")
+            self.block(case.orelse, depth + 1)
+
+    def repeat(self, body: tuple[ast.Statement, ...], until: ast.Expr, depth: int) -> None:
+        first = self.temp()
+        saved, self.lines = self.lines, []
+        until_code = self.exact(until).code
+        hoisted, self.pre = self.pre, []
+        self.lines = saved
+        if hoisted:  # the condition needs statements: test at the end, no CONTINUE support
+            self.emit(depth, "while True:")
+            self.block(body, depth + 1)
+            self.pre = hoisted
+            self.emit(depth + 1, f"if {until_code}:")
+            self.emit(depth + 2, "break")
+            return
+        self.emit(depth, f"{first} = True")
+        self.emit(depth, f"while {first} or not {until_code}:")
+        self.emit(depth + 1, f"{first} = False")
+        self.block(body, depth + 1)
 
     def for_loop(self, loop: ast.For, depth: int) -> None:
+        """IEC FOR: the end and step are evaluated for every test of the loop condition; a
+        counter that would wrap past the end of its type ends the loop instead of running
+        forever."""
         counter = self.scope.variable(loop.variable)
         assert counter is not None and isinstance(counter.type, ElementaryType)
         ref = self.var_code(counter)
-        step_code = self.exact(loop.step).code if loop.step is not None else "1"
         self.emit(depth, f"{ref} = {self.converted(counter.type, loop.start)}")
+        step_constant = self.scope.constant_int(loop.step) if loop.step is not None else 1
+        step = self.temp() if step_constant is None else repr(step_constant)
+        following = self.temp()
+        increment = [
+            f"{following} = {ref} + {step}",
+            f"{ref} = {wrap_code(following, counter.type)}",
+            f"if {ref} != {following}:",
+            f"{INDENT}break",
+        ]
+        if step_constant is not None and not _has_continue(loop.body):
+            stop = self.exact(loop.stop).code
+            comparison = "<=" if step_constant >= 0 else ">="
+            self.emit(depth, f"while {ref} {comparison} {stop}:")
+            self.block(loop.body, depth + 1)
+            for line in increment:
+                self.emit(depth + 1, line)
+            return
+        started = self.temp()
+        self.emit(depth, f"{started} = False")
+        self.emit(depth, "while True:")
+        self.emit(depth + 1, f"if {started}:")
+        for line in increment:
+            self.emit(depth + 2, line)
+        self.emit(depth + 1, f"{started} = True")
         stop = self.exact(loop.stop).code
-        if loop.step is None or isinstance(loop.step, ast.IntLiteral):
-            test = f"{ref} <= {stop}"
-        elif isinstance(loop.step, ast.Unary) and isinstance(loop.step.operand, ast.IntLiteral):
-            test = f"{ref} >= {stop}"
+        if step_constant is None:
+            assert loop.step is not None
+            self.emit(depth + 1, f"{step} = {self.exact(loop.step).code}")
+            test = f"({ref} <= {stop}) if {step} >= 0 else ({ref} >= {stop})"
         else:
-            step_var = self.temp()
-            self.emit(depth, f"{step_var} = {step_code}")
-            step_code = step_var
-            test = f"({ref} <= {stop}) if {step_var} >= 0 else ({ref} >= {stop})"
-        self.emit(depth, f"while {test}:")
+            test = f"{ref} {'<=' if step_constant >= 0 else '>='} {stop}"
+        self.emit(depth + 1, f"if not ({test}):")
+        self.emit(depth + 2, "break")
         self.block(loop.body, depth + 1)
-        self.emit(depth + 1, f"{ref} = {wrap(f'{ref} + {step_code}', counter.type)}")
 
     def call_statement(self, call: ast.Call, depth: int) -> None:
-        instance = self.scope.variable(call.name)
-        if instance is None or not isinstance(instance.type, FbType):
+        binding = self.scope.lookup(call.name) if call.receiver is None else None
+        if isinstance(binding, ProgramRef):
+            callee, instance = binding.pou, f"_P.{class_name(binding.pou.name)}"
+        elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
+            callee, instance = self.scope.fb_symbols(binding.type), self.var_code(binding)
+        else:
             self.emit(depth, self.exact(call).code)
             return
-        fb = self.scope.fb_symbols(instance.type)
         handle = self.temp()
-        self.emit(depth, f"{handle} = {self.var_code(instance)}")
-        outputs: list[tuple[ast.Expr, Variable]] = []
-        for arg in call.args:
-            assert arg.name is not None
-            param = fb.by_key[key(arg.name)]
-            if arg.is_output:
-                outputs.append((arg.value, param))
-            else:
-                self.emit(depth, f"{handle}.{param.attr} = {self.converted(param.type, arg.value)}")
+        self.emit(depth, f"{handle} = {instance}")
+        outputs: list[tuple[ast.Argument, Variable]] = []
+        for arg, param in self.scope.connect_arguments(callee, call):
+            if arg.value is None or param is None:
+                continue
+            if arg.is_output or param.kind == "VAR_OUTPUT":
+                outputs.append((arg, param))
+                continue
+            if param.kind == "VAR_IN_OUT":
+                self.emit(depth, f"{handle}.{param.attr} = {self.expr(arg.value).code}")
+                if not is_aggregate(param.type):
+                    outputs.append((arg, param))
+                continue
+            self.emit(depth, f"{handle}.{param.attr} = {self.converted(param.type, arg.value)}")
         self.emit(depth, f"{handle}()")
-        for target, param in outputs:
-            self.emit(depth, f"{self.expr(target).code} = {handle}.{param.attr}")
+        for arg, param in outputs:
+            assert arg.value is not None
+            value = f"{handle}.{param.attr}"
+            if arg.negated:
+                value = f"(not {value})"
+            self.emit(depth, self.store(arg.value, value))
+
+
+def wrap_constant(value: int, t: ElementaryType) -> int:
+    """A literal's value as stored in `t` (16#FFFF in an INT is -1)."""
+    if not (t.is_integer or t.category in ("time", "date")):
+        return value
+    value &= (1 << t.bits) - 1
+    if t.signed and value >= 1 << (t.bits - 1):
+        value -= 1 << t.bits
+    return value
+
+
+def _has_continue(body: tuple[ast.Statement, ...]) -> bool:
+    """A CONTINUE that belongs to this loop (not to a nested one)."""
+    for statement in body:
+        match statement:
+            case ast.Continue():
+                return True
+            case ast.If(branches=branches, orelse=orelse):
+                if any(_has_continue(b) for _, b in branches) or _has_continue(orelse):
+                    return True
+            case ast.Case(branches=branches, orelse=orelse):
+                if any(_has_continue(b) for _, b in branches) or _has_continue(orelse):
+                    return True
+    return False
+
+
+def _simple(expr: ast.Expr) -> bool:
+    return isinstance(expr, ast.IntLiteral | ast.NameRef | ast.EnumLiteral)
+
+
+def _is_lvalue(expr: ast.Expr) -> bool:
+    return isinstance(expr, ast.NameRef | ast.MemberRef | ast.IndexRef | ast.BitRef)
 
 
 def _type(scope: Scope, expr: ast.Expr) -> Type:
@@ -253,31 +615,72 @@ def _type(scope: Scope, expr: ast.Expr) -> Type:
     return result
 
 
-def _elementary(scope: Scope, expr: ast.Expr) -> ElementaryType:
-    result = _type(scope, expr)
-    assert isinstance(result, ElementaryType)
-    return result
+def _instance_variables(pou: PouSymbols) -> list[Variable]:
+    return [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
 
 
 def generate_pou(resolved: Resolved, pou: PouSymbols) -> str:
     """The Python source of one POU."""
     scope = Scope(resolved, pou)
     if pou.kind == "FUNCTION":
-        raise NotImplementedError("functions are generated from the compiler issue on")
+        return _generate_function(scope, pou)
     emitter = _Emitter(scope, local=False)
+    fields = _instance_variables(pou)
     emitter.emit(0, f"class {class_name(pou.name)}:")
-    emitter.emit(1, f"__slots__ = {tuple(v.attr for v in pou.variables)!r}")
+    emitter.emit(1, f"__slots__ = {tuple(v.attr for v in fields)!r}")
     emitter.emit(0, "")
     emitter.emit(1, "def __init__(s):")
-    if not pou.variables:
+    if not fields:
         emitter.emit(2, "pass")
-    for variable in pou.variables:
-        if variable.init is not None:
-            code = emitter.converted(variable.type, variable.init)
-        else:
-            code = default_value(variable.type)
-        emitter.emit(2, f"s.{variable.attr} = {code}")
+    for variable in fields:
+        emitter.emit(2, f"s.{variable.attr} = {emitter.initial(variable.type, variable.init)}")
     emitter.emit(0, "")
     emitter.emit(1, "def __call__(s):")
+    for variable in pou.variables:
+        if variable.kind == "VAR_TEMP":
+            emitter.emit(2, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
     emitter.block(pou.pou.body, 2)
+    return "\n".join(emitter.lines) + "\n"
+
+
+def _generate_function(scope: Scope, pou: PouSymbols) -> str:
+    emitter = _Emitter(scope, local=True)
+    inputs = [v for v in pou.variables if v.kind in ("VAR_INPUT", "VAR_IN_OUT")]
+    params = ", ".join(f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs)
+    emitter.emit(0, f"def {function_name(pou.name)}({params}):")
+    result = pou.by_key.get(key(pou.name))
+    if result is not None and result.kind == "RETURN":
+        emitter.emit(1, f"{result.attr} = {emitter.initial(result.type, None)}")
+    for variable in pou.variables:
+        if variable.kind in ("VAR", "VAR_TEMP", "VAR_OUTPUT", "VAR_STAT", "VAR_INST"):
+            emitter.emit(1, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
+    emitter.block(pou.pou.body, 1)
+    emitter.emit(1, emitter.return_line())
+    return "\n".join(emitter.lines) + "\n"
+
+
+def generate_struct(resolved: Resolved, info: StructInfo, any_pou: PouSymbols) -> str:
+    emitter = _Emitter(Scope(resolved, any_pou), local=False)
+    emitter.emit(0, f"class {struct_class(info.name)}:")
+    emitter.emit(1, f"__slots__ = {tuple(m.attr for m in info.members)!r}")
+    emitter.emit(0, "")
+    emitter.emit(1, "def __init__(s):")
+    if not info.members:
+        emitter.emit(2, "pass")
+    for member in info.members:
+        emitter.emit(2, f"s.{member.attr} = {emitter.initial(member.type, member.init)}")
+    return "\n".join(emitter.lines) + "\n"
+
+
+def generate_globals(resolved: Resolved, any_pou: PouSymbols) -> str:
+    """The class whose single instance `_G` holds the global variables."""
+    emitter = _Emitter(Scope(resolved, any_pou), local=False, in_globals=True)
+    emitter.emit(0, "class GLOBALS:")
+    emitter.emit(1, f"__slots__ = {tuple(v.attr for v in resolved.globals)!r}")
+    emitter.emit(0, "")
+    emitter.emit(1, "def __init__(s):")
+    if not resolved.globals:
+        emitter.emit(2, "pass")
+    for variable in resolved.globals:
+        emitter.emit(2, f"s.{variable.attr} = {emitter.initial(variable.type, variable.init)}")
     return "\n".join(emitter.lines) + "\n"

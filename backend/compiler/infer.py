@@ -1,35 +1,56 @@
-"""Expression typing, shared by the check stage (which reports) and generate (which trusts).
+"""Expression typing and name lookup, shared by check (which reports) and generate (which
+trusts checked code).
 
-`Scope` answers what a name means inside one POU; `type_of` gives an expression's type and
-records a diagnostic for everything that is wrong with it.
+`Scope` answers what a name means inside one POU and gives every expression its type,
+recording a diagnostic for everything that is wrong with it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from backend.compiler import ast
+from backend.compiler import ast, builtins
 from backend.compiler.ast import key
-from backend.compiler.diagnostics import Diagnostic, error
-from backend.compiler.resolve import PouSymbols, Resolved, Variable
+from backend.compiler.diagnostics import Diagnostic, error, warning
+from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
     BOOL,
+    BYTE,
+    DWORD,
     ELEMENTARY,
     LTIME,
     STRING,
     TIME,
+    WORD,
+    WSTRING,
+    ArrayType,
     ElementaryType,
+    EnumType,
     FbType,
+    StructType,
     Type,
+    VariadicType,
+    assignable,
     common_numeric,
+    elementary,
+    integer_like,
 )
 
-# Functions the runtime provides directly (name -> return type).
-BUILTIN_FUNCTIONS: dict[str, ElementaryType] = {
-    "__CURRENT_TIME": TIME,
-}
+
+@dataclass(frozen=True)
+class EnumValue:
+    type: EnumType
+    value: int
+
+
+@dataclass(frozen=True)
+class ProgramRef:
+    pou: PouSymbols
+
+
+Binding = Variable | EnumValue | ProgramRef
 
 
 @dataclass
@@ -38,37 +59,86 @@ class Scope:
     pou: PouSymbols
     diagnostics: list[Diagnostic] = field(default_factory=list)
 
+    # ---- names
     def variable(self, name: str) -> Variable | None:
-        return self.pou.by_key.get(key(name))
+        found = self.pou.by_key.get(key(name))
+        if found is not None:
+            return found
+        return self.resolved.globals_by_key.get(key(name))
+
+    def lookup(self, name: str) -> Binding | None:
+        found = self.variable(name)
+        if found is not None:
+            return found
+        matches = self.resolved.enum_values_named(name)
+        if matches:
+            info, value = matches[0]
+            return EnumValue(info.type, value)
+        pou = self.resolved.pous.get(key(name))
+        if pou is not None and pou.kind == "PROGRAM":
+            return ProgramRef(pou)
+        return None
 
     def fb_symbols(self, fb: FbType) -> PouSymbols:
         return self.resolved.pous[key(fb.name)]
 
+    def struct(self, struct: StructType) -> StructInfo:
+        return self.resolved.structs[key(struct.name)]
+
     def report(self, pos: ast.Pos, message: str) -> None:
         self.diagnostics.append(error(pos, message))
+
+    def warn(self, pos: ast.Pos, message: str) -> None:
+        self.diagnostics.append(warning(pos, message))
 
     # ---- typing
     def type_of(self, expr: ast.Expr) -> Type | None:
         match expr:
-            case ast.IntLiteral():
-                return ANY_INT
-            case ast.RealLiteral():
-                return ANY_REAL
-            case ast.BoolLiteral():
-                return BOOL
-            case ast.TimeLiteral(long=long):
-                return LTIME if long else TIME
-            case ast.StringLiteral():
-                return STRING
+            case ast.IntLiteral(type_name=type_name):
+                return self._literal_type(type_name, ANY_INT, expr.pos)
+            case ast.RealLiteral(type_name=type_name):
+                return self._literal_type(type_name, ANY_REAL, expr.pos)
+            case ast.BoolLiteral(type_name=type_name):
+                return self._literal_type(type_name, BOOL, expr.pos)
+            case ast.TimeLiteral(type_name=type_name):
+                return ELEMENTARY.get(type_name, TIME)
+            case ast.StringLiteral(wide=wide, type_name=type_name):
+                if type_name is not None:
+                    return self._literal_type(type_name, STRING, expr.pos)
+                return WSTRING if wide else STRING
+            case ast.EnumLiteral():
+                return self._enum_literal(expr)
             case ast.NameRef(name=name, pos=pos):
-                variable = self.variable(name)
-                if variable is None:
+                binding = self.lookup(name)
+                if binding is None:
                     self.report(pos, f"'{name}' is not declared")
                     return None
-                return variable.type
+                if isinstance(binding, Variable):
+                    return binding.type
+                if isinstance(binding, EnumValue):
+                    return binding.type
+                return FbType(binding.pou.name)
             case ast.MemberRef():
                 member = self.member(expr)
                 return member.type if member is not None else None
+            case ast.IndexRef():
+                return self._index(expr)
+            case ast.BitRef(base=base, bit=bit, pos=pos, width=width):
+                base_type = self.type_of(base)
+                if base_type is None:
+                    return None
+                integer = integer_like(base_type)
+                if integer is None:
+                    self.report(
+                        pos, f"bit access needs an integer or bit string, not {base_type.name}"
+                    )
+                    return None
+                if (bit + 1) * width > integer.bits:
+                    self.report(pos, f"part {bit} is out of range for {integer.name}")
+                return {1: BOOL, 8: BYTE, 16: WORD, 32: DWORD}[width]
+            case ast.Deref(pos=pos):
+                self.report(pos, "pointers are not supported")
+                return None
             case ast.Unary():
                 return self._unary(expr)
             case ast.Binary():
@@ -77,67 +147,151 @@ class Scope:
                 return self.call_type(expr)
         raise AssertionError(f"unhandled expression {expr!r}")
 
+    def _literal_type(self, type_name: str | None, default: Type, pos: ast.Pos) -> Type | None:
+        if type_name is None:
+            return default
+        found = elementary(type_name)
+        if found is None:
+            self.report(pos, f"unknown type '{type_name}' in typed literal")
+        return found
+
+    def _enum_literal(self, expr: ast.EnumLiteral) -> Type | None:
+        info = self.resolved.enums.get(key(expr.type_name))
+        if info is None:
+            self.report(expr.pos, f"'{expr.type_name}' is not an enum type")
+            return None
+        if key(expr.value) not in info.values:
+            self.report(expr.pos, f"enum '{expr.type_name}' has no value '{expr.value}'")
+            return None
+        return info.type
+
+    def enum_literal_value(self, expr: ast.EnumLiteral) -> int:
+        return self.resolved.enums[key(expr.type_name)].values[key(expr.value)][1]
+
+    def constant_int(self, expr: ast.Expr | None) -> int | None:
+        """The value of a constant integer expression (literal, enum value, constant)."""
+        match expr:
+            case ast.IntLiteral(value=value):
+                return value
+            case ast.EnumLiteral():
+                if key(expr.type_name) in self.resolved.enums:
+                    return self.enum_literal_value(expr)
+            case ast.Unary(op="-", operand=operand):
+                inner = self.constant_int(operand)
+                return None if inner is None else -inner
+            case ast.NameRef(name=name):
+                binding = self.lookup(name)
+                if isinstance(binding, EnumValue):
+                    return binding.value
+                if (
+                    isinstance(binding, Variable)
+                    and binding.constant
+                    and isinstance(binding.init, ast.IntLiteral | ast.Unary | ast.NameRef)
+                ):
+                    return self.constant_int(binding.init)
+        return None
+
     def member(self, expr: ast.MemberRef) -> Variable | None:
         base_type = self.type_of(expr.base)
         if base_type is None:
             return None
-        if not isinstance(base_type, FbType):
-            self.report(expr.pos, f"'{base_type.name}' has no member '{expr.member}'")
+        if isinstance(base_type, FbType):
+            symbols = self.fb_symbols(base_type)
+            member = symbols.by_key.get(key(expr.member))
+            if member is None or member.kind in ("VAR_TEMP", "VAR_GLOBAL"):
+                self.report(expr.pos, f"'{base_type.name}' has no member '{expr.member}'")
+                return None
+            return member
+        if isinstance(base_type, StructType):
+            member = self.struct(base_type).by_key.get(key(expr.member))
+            if member is None:
+                self.report(expr.pos, f"'{base_type.name}' has no member '{expr.member}'")
+            return member
+        self.report(expr.pos, f"{base_type.name} has no member '{expr.member}'")
+        return None
+
+    def _index(self, expr: ast.IndexRef) -> Type | None:
+        base_type = self.type_of(expr.base)
+        for index in expr.indices:
+            index_type = self.type_of(index)
+            if index_type is not None and integer_like(index_type) is None:
+                self.report(index.pos, f"array index must be an integer, not {index_type.name}")
+        if base_type is None:
             return None
-        member = self.fb_symbols(base_type).by_key.get(key(expr.member))
-        if member is None or member.kind not in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"):
-            self.report(expr.pos, f"function block '{base_type.name}' has no '{expr.member}'")
+        if not isinstance(base_type, ArrayType):
+            self.report(expr.pos, f"{base_type.name} is not an array")
             return None
-        return member
+        if len(expr.indices) != len(base_type.dims):
+            self.report(expr.pos, f"{base_type.name} needs {len(base_type.dims)} indices")
+            return None
+        for index, (low, high) in zip(expr.indices, base_type.dims, strict=True):
+            constant = self.constant_int(index)
+            if constant is not None and not low <= constant <= high:
+                self.report(index.pos, f"index {constant} is outside the bounds {low}..{high}")
+        return base_type.element
 
     def _unary(self, expr: ast.Unary) -> Type | None:
         operand = self.type_of(expr.operand)
         if operand is None:
             return None
-        if not isinstance(operand, ElementaryType):
-            self.report(expr.pos, f"'{expr.op}' cannot be applied to '{operand.name}'")
-            return None
-        if expr.op == "NOT" and operand.category in ("bool", "bits"):
-            return operand
-        if expr.op == "-" and (operand.category in ("int", "real", "time")):
+        integer = integer_like(operand)
+        if expr.op == "NOT" and (operand == BOOL or integer is not None):
+            return operand if operand == BOOL else integer
+        if (
+            expr.op in ("-", "+")
+            and isinstance(operand, ElementaryType)
+            and operand.category in ("int", "bits", "real", "time")
+        ):
             return operand
         self.report(expr.pos, f"'{expr.op}' cannot be applied to {operand.name}")
         return None
 
     def _binary(self, expr: ast.Binary) -> Type | None:
-        left, right = self.type_of(expr.left), self.type_of(expr.right)
-        if left is None or right is None:
-            return None
-        if not isinstance(left, ElementaryType) or not isinstance(right, ElementaryType):
-            self.report(expr.pos, f"'{expr.op}' cannot be applied to {left.name}, {right.name}")
+        left_type, right_type = self.type_of(expr.left), self.type_of(expr.right)
+        if left_type is None or right_type is None:
             return None
         op = expr.op
-        mismatch = f"'{op}' cannot be applied to {left.name} and {right.name}"
+        mismatch = f"'{op}' cannot be applied to {left_type.name} and {right_type.name}"
+        if op in ("=", "<>") and isinstance(left_type, EnumType | StructType):
+            if left_type != right_type and not (
+                isinstance(left_type, EnumType) and integer_like(right_type) is not None
+            ):
+                self.report(expr.pos, mismatch)
+            return BOOL
+        left, right = integer_like(left_type) or left_type, integer_like(right_type) or right_type
+        if not isinstance(left, ElementaryType) or not isinstance(right, ElementaryType):
+            self.report(expr.pos, mismatch)
+            return None
         if op in ("AND", "OR", "XOR", "&"):
-            if left == right and left.category in ("bool", "bits"):
-                return left
+            if left == right == BOOL:
+                return BOOL
             joined = common_numeric(left, right)
-            if joined is not None and joined.category == "bits":
+            if joined is not None and joined.is_integer:
                 return joined
             self.report(expr.pos, mismatch)
             return None
         if op in ("=", "<>", "<", ">", "<=", ">="):
             comparable = (
                 common_numeric(left, right) is not None
-                or (left.category == right.category and left.category in ("time", "string"))
-                or (left == right == BOOL)
+                or left.category == right.category
+                or (left == BOOL and right.is_integer)
+                or (right == BOOL and left.is_integer)
             )
             if not comparable:
                 self.report(expr.pos, mismatch)
             return BOOL
-        if left.category == "time" or right.category == "time":
+        if left.category in ("time", "date") or right.category in ("time", "date"):
             return self._time_arithmetic(expr, left, right, mismatch)
         joined = common_numeric(left, right)
-        if joined is None or joined.category not in ("int", "real", "bits"):
+        if joined is None:
             self.report(expr.pos, mismatch)
             return None
         if op == "**":
-            return joined if joined.category == "real" else ELEMENTARY["LREAL"]
+            return (
+                joined
+                if joined.category == "real" and not joined.is_any_literal
+                else ELEMENTARY["LREAL"]
+            )
         if op == "MOD" and joined.category == "real":
             self.report(expr.pos, mismatch)
             return None
@@ -146,26 +300,171 @@ class Scope:
     def _time_arithmetic(
         self, expr: ast.Binary, left: ElementaryType, right: ElementaryType, mismatch: str
     ) -> Type | None:
-        if expr.op in ("+", "-") and left.category == right.category == "time":
+        op = expr.op
+        if op in ("+", "-") and left.category == right.category == "time":
             return LTIME if LTIME in (left, right) else TIME
-        if expr.op in ("*", "/") and left.category == "time" and right.is_numeric:
+        if op in ("+", "-") and left.category == "date" and right.category == "time":
+            return left  # DT + TIME, TOD - TIME
+        if op == "+" and left.category == "time" and right.category == "date":
+            return right
+        if op == "-" and left.category == right.category == "date":
+            return TIME  # DT - DT, DATE - DATE, TOD - TOD
+        if op in ("*", "/") and left.category == "time" and right.is_numeric:
             return left
-        if expr.op == "*" and right.category == "time" and left.is_numeric:
+        if op in ("+", "-") and left.category in ("time", "date") and right.is_integer:
+            return left  # an integer added to a time counts nanoseconds
+        if op == "*" and right.category == "time" and left.is_numeric:
             return right
         self.report(expr.pos, mismatch)
         return None
 
+    # ---- calls
     def call_type(self, call: ast.Call) -> Type | None:
-        builtin = BUILTIN_FUNCTIONS.get(key(call.name))
-        if builtin is not None:
-            for arg in call.args:
-                self.type_of(arg.value)
-            if call.args:
-                self.report(call.pos, f"'{call.name}' takes no arguments")
-            return builtin
-        variable = self.variable(call.name)
-        if variable is not None and isinstance(variable.type, FbType):
+        if call.receiver is not None:
+            self.report(call.pos, "methods are not supported")
+            return None
+        binding = self.lookup(call.name)
+        if isinstance(binding, Variable) and isinstance(binding.type, FbType):
             self.report(call.pos, f"function block instance '{call.name}' has no value")
+            return None
+        if isinstance(binding, ProgramRef):
+            self.report(call.pos, f"program '{call.name}' has no value; call it as a statement")
+            return None
+        pou = self.resolved.pous.get(key(call.name))
+        if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
+            self.check_user_call(pou, call)
+            return pou.return_type or ELEMENTARY["DINT"]
+        builtin = builtins.lookup(call.name)
+        if builtin is not None:
+            return self._builtin_type(builtin, call)
+        if pou is not None and pou.kind == "FUNCTION":
+            self.report(call.pos, f"external function '{call.name}' is not available")
+            return None
+        if key(call.name) in ("REF", "ADR"):
+            self.report(call.pos, "pointers are not supported (REF and ADR only inside printf)")
             return None
         self.report(call.pos, f"'{call.name}' is not a function")
         return None
+
+    def builtin_arguments(self, builtin: builtins.Builtin, call: ast.Call) -> list[ast.Expr] | None:
+        """The arguments of a builtin call in parameter order: named ones in their place,
+        positional ones filling the remaining places from the left."""
+        values = [arg for arg in call.args if arg.value is not None]
+        if builtin.name == "PRINTF":  # the test helper prints through pointers: unwrap them
+            return [_unwrap_pointer(arg.value) for arg in values if arg.value is not None]
+        if all(arg.name is None for arg in values):
+            return [arg.value for arg in values if arg.value is not None]
+        if builtin.params is None:
+            # IN1, IN2, ... (or K, IN0, IN1 of MUX): selectors first, then inputs by number
+            def order(arg: ast.Argument) -> tuple[int, int]:
+                name = key(arg.name or "")
+                if name.startswith("IN") and name[2:].isdigit():
+                    return (1, int(name[2:]))
+                return (0, 0)
+
+            named = sorted((arg for arg in values if arg.name is not None), key=order)
+            rest = [arg for arg in values if arg.name is None]
+            return [arg.value for arg in (*named, *rest) if arg.value is not None]
+        params = [key(p) for p in builtin.params]
+        ordered: list[ast.Expr | None] = [None] * len(params)
+        for arg in values:
+            if arg.name is None:
+                continue
+            if key(arg.name) not in params:
+                self.report(arg.pos, f"'{call.name}' has no parameter '{arg.name}'")
+                return None
+            ordered[params.index(key(arg.name))] = arg.value
+        free = [i for i, value in enumerate(ordered) if value is None]
+        unnamed = [arg.value for arg in values if arg.name is None]
+        if len(unnamed) > len(free):
+            self.report(call.pos, f"'{call.name}' takes {len(params)} arguments")
+            return None
+        for index, value in zip(free, unnamed, strict=False):
+            ordered[index] = value
+        if any(value is None for value in ordered):
+            self.report(call.pos, f"'{call.name}' needs {', '.join(builtin.params)}")
+            return None
+        return [value for value in ordered if value is not None]
+
+    def _builtin_type(self, builtin: builtins.Builtin, call: ast.Call) -> Type | None:
+        args = self.builtin_arguments(builtin, call)
+        if args is None:
+            return None
+        types = [self.type_of(arg) for arg in args]
+        if any(t is None for t in types):
+            return None
+        if len(args) < builtin.min_args:
+            self.report(call.pos, f"'{call.name}' needs at least {builtin.min_args} arguments")
+            return None
+        result = builtin.typing([t for t in types if t is not None])
+        if isinstance(result, str):
+            self.report(call.pos, f"'{call.name}' {result}")
+            return None
+        return result
+
+    def check_user_call(self, pou: PouSymbols, call: ast.Call) -> None:
+        for arg, param in self.connect_arguments(pou, call):
+            if param is None:
+                if arg.value is not None:
+                    self.type_of(arg.value)
+                continue
+            self._check_argument(arg, param)
+
+    def connect_arguments(
+        self, pou: PouSymbols, call: ast.Call
+    ) -> list[tuple[ast.Argument, Variable | None]]:
+        """Pair each argument with its parameter: named ones by name, positional ones with
+        the parameters not named, in declaration order (inputs, in-outs, outputs)."""
+        params = pou.parameters
+        pairs: list[tuple[ast.Argument, Variable | None]] = []
+        named: set[str] = set()
+        for arg in call.args:
+            if arg.name is None:
+                continue
+            param = pou.by_key.get(key(arg.name))
+            if param is None or param.kind not in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT"):
+                self.report(arg.pos, f"'{pou.name}' has no parameter '{arg.name}'")
+                pairs.append((arg, None))
+                continue
+            named.add(key(param.name))
+            pairs.append((arg, param))
+        free = [p for p in params if key(p.name) not in named]
+        positional = [arg for arg in call.args if arg.name is None]
+        if len(positional) > len(free):
+            self.report(
+                call.pos, f"'{pou.name}' takes {len(params)} arguments, not {len(call.args)}"
+            )
+        for arg, param in zip(positional, free, strict=False):
+            pairs.append((arg, param))
+        return pairs
+
+    def _check_argument(self, arg: ast.Argument, param: Variable) -> None:
+        if arg.value is None:
+            return
+        value_type = self.type_of(arg.value)
+        if value_type is None:
+            return
+        if param.kind == "VAR_OUTPUT" or arg.is_output:
+            if not assignable(value_type, param.type):
+                self.report(
+                    arg.value.pos, f"cannot store {param.type.name} output in {value_type.name}"
+                )
+            return
+        if not assignable(param.type, value_type):
+            self.report(
+                arg.value.pos, f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
+            )
+
+
+def _unwrap_pointer(expr: ast.Expr) -> ast.Expr:
+    if isinstance(expr, ast.Call) and key(expr.name) in ("REF", "ADR") and len(expr.args) == 1:
+        inner = expr.args[0].value
+        if inner is not None:
+            return inner
+    return expr
+
+
+def is_external(pou: PouSymbols) -> bool:
+    """A FUNCTION declared only to announce one the environment provides (e.g. printf)."""
+    variadic = any(isinstance(v.type, VariadicType) for v in pou.variables)
+    return pou.kind == "FUNCTION" and variadic and not pou.pou.body

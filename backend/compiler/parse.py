@@ -6,6 +6,7 @@ builds is turned into typed AST dataclasses right away so that no later stage se
 
 from __future__ import annotations
 
+import datetime
 import functools
 import re
 from importlib import resources
@@ -32,7 +33,8 @@ _TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(D|H|MS|M|S|US|NS)", re.IG
 @functools.cache
 def _parser() -> Lark:
     grammar = resources.files("backend.compiler").joinpath("grammar.lark").read_text()
-    return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True)
+    # cache=True keeps the built LALR tables in the temp folder: `padt` starts in a fraction
+    return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True, cache=True)
 
 
 def parse_time_literal(text: str) -> tuple[int, bool]:
@@ -47,6 +49,40 @@ def parse_time_literal(text: str) -> tuple[int, bool]:
     return (-total if negative else total), prefix.upper() in ("LT", "LTIME")
 
 
+_EPOCH = datetime.datetime(1970, 1, 1)
+_DATE_KINDS = {
+    "D": "DATE", "DATE": "DATE", "LD": "LDATE", "LDATE": "LDATE",
+    "DT": "DT", "DATE_AND_TIME": "DT", "LDT": "LDT", "LDATE_AND_TIME": "LDT",
+    "TOD": "TOD", "TIME_OF_DAY": "TOD", "LTOD": "LTOD", "LTIME_OF_DAY": "LTOD",
+}  # fmt: skip
+# TIME_TO_STRING and friends print these prefixes
+DATE_PREFIXES = {"DATE": "D#", "LDATE": "LDATE#", "TOD": "TOD#", "LTOD": "LTOD#", "DT": "DT#",
+                 "LDT": "LDT#"}  # fmt: skip
+
+
+def parse_date_literal(text: str) -> tuple[str, int]:
+    """`D#2024-01-31`, `TOD#12:00:00.5`, `DT#2024-01-31-12:00:00` -> (type, ns since epoch or
+    since midnight)."""
+    prefix, _, body = text.partition("#")
+    kind = _DATE_KINDS[prefix.upper()]
+    if kind in ("TOD", "LTOD"):
+        return kind, _clock_ns(body)
+    parts = body.split("-")
+    day = datetime.datetime(int(parts[0]), int(parts[1]), int(parts[2]))
+    ns = (day - _EPOCH) // datetime.timedelta(microseconds=1) * 1000
+    if len(parts) > 3:
+        ns += _clock_ns(parts[3])
+    return kind, ns
+
+
+def _clock_ns(text: str) -> int:
+    """`12:30:05.25` -> nanoseconds since midnight; digits below 1 ns are cut off."""
+    hours, minutes, *rest = text.split(":")
+    whole, _, fraction = (rest[0] if rest else "0").partition(".")
+    seconds = (int(hours) * 60 + int(minutes)) * 60 + int(whole)
+    return seconds * 1_000_000_000 + int((fraction + "000000000")[:9])
+
+
 def parse_int_literal(text: str) -> int:
     text = text.replace("_", "")
     if "#" in text:
@@ -55,8 +91,14 @@ def parse_int_literal(text: str) -> int:
     return int(text)
 
 
-def decode_string_literal(text: str) -> str:
-    """Decode the `$` escapes of an ST string literal (without the quotes)."""
+class BadEscape(ValueError):
+    """A `$` escape that IEC 61131-3 does not define."""
+
+
+def decode_string_literal(text: str, wide: bool = False) -> str:
+    """Decode the `$` escapes of an ST string literal (without the quotes): `$N`, `$$`,
+    `$'`, ... and `$hh` (STRING) or `$hhhh` (WSTRING) character codes."""
+    digits = 4 if wide else 2
     out: list[str] = []
     i = 0
     escapes = {"N": "\n", "L": "\n", "R": "\r", "T": "\t", "P": "\f", "$": "$", "'": "'"}
@@ -68,14 +110,34 @@ def decode_string_literal(text: str) -> str:
                 out.append(escapes[nxt.upper()])
                 i += 2
                 continue
-            hex_digits = text[i + 1 : i + 3]
-            if re.fullmatch(r"[0-9A-Fa-f]{2}", hex_digits):
-                out.append(chr(int(hex_digits, 16)))
-                i += 3
+            if nxt == '"' and wide:
+                out.append('"')
+                i += 2
                 continue
-        out.append(ch)
+            hex_digits = text[i + 1 : i + 1 + digits]
+            if re.fullmatch(f"[0-9A-Fa-f]{{{digits}}}", hex_digits):
+                out.append(chr(int(hex_digits, 16)))
+                i += 1 + digits
+                continue
+            raise BadEscape(f"invalid escape '${nxt}' in string literal")
+        if ch == "$":
+            raise BadEscape("a string literal cannot end with '$'")
+        out.append(_source_char(ch, wide))
         i += 1
     return "".join(out)
+
+
+def _source_char(ch: str, wide: bool) -> str:
+    """A character written in the (UTF-8) source: a STRING holds its UTF-8 bytes, one
+    character per byte; a WSTRING its UTF-16 code units."""
+    if ord(ch) < 128:
+        return ch
+    if wide:
+        units = ch.encode("utf-16-le", "surrogatepass")
+        return "".join(
+            chr(int.from_bytes(units[i : i + 2], "little")) for i in range(0, len(units), 2)
+        )
+    return ch.encode("utf-8").decode("latin-1")
 
 
 def _children(tree: Tree[Any]) -> list[Any]:
@@ -89,6 +151,7 @@ class _ToAst(Transformer[Token, Any]):
     def __init__(self, file: str) -> None:
         super().__init__()
         self.file = file
+        self.errors: list[Diagnostic] = []
 
     def _pos(self, item: Any) -> ast.Pos:
         if isinstance(item, Token):
@@ -97,7 +160,9 @@ class _ToAst(Transformer[Token, Any]):
 
     # ---- literals
     def int_literal(self, items: list[Token]) -> ast.IntLiteral:
-        return ast.IntLiteral(parse_int_literal(str(items[0])), self._pos(items[0]))
+        token = items[0]
+        based = token.type == "BASED_INTEGER"
+        return ast.IntLiteral(parse_int_literal(str(token)), self._pos(token), based=based)
 
     def real_literal(self, items: list[Token]) -> ast.RealLiteral:
         text = str(items[0]).replace("_", "")
@@ -108,10 +173,48 @@ class _ToAst(Transformer[Token, Any]):
 
     def time_literal(self, items: list[Token]) -> ast.TimeLiteral:
         ns, long = parse_time_literal(str(items[0]))
-        return ast.TimeLiteral(ns, long, self._pos(items[0]))
+        return ast.TimeLiteral(ns, "LTIME" if long else "TIME", self._pos(items[0]))
+
+    def date_literal(self, items: list[Token]) -> ast.TimeLiteral:
+        type_name, ns = parse_date_literal(str(items[0]))
+        return ast.TimeLiteral(ns, type_name, self._pos(items[0]))
+
+    def _decode(self, token: Token, wide: bool) -> str:
+        try:
+            return decode_string_literal(str(token)[1:-1], wide)
+        except BadEscape as exc:
+            pos = self._pos(token)
+            self.errors.append(Diagnostic(pos.file, pos.line, pos.col, "error", str(exc)))
+            return ""
 
     def string_literal(self, items: list[Token]) -> ast.StringLiteral:
-        return ast.StringLiteral(decode_string_literal(str(items[0])[1:-1]), self._pos(items[0]))
+        return ast.StringLiteral(self._decode(items[0], False), False, self._pos(items[0]))
+
+    def wstring_literal(self, items: list[Token]) -> ast.StringLiteral:
+        return ast.StringLiteral(self._decode(items[0], True), True, self._pos(items[0]))
+
+    def typed_literal(self, items: list[Token]) -> ast.Expr:
+        prefix, *rest = items
+        type_name = str(prefix)[:-1].upper()
+        pos = self._pos(prefix)
+        negative = len(rest) == 2
+        token = rest[-1]
+        if token.type in ("INTEGER", "BASED_INTEGER"):
+            value = parse_int_literal(str(token))
+            based = token.type == "BASED_INTEGER"
+            return ast.IntLiteral(-value if negative else value, pos, type_name, based)
+        if token.type == "REAL_NUMBER":
+            text = str(token).replace("_", "")
+            value_f = float(text)
+            return ast.RealLiteral(-value_f if negative else value_f, text, pos, type_name)
+        if token.type == "BOOL_LITERAL":
+            return ast.BoolLiteral(str(token).upper() == "TRUE", pos, type_name)
+        wide = type_name == "WSTRING"
+        return ast.StringLiteral(self._decode(token, wide), wide, pos, type_name)
+
+    def enum_literal(self, items: list[Token]) -> ast.EnumLiteral:
+        prefix, value = items
+        return ast.EnumLiteral(str(prefix)[:-1], str(value), self._pos(prefix))
 
     # ---- expressions
     def name_ref(self, items: list[Token]) -> ast.NameRef:
@@ -120,6 +223,21 @@ class _ToAst(Transformer[Token, Any]):
     def member_ref(self, items: list[Any]) -> ast.MemberRef:
         base, member = items
         return ast.MemberRef(base, str(member), base.pos)
+
+    def index_ref(self, items: list[Any]) -> ast.IndexRef:
+        base, *indices = items
+        return ast.IndexRef(base, tuple(indices), base.pos)
+
+    def bit_ref(self, items: list[Any]) -> ast.BitRef:
+        base, part = items
+        text = str(part).upper()
+        if text.startswith("%"):
+            width = {"X": 1, "B": 8, "W": 16, "D": 32}[text[1]]
+            return ast.BitRef(base, int(text[2:]), base.pos, width)
+        return ast.BitRef(base, int(text), base.pos)
+
+    def deref(self, items: list[Any]) -> ast.Deref:
+        return ast.Deref(items[0], items[0].pos)
 
     def binary(self, items: list[Any]) -> ast.Binary:
         left, op, right = items
@@ -134,8 +252,12 @@ class _ToAst(Transformer[Token, Any]):
         return ast.Argument(str(name), value, False, self._pos(name))
 
     def named_output(self, items: list[Any]) -> ast.Argument:
-        name, _arrow, target = items
-        return ast.Argument(str(name), target, True, self._pos(name))
+        name, _arrow, *target = items
+        return ast.Argument(str(name), target[0] if target else None, True, self._pos(name))
+
+    def negated_output(self, items: list[Any]) -> ast.Argument:
+        _not, name, _arrow, target = items
+        return ast.Argument(str(name), target, True, self._pos(name), negated=True)
 
     def positional_arg(self, items: list[Any]) -> ast.Argument:
         return ast.Argument(None, items[0], False, items[0].pos)
@@ -143,6 +265,43 @@ class _ToAst(Transformer[Token, Any]):
     def call(self, items: list[Any]) -> ast.Call:
         name, *args = items
         return ast.Call(str(name), tuple(a for a in args if a is not None), self._pos(name))
+
+    def keyword_call(self, items: list[Any]) -> ast.Call:
+        keyword, *args = items
+        name = str(keyword).rstrip("( \t\r\n")
+        return ast.Call(name, tuple(a for a in args if a is not None), self._pos(keyword))
+
+    def method_call(self, items: list[Any]) -> ast.Call:
+        receiver, name, *args = items
+        arguments = tuple(a for a in args if a is not None)
+        return ast.Call(str(name), arguments, self._pos(name), receiver=receiver)
+
+    # ---- initializers
+    @v_args(tree=True)
+    def array_initializer(self, tree: Tree[Any]) -> ast.ArrayInit:
+        items: list[tuple[ast.Expr | None, Any]] = []
+        for child in _children(tree):
+            if child is None:
+                continue
+            if isinstance(child, tuple) and child and child[0] == "REPEAT":
+                items.append((child[1], child[2]))
+            else:
+                items.append((None, child))
+        return ast.ArrayInit(tuple(items), self._pos(tree))
+
+    def repeated_init(self, items: list[Any]) -> tuple[str, ast.Expr, Any]:
+        count, *values = [i for i in items if i is not None]
+        if len(values) == 1:
+            return ("REPEAT", count, values[0])
+        # `n(a, b)` repeats a group: an array initializer of its own, flattened later
+        return ("REPEAT", count, ast.ArrayInit(tuple((None, v) for v in values), count.pos))
+
+    @v_args(tree=True)
+    def struct_initializer(self, tree: Tree[Any]) -> ast.StructInit:
+        return ast.StructInit(tuple(_children(tree)), self._pos(tree))
+
+    def member_init(self, items: list[Any]) -> tuple[str, Any]:
+        return (str(items[0]), items[1])
 
     # ---- statements
     @v_args(tree=True)
@@ -158,6 +317,32 @@ class _ToAst(Transformer[Token, Any]):
 
     def empty_statement(self, items: list[Any]) -> None:
         return None
+
+    @v_args(tree=True)
+    def continue_statement(self, tree: Tree[Any]) -> ast.Continue:
+        return ast.Continue(self._pos(tree))
+
+    @v_args(tree=True)
+    def case_statement(self, tree: Tree[Any]) -> ast.Case:
+        selector, *parts = _children(tree)
+        orelse: tuple[ast.Statement, ...] = ()
+        branches: list[tuple[tuple[Any, ...], list[ast.Statement]]] = []
+        for part in parts:
+            if isinstance(part, tuple) and part and part[0] == "ELSE":
+                orelse = part[1]
+            elif isinstance(part, tuple) and part and part[0] == "LABELS":
+                branches.append((part[1], []))
+            elif part is not None and branches:
+                branches[-1][1].append(part)
+        grouped = tuple((labels, tuple(body)) for labels, body in branches)
+        return ast.Case(selector, grouped, orelse, self._pos(tree))
+
+    def case_labels(self, items: list[Any]) -> tuple[str, tuple[Any, ...]]:
+        return ("LABELS", tuple(items))
+
+    def case_range(self, items: list[Any]) -> ast.CaseRange:
+        low, high = items
+        return ast.CaseRange(low, high, low.pos)
 
     @v_args(tree=True)
     def return_statement(self, tree: Tree[Any]) -> ast.Return:
@@ -212,6 +397,53 @@ class _ToAst(Transformer[Token, Any]):
         length = items[1] if len(items) > 1 else None
         return ast.StringType(str(kw).upper() == "WSTRING", length, self._pos(kw))
 
+    @v_args(tree=True)
+    def array_type(self, tree: Tree[Any]) -> ast.ArrayType:
+        *ranges, element = _children(tree)
+        return ast.ArrayType(tuple(ranges), element, self._pos(tree))
+
+    def array_range(self, items: list[Any]) -> tuple[ast.Expr, ast.Expr]:
+        return (items[0], items[1])
+
+    def open_range(self, items: list[Any]) -> None:
+        return None
+
+    def variadic_type(self, items: list[Token]) -> ast.VariadicType:
+        return ast.VariadicType(self._pos(items[0]))
+
+    @v_args(tree=True)
+    def enum_spec(self, tree: Tree[Any]) -> ast.EnumSpec:
+        children = _children(tree)
+        base = None
+        # the base type may stand before `(` (rusty, CODESYS 3) or after `)` (CODESYS 2)
+        names = [c for c in children if isinstance(c, Token)]
+        if names:
+            base = str(names[0])
+        values = tuple(c for c in children if isinstance(c, tuple))
+        return ast.EnumSpec(base, values, self._pos(tree))
+
+    def enum_value(self, items: list[Any]) -> tuple[str, ast.Expr | None, ast.Pos]:
+        return (str(items[0]), items[1] if len(items) > 1 else None, self._pos(items[0]))
+
+    @v_args(tree=True)
+    def struct_spec(self, tree: Tree[Any]) -> ast.StructSpec:
+        members = tuple(d for group in _children(tree) for d in group)
+        return ast.StructSpec(members, self._pos(tree))
+
+    def struct_member(self, items: list[Any]) -> list[ast.VarDecl]:
+        return self.var_decl(items)
+
+    def subrange_spec(self, items: list[Any]) -> ast.SubrangeSpec:
+        base, low, high = items
+        return ast.SubrangeSpec(str(base), low, high, self._pos(base))
+
+    def type_decl(self, items: list[Any]) -> ast.TypeDecl:
+        name, spec, *init = items
+        return ast.TypeDecl(str(name), spec, init[0] if init else None, self._pos(name))
+
+    def type_block(self, items: list[Any]) -> list[ast.TypeDecl]:
+        return items
+
     def location(self, items: list[Token]) -> str:
         return str(items[0]).upper()
 
@@ -243,7 +475,7 @@ class _ToAst(Transformer[Token, Any]):
     def _pou(self, kind: str, tree: Tree[Any]) -> ast.Pou:
         name, *rest = _children(tree)
         return_type = None
-        if kind == "FUNCTION":
+        if kind == "FUNCTION" and rest and not isinstance(rest[0], ast.VarBlock | tuple):
             return_type, *rest = rest
         blocks = tuple(r for r in rest if isinstance(r, ast.VarBlock))
         body = rest[-1]
@@ -283,6 +515,8 @@ def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:
 
 
 def _describe(terminal: str) -> str:
+    if terminal == "$END":
+        return "end of file"
     pattern = _parser().get_terminal(terminal).pattern
     if pattern.type == "str":
         return f"'{pattern.value}'"
@@ -295,7 +529,11 @@ def parse_source(file: str, text: str) -> ast.SourceUnit:
         tree = _parser().parse(text)
     except UnexpectedInput as exc:
         raise CompileError([_syntax_diagnostic(file, exc)]) from None
-    items = _ToAst(file).transform(tree)
+    transformer = _ToAst(file)
+    items = transformer.transform(tree)
+    if transformer.errors:
+        raise CompileError(transformer.errors)
     pous = tuple(i for i in items if isinstance(i, ast.Pou))
     globals_ = tuple(i for i in items if isinstance(i, ast.VarBlock))
-    return ast.SourceUnit(file, pous, globals_)
+    types = tuple(t for i in items if isinstance(i, list) for t in i)
+    return ast.SourceUnit(file, pous, globals_, types)

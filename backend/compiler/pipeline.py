@@ -12,11 +12,19 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
 from backend.compiler.diagnostics import CompileError, Diagnostic, error
-from backend.compiler.generate import class_name, generate_pou
+from backend.compiler.generate import (
+    class_name,
+    function_name,
+    generate_globals,
+    generate_pou,
+    generate_struct,
+    struct_class,
+)
+from backend.compiler.infer import is_external
 from backend.compiler.parse import parse_source
-from backend.compiler.resolve import PouSymbols, Resolved, resolve
+from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import SourceFile, stdlib_sources
-from backend.compiler.types import FbType
+from backend.compiler.types import ArrayType, FbType, StructType, Type
 from runtime.artifact import (
     Artifact,
     PouCode,
@@ -73,17 +81,32 @@ def compile_sources(
         programs = _default_programs(units)
     diagnostics.extend(_check_programs(resolved, programs, config_file))
     diagnostics.sort()
-    if any(d.severity == "error" for d in diagnostics):
+    if any(d.severity == "error" for d in diagnostics) or not resolved.pous:
+        if not resolved.pous and not diagnostics:
+            diagnostics.append(error(ast.Pos(config_file, 1, 1), "no POU to compile"))
         return CompileResult(tuple(diagnostics), None)
 
     included = _included_pous(resolved, user_pous, programs)
     codes = {name: _pou_code(resolved, resolved.pous[name]) for name in included}
     program_configs = tuple(replace(p, crc=_program_crc(resolved, codes, p)) for p in programs)
+    any_pou = resolved.sorted_pous()[0]
+    types = tuple(
+        _unit_code(
+            info.name, "STRUCT", struct_class(info.name),
+            generate_struct(resolved, info, any_pou), info.members,
+        )
+        for _, info in sorted(resolved.structs.items())
+    )  # fmt: skip
+    globals_code = _unit_code(
+        "GLOBALS", "GLOBALS", "GLOBALS", generate_globals(resolved, any_pou), resolved.globals
+    )
     artifact = Artifact(
         project=project,
         resource=resource,
         pous=tuple(codes[name] for name in sorted(codes)),
         programs=program_configs,
+        types=types,
+        globals=globals_code,
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
 
@@ -125,9 +148,22 @@ def _fb_dependencies(resolved: Resolved, name: str) -> list[str]:
             continue
         seen.append(current)
         for variable in resolved.pous[current].variables:
-            if isinstance(variable.type, FbType):
-                stack.append(key(variable.type.name))
+            stack.extend(_fb_types_in(resolved, variable.type))
     return sorted(seen)
+
+
+def _fb_types_in(resolved: Resolved, t: Type) -> list[str]:
+    """Function block types a variable of type `t` contains (in arrays and structs too)."""
+    if isinstance(t, FbType):
+        return [key(t.name)]
+    if isinstance(t, ArrayType):
+        return _fb_types_in(resolved, t.element)
+    if isinstance(t, StructType):
+        found: list[str] = []
+        for member in resolved.structs[key(t.name)].members:
+            found.extend(_fb_types_in(resolved, member.type))
+        return found
+    return []
 
 
 def _included_pous(
@@ -137,12 +173,13 @@ def _included_pous(
     included: set[str] = set()
     for name in wanted:
         included.update(_fb_dependencies(resolved, name))
-    return sorted(included)
+    return sorted(name for name in included if not is_external(resolved.pous[name]))
 
 
-def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
-    source = generate_pou(resolved, pou)
-    variables = tuple(
+def _unit_code(
+    name: str, kind: str, class_: str, source: str, variables: list[Variable]
+) -> PouCode:
+    infos = tuple(
         VarInfo(
             name=v.name,
             attr=v.attr,
@@ -152,9 +189,17 @@ def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
             constant=v.constant,
             location=v.location,
         )
-        for v in pou.variables
+        for v in variables
     )
-    return PouCode(pou.name, pou.kind, class_name(pou.name), source, crc32_hex(source), variables)
+    return PouCode(name, kind, class_, source, crc32_hex(source), infos)
+
+
+def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
+    source = generate_pou(resolved, pou)
+    if pou.kind == "FUNCTION":
+        return _unit_code(pou.name, pou.kind, function_name(pou.name), source, [])
+    stored = [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
+    return _unit_code(pou.name, pou.kind, class_name(pou.name), source, stored)
 
 
 def _program_crc(resolved: Resolved, codes: dict[str, PouCode], program: ProgramConfig) -> str:

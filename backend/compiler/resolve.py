@@ -1,7 +1,9 @@
 """Stage 2, resolve: bind every declaration to a type and build the symbol tables.
 
-The result, `Resolved`, is what check and generate work on. Everything here is sorted by
-name so that later stages never depend on the order of files or of hash tables.
+The result, `Resolved`, is what check and generate work on: POUs with their variables,
+user data types (structs, enums, aliases, subranges), and the global variables. Tables
+are keyed by the upper-case name; everything a later stage iterates over is sorted or in
+declaration order, never in hash order.
 """
 
 from __future__ import annotations
@@ -12,21 +14,31 @@ from dataclasses import dataclass, field
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.diagnostics import Diagnostic, error
-from backend.compiler.types import ELEMENTARY, FbType, Type
+from backend.compiler.types import (
+    INT,
+    ArrayType,
+    ElementaryType,
+    EnumType,
+    FbType,
+    StructType,
+    Type,
+    VariadicType,
+    elementary,
+)
 
-INSTANCE_KINDS = ("PROGRAM", "FUNCTION_BLOCK")
+PARAMETER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")
 
 
 @dataclass(frozen=True)
 class Variable:
     name: str
-    kind: str  # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_EXTERNAL, VAR_GLOBAL
+    kind: str  # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_EXTERNAL, VAR_GLOBAL, MEMBER
     type: Type
-    init: ast.Expr | None
+    init: ast.Initializer | None
     constant: bool
     retain: bool
     location: str | None
-    attr: str  # the Python attribute name in generated code
+    attr: str  # the Python name in generated code
     pos: ast.Pos
 
 
@@ -45,14 +57,44 @@ class PouSymbols:
     def kind(self) -> str:
         return self.pou.kind
 
+    @property
+    def parameters(self) -> list[Variable]:
+        """Inputs, in-outs and outputs in declaration order (the order of positional args)."""
+        return [v for v in self.variables if v.kind in PARAMETER_KINDS]
+
+
+@dataclass
+class StructInfo:
+    name: str
+    members: list[Variable]
+    by_key: dict[str, Variable]
+
+
+@dataclass
+class EnumInfo:
+    type: EnumType
+    values: dict[str, tuple[str, int]]  # key -> (spelling, value), in declaration order
+
 
 @dataclass
 class Resolved:
-    pous: dict[str, PouSymbols] = field(default_factory=dict)  # by key(name)
+    pous: dict[str, PouSymbols] = field(default_factory=dict)
+    structs: dict[str, StructInfo] = field(default_factory=dict)
+    enums: dict[str, EnumInfo] = field(default_factory=dict)
+    globals: list[Variable] = field(default_factory=list)
+    globals_by_key: dict[str, Variable] = field(default_factory=dict)
     diagnostics: list[Diagnostic] = field(default_factory=list)
 
     def sorted_pous(self) -> list[PouSymbols]:
         return [self.pous[k] for k in sorted(self.pous)]
+
+    def enum_values_named(self, name: str) -> list[tuple[EnumInfo, int]]:
+        """Every enum that has a value called `name` (unqualified use)."""
+        return [
+            (info, info.values[key(name)][1])
+            for _, info in sorted(self.enums.items())
+            if key(name) in info.values
+        ]
 
 
 def python_attr(name: str) -> str:
@@ -60,72 +102,292 @@ def python_attr(name: str) -> str:
     return f"{name}_" if keyword.iskeyword(name) or name in ("None", "True", "False") else name
 
 
-def resolve_type(ref: ast.TypeRef, pou_names: dict[str, ast.Pou]) -> Type | None:
-    if isinstance(ref, ast.StringType):
-        return ELEMENTARY["WSTRING" if ref.wide else "STRING"]
-    elementary = ELEMENTARY.get(key(ref.name))
-    if elementary is not None:
-        return elementary
-    pou = pou_names.get(key(ref.name))
-    if pou is not None and pou.kind == "FUNCTION_BLOCK":
-        return FbType(pou.name)
-    return None
+class _TypeResolver:
+    """Turns type references into types, resolving named types on first use."""
+
+    def __init__(self, units: list[ast.SourceUnit], result: Resolved) -> None:
+        self.result = result
+        self.pou_kinds: dict[str, ast.Pou] = {}
+        self.decls: dict[str, ast.TypeDecl] = {}
+        self.named: dict[str, Type | None] = {}
+        self.in_progress: set[str] = set()
+        self.global_constants: dict[str, ast.Initializer | None] = {}
+        for unit in units:
+            for pou in unit.pous:
+                self.pou_kinds.setdefault(key(pou.name), pou)
+            for decl in unit.types:
+                if key(decl.name) in self.decls:
+                    first = self.decls[key(decl.name)]
+                    self.report(decl.pos, f"type '{decl.name}' is already declared at {first.pos}")
+                    continue
+                self.decls[key(decl.name)] = decl
+            for block in unit.globals:
+                if "CONSTANT" in block.qualifiers:
+                    for var in block.decls:
+                        self.global_constants[key(var.name)] = var.init
+
+    def report(self, pos: ast.Pos, message: str) -> None:
+        self.result.diagnostics.append(error(pos, message))
+
+    def const_int(
+        self, expr: ast.Expr, local_constants: dict[str, ast.Initializer | None]
+    ) -> int | None:
+        """Evaluate a constant integer expression (array bounds, string lengths, enum values)."""
+        match expr:
+            case ast.IntLiteral(value=value):
+                return value
+            case ast.Unary(op="-", operand=operand):
+                inner = self.const_int(operand, local_constants)
+                return None if inner is None else -inner
+            case ast.Binary(op=op, left=left, right=right) if op in ("+", "-", "*", "/", "MOD"):
+                a, b = self.const_int(left, local_constants), self.const_int(right, local_constants)
+                if a is None or b is None:
+                    return None
+                if op in ("/", "MOD") and b == 0:
+                    return None
+                return {
+                    "+": lambda: a + b,
+                    "-": lambda: a - b,
+                    "*": lambda: a * b,
+                    "/": lambda: int(a / b),
+                    "MOD": lambda: a - b * int(a / b),
+                }[op]()
+            case ast.NameRef(name=name):
+                init = local_constants.get(key(name), self.global_constants.get(key(name)))
+                if isinstance(init, ast.IntLiteral | ast.Unary | ast.Binary | ast.NameRef):
+                    return self.const_int(init, {})
+                for info in self.result.enums.values():
+                    if key(name) in info.values:
+                        return info.values[key(name)][1]
+        return None
+
+    def default_init(self, spec: ast.TypeRef) -> ast.Initializer | None:
+        """The initializer a named type carries (`TYPE T : INT := 5;`), through aliases."""
+        seen: set[str] = set()
+        while isinstance(spec, ast.NamedType) and key(spec.name) not in seen:
+            seen.add(key(spec.name))
+            decl = self.decls.get(key(spec.name))
+            if decl is None:
+                return None
+            if decl.init is not None:
+                return decl.init
+            spec = decl.spec
+        return None
+
+    def resolve_named(self, name: str, pos: ast.Pos) -> Type | None:
+        found = elementary(name)
+        if found is not None:
+            return found
+        name_key = key(name)
+        if name_key in self.named:
+            return self.named[name_key]
+        decl = self.decls.get(name_key)
+        if decl is not None:
+            if name_key in self.in_progress:
+                self.report(pos, f"type '{name}' is defined in terms of itself")
+                return None
+            self.in_progress.add(name_key)
+            resolved = self.resolve_spec(decl.spec, {}, type_name=decl.name)
+            self.in_progress.discard(name_key)
+            self.named[name_key] = resolved
+            return resolved
+        pou = self.pou_kinds.get(name_key)
+        if pou is not None and pou.kind in ("FUNCTION_BLOCK", "PROGRAM"):
+            return FbType(pou.name)
+        self.report(pos, f"unknown type '{name}'")
+        self.named[name_key] = None
+        return None
+
+    def resolve_spec(
+        self,
+        spec: ast.TypeRef,
+        local_constants: dict[str, ast.Initializer | None],
+        type_name: str | None = None,
+    ) -> Type | None:
+        match spec:
+            case ast.NamedType(name=name, pos=pos):
+                return self.resolve_named(name, pos)
+            case ast.StringType(wide=wide, length=length, pos=pos):
+                size = 0
+                if length is not None:
+                    size = self.const_int(length, local_constants) or 0
+                    if size <= 0:
+                        self.report(pos, "string length must be a positive constant")
+                return ElementaryType("WSTRING" if wide else "STRING", "string", length=size)
+            case ast.ArrayType():
+                return self._array(spec, local_constants)
+            case ast.VariadicType():
+                return VariadicType()
+            case ast.SubrangeSpec(base=base, pos=pos):
+                return self.resolve_named(base, pos)  # the range is checked, not represented
+            case ast.EnumSpec():
+                return self._enum(spec, type_name or f"enum@{spec.pos.line}:{spec.pos.col}")
+            case ast.StructSpec():
+                return self._struct(spec, type_name or f"struct@{spec.pos.line}:{spec.pos.col}")
+        raise AssertionError(f"unhandled type spec {spec!r}")
+
+    def _array(
+        self, spec: ast.ArrayType, local_constants: dict[str, ast.Initializer | None]
+    ) -> Type | None:
+        element = self.resolve_spec(spec.element, local_constants)
+        dims: list[tuple[int, int]] = []
+        for bounds in spec.ranges:
+            if bounds is None:
+                self.report(spec.pos, "variable-length arrays (ARRAY[*]) are not supported")
+                return None
+            low = self.const_int(bounds[0], local_constants)
+            high = self.const_int(bounds[1], local_constants)
+            if low is None or high is None:
+                self.report(bounds[0].pos, "array bounds must be constant integers")
+                return None
+            if high < low:
+                self.report(bounds[0].pos, f"array range {low}..{high} is empty")
+                return None
+            dims.append((low, high))
+        if element is None:
+            return None
+        return ArrayType(element, tuple(dims))
+
+    def _enum(self, spec: ast.EnumSpec, name: str) -> Type | None:
+        base: ElementaryType = INT
+        if spec.base is not None:
+            found = elementary(spec.base)
+            if found is None or not found.is_integer:
+                self.report(spec.pos, f"enum base type must be an integer type, not '{spec.base}'")
+            else:
+                base = found
+        enum_type = EnumType(name, base)
+        info = EnumInfo(enum_type, {})
+        next_value = 0
+        for value_name, value_expr, pos in spec.values:
+            value = next_value
+            if value_expr is not None:
+                evaluated = self.const_int(value_expr, {})
+                if evaluated is None:
+                    self.report(pos, f"value of '{value_name}' must be a constant integer")
+                else:
+                    value = evaluated
+            if key(value_name) in info.values:
+                self.report(pos, f"'{value_name}' appears twice in enum '{name}'")
+            info.values[key(value_name)] = (value_name, value)
+            next_value = value + 1
+        self.result.enums[key(name)] = info
+        return enum_type
+
+    def _struct(self, spec: ast.StructSpec, name: str) -> Type | None:
+        info = StructInfo(name, [], {})
+        self.result.structs[key(name)] = info
+        for decl in spec.members:
+            member_type = self.resolve_spec(decl.type, {})
+            if member_type is None:
+                continue
+            if key(decl.name) in info.by_key:
+                self.report(decl.pos, f"member '{decl.name}' appears twice in '{name}'")
+                continue
+            init = decl.init if decl.init is not None else self.default_init(decl.type)
+            variable = Variable(
+                decl.name, "MEMBER", member_type, init, False, False, None,
+                python_attr(decl.name), decl.pos,
+            )  # fmt: skip
+            info.members.append(variable)
+            info.by_key[key(decl.name)] = variable
+        return StructType(name)
 
 
 def resolve(units: list[ast.SourceUnit]) -> Resolved:
     result = Resolved()
-    pou_names: dict[str, ast.Pou] = {}
+    types = _TypeResolver(units, result)
+    for name in sorted(types.decls):  # every declared type, used or not, is checked
+        types.resolve_named(types.decls[name].name, types.decls[name].pos)
+
+    for unit in units:
+        for block in unit.globals:
+            for variable in _block_variables(block, types, {}):
+                if key(variable.name) in result.globals_by_key:
+                    first = result.globals_by_key[key(variable.name)]
+                    result.diagnostics.append(
+                        error(
+                            variable.pos,
+                            f"global '{variable.name}' is already declared at {first.pos}",
+                        )
+                    )
+                    continue
+                result.globals.append(variable)
+                result.globals_by_key[key(variable.name)] = variable
+
+    seen: dict[str, ast.Pou] = {}
     for unit in units:
         for pou in unit.pous:
-            previous = pou_names.get(key(pou.name))
+            previous = seen.get(key(pou.name))
             if previous is not None:
                 result.diagnostics.append(
                     error(pou.pos, f"'{pou.name}' is already declared at {previous.pos}")
                 )
                 continue
-            pou_names[key(pou.name)] = pou
-    for name in sorted(pou_names):
-        result.pous[name] = _resolve_pou(pou_names[name], pou_names, result.diagnostics)
+            seen[key(pou.name)] = pou
+    for name in sorted(seen):
+        result.pous[name] = _resolve_pou(seen[name], types, result)
     return result
 
 
-def _resolve_pou(
-    pou: ast.Pou, pou_names: dict[str, ast.Pou], diagnostics: list[Diagnostic]
-) -> PouSymbols:
-    symbols = PouSymbols(pou, [], {})
-    if pou.return_type is not None:
-        symbols.return_type = resolve_type(pou.return_type, pou_names)
-        if symbols.return_type is None:
-            diagnostics.append(error(pou.return_type.pos, f"unknown type '{_type_name(pou)}'"))
-    for block in pou.var_blocks:
-        for decl in block.decls:
-            var_type = resolve_type(decl.type, pou_names)
-            if var_type is None:
-                name = decl.type.name if isinstance(decl.type, ast.NamedType) else "?"
-                diagnostics.append(error(decl.type.pos, f"unknown type '{name}'"))
-                continue
-            if key(decl.name) in symbols.by_key:
-                first = symbols.by_key[key(decl.name)]
-                diagnostics.append(
-                    error(decl.pos, f"'{decl.name}' is already declared at {first.pos}")
-                )
-                continue
-            variable = Variable(
+def _block_variables(
+    block: ast.VarBlock, types: _TypeResolver, local_constants: dict[str, ast.Initializer | None]
+) -> list[Variable]:
+    variables = []
+    for decl in block.decls:
+        var_type = types.resolve_spec(decl.type, local_constants)
+        if var_type is None:
+            continue
+        init = decl.init if decl.init is not None else types.default_init(decl.type)
+        variables.append(
+            Variable(
                 name=decl.name,
                 kind=block.kind,
                 type=var_type,
-                init=decl.init,
+                init=init,
                 constant="CONSTANT" in block.qualifiers,
-                retain="RETAIN" in block.qualifiers,
+                retain="RETAIN" in block.qualifiers or "PERSISTENT" in block.qualifiers,
                 location=decl.location,
                 attr=python_attr(decl.name),
                 pos=decl.pos,
             )
+        )
+    return variables
+
+
+def _resolve_pou(pou: ast.Pou, types: _TypeResolver, result: Resolved) -> PouSymbols:
+    symbols = PouSymbols(pou, [], {})
+    if pou.return_type is not None:
+        symbols.return_type = types.resolve_spec(pou.return_type, {})
+        if symbols.return_type is not None:
+            # inside a function its name is the variable that holds the result
+            result_var = Variable(
+                pou.name, "RETURN", symbols.return_type, None, False, False, None,
+                python_attr(pou.name), pou.pos,
+            )  # fmt: skip
+            symbols.by_key[key(pou.name)] = result_var
+    local_constants = {
+        key(decl.name): decl.init
+        for block in pou.var_blocks
+        if "CONSTANT" in block.qualifiers
+        for decl in block.decls
+    }
+    for block in pou.var_blocks:
+        for variable in _block_variables(block, types, local_constants):
+            if key(variable.name) in symbols.by_key:
+                first = symbols.by_key[key(variable.name)]
+                result.diagnostics.append(
+                    error(variable.pos, f"'{variable.name}' is already declared at {first.pos}")
+                )
+                continue
+            if variable.kind == "VAR_EXTERNAL":
+                declared = result.globals_by_key.get(key(variable.name))
+                if declared is None:
+                    result.diagnostics.append(
+                        error(variable.pos, f"VAR_EXTERNAL '{variable.name}' has no VAR_GLOBAL")
+                    )
+                    continue
+                variable = declared  # the same storage as the global
             symbols.variables.append(variable)
-            symbols.by_key[key(decl.name)] = variable
+            symbols.by_key[key(variable.name)] = variable
     return symbols
-
-
-def _type_name(pou: ast.Pou) -> str:
-    ref = pou.return_type
-    return ref.name if isinstance(ref, ast.NamedType) else "?"

@@ -1,21 +1,25 @@
-"""The type system: elementary IEC types and references to function blocks.
+"""The type system: elementary IEC types, arrays, structs, enums, function blocks.
 
 Run-time representation (the artifact documents it for the runtime): integers and bit
 strings as Python int kept inside their width, REAL/LREAL as float, BOOL as bool,
-TIME/LTIME as int nanoseconds, STRING as str.
+TIME/LTIME and the date types as int nanoseconds, STRING as str, enums as int, arrays as
+flat Python lists, structs and FB instances as objects of generated classes.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+DEFAULT_STRING_LENGTH = 80
+
 
 @dataclass(frozen=True)
 class ElementaryType:
     name: str
-    category: str  # "bool" | "int" | "bits" | "real" | "time" | "string"
+    category: str  # "bool" | "int" | "bits" | "real" | "time" | "date" | "string"
     bits: int = 0
     signed: bool = False
+    length: int = 0  # STRING[n]; 0 = the default length
 
     @property
     def is_integer(self) -> bool:
@@ -26,6 +30,10 @@ class ElementaryType:
         return self.category in ("int", "bits", "real")
 
     @property
+    def is_any_literal(self) -> bool:
+        return self.name.startswith("ANY_")
+
+    @property
     def min(self) -> int:
         return -(1 << (self.bits - 1)) if self.signed else 0
 
@@ -33,15 +41,58 @@ class ElementaryType:
     def max(self) -> int:
         return (1 << (self.bits - 1)) - 1 if self.signed else (1 << self.bits) - 1
 
+    @property
+    def max_length(self) -> int:
+        return self.length or DEFAULT_STRING_LENGTH
+
+
+@dataclass(frozen=True)
+class ArrayType:
+    element: Type
+    dims: tuple[tuple[int, int], ...]
+
+    @property
+    def name(self) -> str:
+        ranges = ", ".join(f"{lo}..{hi}" for lo, hi in self.dims)
+        return f"ARRAY[{ranges}] OF {self.element.name}"
+
+    @property
+    def size(self) -> int:
+        size = 1
+        for lo, hi in self.dims:
+            size *= hi - lo + 1
+        return size
+
+
+@dataclass(frozen=True)
+class StructType:
+    name: str
+
+
+@dataclass(frozen=True)
+class EnumType:
+    name: str
+    base: ElementaryType
+
 
 @dataclass(frozen=True)
 class FbType:
-    """An instance of a FUNCTION_BLOCK (or a PROGRAM, for program instances)."""
+    """An instance of a FUNCTION_BLOCK (or of a PROGRAM, for program instances)."""
 
     name: str
 
 
-Type = ElementaryType | FbType
+@dataclass(frozen=True)
+class VariadicType:
+    name: str = "..."
+
+
+Type = ElementaryType | ArrayType | StructType | EnumType | FbType | VariadicType
+
+
+def _int(name: str, bits: int, signed: bool, category: str = "int") -> ElementaryType:
+    return ElementaryType(name, category, bits, signed)
+
 
 BOOL = ElementaryType("BOOL", "bool", 1)
 TIME = ElementaryType("TIME", "time", 64, True)
@@ -50,70 +101,124 @@ REAL = ElementaryType("REAL", "real", 32, True)
 LREAL = ElementaryType("LREAL", "real", 64, True)
 STRING = ElementaryType("STRING", "string")
 WSTRING = ElementaryType("WSTRING", "string")
-# The type of an integer literal before the context gives it one.
+SINT, INT, DINT, LINT = (
+    _int(n, b, True) for n, b in (("SINT", 8), ("INT", 16), ("DINT", 32), ("LINT", 64))
+)
+USINT, UINT, UDINT, ULINT = (
+    _int(n, b, False) for n, b in (("USINT", 8), ("UINT", 16), ("UDINT", 32), ("ULINT", 64))
+)
+BYTE, WORD, DWORD, LWORD = (
+    _int(n, b, False, "bits") for n, b in (("BYTE", 8), ("WORD", 16), ("DWORD", 32), ("LWORD", 64))
+)
+DATE = ElementaryType("DATE", "date", 64, True)
+TOD = ElementaryType("TOD", "date", 64, True)
+DT = ElementaryType("DT", "date", 64, True)
+# The types of literals before the context gives them one.
 ANY_INT = ElementaryType("ANY_INT", "int", 64, True)
 ANY_REAL = ElementaryType("ANY_REAL", "real", 64, True)
 
 ELEMENTARY: dict[str, ElementaryType] = {
     t.name: t
     for t in (
-        BOOL,
-        ElementaryType("SINT", "int", 8, True),
-        ElementaryType("INT", "int", 16, True),
-        ElementaryType("DINT", "int", 32, True),
-        ElementaryType("LINT", "int", 64, True),
-        ElementaryType("USINT", "int", 8, False),
-        ElementaryType("UINT", "int", 16, False),
-        ElementaryType("UDINT", "int", 32, False),
-        ElementaryType("ULINT", "int", 64, False),
-        ElementaryType("BYTE", "bits", 8, False),
-        ElementaryType("WORD", "bits", 16, False),
-        ElementaryType("DWORD", "bits", 32, False),
-        ElementaryType("LWORD", "bits", 64, False),
-        REAL,
-        LREAL,
-        TIME,
-        LTIME,
-        STRING,
-        WSTRING,
+        BOOL, SINT, INT, DINT, LINT, USINT, UINT, UDINT, ULINT, BYTE, WORD, DWORD, LWORD,
+        REAL, LREAL, TIME, LTIME, STRING, WSTRING, DATE, TOD, DT,
     )
-}
+}  # fmt: skip
+LDATE = ElementaryType("LDATE", "date", 64, True)
+LTOD = ElementaryType("LTOD", "date", 64, True)
+LDT = ElementaryType("LDT", "date", 64, True)
+# Spelled-out names of the date types are the same types.
+ELEMENTARY.update(
+    {
+        "LDATE": LDATE,
+        "LTOD": LTOD,
+        "LDT": LDT,
+        "TIME_OF_DAY": TOD,
+        "LTIME_OF_DAY": LTOD,
+        "DATE_AND_TIME": DT,
+        "LDATE_AND_TIME": LDT,
+        "CHAR": ElementaryType("CHAR", "string", length=1),
+        "WCHAR": ElementaryType("WCHAR", "string", length=1),
+    }
+)
+
+
+def elementary(name: str) -> ElementaryType | None:
+    return ELEMENTARY.get(name.upper())
+
+
+def integer_like(t: Type) -> ElementaryType | None:
+    """The integer representation of `t` (enums count as their base type)."""
+    if isinstance(t, EnumType):
+        return t.base
+    if isinstance(t, ElementaryType) and t.is_integer:
+        return t
+    return None
 
 
 def common_numeric(a: ElementaryType, b: ElementaryType) -> ElementaryType | None:
     """The type of `a op b` for arithmetic, or None if the operands do not mix."""
     if a == b:
         return a
-    if a in (ANY_INT, ANY_REAL) and b.is_numeric:
-        return b if b.category == "real" or a == ANY_INT else LREAL
-    if b in (ANY_INT, ANY_REAL) and a.is_numeric:
-        return a if a.category == "real" or b == ANY_INT else LREAL
-    if a.category == b.category == "real":
-        return LREAL
-    if a.category == b.category and a.is_integer and a.signed == b.signed:
+    if not (a.is_numeric and b.is_numeric):
+        return None
+    if a.category == "real" or b.category == "real":
+        concrete = [t for t in (a, b) if t.category == "real" and not t.is_any_literal]
+        if not concrete:
+            return LREAL
+        return LREAL if LREAL in concrete else REAL
+    if ANY_INT in (a, b):
+        # An integer literal counts as DINT, so narrow integers are promoted (USINT - 1 is
+        # -1, as in CODESYS); bit strings keep their type (b AND 16#0F is a BYTE).
+        other = b if a == ANY_INT else a
+        if other.category == "int" and other.bits < 32:
+            return DINT
+        return other
+    if a.category == "bits" or b.category == "bits":
         return a if a.bits >= b.bits else b
-    return None
+    if a.signed == b.signed:
+        return a if a.bits >= b.bits else b
+    signed, unsigned = (a, b) if a.signed else (b, a)
+    if signed.bits > unsigned.bits:
+        return signed
+    # a signed type that holds every value of the unsigned one
+    return {8: INT, 16: DINT, 32: LINT}.get(unsigned.bits, LINT)
 
 
 def assignable(target: Type, source: Type) -> bool:
-    """Can a value of `source` be stored in `target` without an explicit conversion?"""
+    """Can a value of `source` be stored in `target` without an explicit conversion?
+
+    Generous where real PLC compilers are (implicit numeric conversions between integer
+    widths and to REAL); the check stage warns where a value may not fit.
+    """
     if target == source:
         return True
+    if isinstance(target, EnumType):
+        return (isinstance(source, EnumType) and source.name == target.name) or source == ANY_INT
+    if isinstance(source, EnumType):
+        return isinstance(target, ElementaryType) and target.is_integer
+    if isinstance(target, ArrayType) and isinstance(source, ArrayType):
+        return target.size == source.size and assignable(target.element, source.element)
     if not isinstance(target, ElementaryType) or not isinstance(source, ElementaryType):
         return False
-    if source == ANY_INT:
-        return target.is_numeric
-    if source == ANY_REAL:
-        return target.category == "real"
-    if target.category == "real" and source.category == "real":
-        return target.bits >= source.bits
-    if target.category == "time" and source.category == "time":
+    if target.category == source.category:
         return True
-    if target.category == "string" and source.category == "string":
-        return target.name == source.name
-    if target.is_integer and source.is_integer and target.category == source.category:
-        # implicit widening only: a wider type of the same signedness, or unsigned -> wider signed
-        if target.signed == source.signed:
-            return target.bits >= source.bits
-        return target.signed and target.bits > source.bits
-    return False
+    if target.is_numeric and source.is_numeric:
+        return True
+    if target.is_integer and source.category == "bool":
+        return True
+    # an integer literal 0 or 1 stands for FALSE / TRUE in many dialects
+    return target.category == "bool" and source == ANY_INT
+
+
+def narrowing(target: Type, source: Type) -> bool:
+    """Does storing `source` in `target` possibly lose information (worth a warning)?"""
+    if not isinstance(target, ElementaryType) or not isinstance(source, ElementaryType):
+        return False
+    if source.is_any_literal:
+        return False
+    if target.is_integer and source.category == "real":
+        return True
+    if target.is_integer and source.is_integer:
+        return target.bits < source.bits
+    return target.category == "real" and source.category == "real" and target.bits < source.bits
