@@ -8,6 +8,10 @@ comparisons go through `key()` (upper case) everywhere.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from backend.compiler.diagnostics import Diagnostic
 
 
 @dataclass(frozen=True)
@@ -321,6 +325,39 @@ class Pou:
 
 
 @dataclass(frozen=True)
+class TaskDecl:
+    name: str
+    params: tuple[tuple[str, Expr], ...]  # INTERVAL, PRIORITY, SINGLE
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class ProgramInstanceDecl:
+    name: str
+    task: str | None
+    pou: str
+    args: tuple[Argument, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class ResourceDecl:
+    name: str
+    globals: tuple[VarBlock, ...]
+    tasks: tuple[TaskDecl, ...]
+    programs: tuple[ProgramInstanceDecl, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class Configuration:
+    name: str
+    globals: tuple[VarBlock, ...]
+    resources: tuple[ResourceDecl, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
 class TypeDecl:
     name: str
     spec: TypeRef
@@ -336,3 +373,5 @@ class SourceUnit:
     pous: tuple[Pou, ...]
     globals: tuple[VarBlock, ...] = field(default=())
     types: tuple[TypeDecl, ...] = field(default=())
+    warnings: tuple[Diagnostic, ...] = field(default=())
+    configurations: tuple[Configuration, ...] = field(default=())

@@ -449,6 +449,27 @@ def _time_arith(name: str, op: str, result_name: str | None) -> Builtin:
     return Builtin(name, ("IN1", "IN2"), typing, emit, min_args=2)
 
 
+def _time_scale(name: str, op: str) -> Builtin:
+    """MUL_TIME / DIV_TIME (MULTIME / DIVTIME in the first edition): TIME times a number."""
+
+    def typing(args: list[Type]) -> Type | str:
+        if len(args) != 2 or not (
+            isinstance(args[0], ElementaryType) and args[0].category == "time"
+        ):
+            return "takes a TIME and a number"
+        if _numeric(args[1]) is None:
+            return "takes a TIME and a number"
+        return args[0]
+
+    def emit(codes: list[str], args: list[Type], result: Type) -> str:
+        assert isinstance(result, ElementaryType)
+        if op == "*":
+            return wrap_code(f"_round({codes[0]} * {codes[1]})", result)
+        return wrap_code(f"_round(_fdiv({codes[0]}, {codes[1]}))", result)
+
+    return Builtin(name, ("IN1", "IN2"), typing, emit, min_args=2)
+
+
 def _printf_typing(args: list[Type]) -> Type | str:
     if not args or not (isinstance(args[0], ElementaryType) and args[0].category == "string"):
         return "needs a format string first"
@@ -541,6 +562,17 @@ _FIXED: dict[str, Builtin] = {
                 ("SUB_LDT_LDT", "-", "LTIME"),
                 ("CONCAT_DATE_TOD", "+", "DT"),
                 ("CONCAT_LDATE_LTOD", "+", "DT"),
+            )
+        ),
+        *(
+            _time_scale(name, op)
+            for name, op in (
+                ("MUL_TIME", "*"),
+                ("MULTIME", "*"),
+                ("MUL_LTIME", "*"),
+                ("DIV_TIME", "/"),
+                ("DIVTIME", "/"),
+                ("DIV_LTIME", "/"),
             )
         ),
         _bound("LOWER"),

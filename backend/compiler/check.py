@@ -210,7 +210,9 @@ def _writable_target(scope: Scope, target: ast.Expr) -> Type | None:
         if binding.constant:
             scope.report(target.pos, f"cannot assign to constant '{binding.name}'")
         elif binding.kind == "VAR_INPUT" and scope.pou.kind != "FUNCTION":
-            scope.report(target.pos, f"cannot assign to input '{binding.name}'")
+            # CODESYS, matiec and OSCAT write inputs inside the block; it is legal but
+            # a trap (the caller's value is gone for the rest of the call): warn
+            scope.warn(target.pos, f"assignment to input '{binding.name}' inside its block")
         return binding.type
     if isinstance(target, ast.MemberRef):
         base_type = scope.type_of(target.base)

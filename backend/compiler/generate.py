@@ -16,7 +16,14 @@ from dataclasses import dataclass, field
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.builtins import convert_code, wrap_code
-from backend.compiler.infer import EnumValue, ProgramRef, Scope, is_external
+from backend.compiler.infer import (
+    IMPLICIT_PARAMETERS,
+    EnumValue,
+    ProgramRef,
+    Scope,
+    enable_argument,
+    is_external,
+)
 from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable
 from backend.compiler.types import (
     ANY_INT,
@@ -242,7 +249,7 @@ class _Emitter:
         assigned = {
             key(param.name): arg
             for arg, param in self.scope.connect_arguments(pou, call)
-            if param is not None
+            if param is not None and key(param.name) not in IMPLICIT_PARAMETERS
         }
         keywords: list[str] = []
         for param in pou.parameters:
@@ -252,6 +259,12 @@ class _Emitter:
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
         code = f"{function_name(pou.name)}({', '.join(keywords)})"
         result = pou.return_type or BOOL
+        enable = self._enable(call)
+        if enable is not None:  # EN FALSE: the function does not run and gives its default
+            default = self.initial(result, None)
+            if returns_tuple(pou):
+                default = f"({default},{' None,' * len(tuple_members(pou))})"
+            code = f"({code} if {enable} else {default})"
         if not returns_tuple(pou):
             return _Value(code, result)
         handle = self.temp()
@@ -263,8 +276,28 @@ class _Emitter:
                 continue
             if not _is_lvalue(arg.value):
                 continue
-            self.pre.append(self.store(arg.value, f"{handle}[{slots[key(connected.name)]}]"))
+            store = self.store(arg.value, f"{handle}[{slots[key(connected.name)]}]")
+            self.pre.append(store if enable is None else f"if {enable}: {store}")
         return _Value(f"{handle}[0]", result)
+
+    def _enable(self, call: ast.Call) -> str | None:
+        """EN of a call, evaluated once into a temporary (None when always enabled); ENO
+        outputs are stored from it right away, since a call that runs always succeeds."""
+        enable_expr = enable_argument(call)
+        eno_targets = [
+            arg.value
+            for arg in call.args
+            if arg.name is not None and key(arg.name) == "ENO" and arg.value is not None
+        ]
+        if enable_expr is None and not eno_targets:
+            return None
+        enable = self.temp()
+        self.pre.append(
+            f"{enable} = {self.exact(enable_expr).code if enable_expr is not None else 'True'}"
+        )
+        for target in eno_targets:
+            self.pre.append(self.store(target, enable))
+        return enable
 
     def converted(self, target: Type, value_expr: ast.Expr) -> str:
         """Code for `value_expr` stored into a variable of type `target`."""
@@ -552,11 +585,15 @@ class _Emitter:
         else:
             self.emit(depth, self.exact(call).code)
             return
+        enable = self._enable(call)
+        if enable is not None:
+            self.emit(depth, f"if {enable}:")
+            depth += 1
         handle = self.temp()
         self.emit(depth, f"{handle} = {instance}")
         outputs: list[tuple[ast.Argument, Variable]] = []
         for arg, param in self.scope.connect_arguments(callee, call):
-            if arg.value is None or param is None:
+            if arg.value is None or param is None or key(param.name) in IMPLICIT_PARAMETERS:
                 continue
             if arg.is_output or param.kind == "VAR_OUTPUT":
                 outputs.append((arg, param))

@@ -421,6 +421,9 @@ class Scope:
         for arg in call.args:
             if arg.name is None:
                 continue
+            if key(arg.name) in IMPLICIT_PARAMETERS:
+                pairs.append((arg, IMPLICIT_PARAMETERS[key(arg.name)]))
+                continue
             param = pou.by_key.get(key(arg.name))
             if param is None or param.kind not in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT"):
                 self.report(arg.pos, f"'{pou.name}' has no parameter '{arg.name}'")
@@ -454,6 +457,23 @@ class Scope:
             self.report(
                 arg.value.pos, f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
             )
+
+
+# Every function and function block has EN (run only when TRUE) and ENO (TRUE when it ran).
+IMPLICIT_PARAMETERS = {
+    "EN": Variable("EN", "VAR_INPUT", BOOL, None, False, False, None, "EN", ast.Pos("", 0, 0)),
+    "ENO": Variable("ENO", "VAR_OUTPUT", BOOL, None, False, False, None, "ENO", ast.Pos("", 0, 0)),
+}
+
+
+def enable_argument(call: ast.Call) -> ast.Expr | None:
+    """The expression connected to EN, unless it is missing or the literal TRUE."""
+    for arg in call.args:
+        if arg.name is not None and key(arg.name) == "EN" and arg.value is not None:
+            if isinstance(arg.value, ast.BoolLiteral) and arg.value.value:
+                return None
+            return arg.value
+    return None
 
 
 def _unwrap_pointer(expr: ast.Expr) -> ast.Expr:

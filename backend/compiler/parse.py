@@ -33,8 +33,21 @@ _TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(D|H|MS|M|S|US|NS)", re.IG
 @functools.cache
 def _parser() -> Lark:
     grammar = resources.files("backend.compiler").joinpath("grammar.lark").read_text()
-    # cache=True keeps the built LALR tables in the temp folder: `padt` starts in a fraction
-    return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True, cache=True)
+    # cache=True keeps the built LALR tables in the temp folder: `padt` starts in a fraction;
+    # the pragma callback reports skipped pragmas (lark drops ignored tokens otherwise)
+    return Lark(
+        grammar,
+        parser="lalr",
+        lexer="contextual",
+        propagate_positions=True,
+        cache=True,
+        lexer_callbacks={"PRAGMA": _PRAGMAS.append},
+    )
+
+
+# Pragmas seen by the lexer during the current parse (the parser is built once, so its
+# callback needs a module-level list; parse_source resets and reads it).
+_PRAGMAS: list[Token] = []
 
 
 def parse_time_literal(text: str) -> tuple[int, bool]:
@@ -493,6 +506,45 @@ class _ToAst(Transformer[Token, Any]):
     def function_decl(self, tree: Tree[Any]) -> ast.Pou:
         return self._pou("FUNCTION", tree)
 
+    # ---- configurations
+    def task_param(self, items: list[Any]) -> tuple[str, ast.Expr]:
+        return (str(items[0]).upper(), items[1])
+
+    def task_decl(self, items: list[Any]) -> ast.TaskDecl:
+        name, *params = items
+        return ast.TaskDecl(str(name), tuple(params), self._pos(name))
+
+    def program_config(self, items: list[Any]) -> ast.ProgramInstanceDecl:
+        names = [i for i in items if isinstance(i, Token) and i.type == "NAME"]
+        args = tuple(i for i in items if isinstance(i, ast.Argument))
+        task = str(names[1]) if len(names) == 3 else None
+        return ast.ProgramInstanceDecl(
+            str(names[0]), task, str(names[-1]), args, self._pos(names[0])
+        )
+
+    def resource_body(self, items: list[Any]) -> tuple[str, list[Any]]:
+        return ("BODY", items)
+
+    def _resource(self, name: Token, blocks: list[Any], body: list[Any]) -> ast.ResourceDecl:
+        tasks = tuple(i for i in body if isinstance(i, ast.TaskDecl))
+        programs = tuple(i for i in body if isinstance(i, ast.ProgramInstanceDecl))
+        return ast.ResourceDecl(str(name), tuple(blocks), tasks, programs, self._pos(name))
+
+    def resource_decl(self, items: list[Any]) -> ast.ResourceDecl:
+        name, _target, *rest = items
+        blocks = [i for i in rest if isinstance(i, ast.VarBlock)]
+        body = next(i for i in rest if isinstance(i, tuple))[1]
+        return self._resource(name, blocks, body)
+
+    def configuration_decl(self, items: list[Any]) -> ast.Configuration:
+        name, *rest = items
+        blocks = tuple(i for i in rest if isinstance(i, ast.VarBlock))
+        resources = [i for i in rest if isinstance(i, ast.ResourceDecl)]
+        for item in rest:  # a configuration without RESOURCE is one unnamed resource
+            if isinstance(item, tuple):
+                resources.append(self._resource(name, [], item[1]))
+        return ast.Configuration(str(name), blocks, tuple(resources), self._pos(name))
+
     def start(self, items: list[Any]) -> list[Any]:
         return items
 
@@ -525,6 +577,7 @@ def _describe(terminal: str) -> str:
 
 def parse_source(file: str, text: str) -> ast.SourceUnit:
     """Parse one ST file. Raises `CompileError` with a `file:line:col` diagnostic."""
+    _PRAGMAS.clear()
     try:
         tree = _parser().parse(text)
     except UnexpectedInput as exc:
@@ -536,4 +589,14 @@ def parse_source(file: str, text: str) -> ast.SourceUnit:
     pous = tuple(i for i in items if isinstance(i, ast.Pou))
     globals_ = tuple(i for i in items if isinstance(i, ast.VarBlock))
     types = tuple(t for i in items if isinstance(i, list) for t in i)
-    return ast.SourceUnit(file, pous, globals_, types)
+    configurations = tuple(i for i in items if isinstance(i, ast.Configuration))
+    # globals of a configuration or resource are globals like any other
+    globals_ += tuple(
+        block
+        for c in configurations
+        for block in (*c.globals, *(b for r in c.resources for b in r.globals))
+    )
+    warnings = tuple(
+        Diagnostic(file, t.line or 1, t.column or 1, "warning", "pragma skipped") for t in _PRAGMAS
+    )
+    return ast.SourceUnit(file, pous, globals_, types, warnings, configurations)

@@ -51,7 +51,9 @@ def parse_all(sources: list[SourceFile]) -> tuple[list[ast.SourceUnit], list[Dia
     diagnostics: list[Diagnostic] = []
     for source in sources:
         try:
-            units.append(parse_source(source.name, source.text))
+            unit = parse_source(source.name, source.text)
+            units.append(unit)
+            diagnostics.extend(unit.warnings)
         except CompileError as exc:
             diagnostics.extend(exc.diagnostics)
     return units, diagnostics
