@@ -128,6 +128,32 @@ def _mux(k: int, *inputs: Any) -> Any:
     return inputs[k]
 
 
+def _bcd_to_int(value: int) -> int:
+    """Packed BCD (one decimal digit per nibble) to its number; a nibble above 9 is a
+    program fault, as on PLCs that check BCD input."""
+    result, factor = 0, 1
+    value &= (1 << 64) - 1
+    while value:
+        digit = value & 0xF
+        if digit > 9:
+            raise ProgramFault(f"{digit:X} is not a BCD digit")
+        result += digit * factor
+        factor *= 10
+        value >>= 4
+    return result
+
+
+def _int_to_bcd(value: int) -> int:
+    if value < 0:
+        raise ProgramFault(f"{value} has no BCD form")
+    result, shift = 0, 0
+    while value:
+        value, digit = divmod(value, 10)
+        result |= digit << shift
+        shift += 4
+    return result
+
+
 def _str_to_int(text: str) -> int:
     cleaned = text.strip().replace("_", "")
     try:
@@ -288,6 +314,101 @@ def _stdout_printf(fmt: str, *args: Any) -> int:
     return len(data)
 
 
+class _SfcStep:
+    """An SFC step: X (active), T (time active); `since` is when it became active."""
+
+    __slots__ = ("T", "X", "since")
+
+    def __init__(self) -> None:
+        self.X = False
+        self.T = 0
+        self.since: int | None = None
+
+
+def _step_time(step: _SfcStep, now: int) -> int:
+    if step.since is None:  # the first cycle in which the step is active
+        step.since = now
+    return now - step.since
+
+
+def _step_enter(step: _SfcStep) -> None:
+    step.X = True
+    step.T = 0
+    step.since = None
+
+
+class _ActionControl:
+    """The action control block of IEC 61131-3 for one action. Inputs are the OR of the
+    `.X` flags of the steps that name the action with each qualifier; Q says the action is
+    active; A that its body runs this cycle: while Q, once more after Q falls (the final
+    scan), and once for each pulse (P on activation, P1 on activation, P0 on
+    deactivation; pulses have no final scan). Timers work like TON on program time."""
+
+    __slots__ = (
+        "A",
+        "Q",
+        "d_since",
+        "ds_since",
+        "ds_stored",
+        "l_since",
+        "p0_prev",
+        "p1_prev",
+        "p_prev",
+        "sd_set",
+        "sd_since",
+        "sl_set",
+        "sl_since",
+        "stored",
+    )  # fmt: skip
+
+    def __init__(self) -> None:
+        self.A = self.Q = False
+        self.stored = self.sd_set = self.ds_stored = self.sl_set = False
+        self.p_prev = self.p1_prev = self.p0_prev = False
+        self.l_since: int | None = None
+        self.d_since: int | None = None
+        self.sd_since: int | None = None
+        self.ds_since: int | None = None
+        self.sl_since: int | None = None
+
+    @staticmethod
+    def _elapsed(on: bool, since: int | None, now: int) -> tuple[int | None, int]:
+        if not on:
+            return None, -1
+        start = now if since is None else since
+        return start, now - start
+
+    def update(
+        self, now: int, *, N: bool = False, R: bool = False, S: bool = False,
+        P: bool = False, P0: bool = False, P1: bool = False, L: bool = False,
+        D: bool = False, SD: bool = False, DS: bool = False, SL: bool = False,
+        TL: int = 0, TD: int = 0, TSD: int = 0, TDS: int = 0, TSL: int = 0,
+    ) -> None:  # fmt: skip
+        self.stored = not R and (S or self.stored)
+        self.l_since, l_elapsed = self._elapsed(L, self.l_since, now)
+        self.d_since, d_elapsed = self._elapsed(D, self.d_since, now)
+        self.sd_set = not R and (SD or self.sd_set)
+        self.sd_since, sd_elapsed = self._elapsed(self.sd_set, self.sd_since, now)
+        self.ds_since, ds_elapsed = self._elapsed(DS, self.ds_since, now)
+        self.ds_stored = not R and ((ds_elapsed >= TDS >= 0 and DS) or self.ds_stored)
+        self.sl_set = not R and (SL or self.sl_set)
+        self.sl_since, sl_elapsed = self._elapsed(self.sl_set, self.sl_since, now)
+        pulse = (P and not self.p_prev) or (P1 and not self.p1_prev) or (self.p0_prev and not P0)
+        self.p_prev, self.p1_prev, self.p0_prev = P, P1, P0
+        active = not R and (
+            N
+            or (L and l_elapsed < TL)
+            or (D and d_elapsed >= TD)
+            or self.stored
+            or (self.sd_set and sd_elapsed >= TSD)
+            or self.ds_stored
+            or (self.sl_set and sl_elapsed < TSL)
+        )
+        final_scan = self.Q and not active
+        self.Q = active
+        self.A = active or pulse or final_scan
+
+
 class Namespace:
     """A plain attribute holder (`_P`: program instances by class name)."""
 
@@ -331,6 +452,8 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         "_date_to_str": _date_to_str,
         "_str_to_time": _str_to_time,
         "_w2s": _w2s,
+        "_bcd_to_int": _bcd_to_int,
+        "_int_to_bcd": _int_to_bcd,
         "_ord": lambda ch: ord(ch[0]) if ch else 0,
         "_s2w": _s2w,
         "_left": _left,
@@ -344,4 +467,8 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         "_safe_math": _safe_math,
         "_printf": printf,
         "_P": Namespace(),
+        "_SfcStep": _SfcStep,
+        "_ActionControl": _ActionControl,
+        "_step_time": _step_time,
+        "_step_enter": _step_enter,
     }

@@ -160,6 +160,14 @@ class BitRef:
 
 
 @dataclass(frozen=True)
+class DirectRef:
+    """A direct address used in code: `%IX0.1`, `%QW3`."""
+
+    address: str
+    pos: Pos
+
+
+@dataclass(frozen=True)
 class Deref:
     base: Expr
     pos: Pos
@@ -210,7 +218,7 @@ class StructInit:
 
 
 Literal = IntLiteral | RealLiteral | BoolLiteral | TimeLiteral | StringLiteral | EnumLiteral
-Expr = Literal | NameRef | MemberRef | IndexRef | BitRef | Deref | Unary | Binary | Call
+Expr = Literal | NameRef | MemberRef | IndexRef | BitRef | DirectRef | Deref | Unary | Binary | Call
 Initializer = Expr | ArrayInit | StructInit
 
 
@@ -304,6 +312,7 @@ class VarDecl:
     init: Initializer | None
     location: str | None
     pos: Pos
+    edge: str | None = None  # R_EDGE or F_EDGE on a BOOL input
 
 
 @dataclass(frozen=True)
@@ -315,6 +324,46 @@ class VarBlock:
 
 
 @dataclass(frozen=True)
+class ActionAssociation:
+    action: str
+    qualifier: str  # N (default), R, S, P, P0, P1, L, D, SD, DS, SL
+    duration: Expr | None  # the time of L, D, SD, DS, SL
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class Step:
+    name: str
+    initial: bool
+    associations: tuple[ActionAssociation, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class Transition:
+    name: str | None
+    priority: int | None
+    sources: tuple[str, ...]
+    targets: tuple[str, ...]
+    condition: Expr
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class Action:
+    name: str
+    body: tuple[Statement, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class Sfc:
+    steps: tuple[Step, ...]
+    transitions: tuple[Transition, ...]
+    actions: tuple[Action, ...]
+
+
+@dataclass(frozen=True)
 class Pou:
     kind: str  # PROGRAM, FUNCTION_BLOCK, FUNCTION
     name: str
@@ -322,6 +371,7 @@ class Pou:
     var_blocks: tuple[VarBlock, ...]
     body: tuple[Statement, ...]
     pos: Pos
+    sfc: Sfc | None = None
 
 
 @dataclass(frozen=True)

@@ -179,6 +179,23 @@ def _truncation(target: ElementaryType) -> Builtin:
     return Builtin("TRUNC", ("IN",), typing, emit)
 
 
+def _bcd(to_bcd: bool, target: ElementaryType) -> Builtin:
+    """BCD_TO_INT / INT_TO_BCD (and typed forms such as WORD_BCD_TO_INT): packed decimal."""
+
+    def typing(args: list[Type]) -> Type | str:
+        if len(args) != 1 or integer_like(args[0]) is None:
+            return "expects one integer or bit string"
+        return target
+
+    def emit(codes: list[str], args: list[Type], result: Type) -> str:
+        helper = "_int_to_bcd" if to_bcd else "_bcd_to_int"
+        return wrap_code(f"{helper}({codes[0]})", target)
+
+    return Builtin("BCD", ("IN",), typing, emit)
+
+
+_BCD_FROM = re.compile(r"^(?:([A-Z]+)_)?BCD_TO_([A-Z]+)$")
+_BCD_TO = re.compile(r"^([A-Z]+)_TO_BCD(?:_([A-Z]+))?$")
 _CONVERSION = re.compile(r"^(?:([A-Z_]+?)_)?TO_([A-Z_]+)$")
 _TRUNC = re.compile(r"^(?:([A-Z_]+?)_)?TRUNC(?:_([A-Z_]+))?$")
 
@@ -588,6 +605,16 @@ def lookup(name: str) -> Builtin | None:
     found = _FIXED.get(upper)
     if found is not None:
         return found
+    bcd = _BCD_FROM.match(upper)
+    if bcd:
+        target = elementary(bcd.group(2))
+        if target is not None and target.is_integer:
+            return _bcd(False, target)
+    bcd = _BCD_TO.match(upper)
+    if bcd:
+        target = elementary(bcd.group(2) or "WORD")
+        if target is not None and target.is_integer:
+            return _bcd(True, target)
     trunc = _TRUNC.match(upper)
     if trunc:
         target = elementary(trunc.group(2) or "DINT")

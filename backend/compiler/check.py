@@ -40,9 +40,93 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         for variable in pou.variables:
             if variable.kind != "VAR_GLOBAL":
                 check_initializer(scope, variable.type, variable.init)
+            if variable.edge is not None and (
+                variable.kind != "VAR_INPUT" or variable.type != BOOL
+            ):
+                scope.report(variable.pos, f"{variable.edge} needs a BOOL input")
         _check_block(scope, pou.pou.body, loop_depth=0)
+        if pou.pou.sfc is not None:
+            _check_sfc(scope, pou.pou.sfc)
         diagnostics.extend(scope.diagnostics)
     return diagnostics
+
+
+QUALIFIERS = ("N", "R", "S", "P", "P0", "P1", "L", "D", "SD", "DS", "SL")
+TIMED_QUALIFIERS = ("L", "D", "SD", "DS", "SL")
+
+
+def _sfc_networks(sfc: ast.Sfc) -> list[list[ast.Step]]:
+    """The independent step chains of a POU (steps linked by transitions), in text order."""
+    owner = {key(step.name): key(step.name) for step in sfc.steps}
+
+    def root(name: str) -> str:
+        while owner[name] != name:
+            name = owner[name]
+        return name
+
+    for transition in sfc.transitions:
+        names = [key(n) for n in (*transition.sources, *transition.targets) if key(n) in owner]
+        for other in names[1:]:
+            owner[root(other)] = root(names[0])
+    networks: dict[str, list[ast.Step]] = {}
+    for step in sfc.steps:
+        networks.setdefault(root(key(step.name)), []).append(step)
+    return list(networks.values())
+
+
+def _check_sfc(scope: Scope, sfc: ast.Sfc) -> None:
+    for network in _sfc_networks(sfc):
+        initial = [step for step in network if step.initial]
+        if len(initial) != 1:
+            where = initial[1].pos if len(initial) > 1 else network[0].pos
+            names = ", ".join(step.name for step in network)
+            scope.report(
+                where, f"the step chain {names} needs exactly one INITIAL_STEP, not {len(initial)}"
+            )
+    steps = {key(step.name) for step in sfc.steps}
+    actions: dict[str, ast.Action] = {}
+    for action in sfc.actions:
+        if key(action.name) in actions:
+            scope.report(action.pos, f"action '{action.name}' is declared twice")
+        actions[key(action.name)] = action
+        _check_block(scope, action.body, loop_depth=0)
+    for step in sfc.steps:
+        for association in step.associations:
+            _check_association(scope, association, actions)
+    for transition in sfc.transitions:
+        for name in (*transition.sources, *transition.targets):
+            if key(name) not in steps:
+                scope.report(transition.pos, f"transition refers to '{name}', which is no step")
+        _check_condition(scope, transition.condition)
+
+
+def _check_association(
+    scope: Scope, association: ast.ActionAssociation, actions: dict[str, ast.Action]
+) -> None:
+    if key(association.action) not in actions:
+        variable = scope.variable(association.action)
+        if variable is None or variable.type != BOOL:
+            scope.report(
+                association.pos,
+                f"'{association.action}' is neither an ACTION nor a BOOL variable",
+            )
+    qualifier = association.qualifier
+    if qualifier not in QUALIFIERS:
+        scope.report(association.pos, f"unknown action qualifier '{qualifier}'")
+        return
+    if qualifier in TIMED_QUALIFIERS:
+        if association.duration is None:
+            scope.report(
+                association.pos, f"qualifier {qualifier} needs a time: ({qualifier}, T#1s)"
+            )
+            return
+        duration = scope.type_of(association.duration)
+        if duration is not None and not (
+            isinstance(duration, ElementaryType) and duration.category == "time"
+        ):
+            scope.report(association.pos, f"the time of {qualifier} must be a TIME")
+    elif association.duration is not None:
+        scope.report(association.pos, f"qualifier {qualifier} takes no time")
 
 
 def check_initializer(scope: Scope, target: Type, init: ast.Initializer | None) -> None:
@@ -219,6 +303,14 @@ def _writable_target(scope: Scope, target: ast.Expr) -> Type | None:
         member = scope.member(target)
         if member is None:
             return None
+        root = target.base
+        while isinstance(root, ast.MemberRef | ast.IndexRef):
+            root = root.base
+        if isinstance(root, ast.NameRef):
+            root_binding = scope.lookup(root.name)
+            if isinstance(root_binding, Variable) and root_binding.kind == "STEP":
+                scope.report(target.pos, f"step flag '{root.name}.{target.member}' is read-only")
+                return member.type
         if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS:
             scope.report(
                 target.pos,

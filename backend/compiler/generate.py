@@ -24,7 +24,7 @@ from backend.compiler.infer import (
     enable_argument,
     is_external,
 )
-from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable
+from backend.compiler.resolve import STEP_STRUCT, PouSymbols, Resolved, StructInfo, Variable
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -110,10 +110,7 @@ class _Emitter:
 
     # ---- expressions
     def exact(self, expr: ast.Expr) -> _Value:
-        value = self.expr(expr)
-        if value.unwrapped and isinstance(value.type, ElementaryType):
-            return _Value(wrap_code(value.code, value.type), value.type)
-        return value
+        return _exact(self.expr(expr))
 
     def expr(self, expr: ast.Expr) -> _Value:
         match expr:
@@ -306,7 +303,13 @@ class _Emitter:
             constant = self.scope.constant_int(value_expr)
             if constant is not None:
                 return repr(wrap_constant(constant, integer))
-        value = self.exact(value_expr)
+        raw = self.expr(value_expr)  # generated once: it may hoist calls
+        target_int = integer_like(target)
+        raw_int = integer_like(raw.type)
+        if raw.unwrapped and target_int and raw_int and target_int.bits <= raw_int.bits:
+            # wrapping to the narrower target alone gives the same bits as wrapping twice
+            return wrap_code(raw.code, target_int)
+        value = _exact(raw)
         source = value.type
         if is_aggregate(target):
             return f"_copy({value.code})" if _is_lvalue(value_expr) else value.code
@@ -623,6 +626,12 @@ def wrap_constant(value: int, t: ElementaryType) -> int:
     return value
 
 
+def _exact(value: _Value) -> _Value:
+    if value.unwrapped and isinstance(value.type, ElementaryType):
+        return _Value(wrap_code(value.code, value.type), value.type)
+    return value
+
+
 def _has_continue(body: tuple[ast.Statement, ...]) -> bool:
     """A CONTINUE that belongs to this loop (not to a nested one)."""
     for statement in body:
@@ -663,21 +672,152 @@ def generate_pou(resolved: Resolved, pou: PouSymbols) -> str:
         return _generate_function(scope, pou)
     emitter = _Emitter(scope, local=False)
     fields = _instance_variables(pou)
+    sfc = pou.pou.sfc
+    chart = _Chart(sfc) if sfc is not None else None
+    edges = [v for v in fields if v.edge is not None]
+    slots = [v.attr for v in fields] + [f"_edge_{v.attr}" for v in edges]
+    slots += chart.slots() if chart else []
     emitter.emit(0, f"class {class_name(pou.name)}:")
-    emitter.emit(1, f"__slots__ = {tuple(v.attr for v in fields)!r}")
+    emitter.emit(1, f"__slots__ = {tuple(slots)!r}")
     emitter.emit(0, "")
     emitter.emit(1, "def __init__(s):")
-    if not fields:
+    if not slots:
         emitter.emit(2, "pass")
     for variable in fields:
-        emitter.emit(2, f"s.{variable.attr} = {emitter.initial(variable.type, variable.init)}")
+        code = emitter.initial(variable.type, variable.init)
+        if chart is not None and variable.kind == "STEP" and key(variable.name) in chart.initial:
+            code = f"_init({code}, {{'X': True}})"
+        emitter.emit(2, f"s.{variable.attr} = {code}")
+    for variable in edges:
+        emitter.emit(2, f"s._edge_{variable.attr} = False")
+    if chart is not None:
+        for slot in chart.slots():
+            emitter.emit(2, f"s.{slot} = _ActionControl()")
     emitter.emit(0, "")
     emitter.emit(1, "def __call__(s):")
+    for variable in edges:  # the body sees TRUE only in the call that brings the edge
+        attr, memory = f"s.{variable.attr}", f"s._edge_{variable.attr}"
+        rising = variable.edge == "R_EDGE"
+        edge = f"({attr} and not {memory})" if rising else f"(not {attr} and {memory})"
+        emitter.emit(2, f"{attr}, {memory} = {edge}, {attr}")
     for variable in pou.variables:
         if variable.kind == "VAR_TEMP":
             emitter.emit(2, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
-    emitter.block(pou.pou.body, 2)
+    emitter.block(pou.pou.body, 2) if chart is None or pou.pou.body else None
+    if chart is not None:
+        chart.emit_cycle(emitter, 2)
+        for action in chart.sfc.actions:
+            emitter.emit(0, "")
+            emitter.emit(1, f"def {_action_method(action.name)}(s):")
+            emitter.block(action.body, 2)
     return "\n".join(emitter.lines) + "\n"
+
+
+def _action_method(name: str) -> str:
+    return f"_action_{_ident(name)}"
+
+
+def _action_control(name: str) -> str:
+    return f"_ac_{_ident(name)}"
+
+
+class _Chart:
+    """Code for one sequential function chart (IEC 61131-3 textual SFC), run after the POU's
+    ST body in every call:
+
+    1. the time of each active step (T is 0 in the first cycle a step is active),
+    2. every action's control block from the steps that name it (qualifiers N, R, S, P,
+       P0, P1, L, D, SD, DS, SL), then the actions, in the order they are first named,
+    3. the transitions: enabled (all source steps active) and TRUE fire together; of two
+       that share a source step only the first (PRIORITY, then text order) fires; the
+       steps they leave are deactivated, then the steps they reach activated, so the new
+       steps act from the next cycle on.
+    """
+
+    def __init__(self, sfc: ast.Sfc) -> None:
+        self.sfc = sfc
+        self.initial = {key(step.name) for step in sfc.steps if step.initial}
+        self.action_order: list[str] = []
+        for step in sfc.steps:
+            for association in step.associations:
+                if association.action not in self.action_order:
+                    self.action_order.append(association.action)
+
+    def slots(self) -> list[str]:
+        return [_action_control(name) for name in self.action_order]
+
+    def emit_cycle(self, emitter: _Emitter, depth: int) -> None:
+        scope = emitter.scope
+        emitter.emit(depth, "now = _SYS.now_ns")
+        for step in self.sfc.steps:
+            ref = emitter.var_code(_step_variable(scope, step.name))
+            emitter.emit(depth, f"if {ref}.X:")
+            emitter.emit(depth + 1, f"{ref}.T = _step_time({ref}, now)")
+        declared = {key(action.name) for action in self.sfc.actions}
+        for action in self.action_order:
+            inputs: dict[str, list[str]] = {}
+            durations: dict[str, str] = {}
+            for step in self.sfc.steps:
+                for association in step.associations:
+                    if key(association.action) != key(action):
+                        continue
+                    flag = f"{emitter.var_code(_step_variable(scope, step.name))}.X"
+                    inputs.setdefault(association.qualifier, []).append(flag)
+                    if association.duration is not None:
+                        durations[association.qualifier] = emitter.exact(association.duration).code
+            arguments = [
+                f"{qualifier}=({' or '.join(flags)})" for qualifier, flags in sorted(inputs.items())
+            ] + [f"T{qualifier}={code}" for qualifier, code in sorted(durations.items())]
+            control = f"s.{_action_control(action)}"
+            emitter.emit(depth, f"{control}.update(now, {', '.join(arguments)})")
+            if key(action) in declared:
+                emitter.emit(depth, f"if {control}.A:")
+                emitter.emit(depth + 1, f"s.{_action_method(action)}()")
+            else:  # a Boolean variable as action: it follows the action's Q
+                variable = scope.variable(action)
+                assert variable is not None
+                emitter.emit(depth, f"{emitter.var_code(variable)} = {control}.Q")
+        self._emit_transitions(emitter, depth)
+
+    def _emit_transitions(self, emitter: _Emitter, depth: int) -> None:
+        scope = emitter.scope
+        ordered = sorted(
+            enumerate(self.sfc.transitions),
+            key=lambda item: (item[1].priority if item[1].priority is not None else 0, item[0]),
+        )
+        fired: list[tuple[str, ast.Transition]] = []
+        for _, transition in ordered:
+            flag = emitter.temp()
+            sources = [
+                f"{emitter.var_code(_step_variable(scope, name))}.X" for name in transition.sources
+            ]
+            blockers = [
+                other_flag
+                for other_flag, other in fired
+                if {key(n) for n in other.sources} & {key(n) for n in transition.sources}
+            ]
+            condition = emitter.exact(transition.condition).code
+            terms = sources + [f"not {b}" for b in blockers] + [condition]
+            emitter.emit(depth, f"{flag} = {' and '.join(terms)}")
+            fired.append((flag, transition))
+        for flag, transition in fired:
+            for name in transition.sources:
+                emitter.emit(depth, f"if {flag}:")
+                emitter.emit(
+                    depth + 1, f"{emitter.var_code(_step_variable(scope, name))}.X = False"
+                )
+        for flag, transition in fired:
+            for name in transition.targets:
+                emitter.emit(depth, f"if {flag}:")
+                emitter.emit(
+                    depth + 1, f"_step_enter({emitter.var_code(_step_variable(scope, name))})"
+                )
+
+
+def _step_variable(scope: Scope, name: str) -> Variable:
+    variable = scope.variable(name)
+    assert variable is not None and variable.kind == "STEP", name
+    return variable
 
 
 def _generate_function(scope: Scope, pou: PouSymbols) -> str:
@@ -698,6 +838,8 @@ def _generate_function(scope: Scope, pou: PouSymbols) -> str:
 
 def generate_struct(resolved: Resolved, info: StructInfo, any_pou: PouSymbols) -> str:
     emitter = _Emitter(Scope(resolved, any_pou), local=False)
+    if key(info.name) == key(STEP_STRUCT):  # SFC steps also remember when they started
+        return f"{struct_class(info.name)} = _SfcStep\n"
     emitter.emit(0, f"class {struct_class(info.name)}:")
     emitter.emit(1, f"__slots__ = {tuple(m.attr for m in info.members)!r}")
     emitter.emit(0, "")

@@ -58,6 +58,8 @@ class Scope:
     resolved: Resolved
     pou: PouSymbols
     diagnostics: list[Diagnostic] = field(default_factory=list)
+    # by id() of the node; the node is kept alongside so its id cannot be reused
+    _types: dict[int, tuple[Type | None, ast.Expr]] = field(default_factory=dict)
 
     # ---- names
     def variable(self, name: str) -> Variable | None:
@@ -93,6 +95,13 @@ class Scope:
 
     # ---- typing
     def type_of(self, expr: ast.Expr) -> Type | None:
+        """The type of `expr`; computed (and its problems reported) once per node."""
+        node = id(expr)
+        if node not in self._types:
+            self._types[node] = (self._compute_type(expr), expr)
+        return self._types[node][0]
+
+    def _compute_type(self, expr: ast.Expr) -> Type | None:
         match expr:
             case ast.IntLiteral(type_name=type_name):
                 return self._literal_type(type_name, ANY_INT, expr.pos)
@@ -136,6 +145,11 @@ class Scope:
                 if (bit + 1) * width > integer.bits:
                     self.report(pos, f"part {bit} is out of range for {integer.name}")
                 return {1: BOOL, 8: BYTE, 16: WORD, 32: DWORD}[width]
+            case ast.DirectRef(pos=pos):
+                self.report(
+                    pos, "direct addresses in code are not supported; declare a located variable"
+                )
+                return None
             case ast.Deref(pos=pos):
                 self.report(pos, "pointers are not supported")
                 return None

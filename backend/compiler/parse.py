@@ -249,6 +249,9 @@ class _ToAst(Transformer[Token, Any]):
             return ast.BitRef(base, int(text[2:]), base.pos, width)
         return ast.BitRef(base, int(text), base.pos)
 
+    def direct_ref(self, items: list[Token]) -> ast.DirectRef:
+        return ast.DirectRef(str(items[0]).upper(), self._pos(items[0]))
+
     def deref(self, items: list[Any]) -> ast.Deref:
         return ast.Deref(items[0], items[0].pos)
 
@@ -465,12 +468,14 @@ class _ToAst(Transformer[Token, Any]):
 
     def var_decl(self, items: list[Any]) -> list[ast.VarDecl]:
         names = [i for i in items if isinstance(i, Token) and i.type == "NAME"]
-        rest = [i for i in items if not (isinstance(i, Token) and i.type == "NAME")]
+        edges = [str(i).upper() for i in items if isinstance(i, Token) and i.type == "EDGE"]
+        rest = [i for i in items if not isinstance(i, Token)]
         location = next((r for r in rest if isinstance(r, str)), None)
         typed = [r for r in rest if not isinstance(r, str)]
         type_ref = typed[0]
         init = typed[1] if len(typed) > 1 else None
-        return [ast.VarDecl(str(n), type_ref, init, location, self._pos(n)) for n in names]
+        edge = edges[0] if edges else None
+        return [ast.VarDecl(str(n), type_ref, init, location, self._pos(n), edge) for n in names]
 
     def _block(self, kind: str, pos: ast.Pos, items: list[Any]) -> ast.VarBlock:
         qualifiers = tuple(i for i in items if isinstance(i, str))
@@ -491,8 +496,56 @@ class _ToAst(Transformer[Token, Any]):
         if kind == "FUNCTION" and rest and not isinstance(rest[0], ast.VarBlock | tuple):
             return_type, *rest = rest
         blocks = tuple(r for r in rest if isinstance(r, ast.VarBlock))
-        body = rest[-1]
-        return ast.Pou(kind, str(name), return_type, blocks, body, self._pos(tree))
+        body = next(r for r in rest if isinstance(r, tuple))
+        elements = [r for r in rest if isinstance(r, ast.Step | ast.Transition | ast.Action)]
+        sfc = None
+        if elements:
+            sfc = ast.Sfc(
+                tuple(e for e in elements if isinstance(e, ast.Step)),
+                tuple(e for e in elements if isinstance(e, ast.Transition)),
+                tuple(e for e in elements if isinstance(e, ast.Action)),
+            )
+        return ast.Pou(kind, str(name), return_type, blocks, body, self._pos(tree), sfc)
+
+    # ---- SFC
+    def step_decl(self, items: list[Any]) -> ast.Step:
+        keyword, name, *associations = items
+        initial = str(keyword).upper() == "INITIAL_STEP"
+        return ast.Step(str(name), initial, tuple(associations), self._pos(name))
+
+    def action_association(self, items: list[Any]) -> ast.ActionAssociation:
+        name, *rest = items
+        qualifier, duration = "N", None
+        if rest and isinstance(rest[0], tuple):
+            qualifier, duration = rest[0]
+        return ast.ActionAssociation(str(name), qualifier, duration, self._pos(name))
+
+    def action_qualifier(self, items: list[Any]) -> tuple[str, ast.Expr | None]:
+        qualifier = str(items[0]).upper()
+        if len(items) == 1:
+            return (qualifier, None)
+        token = items[1]
+        if token.type == "TIME_LITERAL":
+            return (qualifier, self.time_literal([token]))
+        return (qualifier, ast.NameRef(str(token), self._pos(token)))
+
+    def step_names(self, items: list[Token]) -> tuple[str, ...]:
+        return tuple(str(i) for i in items)
+
+    def transition_decl(self, items: list[Any]) -> ast.Transition:
+        keyword, *rest = items
+        name = None
+        priority = None
+        if rest and isinstance(rest[0], Token) and rest[0].type == "NAME":
+            name = str(rest.pop(0))
+        if rest and isinstance(rest[0], Token) and rest[0].type == "INTEGER":
+            priority = int(str(rest.pop(0)))
+        sources, targets, condition = rest
+        return ast.Transition(name, priority, sources, targets, condition, self._pos(keyword))
+
+    def action_decl(self, items: list[Any]) -> ast.Action:
+        _keyword, name, body = items
+        return ast.Action(str(name), body, self._pos(name))
 
     @v_args(tree=True)
     def program_decl(self, tree: Tree[Any]) -> ast.Pou:

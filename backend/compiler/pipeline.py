@@ -11,7 +11,7 @@ from dataclasses import dataclass, replace
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
-from backend.compiler.diagnostics import CompileError, Diagnostic, error
+from backend.compiler.diagnostics import CompileError, Diagnostic, error, warning
 from backend.compiler.generate import (
     class_name,
     function_name,
@@ -67,7 +67,6 @@ def compile_sources(
     programs: list[ProgramConfig] | None = None,
     config_file: str = "padt.toml",
 ) -> CompileResult:
-    resource = resource or ResourceConfig(name="Resource1")
     units, diagnostics = parse_all(sources)
     user_pous = {key(p.name) for unit in units for p in unit.pous}
     stdlib_units, stdlib_diagnostics = parse_all(stdlib_sources())
@@ -79,8 +78,11 @@ def compile_sources(
     resolved = resolve(units)
     diagnostics.extend(resolved.diagnostics)
     diagnostics.extend(check(resolved))
+    configured = _from_configuration(units, diagnostics)
+    if resource is None:
+        resource = configured[0] if configured else ResourceConfig(name="Resource1")
     if programs is None:
-        programs = _default_programs(units)
+        programs = configured[1] if configured else _default_programs(units)
     diagnostics.extend(_check_programs(resolved, programs, config_file))
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics) or not resolved.pous:
@@ -111,6 +113,46 @@ def compile_sources(
         globals=globals_code,
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
+
+
+def _from_configuration(
+    units: list[ast.SourceUnit], diagnostics: list[Diagnostic]
+) -> tuple[ResourceConfig, list[ProgramConfig]] | None:
+    """Resource and user programs from the first RESOURCE of an IEC CONFIGURATION: each
+    PROGRAM ... WITH task is a user program with the task's priority; the CPU cycle is the
+    shortest task interval (one cycle for all programs, as on HIMA and M580 controllers)."""
+    resources = [r for unit in units for c in unit.configurations for r in c.resources]
+    if not resources:
+        return None
+    chosen = resources[0]
+    for extra in resources[1:]:
+        diagnostics.append(
+            warning(extra.pos, f"resource '{extra.name}' ignored: one resource per project")
+        )
+    tasks = {key(t.name): dict(t.params) for t in chosen.tasks}
+    intervals = [
+        interval.nanoseconds // 1_000_000
+        for params in tasks.values()
+        if isinstance(interval := params.get("INTERVAL"), ast.TimeLiteral)
+    ]
+    cycle_ms = max(1, min(intervals)) if intervals else 100
+    programs = []
+    for number, instance in enumerate(chosen.programs, 1):
+        params = tasks.get(key(instance.task or ""), {})
+        priority = params.get("PRIORITY")
+        if instance.args:
+            diagnostics.append(
+                warning(instance.pos, "program arguments in a configuration are ignored")
+            )
+        programs.append(
+            ProgramConfig(
+                name=instance.name,
+                pou=instance.pou,
+                program_id=number,
+                priority=priority.value if isinstance(priority, ast.IntLiteral) else 0,
+            )
+        )
+    return ResourceConfig(name=chosen.name, cycle_ms=cycle_ms), programs
 
 
 def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:

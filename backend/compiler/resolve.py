@@ -15,7 +15,9 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.diagnostics import Diagnostic, error
 from backend.compiler.types import (
+    BOOL,
     INT,
+    TIME,
     ArrayType,
     ElementaryType,
     EnumType,
@@ -40,6 +42,7 @@ class Variable:
     location: str | None
     attr: str  # the Python name in generated code
     pos: ast.Pos
+    edge: str | None = None  # R_EDGE / F_EDGE input
 
 
 @dataclass
@@ -350,9 +353,27 @@ def _block_variables(
                 location=decl.location,
                 attr=python_attr(decl.name),
                 pos=decl.pos,
+                edge=decl.edge,
             )
         )
     return variables
+
+
+STEP_STRUCT = "SFC_STEP"
+
+
+def _step_struct(result: Resolved) -> StructType:
+    """The type of an SFC step as ST sees it: `Step.X` (active) and `Step.T` (elapsed)."""
+    if key(STEP_STRUCT) not in result.structs:
+        here = ast.Pos("<sfc>", 1, 1)
+        members = [
+            Variable("X", "MEMBER", BOOL, None, True, False, None, "X", here),
+            Variable("T", "MEMBER", TIME, None, True, False, None, "T", here),
+        ]
+        result.structs[key(STEP_STRUCT)] = StructInfo(
+            STEP_STRUCT, members, {key(m.name): m for m in members}
+        )
+    return StructType(STEP_STRUCT)
 
 
 def _resolve_pou(pou: ast.Pou, types: _TypeResolver, result: Resolved) -> PouSymbols:
@@ -390,4 +411,19 @@ def _resolve_pou(pou: ast.Pou, types: _TypeResolver, result: Resolved) -> PouSym
                 variable = declared  # the same storage as the global
             symbols.variables.append(variable)
             symbols.by_key[key(variable.name)] = variable
+    if pou.sfc is not None:
+        step_type = _step_struct(result)
+        for step in pou.sfc.steps:
+            if key(step.name) in symbols.by_key:
+                first = symbols.by_key[key(step.name)]
+                result.diagnostics.append(
+                    error(step.pos, f"step '{step.name}': the name is already used at {first.pos}")
+                )
+                continue
+            variable = Variable(
+                step.name, "STEP", step_type, None, True, False, None,
+                python_attr(step.name), step.pos,
+            )  # fmt: skip
+            symbols.variables.append(variable)
+            symbols.by_key[key(step.name)] = variable
     return symbols
