@@ -175,6 +175,7 @@ def check_initializer(scope: Scope, target: Type, init: ast.Initializer | None) 
 
 
 def _check_value(scope: Scope, target: Type, value: ast.Expr) -> None:
+    scope.expect(value, target)
     value_type = scope.type_of(value)
     if value_type is None:
         return
@@ -240,7 +241,7 @@ def _check_case(scope: Scope, case: ast.Case, loop_depth: int) -> None:
     for labels, body in case.branches:
         for label in labels:
             bounds = (label.low, label.high) if isinstance(label, ast.CaseRange) else (label, label)
-            values = [_case_label_value(scope, bound) for bound in bounds]
+            values = [_case_label_value(scope, bound, selector) for bound in bounds]
             if values[0] is None or values[1] is None:
                 continue
             for value in range(values[0], values[1] + 1) if values[1] - values[0] < 4096 else ():
@@ -252,7 +253,8 @@ def _check_case(scope: Scope, case: ast.Case, loop_depth: int) -> None:
     _check_block(scope, case.orelse, loop_depth)
 
 
-def _case_label_value(scope: Scope, label: ast.Expr) -> int | None:
+def _case_label_value(scope: Scope, label: ast.Expr, selector: Type | None) -> int | None:
+    scope.expect(label, selector)
     label_type = scope.type_of(label)
     if label_type is None:
         return None

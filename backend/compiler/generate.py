@@ -130,7 +130,7 @@ class _Emitter:
             case ast.EnumLiteral():
                 return _Value(repr(self.scope.enum_literal_value(expr)), _type(self.scope, expr))
             case ast.NameRef(name=name):
-                binding = self.scope.lookup(name)
+                binding = self.scope.enum_hint(expr) or self.scope.lookup(name)
                 if isinstance(binding, EnumValue):
                     return _Value(repr(binding.value), binding.type)
                 if isinstance(binding, ProgramRef):
@@ -298,6 +298,7 @@ class _Emitter:
 
     def converted(self, target: Type, value_expr: ast.Expr) -> str:
         """Code for `value_expr` stored into a variable of type `target`."""
+        self.scope.expect(value_expr, target)
         integer = integer_like(target)
         if integer is not None and _type(self.scope, value_expr) == ANY_INT:
             constant = self.scope.constant_int(value_expr)
@@ -498,7 +499,14 @@ class _Emitter:
 
     def case(self, case: ast.Case, depth: int) -> None:
         selector = self.temp()
-        self.emit(depth, f"{selector} = {self.exact(case.selector).code}")
+        selector_value = self.exact(case.selector)
+        for labels, _ in case.branches:
+            for label in labels:
+                for bound in (
+                    (label.low, label.high) if isinstance(label, ast.CaseRange) else (label,)
+                ):
+                    self.scope.expect(bound, selector_value.type)
+        self.emit(depth, f"{selector} = {selector_value.code}")
         first = True
         for labels, body in case.branches:
             tests = []

@@ -60,6 +60,8 @@ class Scope:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     # by id() of the node; the node is kept alongside so its id cannot be reused
     _types: dict[int, tuple[Type | None, ast.Expr]] = field(default_factory=dict)
+    # enum values named without their type, resolved from where they are used
+    _enum_hints: dict[int, tuple[EnumValue, ast.Expr]] = field(default_factory=dict)
 
     # ---- names
     def variable(self, name: str) -> Variable | None:
@@ -80,6 +82,28 @@ class Scope:
         if pou is not None and pou.kind == "PROGRAM":
             return ProgramRef(pou)
         return None
+
+    def expect(self, expr: ast.Initializer, target: Type | None) -> None:
+        """`expr` is used where a value of `target` is wanted: an unqualified enum value
+        that several enums define means the one of `target` (`c := XXXX`)."""
+        if not isinstance(expr, ast.NameRef) or not isinstance(target, EnumType):
+            return
+        if self.variable(expr.name) is not None or id(expr) in self._types:
+            return
+        info = self.resolved.enums.get(key(target.name))
+        if info is not None and key(expr.name) in info.values:
+            self._enum_hints[id(expr)] = (
+                EnumValue(info.type, info.values[key(expr.name)][1]),
+                expr,
+            )
+
+    def _bare_name(self, expr: ast.Expr) -> bool:
+        """A name that is no variable: it may be an enum value to resolve from context."""
+        return isinstance(expr, ast.NameRef) and self.variable(expr.name) is None
+
+    def enum_hint(self, expr: ast.Expr) -> EnumValue | None:
+        hint = self._enum_hints.get(id(expr))
+        return hint[0] if hint is not None else None
 
     def fb_symbols(self, fb: FbType) -> PouSymbols:
         return self.resolved.pous[key(fb.name)]
@@ -118,7 +142,7 @@ class Scope:
             case ast.EnumLiteral():
                 return self._enum_literal(expr)
             case ast.NameRef(name=name, pos=pos):
-                binding = self.lookup(name)
+                binding = self.enum_hint(expr) or self.lookup(name)
                 if binding is None:
                     self.report(pos, f"'{name}' is not declared")
                     return None
@@ -261,6 +285,9 @@ class Scope:
         return None
 
     def _binary(self, expr: ast.Binary) -> Type | None:
+        for known, bare in ((expr.left, expr.right), (expr.right, expr.left)):
+            if self._bare_name(bare) and not self._bare_name(known):
+                self.expect(bare, self.type_of(known))
         left_type, right_type = self.type_of(expr.left), self.type_of(expr.right)
         if left_type is None or right_type is None:
             return None
