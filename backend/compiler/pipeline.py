@@ -22,6 +22,7 @@ from backend.compiler.generate import (
 )
 from backend.compiler.infer import is_external
 from backend.compiler.parse import parse_source
+from backend.compiler.program_rules import check_programs
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, FbType, StructType, Type
@@ -83,7 +84,7 @@ def compile_sources(
         resource = configured[0] if configured else ResourceConfig(name="Resource1")
     if programs is None:
         programs = configured[1] if configured else _default_programs(units)
-    diagnostics.extend(_check_programs(resolved, programs, config_file))
+    diagnostics.extend(check_programs(resolved, programs, config_file))
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics) or not resolved.pous:
         if not resolved.pous and not diagnostics:
@@ -159,27 +160,6 @@ def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:
     """Without a configuration every PROGRAM runs as a user program named after its POU."""
     pous = [p for unit in units for p in unit.pous if p.kind == "PROGRAM"]
     return [ProgramConfig(name=p.name, pou=p.name, program_id=i) for i, p in enumerate(pous, 1)]
-
-
-def _check_programs(
-    resolved: Resolved, programs: list[ProgramConfig], config_file: str
-) -> list[Diagnostic]:
-    where = ast.Pos(config_file, 1, 1)
-    diagnostics: list[Diagnostic] = []
-    seen_ids: dict[int, str] = {}
-    for program in programs:
-        pou = resolved.pous.get(key(program.pou))
-        if pou is None or pou.kind != "PROGRAM":
-            message = f"user program '{program.name}': no PROGRAM '{program.pou}'"
-            diagnostics.append(error(where, message))
-        if program.program_id in seen_ids:
-            other = seen_ids[program.program_id]
-            message = f"program ID {program.program_id} of '{program.name}' is used by '{other}'"
-            diagnostics.append(error(where, message))
-        seen_ids[program.program_id] = program.name
-    if len(programs) > 32:
-        diagnostics.append(error(where, f"{len(programs)} user programs; at most 32"))
-    return diagnostics
 
 
 def _fb_dependencies(resolved: Resolved, name: str) -> list[str]:

@@ -1,0 +1,185 @@
+"""Checks on the user programs of a resource (not on single POUs): the program list itself,
+and the rule that global data has one writer.
+
+A global written by two user programs would make the result depend on their order and
+slicing; HIMA forbids it, and so do we: each global may be written by at most one program
+(through any FB or function it calls).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+
+from backend.compiler import ast
+from backend.compiler.ast import key
+from backend.compiler.diagnostics import Diagnostic, error
+from backend.compiler.resolve import PouSymbols, Resolved
+from backend.compiler.types import FbType
+from runtime.artifact import ProgramConfig
+
+MAX_PROGRAMS = 32
+
+
+def check_programs(
+    resolved: Resolved, programs: list[ProgramConfig], config_file: str
+) -> list[Diagnostic]:
+    where = ast.Pos(config_file, 1, 1)
+    diagnostics: list[Diagnostic] = []
+    seen_ids: dict[int, str] = {}
+    for program in programs:
+        pou = resolved.pous.get(key(program.pou))
+        if pou is None or pou.kind != "PROGRAM":
+            message = f"user program '{program.name}': no PROGRAM '{program.pou}'"
+            diagnostics.append(error(where, message))
+        if not 1 <= program.program_id <= MAX_PROGRAMS:
+            message = f"program ID {program.program_id} of '{program.name}' is not in 1..32"
+            diagnostics.append(error(where, message))
+        if program.program_id in seen_ids:
+            other = seen_ids[program.program_id]
+            message = f"program ID {program.program_id} of '{program.name}' is used by '{other}'"
+            diagnostics.append(error(where, message))
+        seen_ids[program.program_id] = program.name
+    if len(programs) > MAX_PROGRAMS:
+        diagnostics.append(error(where, f"{len(programs)} user programs; at most {MAX_PROGRAMS}"))
+    diagnostics.extend(_check_single_writer(resolved, programs))
+    return diagnostics
+
+
+def _check_single_writer(resolved: Resolved, programs: list[ProgramConfig]) -> list[Diagnostic]:
+    writers: dict[str, list[str]] = {}
+    first_write: dict[str, ast.Pos] = {}
+    for program in programs:
+        if key(program.pou) not in resolved.pous:
+            continue
+        for name, pos in sorted(globals_written(resolved, key(program.pou)).items()):
+            writers.setdefault(name, []).append(program.name)
+            first_write.setdefault(name, pos)
+    diagnostics = []
+    for name, names in sorted(writers.items()):
+        if len(names) > 1:
+            spelled = resolved.globals_by_key[name].name
+            message = (
+                f"global '{spelled}' is written by the user programs {', '.join(names)}; "
+                "global data must have one writer"
+            )
+            diagnostics.append(error(first_write[name], message))
+    return diagnostics
+
+
+def globals_written(resolved: Resolved, pou_key: str) -> dict[str, ast.Pos]:
+    """The globals (by key) a POU writes, itself or through the POUs it calls."""
+    written: dict[str, ast.Pos] = {}
+    visited: set[str] = set()
+    pending = [pou_key]
+    while pending:
+        current = pending.pop()
+        if current in visited or current not in resolved.pous:
+            continue
+        visited.add(current)
+        pou = resolved.pous[current]
+        for target in _write_targets(pou):
+            root = _root_name(target)
+            variable = pou.by_key.get(key(root.name)) if root is not None else None
+            if variable is None and root is not None:
+                variable = resolved.globals_by_key.get(key(root.name))
+            if root is not None and variable is not None and variable.kind == "VAR_GLOBAL":
+                written.setdefault(key(variable.name), root.pos)
+        pending.extend(sorted(_callees(resolved, pou)))
+    return written
+
+
+def _statements(pou: PouSymbols) -> Iterator[ast.Statement]:
+    bodies = [pou.pou.body]
+    if pou.pou.sfc is not None:
+        bodies.extend(action.body for action in pou.pou.sfc.actions)
+    stack = [s for body in bodies for s in body]
+    while stack:
+        statement = stack.pop()
+        yield statement
+        match statement:
+            case ast.If(branches=branches, orelse=orelse):
+                stack.extend(s for _, body in branches for s in body)
+                stack.extend(orelse)
+            case ast.Case(branches=branches, orelse=orelse):
+                stack.extend(s for _, body in branches for s in body)
+                stack.extend(orelse)
+            case ast.While(body=body) | ast.Repeat(body=body) | ast.For(body=body):
+                stack.extend(body)
+
+
+def _write_targets(pou: PouSymbols) -> Iterator[ast.Expr]:
+    for statement in _statements(pou):
+        match statement:
+            case ast.Assign(target=target):
+                yield target
+            case ast.For(variable=name, pos=pos):
+                yield ast.NameRef(name, pos)
+            case ast.CallStatement(call=call):
+                for arg in call.args:
+                    if arg.is_output and arg.value is not None:
+                        yield arg.value
+                yield ast.NameRef(call.name, call.pos)  # calling an FB instance changes it
+
+
+def _root_name(expr: ast.Expr) -> ast.NameRef | None:
+    while isinstance(expr, ast.MemberRef | ast.IndexRef | ast.BitRef):
+        expr = expr.base
+    return expr if isinstance(expr, ast.NameRef) else None
+
+
+def _callees(resolved: Resolved, pou: PouSymbols) -> set[str]:
+    """POUs this one may run: its FB instances' types and every function or program named
+    in a call."""
+    found = {key(v.type.name) for v in pou.variables if isinstance(v.type, FbType)}
+    for statement in _statements(pou):
+        for call in _calls_in(statement):
+            if key(call.name) in resolved.pous:
+                found.add(key(call.name))
+    return found
+
+
+def _calls_in(statement: ast.Statement) -> Iterator[ast.Call]:
+    """Every call in a statement's own expressions (nested statements are walked apart)."""
+    match statement:
+        case ast.Assign(target=target, value=value):
+            roots: Sequence[ast.Initializer] = [target, value]
+        case ast.CallStatement(call=call):
+            roots = [call]
+        case ast.If(branches=branches):
+            roots = [condition for condition, _ in branches]
+        case ast.Case(selector=selector):
+            roots = [selector]
+        case ast.While(condition=condition) | ast.Repeat(until=condition):
+            roots = [condition]
+        case ast.For(start=start, stop=stop, step=step):
+            roots = [start, stop, *([step] if step is not None else [])]
+        case _:
+            roots = []
+    for root in roots:
+        yield from _expression_calls(root)
+
+
+def _expression_calls(expr: ast.Initializer) -> Iterator[ast.Call]:
+    match expr:
+        case ast.Call(args=args):
+            yield expr
+            for arg in args:
+                if arg.value is not None:
+                    yield from _expression_calls(arg.value)
+        case ast.Unary(operand=operand):
+            yield from _expression_calls(operand)
+        case ast.Binary(left=left, right=right):
+            yield from _expression_calls(left)
+            yield from _expression_calls(right)
+        case ast.MemberRef(base=base) | ast.BitRef(base=base) | ast.Deref(base=base):
+            yield from _expression_calls(base)
+        case ast.IndexRef(base=base, indices=indices):
+            yield from _expression_calls(base)
+            for index in indices:
+                yield from _expression_calls(index)
+        case ast.ArrayInit(items=items):
+            for _, value in items:
+                yield from _expression_calls(value)
+        case ast.StructInit(members=members):
+            for _, value in members:
+                yield from _expression_calls(value)

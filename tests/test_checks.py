@@ -1,0 +1,167 @@
+"""Every compile-time check reports its problem as `file:line:col: severity: message`, all
+problems of a run together, and never a traceback."""
+
+from __future__ import annotations
+
+import pytest
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from runtime.artifact import ProgramConfig
+
+
+def diagnostics(text: str, programs: list[ProgramConfig] | None = None) -> list[str]:
+    result = compile_sources([SourceFile("t.st", text)], programs=programs)
+    return [str(d) for d in result.diagnostics]
+
+
+CASES = [
+    (
+        "undeclared name",
+        "PROGRAM P\nVAR x : INT; END_VAR\nx := y + 1;\nEND_PROGRAM",
+        "t.st:3:6: error: 'y' is not declared",
+    ),
+    (
+        "type mismatch",
+        "PROGRAM P\nVAR x : INT; s : STRING; END_VAR\nx := s;\nEND_PROGRAM",
+        "t.st:3:6: error: type mismatch: cannot assign STRING to INT",
+    ),
+    (
+        "assignment to a constant",
+        "PROGRAM P\nVAR CONSTANT c : INT := 1; END_VAR\nc := 2;\nEND_PROGRAM",
+        "t.st:3:1: error: cannot assign to constant 'c'",
+    ),
+    (
+        "assignment to an input inside its block is a warning",
+        "FUNCTION_BLOCK F\nVAR_INPUT i : INT; END_VAR\ni := 2;\nEND_FUNCTION_BLOCK",
+        "t.st:3:1: warning: assignment to input 'i' inside its block",
+    ),
+    (
+        "writing an FB output from outside",
+        "PROGRAM P\nVAR t : TON; END_VAR\nt.Q := TRUE;\nEND_PROGRAM",
+        "t.st:3:1: error: 'Q' of 'TON' cannot be written from outside",
+    ),
+    (
+        "unknown call argument",
+        "FUNCTION F : INT\nVAR_INPUT a : INT; END_VAR\nF := a;\nEND_FUNCTION\n"
+        "PROGRAM P\nVAR x : INT; END_VAR\nx := F(b := 1);\nEND_PROGRAM",
+        "t.st:7:8: error: 'F' has no parameter 'b'",
+    ),
+    (
+        "too many arguments",
+        "FUNCTION F : INT\nVAR_INPUT a : INT; END_VAR\nF := a;\nEND_FUNCTION\n"
+        "PROGRAM P\nVAR x : INT; END_VAR\nx := F(1, 2);\nEND_PROGRAM",
+        "t.st:7:6: error: 'F' takes 1 arguments, not 2",
+    ),
+    (
+        "argument of the wrong type",
+        "FUNCTION F : INT\nVAR_INPUT a : INT; END_VAR\nF := a;\nEND_FUNCTION\n"
+        "PROGRAM P\nVAR x : INT; END_VAR\nx := F(a := 'text');\nEND_PROGRAM",
+        "t.st:7:13: error: type mismatch: cannot pass STRING as INT",
+    ),
+    (
+        "duplicate CASE label",
+        "PROGRAM P\nVAR x : INT; END_VAR\nCASE x OF 1..3: ; 2: ; END_CASE;\nEND_PROGRAM",
+        "t.st:3:19: error: CASE label 2 already used at t.st:3:11",
+    ),
+    (
+        "CASE on a REAL",
+        "PROGRAM P\nVAR r : REAL; END_VAR\nCASE r OF 1: ; END_CASE;\nEND_PROGRAM",
+        "t.st:3:6: error: CASE selector must be an integer or enum, not REAL",
+    ),
+    (
+        "constant index out of bounds",
+        "PROGRAM P\nVAR a : ARRAY[1..3] OF INT; END_VAR\na[4] := 0;\nEND_PROGRAM",
+        "t.st:3:3: error: index 4 is outside the bounds 1..3",
+    ),
+    (
+        "literal out of range",
+        "PROGRAM P\nVAR b : SINT; END_VAR\nb := 200;\nEND_PROGRAM",
+        "t.st:3:6: error: 200 is out of range for SINT",
+    ),
+    (
+        "condition not BOOL",
+        "PROGRAM P\nVAR x : INT; END_VAR\nWHILE x DO END_WHILE;\nEND_PROGRAM",
+        "t.st:3:7: error: condition must be BOOL, not INT",
+    ),
+    (
+        "EXIT outside a loop",
+        "PROGRAM P\nEXIT;\nEND_PROGRAM",
+        "t.st:2:1: error: EXIT outside of a loop",
+    ),
+    (
+        "step flags are read-only",
+        "PROGRAM P\nINITIAL_STEP S0: END_STEP\nSTEP S1: END_STEP\n"
+        "TRANSITION FROM S0 TO S1 := TRUE; END_TRANSITION\nACTION A: S1.X := TRUE; END_ACTION\n"
+        "END_PROGRAM",
+        "t.st:5:11: error: step flag 'S1.X' is read-only",
+    ),
+    (
+        "SFC without an initial step",
+        "PROGRAM P\nSTEP S0: END_STEP\nSTEP S1: END_STEP\n"
+        "TRANSITION FROM S0 TO S1 := TRUE; END_TRANSITION\nEND_PROGRAM",
+        "t.st:2:6: error: the step chain S0, S1 needs exactly one INITIAL_STEP, not 0",
+    ),
+    (
+        "timed qualifier without a time",
+        "PROGRAM P\nVAR b : BOOL; END_VAR\nINITIAL_STEP S0: b(L); END_STEP\nEND_PROGRAM",
+        "t.st:3:18: error: qualifier L needs a time: (L, T#1s)",
+    ),
+    (
+        "unknown type",
+        "PROGRAM P\nVAR x : MOTOR; END_VAR\nEND_PROGRAM",
+        "t.st:2:9: error: unknown type 'MOTOR'",
+    ),
+    (
+        "duplicate declaration",
+        "PROGRAM P\nVAR x : INT; x : BOOL; END_VAR\nEND_PROGRAM",
+        "t.st:2:14: error: 'x' is already declared at t.st:2:5",
+    ),
+    (
+        "bad string escape",
+        "PROGRAM P\nVAR s : STRING := 'a$Qb'; END_VAR\nEND_PROGRAM",
+        "t.st:2:19: error: invalid escape '$Q' in string literal",
+    ),
+    (
+        "pragmas are skipped with a warning",
+        "PROGRAM P\n{attribute 'x'}\nEND_PROGRAM",
+        "t.st:2:1: warning: pragma skipped",
+    ),
+]
+
+
+@pytest.mark.parametrize(("title", "source", "expected"), CASES, ids=[c[0] for c in CASES])
+def test_check_reports_position(title: str, source: str, expected: str) -> None:
+    assert expected in diagnostics(source)
+
+
+def test_all_errors_of_a_run_are_reported() -> None:
+    source = "PROGRAM P\nVAR x : INT; END_VAR\nx := a;\nx := b;\nx := 'c';\nEND_PROGRAM"
+    errors = [d for d in diagnostics(source) if ": error: " in d]
+    assert len(errors) == 3
+
+
+def test_a_global_has_one_writer() -> None:
+    source = (
+        "VAR_GLOBAL shared : INT; END_VAR\n"
+        "FUNCTION_BLOCK Bump\nVAR_EXTERNAL shared : INT; END_VAR\nshared := shared + 1;\n"
+        "END_FUNCTION_BLOCK\n"
+        "PROGRAM A\nVAR b : Bump; END_VAR\nb();\nEND_PROGRAM\n"
+        "PROGRAM B\nshared := 5;\nEND_PROGRAM\n"
+    )
+    assert (
+        "t.st:4:1: error: global 'shared' is written by the user programs A, B; "
+        "global data must have one writer"
+    ) in diagnostics(source)
+
+
+def test_program_ids_unique_and_at_most_32() -> None:
+    source = "PROGRAM P\nEND_PROGRAM\n"
+    same_id = [ProgramConfig("a", "P", 1), ProgramConfig("b", "P", 1)]
+    assert "padt.toml:1:1: error: program ID 1 of 'b' is used by 'a'" in diagnostics(
+        source, same_id
+    )
+    many = [ProgramConfig(f"p{i}", "P", i) for i in range(1, 34)]
+    found = diagnostics(source, many)
+    assert "padt.toml:1:1: error: 33 user programs; at most 32" in found
+    assert "padt.toml:1:1: error: program ID 33 of 'p33' is not in 1..32" in found
