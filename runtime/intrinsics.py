@@ -186,8 +186,9 @@ _TIME_UNITS = (
 )  # fmt: skip
 
 
-def _time_to_str(ns: int, prefix: str = "T#") -> str:
-    """TIME_TO_STRING: `T#1h2m3s4ms`, the largest units first, zero parts left out."""
+def format_time(ns: int, prefix: str = "T#") -> str:
+    """TIME_TO_STRING: `T#1h2m3s4ms`, the largest units first, zero parts left out (also how
+    the PADT shows TIME values)."""
     if ns == 0:
         return f"{prefix}0s"
     sign, rest = ("-", -ns) if ns < 0 else ("", ns)
@@ -448,7 +449,7 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         "_str_to_real": _str_to_real,
         "_str_to_bool": _str_to_bool,
         "_real_to_str": _real_to_str,
-        "_time_to_str": _time_to_str,
+        "_time_to_str": format_time,
         "_date_to_str": _date_to_str,
         "_str_to_time": _str_to_time,
         "_w2s": _w2s,

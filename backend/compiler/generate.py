@@ -844,30 +844,27 @@ def _generate_function(scope: Scope, pou: PouSymbols) -> str:
     return "\n".join(emitter.lines) + "\n"
 
 
-def generate_struct(resolved: Resolved, info: StructInfo, any_pou: PouSymbols) -> str:
-    emitter = _Emitter(Scope(resolved, any_pou), local=False)
-    if key(info.name) == key(STEP_STRUCT):  # SFC steps also remember when they started
-        return f"{struct_class(info.name)} = _SfcStep\n"
-    emitter.emit(0, f"class {struct_class(info.name)}:")
-    emitter.emit(1, f"__slots__ = {tuple(m.attr for m in info.members)!r}")
+def _data_class(emitter: _Emitter, name: str, fields: list[Variable]) -> str:
+    """A class that only holds data: slots, and an __init__ with the initial values."""
+    emitter.emit(0, f"class {name}:")
+    emitter.emit(1, f"__slots__ = {tuple(v.attr for v in fields)!r}")
     emitter.emit(0, "")
     emitter.emit(1, "def __init__(s):")
-    if not info.members:
+    if not fields:
         emitter.emit(2, "pass")
-    for member in info.members:
-        emitter.emit(2, f"s.{member.attr} = {emitter.initial(member.type, member.init)}")
+    for variable in fields:
+        emitter.emit(2, f"s.{variable.attr} = {emitter.initial(variable.type, variable.init)}")
     return "\n".join(emitter.lines) + "\n"
+
+
+def generate_struct(resolved: Resolved, info: StructInfo, any_pou: PouSymbols) -> str:
+    if key(info.name) == key(STEP_STRUCT):  # SFC steps also remember when they started
+        return f"{struct_class(info.name)} = _SfcStep\n"
+    emitter = _Emitter(Scope(resolved, any_pou), local=False)
+    return _data_class(emitter, struct_class(info.name), info.members)
 
 
 def generate_globals(resolved: Resolved, any_pou: PouSymbols) -> str:
     """The class whose single instance `_G` holds the global variables."""
     emitter = _Emitter(Scope(resolved, any_pou), local=False, in_globals=True)
-    emitter.emit(0, "class GLOBALS:")
-    emitter.emit(1, f"__slots__ = {tuple(v.attr for v in resolved.globals)!r}")
-    emitter.emit(0, "")
-    emitter.emit(1, "def __init__(s):")
-    if not resolved.globals:
-        emitter.emit(2, "pass")
-    for variable in resolved.globals:
-        emitter.emit(2, f"s.{variable.attr} = {emitter.initial(variable.type, variable.init)}")
-    return "\n".join(emitter.lines) + "\n"
+    return _data_class(emitter, "GLOBALS", resolved.globals)
