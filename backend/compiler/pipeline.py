@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
+from backend.compiler.checks.programs import check_programs
 from backend.compiler.diagnostics import CompileError, Diagnostic, error, warning
 from backend.compiler.generate import (
     class_name,
@@ -22,7 +23,6 @@ from backend.compiler.generate import (
 )
 from backend.compiler.infer import is_external
 from backend.compiler.parse import parse_source
-from backend.compiler.program_rules import check_programs
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, FbType, StructType, Type

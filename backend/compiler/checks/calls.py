@@ -1,0 +1,45 @@
+"""Calls of function blocks and programs as statements: arguments and their kinds."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.checks.initializers import mismatch
+from backend.compiler.checks.targets import is_lvalue, writable_target
+from backend.compiler.infer import ProgramRef, Scope
+from backend.compiler.resolve import PouSymbols, Variable
+from backend.compiler.types import FbType, assignable
+
+
+def check_call_statement(scope: Scope, call: ast.Call) -> None:
+    binding = scope.lookup(call.name) if call.receiver is None else None
+    if isinstance(binding, ProgramRef):
+        callee = binding.pou
+    elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
+        callee = scope.fb_symbols(binding.type)
+    else:
+        scope.type_of(call)  # a function called as a statement
+        return
+    for arg, param in scope.connect_arguments(callee, call):
+        if param is None:
+            if arg.value is not None:
+                scope.type_of(arg.value)
+            continue
+        if arg.is_output and param.kind == "VAR_INPUT":
+            scope.report(arg.pos, f"'{param.name}' of '{callee.name}' is an input, not an output")
+            continue
+        check_fb_argument(scope, callee, arg, param)
+
+
+def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Variable) -> None:
+    if arg.value is None:
+        return
+    if arg.is_output or param.kind == "VAR_OUTPUT":
+        target_type = writable_target(scope, arg.value)
+        if target_type is not None and not assignable(target_type, param.type):
+            scope.report(arg.value.pos, mismatch(target_type, param.type))
+        return
+    if param.kind == "VAR_IN_OUT" and not is_lvalue(arg.value):
+        scope.report(arg.value.pos, f"in-out '{param.name}' needs a variable")
+    value_type = scope.type_of(arg.value)
+    if value_type is not None and not assignable(param.type, value_type):
+        scope.report(arg.value.pos, mismatch(param.type, value_type))

@@ -1,0 +1,92 @@
+"""Initial values and assigned values: type compatibility and literal ranges."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.ast import key
+from backend.compiler.infer import Scope
+from backend.compiler.types import (
+    ArrayType,
+    ElementaryType,
+    EnumType,
+    FbType,
+    StructType,
+    Type,
+    assignable,
+)
+
+
+def check_initializer(scope: Scope, target: Type, init: ast.Initializer | None) -> None:
+    if init is None:
+        return
+    if isinstance(init, ast.ArrayInit):
+        if not isinstance(target, ArrayType):
+            scope.report(init.pos, f"an array initializer cannot initialise {target.name}")
+            return
+        count = 0
+        for repeat, value in init.items:
+            times = 1
+            if repeat is not None:
+                if not isinstance(repeat, ast.IntLiteral):
+                    scope.report(repeat.pos, "repetition count must be an integer literal")
+                else:
+                    times = repeat.value
+            element_target: Type = target.element
+            if isinstance(value, ast.ArrayInit) and not isinstance(target.element, ArrayType):
+                for _, inner in value.items:  # a repeated group `n(a, b)`
+                    check_initializer(scope, element_target, inner)
+                count += times * len(value.items)
+                continue
+            check_initializer(scope, element_target, value)
+            count += times
+        if count > target.size:
+            scope.report(init.pos, f"{count} initial values for {target.size} elements")
+        return
+    if isinstance(init, ast.StructInit):
+        if not isinstance(target, StructType | FbType):
+            scope.report(init.pos, f"a structure initializer cannot initialise {target.name}")
+            return
+        members = (
+            scope.struct(target).by_key
+            if isinstance(target, StructType)
+            else scope.fb_symbols(target).by_key
+        )
+        for name, value in init.members:
+            member = members.get(key(name))
+            if member is None:
+                scope.report(init.pos, f"'{target.name}' has no member '{name}'")
+                continue
+            check_initializer(scope, member.type, value)
+        return
+    check_value(scope, target, init)
+
+
+def check_value(scope: Scope, target: Type, value: ast.Expr) -> None:
+    scope.expect(value, target)
+    value_type = scope.type_of(value)
+    if value_type is None:
+        return
+    if not assignable(target, value_type):
+        scope.report(value.pos, mismatch(target, value_type))
+    elif isinstance(value, ast.IntLiteral) and value.type_name is None:
+        check_range(scope, target, value)
+
+
+def literal_fits(target: ElementaryType, literal: ast.IntLiteral) -> bool:
+    """A decimal literal must lie in the range; a based one (16#FFFF) is a bit pattern and
+    only has to fit the width."""
+    if literal.based and 0 <= literal.value < 1 << target.bits:
+        return True
+    return target.min <= literal.value <= target.max
+
+
+def check_range(scope: Scope, target: Type, literal: ast.IntLiteral) -> None:
+    integer = target.base if isinstance(target, EnumType) else target
+    if not (isinstance(integer, ElementaryType) and integer.is_integer):
+        return
+    if not literal_fits(integer, literal):
+        scope.report(literal.pos, f"{literal.value} is out of range for {integer.name}")
+
+
+def mismatch(target: Type, source: Type) -> str:
+    return f"type mismatch: cannot assign {source.name} to {target.name}"

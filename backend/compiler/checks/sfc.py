@@ -1,0 +1,89 @@
+"""Sequential function charts: one initial step per chain, known steps and actions, qualifiers
+and their times."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.ast import key
+from backend.compiler.checks.statements import check_block, check_condition
+from backend.compiler.infer import Scope
+from backend.compiler.types import BOOL, ElementaryType
+
+QUALIFIERS = ("N", "R", "S", "P", "P0", "P1", "L", "D", "SD", "DS", "SL")
+
+
+TIMED_QUALIFIERS = ("L", "D", "SD", "DS", "SL")
+
+
+def sfc_networks(sfc: ast.Sfc) -> list[list[ast.Step]]:
+    """The independent step chains of a POU (steps linked by transitions), in text order."""
+    owner = {key(step.name): key(step.name) for step in sfc.steps}
+
+    def root(name: str) -> str:
+        while owner[name] != name:
+            name = owner[name]
+        return name
+
+    for transition in sfc.transitions:
+        names = [key(n) for n in (*transition.sources, *transition.targets) if key(n) in owner]
+        for other in names[1:]:
+            owner[root(other)] = root(names[0])
+    networks: dict[str, list[ast.Step]] = {}
+    for step in sfc.steps:
+        networks.setdefault(root(key(step.name)), []).append(step)
+    return list(networks.values())
+
+
+def check_sfc(scope: Scope, sfc: ast.Sfc) -> None:
+    for network in sfc_networks(sfc):
+        initial = [step for step in network if step.initial]
+        if len(initial) != 1:
+            where = initial[1].pos if len(initial) > 1 else network[0].pos
+            names = ", ".join(step.name for step in network)
+            scope.report(
+                where, f"the step chain {names} needs exactly one INITIAL_STEP, not {len(initial)}"
+            )
+    steps = {key(step.name) for step in sfc.steps}
+    actions: dict[str, ast.Action] = {}
+    for action in sfc.actions:
+        if key(action.name) in actions:
+            scope.report(action.pos, f"action '{action.name}' is declared twice")
+        actions[key(action.name)] = action
+        check_block(scope, action.body, loop_depth=0)
+    for step in sfc.steps:
+        for association in step.associations:
+            check_association(scope, association, actions)
+    for transition in sfc.transitions:
+        for name in (*transition.sources, *transition.targets):
+            if key(name) not in steps:
+                scope.report(transition.pos, f"transition refers to '{name}', which is no step")
+        check_condition(scope, transition.condition)
+
+
+def check_association(
+    scope: Scope, association: ast.ActionAssociation, actions: dict[str, ast.Action]
+) -> None:
+    if key(association.action) not in actions:
+        variable = scope.variable(association.action)
+        if variable is None or variable.type != BOOL:
+            scope.report(
+                association.pos,
+                f"'{association.action}' is neither an ACTION nor a BOOL variable",
+            )
+    qualifier = association.qualifier
+    if qualifier not in QUALIFIERS:
+        scope.report(association.pos, f"unknown action qualifier '{qualifier}'")
+        return
+    if qualifier in TIMED_QUALIFIERS:
+        if association.duration is None:
+            scope.report(
+                association.pos, f"qualifier {qualifier} needs a time: ({qualifier}, T#1s)"
+            )
+            return
+        duration = scope.type_of(association.duration)
+        if duration is not None and not (
+            isinstance(duration, ElementaryType) and duration.category == "time"
+        ):
+            scope.report(association.pos, f"the time of {qualifier} must be a TIME")
+    elif association.duration is not None:
+        scope.report(association.pos, f"qualifier {qualifier} takes no time")

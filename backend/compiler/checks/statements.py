@@ -1,0 +1,100 @@
+"""Statements: conditions, loops (EXIT/CONTINUE only inside), CASE labels, FOR counters."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.checks.calls import check_call_statement
+from backend.compiler.checks.initializers import check_initializer, mismatch
+from backend.compiler.checks.targets import writable_target
+from backend.compiler.infer import Scope
+from backend.compiler.types import BOOL, ElementaryType, Type, assignable, integer_like
+
+
+def check_block(scope: Scope, body: tuple[ast.Statement, ...], loop_depth: int) -> None:
+    for statement in body:
+        check_statement(scope, statement, loop_depth)
+
+
+def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> None:
+    match statement:
+        case ast.Assign(target=target, value=value):
+            target_type = writable_target(scope, target)
+            if target_type is not None:
+                check_initializer(scope, target_type, value)
+            elif not isinstance(value, ast.ArrayInit | ast.StructInit):
+                scope.type_of(value)
+        case ast.CallStatement(call=call):
+            check_call_statement(scope, call)
+        case ast.If(branches=branches, orelse=orelse):
+            for condition, block in branches:
+                check_condition(scope, condition)
+                check_block(scope, block, loop_depth)
+            check_block(scope, orelse, loop_depth)
+        case ast.Case():
+            check_case(scope, statement, loop_depth)
+        case ast.While(condition=condition, body=block):
+            check_condition(scope, condition)
+            check_block(scope, block, loop_depth + 1)
+        case ast.Repeat(body=block, until=until):
+            check_block(scope, block, loop_depth + 1)
+            check_condition(scope, until)
+        case ast.For():
+            check_for(scope, statement, loop_depth)
+        case ast.Exit(pos=pos) | ast.Continue(pos=pos):
+            if loop_depth == 0:
+                word = "EXIT" if isinstance(statement, ast.Exit) else "CONTINUE"
+                scope.report(pos, f"{word} outside of a loop")
+        case ast.Return():
+            pass
+
+
+def check_case(scope: Scope, case: ast.Case, loop_depth: int) -> None:
+    selector = scope.type_of(case.selector)
+    if selector is not None and integer_like(selector) is None:
+        scope.report(
+            case.selector.pos, f"CASE selector must be an integer or enum, not {selector.name}"
+        )
+    seen: dict[int, ast.Pos] = {}
+    for labels, body in case.branches:
+        for label in labels:
+            bounds = (label.low, label.high) if isinstance(label, ast.CaseRange) else (label, label)
+            values = [case_label_value(scope, bound, selector) for bound in bounds]
+            if values[0] is None or values[1] is None:
+                continue
+            for value in range(values[0], values[1] + 1) if values[1] - values[0] < 4096 else ():
+                if value in seen:
+                    scope.report(label.pos, f"CASE label {value} already used at {seen[value]}")
+                    break
+                seen[value] = label.pos
+        check_block(scope, body, loop_depth)
+    check_block(scope, case.orelse, loop_depth)
+
+
+def case_label_value(scope: Scope, label: ast.Expr, selector: Type | None) -> int | None:
+    scope.expect(label, selector)
+    label_type = scope.type_of(label)
+    if label_type is None:
+        return None
+    if integer_like(label_type) is None:
+        scope.report(label.pos, f"CASE label must be an integer or enum, not {label_type.name}")
+        return None
+    return scope.constant_int(label)
+
+
+def check_for(scope: Scope, loop: ast.For, loop_depth: int) -> None:
+    counter = writable_target(scope, ast.NameRef(loop.variable, loop.pos))
+    if counter is not None and not (isinstance(counter, ElementaryType) and counter.is_integer):
+        scope.report(loop.pos, f"FOR counter '{loop.variable}' must be an integer")
+    for bound in (loop.start, loop.stop, loop.step):
+        if bound is None:
+            continue
+        bound_type = scope.type_of(bound)
+        if counter is not None and bound_type is not None and not assignable(counter, bound_type):
+            scope.report(bound.pos, mismatch(counter, bound_type))
+    check_block(scope, loop.body, loop_depth + 1)
+
+
+def check_condition(scope: Scope, condition: ast.Expr) -> None:
+    condition_type = scope.type_of(condition)
+    if condition_type is not None and condition_type != BOOL:
+        scope.report(condition.pos, f"condition must be BOOL, not {condition_type.name}")

@@ -1,0 +1,60 @@
+"""What may be written: constants, inputs, FB outputs, step flags are protected."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.infer import EnumValue, ProgramRef, Scope
+from backend.compiler.resolve import Variable
+from backend.compiler.types import FbType, StructType, Type
+
+WRITABLE_MEMBER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "MEMBER")
+
+
+def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
+    """Type of an assignment target, reporting anything that may not be written."""
+    if isinstance(target, ast.NameRef):
+        binding = scope.lookup(target.name)
+        if binding is None:
+            scope.report(target.pos, f"'{target.name}' is not declared")
+            return None
+        if isinstance(binding, EnumValue | ProgramRef):
+            scope.report(target.pos, f"cannot assign to '{target.name}'")
+            return None
+        if binding.constant:
+            scope.report(target.pos, f"cannot assign to constant '{binding.name}'")
+        elif binding.kind == "VAR_INPUT" and scope.pou.kind != "FUNCTION":
+            # CODESYS, matiec and OSCAT write inputs inside the block; it is legal but
+            # a trap (the caller's value is gone for the rest of the call): warn
+            scope.warn(target.pos, f"assignment to input '{binding.name}' inside its block")
+        return binding.type
+    if isinstance(target, ast.MemberRef):
+        base_type = scope.type_of(target.base)
+        member = scope.member(target)
+        if member is None:
+            return None
+        root = target.base
+        while isinstance(root, ast.MemberRef | ast.IndexRef):
+            root = root.base
+        if isinstance(root, ast.NameRef):
+            root_binding = scope.lookup(root.name)
+            if isinstance(root_binding, Variable) and root_binding.kind == "STEP":
+                scope.report(target.pos, f"step flag '{root.name}.{target.member}' is read-only")
+                return member.type
+        if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS:
+            scope.report(
+                target.pos,
+                f"'{target.member}' of '{base_type.name}' cannot be written from outside",
+            )
+        if isinstance(base_type, StructType) and not is_lvalue(target.base):
+            scope.report(target.pos, "cannot assign to a member of a value")
+        return member.type
+    if isinstance(target, ast.IndexRef | ast.BitRef):
+        if isinstance(target.base, ast.NameRef | ast.MemberRef | ast.IndexRef | ast.BitRef):
+            writable_target(scope, target.base)
+        return scope.type_of(target)
+    scope.report(target.pos, "cannot assign to an expression")
+    return None
+
+
+def is_lvalue(expr: ast.Expr) -> bool:
+    return isinstance(expr, ast.NameRef | ast.MemberRef | ast.IndexRef)

@@ -1,0 +1,293 @@
+"""`padt sim`: run a resource's user programs on virtual time and trace their values.
+
+Cycle k (from 1) runs with the clock at (k-1) x the cycle interval. Time comes from a
+`VirtualClock` only, so the same project and options give the same output bit for bit.
+Values are set and read through the resource (`Resource.write`, `Resource.values`), the
+same way online test does it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+from backend.compiler.parse import (
+    BadEscape,
+    decode_string_literal,
+    parse_date_literal,
+    parse_int_literal,
+    parse_time_literal,
+)
+from runtime.artifact import Artifact
+from runtime.clock import VirtualClock
+from runtime.code_image import TIME_TYPES, ValueRejected, array_shape, representation
+from runtime.intrinsics import to_bytes
+from runtime.resource import CommandRefused, ProgramState, Resource
+
+NS_PER_MS = 1_000_000
+
+
+class SimulationError(ValueError):
+    """Options that cannot be run (unknown name, bad value); found before the first cycle."""
+
+
+@dataclass(frozen=True)
+class Setting:
+    """`--set NAME=VALUE[@CYCLE]`: write VALUE (an ST literal) before cycle CYCLE."""
+
+    name: str
+    literal: str
+    cycle: int = 1
+
+
+@dataclass(frozen=True)
+class Plan:
+    cycles: int = 10
+    cycle_ms: int | None = None  # None: the resource's own cycle interval
+    settings: tuple[Setting, ...] = ()
+    trace: tuple[str, ...] | None = None  # None: every elementary variable
+
+
+@dataclass(frozen=True)
+class CycleRecord:
+    cycle: int
+    t_ms: int
+    values: dict[str, Any]  # JSON-ready: TIME in ms, strings decoded
+    faults: tuple[str, ...] = ()  # "Program: cause" for programs that went to ERROR now
+
+    def as_json(self) -> str:
+        # allow_nan=False: non-finite REALs are already strings, so every line is strict JSON
+        record = {"cycle": self.cycle, "t_ms": self.t_ms, "values": self.values}
+        return json.dumps(record, ensure_ascii=True, allow_nan=False)
+
+
+@dataclass
+class Simulation:
+    resource: Resource
+    clock: VirtualClock
+    cycles: int
+    cycle_ns: int
+    traced: list[str]  # canonical variable paths, in output order
+    types: dict[str, str]  # path -> type name
+    writes: dict[int, list[tuple[str, Any]]] = field(default_factory=dict)  # cycle -> writes
+
+
+# ---- options
+
+
+_SETTING = re.compile(r"(?P<name>[^=]+)=(?P<value>.*?)(?:@(?P<cycle>[0-9]+))?", re.DOTALL)
+
+
+def parse_setting(text: str) -> Setting:
+    """`NAME=VALUE[@CYCLE]`; an `@` inside a quoted string is part of the value."""
+    match = _SETTING.fullmatch(text)
+    if match is None or not match["value"].strip():
+        raise SimulationError(f"--set {text}: expected NAME=VALUE or NAME=VALUE@CYCLE")
+    cycle = int(match["cycle"]) if match["cycle"] is not None else 1
+    if cycle < 1:
+        raise SimulationError(f"--set {text}: cycles count from 1")
+    return Setting(match["name"].strip(), match["value"].strip(), cycle)
+
+
+def trace_names(options: list[str] | None) -> tuple[str, ...] | None:
+    """`--trace A,B --trace C` -> ("A", "B", "C")."""
+    if options is None:
+        return None
+    return tuple(name.strip() for option in options for name in option.split(",") if name.strip())
+
+
+# ---- ST literals -> run-time values
+
+_INT = re.compile(r"([+-]?)((?:2|8|16)#[0-9A-Fa-f_]+|[0-9][0-9_]*)")
+_REAL = re.compile(r"[+-]?[0-9][0-9_]*(?:\.[0-9][0-9_]*)?(?:[eE][+-]?[0-9]+)?")
+_TIME = re.compile(
+    r"(?:T|TIME|LT|LTIME)#[+-]?(?:[0-9][0-9_]*(?:\.[0-9_]+)?(?:MS|US|NS|D|H|M|S))+",
+    re.IGNORECASE,
+)
+_TYPED = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)#(.+)", re.DOTALL)
+_INTEGERS = (
+    *("SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT"),
+    *("BYTE", "WORD", "DWORD", "LWORD"),
+)
+_DATES = ("DATE", "LDATE", "TOD", "LTOD", "DT", "LDT")
+_STRING_TYPES = {"STRING": False, "CHAR": False, "WSTRING": True, "WCHAR": True}  # -> wide
+_TYPE_PREFIXES = {"BOOL", "REAL", "LREAL", *_INTEGERS, *_STRING_TYPES}
+
+
+def parse_literal(text: str, type_name: str) -> Any:
+    """An ST literal (`TRUE`, `-3.5`, `16#FF`, `T#20ms`, `'text'`) as a value of
+    `type_name` in its run-time representation (TIME in nanoseconds)."""
+    target = type_name.upper()
+    literal = text.strip()
+    typed = _TYPED.fullmatch(literal)
+    if typed is not None and typed[1].upper() in _TYPE_PREFIXES:
+        literal = typed[2]  # `INT#5`, `BOOL#TRUE`: the variable's type decides
+    value = _literal_value(literal, target)
+    if value is None:
+        raise SimulationError(f"'{text}' is not an ST literal of type {type_name}")
+    return value
+
+
+def _literal_value(literal: str, target: str) -> Any:
+    if target == "BOOL":
+        return {"TRUE": True, "FALSE": False, "1": True, "0": False}.get(literal.upper())
+    if target in _INTEGERS:
+        return _int_value(literal)
+    if target in ("REAL", "LREAL"):
+        if _REAL.fullmatch(literal):
+            return float(literal.replace("_", ""))
+        return None
+    if target in TIME_TYPES:
+        return parse_time_literal(literal)[0] if _TIME.fullmatch(literal) else None
+    if target in _DATES:
+        return _date_value(literal, target)
+    if target in _STRING_TYPES:
+        return _string_value(literal, _STRING_TYPES[target])
+    raise SimulationError(f"variables of type {target} cannot be set")
+
+
+def _int_value(literal: str) -> int | None:
+    match = _INT.fullmatch(literal)
+    if match is None:
+        return None
+    magnitude = parse_int_literal(match[2])
+    return -magnitude if match[1] == "-" else magnitude
+
+
+def _date_value(literal: str, target: str) -> int | None:
+    try:
+        kind, ns = parse_date_literal(literal)
+    except (KeyError, ValueError, IndexError):  # no date prefix, or a malformed date
+        return None
+    return ns if kind == target else None
+
+
+def _string_value(literal: str, wide: bool) -> str | None:
+    if len(literal) < 2 or literal[0] not in "'\"" or literal[-1] != literal[0]:
+        return None
+    try:
+        return decode_string_literal(literal[1:-1], wide)
+    except BadEscape as exc:
+        raise SimulationError(f"{literal}: {exc}") from None
+
+
+# ---- run-time values -> JSON
+
+
+def display(value: Any, type_name: str) -> Any:
+    """A value as `padt sim` prints it: TIME in milliseconds (an int when whole), text
+    decoded, non-finite REALs as "NaN" / "Infinity" / "-Infinity"."""
+    if isinstance(value, list):
+        shape = array_shape(type_name)
+        element = shape.element if shape is not None else ""
+        return [display(item, element) for item in value]
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int):
+        if type_name.upper() in TIME_TYPES:
+            return value // NS_PER_MS if value % NS_PER_MS == 0 else value / NS_PER_MS
+        return value
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "NaN"
+        if math.isinf(value):
+            return "Infinity" if value > 0 else "-Infinity"
+        return value
+    if isinstance(value, str):
+        return _text(value, type_name.upper() in ("WSTRING", "WCHAR"))
+    return repr(value)  # no such value in a valid artifact; never fail the trace for it
+
+
+def _text(value: str, wide: bool) -> str:
+    """A STRING holds UTF-8 bytes one per character, a WSTRING UTF-16 code units: both are
+    shown as the text they encode."""
+    if wide:
+        units = b"".join(ord(ch).to_bytes(2, "little") for ch in value if ord(ch) < 0x10000)
+        return units.decode("utf-16-le", "replace")
+    return to_bytes(value).decode("utf-8", "replace")
+
+
+# ---- the run
+
+
+def prepare(artifact: Artifact, plan: Plan) -> Simulation:
+    """Load the artifact into a resource on a virtual clock and check every option; raises
+    SimulationError before anything has run."""
+    if plan.cycles < 1:
+        raise SimulationError("--cycles must be at least 1")
+    cycle_ms = plan.cycle_ms if plan.cycle_ms is not None else artifact.resource.cycle_ms
+    if cycle_ms < 1:
+        raise SimulationError("--cycle-ms must be at least 1")
+    clock = VirtualClock()
+    resource = Resource(artifact.resource.name, clock)
+    resource.load(artifact)
+    types = {v["path"]: v["type"] for v in resource.variables()}
+    traced = list(types) if plan.trace is None else _select(resource, types, plan.trace)
+    simulation = Simulation(resource, clock, plan.cycles, cycle_ms * NS_PER_MS, traced, types)
+    for setting in plan.settings:
+        if setting.cycle > plan.cycles:
+            raise SimulationError(
+                f"--set {setting.name}: cycle {setting.cycle} is after the last cycle "
+                f"({plan.cycles})"
+            )
+        path, value = _checked_write(resource, setting)
+        simulation.writes.setdefault(setting.cycle, []).append((path, value))
+    return simulation
+
+
+def _select(resource: Resource, types: dict[str, str], names: tuple[str, ...]) -> list[str]:
+    """Trace names as canonical paths. A name that is no elementary variable but an
+    instance, struct or step (`Main.t`, `Seq.Fill`) stands for all the values below it."""
+    selected: dict[str, None] = {}  # an ordered set
+    for name in names:
+        try:
+            selected[resource.variable(name).path] = None
+            continue
+        except CommandRefused:
+            pass
+        below = [p for p in types if p.upper().startswith((f"{name.upper()}.", f"{name.upper()}["))]
+        if not below:
+            raise SimulationError(f"--trace: resource {resource.name} has no variable '{name}'")
+        selected.update(dict.fromkeys(below))
+    return list(selected)
+
+
+def _checked_write(resource: Resource, setting: Setting) -> tuple[str, Any]:
+    try:
+        path = resource.variable(setting.name)
+    except CommandRefused as exc:
+        raise SimulationError(f"--set {setting.name}: {exc.message}") from None
+    if path.constant:
+        raise SimulationError(f"--set {setting.name}: '{path.path}' is a constant")
+    value = parse_literal(setting.literal, path.type)
+    try:
+        representation(path.type, value)  # refuse now what Resource.write would refuse later
+    except ValueRejected as exc:
+        raise SimulationError(f"--set {setting.name}: {exc}") from None
+    return path.path, value
+
+
+def run(simulation: Simulation) -> Iterator[CycleRecord]:
+    """Cycle k runs with the clock at (k-1) x the interval; the resource advances each
+    program's time by the clock's difference between cycles, i.e. exactly one interval."""
+    resource, clock = simulation.resource, simulation.clock
+    resource.start()
+    for cycle in range(1, simulation.cycles + 1):
+        for path, value in simulation.writes.get(cycle, []):
+            resource.write(path, value)
+        before = {p.config.name: p.state for p in resource.programs}
+        resource.cycle()
+        faults = tuple(
+            f"{p.config.name}: {p.error}"
+            for p in resource.programs
+            if p.state == ProgramState.ERROR and before[p.config.name] != ProgramState.ERROR
+        )
+        shown = {
+            path: display(resource.read(path), simulation.types[path]) for path in simulation.traced
+        }
+        yield CycleRecord(cycle, (cycle - 1) * simulation.cycle_ns // NS_PER_MS, shown, faults)
+        clock.advance(simulation.cycle_ns)
