@@ -56,8 +56,8 @@ def check_twice(paths: Sequence[Path | str], seeds: tuple[str, str] = SEEDS) -> 
     """Compile `paths` (a project folder or .st files) in two processes at once."""
     if seeds[0] == seeds[1]:
         raise ValueError("check_twice needs two different hash seeds")
-    processes = [_start_compile(paths, seed) for seed in seeds]
-    first, second = (_finish_compile(process, seed) for process, seed in zip(processes, seeds))
+    started = [(_start_compile(paths, seed), seed) for seed in seeds]
+    first, second = (_finish_compile(process, seed) for process, seed in started)
     return CheckTwiceResult(first, second, compare(first, second))
 
 
@@ -103,7 +103,10 @@ def compare(first: CompileRun, second: CompileRun) -> tuple[str, ...]:
     found: list[str] = []
     if first.configuration != second.configuration:
         found.append(f"configuration CRC: {first.configuration} != {second.configuration}")
-    for kind, a, b in (("POU", first.pous, second.pous), ("program", first.programs, second.programs)):
+    for kind, a, b in (
+        ("POU", first.pous, second.pous),
+        ("program", first.programs, second.programs),
+    ):
         for name in sorted(a.keys() | b.keys()):
             if a.get(name) != b.get(name):
                 found.append(f"{kind} {name} CRC: {a.get(name, '-')} != {b.get(name, '-')}")

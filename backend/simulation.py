@@ -116,19 +116,25 @@ _INTEGERS = (
 _DATES = ("DATE", "LDATE", "TOD", "LTOD", "DT", "LDT")
 _STRING_TYPES = {"STRING": False, "CHAR": False, "WSTRING": True, "WCHAR": True}  # -> wide
 _TYPE_PREFIXES = {"BOOL", "REAL", "LREAL", *_INTEGERS, *_STRING_TYPES}
+_SETTABLE = {*_TYPE_PREFIXES, *TIME_TYPES, *_DATES}
 
 
 def parse_literal(text: str, type_name: str) -> Any:
     """An ST literal (`TRUE`, `-3.5`, `16#FF`, `T#20ms`, `'text'`) as a value of
     `type_name` in its run-time representation (TIME in nanoseconds)."""
     target = type_name.upper()
+    if target not in _SETTABLE:  # enumerations, arrays: the artifact has no literals for them
+        raise SimulationError(f"variables of type {type_name} cannot be set")
     literal = text.strip()
     typed = _TYPED.fullmatch(literal)
     if typed is not None and typed[1].upper() in _TYPE_PREFIXES:
         literal = typed[2]  # `INT#5`, `BOOL#TRUE`: the variable's type decides
     value = _literal_value(literal, target)
     if value is None:
-        raise SimulationError(f"'{text}' is not an ST literal of type {type_name}")
+        hint = ""
+        if target in _STRING_TYPES:  # the shell eats the quotes of `--set s='text'`
+            hint = f"; text is written in quotes (in a shell: --set \"NAME='{text}'\")"
+        raise SimulationError(f"{text} is not an ST literal of type {type_name}{hint}")
     return value
 
 
@@ -142,19 +148,25 @@ def _literal_value(literal: str, target: str) -> Any:
             return float(literal.replace("_", ""))
         return None
     if target in TIME_TYPES:
-        return parse_time_literal(literal)[0] if _TIME.fullmatch(literal) else None
+        if not _TIME.fullmatch(literal):
+            return None
+        try:
+            return parse_time_literal(literal)[0]
+        except OverflowError:  # more seconds than a float holds: far beyond any TIME
+            return None
     if target in _DATES:
         return _date_value(literal, target)
-    if target in _STRING_TYPES:
-        return _string_value(literal, _STRING_TYPES[target])
-    raise SimulationError(f"variables of type {target} cannot be set")
+    return _string_value(literal, _STRING_TYPES[target])
 
 
 def _int_value(literal: str) -> int | None:
     match = _INT.fullmatch(literal)
     if match is None:
         return None
-    magnitude = parse_int_literal(match[2])
+    try:
+        magnitude = parse_int_literal(match[2])
+    except ValueError:  # digits outside the base (2#12), or none at all (16#_)
+        return None
     return -magnitude if match[1] == "-" else magnitude
 
 
@@ -263,10 +275,10 @@ def _checked_write(resource: Resource, setting: Setting) -> tuple[str, Any]:
         raise SimulationError(f"--set {setting.name}: {exc.message}") from None
     if path.constant:
         raise SimulationError(f"--set {setting.name}: '{path.path}' is a constant")
-    value = parse_literal(setting.literal, path.type)
     try:
+        value = parse_literal(setting.literal, path.type)
         representation(path.type, value)  # refuse now what Resource.write would refuse later
-    except ValueRejected as exc:
+    except (SimulationError, ValueRejected) as exc:
         raise SimulationError(f"--set {setting.name}: {exc}") from None
     return path.path, value
 

@@ -1,4 +1,8 @@
-"""`padt`: the command line. Each subcommand lives with the part it belongs to."""
+"""`padt`: the command line. Each subcommand lives with the part it belongs to.
+
+Subcommands import their parts when they run: `padt --help` and the light commands must
+not pay for the compiler, Zenoh or the UI. docs/cli.md documents every command.
+"""
 
 from __future__ import annotations
 
@@ -7,10 +11,10 @@ import json
 import sys
 from pathlib import Path
 
-from backend.project import ProjectError, compile_project, load_project
-
 
 def _compile(args: argparse.Namespace) -> int:
+    from backend.project import ProjectError, compile_project, load_project
+
     try:
         project = load_project(args.paths)
     except ProjectError as exc:
@@ -52,6 +56,87 @@ def _exec(args: argparse.Namespace) -> int:
     return run_entry(args.file, args.entry)
 
 
+def _sim(args: argparse.Namespace) -> int:
+    import logging
+
+    from backend.project import ProjectError, compile_project, load_project
+    from backend.simulation import Plan, SimulationError, parse_setting, prepare, run, trace_names
+
+    try:
+        project = load_project(args.paths)
+        plan = Plan(
+            cycles=args.cycles,
+            cycle_ms=args.cycle_ms,
+            settings=tuple(parse_setting(text) for text in args.set),
+            trace=trace_names(args.trace),
+        )
+    except (ProjectError, SimulationError) as exc:
+        print(f"padt sim: {exc}", file=sys.stderr)
+        return 2
+    result = compile_project(project)
+    for diagnostic in result.diagnostics:
+        print(diagnostic, file=sys.stderr)
+    if result.artifact is None:
+        return 1
+    try:
+        simulation = prepare(result.artifact, plan)
+    except SimulationError as exc:
+        print(f"padt sim: {exc}", file=sys.stderr)
+        return 2
+    # sim reports program faults itself, one line each; the resource's log would repeat them
+    resource_log = logging.getLogger("runtime.resource")
+    resource_log.addHandler(logging.NullHandler())
+    resource_log.propagate = False
+    for record in run(simulation):
+        print(record.as_json())
+        if record.faults:
+            sys.stdout.flush()  # keep stdout and stderr in cycle order on a terminal
+            for fault in record.faults:
+                print(f"padt sim: cycle {record.cycle}: program {fault}", file=sys.stderr)
+    return 0
+
+
+def _check_twice(args: argparse.Namespace) -> int:
+    from backend.check_twice import check_twice
+
+    result = check_twice(args.paths)
+    for number, compiled in enumerate((result.first, result.second), 1):
+        where = f"compile {number} (PYTHONHASHSEED={compiled.seed})"
+        if compiled.configuration is not None:
+            print(f"{where}: configuration CRC {compiled.configuration}")
+        else:
+            print(f"{where}: no configuration (compile failed)")
+    if not result.compiled:
+        for compiled in (result.first, result.second):
+            if compiled.failure is not None:
+                print(f"padt check-twice: {compiled.failure}", file=sys.stderr)
+        first = result.first if result.first.failure is None else result.second
+        for diagnostic in first.diagnostics:
+            print(diagnostic, file=sys.stderr)
+        print("padt check-twice: the project does not compile", file=sys.stderr)
+        return 1
+    if result.mismatches:
+        for mismatch in result.mismatches:
+            print(f"padt check-twice: {mismatch}", file=sys.stderr)
+        print("padt check-twice: the two compiles differ", file=sys.stderr)
+        return 1
+    print(
+        f"check-twice: OK, {len(result.first.pous)} POU and "
+        f"{len(result.first.programs)} program CRCs agree"
+    )
+    return 0
+
+
+def _positive(text: str) -> int:
+    try:
+        number = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+    if number < 1:
+        raise argparse.ArgumentTypeError(f"{number} is not at least 1")
+    return number
+
+
 def _runtime(args: argparse.Namespace) -> int:
     from runtime.main import run
 
@@ -91,6 +176,40 @@ def build_parser() -> argparse.ArgumentParser:
     exec_.add_argument("file", type=Path, metavar="FILE.st")
     exec_.add_argument("--entry", default="main", help="FUNCTION or PROGRAM to run")
     exec_.set_defaults(func=_exec)
+
+    sim = sub.add_parser(
+        "sim", help="run the user programs on virtual time; print one JSON line per cycle"
+    )
+    sim.add_argument("paths", nargs="+", type=Path, metavar="PATH")
+    sim.add_argument(
+        "--cycles", type=_positive, default=10, metavar="N", help="cycles to run (default 10)"
+    )
+    sim.add_argument(
+        "--cycle-ms",
+        type=_positive,
+        metavar="MS",
+        help="virtual time per cycle (default: the resource's cycle_ms)",
+    )
+    sim.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE[@CYCLE]",
+        help="write an ST literal to a variable before cycle CYCLE (default 1); repeatable",
+    )
+    sim.add_argument(
+        "--trace",
+        action="append",
+        metavar="NAME,...",
+        help="print only these variables (or everything below an instance); repeatable",
+    )
+    sim.set_defaults(func=_sim)
+
+    check = sub.add_parser(
+        "check-twice", help="compile in two processes with different hash seeds; compare CRCs"
+    )
+    check.add_argument("paths", nargs="+", type=Path, metavar="PATH")
+    check.set_defaults(func=_check_twice)
 
     from frontend.main import add_arguments as ui_arguments
     from padt.demo import add_arguments as demo_arguments

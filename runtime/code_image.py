@@ -3,19 +3,54 @@ plus the flat variable paths used for OLT values."""
 
 from __future__ import annotations
 
+import copy
+import itertools
+import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 from runtime.artifact import Artifact, PouCode
-from runtime.intrinsics import SystemView, namespace
+from runtime.intrinsics import SystemView, _f32, namespace
+
+# An attribute name, or an offset into the flat list that holds an array.
+Accessor = str | int
 
 
 @dataclass(frozen=True)
 class VariablePath:
-    path: str  # e.g. "TankControl.refillDelay.ET"
-    attrs: tuple[str, ...]  # attribute chain below the program instance
+    path: str  # e.g. "TankControl.refillDelay.ET", "gPoints[2].x"
+    attrs: tuple[Accessor, ...]  # attribute chain (and list offsets) below the owner instance
     type: str
+    constant: bool = False
+
+
+@dataclass(frozen=True)
+class ArrayShape:
+    dims: tuple[tuple[int, int], ...]
+    element: str  # type name of one element (itself an array type for arrays of arrays)
+
+    def indices(self) -> list[str]:
+        """IEC index texts ("2", "0,1") in the order of the flat list: last index fastest,
+        as generated code lays multi-dimensional arrays out."""
+        ranges = [range(low, high + 1) for low, high in self.dims]
+        return [",".join(map(str, index)) for index in itertools.product(*ranges)]
+
+
+_ARRAY = re.compile(r"ARRAY\[([^\]]*)\] OF (.+)", re.IGNORECASE)
+
+
+def array_shape(type_name: str) -> ArrayShape | None:
+    """`ARRAY[0..1, 1..3] OF INT` -> its bounds and element type; None for other types."""
+    match = _ARRAY.fullmatch(type_name)
+    if match is None:
+        return None
+    dims = []
+    for part in match.group(1).split(","):
+        low, _, high = part.strip().partition("..")
+        dims.append((int(low), int(high)))
+    return ArrayShape(tuple(dims), match.group(2))
 
 
 class CodeImage:
@@ -69,29 +104,131 @@ class CodeImage:
     def variable_paths(self, program: str, pou_name: str) -> list[VariablePath]:
         """Every elementary variable of a program instance, FB members included."""
         paths: list[VariablePath] = []
-        self._collect(self._pous[pou_name.upper()], program, (), paths)
+        self._collect(self._pous[pou_name.upper()], program, (), False, paths)
+        return paths
+
+    def global_paths(self) -> list[VariablePath]:
+        """Every elementary global variable (paths below `_G`), named without a prefix."""
+        paths: list[VariablePath] = []
+        if self.artifact.globals is not None:
+            self._collect(self.artifact.globals, "", (), False, paths)
         return paths
 
     def _collect(
-        self, pou: PouCode, prefix: str, attrs: tuple[str, ...], out: list[VariablePath]
+        self,
+        pou: PouCode,
+        prefix: str,
+        attrs: tuple[Accessor, ...],
+        constant: bool,
+        out: list[VariablePath],
     ) -> None:
         for var in pou.variables:
-            inner = self._pous.get(var.type.upper())
-            if inner is not None:
-                self._collect(inner, f"{prefix}.{var.name}", (*attrs, var.attr), out)
-            else:
-                out.append(VariablePath(f"{prefix}.{var.name}", (*attrs, var.attr), var.type))
+            path = f"{prefix}.{var.name}" if prefix else var.name
+            self._add(var.type, path, (*attrs, var.attr), constant or var.constant, out)
+
+    def _add(
+        self,
+        type_name: str,
+        path: str,
+        attrs: tuple[Accessor, ...],
+        constant: bool,
+        out: list[VariablePath],
+    ) -> None:
+        inner = self._pous.get(type_name.upper())
+        if inner is not None:
+            self._collect(inner, path, attrs, constant, out)
+            return
+        shape = array_shape(type_name)
+        if shape is not None and self._is_aggregate(shape.element):
+            # elements with members get a path each; arrays of elementary values stay one
+            # value (a list), so a large buffer does not flood the value list
+            for offset, index in enumerate(shape.indices()):
+                self._add(shape.element, f"{path}[{index}]", (*attrs, offset), constant, out)
+            return
+        out.append(VariablePath(path, attrs, type_name, constant))
+
+    def _is_aggregate(self, type_name: str) -> bool:
+        shape = array_shape(type_name)
+        if shape is not None:
+            return self._is_aggregate(shape.element)
+        return type_name.upper() in self._pous
 
 
 def read_path(instance: Any, path: VariablePath) -> Any:
     value = instance
-    for attr in path.attrs:
-        value = getattr(value, attr)
-    return value
+    for accessor in path.attrs:
+        value = value[accessor] if isinstance(accessor, int) else getattr(value, accessor)
+    # a copy: whoever reads values must not hold (and change) the program's own lists
+    return copy.deepcopy(value) if isinstance(value, list) else value
 
 
 def write_path(instance: Any, path: VariablePath, value: Any) -> None:
     target = instance
-    for attr in path.attrs[:-1]:
-        target = getattr(target, attr)
-    setattr(target, path.attrs[-1], value)
+    for accessor in path.attrs[:-1]:
+        target = target[accessor] if isinstance(accessor, int) else getattr(target, accessor)
+    last = path.attrs[-1]
+    if isinstance(last, int):
+        target[last] = value
+    else:
+        setattr(target, last, value)
+
+
+# ---- run-time representation of elementary values (docs/artifact.md)
+
+_INT_RANGES: dict[str, tuple[int, int]] = {
+    **{name: (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
+       for name, bits in (("SINT", 8), ("INT", 16), ("DINT", 32), ("LINT", 64))},
+    **{name: (0, (1 << bits) - 1)
+       for name, bits in (("USINT", 8), ("UINT", 16), ("UDINT", 32), ("ULINT", 64),
+                          ("BYTE", 8), ("WORD", 16), ("DWORD", 32), ("LWORD", 64))},
+    # durations and dates are 64-bit nanosecond counts
+    **dict.fromkeys(("TIME", "LTIME", "DATE", "LDATE", "TOD", "LTOD", "DT", "LDT"),
+                    (-(1 << 63), (1 << 63) - 1)),
+}  # fmt: skip
+_REALS = ("REAL", "LREAL")
+_STRINGS = ("STRING", "WSTRING", "CHAR", "WCHAR")
+TIME_TYPES = ("TIME", "LTIME")
+
+
+class ValueRejected(ValueError):
+    """A value that a variable of the given type cannot hold; the message says why."""
+
+
+def representation(type_name: str, value: Any) -> Any:
+    """`value` as generated code keeps a variable of `type_name`, or ValueRejected.
+
+    Generated code relies on every stored value being in the range of its type (it wraps at
+    each store), so values from outside (OLT, simulation) are checked, never wrapped.
+    """
+    name = type_name.upper()
+    if name == "BOOL":
+        if isinstance(value, bool):
+            return value
+        raise ValueRejected(f"type BOOL takes TRUE or FALSE, not {value!r}")
+    if name in _INT_RANGES:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueRejected(f"type {name} takes an integer, not {value!r}")
+        low, high = _INT_RANGES[name]
+        if not low <= value <= high:
+            raise ValueRejected(f"{value} is outside the range of {name} ({low}..{high})")
+        return value
+    if name in _REALS:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueRejected(f"type {name} takes a number, not {value!r}")
+        try:
+            number = float(value)
+        except OverflowError:
+            raise ValueRejected(f"{value} is outside the range of {name}") from None
+        if name == "LREAL":
+            return number
+        single = _f32(number)
+        if math.isinf(single) and math.isfinite(number):
+            raise ValueRejected(f"{value} is outside the range of REAL")
+        return single
+    if name in _STRINGS:
+        if not isinstance(value, str):
+            raise ValueRejected(f"type {name} takes a string, not {value!r}")
+        if name in ("CHAR", "WCHAR") and len(value) > 1:  # '' is the NUL character
+            raise ValueRejected(f"type {name} takes one character, not {value!r}")
+        return value
+    raise ValueRejected(f"variables of type {type_name} cannot be written")

@@ -13,7 +13,14 @@ from typing import Any
 
 from runtime.artifact import Artifact, ProgramConfig
 from runtime.clock import Clock
-from runtime.code_image import CodeImage, VariablePath, read_path
+from runtime.code_image import (
+    CodeImage,
+    ValueRejected,
+    VariablePath,
+    read_path,
+    representation,
+    write_path,
+)
 from runtime.intrinsics import ProgramFault, SystemView
 
 log = logging.getLogger(__name__)
@@ -52,6 +59,14 @@ class UserProgram:
     error: str | None = None
 
 
+@dataclass(frozen=True)
+class BoundVariable:
+    """A variable path with the instance it starts from (a program instance or `_G`)."""
+
+    owner: Any
+    path: VariablePath
+
+
 @dataclass
 class CycleStats:
     count: int = 0
@@ -88,6 +103,10 @@ class Resource:
     stats: CycleStats = field(default_factory=CycleStats)
     cycle_count: int = 0  # CPU cycles that ran programs, single steps included
     system: SystemView = field(default_factory=SystemView)
+    globals: Any = None  # the instance behind `_G`
+    global_paths: list[VariablePath] = field(default_factory=list)
+    _bound: list[BoundVariable] = field(default_factory=list, init=False, repr=False)
+    _by_name: dict[str, BoundVariable] = field(default_factory=dict, init=False, repr=False)
 
     @property
     def cycle_ns(self) -> int:
@@ -102,10 +121,24 @@ class Resource:
         programs = []
         for config in sorted(artifact.programs, key=lambda p: (p.priority, p.program_id)):
             instance = image.new_instance(config.pou)
+            # `prog();` in ST reaches the user program of that POU (the first by priority),
+            # so a program called from another one is the same instance the task runs
+            image.register_program(config.pou, instance)
             programs.append(
                 UserProgram(config, instance, image.variable_paths(config.name, config.pou))
             )
+        for pou in artifact.pous:  # a PROGRAM that is no user program still has one instance
+            if pou.kind == "PROGRAM":
+                image.register_program(pou.name, image.new_instance(pou.name))
         self.artifact, self.programs = artifact, programs
+        self.globals, self.global_paths = image.globals, image.global_paths()
+        self._bound = [
+            *(BoundVariable(p.instance, path) for p in programs for path in p.paths),
+            *(BoundVariable(self.globals, path) for path in self.global_paths),
+        ]
+        self._by_name = {}
+        for bound in self._bound:
+            self._by_name.setdefault(bound.path.path.upper(), bound)
         self.state = ResourceState.STOP_VALID
         log.info("loaded configuration %s (CRC %s)", artifact.project, artifact.crc)
 
@@ -160,10 +193,15 @@ class Resource:
         self.system.now_ns = program.time_ns
         try:
             program.instance()
-        except (ProgramFault, ArithmeticError, RecursionError, ValueError, TypeError) as exc:
+        except Exception as exc:
+            # whatever the generated code raises is a fault of this program alone: the
+            # resource and its other programs must go on
             program.state = ProgramState.ERROR
-            program.error = str(exc)
-            log.error("program %s: %s", program.config.name, exc)
+            # a ProgramFault says what went wrong in ST terms; anything else is named by its
+            # Python type so that a compiler defect can be told from a program error
+            unexpected = not isinstance(exc, ProgramFault | ArithmeticError)
+            program.error = f"{type(exc).__name__}: {exc}" if unexpected else str(exc)
+            log.error("program %s: %s", program.config.name, program.error)
         program.cycles += 1
 
     # ---- views
@@ -190,15 +228,42 @@ class Resource:
         }
 
     def variables(self) -> list[dict[str, str]]:
-        return [
-            {"path": path.path, "type": path.type}
-            for program in self.programs
-            for path in program.paths
-        ]
+        return [{"path": bound.path.path, "type": bound.path.type} for bound in self._bound]
 
     def values(self) -> dict[str, Any]:
-        return {
-            path.path: read_path(program.instance, path)
-            for program in self.programs
-            for path in program.paths
-        }
+        """Every elementary variable: `Program.var`, `Program.fb.var`, globals by their bare
+        name; struct and FB members with dots; arrays of elementary values as lists."""
+        return {bound.path.path: read_path(bound.owner, bound.path) for bound in self._bound}
+
+    # ---- online test
+    def _lookup(self, name: str) -> BoundVariable:
+        bound = self._by_name.get(name.upper())  # ST names are case-insensitive
+        if bound is None:
+            raise CommandRefused(
+                "unknown_variable", f"resource {self.name} has no variable '{name}'"
+            )
+        return bound
+
+    def variable(self, name: str) -> VariablePath:
+        """The elementary variable called `name` (a path as `values()` names it)."""
+        return self._lookup(name).path
+
+    def read(self, name: str) -> Any:
+        """The value of one variable, as `values()` has it."""
+        bound = self._lookup(name)
+        return read_path(bound.owner, bound.path)
+
+    def write(self, name: str, value: Any) -> None:
+        """Set a variable between cycles, as an online-test field does.
+
+        The value must already be in the run-time representation of the variable's type
+        (TIME in nanoseconds, REAL as float); it is checked, never wrapped to fit.
+        """
+        bound = self._lookup(name)
+        if bound.path.constant:
+            raise CommandRefused("constant", f"'{bound.path.path}' is a constant")
+        try:
+            stored = representation(bound.path.type, value)
+        except ValueRejected as exc:
+            raise CommandRefused("bad_value", f"'{bound.path.path}': {exc}") from None
+        write_path(bound.owner, bound.path, stored)

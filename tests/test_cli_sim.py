@@ -1,0 +1,260 @@
+"""`padt sim` as a user runs it: a real process on ST files, JSON lines on stdout."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from tests.conftest import padt
+
+TIMER = """
+PROGRAM Blink
+VAR
+  start : BOOL;
+  delay : TON;
+  done : BOOL;
+END_VAR
+delay(IN := start, PT := T#30ms);
+done := delay.Q;
+END_PROGRAM
+"""
+
+GLOBALS = """
+VAR_GLOBAL
+  gTotal : DINT := 100;
+  gLimit : INT := 3;
+END_VAR
+
+FUNCTION_BLOCK Counter
+VAR_INPUT step : INT; END_VAR
+VAR_OUTPUT count : INT; END_VAR
+count := count + step;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR_EXTERNAL gTotal : DINT; gLimit : INT; END_VAR
+VAR
+  c : Counter;
+  over : BOOL;
+END_VAR
+c(step := 2);
+gTotal := gTotal + c.count;
+over := c.count > gLimit;
+END_PROGRAM
+"""
+
+SFC = """
+PROGRAM Seq
+VAR go : BOOL; END_VAR
+INITIAL_STEP Idle :
+END_STEP
+STEP Fill :
+END_STEP
+TRANSITION FROM Idle TO Fill := go;
+END_TRANSITION
+TRANSITION FROM Fill TO Idle := Fill.T >= T#20ms;
+END_TRANSITION
+END_PROGRAM
+"""
+
+DIVISION = """
+PROGRAM Divide
+VAR a : INT := 12; b : INT := 2; q : INT; END_VAR
+b := b - 1;
+q := a / b;
+END_PROGRAM
+
+PROGRAM Tick
+VAR n : INT; END_VAR
+n := n + 1;
+END_PROGRAM
+"""
+
+
+def write(tmp_path: Path, text: str, name: str = "prog.st") -> str:
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def lines(stdout: str) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in stdout.splitlines()]
+
+
+def column(records: list[dict[str, Any]], name: str) -> list[Any]:
+    return [record["values"][name] for record in records]
+
+
+def test_ton_traced_cycle_by_cycle_with_a_later_set(tmp_path: Path) -> None:
+    result = padt(
+        "sim", write(tmp_path, TIMER), "--cycles", "7", "--cycle-ms", "10",
+        "--set", "Blink.start=TRUE@2", "--trace", "Blink.delay.ET,Blink.delay.Q",
+        "--trace", "Blink.done",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    records = lines(result.stdout)
+    assert [r["cycle"] for r in records] == [1, 2, 3, 4, 5, 6, 7]
+    assert [r["t_ms"] for r in records] == [0, 10, 20, 30, 40, 50, 60]  # (k-1) x MS
+    assert list(records[0]["values"]) == ["Blink.delay.ET", "Blink.delay.Q", "Blink.done"]
+    # IN rises in cycle 2 at t = 10 ms: ET counts in ms (TIME), Q once ET reaches PT
+    assert column(records, "Blink.delay.ET") == [0, 0, 10, 20, 30, 30, 30]
+    assert column(records, "Blink.delay.Q") == [False, False, False, False, True, True, True]
+    assert column(records, "Blink.done") == column(records, "Blink.delay.Q")
+
+
+def test_default_cycle_is_the_resources_and_every_value_is_printed(tmp_path: Path) -> None:
+    result = padt("sim", write(tmp_path, TIMER), "--cycles", "3")
+    assert result.returncode == 0, result.stderr
+    records = lines(result.stdout)
+    assert [r["t_ms"] for r in records] == [0, 100, 200]  # the default resource: 100 ms
+    assert {"Blink.start", "Blink.done", "Blink.delay.PT", "Blink.delay.ET"} <= set(
+        records[0]["values"]
+    )
+    assert records[0]["values"]["Blink.delay.PT"] == 30  # TIME in milliseconds
+
+
+def test_globals_and_fb_members(tmp_path: Path) -> None:
+    result = padt(
+        "sim", write(tmp_path, GLOBALS), "--cycles", "3",
+        "--set", "gLimit=5@2", "--trace", "gTotal,Main.c.count,Main.over,gLimit",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    records = lines(result.stdout)
+    assert column(records, "Main.c.count") == [2, 4, 6]
+    assert column(records, "gTotal") == [102, 106, 112]
+    assert column(records, "gLimit") == [3, 5, 5]
+    assert column(records, "Main.over") == [False, False, True]
+
+
+def test_an_instance_name_traces_everything_below_it(tmp_path: Path) -> None:
+    result = padt("sim", write(tmp_path, GLOBALS), "--cycles", "1", "--trace", "main.C")
+    assert result.returncode == 0, result.stderr
+    assert lines(result.stdout)[0]["values"] == {"Main.c.step": 2, "Main.c.count": 2}
+
+
+def test_sfc_steps_are_traced_with_x_and_t(tmp_path: Path) -> None:
+    result = padt(
+        "sim", write(tmp_path, SFC), "--cycles", "6", "--cycle-ms", "10",
+        "--set", "Seq.go=TRUE@2", "--set", "Seq.go=FALSE@3",
+        "--trace", "Seq.Idle.X,Seq.Fill.X,Seq.Fill.T",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    records = lines(result.stdout)
+    assert column(records, "Seq.Idle.X") == [True, False, False, False, True, True]
+    assert column(records, "Seq.Fill.X") == [False, True, True, True, False, False]
+    # Fill is entered at the end of cycle 2; T is 0 in its first active cycle, then counts
+    # virtual time, and keeps its last value once the step is left
+    assert column(records, "Seq.Fill.T") == [0, 0, 0, 10, 20, 20]
+
+
+def test_time_values_are_milliseconds(tmp_path: Path) -> None:
+    source = """
+    PROGRAM T
+    VAR whole : TIME := T#2s; part : TIME := T#1.5ms; long : LTIME := LTIME#3ms; END_VAR
+    END_PROGRAM
+    """
+    result = padt("sim", write(tmp_path, source), "--cycles", "2", "--set", "T.whole=T#-20ms@2")
+    assert result.returncode == 0, result.stderr
+    first, second = (r["values"] for r in lines(result.stdout))
+    assert first == {"T.whole": 2000, "T.part": 1.5, "T.long": 3}
+    assert second["T.whole"] == -20
+
+
+def test_compile_errors_exit_1_with_file_line_col(tmp_path: Path) -> None:
+    path = write(tmp_path, "PROGRAM P\nVAR x : INT; END_VAR\nx := nothing;\nEND_PROGRAM\n")
+    result = padt("sim", path)
+    assert result.returncode == 1
+    assert result.stdout == ""
+    assert f"{path}:3:6: error: 'nothing' is not declared" in result.stderr
+
+
+def test_unknown_names_exit_2_before_running(tmp_path: Path) -> None:
+    path = write(tmp_path, TIMER)
+    traced = padt("sim", path, "--trace", "Blink.done,Blink.nothing")
+    assert traced.returncode == 2
+    assert traced.stdout == ""
+    assert "Blink.nothing" in traced.stderr
+    written = padt("sim", path, "--set", "Blink.nope=TRUE")
+    assert written.returncode == 2 and written.stdout == ""
+    assert "Blink.nope" in written.stderr
+
+
+def test_bad_values_exit_2(tmp_path: Path) -> None:
+    path = write(tmp_path, GLOBALS)
+    for setting, message in (
+        ("gLimit=40000", "outside the range of INT"),
+        ("gLimit=TRUE", "not an ST literal of type INT"),
+        ("gLimit=1@99", "after the last cycle"),
+    ):
+        result = padt("sim", path, "--set", setting)
+        assert result.returncode == 2, setting
+        assert message in result.stderr and result.stdout == ""
+
+
+def test_division_by_zero_puts_the_program_in_error_and_the_run_goes_on(
+    tmp_path: Path,
+) -> None:
+    result = padt("sim", write(tmp_path, DIVISION), "--cycles", "4")
+    assert result.returncode == 0, result.stderr
+    records = lines(result.stdout)
+    assert len(records) == 4
+    assert column(records, "Tick.n") == [1, 2, 3, 4]  # the other program runs on
+    assert column(records, "Divide.q") == [12, 12, 12, 12]  # no store after the fault
+    assert column(records, "Divide.b") == [1, 0, 0, 0]  # in ERROR: no more cycles
+    assert result.stderr.splitlines() == [
+        "padt sim: cycle 2: program Divide: integer division by zero"
+    ]
+
+
+def test_literals_of_several_types(tmp_path: Path) -> None:
+    source = """
+    PROGRAM L
+    VAR w : WORD; r : REAL; lr : LREAL; s : STRING; b : BOOL; i : SINT; END_VAR
+    END_PROGRAM
+    """
+    result = padt(
+        "sim", write(tmp_path, source), "--cycles", "1",
+        "--set", "L.w=16#FF", "--set", "L.r=-3.5", "--set", "L.lr=1.0E3",
+        "--set", "L.s='it$'s@home'", "--set", "L.b=true", "--set", "L.i=-128",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    values = lines(result.stdout)[0]["values"]
+    assert values == {
+        "L.w": 255, "L.r": -3.5, "L.lr": 1000.0, "L.s": "it's@home", "L.b": True, "L.i": -128,
+    }  # fmt: skip
+
+
+def test_two_runs_give_identical_output(tmp_path: Path) -> None:
+    path = write(tmp_path, TIMER + GLOBALS + SFC, "all.st")
+    args = ("sim", path, "--cycles", "25", "--cycle-ms", "7", "--set", "Seq.go=TRUE@3")
+    first = padt(*args, env={"PYTHONHASHSEED": "1"})
+    second = padt(*args, env={"PYTHONHASHSEED": "2"})
+    assert first.returncode == 0, first.stderr
+    assert first.stdout == second.stdout
+    assert len(first.stdout.splitlines()) == 25
+
+
+def test_arrays_and_a_program_called_from_another(tmp_path: Path) -> None:
+    source = """
+    TYPE Pt : STRUCT x : INT; END_STRUCT; END_TYPE
+    PROGRAM Helper
+    VAR calls : INT; END_VAR
+    calls := calls + 1;
+    END_PROGRAM
+    PROGRAM Main
+    VAR pts : ARRAY[1..2] OF Pt; laps : ARRAY[0..2] OF TIME; seen : INT; END_VAR
+    Helper();
+    seen := Helper.calls;
+    pts[2].x := pts[2].x + 10;
+    laps[1] := T#1.5ms;
+    END_PROGRAM
+    """
+    # Helper runs as a user program and is called by Main: one instance, two calls a cycle
+    result = padt("sim", write(tmp_path, source), "--cycles", "2", "--trace", "Main,Helper")
+    assert result.returncode == 0, result.stderr
+    second = lines(result.stdout)[1]["values"]
+    assert second == {
+        "Main.pts[1].x": 0, "Main.pts[2].x": 20, "Main.laps": [0, 1.5, 0], "Main.seen": 4,
+        "Helper.calls": 4,
+    }  # fmt: skip
