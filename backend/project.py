@@ -27,7 +27,7 @@ class ProjectError(ValueError):
 class Project:
     name: str
     version: str
-    resource: ResourceConfig
+    resource: ResourceConfig | None  # None: from the sources' CONFIGURATION, or a default
     programs: list[ProgramConfig] | None  # None: every PROGRAM runs, in source order
     sources: list[SourceFile]
 
@@ -46,7 +46,7 @@ def load_project(paths: list[Path]) -> Project:
             raise ProjectError(f"{path}: no such file")
         sources.append(read_source(path))
     name = paths[0].stem if paths else "project"
-    return Project(name, "", ResourceConfig(name="Resource1"), None, sources)
+    return Project(name, "", None, None, sources)
 
 
 def _load_folder(folder: Path) -> Project:
@@ -54,7 +54,7 @@ def _load_folder(folder: Path) -> Project:
     sources = [read_source(p, str(p.relative_to(folder))) for p in st_files]
     config_path = folder / PROJECT_FILE
     if not config_path.exists():
-        return Project(folder.name, "", ResourceConfig(name="Resource1"), None, sources)
+        return Project(folder.name, "", None, None, sources)
     try:
         data = tomllib.loads(config_path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:

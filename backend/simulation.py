@@ -24,7 +24,7 @@ from backend.compiler.parse import (
 )
 from runtime.artifact import Artifact
 from runtime.clock import VirtualClock
-from runtime.code_image import TIME_TYPES, ValueRejected, array_shape, representation
+from runtime.code_image import TIME_TYPES, ValueRejected, array_shape, base_type, representation
 from runtime.intrinsics import to_bytes
 from runtime.resource import CommandRefused, ProgramState, Resource
 
@@ -122,7 +122,7 @@ _SETTABLE = {*_TYPE_PREFIXES, *TIME_TYPES, *_DATES}
 def parse_literal(text: str, type_name: str) -> Any:
     """An ST literal (`TRUE`, `-3.5`, `16#FF`, `T#20ms`, `'text'`) as a value of
     `type_name` in its run-time representation (TIME in nanoseconds)."""
-    target = type_name.upper()
+    target, _length = base_type(type_name)  # the length is checked when the value is written
     if target not in _SETTABLE:  # enumerations, arrays: the artifact has no literals for them
         raise SimulationError(f"variables of type {type_name} cannot be set")
     literal = text.strip()

@@ -190,6 +190,13 @@ _STRINGS = ("STRING", "WSTRING", "CHAR", "WCHAR")
 TIME_TYPES = ("TIME", "LTIME")
 
 
+def base_type(type_name: str) -> tuple[str, int]:
+    """`STRING[4]` -> ("STRING", 4); other names -> (name, 0). The artifact keeps string
+    lengths in the type name."""
+    name, _, rest = type_name.upper().partition("[")
+    return name, int(rest.rstrip("]")) if rest.rstrip("]").isdigit() else 0
+
+
 class ValueRejected(ValueError):
     """A value that a variable of the given type cannot hold; the message says why."""
 
@@ -200,7 +207,7 @@ def representation(type_name: str, value: Any) -> Any:
     Generated code relies on every stored value being in the range of its type (it wraps at
     each store), so values from outside (OLT, simulation) are checked, never wrapped.
     """
-    name = type_name.upper()
+    name, length = base_type(type_name)
     if name == "BOOL":
         if isinstance(value, bool):
             return value
@@ -230,5 +237,7 @@ def representation(type_name: str, value: Any) -> Any:
             raise ValueRejected(f"type {name} takes a string, not {value!r}")
         if name in ("CHAR", "WCHAR") and len(value) > 1:  # '' is the NUL character
             raise ValueRejected(f"type {name} takes one character, not {value!r}")
+        if length and len(value) > length:
+            raise ValueRejected(f"type {type_name} holds at most {length} characters")
         return value
     raise ValueRejected(f"variables of type {type_name} cannot be written")

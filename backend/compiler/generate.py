@@ -17,12 +17,12 @@ from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.builtins import convert_code, wrap_code
 from backend.compiler.infer import (
-    IMPLICIT_PARAMETERS,
     EnumValue,
     ProgramRef,
     Scope,
     enable_argument,
     is_external,
+    is_implicit,
 )
 from backend.compiler.resolve import STEP_STRUCT, PouSymbols, Resolved, StructInfo, Variable
 from backend.compiler.types import (
@@ -246,7 +246,7 @@ class _Emitter:
         assigned = {
             key(param.name): arg
             for arg, param in self.scope.connect_arguments(pou, call)
-            if param is not None and key(param.name) not in IMPLICIT_PARAMETERS
+            if param is not None and not is_implicit(param)
         }
         keywords: list[str] = []
         for param in pou.parameters:
@@ -256,7 +256,7 @@ class _Emitter:
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
         code = f"{function_name(pou.name)}({', '.join(keywords)})"
         result = pou.return_type or BOOL
-        enable = self._enable(call)
+        enable = self._enable(call, pou)
         if enable is not None:  # EN FALSE: the function does not run and gives its default
             default = self.initial(result, None)
             if returns_tuple(pou):
@@ -277,14 +277,17 @@ class _Emitter:
             self.pre.append(store if enable is None else f"if {enable}: {store}")
         return _Value(f"{handle}[0]", result)
 
-    def _enable(self, call: ast.Call) -> str | None:
+    def _enable(self, call: ast.Call, callee: PouSymbols) -> str | None:
         """EN of a call, evaluated once into a temporary (None when always enabled); ENO
         outputs are stored from it right away, since a call that runs always succeeds."""
-        enable_expr = enable_argument(call)
+        enable_expr = enable_argument(call, callee)
         eno_targets = [
             arg.value
             for arg in call.args
-            if arg.name is not None and key(arg.name) == "ENO" and arg.value is not None
+            if arg.name is not None
+            and key(arg.name) == "ENO"
+            and arg.value is not None
+            and "ENO" not in callee.by_key
         ]
         if enable_expr is None and not eno_targets:
             return None
@@ -596,7 +599,7 @@ class _Emitter:
         else:
             self.emit(depth, self.exact(call).code)
             return
-        enable = self._enable(call)
+        enable = self._enable(call, callee)
         if enable is not None:
             self.emit(depth, f"if {enable}:")
             depth += 1
@@ -604,7 +607,7 @@ class _Emitter:
         self.emit(depth, f"{handle} = {instance}")
         outputs: list[tuple[ast.Argument, Variable]] = []
         for arg, param in self.scope.connect_arguments(callee, call):
-            if arg.value is None or param is None or key(param.name) in IMPLICIT_PARAMETERS:
+            if arg.value is None or param is None or is_implicit(param):
                 continue
             if arg.is_output or param.kind == "VAR_OUTPUT":
                 outputs.append((arg, param))

@@ -462,7 +462,7 @@ class Scope:
         for arg in call.args:
             if arg.name is None:
                 continue
-            if key(arg.name) in IMPLICIT_PARAMETERS:
+            if key(arg.name) in IMPLICIT_PARAMETERS and key(arg.name) not in pou.by_key:
                 pairs.append((arg, IMPLICIT_PARAMETERS[key(arg.name)]))
                 continue
             param = pou.by_key.get(key(arg.name))
@@ -507,8 +507,15 @@ IMPLICIT_PARAMETERS = {
 }
 
 
-def enable_argument(call: ast.Call) -> ast.Expr | None:
-    """The expression connected to EN, unless it is missing or the literal TRUE."""
+def is_implicit(param: Variable) -> bool:
+    return any(param is implicit for implicit in IMPLICIT_PARAMETERS.values())
+
+
+def enable_argument(call: ast.Call, callee: PouSymbols) -> ast.Expr | None:
+    """The expression connected to the implicit EN, unless it is missing or the literal TRUE
+    (a POU that declares its own `EN` input gets that input instead)."""
+    if "EN" in callee.by_key:
+        return None
     for arg in call.args:
         if arg.name is not None and key(arg.name) == "EN" and arg.value is not None:
             if isinstance(arg.value, ast.BoolLiteral) and arg.value.value:

@@ -7,6 +7,7 @@ builds is turned into typed AST dataclasses right away so that no later stage se
 from __future__ import annotations
 
 import datetime
+import fractions
 import functools
 import re
 from importlib import resources
@@ -57,7 +58,8 @@ def parse_time_literal(text: str) -> tuple[int, bool]:
     body = body.lstrip("-")
     total = 0
     for number, unit in _TIME_PART.findall(body):
-        value = float(number.replace("_", ""))
+        # exact decimal arithmetic: LT#123456789.123456789s must keep its last nanosecond
+        value = fractions.Fraction(number.replace("_", ""))
         total += round(value * _UNIT_NS[unit.upper()])
     return (-total if negative else total), prefix.upper() in ("LT", "LTIME")
 

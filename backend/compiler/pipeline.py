@@ -25,7 +25,7 @@ from backend.compiler.infer import is_external
 from backend.compiler.parse import parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import SourceFile, stdlib_sources
-from backend.compiler.types import ArrayType, FbType, StructType, Type
+from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
 from runtime.artifact import (
     Artifact,
     PouCode,
@@ -207,7 +207,7 @@ def _unit_code(
         VarInfo(
             name=v.name,
             attr=v.attr,
-            type=v.type.name,
+            type=_type_text(v.type),
             kind=v.kind,
             retain=v.retain,
             constant=v.constant,
@@ -216,6 +216,14 @@ def _unit_code(
         for v in variables
     )
     return PouCode(name, kind, class_, source, crc32_hex(source), infos)
+
+
+def _type_text(t: Type) -> str:
+    """A type as the artifact names it; strings keep their length (`STRING[4]`) so that the
+    runtime can check what it writes."""
+    if isinstance(t, ElementaryType) and t.category == "string" and t.length:
+        return f"{t.name}[{t.length}]"
+    return t.name
 
 
 def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:

@@ -1,0 +1,59 @@
+"""Bugs found in review, each pinned where a user would notice it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from backend.compiler.parse import parse_time_literal
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from backend.project import compile_project, load_project
+from runtime.clock import VirtualClock
+from runtime.resource import Resource
+
+
+def run(text: str, cycles: int = 1) -> dict[str, object]:
+    result = compile_sources([SourceFile("t.st", text)])
+    assert result.artifact is not None, [str(d) for d in result.diagnostics]
+    resource = Resource("R", VirtualClock())
+    resource.load(result.artifact)
+    resource.start()
+    for _ in range(cycles):
+        resource.cycle()
+    return resource.values()
+
+
+def test_a_declared_input_named_en_is_an_input_not_the_implicit_enable() -> None:
+    values = run(
+        "FUNCTION_BLOCK Cnt\nVAR_INPUT en : BOOL; END_VAR\nVAR_OUTPUT n : INT; END_VAR\n"
+        "IF en THEN n := n + 1; END_IF;\nEND_FUNCTION_BLOCK\n"
+        "PROGRAM Main\nVAR c : Cnt; END_VAR\nc(en := TRUE);\nEND_PROGRAM\n",
+        cycles=3,
+    )
+    assert values["Main.c.n"] == 3
+
+
+def test_time_literals_are_exact_to_the_nanosecond() -> None:
+    assert parse_time_literal("LT#123456789.123456789s") == (123_456_789_123_456_789, True)
+    assert parse_time_literal("LT#9007199.254740993s") == (9_007_199_254_740_993, True)
+
+
+def test_the_artifact_keeps_string_lengths() -> None:
+    result = compile_sources(
+        [SourceFile("t.st", "PROGRAM P\nVAR s : STRING[4]; END_VAR\nEND_PROGRAM")]
+    )
+    assert result.artifact is not None
+    assert [v.type for v in result.artifact.pou("P").variables] == ["STRING[4]"]
+
+
+def test_loose_files_take_resource_and_cycle_from_their_configuration(tmp_path: Path) -> None:
+    source = tmp_path / "cfg.st"
+    source.write_text(
+        "PROGRAM Main\nEND_PROGRAM\nCONFIGURATION C\nRESOURCE Res1 ON PLC\n"
+        "TASK Fast (INTERVAL := T#20ms, PRIORITY := 1);\nPROGRAM M WITH Fast : Main;\n"
+        "END_RESOURCE\nEND_CONFIGURATION\n"
+    )
+    artifact = compile_project(load_project([source])).artifact
+    assert artifact is not None
+    assert (artifact.resource.name, artifact.resource.cycle_ms) == ("Res1", 20)
+    assert [(p.name, p.pou, p.priority) for p in artifact.programs] == [("M", "Main", 1)]
