@@ -351,6 +351,7 @@ class _ActionControl:
         "d_since",
         "ds_since",
         "ds_stored",
+        "held",
         "l_since",
         "p0_prev",
         "p1_prev",
@@ -363,7 +364,7 @@ class _ActionControl:
     )  # fmt: skip
 
     def __init__(self) -> None:
-        self.A = self.Q = False
+        self.A = self.Q = self.held = False
         self.stored = self.sd_set = self.ds_stored = self.sl_set = False
         self.p_prev = self.p1_prev = self.p0_prev = False
         self.l_since: int | None = None
@@ -405,8 +406,11 @@ class _ActionControl:
             or self.ds_stored
             or (self.sl_set and sl_elapsed < TSL)
         )
-        final_scan = self.Q and not active
-        self.Q = active
+        # Q includes a pulse (a BOOL action is TRUE for that cycle); the final scan follows
+        # only the loss of held activity, so a pulse runs its action exactly once
+        final_scan = self.held and not active
+        self.held = active
+        self.Q = active or pulse
         self.A = active or pulse or final_scan
 
 

@@ -1,0 +1,49 @@
+"""Timers and counters traced through `padt sim` (100 ms cycles; IN set per cycle)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from tests.conftest import padt
+
+SOURCE = """
+PROGRAM T
+VAR in : BOOL; on : TON; off : TOF; pulse : TP; END_VAR
+on(IN := in, PT := T#200ms);
+off(IN := in, PT := T#200ms);
+pulse(IN := in, PT := T#200ms);
+END_PROGRAM
+"""
+
+
+def run(tmp_path: Path, *sets: str, cycles: int = 8) -> dict[str, list[object]]:
+    path = tmp_path / "t.st"
+    path.write_text(SOURCE)
+    args = ["sim", str(path), "--cycles", str(cycles), "--cycle-ms", "100"]
+    for setting in sets:
+        args += ["--set", setting]
+    result = padt(*args)
+    assert result.returncode == 0, result.stderr
+    rows = [json.loads(line)["values"] for line in result.stdout.splitlines()]
+    return {name: [row[name] for row in rows] for name in rows[0]}
+
+
+def bits(values: list[object]) -> str:
+    return "".join("1" if v else "0" for v in values)
+
+
+def test_ton_tof_tp(tmp_path: Path) -> None:
+    # IN is TRUE in cycles 2..5 (t = 100..400 ms)
+    t = run(tmp_path, "T.in=TRUE@2", "T.in=FALSE@6")
+    assert bits(t["T.on.Q"]) == "00011000"  # TRUE once ET reaches PT (cycles 4, 5)
+    assert t["T.on.ET"] == [0, 0, 100, 200, 200, 0, 0, 0]
+    assert bits(t["T.off.Q"]) == "01111110"  # stays TRUE for 200 ms after IN falls
+    assert t["T.off.ET"] == [0, 0, 0, 0, 0, 0, 100, 200]
+    assert bits(t["T.pulse.Q"]) == "01100000"  # exactly PT long
+    assert t["T.pulse.ET"] == [0, 0, 100, 200, 200, 0, 0, 0]
+
+
+def test_tp_cannot_be_restarted_while_running(tmp_path: Path) -> None:
+    t = run(tmp_path, "T.in=TRUE@2", "T.in=FALSE@3", "T.in=TRUE@4", "T.in=FALSE@5", cycles=6)
+    assert bits(t["T.pulse.Q"]) == "011000"  # the second rising edge falls inside the pulse
