@@ -1,0 +1,1 @@
+"""Test oracles: independent, deliberately simple executions of ST to check the compiler by."""
