@@ -7,10 +7,10 @@ a few cycles on a virtual clock, compiled (compile_sources -> Resource) and in t
 `tests.oracle.tree_walker.TreeWalker`; every variable must be identical after every cycle
 (REAL bit for bit), and a program must fault in the same cycle on both sides.
 
-The main generator stays clear of the constructs where the compiler is known to differ
-from IEC semantics; each of those is switched on by a `Features` flag in a test of its
-own, marked xfail (strict) with the bug it shows, and given an explicit example that fails
-today, so that the mark comes off as soon as the compiler is fixed.
+Constructs where the compiler once differed from IEC semantics (NOT of signed integers,
+narrow results inside wider operations, integers and literals in REAL arithmetic, FB
+outputs into narrower variables) are each switched on by a `Features` flag in a test of its
+own, with the explicit example that used to fail.
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
@@ -537,16 +536,11 @@ def test_the_explicit_examples_compile() -> None:
     assert compile_sources([SourceFile("diff.st", OUTPUT_EXAMPLE)]).ok
 
 
-# ---- known miscompilations: each xfail test fails on an explicit example today -------------
+# ---- former miscompilations, each with the example that showed it ------------------------
 
 NOT_EXAMPLE = program_with("i0 := NOT i0;", i0="INT := 5")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler bug: NOT of a signed integer is x XOR 2**n-1 without a wrap, so "
-    "`i := NOT i` with i = 5 stores 65530 into an INT (IEC: -6)",
-)
 @SETTINGS
 @given(programs(Features(signed_not=True)))
 @example(NOT_EXAMPLE)
@@ -557,12 +551,6 @@ def test_not_of_signed_integers(program: str) -> None:
 UNWRAPPED_EXAMPLE = program_with("d0 := i0 * i1 + d0;", i0="INT := 300", i1="INT := 300")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler bug: an INT (or UINT) + - * / result is not wrapped when it is an "
-    "operand of a wider operation: `d := i * j + d` with i = j = 300 gives 90000 "
-    "(IEC: the INT product wraps to 24464)",
-)
 @SETTINGS
 @given(programs(Features(unwrapped_operands=True)))
 @example(UNWRAPPED_EXAMPLE)
@@ -573,12 +561,6 @@ def test_narrow_results_in_wider_operations(program: str) -> None:
 DINT_REAL_EXAMPLE = program_with("r1 := r0 + d0;", r0="REAL := 1.0", d0="DINT := 16777217")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler bug: a DINT operand of REAL arithmetic is not converted to REAL "
-    "first: 1.0 + DINT 16777217 gives 16777218.0 (IEC: REAL(16777217) = 16777216.0, "
-    "sum 16777216.0)",
-)
 @SETTINGS
 @given(programs(Features(dint_in_real=True)))
 @example(DINT_REAL_EXAMPLE)
@@ -589,12 +571,6 @@ def test_dint_operands_of_real_arithmetic(program: str) -> None:
 LITERAL_EXAMPLE = program_with("r0 := 0.1;\nb0 := r0 = 0.1;\nb1 := r0 > 0.1;")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler bug: a REAL literal in REAL arithmetic or a comparison with a REAL "
-    "keeps double precision: after `r := 0.1`, `r = 0.1` is FALSE and `r > 0.1` TRUE "
-    "(IEC: the literal is a REAL there, so TRUE and FALSE)",
-)
 @SETTINGS
 @given(programs(Features(inexact_real_literals=True)))
 @example(LITERAL_EXAMPLE)
@@ -605,11 +581,6 @@ def test_inexact_real_literals(program: str) -> None:
 OUTPUT_EXAMPLE = program_with("acc(inc := 1, total => i0);", acc_body="total := 70000;")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler bug: an FB output connected with => is stored without conversion: "
-    "`acc(total => i)` with DINT total = 70000 leaves 70000 in the INT i (IEC: 4464)",
-)
 @SETTINGS
 @given(programs(Features(narrowing_outputs=True)))
 @example(OUTPUT_EXAMPLE)

@@ -5,10 +5,9 @@ property tests feed it random text, random bytes, soups of ST tokens and mutatio
 valid program, and check that it returns a CompileResult whose diagnostics all point into
 the file at line >= 1 and column >= 1, and that whatever it accepts loads on a resource.
 
-Crashes already found are pinned by the xfail (strict) tests at the end, each with a
-minimal input; the property tests recognise exactly those crashes (`known_crash`) and let
-them pass, so that they keep hunting for new ones. When a fix lands, its xfail test starts
-passing and fails the run as a reminder to remove the mark and the matching entry.
+Every crash these tests once found is pinned by a test at the end with its minimal input
+(literals without a value, deep nesting, a block containing itself, non-constant initial
+values, arithmetic on BOOL and STRING, typed literals of the wrong kind).
 """
 
 from __future__ import annotations
@@ -17,9 +16,8 @@ import re
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, event, given, note, settings
+from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
-from lark.exceptions import VisitError
 
 from backend.compiler.pipeline import CompileResult, compile_sources
 from backend.compiler.source import SourceFile
@@ -246,38 +244,10 @@ mutations = st.lists(
 
 # ---- the property -----------------------------------------------------------------------------
 
-LITERAL_RULES = ("int_literal", "typed_literal", "date_literal", "time_literal")
 
-
-def known_crash(exc: BaseException) -> str | None:
-    """The name of a crash already pinned by an xfail test below, or None for a new one."""
-    if isinstance(exc, RecursionError):
-        return "deep nesting exhausts the recursion limit"
-    if isinstance(exc, VisitError):
-        if isinstance(exc.orig_exc, RecursionError):
-            return "deep nesting exhausts the recursion limit"
-        if isinstance(exc.orig_exc, ValueError | OverflowError) and str(exc.rule) in LITERAL_RULES:
-            return f"a literal with an impossible value crashes {exc.rule}"
-    return None
-
-
-def compile_or_known_crash(text: str) -> CompileResult | None:
-    """Compile `text`; None when it hits a known crash (recorded as a hypothesis event)."""
-    try:
-        return compile_sources([SourceFile(FILE, text)])
-    except Exception as exc:
-        bug = known_crash(exc)
-        if bug is None:
-            raise
-        event(f"known crash: {bug}")
-        return None
-
-
-def assert_reported_as_diagnostics(text: str) -> CompileResult | None:
+def assert_reported_as_diagnostics(text: str) -> CompileResult:
     note(repr(text))
-    result = compile_or_known_crash(text)
-    if result is None:
-        return None
+    result = compile_sources([SourceFile(FILE, text)])  # any exception is a bug
     assert isinstance(result, CompileResult)
     for diagnostic in result.diagnostics:
         where = f"{diagnostic.file}:{diagnostic.line}:{diagnostic.col}"
@@ -292,18 +262,7 @@ def assert_loads(result: CompileResult) -> None:
     """Accepted code must load: the generated Python compiles and the cold-start values are
     set. (It is not run: a mutation may well have made a loop endless.)"""
     assert result.artifact is not None
-    resource = Resource("R", VirtualClock())
-    try:
-        resource.load(result.artifact)
-    except RecursionError:
-        event("known crash: a function block that contains itself")
-    except AttributeError as exc:
-        # only a variable of the program read before its own initial value is set
-        unset = re.fullmatch(r"'\w+' object has no attribute '(\w+)'", str(exc))
-        attrs = {v.attr for pou in result.artifact.pous for v in pou.variables}
-        if unset is None or unset.group(1) not in attrs:
-            raise
-        event("known crash: an initial value reads a variable declared after it")
+    Resource("R", VirtualClock()).load(result.artifact)
 
 
 @FUZZ
@@ -316,7 +275,7 @@ def test_random_text_gives_diagnostics_not_exceptions(text: str) -> None:
 @given(token_soup())
 def test_token_soup_gives_diagnostics_not_exceptions(text: str) -> None:
     result = assert_reported_as_diagnostics(text)
-    if result is not None and result.ok:
+    if result.ok:
         assert_loads(result)
 
 
@@ -351,7 +310,7 @@ def test_mutation_keeps_the_text_when_it_cannot_apply() -> None:
 def test_mutated_program_gives_diagnostics_not_exceptions(changes: list[Mutation]) -> None:
     text = mutate(VALID, changes)
     result = assert_reported_as_diagnostics(text)
-    if result is not None and result.ok:
+    if result.ok:
         assert_loads(result)
 
 
@@ -380,44 +339,23 @@ def program(body: str, declarations: str = "x : INT;") -> str:
     return f"PROGRAM P\nVAR {declarations} END_VAR\n{body}\nEND_PROGRAM\n"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler crash: a based literal without digits (16#_, 2#_) raises lark "
-    "VisitError(ValueError) in parse instead of a diagnostic",
-)
 @pytest.mark.parametrize("literal", ["16#_", "2#_", "INT#16#_"])
 def test_based_literal_without_digits_is_a_diagnostic(literal: str) -> None:
     found = diagnostics_of(program(f"x := {literal};"))
     assert found and found[0].startswith(f"{FILE}:3:6: error: ")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler crash: a date literal with an impossible date (D#2024-13-01, "
-    "D#0-1-1) raises lark VisitError(ValueError) in parse instead of a diagnostic",
-)
 @pytest.mark.parametrize("literal", ["D#2024-13-01", "D#2024-02-30", "D#0-1-1"])
 def test_impossible_date_is_a_diagnostic(literal: str) -> None:
     found = diagnostics_of(program(f"d := {literal};", "d : DATE;"))
     assert found and found[0].startswith(f"{FILE}:3:6: error: ")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler crash: a duration too large for a float (T#999...9s, 400 digits) "
-    "raises lark VisitError(OverflowError) in parse instead of a diagnostic",
-)
 def test_huge_duration_is_a_diagnostic() -> None:
     found = diagnostics_of(program(f"t := T#{'9' * 400}s;", "t : TIME;"))
     assert found and found[0].startswith(f"{FILE}:3:6: error: ")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler crash: deep nesting exhausts Python's recursion limit "
-    "(RecursionError from about 450 chained operators `1+1+...`, VisitError from about "
-    "300 nested IFs) instead of a diagnostic or a compiled program",
-)
 @pytest.mark.parametrize("depth", [600])
 def test_deeply_nested_code_compiles_or_is_a_diagnostic(depth: int) -> None:
     chain = program(f"x := {'+'.join(['1'] * depth)};", "x : DINT;")
@@ -426,33 +364,16 @@ def test_deeply_nested_code_compiles_or_is_a_diagnostic(depth: int) -> None:
         diagnostics_of(text)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler gap: a FUNCTION_BLOCK with an instance of itself compiles without "
-    "error, and loading it raises RecursionError in the runtime",
-)
 def test_function_block_containing_itself_is_rejected() -> None:
     text = "FUNCTION_BLOCK A\nVAR inner : A; END_VAR\nEND_FUNCTION_BLOCK\n" + program(";", "a : A;")
     assert any(": error: " in d for d in diagnostics_of(text))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler gap: an initial value that reads another variable is accepted (IEC "
-    "wants a constant); when that variable is declared later, loading the program raises "
-    "AttributeError in the runtime",
-)
 def test_initial_value_reading_a_later_variable_is_rejected() -> None:
     text = program(";", "a : INT := b; b : INT := 5;")
     assert any(": error: " in d for d in diagnostics_of(text))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler gap: + - * / on two BOOLs or two STRINGs is accepted (common_numeric "
-    "returns the type when both are equal, numeric or not): `b := b + b` stores 2 in a "
-    "BOOL, `s := s - s` faults at run time",
-)
 @pytest.mark.parametrize(
     "body, declarations",
     [("b := b + b;", "b : BOOL;"), ("b := b / b;", "b : BOOL;"), ("s := s - s;", "s : STRING;")],
@@ -461,21 +382,11 @@ def test_arithmetic_on_bool_and_string_is_rejected(body: str, declarations: str)
     assert any(": error: " in d for d in diagnostics_of(program(body, declarations)))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler gap: a typed literal whose value is of another kind (INT#1.5, "
-    "INT#TRUE, INT#'a') is accepted and stores a float, a bool, a str in an INT",
-)
 @pytest.mark.parametrize("literal", ["INT#1.5", "INT#TRUE", "INT#'a'"])
 def test_typed_literal_of_the_wrong_kind_is_rejected(literal: str) -> None:
     assert any(": error: " in d for d in diagnostics_of(program(f"x := {literal};")))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler gap: errors about the program list of a CONFIGURATION written in an "
-    ".st file point at padt.toml:1:1 (a file that need not exist), not at the source",
-)
 def test_configuration_errors_point_into_the_source() -> None:
     text = (
         "PROGRAM P\nEND_PROGRAM\n"
@@ -486,11 +397,6 @@ def test_configuration_errors_point_into_the_source() -> None:
     assert found and all(d.startswith(f"{FILE}:") for d in found), found
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="compiler crash: `padt compile` on a file with the literal 16#_ prints a "
-    "Python traceback (lark VisitError) instead of a diagnostic",
-)
 def test_cli_compile_of_a_crashing_literal_has_no_traceback(tmp_path: Path) -> None:
     source = tmp_path / "crash.st"
     source.write_text(program("x := 16#_;"))

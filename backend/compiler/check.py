@@ -7,7 +7,8 @@ global) in `checks.programs`, run by the pipeline once the user programs are kno
 
 from __future__ import annotations
 
-from backend.compiler.checks.initializers import check_initializer
+from backend.compiler.checks.initializers import check_constant_initializer, check_initializer
+from backend.compiler.checks.nesting import check_nesting
 from backend.compiler.checks.sfc import check_sfc
 from backend.compiler.checks.statements import check_block
 from backend.compiler.diagnostics import Diagnostic
@@ -23,6 +24,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}))
         for variable in resolved.globals:
             check_initializer(global_scope, variable.type, variable.init)
+            check_constant_initializer(global_scope, variable)
         diagnostics.extend(global_scope.diagnostics)
     for pou in resolved.sorted_pous():
         if is_external(pou):
@@ -31,12 +33,18 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         for variable in pou.variables:
             if variable.kind != "VAR_GLOBAL":
                 check_initializer(scope, variable.type, variable.init)
+                check_constant_initializer(scope, variable)
             if variable.edge is not None and (
                 variable.kind != "VAR_INPUT" or variable.type != BOOL
             ):
                 scope.report(variable.pos, f"{variable.edge} needs a BOOL input")
+        if not check_nesting(scope, pou.pou.body):
+            diagnostics.extend(scope.diagnostics)  # too deep to type: stop at the limit
+            continue
         check_block(scope, pou.pou.body, loop_depth=0)
         if pou.pou.sfc is not None:
+            for action in pou.pou.sfc.actions:
+                check_nesting(scope, action.body)
             check_sfc(scope, pou.pou.sfc)
         diagnostics.extend(scope.diagnostics)
     return diagnostics

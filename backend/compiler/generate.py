@@ -10,7 +10,9 @@ commutes with those.
 
 from __future__ import annotations
 
+import math
 import re
+import struct
 from dataclasses import dataclass, field
 
 from backend.compiler import ast, builtins
@@ -36,6 +38,7 @@ from backend.compiler.types import (
     StructType,
     Type,
     VariadicType,
+    common_numeric,
     integer_like,
 )
 
@@ -116,6 +119,12 @@ class _Emitter:
         match expr:
             case ast.IntLiteral(value=v):
                 literal_type = _type(self.scope, expr)
+                if isinstance(literal_type, ElementaryType) and literal_type.category == "real":
+                    number = float(v)  # REAL#5
+                    return _Value(
+                        repr(f32_constant(number) if literal_type.bits == 32 else number),
+                        literal_type,
+                    )
                 if isinstance(literal_type, ElementaryType) and not literal_type.is_any_literal:
                     v = wrap_constant(v, literal_type)
                 return _Value(repr(v), literal_type)
@@ -180,6 +189,8 @@ class _Emitter:
             if result == BOOL:
                 return _Value(f"(not {operand.code})", BOOL)
             assert isinstance(result, ElementaryType)
+            if result.signed:  # two's complement: NOT x = -x - 1
+                return _Value(f"(~{self.exact(expr.operand).code})", result)
             return _Value(f"({self.exact(expr.operand).code} ^ {(1 << result.bits) - 1})", result)
         if expr.op == "+":
             return operand
@@ -190,42 +201,69 @@ class _Emitter:
         result = _type(self.scope, expr)
         op = expr.op
         if op in _COMPARE:
-            left, right = self.exact(expr.left), self.exact(expr.right)
-            return _Value(f"({left.code} {_COMPARE[op]} {right.code})", BOOL)
+            common = _comparison_type(self.scope, expr)
+            left, right = self.operand(expr.left, common), self.operand(expr.right, common)
+            return _Value(f"({left} {_COMPARE[op]} {right})", BOOL)
         if op in ("AND", "&", "OR", "XOR"):
-            left, right = self.exact(expr.left), self.exact(expr.right)
+            left_value, right_value = self.exact(expr.left), self.exact(expr.right)
             symbol = {"AND": "&", "&": "&", "OR": "|", "XOR": "^"}[op]
-            return _Value(f"({left.code} {symbol} {right.code})", result)
+            return _Value(f"({left_value.code} {symbol} {right_value.code})", result)
         assert isinstance(result, ElementaryType)
         integral = result.category in ("int", "bits", "time", "date")
-        left_type = integer_like(_type(self.scope, expr.left)) or _type(self.scope, expr.left)
         right_type = integer_like(_type(self.scope, expr.right)) or _type(self.scope, expr.right)
-        scaled = op == "*" and not (left_type == right_type or not integral)
-        if op in ("+", "-", "*") and not (scaled and result.category == "time"):
-            left, right = self.expr(expr.left), self.expr(expr.right)
+        if result.category in ("time", "date"):
+            return self._time_binary(expr, result, right_type)
+        if op in ("+", "-", "*"):
+            # + - * commute with wrapping: operands of the result's type stay unwrapped
+            left = self.operand(expr.left, result, ring=True)
+            right = self.operand(expr.right, result, ring=True)
             if result.category == "real":
-                code = f"({left.code} {op} {right.code})"
+                code = f"({left} {op} {right})"
                 return _Value(f"_f32{code}" if result.bits == 32 else code, result)
-            return _Value(f"({left.code} {op} {right.code})", result, integral)
-        left, right = self.exact(expr.left), self.exact(expr.right)
-        if op == "*":  # TIME * number
-            return _Value(f"_round({left.code} * {right.code})", result, True)
+            return _Value(f"({left} {op} {right})", result, integral)
+        left, right = self.operand(expr.left, result), self.operand(expr.right, result)
         if op == "/":
             if result.category == "real":
-                code = f"_fdiv({left.code}, {right.code})"
+                code = f"_fdiv({left}, {right})"
                 return _Value(f"_f32({code})" if result.bits == 32 else code, result)
-            if (
-                result.category == "time"
-                and isinstance(right_type, ElementaryType)
-                and (right_type.category == "real")
-            ):
-                return _Value(f"_round(_fdiv({left.code}, {right.code}))", result, True)
-            return _Value(f"_idiv({left.code}, {right.code})", result, True)
+            return _Value(f"_idiv({left}, {right})", result, True)
         if op == "MOD":
-            return _Value(f"_imod({left.code}, {right.code})", result)
+            return _Value(f"_imod({left}, {right})", result)
         if op == "**":
-            return _Value(f"_pow({left.code}, {right.code})", result)
+            return _Value(f"_pow({left}, {right})", result)
         raise AssertionError(f"unhandled operator {op}")
+
+    def _time_binary(self, expr: ast.Binary, result: ElementaryType, right_type: Type) -> _Value:
+        """TIME/date arithmetic: nanosecond counts, scaled by numbers for * and /."""
+        left, right = self.exact(expr.left).code, self.exact(expr.right).code
+        op = expr.op
+        if op in ("+", "-"):
+            return _Value(f"({left} {op} {right})", result, True)
+        if op == "*":
+            return _Value(f"_round({left} * {right})", result, True)
+        if isinstance(right_type, ElementaryType) and right_type.category == "real":
+            return _Value(f"_round(_fdiv({left}, {right}))", result, True)
+        return _Value(f"_idiv({left}, {right})", result, True)
+
+    def operand(self, expr: ast.Expr, target: Type, ring: bool = False) -> str:
+        """Code of `expr` as an operand of an operation computed in `target` (IEC: the
+        operands are converted to the operation's type first). With `ring`, an operand of
+        the target's own integer type may stay unwrapped (+ - * commute with wrapping)."""
+        value = self.expr(expr)
+        source = integer_like(value.type) or value.type
+        if not isinstance(target, ElementaryType) or not isinstance(source, ElementaryType):
+            return _exact(value).code
+        if target.category == "real":
+            if isinstance(expr, ast.RealLiteral | ast.IntLiteral) and source.is_any_literal:
+                number = float(expr.value)
+                return repr(f32_constant(number) if target.bits == 32 else number)
+            if source.category == "real":
+                return value.code
+            code = _exact(value).code  # an integer: made a REAL before the operation
+            return f"_f32({code})" if target.bits == 32 else f"float({code})"
+        if ring and value.unwrapped and source == target:
+            return value.code
+        return _exact(value).code
 
     # ---- calls
     def call(self, call: ast.Call) -> _Value:
@@ -273,7 +311,8 @@ class _Emitter:
                 continue
             if not _is_lvalue(arg.value):
                 continue
-            store = self.store(arg.value, f"{handle}[{slots[key(connected.name)]}]")
+            output = _Value(f"{handle}[{slots[key(connected.name)]}]", connected.type)
+            store = self.store(arg.value, convert_value(output, _type(self.scope, arg.value)))
             self.pre.append(store if enable is None else f"if {enable}: {store}")
         return _Value(f"{handle}[0]", result)
 
@@ -308,33 +347,12 @@ class _Emitter:
             if constant is not None:
                 return repr(wrap_constant(constant, integer))
         raw = self.expr(value_expr)  # generated once: it may hoist calls
-        target_int = integer_like(target)
-        raw_int = integer_like(raw.type)
-        if raw.unwrapped and target_int and raw_int and target_int.bits <= raw_int.bits:
-            # wrapping to the narrower target alone gives the same bits as wrapping twice
-            return wrap_code(raw.code, target_int)
-        value = _exact(raw)
-        source = value.type
         if is_aggregate(target):
-            return f"_copy({value.code})" if _is_lvalue(value_expr) else value.code
-        if not isinstance(target, ElementaryType | EnumType):
-            return value.code
-        target_elem = target.base if isinstance(target, EnumType) else target
-        if isinstance(source, EnumType):
-            source = source.base
-        code = value.code
-        if isinstance(source, ElementaryType) and source != target_elem:
-            if source == ANY_INT and target_elem.is_integer:
-                code = wrap_code(code, target_elem) if value.unwrapped else code
-            elif not (source == ANY_REAL and target_elem == ANY_REAL):
-                code = convert_code(code, source, target_elem)
-        length = target_elem.length if target_elem.category == "string" else 0
-        short_literal = (
-            isinstance(value_expr, ast.StringLiteral) and len(value_expr.value) <= length
+            return f"_copy({raw.code})" if _is_lvalue(value_expr) else raw.code
+        short_literal = isinstance(value_expr, ast.StringLiteral) and not _longer_than(
+            value_expr.value, target
         )
-        if length and not short_literal:
-            code = f"{code}[:{length}]"
-        return code
+        return convert_value(raw, target, already_fits=short_literal)
 
     def initial(self, var_type: Type, init: ast.Initializer | None) -> str:
         """Code that creates the initial value of a variable."""
@@ -624,7 +642,10 @@ class _Emitter:
             value = f"{handle}.{param.attr}"
             if arg.negated:
                 value = f"(not {value})"
-            self.emit(depth, self.store(arg.value, value))
+            target_type = _type(self.scope, arg.value)
+            self.emit(
+                depth, self.store(arg.value, convert_value(_Value(value, param.type), target_type))
+            )
 
 
 def wrap_constant(value: int, t: ElementaryType) -> int:
@@ -635,6 +656,55 @@ def wrap_constant(value: int, t: ElementaryType) -> int:
     if t.signed and value >= 1 << (t.bits - 1):
         value -= 1 << t.bits
     return value
+
+
+def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> str:
+    """Code storing an elementary value in a variable of `target`: wrapped to its width,
+    converted between types, strings cut to their length."""
+    target_int = integer_like(target)
+    raw_int = integer_like(raw.type)
+    if raw.unwrapped and target_int and raw_int and target_int.bits <= raw_int.bits:
+        # wrapping to the narrower target alone gives the same bits as wrapping twice
+        return wrap_code(raw.code, target_int)
+    value = _exact(raw)
+    if not isinstance(target, ElementaryType | EnumType):
+        return value.code
+    target_elem = target.base if isinstance(target, EnumType) else target
+    source = value.type.base if isinstance(value.type, EnumType) else value.type
+    code = value.code
+    if isinstance(source, ElementaryType) and source != target_elem:
+        if source == ANY_INT and target_elem.is_integer:
+            code = wrap_code(code, target_elem) if value.unwrapped else code
+        elif not (source == ANY_REAL and target_elem == ANY_REAL):
+            code = convert_code(code, source, target_elem)
+    length = target_elem.length if target_elem.category == "string" else 0
+    if length and not already_fits:
+        code = f"{code}[:{length}]"
+    return code
+
+
+def _longer_than(text: str, target: Type) -> bool:
+    length = target.length if isinstance(target, ElementaryType) else 0
+    return bool(length) and len(text) > length
+
+
+def f32_constant(number: float) -> float:
+    """A REAL literal as the REAL it stands for (rounded to single precision)."""
+    try:
+        return float(struct.unpack("f", struct.pack("f", number))[0])
+    except OverflowError:
+        return math.copysign(math.inf, number)
+
+
+def _comparison_type(scope: Scope, expr: ast.Binary) -> Type:
+    """The type both sides of a comparison are converted to."""
+    left = integer_like(_type(scope, expr.left)) or _type(scope, expr.left)
+    right = integer_like(_type(scope, expr.right)) or _type(scope, expr.right)
+    if isinstance(left, ElementaryType) and isinstance(right, ElementaryType):
+        joined = common_numeric(left, right)
+        if joined is not None and joined.category == "real":
+            return joined
+    return left
 
 
 def _exact(value: _Value) -> _Value:

@@ -128,16 +128,16 @@ class Scope:
     def _compute_type(self, expr: ast.Expr) -> Type | None:
         match expr:
             case ast.IntLiteral(type_name=type_name):
-                return self._literal_type(type_name, ANY_INT, expr.pos)
+                return self._literal_type(type_name, ANY_INT, expr.pos, ("int", "bits", "real"))
             case ast.RealLiteral(type_name=type_name):
-                return self._literal_type(type_name, ANY_REAL, expr.pos)
+                return self._literal_type(type_name, ANY_REAL, expr.pos, ("real",))
             case ast.BoolLiteral(type_name=type_name):
-                return self._literal_type(type_name, BOOL, expr.pos)
+                return self._literal_type(type_name, BOOL, expr.pos, ("bool",))
             case ast.TimeLiteral(type_name=type_name):
                 return ELEMENTARY.get(type_name, TIME)
             case ast.StringLiteral(wide=wide, type_name=type_name):
                 if type_name is not None:
-                    return self._literal_type(type_name, STRING, expr.pos)
+                    return self._literal_type(type_name, STRING, expr.pos, ("string",))
                 return WSTRING if wide else STRING
             case ast.EnumLiteral():
                 return self._enum_literal(expr)
@@ -185,12 +185,20 @@ class Scope:
                 return self.call_type(expr)
         raise AssertionError(f"unhandled expression {expr!r}")
 
-    def _literal_type(self, type_name: str | None, default: Type, pos: ast.Pos) -> Type | None:
+    def _literal_type(
+        self, type_name: str | None, default: Type, pos: ast.Pos, kinds: tuple[str, ...]
+    ) -> Type | None:
+        """The type of a literal; `INT#5` takes the named type if the literal is of a kind
+        that type holds (no INT#1.5, no INT#TRUE)."""
         if type_name is None:
             return default
         found = elementary(type_name)
         if found is None:
             self.report(pos, f"unknown type '{type_name}' in typed literal")
+            return None
+        if found.category not in kinds:
+            self.report(pos, f"{type_name}# cannot be given this literal")
+            return None
         return found
 
     def _enum_literal(self, expr: ast.EnumLiteral) -> Type | None:
@@ -323,8 +331,8 @@ class Scope:
             return BOOL
         if left.category in ("time", "date") or right.category in ("time", "date"):
             return self._time_arithmetic(expr, left, right, mismatch)
-        joined = common_numeric(left, right)
-        if joined is None:
+        joined = common_numeric(left, right) if left.is_numeric and right.is_numeric else None
+        if joined is None:  # no arithmetic on BOOL or STRING
             self.report(expr.pos, mismatch)
             return None
         if op == "**":

@@ -14,7 +14,13 @@ from importlib import resources
 from typing import Any
 
 from lark import Lark, Token, Transformer, Tree, v_args
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from lark.exceptions import (
+    UnexpectedCharacters,
+    UnexpectedEOF,
+    UnexpectedInput,
+    UnexpectedToken,
+    VisitError,
+)
 
 from backend.compiler import ast
 from backend.compiler.diagnostics import CompileError, Diagnostic
@@ -102,6 +108,8 @@ def parse_int_literal(text: str) -> int:
     text = text.replace("_", "")
     if "#" in text:
         base, _, digits = text.partition("#")
+        if not digits:
+            raise ValueError(f"no digits after '{base}#'")
         return int(digits, int(base))
     return int(text)
 
@@ -188,6 +196,8 @@ class _ToAst(Transformer[Token, Any]):
 
     def time_literal(self, items: list[Token]) -> ast.TimeLiteral:
         ns, long = parse_time_literal(str(items[0]))
+        if not -(1 << 63) <= ns < 1 << 63:
+            raise ValueError("a duration beyond the 64-bit range of LTIME")
         return ast.TimeLiteral(ns, "LTIME" if long else "TIME", self._pos(items[0]))
 
     def date_literal(self, items: list[Token]) -> ast.TimeLiteral:
@@ -638,7 +648,13 @@ def parse_source(file: str, text: str) -> ast.SourceUnit:
     except UnexpectedInput as exc:
         raise CompileError([_syntax_diagnostic(file, exc)]) from None
     transformer = _ToAst(file)
-    items = transformer.transform(tree)
+    try:
+        items = transformer.transform(tree)
+    except VisitError as exc:  # a literal that parses but has no value (16#_, D#2024-13-01)
+        where = transformer._pos(exc.obj)
+        problem = str(exc.orig_exc) or type(exc.orig_exc).__name__
+        message = f"invalid literal: {problem}"
+        raise CompileError([Diagnostic(file, where.line, where.col, "error", message)]) from None
     if transformer.errors:
         raise CompileError(transformer.errors)
     pous = tuple(i for i in items if isinstance(i, ast.Pou))

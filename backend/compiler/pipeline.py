@@ -6,6 +6,7 @@ artifact only when there is no error.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, replace
 
 from backend.compiler import ast
@@ -47,6 +48,13 @@ class CompileResult:
         return self.artifact is not None
 
 
+# Python frames of the parser and the tree walkers; deep ST is limited by the nesting
+# rules of the check stage long before this (see checks/nesting.py). Set once, when the
+# compiler is imported.
+RECURSION_LIMIT = 20_000
+sys.setrecursionlimit(max(sys.getrecursionlimit(), RECURSION_LIMIT))
+
+
 def parse_all(sources: list[SourceFile]) -> tuple[list[ast.SourceUnit], list[Diagnostic]]:
     units: list[ast.SourceUnit] = []
     diagnostics: list[Diagnostic] = []
@@ -80,11 +88,13 @@ def compile_sources(
     diagnostics.extend(resolved.diagnostics)
     diagnostics.extend(check(resolved))
     configured = _from_configuration(units, diagnostics)
+    positions: dict[str, ast.Pos] = {}
     if resource is None:
         resource = configured[0] if configured else ResourceConfig(name="Resource1")
     if programs is None:
         programs = configured[1] if configured else _default_programs(units)
-    diagnostics.extend(check_programs(resolved, programs, config_file))
+        positions = configured[2] if configured else {}
+    diagnostics.extend(check_programs(resolved, programs, config_file, positions))
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics) or not resolved.pous:
         if not resolved.pous and not diagnostics:
@@ -118,7 +128,7 @@ def compile_sources(
 
 def _from_configuration(
     units: list[ast.SourceUnit], diagnostics: list[Diagnostic]
-) -> tuple[ResourceConfig, list[ProgramConfig]] | None:
+) -> tuple[ResourceConfig, list[ProgramConfig], dict[str, ast.Pos]] | None:
     """Resource and user programs from the first RESOURCE of an IEC CONFIGURATION: each
     PROGRAM ... WITH task is a user program with the task's priority; the CPU cycle is the
     shortest task interval (one cycle for all programs, as on HIMA and M580 controllers)."""
@@ -153,7 +163,8 @@ def _from_configuration(
                 priority=priority.value if isinstance(priority, ast.IntLiteral) else 0,
             )
         )
-    return ResourceConfig(name=chosen.name, cycle_ms=cycle_ms), programs
+    positions = {p.name: p.pos for p in chosen.programs}  # where each program was declared
+    return ResourceConfig(name=chosen.name, cycle_ms=cycle_ms), programs, positions
 
 
 def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:

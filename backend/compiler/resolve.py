@@ -330,7 +330,51 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
             seen[key(pou.name)] = pou
     for name in sorted(seen):
         result.pous[name] = _resolve_pou(seen[name], types, result)
+    _check_self_containment(result)
     return result
+
+
+def _contained_blocks(result: Resolved, t: Type) -> list[str]:
+    """The FB types (keys) a value of type `t` holds directly, in arrays and structs too."""
+    if isinstance(t, FbType):
+        return [key(t.name)]
+    if isinstance(t, ArrayType):
+        return _contained_blocks(result, t.element)
+    if isinstance(t, StructType) and key(t.name) in result.structs:
+        return [
+            b
+            for m in result.structs[key(t.name)].members
+            for b in _contained_blocks(result, m.type)
+        ]
+    return []
+
+
+def _check_self_containment(result: Resolved) -> None:
+    """A block that holds an instance of itself (directly or further down) has no end."""
+    for name, pou in sorted(result.pous.items()):
+        pending = [
+            b
+            for v in pou.variables
+            if v.kind != "VAR_GLOBAL"
+            for b in _contained_blocks(result, v.type)
+        ]
+        seen: set[str] = set()
+        while pending:
+            current = pending.pop()
+            if current == name:
+                result.diagnostics.append(
+                    error(pou.pou.pos, f"'{pou.name}' contains an instance of itself")
+                )
+                break
+            if current in seen or current not in result.pous:
+                continue
+            seen.add(current)
+            pending.extend(
+                b
+                for v in result.pous[current].variables
+                if v.kind != "VAR_GLOBAL"
+                for b in _contained_blocks(result, v.type)
+            )
 
 
 def _block_variables(

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.compiler.ast import key
-from backend.compiler.infer import Scope
+from backend.compiler.infer import EnumValue, Scope
+from backend.compiler.resolve import Variable
 from backend.compiler.types import (
     ArrayType,
     ElementaryType,
@@ -90,3 +91,46 @@ def check_range(scope: Scope, target: Type, literal: ast.IntLiteral) -> None:
 
 def mismatch(target: Type, source: Type) -> str:
     return f"type mismatch: cannot assign {source.name} to {target.name}"
+
+
+def check_constant_initializer(scope: Scope, variable: Variable) -> None:
+    """An initial value is computed once, before anything runs: IEC allows only constant
+    expressions (literals, constants, enum values, standard functions of those)."""
+    if variable.init is not None:
+        for expr in _values(variable.init):
+            if not is_constant(scope, expr):
+                scope.report(
+                    expr.pos, f"initial value of '{variable.name}' must be a constant expression"
+                )
+
+
+def _values(init: ast.Initializer) -> list[ast.Expr]:
+    if isinstance(init, ast.ArrayInit):
+        return [e for _, value in init.items for e in _values(value)]
+    if isinstance(init, ast.StructInit):
+        return [e for _, value in init.members for e in _values(value)]
+    return [init]
+
+
+def is_constant(scope: Scope, expr: ast.Expr) -> bool:
+    match expr:
+        case (
+            ast.IntLiteral() | ast.RealLiteral() | ast.BoolLiteral() | ast.TimeLiteral()
+            | ast.StringLiteral() | ast.EnumLiteral()
+        ):  # fmt: skip
+            return True
+        case ast.NameRef(name=name):
+            binding = scope.enum_hint(expr) or scope.lookup(name)
+            return isinstance(binding, EnumValue) or (
+                isinstance(binding, Variable) and binding.constant and binding.kind != "STEP"
+            )
+        case ast.Unary(operand=operand):
+            return is_constant(scope, operand)
+        case ast.Binary(left=left, right=right):
+            return is_constant(scope, left) and is_constant(scope, right)
+        case ast.Call(name=name, args=args):
+            user_function = key(name) in scope.resolved.pous
+            return not user_function and all(
+                arg.value is not None and is_constant(scope, arg.value) for arg in args
+            )
+    return False

@@ -21,12 +21,18 @@ MAX_PROGRAMS = 32
 
 
 def check_programs(
-    resolved: Resolved, programs: list[ProgramConfig], config_file: str
+    resolved: Resolved,
+    programs: list[ProgramConfig],
+    config_file: str,
+    positions: dict[str, ast.Pos] | None = None,
 ) -> list[Diagnostic]:
-    where = ast.Pos(config_file, 1, 1)
+    """`positions`: where a CONFIGURATION in the sources declares each program; programs
+    from padt.toml are reported at that file."""
+    default = ast.Pos(config_file, 1, 1)
     diagnostics: list[Diagnostic] = []
     seen_ids: dict[int, str] = {}
     for program in programs:
+        where = (positions or {}).get(program.name, default)
         pou = resolved.pous.get(key(program.pou))
         if pou is None or pou.kind != "PROGRAM":
             message = f"user program '{program.name}': no PROGRAM '{program.pou}'"
@@ -40,7 +46,7 @@ def check_programs(
             diagnostics.append(error(where, message))
         seen_ids[program.program_id] = program.name
     if len(programs) > MAX_PROGRAMS:
-        diagnostics.append(error(where, f"{len(programs)} user programs; at most {MAX_PROGRAMS}"))
+        diagnostics.append(error(default, f"{len(programs)} user programs; at most {MAX_PROGRAMS}"))
     diagnostics.extend(_check_single_writer(resolved, programs))
     return diagnostics
 
