@@ -92,6 +92,8 @@ class _Emitter:
     pre: list[str] = field(default_factory=list)  # hoisted statements for the next line
     temp_count: int = 0
     in_globals: bool = False  # initialising GLOBALS itself: other globals are on `s`
+    # the width the + - * expression being generated is wrapped to where it is stored
+    modulus_bits: int | None = None
 
     def emit(self, depth: int, line: str) -> None:
         for hoisted in self.pre:
@@ -116,6 +118,18 @@ class _Emitter:
         return _exact(self.expr(expr))
 
     def expr(self, expr: ast.Expr) -> _Value:
+        ring = (isinstance(expr, ast.Binary) and expr.op in ("+", "-", "*")) or (
+            isinstance(expr, ast.Unary) and expr.op == "-"
+        )
+        if ring:
+            return self._expr(expr)
+        saved, self.modulus_bits = self.modulus_bits, None  # the value itself counts here
+        try:
+            return self._expr(expr)
+        finally:
+            self.modulus_bits = saved
+
+    def _expr(self, expr: ast.Expr) -> _Value:
         match expr:
             case ast.IntLiteral(value=v):
                 literal_type = _type(self.scope, expr)
@@ -254,14 +268,18 @@ class _Emitter:
         if not isinstance(target, ElementaryType) or not isinstance(source, ElementaryType):
             return _exact(value).code
         if target.category == "real":
-            if isinstance(expr, ast.RealLiteral | ast.IntLiteral) and source.is_any_literal:
-                number = float(expr.value)
+            number = _literal_number(expr) if source.is_any_literal else None
+            if number is not None:  # a literal takes the type of the operation: REAL#0.1
                 return repr(f32_constant(number) if target.bits == 32 else number)
             if source.category == "real":
                 return value.code
             code = _exact(value).code  # an integer: made a REAL before the operation
             return f"_f32({code})" if target.bits == 32 else f"float({code})"
         if ring and value.unwrapped and source == target:
+            return value.code
+        if ring and value.unwrapped and self.modulus_bits and source.bits >= self.modulus_bits:
+            # the whole + - * expression is wrapped to fewer bits at its store: an inner wrap
+            # to as many bits or more cannot change the stored result
             return value.code
         return _exact(value).code
 
@@ -346,7 +364,11 @@ class _Emitter:
             constant = self.scope.constant_int(value_expr)
             if constant is not None:
                 return repr(wrap_constant(constant, integer))
-        raw = self.expr(value_expr)  # generated once: it may hoist calls
+        self.modulus_bits = integer.bits if integer is not None else None
+        try:
+            raw = self.expr(value_expr)  # generated once: it may hoist calls
+        finally:
+            self.modulus_bits = None
         if is_aggregate(target):
             return f"_copy({raw.code})" if _is_lvalue(value_expr) else raw.code
         short_literal = isinstance(value_expr, ast.StringLiteral) and not _longer_than(
@@ -686,6 +708,17 @@ def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> str:
 def _longer_than(text: str, target: Type) -> bool:
     length = target.length if isinstance(target, ElementaryType) else 0
     return bool(length) and len(text) > length
+
+
+def _literal_number(expr: ast.Expr) -> float | None:
+    """The value of a number literal, also when negated (`-0.1`)."""
+    if isinstance(expr, ast.RealLiteral | ast.IntLiteral):
+        return float(expr.value)
+    if isinstance(expr, ast.Unary) and expr.op in ("-", "+"):
+        inner = _literal_number(expr.operand)
+        if inner is not None:
+            return -inner if expr.op == "-" else inner
+    return None
 
 
 def f32_constant(number: float) -> float:

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from tests.bench import bench_compiler
+from tests.bench import bench_compiler, bench_language
 
 
 def main() -> None:
     bench_compiler.main()
+    bench_language.main()
 
 
 if __name__ == "__main__":
