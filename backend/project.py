@@ -73,7 +73,12 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
     cycle_ms = res.get("cycle_ms", 100)
     if not isinstance(cycle_ms, int) or not 1 <= cycle_ms <= 7500:
         raise ProjectError(f"{where}: cycle_ms must be an integer from 1 to 7500")
-    resource = ResourceConfig(name=res["name"], cycle_ms=cycle_ms, autostart=autostart)
+    watchdog_ms = res.get("watchdog_ms", 200)
+    if not isinstance(watchdog_ms, int) or not 6 <= watchdog_ms <= 7500:
+        raise ProjectError(f"{where}: watchdog_ms must be an integer from 6 to 7500")
+    resource = ResourceConfig(
+        name=res["name"], cycle_ms=cycle_ms, autostart=autostart, watchdog_ms=watchdog_ms
+    )
     programs = None
     if "program" in res:
         programs = []

@@ -59,6 +59,7 @@ class ResourceConfig:
     name: str
     cycle_ms: int = 100
     autostart: str = "off"  # off | cold | warm
+    watchdog_ms: int = 200  # a CPU cycle longer than this is ERROR STOP
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,7 @@ COMMANDS: dict[str, Callable[[Resource], dict[str, Any]]] = {
     "start": _state_change(Resource.start),
     "stop": _state_change(Resource.stop),
     "step": _state_change(Resource.step),
+    "init": _state_change(Resource.init),
 }
 
 

@@ -7,6 +7,7 @@ methods (commands reach it through the cycle driver's queue), so it needs no loc
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
@@ -22,6 +23,7 @@ from runtime.code_image import (
     write_path,
 )
 from runtime.intrinsics import ProgramFault, SystemView
+from runtime.watchdog import Watchdog, WatchdogExpired, process_watchdog
 
 log = logging.getLogger(__name__)
 
@@ -30,6 +32,7 @@ class ResourceState(StrEnum):
     STOP_INVALID = "STOP/INVALID CONFIGURATION"
     STOP_VALID = "STOP/VALID CONFIGURATION"
     RUN = "RUN"
+    ERROR_STOP = "ERROR STOP"
 
 
 class ProgramState(StrEnum):
@@ -105,6 +108,8 @@ class Resource:
     system: SystemView = field(default_factory=SystemView)
     globals: Any = None  # the instance behind `_G`
     global_paths: list[VariablePath] = field(default_factory=list)
+    error: str | None = None  # why the resource is in ERROR STOP
+    watchdog: Watchdog = field(default_factory=process_watchdog, repr=False)
     _bound: list[BoundVariable] = field(default_factory=list, init=False, repr=False)
     _by_name: dict[str, BoundVariable] = field(default_factory=dict, init=False, repr=False)
 
@@ -112,10 +117,14 @@ class Resource:
     def cycle_ns(self) -> int:
         return (self.artifact.resource.cycle_ms if self.artifact else 100) * 1_000_000
 
+    @property
+    def watchdog_ns(self) -> int:
+        return (self.artifact.resource.watchdog_ms if self.artifact else 200) * 1_000_000
+
     # ---- commands
     def load(self, artifact: Artifact) -> None:
         """Take a whole configuration (only in STOP); a cold start state follows."""
-        if self.state == ResourceState.RUN:
+        if self.state in (ResourceState.RUN, ResourceState.ERROR_STOP):
             raise CommandRefused("state", "a download is only possible in STOP")
         image = CodeImage(artifact, self.system)
         programs = []
@@ -142,9 +151,19 @@ class Resource:
         self.state = ResourceState.STOP_VALID
         log.info("loaded configuration %s (CRC %s)", artifact.project, artifact.crc)
 
+    def init(self) -> None:
+        """INIT: leave ERROR STOP for STOP; the next start is a cold start."""
+        if self.state != ResourceState.ERROR_STOP:
+            raise CommandRefused("state", "INIT leaves ERROR STOP; the resource is not in it")
+        assert self.artifact is not None
+        self.state, self.error = ResourceState.STOP_VALID, None
+        self.load(self.artifact)  # fresh instances: every variable at its initial value
+
     def start(self) -> None:
         if self.state == ResourceState.STOP_INVALID:
             raise CommandRefused("state", "no valid configuration is loaded")
+        if self.state == ResourceState.ERROR_STOP:
+            raise CommandRefused("state", f"ERROR STOP ({self.error}): INIT first")
         if self.state == ResourceState.RUN:
             return
         self.state = ResourceState.RUN
@@ -165,9 +184,9 @@ class Resource:
         """Run exactly one program cycle of every program, with time advancing one interval."""
         if self.state != ResourceState.STOP_VALID:
             raise CommandRefused("state", "single step needs the resource in STOP")
-        for program in self.programs:
-            if program.state != ProgramState.ERROR:
-                self._run_program(program, self.cycle_ns)
+        self._guarded(
+            [p for p in self.programs if p.state != ProgramState.ERROR], lambda p: self.cycle_ns
+        )
         self.cycle_count += 1
 
     # ---- the cycle
@@ -176,16 +195,37 @@ class Resource:
         if self.state != ResourceState.RUN:
             return
         begin = self.clock.now_ns()
-        for program in self.programs:
-            if program.state != ProgramState.RUN:
-                continue
-            delta = self.cycle_ns
+
+        def delta(program: UserProgram) -> int:
+            elapsed = self.cycle_ns
             if program.last_wall_ns is not None:
-                delta = begin - program.last_wall_ns
+                elapsed = begin - program.last_wall_ns
             program.last_wall_ns = begin
-            self._run_program(program, delta)
+            return elapsed
+
+        self._guarded([p for p in self.programs if p.state == ProgramState.RUN], delta)
         self.cycle_count += 1
         self.stats.record(self.clock.now_ns() - begin)
+
+    def _guarded(self, programs: list[UserProgram], delta: Callable[[UserProgram], int]) -> None:
+        """Run programs under the resource watchdog: a cycle longer than the watchdog time
+        (an endless loop, say) ends in ERROR STOP, with outputs safe (when there are
+        outputs) and the runtime still answering."""
+        running: UserProgram | None = None
+        try:
+            with self.watchdog.guard(self.watchdog_ns):
+                for running in programs:
+                    self._run_program(running, delta(running))
+        except WatchdogExpired:
+            cause = f"watchdog: the cycle took longer than {self.watchdog_ns // 1_000_000} ms"
+            if running is not None:
+                cause += f" (in program {running.config.name})"
+                running.error = cause
+            self.state, self.error = ResourceState.ERROR_STOP, cause
+            for program in self.programs:
+                if program.state == ProgramState.RUN:
+                    program.state = ProgramState.STOP
+            log.error("resource %s: ERROR STOP, %s", self.name, cause)
 
     def _run_program(self, program: UserProgram, delta_ns: int) -> None:
         if program.cycles > 0:
@@ -210,6 +250,7 @@ class Resource:
             "resource": self.name,
             "state": self.state.value,
             "crc": self.artifact.crc if self.artifact else None,
+            "error": self.error,
             "project": self.artifact.project if self.artifact else None,
             "cycle": self.cycle_count,
             "cycle_ms": self.cycle_ns / 1e6,

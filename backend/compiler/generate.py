@@ -696,7 +696,11 @@ def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> str:
     code = value.code
     if isinstance(source, ElementaryType) and source != target_elem:
         if source == ANY_INT and target_elem.is_integer:
-            code = wrap_code(code, target_elem) if value.unwrapped else code
+            # an expression of literals (`-79 MOD 100`) may lie outside the target's range
+            in_range = (
+                code.lstrip("-").isdigit() and target_elem.min <= int(code) <= target_elem.max
+            )
+            code = code if in_range else wrap_code(code, target_elem)
         elif not (source == ANY_REAL and target_elem == ANY_REAL):
             code = convert_code(code, source, target_elem)
     length = target_elem.length if target_elem.category == "string" else 0

@@ -1,0 +1,100 @@
+"""A program that never ends cannot hang the controller: the resource watchdog ends the
+cycle in ERROR STOP, the runtime keeps answering, and INIT leads back to STOP."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import pytest
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from backend.resource_client import ResourceClient
+from runtime.artifact import ResourceConfig
+from runtime.clock import VirtualClock
+from runtime.main import artifact_path
+from runtime.resource import CommandRefused, Resource, ResourceState
+from tests.runtime_process import client_session, router, runtime_process, wait_until_answering
+
+ENDLESS = {
+    "while": "WHILE TRUE DO n := n + 1; END_WHILE;",
+    "repeat": "REPEAT n := n + 1; UNTIL FALSE END_REPEAT;",
+    "moving for bound": "FOR i := 0 TO n DO n := n + 1; END_FOR;",
+    "nested in an FB": "spin(go := TRUE);",
+}
+SPINNER = """
+FUNCTION_BLOCK Spinner
+VAR_INPUT go : BOOL; END_VAR
+VAR k : DINT; END_VAR
+WHILE go DO k := k + 1; END_WHILE;
+END_FUNCTION_BLOCK
+"""
+
+
+def endless_program(body: str, autostart: str = "off") -> str:
+    return (
+        SPINNER + "PROGRAM Loop\nVAR n, i : DINT; spin : Spinner; kept : INT := 7; END_VAR\n"
+        f"kept := 8;\n{body}\nEND_PROGRAM\n"
+    )
+
+
+def loaded(body: str) -> Resource:
+    config = ResourceConfig(name="R", watchdog_ms=50)
+    result = compile_sources([SourceFile("loop.st", endless_program(body))], resource=config)
+    assert result.artifact is not None, [str(d) for d in result.diagnostics]
+    resource = Resource("R", VirtualClock())
+    resource.load(result.artifact)
+    return resource
+
+
+@pytest.mark.parametrize("form", sorted(ENDLESS))
+def test_endless_loops_end_in_error_stop(form: str) -> None:
+    resource = loaded(ENDLESS[form])
+    resource.start()
+    started = time.monotonic()
+    resource.cycle()  # returns: the watchdog ends the cycle
+    # generous bound: the watchdog is 50 ms; a hang would never return at all
+    assert time.monotonic() - started < 5
+    assert resource.state == ResourceState.ERROR_STOP
+    assert resource.status()["error"] == (
+        "watchdog: the cycle took longer than 50 ms (in program Loop)"
+    )
+    with pytest.raises(CommandRefused, match="INIT first"):
+        resource.start()
+
+
+def test_init_leaves_error_stop_with_a_cold_start() -> None:
+    resource = loaded(ENDLESS["while"])
+    resource.start()
+    resource.cycle()
+    assert resource.read("Loop.kept") == 8  # the cycle ran up to the loop
+    resource.init()
+    assert resource.state == ResourceState.STOP_VALID
+    assert resource.read("Loop.kept") == 7  # every variable back at its initial value
+    with pytest.raises(CommandRefused):
+        resource.init()  # only from ERROR STOP
+
+
+def test_the_runtime_process_keeps_answering(tmp_path: Path, zenoh_endpoint: str) -> None:
+    config = ResourceConfig(name="Spin", watchdog_ms=100, autostart="cold")
+    result = compile_sources(
+        [SourceFile("loop.st", endless_program(ENDLESS["while"]))], resource=config
+    )
+    assert result.artifact is not None
+    path = artifact_path(tmp_path)
+    path.parent.mkdir(parents=True)
+    path.write_text(result.artifact.to_json())
+    with (
+        router(zenoh_endpoint),
+        runtime_process("Spin", tmp_path, zenoh_endpoint),
+        client_session(zenoh_endpoint) as session,
+    ):
+        client = ResourceClient(session, "Spin")
+        wait_until_answering(client)
+        status = client.command("status")["status"]
+        assert status["state"] == "ERROR STOP", json.dumps(status)
+        assert "watchdog" in status["error"]
+        assert client.command("start")["error"]["code"] == "state"
+        assert client.command("init")["status"]["state"] == "STOP/VALID CONFIGURATION"
