@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import subprocess
@@ -32,6 +33,20 @@ def padt(
         env={**os.environ, **(env or {})},
         timeout=timeout,
     )
+
+
+def sim_trace(tmp_path: Path, source: str, cycles: int, *sets: str) -> dict[str, list[object]]:
+    """Run ST `source` through `padt sim` on 100 ms cycles; each name's value per cycle."""
+    path = tmp_path / "sim.st"
+    path.write_text(source)
+    args = ["sim", str(path), "--cycles", str(cycles), "--cycle-ms", "100"]
+    for setting in sets:
+        args += ["--set", setting]
+    run = padt(*args)
+    assert run.returncode == 0, run.stderr
+    rows = [json.loads(line) for line in run.stdout.splitlines()]
+    assert [row["t_ms"] for row in rows] == [100 * k for k in range(cycles)]
+    return {name: [row["values"][name] for row in rows] for name in rows[0]["values"]}
 
 
 @pytest.fixture

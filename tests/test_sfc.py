@@ -4,10 +4,9 @@ Cycles are 100 ms; a value printed for cycle k is the value after cycle k ran.""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from tests.conftest import padt
+from tests.conftest import sim_trace
 
 QUALIFIERS = """
 PROGRAM Q
@@ -25,16 +24,7 @@ END_PROGRAM
 
 
 def trace(tmp_path: Path, source: str, cycles: int, *sets: str) -> dict[str, list[object]]:
-    path = tmp_path / "chart.st"
-    path.write_text(source)
-    args = ["sim", str(path), "--cycles", str(cycles), "--cycle-ms", "100"]
-    for setting in sets:
-        args += ["--set", setting]
-    run = padt(*args)
-    assert run.returncode == 0, run.stderr
-    rows = [json.loads(line) for line in run.stdout.splitlines()]
-    assert [row["t_ms"] for row in rows] == [100 * k for k in range(cycles)]
-    return {name: [row["values"][name] for row in rows] for name in rows[0]["values"]}
+    return sim_trace(tmp_path, source, cycles, *sets)
 
 
 def flags(text: str) -> list[bool]:

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from tests.conftest import padt
+from tests.conftest import sim_trace
 
 SOURCE = """
 PROGRAM T
@@ -18,15 +17,7 @@ END_PROGRAM
 
 
 def run(tmp_path: Path, *sets: str, cycles: int = 8) -> dict[str, list[object]]:
-    path = tmp_path / "t.st"
-    path.write_text(SOURCE)
-    args = ["sim", str(path), "--cycles", str(cycles), "--cycle-ms", "100"]
-    for setting in sets:
-        args += ["--set", setting]
-    result = padt(*args)
-    assert result.returncode == 0, result.stderr
-    rows = [json.loads(line)["values"] for line in result.stdout.splitlines()]
-    return {name: [row[name] for row in rows] for name in rows[0]}
+    return sim_trace(tmp_path, SOURCE, cycles, *sets)
 
 
 def bits(values: list[object]) -> str:
