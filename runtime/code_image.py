@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from runtime.artifact import Artifact, PouCode
-from runtime.intrinsics import SystemView, _f32, namespace
+from runtime.intrinsics import SystemView, namespace, to_real32
 
 # An attribute name, or an offset into the flat list that holds an array.
 Accessor = str | int
@@ -228,7 +228,7 @@ def representation(type_name: str, value: Any) -> Any:
             raise ValueRejected(f"{value} is outside the range of {name}") from None
         if name == "LREAL":
             return number
-        single = _f32(number)
+        single = to_real32(number)
         if math.isinf(single) and math.isfinite(number):
             raise ValueRejected(f"{value} is outside the range of REAL")
         return single

@@ -76,7 +76,7 @@ def _pow(a: float, b: float) -> float:
 _F32 = struct.Struct("f")
 
 
-def _f32(value: float) -> float:
+def to_real32(value: float) -> float:
     """Round to the nearest IEEE 754 single (REAL is 32 bit)."""
     try:
         return float(_F32.unpack(_F32.pack(value))[0])
@@ -440,7 +440,7 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         "_fdiv": _fdiv,
         "_tdiv": _tdiv,
         "_pow": _pow,
-        "_f32": _f32,
+        "_f32": to_real32,
         "_ix": _ix,
         "_setbits": _setbits,
         "_copy": copy.deepcopy,

@@ -249,14 +249,6 @@ def _numeric_result(name: str, wrap_result: bool) -> Emitting:
     return emit
 
 
-def _fold(op: str) -> Emitting:
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
-        code = "(" + f" {op} ".join(codes) + ")"
-        return wrap_code(code, result) if isinstance(result, ElementaryType) else code
-
-    return emit
-
-
 def _compare_chain(op: str) -> Emitting:
     def emit(codes: list[str], args: list[Type], result: Type) -> str:
         return "(" + f" {op} ".join(codes) + ")"
@@ -356,15 +348,6 @@ def _limit_typing(args: list[Type]) -> Type | str:
     if len(args) != 3:
         return "takes MN, IN and MX"
     return _common(args)
-
-
-def _string_fn(params: tuple[str, ...], result: Type, template: str) -> Builtin:
-    def typing(args: list[Type]) -> Type | str:
-        if len(args) != len(params):
-            return f"takes {', '.join(params)}"
-        return result
-
-    return Builtin("", params, typing, _fn(template), min_args=len(params))
 
 
 def _bound(kind: str) -> Builtin:

@@ -10,9 +10,7 @@ commutes with those.
 
 from __future__ import annotations
 
-import math
 import re
-import struct
 from dataclasses import dataclass, field
 
 from backend.compiler import ast, builtins
@@ -41,10 +39,11 @@ from backend.compiler.types import (
     common_numeric,
     integer_like,
 )
+from runtime.intrinsics import to_real32
 
 INDENT = "    "
 _COMPARE = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
-LOCAL_KINDS = ("VAR_TEMP",)
+LOCAL_KINDS = ("VAR_TEMP", "RETURN")  # Python locals even in a class's __call__
 
 
 def _ident(name: str) -> str:
@@ -109,7 +108,7 @@ class _Emitter:
     def var_code(self, variable: Variable) -> str:
         if variable.kind == "VAR_GLOBAL":
             return f"{'s' if self.in_globals else '_G'}.{variable.attr}"
-        if self.local or variable.kind in LOCAL_KINDS or variable.kind == "RETURN":
+        if self.local or variable.kind in LOCAL_KINDS:
             return variable.attr
         return f"s.{variable.attr}"
 
@@ -136,7 +135,7 @@ class _Emitter:
                 if isinstance(literal_type, ElementaryType) and literal_type.category == "real":
                     number = float(v)  # REAL#5
                     return _Value(
-                        repr(f32_constant(number) if literal_type.bits == 32 else number),
+                        repr(to_real32(number) if literal_type.bits == 32 else number),
                         literal_type,
                     )
                 if isinstance(literal_type, ElementaryType) and not literal_type.is_any_literal:
@@ -198,14 +197,15 @@ class _Emitter:
 
     def _unary(self, expr: ast.Unary) -> _Value:
         result = _type(self.scope, expr)
-        operand = self.expr(expr.operand)
+        operand = self.expr(expr.operand)  # generated once: it may hoist calls
         if expr.op == "NOT":
             if result == BOOL:
                 return _Value(f"(not {operand.code})", BOOL)
             assert isinstance(result, ElementaryType)
+            exact = _exact(operand).code
             if result.signed:  # two's complement: NOT x = -x - 1
-                return _Value(f"(~{self.exact(expr.operand).code})", result)
-            return _Value(f"({self.exact(expr.operand).code} ^ {(1 << result.bits) - 1})", result)
+                return _Value(f"(~{exact})", result)
+            return _Value(f"({exact} ^ {(1 << result.bits) - 1})", result)
         if expr.op == "+":
             return operand
         integral = isinstance(result, ElementaryType) and result.category != "real"
@@ -223,10 +223,9 @@ class _Emitter:
             symbol = {"AND": "&", "&": "&", "OR": "|", "XOR": "^"}[op]
             return _Value(f"({left_value.code} {symbol} {right_value.code})", result)
         assert isinstance(result, ElementaryType)
-        integral = result.category in ("int", "bits", "time", "date")
-        right_type = integer_like(_type(self.scope, expr.right)) or _type(self.scope, expr.right)
         if result.category in ("time", "date"):
-            return self._time_binary(expr, result, right_type)
+            return self._time_binary(expr, result)
+        integral = result.category in ("int", "bits")
         if op in ("+", "-", "*"):
             # + - * commute with wrapping: operands of the result's type stay unwrapped
             left = self.operand(expr.left, result, ring=True)
@@ -247,8 +246,9 @@ class _Emitter:
             return _Value(f"_pow({left}, {right})", result)
         raise AssertionError(f"unhandled operator {op}")
 
-    def _time_binary(self, expr: ast.Binary, result: ElementaryType, right_type: Type) -> _Value:
+    def _time_binary(self, expr: ast.Binary, result: ElementaryType) -> _Value:
         """TIME/date arithmetic: nanosecond counts, scaled by numbers for * and /."""
+        right_type = integer_like(_type(self.scope, expr.right)) or _type(self.scope, expr.right)
         left, right = self.exact(expr.left).code, self.exact(expr.right).code
         op = expr.op
         if op in ("+", "-"):
@@ -256,7 +256,7 @@ class _Emitter:
         if op == "*":
             return _Value(f"_round({left} * {right})", result, True)
         if isinstance(right_type, ElementaryType) and right_type.category == "real":
-            return _Value(f"_round(_fdiv({left}, {right}))", result, True)
+            return _Value(f"_tdiv({left}, {right})", result, True)
         return _Value(f"_idiv({left}, {right})", result, True)
 
     def operand(self, expr: ast.Expr, target: Type, ring: bool = False) -> str:
@@ -270,7 +270,7 @@ class _Emitter:
         if target.category == "real":
             number = _literal_number(expr) if source.is_any_literal else None
             if number is not None:  # a literal takes the type of the operation: REAL#0.1
-                return repr(f32_constant(number) if target.bits == 32 else number)
+                return repr(to_real32(number) if target.bits == 32 else number)
             if source.category == "real":
                 return value.code
             code = _exact(value).code  # an integer: made a REAL before the operation
@@ -299,9 +299,10 @@ class _Emitter:
         )
 
     def _user_call(self, pou: PouSymbols, call: ast.Call) -> _Value:
+        pairs = self.scope.connect_arguments(pou, call)
         assigned = {
             key(param.name): arg
-            for arg, param in self.scope.connect_arguments(pou, call)
+            for arg, param in pairs
             if param is not None and not is_implicit(param)
         }
         keywords: list[str] = []
@@ -324,7 +325,7 @@ class _Emitter:
         self.pre.append(f"{handle} = {code}")
         slots = {key(member.name): index for index, member in enumerate(tuple_members(pou), 1)}
         # outputs are stored in the order the call names them (as CODESYS does)
-        for arg, connected in self.scope.connect_arguments(pou, call):
+        for arg, connected in pairs:
             if connected is None or arg.value is None or key(connected.name) not in slots:
                 continue
             if not _is_lvalue(arg.value):
@@ -500,7 +501,7 @@ class _Emitter:
     def store(self, target: ast.Expr, code: str) -> str:
         """The statement that stores `code` (already converted) into `target`."""
         target_type = _type(self.scope, target)
-        length = target_type.length if isinstance(target_type, ElementaryType) else 0
+        length = target_type.max_length if isinstance(target_type, ElementaryType) else 0
         if length and not code.endswith(f"[:{length}]"):  # only strings have a length
             code = f"{code}[:{length}]"
         if isinstance(target, ast.BitRef):
@@ -571,10 +572,8 @@ class _Emitter:
 
     def repeat(self, body: tuple[ast.Statement, ...], until: ast.Expr, depth: int) -> None:
         first = self.temp()
-        saved, self.lines = self.lines, []
-        until_code = self.exact(until).code
+        until_code = self.exact(until).code  # generated before the body, used after it
         hoisted, self.pre = self.pre, []
-        self.lines = saved
         if hoisted:  # the condition needs statements: test at the end, no CONTINUE support
             self.emit(depth, "while True:")
             self.block(body, depth + 1)
@@ -703,14 +702,14 @@ def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> str:
             code = code if in_range else wrap_code(code, target_elem)
         elif not (source == ANY_REAL and target_elem == ANY_REAL):
             code = convert_code(code, source, target_elem)
-    length = target_elem.length if target_elem.category == "string" else 0
+    length = target_elem.max_length
     if length and not already_fits:
         code = f"{code}[:{length}]"
     return code
 
 
 def _longer_than(text: str, target: Type) -> bool:
-    length = target.length if isinstance(target, ElementaryType) else 0
+    length = target.max_length if isinstance(target, ElementaryType) else 0
     return bool(length) and len(text) > length
 
 
@@ -723,14 +722,6 @@ def _literal_number(expr: ast.Expr) -> float | None:
         if inner is not None:
             return -inner if expr.op == "-" else inner
     return None
-
-
-def f32_constant(number: float) -> float:
-    """A REAL literal as the REAL it stands for (rounded to single precision)."""
-    try:
-        return float(struct.unpack("f", struct.pack("f", number))[0])
-    except OverflowError:
-        return math.copysign(math.inf, number)
 
 
 def _comparison_type(scope: Scope, expr: ast.Binary) -> Type:
@@ -763,10 +754,6 @@ def _has_continue(body: tuple[ast.Statement, ...]) -> bool:
                 if any(_has_continue(b) for _, b in branches) or _has_continue(orelse):
                     return True
     return False
-
-
-def _simple(expr: ast.Expr) -> bool:
-    return isinstance(expr, ast.IntLiteral | ast.NameRef | ast.EnumLiteral)
 
 
 def _is_lvalue(expr: ast.Expr) -> bool:
@@ -821,7 +808,8 @@ def generate_pou(resolved: Resolved, pou: PouSymbols) -> str:
     for variable in pou.variables:
         if variable.kind == "VAR_TEMP":
             emitter.emit(2, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
-    emitter.block(pou.pou.body, 2) if chart is None or pou.pou.body else None
+    if pou.pou.body or chart is None:  # a chart alone needs no `pass` before it
+        emitter.block(pou.pou.body, 2)
     if chart is not None:
         chart.emit_cycle(emitter, 2)
         for action in chart.sfc.actions:

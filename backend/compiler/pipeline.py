@@ -232,8 +232,8 @@ def _unit_code(
 def _type_text(t: Type) -> str:
     """A type as the artifact names it; strings keep their length (`STRING[4]`) so that the
     runtime can check what it writes."""
-    if isinstance(t, ElementaryType) and t.category == "string" and t.length:
-        return f"{t.name}[{t.length}]"
+    if isinstance(t, ElementaryType) and t.category == "string" and t.name in ("STRING", "WSTRING"):
+        return f"{t.name}[{t.max_length}]"
     return t.name
 
 

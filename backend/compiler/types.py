@@ -34,16 +34,19 @@ class ElementaryType:
         return self.name.startswith("ANY_")
 
     @property
+    def max_length(self) -> int:
+        """How many characters a string variable holds (IEC's default is 80)."""
+        if self.category != "string":
+            return 0
+        return self.length or DEFAULT_STRING_LENGTH
+
+    @property
     def min(self) -> int:
         return -(1 << (self.bits - 1)) if self.signed else 0
 
     @property
     def max(self) -> int:
         return (1 << (self.bits - 1)) - 1 if self.signed else (1 << self.bits) - 1
-
-    @property
-    def max_length(self) -> int:
-        return self.length or DEFAULT_STRING_LENGTH
 
 
 @dataclass(frozen=True)
@@ -209,16 +212,3 @@ def assignable(target: Type, source: Type) -> bool:
         return True
     # an integer literal 0 or 1 stands for FALSE / TRUE in many dialects
     return target.category == "bool" and source == ANY_INT
-
-
-def narrowing(target: Type, source: Type) -> bool:
-    """Does storing `source` in `target` possibly lose information (worth a warning)?"""
-    if not isinstance(target, ElementaryType) or not isinstance(source, ElementaryType):
-        return False
-    if source.is_any_literal:
-        return False
-    if target.is_integer and source.category == "real":
-        return True
-    if target.is_integer and source.is_integer:
-        return target.bits < source.bits
-    return target.category == "real" and source.category == "real" and target.bits < source.bits
