@@ -123,6 +123,11 @@ CASES = [
         "t.st:2:19: error: invalid escape '$Q' in string literal",
     ),
     (
+        "an initial value reads a constant set after it",
+        "VAR_GLOBAL CONSTANT c : INT := c + 1; END_VAR\nPROGRAM P\nEND_PROGRAM",
+        "t.st:1:34: error: initial value of 'c' must be a constant expression",
+    ),
+    (
         "pragmas are skipped with a warning",
         "PROGRAM P\n{attribute 'x'}\nEND_PROGRAM",
         "t.st:2:1: warning: pragma skipped",

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
+from backend.compiler.constants import fold_int, guarded
 from backend.compiler.diagnostics import Diagnostic, error, warning
 from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable
 from backend.compiler.types import (
@@ -215,27 +216,23 @@ class Scope:
         return self.resolved.enums[key(expr.type_name)].values[key(expr.value)][1]
 
     def constant_int(self, expr: ast.Expr | None) -> int | None:
-        """The value of a constant integer expression (literal, enum value, constant)."""
-        match expr:
-            case ast.IntLiteral(value=value):
-                return value
-            case ast.EnumLiteral():
-                if key(expr.type_name) in self.resolved.enums:
-                    return self.enum_literal_value(expr)
-            case ast.Unary(op="-", operand=operand):
-                inner = self.constant_int(operand)
-                return None if inner is None else -inner
-            case ast.NameRef(name=name):
-                binding = self.lookup(name)
-                if isinstance(binding, EnumValue):
-                    return binding.value
-                if (
-                    isinstance(binding, Variable)
-                    and binding.constant
-                    and isinstance(binding.init, ast.IntLiteral | ast.Unary | ast.NameRef)
-                ):
-                    return self.constant_int(binding.init)
-        return None
+        """The value of a constant integer expression (literals, enum values, constants)."""
+
+        def leaf(node: ast.NameRef | ast.EnumLiteral) -> int | None:
+            if isinstance(node, ast.EnumLiteral):
+                info = self.resolved.enums.get(key(node.type_name))
+                found = info.values.get(key(node.value)) if info is not None else None
+                return found[1] if found is not None else None
+            binding = self.enum_hint(node) or self.lookup(node.name)
+            if isinstance(binding, EnumValue):
+                return binding.value
+            if isinstance(binding, Variable) and binding.constant:
+                init = binding.init
+                return fold_int(init, checked) if isinstance(init, ast.Expr) else None
+            return None
+
+        checked = guarded(leaf)
+        return fold_int(expr, checked)
 
     def member(self, expr: ast.MemberRef) -> Variable | None:
         base_type = self.type_of(expr.base)

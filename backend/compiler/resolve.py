@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from backend.compiler import ast
 from backend.compiler.ast import key
+from backend.compiler.constants import fold_int, guarded
 from backend.compiler.diagnostics import Diagnostic, error
 from backend.compiler.types import (
     BOOL,
@@ -136,33 +137,23 @@ class _TypeResolver:
         self, expr: ast.Expr, local_constants: dict[str, ast.Initializer | None]
     ) -> int | None:
         """Evaluate a constant integer expression (array bounds, string lengths, enum values)."""
-        match expr:
-            case ast.IntLiteral(value=value):
-                return value
-            case ast.Unary(op="-", operand=operand):
-                inner = self.const_int(operand, local_constants)
-                return None if inner is None else -inner
-            case ast.Binary(op=op, left=left, right=right) if op in ("+", "-", "*", "/", "MOD"):
-                a, b = self.const_int(left, local_constants), self.const_int(right, local_constants)
-                if a is None or b is None:
-                    return None
-                if op in ("/", "MOD") and b == 0:
-                    return None
-                return {
-                    "+": lambda: a + b,
-                    "-": lambda: a - b,
-                    "*": lambda: a * b,
-                    "/": lambda: int(a / b),
-                    "MOD": lambda: a - b * int(a / b),
-                }[op]()
-            case ast.NameRef(name=name):
-                init = local_constants.get(key(name), self.global_constants.get(key(name)))
-                if isinstance(init, ast.IntLiteral | ast.Unary | ast.Binary | ast.NameRef):
-                    return self.const_int(init, {})
-                for info in self.result.enums.values():
-                    if key(name) in info.values:
-                        return info.values[key(name)][1]
-        return None
+
+        def leaf(node: ast.NameRef | ast.EnumLiteral) -> int | None:
+            if isinstance(node, ast.EnumLiteral):
+                info = self.result.enums.get(key(node.type_name))
+                found = info.values.get(key(node.value)) if info is not None else None
+                return found[1] if found is not None else None
+            name = key(node.name)
+            if name in local_constants or name in self.global_constants:
+                init = local_constants.get(name, self.global_constants.get(name))
+                return fold_int(init, checked) if isinstance(init, ast.Expr) else None
+            for info in self.result.enums.values():
+                if name in info.values:
+                    return info.values[name][1]
+            return None
+
+        checked = guarded(leaf)
+        return fold_int(expr, checked)
 
     def default_init(self, spec: ast.TypeRef) -> ast.Initializer | None:
         """The initializer a named type carries (`TYPE T : INT := 5;`), through aliases."""

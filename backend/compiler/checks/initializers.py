@@ -95,13 +95,19 @@ def mismatch(target: Type, source: Type) -> str:
 
 def check_constant_initializer(scope: Scope, variable: Variable) -> None:
     """An initial value is computed once, before anything runs: IEC allows only constant
-    expressions (literals, constants, enum values, standard functions of those)."""
-    if variable.init is not None:
-        for expr in _values(variable.init):
-            if not is_constant(scope, expr):
-                scope.report(
-                    expr.pos, f"initial value of '{variable.name}' must be a constant expression"
-                )
+    expressions (literals, constants, enum values, standard functions of those). A constant
+    of the same storage (the same POU, or the globals) must be declared before it, since
+    initial values are set in declaration order."""
+    if variable.init is None:
+        return
+    storage = scope.resolved.globals if variable.kind == "VAR_GLOBAL" else scope.pou.variables
+    position = next((i for i, v in enumerate(storage) if v is variable), len(storage))
+    not_yet_set = {id(v) for v in storage[position:]}
+    for expr in _values(variable.init):
+        if not is_constant(scope, expr, not_yet_set):
+            scope.report(
+                expr.pos, f"initial value of '{variable.name}' must be a constant expression"
+            )
 
 
 def _values(init: ast.Initializer) -> list[ast.Expr]:
@@ -112,7 +118,8 @@ def _values(init: ast.Initializer) -> list[ast.Expr]:
     return [init]
 
 
-def is_constant(scope: Scope, expr: ast.Expr) -> bool:
+def is_constant(scope: Scope, expr: ast.Expr, not_yet_set: set[int]) -> bool:
+    """`not_yet_set`: ids of the variables whose initial values are set after this one."""
     match expr:
         case (
             ast.IntLiteral() | ast.RealLiteral() | ast.BoolLiteral() | ast.TimeLiteral()
@@ -121,16 +128,21 @@ def is_constant(scope: Scope, expr: ast.Expr) -> bool:
             return True
         case ast.NameRef(name=name):
             binding = scope.enum_hint(expr) or scope.lookup(name)
-            return isinstance(binding, EnumValue) or (
-                isinstance(binding, Variable) and binding.constant and binding.kind != "STEP"
+            if isinstance(binding, EnumValue):
+                return True
+            return (
+                isinstance(binding, Variable)
+                and binding.constant
+                and binding.kind != "STEP"
+                and id(binding) not in not_yet_set
             )
         case ast.Unary(operand=operand):
-            return is_constant(scope, operand)
+            return is_constant(scope, operand, not_yet_set)
         case ast.Binary(left=left, right=right):
-            return is_constant(scope, left) and is_constant(scope, right)
+            return is_constant(scope, left, not_yet_set) and is_constant(scope, right, not_yet_set)
         case ast.Call(name=name, args=args):
             user_function = key(name) in scope.resolved.pous
             return not user_function and all(
-                arg.value is not None and is_constant(scope, arg.value) for arg in args
+                arg.value is not None and is_constant(scope, arg.value, not_yet_set) for arg in args
             )
     return False

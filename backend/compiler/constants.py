@@ -1,0 +1,65 @@
+"""Folding constant integer expressions: array bounds, string lengths, enum values, CASE
+labels, FOR steps, constant indices. One folder for every stage; what a name stands for is
+the caller's business (resolve knows declarations, check knows scopes)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from backend.compiler import ast
+
+# The value of a leaf that is not a literal (a named constant, an enum value), or None.
+Leaf = Callable[[ast.NameRef | ast.EnumLiteral], int | None]
+
+
+def truncated_quotient(a: int, b: int) -> int:
+    """IEC integer division: toward zero, exactly (no float on the way)."""
+    quotient = abs(a) // abs(b)
+    return quotient if (a >= 0) == (b >= 0) else -quotient
+
+
+_OPERATIONS: dict[str, Callable[[int, int], int]] = {
+    "+": lambda a, b: a + b,
+    "-": lambda a, b: a - b,
+    "*": lambda a, b: a * b,
+    "/": truncated_quotient,
+    "MOD": lambda a, b: a - b * truncated_quotient(a, b),
+}
+
+
+def fold_int(expr: ast.Initializer | None, leaf: Leaf) -> int | None:
+    """The value of a constant integer expression, or None when it is not one (or divides
+    by zero, which is left to the run-time check)."""
+    match expr:
+        case ast.IntLiteral(value=value):
+            return value
+        case ast.Unary(op="-", operand=operand):
+            inner = fold_int(operand, leaf)
+            return None if inner is None else -inner
+        case ast.Binary(op=op, left=left, right=right) if op in _OPERATIONS:
+            a, b = fold_int(left, leaf), fold_int(right, leaf)
+            if a is None or b is None or (op in ("/", "MOD") and b == 0):
+                return None
+            return _OPERATIONS[op](a, b)
+        case ast.NameRef() | ast.EnumLiteral():
+            return leaf(expr)
+    return None
+
+
+def guarded(leaf: Leaf) -> Leaf:
+    """`leaf`, refusing to follow a name into itself (`c : INT := c + 1`)."""
+    visiting: set[str] = set()
+
+    def visit(expr: ast.NameRef | ast.EnumLiteral) -> int | None:
+        name = expr.name.upper() if isinstance(expr, ast.NameRef) else None
+        if name is None:
+            return leaf(expr)
+        if name in visiting:
+            return None
+        visiting.add(name)
+        try:
+            return leaf(expr)
+        finally:
+            visiting.discard(name)
+
+    return visit
