@@ -1,0 +1,431 @@
+"""The resource's event log: what happened to the controller, who did it, and when.
+
+Two buffers (spec section 13): a short-term ring of every event that overwrites its oldest
+entries, and a long-term log of user actions and configuration changes, persisted as JSON
+lines in which every entry carries the SHA-256 of the line before it, so that a changed or
+removed entry shows. `docs/event-log.md` describes the file format and the rules for a
+full long-term log.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import tempfile
+import threading
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+GENESIS = "0" * 64
+DAY_NS = 86_400 * 10**9
+ENTRY_FIELDS = ("details", "kind", "message", "prev", "seq", "time_ns", "user")
+_HEX = frozenset("0123456789abcdef")
+
+
+@dataclass(frozen=True)
+class Event:
+    seq: int
+    time_ns: int
+    kind: str
+    message: str
+    user: str | None = None
+    details: dict[str, Any] = field(default_factory=dict)
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "seq": self.seq,
+            "time_ns": self.time_ns,
+            "kind": self.kind,
+            "message": self.message,
+            "user": self.user,
+            "details": json.loads(canonical(self.details)),
+        }
+
+
+@dataclass(frozen=True)
+class ChainReport:
+    ok: bool
+    entries: int  # lines that verified before the first problem (all of them when ok)
+    problem: str | None = None  # "line N: why"
+    line: int | None = None  # 1-based number of the first line that fails
+
+
+def canonical(value: Any) -> bytes:
+    """The one byte form of a value that the chain hashes: sorted keys, no spaces, ASCII."""
+    text = json.dumps(
+        value, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False
+    )
+    return text.encode("ascii")
+
+
+def line_digest(line: bytes) -> str:
+    """What the next entry's `prev` holds: SHA-256 of a line without its newline."""
+    return hashlib.sha256(line).hexdigest()
+
+
+def parse_entry(line: bytes) -> tuple[Event, str]:
+    """One long-term line as event and `prev`; ValueError says what is wrong with it."""
+    try:
+        obj = json.loads(line.decode("utf-8"))
+    except ValueError as exc:  # UnicodeDecodeError and JSONDecodeError both are
+        raise ValueError("not valid JSON") from exc
+    if not isinstance(obj, dict) or sorted(obj) != list(ENTRY_FIELDS):
+        raise ValueError(f"not an entry (its fields must be {', '.join(ENTRY_FIELDS)})")
+    seq, time_ns, prev, user = obj["seq"], obj["time_ns"], obj["prev"], obj["user"]
+    # bool is an int to isinstance, but not a sequence number or a time
+    if type(seq) is not int or seq < 1 or type(time_ns) is not int:
+        raise ValueError("seq and time_ns must be integers, seq at least 1")
+    if not isinstance(obj["kind"], str) or not isinstance(obj["message"], str):
+        raise ValueError("kind and message must be strings")
+    if user is not None and not isinstance(user, str):
+        raise ValueError("user must be a string or null")
+    if not isinstance(obj["details"], dict):
+        raise ValueError("details must be an object")
+    if not isinstance(prev, str) or len(prev) != 64 or not _HEX.issuperset(prev):
+        raise ValueError("prev must be 64 lower-case hex digits")
+    try:
+        in_canonical_form = canonical(obj) == line
+    except ValueError:  # NaN or Infinity, which json.loads lets through
+        in_canonical_form = False
+    if not in_canonical_form:
+        raise ValueError("not in canonical form")
+    event = Event(seq, time_ns, obj["kind"], obj["message"], user, obj["details"])
+    return event, prev
+
+
+def _first_break(lines: Sequence[bytes]) -> tuple[int, str] | None:
+    """Line number and reason of the first line that breaks the chain, or None."""
+    before: bytes | None = None
+    last_seq = 0
+    for number, line in enumerate(lines, start=1):
+        try:
+            event, prev = parse_entry(line)
+        except ValueError as exc:
+            return number, str(exc)
+        # the first line's prev is the anchor: older entries may have been dropped
+        if before is not None and prev != line_digest(before):
+            return number, (
+                f"prev is not the SHA-256 of line {number - 1} (line {number - 1} was "
+                f"changed, entries after it were removed, or this prev was altered)"
+            )
+        if event.seq <= last_seq:
+            return number, f"seq {event.seq} does not follow seq {last_seq}"
+        before, last_seq = line, event.seq
+    return None
+
+
+def _split(data: bytes) -> tuple[list[bytes], bytes]:
+    """Complete lines and the rest after the last newline (empty unless a write was torn)."""
+    lines = data.split(b"\n")
+    tail = lines.pop()
+    return lines, tail
+
+
+def verify_chain(path: Path) -> ChainReport:
+    """Check a long-term log file: every line a canonical entry whose `prev` is the
+    SHA-256 of the line before it, sequence numbers increasing, a newline at the end."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        return ChainReport(False, 0, f"cannot read {path}: {exc.strerror}")
+    lines, tail = _split(data)
+    broken = _first_break(lines)
+    if broken is not None:
+        number, why = broken
+        return ChainReport(False, number - 1, f"line {number}: {why}", number)
+    if tail:
+        number = len(lines) + 1
+        return ChainReport(False, len(lines), f"line {number}: no newline at its end", number)
+    return ChainReport(True, len(lines))
+
+
+def _span(ns: int) -> str:
+    for unit, size in (("day", DAY_NS), ("hour", 3600 * 10**9), ("second", 10**9)):
+        if ns >= size and ns % size == 0:
+            count = ns // size
+            return f"{count} {unit}" + ("" if count == 1 else "s")
+    return f"{ns} ns"
+
+
+def _fsync_dir(directory: Path) -> None:
+    # a rename or a new file is durable only once the directory entry is
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+class EventLog:
+    """Short-term ring and long-term log of one resource. Any thread may call any method:
+    one lock guards both buffers, and a long-term record() holds it through the fsync."""
+
+    def __init__(
+        self,
+        wall_ns: Callable[[], int],
+        *,
+        short_capacity: int = 1000,
+        long_path: Path | None = None,
+        long_capacity: int = 10_000,
+        keep_ns: int = 3 * DAY_NS,
+    ) -> None:
+        if short_capacity < 1 or long_capacity < 1 or keep_ns < 0:
+            raise ValueError("capacities must be at least 1 and keep_ns not negative")
+        self._wall_ns = wall_ns
+        self._path = long_path
+        self._long_capacity = long_capacity
+        self._keep_ns = keep_ns
+        self._lock = threading.Lock()
+        self._short: deque[Event] = deque(maxlen=short_capacity)
+        # the long-term log in memory, line for line as in the file; None for a damaged line
+        self._lines: list[bytes] = []
+        self._events: list[Event | None] = []
+        self._head = GENESIS
+        self._seq = 0
+        # while a "rejected" marker is the last long-term entry, rejections are only counted
+        self._marker_open = False
+        self._uncounted = 0
+        self._rejected = 0
+        notes = self._load(long_path) if long_path is not None else []
+        now = wall_ns()
+        for message, details in notes:
+            self._add(now, "error", message, None, details)
+
+    def record(
+        self,
+        kind: str,
+        message: str,
+        *,
+        user: str | None = None,
+        long_term: bool = False,
+        **details: Any,
+    ) -> Event:
+        """Log an event; with long_term=True also in the long-term log, unless that is full
+        of entries younger than keep_ns (see rejected_count). Raises TypeError or
+        ValueError for details that are not JSON, never for a failed write (that is
+        logged as a short-term "error" event instead)."""
+        clean: dict[str, Any] = json.loads(canonical(details))
+        with self._lock:
+            now = self._wall_ns()
+            if long_term:
+                return self._add_long_term(now, kind, message, user, clean)
+            return self._add(now, kind, message, user, clean)
+
+    def recent(self, after_seq: int = 0, limit: int | None = None) -> list[Event]:
+        """Short-term events with seq > after_seq, oldest first, at most limit of them
+        (the oldest ones, so that a reader pages on with the last seq it got)."""
+        if limit is not None and limit < 0:
+            raise ValueError("limit must not be negative")
+        newer: list[Event] = []
+        with self._lock:
+            # seq rises along the ring, so a poll for new events reads only those
+            for event in reversed(self._short):
+                if event.seq <= after_seq:
+                    break
+                newer.append(event)
+        newer.reverse()
+        return newer if limit is None else newer[:limit]
+
+    def long_term(self) -> list[Event]:
+        """The long-term entries, oldest first, "rejected" markers included; lines that
+        could not be read back from the file are left out (they stay in the file)."""
+        with self._lock:
+            return [event for event in self._events if event is not None]
+
+    @property
+    def rejected_count(self) -> int:
+        """Long-term entries rejected since this EventLog was made."""
+        with self._lock:
+            return self._rejected
+
+    @property
+    def head(self) -> str:
+        """SHA-256 of the last long-term line: kept elsewhere, it shows a changed last line."""
+        with self._lock:
+            return self._head
+
+    def _add(
+        self, now: int, kind: str, message: str, user: str | None, details: dict[str, Any]
+    ) -> Event:
+        self._seq += 1
+        event = Event(self._seq, now, kind, message, user, details)
+        self._short.append(event)
+        return event
+
+    def _add_long_term(
+        self, now: int, kind: str, message: str, user: str | None, details: dict[str, Any]
+    ) -> Event:
+        uncounted = self._uncounted if self._marker_open else 0
+        drop = self._room(now, 2 if uncounted else 1)
+        if drop is None:
+            event = self._add(now, kind, message, user, details)
+            self._reject(now)
+            return event
+        # the count goes in before the entry so that seq keeps rising along the file
+        new: list[Event] = []
+        if uncounted:
+            message_ = (
+                f"{uncounted} more entries were rejected while the long-term event log was "
+                f"full and no entry was older than {_span(self._keep_ns)}."
+            )
+            new.append(self._add(now, "rejected", message_, None, {"rejected": uncounted}))
+        event = self._add(now, kind, message, user, details)
+        new.append(event)
+        if self._write(now, drop, new):
+            self._marker_open = False
+            self._uncounted = 0
+        return event
+
+    def _room(self, now: int, incoming: int) -> int | None:
+        """How many of the oldest entries go to make room, or None if they are too young."""
+        # at most everything: with a capacity of 1 a count and its entry still go in
+        drop = min(len(self._lines) + incoming - self._long_capacity, len(self._lines))
+        if drop <= 0:
+            return 0
+        for event in self._events[:drop]:
+            # a damaged line has no time it can be trusted for; it counts as old
+            if event is not None and now - event.time_ns <= self._keep_ns:
+                return None
+        return drop
+
+    def _reject(self, now: int) -> None:
+        self._rejected += 1
+        if self._marker_open:
+            self._uncounted += 1
+            return
+        message = (
+            f"An entry was rejected because the long-term event log is full "
+            f"({self._long_capacity} entries) and no entry is older than "
+            f"{_span(self._keep_ns)}; further rejections are counted until it accepts again."
+        )
+        marker = self._add(now, "rejected", message, None, {"rejected": 1})
+        # the marker may take the log one over its capacity: it must not be lost
+        if self._write(now, 0, [marker]):
+            self._marker_open = True
+            self._uncounted = 0
+
+    def _write(self, now: int, drop: int, events: list[Event]) -> bool:
+        """Drop the oldest `drop` entries and append `events`, in the file first."""
+        lines: list[bytes] = []
+        head = self._head
+        for event in events:
+            line = canonical({**event.as_json(), "prev": head})
+            lines.append(line)
+            head = line_digest(line)
+        if self._path is not None:
+            try:
+                if drop:
+                    self._rewrite(self._path, self._lines[drop:] + lines)
+                else:
+                    self._append(self._path, lines)
+            except OSError as exc:
+                message = f"The long-term event log could not be written: {exc}"
+                self._add(now, "error", message, None, {"seqs": [e.seq for e in events]})
+                return False
+        del self._lines[:drop]
+        del self._events[:drop]
+        self._lines.extend(lines)
+        self._events.extend(events)
+        self._head = head
+        return True
+
+    def _append(self, path: Path, lines: list[bytes]) -> None:
+        created = not path.exists()
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        try:
+            data = memoryview(b"".join(line + b"\n" for line in lines))
+            while data:
+                data = data[os.write(fd, data) :]
+            os.fsync(fd)
+        except OSError:
+            # a partial line would run into the next entry: cut back to the last whole line
+            with contextlib.suppress(OSError):
+                os.ftruncate(fd, sum(len(line) + 1 for line in self._lines))
+            raise
+        finally:
+            os.close(fd)
+        if created:
+            _fsync_dir(path.parent)
+
+    @staticmethod
+    def _rewrite(path: Path, lines: list[bytes]) -> None:
+        # readers and a crash see either the old file or the new one, never half of it
+        fd, temp = tempfile.mkstemp(dir=path.parent, prefix=f"{path.name}.", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as file:
+                with contextlib.suppress(OSError):
+                    os.fchmod(file.fileno(), os.stat(path).st_mode & 0o777)
+                file.write(b"".join(line + b"\n" for line in lines))
+                file.flush()
+                os.fsync(file.fileno())
+            os.replace(temp, path)
+        except BaseException:
+            with contextlib.suppress(OSError):
+                os.unlink(temp)
+            raise
+        _fsync_dir(path.parent)
+
+    def _load(self, path: Path) -> list[tuple[str, dict[str, Any]]]:
+        """Read an existing long-term log; returns the short-term notes to record."""
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            for stale in path.parent.iterdir():  # left by a crash during a rewrite
+                if stale.name.startswith(f"{path.name}.") and stale.name.endswith(".tmp"):
+                    stale.unlink()
+            data = path.read_bytes() if path.exists() else b""
+        except OSError as exc:
+            self._path = None
+            message = f"The long-term event log cannot be read ({exc}); it is kept in memory only."
+            return [(message, {})]
+        notes: list[tuple[str, dict[str, Any]]] = []
+        lines, tail = _split(data)
+        torn: int | None = None
+        if tail:
+            torn = len(lines) + 1
+        elif lines and not _is_json(lines[-1]):
+            torn = len(lines)
+            lines.pop()
+        if torn is not None:
+            size = sum(len(line) + 1 for line in lines)
+            message = f"The long-term event log ended in an incomplete line {torn}; it was dropped."
+            try:
+                os.truncate(path, size)
+            except OSError as exc:
+                self._path = None
+                message += f" The file could not be cut ({exc}); it is kept in memory only."
+            notes.append((message, {"line": torn}))
+        broken = _first_break(lines)
+        if broken is not None:
+            number, why = broken
+            message = (
+                f"The long-term event log failed verification at line {number}: {why}. "
+                f"New entries are appended after its last line."
+            )
+            notes.append((message, {"line": number}))
+        self._lines = lines
+        self._events = [_event_or_none(line) for line in lines]
+        self._head = line_digest(lines[-1]) if lines else GENESIS
+        self._seq = max((e.seq for e in self._events if e is not None), default=0)
+        last = self._events[-1] if self._events else None
+        self._marker_open = last is not None and last.kind == "rejected"
+        return notes
+
+
+def _is_json(line: bytes) -> bool:
+    try:
+        json.loads(line.decode("utf-8"))
+    except ValueError:
+        return False
+    return True
+
+
+def _event_or_none(line: bytes) -> Event | None:
+    try:
+        return parse_entry(line)[0]
+    except ValueError:
+        return None
