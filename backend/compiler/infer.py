@@ -38,6 +38,7 @@ from backend.compiler.types import (
     elementary,
     integer_like,
 )
+from runtime.system_variables import NAMESPACE
 
 
 @dataclass(frozen=True)
@@ -83,6 +84,31 @@ class Scope:
         if pou is not None and pou.kind == "PROGRAM":
             return ProgramRef(pou)
         return None
+
+    def system_namespace(self, expr: ast.Expr) -> bool:
+        """`expr` is the name SYS of the system variables (`SYS.COLDSTART`): no declaration
+        of the user hides it (a variable, enum value or program here; a type, POU or global
+        in resolve, which then leaves `resolved.system` empty)."""
+        return (
+            isinstance(expr, ast.NameRef)
+            and key(expr.name) == NAMESPACE
+            and bool(self.resolved.system)
+            and self.lookup(expr.name) is None
+        )
+
+    def refuse_system_write(self, target: ast.Expr) -> bool:
+        """Report a write to a read-only system variable (assignment, output, in-out);
+        True when `target` is one."""
+        while isinstance(target, ast.BitRef | ast.IndexRef):
+            target = target.base
+        if not isinstance(target, ast.MemberRef) or not self.system_namespace(target.base):
+            return False
+        self.type_of(target)  # reports an unknown name, once
+        variable = self.resolved.system.get(key(target.member))
+        if variable is None or not variable.constant:
+            return False
+        self.report(target.pos, f"{NAMESPACE}.{variable.name} is a read-only system variable")
+        return True
 
     def expect(self, expr: ast.Initializer, target: Type | None) -> None:
         """`expr` is used where a value of `target` is wanted: an unqualified enum value
@@ -144,6 +170,11 @@ class Scope:
                 return self._enum_literal(expr)
             case ast.NameRef(name=name, pos=pos):
                 binding = self.enum_hint(expr) or self.lookup(name)
+                if binding is None and self.system_namespace(expr):
+                    self.report(
+                        pos, f"{name} holds the system variables; name one, as in {name}.COLDSTART"
+                    )
+                    return None
                 if binding is None:
                     self.report(pos, f"'{name}' is not declared")
                     return None
@@ -235,6 +266,11 @@ class Scope:
         return fold_int(expr, checked)
 
     def member(self, expr: ast.MemberRef) -> Variable | None:
+        if self.system_namespace(expr.base):
+            found = self.resolved.system.get(key(expr.member))
+            if found is None:
+                self.report(expr.pos, f"{NAMESPACE} has no system variable '{expr.member}'")
+            return found
         base_type = self.type_of(expr.base)
         if base_type is None:
             return None
@@ -490,6 +526,8 @@ class Scope:
     def _check_argument(self, arg: ast.Argument, param: Variable) -> None:
         if arg.value is None:
             return
+        if param.kind in ("VAR_OUTPUT", "VAR_IN_OUT") or arg.is_output:
+            self.refuse_system_write(arg.value)
         value_type = self.type_of(arg.value)
         if value_type is None:
             return

@@ -28,6 +28,7 @@ from backend.compiler.types import (
     VariadicType,
     elementary,
 )
+from runtime.system_variables import NAMESPACE, SYSTEM_VARIABLES
 
 PARAMETER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")
 
@@ -36,6 +37,7 @@ PARAMETER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")
 class Variable:
     name: str
     kind: str  # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_EXTERNAL, VAR_GLOBAL, MEMBER
+    # (also STEP, RETURN, and SYSTEM for `SYS.<NAME>`)
     type: Type
     init: ast.Initializer | None
     constant: bool
@@ -88,6 +90,8 @@ class Resolved:
     globals: list[Variable] = field(default_factory=list)
     globals_by_key: dict[str, Variable] = field(default_factory=dict)
     diagnostics: list[Diagnostic] = field(default_factory=list)
+    # `SYS.<NAME>` by key; empty when a type, POU or global of the user is named SYS
+    system: dict[str, Variable] = field(default_factory=dict)
 
     def sorted_pous(self) -> list[PouSymbols]:
         return [self.pous[k] for k in sorted(self.pous)]
@@ -322,7 +326,26 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
     for name in sorted(seen):
         result.pous[name] = _resolve_pou(seen[name], types, result)
     _check_self_containment(result)
+    user_names = (types.decls, result.pous, result.globals_by_key)
+    if not any(key(NAMESPACE) in names for names in user_names):  # the user's SYS wins
+        result.system = system_variables()
     return result
+
+
+def system_variables() -> dict[str, Variable]:
+    """The system variables (`SYS.COLDSTART`) as variables of kind SYSTEM; the read-only
+    ones are `constant` (only the runtime sets them). Generated code names them
+    `_SYS.<NAME>`."""
+    here = ast.Pos("<system>", 1, 1)
+    table: dict[str, Variable] = {}
+    for entry in SYSTEM_VARIABLES:
+        var_type = elementary(entry.type)
+        assert var_type is not None, entry
+        table[key(entry.name)] = Variable(
+            entry.name, "SYSTEM", var_type, None, not entry.writable, False, None,
+            entry.name, here,
+        )  # fmt: skip
+    return table
 
 
 def _contained_blocks(result: Resolved, t: Type) -> list[str]:

@@ -40,6 +40,8 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
         return
     if param.kind == "VAR_IN_OUT" and not is_lvalue(arg.value):
         scope.report(arg.value.pos, f"in-out '{param.name}' needs a variable")
+    elif param.kind == "VAR_IN_OUT":
+        scope.refuse_system_write(arg.value)
     value_type = scope.type_of(arg.value)
     if value_type is not None and not assignable(param.type, value_type):
         scope.report(arg.value.pos, mismatch(param.type, value_type))

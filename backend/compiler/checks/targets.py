@@ -14,6 +14,9 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
     """Type of an assignment target, reporting anything that may not be written."""
     if isinstance(target, ast.NameRef):
         binding = scope.lookup(target.name)
+        if binding is None and scope.system_namespace(target):
+            scope.type_of(target)  # SYS alone: reported as the namespace it is
+            return None
         if binding is None:
             scope.report(target.pos, f"'{target.name}' is not declared")
             return None
@@ -27,6 +30,9 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
             # a trap (the caller's value is gone for the rest of the call): warn
             scope.warn(target.pos, f"assignment to input '{binding.name}' inside its block")
         return binding.type
+    if isinstance(target, ast.MemberRef) and scope.system_namespace(target.base):
+        scope.refuse_system_write(target)  # SYS.COLDSTART: only the runtime writes it
+        return scope.type_of(target)
     if isinstance(target, ast.MemberRef):
         base_type = scope.type_of(target.base)
         member = scope.member(target)
