@@ -14,9 +14,15 @@ from typing import Any
 from backend.compiler.pipeline import CompileResult, compile_sources
 from backend.compiler.source import SourceFile, read_source
 from runtime.artifact import ProgramConfig, ResourceConfig
+from runtime.parameters import (
+    PROGRAM_BY_NAME,
+    RESOURCE_BY_NAME,
+    ParameterError,
+    ParameterSpec,
+    resource_consistency,
+)
 
 PROJECT_FILE = "padt.toml"
-AUTOSTART_MODES = ("off", "cold", "warm")
 
 
 class ProjectError(ValueError):
@@ -67,36 +73,49 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
     res = data.get("resource")
     if not isinstance(res, dict) or not isinstance(res.get("name"), str):
         raise ProjectError(f"{where}: [resource] with a name is required")
-    autostart = res.get("autostart", "off")
-    if autostart not in AUTOSTART_MODES:
-        raise ProjectError(f"{where}: autostart must be one of {', '.join(AUTOSTART_MODES)}")
-    cycle_ms = res.get("cycle_ms", 100)
-    if not isinstance(cycle_ms, int) or not 1 <= cycle_ms <= 7500:
-        raise ProjectError(f"{where}: cycle_ms must be an integer from 1 to 7500")
-    watchdog_ms = res.get("watchdog_ms", 200)
-    if not isinstance(watchdog_ms, int) or not 6 <= watchdog_ms <= 7500:
-        raise ProjectError(f"{where}: watchdog_ms must be an integer from 6 to 7500")
+    settings = {k: v for k, v in res.items() if k not in ("name", "program")}
     resource = ResourceConfig(
-        name=res["name"], cycle_ms=cycle_ms, autostart=autostart, watchdog_ms=watchdog_ms
+        name=res["name"], **_parameters(settings, RESOURCE_BY_NAME, f"{where}: [resource]")
     )
+    problems = resource_consistency(resource.__dict__)
+    if problems:
+        raise ProjectError(f"{where}: [resource] {problems[0]}")
     programs = None
     if "program" in res:
         programs = []
         for entry in res["program"]:
-            try:
-                programs.append(
-                    ProgramConfig(
-                        name=str(entry["name"]),
-                        pou=str(entry.get("pou", entry["name"])),
-                        program_id=int(entry["id"]),
-                        priority=int(entry.get("priority", 0)),
-                    )
+            if not isinstance(entry.get("name"), str) or "id" not in entry:
+                raise ProjectError(f"{where}: [[resource.program]] needs a name and an id")
+            settings = {k: v for k, v in entry.items() if k not in ("name", "pou", "id")}
+            settings["program_id"] = entry["id"]
+            context = f"{where}: program {entry['name']}"
+            programs.append(
+                ProgramConfig(
+                    name=entry["name"],
+                    pou=str(entry.get("pou", entry["name"])),
+                    **_parameters(settings, PROGRAM_BY_NAME, context),
                 )
-            except (KeyError, TypeError, ValueError) as exc:
-                raise ProjectError(f"{where}: [[resource.program]] needs {exc}") from None
+            )
     return Project(
         str(meta.get("name", "project")), str(meta.get("version", "")), resource, programs, sources
     )
+
+
+def _parameters(
+    settings: dict[str, Any], specs: dict[str, ParameterSpec], where: str
+) -> dict[str, Any]:
+    """Settings checked against their parameter table; an unknown name is an error (a typo
+    must not silently leave a parameter at its default)."""
+    checked = {}
+    for name, value in sorted(settings.items()):
+        spec = specs.get(name)
+        if spec is None:
+            raise ProjectError(f"{where}: unknown parameter '{name}'")
+        try:
+            checked[name] = spec.check(value)
+        except ParameterError as exc:
+            raise ProjectError(f"{where}: {exc}") from None
+    return checked
 
 
 def compile_project(project: Project, config_file: str = PROJECT_FILE) -> CompileResult:

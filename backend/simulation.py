@@ -2,7 +2,7 @@
 
 Cycle k (from 1) runs with the clock at (k-1) x the cycle interval. Time comes from a
 `VirtualClock` only, so the same project and options give the same output bit for bit.
-Values are set and read through the resource (`Resource.write`, `Resource.values`), the
+Values are set and read through the resource (`Resource.simulate`, `Resource.values`), the
 same way online test does it.
 """
 
@@ -26,7 +26,8 @@ from runtime.artifact import Artifact
 from runtime.clock import VirtualClock
 from runtime.code_image import TIME_TYPES, ValueRejected, array_shape, base_type, representation
 from runtime.intrinsics import to_bytes
-from runtime.resource import CommandRefused, ProgramState, Resource
+from runtime.resource import CommandRefused, Resource
+from runtime.user_program import ProgramState
 
 NS_PER_MS = 1_000_000
 
@@ -47,7 +48,7 @@ class Setting:
 @dataclass(frozen=True)
 class Plan:
     cycles: int = 10
-    cycle_ms: int | None = None  # None: the resource's own cycle interval
+    cycle_ms: int | None = None  # None: `sim_cycle_ms` of the artifact
     settings: tuple[Setting, ...] = ()
     trace: tuple[str, ...] | None = None  # None: every elementary variable
 
@@ -226,12 +227,20 @@ def _text(value: str, wide: bool) -> str:
 # ---- the run
 
 
+DEFAULT_CYCLE_MS = 100
+
+
+def sim_cycle_ms(artifact: Artifact) -> int:
+    """Virtual time per CPU cycle: the target cycle time, or 100 ms without one."""
+    return artifact.resource.target_cycle_ms or DEFAULT_CYCLE_MS
+
+
 def prepare(artifact: Artifact, plan: Plan) -> Simulation:
     """Load the artifact into a resource on a virtual clock and check every option; raises
     SimulationError before anything has run."""
     if plan.cycles < 1:
         raise SimulationError("--cycles must be at least 1")
-    cycle_ms = plan.cycle_ms if plan.cycle_ms is not None else artifact.resource.cycle_ms
+    cycle_ms = plan.cycle_ms if plan.cycle_ms is not None else sim_cycle_ms(artifact)
     if cycle_ms < 1:
         raise SimulationError("--cycle-ms must be at least 1")
     clock = VirtualClock()
@@ -277,7 +286,7 @@ def _checked_write(resource: Resource, setting: Setting) -> tuple[str, Any]:
         raise SimulationError(f"--set {setting.name}: '{path.path}' is a constant")
     try:
         value = parse_literal(setting.literal, path.type)
-        representation(path.type, value)  # refuse now what Resource.write would refuse later
+        representation(path.type, value)  # refuse now what Resource.simulate would refuse later
     except (SimulationError, ValueRejected) as exc:
         raise SimulationError(f"--set {setting.name}: {exc}") from None
     return path.path, value
@@ -290,7 +299,7 @@ def run(simulation: Simulation) -> Iterator[CycleRecord]:
     resource.start()
     for cycle in range(1, simulation.cycles + 1):
         for path, value in simulation.writes.get(cycle, []):
-            resource.write(path, value)
+            resource.simulate(path, value)
         before = {p.config.name: p.state for p in resource.programs}
         resource.cycle()
         faults = tuple(

@@ -188,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--cycle-ms",
         type=_positive,
         metavar="MS",
-        help="virtual time per cycle (default: the resource's cycle_ms)",
+        help="virtual time per cycle (default: the target cycle time, or 100 ms without one)",
     )
     sim.add_argument(
         "--set",

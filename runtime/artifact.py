@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 FORMAT = "padt-artifact"
-VERSION = 1
+VERSION = 2
 
 
 class ArtifactError(ValueError):
@@ -41,25 +41,53 @@ class PouCode:
     source: str
     crc: str
     variables: tuple[VarInfo, ...]
+    file: str = ""  # the ST source file of a POU
+    st_lines: tuple[int, ...] = ()  # per line of `source`: its line in `file` (0: none)
 
 
 @dataclass(frozen=True)
 class ProgramConfig:
-    """A user program: an instance of a PROGRAM POU scheduled on the resource."""
+    """A user program: an instance of a PROGRAM POU scheduled on the resource, with its
+    parameters (ranges in runtime/parameters.py, meaning in docs/parameters.md)."""
 
     name: str
     pou: str
     program_id: int
-    priority: int = 0
+    priority: int = 0  # 0 runs first
+    max_duration_us: int = 0  # time slice per CPU cycle; 0: always runs to its end
+    max_cycles: int = 1  # CPU cycles one program cycle may span
+    start_allowed: bool = True
+    freeze_allowed: bool = True  # single step possible
+    reload_allowed: bool = True
+    local_forcing_allowed: bool = False
+    local_force_timeout_reaction: str = "stop-forcing"  # | stop-program
+    safety_related: bool = False  # always cold-starts
     crc: str = ""
+    # attribute names (in `_G`) of the globals the program writes, and of those it reads
+    # without writing: what is copied out of and into its view of the globals
+    writes: tuple[str, ...] = ()
+    reads: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
 class ResourceConfig:
+    """The resource parameters (ranges in runtime/parameters.py, docs/parameters.md)."""
+
     name: str
-    cycle_ms: int = 100
-    autostart: str = "off"  # off | cold | warm
+    safety_time_ms: int = 600
     watchdog_ms: int = 200  # a CPU cycle longer than this is ERROR STOP
+    target_cycle_ms: int = 0  # 0: no target, the cycle is as long as its work
+    target_cycle_mode: str = "fixed-tolerant"
+    multitasking_mode: int = 1
+    com_slice_ms: int = 10  # time for communication in each cycle's housekeeping
+    allow_online_settings: bool = True
+    autostart: str = "off"  # off | cold | warm
+    start_allowed: bool = True
+    load_allowed: bool = True
+    reload_allowed: bool = True
+    global_forcing_allowed: bool = False
+    global_force_timeout_reaction: str = "stop-forcing"  # | stop-resource
+    safety_operation: bool = True  # no single step, forcing or OLT writes while ON
 
 
 @dataclass(frozen=True)
@@ -102,7 +130,12 @@ def crc32_hex(text: str) -> str:
 
 
 def _pou_code(data: dict[str, Any]) -> PouCode:
-    return PouCode(**{**data, "variables": tuple(VarInfo(**v) for v in data["variables"])})
+    variables = tuple(VarInfo(**v) for v in data["variables"])
+    return PouCode(**{**data, "variables": variables, "st_lines": tuple(data["st_lines"])})
+
+
+def _program_config(data: dict[str, Any]) -> ProgramConfig:
+    return ProgramConfig(**{**data, "writes": tuple(data["writes"]), "reads": tuple(data["reads"])})
 
 
 def load_artifact(text: str | bytes) -> Artifact:
@@ -120,7 +153,7 @@ def load_artifact(text: str | bytes) -> Artifact:
             project=data["project"],
             resource=ResourceConfig(**data["resource"]),
             pous=tuple(_pou_code(p) for p in data["pous"]),
-            programs=tuple(ProgramConfig(**p) for p in data["programs"]),
+            programs=tuple(_program_config(p) for p in data["programs"]),
             types=tuple(_pou_code(p) for p in data["types"]),
             globals=_pou_code(data["globals"]) if data["globals"] is not None else None,
             crc=data["crc"],

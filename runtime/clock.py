@@ -8,7 +8,13 @@ from typing import Protocol
 
 
 class Clock(Protocol):
+    virtual: bool  # True: time moves only when told to (simulation, single step, tests)
+
     def now_ns(self) -> int: ...
+
+    def wall_ns(self) -> int:
+        """Calendar time (Unix ns): for DATE_AND_TIME and event time stamps."""
+        ...
 
     def sleep_until(self, deadline_ns: int) -> None: ...
 
@@ -16,8 +22,13 @@ class Clock(Protocol):
 class RealClock:
     """Monotonic time; immune to changes of the wall clock."""
 
+    virtual = False
+
     def now_ns(self) -> int:
         return time.monotonic_ns()
+
+    def wall_ns(self) -> int:
+        return time.time_ns()
 
     def sleep_until(self, deadline_ns: int) -> None:
         remaining = deadline_ns - time.monotonic_ns()
@@ -28,11 +39,17 @@ class RealClock:
 class VirtualClock:
     """Time that moves only when told to: exactly one cycle interval per cycle."""
 
-    def __init__(self, start_ns: int = 0) -> None:
+    virtual = True
+
+    def __init__(self, start_ns: int = 0, epoch_ns: int = 0) -> None:
         self._now = start_ns
+        self._epoch = epoch_ns  # calendar time at virtual time 0
 
     def now_ns(self) -> int:
         return self._now
+
+    def wall_ns(self) -> int:
+        return self._epoch + self._now
 
     def sleep_until(self, deadline_ns: int) -> None:
         self._now = max(self._now, deadline_ns)

@@ -4,6 +4,7 @@ plus the flat variable paths used for OLT values."""
 from __future__ import annotations
 
 import copy
+import dataclasses
 import itertools
 import math
 import re
@@ -12,6 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from runtime.artifact import Artifact, PouCode
+from runtime.fault_location import SourceLocation, code_filename, locate
 from runtime.intrinsics import SystemView, namespace, to_real32
 
 # An attribute name, or an offset into the flat list that holds an array.
@@ -24,6 +26,7 @@ class VariablePath:
     attrs: tuple[Accessor, ...]  # attribute chain (and list offsets) below the owner instance
     type: str
     constant: bool = False
+    location: str | None = None  # `%QX0.1`: a located variable (a process-image point)
 
 
 @dataclass(frozen=True)
@@ -63,6 +66,7 @@ class CodeImage:
         self.system = system
         self._namespace = namespace(system) if printf is None else namespace(system, printf)
         self._pous = {pou.name.upper(): pou for pou in (*artifact.types, *artifact.pous)}
+        self.units: dict[str, PouCode] = {}
         # Functions come last: their default arguments may read globals, which need the
         # classes of structs and function blocks first.
         classes = [*artifact.types, *(p for p in artifact.pous if p.kind != "FUNCTION")]
@@ -78,8 +82,23 @@ class CodeImage:
                 self._run(unit)
 
     def _run(self, unit: PouCode) -> None:
-        code = compile(unit.source, f"<{unit.kind} {unit.name}>", "exec")
+        self.units[code_filename(unit)] = unit
+        code = compile(unit.source, code_filename(unit), "exec")
         exec(code, self._namespace)
+
+    def locate(self, exc: BaseException) -> SourceLocation | None:
+        """The ST source line of a run-time error raised by generated code."""
+        return locate(exc, self.units)
+
+    def new_globals(self) -> Any:
+        """Another instance of the globals: a user program's own view of them."""
+        assert self.artifact.globals is not None
+        return self._namespace[self.artifact.globals.class_name]()
+
+    def use(self, globals_view: Any, tick: Callable[[], None]) -> None:
+        """What `_G` and `_tick` mean for the code that runs next."""
+        self._namespace["_G"] = globals_view
+        self._namespace["_tick"] = tick
 
     def register_program(self, pou_name: str, instance: Any) -> None:
         """Make a program instance callable from ST by its POU name (`prog();`)."""
@@ -124,7 +143,10 @@ class CodeImage:
     ) -> None:
         for var in pou.variables:
             path = f"{prefix}.{var.name}" if prefix else var.name
+            start = len(out)
             self._add(var.type, path, (*attrs, var.attr), constant or var.constant, out)
+            if var.location is not None and len(out) == start + 1:
+                out[start] = dataclasses.replace(out[start], location=var.location)
 
     def _add(
         self,

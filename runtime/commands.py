@@ -19,34 +19,106 @@ def error_reply(code: str, message: str) -> dict[str, Any]:
     return {"ok": False, "error": {"code": code, "message": message}}
 
 
-def _status(resource: Resource) -> dict[str, Any]:
+Request = dict[str, Any]
+Reply = dict[str, Any]
+
+
+def _status(resource: Resource, request: Request) -> Reply:
     return {"ok": True, "status": resource.status()}
 
 
-def _values(resource: Resource) -> dict[str, Any]:
+def _values(resource: Resource, request: Request) -> Reply:
     return {"ok": True, "values": resource.values(), "cycle": resource.cycle_count}
 
 
-def _variables(resource: Resource) -> dict[str, Any]:
+def _variables(resource: Resource, request: Request) -> Reply:
     return {"ok": True, "variables": resource.variables()}
 
 
-def _state_change(action: Callable[[Resource], None]) -> Callable[[Resource], dict[str, Any]]:
-    def run(resource: Resource) -> dict[str, Any]:
-        action(resource)
-        return _status(resource)
+def _events(resource: Resource, request: Request) -> Reply:
+    after = _arg(request, "after", int, 0)
+    limit = _arg(request, "limit", int, 200)
+    return {"ok": True, "events": [e.as_json() for e in resource.events.recent(after, limit)]}
+
+
+def _forcing(resource: Resource, request: Request) -> Reply:
+    return {"ok": True, "forcing": resource.forcing()}
+
+
+def _parameters(resource: Resource, request: Request) -> Reply:
+    programs = [p.config.__dict__ for p in resource.programs]
+    return {"ok": True, "resource": resource.params.__dict__, "programs": programs}
+
+
+def _arg(request: Request, name: str, kind: type, default: Any = ...) -> Any:
+    """A request argument of the given JSON type; CommandRefused when missing or wrong."""
+    if name not in request:
+        if default is ...:
+            raise CommandRefused("bad_request", f'"{name}" is missing')
+        return default
+    value = request[name]
+    if kind is not object and (
+        not isinstance(value, kind) or (kind is int and isinstance(value, bool))
+    ):
+        raise CommandRefused("bad_request", f'"{name}" must be a {kind.__name__}')
+    return value
+
+
+def _ms_to_ns(request: Request, name: str) -> int | None:
+    value = _arg(request, name, int, None)
+    if value is not None and value <= 0:
+        raise CommandRefused("bad_request", f'"{name}" must be positive')
+    return value * 1_000_000 if value is not None else None
+
+
+def _then_status(
+    action: Callable[[Resource, Request], None],
+) -> Callable[[Resource, Request], Reply]:
+    def run(resource: Resource, request: Request) -> Reply:
+        action(resource, request)
+        return {"ok": True, "status": resource.status()}
 
     return run
 
 
-COMMANDS: dict[str, Callable[[Resource], dict[str, Any]]] = {
+def _program(request: Request) -> str:
+    return str(_arg(request, "program", str))
+
+
+COMMANDS: dict[str, Callable[[Resource, Request], Reply]] = {
     "status": _status,
     "values": _values,
     "variables": _variables,
-    "start": _state_change(Resource.start),
-    "stop": _state_change(Resource.stop),
-    "step": _state_change(Resource.step),
-    "init": _state_change(Resource.init),
+    "events": _events,
+    "forcing": _forcing,
+    "parameters": _parameters,
+    "start": _then_status(lambda r, q: r.start()),
+    "stop": _then_status(lambda r, q: r.stop()),
+    "step": _then_status(lambda r, q: r.step()),
+    "init": _then_status(lambda r, q: r.init()),
+    "cold_start": _then_status(lambda r, q: r.cold_start()),
+    "start_program": _then_status(lambda r, q: r.start_program(_program(q))),
+    "stop_program": _then_status(lambda r, q: r.stop_program(_program(q))),
+    "freeze": _then_status(lambda r, q: r.freeze(_program(q))),
+    "unfreeze": _then_status(lambda r, q: r.unfreeze(_program(q))),
+    "step_program": _then_status(
+        lambda r, q: r.step_program(_program(q), _ms_to_ns(q, "interval_ms"))
+    ),
+    "write": _then_status(lambda r, q: r.write(_arg(q, "variable", str), _arg(q, "value", object))),
+    "force": _then_status(
+        lambda r, q: r.force(
+            _arg(q, "variable", str), _arg(q, "value", object), _arg(q, "switch", bool, True)
+        )
+    ),
+    "unforce": _then_status(lambda r, q: r.unforce(_arg(q, "variable", str))),
+    "start_forcing": _then_status(
+        lambda r, q: r.start_forcing(_arg(q, "program", str, None), _ms_to_ns(q, "timeout_ms"))
+    ),
+    "stop_forcing": _then_status(lambda r, q: r.stop_forcing(_arg(q, "program", str, None))),
+    "set_parameter": _then_status(
+        lambda r, q: r.set_parameter(_arg(q, "name", str), _arg(q, "value", object))
+    ),
+    "reset_stats": _then_status(lambda r, q: r.reset_stats()),
 }
 
 
@@ -71,6 +143,6 @@ def execute(resource: Resource, payload: bytes) -> dict[str, Any]:
     if handler is None:
         return error_reply("unknown_command", f"unknown command '{request['cmd']}'")
     try:
-        return handler(resource)
+        return handler(resource, request)
     except CommandRefused as refused:
         return error_reply(refused.code, refused.message)

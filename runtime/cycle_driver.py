@@ -1,56 +1,126 @@
-"""Drives a resource in real time: a CPU cycle, then housekeeping (commands, publishing)
-until the next cycle is due. In STOP the loop goes on: it still serves communication."""
+"""Drives a resource in real time: a CPU cycle, then housekeeping (commands, publishing,
+context saving) until the next cycle is due. In STOP the loop goes on: it still serves
+communication.
+
+When the next cycle starts depends on the target cycle time and its mode: `fixed` and
+`fixed-tolerant` stretch short cycles to the target, and the time up to the next cycle is
+free for commands; `dynamic` and `dynamic-tolerant` (and a target of 0) start the next
+cycle as soon as the commands already waiting are answered, spending at most the
+communication time slice on them.
+"""
 
 from __future__ import annotations
 
 import queue
+import sys
 import threading
+import time
+from collections.abc import Callable
 
 from runtime.clock import Clock
 from runtime.commands import execute
 from runtime.link import ResourceLink
-from runtime.resource import Resource
+from runtime.resource import Resource, ResourceState
 
 STATUS_PERIOD_NS = 1_000_000_000
+VALUES_PERIOD_NS = 100_000_000
+SWITCH_INTERVAL_S = 0.0005
 
 
 class CycleDriver:
-    def __init__(self, resource: Resource, clock: Clock, link: ResourceLink) -> None:
+    def __init__(
+        self,
+        resource: Resource,
+        clock: Clock,
+        link: ResourceLink,
+        save_context: Callable[[], None] | None = None,
+        context_period_ns: int = 1_000_000_000,
+    ) -> None:
         self.resource = resource
         self.clock = clock
         self.link = link
+        self._save_context = save_context
+        self._context_period_ns = context_period_ns
+        self._last_context_ns = clock.now_ns()
         self._last_status: dict[str, object] | None = None
         self._last_status_ns = 0
+        self._last_values_ns = 0
 
     def run(self, stop: threading.Event) -> None:
-        next_cycle = self.clock.now_ns()
+        # the cycle thread must get the interpreter back promptly after its wait for the
+        # next cycle, not up to 5 ms (Python's default) later while another thread has it
+        sys.setswitchinterval(SWITCH_INTERVAL_S)
+        planned = self.clock.now_ns()
         while not stop.is_set():
+            start = self.clock.now_ns()
             cycle_before = self.resource.cycle_count
             self.resource.cycle()
             if self.resource.cycle_count != cycle_before:
-                self.link.publish_values(self.resource.cycle_count, self.resource.values())
+                self._publish_values()
             self._publish_status()
-            next_cycle += self.resource.cycle_ns
-            self._housekeeping(next_cycle, stop)
-            now = self.clock.now_ns()
-            if now > next_cycle + self.resource.cycle_ns:
-                next_cycle = now  # an overrun: start afresh instead of racing to catch up
+            self._save_if_due()
+            params = self.resource.params
+            running = self.resource.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP)
+            com_slice = params.com_slice_ms * 1_000_000
+            target = params.target_cycle_ms * 1_000_000
+            if running and target and params.target_cycle_mode.startswith("fixed"):
+                planned += target
+                if planned < start:  # an overrun: start afresh instead of racing to catch up
+                    planned = start + target
+                # the time up to the next cycle is free for communication
+                self._housekeeping(planned, stop, wait=True)
+                self.clock.sleep_until(planned)
+            elif running:  # only what is waiting, for at most the com slice
+                self._housekeeping(self.clock.now_ns() + com_slice, stop)
+                time.sleep(0)  # let the Zenoh threads deliver
+                planned = self.clock.now_ns()
+            else:  # STOP: nothing to run; wait for commands, read inputs now and then
+                self._housekeeping(self.clock.now_ns() + com_slice, stop, wait=True)
+                planned = self.clock.now_ns()
 
-    def _housekeeping(self, deadline_ns: int, stop: threading.Event) -> None:
+    def close(self) -> None:
+        """An orderly shutdown saves the context one last time."""
+        if self._save_context is not None:
+            self._save_context()
+
+    def _save_if_due(self) -> None:
+        now = self.clock.now_ns()
+        if (
+            self._save_context is not None
+            and now - self._last_context_ns >= self._context_period_ns
+        ):
+            self._save_context()
+            self._last_context_ns = now
+
+    def _housekeeping(self, deadline_ns: int, stop: threading.Event, wait: bool = False) -> None:
+        """Answer commands until the deadline; without `wait`, only those already queued."""
         while not stop.is_set():
             remaining = deadline_ns - self.clock.now_ns()
-            if remaining <= 0:
-                return
             try:
-                query = self.link.inbox.get(timeout=min(remaining / 1e9, 0.2))
+                if remaining > 0 and wait:
+                    query = self.link.inbox.get(timeout=min(remaining / 1e9, 0.2))
+                else:
+                    query = self.link.inbox.get_nowait()
             except queue.Empty:
+                if remaining <= 0 or not wait:
+                    return
                 continue
-            cycle_before = self.resource.cycle_count
             self.link.reply(query, execute(self.resource, self.link.payload(query)))
             del query  # a Zenoh query is finalised when its last reference goes
-            if self.resource.cycle_count != cycle_before:  # a single step ran
-                self.link.publish_values(self.resource.cycle_count, self.resource.values())
+            # a command may have stepped, stopped or written: show its outcome at once
+            self._publish_values(at_once=True)
             self._publish_status()
+            if self.clock.now_ns() >= deadline_ns:
+                return
+
+    def _publish_values(self, at_once: bool = False) -> None:
+        """Live values at most every VALUES_PERIOD_NS (what a person can read), at once
+        after a single step: a snapshot of every variable costs far more than a small
+        program's cycle."""
+        now = self.clock.now_ns()
+        if at_once or now - self._last_values_ns >= VALUES_PERIOD_NS:
+            self.link.publish_values(self.resource.cycle_count, self.resource.values())
+            self._last_values_ns = now
 
     def _publish_status(self) -> None:
         """Publish on change (cycle statistics aside) and at least every second."""

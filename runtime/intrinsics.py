@@ -32,9 +32,34 @@ class IndexOutOfRange(ProgramFault):
 
 @dataclass
 class SystemView:
-    """The system values a program sees; the scheduler sets them before each program cycle."""
+    """The system values a program sees; the scheduler sets them before each program cycle.
+
+    Besides `now_ns` (the running program's time), one attribute per system variable of
+    `runtime.system_variables.SYSTEM_VARIABLES`, named as there: ST reads `SYS.COLDSTART`
+    as `_SYS.COLDSTART`; the writable ones (FORCE_DEACTIVATION, ...) are written by logic."""
 
     now_ns: int = 0
+    # read-only in ST: the runtime sets them
+    COLDSTART: bool = False
+    WARMSTART: bool = False
+    START_CYCLE: bool = False
+    CYCLE_TIME_LAST: int = 0  # TIME, ns
+    CYCLE_TIME_MIN: int = 0
+    CYCLE_TIME_MAX: int = 0
+    CYCLE_TIME_MEAN: int = 0
+    WATCHDOG_TIME: int = 0
+    SYSTEM_TICK: int = 0  # UDINT, ms since the runtime started, wrapping at 2^32
+    FORCE_TIME_REMAINING: int = 0
+    CONFIGURATION_CRC: int = 0  # DWORD
+    DATE_AND_TIME: int = 0  # DT, ns since 1970-01-01
+    # writable by logic and I/O
+    FORCE_DEACTIVATION: bool = False
+    RELOAD_DEACTIVATION: bool = False
+    READ_ONLY_IN_RUN: bool = False
+    EMERGENCY_STOP_1: bool = False
+    EMERGENCY_STOP_2: bool = False
+    EMERGENCY_STOP_3: bool = False
+    EMERGENCY_STOP_4: bool = False
 
 
 def _idiv(a: int, b: int) -> int:
@@ -414,6 +439,10 @@ class _ActionControl:
         self.A = active or pulse or final_scan
 
 
+def _no_tick() -> None:
+    """Loop passes of programs without a time slice are not metered."""
+
+
 class Namespace:
     """A plain attribute holder (`_P`: program instances by class name)."""
 
@@ -435,6 +464,7 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         },
         "__name__": "padt_generated",
         "_SYS": system,
+        "_tick": _no_tick,  # replaced while a program with a time slice runs
         "_idiv": _idiv,
         "_imod": _imod,
         "_fdiv": _fdiv,

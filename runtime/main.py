@@ -11,6 +11,8 @@ from pathlib import Path
 
 from runtime.artifact import ArtifactError, load_artifact
 from runtime.clock import RealClock
+from runtime.context import ContextInvalid, load_context
+from runtime.event_log import EventLog
 from runtime.keyspace import valid_resource_name
 from runtime.resource import Resource
 
@@ -21,6 +23,11 @@ log = logging.getLogger("padt.runtime")
 def artifact_path(state_dir: Path) -> Path:
     """Where the loaded configuration of a resource is kept."""
     return state_dir / "config" / "artifact.json"
+
+
+def context_path(state_dir: Path) -> Path:
+    """Where the saved context (for a warm start) is kept."""
+    return state_dir / "context" / "context.json"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -37,6 +44,37 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="ENDPOINT",
         help=f"Zenoh router to connect to (default {DEFAULT_ZENOH})",
     )
+    parser.add_argument(
+        "--context-period-ms",
+        type=int,
+        default=1000,
+        metavar="MS",
+        help="how often the context is saved while the resource runs (default 1000)",
+    )
+
+
+def power_up(resource: Resource, state_dir: Path) -> None:
+    """What a controller does when it comes up: load the stored configuration, take the
+    saved context when it is valid (warm) or not (cold), then Autostart decides."""
+    path = artifact_path(state_dir)
+    if not path.exists():
+        return
+    try:
+        resource.load(load_artifact(path.read_bytes()))
+    except ArtifactError as exc:
+        log.error("stored configuration refused: %s", exc)
+        return
+    assert resource.artifact is not None
+    autostart = resource.artifact.resource.autostart
+    saved = load_context(context_path(state_dir), resource.artifact.crc)
+    if isinstance(saved, ContextInvalid):
+        resource.events.record("state", f"cold start: {saved.reason}", long_term=True)
+    elif autostart == "cold":
+        resource.events.record("state", "cold start: Autostart is cold", long_term=True)
+    else:
+        resource.warm_start(saved)
+    if autostart != "off":
+        resource.start()
 
 
 def run(args: argparse.Namespace) -> int:
@@ -45,16 +83,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"padt runtime: invalid resource name '{args.resource}'", file=sys.stderr)
         return 2
     clock = RealClock()
-    resource = Resource(args.resource, clock)
-    path = artifact_path(args.state_dir)
-    if path.exists():
-        try:
-            resource.load(load_artifact(path.read_bytes()))
-        except ArtifactError as exc:
-            log.error("stored configuration refused: %s", exc)
-    if resource.artifact is not None and resource.artifact.resource.autostart != "off":
-        resource.start()
+    events = EventLog(clock.wall_ns, long_path=args.state_dir / "events.jsonl")
+    resource = Resource(args.resource, clock, events)
+    power_up(resource, args.state_dir)
 
+    from runtime.context_saver import ContextSaver
     from runtime.cycle_driver import CycleDriver
     from runtime.link import ResourceLink
     from runtime.zenoh_config import open_client
@@ -64,10 +97,20 @@ def run(args: argparse.Namespace) -> int:
         signal.signal(sig, lambda *_: stop.set())
     session = open_client(args.zenoh)
     link = ResourceLink(session, args.resource)
+    saver = ContextSaver(context_path(args.state_dir))
+
+    def save() -> None:
+        context = resource.context()
+        if context is not None:
+            saver.submit(context)
+
+    driver = CycleDriver(resource, clock, link, save, args.context_period_ms * 1_000_000)
     log.info("resource %s: %s, Zenoh %s", args.resource, resource.state.value, args.zenoh)
     try:
-        CycleDriver(resource, clock, link).run(stop)
+        driver.run(stop)
     finally:
+        driver.close()  # an orderly stop saves the context one last time
+        saver.close()
         link.close()
         session.close()
     return 0

@@ -52,10 +52,10 @@ def router(endpoint: str) -> Iterator[zenoh.Session]:
 
 @contextmanager
 def runtime_process(
-    resource: str, state_dir: Path, endpoint: str
+    resource: str, state_dir: Path, endpoint: str, *extra: str
 ) -> Iterator[subprocess.Popen[bytes]]:
     command = [sys.executable, "-m", "padt.cli", "runtime", "--resource", resource]
-    command += ["--state-dir", str(state_dir), "--zenoh", endpoint]
+    command += ["--state-dir", str(state_dir), "--zenoh", endpoint, *extra]
     process = subprocess.Popen(command, cwd=REPO, env=dict(os.environ))
     try:
         yield process

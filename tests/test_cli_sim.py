@@ -202,8 +202,10 @@ def test_division_by_zero_puts_the_program_in_error_and_the_run_goes_on(
     assert column(records, "Tick.n") == [1, 2, 3, 4]  # the other program runs on
     assert column(records, "Divide.q") == [12, 12, 12, 12]  # no store after the fault
     assert column(records, "Divide.b") == [1, 0, 0, 0]  # in ERROR: no more cycles
+    # the fault names the POU and the ST line where it happened
+    source = tmp_path / "prog.st"
     assert result.stderr.splitlines() == [
-        "padt sim: cycle 2: program Divide: integer division by zero"
+        f"padt sim: cycle 2: program Divide: integer division by zero in POU Divide ({source}:5)"
     ]
 
 

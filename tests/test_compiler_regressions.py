@@ -55,5 +55,10 @@ def test_loose_files_take_resource_and_cycle_from_their_configuration(tmp_path: 
     )
     artifact = compile_project(load_project([source])).artifact
     assert artifact is not None
-    assert (artifact.resource.name, artifact.resource.cycle_ms) == ("Res1", 20)
+    resource = artifact.resource
+    assert (resource.name, resource.target_cycle_ms, resource.target_cycle_mode) == (
+        "Res1",
+        20,
+        "fixed",
+    )
     assert [(p.name, p.pou, p.priority) for p in artifact.programs] == [("M", "Main", 1)]

@@ -16,6 +16,7 @@ from runtime.artifact import ResourceConfig
 from runtime.clock import VirtualClock
 from runtime.main import artifact_path
 from runtime.resource import CommandRefused, Resource, ResourceState
+from tests.resource_harness import harness
 from tests.runtime_process import client_session, router, runtime_process, wait_until_answering
 
 ENDLESS = {
@@ -98,3 +99,20 @@ def test_the_runtime_process_keeps_answering(tmp_path: Path, zenoh_endpoint: str
         assert "watchdog" in status["error"]
         assert client.command("start")["error"]["code"] == "state"
         assert client.command("init")["status"]["state"] == "STOP/VALID CONFIGURATION"
+
+
+def test_endless_recursion_is_a_program_error_and_the_resource_runs_on() -> None:
+    text = """
+    FUNCTION Deeper : DINT
+    VAR_INPUT n : DINT; END_VAR
+    Deeper := Deeper(n + 1);
+    END_FUNCTION
+    PROGRAM Recurse VAR r : DINT; END_VAR r := Deeper(0); END_PROGRAM
+    PROGRAM Tick VAR n : DINT; END_VAR n := n + 1; END_PROGRAM
+    """
+    h = harness(text, [{"name": "Recurse"}, {"name": "Tick"}])
+    h.cycle(2)
+    assert h.state("Recurse") == "ERROR"
+    assert h.state() == "RUN" and h.value("Tick.n") == 2
+    error = next(p for p in h.resource.status()["programs"] if p["name"] == "Recurse")["error"]
+    assert error.startswith("calls nested too deep (recursion) in POU Deeper (test.st:4)")

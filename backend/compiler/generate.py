@@ -93,12 +93,18 @@ class _Emitter:
     in_globals: bool = False  # initialising GLOBALS itself: other globals are on `s`
     # the width the + - * expression being generated is wrapped to where it is stored
     modulus_bits: int | None = None
+    # the ST line each generated line comes from (0: none), so that a run-time error can
+    # name the line of the source
+    st_lines: list[int] = field(default_factory=list)
+    st_line: int = 0
 
     def emit(self, depth: int, line: str) -> None:
         for hoisted in self.pre:
             self.lines.append(INDENT * depth + hoisted)
+            self.st_lines.append(self.st_line)
         self.pre.clear()
         self.lines.append(INDENT * depth + line)
+        self.st_lines.append(self.st_line)
 
     def temp(self) -> str:
         self.temp_count += 1
@@ -106,6 +112,8 @@ class _Emitter:
 
     # ---- storage
     def var_code(self, variable: Variable) -> str:
+        if variable.kind == "SYSTEM":  # SYS.COLDSTART
+            return f"_SYS.{variable.attr}"
         if variable.kind == "VAR_GLOBAL":
             return f"{'s' if self.in_globals else '_G'}.{variable.attr}"
         if self.local or variable.kind in LOCAL_KINDS:
@@ -162,6 +170,8 @@ class _Emitter:
             case ast.MemberRef(base=base):
                 member = self.scope.member(expr)
                 assert member is not None
+                if member.kind == "SYSTEM":
+                    return _Value(self.var_code(member), member.type)
                 return _Value(f"{self.expr(base).code}.{member.attr}", member.type)
             case ast.IndexRef():
                 return self._index(expr)
@@ -449,7 +459,18 @@ class _Emitter:
         if len(self.lines) == start:
             self.emit(depth, "pass")
 
+    def loop(self, depth: int, header: str) -> None:
+        """A loop header. Each pass starts with `_tick()`: where a program with a time
+        slice may be suspended until the next CPU cycle (see runtime/slicing.py)."""
+        self.emit(depth, header)
+        self.emit(depth + 1, "_tick()")
+
     def statement(self, statement: ast.Statement, depth: int) -> None:
+        outer, self.st_line = self.st_line, statement.pos.line
+        self._statement(statement, depth)
+        self.st_line = outer
+
+    def _statement(self, statement: ast.Statement, depth: int) -> None:
         match statement:
             case ast.Assign(target=target, value=value):
                 self.assign(target, value, depth)
@@ -462,11 +483,11 @@ class _Emitter:
             case ast.While(condition=condition, body=body):
                 condition_code = self.exact(condition).code
                 if self.pre:
-                    self.emit(depth, "while True:")
+                    self.loop(depth, "while True:")
                     self.emit(depth + 1, f"if not {condition_code}:")
                     self.emit(depth + 2, "break")
                 else:
-                    self.emit(depth, f"while {condition_code}:")
+                    self.loop(depth, f"while {condition_code}:")
                 self.block(body, depth + 1)
             case ast.Repeat(body=body, until=until):
                 self.repeat(body, until, depth)
@@ -575,14 +596,14 @@ class _Emitter:
         until_code = self.exact(until).code  # generated before the body, used after it
         hoisted, self.pre = self.pre, []
         if hoisted:  # the condition needs statements: test at the end, no CONTINUE support
-            self.emit(depth, "while True:")
+            self.loop(depth, "while True:")
             self.block(body, depth + 1)
             self.pre = hoisted
             self.emit(depth + 1, f"if {until_code}:")
             self.emit(depth + 2, "break")
             return
         self.emit(depth, f"{first} = True")
-        self.emit(depth, f"while {first} or not {until_code}:")
+        self.loop(depth, f"while {first} or not {until_code}:")
         self.emit(depth + 1, f"{first} = False")
         self.block(body, depth + 1)
 
@@ -606,14 +627,14 @@ class _Emitter:
         if step_constant is not None and not _has_continue(loop.body):
             stop = self.exact(loop.stop).code
             comparison = "<=" if step_constant >= 0 else ">="
-            self.emit(depth, f"while {ref} {comparison} {stop}:")
+            self.loop(depth, f"while {ref} {comparison} {stop}:")
             self.block(loop.body, depth + 1)
             for line in increment:
                 self.emit(depth + 1, line)
             return
         started = self.temp()
         self.emit(depth, f"{started} = False")
-        self.emit(depth, "while True:")
+        self.loop(depth, "while True:")
         self.emit(depth + 1, f"if {started}:")
         for line in increment:
             self.emit(depth + 2, line)
@@ -770,12 +791,24 @@ def _instance_variables(pou: PouSymbols) -> list[Variable]:
     return [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
 
 
-def generate_pou(resolved: Resolved, pou: PouSymbols) -> str:
+@dataclass(frozen=True)
+class GeneratedPou:
+    source: str
+    st_lines: tuple[int, ...]  # per line of `source`: the ST line it comes from, 0 for none
+
+
+def generate_pou(resolved: Resolved, pou: PouSymbols) -> GeneratedPou:
     """The Python source of one POU."""
     scope = Scope(resolved, pou)
+    emitter = _Emitter(scope, local=pou.kind == "FUNCTION")
     if pou.kind == "FUNCTION":
-        return _generate_function(scope, pou)
-    emitter = _Emitter(scope, local=False)
+        _generate_function(emitter, pou)
+    else:
+        _generate_class(emitter, pou)
+    return GeneratedPou("\n".join(emitter.lines) + "\n", tuple(emitter.st_lines))
+
+
+def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
     fields = _instance_variables(pou)
     sfc = pou.pou.sfc
     chart = _Chart(sfc) if sfc is not None else None
@@ -816,7 +849,6 @@ def generate_pou(resolved: Resolved, pou: PouSymbols) -> str:
             emitter.emit(0, "")
             emitter.emit(1, f"def {_action_method(action.name)}(s):")
             emitter.block(action.body, 2)
-    return "\n".join(emitter.lines) + "\n"
 
 
 def _action_method(name: str) -> str:
@@ -926,8 +958,7 @@ def _step_variable(scope: Scope, name: str) -> Variable:
     return variable
 
 
-def _generate_function(scope: Scope, pou: PouSymbols) -> str:
-    emitter = _Emitter(scope, local=True)
+def _generate_function(emitter: _Emitter, pou: PouSymbols) -> None:
     inputs = [v for v in pou.variables if v.kind in ("VAR_INPUT", "VAR_IN_OUT")]
     params = ", ".join(f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs)
     emitter.emit(0, f"def {function_name(pou.name)}({params}):")
@@ -939,7 +970,6 @@ def _generate_function(scope: Scope, pou: PouSymbols) -> str:
             emitter.emit(1, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
     emitter.block(pou.pou.body, 1)
     emitter.emit(1, emitter.return_line())
-    return "\n".join(emitter.lines) + "\n"
 
 
 def _data_class(emitter: _Emitter, name: str, fields: list[Variable]) -> str:

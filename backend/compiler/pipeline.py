@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
-from backend.compiler.checks.programs import check_programs
+from backend.compiler.checks.programs import check_programs, globals_read, globals_written
 from backend.compiler.diagnostics import CompileError, Diagnostic, error, warning
 from backend.compiler.generate import (
     class_name,
@@ -94,7 +94,7 @@ def compile_sources(
     if programs is None:
         programs = configured[1] if configured else _default_programs(units)
         positions = configured[2] if configured else {}
-    diagnostics.extend(check_programs(resolved, programs, config_file, positions))
+    diagnostics.extend(check_programs(resolved, resource, programs, config_file, positions))
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics) or not resolved.pous:
         if not resolved.pous and not diagnostics:
@@ -103,7 +103,7 @@ def compile_sources(
 
     included = _included_pous(resolved, user_pous, programs)
     codes = {name: _pou_code(resolved, resolved.pous[name]) for name in included}
-    program_configs = tuple(replace(p, crc=_program_crc(resolved, codes, p)) for p in programs)
+    program_configs = tuple(_program_config(resolved, codes, p) for p in programs)
     any_pou = resolved.sorted_pous()[0]
     types = tuple(
         _unit_code(
@@ -164,7 +164,8 @@ def _from_configuration(
             )
         )
     positions = {p.name: p.pos for p in chosen.programs}  # where each program was declared
-    return ResourceConfig(name=chosen.name, cycle_ms=cycle_ms), programs, positions
+    resource = ResourceConfig(name=chosen.name, target_cycle_ms=cycle_ms, target_cycle_mode="fixed")
+    return resource, programs, positions
 
 
 def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:
@@ -238,11 +239,27 @@ def _type_text(t: Type) -> str:
 
 
 def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
-    source = generate_pou(resolved, pou)
+    generated = generate_pou(resolved, pou)
     if pou.kind == "FUNCTION":
-        return _unit_code(pou.name, pou.kind, function_name(pou.name), source, [])
-    stored = [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
-    return _unit_code(pou.name, pou.kind, class_name(pou.name), source, stored)
+        code = _unit_code(pou.name, pou.kind, function_name(pou.name), generated.source, [])
+    else:
+        stored = [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
+        code = _unit_code(pou.name, pou.kind, class_name(pou.name), generated.source, stored)
+    return replace(code, file=pou.pou.pos.file, st_lines=generated.st_lines)
+
+
+def _program_config(
+    resolved: Resolved, codes: dict[str, PouCode], program: ProgramConfig
+) -> ProgramConfig:
+    """A user program as the artifact carries it: with the globals it writes and reads (by
+    attribute, sorted), and its CRC."""
+    attr = {k: v.attr for k, v in resolved.globals_by_key.items()}
+    written = sorted(attr[k] for k in globals_written(resolved, key(program.pou)))
+    read = sorted(attr[k] for k in globals_read(resolved, key(program.pou)))
+    program = replace(
+        program, writes=tuple(written), reads=tuple(a for a in read if a not in written)
+    )
+    return replace(program, crc=_program_crc(resolved, codes, program))
 
 
 def _program_crc(resolved: Resolved, codes: dict[str, PouCode], program: ProgramConfig) -> str:

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
-from tests.bench import bench_compiler, bench_language
+from tests.bench import bench_compiler, bench_context, bench_language, bench_runtime
 
 
 def main() -> None:
     bench_compiler.main()
     bench_language.main()
+    bench_context.main()
+    bench_runtime.main()
 
 
 if __name__ == "__main__":

@@ -15,13 +15,14 @@ from backend.compiler.ast import key
 from backend.compiler.diagnostics import Diagnostic, error
 from backend.compiler.resolve import PouSymbols, Resolved
 from backend.compiler.types import FbType
-from runtime.artifact import ProgramConfig
+from runtime.artifact import ProgramConfig, ResourceConfig
 
 MAX_PROGRAMS = 32
 
 
 def check_programs(
     resolved: Resolved,
+    resource: ResourceConfig,
     programs: list[ProgramConfig],
     config_file: str,
     positions: dict[str, ast.Pos] | None = None,
@@ -47,6 +48,13 @@ def check_programs(
         seen_ids[program.program_id] = program.name
     if len(programs) > MAX_PROGRAMS:
         diagnostics.append(error(default, f"{len(programs)} user programs; at most {MAX_PROGRAMS}"))
+    sliced = sum(p.max_duration_us for p in programs)
+    if sliced > resource.watchdog_ms * 1000:
+        message = (
+            f"the programs' Max. Duration for Each Cycle add up to {sliced} us, more than "
+            f"the watchdog time ({resource.watchdog_ms} ms)"
+        )
+        diagnostics.append(error(default, message))
     diagnostics.extend(_check_single_writer(resolved, programs))
     return diagnostics
 
@@ -92,6 +100,39 @@ def globals_written(resolved: Resolved, pou_key: str) -> dict[str, ast.Pos]:
                 written.setdefault(key(variable.name), root.pos)
         pending.extend(sorted(_callees(resolved, pou)))
     return written
+
+
+def globals_read(resolved: Resolved, pou_key: str) -> list[str]:
+    """The globals (by key, sorted) a POU or anything it calls names anywhere: what a user
+    program must see as they were at the start of its program cycle."""
+    found: set[str] = set()
+    visited: set[str] = set()
+    pending = [pou_key]
+    while pending:
+        current = pending.pop()
+        if current in visited or current not in resolved.pous:
+            continue
+        visited.add(current)
+        pou = resolved.pous[current]
+        names = [n for s in _statements(pou) for n in _expressions_in(s)]
+        if pou.pou.sfc is not None:
+            names.extend(n for t in pou.pou.sfc.transitions for n in _nodes(t.condition))
+        names.extend(ast.NameRef(name, p) for name, p in _for_variables(pou))
+        for node in names:
+            if isinstance(node, ast.NameRef | ast.Call):  # a call may name a global FB
+                variable = pou.by_key.get(key(node.name))
+                if variable is None:
+                    variable = resolved.globals_by_key.get(key(node.name))
+                if variable is not None and variable.kind == "VAR_GLOBAL":
+                    found.add(key(variable.name))
+        pending.extend(sorted(_callees(resolved, pou)))
+    return sorted(found)
+
+
+def _for_variables(pou: PouSymbols) -> Iterator[tuple[str, ast.Pos]]:
+    for statement in _statements(pou):
+        if isinstance(statement, ast.For):
+            yield statement.variable, statement.pos
 
 
 def _statements(pou: PouSymbols) -> Iterator[ast.Statement]:
@@ -144,8 +185,8 @@ def _callees(resolved: Resolved, pou: PouSymbols) -> set[str]:
     return found
 
 
-def _calls_in(statement: ast.Statement) -> Iterator[ast.Call]:
-    """Every call in a statement's own expressions (nested statements are walked apart)."""
+def _expressions_in(statement: ast.Statement) -> Iterator[ast.Initializer]:
+    """Every node of a statement's own expressions (nested statements are walked apart)."""
     match statement:
         case ast.Assign(target=target, value=value):
             roots: Sequence[ast.Initializer] = [target, value]
@@ -162,30 +203,34 @@ def _calls_in(statement: ast.Statement) -> Iterator[ast.Call]:
         case _:
             roots = []
     for root in roots:
-        yield from _expression_calls(root)
+        yield from _nodes(root)
 
 
-def _expression_calls(expr: ast.Initializer) -> Iterator[ast.Call]:
+def _calls_in(statement: ast.Statement) -> Iterator[ast.Call]:
+    return (node for node in _expressions_in(statement) if isinstance(node, ast.Call))
+
+
+def _nodes(expr: ast.Initializer) -> Iterator[ast.Initializer]:
+    yield expr
     match expr:
         case ast.Call(args=args):
-            yield expr
             for arg in args:
                 if arg.value is not None:
-                    yield from _expression_calls(arg.value)
+                    yield from _nodes(arg.value)
         case ast.Unary(operand=operand):
-            yield from _expression_calls(operand)
+            yield from _nodes(operand)
         case ast.Binary(left=left, right=right):
-            yield from _expression_calls(left)
-            yield from _expression_calls(right)
+            yield from _nodes(left)
+            yield from _nodes(right)
         case ast.MemberRef(base=base) | ast.BitRef(base=base) | ast.Deref(base=base):
-            yield from _expression_calls(base)
+            yield from _nodes(base)
         case ast.IndexRef(base=base, indices=indices):
-            yield from _expression_calls(base)
+            yield from _nodes(base)
             for index in indices:
-                yield from _expression_calls(index)
+                yield from _nodes(index)
         case ast.ArrayInit(items=items):
             for _, value in items:
-                yield from _expression_calls(value)
+                yield from _nodes(value)
         case ast.StructInit(members=members):
             for _, value in members:
-                yield from _expression_calls(value)
+                yield from _nodes(value)

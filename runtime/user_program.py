@@ -1,0 +1,120 @@
+"""A user program on a resource: its instance, state, own time, and its program cycle in
+progress (which may span several CPU cycles when it has a time slice)."""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any
+
+from runtime.artifact import ProgramConfig
+from runtime.code_image import VariablePath
+from runtime.slicing import ProgramRun
+
+
+class ProgramState(StrEnum):
+    RUN = "RUN"
+    RUN_FREEZE = "RUN_FREEZE"  # single step: runs one program cycle per step command
+    STOP = "STOP"
+    ERROR = "ERROR"
+
+
+_SCALARS = (bool, int, float, str)
+
+
+def copy_globals(source: Any, target: Any, attrs: tuple[str, ...]) -> None:
+    """Copy globals between views by value: a view must never share a list or a struct
+    with another, or a write in one program would show in another at once."""
+    for attr in attrs:
+        value = getattr(source, attr)
+        setattr(target, attr, value if isinstance(value, _SCALARS) else copy.deepcopy(value))
+
+
+@dataclass
+class ProgramCycleStats:
+    count: int = 0  # completed program cycles
+    last_cpu_cycles: int = 0  # CPU cycles the last program cycle spanned
+    max_cpu_cycles: int = 0
+
+
+class _Direct:
+    """The program cycle of a program without a time slice: a plain call."""
+
+
+_DIRECT = _Direct()
+
+
+class UserProgram:
+    """State of one user program; only the CPU cycle (through the resource) changes it."""
+
+    def __init__(
+        self, config: ProgramConfig, instance: Any, paths: list[VariablePath], view: Any
+    ) -> None:
+        self.config = config
+        self.instance = instance
+        self.paths = paths
+        self.view = view  # the globals this program reads and writes (`_G` while it runs)
+        self.state = ProgramState.STOP
+        self.time_ns = 0  # the program's own time: what its timers see
+        self.last_start_ns: int | None = None  # clock time its last program cycle started
+        self.error: str | None = None
+        self.stats = ProgramCycleStats()
+        self.run: ProgramRun | _Direct | None = None  # a program cycle in progress
+        self.cpu_cycles = 0  # CPU cycles the program cycle in progress has had so far
+        self.cycle_time_ns = 0  # program time during the program cycle in progress
+
+    @property
+    def name(self) -> str:
+        return self.config.name
+
+    @property
+    def sliced(self) -> bool:
+        return self.config.max_duration_us > 0
+
+    @property
+    def in_progress(self) -> bool:
+        return self.run is not None
+
+    def begin_cycle(self, delta_ns: int, master: Any) -> None:
+        """Start a program cycle: time advances by `delta_ns` (not for the very first one),
+        and the globals it reads are taken as they are now."""
+        if self.stats.count > 0:
+            self.time_ns += delta_ns
+        self.cycle_time_ns = self.time_ns
+        if self.view is not master:
+            copy_globals(master, self.view, self.config.reads)
+        # only a program that may be suspended needs a stack of its own
+        self.run = ProgramRun(self.instance) if self.sliced else _DIRECT
+        self.cpu_cycles = 0
+
+    def resume(self, before: Callable[[], None]) -> bool:
+        """Run the program cycle on until it ends (True) or its slice is used (False)."""
+        assert self.run is not None
+        before()
+        self.cpu_cycles += 1
+        if isinstance(self.run, ProgramRun):
+            finished = self.run.resume()
+        else:
+            self.instance()
+            finished = True
+        if finished:
+            self.stats.count += 1
+            self.stats.last_cpu_cycles = self.cpu_cycles
+            self.stats.max_cpu_cycles = max(self.stats.max_cpu_cycles, self.cpu_cycles)
+            self.run = None
+        return finished
+
+    def publish(self, master: Any) -> None:
+        """The end of a program cycle: what it wrote to globals becomes visible."""
+        if self.view is not master:
+            copy_globals(self.view, master, self.config.writes)
+
+    def abandon(self) -> None:
+        """Drop the program cycle in progress (stop, ERROR): a warm restart begins its
+        program cycle from the start."""
+        if isinstance(self.run, ProgramRun):
+            self.run.abandon()
+        self.run = None
+        self.cpu_cycles = 0

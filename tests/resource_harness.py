@@ -1,0 +1,86 @@
+"""A resource on virtual time, driven the way a client drives it: through the command
+handler (the same code that answers Zenoh requests), one CPU cycle at a time."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from runtime.artifact import ProgramConfig, ResourceConfig
+from runtime.clock import VirtualClock
+from runtime.commands import execute
+from runtime.resource import Resource
+
+# what tests mostly want: single step, forcing and writes allowed
+OPEN_RESOURCE: dict[str, Any] = {"safety_operation": False, "global_forcing_allowed": True}
+
+
+@dataclass
+class Harness:
+    resource: Resource
+    clock: VirtualClock
+    cycle_ns: int
+    trace: list[dict[str, Any]] = field(default_factory=list)
+
+    def cmd(self, command: str, /, **args: Any) -> dict[str, Any]:
+        """A command as a client sends it; the reply as it would get it."""
+        reply = execute(self.resource, json.dumps({"cmd": command, **args}).encode())
+        crossed: dict[str, Any] = json.loads(json.dumps(reply))  # what crosses the wire
+        return crossed
+
+    def ok(self, command: str, /, **args: Any) -> dict[str, Any]:
+        reply = self.cmd(command, **args)
+        assert reply["ok"], reply
+        return reply
+
+    def refused(self, command: str, /, **args: Any) -> str:
+        reply = self.cmd(command, **args)
+        assert not reply["ok"], reply
+        return str(reply["error"]["code"])
+
+    def cycle(self, count: int = 1) -> dict[str, Any]:
+        """`count` CPU cycles, the clock one target interval further after each."""
+        for _ in range(count):
+            self.resource.cycle()
+            self.clock.advance(self.cycle_ns)
+            self.trace.append(self.resource.values())
+        return self.resource.values()
+
+    def value(self, name: str) -> Any:
+        return self.resource.read(name)
+
+    def state(self, program: str | None = None) -> str:
+        status = self.resource.status()
+        if program is None:
+            return str(status["state"])
+        return next(str(p["state"]) for p in status["programs"] if p["name"] == program)
+
+
+def harness(
+    text: str,
+    programs: list[Any] | None = None,
+    start: bool = True,
+    **resource: Any,
+) -> Harness:
+    """Compile `text` with the given resource parameters and user programs (dicts of
+    ProgramConfig fields; `name` doubles as `pou` unless given), load it and start it."""
+    params = {**OPEN_RESOURCE, "target_cycle_ms": 10, **resource}
+    config = ResourceConfig(name="R", **params)
+    configs = None
+    if programs is not None:
+        configs = [
+            ProgramConfig(**{"pou": p["name"], "program_id": i, **p})
+            for i, p in enumerate(programs, 1)
+        ]
+    result = compile_sources([SourceFile("test.st", text)], resource=config, programs=configs)
+    assert result.artifact is not None, [str(d) for d in result.diagnostics]
+    clock = VirtualClock()
+    res = Resource("R", clock)
+    res.load(result.artifact)
+    h = Harness(res, clock, (config.target_cycle_ms or 10) * 1_000_000)
+    if start:
+        h.ok("start")
+    return h
