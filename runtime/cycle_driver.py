@@ -11,6 +11,7 @@ communication time slice on them.
 
 from __future__ import annotations
 
+import logging
 import queue
 import sys
 import threading
@@ -21,6 +22,8 @@ from runtime.clock import Clock
 from runtime.commands import execute
 from runtime.link import ResourceLink
 from runtime.resource import Resource, ResourceState
+
+log = logging.getLogger(__name__)
 
 STATUS_PERIOD_NS = 1_000_000_000
 VALUES_PERIOD_NS = 100_000_000
@@ -54,7 +57,11 @@ class CycleDriver:
         while not stop.is_set():
             start = self.clock.now_ns()
             cycle_before = self.resource.cycle_count
-            self.resource.cycle()
+            try:
+                self.resource.cycle()
+            except Exception as exc:  # a defect of the runtime itself, never of a program
+                log.exception("internal fault")
+                self.resource.error_stop(f"internal fault: {type(exc).__name__}: {exc}")
             if self.resource.cycle_count != cycle_before:
                 self._publish_values()
             self._publish_status()

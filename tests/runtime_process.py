@@ -15,17 +15,23 @@ import zenoh
 
 from backend.project import compile_project, demo_project_path, load_project
 from backend.resource_client import ResourceClient, ResourceUnreachable
+from runtime.artifact import Artifact
 from runtime.main import artifact_path
 from runtime.zenoh_config import open_client, open_router
 from tests.conftest import REPO
 
 
+def store_artifact(state_dir: Path, artifact: Artifact) -> None:
+    """Put a configuration where `padt runtime` finds it at power-up."""
+    path = artifact_path(state_dir)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(artifact.to_json())
+
+
 def write_demo_artifact(state_dir: Path) -> str:
     result = compile_project(load_project([demo_project_path()]))
     assert result.artifact is not None
-    path = artifact_path(state_dir)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(result.artifact.to_json())
+    store_artifact(state_dir, result.artifact)
     return result.artifact.crc
 
 
@@ -66,6 +72,21 @@ def runtime_process(
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait()
+
+
+@contextmanager
+def running_resource(
+    resource: str, state_dir: Path, endpoint: str, *extra: str
+) -> Iterator[tuple[subprocess.Popen[bytes], ResourceClient]]:
+    """A router, a runtime process for `resource` and a client that it answers."""
+    with (
+        router(endpoint),
+        runtime_process(resource, state_dir, endpoint, *extra) as process,
+        client_session(endpoint) as session,
+    ):
+        client = ResourceClient(session, resource)
+        wait_until_answering(client)
+        yield process, client
 
 
 @contextmanager

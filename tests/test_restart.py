@@ -21,9 +21,15 @@ from backend.resource_client import ResourceClient
 from runtime.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.clock import VirtualClock
 from runtime.context import ContextInvalid, load_context, save_context
-from runtime.main import artifact_path, context_path
+from runtime.main import context_path
 from runtime.resource import Resource
-from tests.runtime_process import client_session, router, runtime_process, wait_until_answering
+from tests.runtime_process import (
+    client_session,
+    router,
+    runtime_process,
+    store_artifact,
+    wait_until_answering,
+)
 
 PLANT = """
 PROGRAM Counter
@@ -133,9 +139,7 @@ def restored_values(artifact: Artifact, state_dir: Path) -> tuple[str, dict[str,
 
 def kill_loop(tmp_path: Path, endpoint: str, kills: int, seed: int) -> None:
     artifact = compiled()
-    path = artifact_path(tmp_path)
-    path.parent.mkdir(parents=True)
-    path.write_text(artifact.to_json())
+    store_artifact(tmp_path, artifact)
     rng = random.Random(seed)
     starts = {"warm": 0, "cold": 0}
     highest = 0

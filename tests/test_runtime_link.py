@@ -10,12 +10,17 @@ from typing import Any
 
 import zenoh
 
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
 from backend.resource_client import ResourceClient
+from runtime.artifact import ResourceConfig
 from runtime.keyspace import alive_key, command_key
 from tests.runtime_process import (
     client_session,
     router,
+    running_resource,
     runtime_process,
+    store_artifact,
     wait_until_answering,
     write_demo_artifact,
 )
@@ -23,13 +28,7 @@ from tests.runtime_process import (
 
 def test_start_stop_step_over_zenoh(tmp_path: Path, zenoh_endpoint: str) -> None:
     crc = write_demo_artifact(tmp_path)
-    with (
-        router(zenoh_endpoint),
-        runtime_process("Tank1", tmp_path, zenoh_endpoint),
-        client_session(zenoh_endpoint) as session,
-    ):
-        client = ResourceClient(session, "Tank1")
-        wait_until_answering(client)
+    with running_resource("Tank1", tmp_path, zenoh_endpoint) as (_, client):
         status = client.command("status")["status"]
         assert status["state"] == "RUN"  # the demo project autostarts
         assert status["crc"] == crc
@@ -106,3 +105,35 @@ def test_values_are_pushed_and_liveliness_ends_with_the_process(
     assert str(zenoh.SampleKind.DELETE) in events
     cycles = [m["cycle"] for m in pushed[:3]]
     assert cycles == sorted(cycles) and "TankControl.level" in pushed[0]["values"]
+
+
+def test_target_cycle_modes_and_an_online_change(tmp_path: Path, zenoh_endpoint: str) -> None:
+    """`fixed` stretches cycles to the target; `dynamic` runs the next one as soon as the
+    commands are answered; an online change of the target takes effect at once. (Coarse
+    counts only: a slow machine makes fewer cycles, never more.)"""
+    config = ResourceConfig(
+        name="Modes", target_cycle_ms=50, target_cycle_mode="fixed", autostart="cold"
+    )
+    text = "PROGRAM P VAR n : DINT; END_VAR n := n + 1; END_PROGRAM"
+    result = compile_sources([SourceFile("p.st", text)], resource=config)
+    assert result.artifact is not None
+    store_artifact(tmp_path, result.artifact)
+
+    def cycles_in(client: ResourceClient, seconds: float) -> int:
+        before = int(client.command("status")["status"]["cycle"])
+        time.sleep(seconds)
+        return int(client.command("status")["status"]["cycle"]) - before
+
+    with running_resource("Modes", tmp_path, zenoh_endpoint) as (_, client):
+        assert cycles_in(client, 1.0) <= 1.0 / 0.050 + 2
+        reply = client.command("set_parameter", name="target_cycle_mode", value="dynamic")
+        assert reply["ok"], reply
+        assert cycles_in(client, 1.0) > 200  # no waiting for the target any more
+        client.command("set_parameter", name="target_cycle_mode", value="fixed")
+        client.command("set_parameter", name="target_cycle_ms", value=100)
+        assert cycles_in(client, 1.0) <= 1.0 / 0.100 + 2
+        events = client.command("events")["events"]
+        changes = [e["details"]["name"] for e in events if e["kind"] == "parameter"]
+        assert changes == ["target_cycle_mode", "target_cycle_mode", "target_cycle_ms"]
+        stats = client.command("status")["status"]["stats"]
+        assert stats["overruns"] == 0

@@ -217,3 +217,22 @@ def test_bad_requests_get_structured_errors(bad: dict[str, object]) -> None:
     h = harness(TWO, PROGRAMS)
     name = str(bad.pop("cmd"))
     assert h.refused(name, **bad) == "bad_request"
+
+
+def test_read_only_system_variables_carry_the_resource_values() -> None:
+    text = """
+    PROGRAM P
+    VAR wd : TIME; crc : DWORD; last : TIME; tick : UDINT; n : INT; END_VAR
+    n := n + 1;
+    wd := SYS.WATCHDOG_TIME;
+    crc := SYS.CONFIGURATION_CRC;
+    last := SYS.CYCLE_TIME_LAST;
+    tick := SYS.SYSTEM_TICK;
+    END_PROGRAM
+    """
+    h = harness(text, watchdog_ms=150)
+    h.cycle(4)
+    assert h.value("P.wd") == 150_000_000
+    assert h.value("P.crc") == int(h.resource.status()["crc"], 16)
+    assert h.value("P.tick") == 30  # 3 cycles of 10 ms since the runtime came up
+    assert h.value("P.last") == 0  # on virtual time a program without loops costs nothing

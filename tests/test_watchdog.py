@@ -11,13 +11,11 @@ import pytest
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from backend.resource_client import ResourceClient
 from runtime.artifact import ResourceConfig
 from runtime.clock import VirtualClock
-from runtime.main import artifact_path
 from runtime.resource import CommandRefused, Resource, ResourceState
 from tests.resource_harness import harness
-from tests.runtime_process import client_session, router, runtime_process, wait_until_answering
+from tests.runtime_process import running_resource, store_artifact
 
 ENDLESS = {
     "while": "WHILE TRUE DO n := n + 1; END_WHILE;",
@@ -84,16 +82,8 @@ def test_the_runtime_process_keeps_answering(tmp_path: Path, zenoh_endpoint: str
         [SourceFile("loop.st", endless_program(ENDLESS["while"]))], resource=config
     )
     assert result.artifact is not None
-    path = artifact_path(tmp_path)
-    path.parent.mkdir(parents=True)
-    path.write_text(result.artifact.to_json())
-    with (
-        router(zenoh_endpoint),
-        runtime_process("Spin", tmp_path, zenoh_endpoint),
-        client_session(zenoh_endpoint) as session,
-    ):
-        client = ResourceClient(session, "Spin")
-        wait_until_answering(client)
+    store_artifact(tmp_path, result.artifact)
+    with running_resource("Spin", tmp_path, zenoh_endpoint) as (_, client):
         status = client.command("status")["status"]
         assert status["state"] == "ERROR STOP", json.dumps(status)
         assert "watchdog" in status["error"]
