@@ -194,17 +194,15 @@ class Resource:
         for pou in artifact.pous:  # a PROGRAM that is no user program still has one instance
             if pou.kind == "PROGRAM":
                 image.register_program(pou.name, image.new_instance(pou.name))
-        for program in programs:
-            program.state = (
-                ProgramState.STOP
-                if self.state not in (ResourceState.RUN, ResourceState.RUN_UP_STOP)
-                else ProgramState.RUN
-            )
         self._image, self.programs, self.globals = image, programs, image.globals
         self._bound = [
             *(BoundVariable(p, path) for p in programs for path in p.paths),
             *(BoundVariable(None, path) for path in image.global_paths()),
         ]
+        self._index()
+
+    def _index(self) -> None:
+        """Variables by upper-case path (ST names are case-insensitive); the first wins."""
         self._by_name = {}
         for bound in self._bound:
             self._by_name.setdefault(bound.path.path.upper(), bound)
@@ -381,7 +379,7 @@ class Resource:
         self._bound = [
             BoundVariable(replacement, b.path) if b.program is program else b for b in self._bound
         ]
-        self._by_name = {k: b for b in self._bound for k in [b.path.path.upper()]}
+        self._index()
         replacement.state = ProgramState.STOP
         return replacement
 
