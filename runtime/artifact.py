@@ -34,6 +34,25 @@ class VarInfo:
 
 
 @dataclass(frozen=True)
+class Association:
+    """A step naming an action with a qualifier (`S1: A(D, T#5s);`)."""
+
+    step: str
+    action: str
+    qualifier: str
+
+
+@dataclass(frozen=True)
+class ChartInfo:
+    """The structure of a POU's sequential function chart, for reload analysis."""
+
+    steps: tuple[str, ...]  # as declared; each is also a variable of type SFC_STEP
+    initial: tuple[str, ...]
+    associations: tuple[Association, ...]
+    controls: tuple[tuple[str, str], ...]  # (action, slot of its action control block)
+
+
+@dataclass(frozen=True)
 class PouCode:
     name: str
     kind: str  # PROGRAM | FUNCTION_BLOCK | FUNCTION | STRUCT | GLOBALS
@@ -43,6 +62,7 @@ class PouCode:
     variables: tuple[VarInfo, ...]
     file: str = ""  # the ST source file of a POU
     st_lines: tuple[int, ...] = ()  # per line of `source`: its line in `file` (0: none)
+    chart: ChartInfo | None = None
 
 
 @dataclass(frozen=True)
@@ -131,7 +151,17 @@ def crc32_hex(text: str) -> str:
 
 def _pou_code(data: dict[str, Any]) -> PouCode:
     variables = tuple(VarInfo(**v) for v in data["variables"])
-    return PouCode(**{**data, "variables": variables, "st_lines": tuple(data["st_lines"])})
+    chart = data["chart"]
+    if chart is not None:
+        chart = ChartInfo(
+            steps=tuple(chart["steps"]),
+            initial=tuple(chart["initial"]),
+            associations=tuple(Association(**a) for a in chart["associations"]),
+            controls=tuple((action, slot) for action, slot in chart["controls"]),
+        )
+    return PouCode(
+        **{**data, "variables": variables, "st_lines": tuple(data["st_lines"]), "chart": chart}
+    )
 
 
 def _program_config(data: dict[str, Any]) -> ProgramConfig:

@@ -90,6 +90,19 @@ class CodeImage:
         """The ST source line of a run-time error raised by generated code."""
         return locate(exc, self.units)
 
+    def declared_attrs(self) -> dict[type, frozenset[str]]:
+        """Per generated class, the attributes that are declared variables; other slots
+        (edge memories, action control blocks, step start times) are internal state."""
+        declared: dict[type, frozenset[str]] = {}
+        units = [*self.artifact.types, *self.artifact.pous]
+        if self.artifact.globals is not None:
+            units.append(self.artifact.globals)
+        for unit in units:
+            kind = self._namespace.get(unit.class_name)
+            if isinstance(kind, type):
+                declared[kind] = frozenset(v.attr for v in unit.variables)
+        return declared
+
     def new_globals(self) -> Any:
         """Another instance of the globals: a user program's own view of them."""
         assert self.artifact.globals is not None

@@ -11,6 +11,7 @@ from collections.abc import Callable
 from typing import Any
 
 from runtime.resource import CommandRefused, Resource
+from runtime.transfer import MAX_CHUNK, TransferError
 
 MAX_REQUEST_BYTES = 64 * 1024
 
@@ -85,7 +86,49 @@ def _program(request: Request) -> str:
     return str(_arg(request, "program", str))
 
 
+def _transfer_begin(resource: Resource, request: Request) -> Reply:
+    resource.incoming.begin(_arg(request, "size", int), _arg(request, "crc", str))
+    return {"ok": True, "max_chunk": MAX_CHUNK}
+
+
+def _transfer_chunk(resource: Resource, request: Request) -> Reply:
+    received = resource.incoming.chunk(_arg(request, "offset", int), _arg(request, "data", str))
+    return {"ok": True, "received": received}
+
+
+def _renames(request: Request) -> dict[str, str]:
+    renames = _arg(request, "renames", dict, {})
+    if not all(isinstance(k, str) and isinstance(v, str) for k, v in renames.items()):
+        raise CommandRefused("bad_request", '"renames" maps new names to old names (strings)')
+    return dict(renames)
+
+
+def _load(resource: Resource, request: Request) -> Reply:
+    resource.load(resource.incoming.complete())
+    return {"ok": True, "status": resource.status()}
+
+
+def _reload_preview(resource: Resource, request: Request) -> Reply:
+    plan = resource.preview_reload(resource.incoming.complete(), _renames(request))
+    return {"ok": True, "plan": plan.as_json()}
+
+
+def _reload(resource: Resource, request: Request) -> Reply:
+    outcome = resource.reload(
+        resource.incoming.complete(),
+        _renames(request),
+        watchdog_ms=_arg(request, "watchdog_ms", int, None),
+        target_cycle_ms=_arg(request, "target_cycle_ms", int, None),
+    )
+    return {"ok": True, "reload": outcome, "status": resource.status()}
+
+
 COMMANDS: dict[str, Callable[[Resource, Request], Reply]] = {
+    "transfer_begin": _transfer_begin,
+    "transfer_chunk": _transfer_chunk,
+    "load": _load,
+    "reload_preview": _reload_preview,
+    "reload": _reload,
     "status": _status,
     "values": _values,
     "variables": _variables,
@@ -146,3 +189,5 @@ def execute(resource: Resource, payload: bytes) -> dict[str, Any]:
         return handler(resource, request)
     except CommandRefused as refused:
         return error_reply(refused.code, refused.message)
+    except TransferError as exc:
+        return error_reply("transfer", str(exc))

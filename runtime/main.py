@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import signal
 import sys
 import threading
 from pathlib import Path
 
-from runtime.artifact import ArtifactError, load_artifact
+from runtime.artifact import Artifact, ArtifactError, load_artifact
 from runtime.clock import RealClock
 from runtime.context import ContextInvalid, load_context
 from runtime.event_log import EventLog
@@ -53,6 +54,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def store_configuration(state_dir: Path, artifact: Artifact) -> None:
+    """Keep a loaded configuration for the next power-up: written whole or not at all."""
+    path = artifact_path(state_dir)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_suffix(".tmp")
+    with temporary.open("w", encoding="ascii") as file:
+        file.write(artifact.to_json())
+        file.flush()
+        os.fsync(file.fileno())
+    os.replace(temporary, path)
+
+
 def power_up(resource: Resource, state_dir: Path) -> None:
     """What a controller does when it comes up: load the stored configuration, take the
     saved context when it is valid (warm) or not (cold), then Autostart decides."""
@@ -86,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
     events = EventLog(clock.wall_ns, long_path=args.state_dir / "events.jsonl")
     resource = Resource(args.resource, clock, events)
     power_up(resource, args.state_dir)
+    resource.on_configuration = lambda artifact: store_configuration(args.state_dir, artifact)
 
     from runtime.context_saver import ContextSaver
     from runtime.cycle_driver import CycleDriver

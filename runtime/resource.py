@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
@@ -32,8 +33,11 @@ from runtime.event_log import EventLog
 from runtime.forcing import GLOBAL, ForceEntry, ForceTable
 from runtime.intrinsics import ProgramFault, SystemView
 from runtime.parameters import RESOURCE_BY_NAME, ParameterError, resource_consistency
+from runtime.reload import SwitchOverTooLong, live_state, switch_over
+from runtime.reload_plan import ReloadPlan, plan_reload
 from runtime.slicing import SliceMeter
 from runtime.system_variables import SYSTEM_VARIABLES
+from runtime.transfer import IncomingArtifact
 from runtime.user_program import ProgramState, UserProgram, copy_globals
 from runtime.watchdog import Watchdog, WatchdogExpired, process_watchdog
 
@@ -79,6 +83,53 @@ def default_value(type_name: str) -> Any:
     return 0
 
 
+@dataclass
+class Instances:
+    """The executable side of a configuration: its code, program and global instances,
+    and every elementary variable bound to its owner."""
+
+    image: CodeImage
+    programs: list[UserProgram]  # by priority, then Program ID
+    globals: Any
+    bound: list[BoundVariable]
+    by_name: dict[str, BoundVariable]
+
+
+def instantiate(artifact: Artifact, system: SystemView) -> Instances:
+    """Fresh instances of everything: every variable at its initial value."""
+    image = CodeImage(artifact, system)
+    configs = sorted(artifact.programs, key=lambda p: (p.priority, p.program_id))
+    # a program needs its own view of the globals when another program could change them
+    # during its program cycle, or when its cycle spans several CPU cycles
+    private = len(configs) > 1 or any(c.max_duration_us for c in configs)
+    programs = []
+    for config in configs:
+        instance = image.new_instance(config.pou)
+        # `prog();` in ST reaches the user program of that POU (the first by priority), so
+        # a program called from another one is the same instance the task runs
+        image.register_program(config.pou, instance)
+        view = image.new_globals() if private and image.globals is not None else image.globals
+        programs.append(
+            UserProgram(config, instance, image.variable_paths(config.name, config.pou), view)
+        )
+    for pou in artifact.pous:  # a PROGRAM that is no user program still has one instance
+        if pou.kind == "PROGRAM":
+            image.register_program(pou.name, image.new_instance(pou.name))
+    bound = [
+        *(BoundVariable(p, path) for p in programs for path in p.paths),
+        *(BoundVariable(None, path) for path in image.global_paths()),
+    ]
+    return Instances(image, programs, image.globals, bound, index(bound))
+
+
+def index(bound: list[BoundVariable]) -> dict[str, BoundVariable]:
+    """Variables by upper-case path (ST names are case-insensitive); the first wins."""
+    by_name: dict[str, BoundVariable] = {}
+    for variable in bound:
+        by_name.setdefault(variable.path.path.upper(), variable)
+    return by_name
+
+
 class Resource:
     def __init__(self, name: str, clock: Clock, events: EventLog | None = None) -> None:
         self.name = name
@@ -107,6 +158,9 @@ class Resource:
         self._last_start_ns: int | None = None
         self._boot_ns = clock.now_ns()
         self._force_deactivation = False
+        # told every new configuration (load or reload), to keep it for the next power-up
+        self.on_configuration: Callable[[Artifact], None] | None = None
+        self.incoming = IncomingArtifact()  # a configuration arriving for load or reload
 
     # ---- parameters
     @property
@@ -164,6 +218,7 @@ class Resource:
             raise CommandRefused("state", "ERROR STOP: INIT first")
         if self.artifact is not None and not self.params.load_allowed:
             raise CommandRefused("not_allowed", "Load Allowed is OFF")
+        old_crc = self.artifact.crc if self.artifact else None
         self._instantiate(artifact)
         self.artifact, self.params = artifact, artifact.resource
         self.forces = ForceTable()  # a download ends forcing, and its entries lose meaning
@@ -172,40 +227,26 @@ class Resource:
         self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
         self.system.WATCHDOG_TIME = self.watchdog_ns
         self._write_outputs(safe=True)
-        self._event("load", f"configuration {artifact.project} loaded, CRC {artifact.crc}")
+        self._event(
+            "load",
+            f"configuration {artifact.project} loaded, CRC {artifact.crc} (cold start)",
+            old_crc=old_crc,
+            new_crc=artifact.crc,
+        )
+        if self.on_configuration is not None:
+            self.on_configuration(artifact)
 
     def _instantiate(self, artifact: Artifact) -> None:
         """Fresh instances of everything: every variable at its initial value."""
-        system = self.system
-        image = CodeImage(artifact, system)
-        configs = sorted(artifact.programs, key=lambda p: (p.priority, p.program_id))
-        # a program needs its own view of the globals when another program could change
-        # them during its program cycle, or when its cycle spans several CPU cycles
-        private = len(configs) > 1 or any(c.max_duration_us for c in configs)
-        programs = []
-        for config in configs:
-            instance = image.new_instance(config.pou)
-            # `prog();` in ST reaches the user program of that POU (the first by priority),
-            # so a program called from another one is the same instance the task runs
-            image.register_program(config.pou, instance)
-            view = image.new_globals() if private and image.globals is not None else image.globals
-            paths = image.variable_paths(config.name, config.pou)
-            programs.append(UserProgram(config, instance, paths, view))
-        for pou in artifact.pous:  # a PROGRAM that is no user program still has one instance
-            if pou.kind == "PROGRAM":
-                image.register_program(pou.name, image.new_instance(pou.name))
-        self._image, self.programs, self.globals = image, programs, image.globals
-        self._bound = [
-            *(BoundVariable(p, path) for p in programs for path in p.paths),
-            *(BoundVariable(None, path) for path in image.global_paths()),
-        ]
-        self._index()
+        self._adopt(instantiate(artifact, self.system))
 
-    def _index(self) -> None:
-        """Variables by upper-case path (ST names are case-insensitive); the first wins."""
-        self._by_name = {}
-        for bound in self._bound:
-            self._by_name.setdefault(bound.path.path.upper(), bound)
+    def _adopt(self, instances: Instances) -> None:
+        self._image, self.programs, self.globals = (
+            instances.image,
+            instances.programs,
+            instances.globals,
+        )
+        self._bound, self._by_name = instances.bound, instances.by_name
 
     def init(self, user: str | None = None) -> None:
         """INIT: leave ERROR STOP for STOP; the next start is a cold start."""
@@ -289,6 +330,141 @@ class Resource:
     def _refuse_read_only(self, what: str) -> None:
         if self.state == ResourceState.RUN and self.system.READ_ONLY_IN_RUN:
             raise CommandRefused("read_only", f"Read-only in RUN is ON: no {what}")
+
+    # ---- reload (online change)
+    def _reload_plan(self, artifact: Artifact, renames: dict[str, str]) -> ReloadPlan:
+        if self.artifact is None or self._image is None:
+            raise CommandRefused("state", "no configuration is loaded: use a download")
+        live = live_state(self.artifact, self._instances())
+        return plan_reload(self.artifact, artifact, renames, live)
+
+    def preview_reload(self, artifact: Artifact, renames: dict[str, str]) -> ReloadPlan:
+        """The reload plan against the running state; changes nothing."""
+        return self._reload_plan(artifact, renames)
+
+    def reload(
+        self,
+        artifact: Artifact,
+        renames: dict[str, str],
+        watchdog_ms: int | None = None,
+        target_cycle_ms: int | None = None,
+        user: str | None = None,
+    ) -> dict[str, Any]:
+        """Replace the running configuration between two cycles, values carried over by
+        name; all or nothing. `watchdog_ms` / `target_cycle_ms` raise the budget for this
+        reload (never below the configured values)."""
+        old_crc = self.artifact.crc if self.artifact else None
+        try:
+            return self._reload(artifact, renames, watchdog_ms, target_cycle_ms, user)
+        except CommandRefused as refused:
+            self._event(
+                "reload",
+                f"reload refused: {refused.message}",
+                user,
+                old_crc=old_crc,
+                new_crc=artifact.crc,
+                code=refused.code,
+            )
+            raise
+
+    def _reload(
+        self,
+        artifact: Artifact,
+        renames: dict[str, str],
+        watchdog_ms: int | None,
+        target_cycle_ms: int | None,
+        user: str | None,
+    ) -> dict[str, Any]:
+        if self.state not in (ResourceState.RUN, ResourceState.RUN_UP_STOP):
+            raise CommandRefused("state", "reload needs the resource running; in STOP, download")
+        if not self.params.reload_allowed:
+            raise CommandRefused("not_allowed", "Reload Allowed is OFF")
+        if self.system.RELOAD_DEACTIVATION:
+            raise CommandRefused("reload_deactivated", "Reload Deactivation is ON")
+        self._refuse_read_only("reload")
+        plan = self._reload_plan(artifact, renames)
+        if plan.refusals:
+            raise CommandRefused(
+                "needs_download", "needs STOP and download: " + "; ".join(plan.refusals)
+            )
+        busy = [p.name for p in self.programs if p.in_progress]
+        if busy:
+            raise CommandRefused(
+                "busy", f"program {busy[0]} is in the middle of its program cycle; try again"
+            )
+        budget = self._reload_budget(watchdog_ms, target_cycle_ms)
+        if plan.estimate_ns > budget:
+            raise CommandRefused(
+                "budget",
+                f"the switch-over needs about {plan.estimate_ns / 1000:.0f} us but the cycle "
+                f"leaves {max(0, budget) / 1000:.0f} us: raise the watchdog (or target cycle "
+                "time) for the reload, or reload less at once",
+            )
+        instances = instantiate(artifact, self.system)  # prepared outside the switch-over
+        begin = time.perf_counter_ns()
+        deadline = None if self.clock.virtual else begin + budget
+        try:
+            carried = switch_over(self._instances(), instances, plan, renames, deadline)
+        except SwitchOverTooLong:
+            raise CommandRefused(
+                "interrupted",
+                f"the switch-over took longer than the {budget / 1000:.0f} us the cycle leaves; "
+                "the old configuration runs on",
+            ) from None
+        old_crc = self.artifact.crc if self.artifact else None
+        running = self.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP)
+        for program in instances.programs:
+            if program.name in plan.programs_added:
+                start = running and program.config.start_allowed
+                program.state = ProgramState.RUN if start else ProgramState.STOP
+        self._adopt(instances)
+        self.artifact, self.params = artifact, artifact.resource
+        self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
+        self.system.WATCHDOG_TIME = self.watchdog_ns
+        for entry in self.forces.entries():  # forcing survives, where the variable does
+            if entry.path.upper() not in self._by_name:
+                self.forces.remove(entry.path)
+        for name in plan.programs_removed:
+            self.forces.stop(name)
+        pause_ns = time.perf_counter_ns() - begin
+        outcome: dict[str, Any] = {
+            "old_crc": old_crc,
+            "new_crc": artifact.crc,
+            "pause_us": pause_ns / 1000,
+            "carried": carried,
+        }
+        self._event(
+            "reload",
+            f"reload done: {old_crc} -> {artifact.crc}, {carried} values carried over",
+            user,
+            **outcome,
+        )
+        if self.on_configuration is not None:
+            self.on_configuration(artifact)
+        return outcome
+
+    def _reload_budget(self, watchdog_ms: int | None, target_cycle_ms: int | None) -> int:
+        """The time the switch-over may add to a cycle: what the watchdog leaves after the
+        last cycle, and in the fixed and dynamic modes what the target cycle leaves."""
+        params = self.params
+        for name, value, configured in (
+            ("watchdog_ms", watchdog_ms, params.watchdog_ms),
+            ("target_cycle_ms", target_cycle_ms, params.target_cycle_ms),
+        ):
+            if value is not None and value < configured:
+                raise CommandRefused(
+                    "bad_value", f"{name} for a reload may only raise it (now {configured})"
+                )
+        watchdog = (watchdog_ms or params.watchdog_ms) * 1_000_000
+        limit = watchdog
+        target = (target_cycle_ms or params.target_cycle_ms) * 1_000_000
+        if target and params.target_cycle_mode in ("fixed", "dynamic"):
+            limit = min(limit, target)
+        return limit - self.stats.last_ns
+
+    def _instances(self) -> Instances:
+        assert self._image is not None
+        return Instances(self._image, self.programs, self.globals, self._bound, self._by_name)
 
     # ---- context (warm start)
     def context(self) -> Context | None:
@@ -379,7 +555,7 @@ class Resource:
         self._bound = [
             BoundVariable(replacement, b.path) if b.program is program else b for b in self._bound
         ]
-        self._index()
+        self._by_name = index(self._bound)
         replacement.state = ProgramState.STOP
         return replacement
 

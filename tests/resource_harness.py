@@ -9,10 +9,11 @@ from typing import Any
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.artifact import ProgramConfig, ResourceConfig
+from runtime.artifact import Artifact, ProgramConfig, ResourceConfig, crc32_hex
 from runtime.clock import VirtualClock
 from runtime.commands import execute
 from runtime.resource import Resource
+from runtime.transfer import pieces
 
 # what tests mostly want: single step, forcing and writes allowed
 OPEN_RESOURCE: dict[str, Any] = {"safety_operation": False, "global_forcing_allowed": True}
@@ -41,6 +42,15 @@ class Harness:
         assert not reply["ok"], reply
         return str(reply["error"]["code"])
 
+    def send(self, artifact: Artifact) -> None:
+        """Transfer an artifact in chunks, as the PADT does before a load or reload."""
+        text = artifact.to_json()
+        self.ok("transfer_begin", size=len(text), crc=crc32_hex(text))
+        offset = 0
+        for piece in pieces(text):
+            self.ok("transfer_chunk", offset=offset, data=piece)
+            offset += len(piece)
+
     def cycle(self, count: int = 1) -> dict[str, Any]:
         """`count` CPU cycles, the clock one target interval further after each."""
         for _ in range(count):
@@ -59,14 +69,9 @@ class Harness:
         return next(str(p["state"]) for p in status["programs"] if p["name"] == program)
 
 
-def harness(
-    text: str,
-    programs: list[Any] | None = None,
-    start: bool = True,
-    **resource: Any,
-) -> Harness:
+def compiled(text: str, programs: list[Any] | None = None, **resource: Any) -> Artifact:
     """Compile `text` with the given resource parameters and user programs (dicts of
-    ProgramConfig fields; `name` doubles as `pou` unless given), load it and start it."""
+    ProgramConfig fields; `name` doubles as `pou` unless given)."""
     params = {**OPEN_RESOURCE, "target_cycle_ms": 10, **resource}
     config = ResourceConfig(name="R", **params)
     configs = None
@@ -77,10 +82,21 @@ def harness(
         ]
     result = compile_sources([SourceFile("test.st", text)], resource=config, programs=configs)
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
+    return result.artifact
+
+
+def harness(
+    text: str,
+    programs: list[Any] | None = None,
+    start: bool = True,
+    **resource: Any,
+) -> Harness:
+    """A resource with `compiled(text, programs, **resource)` loaded (and started)."""
+    artifact = compiled(text, programs, **resource)
     clock = VirtualClock()
     res = Resource("R", clock)
-    res.load(result.artifact)
-    h = Harness(res, clock, (config.target_cycle_ms or 10) * 1_000_000)
+    res.load(artifact)
+    h = Harness(res, clock, (artifact.resource.target_cycle_ms or 10) * 1_000_000)
     if start:
         h.ok("start")
     return h

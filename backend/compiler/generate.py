@@ -855,7 +855,8 @@ def _action_method(name: str) -> str:
     return f"_action_{_ident(name)}"
 
 
-def _action_control(name: str) -> str:
+def action_control(name: str) -> str:
+    """The slot of an action's control block in its POU's class."""
     return f"_ac_{_ident(name)}"
 
 
@@ -882,7 +883,7 @@ class _Chart:
                     self.action_order.append(association.action)
 
     def slots(self) -> list[str]:
-        return [_action_control(name) for name in self.action_order]
+        return [action_control(name) for name in self.action_order]
 
     def emit_cycle(self, emitter: _Emitter, depth: int) -> None:
         scope = emitter.scope
@@ -906,7 +907,7 @@ class _Chart:
             arguments = [
                 f"{qualifier}=({' or '.join(flags)})" for qualifier, flags in sorted(inputs.items())
             ] + [f"T{qualifier}={code}" for qualifier, code in sorted(durations.items())]
-            control = f"s.{_action_control(action)}"
+            control = f"s.{action_control(action)}"
             emitter.emit(depth, f"{control}.update(now, {', '.join(arguments)})")
             if key(action) in declared:
                 emitter.emit(depth, f"if {control}.A:")

@@ -15,6 +15,7 @@ from backend.compiler.check import check
 from backend.compiler.checks.programs import check_programs, globals_read, globals_written
 from backend.compiler.diagnostics import CompileError, Diagnostic, error, warning
 from backend.compiler.generate import (
+    action_control,
     class_name,
     function_name,
     generate_globals,
@@ -29,6 +30,8 @@ from backend.compiler.source import SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
 from runtime.artifact import (
     Artifact,
+    Association,
+    ChartInfo,
     PouCode,
     ProgramConfig,
     ResourceConfig,
@@ -245,7 +248,29 @@ def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
     else:
         stored = [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
         code = _unit_code(pou.name, pou.kind, class_name(pou.name), generated.source, stored)
-    return replace(code, file=pou.pou.pos.file, st_lines=generated.st_lines)
+    return replace(
+        code, file=pou.pou.pos.file, st_lines=generated.st_lines, chart=_chart(pou.pou.sfc)
+    )
+
+
+def _chart(sfc: ast.Sfc | None) -> ChartInfo | None:
+    if sfc is None:
+        return None
+    associations = tuple(
+        Association(step.name, a.action, a.qualifier)
+        for step in sfc.steps
+        for a in step.associations
+    )
+    actions: list[str] = []
+    for association in associations:
+        if association.action not in actions:
+            actions.append(association.action)
+    return ChartInfo(
+        steps=tuple(step.name for step in sfc.steps),
+        initial=tuple(step.name for step in sfc.steps if step.initial),
+        associations=associations,
+        controls=tuple((action, action_control(action)) for action in actions),
+    )
 
 
 def _program_config(

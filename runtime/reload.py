@@ -1,0 +1,158 @@
+"""Carrying the values of a running configuration over to a new one (the switch-over of a
+reload), as the reload plan says.
+
+The new configuration is instantiated beforehand (outside the cycle); the switch-over
+copies values from the old instances into the new ones and never writes to the old ones,
+so it can be abandoned at any moment (too slow for the budget) with the old configuration
+running on untouched. Declared variables follow the plan (kept, converted, initialised);
+internal state that no declaration names (edge memories, action control blocks, the start
+time of a step) follows the object it belongs to when that object is carried over.
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from collections.abc import Iterator, Mapping
+from typing import TYPE_CHECKING, Any
+
+from runtime.code_image import read_path, write_path
+from runtime.reload_plan import (
+    CONVERTED,
+    KEPT,
+    LiveState,
+    ReloadPlan,
+    chart_instances,
+    convert,
+    rename_source,
+)
+from runtime.user_program import copy_globals
+
+if TYPE_CHECKING:
+    from runtime.artifact import Artifact
+    from runtime.resource import BoundVariable, Instances
+
+_SCALARS = (bool, int, float, str, type(None))
+CHECK_EVERY = 256  # values between two looks at the clock
+
+
+class SwitchOverTooLong(Exception):
+    """The switch-over ran past its budget; nothing of the old configuration changed."""
+
+
+def live_state(artifact: Artifact, instances: Instances) -> LiveState:
+    """Step flags and action-control flags of the running charts, for the reload plan."""
+    programs = {p.name.upper(): p.instance for p in instances.programs}
+    objects: dict[str, tuple[Any, dict[str, str], dict[str, str]]] = {}
+    pous = {p.name.upper(): p for p in artifact.pous}
+    for chart in chart_instances(artifact):
+        target = programs.get(chart.program.upper())
+        for attr in chart.attrs:
+            target = getattr(target, attr, None)
+        if target is None:
+            continue
+        pou = pous[chart.pou.upper()]
+        names = {step.upper() for step in chart.chart.steps}
+        steps = {v.name.upper(): v.attr for v in pou.variables if v.name.upper() in names}
+        controls = {action.upper(): slot for action, slot in chart.chart.controls}
+        objects[chart.path.upper()] = (target, steps, controls)
+
+    def read(instance: str, name: str) -> Any:
+        found = objects.get(instance.upper())
+        if found is None:
+            return None
+        target, steps, controls = found
+        owner, _, flag = name.rpartition(".")
+        slot = steps.get(owner.upper()) or controls.get(owner.upper())
+        holder = getattr(target, slot, None) if slot is not None else None
+        return getattr(holder, flag, None)
+
+    return read
+
+
+def switch_over(
+    old: Instances,
+    new: Instances,
+    plan: ReloadPlan,
+    renames: Mapping[str, str],
+    deadline_ns: int | None,
+) -> int:
+    """Fill the new instances from the old ones; returns the number of values carried.
+    Raises SwitchOverTooLong past `deadline_ns` (perf_counter time)."""
+    carried = 0
+
+    def check() -> None:
+        if deadline_ns is not None and time.perf_counter_ns() > deadline_ns:
+            raise SwitchOverTooLong()
+
+    for change in plan.changes:
+        if change.action not in (KEPT, CONVERTED) or change.source is None:
+            continue
+        source, target = old.by_name[change.source.upper()], new.by_name[change.path.upper()]
+        value = read_path(_owner(old, source), source.path)
+        if change.action == CONVERTED:
+            assert change.old_type is not None and change.new_type is not None
+            value = convert(value, change.old_type, change.new_type)
+        write_path(_owner(new, target), target.path, value)
+        carried += 1
+        if carried % CHECK_EVERY == 0:
+            check()
+    old_declared, new_declared = old.image.declared_attrs(), new.image.declared_attrs()
+    old_objects = dict(_objects(old))
+    for path, target in _objects(new):
+        counterpart = old_objects.get(rename_source(path, renames).upper())
+        if counterpart is None or type(counterpart).__name__ != type(target).__name__:
+            continue
+        declared = new_declared.get(type(target), frozenset())
+        known = old_declared.get(type(counterpart), frozenset())
+        for slot in _slots(target):
+            if slot in declared or slot in known or not hasattr(counterpart, slot):
+                continue
+            setattr(target, slot, copy.deepcopy(getattr(counterpart, slot)))
+            carried += 1
+        check()
+    old_programs = {p.name.upper(): p for p in old.programs}
+    for program in new.programs:
+        previous = old_programs.get(rename_source(program.name, renames).upper())
+        if previous is not None:
+            program.state, program.error = previous.state, previous.error
+            program.time_ns, program.last_start_ns = previous.time_ns, previous.last_start_ns
+            program.stats = copy.copy(previous.stats)
+    if new.globals is not None:
+        attrs = tuple(_slots(new.globals))
+        for program in new.programs:
+            if program.view is not new.globals:
+                copy_globals(new.globals, program.view, attrs)
+    return carried
+
+
+def _owner(instances: Instances, bound: BoundVariable) -> Any:
+    return bound.program.instance if bound.program is not None else instances.globals
+
+
+def _slots(target: Any) -> Iterator[str]:
+    for kind in type(target).__mro__:
+        yield from getattr(kind, "__slots__", ())
+
+
+def _objects(instances: Instances) -> Iterator[tuple[str, Any]]:
+    """Every generated object below the program and global instances, by a path of
+    attribute names (`Main.fb`, `Main.arr#2` for the third object of a list)."""
+    roots: list[tuple[str, Any]] = [(p.name, p.instance) for p in instances.programs]
+    if instances.globals is not None:
+        roots.append(("", instances.globals))
+    stack = list(reversed(roots))
+    while stack:
+        path, target = stack.pop()
+        yield path.upper(), target
+        for slot in _slots(target):
+            value = getattr(target, slot, None)
+            inner = f"{path}.{slot}" if path else slot
+            if isinstance(value, list):
+                stack.extend(
+                    (f"{inner}#{offset}", item)
+                    for offset, item in enumerate(value)
+                    if not isinstance(item, (*_SCALARS, list))
+                )
+            elif not isinstance(value, _SCALARS) and hasattr(type(value), "__slots__"):
+                stack.append((inner, value))
