@@ -10,6 +10,7 @@ import json
 from collections.abc import Callable
 from typing import Any
 
+from runtime.artifact import Artifact
 from runtime.resource import CommandRefused, Resource
 from runtime.transfer import MAX_CHUNK, TransferError
 
@@ -103,8 +104,17 @@ def _renames(request: Request) -> dict[str, str]:
     return dict(renames)
 
 
+def _transferred(resource: Resource, what: str) -> Artifact:
+    """The artifact the transfer brought; a failed transfer is a refused load / reload."""
+    try:
+        return resource.incoming.complete()
+    except TransferError as exc:
+        resource.refused(what, str(exc))
+        raise
+
+
 def _load(resource: Resource, request: Request) -> Reply:
-    resource.load(resource.incoming.complete())
+    resource.load(_transferred(resource, "load"))
     return {"ok": True, "status": resource.status()}
 
 
@@ -115,7 +125,7 @@ def _reload_preview(resource: Resource, request: Request) -> Reply:
 
 def _reload(resource: Resource, request: Request) -> Reply:
     outcome = resource.reload(
-        resource.incoming.complete(),
+        _transferred(resource, "reload"),
         _renames(request),
         watchdog_ms=_arg(request, "watchdog_ms", int, None),
         target_cycle_ms=_arg(request, "target_cycle_ms", int, None),

@@ -210,8 +210,20 @@ class Resource:
         self._event("stats", "cycle statistics reset")
 
     # ---- download and states
+    def refused(self, what: str, message: str, new_crc: str | None = None) -> None:
+        """A load or reload that did not happen is an event too, with both CRCs."""
+        old_crc = self.artifact.crc if self.artifact else None
+        self._event(what, f"{what} refused: {message}", old_crc=old_crc, new_crc=new_crc)
+
     def load(self, artifact: Artifact) -> None:
         """Take a whole configuration (only in STOP); a cold start state follows."""
+        try:
+            self._load(artifact)
+        except CommandRefused as refused:
+            self.refused("load", refused.message, artifact.crc)
+            raise
+
+    def _load(self, artifact: Artifact) -> None:
         if self.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP):
             raise CommandRefused("state", "a download is only possible in STOP")
         if self.state == ResourceState.ERROR_STOP:
@@ -353,18 +365,10 @@ class Resource:
         """Replace the running configuration between two cycles, values carried over by
         name; all or nothing. `watchdog_ms` / `target_cycle_ms` raise the budget for this
         reload (never below the configured values)."""
-        old_crc = self.artifact.crc if self.artifact else None
         try:
             return self._reload(artifact, renames, watchdog_ms, target_cycle_ms, user)
         except CommandRefused as refused:
-            self._event(
-                "reload",
-                f"reload refused: {refused.message}",
-                user,
-                old_crc=old_crc,
-                new_crc=artifact.crc,
-                code=refused.code,
-            )
+            self.refused("reload", refused.message, artifact.crc)
             raise
 
     def _reload(

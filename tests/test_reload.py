@@ -326,6 +326,8 @@ def test_a_corrupted_or_cut_transfer_is_refused_and_the_old_configuration_stays(
     bad = h.cmd("load")
     assert bad["error"]["code"] == "transfer" and "CRC" in bad["error"]["message"]
     assert h.resource.status()["crc"] == crc and h.value("Main.level") == 7
+    refusals = [e for e in h.ok("events")["events"] if e["kind"] == "load"]
+    assert [e["details"]["old_crc"] for e in refusals[-2:]] == [crc, crc]
     h.send(new)
     assert h.ok("load")["status"]["crc"] == new.crc
     assert h.value("Main.level") == 0  # a download is a cold start
