@@ -11,7 +11,7 @@ from collections.abc import Callable
 from typing import Any
 
 from runtime.artifact import Artifact
-from runtime.resource import CommandRefused, Resource
+from runtime.resource import CommandRefused, ReloadJob, Resource
 from runtime.transfer import MAX_CHUNK, TransferError
 
 MAX_REQUEST_BYTES = 64 * 1024
@@ -123,14 +123,30 @@ def _reload_preview(resource: Resource, request: Request) -> Reply:
     return {"ok": True, "plan": plan.as_json()}
 
 
-def _reload(resource: Resource, request: Request) -> Reply:
-    outcome = resource.reload(
+def begin_reload(resource: Resource, request: Request) -> ReloadJob:
+    """The first half of `reload`: checks, and the job to prepare (the runtime process
+    prepares it on a worker thread while cycles go on)."""
+    return resource.begin_reload(
         _transferred(resource, "reload"),
         _renames(request),
         watchdog_ms=_arg(request, "watchdog_ms", int, None),
         target_cycle_ms=_arg(request, "target_cycle_ms", int, None),
     )
+
+
+def finish_reload(resource: Resource, job: ReloadJob) -> Reply:
+    """The second half, between two cycles: the switch-over, and the reply."""
+    try:
+        outcome = resource.finish_reload(job)
+    except CommandRefused as refused:
+        return error_reply(refused.code, refused.message)
     return {"ok": True, "reload": outcome, "status": resource.status()}
+
+
+def _reload(resource: Resource, request: Request) -> Reply:
+    job = begin_reload(resource, request)
+    job.prepare()
+    return finish_reload(resource, job)
 
 
 COMMANDS: dict[str, Callable[[Resource, Request], Reply]] = {
@@ -195,8 +211,13 @@ def execute(resource: Resource, payload: bytes) -> dict[str, Any]:
     handler = COMMANDS.get(request["cmd"])
     if handler is None:
         return error_reply("unknown_command", f"unknown command '{request['cmd']}'")
+    return guarded(lambda: handler(resource, request))
+
+
+def guarded(action: Callable[[], Reply]) -> Reply:
+    """A command's reply, or the structured error for a refusal."""
     try:
-        return handler(resource, request)
+        return action()
     except CommandRefused as refused:
         return error_reply(refused.code, refused.message)
     except TransferError as exc:

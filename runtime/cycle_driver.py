@@ -18,10 +18,20 @@ import threading
 import time
 from collections.abc import Callable
 
+import zenoh
+
 from runtime.clock import Clock
-from runtime.commands import execute
+from runtime.commands import (
+    Reply,
+    begin_reload,
+    error_reply,
+    execute,
+    finish_reload,
+    guarded,
+    parse_request,
+)
 from runtime.link import ResourceLink
-from runtime.resource import Resource, ResourceState
+from runtime.resource import ReloadJob, Resource, ResourceState
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +58,7 @@ class CycleDriver:
         self._last_status: dict[str, object] | None = None
         self._last_status_ns = 0
         self._last_values_ns = 0
+        self._reload: tuple[zenoh.Query, ReloadJob, threading.Thread] | None = None
 
     def run(self, stop: threading.Event) -> None:
         # the cycle thread must get the interpreter back promptly after its wait for the
@@ -65,6 +76,7 @@ class CycleDriver:
             if self.resource.cycle_count != cycle_before:
                 self._publish_values()
             self._publish_status()
+            self._finish_reload()  # between two cycles
             self._save_if_due()
             params = self.resource.params
             running = self.resource.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP)
@@ -112,13 +124,51 @@ class CycleDriver:
                 if remaining <= 0 or not wait:
                     return
                 continue
-            self.link.reply(query, execute(self.resource, self.link.payload(query)))
+            payload = self.link.payload(query)
+            if self._starts_reload(query, payload):
+                continue
+            self.link.reply(query, execute(self.resource, payload))
             del query  # a Zenoh query is finalised when its last reference goes
             # a command may have stepped, stopped or written: show its outcome at once
             self._publish_values(at_once=True)
             self._publish_status()
             if self.clock.now_ns() >= deadline_ns:
                 return
+
+    def _starts_reload(self, query: zenoh.Query, payload: bytes) -> bool:
+        """A reload prepares on a worker thread while cycles go on (compiling the new code
+        and planning take far longer than a cycle); its query is answered when the
+        switch-over between two cycles is done (`_finish_reload`)."""
+        request = parse_request(payload)
+        if request.get("cmd") != "reload":
+            return False
+        if self._reload is not None:
+            self.link.reply(query, error_reply("busy", "a reload is already under way"))
+            return True
+        jobs: list[ReloadJob] = []
+
+        def begin() -> Reply:
+            jobs.append(begin_reload(self.resource, request))
+            return {"ok": True}
+
+        reply = guarded(begin)
+        if not jobs:
+            self.link.reply(query, reply)
+            return True
+        worker = threading.Thread(target=jobs[0].prepare, name="padt-reload", daemon=True)
+        worker.start()
+        self._reload = (query, jobs[0], worker)
+        return True
+
+    def _finish_reload(self) -> None:
+        if self._reload is None or self._reload[2].is_alive():
+            return
+        query, job, _ = self._reload
+        self._reload = None
+        self.link.reply(query, finish_reload(self.resource, job))
+        del query
+        self._publish_values(at_once=True)
+        self._publish_status()
 
     def _publish_values(self, at_once: bool = False) -> None:
         """Live values at most every VALUES_PERIOD_NS (what a person can read), at once

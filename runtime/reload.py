@@ -12,11 +12,13 @@ time of a step) follows the object it belongs to when that object is carried ove
 from __future__ import annotations
 
 import copy
+import functools
 import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from runtime.code_image import read_path, write_path
+from runtime.code_image import Accessor
 from runtime.reload_plan import (
     CONVERTED,
     KEPT,
@@ -26,7 +28,7 @@ from runtime.reload_plan import (
     convert,
     rename_source,
 )
-from runtime.user_program import copy_globals
+from runtime.user_program import UserProgram, copy_globals
 
 if TYPE_CHECKING:
     from runtime.artifact import Artifact
@@ -70,60 +72,113 @@ def live_state(artifact: Artifact, instances: Instances) -> LiveState:
     return read
 
 
-def switch_over(
-    old: Instances,
-    new: Instances,
-    plan: ReloadPlan,
-    renames: Mapping[str, str],
-    deadline_ns: int | None,
-) -> int:
-    """Fill the new instances from the old ones; returns the number of values carried.
-    Raises SwitchOverTooLong past `deadline_ns` (perf_counter time)."""
-    carried = 0
+Converter = Callable[[Any], Any] | None
 
-    def check() -> None:
-        if deadline_ns is not None and time.perf_counter_ns() > deadline_ns:
-            raise SwitchOverTooLong()
 
+@dataclass
+class SwitchOver:
+    """Everything the switch-over will do, worked out beforehand (outside the cycle), so
+    that between the two cycles only values move."""
+
+    # (old root, attribute path to the parent, last accessor, new parent, last accessor,
+    # conversion); the old parent is looked up at switch time: a struct may have been
+    # replaced by an assignment since
+    leaves: list[tuple[Any, tuple[Accessor, ...], Accessor, Any, Accessor, Converter]]
+    # (old object, new object, internal slots): FB and program instances and steps are
+    # never replaced, so these pairs hold
+    internal: list[tuple[Any, Any, tuple[str, ...]]]
+    programs: list[tuple[UserProgram, UserProgram]]
+
+
+def prepare_switch_over(
+    old: Instances, new: Instances, plan: ReloadPlan, renames: Mapping[str, str]
+) -> SwitchOver:
+    leaves = []
     for change in plan.changes:
         if change.action not in (KEPT, CONVERTED) or change.source is None:
             continue
         source, target = old.by_name[change.source.upper()], new.by_name[change.path.upper()]
-        value = read_path(_owner(old, source), source.path)
+        converter: Converter = None
         if change.action == CONVERTED:
-            assert change.old_type is not None and change.new_type is not None
-            value = convert(value, change.old_type, change.new_type)
-        write_path(_owner(new, target), target.path, value)
-        carried += 1
-        if carried % CHECK_EVERY == 0:
-            check()
+            old_type, new_type = change.old_type or "", change.new_type or ""
+            converter = functools.partial(convert, old_type=old_type, new_type=new_type)
+        attrs, new_attrs = source.path.attrs, target.path.attrs
+        new_parent = _resolve(_owner(new, target), new_attrs[:-1])
+        leaves.append(
+            (_owner(old, source), attrs[:-1], attrs[-1], new_parent, new_attrs[-1], converter)
+        )
     old_declared, new_declared = old.image.declared_attrs(), new.image.declared_attrs()
     old_objects = dict(_objects(old))
+    internal = []
     for path, target in _objects(new):
         counterpart = old_objects.get(rename_source(path, renames).upper())
         if counterpart is None or type(counterpart).__name__ != type(target).__name__:
             continue
         declared = new_declared.get(type(target), frozenset())
         known = old_declared.get(type(counterpart), frozenset())
-        for slot in _slots(target):
-            if slot in declared or slot in known or not hasattr(counterpart, slot):
-                continue
-            setattr(target, slot, copy.deepcopy(getattr(counterpart, slot)))
-            carried += 1
-        check()
+        slots = tuple(
+            slot
+            for slot in _slots(target)
+            if slot not in declared and slot not in known and hasattr(counterpart, slot)
+        )
+        if slots:
+            internal.append((counterpart, target, slots))
     old_programs = {p.name.upper(): p for p in old.programs}
-    for program in new.programs:
-        previous = old_programs.get(rename_source(program.name, renames).upper())
-        if previous is not None:
-            program.state, program.error = previous.state, previous.error
-            program.time_ns, program.last_start_ns = previous.time_ns, previous.last_start_ns
-            program.stats = copy.copy(previous.stats)
+    programs = [
+        (previous, program)
+        for program in new.programs
+        if (previous := old_programs.get(rename_source(program.name, renames).upper()))
+    ]
+    return SwitchOver(leaves, internal, programs)
+
+
+def switch_over(prepared: SwitchOver, new: Instances, deadline_ns: int | None) -> int:
+    """Fill the new instances from the old ones; returns the number of values carried.
+    Raises SwitchOverTooLong past `deadline_ns` (perf_counter time)."""
+    parents: dict[tuple[int, tuple[Accessor, ...]], Any] = {}
+    carried = 0
+    for root, prefix, last, new_parent, new_last, converter in prepared.leaves:
+        key = (id(root), prefix)
+        parent = parents.get(key)
+        if parent is None:
+            parent = parents[key] = _resolve(root, prefix)
+        value = parent[last] if isinstance(last, int) else getattr(parent, last)
+        if isinstance(value, list):
+            value = copy.deepcopy(value)  # the new list must not be the old one
+        if converter is not None:
+            value = converter(value)
+        if isinstance(new_last, int):
+            new_parent[new_last] = value
+        else:
+            setattr(new_parent, new_last, value)
+        carried += 1
+        checked = carried % CHECK_EVERY == 0
+        if checked and deadline_ns is not None and time.perf_counter_ns() > deadline_ns:
+            raise SwitchOverTooLong()
+    for source, target, slots in prepared.internal:
+        for slot in slots:
+            value = getattr(source, slot)
+            setattr(target, slot, value if isinstance(value, _SCALARS) else copy.deepcopy(value))
+            carried += 1
+    for previous, program in prepared.programs:
+        program.state, program.error = previous.state, previous.error
+        program.time_ns, program.last_start_ns = previous.time_ns, previous.last_start_ns
+        program.stats = copy.copy(previous.stats)
     if new.globals is not None:
         attrs = tuple(_slots(new.globals))
         for program in new.programs:
             if program.view is not new.globals:
                 copy_globals(new.globals, program.view, attrs)
+    if deadline_ns is not None and time.perf_counter_ns() > deadline_ns:
+        raise SwitchOverTooLong()
     return carried
+
+
+def _resolve(root: Any, attrs: tuple[Accessor, ...]) -> Any:
+    target = root
+    for accessor in attrs:
+        target = target[accessor] if isinstance(accessor, int) else getattr(target, accessor)
+    return target
 
 
 def _owner(instances: Instances, bound: BoundVariable) -> Any:

@@ -25,7 +25,7 @@ KEPT, CONVERTED, INITIALISED, NEW, DELETED = "kept", "converted", "initialised",
 TIMED_QUALIFIERS = ("L", "D", "SD", "DS", "SL")
 # per transferred value, what the switch-over between two cycles costs (measured by
 # tests/bench/bench_reload.py on the reference machine, rounded up)
-SWITCH_NS_PER_VALUE = 2_000
+SWITCH_NS_PER_VALUE = 3_000
 
 
 @dataclass(frozen=True)
@@ -181,10 +181,11 @@ def _changes(
             changes.append(
                 VariableChange(path.path, how, source.type, path.type, source.path, reason)
             )
+    listed = {c.path.upper() for c in changes}
     changes.extend(
         VariableChange(p.path, DELETED, p.type, None)
         for p in old
-        if p.path.upper() not in used and p.path.upper() not in {c.path.upper() for c in changes}
+        if p.path.upper() not in used and p.path.upper() not in listed
     )
     return changes
 
@@ -347,10 +348,15 @@ def plan_reload(
     new: Artifact,
     renames: Mapping[str, str] | None = None,
     live: LiveState | None = None,
+    old_paths: list[VariablePath] | None = None,
+    new_paths: list[VariablePath] | None = None,
 ) -> ReloadPlan:
-    """The plan for replacing `old` by `new` (renames: NEW path -> OLD path)."""
+    """The plan for replacing `old` by `new` (renames: NEW path -> OLD path). The
+    variable paths of either side, when the caller has them at hand, save compiling it."""
     renames = dict(renames or {})
-    changes = _changes(variable_paths(old), variable_paths(new), renames)
+    old_paths = old_paths if old_paths is not None else variable_paths(old)
+    new_paths = new_paths if new_paths is not None else variable_paths(new)
+    changes = _changes(old_paths, new_paths, renames)
     old_programs = {p.name: p for p in old.programs}
     new_programs = {p.name: p for p in new.programs}
     transferred = sum(1 for c in changes if c.action in (KEPT, CONVERTED))

@@ -33,8 +33,14 @@ from runtime.event_log import EventLog
 from runtime.forcing import GLOBAL, ForceEntry, ForceTable
 from runtime.intrinsics import ProgramFault, SystemView
 from runtime.parameters import RESOURCE_BY_NAME, ParameterError, resource_consistency
-from runtime.reload import SwitchOverTooLong, live_state, switch_over
-from runtime.reload_plan import ReloadPlan, plan_reload
+from runtime.reload import (
+    SwitchOver,
+    SwitchOverTooLong,
+    live_state,
+    prepare_switch_over,
+    switch_over,
+)
+from runtime.reload_plan import LiveState, ReloadPlan, plan_reload
 from runtime.slicing import SliceMeter
 from runtime.system_variables import SYSTEM_VARIABLES
 from runtime.transfer import IncomingArtifact
@@ -128,6 +134,56 @@ def index(bound: list[BoundVariable]) -> dict[str, BoundVariable]:
     for variable in bound:
         by_name.setdefault(variable.path.path.upper(), variable)
     return by_name
+
+
+class ReloadJob:
+    """A reload on its way: made by `Resource.begin_reload`, prepared by `prepare` (which
+    touches nothing of the running configuration, so it may run on another thread while
+    cycles go on), switched by `Resource.finish_reload` between two cycles."""
+
+    def __init__(
+        self,
+        artifact: Artifact,
+        renames: dict[str, str],
+        old: Instances,
+        old_artifact: Artifact,
+        system: SystemView,
+    ) -> None:
+        self.artifact, self.renames = artifact, renames
+        self.old, self.old_artifact, self.system = old, old_artifact, system
+        self.old.programs = list(old.programs)  # as they were: a restart replaces one
+        self.watchdog_ms: int | None = None
+        self.target_cycle_ms: int | None = None
+        self.user: str | None = None
+        self.live: LiveState | None = None
+        self.instances: Instances | None = None
+        self.plan: ReloadPlan | None = None
+        self.prepared: SwitchOver | None = None
+        self.failure: str | None = None
+
+    def make_plan(self, live: LiveState | None) -> ReloadPlan:
+        if self.instances is None:
+            self.instances = instantiate(self.artifact, self.system)
+        return plan_reload(
+            self.old_artifact,
+            self.artifact,
+            self.renames,
+            live,
+            [b.path for b in self.old.bound],
+            [b.path for b in self.instances.bound],
+        )
+
+    def prepare(self) -> None:
+        """New instances, the plan and the switch-over list; never raises."""
+        try:
+            self.plan = self.make_plan(self.live)
+            assert self.instances is not None
+            if not self.plan.refusals:
+                self.prepared = prepare_switch_over(
+                    self.old, self.instances, self.plan, self.renames
+                )
+        except Exception as exc:  # generated code that fails while it is set up
+            self.failure = f"{type(exc).__name__}: {exc}"
 
 
 class Resource:
@@ -344,15 +400,12 @@ class Resource:
             raise CommandRefused("read_only", f"Read-only in RUN is ON: no {what}")
 
     # ---- reload (online change)
-    def _reload_plan(self, artifact: Artifact, renames: dict[str, str]) -> ReloadPlan:
-        if self.artifact is None or self._image is None:
-            raise CommandRefused("state", "no configuration is loaded: use a download")
-        live = live_state(self.artifact, self._instances())
-        return plan_reload(self.artifact, artifact, renames, live)
-
     def preview_reload(self, artifact: Artifact, renames: dict[str, str]) -> ReloadPlan:
         """The reload plan against the running state; changes nothing."""
-        return self._reload_plan(artifact, renames)
+        if self.artifact is None or self._image is None:
+            raise CommandRefused("state", "no configuration is loaded: use a download")
+        job = ReloadJob(artifact, renames, self._instances(), self.artifact, self.system)
+        return job.make_plan(live_state(self.artifact, job.old))
 
     def reload(
         self,
@@ -364,21 +417,44 @@ class Resource:
     ) -> dict[str, Any]:
         """Replace the running configuration between two cycles, values carried over by
         name; all or nothing. `watchdog_ms` / `target_cycle_ms` raise the budget for this
-        reload (never below the configured values)."""
-        try:
-            return self._reload(artifact, renames, watchdog_ms, target_cycle_ms, user)
-        except CommandRefused as refused:
-            self.refused("reload", refused.message, artifact.crc)
-            raise
+        reload (never below the configured values). The runtime process prepares on a
+        worker thread instead (`begin_reload`, `ReloadJob.prepare`, `finish_reload`)."""
+        job = self.begin_reload(artifact, renames, watchdog_ms, target_cycle_ms, user)
+        job.prepare()
+        return self.finish_reload(job)
 
-    def _reload(
+    def begin_reload(
         self,
         artifact: Artifact,
         renames: dict[str, str],
-        watchdog_ms: int | None,
-        target_cycle_ms: int | None,
-        user: str | None,
-    ) -> dict[str, Any]:
+        watchdog_ms: int | None = None,
+        target_cycle_ms: int | None = None,
+        user: str | None = None,
+    ) -> ReloadJob:
+        """Check what can be checked at once; the job then prepares (anywhere)."""
+        try:
+            self._check_reload()
+            self._reload_budget(watchdog_ms, target_cycle_ms)  # refuses a lowering now
+        except CommandRefused as refused:
+            self.refused("reload", refused.message, artifact.crc)
+            raise
+        assert self.artifact is not None
+        job = ReloadJob(artifact, renames, self._instances(), self.artifact, self.system)
+        job.watchdog_ms, job.target_cycle_ms, job.user = watchdog_ms, target_cycle_ms, user
+        job.live = live_state(self.artifact, job.old)
+        return job
+
+    def finish_reload(self, job: ReloadJob) -> dict[str, Any]:
+        """The switch-over, between two cycles; refused if anything changed meanwhile."""
+        try:
+            return self._switch(job)
+        except CommandRefused as refused:
+            self.refused("reload", refused.message, job.artifact.crc)
+            raise
+
+    def _check_reload(self) -> None:
+        if self.artifact is None or self._image is None:
+            raise CommandRefused("state", "no configuration is loaded: use a download")
         if self.state not in (ResourceState.RUN, ResourceState.RUN_UP_STOP):
             raise CommandRefused("state", "reload needs the resource running; in STOP, download")
         if not self.params.reload_allowed:
@@ -386,42 +462,51 @@ class Resource:
         if self.system.RELOAD_DEACTIVATION:
             raise CommandRefused("reload_deactivated", "Reload Deactivation is ON")
         self._refuse_read_only("reload")
-        plan = self._reload_plan(artifact, renames)
+
+    def _switch(self, job: ReloadJob) -> dict[str, Any]:
+        self._check_reload()
+        if job.failure is not None:
+            raise CommandRefused("reload_failed", f"the new configuration failed: {job.failure}")
+        plan, instances, prepared = job.plan, job.instances, job.prepared
+        assert plan is not None and instances is not None
         if plan.refusals:
             raise CommandRefused(
                 "needs_download", "needs STOP and download: " + "; ".join(plan.refusals)
             )
+        assert prepared is not None
+        if job.old.programs != self.programs or self.artifact is not job.old_artifact:
+            raise CommandRefused("busy", "the configuration changed while the reload prepared")
         busy = [p.name for p in self.programs if p.in_progress]
         if busy:
             raise CommandRefused(
                 "busy", f"program {busy[0]} is in the middle of its program cycle; try again"
             )
-        budget = self._reload_budget(watchdog_ms, target_cycle_ms)
+        budget = self._reload_budget(job.watchdog_ms, job.target_cycle_ms)
         if plan.estimate_ns > budget:
             raise CommandRefused(
                 "budget",
                 f"the switch-over needs about {plan.estimate_ns / 1000:.0f} us but the cycle "
-                f"leaves {max(0, budget) / 1000:.0f} us: raise the watchdog (or target cycle "
-                "time) for the reload, or reload less at once",
+                f"leaves {max(0, budget) / 1000:.0f} us: raise the watchdog (and in the fixed "
+                "and dynamic modes the target cycle time) for the reload, or reload less at once",
             )
-        instances = instantiate(artifact, self.system)  # prepared outside the switch-over
         begin = time.perf_counter_ns()
         deadline = None if self.clock.virtual else begin + budget
         try:
-            carried = switch_over(self._instances(), instances, plan, renames, deadline)
+            carried = switch_over(prepared, instances, deadline)
         except SwitchOverTooLong:
             raise CommandRefused(
                 "interrupted",
                 f"the switch-over took longer than the {budget / 1000:.0f} us the cycle leaves; "
                 "the old configuration runs on",
             ) from None
-        old_crc = self.artifact.crc if self.artifact else None
+        old_crc = job.old_artifact.crc
         running = self.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP)
         for program in instances.programs:
             if program.name in plan.programs_added:
                 start = running and program.config.start_allowed
                 program.state = ProgramState.RUN if start else ProgramState.STOP
         self._adopt(instances)
+        artifact = job.artifact
         self.artifact, self.params = artifact, artifact.resource
         self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
         self.system.WATCHDOG_TIME = self.watchdog_ns
@@ -440,7 +525,7 @@ class Resource:
         self._event(
             "reload",
             f"reload done: {old_crc} -> {artifact.crc}, {carried} values carried over",
-            user,
+            job.user,
             **outcome,
         )
         if self.on_configuration is not None:

@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-from tests.bench import bench_compiler, bench_context, bench_language, bench_runtime
+from tests.bench import (
+    bench_compiler,
+    bench_context,
+    bench_language,
+    bench_reload,
+    bench_runtime,
+)
 
 
 def main() -> None:
@@ -10,6 +16,7 @@ def main() -> None:
     bench_language.main()
     bench_context.main()
     bench_runtime.main()
+    bench_reload.main()
 
 
 if __name__ == "__main__":
