@@ -119,13 +119,16 @@ def _load(resource: Resource, request: Request) -> Reply:
 
 
 def _reload_preview(resource: Resource, request: Request) -> Reply:
-    plan = resource.preview_reload(resource.incoming.complete(), _renames(request))
-    return {"ok": True, "plan": plan.as_json()}
+    job = begin_reload(resource, request)
+    job.prepare()
+    return finish_reload(resource, job)
 
 
 def begin_reload(resource: Resource, request: Request) -> ReloadJob:
-    """The first half of `reload`: checks, and the job to prepare (the runtime process
-    prepares it on a worker thread while cycles go on)."""
+    """The first half of `reload` and `reload_preview`: checks, and the job to prepare
+    (the runtime process prepares it on a worker thread while cycles go on)."""
+    if request["cmd"] == "reload_preview":
+        return resource.begin_preview(resource.incoming.complete(), _renames(request))
     return resource.begin_reload(
         _transferred(resource, "reload"),
         _renames(request),
@@ -135,7 +138,11 @@ def begin_reload(resource: Resource, request: Request) -> ReloadJob:
 
 
 def finish_reload(resource: Resource, job: ReloadJob) -> Reply:
-    """The second half, between two cycles: the switch-over, and the reply."""
+    """The second half, between two cycles: the switch-over (or the plan), and the reply."""
+    if job.preview:
+        if job.plan is None:
+            return error_reply("reload_failed", f"the new configuration failed: {job.failure}")
+        return {"ok": True, "plan": job.plan.as_json()}
     try:
         outcome = resource.finish_reload(job)
     except CommandRefused as refused:

@@ -136,11 +136,11 @@ class CycleDriver:
                 return
 
     def _starts_reload(self, query: zenoh.Query, payload: bytes) -> bool:
-        """A reload prepares on a worker thread while cycles go on (compiling the new code
-        and planning take far longer than a cycle); its query is answered when the
-        switch-over between two cycles is done (`_finish_reload`)."""
+        """A reload (or its preview) prepares on a worker thread while cycles go on
+        (compiling the new code and planning take far longer than a cycle); its query is
+        answered when the switch-over between two cycles is done (`_finish_reload`)."""
         request = parse_request(payload)
-        if request.get("cmd") != "reload":
+        if request.get("cmd") not in ("reload", "reload_preview"):
             return False
         if self._reload is not None:
             self.link.reply(query, error_reply("busy", "a reload is already under way"))

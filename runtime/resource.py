@@ -160,6 +160,7 @@ class ReloadJob:
         self.plan: ReloadPlan | None = None
         self.prepared: SwitchOver | None = None
         self.failure: str | None = None
+        self.preview = False  # only the plan is wanted
 
     def make_plan(self, live: LiveState | None) -> ReloadPlan:
         if self.instances is None:
@@ -178,7 +179,7 @@ class ReloadJob:
         try:
             self.plan = self.make_plan(self.live)
             assert self.instances is not None
-            if not self.plan.refusals:
+            if not self.plan.refusals and not self.preview:
                 self.prepared = prepare_switch_over(
                     self.old, self.instances, self.plan, self.renames
                 )
@@ -402,10 +403,19 @@ class Resource:
     # ---- reload (online change)
     def preview_reload(self, artifact: Artifact, renames: dict[str, str]) -> ReloadPlan:
         """The reload plan against the running state; changes nothing."""
+        job = self.begin_preview(artifact, renames)
+        job.prepare()
+        if job.plan is None:
+            raise CommandRefused("reload_failed", f"the new configuration failed: {job.failure}")
+        return job.plan
+
+    def begin_preview(self, artifact: Artifact, renames: dict[str, str]) -> ReloadJob:
+        """A job that only plans (`prepare` may run on another thread)."""
         if self.artifact is None or self._image is None:
             raise CommandRefused("state", "no configuration is loaded: use a download")
         job = ReloadJob(artifact, renames, self._instances(), self.artifact, self.system)
-        return job.make_plan(live_state(self.artifact, job.old))
+        job.live, job.preview = live_state(self.artifact, job.old), True
+        return job
 
     def reload(
         self,
