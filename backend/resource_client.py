@@ -24,11 +24,11 @@ class ResourceClient:
         self.resource = resource
         self._subscribers: list[zenoh.Subscriber[None]] = []
 
-    def command(self, cmd: str, **args: Any) -> dict[str, Any]:
+    def command(
+        self, cmd: str, /, timeout_s: float = COMMAND_TIMEOUT_S, **args: Any
+    ) -> dict[str, Any]:
         payload = json.dumps({"cmd": cmd, **args})
-        replies = self.session.get(
-            command_key(self.resource), payload=payload, timeout=COMMAND_TIMEOUT_S
-        )
+        replies = self.session.get(command_key(self.resource), payload=payload, timeout=timeout_s)
         for reply in replies:
             if reply.ok is not None:
                 result: dict[str, Any] = json.loads(reply.ok.payload.to_bytes())

@@ -155,6 +155,65 @@ def _demo(args: argparse.Namespace) -> int:
     return run(args)
 
 
+def _load(args: argparse.Namespace) -> int:
+    from padt.online import load
+
+    return load(args)
+
+
+def _start(args: argparse.Namespace) -> int:
+    from padt.online import start
+
+    return start(args)
+
+
+def _stop(args: argparse.Namespace) -> int:
+    from padt.online import stop
+
+    return stop(args)
+
+
+def _status(args: argparse.Namespace) -> int:
+    from padt.online import status
+
+    return status(args)
+
+
+def _reload(args: argparse.Namespace) -> int:
+    from padt.online import reload
+
+    return reload(args)
+
+
+def _rename(text: str) -> tuple[str, str]:
+    from padt.online import parse_rename
+
+    return parse_rename(text)
+
+
+def _resource_options(parser: argparse.ArgumentParser, zenoh_default: str) -> None:
+    """What every command that talks to a running resource needs."""
+    parser.add_argument(
+        "--resource", required=True, metavar="NAME", help="name of the running resource"
+    )
+    parser.add_argument(
+        "--zenoh",
+        default=zenoh_default,
+        metavar="ENDPOINT",
+        help=f"Zenoh router the resource is connected to (default {zenoh_default})",
+    )
+
+
+def _backup_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--backup-dir",
+        type=Path,
+        default=Path("padt-backups"),
+        metavar="DIR",
+        help="folder for the backup archive of what was loaded (default ./padt-backups)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="padt",
@@ -226,6 +285,63 @@ def build_parser() -> argparse.ArgumentParser:
     demo = sub.add_parser("demo", help="router + runtime with the demo project + browser UI")
     demo_arguments(demo)
     demo.set_defaults(func=_demo)
+
+    from runtime.main import DEFAULT_ZENOH
+
+    load = sub.add_parser(
+        "load",
+        help="compile twice, download to a resource in STOP (cold start), store a backup",
+    )
+    load.add_argument("paths", nargs="+", type=Path, metavar="PATH")
+    _resource_options(load, DEFAULT_ZENOH)
+    _backup_option(load)
+    load.set_defaults(func=_load)
+
+    for name, does in (("start", "start"), ("stop", "stop")):
+        command = sub.add_parser(name, help=f"{does} a resource, or one of its programs")
+        _resource_options(command, DEFAULT_ZENOH)
+        command.add_argument("--program", help=f"{does} only this user program")
+        command.set_defaults(func=_start if name == "start" else _stop)
+
+    status = sub.add_parser("status", help="show a resource's state, CRC, cycle and programs")
+    _resource_options(status, DEFAULT_ZENOH)
+    status.add_argument("--json", action="store_true", help="print the status object as JSON")
+    status.set_defaults(func=_status)
+
+    reload = sub.add_parser(
+        "reload",
+        help="compile twice, show the reload plan, change the running resource online",
+    )
+    reload.add_argument("paths", nargs="+", type=Path, metavar="PATH")
+    _resource_options(reload, DEFAULT_ZENOH)
+    reload.add_argument("--preview", action="store_true", help="only show the plan; change nothing")
+    reload.add_argument(
+        "--rename",
+        action="append",
+        default=[],
+        type=_rename,
+        metavar="OLD=NEW",
+        help="carry the values of OLD (variable, FB instance or program) over to NEW; repeatable",
+    )
+    reload.add_argument(
+        "--yes",
+        action="store_true",
+        help="confirm the reload (without it, only the plan is shown and exit code is 1)",
+    )
+    reload.add_argument(
+        "--watchdog-ms",
+        type=_positive,
+        metavar="MS",
+        help="a higher watchdog time for the switch-over cycle only",
+    )
+    reload.add_argument(
+        "--target-cycle-ms",
+        type=_positive,
+        metavar="MS",
+        help="a longer target cycle time for the switch-over cycle only",
+    )
+    _backup_option(reload)
+    reload.set_defaults(func=_reload)
     return parser
 
 

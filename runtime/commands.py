@@ -134,6 +134,7 @@ def begin_reload(resource: Resource, request: Request) -> ReloadJob:
         _renames(request),
         watchdog_ms=_arg(request, "watchdog_ms", int, None),
         target_cycle_ms=_arg(request, "target_cycle_ms", int, None),
+        expected_crc=_arg(request, "expected_crc", str, None),
     )
 
 

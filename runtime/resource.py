@@ -161,6 +161,7 @@ class ReloadJob:
         self.prepared: SwitchOver | None = None
         self.failure: str | None = None
         self.preview = False  # only the plan is wanted
+        self.expected_crc: str | None = None  # the configuration the user previewed against
 
     def make_plan(self, live: LiveState | None) -> ReloadPlan:
         if self.instances is None:
@@ -281,6 +282,10 @@ class Resource:
             raise
 
     def _load(self, artifact: Artifact) -> None:
+        if artifact.resource.name != self.name:
+            raise CommandRefused(
+                "resource", f"the configuration is for resource {artifact.resource.name}"
+            )
         if self.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP):
             raise CommandRefused("state", "a download is only possible in STOP")
         if self.state == ResourceState.ERROR_STOP:
@@ -440,6 +445,7 @@ class Resource:
         watchdog_ms: int | None = None,
         target_cycle_ms: int | None = None,
         user: str | None = None,
+        expected_crc: str | None = None,
     ) -> ReloadJob:
         """Check what can be checked at once; the job then prepares (anywhere)."""
         try:
@@ -451,6 +457,7 @@ class Resource:
         assert self.artifact is not None
         job = ReloadJob(artifact, renames, self._instances(), self.artifact, self.system)
         job.watchdog_ms, job.target_cycle_ms, job.user = watchdog_ms, target_cycle_ms, user
+        job.expected_crc = expected_crc
         job.live = live_state(self.artifact, job.old)
         return job
 
@@ -475,6 +482,10 @@ class Resource:
 
     def _switch(self, job: ReloadJob) -> dict[str, Any]:
         self._check_reload()
+        if job.expected_crc is not None and job.old_artifact.crc != job.expected_crc:
+            raise CommandRefused(
+                "changed", f"the resource runs {job.old_artifact.crc}, not {job.expected_crc}"
+            )
         if job.failure is not None:
             raise CommandRefused("reload_failed", f"the new configuration failed: {job.failure}")
         plan, instances, prepared = job.plan, job.instances, job.prepared

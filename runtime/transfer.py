@@ -1,15 +1,19 @@
 """A configuration arriving in pieces: an artifact is larger than one command may be, so a
 download or reload sends it as `transfer_begin` (size and CRC-32 of the whole text), then
 `transfer_chunk`s in order, then the command that uses it. Nothing is taken until the
-text is whole and both CRCs agree (the transfer's, and the artifact's own)."""
+text is whole and both CRCs agree (the transfer's, and the artifact's own). A resource has
+one transfer at a time: a new `transfer_begin` drops the one before."""
 
 from __future__ import annotations
 
+import re
 import zlib
 
 from runtime.artifact import Artifact, ArtifactError, load_artifact
 
-MAX_CHUNK = 48 * 1024  # characters per chunk: well inside the 64 KiB request limit
+# characters per chunk: escaped inside a JSON request it may double, and must still fit
+# the 64 KiB request limit
+MAX_CHUNK = 24 * 1024
 MAX_SIZE = 64 * 1024 * 1024
 
 
@@ -29,6 +33,8 @@ class IncomingArtifact:
         """Start a transfer; one still open is dropped."""
         if not 0 < size <= MAX_SIZE:
             raise TransferError(f"size must be from 1 to {MAX_SIZE} bytes")
+        if not re.fullmatch(r"[0-9A-Fa-f]{8}", crc):
+            raise TransferError(f"crc must be 8 hex digits, not {crc!r}")
         self._size, self._crc, self._parts, self._received = size, crc.upper(), [], 0
         self._open = True
 

@@ -4,6 +4,7 @@ about, a reload the budget refuses, forcing surviving, and the all-or-nothing do
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 from runtime.artifact import crc32_hex
@@ -334,3 +335,23 @@ def test_a_corrupted_or_cut_transfer_is_refused_and_the_old_configuration_stays(
     h.ok("start")
     h.send(new)
     assert h.cmd("load")["error"]["code"] == "state"  # only in STOP
+
+
+def test_a_reload_against_another_running_configuration_is_refused() -> None:
+    h = harness(PLANT)
+    running = h.resource.status()["crc"]
+    change = PLANT.replace("level + 2", "level + 3")
+    h.send(compiled(change))
+    assert h.cmd("reload", expected_crc="00000000")["error"]["code"] == "changed"
+    assert h.resource.status()["crc"] == running
+    h.send(compiled(change))
+    assert h.ok("reload", expected_crc=running)["reload"]["old_crc"] == running
+
+
+def test_a_configuration_for_another_resource_is_refused() -> None:
+    h = harness(PLANT, start=False)
+    other = compiled(PLANT)
+    foreign = replace(other, resource=replace(other.resource, name="Other")).with_crc()
+    h.send(foreign)
+    assert h.refused("load") == "resource"
+    assert h.refused("transfer_begin", size=10, crc="0") == "transfer"
