@@ -114,7 +114,12 @@ def _transferred(resource: Resource, what: str) -> Artifact:
 
 
 def _load(resource: Resource, request: Request) -> Reply:
-    resource.load(_transferred(resource, "load"))
+    artifact = _transferred(resource, "load")
+    if artifact.resource.name != resource.name:  # sent to the wrong controller
+        message = f"the configuration is for resource {artifact.resource.name}"
+        resource.refused("load", message, artifact.crc)
+        raise CommandRefused("resource", message)
+    resource.load(artifact)
     return {"ok": True, "status": resource.status()}
 
 

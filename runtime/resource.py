@@ -282,10 +282,6 @@ class Resource:
             raise
 
     def _load(self, artifact: Artifact) -> None:
-        if artifact.resource.name != self.name:
-            raise CommandRefused(
-                "resource", f"the configuration is for resource {artifact.resource.name}"
-            )
         if self.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP):
             raise CommandRefused("state", "a download is only possible in STOP")
         if self.state == ResourceState.ERROR_STOP:

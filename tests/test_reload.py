@@ -7,7 +7,10 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+import pytest
+
 from runtime.artifact import crc32_hex
+from runtime.reload import SwitchOverTooLong, switch_over
 from tests.resource_harness import Harness, compiled, harness
 
 PLANT = """
@@ -355,3 +358,20 @@ def test_a_configuration_for_another_resource_is_refused() -> None:
     h.send(foreign)
     assert h.refused("load") == "resource"
     assert h.refused("transfer_begin", size=10, crc="0") == "transfer"
+
+
+def test_a_switch_over_past_its_deadline_leaves_the_old_configuration_untouched() -> None:
+    text = "PROGRAM Big VAR n : DINT; a : ARRAY[1..600] OF Point; END_VAR n := n + 1; END_PROGRAM"
+    text = "TYPE Point : STRUCT x : INT; END_STRUCT; END_TYPE\n" + text
+    h = harness(text)
+    h.cycle(2)
+    before = h.resource.values()
+    job = h.resource.begin_reload(compiled(text.replace("n + 1", "n + 2")), {})
+    job.prepare()
+    assert job.prepared is not None and job.instances is not None
+    with pytest.raises(SwitchOverTooLong):
+        switch_over(job.prepared, job.instances, deadline_ns=0)  # long past
+    assert h.resource.values() == before
+    assert h.resource.status()["crc"] == job.old_artifact.crc
+    h.cycle()
+    assert h.value("Big.n") == 3  # the old code runs on
