@@ -6,7 +6,7 @@ The TOML format is documented in docs/project-format.md.
 from __future__ import annotations
 
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -36,6 +36,7 @@ class Project:
     resource: ResourceConfig | None  # None: from the sources' CONFIGURATION, or a default
     programs: list[ProgramConfig] | None  # None: every PROGRAM runs, in source order
     sources: list[SourceFile]
+    safe_values: dict[str, Any] = field(default_factory=dict)  # output -> its safe value
 
 
 def demo_project_path() -> Path:
@@ -73,7 +74,10 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
     res = data.get("resource")
     if not isinstance(res, dict) or not isinstance(res.get("name"), str):
         raise ProjectError(f"{where}: [resource] with a name is required")
-    settings = {k: v for k, v in res.items() if k not in ("name", "program")}
+    settings = {k: v for k, v in res.items() if k not in ("name", "program", "safe_values")}
+    safe_values = res.get("safe_values", {})
+    if not isinstance(safe_values, dict):
+        raise ProjectError(f"{where}: [resource.safe_values] must be a table")
     resource = ResourceConfig(
         name=res["name"], **_parameters(settings, RESOURCE_BY_NAME, f"{where}: [resource]")
     )
@@ -97,7 +101,12 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
                 )
             )
     return Project(
-        str(meta.get("name", "project")), str(meta.get("version", "")), resource, programs, sources
+        str(meta.get("name", "project")),
+        str(meta.get("version", "")),
+        resource,
+        programs,
+        sources,
+        safe_values,
     )
 
 
@@ -125,4 +134,5 @@ def compile_project(project: Project, config_file: str = PROJECT_FILE) -> Compil
         resource=project.resource,
         programs=project.programs,
         config_file=config_file,
+        safe_values=project.safe_values,
     )

@@ -118,6 +118,8 @@ class Artifact:
     programs: tuple[ProgramConfig, ...]
     types: tuple[PouCode, ...] = ()  # STRUCT classes
     globals: PouCode | None = None  # the GLOBALS class (its instance is `_G`)
+    # outputs whose safe value (in STOP and ERROR STOP) is not 0 / FALSE, by path, sorted
+    safe_values: tuple[tuple[str, Any], ...] = ()
     crc: str = field(default="")
     format: str = FORMAT
     version: int = VERSION
@@ -186,6 +188,7 @@ def load_artifact(text: str | bytes) -> Artifact:
             programs=tuple(_program_config(p) for p in data["programs"]),
             types=tuple(_pou_code(p) for p in data["types"]),
             globals=_pou_code(data["globals"]) if data["globals"] is not None else None,
+            safe_values=tuple((name, value) for name, value in data["safe_values"]),
             crc=data["crc"],
         )
     except (KeyError, TypeError) as exc:

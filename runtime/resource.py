@@ -208,6 +208,7 @@ class Resource:
         self.start_kind: str | None = "cold"  # what the next first cycle is: cold | warm
         self.last_start = ""  # how the resource last started: cold | warm | continued
         self.outputs: dict[str, Any] = {}  # the output image as last written to the field
+        self._safe_values: dict[str, Any] = {}  # configured safe values by upper-case path
         self._image: CodeImage | None = None
         self._bound: list[BoundVariable] = []
         self._by_name: dict[str, BoundVariable] = {}
@@ -291,6 +292,7 @@ class Resource:
         old_crc = self.artifact.crc if self.artifact else None
         self._instantiate(artifact)
         self.artifact, self.params = artifact, artifact.resource
+        self._safe_values = {name.upper(): value for name, value in artifact.safe_values}
         self.forces = ForceTable()  # a download ends forcing, and its entries lose meaning
         self.state = ResourceState.STOP_VALID
         self.start_kind = "cold"
@@ -525,6 +527,7 @@ class Resource:
         self._adopt(instances)
         artifact = job.artifact
         self.artifact, self.params = artifact, artifact.resource
+        self._safe_values = {name.upper(): value for name, value in artifact.safe_values}
         self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
         self.system.WATCHDOG_TIME = self.watchdog_ns
         for entry in self.forces.entries():  # forcing survives, where the variable does
@@ -928,7 +931,10 @@ class Resource:
             if location is None or not location.upper().startswith("%Q"):
                 continue
             if safe:
-                image[bound.path.path] = default_value(bound.path.type)
+                configured = self._safe_values.get(bound.path.path.upper())
+                image[bound.path.path] = (
+                    configured if configured is not None else default_value(bound.path.type)
+                )
             else:
                 image[bound.path.path] = self._read_bound(bound)
         self.outputs = image

@@ -69,7 +69,12 @@ class Harness:
         return next(str(p["state"]) for p in status["programs"] if p["name"] == program)
 
 
-def compiled(text: str, programs: list[Any] | None = None, **resource: Any) -> Artifact:
+def compiled(
+    text: str,
+    programs: list[Any] | None = None,
+    safe_values: dict[str, Any] | None = None,
+    **resource: Any,
+) -> Artifact:
     """Compile `text` with the given resource parameters and user programs (dicts of
     ProgramConfig fields; `name` doubles as `pou` unless given)."""
     params = {**OPEN_RESOURCE, "target_cycle_ms": 10, **resource}
@@ -80,7 +85,9 @@ def compiled(text: str, programs: list[Any] | None = None, **resource: Any) -> A
             ProgramConfig(**{"pou": p["name"], "program_id": i, **p})
             for i, p in enumerate(programs, 1)
         ]
-    result = compile_sources([SourceFile("test.st", text)], resource=config, programs=configs)
+    result = compile_sources(
+        [SourceFile("test.st", text)], resource=config, programs=configs, safe_values=safe_values
+    )
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
     return result.artifact
 
@@ -89,10 +96,12 @@ def harness(
     text: str,
     programs: list[Any] | None = None,
     start: bool = True,
+    safe_values: dict[str, Any] | None = None,
     **resource: Any,
 ) -> Harness:
-    """A resource with `compiled(text, programs, **resource)` loaded (and started)."""
-    artifact = compiled(text, programs, **resource)
+    """A resource with `compiled(text, programs, safe_values, **resource)` loaded (and
+    started)."""
+    artifact = compiled(text, programs, safe_values, **resource)
     clock = VirtualClock()
     res = Resource("R", clock)
     res.load(artifact)

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import pytest
 
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
 from tests.resource_harness import harness
 
 TWO = """
@@ -41,6 +43,30 @@ def test_outputs_are_safe_in_stop_and_live_in_run() -> None:
     assert h.state() == "STOP/VALID CONFIGURATION"
     assert h.resource.outputs == {"valve": False, "speed": 0}
     assert h.value("valve") is True  # the variable keeps its value; the field gets 0
+
+
+def test_an_output_can_have_its_own_safe_value() -> None:
+    # a valve that must open to be safe (energise to trip), and a speed held at 300
+    h = harness(TWO, PROGRAMS, start=False, safe_values={"valve": True, "SPEED": 300})
+    assert h.resource.outputs == {"valve": True, "speed": 300}
+    h.ok("start")
+    h.cycle()
+    h.ok("write", variable="Control.n", value=0)
+    h.resource.error_stop("test")
+    assert h.resource.outputs == {"valve": True, "speed": 300}
+
+
+def test_a_safe_value_must_fit_a_located_output() -> None:
+    for values, message in (
+        ({"level": 1}, "safe value for 'level': no global output (%Q)"),
+        (
+            {"speed": 70000},
+            "safe value for 'speed': 70000 is outside the range of INT (-32768..32767)",
+        ),
+        ({"nothing": True}, "safe value for 'nothing': no global output (%Q)"),
+    ):
+        result = compile_sources([SourceFile("t.st", TWO)], safe_values=values)
+        assert [d.message for d in result.diagnostics] == [message]
 
 
 def test_inputs_are_read_at_the_start_of_the_cycle() -> None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import sys
 from dataclasses import dataclass, replace
+from typing import Any
 
 from backend.compiler import ast
 from backend.compiler.ast import key
@@ -39,6 +40,7 @@ from runtime.artifact import (
     canonical_json,
     crc32_hex,
 )
+from runtime.code_image import ValueRejected, representation
 
 
 @dataclass(frozen=True)
@@ -78,6 +80,7 @@ def compile_sources(
     resource: ResourceConfig | None = None,
     programs: list[ProgramConfig] | None = None,
     config_file: str = "padt.toml",
+    safe_values: dict[str, Any] | None = None,
 ) -> CompileResult:
     units, diagnostics = parse_all(sources)
     user_pous = {key(p.name) for unit in units for p in unit.pous}
@@ -98,6 +101,8 @@ def compile_sources(
         programs = configured[1] if configured else _default_programs(units)
         positions = configured[2] if configured else {}
     diagnostics.extend(check_programs(resolved, resource, programs, config_file, positions))
+    safe, safe_diagnostics = _safe_values(resolved, safe_values or {}, config_file)
+    diagnostics.extend(safe_diagnostics)
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics) or not resolved.pous:
         if not resolved.pous and not diagnostics:
@@ -125,6 +130,7 @@ def compile_sources(
         programs=program_configs,
         types=types,
         globals=globals_code,
+        safe_values=safe,
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
 
@@ -169,6 +175,28 @@ def _from_configuration(
     positions = {p.name: p.pos for p in chosen.programs}  # where each program was declared
     resource = ResourceConfig(name=chosen.name, target_cycle_ms=cycle_ms, target_cycle_mode="fixed")
     return resource, programs, positions
+
+
+def _safe_values(
+    resolved: Resolved, configured: dict[str, Any], config_file: str
+) -> tuple[tuple[tuple[str, Any], ...], list[Diagnostic]]:
+    """Safe values of outputs from the project: each must name a located output (%Q) and
+    be a value of its type."""
+    where = ast.Pos(config_file, 1, 1)
+    checked, diagnostics = [], []
+    for name, value in sorted(configured.items()):
+        variable = resolved.globals_by_key.get(key(name))
+        location = variable.location if variable is not None else None
+        if variable is None or location is None or not location.upper().startswith("%Q"):
+            diagnostics.append(error(where, f"safe value for '{name}': no global output (%Q)"))
+            continue
+        try:
+            stored = representation(_type_text(variable.type), value)
+        except ValueRejected as exc:
+            diagnostics.append(error(where, f"safe value for '{name}': {exc}"))
+            continue
+        checked.append((variable.name, stored))
+    return tuple(checked), diagnostics
 
 
 def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:
