@@ -353,6 +353,8 @@ class Resource:
         self._end_forcing("resource start")
         for program in self.programs:
             if program.state == ProgramState.STOP and program.config.start_allowed:
+                if program.held:  # stopped before the power failure: stays stopped
+                    continue
                 program.state = ProgramState.RUN
             program.last_start_ns = None
         self._first_cycle = True
@@ -607,6 +609,7 @@ class Resource:
                 restore(program.instance, saved["values"])
                 # timers and step times hold absolute program time: it comes back too
                 program.time_ns = int(saved["time_ns"])
+                program.held = saved["state"] in (ProgramState.STOP, ProgramState.ERROR)
                 restored.append(program.name)
         except (ContextMismatch, KeyError, TypeError, ValueError) as exc:
             assert self.artifact is not None
@@ -640,7 +643,7 @@ class Resource:
             program = self._restart_program_cold(program)
         if program.state != ProgramState.STOP:
             return
-        program.state, program.last_start_ns = ProgramState.RUN, None
+        program.state, program.last_start_ns, program.held = ProgramState.RUN, None, False
         self._event("program", f"program {program.name} started", user, program=program.name)
 
     def stop_program(self, name: str, user: str | None = None) -> None:

@@ -57,6 +57,7 @@ class UserProgram:
         self.paths = paths
         self.view = view  # the globals this program reads and writes (`_G` while it runs)
         self.state = ProgramState.STOP
+        self.held = False  # stays in STOP when the resource starts (warm start of a stopped one)
         self.time_ns = 0  # the program's own time: what its timers see
         self.last_start_ns: int | None = None  # clock time its last program cycle started
         self.error: str | None = None

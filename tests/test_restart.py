@@ -114,6 +114,26 @@ def test_a_warm_start_restores_values_timers_and_steps(tmp_path: Path) -> None:
     assert second.read("Counter.t.Q") is True  # the timer ran on from where it stood
 
 
+def test_a_program_stopped_before_the_power_failure_stays_stopped(tmp_path: Path) -> None:
+    artifact = compiled()
+    first = powered_up(artifact, tmp_path / "context.json")
+    first.start()
+    run(first, 3)
+    first.stop_program("Chart")
+    context = first.context()
+    assert context is not None
+    save_context(tmp_path / "context.json", context)
+    second = powered_up(artifact, tmp_path / "context.json")
+    second.start()
+    assert {p.name: p.state.value for p in second.programs} == {
+        "Counter": "RUN",
+        "Chart": "STOP",
+        "Trip": "RUN",
+    }
+    second.start_program("Chart")
+    assert second.program("Chart").state.value == "RUN"
+
+
 def test_a_context_of_another_configuration_gives_a_cold_start(tmp_path: Path) -> None:
     artifact = compiled()
     first = powered_up(artifact, tmp_path / "context.json")
