@@ -4,18 +4,40 @@ and subscriptions to its status and live values."""
 from __future__ import annotations
 
 import json
+import secrets
 from collections.abc import Callable
 from typing import Any
 
 import zenoh
 
-from runtime.keyspace import command_key, status_key, values_key
+from runtime.keyspace import command_key, status_key, watch_key, watcher_key
 
 COMMAND_TIMEOUT_S = 5.0
 
 
 class ResourceUnreachable(Exception):
     """No runtime answered the command."""
+
+
+class WatchRefused(Exception):
+    """The runtime did not take a watch set (unknown variable, bad period, ...)."""
+
+
+class Watch:
+    """A registered watch set: its values arrive until `close`."""
+
+    def __init__(
+        self, watch_id: str, token: zenoh.LivelinessToken, subscriber: zenoh.Subscriber[None]
+    ) -> None:
+        self.watch_id = watch_id
+        self.variables: list[str] = []  # canonical paths, as the runtime names them
+        self._token = token
+        self._subscriber = subscriber
+
+    def close(self) -> None:
+        """Withdraw the token: the runtime drops the set."""
+        self._token.undeclare()
+        self._subscriber.undeclare()
 
 
 class ResourceClient:
@@ -38,14 +60,36 @@ class ResourceClient:
     def on_status(self, callback: Callable[[dict[str, Any]], None]) -> None:
         self._subscribe(status_key(self.resource), callback)
 
-    def on_values(self, callback: Callable[[dict[str, Any]], None]) -> None:
-        self._subscribe(values_key(self.resource), callback)
+    def watch(
+        self,
+        variables: list[str],
+        callback: Callable[[dict[str, Any]], None],
+        period_ms: int = 100,
+    ) -> Watch:
+        """Receive the values of `variables` (with their quality) once per period. The set
+        lives as long as this session holds its liveliness token (until `Watch.close`)."""
+        watch_id = secrets.token_hex(8)
+        token = self.session.liveliness().declare_token(watcher_key(self.resource, watch_id))
+        subscriber = self._declare(watch_key(self.resource, watch_id), callback)
+        handle = Watch(watch_id, token, subscriber)
+        reply = self.command("watch", id=watch_id, variables=variables, period_ms=period_ms)
+        if not reply.get("ok"):
+            handle.close()
+            error = reply.get("error", {})
+            raise WatchRefused(f"{error.get('code')}: {error.get('message')}")
+        handle.variables = list(reply["variables"])
+        return handle
 
     def _subscribe(self, key_expr: str, callback: Callable[[dict[str, Any]], None]) -> None:
+        self._subscribers.append(self._declare(key_expr, callback))
+
+    def _declare(
+        self, key_expr: str, callback: Callable[[dict[str, Any]], None]
+    ) -> zenoh.Subscriber[None]:
         def handler(sample: zenoh.Sample) -> None:
             callback(json.loads(sample.payload.to_bytes()))
 
-        self._subscribers.append(self.session.declare_subscriber(key_expr, handler))
+        return self.session.declare_subscriber(key_expr, handler)
 
     def close(self) -> None:
         for subscriber in self._subscribers:

@@ -1,8 +1,10 @@
 """The viser UI: resource state and CRC, OLT fields with live values, Start / Stop / Step.
 
 Each browser gets its own GUI (login and user-specific views will live there). Live values
-are shown as one HTML table per client, which costs the browser far less than one input
-widget per variable; a refresher thread pushes what changed ten times a second.
+come from one watch set of the variables shown (the runtime sends nothing else), with their
+quality; they are shown as one HTML table per client, which costs the browser far less
+than one input widget per variable; a refresher thread pushes what changed ten times a
+second.
 """
 
 from __future__ import annotations
@@ -15,10 +17,11 @@ from typing import Any
 
 import viser
 
-from backend.resource_client import ResourceClient, ResourceUnreachable
+from backend.resource_client import ResourceClient, ResourceUnreachable, Watch, WatchRefused
 from backend.values import format_value
 
 REFRESH_S = 0.1
+WATCH_PERIOD_MS = 100
 log = logging.getLogger("padt.ui")
 
 
@@ -29,6 +32,7 @@ class _Latest:
     lock: threading.Lock = field(default_factory=threading.Lock)
     status: dict[str, Any] = field(default_factory=dict)
     values: dict[str, Any] = field(default_factory=dict)
+    quality: dict[str, str] = field(default_factory=dict)  # live / forced / stale
     cycle: int = 0
     version: int = 0
 
@@ -51,7 +55,7 @@ class PadtUi:
         self.server.on_client_connect(self._connect)
         self.server.on_client_disconnect(self._disconnect)
         client.on_status(self._on_status)
-        client.on_values(self._on_values)
+        self._watch: Watch | None = None
         self._stop = threading.Event()
         self._refresher = threading.Thread(target=self._refresh_loop, daemon=True)
         self._refresher.start()
@@ -80,6 +84,12 @@ class PadtUi:
             log.warning("%s", exc)
             return
         self.types = {v["path"]: v["type"] for v in reply.get("variables", [])}
+        if self._watch is not None:
+            self._watch.close()
+        try:
+            self._watch = self.client.watch(sorted(self.types), self._on_watch, WATCH_PERIOD_MS)
+        except (ResourceUnreachable, WatchRefused) as exc:
+            log.warning("no live values: %s", exc)
         with self.latest.lock:
             self.latest.version += 1
 
@@ -95,6 +105,14 @@ class PadtUi:
     def _on_values(self, message: dict[str, Any]) -> None:
         with self.latest.lock:
             self.latest.values = message.get("values", {})
+            self.latest.cycle = message.get("cycle", 0)
+            self.latest.version += 1
+
+    def _on_watch(self, message: dict[str, Any]) -> None:
+        entries: dict[str, Any] = message.get("values", {})
+        with self.latest.lock:
+            self.latest.values = {path: entry["value"] for path, entry in entries.items()}
+            self.latest.quality = {path: entry["quality"] for path, entry in entries.items()}
             self.latest.cycle = message.get("cycle", 0)
             self.latest.version += 1
 
@@ -137,8 +155,9 @@ class PadtUi:
             with self.latest.lock:
                 version = self.latest.version
                 status, values, cycle = self.latest.status, self.latest.values, self.latest.cycle
+                quality = self.latest.quality
             status_html = render_status(status, cycle)
-            table_html = render_values(values, self.types)
+            table_html = render_values(values, self.types, quality)
             for view in list(self.views.values()):
                 if view.shown_version != version:
                     view.status.content = status_html
@@ -174,17 +193,24 @@ def render_status(status: dict[str, Any], cycle: int) -> str:
     return f'<table style="font-size:0.9em;width:100%">{body}</table>'
 
 
-def render_values(values: dict[str, Any], types: dict[str, str]) -> str:
+_QUALITY_COLORS = {"forced": "#c92a2a", "stale": "#868e96"}
+
+
+def render_values(
+    values: dict[str, Any], types: dict[str, str], quality: dict[str, str] | None = None
+) -> str:
     rows = []
     for path in sorted(values):
         type_name = types.get(path, "")
         shown = html.escape(format_value(values[path], type_name))
         name = html.escape(path)
+        how = (quality or {}).get(path, "live")
+        color = _QUALITY_COLORS.get(how, "inherit")
         rows.append(
             f'<tr><td style="{_CELL}">{name}</td>'
             f'<td style="{_CELL};color:#868e96">{html.escape(type_name)}</td>'
-            f'<td style="{_CELL};text-align:right;font-family:monospace" '
-            f'data-var="{name}">{shown}</td></tr>'
+            f'<td style="{_CELL};text-align:right;font-family:monospace;color:{color}" '
+            f'data-var="{name}" data-quality="{html.escape(how)}">{shown}</td></tr>'
         )
     head = (
         f'<tr><th style="{_CELL};text-align:left">Variable</th>'

@@ -162,7 +162,27 @@ def _reload(resource: Resource, request: Request) -> Reply:
     return finish_reload(resource, job)
 
 
+def _watch(resource: Resource, request: Request) -> Reply:
+    names = _arg(request, "variables", list)
+    if not all(isinstance(name, str) for name in names):
+        raise CommandRefused("bad_request", '"variables" is a list of variable names')
+    watch_id = _arg(request, "id", str)
+    paths = resource.watch(watch_id, names, _arg(request, "period_ms", int, 100))
+    return {"ok": True, "id": watch_id, "variables": paths}
+
+
+def _unwatch(resource: Resource, request: Request) -> Reply:
+    return {"ok": True, "dropped": resource.watches.drop(_arg(request, "id", str))}
+
+
+def _watches(resource: Resource, request: Request) -> Reply:
+    return {"ok": True, "watches": resource.watches.ids()}
+
+
 COMMANDS: dict[str, Callable[[Resource, Request], Reply]] = {
+    "watch": _watch,
+    "unwatch": _unwatch,
+    "watches": _watches,
     "transfer_begin": _transfer_begin,
     "transfer_chunk": _transfer_chunk,
     "load": _load,

@@ -36,7 +36,6 @@ from runtime.resource import ReloadJob, Resource, ResourceState
 log = logging.getLogger(__name__)
 
 STATUS_PERIOD_NS = 1_000_000_000
-VALUES_PERIOD_NS = 100_000_000
 SWITCH_INTERVAL_S = 0.0005
 
 
@@ -57,7 +56,6 @@ class CycleDriver:
         self._last_context_ns = clock.now_ns()
         self._last_status: dict[str, object] | None = None
         self._last_status_ns = 0
-        self._last_values_ns = 0
         self._reload: tuple[zenoh.Query, ReloadJob, threading.Thread] | None = None
 
     def run(self, stop: threading.Event) -> None:
@@ -171,13 +169,15 @@ class CycleDriver:
         self._publish_status()
 
     def _publish_values(self, at_once: bool = False) -> None:
-        """Live values at most every VALUES_PERIOD_NS (what a person can read), at once
-        after a single step: a snapshot of every variable costs far more than a small
-        program's cycle."""
-        now = self.clock.now_ns()
-        if at_once or now - self._last_values_ns >= VALUES_PERIOD_NS:
-            self.link.publish_values(self.resource.cycle_count, self.resource.values())
-            self._last_values_ns = now
+        """The watch sets whose period has passed (all of them after a command, which may
+        have stepped, stopped or written); sets of departed clients are dropped first."""
+        while True:
+            try:
+                self.resource.watches.drop(self.link.departed.get_nowait())
+            except queue.Empty:
+                break
+        for watch_set in self.resource.watches.due(self.clock.now_ns(), all_of_them=at_once):
+            self.link.publish_watch(watch_set.watch_id, self.resource.watched(watch_set))
 
     def _publish_status(self) -> None:
         """Publish on change (cycle statistics aside) and at least every second."""

@@ -1,7 +1,9 @@
-"""The runtime's side of Zenoh: command queryable, status and value publishers, liveliness.
+"""The runtime's side of Zenoh: command queryable, status publisher, watch-set values,
+liveliness.
 
-Zenoh calls back on its own threads; the callback only queues the query, and the cycle
-driver answers it in the housekeeping part of the cycle (so commands never race the cycle).
+Zenoh calls back on its own threads; the callbacks only queue (a query, a departed
+watcher), and the cycle driver handles the queues in the housekeeping part of the cycle
+(so commands never race the cycle).
 """
 
 from __future__ import annotations
@@ -12,7 +14,14 @@ from typing import Any
 
 import zenoh
 
-from runtime.keyspace import alive_key, command_key, status_key, values_key
+from runtime.keyspace import (
+    alive_key,
+    command_key,
+    status_key,
+    watch_id_of,
+    watch_key,
+    watchers_key_expr,
+)
 
 
 class ResourceLink:
@@ -22,15 +31,29 @@ class ResourceLink:
         self._status = session.declare_publisher(
             status_key(resource), congestion_control=zenoh.CongestionControl.BLOCK
         )
-        # live values may drop under congestion: the next cycle brings fresh ones
-        self._values = session.declare_publisher(values_key(resource))
+        self._session = session
+        self._resource = resource
+        self.departed: queue.Queue[str] = queue.Queue()  # watch ids whose client went away
+        self._watchers = session.liveliness().declare_subscriber(
+            watchers_key_expr(resource), self._on_watcher
+        )
         self._token = session.liveliness().declare_token(alive_key(resource))
+
+    def _on_watcher(self, sample: zenoh.Sample) -> None:
+        if sample.kind == zenoh.SampleKind.DELETE:
+            self.departed.put(watch_id_of(str(sample.key_expr)))
 
     def publish_status(self, status: dict[str, Any]) -> None:
         self._status.put(json.dumps(status))
 
-    def publish_values(self, cycle: int, values: dict[str, Any]) -> None:
-        self._values.put(json.dumps({"cycle": cycle, "values": values}))
+    def publish_watch(self, watch_id: str, message: dict[str, Any]) -> None:
+        """A watch set's values; they may drop under congestion (the next period brings
+        fresh ones), so the cycle never waits for a slow client."""
+        self._session.put(
+            watch_key(self._resource, watch_id),
+            json.dumps(message),
+            congestion_control=zenoh.CongestionControl.DROP,
+        )
 
     @staticmethod
     def payload(query: zenoh.Query) -> bytes:
@@ -42,6 +65,6 @@ class ResourceLink:
 
     def close(self) -> None:
         self._token.undeclare()
+        self._watchers.undeclare()
         self._queryable.undeclare()
         self._status.undeclare()
-        self._values.undeclare()

@@ -32,6 +32,7 @@ from runtime.cycle_stats import CycleStats
 from runtime.event_log import EventLog
 from runtime.forcing import GLOBAL, ForceEntry, ForceTable
 from runtime.intrinsics import ProgramFault, SystemView
+from runtime.keyspace import valid_watch_id
 from runtime.parameters import RESOURCE_BY_NAME, ParameterError, resource_consistency
 from runtime.reload import (
     SwitchOver,
@@ -45,6 +46,7 @@ from runtime.slicing import SliceMeter
 from runtime.system_variables import SYSTEM_VARIABLES
 from runtime.transfer import IncomingArtifact
 from runtime.user_program import ProgramState, UserProgram, copy_globals
+from runtime.watch_sets import MAX_PERIOD_MS, MIN_PERIOD_MS, WatchSet, WatchSets
 from runtime.watchdog import Watchdog, WatchdogExpired, process_watchdog
 
 log = logging.getLogger(__name__)
@@ -220,6 +222,7 @@ class Resource:
         # told every new configuration (load or reload), to keep it for the next power-up
         self.on_configuration: Callable[[Artifact], None] | None = None
         self.incoming = IncomingArtifact()  # a configuration arriving for load or reload
+        self.watches = WatchSets()  # what the clients view
 
     # ---- parameters
     @property
@@ -1116,6 +1119,43 @@ class Resource:
 
     def variables(self) -> list[dict[str, str]]:
         return [{"path": bound.path.path, "type": bound.path.type} for bound in self._bound]
+
+    def watch(self, watch_id: str, names: list[str], period_ms: int) -> list[str]:
+        """Register what a client views; returns the canonical paths (all names must
+        exist: a typo gets an error, not a silently empty field)."""
+        if not valid_watch_id(watch_id):
+            raise CommandRefused("bad_request", "a watch id is 1 to 64 of A-Z a-z 0-9 _ -")
+        if not MIN_PERIOD_MS <= period_ms <= MAX_PERIOD_MS:
+            raise CommandRefused(
+                "bad_request", f"period_ms must be from {MIN_PERIOD_MS} to {MAX_PERIOD_MS}"
+            )
+        if self.watches.full(watch_id):
+            raise CommandRefused("too_many", "too many watch sets on this resource")
+        paths = tuple(self._lookup(name).path.path for name in names)
+        self.watches.set(WatchSet(watch_id, paths, period_ms * 1_000_000))
+        return list(paths)
+
+    def watched(self, watch_set: WatchSet) -> dict[str, Any]:
+        """A watch set's message: each value with its quality (live, forced, or stale when
+        nothing that could change it runs)."""
+        running = self.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP)
+        values: dict[str, Any] = {}
+        for path in watch_set.paths:
+            bound = self._by_name.get(path.upper())
+            if bound is None:  # gone with a reload
+                values[path] = {"value": None, "quality": "deleted"}
+                continue
+            if self.forces.is_forced(path):
+                quality = "forced"
+            elif not running or (
+                bound.program is not None
+                and bound.program.state not in (ProgramState.RUN, ProgramState.RUN_FREEZE)
+            ):
+                quality = "stale"
+            else:
+                quality = "live"
+            values[path] = {"value": _jsonable(self._read_bound(bound)), "quality": quality}
+        return {"cycle": self.cycle_count, "values": values}
 
     def values(self) -> dict[str, Any]:
         """Every elementary variable: `Program.var`, `Program.fb.var`, globals by their bare

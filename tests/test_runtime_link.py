@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import json
-import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import pytest
 import zenoh
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from backend.resource_client import ResourceClient
+from backend.resource_client import ResourceClient, WatchRefused
 from runtime.artifact import ResourceConfig
 from runtime.keyspace import alive_key, command_key
 from tests.runtime_process import (
@@ -72,39 +73,71 @@ def test_bad_commands_get_structured_errors(tmp_path: Path, zenoh_endpoint: str)
         assert client.command("status")["status"]["state"] == "RUN"
 
 
-def test_values_are_pushed_and_liveliness_ends_with_the_process(
+def test_watch_sets_push_only_what_is_watched_with_quality(
     tmp_path: Path, zenoh_endpoint: str
 ) -> None:
     write_demo_artifact(tmp_path)
-    events: list[str] = []
     pushed: list[dict[str, Any]] = []
-    got_values = threading.Event()
 
-    def on_value(message: dict[str, Any]) -> None:
-        pushed.append(message)
-        if len(pushed) >= 3:
-            got_values.set()
+    def latest(predicate: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            if pushed and predicate(pushed[-1]):
+                return pushed[-1]
+            time.sleep(0.02)
+        raise AssertionError(f"no such message; last: {pushed[-1:]}")
 
+    with running_resource("Tank1", tmp_path, zenoh_endpoint) as (_, client):
+        watch = client.watch(["tankcontrol.level", "TankControl.pump"], pushed.append, 50)
+        assert watch.variables == ["TankControl.level", "TankControl.pump"]
+        first = latest(lambda m: m["values"]["TankControl.level"]["quality"] == "live")
+        assert sorted(first["values"]) == ["TankControl.level", "TankControl.pump"]
+        cycles = [m["cycle"] for m in pushed]
+        assert cycles == sorted(cycles)
+
+        assert client.command("start_forcing", program="TankControl")["ok"]
+        assert client.command("force", variable="TankControl.pump", value=True)["ok"]
+        latest(lambda m: m["values"]["TankControl.pump"] == {"value": True, "quality": "forced"})
+        assert client.command("stop")["ok"]
+        latest(lambda m: m["values"]["TankControl.level"]["quality"] == "stale")
+
+        # a typo gets an error, not an empty field
+        with pytest.raises(WatchRefused, match="unknown_variable"):
+            client.watch(["TankControl.levle"], pushed.append)
+        assert client.command("watches")["watches"] == [watch.watch_id]
+        with client_session(zenoh_endpoint) as other_session:  # a second client ...
+            other = ResourceClient(other_session, "Tank1").watch(["TankControl.level"], print)
+            assert other.watch_id in client.command("watches")["watches"]
+        # ... goes away without a word: its liveliness token goes, and so does its set
+        deadline = time.monotonic() + 10
+        while other.watch_id in client.command("watches")["watches"]:
+            assert time.monotonic() < deadline, "the departed client's watch set stayed"
+            time.sleep(0.05)
+        watch.close()
+        deadline = time.monotonic() + 10
+        while client.command("watches")["watches"]:
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+
+
+def test_liveliness_ends_with_the_process(tmp_path: Path, zenoh_endpoint: str) -> None:
+    write_demo_artifact(tmp_path)
+    events: list[str] = []
     with router(zenoh_endpoint), client_session(zenoh_endpoint) as session:
         watcher = session.liveliness().declare_subscriber(
             alive_key("Tank1"), lambda s: events.append(str(s.kind)), history=True
         )
         client = ResourceClient(session, "Tank1")
-        client.on_values(on_value)
         with runtime_process("Tank1", tmp_path, zenoh_endpoint) as process:
             wait_until_answering(client)
-            assert got_values.wait(10)
             process.kill()  # no orderly shutdown: the token must vanish anyway
             process.wait()
             deadline = time.monotonic() + 5
             while str(zenoh.SampleKind.DELETE) not in events and time.monotonic() < deadline:
                 time.sleep(0.05)
         watcher.undeclare()
-        client.close()
     assert events[0] == str(zenoh.SampleKind.PUT)
     assert str(zenoh.SampleKind.DELETE) in events
-    cycles = [m["cycle"] for m in pushed[:3]]
-    assert cycles == sorted(cycles) and "TankControl.level" in pushed[0]["values"]
 
 
 def test_target_cycle_modes_and_an_online_change(tmp_path: Path, zenoh_endpoint: str) -> None:

@@ -344,7 +344,7 @@ def bench_snapshot(rounds: int = 50) -> None:
     mean, best = _mean_ms(resource.values, rounds)
     print(f"  values():                      mean {mean:6.2f} ms   best {best:6.2f} ms")
 
-    def message() -> str:  # what ResourceLink.publish_values sends (every 100 ms)
+    def message() -> str:  # a watch set of every variable, as the link sends it
         return json.dumps({"cycle": resource.cycle_count, "values": values})
 
     encoded = message()

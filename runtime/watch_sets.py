@@ -1,0 +1,51 @@
+"""Watch sets: what each client views, so that only that is sent (spec section 12).
+
+A client registers a set of variables and a period; after the CPU cycle in which a period
+has passed, the runtime sends the set's values (those of that cycle) in one message, each
+with its quality. A client holds a liveliness token for each of its sets; when the client
+goes away, Zenoh withdraws the token and the runtime drops the set.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+MIN_PERIOD_MS = 10
+MAX_PERIOD_MS = 60_000
+MAX_SETS = 64
+
+
+@dataclass
+class WatchSet:
+    watch_id: str
+    paths: tuple[str, ...]  # canonical variable paths, in the client's order
+    period_ns: int
+    next_due_ns: int = 0  # clock time after which it is sent again
+
+
+class WatchSets:
+    def __init__(self) -> None:
+        self._sets: dict[str, WatchSet] = {}
+
+    def set(self, watch_set: WatchSet) -> None:
+        """Register (or replace) a set; it is due at once."""
+        self._sets[watch_set.watch_id] = watch_set
+
+    def drop(self, watch_id: str) -> bool:
+        return self._sets.pop(watch_id, None) is not None
+
+    def ids(self) -> list[str]:
+        return sorted(self._sets)
+
+    def full(self, watch_id: str) -> bool:
+        return watch_id not in self._sets and len(self._sets) >= MAX_SETS
+
+    def due(self, now_ns: int, all_of_them: bool = False) -> list[WatchSet]:
+        """The sets to send now (`all_of_them`: after a command, which may have changed
+        what they show); each is next due one period later."""
+        sending = [
+            s for _, s in sorted(self._sets.items()) if all_of_them or now_ns >= s.next_due_ns
+        ]
+        for watch_set in sending:
+            watch_set.next_due_ns = now_ns + watch_set.period_ns
+        return sending
