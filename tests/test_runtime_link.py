@@ -64,13 +64,51 @@ def test_bad_commands_get_structured_errors(tmp_path: Path, zenoh_endpoint: str)
         wait_until_answering(client)
         assert client.command("explode")["error"]["code"] == "unknown_command"
         assert client.command("step")["error"]["code"] == "state"  # step needs STOP
-        for payload in (b"not json", b"[1, 2]", b"x" * 100_000):
+        before = client.command("status")["status"]["cycle"]
+        garbage = (b"not json", b"[1, 2]", b"x" * 100_000, b"\xff\xfe", b'{"cmd": 7}')
+        for payload in garbage:
             replies = list(session.get(command_key("Tank1"), payload=payload, timeout=5))
             sample = replies[0].ok
             assert sample is not None
             reply = json.loads(sample.payload.to_bytes())
             assert reply["ok"] is False and reply["error"]["message"]
-        assert client.command("status")["status"]["state"] == "RUN"
+        for bad in ({"variable": 3, "value": 1}, {"variable": "TankControl.level"}):
+            assert client.command("write", **bad)["error"]["code"] == "bad_request"
+        status = client.command("status")["status"]
+        assert status["state"] == "RUN"
+        deadline = time.monotonic() + 10
+        while client.command("status")["status"]["cycle"] <= before + 2:
+            assert time.monotonic() < deadline, "the cycle stopped"  # it goes on
+            time.sleep(0.05)
+
+
+def test_two_resources_on_one_router(tmp_path: Path, zenoh_endpoint: str) -> None:
+    """Each resource answers its own commands; liveliness tells which ones are there."""
+    for name in ("Left", "Right"):
+        config = ResourceConfig(name=name, target_cycle_ms=20, autostart="cold")
+        text = f"PROGRAM P VAR n : DINT; tag : STRING := '{name}'; END_VAR n := n + 1; END_PROGRAM"
+        result = compile_sources([SourceFile("p.st", text)], resource=config)
+        assert result.artifact is not None
+        store_artifact(tmp_path / name, result.artifact)
+    with (
+        router(zenoh_endpoint),
+        runtime_process("Left", tmp_path / "Left", zenoh_endpoint),
+        runtime_process("Right", tmp_path / "Right", zenoh_endpoint),
+        client_session(zenoh_endpoint) as session,
+    ):
+        left, right = ResourceClient(session, "Left"), ResourceClient(session, "Right")
+        wait_until_answering(left)
+        wait_until_answering(right)
+        assert left.command("values")["values"]["P.tag"] == "Left"
+        assert right.command("values")["values"]["P.tag"] == "Right"
+        assert left.command("stop")["status"]["state"] == "STOP/VALID CONFIGURATION"
+        assert right.command("status")["status"]["state"] == "RUN"
+        found = {
+            str(reply.ok.key_expr).split("/")[3]
+            for reply in session.liveliness().get("padt/v1/res/*/alive", timeout=5)
+            if reply.ok is not None
+        }
+        assert found == {"Left", "Right"}
 
 
 def test_watch_sets_push_only_what_is_watched_with_quality(
