@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import signal
 import threading
+from pathlib import Path
 
 DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
 
@@ -12,6 +13,12 @@ DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--resource", required=True, help="resource to show")
     parser.add_argument("--zenoh", default=DEFAULT_ZENOH, metavar="ENDPOINT")
+    parser.add_argument(
+        "--zenoh-config",
+        type=Path,
+        metavar="FILE",
+        help="Zenoh configuration (JSON5) with TLS and user/password settings",
+    )
     parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
     parser.add_argument("--port", type=int, default=8080, help="HTTP port (next free if busy)")
 
@@ -22,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     from frontend.app import PadtUi
     from runtime.zenoh_config import open_client
 
-    session = open_client(args.zenoh)
+    session = open_client(args.zenoh, args.zenoh_config)
     ui = PadtUi(ResourceClient(session, args.resource), host=args.host, port=args.port)
     print(f"PADT UI: {ui.url}", flush=True)
     stop = threading.Event()

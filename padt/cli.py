@@ -202,6 +202,12 @@ def _resource_options(parser: argparse.ArgumentParser, zenoh_default: str) -> No
         metavar="ENDPOINT",
         help=f"Zenoh router the resource is connected to (default {zenoh_default})",
     )
+    parser.add_argument(
+        "--zenoh-config",
+        type=Path,
+        metavar="FILE",
+        help="Zenoh configuration (JSON5) with TLS and user/password settings",
+    )
 
 
 def _backup_option(parser: argparse.ArgumentParser) -> None:

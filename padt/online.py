@@ -64,7 +64,7 @@ def _client(args: argparse.Namespace) -> Iterator[ResourceClient]:
     from runtime.zenoh_config import open_client
 
     try:
-        session = open_client(args.zenoh)
+        session = open_client(args.zenoh, args.zenoh_config)
     except zenoh.ZError as exc:
         # zenoh appends the Rust source location of the error: of no use to the user
         reason = str(exc).split(" at /", 1)[0]

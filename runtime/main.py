@@ -46,6 +46,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"Zenoh router to connect to (default {DEFAULT_ZENOH})",
     )
     parser.add_argument(
+        "--zenoh-config",
+        type=Path,
+        metavar="FILE",
+        help="Zenoh configuration (JSON5) with TLS and user/password settings",
+    )
+    parser.add_argument(
         "--context-period-ms",
         type=int,
         default=1000,
@@ -109,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
-    session = open_client(args.zenoh)
+    session = open_client(args.zenoh, args.zenoh_config)
     link = ResourceLink(session, args.resource)
     saver = ContextSaver(context_path(args.state_dir))
 

@@ -1,32 +1,47 @@
 """Zenoh session configuration with the secure defaults: explicit endpoints, loopback
-unless told otherwise, no multicast scouting."""
+unless told otherwise, no multicast scouting.
+
+Transport security comes from an optional Zenoh configuration file (JSON5, Zenoh's own
+keys; `--zenoh-config FILE` on every command that opens a session): TLS certificates under
+`transport/link/tls`, user and password under `transport/auth/usrpwd`. The file is read
+first and the endpoints, mode and scouting set here on top, so it cannot turn the secure
+defaults off by accident (it may set `connect/timeout_ms`). docs/zenoh-security.md has
+examples.
+"""
 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import zenoh
 
+CONNECT_TIMEOUT_MS = 10_000
+
 
 def session_config(
-    *, mode: str = "client", listen: list[str] | None = None, connect: list[str] | None = None
+    *,
+    mode: str = "client",
+    listen: list[str] | None = None,
+    connect: list[str] | None = None,
+    config_file: Path | None = None,
 ) -> zenoh.Config:
-    config = zenoh.Config()
+    config = zenoh.Config.from_file(str(config_file)) if config_file else zenoh.Config()
     config.insert_json5("mode", json.dumps(mode))
     config.insert_json5("listen/endpoints", json.dumps(listen or []))
     config.insert_json5("connect/endpoints", json.dumps(connect or []))
     config.insert_json5("scouting/multicast/enabled", "false")
     config.insert_json5("scouting/delay", "0")
-    if mode == "client":
+    if mode == "client" and config.get_json("connect/timeout_ms") == "null":
         # wait for the router instead of failing at once when it starts a moment later
-        config.insert_json5("connect/timeout_ms", "10000")
+        config.insert_json5("connect/timeout_ms", str(CONNECT_TIMEOUT_MS))
     return config
 
 
-def open_router(endpoint: str) -> zenoh.Session:
+def open_router(endpoint: str, config_file: Path | None = None) -> zenoh.Session:
     """A Zenoh router inside this Python process (no zenohd binary needed)."""
-    return zenoh.open(session_config(mode="router", listen=[endpoint]))
+    return zenoh.open(session_config(mode="router", listen=[endpoint], config_file=config_file))
 
 
-def open_client(endpoint: str) -> zenoh.Session:
-    return zenoh.open(session_config(mode="client", connect=[endpoint]))
+def open_client(endpoint: str, config_file: Path | None = None) -> zenoh.Session:
+    return zenoh.open(session_config(mode="client", connect=[endpoint], config_file=config_file))
