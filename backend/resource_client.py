@@ -10,7 +10,7 @@ from typing import Any
 
 import zenoh
 
-from runtime.keyspace import command_key, status_key, watch_key, watcher_key
+from runtime.keyspace import command_key, events_key, status_key, watch_key, watcher_key
 
 COMMAND_TIMEOUT_S = 5.0
 
@@ -59,6 +59,10 @@ class ResourceClient:
 
     def on_status(self, callback: Callable[[dict[str, Any]], None]) -> None:
         self._subscribe(status_key(self.resource), callback)
+
+    def on_events(self, callback: Callable[[dict[str, Any]], None]) -> None:
+        """Every event of the resource's log from now on, in order."""
+        self._subscribe(events_key(self.resource), callback)
 
     def watch(
         self,

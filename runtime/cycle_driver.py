@@ -57,6 +57,8 @@ class CycleDriver:
         self._last_status: dict[str, object] | None = None
         self._last_status_ns = 0
         self._reload: tuple[zenoh.Query, ReloadJob, threading.Thread] | None = None
+        # events before the driver started (power-up: warm or cold start) go out too
+        self._events_sent = 0
 
     def run(self, stop: threading.Event) -> None:
         # the cycle thread must get the interpreter back promptly after its wait for the
@@ -179,8 +181,16 @@ class CycleDriver:
         for watch_set in self.resource.watches.due(self.clock.now_ns(), all_of_them=at_once):
             self.link.publish_watch(watch_set.watch_id, self.resource.watched(watch_set))
 
+    def _publish_events(self) -> None:
+        """What the event log got since the last time, in order."""
+        for event in self.resource.events.recent(self._events_sent):
+            self.link.publish_event(event.as_json())
+            self._events_sent = event.seq
+
     def _publish_status(self) -> None:
-        """Publish on change (cycle statistics aside) and at least every second."""
+        """Publish on change (cycle statistics aside) and at least every second; the
+        events that led to a change go first."""
+        self._publish_events()
         status = self.resource.status()
         significant = {k: v for k, v in status.items() if k not in ("stats", "cycle")}
         now = self.clock.now_ns()

@@ -3,6 +3,7 @@
 padt/v1/res/<resource>/cmd      queryable: JSON command in, JSON reply out
 padt/v1/res/<resource>/status   published on change and every second
 padt/v1/res/<resource>/alive    liveliness token while the runtime process lives
+padt/v1/res/<resource>/events   every event of the event log, in order (reliable)
 padt/v1/res/<resource>/watch/<id>     the values of watch set <id>, once per its period
 padt/v1/res/<resource>/watchers/<id>  liveliness token of the client that owns watch set <id>
 """
@@ -48,6 +49,10 @@ def watchers_key_expr(resource: str) -> str:
 def watch_id_of(key: str) -> str:
     """The watch set id at the end of a watcher or watch key."""
     return key.rsplit("/", 1)[-1]
+
+
+def events_key(resource: str) -> str:
+    return f"{ROOT}/res/{resource}/events"
 
 
 def alive_key(resource: str) -> str:

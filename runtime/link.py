@@ -17,6 +17,7 @@ import zenoh
 from runtime.keyspace import (
     alive_key,
     command_key,
+    events_key,
     status_key,
     watch_id_of,
     watch_key,
@@ -30,6 +31,10 @@ class ResourceLink:
         self._queryable = session.declare_queryable(command_key(resource), self.inbox.put)
         self._status = session.declare_publisher(
             status_key(resource), congestion_control=zenoh.CongestionControl.BLOCK
+        )
+        # events must all arrive, in order: the publisher waits rather than drop one
+        self._events = session.declare_publisher(
+            events_key(resource), congestion_control=zenoh.CongestionControl.BLOCK
         )
         self._session = session
         self._resource = resource
@@ -45,6 +50,9 @@ class ResourceLink:
 
     def publish_status(self, status: dict[str, Any]) -> None:
         self._status.put(json.dumps(status))
+
+    def publish_event(self, event: dict[str, Any]) -> None:
+        self._events.put(json.dumps(event))
 
     def publish_watch(self, watch_id: str, message: dict[str, Any]) -> None:
         """A watch set's values; they may drop under congestion (the next period brings
@@ -68,3 +76,4 @@ class ResourceLink:
         self._watchers.undeclare()
         self._queryable.undeclare()
         self._status.undeclare()
+        self._events.undeclare()

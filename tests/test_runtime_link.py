@@ -158,6 +158,27 @@ def test_watch_sets_push_only_what_is_watched_with_quality(
             time.sleep(0.05)
 
 
+def test_events_are_pushed_in_order(tmp_path: Path, zenoh_endpoint: str) -> None:
+    write_demo_artifact(tmp_path)
+    events: list[dict[str, Any]] = []
+    with running_resource("Tank1", tmp_path, zenoh_endpoint) as (_, client):
+        client.on_events(events.append)
+        assert client.command("stop")["ok"]
+        assert client.command("write", variable="TankControl.level", value=400)["ok"]
+        deadline = time.monotonic() + 10
+        while len([e for e in events if e["kind"] in ("stop", "write")]) < 2:
+            assert time.monotonic() < deadline, events
+            time.sleep(0.02)
+        client.close()
+    kinds = [e["kind"] for e in events]
+    assert kinds.index("stop") < kinds.index("write")
+    write = next(e for e in events if e["kind"] == "write")
+    assert write["details"]["variable"] == "TankControl.level"
+    assert write["details"]["new"] == 400
+    seqs = [e["seq"] for e in events]
+    assert seqs == sorted(seqs)
+
+
 def test_liveliness_ends_with_the_process(tmp_path: Path, zenoh_endpoint: str) -> None:
     write_demo_artifact(tmp_path)
     events: list[str] = []
