@@ -13,7 +13,7 @@ from typing import Any
 
 from backend.compiler.pipeline import CompileResult, compile_sources
 from backend.compiler.source import SourceFile, read_source
-from runtime.artifact import ProgramConfig, ResourceConfig
+from runtime.artifact import ProgramConfig, ResourceConfig, UserAccount
 from runtime.parameters import (
     PROGRAM_BY_NAME,
     RESOURCE_BY_NAME,
@@ -37,6 +37,7 @@ class Project:
     programs: list[ProgramConfig] | None  # None: every PROGRAM runs, in source order
     sources: list[SourceFile]
     safe_values: dict[str, Any] = field(default_factory=dict)  # output -> its safe value
+    users: list[UserAccount] = field(default_factory=list)  # PES accounts ([[resource.user]])
 
 
 def demo_project_path() -> Path:
@@ -74,7 +75,17 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
     res = data.get("resource")
     if not isinstance(res, dict) or not isinstance(res.get("name"), str):
         raise ProjectError(f"{where}: [resource] with a name is required")
-    settings = {k: v for k, v in res.items() if k not in ("name", "program", "safe_values")}
+    settings = {k: v for k, v in res.items() if k not in ("name", "program", "safe_values", "user")}
+    users = []
+    for entry in res.get("user", []):
+        try:
+            users.append(
+                UserAccount(str(entry["name"]), str(entry["level"]), str(entry["password_hash"]))
+            )
+        except (KeyError, TypeError) as exc:
+            raise ProjectError(
+                f"{where}: [[resource.user]] needs name, level and password_hash ({exc})"
+            ) from None
     safe_values = res.get("safe_values", {})
     if not isinstance(safe_values, dict):
         raise ProjectError(f"{where}: [resource.safe_values] must be a table")
@@ -107,6 +118,7 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
         programs,
         sources,
         safe_values,
+        users,
     )
 
 
@@ -135,4 +147,5 @@ def compile_project(project: Project, config_file: str = PROJECT_FILE) -> Compil
         programs=project.programs,
         config_file=config_file,
         safe_values=project.safe_values,
+        users=project.users,
     )

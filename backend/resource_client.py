@@ -45,17 +45,26 @@ class ResourceClient:
         self.session = session
         self.resource = resource
         self._subscribers: list[zenoh.Subscriber[None]] = []
+        self.token: str | None = None  # the session token after `login`, sent with every command
 
     def command(
         self, cmd: str, /, timeout_s: float = COMMAND_TIMEOUT_S, **args: Any
     ) -> dict[str, Any]:
-        payload = json.dumps({"cmd": cmd, **args})
+        token = {"token": self.token} if self.token is not None else {}
+        payload = json.dumps({"cmd": cmd, **token, **args})
         replies = self.session.get(command_key(self.resource), payload=payload, timeout=timeout_s)
         for reply in replies:
             if reply.ok is not None:
                 result: dict[str, Any] = json.loads(reply.ok.payload.to_bytes())
                 return result
         raise ResourceUnreachable(f"resource '{self.resource}' did not answer '{cmd}'")
+
+    def login(self, user: str, password: str) -> dict[str, Any]:
+        """Log in; the token goes with every later command. The reply says the level."""
+        reply = self.command("login", user=user, password=password)
+        if reply.get("ok"):
+            self.token = str(reply["token"])
+        return reply
 
     def on_status(self, callback: Callable[[dict[str, Any]], None]) -> None:
         self._subscribe(status_key(self.resource), callback)

@@ -208,6 +208,11 @@ def _resource_options(parser: argparse.ArgumentParser, zenoh_default: str) -> No
         metavar="FILE",
         help="Zenoh configuration (JSON5) with TLS and user/password settings",
     )
+    parser.add_argument(
+        "--user",
+        metavar="NAME",
+        help="log in to the resource as NAME (password from PADT_PASSWORD, else asked for)",
+    )
 
 
 def _backup_option(parser: argparse.ArgumentParser) -> None:
@@ -292,6 +297,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo_arguments(demo)
     demo.set_defaults(func=_demo)
 
+    from runtime.access import LEVELS
     from runtime.main import DEFAULT_ZENOH
 
     load = sub.add_parser(
@@ -348,7 +354,44 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _backup_option(reload)
     reload.set_defaults(func=_reload)
+
+    passwd = sub.add_parser(
+        "passwd",
+        help="print a [[resource.user]] entry with the salted hash of a password",
+    )
+    passwd.add_argument("user", metavar="NAME")
+    passwd.add_argument("--level", default="read", choices=LEVELS, help="access level")
+    passwd.set_defaults(func=_passwd)
     return parser
+
+
+def _passwd(args: argparse.Namespace) -> int:
+    """The password from PADT_PASSWORD or asked for twice; only its hash is printed."""
+    import getpass
+    import os
+
+    from runtime.access import account_problems, hash_password
+
+    password = os.environ.get("PADT_PASSWORD")
+    if password is None:
+        password = getpass.getpass(f"password of {args.user}: ")
+        if getpass.getpass("again: ") != password:
+            print("padt passwd: the two passwords differ", file=sys.stderr)
+            return 1
+    try:
+        hashed = hash_password(password)
+    except ValueError as exc:
+        print(f"padt passwd: {exc}", file=sys.stderr)
+        return 2
+    problems = account_problems(args.user, args.level, hashed)
+    if problems:
+        print(f"padt passwd: {problems[0]}", file=sys.stderr)
+        return 2
+    print("[[resource.user]]")
+    print(f'name = "{args.user}"')
+    print(f'level = "{args.level}"')
+    print(f'password_hash = "{hashed}"')
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:

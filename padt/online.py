@@ -8,7 +8,9 @@ confirmation) or the resource did not answer, 2 bad options or an unreadable pro
 from __future__ import annotations
 
 import argparse
+import getpass
 import json
+import os
 import shlex
 import sys
 from collections.abc import Callable, Iterator
@@ -70,7 +72,10 @@ def _client(args: argparse.Namespace) -> Iterator[ResourceClient]:
         reason = str(exc).split(" at /", 1)[0]
         raise _Failed(f"cannot reach the Zenoh router at {args.zenoh}: {reason}") from None
     try:
-        yield ResourceClient(session, args.resource)
+        client = ResourceClient(session, args.resource)
+        if args.user is not None:
+            _log_in(client, args.user)
+        yield client
     except ResourceUnreachable as exc:
         raise _Failed(
             f"{exc}: is `padt runtime --resource {args.resource}` running and connected to "
@@ -78,6 +83,18 @@ def _client(args: argparse.Namespace) -> Iterator[ResourceClient]:
         ) from None
     finally:
         session.close()
+
+
+def _log_in(client: ResourceClient, user: str) -> None:
+    """Log in as `user`: the password from PADT_PASSWORD, else asked for (never an
+    option, so that it stays out of shell histories and process lists)."""
+    password = os.environ.get("PADT_PASSWORD")
+    if password is None:
+        password = getpass.getpass(f"password of {user}: ")
+    reply = client.login(user, password)
+    if not reply.get("ok"):
+        error = reply.get("error", {})
+        raise _Failed(f"login refused ({error.get('code')}): {error.get('message')}")
 
 
 def _run(name: str, args: argparse.Namespace, body: Callable[[], int]) -> int:

@@ -111,6 +111,15 @@ class ResourceConfig:
 
 
 @dataclass(frozen=True)
+class UserAccount:
+    """A PES user: name, access level, and the salted scrypt hash of the password."""
+
+    name: str
+    level: str  # read | operator | read-write | administrator
+    password_hash: str  # scrypt$N$r$p$salt$hash (base64)
+
+
+@dataclass(frozen=True)
 class Artifact:
     project: str
     resource: ResourceConfig
@@ -120,6 +129,7 @@ class Artifact:
     globals: PouCode | None = None  # the GLOBALS class (its instance is `_G`)
     # outputs whose safe value (in STOP and ERROR STOP) is not 0 / FALSE, by path, sorted
     safe_values: tuple[tuple[str, Any], ...] = ()
+    users: tuple[UserAccount, ...] = ()  # none: open access (simulation, tests)
     crc: str = field(default="")
     format: str = FORMAT
     version: int = VERSION
@@ -189,6 +199,7 @@ def load_artifact(text: str | bytes) -> Artifact:
             types=tuple(_pou_code(p) for p in data["types"]),
             globals=_pou_code(data["globals"]) if data["globals"] is not None else None,
             safe_values=tuple((name, value) for name, value in data["safe_values"]),
+            users=tuple(UserAccount(**user) for user in data["users"]),
             crc=data["crc"],
         )
     except (KeyError, TypeError) as exc:

@@ -10,6 +10,7 @@ import json
 from collections.abc import Callable
 from typing import Any
 
+from runtime.access import ADMINISTRATOR_PARAMETERS, COMMAND_LEVELS, AccessDenied
 from runtime.artifact import Artifact
 from runtime.resource import CommandRefused, ReloadJob, Resource
 from runtime.transfer import MAX_CHUNK, TransferError
@@ -139,6 +140,7 @@ def begin_reload(resource: Resource, request: Request) -> ReloadJob:
         _renames(request),
         watchdog_ms=_arg(request, "watchdog_ms", int, None),
         target_cycle_ms=_arg(request, "target_cycle_ms", int, None),
+        user=resource.acting_user,
         expected_crc=_arg(request, "expected_crc", str, None),
     )
 
@@ -179,7 +181,19 @@ def _watches(resource: Resource, request: Request) -> Reply:
     return {"ok": True, "watches": resource.watches.ids()}
 
 
+def _login(resource: Resource, request: Request) -> Reply:
+    token, session = resource.login(_arg(request, "user", str), _arg(request, "password", str))
+    return {"ok": True, "token": token, "user": session.user, "level": session.level}
+
+
+def _logout(resource: Resource, request: Request) -> Reply:
+    resource.access.logout(_arg(request, "token", str, ""))
+    return {"ok": True}
+
+
 COMMANDS: dict[str, Callable[[Resource, Request], Reply]] = {
+    "login": _login,
+    "logout": _logout,
     "watch": _watch,
     "unwatch": _unwatch,
     "watches": _watches,
@@ -244,7 +258,29 @@ def execute(resource: Resource, payload: bytes) -> dict[str, Any]:
     handler = COMMANDS.get(request["cmd"])
     if handler is None:
         return error_reply("unknown_command", f"unknown command '{request['cmd']}'")
+    refusal = authorize(resource, request)
+    if refusal is not None:
+        return refusal
     return guarded(lambda: handler(resource, request))
+
+
+def authorize(resource: Resource, request: Request) -> Reply | None:
+    """Whether the caller's session token allows this command (the resource checks it for
+    every request, whoever sends it); sets who acts, for the events. An error reply, or
+    None to go on."""
+    command = request["cmd"]
+    resource.acting_user = None
+    if command in ("login", "logout"):
+        return None
+    needed = COMMAND_LEVELS.get(command, "administrator")
+    if command == "set_parameter" and request.get("name") in ADMINISTRATOR_PARAMETERS:
+        needed = "administrator"
+    try:
+        session = resource.access.check(request.get("token"), needed)
+    except AccessDenied as denied:
+        return error_reply(denied.code, denied.message)
+    resource.acting_user = session.user if session is not None else None
+    return None
 
 
 def guarded(action: Callable[[], Reply]) -> Reply:

@@ -23,6 +23,7 @@ import zenoh
 from runtime.clock import Clock
 from runtime.commands import (
     Reply,
+    authorize,
     begin_reload,
     error_reply,
     execute,
@@ -142,6 +143,10 @@ class CycleDriver:
         request = parse_request(payload)
         if request.get("cmd") not in ("reload", "reload_preview"):
             return False
+        refusal = authorize(self.resource, request)
+        if refusal is not None:
+            self.link.reply(query, refusal)
+            return True
         if self._reload is not None:
             self.link.reply(query, error_reply("busy", "a reload is already under way"))
             return True

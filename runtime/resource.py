@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
+from runtime.access import AccessControl, AccessDenied, Session
 from runtime.artifact import Artifact, ResourceConfig
 from runtime.clock import Clock
 from runtime.code_image import (
@@ -223,6 +224,8 @@ class Resource:
         self.on_configuration: Callable[[Artifact], None] | None = None
         self.incoming = IncomingArtifact()  # a configuration arriving for load or reload
         self.watches = WatchSets()  # what the clients view
+        self.access = AccessControl((), clock.now_ns)  # accounts of the loaded configuration
+        self.acting_user: str | None = None  # who sent the command being carried out
 
     # ---- parameters
     @property
@@ -266,6 +269,16 @@ class Resource:
             "parameter", f"{name} changed from {old} to {checked}", user, name=name, old=old
         )
 
+    def login(self, name: str, password: str) -> tuple[str, Session]:
+        """A session token; a failed login is an event (without the password)."""
+        try:
+            token, session = self.access.login(name, password)
+        except AccessDenied as denied:
+            self._event("login", f"login of '{name}' refused: {denied.message}", name)
+            raise CommandRefused(denied.code, denied.message) from None
+        self._event("login", f"{name} logged in ({session.level})", name)
+        return token, session
+
     def reset_stats(self) -> None:
         self.stats = CycleStats()
         self._last_start_ns = None
@@ -296,6 +309,7 @@ class Resource:
         self._instantiate(artifact)
         self.artifact, self.params = artifact, artifact.resource
         self._safe_values = {name.upper(): value for name, value in artifact.safe_values}
+        self.access.replace_users(artifact.users)
         self.forces = ForceTable()  # a download ends forcing, and its entries lose meaning
         self.state = ResourceState.STOP_VALID
         self.start_kind = "cold"
@@ -533,6 +547,7 @@ class Resource:
         artifact = job.artifact
         self.artifact, self.params = artifact, artifact.resource
         self._safe_values = {name.upper(): value for name, value in artifact.safe_values}
+        self.access.replace_users(artifact.users)  # new accounts take effect with a reload
         self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
         self.system.WATCHDOG_TIME = self.watchdog_ns
         for entry in self.forces.entries():  # forcing survives, where the variable does
@@ -1087,7 +1102,8 @@ class Resource:
         # user actions and configuration changes go to the long-term log too
         keep = long_term if long_term is not None else kind != "error"
         plain = {name: _jsonable(value) for name, value in sorted(details.items())}
-        self.events.record(kind, message, user=user, long_term=keep, **plain)
+        who = user if user is not None else self.acting_user
+        self.events.record(kind, message, user=who, long_term=keep, **plain)
 
     # ---- views
     def status(self) -> dict[str, Any]:
@@ -1101,6 +1117,7 @@ class Resource:
             "cycle_ms": self.cycle_ns / 1e6,
             "stats": self.stats.as_json(),
             "forcing": self.forces.started_levels() != [],
+            "access": "open" if self.access.open else "users",
             "start": self.start_kind if self.state == ResourceState.STOP_VALID else self.last_start,
             "programs": [
                 {

@@ -9,7 +9,7 @@ from typing import Any
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.artifact import Artifact, ProgramConfig, ResourceConfig, crc32_hex
+from runtime.artifact import Artifact, ProgramConfig, ResourceConfig, UserAccount, crc32_hex
 from runtime.clock import VirtualClock
 from runtime.commands import execute
 from runtime.resource import Resource
@@ -25,10 +25,13 @@ class Harness:
     clock: VirtualClock
     cycle_ns: int
     trace: list[dict[str, Any]] = field(default_factory=list)
+    token: str | None = None  # sent with every command, as a logged-in client does
 
     def cmd(self, command: str, /, **args: Any) -> dict[str, Any]:
         """A command as a client sends it; the reply as it would get it."""
-        reply = execute(self.resource, json.dumps({"cmd": command, **args}).encode())
+        session = {"token": self.token} if self.token is not None else {}
+        request = {"cmd": command, **session, **args}
+        reply = execute(self.resource, json.dumps(request).encode())
         crossed: dict[str, Any] = json.loads(json.dumps(reply))  # what crosses the wire
         return crossed
 
@@ -73,6 +76,7 @@ def compiled(
     text: str,
     programs: list[Any] | None = None,
     safe_values: dict[str, Any] | None = None,
+    users: list[UserAccount] | None = None,
     **resource: Any,
 ) -> Artifact:
     """Compile `text` with the given resource parameters and user programs (dicts of
@@ -86,7 +90,11 @@ def compiled(
             for i, p in enumerate(programs, 1)
         ]
     result = compile_sources(
-        [SourceFile("test.st", text)], resource=config, programs=configs, safe_values=safe_values
+        [SourceFile("test.st", text)],
+        resource=config,
+        programs=configs,
+        safe_values=safe_values,
+        users=users,
     )
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
     return result.artifact
@@ -97,15 +105,16 @@ def harness(
     programs: list[Any] | None = None,
     start: bool = True,
     safe_values: dict[str, Any] | None = None,
+    users: list[UserAccount] | None = None,
     **resource: Any,
 ) -> Harness:
-    """A resource with `compiled(text, programs, safe_values, **resource)` loaded (and
-    started)."""
-    artifact = compiled(text, programs, safe_values, **resource)
+    """A resource with `compiled(text, programs, safe_values, users, **resource)` loaded
+    (and started)."""
+    artifact = compiled(text, programs, safe_values, users, **resource)
     clock = VirtualClock()
     res = Resource("R", clock)
     res.load(artifact)
     h = Harness(res, clock, (artifact.resource.target_cycle_ms or 10) * 1_000_000)
-    if start:
-        h.ok("start")
+    if start:  # as at power-up with Autostart (no client, so no login needed)
+        h.resource.start()
     return h

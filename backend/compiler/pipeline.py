@@ -29,6 +29,7 @@ from backend.compiler.parse import parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
+from runtime.access import account_problems
 from runtime.artifact import (
     Artifact,
     Association,
@@ -36,6 +37,7 @@ from runtime.artifact import (
     PouCode,
     ProgramConfig,
     ResourceConfig,
+    UserAccount,
     VarInfo,
     canonical_json,
     crc32_hex,
@@ -81,6 +83,7 @@ def compile_sources(
     programs: list[ProgramConfig] | None = None,
     config_file: str = "padt.toml",
     safe_values: dict[str, Any] | None = None,
+    users: list[UserAccount] | None = None,
 ) -> CompileResult:
     units, diagnostics = parse_all(sources)
     user_pous = {key(p.name) for unit in units for p in unit.pous}
@@ -103,6 +106,7 @@ def compile_sources(
     diagnostics.extend(check_programs(resolved, resource, programs, config_file, positions))
     safe, safe_diagnostics = _safe_values(resolved, safe_values or {}, config_file)
     diagnostics.extend(safe_diagnostics)
+    diagnostics.extend(_check_users(users or [], config_file))
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics) or not resolved.pous:
         if not resolved.pous and not diagnostics:
@@ -131,6 +135,7 @@ def compile_sources(
         types=types,
         globals=globals_code,
         safe_values=safe,
+        users=tuple(sorted(users or [], key=lambda u: u.name)),
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
 
@@ -197,6 +202,23 @@ def _safe_values(
             continue
         checked.append((variable.name, stored))
     return tuple(checked), diagnostics
+
+
+def _check_users(users: list[UserAccount], config_file: str) -> list[Diagnostic]:
+    """PES accounts: valid names, levels and hashes, unique names, and (when there are
+    any) at least one Administrator, or nobody could manage them."""
+    where = ast.Pos(config_file, 1, 1)
+    diagnostics = [
+        error(where, problem)
+        for user in users
+        for problem in account_problems(user.name, user.level, user.password_hash)
+    ]
+    names = [user.name for user in users]
+    for name in sorted({n for n in names if names.count(n) > 1}):
+        diagnostics.append(error(where, f"user '{name}' is defined twice"))
+    if users and not any(user.level == "administrator" for user in users):
+        diagnostics.append(error(where, "the users include no administrator"))
+    return diagnostics
 
 
 def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:

@@ -1,0 +1,170 @@
+"""Access control in the PES itself (spec section 13): user accounts from the loaded
+configuration, login to a session token with an expiry, and the level every command needs,
+checked for every request whoever sends it.
+
+Levels include the ones before: Read (view everything), Operator (start and stop, reset
+statistics, force), Read+Write (load, reload, write, single step, parameters), Administrator
+(Allow Online Settings). Passwords exist only as salted scrypt hashes, in the project and
+the artifact alike. A configuration without accounts runs open: every command is allowed
+(for simulation and tests; `status` says so).
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import hmac
+import re
+import secrets
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from runtime.artifact import UserAccount
+
+LEVELS = ("read", "operator", "read-write", "administrator")
+NAME = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
+SESSION_NS = 8 * 3600 * 10**9
+FAILURES_BEFORE_LOCK = 5
+LOCK_NS = 60 * 10**9
+# scrypt cost: about 50 ms per check here, so guessing is slow and a login still quick
+SCRYPT_N, SCRYPT_R, SCRYPT_P = 2**14, 8, 1
+
+COMMAND_LEVELS: dict[str, str] = {
+    **dict.fromkeys(
+        ("status", "values", "variables", "parameters", "forcing", "events", "watches",
+         "watch", "unwatch"),
+        "read",
+    ),
+    **dict.fromkeys(
+        ("start", "stop", "start_program", "stop_program", "reset_stats", "force", "unforce",
+         "start_forcing", "stop_forcing"),
+        "operator",
+    ),
+    **dict.fromkeys(
+        ("step", "init", "cold_start", "freeze", "unfreeze", "step_program", "write",
+         "set_parameter", "transfer_begin", "transfer_chunk", "load", "reload_preview",
+         "reload"),
+        "read-write",
+    ),
+}  # fmt: skip
+ADMINISTRATOR_PARAMETERS = ("allow_online_settings",)
+
+
+class AccessDenied(Exception):
+    def __init__(self, code: str, message: str) -> None:
+        super().__init__(message)
+        self.code = code
+        self.message = message
+
+
+def account_problems(name: str, level: str, password_hash: str) -> list[str]:
+    problems = []
+    if not NAME.match(name):
+        problems.append(f"user name '{name}' must be 1 to 32 of A-Z a-z 0-9 _ -")
+    if level not in LEVELS:
+        problems.append(f"level of '{name}' must be one of {', '.join(LEVELS)}")
+    if not password_hash.startswith("scrypt$") or password_hash.count("$") != 5:
+        problems.append(f"password of '{name}' is not a hash from `padt passwd`")
+    return problems
+
+
+def hash_password(password: str, salt: bytes | None = None) -> str:
+    if not NAME.match(password):
+        raise ValueError("a password is 1 to 32 of A-Z a-z 0-9 _ -")
+    salt = salt if salt is not None else secrets.token_bytes(16)
+    digest = hashlib.scrypt(
+        password.encode(), salt=salt, n=SCRYPT_N, r=SCRYPT_R, p=SCRYPT_P, dklen=32
+    )
+    encode = base64.b64encode
+    return (
+        f"scrypt${SCRYPT_N}${SCRYPT_R}${SCRYPT_P}${encode(salt).decode()}${encode(digest).decode()}"
+    )
+
+
+def verify_password(password: str, hashed: str) -> bool:
+    try:
+        _, n, r, p, salt, digest = hashed.split("$")
+        expected = base64.b64decode(digest)
+        actual = hashlib.scrypt(
+            password.encode(),
+            salt=base64.b64decode(salt),
+            n=int(n),
+            r=int(r),
+            p=int(p),
+            dklen=len(expected),
+        )
+    except (ValueError, TypeError):
+        return False
+    return hmac.compare_digest(actual, expected)
+
+
+@dataclass
+class Session:
+    user: str
+    level: str
+    expires_ns: int
+
+
+@dataclass
+class _Failures:
+    count: int = 0
+    locked_until_ns: int = 0
+
+
+@dataclass
+class AccessControl:
+    users: tuple[UserAccount, ...]
+    now_ns: Callable[[], int]
+    sessions: dict[str, Session] = field(default_factory=dict)
+    failures: dict[str, _Failures] = field(default_factory=dict)
+
+    @property
+    def open(self) -> bool:
+        return not self.users
+
+    def login(self, name: str, password: str) -> tuple[str, Session]:
+        """A token for a valid name and password; AccessDenied otherwise (the same answer
+        for an unknown name and a wrong password), and for a while after repeated
+        failures."""
+        now = self.now_ns()
+        failures = self.failures.setdefault(name, _Failures())
+        if failures.locked_until_ns > now:
+            raise AccessDenied("locked", f"too many failed logins for '{name}': wait")
+        account = next((u for u in self.users if u.name == name), None)
+        if account is None or not verify_password(password, account.password_hash):
+            failures.count += 1
+            if failures.count >= FAILURES_BEFORE_LOCK:
+                failures.count, failures.locked_until_ns = 0, now + LOCK_NS
+            raise AccessDenied("login_failed", "unknown user or wrong password")
+        self.failures.pop(name, None)
+        token = secrets.token_urlsafe(32)
+        session = Session(account.name, account.level, now + SESSION_NS)
+        self.sessions[token] = session
+        return token, session
+
+    def logout(self, token: str) -> None:
+        self.sessions.pop(token, None)
+
+    def check(self, token: object, needed: str) -> Session | None:
+        """The caller's session if its level suffices; None when access is open."""
+        if self.open:
+            return None
+        if not isinstance(token, str) or token not in self.sessions:
+            raise AccessDenied("unauthenticated", "log in first (no valid session token)")
+        session = self.sessions[token]
+        if session.expires_ns <= self.now_ns():
+            del self.sessions[token]
+            raise AccessDenied("unauthenticated", "the session has expired: log in again")
+        if LEVELS.index(session.level) < LEVELS.index(needed):
+            raise AccessDenied(
+                "forbidden", f"{session.user} ({session.level}) may not do this: needs {needed}"
+            )
+        return session
+
+    def replace_users(self, users: tuple[UserAccount, ...]) -> None:
+        """New accounts (download or reload): sessions of users gone or changed end."""
+        self.users = users
+        kept = {(u.name, u.level) for u in users}
+        for token, session in list(self.sessions.items()):
+            if (session.user, session.level) not in kept:
+                del self.sessions[token]

@@ -1,0 +1,156 @@
+"""Access control enforced by the runtime itself (spec section 13): accounts from the
+configuration, login to a session token, the level each command needs, expiry, forged
+tokens, locking after failed logins, and no password anywhere but as a salted hash."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from backend.resource_client import ResourceClient
+from runtime.access import SESSION_NS, hash_password, verify_password
+from runtime.artifact import ResourceConfig, UserAccount
+from runtime.keyspace import command_key
+from tests.conftest import padt
+from tests.resource_harness import Harness, compiled, harness
+from tests.runtime_process import running_resource, store_artifact
+
+TEXT = "PROGRAM P VAR n : INT; END_VAR n := n + 1; END_PROGRAM"
+PASSWORDS = {"viewer": "Look-1", "op": "Turn-2", "engineer": "Change-3", "admin": "Manage-4"}
+LEVELS = {"viewer": "read", "op": "operator", "engineer": "read-write", "admin": "administrator"}
+
+
+def users() -> list[UserAccount]:
+    return [UserAccount(n, LEVELS[n], hash_password(PASSWORDS[n])) for n in sorted(PASSWORDS)]
+
+
+def login(h: Harness, name: str) -> str:
+    token: str = h.ok("login", user=name, password=PASSWORDS[name])["token"]
+    return token
+
+
+def test_every_command_needs_a_session_of_the_right_level() -> None:
+    h = harness(TEXT, users=users())
+    assert h.refused("status") == "unauthenticated"
+    assert h.refused("stop", token="forged-" + "x" * 40) == "unauthenticated"
+    viewer, op, engineer = login(h, "viewer"), login(h, "op"), login(h, "engineer")
+    assert h.ok("status", token=viewer)["status"]["access"] == "users"
+    assert h.refused("stop", token=viewer) == "forbidden"
+    assert h.ok("stop", token=op)["status"]["state"] == "STOP/VALID CONFIGURATION"
+    assert h.refused("step", token=op) == "forbidden"  # single step needs Read+Write
+    assert h.ok("step", token=engineer)["ok"]
+    assert h.refused("write", token=op, variable="P.n", value=5) == "forbidden"
+    h.ok("write", token=engineer, variable="P.n", value=5)
+    admin_only = {"name": "allow_online_settings", "value": False}
+    assert h.refused("set_parameter", token=engineer, **admin_only) == "forbidden"
+    h.ok("set_parameter", token=login(h, "admin"), **admin_only)
+    write = [e for e in h.ok("events", token=viewer)["events"] if e["kind"] == "write"]
+    assert write[0]["user"] == "engineer"  # who did it is in the event
+
+
+def test_sessions_expire_and_logout_ends_them() -> None:
+    h = harness(TEXT, users=users())
+    token = login(h, "op")
+    h.clock.advance(SESSION_NS)
+    assert h.refused("status", token=token) == "unauthenticated"
+    token = login(h, "op")
+    h.ok("logout", token=token)
+    assert h.refused("status", token=token) == "unauthenticated"
+
+
+def test_failed_logins_are_events_and_lock_the_name_for_a_while() -> None:
+    h = harness(TEXT, users=users())
+    for _ in range(5):
+        assert h.refused("login", user="op", password="Guess-0") == "login_failed"
+    assert h.refused("login", user="op", password=PASSWORDS["op"]) == "locked"
+    h.clock.advance(61 * 10**9)
+    token = login(h, "op")
+    events = h.ok("events", token=token)["events"]
+    refused = [e for e in events if e["kind"] == "login" and "refused" in e["message"]]
+    assert len(refused) == 6
+    assert "Guess-0" not in json.dumps(events)  # no password in any event
+
+
+def test_new_accounts_take_effect_with_a_reload() -> None:
+    h = harness(TEXT, users=users())
+    op, admin = login(h, "op"), login(h, "admin")
+    fewer = [u for u in users() if u.name != "op"]
+    h.token = admin
+    h.send(compiled(TEXT.replace("n + 1", "n + 2"), users=fewer))
+    h.ok("reload")
+    h.token = None
+    assert h.refused("status", token=op) == "unauthenticated"  # the account is gone
+    assert h.refused("login", user="op", password=PASSWORDS["op"]) == "login_failed"
+    assert h.ok("status", token=admin)["ok"]
+
+
+def test_accounts_are_checked_at_compile_time() -> None:
+    def messages(accounts: list[UserAccount]) -> list[str]:
+        result = compile_sources([SourceFile("t.st", TEXT)], users=accounts)
+        return [d.message for d in result.diagnostics]
+
+    operator = UserAccount("op", "operator", hash_password("Turn-2"))
+    assert messages([operator]) == ["the users include no administrator"]
+    assert messages([operator, UserAccount("op", "administrator", operator.password_hash)]) == [
+        "user 'op' is defined twice"
+    ]
+    bad = UserAccount("bad name", "boss", "Turn-2")
+    assert messages([bad, UserAccount("a", "administrator", operator.password_hash)]) == sorted(
+        [
+            "user name 'bad name' must be 1 to 32 of A-Z a-z 0-9 _ -",
+            "level of 'bad name' must be one of read, operator, read-write, administrator",
+            "password of 'bad name' is not a hash from `padt passwd`",
+        ]
+    )
+
+
+def test_hashes_are_salted_and_slow() -> None:
+    first, second = hash_password("Same-1"), hash_password("Same-1")
+    assert first != second  # another salt each time
+    assert verify_password("Same-1", first) and not verify_password("Same-2", first)
+    assert first.startswith("scrypt$16384$8$1$")
+
+
+def test_passwd_prints_an_account_and_never_the_password() -> None:
+    result = padt("passwd", "admin", "--level", "administrator", env={"PADT_PASSWORD": "Ab-12"})
+    assert result.returncode == 0, result.stderr
+    assert "Ab-12" not in result.stdout + result.stderr
+    line = next(x for x in result.stdout.splitlines() if x.startswith("password_hash"))
+    assert verify_password("Ab-12", line.split('"')[1])
+
+
+def test_the_runtime_refuses_whoever_sends_the_command(tmp_path: Path, zenoh_endpoint: str) -> None:
+    """Straight over Zenoh (bypassing the PADT) and through the command line alike."""
+    config = ResourceConfig(name="Guarded", autostart="cold", target_cycle_ms=20)
+    result = compile_sources([SourceFile("p.st", TEXT)], resource=config, users=users())
+    assert result.artifact is not None
+    store_artifact(tmp_path, result.artifact)
+    assert "Manage-4" not in result.artifact.to_json()
+    with running_resource("Guarded", tmp_path, zenoh_endpoint) as (_, client):
+        raw: list[dict[str, Any]] = [
+            json.loads(r.ok.payload.to_bytes())
+            for r in client.session.get(
+                command_key("Guarded"), payload=json.dumps({"cmd": "stop"}), timeout=5
+            )
+            if r.ok is not None
+        ]
+        assert raw[0]["error"]["code"] == "unauthenticated"
+        endpoint = ["--resource", "Guarded", "--zenoh", zenoh_endpoint]
+        refused = padt("stop", *endpoint)
+        assert refused.returncode == 1 and "unauthenticated" in refused.stderr
+        env = {"PADT_PASSWORD": PASSWORDS["viewer"]}
+        forbidden = padt("stop", *endpoint, "--user", "viewer", env=env)
+        assert forbidden.returncode == 1 and "forbidden" in forbidden.stderr
+        env = {"PADT_PASSWORD": PASSWORDS["op"]}
+        stopped = padt("stop", *endpoint, "--user", "op", env=env)
+        assert stopped.returncode == 0, stopped.stderr
+        op = ResourceClient(client.session, "Guarded")
+        assert op.login("op", PASSWORDS["op"])["level"] == "operator"
+        assert op.command("status")["status"]["state"] == "STOP/VALID CONFIGURATION"
+    logs = [p.read_text(errors="replace") for p in tmp_path.rglob("*") if p.is_file()]
+    assert not any(password in text for text in logs for password in PASSWORDS.values())
+    assert os.environ.get("PADT_PASSWORD") is None
