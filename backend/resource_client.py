@@ -46,10 +46,25 @@ class ResourceClient:
         self.resource = resource
         self._subscribers: list[zenoh.Subscriber[None]] = []
         self.token: str | None = None  # the session token after `login`, sent with every command
+        self._credentials: tuple[str, str] | None = None
 
     def command(
         self, cmd: str, /, timeout_s: float = COMMAND_TIMEOUT_S, **args: Any
     ) -> dict[str, Any]:
+        reply = self._send(cmd, timeout_s, args)
+        refused = reply.get("error", {}).get("code") == "unauthenticated"
+        # a session ends with its expiry or a restart of the runtime: log in again
+        again = refused and self._credentials is not None and cmd != "login"
+        if again and self._credentials and self.login(*self._credentials).get("ok"):
+            reply = self._send(cmd, timeout_s, args)
+        return reply
+
+    def use_credentials(self, user: str, password: str) -> None:
+        """Log in whenever the resource asks for it (at the first command, after a runtime
+        restart or an expired session)."""
+        self._credentials = (user, password)
+
+    def _send(self, cmd: str, timeout_s: float, args: dict[str, Any]) -> dict[str, Any]:
         token = {"token": self.token} if self.token is not None else {}
         payload = json.dumps({"cmd": cmd, **token, **args})
         replies = self.session.get(command_key(self.resource), payload=payload, timeout=timeout_s)
@@ -61,7 +76,7 @@ class ResourceClient:
 
     def login(self, user: str, password: str) -> dict[str, Any]:
         """Log in; the token goes with every later command. The reply says the level."""
-        reply = self.command("login", user=user, password=password)
+        reply = self._send("login", COMMAND_TIMEOUT_S, {"user": user, "password": password})
         if reply.get("ok"):
             self.token = str(reply["token"])
         return reply

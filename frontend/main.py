@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import getpass
+import os
 import signal
 import threading
 from pathlib import Path
@@ -19,6 +21,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="Zenoh configuration (JSON5) with TLS and user/password settings",
     )
+    parser.add_argument(
+        "--user",
+        metavar="NAME",
+        help="the account the UI acts with (password from PADT_PASSWORD, else asked for)",
+    )
     parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
     parser.add_argument("--port", type=int, default=8080, help="HTTP port (next free if busy)")
 
@@ -30,7 +37,11 @@ def run(args: argparse.Namespace) -> int:
     from runtime.zenoh_config import open_client
 
     session = open_client(args.zenoh, args.zenoh_config)
-    ui = PadtUi(ResourceClient(session, args.resource), host=args.host, port=args.port)
+    client = ResourceClient(session, args.resource)
+    if args.user is not None:
+        password = os.environ.get("PADT_PASSWORD") or getpass.getpass(f"password of {args.user}: ")
+        client.use_credentials(args.user, password)
+    ui = PadtUi(client, host=args.host, port=args.port)
     print(f"PADT UI: {ui.url}", flush=True)
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):

@@ -5,11 +5,17 @@ from __future__ import annotations
 
 import argparse
 import ctypes
+import dataclasses
+import json
+import secrets
 import signal
 import subprocess
 import sys
 import threading
 from pathlib import Path
+
+from runtime.access import hash_password
+from runtime.artifact import UserAccount
 
 _PR_SET_PDEATHSIG = 1
 
@@ -29,6 +35,24 @@ def _die_with_parent() -> None:
     libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
+def admin_file(state_dir: Path) -> Path:
+    return state_dir / "demo-administrator.json"
+
+
+def demo_administrator(state_dir: Path) -> tuple[UserAccount, str | None]:
+    """The demo's administrator: made at the first start with a random password, which is
+    returned (to be shown once) and kept nowhere; later starts read back only its hash."""
+    path = admin_file(state_dir)
+    if path.exists():
+        return UserAccount(**json.loads(path.read_text())), None
+    password = secrets.token_urlsafe(18)
+    account = UserAccount("admin", "administrator", hash_password(password))
+    state_dir.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(dataclasses.asdict(account)))
+    path.chmod(0o600)
+    return account, password
+
+
 def run(args: argparse.Namespace) -> int:
     from backend.project import compile_project, demo_project_path, load_project
     from backend.resource_client import ResourceClient
@@ -37,6 +61,12 @@ def run(args: argparse.Namespace) -> int:
     from runtime.zenoh_config import open_client, open_router
 
     project = load_project([demo_project_path()])
+    admin, admin_password = demo_administrator(args.state_dir)
+    # the UI acts with an account of its own, new at every start: its password lives in
+    # this process only
+    panel_password = secrets.token_urlsafe(18)
+    panel = UserAccount("panel", "read-write", hash_password(panel_password))
+    project = dataclasses.replace(project, users=[admin, panel])
     result = compile_project(project)
     if result.artifact is None:  # the embedded project always compiles; guard all the same
         for diagnostic in result.diagnostics:
@@ -58,8 +88,22 @@ def run(args: argparse.Namespace) -> int:
     command += ["--state-dir", str(args.state_dir), "--zenoh", endpoint]
     runtime = subprocess.Popen(command, preexec_fn=_die_with_parent)
     session = open_client(endpoint)
-    ui = PadtUi(ResourceClient(session, resource), host=args.host, port=args.port)
+    client = ResourceClient(session, resource)
+    client.use_credentials(panel.name, panel_password)
+    ui = PadtUi(client, host=args.host, port=args.port)
     print(f"padt demo: resource {resource} (CRC {result.artifact.crc})", flush=True)
+    if admin_password is not None:
+        print(
+            f"padt demo: administrator '{admin.name}', password {admin_password} "
+            "(shown only now; the state folder keeps only its hash)",
+            flush=True,
+        )
+    else:
+        print(
+            f"padt demo: administrator '{admin.name}' (its password was shown at the first "
+            f"start; delete {admin_file(args.state_dir)} for a new one)",
+            flush=True,
+        )
     print(f"padt demo: open {ui.url}", flush=True)
 
     stop = threading.Event()

@@ -6,6 +6,9 @@ from __future__ import annotations
 
 import json
 import os
+import signal
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -15,9 +18,10 @@ from backend.resource_client import ResourceClient
 from runtime.access import SESSION_NS, hash_password, verify_password
 from runtime.artifact import ResourceConfig, UserAccount
 from runtime.keyspace import command_key
-from tests.conftest import padt
+from runtime.zenoh_config import open_client
+from tests.conftest import REPO, free_port, padt
 from tests.resource_harness import Harness, compiled, harness
-from tests.runtime_process import running_resource, store_artifact
+from tests.runtime_process import running_resource, store_artifact, wait_until_answering
 
 TEXT = "PROGRAM P VAR n : INT; END_VAR n := n + 1; END_PROGRAM"
 PASSWORDS = {"viewer": "Look-1", "op": "Turn-2", "engineer": "Change-3", "admin": "Manage-4"}
@@ -154,3 +158,47 @@ def test_the_runtime_refuses_whoever_sends_the_command(tmp_path: Path, zenoh_end
     logs = [p.read_text(errors="replace") for p in tmp_path.rglob("*") if p.is_file()]
     assert not any(password in text for text in logs for password in PASSWORDS.values())
     assert os.environ.get("PADT_PASSWORD") is None
+
+
+def start_demo(state_dir: Path, zenoh_port: int) -> tuple[subprocess.Popen[str], list[str]]:
+    command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(state_dir)]
+    command += ["--port", str(free_port()), "--zenoh-port", str(zenoh_port)]
+    process = subprocess.Popen(command, cwd=REPO, stdout=subprocess.PIPE, text=True)
+    assert process.stdout is not None
+    lines = []
+    for line in process.stdout:
+        lines.append(line)
+        if "padt demo: open" in line:
+            break
+    return process, lines
+
+
+def stop_demo(process: subprocess.Popen[str]) -> None:
+    process.send_signal(signal.SIGINT)
+    assert process.wait(timeout=15) == 0
+
+
+def test_the_demo_makes_its_administrator_once_and_keeps_only_the_hash(tmp_path: Path) -> None:
+    zenoh_port = free_port()
+    process, lines = start_demo(tmp_path, zenoh_port)
+    try:
+        line = next(x for x in lines if "administrator 'admin', password" in x)
+        password = line.split("password ")[1].split(" ")[0]
+        session = open_client(f"tcp/127.0.0.1:{zenoh_port}")
+        try:
+            anonymous = ResourceClient(session, "Tank1")
+            wait_until_answering(anonymous)
+            assert anonymous.command("stop")["error"]["code"] == "unauthenticated"
+            admin = ResourceClient(session, "Tank1")
+            assert admin.login("admin", password)["level"] == "administrator"
+            assert admin.command("stop")["ok"]
+        finally:
+            session.close()
+    finally:
+        stop_demo(process)
+    stored = [p.read_text(errors="replace") for p in tmp_path.rglob("*") if p.is_file()]
+    assert not any(password in text for text in stored)
+    again, lines = start_demo(tmp_path, free_port())
+    stop_demo(again)
+    assert not any(password in line for line in lines)
+    assert any("shown at the first start" in line for line in lines)
