@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import secrets
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -13,6 +14,7 @@ import zenoh
 from runtime.keyspace import command_key, events_key, status_key, watch_key, watcher_key
 
 COMMAND_TIMEOUT_S = 5.0
+WATCH_BATCH = 1000  # variable names per watch request (paths are short; 64 KiB is the limit)
 
 
 class ResourceUnreachable(Exception):
@@ -59,6 +61,18 @@ class ResourceClient:
             reply = self._send(cmd, timeout_s, args)
         return reply
 
+    def wait_until_answering(self, timeout_s: float = 30) -> None:
+        """Wait for the resource to answer (a runtime that is still starting)."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            try:
+                self.command("status")
+                return
+            except ResourceUnreachable:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.1)
+
     def use_credentials(self, user: str, password: str) -> None:
         """Log in whenever the resource asks for it (at the first command, after a runtime
         restart or an expired session)."""
@@ -100,11 +114,17 @@ class ResourceClient:
         token = self.session.liveliness().declare_token(watcher_key(self.resource, watch_id))
         subscriber = self._declare(watch_key(self.resource, watch_id), callback)
         handle = Watch(watch_id, token, subscriber)
-        reply = self.command("watch", id=watch_id, variables=variables, period_ms=period_ms)
-        if not reply.get("ok"):
-            handle.close()
-            error = reply.get("error", {})
-            raise WatchRefused(f"{error.get('code')}: {error.get('message')}")
+        # a large set goes in several requests, each well inside the request limit
+        batches = [variables[i : i + WATCH_BATCH] for i in range(0, len(variables), WATCH_BATCH)]
+        for number, batch in enumerate(batches or [[]]):
+            reply = self.command(
+                "watch", id=watch_id, variables=batch, period_ms=period_ms, append=number > 0
+            )
+            if not reply.get("ok"):
+                handle.close()
+                self.command("unwatch", id=watch_id)
+                error = reply.get("error", {})
+                raise WatchRefused(f"{error.get('code')}: {error.get('message')}")
         handle.variables = list(reply["variables"])
         return handle
 

@@ -169,7 +169,8 @@ def _watch(resource: Resource, request: Request) -> Reply:
     if not all(isinstance(name, str) for name in names):
         raise CommandRefused("bad_request", '"variables" is a list of variable names')
     watch_id = _arg(request, "id", str)
-    paths = resource.watch(watch_id, names, _arg(request, "period_ms", int, 100))
+    period = _arg(request, "period_ms", int, 100)
+    paths = resource.watch(watch_id, names, period, _arg(request, "append", bool, False))
     return {"ok": True, "id": watch_id, "variables": paths}
 
 

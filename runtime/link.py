@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import queue
+import threading
 from typing import Any
 
 import zenoh
@@ -23,6 +24,7 @@ from runtime.keyspace import (
     watch_key,
     watchers_key_expr,
 )
+from runtime.resource import WatchSnapshot
 
 
 class ResourceLink:
@@ -37,6 +39,13 @@ class ResourceLink:
             events_key(resource), congestion_control=zenoh.CongestionControl.BLOCK
         )
         self._session = session
+        self._pending: dict[str, WatchSnapshot] = {}
+        self._pending_lock = threading.Condition()
+        self._closing = False
+        self._publisher = threading.Thread(
+            target=self._publish_loop, name="padt-watch-publisher", daemon=True
+        )
+        self._publisher.start()
         self._resource = resource
         self.departed: queue.Queue[str] = queue.Queue()  # watch ids whose client went away
         self._watchers = session.liveliness().declare_subscriber(
@@ -54,14 +63,29 @@ class ResourceLink:
     def publish_event(self, event: dict[str, Any]) -> None:
         self._events.put(json.dumps(event))
 
-    def publish_watch(self, watch_id: str, message: dict[str, Any]) -> None:
-        """A watch set's values; they may drop under congestion (the next period brings
-        fresh ones), so the cycle never waits for a slow client."""
-        self._session.put(
-            watch_key(self._resource, watch_id),
-            json.dumps(message),
-            congestion_control=zenoh.CongestionControl.DROP,
-        )
+    def publish_watch(self, watch_id: str, snapshot: WatchSnapshot) -> None:
+        """A watch set's values, read in this cycle; the message is built, encoded and put
+        on the publisher thread (for 10,000 values that is most of the work), and may drop
+        under congestion: the next period brings fresh ones. A snapshot not yet sent is
+        replaced by a newer one of the same set."""
+        with self._pending_lock:
+            self._pending[watch_id] = snapshot
+            self._pending_lock.notify()
+
+    def _publish_loop(self) -> None:
+        while True:
+            with self._pending_lock:
+                while not self._pending and not self._closing:
+                    self._pending_lock.wait()
+                if self._closing:
+                    return
+                watch_id, snapshot = next(iter(self._pending.items()))
+                del self._pending[watch_id]
+            self._session.put(
+                watch_key(self._resource, watch_id),
+                json.dumps(snapshot.message()),
+                congestion_control=zenoh.CongestionControl.DROP,
+            )
 
     @staticmethod
     def payload(query: zenoh.Query) -> bytes:
@@ -72,6 +96,10 @@ class ResourceLink:
         query.reply(query.key_expr, json.dumps(reply))
 
     def close(self) -> None:
+        with self._pending_lock:
+            self._closing = True
+            self._pending_lock.notify()
+        self._publisher.join()
         self._token.undeclare()
         self._watchers.undeclare()
         self._queryable.undeclare()

@@ -1101,7 +1101,7 @@ class Resource:
     ) -> None:
         # user actions and configuration changes go to the long-term log too
         keep = long_term if long_term is not None else kind != "error"
-        plain = {name: _jsonable(value) for name, value in sorted(details.items())}
+        plain = {name: jsonable(value) for name, value in sorted(details.items())}
         who = user if user is not None else self.acting_user
         self.events.record(kind, message, user=who, long_term=keep, **plain)
 
@@ -1137,9 +1137,12 @@ class Resource:
     def variables(self) -> list[dict[str, str]]:
         return [{"path": bound.path.path, "type": bound.path.type} for bound in self._bound]
 
-    def watch(self, watch_id: str, names: list[str], period_ms: int) -> list[str]:
+    def watch(
+        self, watch_id: str, names: list[str], period_ms: int, append: bool = False
+    ) -> list[str]:
         """Register what a client views; returns the canonical paths (all names must
-        exist: a typo gets an error, not a silently empty field)."""
+        exist: a typo gets an error, not a silently empty field). `append` adds to a set
+        (a large set arrives in several requests)."""
         if not valid_watch_id(watch_id):
             raise CommandRefused("bad_request", "a watch id is 1 to 64 of A-Z a-z 0-9 _ -")
         if not MIN_PERIOD_MS <= period_ms <= MAX_PERIOD_MS:
@@ -1149,30 +1152,39 @@ class Resource:
         if self.watches.full(watch_id):
             raise CommandRefused("too_many", "too many watch sets on this resource")
         paths = tuple(self._lookup(name).path.path for name in names)
+        existing = self.watches.get(watch_id) if append else None
+        if existing is not None:
+            paths = existing.paths + paths
         self.watches.set(WatchSet(watch_id, paths, period_ms * 1_000_000))
         return list(paths)
 
-    def watched(self, watch_set: WatchSet) -> dict[str, Any]:
-        """A watch set's message: each value with its quality (live, forced, or stale when
-        nothing that could change it runs)."""
+    def watched(self, watch_set: WatchSet) -> WatchSnapshot:
+        """A watch set's values as this cycle left them, each with its quality (live;
+        forced; stale when nothing that could change it runs; deleted by a reload). Only
+        the reading happens here, between two cycles; `WatchSnapshot.message` builds
+        the message elsewhere."""
         running = self.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP)
-        values: dict[str, Any] = {}
+        forcing = bool(self.forces.started_levels())
+        halted = {
+            id(p)
+            for p in self.programs
+            if p.state not in (ProgramState.RUN, ProgramState.RUN_FREEZE)
+        }
+        entries: list[tuple[str, Any, str]] = []
         for path in watch_set.paths:
             bound = self._by_name.get(path.upper())
-            if bound is None:  # gone with a reload
-                values[path] = {"value": None, "quality": "deleted"}
+            if bound is None:
+                entries.append((path, None, "deleted"))
                 continue
-            if self.forces.is_forced(path):
+            if forcing and self.forces.is_forced(path):
                 quality = "forced"
-            elif not running or (
-                bound.program is not None
-                and bound.program.state not in (ProgramState.RUN, ProgramState.RUN_FREEZE)
-            ):
+            elif not running or (bound.program is not None and id(bound.program) in halted):
                 quality = "stale"
             else:
                 quality = "live"
-            values[path] = {"value": _jsonable(self._read_bound(bound)), "quality": quality}
-        return {"cycle": self.cycle_count, "values": values}
+            owner = bound.program.instance if bound.program is not None else self.globals
+            entries.append((path, read_path(owner, bound.path), quality))
+        return WatchSnapshot(self.cycle_count, entries)
 
     def values(self) -> dict[str, Any]:
         """Every elementary variable: `Program.var`, `Program.fb.var`, globals by their bare
@@ -1229,12 +1241,27 @@ class Resource:
         self._store(bound, self._checked(bound, value))
 
 
-def _jsonable(value: Any) -> Any:
+@dataclass(frozen=True)
+class WatchSnapshot:
+    cycle: int
+    entries: list[tuple[str, Any, str]]  # (path, value, quality)
+
+    def message(self) -> dict[str, Any]:
+        return {
+            "cycle": self.cycle,
+            "values": {
+                path: {"value": jsonable(value), "quality": quality}
+                for path, value, quality in self.entries
+            },
+        }
+
+
+def jsonable(value: Any) -> Any:
     """A variable value as an event detail: non-finite REALs as text (strict JSON)."""
     if isinstance(value, float) and not math.isfinite(value):
         return repr(value)
     if isinstance(value, list):
-        return [_jsonable(item) for item in value]
+        return [jsonable(item) for item in value]
     return value
 
 

@@ -40,12 +40,22 @@ class WatchSets:
     def full(self, watch_id: str) -> bool:
         return watch_id not in self._sets and len(self._sets) >= MAX_SETS
 
+    def get(self, watch_id: str) -> WatchSet | None:
+        return self._sets.get(watch_id)
+
     def due(self, now_ns: int, all_of_them: bool = False) -> list[WatchSet]:
         """The sets to send now (`all_of_them`: after a command, which may have changed
-        what they show); each is next due one period later."""
-        sending = [
-            s for _, s in sorted(self._sets.items()) if all_of_them or now_ns >= s.next_due_ns
-        ]
-        for watch_set in sending:
-            watch_set.next_due_ns = now_ns + watch_set.period_ns
+        what they show). A set that was due is next due one period after it was due, so
+        the rate does not drift by the part of a cycle it waited; one that fell a whole
+        period behind starts afresh."""
+        sending = []
+        for _, watch_set in sorted(self._sets.items()):
+            if now_ns >= watch_set.next_due_ns:
+                following = watch_set.next_due_ns + watch_set.period_ns
+                watch_set.next_due_ns = (
+                    following if following > now_ns else now_ns + watch_set.period_ns
+                )
+                sending.append(watch_set)
+            elif all_of_them:
+                sending.append(watch_set)
         return sending

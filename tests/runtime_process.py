@@ -6,7 +6,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -14,7 +13,7 @@ from pathlib import Path
 import zenoh
 
 from backend.project import compile_project, demo_project_path, load_project
-from backend.resource_client import ResourceClient, ResourceUnreachable
+from backend.resource_client import ResourceClient
 from runtime.artifact import Artifact
 from runtime.main import artifact_path
 from runtime.zenoh_config import open_client, open_router
@@ -36,15 +35,7 @@ def write_demo_artifact(state_dir: Path) -> str:
 
 
 def wait_until_answering(client: ResourceClient, timeout_s: float = 30) -> None:
-    deadline = time.monotonic() + timeout_s
-    while True:
-        try:
-            client.command("status")
-            return
-        except ResourceUnreachable:
-            if time.monotonic() > deadline:
-                raise
-            time.sleep(0.1)
+    client.wait_until_answering(timeout_s)
 
 
 @contextmanager

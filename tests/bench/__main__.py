@@ -8,6 +8,7 @@ from tests.bench import (
     bench_language,
     bench_reload,
     bench_runtime,
+    bench_watch,
 )
 
 
@@ -17,6 +18,7 @@ def main() -> None:
     bench_context.main()
     bench_runtime.main()
     bench_reload.main()
+    bench_watch.main()
 
 
 if __name__ == "__main__":
