@@ -11,7 +11,14 @@ from typing import Any
 
 import zenoh
 
-from runtime.keyspace import command_key, events_key, status_key, watch_key, watcher_key
+from runtime.keyspace import (
+    alive_key,
+    command_key,
+    events_key,
+    status_key,
+    watch_key,
+    watcher_key,
+)
 
 COMMAND_TIMEOUT_S = 5.0
 WATCH_BATCH = 1000  # variable names per watch request (paths are short; 64 KiB is the limit)
@@ -97,6 +104,19 @@ class ResourceClient:
 
     def on_status(self, callback: Callable[[dict[str, Any]], None]) -> None:
         self._subscribe(status_key(self.resource), callback)
+
+    def on_alive(self, callback: Callable[[bool], None]) -> None:
+        """Told True when the runtime process is (or comes back) there, False when it goes;
+        at once for a runtime already running."""
+
+        def handler(sample: zenoh.Sample) -> None:
+            callback(sample.kind == zenoh.SampleKind.PUT)
+
+        self._subscribers.append(
+            self.session.liveliness().declare_subscriber(
+                alive_key(self.resource), handler, history=True
+            )
+        )
 
     def on_events(self, callback: Callable[[dict[str, Any]], None]) -> None:
         """Every event of the resource's log from now on, in order."""

@@ -54,8 +54,10 @@ class PadtUi:
         self.server.gui.configure_theme(control_width="large", show_logo=False)
         self.server.on_client_connect(self._connect)
         self.server.on_client_disconnect(self._disconnect)
-        client.on_status(self._on_status)
         self._watch: Watch | None = None
+        self._watching = threading.Lock()
+        client.on_status(self._on_status)
+        client.on_alive(self._on_alive)
         self._stop = threading.Event()
         self._refresher = threading.Thread(target=self._refresh_loop, daemon=True)
         self._refresher.start()
@@ -78,20 +80,28 @@ class PadtUi:
         self._on_values({"cycle": values.get("cycle", 0), "values": values.get("values", {})})
 
     def _load_variables(self) -> None:
-        try:
-            reply = self.client.command("variables")
-        except ResourceUnreachable as exc:
-            log.warning("%s", exc)
-            return
-        self.types = {v["path"]: v["type"] for v in reply.get("variables", [])}
-        if self._watch is not None:
-            self._watch.close()
-        try:
-            self._watch = self.client.watch(sorted(self.types), self._on_watch, WATCH_PERIOD_MS)
-        except (ResourceUnreachable, WatchRefused) as exc:
-            log.warning("no live values: %s", exc)
+        with self._watching:  # a new configuration and a restarted runtime may coincide
+            try:
+                reply = self.client.command("variables")
+            except ResourceUnreachable as exc:
+                log.warning("%s", exc)
+                return
+            self.types = {v["path"]: v["type"] for v in reply.get("variables", [])}
+            if self._watch is not None:
+                self._watch.close()
+                self._watch = None
+            try:
+                self._watch = self.client.watch(sorted(self.types), self._on_watch, WATCH_PERIOD_MS)
+            except (ResourceUnreachable, WatchRefused) as exc:
+                log.warning("no live values: %s", exc)
         with self.latest.lock:
             self.latest.version += 1
+
+    def _on_alive(self, present: bool) -> None:
+        """A runtime that (re)appears knows nothing of our watch set: register it again
+        (outside Zenoh's thread)."""
+        if present:
+            threading.Thread(target=self._load_variables, daemon=True).start()
 
     def _on_status(self, status: dict[str, Any]) -> None:
         with self.latest.lock:

@@ -14,8 +14,10 @@ import zenoh
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.resource_client import ResourceClient, WatchRefused
+from frontend.app import PadtUi
 from runtime.artifact import ResourceConfig
 from runtime.keyspace import alive_key, command_key
+from tests.conftest import free_port
 from tests.runtime_process import (
     client_session,
     router,
@@ -229,3 +231,28 @@ def test_target_cycle_modes_and_an_online_change(tmp_path: Path, zenoh_endpoint:
         assert changes == ["target_cycle_mode", "target_cycle_mode", "target_cycle_ms"]
         stats = client.command("status")["status"]["stats"]
         assert stats["overruns"] == 0
+
+
+def test_the_ui_watches_again_when_the_runtime_comes_back(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    write_demo_artifact(tmp_path)
+    with router(zenoh_endpoint), client_session(zenoh_endpoint) as session:
+        ui = PadtUi(ResourceClient(session, "Tank1"), port=free_port())
+        try:
+            for attempt in range(2):  # the runtime, then a new one after a crash
+                with runtime_process("Tank1", tmp_path, zenoh_endpoint) as process:
+                    deadline = time.monotonic() + 20
+                    while True:
+                        with ui.latest.lock:
+                            quality = dict(ui.latest.quality)
+                        if quality.get("TankControl.level") == "live":
+                            break
+                        assert time.monotonic() < deadline, f"no live values (run {attempt})"
+                        time.sleep(0.05)
+                    process.kill()
+                    process.wait()
+                with ui.latest.lock:
+                    ui.latest.quality.clear()
+        finally:
+            ui.close()
