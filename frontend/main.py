@@ -7,20 +7,14 @@ import getpass
 import os
 import signal
 import threading
-from pathlib import Path
+import time
 
-DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
+from runtime.zenoh_options import add_zenoh_options
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--resource", required=True, help="resource to show")
-    parser.add_argument("--zenoh", default=DEFAULT_ZENOH, metavar="ENDPOINT")
-    parser.add_argument(
-        "--zenoh-config",
-        type=Path,
-        metavar="FILE",
-        help="Zenoh configuration (JSON5) with TLS and user/password settings",
-    )
+    add_zenoh_options(parser, "Zenoh router the resource is connected to")
     parser.add_argument(
         "--user",
         metavar="NAME",
@@ -46,7 +40,8 @@ def run(args: argparse.Namespace) -> int:
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
-    stop.wait()
+    while not stop.is_set():  # not stop.wait(): see padt/demo.py
+        time.sleep(0.2)
     ui.close()
     session.close()
     return 0

@@ -12,6 +12,7 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 from runtime.access import hash_password
@@ -109,7 +110,10 @@ def run(args: argparse.Namespace) -> int:
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
-    while not stop.wait(0.5):
+    # sleep, not stop.wait(): the handler runs in this thread, and Event.set() would wait
+    # for the lock that a wait() interrupted by the signal holds (a deadlock at Ctrl-C)
+    while not stop.is_set():
+        time.sleep(0.2)
         if runtime.poll() is not None:
             print(f"padt demo: the runtime ended with code {runtime.returncode}", file=sys.stderr)
             break
