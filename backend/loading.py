@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import time
-import zlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,8 +19,7 @@ from typing import Any
 from backend.check_twice import check_twice
 from backend.project import PROJECT_FILE, Project, compile_project, load_project
 from backend.resource_client import ResourceClient, ResourceUnreachable
-from runtime.artifact import Artifact
-from runtime.commands import MAX_REQUEST_BYTES
+from runtime.artifact import Artifact, crc32_hex
 from runtime.transfer import MAX_CHUNK, pieces
 
 BUSY_PAUSE_S = 0.05  # a program mid-cycle finishes it within a few CPU cycles
@@ -49,7 +47,7 @@ class CompileFailed(LoadRefused):
         self.diagnostics = tuple(diagnostics)
 
 
-def _checked(reply: dict[str, Any]) -> dict[str, Any]:
+def checked_reply(reply: dict[str, Any]) -> dict[str, Any]:
     """The reply when it is a success; LoadRefused with the runtime's code otherwise."""
     if reply.get("ok") is True:
         return reply
@@ -72,46 +70,17 @@ def _taking(client: ResourceClient, cmd: str, **args: Any) -> dict[str, Any]:
         ) from None
 
 
-def transfer_crc(text: str) -> str:
-    """The CRC `transfer_begin` announces: CRC-32 of the text's bytes, 8 hex digits."""
-    return f"{zlib.crc32(text.encode('utf-8')):08X}"
-
-
-def _fits(offset: int, data: str) -> bool:
-    request = {"cmd": "transfer_chunk", "offset": offset, "data": data}
-    return len(json.dumps(request).encode("utf-8")) <= MAX_REQUEST_BYTES
-
-
-def chunks(text: str, max_chunk: int = MAX_CHUNK) -> list[tuple[int, str]]:
-    """(offset, data) pieces of `text`, each within `max_chunk` characters and, once
-    JSON-encoded into its request, within the runtime's request limit: escaping can make
-    a piece of quotes and backslashes nearly twice as long on the wire."""
-    result: list[tuple[int, str]] = []
-    offset = 0
-    for piece in pieces(text):
-        pending = [piece[i : i + max_chunk] for i in range(0, len(piece), max_chunk)] or [""]
-        while pending:
-            data = pending.pop(0)
-            if len(data) > 1 and not _fits(offset, data):
-                half = len(data) // 2
-                pending[:0] = [data[:half], data[half:]]
-                continue
-            result.append((offset, data))
-            offset += len(data)
-    return result
-
-
 def send_artifact(client: ResourceClient, text: str) -> None:
     """Transfer an artifact text; the next load / reload_preview / reload takes it."""
-    begun = _checked(client.command("transfer_begin", size=len(text), crc=transfer_crc(text)))
-    max_chunk = min(MAX_CHUNK, int(begun.get("max_chunk", MAX_CHUNK)))
-    for offset, data in chunks(text, max_chunk):
-        _checked(client.command("transfer_chunk", offset=offset, data=data))
+    begun = checked_reply(client.command("transfer_begin", size=len(text), crc=crc32_hex(text)))
+    # a chunk escaped into its request may double (quotes, backslashes): MAX_CHUNK keeps
+    # even that within the request limit
+    for offset, data in pieces(text, min(MAX_CHUNK, int(begun.get("max_chunk", MAX_CHUNK)))):
+        checked_reply(client.command("transfer_chunk", offset=offset, data=data))
 
 
 def _same_resource(client: ResourceClient, artifact: Artifact) -> None:
-    # the runtime does not compare names on a download: a project for another resource
-    # would otherwise be taken silently
+    # the runtime refuses it too; saying so before sending names the project
     if artifact.resource.name != client.resource:
         raise LoadRefused(
             "resource",
@@ -124,7 +93,7 @@ def download(client: ResourceClient, artifact: Artifact) -> dict[str, Any]:
     `status`. Raises LoadRefused when the resource does not take it."""
     _same_resource(client, artifact)
     send_artifact(client, artifact.to_json())
-    return _checked(_taking(client, "load"))
+    return checked_reply(_taking(client, "load"))
 
 
 def preview_reload(
@@ -132,7 +101,7 @@ def preview_reload(
 ) -> dict[str, Any]:
     """The reload plan against the running state (`renames`: NEW name -> OLD name)."""
     send_artifact(client, artifact.to_json())
-    plan: dict[str, Any] = _checked(_taking(client, "reload_preview", renames=dict(renames)))[
+    plan: dict[str, Any] = checked_reply(_taking(client, "reload_preview", renames=dict(renames)))[
         "plan"
     ]
     return plan
@@ -167,7 +136,7 @@ def reload(
     while True:
         send_artifact(client, text)
         try:
-            return _checked(_taking(client, "reload", **arguments))
+            return checked_reply(_taking(client, "reload", **arguments))
         except LoadRefused as refused:
             if refused.code != "busy" or attempt >= retries_when_busy:
                 raise

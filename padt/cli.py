@@ -11,6 +11,8 @@ import json
 import sys
 from pathlib import Path
 
+from runtime.zenoh_options import add_zenoh_options
+
 
 def _compile(args: argparse.Namespace) -> int:
     from backend.project import ProjectError, compile_project, load_project
@@ -191,23 +193,12 @@ def _rename(text: str) -> tuple[str, str]:
     return parse_rename(text)
 
 
-def _resource_options(parser: argparse.ArgumentParser, zenoh_default: str) -> None:
+def _resource_options(parser: argparse.ArgumentParser) -> None:
     """What every command that talks to a running resource needs."""
     parser.add_argument(
         "--resource", required=True, metavar="NAME", help="name of the running resource"
     )
-    parser.add_argument(
-        "--zenoh",
-        default=zenoh_default,
-        metavar="ENDPOINT",
-        help=f"Zenoh router the resource is connected to (default {zenoh_default})",
-    )
-    parser.add_argument(
-        "--zenoh-config",
-        type=Path,
-        metavar="FILE",
-        help="Zenoh configuration (JSON5) with TLS and user/password settings",
-    )
+    add_zenoh_options(parser, "Zenoh router the resource is connected to")
     parser.add_argument(
         "--user",
         metavar="NAME",
@@ -298,25 +289,24 @@ def build_parser() -> argparse.ArgumentParser:
     demo.set_defaults(func=_demo)
 
     from runtime.access import LEVELS
-    from runtime.main import DEFAULT_ZENOH
 
     load = sub.add_parser(
         "load",
         help="compile twice, download to a resource in STOP (cold start), store a backup",
     )
     load.add_argument("paths", nargs="+", type=Path, metavar="PATH")
-    _resource_options(load, DEFAULT_ZENOH)
+    _resource_options(load)
     _backup_option(load)
     load.set_defaults(func=_load)
 
     for name, does in (("start", "start"), ("stop", "stop")):
         command = sub.add_parser(name, help=f"{does} a resource, or one of its programs")
-        _resource_options(command, DEFAULT_ZENOH)
+        _resource_options(command)
         command.add_argument("--program", help=f"{does} only this user program")
         command.set_defaults(func=_start if name == "start" else _stop)
 
     status = sub.add_parser("status", help="show a resource's state, CRC, cycle and programs")
-    _resource_options(status, DEFAULT_ZENOH)
+    _resource_options(status)
     status.add_argument("--json", action="store_true", help="print the status object as JSON")
     status.set_defaults(func=_status)
 
@@ -325,7 +315,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="compile twice, show the reload plan, change the running resource online",
     )
     reload.add_argument("paths", nargs="+", type=Path, metavar="PATH")
-    _resource_options(reload, DEFAULT_ZENOH)
+    _resource_options(reload)
     reload.add_argument("--preview", action="store_true", help="only show the plan; change nothing")
     reload.add_argument(
         "--rename",

@@ -23,6 +23,7 @@ from backend.loading import (
     CheckedCompile,
     CompileFailed,
     LoadRefused,
+    checked_reply,
     compile_checked,
     download,
     preview_reload,
@@ -176,11 +177,7 @@ def load(args: argparse.Namespace) -> int:
 
 def _command(args: argparse.Namespace, cmd: str, **arguments: Any) -> dict[str, Any]:
     with _client(args) as client:
-        reply = client.command(cmd, **arguments)
-    if reply.get("ok") is not True:
-        error = reply.get("error") or {}
-        raise LoadRefused(str(error.get("code", "unknown")), str(error.get("message", "")))
-    return reply
+        return checked_reply(client.command(cmd, **arguments))
 
 
 def _program_state(status: dict[str, Any], program: str) -> str:

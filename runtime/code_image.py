@@ -8,7 +8,7 @@ import dataclasses
 import itertools
 import math
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -187,6 +187,21 @@ class CodeImage:
         if shape is not None:
             return self._is_aggregate(shape.element)
         return type_name.upper() in self._pous
+
+
+def slot_names(target: Any) -> Iterator[str]:
+    """The attributes of a generated object (its class's and its bases' `__slots__`)."""
+    for kind in type(target).__mro__:
+        yield from getattr(kind, "__slots__", ())
+
+
+def jsonable(value: Any) -> Any:
+    """A run-time value as strict JSON takes it: non-finite REALs as text."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return repr(value)
+    if isinstance(value, list):
+        return [jsonable(item) for item in value]
+    return value
 
 
 def read_path(instance: Any, path: VariablePath) -> Any:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 from runtime.access import ADMINISTRATOR_PARAMETERS, COMMAND_LEVELS, AccessDenied
 from runtime.artifact import Artifact
@@ -24,6 +24,7 @@ def error_reply(code: str, message: str) -> dict[str, Any]:
 
 Request = dict[str, Any]
 Reply = dict[str, Any]
+T = TypeVar("T")
 
 
 def _status(resource: Resource, request: Request) -> Reply:
@@ -124,12 +125,6 @@ def _load(resource: Resource, request: Request) -> Reply:
     return {"ok": True, "status": resource.status()}
 
 
-def _reload_preview(resource: Resource, request: Request) -> Reply:
-    job = begin_reload(resource, request)
-    job.prepare()
-    return finish_reload(resource, job)
-
-
 def begin_reload(resource: Resource, request: Request) -> ReloadJob:
     """The first half of `reload` and `reload_preview`: checks, and the job to prepare
     (the runtime process prepares it on a worker thread while cycles go on)."""
@@ -151,14 +146,14 @@ def finish_reload(resource: Resource, job: ReloadJob) -> Reply:
         if job.plan is None:
             return error_reply("reload_failed", f"the new configuration failed: {job.failure}")
         return {"ok": True, "plan": job.plan.as_json()}
-    try:
-        outcome = resource.finish_reload(job)
-    except CommandRefused as refused:
-        return error_reply(refused.code, refused.message)
-    return {"ok": True, "reload": outcome, "status": resource.status()}
+    return guarded(
+        lambda: {"ok": True, "reload": resource.finish_reload(job), "status": resource.status()}
+    )
 
 
 def _reload(resource: Resource, request: Request) -> Reply:
+    """`reload` and `reload_preview` in one go (the runtime process prepares on a worker
+    thread instead, see CycleDriver)."""
     job = begin_reload(resource, request)
     job.prepare()
     return finish_reload(resource, job)
@@ -201,7 +196,7 @@ COMMANDS: dict[str, Callable[[Resource, Request], Reply]] = {
     "transfer_begin": _transfer_begin,
     "transfer_chunk": _transfer_chunk,
     "load": _load,
-    "reload_preview": _reload_preview,
+    "reload_preview": _reload,
     "reload": _reload,
     "status": _status,
     "values": _values,
@@ -239,7 +234,7 @@ COMMANDS: dict[str, Callable[[Resource, Request], Reply]] = {
 }
 
 
-def parse_request(payload: bytes) -> dict[str, Any] | dict[str, Any]:
+def parse_request(payload: bytes) -> dict[str, Any]:
     """Decode a request; returns the request, or an error reply with `ok` False."""
     if len(payload) > MAX_REQUEST_BYTES:
         return error_reply("too_large", f"request larger than {MAX_REQUEST_BYTES} bytes")
@@ -284,8 +279,17 @@ def authorize(resource: Resource, request: Request) -> Reply | None:
     return None
 
 
-def guarded(action: Callable[[], Reply]) -> Reply:
-    """A command's reply, or the structured error for a refusal."""
+def start_reload(resource: Resource, request: Request) -> ReloadJob | Reply:
+    """For the runtime process, which prepares a reload on a worker thread: the job, or
+    the reply that refuses it (access, state, transfer)."""
+    refusal = authorize(resource, request)
+    if refusal is not None:
+        return refusal
+    return guarded(lambda: begin_reload(resource, request))
+
+
+def guarded(action: Callable[[], T]) -> T | Reply:
+    """What the action gives, or the structured error reply for a refusal."""
     try:
         return action()
     except CommandRefused as refused:

@@ -21,16 +21,7 @@ from collections.abc import Callable
 import zenoh
 
 from runtime.clock import Clock
-from runtime.commands import (
-    Reply,
-    authorize,
-    begin_reload,
-    error_reply,
-    execute,
-    finish_reload,
-    guarded,
-    parse_request,
-)
+from runtime.commands import error_reply, execute, finish_reload, parse_request, start_reload
 from runtime.link import ResourceLink
 from runtime.resource import ReloadJob, Resource, ResourceState
 
@@ -143,26 +134,16 @@ class CycleDriver:
         request = parse_request(payload)
         if request.get("cmd") not in ("reload", "reload_preview"):
             return False
-        refusal = authorize(self.resource, request)
-        if refusal is not None:
-            self.link.reply(query, refusal)
-            return True
         if self._reload is not None:
             self.link.reply(query, error_reply("busy", "a reload is already under way"))
             return True
-        jobs: list[ReloadJob] = []
-
-        def begin() -> Reply:
-            jobs.append(begin_reload(self.resource, request))
-            return {"ok": True}
-
-        reply = guarded(begin)
-        if not jobs:
-            self.link.reply(query, reply)
+        job = start_reload(self.resource, request)
+        if not isinstance(job, ReloadJob):  # refused at once
+            self.link.reply(query, job)
             return True
-        worker = threading.Thread(target=jobs[0].prepare, name="padt-reload", daemon=True)
+        worker = threading.Thread(target=job.prepare, name="padt-reload", daemon=True)
         worker.start()
-        self._reload = (query, jobs[0], worker)
+        self._reload = (query, job, worker)
         return True
 
     def _finish_reload(self) -> None:

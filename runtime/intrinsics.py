@@ -439,7 +439,7 @@ class _ActionControl:
         self.A = active or pulse or final_scan
 
 
-def _no_tick() -> None:
+def no_tick() -> None:
     """Loop passes of programs without a time slice are not metered."""
 
 
@@ -464,7 +464,7 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         },
         "__name__": "padt_generated",
         "_SYS": system,
-        "_tick": _no_tick,  # replaced while a program with a time slice runs
+        "_tick": no_tick,  # replaced while a program with a time slice runs
         "_idiv": _idiv,
         "_imod": _imod,
         "_fdiv": _fdiv,

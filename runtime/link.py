@@ -24,7 +24,7 @@ from runtime.keyspace import (
     watch_key,
     watchers_key_expr,
 )
-from runtime.resource import WatchSnapshot
+from runtime.watch_sets import WatchSnapshot
 
 
 class ResourceLink:
@@ -39,6 +39,7 @@ class ResourceLink:
             events_key(resource), congestion_control=zenoh.CongestionControl.BLOCK
         )
         self._session = session
+        self._resource = resource
         self._pending: dict[str, WatchSnapshot] = {}
         self._pending_lock = threading.Condition()
         self._closing = False
@@ -46,7 +47,6 @@ class ResourceLink:
             target=self._publish_loop, name="padt-watch-publisher", daemon=True
         )
         self._publisher.start()
-        self._resource = resource
         self.departed: queue.Queue[str] = queue.Queue()  # watch ids whose client went away
         self._watchers = session.liveliness().declare_subscriber(
             watchers_key_expr(resource), self._on_watcher

@@ -16,8 +16,8 @@ from runtime.context import ContextInvalid, load_context
 from runtime.event_log import EventLog
 from runtime.keyspace import valid_resource_name
 from runtime.resource import Resource
+from runtime.zenoh_options import add_zenoh_options
 
-DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
 log = logging.getLogger("padt.runtime")
 
 
@@ -39,18 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=Path,
         help="folder of the resource's loaded configuration and saved state",
     )
-    parser.add_argument(
-        "--zenoh",
-        default=DEFAULT_ZENOH,
-        metavar="ENDPOINT",
-        help=f"Zenoh router to connect to (default {DEFAULT_ZENOH})",
-    )
-    parser.add_argument(
-        "--zenoh-config",
-        type=Path,
-        metavar="FILE",
-        help="Zenoh configuration (JSON5) with TLS and user/password settings",
-    )
+    add_zenoh_options(parser, "Zenoh router to connect to")
     parser.add_argument(
         "--context-period-ms",
         type=int,

@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from runtime.code_image import Accessor
+from runtime.code_image import Accessor, slot_names
 from runtime.reload_plan import (
     CONVERTED,
     KEPT,
@@ -28,7 +28,7 @@ from runtime.reload_plan import (
     convert,
     rename_source,
 )
-from runtime.user_program import UserProgram, copy_globals
+from runtime.user_program import UserProgram, share_globals
 
 if TYPE_CHECKING:
     from runtime.artifact import Artifact
@@ -118,7 +118,7 @@ def prepare_switch_over(
         known = old_declared.get(type(counterpart), frozenset())
         slots = tuple(
             slot
-            for slot in _slots(target)
+            for slot in slot_names(target)
             if slot not in declared and slot not in known and hasattr(counterpart, slot)
         )
         if slots:
@@ -164,11 +164,7 @@ def switch_over(prepared: SwitchOver, new: Instances, deadline_ns: int | None) -
         program.state, program.error = previous.state, previous.error
         program.time_ns, program.last_start_ns = previous.time_ns, previous.last_start_ns
         program.stats = copy.copy(previous.stats)
-    if new.globals is not None:
-        attrs = tuple(_slots(new.globals))
-        for program in new.programs:
-            if program.view is not new.globals:
-                copy_globals(new.globals, program.view, attrs)
+    share_globals(new.globals, new.programs)
     if deadline_ns is not None and time.perf_counter_ns() > deadline_ns:
         raise SwitchOverTooLong()
     return carried
@@ -185,11 +181,6 @@ def _owner(instances: Instances, bound: BoundVariable) -> Any:
     return bound.program.instance if bound.program is not None else instances.globals
 
 
-def _slots(target: Any) -> Iterator[str]:
-    for kind in type(target).__mro__:
-        yield from getattr(kind, "__slots__", ())
-
-
 def _objects(instances: Instances) -> Iterator[tuple[str, Any]]:
     """Every generated object below the program and global instances, by a path of
     attribute names (`Main.fb`, `Main.arr#2` for the third object of a list)."""
@@ -200,7 +191,7 @@ def _objects(instances: Instances) -> Iterator[tuple[str, Any]]:
     while stack:
         path, target = stack.pop()
         yield path.upper(), target
-        for slot in _slots(target):
+        for slot in slot_names(target):
             value = getattr(target, slot, None)
             inner = f"{path}.{slot}" if path else slot
             if isinstance(value, list):

@@ -239,6 +239,14 @@ def _hazards(
     return hazards
 
 
+# qualifiers whose deletion matters only while their action-control flag is TRUE:
+# (hazard kind, the flag, how the message says it is TRUE, what happens)
+_LATCHED = {
+    "S": ("set-qualifier-deleted", "stored", " while the action is set", "the action stays set"),
+    "P0": ("p0-deleted", "p0_prev", " while its flag is TRUE", "the trigger fires"),
+}
+
+
 def _active(live: LiveState | None, instance: str, step: str) -> bool | None:
     return None if live is None else bool(live(instance, f"{step}.X"))
 
@@ -289,27 +297,16 @@ def _chart_hazards(instance: ChartInstance, new: ChartInfo, live: LiveState | No
                     "is deleted: its timer expires at once, so the action's Q may go TRUE",
                 )
             )
-        elif a.qualifier == "S":
-            stored = None if live is None else bool(live(where, f"{a.action}.stored"))
-            if stored is not False:
+        elif a.qualifier in _LATCHED:
+            kind, flag, while_set, outcome = _LATCHED[a.qualifier]
+            flagged = None if live is None else bool(live(where, f"{a.action}.{flag}"))
+            if flagged is not False:
                 hazards.append(
                     Hazard(
-                        "set-qualifier-deleted",
+                        kind,
                         where,
-                        f"qualifier S of action {a.action} in step {a.step} of {where} is "
-                        f"deleted{' while the action is set' if stored else ''}: the action "
-                        "stays set",
-                    )
-                )
-        elif a.qualifier == "P0":
-            flag = None if live is None else bool(live(where, f"{a.action}.p0_prev"))
-            if flag is not False:
-                hazards.append(
-                    Hazard(
-                        "p0-deleted",
-                        where,
-                        f"qualifier P0 of action {a.action} in step {a.step} of {where} is "
-                        f"deleted{' while its flag is TRUE' if flag else ''}: the trigger fires",
+                        f"qualifier {a.qualifier} of action {a.action} in step {a.step} of "
+                        f"{where} is deleted{while_set if flagged else ''}: {outcome}",
                     )
                 )
     return hazards

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -24,6 +23,7 @@ from runtime.code_image import (
     CodeImage,
     ValueRejected,
     VariablePath,
+    jsonable,
     read_path,
     representation,
     write_path,
@@ -32,7 +32,7 @@ from runtime.context import Context, ContextMismatch, restore, snapshot
 from runtime.cycle_stats import CycleStats
 from runtime.event_log import EventLog
 from runtime.forcing import GLOBAL, ForceEntry, ForceTable
-from runtime.intrinsics import ProgramFault, SystemView
+from runtime.intrinsics import ProgramFault, SystemView, no_tick
 from runtime.keyspace import valid_watch_id
 from runtime.parameters import RESOURCE_BY_NAME, ParameterError, resource_consistency
 from runtime.reload import (
@@ -46,8 +46,8 @@ from runtime.reload_plan import LiveState, ReloadPlan, plan_reload
 from runtime.slicing import SliceMeter
 from runtime.system_variables import SYSTEM_VARIABLES
 from runtime.transfer import IncomingArtifact
-from runtime.user_program import ProgramState, UserProgram, copy_globals
-from runtime.watch_sets import MAX_PERIOD_MS, MIN_PERIOD_MS, WatchSet, WatchSets
+from runtime.user_program import ProgramState, UserProgram, share_globals
+from runtime.watch_sets import MAX_PERIOD_MS, MIN_PERIOD_MS, WatchSet, WatchSets, WatchSnapshot
 from runtime.watchdog import Watchdog, WatchdogExpired, process_watchdog
 
 log = logging.getLogger(__name__)
@@ -151,14 +151,15 @@ class ReloadJob:
         old: Instances,
         old_artifact: Artifact,
         system: SystemView,
+        live: LiveState,
     ) -> None:
         self.artifact, self.renames = artifact, renames
+        # the programs as they were (a list of its own: a restart replaces one)
         self.old, self.old_artifact, self.system = old, old_artifact, system
-        self.old.programs = list(old.programs)  # as they were: a restart replaces one
+        self.live = live
         self.watchdog_ms: int | None = None
         self.target_cycle_ms: int | None = None
         self.user: str | None = None
-        self.live: LiveState | None = None
         self.instances: Instances | None = None
         self.plan: ReloadPlan | None = None
         self.prepared: SwitchOver | None = None
@@ -166,23 +167,18 @@ class ReloadJob:
         self.preview = False  # only the plan is wanted
         self.expected_crc: str | None = None  # the configuration the user previewed against
 
-    def make_plan(self, live: LiveState | None) -> ReloadPlan:
-        if self.instances is None:
-            self.instances = instantiate(self.artifact, self.system)
-        return plan_reload(
-            self.old_artifact,
-            self.artifact,
-            self.renames,
-            live,
-            [b.path for b in self.old.bound],
-            [b.path for b in self.instances.bound],
-        )
-
     def prepare(self) -> None:
         """New instances, the plan and the switch-over list; never raises."""
         try:
-            self.plan = self.make_plan(self.live)
-            assert self.instances is not None
+            self.instances = instantiate(self.artifact, self.system)
+            self.plan = plan_reload(
+                self.old_artifact,
+                self.artifact,
+                self.renames,
+                self.live,
+                [b.path for b in self.old.bound],
+                [b.path for b in self.instances.bound],
+            )
             if not self.plan.refusals and not self.preview:
                 self.prepared = prepare_switch_over(
                     self.old, self.instances, self.plan, self.renames
@@ -215,6 +211,8 @@ class Resource:
         self._image: CodeImage | None = None
         self._bound: list[BoundVariable] = []
         self._by_name: dict[str, BoundVariable] = {}
+        self._output_points: list[BoundVariable] = []
+        self.meter_total_ns = 0  # program execution time in the current CPU cycle
         self._inputs: dict[str, Any] = {}  # input image: what the I/O last delivered
         self._first_cycle = False  # the next CPU cycle is the first after a start
         self._last_start_ns: int | None = None
@@ -240,7 +238,7 @@ class Resource:
     def watchdog_ns(self) -> int:
         return self.params.watchdog_ms * 1_000_000
 
-    def set_parameter(self, name: str, value: Any, user: str | None = None) -> None:
+    def set_parameter(self, name: str, value: Any) -> None:
         """An online change of a resource parameter (section 6)."""
         spec = RESOURCE_BY_NAME.get(name)
         if spec is None:
@@ -265,9 +263,7 @@ class Resource:
         old = getattr(self.params, name)
         self.params = changed
         self.system.WATCHDOG_TIME = self.watchdog_ns
-        self._event(
-            "parameter", f"{name} changed from {old} to {checked}", user, name=name, old=old
-        )
+        self._event("parameter", f"{name} changed from {old} to {checked}", name=name, old=old)
 
     def login(self, name: str, password: str) -> tuple[str, Session]:
         """A session token; a failed login is an event (without the password)."""
@@ -306,15 +302,10 @@ class Resource:
         if self.artifact is not None and not self.params.load_allowed:
             raise CommandRefused("not_allowed", "Load Allowed is OFF")
         old_crc = self.artifact.crc if self.artifact else None
-        self._instantiate(artifact)
-        self.artifact, self.params = artifact, artifact.resource
-        self._safe_values = {name.upper(): value for name, value in artifact.safe_values}
-        self.access.replace_users(artifact.users)
         self.forces = ForceTable()  # a download ends forcing, and its entries lose meaning
+        self._take(artifact, instantiate(artifact, self.system))
         self.state = ResourceState.STOP_VALID
         self.start_kind = "cold"
-        self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
-        self.system.WATCHDOG_TIME = self.watchdog_ns
         self._write_outputs(safe=True)
         self._event(
             "load",
@@ -324,6 +315,16 @@ class Resource:
         )
         if self.on_configuration is not None:
             self.on_configuration(artifact)
+
+    def _take(self, artifact: Artifact, instances: Instances) -> None:
+        """A new configuration (download or reload) with its instances: parameters, safe
+        values, accounts and the system variables that describe it follow it."""
+        self._adopt(instances)
+        self.artifact, self.params = artifact, artifact.resource
+        self._safe_values = {name.upper(): value for name, value in artifact.safe_values}
+        self.access.replace_users(artifact.users)  # sessions of removed accounts end
+        self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
+        self.system.WATCHDOG_TIME = self.watchdog_ns
 
     def _instantiate(self, artifact: Artifact) -> None:
         """Fresh instances of everything: every variable at its initial value."""
@@ -335,9 +336,16 @@ class Resource:
             instances.programs,
             instances.globals,
         )
-        self._bound, self._by_name = instances.bound, instances.by_name
+        self._set_bound(instances.bound)
 
-    def init(self, user: str | None = None) -> None:
+    def _set_bound(self, bound: list[BoundVariable]) -> None:
+        self._bound, self._by_name = bound, index(bound)
+        # the output image's points (located %Q variables), listed once, not every cycle
+        self._output_points = [
+            b for b in bound if b.path.location and b.path.location.upper().startswith("%Q")
+        ]
+
+    def init(self) -> None:
         """INIT: leave ERROR STOP for STOP; the next start is a cold start."""
         if self.state != ResourceState.ERROR_STOP:
             raise CommandRefused("state", "INIT leaves ERROR STOP; the resource is not in it")
@@ -346,17 +354,17 @@ class Resource:
         self._instantiate(self.artifact)
         self.start_kind = "cold"
         self._reset_system_inputs()
-        self._event("state", "INIT: ERROR STOP left for STOP (cold start next)", user)
+        self._event("state", "INIT: ERROR STOP left for STOP (cold start next)")
 
-    def cold_start(self, user: str | None = None) -> None:
+    def cold_start(self) -> None:
         """Every variable to its initial value (in STOP); the next start is a cold start."""
         self._require_stop("a cold start")
         assert self.artifact is not None
         self._instantiate(self.artifact)
         self.start_kind = "cold"
-        self._event("state", "cold start prepared: all variables at their initial values", user)
+        self._event("state", "cold start prepared: all variables at their initial values")
 
-    def start(self, user: str | None = None) -> None:
+    def start(self) -> None:
         if self.state == ResourceState.STOP_INVALID:
             raise CommandRefused("state", "no valid configuration is loaded")
         if self.state == ResourceState.ERROR_STOP:
@@ -377,9 +385,9 @@ class Resource:
         self._first_cycle = True
         self._last_start_ns = None
         self.last_start = self.start_kind or "continued"
-        self._event("start", f"resource started ({self.start_kind or 'continuing'})", user)
+        self._event("start", f"resource started ({self.start_kind or 'continuing'})")
 
-    def stop(self, user: str | None = None, reason: str = "stop command") -> None:
+    def stop(self, reason: str = "stop command") -> None:
         if self.state not in (ResourceState.RUN, ResourceState.RUN_UP_STOP):
             return
         if reason == "stop command":
@@ -391,7 +399,7 @@ class Resource:
                 program.state = ProgramState.STOP
         self._end_forcing("resource stop")
         self._write_outputs(safe=True)
-        self._event("stop", f"resource stopped ({reason})", user)
+        self._event("stop", f"resource stopped ({reason})")
 
     def error_stop(self, cause: str) -> None:
         """ERROR STOP: programs halted, outputs safe at once; only INIT leaves it."""
@@ -435,9 +443,17 @@ class Resource:
         """A job that only plans (`prepare` may run on another thread)."""
         if self.artifact is None or self._image is None:
             raise CommandRefused("state", "no configuration is loaded: use a download")
-        job = ReloadJob(artifact, renames, self._instances(), self.artifact, self.system)
-        job.live, job.preview = live_state(self.artifact, job.old), True
+        job = self._job(artifact, renames)
+        job.preview = True
         return job
+
+    def _job(self, artifact: Artifact, renames: dict[str, str]) -> ReloadJob:
+        """A job against the running configuration and its live chart state."""
+        assert self.artifact is not None and self._image is not None
+        old = Instances(self._image, list(self.programs), self.globals, self._bound, self._by_name)
+        return ReloadJob(
+            artifact, renames, old, self.artifact, self.system, live_state(self.artifact, old)
+        )
 
     def reload(
         self,
@@ -445,13 +461,12 @@ class Resource:
         renames: dict[str, str],
         watchdog_ms: int | None = None,
         target_cycle_ms: int | None = None,
-        user: str | None = None,
     ) -> dict[str, Any]:
         """Replace the running configuration between two cycles, values carried over by
         name; all or nothing. `watchdog_ms` / `target_cycle_ms` raise the budget for this
         reload (never below the configured values). The runtime process prepares on a
         worker thread instead (`begin_reload`, `ReloadJob.prepare`, `finish_reload`)."""
-        job = self.begin_reload(artifact, renames, watchdog_ms, target_cycle_ms, user)
+        job = self.begin_reload(artifact, renames, watchdog_ms, target_cycle_ms, self.acting_user)
         job.prepare()
         return self.finish_reload(job)
 
@@ -471,11 +486,9 @@ class Resource:
         except CommandRefused as refused:
             self.refused("reload", refused.message, artifact.crc)
             raise
-        assert self.artifact is not None
-        job = ReloadJob(artifact, renames, self._instances(), self.artifact, self.system)
+        job = self._job(artifact, renames)
         job.watchdog_ms, job.target_cycle_ms, job.user = watchdog_ms, target_cycle_ms, user
         job.expected_crc = expected_crc
-        job.live = live_state(self.artifact, job.old)
         return job
 
     def finish_reload(self, job: ReloadJob) -> dict[str, Any]:
@@ -543,13 +556,8 @@ class Resource:
             if program.name in plan.programs_added:
                 start = running and program.config.start_allowed
                 program.state = ProgramState.RUN if start else ProgramState.STOP
-        self._adopt(instances)
         artifact = job.artifact
-        self.artifact, self.params = artifact, artifact.resource
-        self._safe_values = {name.upper(): value for name, value in artifact.safe_values}
-        self.access.replace_users(artifact.users)  # new accounts take effect with a reload
-        self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
-        self.system.WATCHDOG_TIME = self.watchdog_ns
+        self._take(artifact, instances)
         for entry in self.forces.entries():  # forcing survives, where the variable does
             if entry.path.upper() not in self._by_name:
                 self.forces.remove(entry.path)
@@ -591,10 +599,6 @@ class Resource:
             limit = min(limit, target)
         return limit - self.stats.last_ns
 
-    def _instances(self) -> Instances:
-        assert self._image is not None
-        return Instances(self._image, self.programs, self.globals, self._bound, self._by_name)
-
     # ---- context (warm start)
     def context(self) -> Context | None:
         """A consistent image of everything a warm start needs (taken between cycles)."""
@@ -634,12 +638,7 @@ class Resource:
             self._instantiate(self.artifact)  # nothing half-restored
             self._event("state", f"cold start: the saved context does not fit ({exc})")
             return []
-        assert self.artifact is not None
-        unit = self.artifact.globals
-        attrs = tuple(v.attr for v in unit.variables) if unit is not None else ()
-        for program in self.programs:
-            if program.view is not self.globals:
-                copy_globals(self.globals, program.view, attrs)
+        share_globals(self.globals, self.programs)
         self.start_kind = "warm"
         self._event("state", f"warm start prepared from the context saved at {context.saved_ns}")
         return restored
@@ -651,7 +650,7 @@ class Resource:
                 return program
         raise CommandRefused("unknown_program", f"resource {self.name} has no program '{name}'")
 
-    def start_program(self, name: str, user: str | None = None) -> None:
+    def start_program(self, name: str) -> None:
         program = self.program(name)
         if self.state not in (ResourceState.RUN, ResourceState.RUN_UP_STOP):
             raise CommandRefused("state", "a program starts only while the resource runs")
@@ -662,9 +661,9 @@ class Resource:
         if program.state != ProgramState.STOP:
             return
         program.state, program.last_start_ns, program.held = ProgramState.RUN, None, False
-        self._event("program", f"program {program.name} started", user, program=program.name)
+        self._event("program", f"program {program.name} started", program=program.name)
 
-    def stop_program(self, name: str, user: str | None = None) -> None:
+    def stop_program(self, name: str) -> None:
         program = self.program(name)
         if program.state not in (ProgramState.RUN, ProgramState.RUN_FREEZE):
             return
@@ -672,8 +671,8 @@ class Resource:
         program.abandon()
         program.state = ProgramState.STOP
         if self.forces.stop(program.name):
-            self._event("force", f"local forcing of {program.name} ended: program stop", user)
-        self._event("program", f"program {program.name} stopped", user, program=program.name)
+            self._event("force", f"local forcing of {program.name} ended: program stop")
+        self._event("program", f"program {program.name} stopped", program=program.name)
 
     def _restart_program_cold(self, program: UserProgram) -> UserProgram:
         """A program leaves ERROR by a start: from its initial values (its state after the
@@ -682,14 +681,13 @@ class Resource:
         fresh = self._image.new_instance(program.config.pou)
         replacement = UserProgram(program.config, fresh, program.paths, program.view)
         self.programs[self.programs.index(program)] = replacement
-        self._bound = [
-            BoundVariable(replacement, b.path) if b.program is program else b for b in self._bound
-        ]
-        self._by_name = index(self._bound)
+        self._set_bound(
+            [BoundVariable(replacement, b.path) if b.program is program else b for b in self._bound]
+        )
         replacement.state = ProgramState.STOP
         return replacement
 
-    def freeze(self, name: str, user: str | None = None) -> None:
+    def freeze(self, name: str) -> None:
         """Single step on: the program runs one program cycle per `step_program`."""
         program = self.program(name)
         if not program.config.freeze_allowed:
@@ -703,14 +701,14 @@ class Resource:
             # between two program cycles
             self._run_to_end(program)
         program.state = ProgramState.RUN_FREEZE
-        self._event("program", f"program {program.name} frozen (single step)", user)
+        self._event("program", f"program {program.name} frozen (single step)")
 
-    def unfreeze(self, name: str, user: str | None = None) -> None:
+    def unfreeze(self, name: str) -> None:
         program = self.program(name)
         if program.state != ProgramState.RUN_FREEZE:
             raise CommandRefused("state", f"program {program.name} is not in single step")
         program.state, program.last_start_ns = ProgramState.RUN, None
-        self._event("program", f"program {program.name} leaves single step", user)
+        self._event("program", f"program {program.name} leaves single step")
 
     def step_program(self, name: str, interval_ns: int | None = None) -> None:
         """One whole program cycle of a frozen program; its time advances by one cycle
@@ -809,7 +807,7 @@ class Resource:
         def before() -> None:
             assert self._image is not None
             self.system.now_ns = program.cycle_time_ns
-            self._image.use(view, meter.tick if budget_ns is not None else _no_tick)
+            self._image.use(view, meter.tick if budget_ns is not None else no_tick)
             meter.begin(budget_ns)
 
         done = False
@@ -900,8 +898,6 @@ class Resource:
         for program in finished:
             program.publish(self.globals)
 
-    meter_total_ns = 0  # program execution time in the current CPU cycle
-
     # ---- system variables
     def _update_system(self, begin: int) -> None:
         system = self.system
@@ -947,10 +943,7 @@ class Resource:
     def _write_outputs(self, safe: bool) -> None:
         """The output image (located %Q variables) as the I/O sends it to the field."""
         image: dict[str, Any] = {}
-        for bound in self._bound:
-            location = bound.path.location
-            if location is None or not location.upper().startswith("%Q"):
-                continue
+        for bound in self._output_points:
             if safe:
                 configured = self._safe_values.get(bound.path.path.upper())
                 image[bound.path.path] = (
@@ -1000,8 +993,7 @@ class Resource:
 
     def _end_forcing(self, why: str) -> None:
         for level in self.forces.stop_all():
-            where = "global forcing" if level == GLOBAL else f"local forcing of {level}"
-            self._event("force", f"{where} ended: {why}", long_term=True)
+            self._event("force", f"{_forcing_name(level)} ended: {why}", long_term=True)
 
     def _force_level(self, bound: BoundVariable) -> str:
         return GLOBAL if bound.program is None else bound.program.name
@@ -1017,7 +1009,7 @@ class Resource:
         elif not self.program(level).config.local_forcing_allowed:
             raise CommandRefused("not_allowed", f"Local Forcing Allowed of {level} is OFF")
 
-    def force(self, name: str, value: Any, switch: bool = True, user: str | None = None) -> None:
+    def force(self, name: str, value: Any, switch: bool = True) -> None:
         """Prepare a force value and its switch; it acts while forcing runs at its level."""
         bound = self._lookup(name)
         level = self._force_level(bound)
@@ -1030,36 +1022,31 @@ class Resource:
         self._event(
             "force",
             f"{bound.path.path} forced to {stored!r} (switch {'ON' if switch else 'OFF'})",
-            user,
             variable=bound.path.path,
             old=old,
             new=stored,
         )
 
-    def unforce(self, name: str, user: str | None = None) -> None:
+    def unforce(self, name: str) -> None:
         bound = self._lookup(name)
         if self.forces.remove(bound.path.path) is None:
             raise CommandRefused("not_forced", f"'{bound.path.path}' has no force value")
-        self._event("force", f"{bound.path.path} force value removed", user)
+        self._event("force", f"{bound.path.path} force value removed")
 
-    def start_forcing(
-        self, program: str | None = None, timeout_ns: int | None = None, user: str | None = None
-    ) -> None:
+    def start_forcing(self, program: str | None = None, timeout_ns: int | None = None) -> None:
         level = GLOBAL if program is None else self.program(program).name
         self._check_forcing_allowed(level)
         if self.state not in (ResourceState.RUN, ResourceState.RUN_UP_STOP):
             raise CommandRefused("state", "forcing starts only while the resource runs")
         self.forces.start(level, self.clock.now_ns(), timeout_ns)
         self._apply_forces()
-        where = "global forcing" if level == GLOBAL else f"local forcing of {level}"
         limit = f"{timeout_ns / 1e9:g} s" if timeout_ns is not None else "no time limit"
-        self._event("force", f"{where} started ({limit})", user)
+        self._event("force", f"{_forcing_name(level)} started ({limit})")
 
-    def stop_forcing(self, program: str | None = None, user: str | None = None) -> None:
+    def stop_forcing(self, program: str | None = None) -> None:
         level = GLOBAL if program is None else self.program(program).name
         if self.forces.stop(level):
-            where = "global forcing" if level == GLOBAL else f"local forcing of {level}"
-            self._event("force", f"{where} stopped", user)
+            self._event("force", f"{_forcing_name(level)} stopped")
 
     def _check_force_deactivation(self) -> None:
         """Force Deactivation OFF -> ON ends all forcing at once (ON also blocks it)."""
@@ -1182,8 +1169,7 @@ class Resource:
                 quality = "stale"
             else:
                 quality = "live"
-            owner = bound.program.instance if bound.program is not None else self.globals
-            entries.append((path, read_path(owner, bound.path), quality))
+            entries.append((path, self._read_bound(bound), quality))
         return WatchSnapshot(self.cycle_count, entries)
 
     def values(self) -> dict[str, Any]:
@@ -1216,7 +1202,7 @@ class Resource:
         except ValueRejected as exc:
             raise CommandRefused("bad_value", f"'{bound.path.path}': {exc}") from None
 
-    def write(self, name: str, value: Any, user: str | None = None) -> None:
+    def write(self, name: str, value: Any) -> None:
         """Write a value once from an OLT field (not forcing): refused in safety
         operation; a forced variable keeps its force value."""
         if self.params.safety_operation:
@@ -1228,7 +1214,6 @@ class Resource:
         self._event(
             "write",
             f"{bound.path.path} written: {old!r} -> {stored!r}",
-            user,
             variable=bound.path.path,
             old=old,
             new=stored,
@@ -1241,33 +1226,9 @@ class Resource:
         self._store(bound, self._checked(bound, value))
 
 
-@dataclass(frozen=True)
-class WatchSnapshot:
-    cycle: int
-    entries: list[tuple[str, Any, str]]  # (path, value, quality)
-
-    def message(self) -> dict[str, Any]:
-        return {
-            "cycle": self.cycle,
-            "values": {
-                path: {"value": jsonable(value), "quality": quality}
-                for path, value, quality in self.entries
-            },
-        }
-
-
-def jsonable(value: Any) -> Any:
-    """A variable value as an event detail: non-finite REALs as text (strict JSON)."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return repr(value)
-    if isinstance(value, list):
-        return [jsonable(item) for item in value]
-    return value
+def _forcing_name(level: str) -> str:
+    return "global forcing" if level == GLOBAL else f"local forcing of {level}"
 
 
 class _Halted(BaseException):
     """Ends the CPU cycle at once (Emergency Stop); caught by nothing but the cycle."""
-
-
-def _no_tick() -> None:
-    pass

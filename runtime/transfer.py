@@ -67,6 +67,6 @@ class IncomingArtifact:
             raise TransferError(str(exc)) from None
 
 
-def pieces(text: str) -> list[str]:
-    """An artifact text cut into chunks for sending."""
-    return [text[i : i + MAX_CHUNK] for i in range(0, len(text), MAX_CHUNK)] or [""]
+def pieces(text: str, size: int = MAX_CHUNK) -> list[tuple[int, str]]:
+    """An artifact text cut for sending: (offset, data) of each `transfer_chunk`."""
+    return [(offset, text[offset : offset + size]) for offset in range(0, len(text), size)]

@@ -10,7 +10,7 @@ from enum import StrEnum
 from typing import Any
 
 from runtime.artifact import ProgramConfig
-from runtime.code_image import VariablePath
+from runtime.code_image import VariablePath, slot_names
 from runtime.slicing import ProgramRun
 
 
@@ -30,6 +30,17 @@ def copy_globals(source: Any, target: Any, attrs: tuple[str, ...]) -> None:
     for attr in attrs:
         value = getattr(source, attr)
         setattr(target, attr, value if isinstance(value, _SCALARS) else copy.deepcopy(value))
+
+
+def share_globals(master: Any, programs: list[UserProgram]) -> None:
+    """Every global as `master` holds it, into every program's own view (after values
+    came from elsewhere: a warm start, a reload)."""
+    if master is None:
+        return
+    attrs = tuple(slot_names(master))
+    for program in programs:
+        if program.view is not master:
+            copy_globals(master, program.view, attrs)
 
 
 @dataclass

@@ -9,6 +9,9 @@ goes away, Zenoh withdraws the token and the runtime drops the set.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
+
+from runtime.code_image import jsonable
 
 MIN_PERIOD_MS = 10
 MAX_PERIOD_MS = 60_000
@@ -21,6 +24,24 @@ class WatchSet:
     paths: tuple[str, ...]  # canonical variable paths, in the client's order
     period_ns: int
     next_due_ns: int = 0  # clock time after which it is sent again
+
+
+@dataclass(frozen=True)
+class WatchSnapshot:
+    """A set's values as one cycle left them, read between two cycles; the message is
+    built from it elsewhere (on the link's publisher thread)."""
+
+    cycle: int
+    entries: list[tuple[str, Any, str]]  # (path, value, quality)
+
+    def message(self) -> dict[str, Any]:
+        return {
+            "cycle": self.cycle,
+            "values": {
+                path: {"value": jsonable(value), "quality": quality}
+                for path, value, quality in self.entries
+            },
+        }
 
 
 class WatchSets:

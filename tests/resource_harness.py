@@ -49,10 +49,8 @@ class Harness:
         """Transfer an artifact in chunks, as the PADT does before a load or reload."""
         text = artifact.to_json()
         self.ok("transfer_begin", size=len(text), crc=crc32_hex(text))
-        offset = 0
-        for piece in pieces(text):
+        for offset, piece in pieces(text):
             self.ok("transfer_chunk", offset=offset, data=piece)
-            offset += len(piece)
 
     def cycle(self, count: int = 1) -> dict[str, Any]:
         """`count` CPU cycles, the clock one target interval further after each."""

@@ -16,11 +16,12 @@ import pytest
 import backend.loading as loading
 from backend.backup import BackupError, BackupInfo, restore_backup, write_backup
 from backend.check_twice import CheckTwiceResult, CompileRun, compare
-from backend.loading import LoadRefused, chunks, compile_checked, send_artifact, transfer_crc
+from backend.loading import LoadRefused, compile_checked, send_artifact
 from backend.resource_client import ResourceClient
 from padt.online import parse_rename
-from runtime.artifact import load_artifact
+from runtime.artifact import crc32_hex, load_artifact
 from runtime.commands import MAX_REQUEST_BYTES
+from runtime.transfer import pieces
 from tests.conftest import padt
 from tests.runtime_process import client_session, router, running_resource
 
@@ -190,15 +191,15 @@ def test_corrupted_or_cut_transfer_keeps_the_old_configuration(
         assert load_artifact(text).crc != crc
 
         changed = text[:200] + ("A" if text[200] != "A" else "B") + text[201:]
-        begun = client.command("transfer_begin", size=len(text), crc=transfer_crc(text))
+        begun = client.command("transfer_begin", size=len(text), crc=crc32_hex(text))
         assert begun["ok"], begun
         assert client.command("transfer_chunk", offset=0, data=changed)["ok"]
         refused = client.command("load")
         assert refused["ok"] is False and refused["error"]["code"] == "transfer"
         assert "CRC" in refused["error"]["message"]
 
-        (_, first), *_ = chunks(text, max_chunk=len(text) // 2)
-        assert client.command("transfer_begin", size=len(text), crc=transfer_crc(text))["ok"]
+        (_, first), *_ = pieces(text, len(text) // 2)
+        assert client.command("transfer_begin", size=len(text), crc=crc32_hex(text))["ok"]
         assert client.command("transfer_chunk", offset=0, data=first)["ok"]
         cut = client.command("load")
         assert cut["ok"] is False and cut["error"]["code"] == "transfer"
@@ -354,12 +355,12 @@ def test_rename_is_written_old_equals_new() -> None:
 
 def test_chunks_fit_the_request_limit_even_after_escaping() -> None:
     text = '"\\' * 60_000  # every character doubles when JSON-encoded again
-    pieces = chunks(text)
-    assert "".join(data for _, data in pieces) == text
-    assert [offset for offset, _ in pieces] == [
-        sum(len(data) for _, data in pieces[:i]) for i in range(len(pieces))
+    cut = pieces(text)
+    assert "".join(data for _, data in cut) == text
+    assert [offset for offset, _ in cut] == [
+        sum(len(data) for _, data in cut[:i]) for i in range(len(cut))
     ]
-    for offset, data in pieces:
+    for offset, data in cut:
         request = {"cmd": "transfer_chunk", "offset": offset, "data": data}
         assert len(json.dumps(request).encode()) <= MAX_REQUEST_BYTES
 

@@ -35,7 +35,7 @@ from runtime.reload_plan import (
 )
 from runtime.resource import CommandRefused, Resource, ResourceState, instantiate
 from runtime.user_program import ProgramState
-from tests.bench.bench_runtime import ten_thousand_paths
+from tests.bench.bench_runtime import mean_and_best_ms, ten_thousand_paths
 
 PLAN_ROUNDS = 5
 RELOADS = 10  # alternating old -> new -> old ...
@@ -82,16 +82,6 @@ def _running(artifact: Artifact) -> Resource:
     return resource
 
 
-def _timed_ms(action: Callable[[], object], rounds: int) -> tuple[float, float]:
-    """Mean and best of `rounds` runs, in milliseconds."""
-    samples = []
-    for _ in range(rounds):
-        started = time.perf_counter_ns()
-        action()
-        samples.append((time.perf_counter_ns() - started) / 1e6)
-    return statistics.fmean(samples), min(samples)
-
-
 def _summary(plan: ReloadPlan) -> str:
     counts = ", ".join(f"{a} {plan.count(a):,}" for a in (KEPT, CONVERTED, INITIALISED, NEW))
     return f"{counts}, {DELETED} {plan.count(DELETED):,}"
@@ -113,14 +103,14 @@ def bench_plan(old: Artifact, new: Artifact, rounds: int = PLAN_ROUNDS) -> None:
         f"1. reload plan, {len(plan.changes):,} variable changes "
         f"(CRC {old.crc} -> {new.crc}), {rounds} runs each:"
     )
-    mean, best = _timed_ms(lambda: plan_reload(old, new), rounds)
+    mean, best = mean_and_best_ms(lambda: plan_reload(old, new), rounds)
     print(f"  plan_reload (no live state):      mean {mean:7.1f} ms   best {best:7.1f} ms")
     resource = _running(old)
-    mean, best = _timed_ms(lambda: resource.preview_reload(new, {}), rounds)
+    mean, best = mean_and_best_ms(lambda: resource.preview_reload(new, {}), rounds)
     print(f"  Resource.preview_reload (live):   mean {mean:7.1f} ms   best {best:7.1f} ms")
     # what Resource.reload does after the plan and before the switch-over, also outside
     # the pause but inside the same call (the driver's housekeeping between two cycles)
-    mean, best = _timed_ms(lambda: instantiate(new, SystemView()), rounds)
+    mean, best = mean_and_best_ms(lambda: instantiate(new, SystemView()), rounds)
     print(f"  new instances (before the pause): mean {mean:7.1f} ms   best {best:7.1f} ms")
     print(f"  summary: {_summary(plan)}")
     print(

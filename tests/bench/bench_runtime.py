@@ -324,7 +324,7 @@ def ten_thousand_paths() -> str:
     )
 
 
-def _mean_ms(action: Callable[[], object], rounds: int) -> tuple[float, float]:
+def mean_and_best_ms(action: Callable[[], object], rounds: int) -> tuple[float, float]:
     """Mean and best of `rounds` runs, in milliseconds."""
     samples = []
     for _ in range(rounds):
@@ -341,19 +341,19 @@ def bench_snapshot(rounds: int = 50) -> None:
     print(f"OLT snapshot (Resource.values()) of {len(values):,} variables, {rounds} calls each:")
     if len(values) < 10_000:
         print(f"  WARNING: only {len(values):,} variables, fewer than the 10,000 asked for")
-    mean, best = _mean_ms(resource.values, rounds)
+    mean, best = mean_and_best_ms(resource.values, rounds)
     print(f"  values():                      mean {mean:6.2f} ms   best {best:6.2f} ms")
 
     def message() -> str:  # a watch set of every variable, as the link sends it
         return json.dumps({"cycle": resource.cycle_count, "values": values})
 
     encoded = message()
-    dumps_mean, dumps_best = _mean_ms(message, rounds)
+    dumps_mean, dumps_best = mean_and_best_ms(message, rounds)
     print(
         f"  json.dumps of it:              mean {dumps_mean:6.2f} ms   best {dumps_best:6.2f} ms"
         f"   ({len(encoded) / 1024:,.0f} KiB)"
     )
-    both_mean, both_best = _mean_ms(
+    both_mean, both_best = mean_and_best_ms(
         lambda: json.dumps({"cycle": resource.cycle_count, "values": resource.values()}), rounds
     )
     print(

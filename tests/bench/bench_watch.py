@@ -47,9 +47,9 @@ from runtime.commands import MAX_REQUEST_BYTES
 from runtime.cycle_driver import CycleDriver
 from runtime.keyspace import watch_key, watcher_key
 from runtime.link import ResourceLink
-from runtime.resource import Resource, ResourceState, WatchSnapshot
+from runtime.resource import Resource, ResourceState
 from runtime.user_program import ProgramState
-from runtime.watch_sets import WatchSet
+from runtime.watch_sets import WatchSet, WatchSnapshot
 from runtime.zenoh_config import open_client, open_router
 from tests.bench.bench_runtime import (
     SECONDS_ENV,

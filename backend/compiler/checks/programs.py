@@ -13,7 +13,7 @@ from collections.abc import Iterator, Sequence
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.diagnostics import Diagnostic, error
-from backend.compiler.resolve import PouSymbols, Resolved
+from backend.compiler.resolve import PouSymbols, Resolved, Variable
 from backend.compiler.types import FbType
 from runtime.artifact import ProgramConfig, ResourceConfig
 
@@ -83,22 +83,12 @@ def _check_single_writer(resolved: Resolved, programs: list[ProgramConfig]) -> l
 def globals_written(resolved: Resolved, pou_key: str) -> dict[str, ast.Pos]:
     """The globals (by key) a POU writes, itself or through the POUs it calls."""
     written: dict[str, ast.Pos] = {}
-    visited: set[str] = set()
-    pending = [pou_key]
-    while pending:
-        current = pending.pop()
-        if current in visited or current not in resolved.pous:
-            continue
-        visited.add(current)
-        pou = resolved.pous[current]
+    for pou in _reachable(resolved, pou_key):
         for target in _write_targets(pou):
             root = _root_name(target)
-            variable = pou.by_key.get(key(root.name)) if root is not None else None
-            if variable is None and root is not None:
-                variable = resolved.globals_by_key.get(key(root.name))
-            if root is not None and variable is not None and variable.kind == "VAR_GLOBAL":
+            variable = _global(resolved, pou, root.name) if root is not None else None
+            if root is not None and variable is not None:
                 written.setdefault(key(variable.name), root.pos)
-        pending.extend(sorted(_callees(resolved, pou)))
     return written
 
 
@@ -106,6 +96,21 @@ def globals_read(resolved: Resolved, pou_key: str) -> list[str]:
     """The globals (by key, sorted) a POU or anything it calls names anywhere: what a user
     program must see as they were at the start of its program cycle."""
     found: set[str] = set()
+    for pou in _reachable(resolved, pou_key):
+        names = [n for s in _statements(pou) for n in _expressions_in(s)]
+        if pou.pou.sfc is not None:
+            names.extend(n for t in pou.pou.sfc.transitions for n in _nodes(t.condition))
+        names.extend(ast.NameRef(name, p) for name, p in _for_variables(pou))
+        for node in names:
+            if isinstance(node, ast.NameRef | ast.Call):  # a call may name a global FB
+                variable = _global(resolved, pou, node.name)
+                if variable is not None:
+                    found.add(key(variable.name))
+    return sorted(found)
+
+
+def _reachable(resolved: Resolved, pou_key: str) -> Iterator[PouSymbols]:
+    """A POU and every POU it may run (its FBs, the functions and programs it calls)."""
     visited: set[str] = set()
     pending = [pou_key]
     while pending:
@@ -114,19 +119,14 @@ def globals_read(resolved: Resolved, pou_key: str) -> list[str]:
             continue
         visited.add(current)
         pou = resolved.pous[current]
-        names = [n for s in _statements(pou) for n in _expressions_in(s)]
-        if pou.pou.sfc is not None:
-            names.extend(n for t in pou.pou.sfc.transitions for n in _nodes(t.condition))
-        names.extend(ast.NameRef(name, p) for name, p in _for_variables(pou))
-        for node in names:
-            if isinstance(node, ast.NameRef | ast.Call):  # a call may name a global FB
-                variable = pou.by_key.get(key(node.name))
-                if variable is None:
-                    variable = resolved.globals_by_key.get(key(node.name))
-                if variable is not None and variable.kind == "VAR_GLOBAL":
-                    found.add(key(variable.name))
+        yield pou
         pending.extend(sorted(_callees(resolved, pou)))
-    return sorted(found)
+
+
+def _global(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:
+    """The global variable a name in a POU stands for (through VAR_EXTERNAL or not)."""
+    variable = pou.by_key.get(key(name)) or resolved.globals_by_key.get(key(name))
+    return variable if variable is not None and variable.kind == "VAR_GLOBAL" else None
 
 
 def _for_variables(pou: PouSymbols) -> Iterator[tuple[str, ast.Pos]]:
