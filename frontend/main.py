@@ -5,9 +5,6 @@ from __future__ import annotations
 import argparse
 import getpass
 import os
-import signal
-import threading
-import time
 
 from runtime.zenoh_options import add_zenoh_options
 
@@ -28,8 +25,10 @@ def run(args: argparse.Namespace) -> int:
     # imported here: `padt` must start fast for commands that never open a UI
     from backend.resource_client import ResourceClient
     from frontend.app import PadtUi
+    from runtime.stop_request import StopRequest
     from runtime.zenoh_config import open_client
 
+    stop = StopRequest()
     session = open_client(args.zenoh, args.zenoh_config)
     client = ResourceClient(session, args.resource)
     if args.user is not None:
@@ -37,11 +36,7 @@ def run(args: argparse.Namespace) -> int:
         client.use_credentials(args.user, password)
     ui = PadtUi(client, host=args.host, port=args.port)
     print(f"PADT UI: {ui.url}", flush=True)
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    while not stop.is_set():  # not stop.wait(): see padt/demo.py
-        time.sleep(0.2)
+    stop.sleep_until_requested()
     ui.close()
     session.close()
     return 0

@@ -386,7 +386,10 @@ def _passwd(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    code: int = args.func(args)
+    try:
+        code: int = args.func(args)
+    except KeyboardInterrupt:  # Ctrl-C before a command took over the signal: no traceback
+        return 130
     return code
 
 

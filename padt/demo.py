@@ -11,8 +11,6 @@ import secrets
 import signal
 import subprocess
 import sys
-import threading
-import time
 from pathlib import Path
 
 from runtime.access import hash_password
@@ -59,8 +57,10 @@ def run(args: argparse.Namespace) -> int:
     from backend.resource_client import ResourceClient
     from frontend.app import PadtUi
     from runtime.main import artifact_path
+    from runtime.stop_request import StopRequest
     from runtime.zenoh_config import open_client, open_router
 
+    stop = StopRequest()
     project = load_project([demo_project_path()])
     admin, admin_password = demo_administrator(args.state_dir)
     # the UI acts with an account of its own, new at every start: its password lives in
@@ -89,40 +89,43 @@ def run(args: argparse.Namespace) -> int:
     command += ["--state-dir", str(args.state_dir), "--zenoh", endpoint]
     runtime = subprocess.Popen(command, preexec_fn=_die_with_parent)
     session = open_client(endpoint)
-    client = ResourceClient(session, resource)
-    client.use_credentials(panel.name, panel_password)
-    ui = PadtUi(client, host=args.host, port=args.port)
-    print(f"padt demo: resource {resource} (CRC {result.artifact.crc})", flush=True)
-    if admin_password is not None:
+    try:
+        client = ResourceClient(session, resource)
+        client.use_credentials(panel.name, panel_password)
+        ui = PadtUi(client, host=args.host, port=args.port)
+        try:
+            _announce(args.state_dir, resource, result.artifact.crc, admin, admin_password)
+            print(f"padt demo: open {ui.url}", flush=True)
+            stop.sleep_until_requested(lambda: runtime.poll() is None)
+            if runtime.returncode is not None:
+                code = runtime.returncode
+                print(f"padt demo: the runtime ended with code {code}", file=sys.stderr)
+        finally:
+            ui.close()
+    finally:
+        session.close()
+        runtime.terminate()
+        try:
+            runtime.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            runtime.kill()
+        router.close()
+    return 0
+
+
+def _announce(
+    state_dir: Path, resource: str, crc: str, admin: UserAccount, password: str | None
+) -> None:
+    print(f"padt demo: resource {resource} (CRC {crc})", flush=True)
+    if password is not None:
         print(
-            f"padt demo: administrator '{admin.name}', password {admin_password} "
+            f"padt demo: administrator '{admin.name}', password {password} "
             "(shown only now; the state folder keeps only its hash)",
             flush=True,
         )
     else:
         print(
             f"padt demo: administrator '{admin.name}' (its password was shown at the first "
-            f"start; delete {admin_file(args.state_dir)} for a new one)",
+            f"start; delete {admin_file(state_dir)} for a new one)",
             flush=True,
         )
-    print(f"padt demo: open {ui.url}", flush=True)
-
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    # sleep, not stop.wait(): the handler runs in this thread, and Event.set() would wait
-    # for the lock that a wait() interrupted by the signal holds (a deadlock at Ctrl-C)
-    while not stop.is_set():
-        time.sleep(0.2)
-        if runtime.poll() is not None:
-            print(f"padt demo: the runtime ended with code {runtime.returncode}", file=sys.stderr)
-            break
-    ui.close()
-    session.close()
-    runtime.terminate()
-    try:
-        runtime.wait(timeout=5)
-    except subprocess.TimeoutExpired:
-        runtime.kill()
-    router.close()
-    return 0

@@ -5,9 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import signal
 import sys
-import threading
 from pathlib import Path
 
 from runtime.artifact import Artifact, ArtifactError, load_artifact
@@ -16,6 +14,7 @@ from runtime.context import ContextInvalid, load_context
 from runtime.event_log import EventLog
 from runtime.keyspace import valid_resource_name
 from runtime.resource import Resource
+from runtime.stop_request import StopRequest
 from runtime.zenoh_options import add_zenoh_options
 
 log = logging.getLogger("padt.runtime")
@@ -86,6 +85,7 @@ def power_up(resource: Resource, state_dir: Path) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    stop = StopRequest()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s runtime %(message)s")
     if not valid_resource_name(args.resource):
         print(f"padt runtime: invalid resource name '{args.resource}'", file=sys.stderr)
@@ -101,9 +101,6 @@ def run(args: argparse.Namespace) -> int:
     from runtime.link import ResourceLink
     from runtime.zenoh_config import open_client
 
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
     session = open_client(args.zenoh, args.zenoh_config)
     link = ResourceLink(session, args.resource)
     saver = ContextSaver(context_path(args.state_dir))
@@ -116,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     driver = CycleDriver(resource, clock, link, save, args.context_period_ms * 1_000_000)
     log.info("resource %s: %s, Zenoh %s", args.resource, resource.state.value, args.zenoh)
     try:
-        driver.run(stop)
+        driver.run(stop.event)
     finally:
         driver.close()  # an orderly stop saves the context one last time
         saver.close()
