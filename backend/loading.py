@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from backend.backup import BackupInfo, write_backup
 from backend.check_twice import check_twice
 from backend.project import PROJECT_FILE, Project, compile_project, load_project
 from backend.resource_client import ResourceClient, ResourceUnreachable
@@ -192,3 +193,36 @@ def compile_checked(paths: Sequence[Path]) -> CheckedCompile:
 def compiled_twice(paths: Sequence[Path]) -> Artifact:
     """The artifact of `paths`, only when two compiles and this one agree on every CRC."""
     return compile_checked(paths).artifact
+
+
+def backup_of(
+    checked: CheckedCompile, folder: Path, resource: str, action: str, command: str
+) -> Path:
+    """Keep the backup archive of a configuration the resource has just taken; `command`
+    records how (a command line, or the API request and its user)."""
+    info = BackupInfo(
+        project=checked.project.name,
+        version=checked.project.version,
+        resource=resource,
+        action=action,
+        command=command,
+    )
+    sources = {source.name: source.text for source in checked.project.sources}
+    return write_backup(folder, info, checked.artifact.to_json(), sources, checked.config_text)
+
+
+def needs_confirmation(plan: dict[str, Any]) -> list[str]:
+    """What a reload would lose or risk; empty when every value is kept, converted or new."""
+    summary = plan.get("summary", {})
+    found = [
+        counted(summary[action], "value") + f" {action}"
+        for action in ("initialised", "deleted")
+        if summary.get(action)
+    ]
+    if plan.get("hazards"):
+        found.append(counted(len(plan["hazards"]), "hazard"))
+    return found
+
+
+def counted(number: int, noun: str) -> str:
+    return f"{number} {noun}" if number == 1 else f"{number} {noun}s"

@@ -11,7 +11,7 @@ import json
 import sys
 from pathlib import Path
 
-from runtime.zenoh_options import add_zenoh_options
+from runtime.zenoh_options import RouterUnreachable, add_zenoh_options
 
 
 def _compile(args: argparse.Namespace) -> int:
@@ -24,20 +24,8 @@ def _compile(args: argparse.Namespace) -> int:
         return 2
     result = compile_project(project)
     artifact = result.artifact
-    crc: dict[str, object] = {}
-    if artifact is not None:
-        crc = {
-            "configuration": artifact.crc,
-            "pous": {p.name: p.crc for p in artifact.pous},
-            "programs": {p.name: p.crc for p in artifact.programs},
-        }
     if args.json:
-        report = {
-            "ok": result.ok,
-            "diagnostics": [d.as_json() for d in result.diagnostics],
-            "crc": crc,
-        }
-        print(json.dumps(report, indent=2, sort_keys=True))
+        print(json.dumps(result.as_json(), indent=2, sort_keys=True))
     else:
         for diagnostic in result.diagnostics:
             print(diagnostic)
@@ -352,22 +340,84 @@ def build_parser() -> argparse.ArgumentParser:
     passwd.add_argument("user", metavar="NAME")
     passwd.add_argument("--level", default="read", choices=LEVELS, help="access level")
     passwd.set_defaults(func=_passwd)
+
+    from backend.api.accounts import PADT_LEVELS
+    from backend.api.server import DEFAULT_ACCOUNTS
+    from backend.api.server import add_arguments as api_arguments
+
+    api = sub.add_parser("api", help="serve the REST API (OpenAPI at /docs)")
+    api_arguments(api)
+    api.set_defaults(func=_api)
+
+    api_user = sub.add_parser(
+        "api-user", help="add, change or delete an account of the PADT (REST API)"
+    )
+    api_user.add_argument("user", metavar="NAME")
+    api_user.add_argument("--level", default="read-only", choices=PADT_LEVELS)
+    api_user.add_argument(
+        "--accounts", type=Path, default=DEFAULT_ACCOUNTS, help="the accounts file"
+    )
+    api_user.add_argument("--delete", action="store_true", help="delete the account")
+    api_user.set_defaults(func=_api_user)
     return parser
 
 
-def _passwd(args: argparse.Namespace) -> int:
-    """The password from PADT_PASSWORD or asked for twice; only its hash is printed."""
+def _api(args: argparse.Namespace) -> int:
+    from backend.api.server import run
+
+    return run(args)
+
+
+def _new_password(user: str) -> str | None:
+    """From PADT_PASSWORD, or asked for twice (never an option: it would stay in shell
+    histories and process lists); None when the two differ."""
     import getpass
     import os
 
-    from runtime.access import account_problems, hash_password
-
     password = os.environ.get("PADT_PASSWORD")
     if password is None:
-        password = getpass.getpass(f"password of {args.user}: ")
+        password = getpass.getpass(f"password of {user}: ")
         if getpass.getpass("again: ") != password:
-            print("padt passwd: the two passwords differ", file=sys.stderr)
-            return 1
+            return None
+    return password
+
+
+def _api_user(args: argparse.Namespace) -> int:
+    from backend.api.accounts import (
+        AccountsError,
+        read_accounts,
+        with_account,
+        without_account,
+        write_accounts,
+    )
+
+    try:
+        accounts = read_accounts(args.accounts)
+        if args.delete:
+            changed = without_account(accounts, args.user)
+        else:
+            password = _new_password(args.user)
+            if password is None:
+                print("padt api-user: the two passwords differ", file=sys.stderr)
+                return 1
+            changed = with_account(accounts, args.user, args.level, password)
+        write_accounts(args.accounts, changed)
+    except (AccountsError, OSError) as exc:
+        print(f"padt api-user: {exc}", file=sys.stderr)
+        return 2
+    done = "deleted" if args.delete else f"set ({args.level})"
+    print(f"padt api-user: account {args.user} {done} in {args.accounts}")
+    return 0
+
+
+def _passwd(args: argparse.Namespace) -> int:
+    """Only the hash of the password is printed."""
+    from runtime.access import account_problems, hash_password
+
+    password = _new_password(args.user)
+    if password is None:
+        print("padt passwd: the two passwords differ", file=sys.stderr)
+        return 1
     try:
         hashed = hash_password(password)
     except ValueError as exc:
@@ -390,6 +440,9 @@ def main(argv: list[str] | None = None) -> int:
         code: int = args.func(args)
     except KeyboardInterrupt:  # Ctrl-C before a command took over the signal: no traceback
         return 130
+    except RouterUnreachable as exc:
+        print(f"padt {args.command}: {exc}", file=sys.stderr)
+        return 1
     return code
 
 

@@ -18,14 +18,17 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from backend.backup import BackupError, BackupInfo, write_backup
+from backend.backup import BackupError
 from backend.loading import (
     CheckedCompile,
     CompileFailed,
     LoadRefused,
+    backup_of,
     checked_reply,
     compile_checked,
+    counted,
     download,
+    needs_confirmation,
     preview_reload,
 )
 from backend.loading import reload as reload_resource
@@ -62,16 +65,13 @@ def _renames(pairs: list[tuple[str, str]]) -> dict[str, str]:
 
 @contextmanager
 def _client(args: argparse.Namespace) -> Iterator[ResourceClient]:
-    import zenoh
-
     from runtime.zenoh_config import open_client
+    from runtime.zenoh_options import RouterUnreachable
 
     try:
         session = open_client(args.zenoh, args.zenoh_config)
-    except zenoh.ZError as exc:
-        # zenoh appends the Rust source location of the error: of no use to the user
-        reason = str(exc).split(" at /", 1)[0]
-        raise _Failed(f"cannot reach the Zenoh router at {args.zenoh}: {reason}") from None
+    except RouterUnreachable as exc:
+        raise _Failed(str(exc)) from None
     try:
         client = ResourceClient(session, args.resource)
         if args.user is not None:
@@ -132,18 +132,9 @@ def _compile(paths: list[Path]) -> CheckedCompile:
 def _backup(
     args: argparse.Namespace, checked: CheckedCompile, action: str, command: list[str]
 ) -> None:
-    info = BackupInfo(
-        project=checked.project.name,
-        version=checked.project.version,
-        resource=args.resource,
-        action=action,
-        command=shlex.join([*command, "--backup-dir", str(args.backup_dir)]),
-    )
-    sources = {source.name: source.text for source in checked.project.sources}
+    line = shlex.join([*command, "--backup-dir", str(args.backup_dir)])
     try:
-        path = write_backup(
-            args.backup_dir, info, checked.artifact.to_json(), sources, checked.config_text
-        )
+        path = backup_of(checked, args.backup_dir, args.resource, action, line)
     except BackupError as exc:
         # the resource has the configuration already; only the record of it is missing
         raise _Failed(f"{action} done, but no backup: {exc}") from None
@@ -311,23 +302,6 @@ def plan_lines(plan: dict[str, Any]) -> list[str]:
     return lines
 
 
-def needs_confirmation(plan: dict[str, Any]) -> list[str]:
-    """What a reload would lose or risk; empty when every value is kept, converted or new."""
-    summary = plan.get("summary", {})
-    found = [
-        _count(summary[action], "value") + f" {action}"
-        for action in ("initialised", "deleted")
-        if summary.get(action)
-    ]
-    if plan.get("hazards"):
-        found.append(_count(len(plan["hazards"]), "hazard"))
-    return found
-
-
-def _count(number: int, noun: str) -> str:
-    return f"{number} {noun}" if number == 1 else f"{number} {noun}s"
-
-
 def reload(args: argparse.Namespace) -> int:
     def body() -> int:
         renames = _renames(args.rename)
@@ -357,7 +331,7 @@ def reload(args: argparse.Namespace) -> int:
         print(
             f"reload done: configuration CRC {outcome['old_crc']} -> {outcome['new_crc']}, "
             f"pause {float(outcome['pause_us']):.0f} us, "
-            f"{_count(outcome['carried'], 'value')} carried over"
+            f"{counted(outcome['carried'], 'value')} carried over"
         )
         print(f"resource {args.resource}: {reply['status']['state']}")
         command = ["padt", "reload", *map(str, args.paths), *_common(args)]

@@ -57,12 +57,14 @@ class AccessDenied(Exception):
         self.message = message
 
 
-def account_problems(name: str, level: str, password_hash: str) -> list[str]:
+def account_problems(
+    name: str, level: str, password_hash: str, levels: tuple[str, ...] = LEVELS
+) -> list[str]:
     problems = []
     if not NAME.match(name):
         problems.append(f"user name '{name}' must be 1 to 32 of A-Z a-z 0-9 _ -")
-    if level not in LEVELS:
-        problems.append(f"level of '{name}' must be one of {', '.join(LEVELS)}")
+    if level not in levels:
+        problems.append(f"level of '{name}' must be one of {', '.join(levels)}")
     if not password_hash.startswith("scrypt$") or password_hash.count("$") != 5:
         problems.append(f"password of '{name}' is not a hash from `padt passwd`")
     return problems
@@ -113,8 +115,12 @@ class _Failures:
 
 @dataclass
 class AccessControl:
+    """Accounts, sessions and failed logins. The PES uses it with its four levels; the
+    PADT's REST API with its own three (backend/api/accounts.py)."""
+
     users: tuple[UserAccount, ...]
     now_ns: Callable[[], int]
+    levels: tuple[str, ...] = LEVELS  # lowest first; each includes the ones before
     sessions: dict[str, Session] = field(default_factory=dict)
     failures: dict[str, _Failures] = field(default_factory=dict)
 
@@ -155,7 +161,7 @@ class AccessControl:
         if session.expires_ns <= self.now_ns():
             del self.sessions[token]
             raise AccessDenied("unauthenticated", "the session has expired: log in again")
-        if LEVELS.index(session.level) < LEVELS.index(needed):
+        if self.levels.index(session.level) < self.levels.index(needed):
             raise AccessDenied(
                 "forbidden", f"{session.user} ({session.level}) may not do this: needs {needed}"
             )

@@ -11,6 +11,7 @@ padt/v1/res/<resource>/watchers/<id>  liveliness token of the client that owns w
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 
 ROOT = "padt/v1"
 _RESOURCE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]{0,63}$")
@@ -57,3 +58,13 @@ def events_key(resource: str) -> str:
 
 def alive_key(resource: str) -> str:
     return f"{ROOT}/res/{resource}/alive"
+
+
+def any_resource(key_for: Callable[[str], str]) -> str:
+    """The key expression of `key_for` over all resources, e.g. any_resource(alive_key)."""
+    return key_for("*")
+
+
+def resource_of(key: str) -> str:
+    """The resource named in a key of this space."""
+    return key.removeprefix(f"{ROOT}/res/").split("/", 1)[0]

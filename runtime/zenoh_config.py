@@ -16,6 +16,8 @@ from pathlib import Path
 
 import zenoh
 
+from runtime.zenoh_options import RouterUnreachable
+
 CONNECT_TIMEOUT_MS = 10_000
 
 
@@ -44,4 +46,11 @@ def open_router(endpoint: str, config_file: Path | None = None) -> zenoh.Session
 
 
 def open_client(endpoint: str, config_file: Path | None = None) -> zenoh.Session:
-    return zenoh.open(session_config(mode="client", connect=[endpoint], config_file=config_file))
+    try:
+        return zenoh.open(
+            session_config(mode="client", connect=[endpoint], config_file=config_file)
+        )
+    except zenoh.ZError as exc:
+        # zenoh appends the Rust source location of the error: of no use to the user
+        reason = str(exc).split(" at /", 1)[0]
+        raise RouterUnreachable(f"cannot reach the Zenoh router at {endpoint}: {reason}") from None

@@ -24,3 +24,8 @@ def add_zenoh_options(parser: argparse.ArgumentParser, router: str) -> None:
         metavar="FILE",
         help="Zenoh configuration (JSON5) with TLS and user/password settings",
     )
+
+
+class RouterUnreachable(Exception):
+    """No Zenoh router answered at the endpoint within the connect timeout (raised by
+    zenoh_config.open_client; here, so the command line can catch it without Zenoh)."""

@@ -54,6 +54,17 @@ class CompileResult:
     def ok(self) -> bool:
         return self.artifact is not None
 
+    def as_json(self) -> dict[str, Any]:
+        """The report of `padt compile --json` and of the REST API's compile."""
+        crc: dict[str, Any] = {}
+        if self.artifact is not None:
+            crc = {
+                "configuration": self.artifact.crc,
+                "pous": {p.name: p.crc for p in self.artifact.pous},
+                "programs": {p.name: p.crc for p in self.artifact.programs},
+            }
+        return {"ok": self.ok, "diagnostics": [d.as_json() for d in self.diagnostics], "crc": crc}
+
 
 # Python frames of the parser and the tree walkers; deep ST is limited by the nesting
 # rules of the check stage long before this (see checks/nesting.py). Set once, when the

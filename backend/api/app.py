@@ -1,0 +1,27 @@
+"""The FastAPI application: routes, error handlers, and the service behind them."""
+
+from __future__ import annotations
+
+from fastapi import FastAPI
+
+from backend.api import auth, live, projects, resources
+from backend.api.errors import install_error_handlers
+from backend.api.service import PadtService
+
+API_VERSION = "1"
+DESCRIPTION = """The PADT's operations over HTTP: projects (compile, check-twice, CRCs),
+resources (status, load, start and stop, programs and single step, reload preview and
+reload, parameters, forcing, values, events, statistics) and live values (WebSocket
+`/api/resources/{resource}/live`). Log in with `POST /api/login` and send the token as
+`Authorization: Bearer <token>`; acting on a resource needs a login to it as well
+(`POST /api/resources/{resource}/login`). Every error is `{"error": {"code", "message"}}`.
+The reference is docs/rest-api.md."""
+
+
+def create_app(service: PadtService) -> FastAPI:
+    app = FastAPI(title="PADT REST API", version=API_VERSION, description=DESCRIPTION)
+    app.state.service = service
+    install_error_handlers(app)
+    for router in (auth.router, projects.router, resources.router, live.router):
+        app.include_router(router)
+    return app

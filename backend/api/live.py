@@ -1,0 +1,124 @@
+"""Live values over a WebSocket: `/api/resources/{resource}/live`.
+
+The client's first message is `{"token", "variables", "period_ms"}` (a browser cannot set
+headers on a WebSocket, so the API token comes in the message). The reply is
+`{"variables": [...]}` with the canonical paths, then one message per period as the
+resource sends it: `{"cycle", "values": {path: {"value", "quality"}}}`. A client that
+reads slowly gets the newest message, not a backlog. The watch set ends with the
+WebSocket; when the resource goes away the server sends an `unreachable` error and
+closes."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from typing import Any
+
+from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+from starlette.concurrency import run_in_threadpool
+
+from backend.api.errors import ApiError
+from backend.api.service import Caller, PadtService
+from backend.resource_client import ResourceUnreachable, Watch, WatchRefused
+from runtime.access import AccessDenied
+
+router = APIRouter()
+ONLINE_CHECK_S = 1.0
+POLICY_VIOLATION = 1008  # WebSocket close code: authentication failed or request refused
+
+
+def _subscription(message: Any) -> tuple[str, list[str], int]:
+    if not isinstance(message, dict):
+        raise ApiError("bad_request", "the first message is an object")
+    token, variables = message.get("token"), message.get("variables")
+    period = message.get("period_ms", 100)
+    if not isinstance(token, str):
+        raise ApiError("unauthenticated", '"token" (from POST /api/login) is missing')
+    if not isinstance(variables, list) or not all(isinstance(v, str) for v in variables):
+        raise ApiError("bad_request", '"variables" is a list of variable names')
+    if not isinstance(period, int) or isinstance(period, bool):
+        raise ApiError("bad_request", '"period_ms" is an integer')
+    return token, variables, period
+
+
+def _start_watch(
+    service: PadtService, resource: str, message: Any, deliver: Any
+) -> tuple[Watch, Caller]:
+    token, variables, period = _subscription(message)
+    try:
+        session = service.accounts.check(token, "read-only")
+    except AccessDenied as denied:
+        raise ApiError(denied.code, denied.message) from None
+    caller = Caller(token, session.user, session.level)
+    client = service.client(caller, resource)
+    try:
+        return client.watch(variables, deliver, period), caller
+    except WatchRefused as exc:
+        raise ApiError("watch_refused", str(exc)) from None
+    except ResourceUnreachable as exc:
+        raise ApiError("unreachable", str(exc)) from None
+
+
+@router.websocket("/api/resources/{resource}/live")
+async def live(websocket: WebSocket, resource: str) -> None:
+    service: PadtService = websocket.app.state.service
+    await websocket.accept()
+    loop = asyncio.get_running_loop()
+    newest: asyncio.Queue[dict[str, Any]] = asyncio.Queue(maxsize=1)
+
+    def put_newest(message: dict[str, Any]) -> None:
+        if newest.full():
+            newest.get_nowait()  # the reader is behind: it gets this one instead
+        newest.put_nowait(message)
+
+    def deliver(message: dict[str, Any]) -> None:  # on a Zenoh thread
+        loop.call_soon_threadsafe(put_newest, message)
+
+    try:
+        first = json.loads(await websocket.receive_text())
+        watch, _ = await run_in_threadpool(_start_watch, service, resource, first, deliver)
+    except (ValueError, ApiError) as exc:
+        error = exc if isinstance(exc, ApiError) else ApiError("bad_request", "not JSON")
+        await websocket.send_json(error.body())
+        await websocket.close(POLICY_VIOLATION)
+        return
+    except WebSocketDisconnect:
+        return
+    try:
+        await websocket.send_json({"variables": watch.variables})
+        await _forward(websocket, newest, service, resource)
+    except WebSocketDisconnect:
+        pass
+    finally:
+        await run_in_threadpool(watch.close)
+
+
+async def _forward(
+    websocket: WebSocket,
+    newest: asyncio.Queue[dict[str, Any]],
+    service: PadtService,
+    resource: str,
+) -> None:
+    closed = asyncio.ensure_future(websocket.receive_text())  # tells when the client goes
+    try:
+        while True:
+            getting = asyncio.ensure_future(newest.get())
+            done, _ = await asyncio.wait(
+                {getting, closed}, timeout=ONLINE_CHECK_S, return_when=asyncio.FIRST_COMPLETED
+            )
+            if closed in done:
+                getting.cancel()
+                closed.result()  # raises WebSocketDisconnect when the client closed
+                closed = asyncio.ensure_future(websocket.receive_text())  # ignore chatter
+                continue
+            if getting in done:
+                await websocket.send_json(getting.result())
+                continue
+            getting.cancel()
+            if not service.directory.is_online(resource):
+                gone = ApiError("unreachable", f"resource '{resource}' went away")
+                await websocket.send_json(gone.body())
+                await websocket.close(1011)
+                return
+    finally:
+        closed.cancel()

@@ -1,0 +1,59 @@
+"""Which resources are online: found by their liveliness tokens, each with the status it
+last published. The API answers for a resource only while it is online, so a request
+for an unknown name is a quick 404 instead of a command that times out."""
+
+from __future__ import annotations
+
+import json
+import threading
+from typing import Any
+
+import zenoh
+
+from runtime.keyspace import alive_key, any_resource, resource_of, status_key
+
+
+class ResourceDirectory:
+    def __init__(self, session: zenoh.Session) -> None:
+        self._lock = threading.Lock()
+        self._online: set[str] = set()
+        self._status: dict[str, dict[str, Any]] = {}
+        self._alive = session.liveliness().declare_subscriber(
+            any_resource(alive_key), self._on_alive, history=True
+        )
+        self._statuses = session.declare_subscriber(any_resource(status_key), self._on_status)
+
+    def _on_alive(self, sample: zenoh.Sample) -> None:
+        name = resource_of(str(sample.key_expr))
+        with self._lock:
+            if sample.kind == zenoh.SampleKind.PUT:
+                self._online.add(name)
+            else:
+                self._online.discard(name)
+                self._status.pop(name, None)
+
+    def _on_status(self, sample: zenoh.Sample) -> None:
+        try:
+            status = json.loads(sample.payload.to_bytes())
+        except ValueError:
+            return  # not from a runtime of ours
+        name = resource_of(str(sample.key_expr))
+        with self._lock:
+            if name in self._online and isinstance(status, dict):
+                self._status[name] = status
+
+    def online(self) -> list[dict[str, Any]]:
+        """Each online resource (sorted by name) with its last published status, if any."""
+        with self._lock:
+            return [
+                {"resource": name, "status": self._status.get(name)}
+                for name in sorted(self._online)
+            ]
+
+    def is_online(self, name: str) -> bool:
+        with self._lock:
+            return name in self._online
+
+    def close(self) -> None:
+        self._alive.undeclare()
+        self._statuses.undeclare()

@@ -1,0 +1,250 @@
+"""The resources online, and every operation on one: status and statistics, login, load,
+start and stop, programs and single step, reload preview and reload, parameters,
+forcing, values and events.
+
+Each request goes to the resource as a command with the caller's PES session (from `POST
+.../login`); the resource checks the level itself and its refusal comes back unchanged
+(code and message), with the HTTP status of docs/rest-api.md."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query, Response
+from pydantic import BaseModel, Field
+
+from backend.api.auth import Credentials, ReadOnly, ReadWrite, Service
+from backend.api.errors import ApiError
+from backend.api.service import ReloadOptions
+
+router = APIRouter(prefix="/api/resources", tags=["resources"])
+MAX_MS = 86_400_000  # a day: longer than any parameter or time limit allows
+JsonValue = bool | int | float | str | list[Any]  # a variable's value as `values` shows it
+
+
+class ProjectChoice(BaseModel):
+    project: str = Field(description="a project served by this API (GET /api/projects)")
+
+
+class ReloadPreviewRequest(ProjectChoice):
+    renames: dict[str, str] = Field(
+        default_factory=dict,
+        description="OLD name -> NEW name: values of OLD go to NEW (full paths or globals)",
+    )
+
+
+class ReloadRequest(ReloadPreviewRequest):
+    expected_crc: str = Field(
+        pattern=r"^[0-9A-Fa-f]{8}$",
+        description="`old_crc` of the preview confirmed: the reload is refused when the "
+        "resource runs another configuration by now",
+    )
+    watchdog_ms: int | None = Field(default=None, gt=0, le=MAX_MS)
+    target_cycle_ms: int | None = Field(default=None, gt=0, le=MAX_MS)
+
+
+class ParameterValue(BaseModel):
+    value: bool | int | str
+
+
+class ValueRequest(BaseModel):
+    value: JsonValue
+
+
+class ForceRequest(ValueRequest):
+    switch: bool = Field(default=True, description="the variable's force switch")
+
+
+class ForcingLevel(BaseModel):
+    program: str | None = Field(default=None, description="a program (local); none is global")
+
+
+class ForcingStart(ForcingLevel):
+    timeout_ms: int | None = Field(default=None, gt=0, le=MAX_MS)
+
+
+class StepRequest(BaseModel):
+    interval_ms: int | None = Field(default=None, gt=0, le=MAX_MS)
+
+
+def _renames(renames: dict[str, str]) -> dict[str, str]:
+    """OLD -> NEW as the user writes it; NEW -> OLD as the runtime takes it."""
+    flipped: dict[str, str] = {}
+    for old, new in sorted(renames.items()):
+        if new.upper() in (known.upper() for known in flipped):
+            raise ApiError("bad_request", f"renames give {new} twice")
+        flipped[new] = old
+    return flipped
+
+
+@router.get("", summary="The resources online, with their last published status")
+def resources(caller: ReadOnly, service: Service) -> list[dict[str, Any]]:
+    return service.directory.online()
+
+
+@router.post("/{resource}/login", summary="Log in to the resource (its own accounts)")
+def login(resource: str, credentials: Credentials, caller: ReadOnly, service: Service) -> Any:
+    return service.log_in(caller, resource, credentials.user, credentials.password)
+
+
+@router.post("/{resource}/logout", status_code=204, summary="End the resource session")
+def logout(resource: str, caller: ReadOnly, service: Service) -> Response:
+    service.log_out(caller, resource)
+    return Response(status_code=204)
+
+
+@router.get("/{resource}/status", summary="State, configuration CRC, programs, statistics")
+def status(resource: str, caller: ReadOnly, service: Service) -> Any:
+    return service.command(caller, resource, "status")["status"]
+
+
+@router.get("/{resource}/statistics", summary="Cycle statistics of the resource and programs")
+def statistics(resource: str, caller: ReadOnly, service: Service) -> dict[str, Any]:
+    current = service.command(caller, resource, "status")["status"]
+    programs = {
+        p["name"]: {"cycles": p["cycles"], "cpu_cycles_max": p["cpu_cycles_max"]}
+        for p in current["programs"]
+    }
+    return {"cycle": current["cycle"], "stats": current["stats"], "programs": programs}
+
+
+@router.post("/{resource}/statistics/reset", summary="Reset the cycle statistics")
+def reset_statistics(resource: str, caller: ReadWrite, service: Service) -> Any:
+    return service.command(caller, resource, "reset_stats")
+
+
+def _resource_action(cmd: str, summary: str) -> None:
+    def action(resource: str, caller: ReadWrite, service: Service) -> Any:
+        return service.command(caller, resource, cmd)
+
+    path = "/{resource}/" + cmd.replace("_", "-")
+    router.post(path, summary=summary, name=cmd)(action)
+
+
+_resource_action("start", "Start the resource (RUN)")
+_resource_action("stop", "Stop the resource (STOP, safe output values)")
+_resource_action("init", "Leave ERROR STOP for STOP")
+_resource_action("cold_start", "Make the next start a cold start")
+_resource_action("step", "In STOP: one CPU cycle of every program")
+
+
+@router.post("/{resource}/load", summary="Download a project (in STOP; a cold start follows)")
+def load(resource: str, body: ProjectChoice, caller: ReadWrite, service: Service) -> Any:
+    return service.load(caller, resource, body.project)
+
+
+@router.post("/{resource}/reload/preview", summary="What a reload would do to every value")
+def preview_reload(
+    resource: str, body: ReloadPreviewRequest, caller: ReadWrite, service: Service
+) -> Any:
+    return service.preview_reload(caller, resource, body.project, _renames(body.renames))
+
+
+@router.post("/{resource}/reload", summary="Reload (online change) after a preview")
+def reload(resource: str, body: ReloadRequest, caller: ReadWrite, service: Service) -> Any:
+    options = ReloadOptions(
+        _renames(body.renames), body.expected_crc.upper(), body.watchdog_ms, body.target_cycle_ms
+    )
+    return service.reload(caller, resource, body.project, options)
+
+
+@router.get("/{resource}/programs", summary="The user programs and their states")
+def programs(resource: str, caller: ReadOnly, service: Service) -> Any:
+    return service.command(caller, resource, "status")["status"]["programs"]
+
+
+def _program_action(cmd: str, verb: str, summary: str) -> None:
+    def action(resource: str, program: str, caller: ReadWrite, service: Service) -> Any:
+        return service.command(caller, resource, cmd, program=program)
+
+    router.post(f"/{{resource}}/programs/{{program}}/{verb}", summary=summary, name=cmd)(action)
+
+
+_program_action("start_program", "start", "Start a user program")
+_program_action("stop_program", "stop", "Stop a user program")
+_program_action("freeze", "freeze", "Freeze a program for single step (RUN_FREEZE)")
+_program_action("unfreeze", "unfreeze", "Leave single step: the program runs again")
+
+
+@router.post("/{resource}/programs/{program}/step", summary="One cycle of a frozen program")
+def step_program(
+    resource: str,
+    program: str,
+    caller: ReadWrite,
+    service: Service,
+    body: StepRequest | None = None,
+) -> Any:
+    interval = {"interval_ms": body.interval_ms} if body and body.interval_ms else {}
+    return service.command(caller, resource, "step_program", program=program, **interval)
+
+
+@router.get("/{resource}/parameters", summary="Resource and program parameters")
+def parameters(resource: str, caller: ReadOnly, service: Service) -> Any:
+    return service.command(caller, resource, "parameters")
+
+
+@router.put("/{resource}/parameters/{name}", summary="Change an online parameter")
+def set_parameter(
+    resource: str, name: str, body: ParameterValue, caller: ReadWrite, service: Service
+) -> Any:
+    return service.command(caller, resource, "set_parameter", name=name, value=body.value)
+
+
+@router.get("/{resource}/variables", summary="Every variable: full path and type")
+def variables(resource: str, caller: ReadOnly, service: Service) -> Any:
+    return service.command(caller, resource, "variables")["variables"]
+
+
+@router.get("/{resource}/values", summary="Every value now (for chosen ones, use /live)")
+def values(resource: str, caller: ReadOnly, service: Service) -> Any:
+    return service.command(caller, resource, "values")
+
+
+@router.put("/{resource}/values/{variable}", summary="Write a value once (not forcing)")
+def write(
+    resource: str, variable: str, body: ValueRequest, caller: ReadWrite, service: Service
+) -> Any:
+    return service.command(caller, resource, "write", variable=variable, value=body.value)
+
+
+@router.get("/{resource}/forcing", summary="Force levels, switches and forced values")
+def forcing(resource: str, caller: ReadOnly, service: Service) -> Any:
+    return service.command(caller, resource, "forcing")["forcing"]
+
+
+@router.post("/{resource}/forcing/start", summary="Start forcing (global, or one program)")
+def start_forcing(resource: str, body: ForcingStart, caller: ReadWrite, service: Service) -> Any:
+    level = {"program": body.program} if body.program is not None else {}
+    timeout = {"timeout_ms": body.timeout_ms} if body.timeout_ms is not None else {}
+    return service.command(caller, resource, "start_forcing", **level, **timeout)
+
+
+@router.post("/{resource}/forcing/stop", summary="Stop forcing (global, or one program)")
+def stop_forcing(resource: str, body: ForcingLevel, caller: ReadWrite, service: Service) -> Any:
+    level = {"program": body.program} if body.program is not None else {}
+    return service.command(caller, resource, "stop_forcing", **level)
+
+
+@router.put("/{resource}/forces/{variable}", summary="Set a force value and its switch")
+def force(
+    resource: str, variable: str, body: ForceRequest, caller: ReadWrite, service: Service
+) -> Any:
+    return service.command(
+        caller, resource, "force", variable=variable, value=body.value, switch=body.switch
+    )
+
+
+@router.delete("/{resource}/forces/{variable}", summary="Remove a force value")
+def unforce(resource: str, variable: str, caller: ReadWrite, service: Service) -> Any:
+    return service.command(caller, resource, "unforce", variable=variable)
+
+
+@router.get("/{resource}/events", summary="The resource's event log, oldest first")
+def events(
+    resource: str,
+    caller: ReadOnly,
+    service: Service,
+    after: Annotated[int, Query(ge=0, description="only events after this sequence number")] = 0,
+    limit: Annotated[int, Query(ge=1, le=1000)] = 200,
+) -> Any:
+    return service.command(caller, resource, "events", after=after, limit=limit)["events"]

@@ -1,0 +1,119 @@
+"""`padt api`: serve the REST API; and `ApiServer`, the same server on a thread of another
+process (`padt demo`, tests)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import socket
+import sys
+import threading
+import time
+from pathlib import Path
+
+import uvicorn
+
+from backend.api.accounts import AccountsError, PadtAccounts
+from backend.api.app import create_app
+from backend.api.service import PadtService
+from runtime.zenoh_options import add_zenoh_options
+
+DEFAULT_ACCOUNTS = Path("padt-accounts.json")
+log = logging.getLogger("padt.api")
+
+
+class ApiServer:
+    """Uvicorn on a thread, on a socket bound before it starts (so port 0 works and the
+    URL is known at once)."""
+
+    def __init__(self, service: PadtService, host: str = "127.0.0.1", port: int = 0) -> None:
+        self._socket = socket.create_server((host, port))
+        bound_host, bound_port = self._socket.getsockname()[:2]
+        self.url = f"http://{bound_host}:{bound_port}"
+        config = uvicorn.Config(create_app(service), log_level="warning", ws="websockets-sansio")
+        self._server = uvicorn.Server(config)
+        self._thread = threading.Thread(
+            target=self._server.run, kwargs={"sockets": [self._socket]}, daemon=True
+        )
+        self._thread.start()
+        deadline = time.monotonic() + 10
+        while not self._server.started and self._thread.is_alive():
+            if time.monotonic() > deadline:
+                raise RuntimeError("the API server did not start")
+            time.sleep(0.01)
+
+    def close(self) -> None:
+        self._server.should_exit = True
+        self._thread.join(timeout=10)
+        self._socket.close()
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--accounts",
+        type=Path,
+        default=DEFAULT_ACCOUNTS,
+        help="the PADT accounts file (made with `padt api-user`)",
+    )
+    parser.add_argument(
+        "--project",
+        type=Path,
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="a project folder to serve, named by its folder (repeatable)",
+    )
+    parser.add_argument(
+        "--backup-dir", type=Path, default=Path("padt-backups"), help="where backups go"
+    )
+    add_zenoh_options(parser, "Zenoh router the resources are connected to")
+    parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
+    parser.add_argument("--port", type=int, default=8000, help="HTTP port")
+
+
+def projects_by_name(folders: list[Path]) -> dict[str, Path]:
+    projects: dict[str, Path] = {}
+    for folder in folders:
+        name = folder.resolve().name
+        if name in projects:
+            raise ValueError(f"two projects are named {name}: {projects[name]} and {folder}")
+        if not folder.is_dir():
+            raise ValueError(f"{folder}: not a project folder")
+        projects[name] = folder
+    return projects
+
+
+def run(args: argparse.Namespace) -> int:
+    from runtime.stop_request import StopRequest
+    from runtime.zenoh_config import open_client
+
+    stop = StopRequest()
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
+    try:
+        accounts = PadtAccounts(args.accounts, time.monotonic_ns)
+        projects = projects_by_name(args.project)
+    except (AccountsError, ValueError) as exc:
+        print(f"padt api: {exc}", file=sys.stderr)
+        return 2
+    if accounts.empty:
+        print(
+            f"padt api: no accounts in {args.accounts}; make a Security Administrator first: "
+            f"padt api-user --accounts {args.accounts} NAME --level security-administrator",
+            file=sys.stderr,
+        )
+        return 2
+    session = open_client(args.zenoh, args.zenoh_config)
+    service = PadtService(session, accounts, projects, args.backup_dir)
+    try:
+        server = ApiServer(service, args.host, args.port)
+    except OSError as exc:
+        print(f"padt api: cannot serve on {args.host}:{args.port}: {exc}", file=sys.stderr)
+        service.close()
+        session.close()
+        return 1
+    print(f"padt api: {server.url} (OpenAPI at {server.url}/docs)", flush=True)
+    stop.sleep_until_requested()
+    server.close()
+    service.close()
+    session.close()
+    return 0
