@@ -11,6 +11,7 @@ import secrets
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 from runtime.access import hash_password
@@ -23,6 +24,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--host", default="127.0.0.1", help="address the UI listens on")
     parser.add_argument("--port", type=int, default=8080, help="HTTP port of the UI")
     parser.add_argument("--zenoh-port", type=int, default=7447, help="port of the Zenoh router")
+    parser.add_argument(
+        "--api-port", type=int, default=8000, help="HTTP port of the REST API (0: any free one)"
+    )
     parser.add_argument(
         "--state-dir", type=Path, default=Path("state/demo"), help="the runtime's state folder"
     )
@@ -53,6 +57,9 @@ def demo_administrator(state_dir: Path) -> tuple[UserAccount, str | None]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from backend.api.accounts import PadtAccounts, write_accounts
+    from backend.api.server import ApiServer
+    from backend.api.service import PadtService
     from backend.project import compile_project, demo_project_path, load_project
     from backend.resource_client import ResourceClient
     from frontend.app import PadtUi
@@ -92,9 +99,20 @@ def run(args: argparse.Namespace) -> int:
     try:
         client = ResourceClient(session, resource)
         client.use_credentials(panel.name, panel_password)
+        # the REST API knows the demo's administrator as its Security Administrator
+        accounts_file = args.state_dir / "padt-accounts.json"
+        write_accounts(accounts_file, (dataclasses.replace(admin, level="security-administrator"),))
+        accounts = PadtAccounts(accounts_file, time.monotonic_ns)
+        projects = {"demo": demo_project_path()}
+        service = PadtService(session, accounts, projects, args.state_dir / "backups")
+        try:
+            api = ApiServer(service, args.host, args.api_port)
+        except OSError:  # busy: like the UI, take another port rather than fail
+            api = ApiServer(service, args.host, 0)
         ui = PadtUi(client, host=args.host, port=args.port)
         try:
             _announce(args.state_dir, resource, result.artifact.crc, admin, admin_password)
+            print(f"padt demo: REST API {api.url}/docs (log in as {admin.name})", flush=True)
             print(f"padt demo: open {ui.url}", flush=True)
             stop.sleep_until_requested(lambda: runtime.poll() is None)
             if runtime.returncode is not None:
@@ -102,6 +120,8 @@ def run(args: argparse.Namespace) -> int:
                 print(f"padt demo: the runtime ended with code {code}", file=sys.stderr)
         finally:
             ui.close()
+            api.close()
+            service.close()
     finally:
         session.close()
         runtime.terminate()

@@ -12,6 +12,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import httpx
+
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.resource_client import ResourceClient
@@ -162,7 +164,7 @@ def test_the_runtime_refuses_whoever_sends_the_command(tmp_path: Path, zenoh_end
 
 def start_demo(state_dir: Path, zenoh_port: int) -> tuple[subprocess.Popen[str], list[str]]:
     command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(state_dir)]
-    command += ["--port", str(free_port()), "--zenoh-port", str(zenoh_port)]
+    command += ["--port", str(free_port()), "--zenoh-port", str(zenoh_port), "--api-port", "0"]
     process = subprocess.Popen(command, cwd=REPO, stdout=subprocess.PIPE, text=True)
     assert process.stdout is not None
     lines = []
@@ -192,6 +194,13 @@ def test_the_demo_makes_its_administrator_once_and_keeps_only_the_hash(tmp_path:
             admin = ResourceClient(session, "Tank1")
             assert admin.login("admin", password)["level"] == "administrator"
             assert admin.command("stop")["ok"]
+            # the same administrator is the REST API's Security Administrator
+            api = next(x for x in lines if "REST API" in x).split()[4].removesuffix("/docs")
+            login = httpx.post(f"{api}/api/login", json={"user": "admin", "password": password})
+            assert login.json()["level"] == "security-administrator"
+            headers = {"Authorization": f"Bearer {login.json()['token']}"}
+            listed = httpx.get(f"{api}/api/resources", headers=headers).json()
+            assert [entry["resource"] for entry in listed] == ["Tank1"]
         finally:
             session.close()
     finally:

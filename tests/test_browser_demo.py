@@ -24,7 +24,7 @@ URL_LINE = re.compile(r"padt demo: open (http://\S+)")
 @pytest.fixture
 def demo_url(tmp_path: Path) -> Iterator[str]:
     command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(tmp_path)]
-    command += ["--port", str(free_port()), "--zenoh-port", str(free_port())]
+    command += ["--port", str(free_port()), "--zenoh-port", str(free_port()), "--api-port", "0"]
     process = subprocess.Popen(
         command, cwd=REPO, stdout=subprocess.PIPE, text=True, env=dict(os.environ)
     )
