@@ -4,6 +4,7 @@ on a real HTTP port, with PADT accounts of each level."""
 
 from __future__ import annotations
 
+import subprocess
 import time
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
@@ -71,6 +72,7 @@ class Plant:
     state_dir: Path
     http: httpx.Client
     zenoh_client: ResourceClient
+    runtime: subprocess.Popen[bytes]
 
     def token(self, padt_user: str) -> str:
         reply = self.http.post(
@@ -119,7 +121,7 @@ def plant(base: Path) -> Iterator[Plant]:
     accounts_file = padt_accounts_file(base / "padt-accounts.json")
     with ExitStack() as stack:
         stack.enter_context(router(endpoint))
-        stack.enter_context(runtime_process("Plant", state_dir, endpoint))
+        runtime = stack.enter_context(runtime_process("Plant", state_dir, endpoint))
         session = open_client(endpoint)
         stack.callback(session.close)
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
@@ -140,6 +142,7 @@ def plant(base: Path) -> Iterator[Plant]:
             state_dir,
             http,
             zenoh_client,
+            runtime,
         )
         _wait_until_listed(found)
         yield found

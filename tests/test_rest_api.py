@@ -391,3 +391,21 @@ def test_padt_api_needs_an_account_and_padt_api_user_makes_one(tmp_path: Path) -
         finally:
             process.terminate()
             assert process.wait(timeout=15) == 0
+
+
+def test_a_killed_runtime_leaves_the_list_and_its_live_values_end(tmp_path: Path) -> None:
+    with plant(tmp_path) as site:
+        token = site.session("builder", "viewer")
+        ws_url = site.url.replace("http://", "ws://") + f"{R}/live"
+        with connect(ws_url) as ws:
+            ws.send(json.dumps({"token": token, "variables": ["P.n"], "period_ms": 50}))
+            assert json.loads(ws.recv(timeout=10)) == {"variables": ["P.n"]}
+            assert "P.n" in json.loads(ws.recv(timeout=10))["values"]
+            site.runtime.kill()
+            deadline = time.monotonic() + 20
+            message: dict[str, Any] = {}
+            while "error" not in message and time.monotonic() < deadline:
+                message = json.loads(ws.recv(timeout=20))
+            assert message["error"]["code"] == "unreachable"
+        assert site.call("GET", "/api/resources", token).json() == []
+        error(site.call("GET", f"{R}/status", token), 404, "unknown_resource")
