@@ -27,7 +27,7 @@ class ApiServer:
     URL is known at once)."""
 
     def __init__(self, service: PadtService, host: str = "127.0.0.1", port: int = 0) -> None:
-        self._socket = socket.create_server((host, port))
+        self._socket = _listening_socket(host, port)
         bound_host, bound_port = self._socket.getsockname()[:2]
         self.url = f"http://{bound_host}:{bound_port}"
         config = uvicorn.Config(create_app(service), log_level="warning", ws="websockets-sansio")
@@ -46,6 +46,22 @@ class ApiServer:
         self._server.should_exit = True
         self._thread.join(timeout=10)
         self._socket.close()
+
+
+def _listening_socket(host: str, port: int) -> socket.socket:
+    # with protocol IPPROTO_TCP, not 0 as socket.create_server makes it: asyncio turns
+    # Nagle's algorithm off only for such sockets, and with it on every response on a
+    # kept-alive connection waited 40 ms for a delayed ACK
+    family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
+    listening = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
+    try:
+        listening.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        listening.bind((host, port))
+        listening.listen(128)
+    except OSError:
+        listening.close()
+        raise
+    return listening
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

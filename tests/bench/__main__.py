@@ -7,6 +7,7 @@ from tests.bench import (
     bench_context,
     bench_language,
     bench_reload,
+    bench_rest,
     bench_runtime,
     bench_watch,
 )
@@ -19,6 +20,7 @@ def main() -> None:
     bench_runtime.main()
     bench_reload.main()
     bench_watch.main()
+    bench_rest.main()
 
 
 if __name__ == "__main__":
