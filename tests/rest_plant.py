@@ -44,7 +44,7 @@ END_PROGRAM
 """
 
 
-def write_project(folder: Path, extra: str = "") -> Path:
+def write_project(folder: Path, extra: str = "", resource: str = "Plant") -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     users = "".join(
         f'[[resource.user]]\nname = "{name}"\nlevel = "{PES_LEVELS[name]}"\n'
@@ -53,7 +53,7 @@ def write_project(folder: Path, extra: str = "") -> Path:
     )
     (folder / "padt.toml").write_text(
         '[project]\nname = "Plant"\nversion = "1"\n\n'
-        '[resource]\nname = "Plant"\ntarget_cycle_ms = 20\nsafety_operation = false\n'
+        f'[resource]\nname = "{resource}"\ntarget_cycle_ms = 20\nsafety_operation = false\n'
         'global_forcing_allowed = true\nautostart = "cold"\n\n'
         '[[resource.program]]\nname = "P"\npou = "P"\nid = 1\nlocal_forcing_allowed = true\n\n'
         + users

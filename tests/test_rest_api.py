@@ -19,6 +19,7 @@ import pytest
 from websockets.sync.client import connect
 
 from backend.api.accounts import PadtAccounts, read_accounts
+from backend.project import compile_project, load_project
 from runtime.access import COMMAND_LEVELS, LEVELS, SESSION_NS
 from tests.conftest import REPO, free_port, padt
 from tests.rest_plant import (
@@ -28,8 +29,9 @@ from tests.rest_plant import (
     Plant,
     padt_accounts_file,
     plant,
+    write_project,
 )
-from tests.runtime_process import router
+from tests.runtime_process import router, runtime_process, store_artifact
 
 R = "/api/resources/Plant"
 
@@ -393,9 +395,25 @@ def test_padt_api_needs_an_account_and_padt_api_user_makes_one(tmp_path: Path) -
             assert process.wait(timeout=15) == 0
 
 
-def test_a_killed_runtime_leaves_the_list_and_its_live_values_end(tmp_path: Path) -> None:
-    with plant(tmp_path) as site:
+def test_two_resources_on_one_router_and_a_killed_one_leaves_the_list(tmp_path: Path) -> None:
+    second = write_project(tmp_path / "line2", resource="Line2")
+    artifact = compile_project(load_project([second])).artifact
+    assert artifact is not None
+    store_artifact(tmp_path / "line2-state", artifact)
+    with (
+        plant(tmp_path / "plant") as site,
+        runtime_process("Line2", tmp_path / "line2-state", site.endpoint),
+    ):
         token = site.session("builder", "viewer")
+        deadline = time.monotonic() + 20
+        listed: list[str] = []
+        while listed != ["Line2", "Plant"] and time.monotonic() < deadline:
+            listed = [e["resource"] for e in site.call("GET", "/api/resources", token).json()]
+        assert listed == ["Line2", "Plant"]
+        line2 = {"user": "op", "password": PES_PASSWORDS["op"]}
+        assert site.call("POST", "/api/resources/Line2/login", token, json=line2).status_code == 200
+        status = site.call("GET", "/api/resources/Line2/status", token).json()
+        assert (status["resource"], status["state"]) == ("Line2", "RUN")
         ws_url = site.url.replace("http://", "ws://") + f"{R}/live"
         with connect(ws_url) as ws:
             ws.send(json.dumps({"token": token, "variables": ["P.n"], "period_ms": 50}))
@@ -407,5 +425,6 @@ def test_a_killed_runtime_leaves_the_list_and_its_live_values_end(tmp_path: Path
             while "error" not in message and time.monotonic() < deadline:
                 message = json.loads(ws.recv(timeout=20))
             assert message["error"]["code"] == "unreachable"
-        assert site.call("GET", "/api/resources", token).json() == []
+        listed = [e["resource"] for e in site.call("GET", "/api/resources", token).json()]
+        assert listed == ["Line2"]
         error(site.call("GET", f"{R}/status", token), 404, "unknown_resource")
