@@ -317,6 +317,18 @@ def test_errors_are_json_with_a_code_never_a_traceback(site: Plant) -> None:
     error(site.call("PUT", f"{R}/parameters/colour", token, json=one), 404, "unknown_parameter")
     huge = site.call("PUT", f"{R}/values/P.n", token, json={"value": 10**40})
     error(huge, 400, "bad_value")
+    oversized = {"value": "x" * (2 * 1024 * 1024)}
+    too_large = site.call("PUT", f"{R}/values/P.n", token, json=oversized)
+    assert "body larger" in error(too_large, 413, "too_large")
+
+    def chunks() -> Iterator[bytes]:
+        yield b'{"value": "'
+        for _ in range(40):
+            yield b"x" * 65536
+        yield b'"}'
+
+    chunked = site.call("PUT", f"{R}/values/P.n", token, content=chunks())
+    assert "body larger" in error(chunked, 413, "too_large")
     openapi = site.http.get(f"{site.url}/openapi.json").json()
     assert f"{R.replace('Plant', '{resource}')}/reload/preview" in openapi["paths"]
     assert site.http.get(f"{site.url}/docs").status_code == 200

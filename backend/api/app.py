@@ -5,6 +5,7 @@ from __future__ import annotations
 from fastapi import FastAPI
 
 from backend.api import auth, live, projects, resources
+from backend.api.body_limit import BodyLimit
 from backend.api.errors import install_error_handlers
 from backend.api.service import PadtService
 
@@ -22,6 +23,7 @@ def create_app(service: PadtService) -> FastAPI:
     app = FastAPI(title="PADT REST API", version=API_VERSION, description=DESCRIPTION)
     app.state.service = service
     install_error_handlers(app)
+    app.add_middleware(BodyLimit)
     for router in (auth.router, projects.router, resources.router, live.router):
         app.include_router(router)
     return app
