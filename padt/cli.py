@@ -341,9 +341,8 @@ def build_parser() -> argparse.ArgumentParser:
     passwd.add_argument("--level", default="read", choices=LEVELS, help="access level")
     passwd.set_defaults(func=_passwd)
 
-    from backend.api.accounts import PADT_LEVELS
-    from backend.api.server import DEFAULT_ACCOUNTS
-    from backend.api.server import add_arguments as api_arguments
+    from backend.api.options import add_arguments as api_arguments
+    from backend.api.options import add_user_arguments
 
     api = sub.add_parser("api", help="serve the REST API (OpenAPI at /docs)")
     api_arguments(api)
@@ -352,12 +351,7 @@ def build_parser() -> argparse.ArgumentParser:
     api_user = sub.add_parser(
         "api-user", help="add, change or delete an account of the PADT (REST API)"
     )
-    api_user.add_argument("user", metavar="NAME")
-    api_user.add_argument("--level", default="read-only", choices=PADT_LEVELS)
-    api_user.add_argument(
-        "--accounts", type=Path, default=DEFAULT_ACCOUNTS, help="the accounts file"
-    )
-    api_user.add_argument("--delete", action="store_true", help="delete the account")
+    add_user_arguments(api_user)
     api_user.set_defaults(func=_api_user)
     return parser
 

@@ -440,3 +440,16 @@ def test_two_resources_on_one_router_and_a_killed_one_leaves_the_list(tmp_path: 
         listed = [e["resource"] for e in site.call("GET", "/api/resources", token).json()]
         assert listed == ["Line2"]
         error(site.call("GET", f"{R}/status", token), 404, "unknown_resource")
+
+
+def test_building_the_command_line_loads_neither_the_api_server_nor_zenoh() -> None:
+    """Every padt command (the runtime's start, each check-twice compile) pays for what
+    its parser imports: FastAPI alone took 0.6 s."""
+    probe = (
+        "import sys; from padt.cli import build_parser; build_parser(); "
+        "print(sorted(m for m in ('fastapi', 'uvicorn', 'zenoh') if m in sys.modules))"
+    )
+    loaded = subprocess.run(
+        [sys.executable, "-c", probe], cwd=REPO, capture_output=True, text=True, check=True
+    )
+    assert loaded.stdout.strip() == "[]"

@@ -17,11 +17,10 @@ from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 
+from backend.api.levels import ADMINISTRATOR, PADT_LEVELS
 from runtime.access import AccessControl, AccessDenied, Session, account_problems, hash_password
 from runtime.artifact import UserAccount
 
-PADT_LEVELS = ("read-only", "read-write", "security-administrator")
-ADMINISTRATOR = PADT_LEVELS[-1]
 FORMAT = "padt-accounts"
 VERSION = 1
 

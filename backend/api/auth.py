@@ -16,8 +16,9 @@ from fastapi import Path as PathParameter
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from pydantic import BaseModel, Field
 
-from backend.api.accounts import PADT_LEVELS, AccountsError
+from backend.api.accounts import AccountsError
 from backend.api.errors import ApiError
+from backend.api.levels import PADT_LEVELS
 from backend.api.service import Caller, PadtService
 from runtime.access import SESSION_NS, AccessDenied
 

@@ -16,9 +16,7 @@ import uvicorn
 from backend.api.accounts import AccountsError, PadtAccounts
 from backend.api.app import create_app
 from backend.api.service import PadtService
-from runtime.zenoh_options import add_zenoh_options
 
-DEFAULT_ACCOUNTS = Path("padt-accounts.json")
 log = logging.getLogger("padt.api")
 
 
@@ -62,29 +60,6 @@ def _listening_socket(host: str, port: int) -> socket.socket:
         listening.close()
         raise
     return listening
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--accounts",
-        type=Path,
-        default=DEFAULT_ACCOUNTS,
-        help="the PADT accounts file (made with `padt api-user`)",
-    )
-    parser.add_argument(
-        "--project",
-        type=Path,
-        action="append",
-        default=[],
-        metavar="DIR",
-        help="a project folder to serve, named by its folder (repeatable)",
-    )
-    parser.add_argument(
-        "--backup-dir", type=Path, default=Path("padt-backups"), help="where backups go"
-    )
-    add_zenoh_options(parser, "Zenoh router the resources are connected to")
-    parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
-    parser.add_argument("--port", type=int, default=8000, help="HTTP port")
 
 
 def projects_by_name(folders: list[Path]) -> dict[str, Path]:
