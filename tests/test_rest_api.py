@@ -20,7 +20,7 @@ from websockets.sync.client import connect
 
 from backend.api.accounts import PadtAccounts, read_accounts
 from backend.project import compile_project, load_project
-from runtime.access import COMMAND_LEVELS, LEVELS, SESSION_NS
+from runtime.access import COMMAND_LEVELS, LEVELS, SESSION_NS, AccessDenied
 from tests.conftest import REPO, free_port, padt
 from tests.rest_plant import (
     PADT_PASSWORDS,
@@ -112,11 +112,11 @@ def test_a_session_expires_and_an_account_change_ends_it(tmp_path: Path) -> None
     token, _ = accounts.login("builder", PADT_PASSWORDS["builder"])
     assert accounts.check(token, "read-write").user == "builder"
     now[0] += SESSION_NS
-    with pytest.raises(Exception, match="expired"):
+    with pytest.raises(AccessDenied, match="expired"):
         accounts.check(token, "read-only")
     token, _ = accounts.login("builder", PADT_PASSWORDS["builder"])
     accounts.put("builder", "read-only", None)  # lowered: its sessions end
-    with pytest.raises(Exception, match="log in first"):
+    with pytest.raises(AccessDenied, match="log in first"):
         accounts.check(token, "read-only")
 
 
