@@ -40,6 +40,14 @@ class Project:
     users: list[UserAccount] = field(default_factory=list)  # PES accounts ([[resource.user]])
 
 
+def user_entry(account: UserAccount) -> str:
+    """A `[[resource.user]]` entry of padt.toml for an account (its hash only)."""
+    return (
+        f'[[resource.user]]\nname = "{account.name}"\nlevel = "{account.level}"\n'
+        f'password_hash = "{account.password_hash}"\n'
+    )
+
+
 def demo_project_path() -> Path:
     return Path(str(resources.files("backend").joinpath("projects", "demo")))
 

@@ -406,7 +406,9 @@ def _api_user(args: argparse.Namespace) -> int:
 
 def _passwd(args: argparse.Namespace) -> int:
     """Only the hash of the password is printed."""
+    from backend.project import user_entry
     from runtime.access import account_problems, hash_password
+    from runtime.artifact import UserAccount
 
     password = _new_password(args.user)
     if password is None:
@@ -421,10 +423,7 @@ def _passwd(args: argparse.Namespace) -> int:
     if problems:
         print(f"padt passwd: {problems[0]}", file=sys.stderr)
         return 2
-    print("[[resource.user]]")
-    print(f'name = "{args.user}"')
-    print(f'level = "{args.level}"')
-    print(f'password_hash = "{hashed}"')
+    print(user_entry(UserAccount(args.user, args.level, hashed)), end="")
     return 0
 
 

@@ -56,11 +56,28 @@ def demo_administrator(state_dir: Path) -> tuple[UserAccount, str | None]:
     return account, password
 
 
+def demo_project_with_accounts(state_dir: Path, accounts: list[UserAccount]) -> Path:
+    """The embedded demo project, copied into the state folder with the demo's accounts
+    added: the runtime gets it from there, and the REST API serves it as `demo`, so a
+    load through the API keeps the accounts."""
+    from backend.project import PROJECT_FILE, demo_project_path, user_entry
+
+    folder = state_dir / "project"
+    folder.mkdir(parents=True, exist_ok=True)
+    for source in sorted(demo_project_path().iterdir()):
+        if source.is_file():
+            (folder / source.name).write_text(source.read_text(encoding="utf-8"))
+    entries = "".join("\n" + user_entry(account) for account in accounts)
+    with (folder / PROJECT_FILE).open("a", encoding="utf-8") as config:
+        config.write(entries)
+    return folder
+
+
 def run(args: argparse.Namespace) -> int:
     from backend.api.accounts import PadtAccounts, write_accounts
     from backend.api.server import ApiServer
     from backend.api.service import PadtService
-    from backend.project import compile_project, demo_project_path, load_project
+    from backend.project import compile_project, load_project
     from backend.resource_client import ResourceClient
     from frontend.app import PadtUi
     from runtime.main import artifact_path
@@ -68,14 +85,13 @@ def run(args: argparse.Namespace) -> int:
     from runtime.zenoh_config import open_client, open_router
 
     stop = StopRequest()
-    project = load_project([demo_project_path()])
     admin, admin_password = demo_administrator(args.state_dir)
     # the UI acts with an account of its own, new at every start: its password lives in
     # this process only
     panel_password = secrets.token_urlsafe(18)
     panel = UserAccount("panel", "read-write", hash_password(panel_password))
-    project = dataclasses.replace(project, users=[admin, panel])
-    result = compile_project(project)
+    folder = demo_project_with_accounts(args.state_dir, [admin, panel])
+    result = compile_project(load_project([folder]))
     if result.artifact is None:  # the embedded project always compiles; guard all the same
         for diagnostic in result.diagnostics:
             print(diagnostic, file=sys.stderr)
@@ -103,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
         accounts_file = args.state_dir / "padt-accounts.json"
         write_accounts(accounts_file, (dataclasses.replace(admin, level="security-administrator"),))
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
-        projects = {"demo": demo_project_path()}
+        projects = {"demo": folder}
         service = PadtService(session, accounts, projects, args.state_dir / "backups")
         try:
             api = ApiServer(service, args.host, args.api_port)

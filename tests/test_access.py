@@ -201,6 +201,15 @@ def test_the_demo_makes_its_administrator_once_and_keeps_only_the_hash(tmp_path:
             headers = {"Authorization": f"Bearer {login.json()['token']}"}
             listed = httpx.get(f"{api}/api/resources", headers=headers).json()
             assert [entry["resource"] for entry in listed] == ["Tank1"]
+            # a load of the served demo project keeps the demo's accounts
+            account = {"user": "admin", "password": password}
+            httpx.post(f"{api}/api/resources/Tank1/login", headers=headers, json=account)
+            loaded = httpx.post(
+                f"{api}/api/resources/Tank1/load", headers=headers, json={"project": "demo"},
+                timeout=120,
+            )  # fmt: skip
+            assert loaded.status_code == 200, loaded.text
+            assert anonymous.command("status")["error"]["code"] == "unauthenticated"
         finally:
             session.close()
     finally:

@@ -20,11 +20,10 @@ from backend.api.accounts import AccountsError
 from backend.api.errors import ApiError
 from backend.api.levels import PADT_LEVELS
 from backend.api.service import Caller, PadtService
-from runtime.access import SESSION_NS, AccessDenied
+from runtime.access import NAME, SESSION_NS, AccessDenied
 
 log = logging.getLogger("padt.api")
 _bearer = HTTPBearer(auto_error=False, description="the token from POST /api/login")
-NAME_PATTERN = r"^[A-Za-z0-9_-]{1,32}$"
 
 
 def service_of(request: Request) -> PadtService:
@@ -38,12 +37,7 @@ def _caller(needed: str) -> Callable[..., Caller]:
         credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
     ) -> Caller:
         token = credentials.credentials if credentials is not None else None
-        try:
-            session = service_of(request).accounts.check(token, needed)
-        except AccessDenied as denied:
-            raise ApiError(denied.code, denied.message) from None
-        assert token is not None  # a session exists only for a token
-        return Caller(token, session.user, session.level)
+        return service_of(request).caller(token, needed)
 
     return dependency
 
@@ -113,7 +107,7 @@ def accounts(caller: SecurityAdministrator, service: Service) -> list[Account]:
 
 @router.put("/accounts/{name}", summary="Add or change a PADT account")
 def put_account(
-    name: Annotated[str, PathParameter(pattern=NAME_PATTERN)],
+    name: Annotated[str, PathParameter(pattern=NAME.pattern)],
     change: AccountChange,
     caller: SecurityAdministrator,
     service: Service,

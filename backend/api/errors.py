@@ -58,14 +58,6 @@ class ApiError(Exception):
         return {"error": {"code": self.code, "message": self.message, **self.details}}
 
 
-def refusal_of(reply: dict[str, Any]) -> ApiError:
-    """The ApiError for a resource's error reply."""
-    error = reply.get("error")
-    if not isinstance(error, dict):
-        return ApiError("internal", "the resource gave a reply without an error")
-    return ApiError(str(error.get("code", "unknown")), str(error.get("message", "")))
-
-
 def error_response(error: ApiError) -> JSONResponse:
     headers = {"WWW-Authenticate": "Bearer"} if error.status == 401 else None
     return JSONResponse(error.body(), status_code=error.status, headers=headers)

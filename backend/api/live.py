@@ -18,9 +18,8 @@ from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
 from backend.api.errors import ApiError
-from backend.api.service import Caller, PadtService
+from backend.api.service import PadtService
 from backend.resource_client import ResourceUnreachable, Watch, WatchRefused
-from runtime.access import AccessDenied
 
 router = APIRouter()
 ONLINE_CHECK_S = 1.0
@@ -41,18 +40,11 @@ def _subscription(message: Any) -> tuple[str, list[str], int]:
     return token, variables, period
 
 
-def _start_watch(
-    service: PadtService, resource: str, message: Any, deliver: Any
-) -> tuple[Watch, Caller]:
+def _start_watch(service: PadtService, resource: str, message: Any, deliver: Any) -> Watch:
     token, variables, period = _subscription(message)
+    client = service.client(service.caller(token, "read-only"), resource)
     try:
-        session = service.accounts.check(token, "read-only")
-    except AccessDenied as denied:
-        raise ApiError(denied.code, denied.message) from None
-    caller = Caller(token, session.user, session.level)
-    client = service.client(caller, resource)
-    try:
-        return client.watch(variables, deliver, period), caller
+        return client.watch(variables, deliver, period)
     except WatchRefused as exc:
         raise ApiError("watch_refused", str(exc)) from None
     except ResourceUnreachable as exc:
@@ -76,7 +68,7 @@ async def live(websocket: WebSocket, resource: str) -> None:
 
     try:
         first = json.loads(await websocket.receive_text())
-        watch, _ = await run_in_threadpool(_start_watch, service, resource, first, deliver)
+        watch = await run_in_threadpool(_start_watch, service, resource, first, deliver)
     except (ValueError, ApiError) as exc:
         error = exc if isinstance(exc, ApiError) else ApiError("bad_request", "not JSON")
         await websocket.send_json(error.body())

@@ -17,8 +17,6 @@ from backend.api.accounts import AccountsError, PadtAccounts
 from backend.api.app import create_app
 from backend.api.service import PadtService
 
-log = logging.getLogger("padt.api")
-
 
 class ApiServer:
     """Uvicorn on a thread, on a socket bound before it starts (so port 0 works and the

@@ -14,7 +14,7 @@ from typing import Any
 import zenoh
 
 from backend.api.accounts import PadtAccounts
-from backend.api.errors import ApiError, refusal_of
+from backend.api.errors import ApiError
 from backend.api.resource_directory import ResourceDirectory
 from backend.backup import BackupError
 from backend.check_twice import check_twice
@@ -23,6 +23,7 @@ from backend.loading import (
     CompileFailed,
     LoadRefused,
     backup_of,
+    checked_reply,
     compile_checked,
     download,
     needs_confirmation,
@@ -30,7 +31,8 @@ from backend.loading import (
     reload,
 )
 from backend.project import ProjectError, compile_project, load_project
-from backend.resource_client import COMMAND_TIMEOUT_S, ResourceClient, ResourceUnreachable
+from backend.resource_client import ResourceClient, ResourceUnreachable
+from runtime.access import AccessDenied
 
 
 @dataclass(frozen=True)
@@ -67,6 +69,15 @@ class PadtService:
     def close(self) -> None:
         self.directory.close()
 
+    def caller(self, token: str | None, needed: str) -> Caller:
+        """Who holds `token`, if the session exists and its level is at least `needed`."""
+        try:
+            session = self.accounts.check(token, needed)
+        except AccessDenied as denied:
+            raise ApiError(denied.code, denied.message) from None
+        assert token is not None  # a session exists only for a token
+        return Caller(token, session.user, session.level)
+
     # ---- projects
 
     def project_path(self, name: str) -> Path:
@@ -101,17 +112,13 @@ class PadtService:
         """A command to the resource with the caller's PES session; the reply without
         `ok`, or the resource's refusal as ApiError."""
         with self._refusals(caller, resource):
-            reply = self.client(caller, resource).command(cmd, COMMAND_TIMEOUT_S, **args)
-            if reply.get("ok") is not True:
-                raise refusal_of(reply)
+            reply = checked_reply(self.client(caller, resource).command(cmd, **args))
         return {key: value for key, value in reply.items() if key not in ("ok", "token")}
 
     def log_in(self, caller: Caller, resource: str, user: str, password: str) -> dict[str, Any]:
         client = self.client(caller, resource)
         with self._refusals(caller, resource):
-            reply = client.login(user, password)
-            if reply.get("ok") is not True:
-                raise refusal_of(reply)
+            reply = checked_reply(client.login(user, password))
         self.accounts.set_resource_token(caller.token, resource, client.token)
         return {"resource": resource, "user": reply["user"], "level": reply["level"]}
 
@@ -169,7 +176,8 @@ class PadtService:
 
     @contextmanager
     def _refusals(self, caller: Caller, resource: str) -> Iterator[None]:
-        """Failures of the layers below as ApiErrors. A resource that no longer knows the
+        """Failures of the layers below (a resource's refusal comes as LoadRefused from
+        checked_reply) as ApiErrors. A resource that no longer knows the
         caller's PES session (expired, or the runtime restarted) drops it here too."""
         try:
             with _project_errors():
