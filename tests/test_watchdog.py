@@ -100,7 +100,10 @@ def test_endless_recursion_is_a_program_error_and_the_resource_runs_on() -> None
     PROGRAM Recurse VAR r : DINT; END_VAR r := Deeper(0); END_PROGRAM
     PROGRAM Tick VAR n : DINT; END_VAR n := n + 1; END_PROGRAM
     """
-    h = harness(text, [{"name": "Recurse"}, {"name": "Tick"}])
+    # in this process the compiler has raised Python's recursion limit to 20,000 frames:
+    # reaching it takes over 100 ms, too close to a 200 ms watchdog on a busy machine
+    programs = [{"name": "Recurse"}, {"name": "Tick"}]
+    h = harness(text, programs, watchdog_ms=5_000, safety_time_ms=10_000)
     h.cycle(2)
     assert h.state("Recurse") == "ERROR"
     assert h.state() == "RUN" and h.value("Tick.n") == 2
