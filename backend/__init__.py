@@ -1,1 +1,2 @@
-"""The PADT services: project model, compiler, link client and (later) reload, docs, API."""
+"""The PADT: the compiler (`compiler`), the engineering services (`engineering`) and the
+REST API over them (`api`)."""

@@ -17,8 +17,13 @@ from typing import Any
 
 import viser
 
-from backend.resource_client import ResourceClient, ResourceUnreachable, Watch, WatchRefused
-from backend.values import format_value
+from backend.engineering.resource_client import (
+    ResourceClient,
+    ResourceUnreachable,
+    Watch,
+    WatchRefused,
+)
+from runtime.contract.values import format_value
 
 REFRESH_S = 0.1
 WATCH_PERIOD_MS = 100

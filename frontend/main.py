@@ -6,7 +6,7 @@ import argparse
 import getpass
 import os
 
-from runtime.zenoh_options import add_zenoh_options
+from runtime.contract.session_options import add_zenoh_options
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -23,10 +23,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # imported here: `padt` must start fast for commands that never open a UI
-    from backend.resource_client import ResourceClient
+    from backend.engineering.resource_client import ResourceClient
     from frontend.app import PadtUi
-    from runtime.stop_request import StopRequest
-    from runtime.zenoh_config import open_client
+    from runtime.contract.session import open_client
+    from runtime.contract.stop_request import StopRequest
 
     stop = StopRequest()
     session = open_client(args.zenoh, args.zenoh_config)

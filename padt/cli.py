@@ -11,11 +11,11 @@ import json
 import sys
 from pathlib import Path
 
-from runtime.zenoh_options import RouterUnreachable, add_zenoh_options
+from runtime.contract.session_options import RouterUnreachable, add_zenoh_options
 
 
 def _compile(args: argparse.Namespace) -> int:
-    from backend.project import ProjectError, compile_project, load_project
+    from backend.engineering.project import ProjectError, compile_project, load_project
 
     try:
         project = load_project(args.paths)
@@ -41,7 +41,7 @@ def _compile(args: argparse.Namespace) -> int:
 
 
 def _exec(args: argparse.Namespace) -> int:
-    from backend.run_once import run_entry
+    from backend.engineering.run_once import run_entry
 
     return run_entry(args.file, args.entry)
 
@@ -49,8 +49,15 @@ def _exec(args: argparse.Namespace) -> int:
 def _sim(args: argparse.Namespace) -> int:
     import logging
 
-    from backend.project import ProjectError, compile_project, load_project
-    from backend.simulation import Plan, SimulationError, parse_setting, prepare, run, trace_names
+    from backend.engineering.project import ProjectError, compile_project, load_project
+    from backend.engineering.simulation import (
+        Plan,
+        SimulationError,
+        parse_setting,
+        prepare,
+        run,
+        trace_names,
+    )
 
     try:
         project = load_project(args.paths)
@@ -87,7 +94,7 @@ def _sim(args: argparse.Namespace) -> int:
 
 
 def _check_twice(args: argparse.Namespace) -> int:
-    from backend.check_twice import check_twice
+    from backend.engineering.check_twice import check_twice
 
     result = check_twice(args.paths)
     for number, compiled in enumerate((result.first, result.second), 1):
@@ -276,7 +283,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo_arguments(demo)
     demo.set_defaults(func=_demo)
 
-    from runtime.access import LEVELS
+    from runtime.contract.accounts import LEVELS
 
     load = sub.add_parser(
         "load",
@@ -406,9 +413,9 @@ def _api_user(args: argparse.Namespace) -> int:
 
 def _passwd(args: argparse.Namespace) -> int:
     """Only the hash of the password is printed."""
-    from backend.project import user_entry
-    from runtime.access import account_problems, hash_password
-    from runtime.artifact import UserAccount
+    from backend.engineering.project import user_entry
+    from runtime.contract.accounts import account_problems, hash_password
+    from runtime.contract.artifact import UserAccount
 
     password = _new_password(args.user)
     if password is None:

@@ -14,8 +14,8 @@ import sys
 import time
 from pathlib import Path
 
-from runtime.access import hash_password
-from runtime.artifact import UserAccount
+from runtime.contract.accounts import hash_password
+from runtime.contract.artifact import UserAccount
 
 _PR_SET_PDEATHSIG = 1
 
@@ -60,7 +60,7 @@ def demo_project_with_accounts(state_dir: Path, accounts: list[UserAccount]) -> 
     """The embedded demo project, copied into the state folder with the demo's accounts
     added: the runtime gets it from there, and the REST API serves it as `demo`, so a
     load through the API keeps the accounts."""
-    from backend.project import PROJECT_FILE, demo_project_path, user_entry
+    from backend.engineering.project import PROJECT_FILE, demo_project_path, user_entry
 
     folder = state_dir / "project"
     folder.mkdir(parents=True, exist_ok=True)
@@ -77,12 +77,12 @@ def run(args: argparse.Namespace) -> int:
     from backend.api.accounts import PadtAccounts, write_accounts
     from backend.api.server import ApiServer
     from backend.api.service import PadtService
-    from backend.project import compile_project, load_project
-    from backend.resource_client import ResourceClient
+    from backend.engineering.project import compile_project, load_project
+    from backend.engineering.resource_client import ResourceClient
     from frontend.app import PadtUi
+    from runtime.contract.session import open_client, open_router
+    from runtime.contract.stop_request import StopRequest
     from runtime.main import artifact_path
-    from runtime.stop_request import StopRequest
-    from runtime.zenoh_config import open_client, open_router
 
     stop = StopRequest()
     admin, admin_password = demo_administrator(args.state_dir)

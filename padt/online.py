@@ -18,8 +18,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from backend.backup import BackupError
-from backend.loading import (
+from backend.engineering.backup import BackupError
+from backend.engineering.loading import (
     CheckedCompile,
     CompileFailed,
     LoadRefused,
@@ -31,10 +31,10 @@ from backend.loading import (
     needs_confirmation,
     preview_reload,
 )
-from backend.loading import reload as reload_resource
-from backend.project import ProjectError
-from backend.resource_client import ResourceClient, ResourceUnreachable
-from runtime.keyspace import valid_resource_name
+from backend.engineering.loading import reload as reload_resource
+from backend.engineering.project import ProjectError
+from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
+from runtime.contract.keyspace import valid_resource_name
 
 
 class _Failed(Exception):
@@ -65,8 +65,8 @@ def _renames(pairs: list[tuple[str, str]]) -> dict[str, str]:
 
 @contextmanager
 def _client(args: argparse.Namespace) -> Iterator[ResourceClient]:
-    from runtime.zenoh_config import open_client
-    from runtime.zenoh_options import RouterUnreachable
+    from runtime.contract.session import open_client
+    from runtime.contract.session_options import RouterUnreachable
 
     try:
         session = open_client(args.zenoh, args.zenoh_config)

@@ -1,5 +1,5 @@
 """The PES: one process per resource, running compiled IEC 61131-3 code cyclically.
 
-Nothing here imports the backend or the frontend: the compiled artifact
-(`runtime.artifact`) is the only contract with the engineering side.
+Nothing here imports the backend, the frontend or the command line. `runtime.contract` is
+what the engineering side may know of it: the compiled artifact and the bus protocol.
 """

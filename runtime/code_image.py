@@ -5,16 +5,14 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import itertools
-import math
-import re
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from runtime.artifact import Artifact, PouCode
+from runtime.contract.artifact import Artifact, PouCode
+from runtime.contract.values import array_shape
 from runtime.fault_location import SourceLocation, code_filename, locate
-from runtime.intrinsics import SystemView, namespace, to_real32
+from runtime.intrinsics import SystemView, namespace
 
 # An attribute name, or an offset into the flat list that holds an array.
 Accessor = str | int
@@ -27,33 +25,6 @@ class VariablePath:
     type: str
     constant: bool = False
     location: str | None = None  # `%QX0.1`: a located variable (a process-image point)
-
-
-@dataclass(frozen=True)
-class ArrayShape:
-    dims: tuple[tuple[int, int], ...]
-    element: str  # type name of one element (itself an array type for arrays of arrays)
-
-    def indices(self) -> list[str]:
-        """IEC index texts ("2", "0,1") in the order of the flat list: last index fastest,
-        as generated code lays multi-dimensional arrays out."""
-        ranges = [range(low, high + 1) for low, high in self.dims]
-        return [",".join(map(str, index)) for index in itertools.product(*ranges)]
-
-
-_ARRAY = re.compile(r"ARRAY\[([^\]]*)\] OF (.+)", re.IGNORECASE)
-
-
-def array_shape(type_name: str) -> ArrayShape | None:
-    """`ARRAY[0..1, 1..3] OF INT` -> its bounds and element type; None for other types."""
-    match = _ARRAY.fullmatch(type_name)
-    if match is None:
-        return None
-    dims = []
-    for part in match.group(1).split(","):
-        low, _, high = part.strip().partition("..")
-        dims.append((int(low), int(high)))
-    return ArrayShape(tuple(dims), match.group(2))
 
 
 class CodeImage:
@@ -195,15 +166,6 @@ def slot_names(target: Any) -> Iterator[str]:
         yield from getattr(kind, "__slots__", ())
 
 
-def jsonable(value: Any) -> Any:
-    """A run-time value as strict JSON takes it: non-finite REALs as text."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return repr(value)
-    if isinstance(value, list):
-        return [jsonable(item) for item in value]
-    return value
-
-
 def read_path(instance: Any, path: VariablePath) -> Any:
     value = instance
     for accessor in path.attrs:
@@ -221,73 +183,3 @@ def write_path(instance: Any, path: VariablePath, value: Any) -> None:
         target[last] = value
     else:
         setattr(target, last, value)
-
-
-# ---- run-time representation of elementary values (docs/artifact.md)
-
-_INT_RANGES: dict[str, tuple[int, int]] = {
-    **{name: (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
-       for name, bits in (("SINT", 8), ("INT", 16), ("DINT", 32), ("LINT", 64))},
-    **{name: (0, (1 << bits) - 1)
-       for name, bits in (("USINT", 8), ("UINT", 16), ("UDINT", 32), ("ULINT", 64),
-                          ("BYTE", 8), ("WORD", 16), ("DWORD", 32), ("LWORD", 64))},
-    # durations and dates are 64-bit nanosecond counts
-    **dict.fromkeys(("TIME", "LTIME", "DATE", "LDATE", "TOD", "LTOD", "DT", "LDT"),
-                    (-(1 << 63), (1 << 63) - 1)),
-}  # fmt: skip
-_REALS = ("REAL", "LREAL")
-_STRINGS = ("STRING", "WSTRING", "CHAR", "WCHAR")
-TIME_TYPES = ("TIME", "LTIME")
-
-
-def base_type(type_name: str) -> tuple[str, int]:
-    """`STRING[4]` -> ("STRING", 4); other names -> (name, 0). The artifact keeps string
-    lengths in the type name."""
-    name, _, rest = type_name.upper().partition("[")
-    return name, int(rest.rstrip("]")) if rest.rstrip("]").isdigit() else 0
-
-
-class ValueRejected(ValueError):
-    """A value that a variable of the given type cannot hold; the message says why."""
-
-
-def representation(type_name: str, value: Any) -> Any:
-    """`value` as generated code keeps a variable of `type_name`, or ValueRejected.
-
-    Generated code relies on every stored value being in the range of its type (it wraps at
-    each store), so values from outside (OLT, simulation) are checked, never wrapped.
-    """
-    name, length = base_type(type_name)
-    if name == "BOOL":
-        if isinstance(value, bool):
-            return value
-        raise ValueRejected(f"type BOOL takes TRUE or FALSE, not {value!r}")
-    if name in _INT_RANGES:
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise ValueRejected(f"type {name} takes an integer, not {value!r}")
-        low, high = _INT_RANGES[name]
-        if not low <= value <= high:
-            raise ValueRejected(f"{value} is outside the range of {name} ({low}..{high})")
-        return value
-    if name in _REALS:
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise ValueRejected(f"type {name} takes a number, not {value!r}")
-        try:
-            number = float(value)
-        except OverflowError:
-            raise ValueRejected(f"{value} is outside the range of {name}") from None
-        if name == "LREAL":
-            return number
-        single = to_real32(number)
-        if math.isinf(single) and math.isfinite(number):
-            raise ValueRejected(f"{value} is outside the range of REAL")
-        return single
-    if name in _STRINGS:
-        if not isinstance(value, str):
-            raise ValueRejected(f"type {name} takes a string, not {value!r}")
-        if name in ("CHAR", "WCHAR") and len(value) > 1:  # '' is the NUL character
-            raise ValueRejected(f"type {name} takes one character, not {value!r}")
-        if length and len(value) > length:
-            raise ValueRejected(f"type {type_name} holds at most {length} characters")
-        return value
-    raise ValueRejected(f"variables of type {type_name} cannot be written")

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 from runtime.access import ADMINISTRATOR_PARAMETERS, COMMAND_LEVELS, AccessDenied
-from runtime.artifact import Artifact
+from runtime.contract.artifact import Artifact
 from runtime.resource import CommandRefused, ReloadJob, Resource
 from runtime.transfer import MAX_CHUNK, TransferError
 

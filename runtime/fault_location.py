@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from runtime.artifact import PouCode
+from runtime.contract.artifact import PouCode
 
 
 @dataclass(frozen=True)

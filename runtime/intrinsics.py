@@ -9,11 +9,12 @@ from __future__ import annotations
 import builtins
 import copy
 import math
-import struct
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
+
+from runtime.contract.values import format_time, to_real32
 
 
 class ProgramFault(Exception):
@@ -96,17 +97,6 @@ def _pow(a: float, b: float) -> float:
         return result
     except (ZeroDivisionError, OverflowError):
         return math.inf
-
-
-_F32 = struct.Struct("f")
-
-
-def to_real32(value: float) -> float:
-    """Round to the nearest IEEE 754 single (REAL is 32 bit)."""
-    try:
-        return float(_F32.unpack(_F32.pack(value))[0])
-    except OverflowError:
-        return math.copysign(math.inf, value)
 
 
 def _ix(index: int, low: int, high: int) -> int:
@@ -203,26 +193,6 @@ def _str_to_bool(text: str) -> bool:
 
 def _real_to_str(value: float) -> str:
     return repr(value)
-
-
-_TIME_UNITS = (
-    ("d", 86_400_000_000_000), ("h", 3_600_000_000_000), ("m", 60_000_000_000),
-    ("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000), ("ns", 1),
-)  # fmt: skip
-
-
-def format_time(ns: int, prefix: str = "T#") -> str:
-    """TIME_TO_STRING: `T#1h2m3s4ms`, the largest units first, zero parts left out (also how
-    the PADT shows TIME values)."""
-    if ns == 0:
-        return f"{prefix}0s"
-    sign, rest = ("-", -ns) if ns < 0 else ("", ns)
-    parts = []
-    for unit, size in _TIME_UNITS:
-        count, rest = divmod(rest, size)
-        if count:
-            parts.append(f"{count}{unit}")
-    return f"{prefix}{sign}{''.join(parts)}"
 
 
 def _date_to_str(ns: int, kind: str) -> str:

@@ -15,7 +15,7 @@ from typing import Any
 
 import zenoh
 
-from runtime.keyspace import (
+from runtime.contract.keyspace import (
     alive_key,
     command_key,
     events_key,

@@ -8,14 +8,14 @@ import os
 import sys
 from pathlib import Path
 
-from runtime.artifact import Artifact, ArtifactError, load_artifact
 from runtime.clock import RealClock
 from runtime.context import ContextInvalid, load_context
+from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
+from runtime.contract.keyspace import valid_resource_name
+from runtime.contract.session_options import add_zenoh_options
+from runtime.contract.stop_request import StopRequest
 from runtime.event_log import EventLog
-from runtime.keyspace import valid_resource_name
 from runtime.resource import Resource
-from runtime.stop_request import StopRequest
-from runtime.zenoh_options import add_zenoh_options
 
 log = logging.getLogger("padt.runtime")
 
@@ -97,9 +97,9 @@ def run(args: argparse.Namespace) -> int:
     resource.on_configuration = lambda artifact: store_configuration(args.state_dir, artifact)
 
     from runtime.context_saver import ContextSaver
+    from runtime.contract.session import open_client
     from runtime.cycle_driver import CycleDriver
     from runtime.link import ResourceLink
-    from runtime.zenoh_config import open_client
 
     session = open_client(args.zenoh, args.zenoh_config)
     link = ResourceLink(session, args.resource)

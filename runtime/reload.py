@@ -31,7 +31,7 @@ from runtime.reload_plan import (
 from runtime.user_program import UserProgram, share_globals
 
 if TYPE_CHECKING:
-    from runtime.artifact import Artifact
+    from runtime.contract.artifact import Artifact
     from runtime.resource import BoundVariable, Instances
 
 _SCALARS = (bool, int, float, str, type(None))

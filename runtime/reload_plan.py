@@ -16,10 +16,11 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from runtime.artifact import Artifact, ChartInfo, PouCode, ResourceConfig
-from runtime.code_image import CodeImage, VariablePath, array_shape, base_type
+from runtime.code_image import CodeImage, VariablePath
+from runtime.contract.artifact import Artifact, ChartInfo, PouCode, ResourceConfig
+from runtime.contract.parameters import RESOURCE_BY_NAME
+from runtime.contract.values import array_shape, base_type
 from runtime.intrinsics import SystemView
-from runtime.parameters import RESOURCE_BY_NAME
 
 KEPT, CONVERTED, INITIALISED, NEW, DELETED = "kept", "converted", "initialised", "new", "deleted"
 TIMED_QUALIFIERS = ("L", "D", "SD", "DS", "SL")

@@ -17,24 +17,18 @@ from enum import StrEnum
 from typing import Any
 
 from runtime.access import AccessControl, AccessDenied, Session
-from runtime.artifact import Artifact, ResourceConfig
 from runtime.clock import Clock
-from runtime.code_image import (
-    CodeImage,
-    ValueRejected,
-    VariablePath,
-    jsonable,
-    read_path,
-    representation,
-    write_path,
-)
+from runtime.code_image import CodeImage, VariablePath, read_path, write_path
 from runtime.context import Context, ContextMismatch, restore, snapshot
+from runtime.contract.artifact import Artifact, ResourceConfig
+from runtime.contract.keyspace import valid_watch_id
+from runtime.contract.parameters import RESOURCE_BY_NAME, ParameterError, resource_consistency
+from runtime.contract.system_variables import SYSTEM_VARIABLES
+from runtime.contract.values import ValueRejected, jsonable, representation
 from runtime.cycle_stats import CycleStats
 from runtime.event_log import EventLog
 from runtime.forcing import GLOBAL, ForceEntry, ForceTable
 from runtime.intrinsics import ProgramFault, SystemView, no_tick
-from runtime.keyspace import valid_watch_id
-from runtime.parameters import RESOURCE_BY_NAME, ParameterError, resource_consistency
 from runtime.reload import (
     SwitchOver,
     SwitchOverTooLong,
@@ -44,7 +38,6 @@ from runtime.reload import (
 )
 from runtime.reload_plan import LiveState, ReloadPlan, plan_reload
 from runtime.slicing import SliceMeter
-from runtime.system_variables import SYSTEM_VARIABLES
 from runtime.transfer import IncomingArtifact
 from runtime.user_program import ProgramState, UserProgram, share_globals
 from runtime.watch_sets import MAX_PERIOD_MS, MIN_PERIOD_MS, WatchSet, WatchSets, WatchSnapshot

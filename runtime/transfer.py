@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 import zlib
 
-from runtime.artifact import Artifact, ArtifactError, load_artifact
+from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
 
 # characters per chunk: escaped inside a JSON request it may double, and must still fit
 # the 64 KiB request limit

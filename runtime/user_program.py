@@ -9,8 +9,8 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
-from runtime.artifact import ProgramConfig
 from runtime.code_image import VariablePath, slot_names
+from runtime.contract.artifact import ProgramConfig
 from runtime.slicing import ProgramRun
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from runtime.code_image import jsonable
+from runtime.contract.values import jsonable
 
 MIN_PERIOD_MS = 10
 MAX_PERIOD_MS = 60_000

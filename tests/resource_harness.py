@@ -9,9 +9,15 @@ from typing import Any
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.artifact import Artifact, ProgramConfig, ResourceConfig, UserAccount, crc32_hex
 from runtime.clock import VirtualClock
 from runtime.commands import execute
+from runtime.contract.artifact import (
+    Artifact,
+    ProgramConfig,
+    ResourceConfig,
+    UserAccount,
+    crc32_hex,
+)
 from runtime.resource import Resource
 from runtime.transfer import pieces
 

@@ -17,10 +17,10 @@ import httpx
 from backend.api.accounts import PadtAccounts, with_account, write_accounts
 from backend.api.server import ApiServer
 from backend.api.service import PadtService
-from backend.project import compile_project, load_project
-from backend.resource_client import ResourceClient
-from runtime.access import hash_password
-from runtime.zenoh_config import open_client
+from backend.engineering.project import compile_project, load_project
+from backend.engineering.resource_client import ResourceClient
+from runtime.contract.accounts import hash_password
+from runtime.contract.session import open_client
 from tests.conftest import free_port
 from tests.runtime_process import router, runtime_process, store_artifact
 

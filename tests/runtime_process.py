@@ -12,11 +12,11 @@ from pathlib import Path
 
 import zenoh
 
-from backend.project import compile_project, demo_project_path, load_project
-from backend.resource_client import ResourceClient
-from runtime.artifact import Artifact
+from backend.engineering.project import compile_project, demo_project_path, load_project
+from backend.engineering.resource_client import ResourceClient
+from runtime.contract.artifact import Artifact
+from runtime.contract.session import open_client, open_router
 from runtime.main import artifact_path
-from runtime.zenoh_config import open_client, open_router
 from tests.conftest import REPO
 
 

@@ -16,11 +16,11 @@ import httpx
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from backend.resource_client import ResourceClient
-from runtime.access import SESSION_NS, hash_password, verify_password
-from runtime.artifact import ResourceConfig, UserAccount
-from runtime.keyspace import command_key
-from runtime.zenoh_config import open_client
+from backend.engineering.resource_client import ResourceClient
+from runtime.contract.accounts import SESSION_NS, hash_password, verify_password
+from runtime.contract.artifact import ResourceConfig, UserAccount
+from runtime.contract.keyspace import command_key
+from runtime.contract.session import open_client
 from tests.conftest import REPO, free_port, padt
 from tests.resource_harness import Harness, compiled, harness
 from tests.runtime_process import running_resource, store_artifact, wait_until_answering

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from backend.check_twice import CompileRun, check_twice, compare
-from backend.project import demo_project_path
+from backend.engineering.check_twice import CompileRun, check_twice, compare
+from backend.engineering.project import demo_project_path
 from tests.conftest import padt
 
 

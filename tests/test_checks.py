@@ -7,7 +7,7 @@ import pytest
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.artifact import ProgramConfig
+from runtime.contract.artifact import ProgramConfig
 
 
 def diagnostics(text: str, programs: list[ProgramConfig] | None = None) -> list[str]:

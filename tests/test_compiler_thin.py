@@ -8,7 +8,7 @@ from typing import Any
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from backend.project import demo_project_path
+from backend.engineering.project import demo_project_path
 from runtime.clock import VirtualClock
 from runtime.resource import Resource
 from tests.conftest import padt

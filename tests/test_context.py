@@ -19,7 +19,6 @@ from hypothesis import strategies as st
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.artifact import Artifact
 from runtime.code_image import CodeImage
 from runtime.context import (
     CONTEXT_FORMAT,
@@ -34,6 +33,7 @@ from runtime.context import (
     save_context,
     snapshot,
 )
+from runtime.contract.artifact import Artifact
 from runtime.intrinsics import SystemView
 from tests.conftest import REPO
 

@@ -13,14 +13,14 @@ from typing import Any
 
 import pytest
 
-import backend.loading as loading
-from backend.backup import BackupError, BackupInfo, restore_backup, write_backup
-from backend.check_twice import CheckTwiceResult, CompileRun, compare
-from backend.loading import LoadRefused, compile_checked, send_artifact
-from backend.resource_client import ResourceClient
+import backend.engineering.loading as loading
+from backend.engineering.backup import BackupError, BackupInfo, restore_backup, write_backup
+from backend.engineering.check_twice import CheckTwiceResult, CompileRun, compare
+from backend.engineering.loading import LoadRefused, compile_checked, send_artifact
+from backend.engineering.resource_client import ResourceClient
 from padt.online import parse_rename
-from runtime.artifact import crc32_hex, load_artifact
 from runtime.commands import MAX_REQUEST_BYTES
+from runtime.contract.artifact import crc32_hex, load_artifact
 from runtime.transfer import pieces
 from tests.conftest import padt
 from tests.runtime_process import client_session, router, running_resource

@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from runtime.artifact import crc32_hex
+from runtime.contract.artifact import crc32_hex
 from runtime.reload import SwitchOverTooLong, switch_over
 from tests.resource_harness import Harness, compiled, harness
 

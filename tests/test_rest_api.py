@@ -19,8 +19,9 @@ import pytest
 from websockets.sync.client import connect
 
 from backend.api.accounts import PadtAccounts, read_accounts
-from backend.project import compile_project, load_project
-from runtime.access import COMMAND_LEVELS, LEVELS, SESSION_NS, AccessDenied
+from backend.engineering.project import compile_project, load_project
+from runtime.access import COMMAND_LEVELS, AccessDenied
+from runtime.contract.accounts import LEVELS, SESSION_NS
 from tests.conftest import REPO, free_port, padt
 from tests.rest_plant import (
     PADT_PASSWORDS,

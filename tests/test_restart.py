@@ -17,10 +17,10 @@ import pytest
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from backend.resource_client import ResourceClient
-from runtime.artifact import Artifact, ProgramConfig, ResourceConfig
+from backend.engineering.resource_client import ResourceClient
 from runtime.clock import VirtualClock
 from runtime.context import ContextInvalid, load_context, save_context
+from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.main import context_path
 from runtime.resource import Resource
 from tests.runtime_process import (

@@ -13,10 +13,10 @@ import zenoh
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from backend.resource_client import ResourceClient, WatchRefused
+from backend.engineering.resource_client import ResourceClient, WatchRefused
 from frontend.app import PadtUi
-from runtime.artifact import ResourceConfig
-from runtime.keyspace import alive_key, command_key
+from runtime.contract.artifact import ResourceConfig
+from runtime.contract.keyspace import alive_key, command_key
 from tests.conftest import free_port
 from tests.runtime_process import (
     client_session,

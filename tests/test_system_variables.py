@@ -10,16 +10,16 @@ from typing import Any
 
 import pytest
 
-from backend.check_twice import check_twice
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.compiler.types import elementary
-from runtime.artifact import Artifact
+from backend.engineering.check_twice import check_twice
 from runtime.clock import VirtualClock
 from runtime.code_image import CodeImage
+from runtime.contract.artifact import Artifact
+from runtime.contract.system_variables import BY_NAME, NAMESPACE, SYSTEM_VARIABLES, initial_value
 from runtime.intrinsics import SystemView
 from runtime.resource import Resource
-from runtime.system_variables import BY_NAME, NAMESPACE, SYSTEM_VARIABLES, initial_value
 
 EXPECTED = {
     "COLDSTART": ("BOOL", False),

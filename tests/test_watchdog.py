@@ -11,8 +11,8 @@ import pytest
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.artifact import ResourceConfig
 from runtime.clock import VirtualClock
+from runtime.contract.artifact import ResourceConfig
 from runtime.resource import CommandRefused, Resource, ResourceState
 from tests.resource_harness import harness
 from tests.runtime_process import running_resource, store_artifact

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from backend.resource_client import ResourceClient
-from runtime.zenoh_config import open_client, open_router
-from runtime.zenoh_options import RouterUnreachable
+from backend.engineering.resource_client import ResourceClient
+from runtime.contract.session import open_client, open_router
+from runtime.contract.session_options import RouterUnreachable
 from tests.conftest import free_port, padt
 from tests.runtime_process import runtime_process, wait_until_answering, write_demo_artifact
 

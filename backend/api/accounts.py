@@ -18,8 +18,9 @@ from dataclasses import asdict
 from pathlib import Path
 
 from backend.api.levels import ADMINISTRATOR, PADT_LEVELS
-from runtime.access import AccessControl, AccessDenied, Session, account_problems, hash_password
-from runtime.artifact import UserAccount
+from runtime.access import AccessControl, AccessDenied, Session
+from runtime.contract.accounts import account_problems, hash_password
+from runtime.contract.artifact import UserAccount
 
 FORMAT = "padt-accounts"
 VERSION = 1

@@ -20,7 +20,8 @@ from backend.api.accounts import AccountsError
 from backend.api.errors import ApiError
 from backend.api.levels import PADT_LEVELS
 from backend.api.service import Caller, PadtService
-from runtime.access import NAME, SESSION_NS, AccessDenied
+from runtime.access import AccessDenied
+from runtime.contract.accounts import NAME, SESSION_NS
 
 log = logging.getLogger("padt.api")
 _bearer = HTTPBearer(auto_error=False, description="the token from POST /api/login")

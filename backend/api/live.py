@@ -19,7 +19,7 @@ from starlette.concurrency import run_in_threadpool
 
 from backend.api.errors import ApiError
 from backend.api.service import PadtService
-from backend.resource_client import ResourceUnreachable, Watch, WatchRefused
+from backend.engineering.resource_client import ResourceUnreachable, Watch, WatchRefused
 
 router = APIRouter()
 ONLINE_CHECK_S = 1.0

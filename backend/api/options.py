@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from backend.api.levels import PADT_LEVELS
-from runtime.zenoh_options import add_zenoh_options
+from runtime.contract.session_options import add_zenoh_options
 
 DEFAULT_ACCOUNTS = Path("padt-accounts.json")
 

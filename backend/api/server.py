@@ -73,8 +73,8 @@ def projects_by_name(folders: list[Path]) -> dict[str, Path]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from runtime.stop_request import StopRequest
-    from runtime.zenoh_config import open_client
+    from runtime.contract.session import open_client
+    from runtime.contract.stop_request import StopRequest
 
     stop = StopRequest()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")

@@ -15,10 +15,9 @@ import zenoh
 
 from backend.api.accounts import PadtAccounts
 from backend.api.errors import ApiError
-from backend.api.resource_directory import ResourceDirectory
-from backend.backup import BackupError
-from backend.check_twice import check_twice
-from backend.loading import (
+from backend.engineering.backup import BackupError
+from backend.engineering.check_twice import check_twice
+from backend.engineering.loading import (
     CheckedCompile,
     CompileFailed,
     LoadRefused,
@@ -30,8 +29,9 @@ from backend.loading import (
     preview_reload,
     reload,
 )
-from backend.project import ProjectError, compile_project, load_project
-from backend.resource_client import ResourceClient, ResourceUnreachable
+from backend.engineering.project import ProjectError, compile_project, load_project
+from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
+from backend.engineering.resource_directory import ResourceDirectory
 from runtime.access import AccessDenied
 
 

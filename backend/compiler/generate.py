@@ -39,7 +39,7 @@ from backend.compiler.types import (
     common_numeric,
     integer_like,
 )
-from runtime.intrinsics import to_real32
+from runtime.contract.values import to_real32
 
 INDENT = "    "
 _COMPARE = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}

@@ -38,7 +38,7 @@ from backend.compiler.types import (
     elementary,
     integer_like,
 )
-from runtime.system_variables import NAMESPACE
+from runtime.contract.system_variables import NAMESPACE
 
 
 @dataclass(frozen=True)

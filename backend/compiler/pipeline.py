@@ -29,8 +29,8 @@ from backend.compiler.parse import parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
-from runtime.access import account_problems
-from runtime.artifact import (
+from runtime.contract.accounts import account_problems
+from runtime.contract.artifact import (
     Artifact,
     Association,
     ChartInfo,
@@ -42,7 +42,7 @@ from runtime.artifact import (
     canonical_json,
     crc32_hex,
 )
-from runtime.code_image import ValueRejected, representation
+from runtime.contract.values import ValueRejected, representation
 
 
 @dataclass(frozen=True)

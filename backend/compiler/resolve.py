@@ -28,7 +28,7 @@ from backend.compiler.types import (
     VariadicType,
     elementary,
 )
-from runtime.system_variables import NAMESPACE, SYSTEM_VARIABLES
+from runtime.contract.system_variables import NAMESPACE, SYSTEM_VARIABLES
 
 PARAMETER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT")
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from backend.project import compile_project, demo_project_path, load_project
+from backend.engineering.project import compile_project, demo_project_path, load_project
 from runtime.clock import VirtualClock
 from runtime.resource import Resource
 

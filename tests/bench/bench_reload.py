@@ -19,10 +19,10 @@ from typing import Any
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.artifact import Artifact, ResourceConfig
 from runtime.clock import RealClock
+from runtime.contract.artifact import Artifact, ResourceConfig
+from runtime.contract.parameters import RESOURCE_BY_NAME
 from runtime.intrinsics import SystemView
-from runtime.parameters import RESOURCE_BY_NAME
 from runtime.reload_plan import (
     CONVERTED,
     DELETED,

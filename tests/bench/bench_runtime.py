@@ -22,13 +22,13 @@ from itertools import pairwise
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.clock import Clock, RealClock
+from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
+from runtime.contract.session import open_client, open_router
 from runtime.cycle_driver import CycleDriver
 from runtime.link import ResourceLink
 from runtime.resource import Resource
 from runtime.user_program import ProgramState
-from runtime.zenoh_config import open_client, open_router
 from tests.bench.bench_language import thousand_statements
 
 TARGET_MS = 10

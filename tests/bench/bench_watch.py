@@ -40,17 +40,17 @@ from typing import Any
 
 import zenoh
 
-from backend.resource_client import ResourceClient, WatchRefused
-from runtime.artifact import Artifact
+from backend.engineering.resource_client import ResourceClient, WatchRefused
 from runtime.clock import Clock, RealClock
 from runtime.commands import MAX_REQUEST_BYTES
+from runtime.contract.artifact import Artifact
+from runtime.contract.keyspace import watch_key, watcher_key
+from runtime.contract.session import open_client, open_router
 from runtime.cycle_driver import CycleDriver
-from runtime.keyspace import watch_key, watcher_key
 from runtime.link import ResourceLink
 from runtime.resource import Resource, ResourceState
 from runtime.user_program import ProgramState
 from runtime.watch_sets import WatchSet, WatchSnapshot
-from runtime.zenoh_config import open_client, open_router
 from tests.bench.bench_runtime import (
     SECONDS_ENV,
     TARGET_MS,

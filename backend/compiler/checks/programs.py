@@ -15,7 +15,7 @@ from backend.compiler.ast import key
 from backend.compiler.diagnostics import Diagnostic, error
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
 from backend.compiler.types import FbType
-from runtime.artifact import ProgramConfig, ResourceConfig
+from runtime.contract.artifact import ProgramConfig, ResourceConfig
 
 MAX_PROGRAMS = 32
 

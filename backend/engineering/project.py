@@ -13,8 +13,8 @@ from typing import Any
 
 from backend.compiler.pipeline import CompileResult, compile_sources
 from backend.compiler.source import SourceFile, read_source
-from runtime.artifact import ProgramConfig, ResourceConfig, UserAccount
-from runtime.parameters import (
+from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount
+from runtime.contract.parameters import (
     PROGRAM_BY_NAME,
     RESOURCE_BY_NAME,
     ParameterError,

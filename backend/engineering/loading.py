@@ -16,11 +16,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from backend.backup import BackupInfo, write_backup
-from backend.check_twice import check_twice
-from backend.project import PROJECT_FILE, Project, compile_project, load_project
-from backend.resource_client import ResourceClient, ResourceUnreachable
-from runtime.artifact import Artifact, crc32_hex
+from backend.engineering.backup import BackupInfo, write_backup
+from backend.engineering.check_twice import check_twice
+from backend.engineering.project import PROJECT_FILE, Project, compile_project, load_project
+from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
+from runtime.contract.artifact import Artifact, crc32_hex
 from runtime.transfer import MAX_CHUNK, pieces
 
 BUSY_PAUSE_S = 0.05  # a program mid-cycle finishes it within a few CPU cycles

@@ -22,9 +22,15 @@ from backend.compiler.parse import (
     parse_int_literal,
     parse_time_literal,
 )
-from runtime.artifact import Artifact
 from runtime.clock import VirtualClock
-from runtime.code_image import TIME_TYPES, ValueRejected, array_shape, base_type, representation
+from runtime.contract.artifact import Artifact
+from runtime.contract.values import (
+    TIME_TYPES,
+    ValueRejected,
+    array_shape,
+    base_type,
+    representation,
+)
 from runtime.intrinsics import to_bytes
 from runtime.resource import CommandRefused, Resource
 from runtime.user_program import ProgramState

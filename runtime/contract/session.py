@@ -16,7 +16,7 @@ from pathlib import Path
 
 import zenoh
 
-from runtime.zenoh_options import RouterUnreachable
+from runtime.contract.session_options import RouterUnreachable
 
 CONNECT_TIMEOUT_MS = 10_000
 

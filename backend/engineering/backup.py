@@ -24,7 +24,7 @@ from datetime import UTC, datetime
 from pathlib import Path, PurePosixPath
 from typing import Any
 
-from runtime.artifact import Artifact, ArtifactError, load_artifact
+from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
 
 DEFAULT_BACKUP_DIR = Path("padt-backups")
 ARTIFACT_ENTRY = "artifact.json"

@@ -10,7 +10,7 @@ from typing import Any
 
 import zenoh
 
-from runtime.keyspace import alive_key, any_resource, resource_of, status_key
+from runtime.contract.keyspace import alive_key, any_resource, resource_of, status_key
 
 
 class ResourceDirectory:

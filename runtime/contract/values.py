@@ -1,0 +1,162 @@
+"""The value representation of the contract (docs/artifact.md): how each IEC elementary
+type is held at run time and on the bus (BOOL as a boolean, integers as integers in the
+range of their type, REAL rounded to 32 bits, TIME as integer nanoseconds, strings as
+text), how a value from outside is checked against its type, and how values are shown to
+people (IEC literals: TRUE, T#1s500ms, not Python reprs).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+import struct
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class ArrayShape:
+    dims: tuple[tuple[int, int], ...]
+    element: str  # type name of one element (itself an array type for arrays of arrays)
+
+    def indices(self) -> list[str]:
+        """IEC index texts ("2", "0,1") in the order of the flat list: last index fastest,
+        as generated code lays multi-dimensional arrays out."""
+        ranges = [range(low, high + 1) for low, high in self.dims]
+        return [",".join(map(str, index)) for index in itertools.product(*ranges)]
+
+
+_ARRAY = re.compile(r"ARRAY\[([^\]]*)\] OF (.+)", re.IGNORECASE)
+
+
+def array_shape(type_name: str) -> ArrayShape | None:
+    """`ARRAY[0..1, 1..3] OF INT` -> its bounds and element type; None for other types."""
+    match = _ARRAY.fullmatch(type_name)
+    if match is None:
+        return None
+    dims = []
+    for part in match.group(1).split(","):
+        low, _, high = part.strip().partition("..")
+        dims.append((int(low), int(high)))
+    return ArrayShape(tuple(dims), match.group(2))
+
+
+_F32 = struct.Struct("f")
+
+
+def to_real32(value: float) -> float:
+    """Round to the nearest IEEE 754 single (REAL is 32 bit)."""
+    try:
+        return float(_F32.unpack(_F32.pack(value))[0])
+    except OverflowError:
+        return math.copysign(math.inf, value)
+
+
+_TIME_UNITS = (
+    ("d", 86_400_000_000_000), ("h", 3_600_000_000_000), ("m", 60_000_000_000),
+    ("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000), ("ns", 1),
+)  # fmt: skip
+
+
+def format_time(ns: int, prefix: str = "T#") -> str:
+    """TIME_TO_STRING: `T#1h2m3s4ms`, the largest units first, zero parts left out (also how
+    the PADT shows TIME values)."""
+    if ns == 0:
+        return f"{prefix}0s"
+    sign, rest = ("-", -ns) if ns < 0 else ("", ns)
+    parts = []
+    for unit, size in _TIME_UNITS:
+        count, rest = divmod(rest, size)
+        if count:
+            parts.append(f"{count}{unit}")
+    return f"{prefix}{sign}{''.join(parts)}"
+
+
+def jsonable(value: Any) -> Any:
+    """A run-time value as strict JSON takes it: non-finite REALs as text."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return repr(value)
+    if isinstance(value, list):
+        return [jsonable(item) for item in value]
+    return value
+
+
+# ---- run-time representation of elementary values (docs/artifact.md)
+
+_INT_RANGES: dict[str, tuple[int, int]] = {
+    **{name: (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
+       for name, bits in (("SINT", 8), ("INT", 16), ("DINT", 32), ("LINT", 64))},
+    **{name: (0, (1 << bits) - 1)
+       for name, bits in (("USINT", 8), ("UINT", 16), ("UDINT", 32), ("ULINT", 64),
+                          ("BYTE", 8), ("WORD", 16), ("DWORD", 32), ("LWORD", 64))},
+    # durations and dates are 64-bit nanosecond counts
+    **dict.fromkeys(("TIME", "LTIME", "DATE", "LDATE", "TOD", "LTOD", "DT", "LDT"),
+                    (-(1 << 63), (1 << 63) - 1)),
+}  # fmt: skip
+_REALS = ("REAL", "LREAL")
+_STRINGS = ("STRING", "WSTRING", "CHAR", "WCHAR")
+TIME_TYPES = ("TIME", "LTIME")
+
+
+def base_type(type_name: str) -> tuple[str, int]:
+    """`STRING[4]` -> ("STRING", 4); other names -> (name, 0). The artifact keeps string
+    lengths in the type name."""
+    name, _, rest = type_name.upper().partition("[")
+    return name, int(rest.rstrip("]")) if rest.rstrip("]").isdigit() else 0
+
+
+class ValueRejected(ValueError):
+    """A value that a variable of the given type cannot hold; the message says why."""
+
+
+def representation(type_name: str, value: Any) -> Any:
+    """`value` as generated code keeps a variable of `type_name`, or ValueRejected.
+
+    Generated code relies on every stored value being in the range of its type (it wraps at
+    each store), so values from outside (OLT, simulation) are checked, never wrapped.
+    """
+    name, length = base_type(type_name)
+    if name == "BOOL":
+        if isinstance(value, bool):
+            return value
+        raise ValueRejected(f"type BOOL takes TRUE or FALSE, not {value!r}")
+    if name in _INT_RANGES:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueRejected(f"type {name} takes an integer, not {value!r}")
+        low, high = _INT_RANGES[name]
+        if not low <= value <= high:
+            raise ValueRejected(f"{value} is outside the range of {name} ({low}..{high})")
+        return value
+    if name in _REALS:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueRejected(f"type {name} takes a number, not {value!r}")
+        try:
+            number = float(value)
+        except OverflowError:
+            raise ValueRejected(f"{value} is outside the range of {name}") from None
+        if name == "LREAL":
+            return number
+        single = to_real32(number)
+        if math.isinf(single) and math.isfinite(number):
+            raise ValueRejected(f"{value} is outside the range of REAL")
+        return single
+    if name in _STRINGS:
+        if not isinstance(value, str):
+            raise ValueRejected(f"type {name} takes a string, not {value!r}")
+        if name in ("CHAR", "WCHAR") and len(value) > 1:  # '' is the NUL character
+            raise ValueRejected(f"type {name} takes one character, not {value!r}")
+        if length and len(value) > length:
+            raise ValueRejected(f"type {type_name} holds at most {length} characters")
+        return value
+    raise ValueRejected(f"variables of type {type_name} cannot be written")
+
+
+def format_value(value: Any, type_name: str) -> str:
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    if type_name in ("TIME", "LTIME") and isinstance(value, int):
+        return format_time(value, "LTIME#" if type_name == "LTIME" else "T#")
+    if isinstance(value, str):
+        return f"'{value}'"
+    return str(value)
