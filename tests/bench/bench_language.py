@@ -18,7 +18,7 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
 from runtime.clock import VirtualClock
 from runtime.resource import Resource
-from tests.oracle.tree_walker import TreeWalker
+from tests.support.oracle.tree_walker import TreeWalker
 
 REPO = Path(__file__).resolve().parents[2]
 OSCAT = REPO.parent / "shared" / "corpus" / "oscat" / "st"

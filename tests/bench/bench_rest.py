@@ -20,7 +20,7 @@ from pathlib import Path
 
 from websockets.sync.client import connect
 
-from tests.rest_plant import PADT_PASSWORDS, plant
+from tests.support.rest_plant import PADT_PASSWORDS, plant
 
 ROUNDS = 300
 LIVE_SECONDS = 10

@@ -23,7 +23,7 @@ from runtime.context import ContextInvalid, load_context, save_context
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.main import context_path
 from runtime.resource import Resource
-from tests.runtime_process import (
+from tests.support.runtime_process import (
     client_session,
     router,
     runtime_process,

@@ -23,7 +23,7 @@ from runtime.commands import MAX_REQUEST_BYTES
 from runtime.contract.artifact import crc32_hex, load_artifact
 from runtime.transfer import pieces
 from tests.conftest import padt
-from tests.runtime_process import client_session, router, running_resource
+from tests.support.runtime_process import client_session, router, running_resource
 
 RESOURCE = "LoadRes"
 STOPPED = "STOP/VALID CONFIGURATION"

@@ -1,24 +1,21 @@
-"""The FileCheck matcher in `tests/filecheck.py`, on small inputs and on the rusty-lit corpus."""
+"""The FileCheck matcher (`tests/support/filecheck.py`), on small inputs and on rusty-lit."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
 
 from runtime.printf import format_printf
-from tests.filecheck import Check, CheckKind, match_output, parse_checks, run_line
+from tests.support.corpus_paths import CORPUS as CORPUS_ROOT
+from tests.support.corpus_paths import corpus_dir
+from tests.support.filecheck import Check, CheckKind, match_output, parse_checks, run_line
 
-CORPUS = Path(__file__).resolve().parent.parent.parent / "shared" / "corpus" / "rusty-lit"
+CORPUS = CORPUS_ROOT / "rusty-lit"
 
 
-def corpus_dir() -> Path:
-    if not CORPUS.is_dir():
-        if os.environ.get("CI") == "true":
-            pytest.fail(f"the rusty-lit corpus is missing at {CORPUS}; CI must have it")
-        pytest.skip(f"the rusty-lit corpus is not at {CORPUS}")
-    return CORPUS
+def rusty_lit() -> Path:
+    return corpus_dir("rusty-lit")
 
 
 def check(source: str, output: str, *, full: bool = True) -> tuple[bool, str]:
@@ -280,7 +277,7 @@ def test_malformed_checks_fail_with_a_reason(source: str, expected: str) -> None
 
 
 def corpus_files() -> list[Path]:
-    return sorted(corpus_dir().rglob("*.st"))
+    return sorted(rusty_lit().rglob("*.st"))
 
 
 def is_expect_error(path: Path) -> bool:
@@ -315,7 +312,7 @@ def test_each_runnable_corpus_file_accepts_its_own_expected_lines() -> None:
 
 
 def test_disabled_xcheck_in_string_escapes_is_not_a_check() -> None:
-    source = (corpus_dir() / "string_escapes" / "string_escapes.st").read_text(encoding="utf-8")
+    source = (rusty_lit() / "string_escapes" / "string_escapes.st").read_text(encoding="utf-8")
     patterns = [c.pattern for c in parse_checks(source)]
     assert "Price: $100" not in patterns
     assert "Col1\tCol2" in patterns
@@ -324,7 +321,7 @@ def test_disabled_xcheck_in_string_escapes_is_not_a_check() -> None:
 def test_integer_overflow_output_from_format_printf() -> None:
     # arithmetic/integer_overflow.st, with its printf calls replayed by hand: the values
     # before and after each type wraps.
-    source = (corpus_dir() / "arithmetic" / "integer_overflow.st").read_text(encoding="utf-8")
+    source = (rusty_lit() / "arithmetic" / "integer_overflow.st").read_text(encoding="utf-8")
     calls = [
         ("%d\n", 127),
         ("%d\n", 32767),

@@ -1,6 +1,6 @@
 """rusty's lit tests: every runnable file through `padt exec`, its output matched against its
 `// CHECK:` lines; the expect-error files must be refused. Known failures are listed, each
-with its reason, in tests/corpus/rusty_known_failures.tsv."""
+with its reason, in tests/compiler/corpus/rusty_known_failures.tsv."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from tests.conftest import REPO
-from tests.corpus_paths import corpus_dir, known_failures
-from tests.filecheck import match_output, parse_checks
+from tests.support.corpus_paths import corpus_dir, known_failures
+from tests.support.filecheck import match_output, parse_checks
 
 TIMEOUT_S = 30
 REQUIRED_PASS_RATE = 0.90

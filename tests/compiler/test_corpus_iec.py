@@ -1,6 +1,6 @@
 """The other third-party ST of ../shared/corpus: OSCAT BASIC and BUILDING, matiec's standard
 library, the IEC 61131-3 Annex F examples and matiec's syntax samples. Each must compile
-with no error, or be listed with its reason in tests/corpus/iec_known_failures.tsv.
+with no error, or be listed with its reason in tests/compiler/corpus/iec_known_failures.tsv.
 
 Files of one folder may use each other's POUs (Annex F's PID uses its INTEGRAL), so each
 folder is compiled as one set; a listed file is left out of its set and must still fail."""
@@ -14,7 +14,7 @@ import pytest
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import read_source
-from tests.corpus_paths import CORPUS, corpus_dir, known_failures
+from tests.support.corpus_paths import CORPUS, corpus_dir, known_failures
 
 KNOWN = known_failures("iec_known_failures.tsv")
 # folder -> whether its files form one set (they refer to each other) or stand alone

@@ -7,7 +7,7 @@ import pytest
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from tests.resource_harness import harness
+from tests.support.resource_harness import harness
 
 TWO = """
 VAR_GLOBAL

@@ -630,7 +630,7 @@ def test_a_process_killed_mid_save_leaves_the_previous_context(
 import os
 from pathlib import Path
 from runtime import context
-from tests.test_context import small_context
+from tests.runtime.test_context import small_context
 os.{dies_in} = lambda *args: os._exit(9)
 context.save_context(Path({str(path)!r}), small_context(counter=2))
 """

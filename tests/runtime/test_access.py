@@ -22,8 +22,8 @@ from runtime.contract.artifact import ResourceConfig, UserAccount
 from runtime.contract.keyspace import command_key
 from runtime.contract.session import open_client
 from tests.conftest import REPO, free_port, padt
-from tests.resource_harness import Harness, compiled, harness
-from tests.runtime_process import running_resource, store_artifact, wait_until_answering
+from tests.support.resource_harness import Harness, compiled, harness
+from tests.support.runtime_process import running_resource, store_artifact, wait_until_answering
 
 TEXT = "PROGRAM P VAR n : INT; END_VAR n := n + 1; END_PROGRAM"
 PASSWORDS = {"viewer": "Look-1", "op": "Turn-2", "engineer": "Change-3", "admin": "Manage-4"}

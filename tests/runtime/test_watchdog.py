@@ -14,8 +14,8 @@ from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
 from runtime.contract.artifact import ResourceConfig
 from runtime.resource import CommandRefused, Resource, ResourceState
-from tests.resource_harness import harness
-from tests.runtime_process import running_resource, store_artifact
+from tests.support.resource_harness import harness
+from tests.support.runtime_process import running_resource, store_artifact
 
 ENDLESS = {
     "while": "WHILE TRUE DO n := n + 1; END_WHILE;",

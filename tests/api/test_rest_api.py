@@ -23,7 +23,7 @@ from backend.engineering.project import compile_project, load_project
 from runtime.access import COMMAND_LEVELS, AccessDenied
 from runtime.contract.accounts import LEVELS, SESSION_NS
 from tests.conftest import REPO, free_port, padt
-from tests.rest_plant import (
+from tests.support.rest_plant import (
     PADT_PASSWORDS,
     PES_LEVELS,
     PES_PASSWORDS,
@@ -32,7 +32,7 @@ from tests.rest_plant import (
     plant,
     write_project,
 )
-from tests.runtime_process import router, runtime_process, store_artifact
+from tests.support.runtime_process import router, runtime_process, store_artifact
 
 R = "/api/resources/Plant"
 

@@ -1,4 +1,4 @@
-"""Language features end to end: every tests/language/*.st runs through `padt exec`, its
+"""Language features end to end: every tests/compiler/language/*.st runs through `padt exec`, its
 output matched against its `// CHECK:` lines (and `// EXIT: n` for the expected exit code)."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import REPO
-from tests.filecheck import match_output, parse_checks
+from tests.support.filecheck import match_output, parse_checks
 
-FILES = sorted((REPO / "tests" / "language").glob("*.st"))
+FILES = sorted((REPO / "tests" / "compiler" / "language").glob("*.st"))
 EXIT = re.compile(r"//\s*EXIT:\s*(\d+)")
 
 

@@ -22,7 +22,7 @@ from backend.engineering.resource_client import ResourceClient
 from runtime.contract.accounts import hash_password
 from runtime.contract.session import open_client
 from tests.conftest import free_port
-from tests.runtime_process import router, runtime_process, store_artifact
+from tests.support.runtime_process import router, runtime_process, store_artifact
 
 # PES accounts of the resource (its own levels) and PADT accounts of the API
 PES_PASSWORDS = {"viewer": "Look-1", "op": "Turn-2", "engineer": "Change-3", "admin": "Manage-4"}

@@ -13,7 +13,7 @@ from backend.engineering.resource_client import ResourceClient
 from runtime.contract.session import open_client, open_router
 from runtime.contract.session_options import RouterUnreachable
 from tests.conftest import free_port, padt
-from tests.runtime_process import runtime_process, wait_until_answering, write_demo_artifact
+from tests.support.runtime_process import runtime_process, wait_until_answering, write_demo_artifact
 
 
 def openssl(*args: str) -> None:

@@ -18,7 +18,7 @@ from frontend.app import PadtUi
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.keyspace import alive_key, command_key
 from tests.conftest import free_port
-from tests.runtime_process import (
+from tests.support.runtime_process import (
     client_session,
     router,
     running_resource,

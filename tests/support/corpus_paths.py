@@ -23,9 +23,9 @@ def corpus_dir(name: str) -> Path:
 
 
 def known_failures(name: str) -> dict[str, str]:
-    """`tests/corpus/<name>`: one `path<TAB>reason` per line; # starts a comment."""
+    """`tests/compiler/corpus/<name>`: one `path<TAB>reason` per line; # starts a comment."""
     entries: dict[str, str] = {}
-    for line in (REPO / "tests" / "corpus" / name).read_text().splitlines():
+    for line in (REPO / "tests" / "compiler" / "corpus" / name).read_text().splitlines():
         if not line.strip() or line.startswith("#"):
             continue
         path, _, reason = line.partition("\t")

@@ -4,7 +4,7 @@ Hypothesis writes small programs (a FUNCTION_BLOCK and a PROGRAM that calls it a
 over INT, UINT, DINT, BOOL and REAL variables: wrapping arithmetic, comparisons, logic, IF,
 CASE, FOR, WHILE and REPEAT with constant bounds, EXIT and CONTINUE. Each program runs for
 a few cycles on a virtual clock, compiled (compile_sources -> Resource) and in the
-`tests.oracle.tree_walker.TreeWalker`; every variable must be identical after every cycle
+`tests.support.oracle.tree_walker.TreeWalker`; every variable must be identical after every cycle
 (REAL bit for bit), and a program must fault in the same cycle on both sides.
 
 Constructs where the compiler once differed from IEC semantics (NOT of signed integers,
@@ -25,7 +25,7 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
 from runtime.resource import Resource
-from tests.oracle.tree_walker import TreeWalker
+from tests.support.oracle.tree_walker import TreeWalker
 
 CYCLES = 6
 CYCLE_NS = 100_000_000

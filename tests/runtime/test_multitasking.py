@@ -5,7 +5,7 @@ earliest. Everything runs on virtual time, where one loop pass costs 1 us."""
 
 from __future__ import annotations
 
-from tests.resource_harness import harness
+from tests.support.resource_harness import harness
 
 ORDER = """
 VAR_GLOBAL order : STRING[40]; END_VAR

@@ -4,7 +4,7 @@ event with the old and new value."""
 
 from __future__ import annotations
 
-from tests.resource_harness import harness
+from tests.support.resource_harness import harness
 
 PLANT = """
 VAR_GLOBAL

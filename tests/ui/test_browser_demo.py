@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import Page
 
-from tests.browser import chromium
 from tests.conftest import REPO, free_port
+from tests.support.browser import chromium
 
 pytestmark = pytest.mark.browser
 URL_LINE = re.compile(r"padt demo: open (http://\S+)")

@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from schemathesis.checks import not_a_server_error
 
-from tests.rest_plant import Plant, plant
+from tests.support.rest_plant import Plant, plant
 
 # path parameters that exist in the plant, used for about half the cases: random names
 # alone would only ever meet "no such resource"

@@ -11,7 +11,7 @@ import pytest
 
 from runtime.contract.artifact import crc32_hex
 from runtime.reload import SwitchOverTooLong, switch_over
-from tests.resource_harness import Harness, compiled, harness
+from tests.support.resource_harness import Harness, compiled, harness
 
 PLANT = """
 TYPE Point : STRUCT x : INT; y : REAL; END_STRUCT; END_TYPE
