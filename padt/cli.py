@@ -7,9 +7,12 @@ not pay for the compiler, Zenoh or the UI. docs/cli.md documents every command.
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from runtime.contract.session_options import RouterUnreachable, add_zenoh_options
 
@@ -152,40 +155,28 @@ def _demo(args: argparse.Namespace) -> int:
     return run(args)
 
 
-def _load(args: argparse.Namespace) -> int:
-    from padt.online import load
+def _lazy(module: str, function: str) -> Callable[[argparse.Namespace], int]:
+    """A subcommand whose module is imported only when it runs."""
 
-    return load(args)
+    def run(args: argparse.Namespace) -> int:
+        command: Callable[[argparse.Namespace], int] = getattr(
+            importlib.import_module(module), function
+        )
+        return command(args)
 
-
-def _start(args: argparse.Namespace) -> int:
-    from padt.online import start
-
-    return start(args)
-
-
-def _stop(args: argparse.Namespace) -> int:
-    from padt.online import stop
-
-    return stop(args)
-
-
-def _status(args: argparse.Namespace) -> int:
-    from padt.online import status
-
-    return status(args)
-
-
-def _reload(args: argparse.Namespace) -> int:
-    from padt.online import reload
-
-    return reload(args)
+    return run
 
 
 def _rename(text: str) -> tuple[str, str]:
-    from padt.online import parse_rename
+    from padt.configuration import parse_rename
 
     return parse_rename(text)
+
+
+def _parameter(text: str) -> tuple[str, bool | int | str]:
+    from padt.operation import parse_setting
+
+    return parse_setting(text)
 
 
 def _resource_options(parser: argparse.ArgumentParser) -> None:
@@ -292,18 +283,18 @@ def build_parser() -> argparse.ArgumentParser:
     load.add_argument("paths", nargs="+", type=Path, metavar="PATH")
     _resource_options(load)
     _backup_option(load)
-    load.set_defaults(func=_load)
+    load.set_defaults(func=_lazy("padt.configuration", "load"))
 
     for name, does in (("start", "start"), ("stop", "stop")):
         command = sub.add_parser(name, help=f"{does} a resource, or one of its programs")
         _resource_options(command)
         command.add_argument("--program", help=f"{does} only this user program")
-        command.set_defaults(func=_start if name == "start" else _stop)
+        command.set_defaults(func=_lazy("padt.operation", name))
 
     status = sub.add_parser("status", help="show a resource's state, CRC, cycle and programs")
     _resource_options(status)
     status.add_argument("--json", action="store_true", help="print the status object as JSON")
-    status.set_defaults(func=_status)
+    status.set_defaults(func=_lazy("padt.operation", "status"))
 
     reload = sub.add_parser(
         "reload",
@@ -338,7 +329,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="a longer target cycle time for the switch-over cycle only",
     )
     _backup_option(reload)
-    reload.set_defaults(func=_reload)
+    reload.set_defaults(func=_lazy("padt.configuration", "reload"))
+
+    _online_test_commands(sub)
 
     passwd = sub.add_parser(
         "passwd",
@@ -363,6 +356,84 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _online_test_commands(sub: Any) -> None:
+    """values, write, force, freeze / step / unfreeze, events, params."""
+    values = sub.add_parser("values", help="show values of a running resource (or follow them)")
+    _resource_options(values)
+    values.add_argument("variables", nargs="*", metavar="VAR", help="only these (default: all)")
+    values.add_argument("--json", action="store_true", help="print JSON (a line per message)")
+    values.add_argument("--follow", action="store_true", help="print every update until Ctrl-C")
+    values.add_argument(
+        "--period-ms", type=_positive, default=500, metavar="MS", help="with --follow (500)"
+    )
+    values.set_defaults(func=_lazy("padt.online_test", "values"))
+
+    write = sub.add_parser("write", help="write a value once (an ST literal; not forcing)")
+    _resource_options(write)
+    write.add_argument("variable", metavar="VAR")
+    write.add_argument("value", metavar="VALUE", help="an ST literal: TRUE, 42, T#2s, 'text'")
+    write.set_defaults(func=_lazy("padt.online_test", "write"))
+
+    force = sub.add_parser("force", help="forcing: start, stop, set, clear, show")
+    actions = force.add_subparsers(dest="action", required=True, metavar="ACTION")
+    for action, does in (("start", "start forcing"), ("stop", "stop forcing")):
+        level = actions.add_parser(action, help=f"{does} (global, or --program's local level)")
+        level.add_argument("--program", metavar="P", help="a program's local forcing")
+        if action == "start":
+            level.add_argument("--timeout-ms", type=_positive, metavar="MS", help="time limit")
+    set_ = actions.add_parser("set", help="set a force value and its switch")
+    set_.add_argument("variable", metavar="VAR")
+    set_.add_argument("value", metavar="VALUE", help="an ST literal of the variable's type")
+    set_.add_argument("--off", action="store_true", help="the force switch OFF (prepared only)")
+    clear = actions.add_parser("clear", help="remove a force value")
+    clear.add_argument("variable", metavar="VAR")
+    actions.add_parser("show", help="the force levels and values")
+    for parser in actions.choices.values():
+        _resource_options(parser)
+        parser.add_argument("--json", action="store_true", help="print the forcing state as JSON")
+        parser.set_defaults(func=_lazy("padt.online_test", "force"))
+
+    for verb, does in (
+        ("freeze", "freeze a program for single step (RUN_FREEZE)"),
+        ("step", "run program cycles of a frozen program"),
+        ("unfreeze", "leave single step: the program runs again"),
+    ):
+        command = sub.add_parser(verb, help=does)
+        _resource_options(command)
+        command.add_argument("--program", required=True, metavar="P", help="the user program")
+        if verb == "step":
+            command.add_argument(
+                "--cycles", type=_positive, default=1, metavar="N", help="program cycles (1)"
+            )
+            command.add_argument(
+                "--interval-ms",
+                type=_positive,
+                metavar="MS",
+                help="time per cycle (default: the target cycle time)",
+            )
+        command.set_defaults(func=_lazy("padt.operation", "single_step"), verb=verb)
+
+    events = sub.add_parser("events", help="the resource's event log (or follow it)")
+    _resource_options(events)
+    events.add_argument("--json", action="store_true", help="one JSON line per event")
+    events.add_argument("--follow", action="store_true", help="then every new event until Ctrl-C")
+    events.add_argument("--after", type=int, default=0, metavar="SEQ", help="only after SEQ")
+    events.set_defaults(func=_lazy("padt.online_test", "events"))
+
+    params = sub.add_parser("params", help="resource and program parameters; change online")
+    _resource_options(params)
+    params.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        type=_parameter,
+        metavar="NAME=VALUE",
+        help="change a resource parameter online (ON/OFF, a number, a word); repeatable",
+    )
+    params.add_argument("--json", action="store_true", help="print the parameters as JSON")
+    params.set_defaults(func=_lazy("padt.operation", "params"))
+
+
 def _api(args: argparse.Namespace) -> int:
     from backend.api.server import run
 
@@ -384,7 +455,7 @@ def _new_password(user: str) -> str | None:
 
 
 def _api_user(args: argparse.Namespace) -> int:
-    from backend.api.accounts import (
+    from backend.engineering.padt_accounts import (
         AccountsError,
         read_accounts,
         with_account,

@@ -74,9 +74,9 @@ def demo_project_with_accounts(state_dir: Path, accounts: list[UserAccount]) -> 
 
 
 def run(args: argparse.Namespace) -> int:
-    from backend.api.accounts import PadtAccounts, write_accounts
     from backend.api.server import ApiServer
     from backend.api.service import PadtService
+    from backend.engineering.padt_accounts import PadtAccounts, write_accounts
     from backend.engineering.project import compile_project, load_project
     from backend.engineering.resource_client import ResourceClient
     from frontend.app import PadtUi

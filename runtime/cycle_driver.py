@@ -11,6 +11,7 @@ communication time slice on them.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import queue
 import sys
@@ -21,14 +22,26 @@ from collections.abc import Callable
 import zenoh
 
 from runtime.clock import Clock
-from runtime.commands import error_reply, execute, finish_reload, parse_request, start_reload
+from runtime.commands import answer, authorize, begin_reload, finish_reload, respond
+from runtime.contract.protocol import (
+    Reload,
+    ReloadPreview,
+    Request,
+    Status,
+    decode_request,
+    encode_refusal,
+)
+from runtime.contract.refusal import Refusal
+from runtime.cycle_stats import CycleStats
 from runtime.link import ResourceLink
-from runtime.resource import ReloadJob, Resource, ResourceState
+from runtime.reload_switch import ReloadJob
+from runtime.resource import Resource
 
 log = logging.getLogger(__name__)
 
 STATUS_PERIOD_NS = 1_000_000_000
 SWITCH_INTERVAL_S = 0.0005
+_UNCOUNTED = CycleStats().info()  # statistics and cycle count alone are no change
 
 
 class CycleDriver:
@@ -46,7 +59,7 @@ class CycleDriver:
         self._save_context = save_context
         self._context_period_ns = context_period_ns
         self._last_context_ns = clock.now_ns()
-        self._last_status: dict[str, object] | None = None
+        self._last_status: Status | None = None
         self._last_status_ns = 0
         self._reload: tuple[zenoh.Query, ReloadJob, threading.Thread] | None = None
         # events before the driver started (power-up: warm or cold start) go out too
@@ -71,7 +84,7 @@ class CycleDriver:
             self._finish_reload()  # between two cycles
             self._save_if_due()
             params = self.resource.params
-            running = self.resource.state in (ResourceState.RUN, ResourceState.RUN_UP_STOP)
+            running = self.resource.running()
             com_slice = params.com_slice_ms * 1_000_000
             target = params.target_cycle_ms * 1_000_000
             if running and target and params.target_cycle_mode.startswith("fixed"):
@@ -116,10 +129,9 @@ class CycleDriver:
                 if remaining <= 0 or not wait:
                     return
                 continue
-            payload = self.link.payload(query)
-            if self._starts_reload(query, payload):
-                continue
-            self.link.reply(query, execute(self.resource, payload))
+            reply = self._answer(query)
+            if reply is not None:
+                self.link.reply(query, reply)
             del query  # a Zenoh query is finalised when its last reference goes
             # a command may have stepped, stopped or written: show its outcome at once
             self._publish_values(at_once=True)
@@ -127,31 +139,37 @@ class CycleDriver:
             if self.clock.now_ns() >= deadline_ns:
                 return
 
-    def _starts_reload(self, query: zenoh.Query, payload: bytes) -> bool:
+    def _answer(self, query: zenoh.Query) -> bytes | None:
+        """The reply to a query, decoded once and checked whole before anything else; None
+        when it is a reload that answers later."""
+        try:
+            request = decode_request(self.link.payload(query))
+            if isinstance(request.command, Reload | ReloadPreview):
+                self._start_reload(query, request)
+                return None
+        except Refusal as refusal:
+            return encode_refusal(refusal)
+        return respond(lambda: answer(self.resource, request))
+
+    def _start_reload(self, query: zenoh.Query, request: Request) -> None:
         """A reload (or its preview) prepares on a worker thread while cycles go on
         (compiling the new code and planning take far longer than a cycle); its query is
         answered when the switch-over between two cycles is done (`_finish_reload`)."""
-        request = parse_request(payload)
-        if request.get("cmd") not in ("reload", "reload_preview"):
-            return False
         if self._reload is not None:
-            self.link.reply(query, error_reply("busy", "a reload is already under way"))
-            return True
-        job = start_reload(self.resource, request)
-        if not isinstance(job, ReloadJob):  # refused at once
-            self.link.reply(query, job)
-            return True
+            raise Refusal("busy", "a reload is already under way")
+        authorize(self.resource, request)
+        assert isinstance(request.command, Reload | ReloadPreview)
+        job = begin_reload(self.resource, request.command)
         worker = threading.Thread(target=job.prepare, name="padt-reload", daemon=True)
         worker.start()
         self._reload = (query, job, worker)
-        return True
 
     def _finish_reload(self) -> None:
         if self._reload is None or self._reload[2].is_alive():
             return
         query, job, _ = self._reload
         self._reload = None
-        self.link.reply(query, finish_reload(self.resource, job))
+        self.link.reply(query, respond(lambda: finish_reload(self.resource, job)))
         del query
         self._publish_values(at_once=True)
         self._publish_status()
@@ -161,16 +179,19 @@ class CycleDriver:
         have stepped, stopped or written); sets of departed clients are dropped first."""
         while True:
             try:
-                self.resource.watches.drop(self.link.departed.get_nowait())
+                self.resource.online.watches.drop(self.link.departed.get_nowait())
             except queue.Empty:
                 break
-        for watch_set in self.resource.watches.due(self.clock.now_ns(), all_of_them=at_once):
-            self.link.publish_watch(watch_set.watch_id, self.resource.watched(watch_set))
+        resource = self.resource
+        running, forces = resource.running(), resource.forcing.table
+        for watch_set in resource.online.watches.due(self.clock.now_ns(), all_of_them=at_once):
+            snapshot = resource.online.snapshot(watch_set, resource.cycle_count, running, forces)
+            self.link.publish_watch(watch_set.watch_id, snapshot)
 
     def _publish_events(self) -> None:
         """What the event log got since the last time, in order."""
         for event in self.resource.events.recent(self._events_sent):
-            self.link.publish_event(event.as_json())
+            self.link.publish_event(event)
             self._events_sent = event.seq
 
     def _publish_status(self) -> None:
@@ -178,7 +199,7 @@ class CycleDriver:
         events that led to a change go first."""
         self._publish_events()
         status = self.resource.status()
-        significant = {k: v for k, v in status.items() if k not in ("stats", "cycle")}
+        significant = dataclasses.replace(status, stats=_UNCOUNTED, cycle=0)
         now = self.clock.now_ns()
         if significant != self._last_status or now - self._last_status_ns >= STATUS_PERIOD_NS:
             self.link.publish_status(status)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from runtime.contract.protocol import CycleStatistics
+
 
 @dataclass
 class CycleStats:
@@ -37,14 +39,14 @@ class CycleStats:
     def mean_ns(self) -> int:
         return self.total_ns // self.count if self.count else 0
 
-    def as_json(self) -> dict[str, float]:
-        return {
-            "count": self.count,
-            "last_ms": self.last_ns / 1e6,
-            "min_ms": self.min_ns / 1e6,
-            "max_ms": self.max_ns / 1e6,
-            "mean_ms": self.mean_ns / 1e6,
-            "period_ms": self.last_period_ns / 1e6,
-            "jitter_max_ms": self.jitter_max_ns / 1e6,
-            "overruns": self.overruns,
-        }
+    def info(self) -> CycleStatistics:
+        return CycleStatistics(
+            count=self.count,
+            last_ms=self.last_ns / 1e6,
+            min_ms=self.min_ns / 1e6,
+            max_ms=self.max_ns / 1e6,
+            mean_ms=self.mean_ns / 1e6,
+            period_ms=self.last_period_ns / 1e6,
+            jitter_max_ms=self.jitter_max_ns / 1e6,
+            overruns=self.overruns,
+        )

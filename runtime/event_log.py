@@ -17,34 +17,17 @@ import tempfile
 import threading
 from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from runtime.contract.protocol import Event
+from runtime.contract.wire import encode
 
 GENESIS = "0" * 64
 DAY_NS = 86_400 * 10**9
 ENTRY_FIELDS = ("details", "kind", "message", "prev", "seq", "time_ns", "user")
 _HEX = frozenset("0123456789abcdef")
-
-
-@dataclass(frozen=True)
-class Event:
-    seq: int
-    time_ns: int
-    kind: str
-    message: str
-    user: str | None = None
-    details: dict[str, Any] = field(default_factory=dict)
-
-    def as_json(self) -> dict[str, Any]:
-        return {
-            "seq": self.seq,
-            "time_ns": self.time_ns,
-            "kind": self.kind,
-            "message": self.message,
-            "user": self.user,
-            "details": json.loads(canonical(self.details)),
-        }
 
 
 @dataclass(frozen=True)
@@ -314,7 +297,7 @@ class EventLog:
         lines: list[bytes] = []
         head = self._head
         for event in events:
-            line = canonical({**event.as_json(), "prev": head})
+            line = canonical({**encode(event), "prev": head})
             lines.append(line)
             head = line_digest(line)
         if self._path is not None:

@@ -1,103 +1,159 @@
-"""Forcing: a variable's value replaced by a fixed one until forcing stops.
-
-Two levels: global forcing (globals and I/O, allowed per resource) and local forcing (the
-variables of one user program, allowed per program). A variable is forced only while its
-force switch is ON *and* forcing has been started at its level. Starting may set a time
-limit; what happens when it runs out is the level's timeout reaction, carried out by the
-resource. The table holds no variable values of its own besides the forced ones: applying
-them to the program data is the resource's job.
-"""
+"""Forcing as the resource does it (spec section 11): force values prepared per variable,
+forcing started per level (global, or one program's local level) with an optional time
+limit, refused in safety operation and while Force Deactivation is ON, and every change an
+event. The force table (`force_table.py`) holds what is forced; this applies it."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
-GLOBAL = ""  # the level key of global forcing; local levels are keyed by program name
-
-
-@dataclass
-class ForceEntry:
-    path: str  # canonical variable path
-    level: str  # GLOBAL or a program name
-    value: Any  # in the run-time representation of the variable's type
-    switch: bool = True
+from runtime.clock import Clock
+from runtime.contract.artifact import ResourceConfig
+from runtime.contract.protocol import ForceInfo, ForcingState
+from runtime.contract.refusal import Refusal
+from runtime.event_recorder import EventRecorder
+from runtime.force_table import GLOBAL, ForceEntry, ForceTable
+from runtime.intrinsics import SystemView
+from runtime.variables import Variables
 
 
-@dataclass
-class ForceLevel:
-    started_ns: int
-    deadline_ns: int | None  # None: no time limit
+class ForcingSettings(Protocol):
+    """What forcing needs to know of its resource."""
+
+    @property
+    def params(self) -> ResourceConfig: ...
+
+    @property
+    def system(self) -> SystemView: ...
+
+    def running(self) -> bool: ...
 
 
-class ForceTable:
-    def __init__(self) -> None:
-        self._entries: dict[str, ForceEntry] = {}  # by upper-case path
-        self._levels: dict[str, ForceLevel] = {}  # levels where forcing is started
+class Forcing:
+    def __init__(
+        self,
+        settings: ForcingSettings,
+        variables: Variables,
+        recorder: EventRecorder,
+        clock: Clock,
+    ) -> None:
+        self._settings, self._variables = settings, variables
+        self._recorder, self._clock = recorder, clock
+        self.table = ForceTable()
+        self._deactivated = False  # Force Deactivation as last seen (its OFF -> ON ends forcing)
 
-    # ---- entries
-    def set(self, entry: ForceEntry) -> ForceEntry | None:
-        """Prepare (or change) a force value; returns the entry it replaces."""
-        previous = self._entries.get(entry.path.upper())
-        self._entries[entry.path.upper()] = entry
-        return previous
+    def reset(self) -> None:
+        """A download ends forcing, and its entries lose their meaning."""
+        self.table = ForceTable()
 
-    def remove(self, path: str) -> ForceEntry | None:
-        return self._entries.pop(path.upper(), None)
+    # ---- commands
+    def force(self, name: str, value: Any, switch: bool = True) -> None:
+        """Prepare a force value and its switch; it acts while forcing runs at its level."""
+        bound = self._variables.lookup(name)
+        level = GLOBAL if bound.program is None else bound.program.name
+        self._check_allowed(level)
+        stored = self._variables.checked(bound, value)
+        old = self._variables.read(bound)
+        self.table.set(ForceEntry(bound.path.path, level, stored, switch))
+        if self.table.is_forced(bound.path.path):
+            self._variables.store(bound, stored)
+        self._recorder.record(
+            "force",
+            f"{bound.path.path} forced to {stored!r} (switch {'ON' if switch else 'OFF'})",
+            variable=bound.path.path,
+            old=old,
+            new=stored,
+        )
 
-    def entry(self, path: str) -> ForceEntry | None:
-        return self._entries.get(path.upper())
+    def unforce(self, name: str) -> None:
+        bound = self._variables.lookup(name)
+        if self.table.remove(bound.path.path) is None:
+            raise Refusal("not_forced", f"'{bound.path.path}' has no force value")
+        self._recorder.record("force", f"{bound.path.path} force value removed")
 
-    def entries(self) -> list[ForceEntry]:
-        return [self._entries[key] for key in sorted(self._entries)]
+    def start(self, program: str | None = None, timeout_ns: int | None = None) -> None:
+        level = GLOBAL if program is None else self._variables.program(program).name
+        self._check_allowed(level)
+        if not self._settings.running():
+            raise Refusal("state", "forcing starts only while the resource runs")
+        self.table.start(level, self._clock.now_ns(), timeout_ns)
+        self.apply()
+        limit = f"{timeout_ns / 1e9:g} s" if timeout_ns is not None else "no time limit"
+        self._recorder.record("force", f"{_level_name(level)} started ({limit})")
 
-    def remove_level(self, level: str) -> None:
-        """Forget the entries of a level (its program is gone after a load)."""
-        for key in [k for k, e in sorted(self._entries.items()) if e.level == level]:
-            del self._entries[key]
+    def stop(self, program: str | None = None) -> None:
+        level = GLOBAL if program is None else self._variables.program(program).name
+        if self.table.stop(level):
+            self._recorder.record("force", f"{_level_name(level)} stopped")
 
-    # ---- levels
-    def start(self, level: str, now_ns: int, timeout_ns: int | None) -> None:
-        deadline = now_ns + timeout_ns if timeout_ns is not None else None
-        self._levels[level] = ForceLevel(now_ns, deadline)
+    def state(self) -> ForcingState:
+        now = self._clock.now_ns()
+        started = self.table.started_levels()
+        return ForcingState(
+            started=started,
+            remaining_ms={
+                level or "global": (r / 1e6 if (r := self.table.remaining_ns(level, now)) else None)
+                for level in started
+            },
+            entries=[
+                ForceInfo(
+                    e.path, e.level or "global", e.value, e.switch, self.table.is_forced(e.path)
+                )
+                for e in self.table.entries()
+            ],
+        )
 
-    def stop(self, level: str) -> bool:
-        """End forcing at a level; True when it was started."""
-        return self._levels.pop(level, None) is not None
+    # ---- in the cycle
+    def apply(self) -> None:
+        """Write the values in force (after reading inputs, before writing outputs)."""
+        for entry in self.table.active():
+            bound = self._variables.find(entry.path)
+            if bound is not None:
+                self._variables.store(bound, entry.value)
 
-    def stop_all(self) -> list[str]:
-        """End forcing everywhere; the levels that were started."""
-        stopped = sorted(self._levels)
-        self._levels.clear()
-        return stopped
+    def expire(self, now_ns: int) -> list[str]:
+        """Stop the levels whose time limit ran out; the levels, for their reactions."""
+        expired = self.table.expired(now_ns)
+        for level in expired:
+            self.table.stop(level)
+        return expired
 
-    def started(self, level: str) -> bool:
-        return level in self._levels
+    def check_deactivation(self) -> None:
+        """Force Deactivation OFF -> ON ends all forcing at once (ON also blocks it)."""
+        now_on = bool(self._settings.system.FORCE_DEACTIVATION)
+        if now_on and not self._deactivated:
+            self.end_all("Force Deactivation ON")
+        self._deactivated = now_on
 
-    def started_levels(self) -> list[str]:
-        return sorted(self._levels)
+    def end_all(self, why: str) -> None:
+        for level in self.table.stop_all():
+            self._recorder.record("force", f"{_level_name(level)} ended: {why}", long_term=True)
 
-    def remaining_ns(self, level: str, now_ns: int) -> int | None:
-        """Time left at a started level with a limit; None without a limit or not started."""
-        state = self._levels.get(level)
-        if state is None or state.deadline_ns is None:
-            return None
-        return max(0, state.deadline_ns - now_ns)
+    def end_program(self, program: str) -> None:
+        """A program stop ends its local forcing."""
+        if self.table.stop(program):
+            self._recorder.record("force", f"local forcing of {program} ended: program stop")
 
-    def expired(self, now_ns: int) -> list[str]:
-        """Started levels whose time limit has run out."""
-        return [
-            level
-            for level, state in sorted(self._levels.items())
-            if state.deadline_ns is not None and now_ns >= state.deadline_ns
-        ]
+    def keep_after_reload(self, programs_removed: tuple[str, ...]) -> None:
+        """Forcing survives a reload where its variable and its program do."""
+        for entry in self.table.entries():
+            if self._variables.find(entry.path) is None:
+                self.table.remove(entry.path)
+        for name in programs_removed:
+            self.table.stop(name)
 
-    def active(self) -> list[ForceEntry]:
-        """The entries in force now: switch ON and forcing started at their level."""
-        if not self._levels:  # the usual case, checked twice per cycle
-            return []
-        return [e for e in self.entries() if e.switch and e.level in self._levels]
+    def _check_allowed(self, level: str) -> None:
+        params = self._settings.params
+        if params.safety_operation:
+            raise Refusal("safety_operation", "no forcing in safety operation")
+        if self._settings.system.FORCE_DEACTIVATION:
+            raise Refusal("force_deactivated", "Force Deactivation is ON")
+        if level == GLOBAL:
+            if not params.global_forcing_allowed:
+                raise Refusal("not_allowed", "Global Forcing Allowed is OFF")
+        elif not self._variables.program(level).config.local_forcing_allowed:
+            raise Refusal("not_allowed", f"Local Forcing Allowed of {level} is OFF")
 
-    def is_forced(self, path: str) -> bool:
-        entry = self._entries.get(path.upper())
-        return entry is not None and entry.switch and entry.level in self._levels
+
+def _level_name(level: str) -> str:
+    return "global forcing" if level == GLOBAL else f"local forcing of {level}"

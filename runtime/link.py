@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import queue
 import threading
-from typing import Any
 
 import zenoh
 
@@ -24,6 +23,8 @@ from runtime.contract.keyspace import (
     watch_key,
     watchers_key_expr,
 )
+from runtime.contract.protocol import Event, Status
+from runtime.contract.wire import encode
 from runtime.watch_sets import WatchSnapshot
 
 
@@ -57,11 +58,11 @@ class ResourceLink:
         if sample.kind == zenoh.SampleKind.DELETE:
             self.departed.put(watch_id_of(str(sample.key_expr)))
 
-    def publish_status(self, status: dict[str, Any]) -> None:
-        self._status.put(json.dumps(status))
+    def publish_status(self, status: Status) -> None:
+        self._status.put(json.dumps(encode(status)))
 
-    def publish_event(self, event: dict[str, Any]) -> None:
-        self._events.put(json.dumps(event))
+    def publish_event(self, event: Event) -> None:
+        self._events.put(json.dumps(encode(event)))
 
     def publish_watch(self, watch_id: str, snapshot: WatchSnapshot) -> None:
         """A watch set's values, read in this cycle; the message is built, encoded and put
@@ -92,8 +93,8 @@ class ResourceLink:
         return query.payload.to_bytes() if query.payload is not None else b"{}"
 
     @staticmethod
-    def reply(query: zenoh.Query, reply: dict[str, Any]) -> None:
-        query.reply(query.key_expr, json.dumps(reply))
+    def reply(query: zenoh.Query, reply: bytes) -> None:
+        query.reply(query.key_expr, reply)
 
     def close(self) -> None:
         with self._pending_lock:

@@ -16,6 +16,7 @@ from runtime.contract.session_options import add_zenoh_options
 from runtime.contract.stop_request import StopRequest
 from runtime.event_log import EventLog
 from runtime.resource import Resource
+from runtime.restart import take_context, warm_start
 
 log = logging.getLogger("padt.runtime")
 
@@ -79,7 +80,7 @@ def power_up(resource: Resource, state_dir: Path) -> None:
     elif autostart == "cold":
         resource.events.record("state", "cold start: Autostart is cold", long_term=True)
     else:
-        resource.warm_start(saved)
+        warm_start(resource, saved)
     if autostart != "off":
         resource.start()
 
@@ -106,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
     saver = ContextSaver(context_path(args.state_dir))
 
     def save() -> None:
-        context = resource.context()
+        context = take_context(resource)
         if context is not None:
             saver.submit(context)
 

@@ -16,9 +16,11 @@ import functools
 import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from runtime.code_image import Accessor, slot_names
+from runtime.contract.artifact import Artifact
+from runtime.instances import BoundVariable, Instances
 from runtime.reload_plan import (
     CONVERTED,
     KEPT,
@@ -29,10 +31,6 @@ from runtime.reload_plan import (
     rename_source,
 )
 from runtime.user_program import UserProgram, share_globals
-
-if TYPE_CHECKING:
-    from runtime.contract.artifact import Artifact
-    from runtime.resource import BoundVariable, Instances
 
 _SCALARS = (bool, int, float, str, type(None))
 CHECK_EVERY = 256  # values between two looks at the clock

@@ -19,6 +19,7 @@ from typing import Any
 from runtime.code_image import CodeImage, VariablePath
 from runtime.contract.artifact import Artifact, ChartInfo, PouCode, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
+from runtime.contract.protocol import Hazard, ProgramChanges, ReloadPlanInfo, VariableChange
 from runtime.contract.values import array_shape, base_type
 from runtime.intrinsics import SystemView
 
@@ -27,23 +28,6 @@ TIMED_QUALIFIERS = ("L", "D", "SD", "DS", "SL")
 # per transferred value, what the switch-over between two cycles costs (measured by
 # tests/bench/bench_reload.py on the reference machine, rounded up)
 SWITCH_NS_PER_VALUE = 3_000
-
-
-@dataclass(frozen=True)
-class VariableChange:
-    path: str  # in the new configuration (the old one for `deleted`)
-    action: str  # kept | converted | initialised | new | deleted
-    old_type: str | None
-    new_type: str | None
-    source: str | None = None  # the old path a value comes from (differs after a rename)
-    reason: str = ""
-
-
-@dataclass(frozen=True)
-class Hazard:
-    kind: str  # active-step-deleted | initial-step-renamed | timed-qualifier-deleted | ...
-    instance: str  # the program or FB instance whose chart is affected
-    message: str
 
 
 @dataclass(frozen=True)
@@ -65,22 +49,21 @@ class ReloadPlan:
     def count(self, action: str) -> int:
         return sum(1 for change in self.changes if change.action == action)
 
-    def as_json(self) -> dict[str, Any]:
-        return {
-            "old_crc": self.old_crc,
-            "new_crc": self.new_crc,
-            "possible": self.possible,
-            "refusals": list(self.refusals),
-            "hazards": [dataclasses.asdict(h) for h in self.hazards],
-            "programs": {
-                "added": list(self.programs_added),
-                "removed": list(self.programs_removed),
-                "changed": list(self.programs_changed),
-            },
-            "summary": {a: self.count(a) for a in (KEPT, CONVERTED, INITIALISED, NEW, DELETED)},
-            "changes": [dataclasses.asdict(c) for c in self.changes],
-            "estimate_us": self.estimate_ns / 1000,
-        }
+    def info(self) -> ReloadPlanInfo:
+        """The plan as the protocol sends it (the reload preview)."""
+        return ReloadPlanInfo(
+            old_crc=self.old_crc,
+            new_crc=self.new_crc,
+            possible=self.possible,
+            refusals=list(self.refusals),
+            hazards=list(self.hazards),
+            programs=ProgramChanges(
+                list(self.programs_added), list(self.programs_removed), list(self.programs_changed)
+            ),
+            summary={a: self.count(a) for a in (KEPT, CONVERTED, INITIALISED, NEW, DELETED)},
+            changes=list(self.changes),
+            estimate_us=self.estimate_ns / 1000,
+        )
 
 
 # ---- which values carry over

@@ -6,20 +6,12 @@ from __future__ import annotations
 import copy
 from collections.abc import Callable
 from dataclasses import dataclass
-from enum import StrEnum
 from typing import Any
 
 from runtime.code_image import VariablePath, slot_names
 from runtime.contract.artifact import ProgramConfig
+from runtime.contract.protocol import ProgramState
 from runtime.slicing import ProgramRun
-
-
-class ProgramState(StrEnum):
-    RUN = "RUN"
-    RUN_FREEZE = "RUN_FREEZE"  # single step: runs one program cycle per step command
-    STOP = "STOP"
-    ERROR = "ERROR"
-
 
 _SCALARS = (bool, int, float, str)
 

@@ -13,8 +13,6 @@ from typing import Any
 
 from runtime.contract.values import jsonable
 
-MIN_PERIOD_MS = 10
-MAX_PERIOD_MS = 60_000
 MAX_SETS = 64
 
 

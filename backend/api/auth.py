@@ -16,12 +16,11 @@ from fastapi import Path as PathParameter
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from pydantic import BaseModel, Field
 
-from backend.api.accounts import AccountsError
-from backend.api.errors import ApiError
-from backend.api.levels import PADT_LEVELS
 from backend.api.service import Caller, PadtService
-from runtime.access import AccessDenied
+from backend.engineering.padt_accounts import AccountsError
+from backend.engineering.padt_levels import PADT_LEVELS
 from runtime.contract.accounts import NAME, SESSION_NS
+from runtime.contract.refusal import Refusal
 
 log = logging.getLogger("padt.api")
 _bearer = HTTPBearer(auto_error=False, description="the token from POST /api/login")
@@ -80,10 +79,10 @@ router = APIRouter(prefix="/api", tags=["session and accounts"])
 def login(credentials: Credentials, service: Service) -> SessionInfo:
     try:
         token, session = service.accounts.login(credentials.user, credentials.password)
-    except AccessDenied as denied:
+    except Refusal as denied:
         # the name only: it is what an administrator looks for; never the password
         log.warning("login to the PADT refused for %r: %s", credentials.user[:32], denied.code)
-        raise ApiError(denied.code, denied.message) from None
+        raise
     log.info("login to the PADT: %s (%s)", session.user, session.level)
     return SessionInfo(
         token=token, user=session.user, level=session.level, expires_in_s=SESSION_NS // 10**9
@@ -116,7 +115,7 @@ def put_account(
     try:
         service.accounts.put(name, change.level, change.password)
     except AccountsError as exc:
-        raise ApiError("accounts", str(exc)) from None
+        raise Refusal("accounts", str(exc)) from None
     log.info("PADT account %s set to %s by %s", name, change.level, caller.user)
     return Account(name=name, level=change.level)
 
@@ -124,10 +123,10 @@ def put_account(
 @router.delete("/accounts/{name}", status_code=204, summary="Remove a PADT account")
 def delete_account(name: str, caller: SecurityAdministrator, service: Service) -> Response:
     if all(account.name != name for account in service.accounts.accounts()):
-        raise ApiError("not_found", f"there is no account '{name}'")
+        raise Refusal("not_found", f"there is no account '{name}'")
     try:
         service.accounts.delete(name)
     except AccountsError as exc:
-        raise ApiError("accounts", str(exc)) from None
+        raise Refusal("accounts", str(exc)) from None
     log.info("PADT account %s removed by %s", name, caller.user)
     return Response(status_code=204)

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from backend.api.errors import ApiError, error_response
+from backend.api.errors import error_response
+from runtime.contract.refusal import Refusal
 
 MAX_BODY_BYTES = 1024 * 1024
 
@@ -20,7 +21,7 @@ class BodyLimit:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        too_large = ApiError("too_large", f"request body larger than {self.limit} bytes")
+        too_large = Refusal("too_large", f"request body larger than {self.limit} bytes")
         declared = dict(scope["headers"]).get(b"content-length")
         if declared is not None and declared.isdigit() and int(declared) > self.limit:
             await error_response(too_large)(scope, receive, send)

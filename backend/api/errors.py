@@ -15,6 +15,8 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException
 
+from runtime.contract.refusal import Refusal
+
 log = logging.getLogger("padt.api")
 
 # the status for each refusal code; anything else is 409: the resource's state or
@@ -43,29 +45,23 @@ HTTP_STATUS = {
 }
 
 
-class ApiError(Exception):
-    def __init__(self, code: str, message: str, **details: Any) -> None:
-        super().__init__(message)
-        self.code = code
-        self.message = message
-        self.details = details
-
-    @property
-    def status(self) -> int:
-        return HTTP_STATUS.get(self.code, 409)
-
-    def body(self) -> dict[str, Any]:
-        return {"error": {"code": self.code, "message": self.message, **self.details}}
+def http_status(refusal: Refusal) -> int:
+    return HTTP_STATUS.get(refusal.code, 409)
 
 
-def error_response(error: ApiError) -> JSONResponse:
-    headers = {"WWW-Authenticate": "Bearer"} if error.status == 401 else None
-    return JSONResponse(error.body(), status_code=error.status, headers=headers)
+def error_body(refusal: Refusal) -> dict[str, Any]:
+    return {"error": refusal.as_json()}
+
+
+def error_response(refusal: Refusal) -> JSONResponse:
+    status = http_status(refusal)
+    headers = {"WWW-Authenticate": "Bearer"} if status == 401 else None
+    return JSONResponse(error_body(refusal), status_code=status, headers=headers)
 
 
 def install_error_handlers(app: FastAPI) -> None:
-    async def api_error(request: Request, exc: Exception) -> JSONResponse:
-        assert isinstance(exc, ApiError)
+    async def refused(request: Request, exc: Exception) -> JSONResponse:
+        assert isinstance(exc, Refusal)
         return error_response(exc)
 
     async def invalid(request: Request, exc: Exception) -> JSONResponse:
@@ -74,23 +70,23 @@ def install_error_handlers(app: FastAPI) -> None:
             f"{'.'.join(str(part) for part in e.get('loc', ()))}: {e.get('msg')}"
             for e in exc.errors()
         ]
-        return error_response(ApiError("bad_request", "; ".join(problems) or "invalid request"))
+        return error_response(Refusal("bad_request", "; ".join(problems) or "invalid request"))
 
     async def http_error(request: Request, exc: Exception) -> JSONResponse:
         assert isinstance(exc, HTTPException)
         code = {404: "not_found", 405: "method_not_allowed"}.get(exc.status_code, "bad_request")
         where = f"{request.method} {request.url.path}"
         message = {404: f"no such route: {where}", 405: f"method not allowed: {where}"}
-        response = error_response(ApiError(code, message.get(exc.status_code, str(exc.detail))))
+        response = error_response(Refusal(code, message.get(exc.status_code, str(exc.detail))))
         response.status_code = exc.status_code
         return response
 
     async def unexpected(request: Request, exc: Exception) -> JSONResponse:
         # a defect of the PADT: logged in full here, one line for the caller
         log.exception("%s %s failed", request.method, request.url.path)
-        return error_response(ApiError("internal", f"internal error: {type(exc).__name__}"))
+        return error_response(Refusal("internal", f"internal error: {type(exc).__name__}"))
 
-    app.add_exception_handler(ApiError, api_error)
+    app.add_exception_handler(Refusal, refused)
     app.add_exception_handler(RequestValidationError, invalid)
     app.add_exception_handler(HTTPException, http_error)
     app.add_exception_handler(Exception, unexpected)

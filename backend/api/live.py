@@ -17,9 +17,12 @@ from typing import Any
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
-from backend.api.errors import ApiError
+from backend.api.errors import error_body
 from backend.api.service import PadtService
-from backend.engineering.resource_client import ResourceUnreachable, Watch, WatchRefused
+from backend.engineering.resource_client import ResourceUnreachable, WatchHandle
+from runtime.contract.protocol import WatchValues
+from runtime.contract.refusal import Refusal
+from runtime.contract.wire import encode
 
 router = APIRouter()
 ONLINE_CHECK_S = 1.0
@@ -28,27 +31,27 @@ POLICY_VIOLATION = 1008  # WebSocket close code: authentication failed or reques
 
 def _subscription(message: Any) -> tuple[str, list[str], int]:
     if not isinstance(message, dict):
-        raise ApiError("bad_request", "the first message is an object")
+        raise Refusal("bad_request", "the first message is an object")
     token, variables = message.get("token"), message.get("variables")
     period = message.get("period_ms", 100)
     if not isinstance(token, str):
-        raise ApiError("unauthenticated", '"token" (from POST /api/login) is missing')
+        raise Refusal("unauthenticated", '"token" (from POST /api/login) is missing')
     if not isinstance(variables, list) or not all(isinstance(v, str) for v in variables):
-        raise ApiError("bad_request", '"variables" is a list of variable names')
+        raise Refusal("bad_request", '"variables" is a list of variable names')
     if not isinstance(period, int) or isinstance(period, bool):
-        raise ApiError("bad_request", '"period_ms" is an integer')
+        raise Refusal("bad_request", '"period_ms" is an integer')
     return token, variables, period
 
 
-def _start_watch(service: PadtService, resource: str, message: Any, deliver: Any) -> Watch:
+def _start_watch(service: PadtService, resource: str, message: Any, deliver: Any) -> WatchHandle:
     token, variables, period = _subscription(message)
     client = service.client(service.caller(token, "read-only"), resource)
     try:
         return client.watch(variables, deliver, period)
-    except WatchRefused as exc:
-        raise ApiError("watch_refused", str(exc)) from None
+    except Refusal as refused:
+        raise Refusal("watch_refused", f"{refused.code}: {refused.message}") from None
     except ResourceUnreachable as exc:
-        raise ApiError("unreachable", str(exc)) from None
+        raise Refusal("unreachable", str(exc)) from None
 
 
 @router.websocket("/api/resources/{resource}/live")
@@ -63,15 +66,15 @@ async def live(websocket: WebSocket, resource: str) -> None:
             newest.get_nowait()  # the reader is behind: it gets this one instead
         newest.put_nowait(message)
 
-    def deliver(message: dict[str, Any]) -> None:  # on a Zenoh thread
-        loop.call_soon_threadsafe(put_newest, message)
+    def deliver(message: WatchValues) -> None:  # on a Zenoh thread
+        loop.call_soon_threadsafe(put_newest, encode(message))
 
     try:
         first = json.loads(await websocket.receive_text())
         watch = await run_in_threadpool(_start_watch, service, resource, first, deliver)
-    except (ValueError, ApiError) as exc:
-        error = exc if isinstance(exc, ApiError) else ApiError("bad_request", "not JSON")
-        await websocket.send_json(error.body())
+    except (ValueError, Refusal) as exc:
+        error = exc if isinstance(exc, Refusal) else Refusal("bad_request", "not JSON")
+        await websocket.send_json(error_body(error))
         await websocket.close(POLICY_VIOLATION)
         return
     except WebSocketDisconnect:
@@ -108,8 +111,8 @@ async def _forward(
                 continue
             getting.cancel()
             if not service.directory.is_online(resource):
-                gone = ApiError("unreachable", f"resource '{resource}' went away")
-                await websocket.send_json(gone.body())
+                gone = Refusal("unreachable", f"resource '{resource}' went away")
+                await websocket.send_json(error_body(gone))
                 await websocket.close(1011)
                 return
     finally:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from backend.api.levels import PADT_LEVELS
+from backend.engineering.padt_levels import PADT_LEVELS
 from runtime.contract.session_options import add_zenoh_options
 
 DEFAULT_ACCOUNTS = Path("padt-accounts.json")

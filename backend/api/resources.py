@@ -8,17 +8,19 @@ Each request goes to the resource as a command with the caller's PES session (fr
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Query, Response
 from pydantic import BaseModel, Field
 
 from backend.api.auth import Credentials, ReadOnly, ReadWrite, Service
-from backend.api.errors import ApiError
-from backend.api.service import ReloadOptions
+from backend.engineering.reload import ReloadOptions, rename_map
+from runtime.contract import protocol as p
+from runtime.contract.protocol import MAX_EVENTS, MAX_MS
+from runtime.contract.wire import encode
 
 router = APIRouter(prefix="/api/resources", tags=["resources"])
-MAX_MS = 86_400_000  # a day: longer than any parameter or time limit allows
 JsonValue = bool | int | float | str | list[Any]  # a variable's value as `values` shows it
 
 
@@ -69,22 +71,20 @@ class StepRequest(BaseModel):
 
 def _renames(renames: dict[str, str]) -> dict[str, str]:
     """OLD -> NEW as the user writes it; NEW -> OLD as the runtime takes it."""
-    flipped: dict[str, str] = {}
-    for old, new in sorted(renames.items()):
-        if new.upper() in (known.upper() for known in flipped):
-            raise ApiError("bad_request", f"renames give {new} twice")
-        flipped[new] = old
-    return flipped
+    return rename_map((new, old) for old, new in sorted(renames.items()))
 
 
 @router.get("", summary="The resources online, with their last published status")
 def resources(caller: ReadOnly, service: Service) -> list[dict[str, Any]]:
-    return service.directory.online()
+    return [
+        {"resource": name, "status": encode(status)} for name, status in service.directory.online()
+    ]
 
 
 @router.post("/{resource}/login", summary="Log in to the resource (its own accounts)")
 def login(resource: str, credentials: Credentials, caller: ReadOnly, service: Service) -> Any:
-    return service.log_in(caller, resource, credentials.user, credentials.password)
+    reply = service.log_in(caller, resource, credentials.user, credentials.password)
+    return {"resource": resource, "user": reply.user, "level": reply.level}
 
 
 @router.post("/{resource}/logout", status_code=204, summary="End the resource session")
@@ -93,51 +93,67 @@ def logout(resource: str, caller: ReadOnly, service: Service) -> Response:
     return Response(status_code=204)
 
 
+def _status(service: Service, caller: ReadOnly, resource: str) -> p.Status:
+    return service.ask(caller, resource, p.GetStatus()).status
+
+
 @router.get("/{resource}/status", summary="State, configuration CRC, programs, statistics")
 def status(resource: str, caller: ReadOnly, service: Service) -> Any:
-    return service.command(caller, resource, "status")["status"]
+    return encode(_status(service, caller, resource))
 
 
 @router.get("/{resource}/statistics", summary="Cycle statistics of the resource and programs")
 def statistics(resource: str, caller: ReadOnly, service: Service) -> dict[str, Any]:
-    current = service.command(caller, resource, "status")["status"]
+    current = _status(service, caller, resource)
     programs = {
-        p["name"]: {"cycles": p["cycles"], "cpu_cycles_max": p["cpu_cycles_max"]}
-        for p in current["programs"]
+        p.name: {"cycles": p.cycles, "cpu_cycles_max": p.cpu_cycles_max} for p in current.programs
     }
-    return {"cycle": current["cycle"], "stats": current["stats"], "programs": programs}
+    return {"cycle": current.cycle, "stats": encode(current.stats), "programs": programs}
 
 
 @router.post("/{resource}/statistics/reset", summary="Reset the cycle statistics")
 def reset_statistics(resource: str, caller: ReadWrite, service: Service) -> Any:
-    return service.command(caller, resource, "reset_stats")
+    return encode(service.ask(caller, resource, p.ResetStats()))
 
 
-def _resource_action(cmd: str, summary: str) -> None:
+def _resource_action(command: type[p.Command[p.StatusReply]], summary: str) -> None:
     def action(resource: str, caller: ReadWrite, service: Service) -> Any:
-        return service.command(caller, resource, cmd)
+        return encode(service.ask(caller, resource, command()))
 
-    path = "/{resource}/" + cmd.replace("_", "-")
-    router.post(path, summary=summary, name=cmd)(action)
+    path = "/{resource}/" + command.NAME.replace("_", "-")
+    router.post(path, summary=summary, name=command.NAME)(action)
 
 
-_resource_action("start", "Start the resource (RUN)")
-_resource_action("stop", "Stop the resource (STOP, safe output values)")
-_resource_action("init", "Leave ERROR STOP for STOP")
-_resource_action("cold_start", "Make the next start a cold start")
-_resource_action("step", "In STOP: one CPU cycle of every program")
+_resource_action(p.Start, "Start the resource (RUN)")
+_resource_action(p.Stop, "Stop the resource (STOP, safe output values)")
+_resource_action(p.Init, "Leave ERROR STOP for STOP")
+_resource_action(p.ColdStart, "Make the next start a cold start")
+_resource_action(p.Step, "In STOP: one CPU cycle of every program")
 
 
 @router.post("/{resource}/load", summary="Download a project (in STOP; a cold start follows)")
 def load(resource: str, body: ProjectChoice, caller: ReadWrite, service: Service) -> Any:
-    return service.load(caller, resource, body.project)
+    done = service.load(caller, resource, body.project)
+    return {
+        "status": encode(done.status),
+        "warnings": list(done.warnings),
+        **_backup(done.backup.path, done.backup.error),
+    }
+
+
+def _backup(path: Path | None, error: str | None) -> dict[str, Any]:
+    # the resource has the configuration already; only the record of it may be missing
+    if path is None:
+        return {"backup": None, "backup_error": error}
+    return {"backup": path.name}
 
 
 @router.post("/{resource}/reload/preview", summary="What a reload would do to every value")
 def preview_reload(
     resource: str, body: ReloadPreviewRequest, caller: ReadWrite, service: Service
 ) -> Any:
-    return service.preview_reload(caller, resource, body.project, _renames(body.renames))
+    plan, risks = service.preview_reload(caller, resource, body.project, _renames(body.renames))
+    return {"plan": encode(plan), "risks": risks}
 
 
 @router.post("/{resource}/reload", summary="Reload (online change) after a preview")
@@ -145,25 +161,35 @@ def reload(resource: str, body: ReloadRequest, caller: ReadWrite, service: Servi
     options = ReloadOptions(
         _renames(body.renames), body.expected_crc.upper(), body.watchdog_ms, body.target_cycle_ms
     )
-    return service.reload(caller, resource, body.project, options)
+    done = service.reload(caller, resource, body.project, options)
+    return {
+        "reload": encode(done.reply.reload),
+        "status": encode(done.reply.status),
+        **_backup(done.backup.path, done.backup.error),
+    }
 
 
 @router.get("/{resource}/programs", summary="The user programs and their states")
 def programs(resource: str, caller: ReadOnly, service: Service) -> Any:
-    return service.command(caller, resource, "status")["status"]["programs"]
+    return encode(_status(service, caller, resource).programs)
 
 
-def _program_action(cmd: str, verb: str, summary: str) -> None:
+ProgramCommand = p.StartProgram | p.StopProgram | p.Freeze | p.Unfreeze
+
+
+def _program_action(command: type[ProgramCommand], verb: str, summary: str) -> None:
     def action(resource: str, program: str, caller: ReadWrite, service: Service) -> Any:
-        return service.command(caller, resource, cmd, program=program)
+        return encode(service.ask(caller, resource, command(program)))
 
-    router.post(f"/{{resource}}/programs/{{program}}/{verb}", summary=summary, name=cmd)(action)
+    router.post(f"/{{resource}}/programs/{{program}}/{verb}", summary=summary, name=command.NAME)(
+        action
+    )
 
 
-_program_action("start_program", "start", "Start a user program")
-_program_action("stop_program", "stop", "Stop a user program")
-_program_action("freeze", "freeze", "Freeze a program for single step (RUN_FREEZE)")
-_program_action("unfreeze", "unfreeze", "Leave single step: the program runs again")
+_program_action(p.StartProgram, "start", "Start a user program")
+_program_action(p.StopProgram, "stop", "Stop a user program")
+_program_action(p.Freeze, "freeze", "Freeze a program for single step (RUN_FREEZE)")
+_program_action(p.Unfreeze, "unfreeze", "Leave single step: the program runs again")
 
 
 @router.post("/{resource}/programs/{program}/step", summary="One cycle of a frozen program")
@@ -174,69 +200,65 @@ def step_program(
     service: Service,
     body: StepRequest | None = None,
 ) -> Any:
-    interval = {"interval_ms": body.interval_ms} if body and body.interval_ms else {}
-    return service.command(caller, resource, "step_program", program=program, **interval)
+    interval = body.interval_ms if body else None
+    return encode(service.ask(caller, resource, p.StepProgram(program, interval)))
 
 
 @router.get("/{resource}/parameters", summary="Resource and program parameters")
 def parameters(resource: str, caller: ReadOnly, service: Service) -> Any:
-    return service.command(caller, resource, "parameters")
+    return encode(service.ask(caller, resource, p.GetParameters()))
 
 
 @router.put("/{resource}/parameters/{name}", summary="Change an online parameter")
 def set_parameter(
     resource: str, name: str, body: ParameterValue, caller: ReadWrite, service: Service
 ) -> Any:
-    return service.command(caller, resource, "set_parameter", name=name, value=body.value)
+    return encode(service.ask(caller, resource, p.SetParameter(name, body.value)))
 
 
 @router.get("/{resource}/variables", summary="Every variable: full path and type")
 def variables(resource: str, caller: ReadOnly, service: Service) -> Any:
-    return service.command(caller, resource, "variables")["variables"]
+    return encode(service.ask(caller, resource, p.GetVariables()).variables)
 
 
 @router.get("/{resource}/values", summary="Every value now (for chosen ones, use /live)")
 def values(resource: str, caller: ReadOnly, service: Service) -> Any:
-    return service.command(caller, resource, "values")
+    return encode(service.ask(caller, resource, p.GetValues()))
 
 
 @router.put("/{resource}/values/{variable}", summary="Write a value once (not forcing)")
 def write(
     resource: str, variable: str, body: ValueRequest, caller: ReadWrite, service: Service
 ) -> Any:
-    return service.command(caller, resource, "write", variable=variable, value=body.value)
+    return encode(service.ask(caller, resource, p.Write(variable, body.value)))
 
 
 @router.get("/{resource}/forcing", summary="Force levels, switches and forced values")
 def forcing(resource: str, caller: ReadOnly, service: Service) -> Any:
-    return service.command(caller, resource, "forcing")["forcing"]
+    return encode(service.ask(caller, resource, p.GetForcing()).forcing)
 
 
 @router.post("/{resource}/forcing/start", summary="Start forcing (global, or one program)")
 def start_forcing(resource: str, body: ForcingStart, caller: ReadWrite, service: Service) -> Any:
-    level = {"program": body.program} if body.program is not None else {}
-    timeout = {"timeout_ms": body.timeout_ms} if body.timeout_ms is not None else {}
-    return service.command(caller, resource, "start_forcing", **level, **timeout)
+    command = p.StartForcing(body.program, body.timeout_ms)
+    return encode(service.ask(caller, resource, command))
 
 
 @router.post("/{resource}/forcing/stop", summary="Stop forcing (global, or one program)")
 def stop_forcing(resource: str, body: ForcingLevel, caller: ReadWrite, service: Service) -> Any:
-    level = {"program": body.program} if body.program is not None else {}
-    return service.command(caller, resource, "stop_forcing", **level)
+    return encode(service.ask(caller, resource, p.StopForcing(body.program)))
 
 
 @router.put("/{resource}/forces/{variable}", summary="Set a force value and its switch")
 def force(
     resource: str, variable: str, body: ForceRequest, caller: ReadWrite, service: Service
 ) -> Any:
-    return service.command(
-        caller, resource, "force", variable=variable, value=body.value, switch=body.switch
-    )
+    return encode(service.ask(caller, resource, p.Force(variable, body.value, body.switch)))
 
 
 @router.delete("/{resource}/forces/{variable}", summary="Remove a force value")
 def unforce(resource: str, variable: str, caller: ReadWrite, service: Service) -> Any:
-    return service.command(caller, resource, "unforce", variable=variable)
+    return encode(service.ask(caller, resource, p.Unforce(variable)))
 
 
 @router.get("/{resource}/events", summary="The resource's event log, oldest first")
@@ -245,6 +267,6 @@ def events(
     caller: ReadOnly,
     service: Service,
     after: Annotated[int, Query(ge=0, description="only events after this sequence number")] = 0,
-    limit: Annotated[int, Query(ge=1, le=1000)] = 200,
+    limit: Annotated[int, Query(ge=1, le=MAX_EVENTS)] = 200,
 ) -> Any:
-    return service.command(caller, resource, "events", after=after, limit=limit)["events"]
+    return encode(service.ask(caller, resource, p.GetEvents(after, limit)).events)

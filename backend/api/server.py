@@ -13,9 +13,9 @@ from pathlib import Path
 
 import uvicorn
 
-from backend.api.accounts import AccountsError, PadtAccounts
 from backend.api.app import create_app
 from backend.api.service import PadtService
+from backend.engineering.padt_accounts import AccountsError, PadtAccounts
 
 
 class ApiServer:

@@ -1,6 +1,7 @@
 """What the API acts on, behind its routes: the PADT accounts, the resources online, the
 projects it serves, and where backups go. One instance per API server; the request
-threads share it."""
+threads share it. Every operation is the engineering services' (backend/engineering); this
+adds only who the caller is and which PES session it holds for each resource."""
 
 from __future__ import annotations
 
@@ -9,30 +10,28 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import zenoh
 
-from backend.api.accounts import PadtAccounts
-from backend.api.errors import ApiError
-from backend.engineering.backup import BackupError
 from backend.engineering.check_twice import check_twice
-from backend.engineering.loading import (
-    CheckedCompile,
-    CompileFailed,
-    LoadRefused,
-    backup_of,
-    checked_reply,
-    compile_checked,
-    download,
+from backend.engineering.compile_gate import compile_checked
+from backend.engineering.download import Downloaded, download_checked
+from backend.engineering.padt_accounts import PadtAccounts
+from backend.engineering.project import ProjectError, compile_project, load_project
+from backend.engineering.reload import (
+    Reloaded,
+    ReloadOptions,
     needs_confirmation,
     preview_reload,
-    reload,
+    reload_checked,
 )
-from backend.engineering.project import ProjectError, compile_project, load_project
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
 from backend.engineering.resource_directory import ResourceDirectory
-from runtime.access import AccessDenied
+from runtime.contract.protocol import Command, LoginReply, Logout, ReloadPlanInfo
+from runtime.contract.refusal import Refusal
+
+R = TypeVar("R")
 
 
 @dataclass(frozen=True)
@@ -42,14 +41,6 @@ class Caller:
     token: str
     user: str
     level: str
-
-
-@dataclass(frozen=True)
-class ReloadOptions:
-    renames: dict[str, str]  # NEW name -> OLD name, as the runtime's rename map has it
-    expected_crc: str | None = None
-    watchdog_ms: int | None = None
-    target_cycle_ms: int | None = None
 
 
 class PadtService:
@@ -71,10 +62,7 @@ class PadtService:
 
     def caller(self, token: str | None, needed: str) -> Caller:
         """Who holds `token`, if the session exists and its level is at least `needed`."""
-        try:
-            session = self.accounts.check(token, needed)
-        except AccessDenied as denied:
-            raise ApiError(denied.code, denied.message) from None
+        session = self.accounts.check(token, needed)
         assert token is not None  # a session exists only for a token
         return Caller(token, session.user, session.level)
 
@@ -82,7 +70,7 @@ class PadtService:
 
     def project_path(self, name: str) -> Path:
         if name not in self.projects:
-            raise ApiError("unknown_project", f"there is no project '{name}'")
+            raise Refusal("unknown_project", f"there is no project '{name}'")
         return self.projects[name]
 
     def compile(self, name: str) -> dict[str, Any]:
@@ -103,99 +91,76 @@ class PadtService:
 
     def client(self, caller: Caller, resource: str) -> ResourceClient:
         if not self.directory.is_online(resource):
-            raise ApiError("unknown_resource", f"no resource '{resource}' is online")
+            raise Refusal("unknown_resource", f"no resource '{resource}' is online")
         client = ResourceClient(self.session, resource)
         client.token = self.accounts.resource_token(caller.token, resource)
         return client
 
-    def command(self, caller: Caller, resource: str, cmd: str, /, **args: Any) -> dict[str, Any]:
-        """A command to the resource with the caller's PES session; the reply without
-        `ok`, or the resource's refusal as ApiError."""
+    def ask(self, caller: Caller, resource: str, command: Command[R]) -> R:
+        """A command to the resource with the caller's PES session: its checked reply, or
+        its refusal."""
         with self._refusals(caller, resource):
-            reply = checked_reply(self.client(caller, resource).command(cmd, **args))
-        return {key: value for key, value in reply.items() if key not in ("ok", "token")}
+            return self.client(caller, resource).ask(command)
 
-    def log_in(self, caller: Caller, resource: str, user: str, password: str) -> dict[str, Any]:
+    def log_in(self, caller: Caller, resource: str, user: str, password: str) -> LoginReply:
         client = self.client(caller, resource)
         with self._refusals(caller, resource):
-            reply = checked_reply(client.login(user, password))
+            reply = client.login(user, password)
         self.accounts.set_resource_token(caller.token, resource, client.token)
-        return {"resource": resource, "user": reply["user"], "level": reply["level"]}
+        return reply
 
     def log_out(self, caller: Caller, resource: str) -> None:
         token = self.accounts.resource_token(caller.token, resource)
         self.accounts.set_resource_token(caller.token, resource, None)
         if token is not None and self.directory.is_online(resource):
             with self._refusals(caller, resource):
-                self.client(caller, resource).command("logout", token=token)
+                client = self.client(caller, resource)
+                client.token = token
+                client.ask(Logout())
 
-    def load(self, caller: Caller, resource: str, project: str) -> dict[str, Any]:
+    def load(self, caller: Caller, resource: str, project: str) -> Downloaded:
         path = self.project_path(project)
         with self._refusals(caller, resource):
             checked = compile_checked([path])
-            reply = download(self.client(caller, resource), checked.artifact)
-        outcome = {"status": reply["status"], "warnings": list(checked.diagnostics)}
-        return outcome | self._backup(caller, resource, checked, "load", project)
+            how = f"REST API: load of project {project} by {caller.user}"
+            return download_checked(self.client(caller, resource), checked, self.backup_dir, how)
 
     def preview_reload(
         self, caller: Caller, resource: str, project: str, renames: dict[str, str]
-    ) -> dict[str, Any]:
+    ) -> tuple[ReloadPlanInfo, list[str]]:
+        """The plan, and what in it needs the user's confirmation."""
         path = self.project_path(project)
         with self._refusals(caller, resource):
             checked = compile_checked([path])
             plan = preview_reload(self.client(caller, resource), checked.artifact, renames)
-        return {"plan": plan, "risks": needs_confirmation(plan)}
+        return plan, needs_confirmation(plan)
 
     def reload(
         self, caller: Caller, resource: str, project: str, options: ReloadOptions
-    ) -> dict[str, Any]:
+    ) -> Reloaded:
         path = self.project_path(project)
         with self._refusals(caller, resource):
             checked = compile_checked([path])
-            reply = reload(
-                self.client(caller, resource),
-                checked.artifact,
-                options.renames,
-                watchdog_ms=options.watchdog_ms,
-                target_cycle_ms=options.target_cycle_ms,
-                expected_crc=options.expected_crc,
-            )
-        outcome = {"reload": reply["reload"], "status": reply["status"]}
-        return outcome | self._backup(caller, resource, checked, "reload", project)
-
-    def _backup(
-        self, caller: Caller, resource: str, checked: CheckedCompile, action: str, project: str
-    ) -> dict[str, Any]:
-        how = f"REST API: {action} of project {project} by {caller.user}"
-        try:
-            path = backup_of(checked, self.backup_dir, resource, action, how)
-        except BackupError as exc:
-            # the resource has the configuration already; only the record of it is missing
-            return {"backup": None, "backup_error": str(exc)}
-        return {"backup": path.name}
+            how = f"REST API: reload of project {project} by {caller.user}"
+            client = self.client(caller, resource)
+            return reload_checked(client, checked, options, self.backup_dir, how)
 
     @contextmanager
     def _refusals(self, caller: Caller, resource: str) -> Iterator[None]:
-        """Failures of the layers below (a resource's refusal comes as LoadRefused from
-        checked_reply) as ApiErrors. A resource that no longer knows the
+        """Failures of the layers below as refusals. A resource that no longer knows the
         caller's PES session (expired, or the runtime restarted) drops it here too."""
         try:
             with _project_errors():
                 yield
-        except CompileFailed as exc:
-            raise ApiError("compile", exc.message, diagnostics=list(exc.diagnostics)) from None
-        except LoadRefused as exc:
-            raise self._unauthenticated(caller, resource, ApiError(exc.code, exc.message)) from None
         except ResourceUnreachable as exc:
-            raise ApiError("unreachable", str(exc)) from None
-        except ApiError as exc:
-            raise self._unauthenticated(caller, resource, exc) from None
-
-    def _unauthenticated(self, caller: Caller, resource: str, error: ApiError) -> ApiError:
-        if error.code == "unauthenticated":
-            self.accounts.set_resource_token(caller.token, resource, None)
-            error.message += f" (log in to the resource: POST /api/resources/{resource}/login)"
-        return error
+            raise Refusal("unreachable", str(exc)) from None
+        except Refusal as refusal:
+            if refusal.code == "unauthenticated":
+                self.accounts.set_resource_token(caller.token, resource, None)
+                refusal.message += (
+                    f" (log in to the resource: POST /api/resources/{resource}/login)"
+                )
+            raise
 
 
 @contextmanager
@@ -203,4 +168,4 @@ def _project_errors() -> Iterator[None]:
     try:
         yield
     except ProjectError as exc:
-        raise ApiError("project", str(exc)) from None
+        raise Refusal("project", str(exc)) from None

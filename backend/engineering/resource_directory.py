@@ -4,20 +4,20 @@ for an unknown name is a quick 404 instead of a command that times out."""
 
 from __future__ import annotations
 
-import json
 import threading
-from typing import Any
 
 import zenoh
 
 from runtime.contract.keyspace import alive_key, any_resource, resource_of, status_key
+from runtime.contract.protocol import Status, decode_publication
+from runtime.contract.refusal import Refusal
 
 
 class ResourceDirectory:
     def __init__(self, session: zenoh.Session) -> None:
         self._lock = threading.Lock()
         self._online: set[str] = set()
-        self._status: dict[str, dict[str, Any]] = {}
+        self._status: dict[str, Status] = {}
         self._alive = session.liveliness().declare_subscriber(
             any_resource(alive_key), self._on_alive, history=True
         )
@@ -34,21 +34,18 @@ class ResourceDirectory:
 
     def _on_status(self, sample: zenoh.Sample) -> None:
         try:
-            status = json.loads(sample.payload.to_bytes())
-        except ValueError:
+            status = decode_publication(Status, sample.payload.to_bytes())
+        except Refusal:
             return  # not from a runtime of ours
         name = resource_of(str(sample.key_expr))
         with self._lock:
-            if name in self._online and isinstance(status, dict):
+            if name in self._online:
                 self._status[name] = status
 
-    def online(self) -> list[dict[str, Any]]:
+    def online(self) -> list[tuple[str, Status | None]]:
         """Each online resource (sorted by name) with its last published status, if any."""
         with self._lock:
-            return [
-                {"resource": name, "status": self._status.get(name)}
-                for name in sorted(self._online)
-            ]
+            return [(name, self._status.get(name)) for name in sorted(self._online)]
 
     def is_online(self, name: str) -> bool:
         with self._lock:

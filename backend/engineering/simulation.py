@@ -15,25 +15,19 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from backend.compiler.parse import (
-    BadEscape,
-    decode_string_literal,
-    parse_date_literal,
-    parse_int_literal,
-    parse_time_literal,
-)
+from backend.engineering.literals import LiteralError, parse_literal
 from runtime.clock import VirtualClock
 from runtime.contract.artifact import Artifact
+from runtime.contract.protocol import ProgramState
+from runtime.contract.refusal import Refusal
 from runtime.contract.values import (
     TIME_TYPES,
     ValueRejected,
     array_shape,
-    base_type,
     representation,
 )
 from runtime.intrinsics import to_bytes
-from runtime.resource import CommandRefused, Resource
-from runtime.user_program import ProgramState
+from runtime.resource import Resource
 
 NS_PER_MS = 1_000_000
 
@@ -107,93 +101,6 @@ def trace_names(options: list[str] | None) -> tuple[str, ...] | None:
     return tuple(name.strip() for option in options for name in option.split(",") if name.strip())
 
 
-# ---- ST literals -> run-time values
-
-_INT = re.compile(r"([+-]?)((?:2|8|16)#[0-9A-Fa-f_]+|[0-9][0-9_]*)")
-_REAL = re.compile(r"[+-]?[0-9][0-9_]*(?:\.[0-9][0-9_]*)?(?:[eE][+-]?[0-9]+)?")
-_TIME = re.compile(
-    r"(?:T|TIME|LT|LTIME)#[+-]?(?:[0-9][0-9_]*(?:\.[0-9_]+)?(?:MS|US|NS|D|H|M|S))+",
-    re.IGNORECASE,
-)
-_TYPED = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)#(.+)", re.DOTALL)
-_INTEGERS = (
-    *("SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT"),
-    *("BYTE", "WORD", "DWORD", "LWORD"),
-)
-_DATES = ("DATE", "LDATE", "TOD", "LTOD", "DT", "LDT")
-_STRING_TYPES = {"STRING": False, "CHAR": False, "WSTRING": True, "WCHAR": True}  # -> wide
-_TYPE_PREFIXES = {"BOOL", "REAL", "LREAL", *_INTEGERS, *_STRING_TYPES}
-_SETTABLE = {*_TYPE_PREFIXES, *TIME_TYPES, *_DATES}
-
-
-def parse_literal(text: str, type_name: str) -> Any:
-    """An ST literal (`TRUE`, `-3.5`, `16#FF`, `T#20ms`, `'text'`) as a value of
-    `type_name` in its run-time representation (TIME in nanoseconds)."""
-    target, _length = base_type(type_name)  # the length is checked when the value is written
-    if target not in _SETTABLE:  # enumerations, arrays: the artifact has no literals for them
-        raise SimulationError(f"variables of type {type_name} cannot be set")
-    literal = text.strip()
-    typed = _TYPED.fullmatch(literal)
-    if typed is not None and typed[1].upper() in _TYPE_PREFIXES:
-        literal = typed[2]  # `INT#5`, `BOOL#TRUE`: the variable's type decides
-    value = _literal_value(literal, target)
-    if value is None:
-        hint = ""
-        if target in _STRING_TYPES:  # the shell eats the quotes of `--set s='text'`
-            hint = f"; text is written in quotes (in a shell: --set \"NAME='{text}'\")"
-        raise SimulationError(f"{text} is not an ST literal of type {type_name}{hint}")
-    return value
-
-
-def _literal_value(literal: str, target: str) -> Any:
-    if target == "BOOL":
-        return {"TRUE": True, "FALSE": False, "1": True, "0": False}.get(literal.upper())
-    if target in _INTEGERS:
-        return _int_value(literal)
-    if target in ("REAL", "LREAL"):
-        if _REAL.fullmatch(literal):
-            return float(literal.replace("_", ""))
-        return None
-    if target in TIME_TYPES:
-        if not _TIME.fullmatch(literal):
-            return None
-        try:
-            return parse_time_literal(literal)[0]
-        except OverflowError:  # more seconds than a float holds: far beyond any TIME
-            return None
-    if target in _DATES:
-        return _date_value(literal, target)
-    return _string_value(literal, _STRING_TYPES[target])
-
-
-def _int_value(literal: str) -> int | None:
-    match = _INT.fullmatch(literal)
-    if match is None:
-        return None
-    try:
-        magnitude = parse_int_literal(match[2])
-    except ValueError:  # digits outside the base (2#12), or none at all (16#_)
-        return None
-    return -magnitude if match[1] == "-" else magnitude
-
-
-def _date_value(literal: str, target: str) -> int | None:
-    try:
-        kind, ns = parse_date_literal(literal)
-    except (KeyError, ValueError, IndexError):  # no date prefix, or a malformed date
-        return None
-    return ns if kind == target else None
-
-
-def _string_value(literal: str, wide: bool) -> str | None:
-    if len(literal) < 2 or literal[0] not in "'\"" or literal[-1] != literal[0]:
-        return None
-    try:
-        return decode_string_literal(literal[1:-1], wide)
-    except BadEscape as exc:
-        raise SimulationError(f"{literal}: {exc}") from None
-
-
 # ---- run-time values -> JSON
 
 
@@ -252,7 +159,7 @@ def prepare(artifact: Artifact, plan: Plan) -> Simulation:
     clock = VirtualClock()
     resource = Resource(artifact.resource.name, clock)
     resource.load(artifact)
-    types = {v["path"]: v["type"] for v in resource.variables()}
+    types = {v.path: v.type for v in resource.variables.infos()}
     traced = list(types) if plan.trace is None else _select(resource, types, plan.trace)
     simulation = Simulation(resource, clock, plan.cycles, cycle_ms * NS_PER_MS, traced, types)
     for setting in plan.settings:
@@ -272,9 +179,9 @@ def _select(resource: Resource, types: dict[str, str], names: tuple[str, ...]) -
     selected: dict[str, None] = {}  # an ordered set
     for name in names:
         try:
-            selected[resource.variable(name).path] = None
+            selected[resource.variables.lookup(name).path.path] = None
             continue
-        except CommandRefused:
+        except Refusal:
             pass
         below = [p for p in types if p.upper().startswith((f"{name.upper()}.", f"{name.upper()}["))]
         if not below:
@@ -285,15 +192,15 @@ def _select(resource: Resource, types: dict[str, str], names: tuple[str, ...]) -
 
 def _checked_write(resource: Resource, setting: Setting) -> tuple[str, Any]:
     try:
-        path = resource.variable(setting.name)
-    except CommandRefused as exc:
+        path = resource.variables.lookup(setting.name).path
+    except Refusal as exc:
         raise SimulationError(f"--set {setting.name}: {exc.message}") from None
     if path.constant:
         raise SimulationError(f"--set {setting.name}: '{path.path}' is a constant")
     try:
         value = parse_literal(setting.literal, path.type)
         representation(path.type, value)  # refuse now what Resource.simulate would refuse later
-    except (SimulationError, ValueRejected) as exc:
+    except (LiteralError, ValueRejected) as exc:
         raise SimulationError(f"--set {setting.name}: {exc}") from None
     return path.path, value
 

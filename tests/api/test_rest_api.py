@@ -18,10 +18,11 @@ from typing import Any
 import pytest
 from websockets.sync.client import connect
 
-from backend.api.accounts import PadtAccounts, read_accounts
+from backend.engineering.padt_accounts import PadtAccounts, read_accounts
 from backend.engineering.project import compile_project, load_project
-from runtime.access import COMMAND_LEVELS, AccessDenied
 from runtime.contract.accounts import LEVELS, SESSION_NS
+from runtime.contract.protocol import COMMAND_LEVELS
+from runtime.contract.refusal import Refusal
 from tests.conftest import REPO, free_port, padt
 from tests.support.rest_plant import (
     PADT_PASSWORDS,
@@ -113,11 +114,11 @@ def test_a_session_expires_and_an_account_change_ends_it(tmp_path: Path) -> None
     token, _ = accounts.login("builder", PADT_PASSWORDS["builder"])
     assert accounts.check(token, "read-write").user == "builder"
     now[0] += SESSION_NS
-    with pytest.raises(AccessDenied, match="expired"):
+    with pytest.raises(Refusal, match="expired"):
         accounts.check(token, "read-only")
     token, _ = accounts.login("builder", PADT_PASSWORDS["builder"])
     accounts.put("builder", "read-only", None)  # lowered: its sessions end
-    with pytest.raises(AccessDenied, match="log in first"):
+    with pytest.raises(Refusal, match="log in first"):
         accounts.check(token, "read-only")
 
 
@@ -155,22 +156,41 @@ def test_every_state_changing_route_is_refused_by_the_resource_below_its_pes_lev
     assert {e["kind"] for e in events} == {"login"}  # nothing else happened
 
 
+WELL_FORMED: dict[str, dict[str, Any]] = {
+    "watch": {"id": "w1", "variables": ["P.n"]},
+    "unwatch": {"id": "w1"},
+    **{
+        name: {"program": "P"}
+        for name in ("start_program", "stop_program", "freeze", "unfreeze", "step_program")
+    },
+    "force": {"variable": "P.n", "value": 1},
+    "unforce": {"variable": "P.n"},
+    "write": {"variable": "P.n", "value": 1},
+    "set_parameter": {"name": "watchdog_ms", "value": 100},
+    "transfer_begin": {"size": 10, "crc": "0000ABCD"},
+    "transfer_chunk": {"offset": 0, "data": "x"},
+}
+
+
 def test_the_same_commands_sent_directly_over_zenoh_get_the_same_refusals(site: Plant) -> None:
     """A client that bypasses the PADT meets the resource's own check."""
     client = site.zenoh_client
     tokens = {}
     for name in ("viewer", "op", "engineer"):
-        tokens[name] = client.login(name, PES_PASSWORDS[name])["token"]
+        tokens[name] = client.login(name, PES_PASSWORDS[name]).token
     client.token = None
     refused = []
     for command, needed in sorted(COMMAND_LEVELS.items()):
-        assert client.command(command)["error"]["code"] == "unauthenticated", command
+        # well-formed requests: a malformed one is refused by the decoder before the
+        # access check sees it
+        arguments = WELL_FORMED.get(command, {})
+        assert client.command(command, **arguments)["error"]["code"] == "unauthenticated", command
         if needed == "read":
             continue
         below = LEVELS[LEVELS.index(needed) - 1]
         name = next(n for n, level in PES_LEVELS.items() if level == below)
         client.token = tokens[name]
-        reply = client.command(command)
+        reply = client.command(command, **arguments)
         client.token = None
         assert reply["error"]["code"] == "forbidden", (command, reply)
         refused.append(command)

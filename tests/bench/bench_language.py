@@ -176,7 +176,7 @@ def bench_cycles(compiled_cycles: int = 2000, walker_cycles: int = 100) -> None:
     for _ in range(walker_cycles):
         check.cycle()
         check_clock.advance(CYCLE_NS)
-    agree = check.values() == walker.values()
+    agree = check.variables.values() == walker.values()
     print(f"compiled and tree walker agree after {walker_cycles} cycles: {agree}")
 
 

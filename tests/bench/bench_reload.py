@@ -15,13 +15,16 @@ import time
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
+from runtime import reload_switch
 from runtime.clock import RealClock
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
+from runtime.contract.protocol import ProgramState, ReloadOutcome, ResourceState
+from runtime.contract.refusal import Refusal
+from runtime.instances import instantiate
 from runtime.intrinsics import SystemView
 from runtime.reload_plan import (
     CONVERTED,
@@ -33,8 +36,7 @@ from runtime.reload_plan import (
     ReloadPlan,
     plan_reload,
 )
-from runtime.resource import CommandRefused, Resource, ResourceState, instantiate
-from runtime.user_program import ProgramState
+from runtime.resource import Resource
 from tests.bench.bench_runtime import mean_and_best_ms, ten_thousand_paths
 
 PLAN_ROUNDS = 5
@@ -106,8 +108,8 @@ def bench_plan(old: Artifact, new: Artifact, rounds: int = PLAN_ROUNDS) -> None:
     mean, best = mean_and_best_ms(lambda: plan_reload(old, new), rounds)
     print(f"  plan_reload (no live state):      mean {mean:7.1f} ms   best {best:7.1f} ms")
     resource = _running(old)
-    mean, best = mean_and_best_ms(lambda: resource.preview_reload(new, {}), rounds)
-    print(f"  Resource.preview_reload (live):   mean {mean:7.1f} ms   best {best:7.1f} ms")
+    mean, best = mean_and_best_ms(lambda: reload_switch.preview(resource, new, {}), rounds)
+    print(f"  reload_switch.preview (live):     mean {mean:7.1f} ms   best {best:7.1f} ms")
     # what Resource.reload does after the plan and before the switch-over, also outside
     # the pause but inside the same call (the driver's housekeeping between two cycles)
     mean, best = mean_and_best_ms(lambda: instantiate(new, SystemView()), rounds)
@@ -159,13 +161,13 @@ class Reloader:
     def raised(self) -> str:
         return f"watchdog_ms={self.watchdog_ms}, target_cycle_ms={self.target_cycle_ms}"
 
-    def __call__(self, artifact: Artifact, keep_cycling: Callable[[], None]) -> dict[str, Any]:
+    def __call__(self, artifact: Artifact, keep_cycling: Callable[[], None]) -> ReloadOutcome:
         """As the runtime process reloads: the job prepares on a worker thread while the
         cycles go on, and switches over between two cycles."""
         if self.refusal is None:
             try:
                 return self._reload(artifact, keep_cycling)
-            except CommandRefused as refused:
+            except Refusal as refused:
                 if refused.code not in BUDGET_CODES:
                     raise
                 self.refusal = f"[{refused.code}] {refused.message}"
@@ -175,16 +177,20 @@ class Reloader:
                     self.target_cycle_ms = self.watchdog_ms
         return self._reload(artifact, keep_cycling)
 
-    def _reload(self, artifact: Artifact, keep_cycling: Callable[[], None]) -> dict[str, Any]:
-        job = self.resource.begin_reload(
-            artifact, {}, watchdog_ms=self.watchdog_ms, target_cycle_ms=self.target_cycle_ms
+    def _reload(self, artifact: Artifact, keep_cycling: Callable[[], None]) -> ReloadOutcome:
+        job = reload_switch.begin(
+            self.resource,
+            artifact,
+            {},
+            watchdog_ms=self.watchdog_ms,
+            target_cycle_ms=self.target_cycle_ms,
         )
         worker = threading.Thread(target=job.prepare)
         worker.start()
         while worker.is_alive():
             keep_cycling()
         worker.join()
-        return self.resource.finish_reload(job)
+        return reload_switch.finish(self.resource, job)
 
 
 def drive(old: Artifact, new: Artifact, reloads: int = RELOADS) -> tuple[Run, Reloader]:
@@ -201,8 +207,8 @@ def drive(old: Artifact, new: Artifact, reloads: int = RELOADS) -> tuple[Run, Re
         outcome = reloader(new if n % 2 == 0 else old, lambda: run.cycle(resource))
         run.calls_ns.append(time.perf_counter_ns() - started)
         run.reload_after[len(run.starts_ns) - 1] = n
-        run.pauses_us.append(float(outcome["pause_us"]))
-        run.carried.append(int(outcome["carried"]))
+        run.pauses_us.append(outcome.pause_us)
+        run.carried.append(outcome.carried)
     for _ in range(CYCLES_BETWEEN):
         run.cycle(resource)
     if resource.state not in (ResourceState.RUN, ResourceState.RUN_UP_STOP):
@@ -305,12 +311,12 @@ def _attempt(
     target_cycle_ms: int | None = None,
 ) -> str:
     try:
-        outcome = resource.reload(
-            artifact, {}, watchdog_ms=watchdog_ms, target_cycle_ms=target_cycle_ms
+        outcome = reload_switch.reload(
+            resource, artifact, {}, watchdog_ms=watchdog_ms, target_cycle_ms=target_cycle_ms
         )
-    except CommandRefused as refused:
+    except Refusal as refused:
         return f"REFUSED [{refused.code}] {refused.message}"
-    return f"done, pause {outcome['pause_us']:,.0f} us, {outcome['carried']:,} values carried"
+    return f"done, pause {outcome.pause_us:,.0f} us, {outcome.carried:,} values carried"
 
 
 def bench_budget(config: ResourceConfig) -> None:
@@ -324,7 +330,7 @@ def bench_budget(config: ResourceConfig) -> None:
         f"budget check, target cycle {config.target_cycle_ms} ms '{config.target_cycle_mode}', "
         f"watchdog {config.watchdog_ms} ms (last cycle "
         f"{resource.stats.last_ns / 1e6:.2f} ms, estimate "
-        f"{resource.preview_reload(new, {}).estimate_ns / 1e3:,.0f} us):"
+        f"{reload_switch.preview(resource, new, {}).estimate_ns / 1e3:,.0f} us):"
     )
     for label, watchdog_ms, target_cycle_ms in (
         ("default parameters", None, None),
@@ -354,7 +360,7 @@ def main() -> None:
     started = time.perf_counter()
     old, new = _pair(config)
     print(
-        f"reload benchmark: {len(_running(old).values()):,} variables "
+        f"reload benchmark: {len(_running(old).variables.values()):,} variables "
         f"(compiled twice in {time.perf_counter() - started:.1f} s)"
     )
     _section(lambda: bench_plan(old, new))

@@ -24,11 +24,12 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import Clock, RealClock
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
+from runtime.contract.protocol import ProgramState
 from runtime.contract.session import open_client, open_router
+from runtime.contract.wire import encode
 from runtime.cycle_driver import CycleDriver
 from runtime.link import ResourceLink
 from runtime.resource import Resource
-from runtime.user_program import ProgramState
 from tests.bench.bench_language import thousand_statements
 
 TARGET_MS = 10
@@ -190,7 +191,7 @@ class LoggedResource(Resource):
         super().cycle()
         self.log.durations_ns.append(time.monotonic_ns() - started)
         # measured on the real clock by the slice meter, programs only (no engine work)
-        self.log.program_ns.append(self.meter_total_ns)
+        self.log.program_ns.append(self.scheduler.used_ns)
 
 
 def _free_port() -> int:
@@ -238,7 +239,8 @@ def bench_jitter(seconds: float) -> None:
     resource.start()
     print(
         f"jitter: 1,000-statement program, target cycle {TARGET_MS} ms 'fixed', real "
-        f"CycleDriver with a Zenoh link, {seconds:g} s ({len(resource.values())} variables "
+        f"CycleDriver with a Zenoh link, {seconds:g} s "
+        f"({len(resource.variables.values())} variables "
         "published every 100 ms):"
     )
     _drive(resource, clock, seconds)
@@ -283,7 +285,7 @@ def bench_jitter(seconds: float) -> None:
         f"  whole CPU cycle (inputs to outputs): mean {durations.mean / 1e6:.3f} ms   "
         f"p99 {durations.p99 / 1e6:.3f} ms   max {durations.max / 1e6:.3f} ms"
     )
-    print(f"  resource.stats: {json.dumps(resource.stats.as_json())}")
+    print(f"  resource.stats: {json.dumps(encode(resource.stats.info()))}")
 
 
 # ---- 3. OLT snapshot of 10,000 variables ------------------------------------------------------
@@ -337,11 +339,11 @@ def mean_and_best_ms(action: Callable[[], object], rounds: int) -> tuple[float, 
 def bench_snapshot(rounds: int = 50) -> None:
     resource = _running(_compile(ten_thousand_paths()), RealClock())
     resource.cycle()
-    values = resource.values()
+    values = resource.variables.values()
     print(f"OLT snapshot (Resource.values()) of {len(values):,} variables, {rounds} calls each:")
     if len(values) < 10_000:
         print(f"  WARNING: only {len(values):,} variables, fewer than the 10,000 asked for")
-    mean, best = mean_and_best_ms(resource.values, rounds)
+    mean, best = mean_and_best_ms(resource.variables.values, rounds)
     print(f"  values():                      mean {mean:6.2f} ms   best {best:6.2f} ms")
 
     def message() -> str:  # a watch set of every variable, as the link sends it
@@ -354,7 +356,8 @@ def bench_snapshot(rounds: int = 50) -> None:
         f"   ({len(encoded) / 1024:,.0f} KiB)"
     )
     both_mean, both_best = mean_and_best_ms(
-        lambda: json.dumps({"cycle": resource.cycle_count, "values": resource.values()}), rounds
+        lambda: json.dumps({"cycle": resource.cycle_count, "values": resource.variables.values()}),
+        rounds,
     )
     print(
         f"  values() + json.dumps:         mean {both_mean:6.2f} ms   best {both_best:6.2f} ms"

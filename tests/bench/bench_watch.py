@@ -40,16 +40,26 @@ from typing import Any
 
 import zenoh
 
-from backend.engineering.resource_client import ResourceClient, WatchRefused
+from backend.engineering.resource_client import ResourceClient
 from runtime.clock import Clock, RealClock
-from runtime.commands import MAX_REQUEST_BYTES
 from runtime.contract.artifact import Artifact
 from runtime.contract.keyspace import watch_key, watcher_key
+from runtime.contract.protocol import (
+    MAX_REQUEST_BYTES,
+    GetVariables,
+    ProgramState,
+    Quality,
+    ResourceState,
+    WatchValues,
+)
+from runtime.contract.refusal import Refusal
 from runtime.contract.session import open_client, open_router
 from runtime.cycle_driver import CycleDriver
+from runtime.force_table import ForceTable
 from runtime.link import ResourceLink
-from runtime.resource import Resource, ResourceState
-from runtime.user_program import ProgramState
+from runtime.online_values import OnlineValues
+from runtime.resource import Resource
+from runtime.variables import Variables
 from runtime.watch_sets import WatchSet, WatchSnapshot
 from tests.bench.bench_runtime import (
     SECONDS_ENV,
@@ -103,7 +113,7 @@ class TimedResource(Resource):
 
     def __init__(self, name: str, clock: Clock, log: PublicationLog) -> None:
         super().__init__(name, clock)
-        self.publication_log = log
+        self.online = TimedOnlineValues(self.variables, log)
         self.starts_ns: dict[int, int] = {}
         self.ends_ns: dict[int, int] = {}
         self.pending: queue.Queue[Callable[[], object]] = queue.Queue()
@@ -130,9 +140,19 @@ class TimedResource(Resource):
             except Exception as exc:  # never let the benchmark's own work stop the resource
                 self.pending_errors.append(f"{type(exc).__name__}: {exc}")
 
-    def watched(self, watch_set: WatchSet) -> WatchSnapshot:
+
+class TimedOnlineValues(OnlineValues):
+    """Online values that note how long reading a watch set's snapshot takes."""
+
+    def __init__(self, variables: Variables, log: PublicationLog) -> None:
+        super().__init__(variables)
+        self.publication_log = log
+
+    def snapshot(
+        self, watch_set: WatchSet, cycle: int, running: bool, forces: ForceTable
+    ) -> WatchSnapshot:
         started = time.monotonic_ns()
-        snapshot = super().watched(watch_set)
+        snapshot = super().snapshot(watch_set, cycle, running, forces)
         self.publication_log.last_watched_ns = time.monotonic_ns() - started
         return snapshot
 
@@ -203,22 +223,22 @@ def client_main(endpoint: str, count: int, period_ms: int) -> None:
     try:
         client = ResourceClient(session, RESOURCE)
         client.wait_until_answering()
-        paths = [str(v["path"]) for v in client.command("variables")["variables"]]
+        paths = [v.path for v in client.ask(GetVariables()).variables]
         selection = select(paths, count)
         arrivals: list[tuple[int, int, int, int]] = []
 
-        def on_values(message: dict[str, Any]) -> None:
+        def on_values(message: WatchValues) -> None:
             arrived = time.monotonic_ns()
-            values: dict[str, Any] = message["values"]
-            live = sum(1 for value in values.values() if value["quality"] == "live")
-            arrivals.append((int(message["cycle"]), arrived, len(values), live))
+            values = message.values
+            live = sum(1 for value in values.values() if value.quality == Quality.LIVE)
+            arrivals.append((message.cycle, arrived, len(values), live))
 
         close: Callable[[], None]
         try:
             watch = client.watch(selection, on_values, period_ms)
             hello = {"ready": watch.watch_id, "mode": "client", "variables": len(watch.variables)}
             close = watch.close
-        except WatchRefused as refused:
+        except Refusal as refused:
             # the same subscription and liveliness token as ResourceClient.watch; the
             # benchmark process registers the set in the runtime instead of the command
             watch_id = secrets.token_hex(8)
@@ -319,7 +339,7 @@ def bench_watch_set(artifact: Artifact, count: int, seconds: float) -> None:
     resource = TimedResource(RESOURCE, clock, log)
     resource.load(artifact)
     resource.start()
-    selection = select([v["path"] for v in resource.variables()], count)
+    selection = select([v.path for v in resource.variables.infos()], count)
     print(
         f"watch set of {len(selection):,} variables every {PERIOD_MS} ms, {seconds:g} s; "
         f"target cycle {TARGET_MS} ms 'fixed', real CycleDriver, client in a separate process:"
@@ -337,7 +357,9 @@ def bench_watch_set(artifact: Artifact, count: int, seconds: float) -> None:
                     f"bytes, the limit {MAX_REQUEST_BYTES:,}); registered in the runtime "
                     "process instead (Resource.watch between two cycles), same publication path"
                 )
-                resource.pending.put(lambda: resource.watch(watch_id, selection, PERIOD_MS))
+                resource.pending.put(
+                    lambda: resource.online.watch(watch_id, selection, PERIOD_MS, False)
+                )
             else:
                 print(f"  registration: ResourceClient.watch ({hello['variables']:,} variables)")
             # the first message goes out at once on registration, after a command and not
@@ -379,7 +401,12 @@ def _report(
     cycles = sorted(c for c in ends if in_window(c))
 
     # the message: its size as publish_watch encodes it, and the encoding alone
-    snapshot = resource.watched(WatchSet(watch_id, tuple(selection), PERIOD_MS * 1_000_000))
+    snapshot = resource.online.snapshot(
+        WatchSet(watch_id, tuple(selection), PERIOD_MS * 1_000_000),
+        resource.cycle_count,
+        resource.running(),
+        resource.forcing.table,
+    )
     message = snapshot.message()
     encoded = json.dumps(message)
     dumps_ns = []

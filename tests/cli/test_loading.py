@@ -13,15 +13,16 @@ from typing import Any
 
 import pytest
 
-import backend.engineering.loading as loading
+import backend.engineering.compile_gate as compile_gate
 from backend.engineering.backup import BackupError, BackupInfo, restore_backup, write_backup
 from backend.engineering.check_twice import CheckTwiceResult, CompileRun, compare
-from backend.engineering.loading import LoadRefused, compile_checked, send_artifact
+from backend.engineering.compile_gate import compile_checked
+from backend.engineering.download import send_artifact
 from backend.engineering.resource_client import ResourceClient
-from padt.online import parse_rename
-from runtime.commands import MAX_REQUEST_BYTES
+from padt.configuration import parse_rename
 from runtime.contract.artifact import crc32_hex, load_artifact
-from runtime.transfer import pieces
+from runtime.contract.protocol import MAX_REQUEST_BYTES, pieces
+from runtime.contract.refusal import Refusal
 from tests.conftest import padt
 from tests.support.runtime_process import client_session, router, running_resource
 
@@ -187,7 +188,7 @@ def test_corrupted_or_cut_transfer_keeps_the_old_configuration(
 
         # another configuration, which a load would take with a cold start
         other = write_project(tmp_path / "other", CHANGED_ST)
-        text = loading.compiled_twice([other]).to_json()
+        text = compile_checked([other]).artifact.to_json()
         assert load_artifact(text).crc != crc
 
         changed = text[:200] + ("A" if text[200] != "A" else "B") + text[201:]
@@ -212,7 +213,7 @@ def test_corrupted_or_cut_transfer_keeps_the_old_configuration(
         # every load consumes the transfer: a load with nothing transferred is refused
         assert client.command("load")["error"]["code"] == "transfer"
 
-        send_artifact(client, text)  # the whole, correct text is taken
+        send_artifact(client, load_artifact(text))  # the whole, correct text is taken
         assert client.command("load")["status"]["crc"] == load_artifact(text).crc
 
 
@@ -379,8 +380,8 @@ def test_compile_twice_gate(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> 
         first, second = _run("1", crc), _run("2", "0BADC0DE", "33333333")
         return CheckTwiceResult(first, second, compare(first, second))
 
-    monkeypatch.setattr(loading, "check_twice", differing)
-    with pytest.raises(LoadRefused) as mismatch:
+    monkeypatch.setattr(compile_gate, "check_twice", differing)
+    with pytest.raises(Refusal) as mismatch:
         compile_checked([project])
     assert mismatch.value.code == "check_twice"
     assert f"configuration CRC: {crc} != 0BADC0DE" in mismatch.value.message
@@ -389,8 +390,8 @@ def test_compile_twice_gate(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> 
     def agreeing_elsewhere(paths: object) -> CheckTwiceResult:
         return CheckTwiceResult(_run("1", "0BADC0DE"), _run("2", "0BADC0DE"), ())
 
-    monkeypatch.setattr(loading, "check_twice", agreeing_elsewhere)
-    with pytest.raises(LoadRefused) as elsewhere:
+    monkeypatch.setattr(compile_gate, "check_twice", agreeing_elsewhere)
+    with pytest.raises(Refusal) as elsewhere:
         compile_checked([project])
     assert f"this compile gives configuration CRC {crc}" in elsewhere.value.message
     assert "0BADC0DE" in elsewhere.value.message

@@ -20,7 +20,7 @@ def run(text: str, cycles: int = 1) -> dict[str, object]:
     resource.start()
     for _ in range(cycles):
         resource.cycle()
-    return resource.values()
+    return resource.variables.values()
 
 
 def test_a_declared_input_named_en_is_an_input_not_the_implicit_enable() -> None:

@@ -39,7 +39,7 @@ def run_cycles(text: str, cycles: int, cycle_ms: int = 100) -> list[dict[str, An
     trace = []
     for _ in range(cycles):
         resource.cycle()
-        trace.append(resource.values())
+        trace.append(resource.variables.values())
         clock.advance(cycle_ms * 1_000_000)
     return trace
 

@@ -501,14 +501,14 @@ def assert_same_run(program: str, cycles: int = CYCLES) -> None:
     for cycle in range(1, cycles + 1):
         resource.cycle()
         walker.run_cycle(clock.now_ns())
-        compiled, oracle = resource.values(), walker.values()
+        compiled, oracle = resource.variables.values(), walker.values()
         assert compiled.keys() == oracle.keys()
         differences = {
             path: (compiled[path], oracle[path])
             for path in compiled
             if not _same(compiled[path], oracle[path])
         }
-        states = {p["name"]: p["state"] for p in resource.status()["programs"]}
+        states = {p.name: p.state for p in resource.status().programs}
         assert not differences and states == walker.states(), (
             f"cycle {cycle}: compiled vs tree walker {differences}; "
             f"states {states} vs {walker.states()}\n{program}"

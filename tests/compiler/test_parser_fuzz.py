@@ -294,8 +294,10 @@ def test_the_valid_program_compiles_loads_and_runs() -> None:
     for _ in range(5):
         resource.cycle()
         clock.advance(100_000_000)
-    assert resource.status()["programs"][0]["state"] == "RUN"
-    assert resource.values()["Main.ctr.count"] == 3  # the TON let the counter run to its limit
+    assert resource.status().programs[0].state == "RUN"
+    assert (
+        resource.variables.values()["Main.ctr.count"] == 3
+    )  # the TON let the counter run to its limit
 
 
 def test_mutation_keeps_the_text_when_it_cannot_apply() -> None:

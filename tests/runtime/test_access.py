@@ -155,7 +155,7 @@ def test_the_runtime_refuses_whoever_sends_the_command(tmp_path: Path, zenoh_end
         stopped = padt("stop", *endpoint, "--user", "op", env=env)
         assert stopped.returncode == 0, stopped.stderr
         op = ResourceClient(client.session, "Guarded")
-        assert op.login("op", PASSWORDS["op"])["level"] == "operator"
+        assert op.login("op", PASSWORDS["op"]).level == "operator"
         assert op.command("status")["status"]["state"] == "STOP/VALID CONFIGURATION"
     logs = [p.read_text(errors="replace") for p in tmp_path.rglob("*") if p.is_file()]
     assert not any(password in text for text in logs for password in PASSWORDS.values())
@@ -192,7 +192,7 @@ def test_the_demo_makes_its_administrator_once_and_keeps_only_the_hash(tmp_path:
             wait_until_answering(anonymous)
             assert anonymous.command("stop")["error"]["code"] == "unauthenticated"
             admin = ResourceClient(session, "Tank1")
-            assert admin.login("admin", password)["level"] == "administrator"
+            assert admin.login("admin", password).level == "administrator"
             assert admin.command("stop")["ok"]
             # the same administrator is the REST API's Security Administrator
             api = next(x for x in lines if "REST API" in x).split()[4].removesuffix("/docs")

@@ -10,7 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from runtime.event_log import DAY_NS, GENESIS, ChainReport, Event, EventLog, verify_chain
+from runtime.contract.protocol import Event
+from runtime.contract.wire import encode
+from runtime.event_log import DAY_NS, GENESIS, ChainReport, EventLog, verify_chain
 
 T0 = 1_750_000_000 * 10**9
 
@@ -63,7 +65,7 @@ def test_event_fields_and_json() -> None:
     log = EventLog(clock)
     event = log.record("force", "Forcing was switched on.", user="anna", variable="P.x")
     assert event == Event(1, T0, "force", "Forcing was switched on.", "anna", {"variable": "P.x"})
-    assert event.as_json() == {
+    assert encode(event) == {
         "seq": 1,
         "time_ns": T0,
         "kind": "force",

@@ -31,14 +31,14 @@ PROGRAMS = [{"name": "Control", "local_forcing_allowed": True}, {"name": "Safety
 def test_a_forced_input_replaces_what_the_io_delivers() -> None:
     h = harness(PLANT, PROGRAMS)
     h.ok("force", variable="level", value=95)
-    h.resource.set_inputs({"level": 10})
+    h.resource.io.set_inputs({"level": 10})
     h.cycle()
     assert h.value("Control.n") == 1 and h.value("pump") is True  # prepared, not started
     h.ok("start_forcing")
-    h.resource.set_inputs({"level": 10})
+    h.resource.io.set_inputs({"level": 10})
     h.cycle()
     assert (h.value("level"), h.value("alarm"), h.value("pump")) == (95, True, False)
-    assert h.resource.outputs["pump"] is False
+    assert h.resource.io.outputs["pump"] is False
     forcing = h.ok("forcing")["forcing"]
     assert forcing["started"] == [""] and forcing["entries"][0]["active"] is True
 
@@ -47,12 +47,12 @@ def test_a_forced_output_wins_over_the_program() -> None:
     h = harness(PLANT, PROGRAMS)
     h.ok("start_forcing")
     h.ok("force", variable="pump", value=True)
-    h.resource.set_inputs({"level": 80})  # the program says: pump off
+    h.resource.io.set_inputs({"level": 80})  # the program says: pump off
     h.cycle(2)
-    assert h.resource.outputs["pump"] is True
+    assert h.resource.io.outputs["pump"] is True
     h.ok("force", variable="pump", value=True, switch=False)  # switch OFF: not forced
     h.cycle()
-    assert h.resource.outputs["pump"] is False
+    assert h.resource.io.outputs["pump"] is False
 
 
 def test_local_forcing_needs_its_program_allowed_and_started() -> None:

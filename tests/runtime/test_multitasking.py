@@ -22,7 +22,7 @@ def test_programs_run_by_priority_zero_first() -> None:
     PROGRAM High VAR n : INT; END_VAR n := n + 1; END_PROGRAM
     """
     h = harness(text, [{"name": "Low", "priority": 5}, {"name": "High", "priority": 0}])
-    assert [p["name"] for p in h.resource.status()["programs"]] == ["High", "Low"]
+    assert [p.name for p in h.resource.status().programs] == ["High", "Low"]
     h.cycle(3)
     assert (h.value("High.n"), h.value("Low.n")) == (3, 3)
 
@@ -64,8 +64,8 @@ def test_a_program_over_its_slice_resumes_where_it_stopped() -> None:
     h.cycle()
     assert h.value("Watcher.seen") == 1  # ... so seen one CPU cycle later
     assert (h.value("Worker.started"), h.value("Worker.k")) == (2, 14)
-    program = next(p for p in h.resource.status()["programs"] if p["name"] == "Worker")
-    assert program["cpu_cycles_max"] == 3
+    program = next(p for p in h.resource.status().programs if p.name == "Worker")
+    assert program.cpu_cycles_max == 3
 
 
 def test_the_program_watchdog_puts_only_that_program_in_error() -> None:
@@ -78,8 +78,8 @@ def test_the_program_watchdog_puts_only_that_program_in_error() -> None:
     assert h.state("Worker") == "ERROR"
     assert h.state("Watcher") == "RUN"
     assert h.state() == "RUN"
-    error = next(p for p in h.resource.status()["programs"] if p["name"] == "Worker")["error"]
-    assert "program watchdog" in error
+    error = next(p for p in h.resource.status().programs if p.name == "Worker").error
+    assert "program watchdog" in str(error)
     events = h.ok("events")["events"]
     assert any(e["kind"] == "error" and "Worker" in e["message"] for e in events)
     assert h.value("done") == 0  # the half-done program cycle is never published

@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 
+from runtime import reload_switch
 from runtime.contract.artifact import crc32_hex
 from runtime.reload import SwitchOverTooLong, switch_over
 from tests.support.resource_harness import Harness, compiled, harness
@@ -69,9 +70,9 @@ def test_values_carry_over_by_name_through_fbs_and_arrays_of_structs() -> None:
     assert (summary["Main.held"], summary["Main.kept"]) == ("new", "deleted")
     assert summary["points[2].x"] == "kept" and summary["total"] == "kept"
     assert plan["hazards"] == [] and plan["possible"] is True
-    before = h.resource.values()
+    before = h.resource.variables.values()
     assert reload(h, changed)["ok"]
-    after = h.resource.values()
+    after = h.resource.variables.values()
     for path in ("Main.c.count", "Main.c.inner.ET", "points[2].x", "total", "Main.name"):
         assert after[path] == before[path], path
     assert after["Main.level"] == before["Main.level"] == 10
@@ -102,7 +103,7 @@ def test_preconditions_refuse_and_keep_the_old_configuration() -> None:
 
     h = harness(PLANT)
     h.cycle()
-    crc = h.resource.status()["crc"]
+    crc = h.resource.status().crc
     refused = reload(h, PLANT, params={"safety_time_ms": 800})
     assert refused["error"]["code"] == "needs_download"
     assert "safety_time_ms" in refused["error"]["message"]
@@ -112,7 +113,7 @@ def test_preconditions_refuse_and_keep_the_old_configuration() -> None:
     h.resource.system.READ_ONLY_IN_RUN = True
     assert reload(h, PLANT)["error"]["code"] == "read_only"
     h.resource.system.READ_ONLY_IN_RUN = False
-    assert h.resource.status()["crc"] == crc
+    assert h.resource.status().crc == crc
     events = [e for e in h.ok("events")["events"] if e["kind"] == "reload"]
     assert len(events) == 3 and all(e["details"]["old_crc"] == crc for e in events)
 
@@ -316,7 +317,7 @@ def test_deleting_p0_while_its_flag_is_true_fires_the_trigger() -> None:
 
 def test_a_corrupted_or_cut_transfer_is_refused_and_the_old_configuration_stays() -> None:
     h = harness(PLANT, start=False)
-    crc = h.resource.status()["crc"]
+    crc = h.resource.status().crc
     h.ok("write", variable="Main.level", value=7)
     new = compiled(PLANT.replace("level + 2", "level + 5"))
     text = new.to_json()
@@ -329,7 +330,7 @@ def test_a_corrupted_or_cut_transfer_is_refused_and_the_old_configuration_stays(
     h.ok("transfer_chunk", offset=0, data=corrupted)
     bad = h.cmd("load")
     assert bad["error"]["code"] == "transfer" and "CRC" in bad["error"]["message"]
-    assert h.resource.status()["crc"] == crc and h.value("Main.level") == 7
+    assert h.resource.status().crc == crc and h.value("Main.level") == 7
     refusals = [e for e in h.ok("events")["events"] if e["kind"] == "load"]
     assert [e["details"]["old_crc"] for e in refusals[-2:]] == [crc, crc]
     h.send(new)
@@ -342,11 +343,11 @@ def test_a_corrupted_or_cut_transfer_is_refused_and_the_old_configuration_stays(
 
 def test_a_reload_against_another_running_configuration_is_refused() -> None:
     h = harness(PLANT)
-    running = h.resource.status()["crc"]
+    running = h.resource.status().crc
     change = PLANT.replace("level + 2", "level + 3")
     h.send(compiled(change))
     assert h.cmd("reload", expected_crc="00000000")["error"]["code"] == "changed"
-    assert h.resource.status()["crc"] == running
+    assert h.resource.status().crc == running
     h.send(compiled(change))
     assert h.ok("reload", expected_crc=running)["reload"]["old_crc"] == running
 
@@ -357,7 +358,7 @@ def test_a_configuration_for_another_resource_is_refused() -> None:
     foreign = replace(other, resource=replace(other.resource, name="Other")).with_crc()
     h.send(foreign)
     assert h.refused("load") == "resource"
-    assert h.refused("transfer_begin", size=10, crc="0") == "transfer"
+    assert h.refused("transfer_begin", size=10, crc="0") == "bad_request"  # the decoder's
 
 
 def test_a_switch_over_past_its_deadline_leaves_the_old_configuration_untouched() -> None:
@@ -365,13 +366,13 @@ def test_a_switch_over_past_its_deadline_leaves_the_old_configuration_untouched(
     text = "TYPE Point : STRUCT x : INT; END_STRUCT; END_TYPE\n" + text
     h = harness(text)
     h.cycle(2)
-    before = h.resource.values()
-    job = h.resource.begin_reload(compiled(text.replace("n + 1", "n + 2")), {})
+    before = h.resource.variables.values()
+    job = reload_switch.begin(h.resource, compiled(text.replace("n + 1", "n + 2")), {})
     job.prepare()
     assert job.prepared is not None and job.instances is not None
     with pytest.raises(SwitchOverTooLong):
         switch_over(job.prepared, job.instances, deadline_ns=0)  # long past
-    assert h.resource.values() == before
-    assert h.resource.status()["crc"] == job.old_artifact.crc
+    assert h.resource.variables.values() == before
+    assert h.resource.status().crc == job.old_artifact.crc
     h.cycle()
     assert h.value("Big.n") == 3  # the old code runs on

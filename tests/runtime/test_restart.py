@@ -22,7 +22,9 @@ from runtime.clock import VirtualClock
 from runtime.context import ContextInvalid, load_context, save_context
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.main import context_path
+from runtime.program_control import start_program, stop_program
 from runtime.resource import Resource
+from runtime.restart import take_context, warm_start
 from tests.support.runtime_process import (
     client_session,
     router,
@@ -73,7 +75,7 @@ def powered_up(artifact: Artifact, path: Path) -> Resource:
     resource.load(artifact)
     saved = load_context(path, artifact.crc)
     if not isinstance(saved, ContextInvalid):
-        resource.warm_start(saved)
+        warm_start(resource, saved)
     return resource
 
 
@@ -91,15 +93,15 @@ def test_a_warm_start_restores_values_timers_and_steps(tmp_path: Path) -> None:
     first.start()
     first.write("Chart.go", True)
     run(first, 30)
-    before = first.values()
+    before = first.variables.values()
     assert before["Chart.Busy.X"] is True and before["Counter.t.ET"] == 290_000_000
-    context = first.context()
+    context = take_context(first)
     assert context is not None
     save_context(tmp_path / "context.json", context)
 
     second = powered_up(artifact, tmp_path / "context.json")
-    assert second.status()["start"] == "warm"
-    assert {k: v for k, v in second.values().items() if not k.startswith("Trip.")} == {
+    assert second.status().start == "warm"
+    assert {k: v for k, v in second.variables.values().items() if not k.startswith("Trip.")} == {
         k: v for k, v in before.items() if not k.startswith("Trip.")
     }
     assert second.read("Trip.n") == 0  # safety-related: always a cold start
@@ -119,8 +121,8 @@ def test_a_program_stopped_before_the_power_failure_stays_stopped(tmp_path: Path
     first = powered_up(artifact, tmp_path / "context.json")
     first.start()
     run(first, 3)
-    first.stop_program("Chart")
-    context = first.context()
+    stop_program(first, "Chart")
+    context = take_context(first)
     assert context is not None
     save_context(tmp_path / "context.json", context)
     second = powered_up(artifact, tmp_path / "context.json")
@@ -130,8 +132,8 @@ def test_a_program_stopped_before_the_power_failure_stays_stopped(tmp_path: Path
         "Chart": "STOP",
         "Trip": "RUN",
     }
-    second.start_program("Chart")
-    assert second.program("Chart").state.value == "RUN"
+    start_program(second, "Chart")
+    assert second.variables.program("Chart").state.value == "RUN"
 
 
 def test_a_context_of_another_configuration_gives_a_cold_start(tmp_path: Path) -> None:
@@ -139,13 +141,13 @@ def test_a_context_of_another_configuration_gives_a_cold_start(tmp_path: Path) -
     first = powered_up(artifact, tmp_path / "context.json")
     first.start()
     run(first, 5)
-    context = first.context()
+    context = take_context(first)
     assert context is not None
     save_context(tmp_path / "context.json", context)
     other = compiled(autostart="cold")  # another parameter: another configuration CRC
     assert other.crc != artifact.crc
     resource = powered_up(other, tmp_path / "context.json")
-    assert resource.status()["start"] == "cold"
+    assert resource.status().start == "cold"
     assert resource.read("Counter.n") == 0
 
 
@@ -153,8 +155,8 @@ def restored_values(artifact: Artifact, state_dir: Path) -> tuple[str, dict[str,
     """What a restart must show: the values of the context on disk now (or the initial
     values when there is no valid one), computed in this process."""
     resource = powered_up(artifact, context_path(state_dir))
-    expected = resource.status()["start"]
-    return str(expected), json.loads(json.dumps(resource.values()))
+    expected = resource.status().start
+    return str(expected), json.loads(json.dumps(resource.variables.values()))
 
 
 def kill_loop(tmp_path: Path, endpoint: str, kills: int, seed: int) -> None:

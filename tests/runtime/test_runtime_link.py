@@ -13,10 +13,12 @@ import zenoh
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from backend.engineering.resource_client import ResourceClient, WatchRefused
+from backend.engineering.resource_client import ResourceClient
 from frontend.app import PadtUi
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.keyspace import alive_key, command_key
+from runtime.contract.refusal import Refusal
+from runtime.contract.wire import encode
 from tests.conftest import free_port
 from tests.support.runtime_process import (
     client_session,
@@ -128,7 +130,9 @@ def test_watch_sets_push_only_what_is_watched_with_quality(
         raise AssertionError(f"no such message; last: {pushed[-1:]}")
 
     with running_resource("Tank1", tmp_path, zenoh_endpoint) as (_, client):
-        watch = client.watch(["tankcontrol.level", "TankControl.pump"], pushed.append, 50)
+        watch = client.watch(
+            ["tankcontrol.level", "TankControl.pump"], lambda m: pushed.append(encode(m)), 50
+        )
         assert watch.variables == ["TankControl.level", "TankControl.pump"]
         first = latest(lambda m: m["values"]["TankControl.level"]["quality"] == "live")
         assert sorted(first["values"]) == ["TankControl.level", "TankControl.pump"]
@@ -142,8 +146,8 @@ def test_watch_sets_push_only_what_is_watched_with_quality(
         latest(lambda m: m["values"]["TankControl.level"]["quality"] == "stale")
 
         # a typo gets an error, not an empty field
-        with pytest.raises(WatchRefused, match="unknown_variable"):
-            client.watch(["TankControl.levle"], pushed.append)
+        with pytest.raises(Refusal, match="unknown_variable"):
+            client.watch(["TankControl.levle"], print)
         assert client.command("watches")["watches"] == [watch.watch_id]
         with client_session(zenoh_endpoint) as other_session:  # a second client ...
             other = ResourceClient(other_session, "Tank1").watch(["TankControl.level"], print)
@@ -164,7 +168,7 @@ def test_events_are_pushed_in_order(tmp_path: Path, zenoh_endpoint: str) -> None
     write_demo_artifact(tmp_path)
     events: list[dict[str, Any]] = []
     with running_resource("Tank1", tmp_path, zenoh_endpoint) as (_, client):
-        client.on_events(events.append)
+        client.on_events(lambda e: events.append(encode(e)))
         assert client.command("stop")["ok"]
         assert client.command("write", variable="TankControl.level", value=400)["ok"]
         deadline = time.monotonic() + 10
@@ -244,15 +248,15 @@ def test_the_ui_watches_again_when_the_runtime_comes_back(
                 with runtime_process("Tank1", tmp_path, zenoh_endpoint) as process:
                     deadline = time.monotonic() + 20
                     while True:
-                        with ui.latest.lock:
-                            quality = dict(ui.latest.quality)
+                        with ui.feed.latest.lock:
+                            quality = dict(ui.feed.latest.quality)
                         if quality.get("TankControl.level") == "live":
                             break
                         assert time.monotonic() < deadline, f"no live values (run {attempt})"
                         time.sleep(0.05)
                     process.kill()
                     process.wait()
-                with ui.latest.lock:
-                    ui.latest.quality.clear()
+                with ui.feed.latest.lock:
+                    ui.feed.latest.quality.clear()
         finally:
             ui.close()

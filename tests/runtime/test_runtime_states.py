@@ -35,25 +35,25 @@ PROGRAMS = [{"name": "Control"}, {"name": "Clock", "priority": 1}]
 
 def test_outputs_are_safe_in_stop_and_live_in_run() -> None:
     h = harness(TWO, PROGRAMS, start=False)
-    assert h.resource.outputs == {"valve": False, "speed": 0}
+    assert h.resource.io.outputs == {"valve": False, "speed": 0}
     h.ok("start")
     h.cycle()
-    assert h.resource.outputs == {"valve": True, "speed": 1200}
+    assert h.resource.io.outputs == {"valve": True, "speed": 1200}
     h.ok("stop")
     assert h.state() == "STOP/VALID CONFIGURATION"
-    assert h.resource.outputs == {"valve": False, "speed": 0}
+    assert h.resource.io.outputs == {"valve": False, "speed": 0}
     assert h.value("valve") is True  # the variable keeps its value; the field gets 0
 
 
 def test_an_output_can_have_its_own_safe_value() -> None:
     # a valve that must open to be safe (energise to trip), and a speed held at 300
     h = harness(TWO, PROGRAMS, start=False, safe_values={"valve": True, "SPEED": 300})
-    assert h.resource.outputs == {"valve": True, "speed": 300}
+    assert h.resource.io.outputs == {"valve": True, "speed": 300}
     h.ok("start")
     h.cycle()
     h.ok("write", variable="Control.n", value=0)
     h.resource.error_stop("test")
-    assert h.resource.outputs == {"valve": True, "speed": 300}
+    assert h.resource.io.outputs == {"valve": True, "speed": 300}
 
 
 def test_a_safe_value_must_fit_a_located_output() -> None:
@@ -71,7 +71,7 @@ def test_a_safe_value_must_fit_a_located_output() -> None:
 
 def test_inputs_are_read_at_the_start_of_the_cycle() -> None:
     h = harness(TWO, PROGRAMS)
-    h.resource.set_inputs({"level": 42})
+    h.resource.io.set_inputs({"level": 42})
     h.cycle()
     assert h.value("Control.seen") == 42
 
@@ -143,7 +143,7 @@ def test_error_stop_needs_init_and_init_cold_starts() -> None:
     h = harness(text)
     h.cycle(3)
     assert h.state() == "ERROR STOP"
-    assert "Emergency Stop 2" in h.resource.status()["error"]
+    assert "Emergency Stop 2" in str(h.resource.status().error)
     assert h.refused("start") == "state"
     h.ok("init")
     assert h.state() == "STOP/VALID CONFIGURATION"
@@ -259,6 +259,6 @@ def test_read_only_system_variables_carry_the_resource_values() -> None:
     h = harness(text, watchdog_ms=150)
     h.cycle(4)
     assert h.value("P.wd") == 150_000_000
-    assert h.value("P.crc") == int(h.resource.status()["crc"], 16)
+    assert h.value("P.crc") == int(str(h.resource.status().crc), 16)
     assert h.value("P.tick") == 30  # 3 cycles of 10 ms since the runtime came up
     assert h.value("P.last") == 0  # on virtual time a program without loops costs nothing

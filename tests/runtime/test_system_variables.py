@@ -408,10 +408,10 @@ def test_a_program_on_a_resource_sees_coldstart() -> None:
     )
     resource.system.COLDSTART = True  # the first cycle after a cold start
     resource.cycle()
-    assert resource.values()["P.cold"] is True
+    assert resource.variables.values()["P.cold"] is True
     resource.system.COLDSTART = False
     resource.cycle()
-    assert resource.values()["P.cold"] is False
+    assert resource.variables.values()["P.cold"] is False
 
 
 def test_a_program_on_a_resource_writes_an_emergency_stop() -> None:

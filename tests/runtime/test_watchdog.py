@@ -13,7 +13,9 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
 from runtime.contract.artifact import ResourceConfig
-from runtime.resource import CommandRefused, Resource, ResourceState
+from runtime.contract.protocol import ResourceState
+from runtime.contract.refusal import Refusal
+from runtime.resource import Resource
 from tests.support.resource_harness import harness
 from tests.support.runtime_process import running_resource, store_artifact
 
@@ -57,10 +59,10 @@ def test_endless_loops_end_in_error_stop(form: str) -> None:
     # generous bound: the watchdog is 50 ms; a hang would never return at all
     assert time.monotonic() - started < 5
     assert resource.state == ResourceState.ERROR_STOP
-    assert resource.status()["error"] == (
+    assert resource.status().error == (
         "watchdog: the cycle took longer than 50 ms (in program Loop)"
     )
-    with pytest.raises(CommandRefused, match="INIT first"):
+    with pytest.raises(Refusal, match="INIT first"):
         resource.start()
 
 
@@ -72,7 +74,7 @@ def test_init_leaves_error_stop_with_a_cold_start() -> None:
     resource.init()
     assert resource.state == ResourceState.STOP_VALID
     assert resource.read("Loop.kept") == 7  # every variable back at its initial value
-    with pytest.raises(CommandRefused):
+    with pytest.raises(Refusal):
         resource.init()  # only from ERROR STOP
 
 
@@ -107,5 +109,5 @@ def test_endless_recursion_is_a_program_error_and_the_resource_runs_on() -> None
     h.cycle(2)
     assert h.state("Recurse") == "ERROR"
     assert h.state() == "RUN" and h.value("Tick.n") == 2
-    error = next(p for p in h.resource.status()["programs"] if p["name"] == "Recurse")["error"]
-    assert error.startswith("calls nested too deep (recursion) in POU Deeper (test.st:4)")
+    error = next(p for p in h.resource.status().programs if p.name == "Recurse").error
+    assert str(error).startswith("calls nested too deep (recursion) in POU Deeper (test.st:4)")

@@ -18,8 +18,8 @@ from runtime.contract.artifact import (
     UserAccount,
     crc32_hex,
 )
+from runtime.contract.protocol import pieces
 from runtime.resource import Resource
-from runtime.transfer import pieces
 
 # what tests mostly want: single step, forcing and writes allowed
 OPEN_RESOURCE: dict[str, Any] = {"safety_operation": False, "global_forcing_allowed": True}
@@ -37,8 +37,7 @@ class Harness:
         """A command as a client sends it; the reply as it would get it."""
         session = {"token": self.token} if self.token is not None else {}
         request = {"cmd": command, **session, **args}
-        reply = execute(self.resource, json.dumps(request).encode())
-        crossed: dict[str, Any] = json.loads(json.dumps(reply))  # what crosses the wire
+        crossed: dict[str, Any] = json.loads(execute(self.resource, json.dumps(request).encode()))
         return crossed
 
     def ok(self, command: str, /, **args: Any) -> dict[str, Any]:
@@ -63,8 +62,8 @@ class Harness:
         for _ in range(count):
             self.resource.cycle()
             self.clock.advance(self.cycle_ns)
-            self.trace.append(self.resource.values())
-        return self.resource.values()
+            self.trace.append(self.resource.variables.values())
+        return self.resource.variables.values()
 
     def value(self, name: str) -> Any:
         return self.resource.read(name)
@@ -72,8 +71,8 @@ class Harness:
     def state(self, program: str | None = None) -> str:
         status = self.resource.status()
         if program is None:
-            return str(status["state"])
-        return next(str(p["state"]) for p in status["programs"] if p["name"] == program)
+            return str(status.state)
+        return next(str(p.state) for p in status.programs if p.name == program)
 
 
 def compiled(

@@ -14,9 +14,9 @@ from typing import Any
 
 import httpx
 
-from backend.api.accounts import PadtAccounts, with_account, write_accounts
 from backend.api.server import ApiServer
 from backend.api.service import PadtService
+from backend.engineering.padt_accounts import PadtAccounts, with_account, write_accounts
 from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.accounts import hash_password

@@ -17,10 +17,10 @@ from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 
-from backend.api.levels import ADMINISTRATOR, PADT_LEVELS
-from runtime.access import AccessControl, AccessDenied, Session
-from runtime.contract.accounts import account_problems, hash_password
+from backend.engineering.padt_levels import ADMINISTRATOR, PADT_LEVELS
+from runtime.contract.accounts import AccessControl, Session, account_problems, hash_password
 from runtime.contract.artifact import UserAccount
+from runtime.contract.refusal import Refusal
 
 FORMAT = "padt-accounts"
 VERSION = 1
@@ -129,16 +129,16 @@ class PadtAccounts:
             self._forget_resources(token)
 
     def check(self, token: str | None, needed: str) -> Session:
-        """The caller's session; AccessDenied when it is missing, expired or too low."""
+        """The caller's session; Refusal when it is missing, expired or too low."""
         with self._lock:
             try:
                 session = self._access.check(token, needed)
-            except AccessDenied:
+            except Refusal:
                 if token is not None and token not in self._access.sessions:
                     self._forget_resources(token)
                 raise
         if session is None:  # no accounts at all: `padt api` does not start like that
-            raise AccessDenied("unauthenticated", "the PADT has no accounts")
+            raise Refusal("unauthenticated", "the PADT has no accounts")
         return session
 
     def accounts(self) -> tuple[UserAccount, ...]:

@@ -1,0 +1,630 @@
+"""The bus protocol of a resource, version 1: every command it answers and every message it
+publishes, one typed dataclass each (docs/protocol.md is the reference for people).
+
+A command class names its wire name, the access level it needs and its reply type; its
+fields are its arguments, with their types, ranges and size limits. `decode_request`
+checks a whole request (size, nesting, types, ranges, unknown arguments) before anything
+else of the runtime sees it; `decode_reply` and `decode` check what a client receives the
+same way. On the wire a request is `{"cmd": NAME, "token": TOKEN, ...arguments}`, a reply
+`{"ok": true, ...reply fields}` or `{"ok": false, "error": {"code", "message"}}`, all UTF-8
+JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import typing
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Annotated, Any, ClassVar, Generic, TypeVar
+
+from runtime.contract.accounts import NAME_PATTERN, Level
+from runtime.contract.artifact import ProgramConfig, ResourceConfig
+from runtime.contract.refusal import Refusal
+from runtime.contract.wire import (
+    MAX_DEPTH,
+    JsonValue,
+    MaxLength,
+    Pattern,
+    Range,
+    decode,
+    depth,
+    encode,
+)
+
+MAX_REQUEST_BYTES = 64 * 1024
+MAX_PATH = 1024  # characters of a variable path
+MAX_NAME = 64  # characters of a program or parameter name
+MAX_WATCHED = 4096  # variables in one watch request (a larger set comes in several)
+MAX_RENAMES = 4096
+MAX_MS = 86_400_000  # a day: longer than any parameter or time limit allows
+MAX_CHUNK = 24 * 1024  # characters of artifact text per transfer_chunk
+MAX_ARTIFACT = 64 * 1024 * 1024  # characters of a whole artifact
+MIN_WATCH_PERIOD_MS = 10
+MAX_WATCH_PERIOD_MS = 60_000
+MAX_EVENTS = 1000  # events per `events` request
+ADMINISTRATOR_PARAMETERS = ("allow_online_settings",)
+
+
+class ResourceState(StrEnum):
+    STOP_INVALID = "STOP/INVALID CONFIGURATION"
+    STOP_VALID = "STOP/VALID CONFIGURATION"
+    RUN = "RUN"
+    RUN_UP_STOP = "RUN/UP STOP"  # running, but no user program runs
+    ERROR_STOP = "ERROR STOP"
+
+
+class ProgramState(StrEnum):
+    RUN = "RUN"
+    RUN_FREEZE = "RUN_FREEZE"  # single step
+    STOP = "STOP"
+    ERROR = "ERROR"
+
+
+class Quality(StrEnum):
+    """How far a watched value can be trusted."""
+
+    LIVE = "live"
+    FORCED = "forced"
+    STALE = "stale"  # nothing that could change it runs
+    DELETED = "deleted"  # gone with a reload
+
+
+# ---- argument types
+
+VariableName = Annotated[str, MaxLength(MAX_PATH)]
+ProgramName = Annotated[str, MaxLength(MAX_NAME)]
+Milliseconds = Annotated[int, Range(1, MAX_MS)]
+Crc = Annotated[str, Pattern(r"[0-9A-Fa-f]{8}", "8 hex digits")]
+WatchId = Annotated[str, Pattern(r"[A-Za-z0-9_-]{1,64}", "1 to 64 of A-Z a-z 0-9 _ -")]
+AccountName = Annotated[str, Pattern(NAME_PATTERN, "1 to 32 of A-Z a-z 0-9 _ -")]
+Value = Annotated[Any, JsonValue()]  # a variable's value; checked against its type later
+
+
+# ---- publications
+
+
+@dataclass(frozen=True)
+class CycleStatistics:
+    count: int
+    last_ms: float
+    min_ms: float
+    max_ms: float
+    mean_ms: float
+    period_ms: float  # the last period, start to start
+    jitter_max_ms: float
+    overruns: int
+
+
+@dataclass(frozen=True)
+class ProgramStatus:
+    name: str
+    id: int
+    priority: int
+    state: ProgramState
+    crc: str
+    cycles: int
+    cpu_cycles_max: int  # most CPU cycles one program cycle spanned
+    error: str | None
+
+
+@dataclass(frozen=True)
+class Status:
+    """Published on `status` on every change and at least every second; also the reply of
+    every command that changes a state."""
+
+    resource: str
+    state: ResourceState
+    crc: str | None
+    error: str | None  # why the resource is in ERROR STOP
+    project: str | None
+    cycle: int
+    cycle_ms: float
+    stats: CycleStatistics
+    forcing: bool
+    access: str  # "open" (no accounts) or "users"
+    start: str | None  # how it starts next (cold, warm) or last started (continued)
+    programs: list[ProgramStatus]
+
+
+@dataclass(frozen=True)
+class Event:
+    """One entry of the event log, published in order on `events` (docs/event-log.md)."""
+
+    seq: int
+    time_ns: int
+    kind: str
+    message: str
+    user: str | None
+    details: dict[str, Value]
+
+
+@dataclass(frozen=True)
+class WatchedValue:
+    value: Value
+    quality: Quality
+
+
+@dataclass(frozen=True)
+class WatchValues:
+    """A watch set's values of one cycle, published on `watch/<id>` once per its period."""
+
+    cycle: int
+    values: dict[str, WatchedValue]
+
+
+# ---- replies
+
+
+@dataclass(frozen=True)
+class Done:
+    """The reply of a command with nothing to report but that it was done."""
+
+
+@dataclass(frozen=True)
+class StatusReply:
+    status: Status
+
+
+@dataclass(frozen=True)
+class ValuesReply:
+    values: dict[str, Value]
+    cycle: int
+
+
+@dataclass(frozen=True)
+class VariableInfo:
+    path: str
+    type: str
+
+
+@dataclass(frozen=True)
+class VariablesReply:
+    variables: list[VariableInfo]
+
+
+@dataclass(frozen=True)
+class EventsReply:
+    events: list[Event]
+
+
+@dataclass(frozen=True)
+class ForceInfo:
+    variable: str
+    level: str  # "global" or a program
+    value: Value
+    switch: bool
+    active: bool
+
+
+@dataclass(frozen=True)
+class ForcingState:
+    started: list[str]  # levels where forcing runs: "" for global, else a program
+    remaining_ms: dict[str, float | None]  # per started level ("global" for "")
+    entries: list[ForceInfo]
+
+
+@dataclass(frozen=True)
+class ForcingReply:
+    forcing: ForcingState
+
+
+@dataclass(frozen=True)
+class ParametersReply:
+    resource: ResourceConfig
+    programs: list[ProgramConfig]
+
+
+@dataclass(frozen=True)
+class WatchReply:
+    id: str
+    variables: list[str]  # canonical paths, in the order asked
+
+
+@dataclass(frozen=True)
+class UnwatchReply:
+    dropped: bool
+
+
+@dataclass(frozen=True)
+class WatchesReply:
+    watches: list[str]
+
+
+@dataclass(frozen=True)
+class TransferBeginReply:
+    max_chunk: int
+
+
+@dataclass(frozen=True)
+class TransferChunkReply:
+    received: int
+
+
+@dataclass(frozen=True)
+class VariableChange:
+    path: str  # in the new configuration (the old one for `deleted`)
+    action: str  # kept | converted | initialised | new | deleted
+    old_type: str | None
+    new_type: str | None
+    source: str | None = None  # the old path a value comes from (differs after a rename)
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class Hazard:
+    kind: str  # active-step-deleted | initial-step-renamed | timed-qualifier-deleted | ...
+    instance: str  # the program or FB instance whose chart is affected
+    message: str
+
+
+@dataclass(frozen=True)
+class ProgramChanges:
+    added: list[str]
+    removed: list[str]
+    changed: list[str]
+
+
+@dataclass(frozen=True)
+class ReloadPlanInfo:
+    """What a reload would do to every value, and whether it is possible: the preview."""
+
+    old_crc: str
+    new_crc: str
+    possible: bool
+    refusals: list[str]  # why this change needs STOP and a download
+    hazards: list[Hazard]
+    programs: ProgramChanges
+    summary: dict[str, int]  # values kept, converted, initialised, new, deleted
+    changes: list[VariableChange]
+    estimate_us: float  # extra time of the switch-over between two cycles
+
+
+@dataclass(frozen=True)
+class ReloadPlanReply:
+    plan: ReloadPlanInfo
+
+
+@dataclass(frozen=True)
+class ReloadOutcome:
+    old_crc: str
+    new_crc: str
+    pause_us: float  # how long the cycles stood still for the switch-over
+    carried: int  # values carried over
+
+
+@dataclass(frozen=True)
+class ReloadReply:
+    reload: ReloadOutcome
+    status: Status
+
+
+@dataclass(frozen=True)
+class LoginReply:
+    token: str
+    user: str
+    level: str  # one of accounts.LEVELS
+
+
+# ---- the commands
+
+R = TypeVar("R")
+COMMANDS: dict[str, type[Command[Any]]] = {}  # by wire name
+
+
+class Command(Generic[R]):
+    """A command; its dataclass fields are its arguments. A subclass gives its wire name and
+    the level it needs: `class Start(Command[StatusReply], name="start", level="operator")`;
+    its reply type is the type argument. Level None: no session needed (login, logout)."""
+
+    NAME: ClassVar[str]
+    LEVEL: ClassVar[Level | None]
+    REPLY: ClassVar[type[Any]]
+
+    def __init_subclass__(cls, /, name: str, level: Level | None, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        (base,) = (b for b in cls.__orig_bases__ if typing.get_origin(b) is Command)  # type: ignore[attr-defined]
+        cls.NAME, cls.LEVEL, cls.REPLY = name, level, typing.get_args(base)[0]
+        COMMANDS[name] = cls
+
+    def level(self) -> Level | None:
+        """The level this request needs (some arguments need more than the command)."""
+        return self.LEVEL
+
+
+@dataclass(frozen=True)
+class Login(Command[LoginReply], name="login", level=None):
+    user: AccountName
+    password: AccountName
+
+
+@dataclass(frozen=True)
+class Logout(Command[Done], name="logout", level=None):
+    """Ends the session of the request's token."""
+
+
+@dataclass(frozen=True)
+class GetStatus(Command[StatusReply], name="status", level="read"):
+    pass
+
+
+@dataclass(frozen=True)
+class GetValues(Command[ValuesReply], name="values", level="read"):
+    """Every variable at once, for tools; live views use watch sets."""
+
+
+@dataclass(frozen=True)
+class GetVariables(Command[VariablesReply], name="variables", level="read"):
+    pass
+
+
+@dataclass(frozen=True)
+class GetParameters(Command[ParametersReply], name="parameters", level="read"):
+    pass
+
+
+@dataclass(frozen=True)
+class GetForcing(Command[ForcingReply], name="forcing", level="read"):
+    pass
+
+
+@dataclass(frozen=True)
+class GetEvents(Command[EventsReply], name="events", level="read"):
+    """The short-term event log after sequence number `after`, oldest first."""
+
+    after: Annotated[int, Range(0, None)] = 0
+    limit: Annotated[int, Range(1, MAX_EVENTS)] = 200
+
+
+@dataclass(frozen=True)
+class Watch(Command[WatchReply], name="watch", level="read"):
+    """Register (or, with `append`, extend) watch set `id`: its values come on `watch/<id>`
+    while the client holds the liveliness token `watchers/<id>`."""
+
+    id: WatchId
+    variables: Annotated[list[VariableName], MaxLength(MAX_WATCHED)]
+    period_ms: Annotated[int, Range(MIN_WATCH_PERIOD_MS, MAX_WATCH_PERIOD_MS)] = 100
+    append: bool = False
+
+
+@dataclass(frozen=True)
+class Unwatch(Command[UnwatchReply], name="unwatch", level="read"):
+    id: WatchId
+
+
+@dataclass(frozen=True)
+class GetWatches(Command[WatchesReply], name="watches", level="read"):
+    pass
+
+
+@dataclass(frozen=True)
+class Start(Command[StatusReply], name="start", level="operator"):
+    pass
+
+
+@dataclass(frozen=True)
+class Stop(Command[StatusReply], name="stop", level="operator"):
+    pass
+
+
+@dataclass(frozen=True)
+class ResetStats(Command[StatusReply], name="reset_stats", level="operator"):
+    pass
+
+
+@dataclass(frozen=True)
+class StartProgram(Command[StatusReply], name="start_program", level="operator"):
+    program: ProgramName
+
+
+@dataclass(frozen=True)
+class StopProgram(Command[StatusReply], name="stop_program", level="operator"):
+    program: ProgramName
+
+
+@dataclass(frozen=True)
+class Force(Command[StatusReply], name="force", level="operator"):
+    """Prepare a force value and its switch; it acts while forcing runs at its level."""
+
+    variable: VariableName
+    value: Value
+    switch: bool = True
+
+
+@dataclass(frozen=True)
+class Unforce(Command[StatusReply], name="unforce", level="operator"):
+    variable: VariableName
+
+
+@dataclass(frozen=True)
+class StartForcing(Command[StatusReply], name="start_forcing", level="operator"):
+    """Start forcing at a level: one program's (local), or global without `program`."""
+
+    program: ProgramName | None = None
+    timeout_ms: Milliseconds | None = None
+
+
+@dataclass(frozen=True)
+class StopForcing(Command[StatusReply], name="stop_forcing", level="operator"):
+    program: ProgramName | None = None
+
+
+@dataclass(frozen=True)
+class Init(Command[StatusReply], name="init", level="read-write"):
+    """Leave ERROR STOP for STOP; the next start is a cold start."""
+
+
+@dataclass(frozen=True)
+class ColdStart(Command[StatusReply], name="cold_start", level="read-write"):
+    pass
+
+
+@dataclass(frozen=True)
+class Step(Command[StatusReply], name="step", level="read-write"):
+    """In STOP: one CPU cycle of every program."""
+
+
+@dataclass(frozen=True)
+class Freeze(Command[StatusReply], name="freeze", level="read-write"):
+    program: ProgramName
+
+
+@dataclass(frozen=True)
+class Unfreeze(Command[StatusReply], name="unfreeze", level="read-write"):
+    program: ProgramName
+
+
+@dataclass(frozen=True)
+class StepProgram(Command[StatusReply], name="step_program", level="read-write"):
+    """One program cycle of a frozen program; its time advances by `interval_ms` (default:
+    the target cycle time)."""
+
+    program: ProgramName
+    interval_ms: Milliseconds | None = None
+
+
+@dataclass(frozen=True)
+class Write(Command[StatusReply], name="write", level="read-write"):
+    """Write a value once (not forcing)."""
+
+    variable: VariableName
+    value: Value
+
+
+@dataclass(frozen=True)
+class SetParameter(Command[StatusReply], name="set_parameter", level="read-write"):
+    name: Annotated[str, MaxLength(MAX_NAME)]
+    value: bool | int | str
+
+    def level(self) -> Level | None:
+        return "administrator" if self.name in ADMINISTRATOR_PARAMETERS else self.LEVEL
+
+
+@dataclass(frozen=True)
+class TransferBegin(Command[TransferBeginReply], name="transfer_begin", level="read-write"):
+    """Announce an artifact text of `size` characters and CRC `crc` (docs/reload.md)."""
+
+    size: Annotated[int, Range(1, MAX_ARTIFACT)]
+    crc: Crc
+
+
+@dataclass(frozen=True)
+class TransferChunk(Command[TransferChunkReply], name="transfer_chunk", level="read-write"):
+    offset: Annotated[int, Range(0, MAX_ARTIFACT)]
+    data: Annotated[str, MaxLength(MAX_CHUNK)]
+
+
+@dataclass(frozen=True)
+class Load(Command[StatusReply], name="load", level="read-write"):
+    """Download the transferred artifact (STOP only); a cold start follows."""
+
+
+Renames = Annotated[dict[str, VariableName], MaxLength(MAX_RENAMES)]  # NEW name -> OLD name
+
+
+@dataclass(frozen=True)
+class ReloadPreview(Command[ReloadPlanReply], name="reload_preview", level="read-write"):
+    """The reload plan of the transferred artifact against the running state."""
+
+    renames: Renames = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Reload(Command[ReloadReply], name="reload", level="read-write"):
+    """Online change to the transferred artifact. `watchdog_ms` and `target_cycle_ms` raise
+    the budget for this reload; `expected_crc` is the configuration the user previewed
+    against (refused with `changed` when the resource runs another)."""
+
+    renames: Renames = field(default_factory=dict)
+    watchdog_ms: Milliseconds | None = None
+    target_cycle_ms: Milliseconds | None = None
+    expected_crc: Crc | None = None
+
+
+# ---- requests and replies on the wire
+
+# the level each command needs (login and logout need none)
+COMMAND_LEVELS: dict[str, Level] = {
+    name: kind.LEVEL for name, kind in COMMANDS.items() if kind.LEVEL is not None
+}
+
+
+@dataclass(frozen=True)
+class Request:
+    """A decoded request: the command and the session token it came with."""
+
+    command: Command[Any]
+    token: str | None
+
+
+def decode_request(payload: bytes) -> Request:
+    """A whole request checked: size, JSON, nesting, the command and every argument.
+    Refusal `too_large`, `bad_request` or `unknown_command` otherwise."""
+    if len(payload) > MAX_REQUEST_BYTES:
+        raise Refusal("too_large", f"request larger than {MAX_REQUEST_BYTES} bytes")
+    try:
+        data = json.loads(payload)
+    except (ValueError, RecursionError):
+        raise Refusal("bad_request", "request is not valid JSON") from None
+    if depth(data) > MAX_DEPTH:
+        raise Refusal("bad_request", f"request nested deeper than {MAX_DEPTH}")
+    if not isinstance(data, dict) or not isinstance(data.get("cmd"), str):
+        raise Refusal("bad_request", 'request must be an object with a "cmd" text')
+    name = data.pop("cmd")
+    kind = COMMANDS.get(name)
+    if kind is None:
+        raise Refusal("unknown_command", f"unknown command '{name[:MAX_NAME]}'")
+    token = data.pop("token", None)
+    if token is not None and (not isinstance(token, str) or len(token) > 128):
+        raise Refusal("bad_request", '"token" must be a session token')
+    return Request(decode(kind, data), token)
+
+
+def encode_request(command: Command[Any], token: str | None) -> bytes:
+    session = {"token": token} if token is not None else {}
+    return json.dumps({"cmd": command.NAME, **session, **encode(command)}).encode()
+
+
+def encode_reply(reply: Any) -> bytes:
+    return json.dumps({"ok": True, **encode(reply)}).encode()
+
+
+def encode_refusal(refusal: Refusal) -> bytes:
+    return json.dumps({"ok": False, "error": refusal.as_json()}).encode()
+
+
+def decode_reply(command: Command[R], payload: bytes) -> R:
+    """A resource's reply to `command`, checked: the reply, or its refusal raised. A reply
+    that is not what the protocol says is refused as `bad_reply`."""
+    try:
+        data = json.loads(payload)
+    except (ValueError, RecursionError):
+        raise Refusal("bad_reply", "the reply is not valid JSON") from None
+    if not isinstance(data, dict) or not isinstance(data.get("ok"), bool):
+        raise Refusal("bad_reply", 'a reply is an object with "ok"')
+    ok = data.pop("ok")
+    if not ok:
+        error = data.get("error")
+        if not isinstance(error, dict):
+            raise Refusal("bad_reply", 'a refusal has an "error" object')
+        raise Refusal(str(error.get("code", "unknown")), str(error.get("message", "")))
+    try:
+        reply: R = decode(command.REPLY, data)
+    except Refusal as wrong:
+        raise Refusal("bad_reply", f"reply to {command.NAME}: {wrong.message}") from None
+    return reply
+
+
+def decode_publication(kind: type[R], payload: bytes) -> R:
+    """A publication (Status, Event, WatchValues) checked; Refusal `bad_reply` otherwise."""
+    try:
+        return decode(kind, json.loads(payload))
+    except (ValueError, RecursionError):
+        raise Refusal("bad_reply", f"a {kind.__name__} that is not valid JSON") from None
+    except Refusal as wrong:
+        raise Refusal("bad_reply", f"{kind.__name__}: {wrong.message}") from None
+
+
+def pieces(text: str, size: int = MAX_CHUNK) -> list[tuple[int, str]]:
+    """An artifact text in transfer chunks: (offset, data)."""
+    return [(offset, text[offset : offset + size]) for offset in range(0, len(text), size)]

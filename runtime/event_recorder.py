@@ -1,0 +1,28 @@
+"""Writing events of a resource: who acts (the user of the command being carried out), and
+which events go to the long-term log too (user actions and configuration changes)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from runtime.contract.values import jsonable
+from runtime.event_log import EventLog
+
+
+class EventRecorder:
+    def __init__(self, log: EventLog) -> None:
+        self.log = log
+        self.acting_user: str | None = None  # who sent the command being carried out
+
+    def record(
+        self,
+        kind: str,
+        message: str,
+        user: str | None = None,
+        long_term: bool | None = None,
+        **details: Any,
+    ) -> None:
+        keep = long_term if long_term is not None else kind != "error"
+        plain = {name: jsonable(value) for name, value in sorted(details.items())}
+        who = user if user is not None else self.acting_user
+        self.log.record(kind, message, user=who, long_term=keep, **plain)

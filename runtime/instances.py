@@ -1,0 +1,64 @@
+"""The executable side of a configuration: its code, the program and global instances, and
+every elementary variable bound to what it belongs to."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from runtime.code_image import CodeImage, VariablePath
+from runtime.contract.artifact import Artifact
+from runtime.intrinsics import SystemView
+from runtime.user_program import UserProgram
+
+
+@dataclass(frozen=True)
+class BoundVariable:
+    """A variable path with what it belongs to: a user program, or the globals."""
+
+    program: UserProgram | None  # None: a global
+    path: VariablePath
+
+
+@dataclass
+class Instances:
+    image: CodeImage
+    programs: list[UserProgram]  # by priority, then Program ID
+    globals: Any
+    bound: list[BoundVariable]
+    by_name: dict[str, BoundVariable]
+
+
+def instantiate(artifact: Artifact, system: SystemView) -> Instances:
+    """Fresh instances of everything: every variable at its initial value."""
+    image = CodeImage(artifact, system)
+    configs = sorted(artifact.programs, key=lambda p: (p.priority, p.program_id))
+    # a program needs its own view of the globals when another program could change them
+    # during its program cycle, or when its cycle spans several CPU cycles
+    private = len(configs) > 1 or any(c.max_duration_us for c in configs)
+    programs = []
+    for config in configs:
+        instance = image.new_instance(config.pou)
+        # `prog();` in ST reaches the user program of that POU (the first by priority), so
+        # a program called from another one is the same instance the task runs
+        image.register_program(config.pou, instance)
+        view = image.new_globals() if private and image.globals is not None else image.globals
+        programs.append(
+            UserProgram(config, instance, image.variable_paths(config.name, config.pou), view)
+        )
+    for pou in artifact.pous:  # a PROGRAM that is no user program still has one instance
+        if pou.kind == "PROGRAM":
+            image.register_program(pou.name, image.new_instance(pou.name))
+    bound = [
+        *(BoundVariable(p, path) for p in programs for path in p.paths),
+        *(BoundVariable(None, path) for path in image.global_paths()),
+    ]
+    return Instances(image, programs, image.globals, bound, index(bound))
+
+
+def index(bound: list[BoundVariable]) -> dict[str, BoundVariable]:
+    """Variables by upper-case path (ST names are case-insensitive); the first wins."""
+    by_name: dict[str, BoundVariable] = {}
+    for variable in bound:
+        by_name.setdefault(variable.path.path.upper(), variable)
+    return by_name

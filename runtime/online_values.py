@@ -1,0 +1,56 @@
+"""Online values (spec section 12): what clients view, as watch sets, and the values of a
+set as one cycle left them, each with its quality. Only the reading happens between two
+cycles; the message is built on the link's publisher thread (`WatchSnapshot.message`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from runtime.contract.protocol import ProgramState, Quality
+from runtime.contract.refusal import Refusal
+from runtime.force_table import ForceTable
+from runtime.variables import Variables
+from runtime.watch_sets import WatchSet, WatchSets, WatchSnapshot
+
+_RUNNING = (ProgramState.RUN, ProgramState.RUN_FREEZE)
+
+
+class OnlineValues:
+    def __init__(self, variables: Variables) -> None:
+        self._variables = variables
+        self.watches = WatchSets()
+
+    def watch(self, watch_id: str, names: list[str], period_ms: int, append: bool) -> list[str]:
+        """Register what a client views; returns the canonical paths (all names must
+        exist: a typo gets an error, not a silently empty field). `append` adds to a set
+        (a large set arrives in several requests)."""
+        if self.watches.full(watch_id):
+            raise Refusal("too_many", "too many watch sets on this resource")
+        paths = tuple(self._variables.lookup(name).path.path for name in names)
+        existing = self.watches.get(watch_id) if append else None
+        if existing is not None:
+            paths = existing.paths + paths
+        self.watches.set(WatchSet(watch_id, paths, period_ms * 1_000_000))
+        return list(paths)
+
+    def snapshot(
+        self, watch_set: WatchSet, cycle: int, running: bool, forces: ForceTable
+    ) -> WatchSnapshot:
+        """A set's values now: live; forced; stale when nothing that could change it runs;
+        deleted by a reload."""
+        forcing = bool(forces.started_levels())
+        halted = {id(p) for p in self._variables.programs if p.state not in _RUNNING}
+        entries: list[tuple[str, Any, str]] = []
+        for path in watch_set.paths:
+            bound = self._variables.find(path)
+            if bound is None:
+                entries.append((path, None, Quality.DELETED))
+                continue
+            if forcing and forces.is_forced(path):
+                quality = Quality.FORCED
+            elif not running or (bound.program is not None and id(bound.program) in halted):
+                quality = Quality.STALE
+            else:
+                quality = Quality.LIVE
+            entries.append((path, self._variables.read(bound), quality))
+        return WatchSnapshot(cycle, entries)

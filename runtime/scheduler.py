@@ -1,0 +1,201 @@
+"""The user programs in the CPU cycle (spec section 5): by priority, each in its time slice,
+under the resource watchdog; the multitasking modes decide what happens with the time a
+program leaves unused; the user-program watchdog and run-time errors put one program in
+ERROR while the others go on."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import Any, Protocol
+
+from runtime.clock import Clock
+from runtime.contract.artifact import ResourceConfig
+from runtime.contract.protocol import ProgramState
+from runtime.event_recorder import EventRecorder
+from runtime.intrinsics import ProgramFault, SystemView, no_tick
+from runtime.slicing import SliceMeter
+from runtime.user_program import UserProgram
+from runtime.variables import Variables
+from runtime.watchdog import Watchdog, WatchdogExpired, process_watchdog
+
+log = logging.getLogger("runtime.resource")
+
+
+class SchedulerHost(Protocol):
+    """What the scheduler needs of its resource."""
+
+    @property
+    def params(self) -> ResourceConfig: ...
+
+    @property
+    def system(self) -> SystemView: ...
+
+    @property
+    def cycle_ns(self) -> int: ...
+
+    def error_stop(self, cause: str) -> None: ...
+
+    def emergency_stopped(self) -> bool:
+        """True when an Emergency Stop system variable has just put it in ERROR STOP."""
+        ...
+
+
+class Halted(BaseException):
+    """Ends the CPU cycle at once (Emergency Stop); caught by nothing but `guarded`."""
+
+
+class Scheduler:
+    def __init__(
+        self, host: SchedulerHost, variables: Variables, recorder: EventRecorder, clock: Clock
+    ) -> None:
+        self._host, self._variables = host, variables
+        self._recorder, self._clock = recorder, clock
+        self.watchdog: Watchdog = process_watchdog()
+        self.meter = SliceMeter(virtual=clock.virtual)
+        self.used_ns = 0  # program execution time in the current CPU cycle
+
+    @property
+    def watchdog_ns(self) -> int:
+        return self._host.params.watchdog_ms * 1_000_000
+
+    def run(self, begin: int, finished: list[UserProgram]) -> None:
+        """Programs by priority, each in its slice; multitasking modes 2 and 3 decide what
+        happens with the time a program leaves unused."""
+        mode = self._host.params.multitasking_mode
+        self.used_ns = 0
+        unused_ns = 0
+        for program in list(self._variables.programs):
+            if program.state != ProgramState.RUN:
+                continue
+            budget = program.config.max_duration_us * 1000 or None
+            if not program.in_progress:
+                program.begin_cycle(self._delta(program, begin), self._variables.globals)
+            used, done = self._slice(program, budget)
+            if done:
+                finished.append(program)
+            elif program.state == ProgramState.RUN:
+                self._check_program_watchdog(program)
+            if budget is not None:
+                unused_ns += max(0, budget - used)
+                if mode == 3 and used < budget:
+                    self._wait(budget - used)  # every cycle as long as the worst case
+        if mode == 2:
+            for program in list(self._variables.programs):
+                if unused_ns <= 0:
+                    break
+                if program.state == ProgramState.RUN and program.in_progress:
+                    used, done = self._slice(program, unused_ns, extra=True)
+                    unused_ns -= used
+                    if done:
+                        finished.append(program)
+
+    def run_to_end(self, program: UserProgram, step_ns: int | None = None) -> None:
+        """A whole program cycle at once (single step): no slice limit."""
+        if not program.in_progress:
+            program.begin_cycle(
+                step_ns if step_ns is not None else self._host.cycle_ns, self._variables.globals
+            )
+        while program.in_progress and program.state not in (ProgramState.ERROR,):
+            self._slice(program, None)
+
+    def guarded(self, work: Callable[[], None]) -> bool:
+        """Work under the resource watchdog: a CPU cycle longer than the watchdog time (an
+        endless loop, say) ends in ERROR STOP, and the runtime still answers. False when
+        the resource halted."""
+        try:
+            with self.watchdog.guard(self.watchdog_ns):
+                work()
+            return True
+        except Halted:  # an Emergency Stop: already in ERROR STOP
+            return False
+        except WatchdogExpired:
+            running = [p.name for p in self._variables.programs if p.in_progress]
+            cause = f"watchdog: the cycle took longer than {self.watchdog_ns // 1_000_000} ms"
+            if running:
+                cause += f" (in program {running[-1]})"
+            self._host.error_stop(cause)
+            return False
+
+    def _slice(
+        self, program: UserProgram, budget_ns: int | None, extra: bool = False
+    ) -> tuple[int, bool]:
+        """Run a program on for at most `budget_ns`; (time used, program cycle ended).
+        A run-time error puts the program in ERROR; the others go on."""
+        code, view, meter, system = (
+            self._variables.code,
+            program.view,
+            self.meter,
+            self._host.system,
+        )
+        assert code is not None
+
+        def before() -> None:
+            system.now_ns = program.cycle_time_ns
+            code.use(view, meter.tick if budget_ns is not None else no_tick)
+            meter.begin(budget_ns)
+
+        done = False
+        try:
+            if extra:  # more time for a program in its CPU cycle: not another CPU cycle
+                program.cpu_cycles -= 1
+            done = program.resume(before)
+        except (Exception, RecursionError) as exc:
+            self._program_fault(program, exc)
+        used = meter.used_ns()
+        self.used_ns += used
+        if self._host.emergency_stopped():
+            raise Halted()
+        return used, done
+
+    def _check_program_watchdog(self, program: UserProgram) -> None:
+        """A program cycle may span Max. Cycles CPU cycles of Max. Duration each."""
+        config = program.config
+        if program.cpu_cycles >= config.max_cycles:
+            program.abandon()
+            program.state = ProgramState.ERROR
+            program.error = (
+                f"program watchdog: the program cycle did not end within {config.max_cycles} "
+                f"CPU cycle(s) of {config.max_duration_us} us"
+            )
+            self._recorder.record(
+                "error", f"program {program.name}: {program.error}", long_term=True
+            )
+
+    def _program_fault(self, program: UserProgram, exc: BaseException) -> None:
+        code = self._variables.code
+        assert code is not None
+        program.abandon()
+        program.state = ProgramState.ERROR
+        # a ProgramFault says what went wrong in ST terms; anything else is named by its
+        # Python type so that a compiler defect can be told from a program error
+        if isinstance(exc, RecursionError):
+            cause = "calls nested too deep (recursion)"
+        elif isinstance(exc, ProgramFault | ArithmeticError):
+            cause = str(exc)
+        else:
+            cause = f"{type(exc).__name__}: {exc}"
+        where = code.locate(exc)
+        program.error = f"{cause} in {where}" if where is not None else cause
+        details: dict[str, Any] = {"program": program.name, "cause": cause}
+        if where is not None:
+            details.update(pou=where.pou, file=where.file, line=where.line)
+        self._recorder.record(
+            "error", f"program {program.name}: {program.error}", long_term=True, **details
+        )
+        log.error("program %s: %s", program.name, program.error)
+
+    def _delta(self, program: UserProgram, begin: int) -> int:
+        """How far a program's time advances at the start of its program cycle: the
+        clock's time since its last program cycle started."""
+        delta = (
+            self._host.cycle_ns if program.last_start_ns is None else begin - program.last_start_ns
+        )
+        program.last_start_ns = begin
+        return delta
+
+    def _wait(self, duration_ns: int) -> None:
+        if self._clock.virtual:
+            self.used_ns += duration_ns
+        else:
+            self._clock.sleep_until(self._clock.now_ns() + duration_ns)

@@ -1,0 +1,97 @@
+"""The variables of the loaded configuration: the program and global instances, and every
+elementary variable by its path (`Program.fb.var`, globals by their bare name), to look up,
+read, check against its type and store wherever its readers see it."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from runtime.code_image import CodeImage, read_path, write_path
+from runtime.contract.protocol import VariableInfo
+from runtime.contract.refusal import Refusal
+from runtime.contract.values import ValueRejected, representation
+from runtime.instances import BoundVariable, Instances, index
+from runtime.user_program import UserProgram
+
+
+class Variables:
+    def __init__(self, resource: str) -> None:
+        self._resource = resource
+        self.code: CodeImage | None = None
+        self.programs: list[UserProgram] = []  # by priority, then Program ID
+        self.globals: Any = None  # the globals as all programs see them between cycles
+        self.bound: list[BoundVariable] = []
+        self._by_name: dict[str, BoundVariable] = {}
+
+    def adopt(self, instances: Instances) -> None:
+        self.code, self.programs, self.globals = (
+            instances.image,
+            instances.programs,
+            instances.globals,
+        )
+        self.bound, self._by_name = instances.bound, instances.by_name
+
+    def instances(self) -> Instances:
+        """What is loaded now (a reload plans against it; the program list is a copy, as a
+        restart replaces a program)."""
+        assert self.code is not None
+        return Instances(self.code, list(self.programs), self.globals, self.bound, self._by_name)
+
+    def replace_program(self, old: UserProgram, new: UserProgram) -> None:
+        """A program restarted from fresh instances (it leaves ERROR by a start)."""
+        self.programs[self.programs.index(old)] = new
+        self.bound = [BoundVariable(new, b.path) if b.program is old else b for b in self.bound]
+        self._by_name = index(self.bound)
+
+    def program(self, name: str) -> UserProgram:
+        for program in self.programs:
+            if program.name.upper() == name.upper():
+                return program
+        raise Refusal("unknown_program", f"resource {self._resource} has no program '{name}'")
+
+    def find(self, path: str) -> BoundVariable | None:
+        return self._by_name.get(path.upper())  # ST names are case-insensitive
+
+    def lookup(self, name: str) -> BoundVariable:
+        bound = self.find(name)
+        if bound is None:
+            raise Refusal("unknown_variable", f"resource {self._resource} has no variable '{name}'")
+        return bound
+
+    def read(self, bound: BoundVariable) -> Any:
+        owner = bound.program.instance if bound.program is not None else self.globals
+        return read_path(owner, bound.path)
+
+    def store(self, bound: BoundVariable, value: Any) -> None:
+        """Write a variable where every reader sees it: a global into the globals and into
+        every program's view of them."""
+        if bound.program is not None:
+            write_path(bound.program.instance, bound.path, value)
+            return
+        write_path(self.globals, bound.path, value)
+        for program in self.programs:
+            if program.view is not self.globals:
+                write_path(program.view, bound.path, value)
+
+    def checked(self, bound: BoundVariable, value: Any) -> Any:
+        """`value` as the variable holds it; Refusal when it cannot hold it."""
+        if bound.path.constant:
+            raise Refusal("constant", f"'{bound.path.path}' is a constant")
+        try:
+            return representation(bound.path.type, value)
+        except ValueRejected as exc:
+            raise Refusal("bad_value", f"'{bound.path.path}': {exc}") from None
+
+    def values(self) -> dict[str, Any]:
+        """Every elementary variable: `Program.var`, `Program.fb.var`, globals by their bare
+        name; struct and FB members with dots; arrays of elementary values as lists."""
+        return {bound.path.path: self.read(bound) for bound in self.bound}
+
+    def infos(self) -> list[VariableInfo]:
+        return [VariableInfo(bound.path.path, bound.path.type) for bound in self.bound]
+
+    def publish(self, finished: list[UserProgram]) -> None:
+        """The writes of programs whose program cycle ended become visible to the others
+        (in their next program cycle: one CPU cycle later at the earliest)."""
+        for program in finished:
+            program.publish(self.globals)
