@@ -79,10 +79,11 @@ def run(args: argparse.Namespace) -> int:
     from backend.engineering.padt_accounts import PadtAccounts, write_accounts
     from backend.engineering.project import compile_project, load_project
     from backend.engineering.resource_client import ResourceClient
+    from backend.engineering.resource_directory import ResourceDirectory
     from frontend.app import PadtUi
     from runtime.contract.session import open_client, open_router
+    from runtime.contract.state_folder import artifact_path
     from runtime.contract.stop_request import StopRequest
-    from runtime.main import artifact_path
 
     stop = StopRequest()
     admin, admin_password = demo_administrator(args.state_dir)
@@ -120,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
         write_accounts(accounts_file, (dataclasses.replace(admin, level="security-administrator"),))
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
         projects = {"demo": folder}
-        service = PadtService(session, accounts, projects, args.state_dir / "backups")
+        directory = ResourceDirectory(session)
+        service = PadtService(directory, accounts, projects, args.state_dir / "backups")
         try:
             api = ApiServer(service, args.host, args.api_port)
         except OSError:  # busy: like the UI, take another port rather than fail

@@ -13,22 +13,13 @@ from runtime.context import ContextInvalid, load_context
 from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
 from runtime.contract.keyspace import valid_resource_name
 from runtime.contract.session_options import add_zenoh_options
+from runtime.contract.state_folder import artifact_path, context_path, events_path
 from runtime.contract.stop_request import StopRequest
 from runtime.event_log import EventLog
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
 
 log = logging.getLogger("padt.runtime")
-
-
-def artifact_path(state_dir: Path) -> Path:
-    """Where the loaded configuration of a resource is kept."""
-    return state_dir / "config" / "artifact.json"
-
-
-def context_path(state_dir: Path) -> Path:
-    """Where the saved context (for a warm start) is kept."""
-    return state_dir / "context" / "context.json"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -92,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"padt runtime: invalid resource name '{args.resource}'", file=sys.stderr)
         return 2
     clock = RealClock()
-    events = EventLog(clock.wall_ns, long_path=args.state_dir / "events.jsonl")
+    events = EventLog(clock.wall_ns, long_path=events_path(args.state_dir))
     resource = Resource(args.resource, clock, events)
     power_up(resource, args.state_dir)
     resource.on_configuration = lambda artifact: store_configuration(args.state_dir, artifact)

@@ -16,6 +16,7 @@ import uvicorn
 from backend.api.app import create_app
 from backend.api.service import PadtService
 from backend.engineering.padt_accounts import AccountsError, PadtAccounts
+from backend.engineering.resource_directory import ResourceDirectory
 
 
 class ApiServer:
@@ -92,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
         )
         return 2
     session = open_client(args.zenoh, args.zenoh_config)
-    service = PadtService(session, accounts, projects, args.backup_dir)
+    directory = ResourceDirectory(session)
+    service = PadtService(directory, accounts, projects, args.backup_dir)
     try:
         server = ApiServer(service, args.host, args.port)
     except OSError as exc:

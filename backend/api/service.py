@@ -12,8 +12,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
-import zenoh
-
 from backend.engineering.check_twice import check_twice
 from backend.engineering.compile_gate import compile_checked
 from backend.engineering.download import Downloaded, download_checked
@@ -46,16 +44,15 @@ class Caller:
 class PadtService:
     def __init__(
         self,
-        session: zenoh.Session,
+        directory: ResourceDirectory,
         accounts: PadtAccounts,
         projects: dict[str, Path],
         backup_dir: Path,
     ) -> None:
-        self.session = session
         self.accounts = accounts
         self.projects = dict(sorted(projects.items()))
         self.backup_dir = backup_dir
-        self.directory = ResourceDirectory(session)
+        self.directory = directory
 
     def close(self) -> None:
         self.directory.close()
@@ -90,9 +87,7 @@ class PadtService:
     # ---- resources
 
     def client(self, caller: Caller, resource: str) -> ResourceClient:
-        if not self.directory.is_online(resource):
-            raise Refusal("unknown_resource", f"no resource '{resource}' is online")
-        client = ResourceClient(self.session, resource)
+        client = self.directory.client(resource)
         client.token = self.accounts.resource_token(caller.token, resource)
         return client
 

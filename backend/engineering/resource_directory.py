@@ -1,6 +1,7 @@
-"""Which resources are online: found by their liveliness tokens, each with the status it
-last published. The API answers for a resource only while it is online, so a request
-for an unknown name is a quick 404 instead of a command that times out."""
+"""The resources on the bus: which are online (found by their liveliness tokens), the
+status each last published, and a client for one of them. The API answers for a resource
+only while it is online, so a request for an unknown name is a quick 404 instead of a
+command that times out."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import threading
 
 import zenoh
 
+from backend.engineering.resource_client import ResourceClient
 from runtime.contract.keyspace import alive_key, any_resource, resource_of, status_key
 from runtime.contract.protocol import Status, decode_publication
 from runtime.contract.refusal import Refusal
@@ -15,6 +17,7 @@ from runtime.contract.refusal import Refusal
 
 class ResourceDirectory:
     def __init__(self, session: zenoh.Session) -> None:
+        self._session = session
         self._lock = threading.Lock()
         self._online: set[str] = set()
         self._status: dict[str, Status] = {}
@@ -46,6 +49,12 @@ class ResourceDirectory:
         """Each online resource (sorted by name) with its last published status, if any."""
         with self._lock:
             return [(name, self._status.get(name)) for name in sorted(self._online)]
+
+    def client(self, name: str) -> ResourceClient:
+        """A client of an online resource; Refusal `unknown_resource` for any other."""
+        if not self.is_online(name):
+            raise Refusal("unknown_resource", f"no resource '{name}' is online")
+        return ResourceClient(self._session, name)
 
     def is_online(self, name: str) -> bool:
         with self._lock:

@@ -21,7 +21,7 @@ from backend.engineering.resource_client import ResourceClient
 from runtime.clock import VirtualClock
 from runtime.context import ContextInvalid, load_context, save_context
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
-from runtime.main import context_path
+from runtime.contract.state_folder import context_path
 from runtime.program_control import start_program, stop_program
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start

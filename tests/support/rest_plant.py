@@ -19,6 +19,7 @@ from backend.api.service import PadtService
 from backend.engineering.padt_accounts import PadtAccounts, with_account, write_accounts
 from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
+from backend.engineering.resource_directory import ResourceDirectory
 from runtime.contract.accounts import hash_password
 from runtime.contract.session import open_client
 from tests.conftest import free_port
@@ -126,7 +127,7 @@ def plant(base: Path) -> Iterator[Plant]:
         stack.callback(session.close)
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
         folders = {"plant": projects / "plant", "plant_v2": projects / "plant_v2"}
-        service = PadtService(session, accounts, folders, base / "backups")
+        service = PadtService(ResourceDirectory(session), accounts, folders, base / "backups")
         stack.callback(service.close)
         server = ApiServer(service)
         stack.callback(server.close)

@@ -16,7 +16,7 @@ from backend.engineering.project import compile_project, demo_project_path, load
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.artifact import Artifact
 from runtime.contract.session import open_client, open_router
-from runtime.main import artifact_path
+from runtime.contract.state_folder import artifact_path
 from tests.conftest import REPO
 
 

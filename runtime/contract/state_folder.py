@@ -1,0 +1,23 @@
+"""The state folder of a resource (`padt runtime --state-dir DIR`): where it keeps the
+configuration it was given (to power up with it), the context it saves (for a warm start)
+and its long-term event log. A configuration placed here before the runtime starts is the
+one it powers up with (the demo does that)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def artifact_path(state_dir: Path) -> Path:
+    """Where the loaded configuration of a resource is kept."""
+    return state_dir / "config" / "artifact.json"
+
+
+def context_path(state_dir: Path) -> Path:
+    """Where the saved context (for a warm start) is kept."""
+    return state_dir / "context" / "context.json"
+
+
+def events_path(state_dir: Path) -> Path:
+    """The long-term event log."""
+    return state_dir / "events.jsonl"
