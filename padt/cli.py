@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -511,6 +512,11 @@ def main(argv: list[str] | None = None) -> int:
         code: int = args.func(args)
     except KeyboardInterrupt:  # Ctrl-C before a command took over the signal: no traceback
         return 130
+    except BrokenPipeError:
+        # the reader stopped reading (`padt status | head -1`): end quietly, and keep the
+        # interpreter's last flush at exit from failing on the closed pipe again
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141  # as a process ended by SIGPIPE
     except RouterUnreachable as exc:
         print(f"padt {args.command}: {exc}", file=sys.stderr)
         return 1

@@ -1,0 +1,200 @@
+"""The bus protocol's decoder: every command survives the trip over the wire unchanged, and
+nothing a hostile client can send gets past it as anything but a structured refusal."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from runtime.contract import protocol as p
+from runtime.contract.refusal import Refusal
+from runtime.contract.wire import MAX_DEPTH, decode, encode
+from tests.conftest import REPO
+
+# one well-formed instance of every command
+SAMPLES: dict[str, p.Command[Any]] = {
+    "login": p.Login("op", "secret-1"),
+    "logout": p.Logout(),
+    "status": p.GetStatus(),
+    "values": p.GetValues(),
+    "variables": p.GetVariables(),
+    "parameters": p.GetParameters(),
+    "forcing": p.GetForcing(),
+    "events": p.GetEvents(after=5, limit=10),
+    "watch": p.Watch("w1", ["Main.n", "gLevel"], period_ms=50, append=True),
+    "unwatch": p.Unwatch("w1"),
+    "watches": p.GetWatches(),
+    "start": p.Start(),
+    "stop": p.Stop(),
+    "reset_stats": p.ResetStats(),
+    "start_program": p.StartProgram("Main"),
+    "stop_program": p.StopProgram("Main"),
+    "force": p.Force("Main.n", [1, 2, [3]], switch=False),
+    "unforce": p.Unforce("Main.n"),
+    "start_forcing": p.StartForcing("Main", 1500),
+    "stop_forcing": p.StopForcing(None),
+    "init": p.Init(),
+    "cold_start": p.ColdStart(),
+    "step": p.Step(),
+    "freeze": p.Freeze("Main"),
+    "unfreeze": p.Unfreeze("Main"),
+    "step_program": p.StepProgram("Main", 20),
+    "write": p.Write("Main.s", "text"),
+    "set_parameter": p.SetParameter("target_cycle_mode", "fixed"),
+    "transfer_begin": p.TransferBegin(1234, "0BADC0DE"),
+    "transfer_chunk": p.TransferChunk(0, "{}"),
+    "load": p.Load(),
+    "reload_preview": p.ReloadPreview({"Main.total": "Main.count"}),
+    "reload": p.Reload({}, watchdog_ms=300, target_cycle_ms=None, expected_crc="0BADC0DE"),
+}
+
+
+def refusal(payload: bytes) -> str:
+    with pytest.raises(Refusal) as refused:
+        p.decode_request(payload)
+    return refused.value.code
+
+
+def request(**fields: Any) -> bytes:
+    return json.dumps(fields).encode()
+
+
+def test_every_command_has_a_sample_and_survives_the_wire() -> None:
+    assert sorted(SAMPLES) == sorted(p.COMMANDS)
+    for name, command in SAMPLES.items():
+        assert command.NAME == name
+        decoded = p.decode_request(p.encode_request(command, "tok"))
+        assert decoded.command == command and decoded.token == "tok"
+
+
+def test_the_levels_are_those_of_the_spec() -> None:
+    assert p.COMMAND_LEVELS["status"] == "read"
+    assert p.COMMAND_LEVELS["force"] == "operator"
+    assert p.COMMAND_LEVELS["reload"] == "read-write"
+    assert "login" not in p.COMMAND_LEVELS and "logout" not in p.COMMAND_LEVELS
+    assert p.SetParameter("allow_online_settings", True).level() == "administrator"
+    assert p.SetParameter("watchdog_ms", 100).level() == "read-write"
+
+
+def test_hostile_requests_are_refused_with_a_code() -> None:
+    deep = b"[" * 500 + b"]" * 500  # nested far past any message (and past json's stack)
+    assert refusal(deep) == "bad_request"
+    assert refusal(b"[" * 100_000) in ("bad_request", "too_large")
+    assert refusal(b"x" * (p.MAX_REQUEST_BYTES + 1)) == "too_large"
+    assert refusal(b"\xff\xfe") == "bad_request"  # not UTF-8
+    assert refusal(b"[]") == "bad_request"
+    assert refusal(request(cmd=7)) == "bad_request"
+    assert refusal(request(cmd="self_destruct")) == "unknown_command"
+    assert refusal(request(cmd="status", token=["x"])) == "bad_request"
+    nested_value = {"cmd": "write", "variable": "Main.a", "value": 1}
+    for _ in range(MAX_DEPTH + 1):
+        nested_value["value"] = [nested_value["value"]]
+    assert refusal(json.dumps(nested_value).encode()) == "bad_request"
+
+
+@pytest.mark.parametrize(
+    "fields",
+    [
+        {"cmd": "events", "limit": -1},
+        {"cmd": "events", "limit": 10**6},
+        {"cmd": "events", "after": "3"},
+        {"cmd": "events", "after": True},  # a boolean is no integer
+        {"cmd": "start_forcing", "timeout_ms": 10**100},
+        {"cmd": "start_forcing", "timeout_ms": 0},
+        {"cmd": "watch", "id": "a/b", "variables": []},
+        {"cmd": "watch", "id": "w", "variables": ["x"] * (p.MAX_WATCHED + 1)},
+        {"cmd": "watch", "id": "w", "variables": ["x"], "period_ms": 1},
+        {"cmd": "watch", "id": "w"},  # a required argument missing
+        {"cmd": "write", "variable": "x" * (p.MAX_PATH + 1), "value": 1},
+        {"cmd": "write", "variable": "Main.n", "value": 1, "extra": 2},  # unknown argument
+        {"cmd": "login", "user": "x" * 60_000, "password": "p"},
+        {"cmd": "transfer_begin", "size": 0, "crc": "0BADC0DE"},
+        {"cmd": "transfer_begin", "size": 10, "crc": "0"},
+        {"cmd": "reload", "renames": {"a": 1}},
+        {"cmd": "set_parameter", "name": "watchdog_ms", "value": [1]},
+    ],
+)
+def test_wrong_types_and_ranges_are_bad_requests(fields: dict[str, Any]) -> None:
+    assert refusal(json.dumps(fields).encode()) == "bad_request"
+
+
+json_values = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats(allow_nan=False) | st.text(),
+    lambda inner: st.lists(inner) | st.dictionaries(st.text(), inner),
+    max_leaves=30,
+)
+
+
+@settings(max_examples=300)
+@given(
+    st.sampled_from(sorted(p.COMMANDS)),
+    st.dictionaries(st.text(max_size=12), json_values, max_size=4),
+)
+def test_any_json_is_a_command_or_a_refusal(name: str, fields: dict[str, Any]) -> None:
+    payload = json.dumps({**fields, "cmd": name}).encode()
+    try:
+        decoded = p.decode_request(payload)
+    except Refusal as refused:
+        assert refused.code == "bad_request"
+        return
+    assert type(decoded.command) is p.COMMANDS[name]
+
+
+@settings(max_examples=300)
+@given(st.binary(max_size=200))
+def test_any_bytes_are_a_command_or_a_refusal(payload: bytes) -> None:
+    try:
+        p.decode_request(payload)
+    except Refusal as refused:
+        assert refused.code in ("bad_request", "unknown_command", "too_large")
+
+
+def test_replies_are_checked_on_the_client_too() -> None:
+    status = p.GetStatus()
+    with pytest.raises(Refusal) as refused:
+        p.decode_reply(status, b'{"ok": false, "error": {"code": "forbidden", "message": "no"}}')
+    assert (refused.value.code, refused.value.message) == ("forbidden", "no")
+    for bad in (b"", b"[]", b'{"ok": true}', b'{"ok": true, "status": {"state": 1}}'):
+        with pytest.raises(Refusal) as wrong:
+            p.decode_reply(status, bad)
+        assert wrong.value.code == "bad_reply"
+    watch = p.WatchValues(3, {"Main.n": p.WatchedValue(5, p.Quality.FORCED)})
+    assert p.decode_publication(p.WatchValues, json.dumps(encode(watch)).encode()) == watch
+    with pytest.raises(Refusal):
+        p.decode_publication(p.WatchValues, b'{"cycle": 1, "values": {"x": {"value": 1}}}')
+
+
+def test_decoding_makes_the_declared_types() -> None:
+    plan = decode(p.ReloadPlanInfo, encode(_plan()))
+    assert plan == _plan() and isinstance(plan.hazards[0], p.Hazard)
+
+
+def _plan() -> p.ReloadPlanInfo:
+    return p.ReloadPlanInfo(
+        old_crc="00000001",
+        new_crc="00000002",
+        possible=True,
+        refusals=[],
+        hazards=[p.Hazard("active-step-deleted", "Main", "step S2 is active")],
+        programs=p.ProgramChanges([], [], ["Main"]),
+        summary={"kept": 1},
+        changes=[p.VariableChange("Main.n", "kept", "INT", "INT")],
+        estimate_us=3.0,
+    )
+
+
+def test_the_protocol_reference_lists_every_command_with_its_level() -> None:
+    text = (REPO / "docs" / "protocol.md").read_text().split("## Commands")[1].split("\n## ")[0]
+    rows = {
+        cells[1].strip("` "): cells[2].strip()
+        for line in text.splitlines()
+        if line.startswith("| `") and len(cells := line.split("|")) > 3
+    }
+    for name, kind in p.COMMANDS.items():
+        assert name in rows, f"docs/protocol.md has no row for {name}"
+        assert rows[name] == (kind.LEVEL or "none"), name
+
