@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from runtime import program_control, reload_switch
+from runtime import online_writes, program_control, reload_switch
 from runtime.contract import protocol as p
 from runtime.contract.protocol import Request, decode_request, encode_refusal, encode_reply
 from runtime.contract.refusal import Refusal
@@ -104,7 +104,7 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.StepProgram: _then_status(
         lambda r, c: program_control.step_program(r, c.program, _ms_to_ns(c.interval_ms))
     ),
-    p.Write: _then_status(lambda r, c: r.write(c.variable, c.value)),
+    p.Write: _then_status(lambda r, c: online_writes.write(r, c.variable, c.value)),
     p.SetParameter: _then_status(lambda r, c: set_parameter(r, c.name, c.value)),
     p.TransferBegin: _transfer_begin,
     p.TransferChunk: lambda r, c: p.TransferChunkReply(r.incoming.chunk(c.offset, c.data)),

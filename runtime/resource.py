@@ -329,34 +329,6 @@ class Resource:
                     program.abandon()
                     program.state = ProgramState.STOP
 
-    # ---- online test
-    def write(self, name: str, value: object) -> None:
-        """Write a value once from an OLT field (not forcing): refused in safety
-        operation; a forced variable keeps its force value."""
-        if self.params.safety_operation:
-            raise Refusal("safety_operation", "no writes from OLT in safety operation")
-        bound = self.variables.lookup(name)
-        stored = self.variables.checked(bound, value)
-        old = self.variables.read(bound)
-        self.variables.store(bound, stored)
-        self.recorder.record(
-            "write",
-            f"{bound.path.path} written: {old!r} -> {stored!r}",
-            variable=bound.path.path,
-            old=old,
-            new=stored,
-        )
-
-    def simulate(self, name: str, value: object) -> None:
-        """Set a variable as the simulated plant does (`padt sim --set`): no event, and
-        allowed in safety operation, since no real plant is behind it."""
-        bound = self.variables.lookup(name)
-        self.variables.store(bound, self.variables.checked(bound, value))
-
-    def read(self, name: str) -> object:
-        """The value of one variable, as `values()` has it."""
-        return self.variables.read(self.variables.lookup(name))
-
     def status(self) -> Status:
         return Status(
             resource=self.name,

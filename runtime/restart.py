@@ -3,7 +3,8 @@ taking a valid one back at power-up. Safety-related programs always cold-start."
 
 from __future__ import annotations
 
-from runtime.context import Context, ContextMismatch, restore, snapshot
+from runtime.context import Context
+from runtime.context_snapshot import ContextMismatch, restore, snapshot
 from runtime.contract.protocol import ProgramState
 from runtime.resource import Resource
 from runtime.user_program import share_globals

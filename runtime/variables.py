@@ -58,6 +58,10 @@ class Variables:
             raise Refusal("unknown_variable", f"resource {self._resource} has no variable '{name}'")
         return bound
 
+    def value(self, name: str) -> Any:
+        """The value of one variable, as `values()` has it."""
+        return self.read(self.lookup(name))
+
     def read(self, bound: BoundVariable) -> Any:
         owner = bound.program.instance if bound.program is not None else self.globals
         return read_path(owner, bound.path)

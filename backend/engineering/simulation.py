@@ -2,7 +2,7 @@
 
 Cycle k (from 1) runs with the clock at (k-1) x the cycle interval. Time comes from a
 `VirtualClock` only, so the same project and options give the same output bit for bit.
-Values are set and read through the resource (`Resource.simulate`, `Resource.values`), the
+Values are set and read through the resource (`online_writes.simulate`, `Variables.values`), the
 same way online test does it.
 """
 
@@ -27,6 +27,7 @@ from runtime.contract.values import (
     representation,
 )
 from runtime.intrinsics import to_bytes
+from runtime.online_writes import simulate
 from runtime.resource import Resource
 
 NS_PER_MS = 1_000_000
@@ -212,7 +213,7 @@ def run(simulation: Simulation) -> Iterator[CycleRecord]:
     resource.start()
     for cycle in range(1, simulation.cycles + 1):
         for path, value in simulation.writes.get(cycle, []):
-            resource.simulate(path, value)
+            simulate(resource, path, value)
         before = {p.config.name: p.state for p in resource.programs}
         resource.cycle()
         faults = tuple(
@@ -221,7 +222,8 @@ def run(simulation: Simulation) -> Iterator[CycleRecord]:
             if p.state == ProgramState.ERROR and before[p.config.name] != ProgramState.ERROR
         )
         shown = {
-            path: display(resource.read(path), simulation.types[path]) for path in simulation.traced
+            path: display(resource.variables.value(path), simulation.types[path])
+            for path in simulation.traced
         }
         yield CycleRecord(cycle, (cycle - 1) * simulation.cycle_ns // NS_PER_MS, shown, faults)
         clock.advance(simulation.cycle_ns)

@@ -17,15 +17,8 @@ from typing import Any
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.code_image import CodeImage, VariablePath
-from runtime.context import (
-    Context,
-    ContextInvalid,
-    encode_context,
-    load_context,
-    restore,
-    save_context,
-    snapshot,
-)
+from runtime.context import Context, ContextInvalid, encode_context, load_context, save_context
+from runtime.context_snapshot import restore, snapshot
 from runtime.intrinsics import SystemView
 
 SCALARS, TIMERS, POINTS, SAMPLES = 2_399, 100, 1_000, 2_000  # and the loop counter

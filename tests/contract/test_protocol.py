@@ -66,7 +66,7 @@ def request(**fields: Any) -> bytes:
 def test_every_command_has_a_sample_and_survives_the_wire() -> None:
     assert sorted(SAMPLES) == sorted(p.COMMANDS)
     for name, command in SAMPLES.items():
-        assert command.NAME == name
+        assert name == command.NAME
         decoded = p.decode_request(p.encode_request(command, "tok"))
         assert decoded.command == command and decoded.token == "tok"
 
@@ -197,4 +197,3 @@ def test_the_protocol_reference_lists_every_command_with_its_level() -> None:
     for name, kind in p.COMMANDS.items():
         assert name in rows, f"docs/protocol.md has no row for {name}"
         assert rows[name] == (kind.LEVEL or "none"), name
-

@@ -25,14 +25,11 @@ from runtime.context import (
     CONTEXT_VERSION,
     Context,
     ContextInvalid,
-    ContextMismatch,
-    UnsupportedValue,
     encode_context,
     load_context,
-    restore,
     save_context,
-    snapshot,
 )
+from runtime.context_snapshot import ContextMismatch, UnsupportedValue, restore, snapshot
 from runtime.contract.artifact import Artifact
 from runtime.intrinsics import SystemView
 from tests.conftest import REPO

@@ -22,6 +22,7 @@ from runtime.clock import VirtualClock
 from runtime.context import ContextInvalid, load_context, save_context
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.state_folder import context_path
+from runtime.online_writes import write
 from runtime.program_control import start_program, stop_program
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
@@ -91,7 +92,7 @@ def test_a_warm_start_restores_values_timers_and_steps(tmp_path: Path) -> None:
     artifact = compiled()
     first = powered_up(artifact, tmp_path / "context.json")
     first.start()
-    first.write("Chart.go", True)
+    write(first, "Chart.go", True)
     run(first, 30)
     before = first.variables.values()
     assert before["Chart.Busy.X"] is True and before["Counter.t.ET"] == 290_000_000
@@ -104,16 +105,19 @@ def test_a_warm_start_restores_values_timers_and_steps(tmp_path: Path) -> None:
     assert {k: v for k, v in second.variables.values().items() if not k.startswith("Trip.")} == {
         k: v for k, v in before.items() if not k.startswith("Trip.")
     }
-    assert second.read("Trip.n") == 0  # safety-related: always a cold start
+    assert second.variables.value("Trip.n") == 0  # safety-related: always a cold start
     second.start()
     run(second, 1)
-    assert (second.read("Counter.warm"), second.read("Counter.cold")) == (1, 1)
-    assert second.read("Counter.n") == 31
-    assert second.read("Chart.Busy.X") is True  # the active step came back
+    assert (second.variables.value("Counter.warm"), second.variables.value("Counter.cold")) == (
+        1,
+        1,
+    )
+    assert second.variables.value("Counter.n") == 31
+    assert second.variables.value("Chart.Busy.X") is True  # the active step came back
     run(second, 70)  # time stood still while the power was off: 290 ms + 700 ms
-    assert second.read("Counter.t.Q") is False
+    assert second.variables.value("Counter.t.Q") is False
     run(second, 1)
-    assert second.read("Counter.t.Q") is True  # the timer ran on from where it stood
+    assert second.variables.value("Counter.t.Q") is True  # the timer ran on from where it stood
 
 
 def test_a_program_stopped_before_the_power_failure_stays_stopped(tmp_path: Path) -> None:
@@ -148,7 +152,7 @@ def test_a_context_of_another_configuration_gives_a_cold_start(tmp_path: Path) -
     assert other.crc != artifact.crc
     resource = powered_up(other, tmp_path / "context.json")
     assert resource.status().start == "cold"
-    assert resource.read("Counter.n") == 0
+    assert resource.variables.value("Counter.n") == 0
 
 
 def restored_values(artifact: Artifact, state_dir: Path) -> tuple[str, dict[str, Any]]:

@@ -70,10 +70,10 @@ def test_init_leaves_error_stop_with_a_cold_start() -> None:
     resource = loaded(ENDLESS["while"])
     resource.start()
     resource.cycle()
-    assert resource.read("Loop.kept") == 8  # the cycle ran up to the loop
+    assert resource.variables.value("Loop.kept") == 8  # the cycle ran up to the loop
     resource.init()
     assert resource.state == ResourceState.STOP_VALID
-    assert resource.read("Loop.kept") == 7  # every variable back at its initial value
+    assert resource.variables.value("Loop.kept") == 7  # every variable back at its initial value
     with pytest.raises(Refusal):
         resource.init()  # only from ERROR STOP
 

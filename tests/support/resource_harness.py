@@ -66,7 +66,7 @@ class Harness:
         return self.resource.variables.values()
 
     def value(self, name: str) -> Any:
-        return self.resource.read(name)
+        return self.resource.variables.value(name)
 
     def state(self, program: str | None = None) -> str:
         status = self.resource.status()
