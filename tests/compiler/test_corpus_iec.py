@@ -7,6 +7,7 @@ folder is compiled as one set; a listed file is left out of its set and must sti
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -14,6 +15,7 @@ import pytest
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import read_source
+from tests.conftest import REPO
 from tests.support.corpus_paths import CORPUS, corpus_dir, known_failures
 
 KNOWN = known_failures("iec_known_failures.tsv")
@@ -72,3 +74,31 @@ def test_oscat_chapters_all_accounted_for() -> None:
     assert len(files) == 22
     failing = [p for p in files if name_of(p) in KNOWN]
     assert len(failing) <= 1, "OSCAT: only genuinely faulty chapters may fail"
+
+
+CRCS = REPO / "tests" / "compiler" / "corpus" / "crcs.tsv"
+
+
+def corpus_crcs() -> list[str]:
+    """`set<TAB>POU<TAB>CRC` of every set that compiles, `*` for its configuration CRC."""
+    rows = []
+    for folder, together in sorted(FOLDERS.items()):
+        files = [p for p in st_files(corpus_dir(folder)) if name_of(p) not in KNOWN]
+        sets = [(folder, files)] if together else [(name_of(p), [p]) for p in files]
+        for name, paths in sets:
+            result = compile_sources([read_source(p, name_of(p)) for p in paths], programs=[])
+            assert result.artifact is not None, name
+            rows.append(f"{name}\t*\t{result.artifact.crc}")
+            rows += [f"{name}\t{pou.name}\t{pou.crc}" for pou in result.artifact.pous]
+    return sorted(rows)
+
+
+def test_the_corpus_compiles_to_the_same_crcs() -> None:
+    """The same sources give the same code: a change of any CRC here is a change of the
+    generated code, which needs a new artifact version (docs/artifact.md)."""
+    found = corpus_crcs()
+    if os.environ.get("PADT_WRITE_CRCS") == "1":
+        CRCS.write_text(CRCS.read_text().split("\n\n")[0] + "\n\n" + "\n".join(found) + "\n")
+    pinned = [line for line in CRCS.read_text().splitlines() if line and not line.startswith("#")]
+    changed = sorted(set(found) ^ set(pinned))
+    assert not changed, f"{len(changed)} CRC rows differ, first: {changed[:6]}"
