@@ -8,6 +8,7 @@ resource and returns the command's typed reply. Every refusal, wherever it arise
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from typing import Any
 
@@ -20,6 +21,7 @@ from runtime.reload_switch import ReloadJob
 from runtime.resource import Resource
 
 Handler = Callable[[Resource, Any], Any]
+log = logging.getLogger("runtime.commands")
 
 
 def _status(resource: Resource) -> p.StatusReply:
@@ -47,9 +49,19 @@ def _events(resource: Resource, command: p.GetEvents) -> p.EventsReply:
     return p.EventsReply(resource.events.recent(command.after, command.limit))
 
 
-def _watch(resource: Resource, command: p.Watch) -> p.WatchReply:
-    paths = resource.online.watch(command.id, command.variables, command.period_ms, command.append)
+def _watch(resource: Resource, command: p.Watch, token: str | None) -> p.WatchReply:
+    """A watch set belongs to the session that makes it (none when access is open)."""
+    owner = None if resource.access.open else token
+    online, now = resource.online, resource.clock.now_ns()
+    paths = online.watch(
+        command.id, command.variables, command.period_ms, command.append, owner, now
+    )
     return p.WatchReply(command.id, paths)
+
+
+def _logout(resource: Resource, command: p.Logout, token: str | None) -> p.Done:
+    resource.access.logout(token or "")
+    return p.Done()
 
 
 def _transfer_begin(resource: Resource, command: p.TransferBegin) -> p.TransferBeginReply:
@@ -77,14 +89,12 @@ def _reload(resource: Resource, command: p.Reload | p.ReloadPreview) -> Any:
 
 HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.Login: _login,
-    p.Logout: lambda r, c: p.Done(),  # the session is ended by `execute`, which has the token
     p.GetStatus: lambda r, c: _status(r),
     p.GetValues: lambda r, c: p.ValuesReply(r.variables.values(), r.cycle_count),
     p.GetVariables: lambda r, c: p.VariablesReply(r.variables.infos()),
     p.GetParameters: lambda r, c: p.ParametersReply(r.params, [x.config for x in r.programs]),
     p.GetForcing: lambda r, c: p.ForcingReply(r.forcing.state()),
     p.GetEvents: _events,
-    p.Watch: _watch,
     p.Unwatch: lambda r, c: p.UnwatchReply(r.online.watches.drop(c.id)),
     p.GetWatches: lambda r, c: p.WatchesReply(r.online.watches.ids()),
     p.Start: _then_status(lambda r, c: r.start()),
@@ -114,25 +124,46 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
 }
 
 
+# the commands that act on the request's session itself
+SESSION_HANDLERS: dict[type[p.Command[Any]], Callable[[Resource, Any, str | None], Any]] = {
+    p.Logout: _logout,
+    p.Watch: _watch,
+}
+
+
 def execute(resource: Resource, payload: bytes) -> bytes:
     """A request as it comes off the bus, answered: the encoded reply or refusal."""
-    return respond(lambda: answer(resource, decode_request(payload)))
+    return respond(resource, lambda: answer(resource, decode_request(payload)))
 
 
-def respond(work: Callable[[], Any]) -> bytes:
-    """The encoded reply of `work`, or of its refusal."""
+def respond(resource: Resource, work: Callable[[], Any]) -> bytes:
+    """The encoded reply of `work`, or of its refusal; a defect met on the way is refused as
+    `internal`, never the end of the process."""
     try:
         return encode_reply(work())
     except Refusal as refusal:
         return encode_refusal(refusal)
+    except Exception as exc:
+        return encode_refusal(internal_failure(resource, exc))
+
+
+def internal_failure(resource: Resource, exc: Exception) -> Refusal:
+    """A defect of the runtime met while answering: logged with its traceback, an event
+    (short-term), and an `internal` refusal for the client. The resource runs on: every
+    change a command makes is checked before it is applied, so nothing is half-applied."""
+    log.exception("internal error while answering a command")
+    cause = f"{type(exc).__name__}: {str(exc)[:200]}"
+    resource.recorder.record("error", f"internal error while answering a command: {cause}")
+    return Refusal("internal", f"internal error in the runtime ({type(exc).__name__})")
 
 
 def answer(resource: Resource, request: Request) -> Any:
     """The typed reply to a decoded request; Refusal when it is refused."""
     authorize(resource, request)
-    if isinstance(request.command, p.Logout):
-        resource.access.logout(request.token or "")
-    return HANDLERS[type(request.command)](resource, request.command)
+    kind = type(request.command)
+    if kind in SESSION_HANDLERS:
+        return SESSION_HANDLERS[kind](resource, request.command, request.token)
+    return HANDLERS[kind](resource, request.command)
 
 
 def authorize(resource: Resource, request: Request) -> None:

@@ -12,6 +12,7 @@ communication time slice on them.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import queue
 import sys
@@ -22,7 +23,14 @@ from collections.abc import Callable
 import zenoh
 
 from runtime.clock import Clock
-from runtime.commands import answer, authorize, begin_reload, finish_reload, respond
+from runtime.commands import (
+    answer,
+    authorize,
+    begin_reload,
+    finish_reload,
+    internal_failure,
+    respond,
+)
 from runtime.contract.protocol import (
     Reload,
     ReloadPreview,
@@ -42,6 +50,8 @@ log = logging.getLogger(__name__)
 STATUS_PERIOD_NS = 1_000_000_000
 SWITCH_INTERVAL_S = 0.0005
 _UNCOUNTED = CycleStats().info()  # statistics and cycle count alone are no change
+# how long a watch set may wait for its client's liveliness token to show
+WATCHER_GRACE_NS = 2_000_000_000
 
 
 class CycleDriver:
@@ -78,11 +88,8 @@ class CycleDriver:
             except Exception as exc:  # a defect of the runtime itself, never of a program
                 log.exception("internal fault")
                 self.resource.error_stop(f"internal fault: {type(exc).__name__}: {exc}")
-            if self.resource.cycle_count != cycle_before:
-                self._publish_values()
-            self._publish_status()
-            self._finish_reload()  # between two cycles
-            self._save_if_due()
+            cycled = self.resource.cycle_count != cycle_before
+            self._safely(functools.partial(self._after_cycle, cycled))
             params = self.resource.params
             running = self.resource.running()
             com_slice = params.com_slice_ms * 1_000_000
@@ -101,6 +108,21 @@ class CycleDriver:
             else:  # STOP: nothing to run; wait for commands, read inputs now and then
                 self._housekeeping(self.clock.now_ns() + com_slice, stop, wait=True)
                 planned = self.clock.now_ns()
+
+    def _after_cycle(self, cycled: bool) -> None:
+        if cycled:
+            self._publish_values()
+        self._publish_status()
+        self._finish_reload()  # between two cycles
+        self._save_if_due()
+
+    @staticmethod
+    def _safely(work: Callable[[], None]) -> None:
+        """Housekeeping that meets a defect of the runtime logs it; the cycles go on."""
+        try:
+            work()
+        except Exception:
+            log.exception("internal fault in housekeeping")
 
     def close(self) -> None:
         """An orderly shutdown saves the context one last time."""
@@ -134,10 +156,13 @@ class CycleDriver:
                 self.link.reply(query, reply)
             del query  # a Zenoh query is finalised when its last reference goes
             # a command may have stepped, stopped or written: show its outcome at once
-            self._publish_values(at_once=True)
-            self._publish_status()
+            self._safely(self._publish_after_command)
             if self.clock.now_ns() >= deadline_ns:
                 return
+
+    def _publish_after_command(self) -> None:
+        self._publish_values(at_once=True)
+        self._publish_status()
 
     def _answer(self, query: zenoh.Query) -> bytes | None:
         """The reply to a query, decoded once and checked whole before anything else; None
@@ -149,7 +174,9 @@ class CycleDriver:
                 return None
         except Refusal as refusal:
             return encode_refusal(refusal)
-        return respond(lambda: answer(self.resource, request))
+        except Exception as exc:
+            return encode_refusal(internal_failure(self.resource, exc))
+        return respond(self.resource, lambda: answer(self.resource, request))
 
     def _start_reload(self, query: zenoh.Query, request: Request) -> None:
         """A reload (or its preview) prepares on a worker thread while cycles go on
@@ -169,24 +196,33 @@ class CycleDriver:
             return
         query, job, _ = self._reload
         self._reload = None
-        self.link.reply(query, respond(lambda: finish_reload(self.resource, job)))
+        self.link.reply(query, respond(self.resource, lambda: finish_reload(self.resource, job)))
         del query
-        self._publish_values(at_once=True)
-        self._publish_status()
+        self._publish_after_command()
 
     def _publish_values(self, at_once: bool = False) -> None:
         """The watch sets whose period has passed (all of them after a command, which may
-        have stepped, stopped or written); sets of departed clients are dropped first."""
-        while True:
-            try:
-                self.resource.online.watches.drop(self.link.departed.get_nowait())
-            except queue.Empty:
-                break
-        resource = self.resource
+        have stepped, stopped or written), read within the communication time slice: the
+        sets that do not fit wait for the next cycle, and are counted. Sets whose session
+        ended, or whose client holds no liveliness token for them, are dropped first."""
+        resource, now = self.resource, self.clock.now_ns()
+        watches, access, watchers = resource.online.watches, resource.access, self.link.watchers
+        watches.drop_where(
+            lambda s: (
+                (s.owner is not None and not access.valid(s.owner))
+                or (s.watch_id not in watchers and now - s.registered_ns > WATCHER_GRACE_NS)
+            )
+        )
         running, forces = resource.running(), resource.forcing.table
-        for watch_set in resource.online.watches.due(self.clock.now_ns(), all_of_them=at_once):
+        budget_end = now + resource.params.com_slice_ms * 1_000_000
+        due = watches.due(now, all_of_them=at_once)
+        for number, watch_set in enumerate(due):
+            if number > 0 and self.clock.now_ns() >= budget_end:
+                resource.stats.watch_deferred += len(due) - number
+                return
             snapshot = resource.online.snapshot(watch_set, resource.cycle_count, running, forces)
             self.link.publish_watch(watch_set.watch_id, snapshot)
+            watches.sent(watch_set, now)
 
     def _publish_events(self) -> None:
         """What the event log got since the last time, in order."""

@@ -6,6 +6,9 @@ from dataclasses import dataclass
 
 from runtime.contract.protocol import CycleStatistics
 
+# a period is an overrun when it is longer than the target by a quarter of it, at least 1 ms
+MIN_TOLERANCE_NS = 1_000_000
+
 
 @dataclass
 class CycleStats:
@@ -14,26 +17,27 @@ class CycleStats:
     min_ns: int = 0
     max_ns: int = 0
     total_ns: int = 0
-    overruns: int = 0  # cycles whose work (inputs to outputs) took longer than the target
+    overruns: int = 0  # periods longer than the target cycle time and its tolerance
     jitter_max_ns: int = 0  # largest deviation of a period from the target cycle time
     last_period_ns: int = 0  # start to start
+    watch_deferred: int = 0  # watch sets that waited a cycle for the communication slice
 
-    def record(self, duration_ns: int, target_ns: int = 0) -> None:
+    def record(self, duration_ns: int) -> None:
         self.count += 1
-        if target_ns and duration_ns > target_ns:
-            self.overruns += 1
         self.last_ns = duration_ns
         self.min_ns = duration_ns if self.count == 1 else min(self.min_ns, duration_ns)
         self.max_ns = max(self.max_ns, duration_ns)
         self.total_ns += duration_ns
 
     def record_period(self, period_ns: int, target_ns: int) -> None:
-        """The time from one cycle's start to the next's; its deviation from the target
-        is the jitter (a late wake-up of the operating system shows here, not as an
-        overrun)."""
+        """The time from one cycle's start to the next's. Its deviation from the target is
+        the jitter; a period longer than the target and its tolerance is an overrun,
+        whatever made it long (the programs, communication, the operating system)."""
         self.last_period_ns = period_ns
         if target_ns:
             self.jitter_max_ns = max(self.jitter_max_ns, abs(period_ns - target_ns))
+            if period_ns > target_ns + max(MIN_TOLERANCE_NS, target_ns // 4):
+                self.overruns += 1
 
     @property
     def mean_ns(self) -> int:
@@ -49,4 +53,5 @@ class CycleStats:
             period_ms=self.last_period_ns / 1e6,
             jitter_max_ms=self.jitter_max_ns / 1e6,
             overruns=self.overruns,
+            watch_deferred=self.watch_deferred,
         )

@@ -1,8 +1,8 @@
 """The runtime's side of Zenoh: command queryable, status publisher, watch-set values,
 liveliness.
 
-Zenoh calls back on its own threads; the callbacks only queue (a query, a departed
-watcher), and the cycle driver handles the queues in the housekeeping part of the cycle
+Zenoh calls back on its own threads; the callbacks only queue a query or note a watcher
+coming or going, and the cycle driver handles them in the housekeeping part of the cycle
 (so commands never race the cycle).
 """
 
@@ -48,15 +48,20 @@ class ResourceLink:
             target=self._publish_loop, name="padt-watch-publisher", daemon=True
         )
         self._publisher.start()
-        self.departed: queue.Queue[str] = queue.Queue()  # watch ids whose client went away
+        # the watch sets whose client holds its liveliness token (Zenoh's threads add and
+        # remove ids; the cycle thread only asks)
+        self.watchers: set[str] = set()
         self._watchers = session.liveliness().declare_subscriber(
-            watchers_key_expr(resource), self._on_watcher
+            watchers_key_expr(resource), self._on_watcher, history=True
         )
         self._token = session.liveliness().declare_token(alive_key(resource))
 
     def _on_watcher(self, sample: zenoh.Sample) -> None:
-        if sample.kind == zenoh.SampleKind.DELETE:
-            self.departed.put(watch_id_of(str(sample.key_expr)))
+        watch_id = watch_id_of(str(sample.key_expr))
+        if sample.kind == zenoh.SampleKind.PUT:
+            self.watchers.add(watch_id)
+        else:
+            self.watchers.discard(watch_id)
 
     def publish_status(self, status: Status) -> None:
         self._status.put(json.dumps(encode(status)))

@@ -7,7 +7,6 @@ from __future__ import annotations
 from typing import Any
 
 from runtime.contract.protocol import ProgramState, Quality
-from runtime.contract.refusal import Refusal
 from runtime.force_table import ForceTable
 from runtime.variables import Variables
 from runtime.watch_sets import WatchSet, WatchSets, WatchSnapshot
@@ -20,17 +19,23 @@ class OnlineValues:
         self._variables = variables
         self.watches = WatchSets()
 
-    def watch(self, watch_id: str, names: list[str], period_ms: int, append: bool) -> list[str]:
-        """Register what a client views; returns the canonical paths (all names must
-        exist: a typo gets an error, not a silently empty field). `append` adds to a set
-        (a large set arrives in several requests)."""
-        if self.watches.full(watch_id):
-            raise Refusal("too_many", "too many watch sets on this resource")
+    def watch(
+        self,
+        watch_id: str,
+        names: list[str],
+        period_ms: int,
+        append: bool,
+        owner: str | None,
+        now_ns: int,
+    ) -> list[str]:
+        """Register what a client views, for the session `owner`; returns the canonical
+        paths (all names must exist: a typo gets an error, not a silently empty field).
+        `append` adds to a set (a large set arrives in several requests)."""
         paths = tuple(self._variables.lookup(name).path.path for name in names)
         existing = self.watches.get(watch_id) if append else None
         if existing is not None:
             paths = existing.paths + paths
-        self.watches.set(WatchSet(watch_id, paths, period_ms * 1_000_000))
+        self.watches.set(WatchSet(watch_id, paths, period_ms * 1_000_000, owner, now_ns))
         return list(paths)
 
     def snapshot(

@@ -276,11 +276,10 @@ class Resource:
             self._first_cycle = False
             self.start_kind = None
         self.cycle_count += 1
-        target = self.params.target_cycle_ms * 1_000_000
         if self.clock.virtual:  # what the programs used, counted in loop passes
-            self.stats.record(self.scheduler.used_ns, target)
+            self.stats.record(self.scheduler.used_ns)
         else:
-            self.stats.record(self.clock.now_ns() - begin, target)
+            self.stats.record(self.clock.now_ns() - begin)
 
     def step(self) -> None:
         """In STOP: one CPU cycle of every program, time advancing one interval."""

@@ -2,18 +2,27 @@
 
 A client registers a set of variables and a period; after the CPU cycle in which a period
 has passed, the runtime sends the set's values (those of that cycle) in one message, each
-with its quality. A client holds a liveliness token for each of its sets; when the client
-goes away, Zenoh withdraws the token and the runtime drops the set.
+with its quality. A set belongs to the session that made it and ends with it; the client
+also holds a liveliness token for each of its sets, and when the client goes away Zenoh
+withdraws the token and the runtime drops the set. Quotas per session (protocol.py) keep
+what one client can ask for inside what the cycle can afford.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from runtime.contract.protocol import (
+    MAX_SET_VARIABLES,
+    MAX_SETS_PER_SESSION,
+    MAX_VALUES_PER_SECOND,
+)
+from runtime.contract.refusal import Refusal
 from runtime.contract.values import jsonable
 
-MAX_SETS = 64
+MAX_SETS = 64  # on one resource, of all sessions
 
 
 @dataclass
@@ -21,7 +30,13 @@ class WatchSet:
     watch_id: str
     paths: tuple[str, ...]  # canonical variable paths, in the client's order
     period_ns: int
+    owner: str | None = None  # the session token that made it; None when access is open
+    registered_ns: int = 0
     next_due_ns: int = 0  # clock time after which it is sent again
+
+    @property
+    def values_per_second(self) -> float:
+        return len(self.paths) * 1e9 / self.period_ns
 
 
 @dataclass(frozen=True)
@@ -47,34 +62,54 @@ class WatchSets:
         self._sets: dict[str, WatchSet] = {}
 
     def set(self, watch_set: WatchSet) -> None:
-        """Register (or replace) a set; it is due at once."""
+        """Register (or replace) a set within the quotas; it is due at once."""
+        existing = self._sets.get(watch_set.watch_id)
+        if existing is not None and existing.owner != watch_set.owner:
+            raise Refusal("forbidden", f"watch set {watch_set.watch_id} is another session's")
+        if existing is None and len(self._sets) >= MAX_SETS:
+            raise Refusal("too_many", "too many watch sets on this resource")
+        others = [s for s in self.owned_by(watch_set.owner) if s.watch_id != watch_set.watch_id]
+        if len(others) >= MAX_SETS_PER_SESSION:
+            raise Refusal("quota", f"a session may watch at most {MAX_SETS_PER_SESSION} sets")
+        if len(watch_set.paths) > MAX_SET_VARIABLES:
+            raise Refusal("quota", f"a watch set holds at most {MAX_SET_VARIABLES} variables")
+        rate = watch_set.values_per_second + sum(s.values_per_second for s in others)
+        if rate > MAX_VALUES_PER_SECOND:
+            raise Refusal(
+                "quota",
+                f"a session may watch at most {MAX_VALUES_PER_SECOND} values per second "
+                f"(this set would make it {rate:.0f}): fewer variables or a longer period",
+            )
         self._sets[watch_set.watch_id] = watch_set
+
+    def owned_by(self, owner: str | None) -> list[WatchSet]:
+        return [s for _, s in sorted(self._sets.items()) if s.owner == owner]
 
     def drop(self, watch_id: str) -> bool:
         return self._sets.pop(watch_id, None) is not None
 
+    def drop_where(self, gone: Callable[[WatchSet], bool]) -> None:
+        for watch_id in [i for i, s in sorted(self._sets.items()) if gone(s)]:
+            del self._sets[watch_id]
+
     def ids(self) -> list[str]:
         return sorted(self._sets)
-
-    def full(self, watch_id: str) -> bool:
-        return watch_id not in self._sets and len(self._sets) >= MAX_SETS
 
     def get(self, watch_id: str) -> WatchSet | None:
         return self._sets.get(watch_id)
 
     def due(self, now_ns: int, all_of_them: bool = False) -> list[WatchSet]:
         """The sets to send now (`all_of_them`: after a command, which may have changed
-        what they show). A set that was due is next due one period after it was due, so
-        the rate does not drift by the part of a cycle it waited; one that fell a whole
-        period behind starts afresh."""
-        sending = []
-        for _, watch_set in sorted(self._sets.items()):
-            if now_ns >= watch_set.next_due_ns:
-                following = watch_set.next_due_ns + watch_set.period_ns
-                watch_set.next_due_ns = (
-                    following if following > now_ns else now_ns + watch_set.period_ns
-                )
-                sending.append(watch_set)
-            elif all_of_them:
-                sending.append(watch_set)
-        return sending
+        what they show), longest waiting first; `sent` marks those that went."""
+        due = [s for s in self._sets.values() if all_of_them or now_ns >= s.next_due_ns]
+        return sorted(due, key=lambda s: (s.next_due_ns, s.watch_id))
+
+    @staticmethod
+    def sent(watch_set: WatchSet, now_ns: int) -> None:
+        """A set that was due is next due one period after it was due, so the rate does
+        not drift by the part of a cycle it waited; one that fell a whole period behind
+        starts afresh. One sent early, after a command, keeps its time."""
+        if now_ns < watch_set.next_due_ns:
+            return
+        following = watch_set.next_due_ns + watch_set.period_ns
+        watch_set.next_due_ns = following if following > now_ns else now_ns + watch_set.period_ns

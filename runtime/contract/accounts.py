@@ -146,6 +146,12 @@ class AccessControl:
             )
         return session
 
+    def valid(self, token: str) -> bool:
+        """Whether a session is still there: not logged out, not expired, its account
+        unchanged."""
+        session = self.sessions.get(token)
+        return session is not None and session.expires_ns > self.now_ns()
+
     def replace_users(self, users: tuple[UserAccount, ...]) -> None:
         """New accounts (download or reload): sessions of users gone or changed end."""
         self.users = users

@@ -43,6 +43,10 @@ MAX_ARTIFACT = 64 * 1024 * 1024  # characters of a whole artifact
 MIN_WATCH_PERIOD_MS = 10
 MAX_WATCH_PERIOD_MS = 60_000
 MAX_EVENTS = 1000  # events per `events` request
+# what one session may watch: sets, variables per set, and values per second over its sets
+MAX_SETS_PER_SESSION = 8
+MAX_SET_VARIABLES = 20_000
+MAX_VALUES_PER_SECOND = 200_000
 ADMINISTRATOR_PARAMETERS = ("allow_online_settings",)
 
 
@@ -93,7 +97,8 @@ class CycleStatistics:
     mean_ms: float
     period_ms: float  # the last period, start to start
     jitter_max_ms: float
-    overruns: int
+    overruns: int  # periods longer than the target cycle time by more than a quarter of it
+    watch_deferred: int  # watch-set messages that waited a cycle for the communication slice
 
 
 @dataclass(frozen=True)

@@ -358,7 +358,9 @@ def bench_watch_set(artifact: Artifact, count: int, seconds: float) -> None:
                     "process instead (Resource.watch between two cycles), same publication path"
                 )
                 resource.pending.put(
-                    lambda: resource.online.watch(watch_id, selection, PERIOD_MS, False)
+                    lambda: resource.online.watch(
+                        watch_id, selection, PERIOD_MS, False, None, clock.now_ns()
+                    )
                 )
             else:
                 print(f"  registration: ResourceClient.watch ({hello['variables']:,} variables)")
