@@ -53,9 +53,9 @@ def target(tmp_path: Path, endpoint: str) -> Iterator[ResourceClient]:
 
 
 def cycles_per_second(client: ResourceClient, seconds: float = 1.0) -> float:
-    first = client.command("status")["status"]["cycle"]
+    first = int(client.command("status")["status"]["cycle"])
     time.sleep(seconds)
-    return (client.command("status")["status"]["cycle"] - first) / seconds
+    return (int(client.command("status")["status"]["cycle"]) - first) / seconds
 
 
 def still_healthy(client: ResourceClient) -> None:
