@@ -14,6 +14,8 @@ from typing import Any
 
 from runtime import online_writes, program_control, reload_switch
 from runtime.contract import protocol as p
+from runtime.contract import scram
+from runtime.contract.accounts import ANONYMOUS
 from runtime.contract.protocol import Request, decode_request, encode_refusal, encode_reply
 from runtime.contract.refusal import Refusal
 from runtime.online_parameters import set_parameter
@@ -40,18 +42,26 @@ def _ms_to_ns(ms: int | None) -> int | None:
     return ms * 1_000_000 if ms is not None else None
 
 
-def _login(resource: Resource, command: p.Login) -> p.LoginReply:
-    token, session = resource.login(command.user, command.password)
-    return p.LoginReply(token, session.user, session.level)
+def _login_begin(resource: Resource, command: p.LoginBegin, request: Request) -> p.LoginChallenge:
+    challenge = resource.begin_login(command.user, command.nonce, request.source)
+    return p.LoginChallenge(challenge.nonce, challenge.salt, challenge.n, challenge.r, challenge.p)
+
+
+def _login(resource: Resource, command: p.Login, request: Request) -> p.LoginReply:
+    proof = scram.unb64(command.proof)
+    proven = resource.finish_login(command.user, command.nonce, proof, request.source)
+    session = proven.session
+    signature, key = proven.server_signature, resource.identity.public_key
+    return p.LoginReply(proven.token, session.user, session.level, signature, key)
 
 
 def _events(resource: Resource, command: p.GetEvents) -> p.EventsReply:
     return p.EventsReply(resource.events.recent(command.after, command.limit))
 
 
-def _watch(resource: Resource, command: p.Watch, token: str | None) -> p.WatchReply:
+def _watch(resource: Resource, command: p.Watch, request: Request) -> p.WatchReply:
     """A watch set belongs to the session that makes it (none when access is open)."""
-    owner = None if resource.access.open else token
+    owner = None if resource.access.open else request.token
     online, now = resource.online, resource.clock.now_ns()
     paths = online.watch(
         command.id, command.variables, command.period_ms, command.append, owner, now
@@ -59,8 +69,8 @@ def _watch(resource: Resource, command: p.Watch, token: str | None) -> p.WatchRe
     return p.WatchReply(command.id, paths)
 
 
-def _logout(resource: Resource, command: p.Logout, token: str | None) -> p.Done:
-    resource.access.logout(token or "")
+def _logout(resource: Resource, command: p.Logout, request: Request) -> p.Done:
+    resource.access.logout(request.token or "")
     return p.Done()
 
 
@@ -88,7 +98,6 @@ def _reload(resource: Resource, command: p.Reload | p.ReloadPreview) -> Any:
 
 
 HANDLERS: dict[type[p.Command[Any]], Handler] = {
-    p.Login: _login,
     p.GetStatus: lambda r, c: _status(r),
     p.GetValues: lambda r, c: p.ValuesReply(r.variables.values(), r.cycle_count),
     p.GetVariables: lambda r, c: p.VariablesReply(r.variables.infos()),
@@ -124,16 +133,21 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
 }
 
 
-# the commands that act on the request's session itself
-SESSION_HANDLERS: dict[type[p.Command[Any]], Callable[[Resource, Any, str | None], Any]] = {
+# the commands that act on the request's session itself, or need to know where it came from
+SESSION_HANDLERS: dict[type[p.Command[Any]], Callable[[Resource, Any, Request], Any]] = {
+    p.LoginBegin: _login_begin,
+    p.Login: _login,
     p.Logout: _logout,
     p.Watch: _watch,
 }
 
 
-def execute(resource: Resource, payload: bytes) -> bytes:
-    """A request as it comes off the bus, answered: the encoded reply or refusal."""
-    return respond(resource, lambda: answer(resource, decode_request(payload)))
+def execute(
+    resource: Resource, payload: bytes, mac: bytes | None = None, source: str = ANONYMOUS
+) -> bytes:
+    """A request as it comes off the bus (with its MAC and source), answered: the encoded
+    reply or refusal."""
+    return respond(resource, lambda: answer(resource, decode_request(payload, source, mac)))
 
 
 def respond(resource: Resource, work: Callable[[], Any]) -> bytes:
@@ -162,7 +176,7 @@ def answer(resource: Resource, request: Request) -> Any:
     authorize(resource, request)
     kind = type(request.command)
     if kind in SESSION_HANDLERS:
-        return SESSION_HANDLERS[kind](resource, request.command, request.token)
+        return SESSION_HANDLERS[kind](resource, request.command, request)
     return HANDLERS[kind](resource, request.command)
 
 
@@ -173,7 +187,7 @@ def authorize(resource: Resource, request: Request) -> None:
     needed = request.command.level()
     if needed is None:  # login and logout
         return
-    session = resource.access.check(request.token, needed)
+    session = resource.access.check(request.token, needed, request.signed, request.mac, request.seq)
     resource.recorder.acting_user = session.user if session is not None else None
 
 

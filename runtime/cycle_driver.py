@@ -168,7 +168,8 @@ class CycleDriver:
         """The reply to a query, decoded once and checked whole before anything else; None
         when it is a reload that answers later."""
         try:
-            request = decode_request(self.link.payload(query))
+            link = self.link
+            request = decode_request(link.payload(query), link.source(query), link.mac(query))
             if isinstance(request.command, Reload | ReloadPreview):
                 self._start_reload(query, request)
                 return None

@@ -14,6 +14,7 @@ import threading
 
 import zenoh
 
+from runtime.contract.accounts import ANONYMOUS
 from runtime.contract.keyspace import (
     alive_key,
     command_key,
@@ -25,11 +26,13 @@ from runtime.contract.keyspace import (
 )
 from runtime.contract.protocol import Event, Status
 from runtime.contract.wire import encode
+from runtime.identity import Identity
 from runtime.watch_sets import WatchSnapshot
 
 
 class ResourceLink:
-    def __init__(self, session: zenoh.Session, resource: str) -> None:
+    def __init__(self, session: zenoh.Session, resource: str, identity: Identity) -> None:
+        self._identity = identity  # every publication is signed with its key
         self.inbox: queue.Queue[zenoh.Query] = queue.Queue()
         self._queryable = session.declare_queryable(command_key(resource), self.inbox.put)
         self._status = session.declare_publisher(
@@ -64,10 +67,12 @@ class ResourceLink:
             self.watchers.discard(watch_id)
 
     def publish_status(self, status: Status) -> None:
-        self._status.put(json.dumps(encode(status)))
+        payload = json.dumps(encode(status)).encode()
+        self._status.put(payload, attachment=self._identity.sign(payload))
 
     def publish_event(self, event: Event) -> None:
-        self._events.put(json.dumps(encode(event)))
+        payload = json.dumps(encode(event)).encode()
+        self._events.put(payload, attachment=self._identity.sign(payload))
 
     def publish_watch(self, watch_id: str, snapshot: WatchSnapshot) -> None:
         """A watch set's values, read in this cycle; the message is built, encoded and put
@@ -87,15 +92,29 @@ class ResourceLink:
                     return
                 watch_id, snapshot = next(iter(self._pending.items()))
                 del self._pending[watch_id]
+            payload = json.dumps(snapshot.message()).encode()
             self._session.put(
                 watch_key(self._resource, watch_id),
-                json.dumps(snapshot.message()),
+                payload,
+                attachment=self._identity.sign(payload),
                 congestion_control=zenoh.CongestionControl.DROP,
             )
 
     @staticmethod
     def payload(query: zenoh.Query) -> bytes:
         return query.payload.to_bytes() if query.payload is not None else b"{}"
+
+    @staticmethod
+    def source(query: zenoh.Query) -> str:
+        """The Zenoh session the sender names as its own (clients of this project do); the
+        same for all that name none. It tells callers apart for the login lock, no more."""
+        info = query.source_info
+        return str(info.source_id.zid) if info is not None else ANONYMOUS
+
+    @staticmethod
+    def mac(query: zenoh.Query) -> bytes | None:
+        """The MAC a request of a session carries as its attachment."""
+        return query.attachment.to_bytes() if query.attachment is not None else None
 
     @staticmethod
     def reply(query: zenoh.Query, reply: bytes) -> None:

@@ -13,9 +13,15 @@ from runtime.context import ContextInvalid, load_context
 from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
 from runtime.contract.keyspace import valid_resource_name
 from runtime.contract.session_options import add_zenoh_options
-from runtime.contract.state_folder import artifact_path, context_path, events_path
+from runtime.contract.state_folder import (
+    artifact_path,
+    context_path,
+    events_path,
+    identity_path,
+)
 from runtime.contract.stop_request import StopRequest
 from runtime.event_log import EventLog
+from runtime.identity import Identity
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
 
@@ -84,7 +90,8 @@ def run(args: argparse.Namespace) -> int:
         return 2
     clock = RealClock()
     events = EventLog(clock.wall_ns, long_path=events_path(args.state_dir))
-    resource = Resource(args.resource, clock, events)
+    identity = Identity.kept_in(identity_path(args.state_dir))
+    resource = Resource(args.resource, clock, events, identity)
     power_up(resource, args.state_dir)
     resource.on_configuration = lambda artifact: store_configuration(args.state_dir, artifact)
 
@@ -94,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     from runtime.link import ResourceLink
 
     session = open_client(args.zenoh, args.zenoh_config)
-    link = ResourceLink(session, args.resource)
+    link = ResourceLink(session, args.resource, identity)
     saver = ContextSaver(context_path(args.state_dir))
 
     def save() -> None:

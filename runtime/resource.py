@@ -20,7 +20,7 @@ import logging
 from collections.abc import Callable
 
 from runtime.clock import Clock
-from runtime.contract.accounts import AccessControl, Session
+from runtime.contract.accounts import AccessControl, Challenge, Proven
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.protocol import ProgramState, ProgramStatus, ResourceState, Status
 from runtime.contract.refusal import Refusal
@@ -30,8 +30,10 @@ from runtime.event_log import EventLog
 from runtime.event_recorder import EventRecorder
 from runtime.force_table import GLOBAL
 from runtime.forcing import Forcing
+from runtime.identity import Identity
 from runtime.instances import Instances, instantiate
 from runtime.intrinsics import SystemView
+from runtime.login_audit import LoginAudit
 from runtime.online_values import OnlineValues
 from runtime.process_image import ProcessImage
 from runtime.scheduler import Scheduler
@@ -46,7 +48,13 @@ _RUNNING = (ResourceState.RUN, ResourceState.RUN_UP_STOP)
 
 
 class Resource:
-    def __init__(self, name: str, clock: Clock, events: EventLog | None = None) -> None:
+    def __init__(
+        self,
+        name: str,
+        clock: Clock,
+        events: EventLog | None = None,
+        identity: Identity | None = None,
+    ) -> None:
         self.name = name
         self.clock = clock
         self.events = events if events is not None else EventLog(clock.wall_ns)
@@ -63,7 +71,10 @@ class Resource:
         self.forcing = Forcing(self, self.variables, self.recorder, clock)
         self.online = OnlineValues(self.variables)
         self.scheduler = Scheduler(self, self.variables, self.recorder, clock)
-        self.access = AccessControl((), clock.now_ns)  # accounts of the loaded configuration
+        # the key its publications are signed with (made fresh when none is given)
+        self.identity = identity if identity is not None else Identity.fresh()
+        self.access = AccessControl((), clock.now_ns, realm=name)  # the loaded accounts
+        self.login_audit = LoginAudit()
         self.incoming = IncomingArtifact()  # a configuration arriving for load or reload
         self.start_kind: str | None = "cold"  # what the next first cycle is: cold | warm
         self.last_start = ""  # how the resource last started: cold | warm | continued
@@ -88,15 +99,34 @@ class Resource:
     def running(self) -> bool:
         return self.state in _RUNNING
 
-    def login(self, name: str, password: str) -> tuple[str, Session]:
-        """A session token; a failed login is an event (without the password)."""
+    def begin_login(self, name: str, client_nonce: str, source: str) -> Challenge:
+        """The challenge of a login (runtime/contract/scram.py)."""
         try:
-            token, session = self.access.login(name, password)
+            return self.access.begin(name, client_nonce, source)
         except Refusal as denied:
-            self.recorder.record("login", f"login of '{name}' refused: {denied.message}", name)
+            self._login_refused(name, source, denied)
             raise
-        self.recorder.record("login", f"{name} logged in ({session.level})", name)
-        return token, session
+
+    def finish_login(self, name: str, nonce: str, proof: bytes, source: str) -> Proven:
+        """A session for a proof that holds. Failed logins are short-term events,
+        aggregated per name, source and interval (`login_audit.py`)."""
+        try:
+            proven = self.access.finish(name, nonce, proof, self.identity.public_key, source)
+        except Refusal as denied:
+            self._login_refused(name, source, denied)
+            raise
+        earlier = self.login_audit.succeeded(name, source)
+        if earlier:
+            message = f"login of '{name}' refused{_more(earlier)}"
+            self.recorder.record("login", message, name, long_term=False, source=source)
+        self.recorder.record("login", f"{name} logged in ({proven.session.level})", name)
+        return proven
+
+    def _login_refused(self, name: str, source: str, denied: Refusal) -> None:
+        earlier = self.login_audit.failed(name, source, self.clock.now_ns())
+        if earlier is not None:
+            message = f"login of '{name}' refused: {denied.message}{_more(earlier)}"
+            self.recorder.record("login", message, name, long_term=False, source=source)
 
     def reset_stats(self) -> None:
         self.stats = CycleStats()
@@ -355,3 +385,7 @@ class Resource:
                 for p in self.programs
             ],
         )
+
+
+def _more(count: int) -> str:
+    return f" ({count} more refused since the last report)" if count else ""

@@ -76,9 +76,11 @@ router = APIRouter(prefix="/api", tags=["session and accounts"])
 
 
 @router.post("/login", summary="Log in to the PADT")
-def login(credentials: Credentials, service: Service) -> SessionInfo:
+def login(credentials: Credentials, service: Service, request: Request) -> SessionInfo:
+    # failed logins lock the name for the address they come from, not for everyone
+    address = request.client.host if request.client is not None else "unknown"
     try:
-        token, session = service.accounts.login(credentials.user, credentials.password)
+        token, session = service.accounts.login(credentials.user, credentials.password, address)
     except Refusal as denied:
         # the name only: it is what an administrator looks for; never the password
         log.warning("login to the PADT refused for %r: %s", credentials.user[:32], denied.code)

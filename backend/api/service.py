@@ -24,9 +24,13 @@ from backend.engineering.reload import (
     preview_reload,
     reload_checked,
 )
-from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
+from backend.engineering.resource_client import (
+    ResourceClient,
+    ResourceLogin,
+    ResourceUnreachable,
+)
 from backend.engineering.resource_directory import ResourceDirectory
-from runtime.contract.protocol import Command, LoginReply, Logout, ReloadPlanInfo
+from runtime.contract.protocol import Command, Logout, ReloadPlanInfo
 from runtime.contract.refusal import Refusal
 
 R = TypeVar("R")
@@ -88,7 +92,7 @@ class PadtService:
 
     def client(self, caller: Caller, resource: str) -> ResourceClient:
         client = self.directory.client(resource)
-        client.token = self.accounts.resource_token(caller.token, resource)
+        client.logged_in = self.accounts.resource_login(caller.token, resource)
         return client
 
     def ask(self, caller: Caller, resource: str, command: Command[R]) -> R:
@@ -97,21 +101,21 @@ class PadtService:
         with self._refusals(caller, resource):
             return self.client(caller, resource).ask(command)
 
-    def log_in(self, caller: Caller, resource: str, user: str, password: str) -> LoginReply:
+    def log_in(self, caller: Caller, resource: str, user: str, password: str) -> ResourceLogin:
         client = self.client(caller, resource)
         with self._refusals(caller, resource):
-            reply = client.login(user, password)
-        self.accounts.set_resource_token(caller.token, resource, client.token)
-        return reply
+            login = client.login(user, password)
+        self.accounts.set_resource_login(caller.token, resource, login)
+        # what it proved: the resource's publications can be told from forgeries now
+        self.directory.trust(resource, login.publication_key)
+        return login
 
     def log_out(self, caller: Caller, resource: str) -> None:
-        token = self.accounts.resource_token(caller.token, resource)
-        self.accounts.set_resource_token(caller.token, resource, None)
-        if token is not None and self.directory.is_online(resource):
+        login = self.accounts.resource_login(caller.token, resource)
+        if login is not None and self.directory.is_online(resource):
             with self._refusals(caller, resource):
-                client = self.client(caller, resource)
-                client.token = token
-                client.ask(Logout())
+                self.client(caller, resource).ask(Logout())
+        self.accounts.set_resource_login(caller.token, resource, None)
 
     def load(self, caller: Caller, resource: str, project: str) -> Downloaded:
         path = self.project_path(project)
@@ -151,7 +155,7 @@ class PadtService:
             raise Refusal("unreachable", str(exc)) from None
         except Refusal as refusal:
             if refusal.code == "unauthenticated":
-                self.accounts.set_resource_token(caller.token, resource, None)
+                self.accounts.set_resource_login(caller.token, resource, None)
                 refusal.message += (
                     f" (log in to the resource: POST /api/resources/{resource}/login)"
                 )

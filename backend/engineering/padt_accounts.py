@@ -18,6 +18,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from backend.engineering.padt_levels import ADMINISTRATOR, PADT_LEVELS
+from backend.engineering.resource_client import ResourceLogin
 from runtime.contract.accounts import AccessControl, Session, account_problems, hash_password
 from runtime.contract.artifact import UserAccount
 from runtime.contract.refusal import Refusal
@@ -106,22 +107,24 @@ def _keep_an_administrator(accounts: tuple[UserAccount, ...]) -> None:
 class PadtAccounts:
     """The accounts of the file and the API's sessions, shared by the request threads.
 
-    Each API session also holds the PES session tokens its user got by logging in to
-    resources: a resource checks its own accounts, the PADT only carries the token."""
+    Each API session also holds the resource logins its user made: a resource checks its
+    own accounts, the PADT only carries the session (and signs its requests)."""
 
     def __init__(self, path: Path, now_ns: Callable[[], int]) -> None:
         self.path = path
         self._lock = threading.Lock()
         self._access = AccessControl(read_accounts(path), now_ns, PADT_LEVELS)
-        self._resource_tokens: dict[tuple[str, str], str] = {}  # (API token, resource)
+        # the resource logins of each API session: (API token, resource) -> login
+        self._resource_logins: dict[tuple[str, str], ResourceLogin] = {}
 
     @property
     def empty(self) -> bool:
         return self._access.open
 
-    def login(self, name: str, password: str) -> tuple[str, Session]:
+    def login(self, name: str, password: str, source: str) -> tuple[str, Session]:
+        """`source`: the caller's address; repeated failures lock the name for it only."""
         with self._lock:
-            return self._access.login(name, password)
+            return self._access.login(name, password, source)
 
     def logout(self, token: str) -> None:
         with self._lock:
@@ -157,17 +160,17 @@ class PadtAccounts:
             write_accounts(self.path, kept)
             self._access.replace_users(kept)
 
-    def resource_token(self, token: str, resource: str) -> str | None:
+    def resource_login(self, token: str, resource: str) -> ResourceLogin | None:
         with self._lock:
-            return self._resource_tokens.get((token, resource))
+            return self._resource_logins.get((token, resource))
 
-    def set_resource_token(self, token: str, resource: str, pes_token: str | None) -> None:
+    def set_resource_login(self, token: str, resource: str, login: ResourceLogin | None) -> None:
         with self._lock:
-            if pes_token is None:
-                self._resource_tokens.pop((token, resource), None)
+            if login is None:
+                self._resource_logins.pop((token, resource), None)
             else:
-                self._resource_tokens[(token, resource)] = pes_token
+                self._resource_logins[(token, resource)] = login
 
     def _forget_resources(self, token: str) -> None:
-        for key in [k for k in self._resource_tokens if k[0] == token]:
-            del self._resource_tokens[key]
+        for key in [k for k in self._resource_logins if k[0] == token]:
+            del self._resource_logins[key]

@@ -6,15 +6,18 @@ through this client."""
 from __future__ import annotations
 
 import contextlib
+import itertools
 import json
 import logging
 import secrets
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 import zenoh
 
+from runtime.contract import scram, signatures
 from runtime.contract.keyspace import (
     alive_key,
     command_key,
@@ -29,7 +32,7 @@ from runtime.contract.protocol import (
     Event,
     GetStatus,
     Login,
-    LoginReply,
+    LoginBegin,
     Status,
     Unwatch,
     Watch,
@@ -42,6 +45,8 @@ from runtime.contract.refusal import Refusal
 
 COMMAND_TIMEOUT_S = 5.0
 WATCH_BATCH = 1000  # variable names per watch request (paths are short; 64 KiB is the limit)
+# the most work a login challenge may ask of this process (our resources ask for 2**14, 8, 1)
+MAX_SCRYPT_N, MAX_SCRYPT_R, MAX_SCRYPT_P = 2**17, 16, 4
 R = TypeVar("R")
 P = TypeVar("P")
 log = logging.getLogger("padt.client")
@@ -68,22 +73,42 @@ class WatchHandle:
         self._subscriber.undeclare()
 
 
+@dataclass
+class ResourceLogin:
+    """What a login to a resource gives its client: the session token, the key that signs
+    every request of the session, and the key the resource signs its publications with
+    (runtime/contract/scram.py, signatures.py)."""
+
+    token: str
+    key: bytes
+    publication_key: str
+    user: str
+    level: str
+    _numbers: Iterator[int] = field(default_factory=lambda: itertools.count(1), repr=False)
+
+    def next_seq(self) -> int:
+        return next(self._numbers)  # one counter for all threads of a client (atomic)
+
+
 class ResourceClient:
     def __init__(self, session: zenoh.Session, resource: str) -> None:
         self.session = session
         self.resource = resource
         self._subscribers: list[zenoh.Subscriber[None]] = []
-        self.token: str | None = None  # the session token after `login`, sent with every command
+        self.logged_in: ResourceLogin | None = None  # after `login`: signs every request
+        # a publication key known from elsewhere (the API learns it from its users' logins)
+        self.trusted_key: str | None = None
         self._credentials: tuple[str, str] | None = None
+        self._sent = 0  # requests sent: the sequence number of their source information
 
     def ask(self, command: Command[R], timeout_s: float = COMMAND_TIMEOUT_S) -> R:
         """Send a command; its reply, checked against the protocol. Raises the resource's
         Refusal, or ResourceUnreachable when no runtime answered."""
         reply = self._exchange(
             command.NAME,
-            lambda: encode_request(command, self.token),
+            lambda seq: encode_request(command, self._token(), seq),
             timeout_s,
-            relogin=not isinstance(command, Login),
+            relogin=not isinstance(command, LoginBegin | Login),
         )
         return decode_reply(command, reply)
 
@@ -93,22 +118,42 @@ class ResourceClient:
         """The wire form, for tools and tests that speak JSON: a command by its name and
         arguments as they are (unchecked), the reply as JSON data with its `ok`."""
 
-        def payload() -> bytes:
-            token = {"token": self.token} if self.token is not None else {}
-            return json.dumps({"cmd": cmd, **token, **args}).encode()
+        def payload(seq: int | None) -> bytes:
+            session = {"token": self._token(), "seq": seq} if self.logged_in else {}
+            return json.dumps({"cmd": cmd, **session, **args}).encode()
 
         reply: dict[str, Any] = json.loads(
-            self._exchange(cmd, payload, timeout_s, relogin=cmd != "login")
+            self._exchange(cmd, payload, timeout_s, relogin=not cmd.startswith("login"))
         )
         return reply
 
-    def login(self, user: str, password: str) -> LoginReply:
-        """Log in; the token goes with every later command. Raises Refusal when refused."""
-        login = Login(user, password)
-        reply = self._exchange(login.NAME, lambda: encode_request(login, None), relogin=False)
-        logged_in = decode_reply(login, reply)
-        self.token = logged_in.token
-        return logged_in
+    def login(self, user: str, password: str) -> ResourceLogin:
+        """Log in by challenge and response: the password never leaves this process, and
+        the resource must prove that it holds the user's verifier (Refusal `impostor`
+        otherwise). Raises the resource's Refusal when it refuses."""
+        client_nonce = scram.new_nonce()
+        challenge = self._plain(LoginBegin(user, client_nonce))
+        if (
+            not challenge.nonce.startswith(client_nonce)
+            or challenge.n > MAX_SCRYPT_N
+            or challenge.r > MAX_SCRYPT_R
+            or challenge.p > MAX_SCRYPT_P
+        ):
+            raise Refusal("impostor", f"a login challenge not from resource {self.resource}")
+        exchange = scram.ClientExchange.answer(
+            self.resource, user, password, client_nonce, challenge.nonce,
+            scram.unb64(challenge.salt), challenge.n, challenge.r, challenge.p,
+        )  # fmt: skip
+        reply = self._plain(Login(user, challenge.nonce, exchange.proof))
+        if not exchange.server_proven(reply.server_signature, reply.publication_key):
+            raise Refusal(
+                "impostor",
+                f"the answer to the login does not prove that it comes from {self.resource}",
+            )
+        self.logged_in = ResourceLogin(
+            reply.token, exchange.session_key, reply.publication_key, reply.user, reply.level
+        )
+        return self.logged_in
 
     def use_credentials(self, user: str, password: str) -> None:
         """Log in whenever the resource asks for it (at the first command, after a runtime
@@ -129,27 +174,48 @@ class ResourceClient:
                     raise
                 time.sleep(0.1)
 
+    def _token(self) -> str | None:
+        return self.logged_in.token if self.logged_in is not None else None
+
+    def _plain(self, command: Command[R]) -> R:
+        """A login step: no session, no second try."""
+        reply = self._exchange(
+            command.NAME, lambda seq: encode_request(command, None), relogin=False
+        )
+        return decode_reply(command, reply)
+
     def _exchange(
         self,
         name: str,
-        payload: Callable[[], bytes],
+        payload: Callable[[int | None], bytes],
         timeout_s: float = COMMAND_TIMEOUT_S,
         relogin: bool = True,
     ) -> bytes:
-        """Send a request; log in again once when the session is gone (its expiry or a
-        restart of the runtime) and the client has credentials. `payload` makes the request
-        with the token of the moment."""
-        reply = self._send(name, payload(), timeout_s)
+        """Send a request, signed with the session key when logged in; log in again once
+        when the session is gone (its expiry or a restart of the runtime) and the client
+        has credentials. `payload` makes the request with the session and sequence number
+        of the moment."""
+        reply = self._send(name, payload, timeout_s)
         if not relogin or self._credentials is None or not _unauthenticated(reply):
             return reply
         try:
             self.login(*self._credentials)
         except Refusal:
             return reply
-        return self._send(name, payload(), timeout_s)
+        return self._send(name, payload, timeout_s)
 
-    def _send(self, name: str, payload: bytes, timeout_s: float) -> bytes:
-        replies = self.session.get(command_key(self.resource), payload=payload, timeout=timeout_s)
+    def _send(self, name: str, payload: Callable[[int | None], bytes], timeout_s: float) -> bytes:
+        login = self.logged_in
+        request = payload(login.next_seq() if login is not None else None)
+        mac = scram.request_mac(login.key, request) if login is not None else None
+        self._sent += 1
+        replies = self.session.get(
+            command_key(self.resource),
+            payload=request,
+            attachment=mac,
+            timeout=timeout_s,
+            source_info=zenoh.SourceInfo(self.session.id, self._sent),
+        )
         for reply in replies:
             if reply.ok is not None:
                 return bytes(reply.ok.payload.to_bytes())
@@ -207,14 +273,27 @@ class ResourceClient:
         self, key_expr: str, kind: type[P], callback: Callable[[P], None]
     ) -> zenoh.Subscriber[None]:
         def handler(sample: zenoh.Sample) -> None:
+            payload = sample.payload.to_bytes()
+            if not self._authentic(payload, sample.attachment):
+                log.warning("%s on %s dropped: not signed by the resource", kind.__name__, key_expr)
+                return
             try:
-                message = decode_publication(kind, sample.payload.to_bytes())
+                message = decode_publication(kind, payload)
             except Refusal as wrong:  # not from a runtime that speaks our protocol
                 log.warning("%s on %s dropped: %s", kind.__name__, key_expr, wrong.message)
                 return
             callback(message)
 
         return self.session.declare_subscriber(key_expr, handler)
+
+    def _authentic(self, payload: bytes, attachment: zenoh.ZBytes | None) -> bool:
+        """A client that logs in (or knows the resource's key) takes only what the
+        resource signed; one without any (a resource without accounts) takes what comes."""
+        key = self.logged_in.publication_key if self.logged_in is not None else self.trusted_key
+        if key is None:
+            return self._credentials is None
+        signature = attachment.to_bytes() if attachment is not None else None
+        return signatures.verifies(key, payload, signature)
 
     def close(self) -> None:
         for subscriber in self._subscribers:

@@ -1,7 +1,11 @@
 """The resources on the bus: which are online (found by their liveliness tokens), the
 status each last published, and a client for one of them. The API answers for a resource
 only while it is online, so a request for an unknown name is a quick 404 instead of a
-command that times out."""
+command that times out.
+
+A status counts only when the resource signed it with the key a login to it proved
+(`trust`); until someone logged in to a resource, its status is unknown here rather than
+possibly forged."""
 
 from __future__ import annotations
 
@@ -10,6 +14,7 @@ import threading
 import zenoh
 
 from backend.engineering.resource_client import ResourceClient
+from runtime.contract import signatures
 from runtime.contract.keyspace import alive_key, any_resource, resource_of, status_key
 from runtime.contract.protocol import Status, decode_publication
 from runtime.contract.refusal import Refusal
@@ -21,6 +26,7 @@ class ResourceDirectory:
         self._lock = threading.Lock()
         self._online: set[str] = set()
         self._status: dict[str, Status] = {}
+        self._keys: dict[str, str] = {}  # resource -> the publication key a login proved
         self._alive = session.liveliness().declare_subscriber(
             any_resource(alive_key), self._on_alive, history=True
         )
@@ -36,11 +42,16 @@ class ResourceDirectory:
                 self._status.pop(name, None)
 
     def _on_status(self, sample: zenoh.Sample) -> None:
+        name, payload = resource_of(str(sample.key_expr)), sample.payload.to_bytes()
+        signature = sample.attachment.to_bytes() if sample.attachment is not None else None
+        with self._lock:
+            key = self._keys.get(name)
+        if key is None or not signatures.verifies(key, payload, signature):
+            return  # not known to be the resource's own
         try:
-            status = decode_publication(Status, sample.payload.to_bytes())
+            status = decode_publication(Status, payload)
         except Refusal:
-            return  # not from a runtime of ours
-        name = resource_of(str(sample.key_expr))
+            return
         with self._lock:
             if name in self._online:
                 self._status[name] = status
@@ -50,11 +61,19 @@ class ResourceDirectory:
         with self._lock:
             return [(name, self._status.get(name)) for name in sorted(self._online)]
 
+    def trust(self, name: str, publication_key: str) -> None:
+        """The key a login to `name` proved: its publications verify with it."""
+        with self._lock:
+            self._keys[name] = publication_key
+
     def client(self, name: str) -> ResourceClient:
         """A client of an online resource; Refusal `unknown_resource` for any other."""
         if not self.is_online(name):
             raise Refusal("unknown_resource", f"no resource '{name}' is online")
-        return ResourceClient(self._session, name)
+        client = ResourceClient(self._session, name)
+        with self._lock:
+            client.trusted_key = self._keys.get(name)
+        return client
 
     def is_online(self, name: str) -> bool:
         with self._lock:

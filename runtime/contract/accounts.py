@@ -1,8 +1,9 @@
 """Accounts and sessions as the contract has them (spec section 13): the access levels of
-a resource, the form of user names and passwords, the salted slow hash that is all a
-project, an artifact or an accounts file ever holds of a password, and the session table
-(login to a token with an expiry, the level check, the lock after failed logins). The PES
-uses it with its four levels; the PADT with its own three (backend/engineering/padt_accounts.py).
+a resource, the form of user names and passwords, and the session table: login to a token
+with an expiry, the level check, the lock after failed logins. The PES uses it with its
+four levels and the challenge-response login of `scram.py`, so that no password crosses
+the bus; the PADT with its own three levels and a password login over HTTP
+(backend/engineering/padt_accounts.py).
 
 Levels include the ones before: Read (view everything), Operator (start and stop, reset
 statistics, force), Read+Write (load, reload, write, single step, parameters), Administrator
@@ -12,15 +13,14 @@ allowed (for simulation and tests; `status` says so).
 
 from __future__ import annotations
 
-import base64
-import hashlib
-import hmac
 import re
 import secrets
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
 
+from runtime.contract import scram
 from runtime.contract.artifact import UserAccount
 from runtime.contract.refusal import Refusal
 
@@ -29,8 +29,14 @@ LEVELS: tuple[Level, ...] = ("read", "operator", "read-write", "administrator")
 NAME_PATTERN = r"[A-Za-z0-9_-]{1,32}"
 NAME = re.compile(f"^{NAME_PATTERN}$")
 SESSION_NS = 8 * 3600 * 10**9
-# scrypt cost: about 50 ms per check here, so guessing is slow and a login still quick
-SCRYPT_N, SCRYPT_R, SCRYPT_P = 2**14, 8, 1
+FAILURES_BEFORE_LOCK = 5
+FIRST_LOCK_NS = 1 * 10**9  # then doubled with every further failure, up to LAST_LOCK_NS
+LAST_LOCK_NS = 60 * 10**9
+MAX_FAILURE_RECORDS = 10_000  # (name, source) pairs remembered; the oldest are forgotten
+CHALLENGE_NS = 30 * 10**9  # how long a login challenge may wait for its answer
+MAX_CHALLENGES = 1000
+REPLAY_WINDOW = 64  # a request's sequence number may come this far out of order
+ANONYMOUS = "anonymous"  # the source of a request that names none
 
 
 def account_problems(
@@ -41,43 +47,21 @@ def account_problems(
         problems.append(f"user name '{name}' must be 1 to 32 of A-Z a-z 0-9 _ -")
     if level not in levels:
         problems.append(f"level of '{name}' must be one of {', '.join(levels)}")
-    if not password_hash.startswith("scrypt$") or password_hash.count("$") != 5:
-        problems.append(f"password of '{name}' is not a hash from `padt passwd`")
+    if scram.parse_verifier(password_hash) is None:
+        problems.append(f"password of '{name}' is not a verifier from `padt passwd`")
     return problems
 
 
 def hash_password(password: str, salt: bytes | None = None) -> str:
+    """The verifier of a password: what a project or an accounts file holds of it."""
     if not NAME.match(password):
         raise ValueError("a password is 1 to 32 of A-Z a-z 0-9 _ -")
-    salt = salt if salt is not None else secrets.token_bytes(16)
-    digest = hashlib.scrypt(
-        password.encode(), salt=salt, n=SCRYPT_N, r=SCRYPT_R, p=SCRYPT_P, dklen=32
-    )
-    encode = base64.b64encode
-    return (
-        f"scrypt${SCRYPT_N}${SCRYPT_R}${SCRYPT_P}${encode(salt).decode()}${encode(digest).decode()}"
-    )
+    return scram.make_verifier(password, salt)
 
 
 def verify_password(password: str, hashed: str) -> bool:
-    try:
-        _, n, r, p, salt, digest = hashed.split("$")
-        expected = base64.b64decode(digest)
-        actual = hashlib.scrypt(
-            password.encode(),
-            salt=base64.b64decode(salt),
-            n=int(n),
-            r=int(r),
-            p=int(p),
-            dklen=len(expected),
-        )
-    except (ValueError, TypeError):
-        return False
-    return hmac.compare_digest(actual, expected)
-
-
-FAILURES_BEFORE_LOCK = 5
-LOCK_NS = 60 * 10**9
+    verifier = scram.parse_verifier(hashed)
+    return verifier is not None and scram.password_matches(password, verifier)
 
 
 @dataclass
@@ -85,53 +69,147 @@ class Session:
     user: str
     level: str
     expires_ns: int
+    key: bytes | None = None  # the key of the login exchange: every request carries its MAC
+    highest_seq: int = 0
+    seen: set[int] = field(default_factory=set)  # sequence numbers in the replay window
+
+    def fresh(self, seq: int) -> bool:
+        """Whether a request's sequence number is new (requests may overtake each other
+        a little, but none is taken twice)."""
+        if seq <= self.highest_seq - REPLAY_WINDOW or seq in self.seen:
+            return False
+        self.seen.add(seq)
+        if seq > self.highest_seq:
+            self.highest_seq = seq
+            self.seen = {s for s in self.seen if s > seq - REPLAY_WINDOW}
+        return True
+
+
+@dataclass(frozen=True)
+class Challenge:
+    """What `login_begin` answers: the nonce, and how the client derives its keys."""
+
+    nonce: str
+    salt: str
+    n: int
+    r: int
+    p: int
+
+
+@dataclass(frozen=True)
+class Proven:
+    """A login that succeeded: the token, the session, and the resource's proof."""
+
+    token: str
+    session: Session
+    server_signature: str
+
+
+@dataclass
+class _Pending:
+    user: str
+    client_nonce: str
+    verifier: scram.Verifier
+    account: UserAccount | None
+    expires_ns: int
 
 
 @dataclass
 class _Failures:
     count: int = 0
     locked_until_ns: int = 0
+    next_lock_ns: int = FIRST_LOCK_NS
 
 
 @dataclass
 class AccessControl:
-    """Accounts, sessions and failed logins."""
+    """Accounts, sessions and failed logins. Repeated failures lock a name for the source
+    they come from only, with a lock that doubles with every further failure: a caller
+    elsewhere cannot lock anyone out."""
 
     users: tuple[UserAccount, ...]
     now_ns: Callable[[], int]
     levels: tuple[str, ...] = LEVELS  # lowest first; each includes the ones before
+    realm: str = ""  # the resource whose accounts these are: part of every login proof
     sessions: dict[str, Session] = field(default_factory=dict)
-    failures: dict[str, _Failures] = field(default_factory=dict)
+    failures: OrderedDict[tuple[str, str], _Failures] = field(default_factory=OrderedDict)
+    _pending: OrderedDict[str, _Pending] = field(default_factory=OrderedDict)
+    _secret: bytes = field(default_factory=lambda: secrets.token_bytes(32))
 
     @property
     def open(self) -> bool:
         return not self.users
 
-    def login(self, name: str, password: str) -> tuple[str, Session]:
+    # ---- login with a password (the PADT's own accounts, over HTTP)
+    def login(self, name: str, password: str, source: str = ANONYMOUS) -> tuple[str, Session]:
         """A token for a valid name and password; Refusal otherwise (the same answer
         for an unknown name and a wrong password), and for a while after repeated
-        failures."""
-        now = self.now_ns()
-        failures = self.failures.setdefault(name, _Failures())
-        if failures.locked_until_ns > now:
-            raise Refusal("locked", f"too many failed logins for '{name}': wait")
-        account = next((u for u in self.users if u.name == name), None)
+        failures from the same source."""
+        self._not_locked(name, source)
+        account = self._account(name)
         if account is None or not verify_password(password, account.password_hash):
-            failures.count += 1
-            if failures.count >= FAILURES_BEFORE_LOCK:
-                failures.count, failures.locked_until_ns = 0, now + LOCK_NS
-            raise Refusal("login_failed", "unknown user or wrong password")
-        self.failures.pop(name, None)
-        token = secrets.token_urlsafe(32)
-        session = Session(account.name, account.level, now + SESSION_NS)
-        self.sessions[token] = session
-        return token, session
+            raise self._failed(name, source)
+        return self._open_session(name, source, account, None)
 
+    # ---- login by challenge and response (the resource's accounts, over the bus)
+    def begin(self, name: str, client_nonce: str, source: str = ANONYMOUS) -> Challenge:
+        """The challenge for a login: an unknown name gets one that looks the same (its
+        salt derived from a secret of this process), so that it cannot be told apart."""
+        self._not_locked(name, source)
+        account = self._account(name)
+        verifier = (
+            scram.parse_verifier(account.password_hash) if account is not None else None
+        ) or self._decoy(name)
+        now = self.now_ns()
+        nonce = client_nonce + scram.new_nonce()
+        for stale in [k for k, c in self._pending.items() if c.expires_ns <= now]:
+            del self._pending[stale]
+        self._pending[nonce] = _Pending(name, client_nonce, verifier, account, now + CHALLENGE_NS)
+        while len(self._pending) > MAX_CHALLENGES:
+            self._pending.popitem(last=False)
+        return Challenge(nonce, scram.b64(verifier.salt), verifier.n, verifier.r, verifier.p)
+
+    def finish(
+        self, name: str, nonce: str, proof: bytes, publication_key: str, source: str = ANONYMOUS
+    ) -> Proven:
+        """A session for a proof that holds; Refusal `login_failed` otherwise."""
+        self._not_locked(name, source)
+        pending = self._pending.pop(nonce, None)
+        if pending is None or pending.user != name or pending.expires_ns <= self.now_ns():
+            raise self._failed(name, source)
+        verifier = pending.verifier
+        auth = scram.auth_message(
+            self.realm, name, pending.client_nonce, nonce, verifier.salt, verifier.n,
+            verifier.r, verifier.p,
+        )  # fmt: skip
+        if pending.account is None or not scram.proof_holds(proof, verifier, auth):
+            raise self._failed(name, source)
+        key = scram.session_key(verifier.stored_key, auth)
+        token, session = self._open_session(name, source, pending.account, key)
+        signature = scram.server_signature(verifier.server_key, auth, publication_key)
+        return Proven(token, session, scram.b64(signature))
+
+    def _decoy(self, name: str) -> scram.Verifier:
+        keyed = scram.request_mac(self._secret, name.encode())
+        return scram.Verifier(
+            scram.SCRYPT_N, scram.SCRYPT_R, scram.SCRYPT_P, keyed[:16], keyed, keyed
+        )
+
+    # ---- sessions
     def logout(self, token: str) -> None:
         self.sessions.pop(token, None)
 
-    def check(self, token: object, needed: str) -> Session | None:
-        """The caller's session if its level suffices; None when access is open."""
+    def check(
+        self,
+        token: object,
+        needed: str,
+        signed: bytes = b"",
+        mac: bytes | None = None,
+        seq: int | None = None,
+    ) -> Session | None:
+        """The caller's session if its level suffices, and if the request (`signed`: its
+        bytes) carries the session's MAC and a sequence number not seen before; None when
+        access is open."""
         if self.open:
             return None
         if not isinstance(token, str) or token not in self.sessions:
@@ -140,6 +218,11 @@ class AccessControl:
         if session.expires_ns <= self.now_ns():
             del self.sessions[token]
             raise Refusal("unauthenticated", "the session has expired: log in again")
+        if session.key is not None:
+            if mac is None or seq is None or not scram.mac_holds(session.key, signed, mac):
+                raise Refusal("unauthenticated", "the request is not signed with the session key")
+            if not session.fresh(seq):
+                raise Refusal("unauthenticated", "a request of this session was sent again")
         if self.levels.index(session.level) < self.levels.index(needed):
             raise Refusal(
                 "forbidden", f"{session.user} ({session.level}) may not do this: needs {needed}"
@@ -159,3 +242,36 @@ class AccessControl:
         for token, session in list(self.sessions.items()):
             if (session.user, session.level) not in kept:
                 del self.sessions[token]
+
+    # ---- failures
+    def _account(self, name: str) -> UserAccount | None:
+        return next((u for u in self.users if u.name == name), None)
+
+    def _open_session(
+        self, name: str, source: str, account: UserAccount, key: bytes | None
+    ) -> tuple[str, Session]:
+        self.failures.pop((name, source), None)
+        token = scram.new_nonce() + scram.new_nonce()
+        session = Session(account.name, account.level, self.now_ns() + SESSION_NS, key)
+        self.sessions[token] = session
+        return token, session
+
+    def _not_locked(self, name: str, source: str) -> None:
+        failures = self.failures.get((name, source))
+        now = self.now_ns()
+        if failures is not None and failures.locked_until_ns > now:
+            wait_s = (failures.locked_until_ns - now) / 1e9
+            raise Refusal("locked", f"too many failed logins for '{name}': wait {wait_s:.0f} s")
+
+    def _failed(self, name: str, source: str) -> Refusal:
+        key = (name, source)
+        failures = self.failures.get(key)
+        if failures is None:
+            failures = self.failures[key] = _Failures()
+            while len(self.failures) > MAX_FAILURE_RECORDS:
+                self.failures.popitem(last=False)
+        failures.count += 1
+        if failures.count >= FAILURES_BEFORE_LOCK:
+            failures.locked_until_ns = self.now_ns() + failures.next_lock_ns
+            failures.next_lock_ns = min(2 * failures.next_lock_ns, LAST_LOCK_NS)
+        return Refusal("login_failed", "unknown user or wrong password")

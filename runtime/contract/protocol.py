@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Annotated, Any, ClassVar, Generic, TypeVar
 
-from runtime.contract.accounts import NAME_PATTERN, Level
+from runtime.contract.accounts import ANONYMOUS, NAME_PATTERN, Level
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import (
@@ -305,10 +305,21 @@ class ReloadReply:
 
 
 @dataclass(frozen=True)
+class LoginChallenge:
+    nonce: str  # the client's nonce, extended by the resource's part
+    salt: str  # base64
+    n: int  # scrypt cost parameters of the verifier
+    r: int
+    p: int
+
+
+@dataclass(frozen=True)
 class LoginReply:
     token: str
     user: str
     level: str  # one of accounts.LEVELS
+    server_signature: str  # base64: the resource's proof that it holds the verifier
+    publication_key: str  # base64 Ed25519 public key: every publication is signed with it
 
 
 # ---- the commands
@@ -337,10 +348,26 @@ class Command(Generic[R]):
         return self.LEVEL
 
 
+Nonce = Annotated[str, Pattern(r"[A-Za-z0-9_=-]{16,96}", "16 to 96 characters of base64url")]
+
+
+@dataclass(frozen=True)
+class LoginBegin(Command[LoginChallenge], name="login_begin", level=None):
+    """The first step of a login (runtime/contract/scram.py): the user and a fresh nonce."""
+
+    user: AccountName
+    nonce: Nonce
+
+
 @dataclass(frozen=True)
 class Login(Command[LoginReply], name="login", level=None):
+    """The second step: the proof that the client knows the password, for the nonce of the
+    challenge. Every later request carries `token`, a sequence number `seq` and, as its
+    Zenoh attachment, the MAC of its bytes with the session key."""
+
     user: AccountName
-    password: AccountName
+    nonce: Nonce
+    proof: Annotated[str, Pattern(r"[A-Za-z0-9+/=]{44}", "a base64 SHA-256 proof")]
 
 
 @dataclass(frozen=True)
@@ -556,13 +583,19 @@ COMMAND_LEVELS: dict[str, Level] = {
 
 @dataclass(frozen=True)
 class Request:
-    """A decoded request: the command and the session token it came with."""
+    """A decoded request: the command, its session token and sequence number, the source
+    the sender named (its Zenoh session; `anonymous` when it named none), and what the
+    session's MAC covers (the request's bytes) with the MAC itself."""
 
     command: Command[Any]
     token: str | None
+    source: str = ANONYMOUS
+    seq: int | None = None
+    signed: bytes = b""
+    mac: bytes | None = None
 
 
-def decode_request(payload: bytes) -> Request:
+def decode_request(payload: bytes, source: str = ANONYMOUS, mac: bytes | None = None) -> Request:
     """A whole request checked: size, JSON, nesting, the command and every argument.
     Refusal `too_large`, `bad_request` or `unknown_command` otherwise."""
     if len(payload) > MAX_REQUEST_BYTES:
@@ -582,11 +615,16 @@ def decode_request(payload: bytes) -> Request:
     token = data.pop("token", None)
     if token is not None and (not isinstance(token, str) or len(token) > 128):
         raise Refusal("bad_request", '"token" must be a session token')
-    return Request(decode(kind, data), token)
+    seq = data.pop("seq", None)
+    if seq is not None and (isinstance(seq, bool) or not isinstance(seq, int) or seq < 1):
+        raise Refusal("bad_request", '"seq" must be a positive integer')
+    if mac is not None and len(mac) > 64:
+        raise Refusal("bad_request", "the MAC is too long")
+    return Request(decode(kind, data), token, source, seq, payload, mac)
 
 
-def encode_request(command: Command[Any], token: str | None) -> bytes:
-    session = {"token": token} if token is not None else {}
+def encode_request(command: Command[Any], token: str | None, seq: int | None = None) -> bytes:
+    session = {"token": token, "seq": seq} if token is not None else {}
     return json.dumps({"cmd": command.NAME, **session, **encode(command)}).encode()
 
 

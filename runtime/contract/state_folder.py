@@ -21,3 +21,8 @@ def context_path(state_dir: Path) -> Path:
 def events_path(state_dir: Path) -> Path:
     """The long-term event log."""
     return state_dir / "events.jsonl"
+
+
+def identity_path(state_dir: Path) -> Path:
+    """The resource's signing key (owner-only)."""
+    return state_dir / "identity.key"

@@ -111,12 +111,12 @@ def test_no_token_a_forged_one_or_a_wrong_password_is_refused(site: Plant) -> No
 def test_a_session_expires_and_an_account_change_ends_it(tmp_path: Path) -> None:
     now = [0]
     accounts = PadtAccounts(padt_accounts_file(tmp_path / "a.json"), lambda: now[0])
-    token, _ = accounts.login("builder", PADT_PASSWORDS["builder"])
+    token, _ = accounts.login("builder", PADT_PASSWORDS["builder"], "127.0.0.1")
     assert accounts.check(token, "read-write").user == "builder"
     now[0] += SESSION_NS
     with pytest.raises(Refusal, match="expired"):
         accounts.check(token, "read-only")
-    token, _ = accounts.login("builder", PADT_PASSWORDS["builder"])
+    token, _ = accounts.login("builder", PADT_PASSWORDS["builder"], "127.0.0.1")
     accounts.put("builder", "read-only", None)  # lowered: its sessions end
     with pytest.raises(Refusal, match="log in first"):
         accounts.check(token, "read-only")
@@ -175,10 +175,10 @@ WELL_FORMED: dict[str, dict[str, Any]] = {
 def test_the_same_commands_sent_directly_over_zenoh_get_the_same_refusals(site: Plant) -> None:
     """A client that bypasses the PADT meets the resource's own check."""
     client = site.zenoh_client
-    tokens = {}
-    for name in ("viewer", "op", "engineer"):
-        tokens[name] = client.login(name, PES_PASSWORDS[name]).token
-    client.token = None
+    logins = {
+        name: client.login(name, PES_PASSWORDS[name]) for name in ("viewer", "op", "engineer")
+    }
+    client.logged_in = None
     refused = []
     for command, needed in sorted(COMMAND_LEVELS.items()):
         # well-formed requests: a malformed one is refused by the decoder before the
@@ -189,15 +189,15 @@ def test_the_same_commands_sent_directly_over_zenoh_get_the_same_refusals(site: 
             continue
         below = LEVELS[LEVELS.index(needed) - 1]
         name = next(n for n, level in PES_LEVELS.items() if level == below)
-        client.token = tokens[name]
+        client.logged_in = logins[name]
         reply = client.command(command, **arguments)
-        client.token = None
+        client.logged_in = None
         assert reply["error"]["code"] == "forbidden", (command, reply)
         refused.append(command)
     admin_only: dict[str, Any] = {"name": "allow_online_settings", "value": True}
-    client.token = tokens["engineer"]
+    client.logged_in = logins["engineer"]
     assert client.command("set_parameter", **admin_only)["error"]["code"] == "forbidden"
-    client.token = None
+    client.logged_in = None
     assert len(refused) >= 20
 
 
@@ -307,7 +307,7 @@ def test_live_values_arrive_over_a_websocket_with_their_quality(site: Plant) -> 
         while viewer.command("watches")["watches"] and time.monotonic() < deadline:
             time.sleep(0.05)
         assert viewer.command("watches")["watches"] == []
-        viewer.token = None
+        viewer.logged_in = None
     finally:
         site.call("POST", f"{R}/forcing/stop", token, json={"program": "P"}).raise_for_status()
         site.call("DELETE", f"{R}/forces/P.flag", token)

@@ -209,7 +209,7 @@ def _drive(resource: Resource, clock: Clock, seconds: float) -> None:
     try:
         session = open_client(endpoint)
         try:
-            link = ResourceLink(session, resource.name)
+            link = ResourceLink(session, resource.name, resource.identity)
             try:
                 stop = threading.Event()
                 timer = threading.Timer(seconds, stop.set)

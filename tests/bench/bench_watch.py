@@ -161,8 +161,8 @@ class TimedLink(ResourceLink):
     """Times each watch-set publication on the cycle thread (handing the snapshot to the
     publisher thread, which encodes and puts it)."""
 
-    def __init__(self, session: zenoh.Session, resource: str, log: PublicationLog) -> None:
-        super().__init__(session, resource)
+    def __init__(self, session: zenoh.Session, resource: Resource, log: PublicationLog) -> None:
+        super().__init__(session, resource.name, resource.identity)
         self.publication_log = log
 
     def publish_watch(self, watch_id: str, snapshot: WatchSnapshot) -> None:
@@ -190,7 +190,7 @@ def serving(resource: TimedResource, clock: Clock, log: PublicationLog) -> Itera
     try:
         session = open_client(endpoint)
         try:
-            link = TimedLink(session, resource.name, log)
+            link = TimedLink(session, resource, log)
             try:
                 stop = threading.Event()
                 driver = CycleDriver(resource, clock, link)

@@ -17,7 +17,8 @@ from tests.conftest import REPO
 
 # one well-formed instance of every command
 SAMPLES: dict[str, p.Command[Any]] = {
-    "login": p.Login("op", "secret-1"),
+    "login_begin": p.LoginBegin("op", "bm9uY2Utb2YtdGhlLWNsaWVudA"),
+    "login": p.Login("op", "bm9uY2Utb2YtdGhlLWNsaWVudA", "A" * 43 + "="),
     "logout": p.Logout(),
     "status": p.GetStatus(),
     "values": p.GetValues(),

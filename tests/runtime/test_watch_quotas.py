@@ -20,10 +20,8 @@ USERS = [
 
 
 def logged_in(h: Harness, name: str) -> str:
-    h.token = None
-    token = str(h.ok("login", user=name, password="Secret-1")["token"])
-    h.token = token
-    return token
+    h.token = h.login(name, "Secret-1")
+    return h.token
 
 
 @pytest.fixture

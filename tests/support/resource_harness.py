@@ -3,7 +3,9 @@ handler (the same code that answers Zenoh requests), one CPU cycle at a time."""
 
 from __future__ import annotations
 
+import itertools
 import json
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -11,6 +13,7 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
 from runtime.commands import execute
+from runtime.contract import scram
 from runtime.contract.artifact import (
     Artifact,
     ProgramConfig,
@@ -33,12 +36,56 @@ class Harness:
     trace: list[dict[str, Any]] = field(default_factory=list)
     token: str | None = None  # sent with every command, as a logged-in client does
 
+    logins: dict[str, tuple[bytes, Iterator[int]]] = field(default_factory=dict)
+
     def cmd(self, command: str, /, **args: Any) -> dict[str, Any]:
-        """A command as a client sends it; the reply as it would get it."""
-        session = {"token": self.token} if self.token is not None else {}
-        request = {"cmd": command, **session, **args}
-        crossed: dict[str, Any] = json.loads(execute(self.resource, json.dumps(request).encode()))
+        """A command as a client sends it, signed with its session's key (`token`: the
+        harness's own, or one given); the reply as it would get it."""
+        token = args.pop("token", self.token)
+        session: dict[str, Any] = {}
+        key = None
+        if token in self.logins:
+            key, numbers = self.logins[token]
+            session = {"token": token, "seq": next(numbers)}
+        elif token is not None:  # a token this harness did not log in with: unsigned
+            session = {"token": token}
+        payload = json.dumps({"cmd": command, **session, **args}).encode()
+        mac = scram.request_mac(key, payload) if key is not None else None
+        crossed: dict[str, Any] = json.loads(execute(self.resource, payload, mac))
         return crossed
+
+    def login(self, user: str, password: str) -> str:
+        """Log in as a client does (runtime/contract/scram.py); returns the token, whose
+        requests this harness then signs."""
+        challenge, exchange = self._challenge(user, password)
+        assert exchange is not None, challenge
+        proof = exchange.proof
+        reply = self.ok("login", token=None, user=user, nonce=challenge["nonce"], proof=proof)
+        assert exchange.server_proven(reply["server_signature"], reply["publication_key"])
+        token = str(reply["token"])
+        self.logins[token] = (exchange.session_key, itertools.count(1))
+        return token
+
+    def failed_login(self, user: str, password: str) -> str:
+        """A login that does not succeed: the code of its refusal."""
+        challenge, exchange = self._challenge(user, password)
+        if exchange is None:
+            return str(challenge["error"]["code"])
+        proof = exchange.proof
+        return self.refused("login", token=None, user=user, nonce=challenge["nonce"], proof=proof)
+
+    def _challenge(
+        self, user: str, password: str
+    ) -> tuple[dict[str, Any], scram.ClientExchange | None]:
+        client_nonce = scram.new_nonce()
+        challenge = self.cmd("login_begin", token=None, user=user, nonce=client_nonce)
+        if not challenge["ok"]:
+            return challenge, None
+        exchange = scram.ClientExchange.answer(
+            self.resource.name, user, password, client_nonce, challenge["nonce"],
+            scram.unb64(challenge["salt"]), challenge["n"], challenge["r"], challenge["p"],
+        )  # fmt: skip
+        return challenge, exchange
 
     def ok(self, command: str, /, **args: Any) -> dict[str, Any]:
         reply = self.cmd(command, **args)
