@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from backend.compiler.ast import Pos
+from backend.compiler.source import Pos
 
 Severity = Literal["error", "warning"]
 

@@ -14,6 +14,7 @@ from backend.compiler.ast import key
 from backend.compiler.constants import fold_int, guarded
 from backend.compiler.diagnostics import Diagnostic, error, warning
 from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable
+from backend.compiler.source import Pos
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -138,10 +139,10 @@ class Scope:
     def struct(self, struct: StructType) -> StructInfo:
         return self.resolved.structs[key(struct.name)]
 
-    def report(self, pos: ast.Pos, message: str) -> None:
+    def report(self, pos: Pos, message: str) -> None:
         self.diagnostics.append(error(pos, message))
 
-    def warn(self, pos: ast.Pos, message: str) -> None:
+    def warn(self, pos: Pos, message: str) -> None:
         self.diagnostics.append(warning(pos, message))
 
     # ---- typing
@@ -218,7 +219,7 @@ class Scope:
         raise AssertionError(f"unhandled expression {expr!r}")
 
     def _literal_type(
-        self, type_name: str | None, default: Type, pos: ast.Pos, kinds: tuple[str, ...]
+        self, type_name: str | None, default: Type, pos: Pos, kinds: tuple[str, ...]
     ) -> Type | None:
         """The type of a literal; `INT#5` takes the named type if the literal is of a kind
         that type holds (no INT#1.5, no INT#TRUE)."""
@@ -545,8 +546,8 @@ class Scope:
 
 # Every function and function block has EN (run only when TRUE) and ENO (TRUE when it ran).
 IMPLICIT_PARAMETERS = {
-    "EN": Variable("EN", "VAR_INPUT", BOOL, None, False, False, None, "EN", ast.Pos("", 0, 0)),
-    "ENO": Variable("ENO", "VAR_OUTPUT", BOOL, None, False, False, None, "ENO", ast.Pos("", 0, 0)),
+    "EN": Variable("EN", "VAR_INPUT", BOOL, None, False, False, None, "EN", Pos("", 0, 0)),
+    "ENO": Variable("ENO", "VAR_OUTPUT", BOOL, None, False, False, None, "ENO", Pos("", 0, 0)),
 }
 
 

@@ -24,6 +24,7 @@ from lark.exceptions import (
 
 from backend.compiler import ast
 from backend.compiler.diagnostics import CompileError, Diagnostic
+from backend.compiler.source import Pos
 
 _UNIT_NS = {
     "D": 86_400_000_000_000,
@@ -176,10 +177,10 @@ class _ToAst(Transformer[Token, Any]):
         self.file = file
         self.errors: list[Diagnostic] = []
 
-    def _pos(self, item: Any) -> ast.Pos:
+    def _pos(self, item: Any) -> Pos:
         if isinstance(item, Token):
-            return ast.Pos(self.file, item.line or 0, item.column or 0)
-        return ast.Pos(self.file, item.meta.line, item.meta.column)
+            return Pos(self.file, item.line or 0, item.column or 0)
+        return Pos(self.file, item.meta.line, item.meta.column)
 
     # ---- literals
     def int_literal(self, items: list[Token]) -> ast.IntLiteral:
@@ -450,7 +451,7 @@ class _ToAst(Transformer[Token, Any]):
         values = tuple(c for c in children if isinstance(c, tuple))
         return ast.EnumSpec(base, values, self._pos(tree))
 
-    def enum_value(self, items: list[Any]) -> tuple[str, ast.Expr | None, ast.Pos]:
+    def enum_value(self, items: list[Any]) -> tuple[str, ast.Expr | None, Pos]:
         return (str(items[0]), items[1] if len(items) > 1 else None, self._pos(items[0]))
 
     @v_args(tree=True)
@@ -489,7 +490,7 @@ class _ToAst(Transformer[Token, Any]):
         edge = edges[0] if edges else None
         return [ast.VarDecl(str(n), type_ref, init, location, self._pos(n), edge) for n in names]
 
-    def _block(self, kind: str, pos: ast.Pos, items: list[Any]) -> ast.VarBlock:
+    def _block(self, kind: str, pos: Pos, items: list[Any]) -> ast.VarBlock:
         qualifiers = tuple(i for i in items if isinstance(i, str))
         decls = tuple(d for group in items if isinstance(group, list) for d in group)
         return ast.VarBlock(kind, qualifiers, decls, pos)

@@ -27,7 +27,7 @@ from backend.compiler.generate import (
 from backend.compiler.infer import is_external
 from backend.compiler.parse import parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
-from backend.compiler.source import SourceFile, stdlib_sources
+from backend.compiler.source import Pos, SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
 from runtime.contract.accounts import account_problems
 from runtime.contract.artifact import (
@@ -108,7 +108,7 @@ def compile_sources(
     diagnostics.extend(resolved.diagnostics)
     diagnostics.extend(check(resolved))
     configured = _from_configuration(units, diagnostics)
-    positions: dict[str, ast.Pos] = {}
+    positions: dict[str, Pos] = {}
     if resource is None:
         resource = configured[0] if configured else ResourceConfig(name="Resource1")
     if programs is None:
@@ -121,7 +121,7 @@ def compile_sources(
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics) or not resolved.pous:
         if not resolved.pous and not diagnostics:
-            diagnostics.append(error(ast.Pos(config_file, 1, 1), "no POU to compile"))
+            diagnostics.append(error(Pos(config_file, 1, 1), "no POU to compile"))
         return CompileResult(tuple(diagnostics), None)
 
     included = _included_pous(resolved, user_pous, programs)
@@ -153,7 +153,7 @@ def compile_sources(
 
 def _from_configuration(
     units: list[ast.SourceUnit], diagnostics: list[Diagnostic]
-) -> tuple[ResourceConfig, list[ProgramConfig], dict[str, ast.Pos]] | None:
+) -> tuple[ResourceConfig, list[ProgramConfig], dict[str, Pos]] | None:
     """Resource and user programs from the first RESOURCE of an IEC CONFIGURATION: each
     PROGRAM ... WITH task is a user program with the task's priority; the CPU cycle is the
     shortest task interval (one cycle for all programs, as on HIMA and M580 controllers)."""
@@ -198,7 +198,7 @@ def _safe_values(
 ) -> tuple[tuple[tuple[str, Any], ...], list[Diagnostic]]:
     """Safe values of outputs from the project: each must name a located output (%Q) and
     be a value of its type."""
-    where = ast.Pos(config_file, 1, 1)
+    where = Pos(config_file, 1, 1)
     checked, diagnostics = [], []
     for name, value in sorted(configured.items()):
         variable = resolved.globals_by_key.get(key(name))
@@ -218,7 +218,7 @@ def _safe_values(
 def _check_users(users: list[UserAccount], config_file: str) -> list[Diagnostic]:
     """PES accounts: valid names, levels and hashes, unique names, and (when there are
     any) at least one Administrator, or nobody could manage them."""
-    where = ast.Pos(config_file, 1, 1)
+    where = Pos(config_file, 1, 1)
     diagnostics = [
         error(where, problem)
         for user in users

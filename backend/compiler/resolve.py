@@ -15,6 +15,7 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.constants import fold_int, guarded
 from backend.compiler.diagnostics import Diagnostic, error
+from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
     INT,
@@ -44,7 +45,7 @@ class Variable:
     retain: bool
     location: str | None
     attr: str  # the Python name in generated code
-    pos: ast.Pos
+    pos: Pos
     edge: str | None = None  # R_EDGE / F_EDGE input
 
 
@@ -134,7 +135,7 @@ class _TypeResolver:
                     for var in block.decls:
                         self.global_constants[key(var.name)] = var.init
 
-    def report(self, pos: ast.Pos, message: str) -> None:
+    def report(self, pos: Pos, message: str) -> None:
         self.result.diagnostics.append(error(pos, message))
 
     def const_int(
@@ -172,7 +173,7 @@ class _TypeResolver:
             spec = decl.spec
         return None
 
-    def resolve_named(self, name: str, pos: ast.Pos) -> Type | None:
+    def resolve_named(self, name: str, pos: Pos) -> Type | None:
         found = elementary(name)
         if found is not None:
             return found
@@ -336,7 +337,7 @@ def system_variables() -> dict[str, Variable]:
     """The system variables (`SYS.COLDSTART`) as variables of kind SYSTEM; the read-only
     ones are `constant` (only the runtime sets them). Generated code names them
     `_SYS.<NAME>`."""
-    here = ast.Pos("<system>", 1, 1)
+    here = Pos("<system>", 1, 1)
     table: dict[str, Variable] = {}
     for entry in SYSTEM_VARIABLES:
         var_type = elementary(entry.type)
@@ -423,7 +424,7 @@ STEP_STRUCT = "SFC_STEP"
 def _step_struct(result: Resolved) -> StructType:
     """The type of an SFC step as ST sees it: `Step.X` (active) and `Step.T` (elapsed)."""
     if key(STEP_STRUCT) not in result.structs:
-        here = ast.Pos("<sfc>", 1, 1)
+        here = Pos("<sfc>", 1, 1)
         members = [
             Variable("X", "MEMBER", BOOL, None, True, False, None, "X", here),
             Variable("T", "MEMBER", TIME, None, True, False, None, "T", here),

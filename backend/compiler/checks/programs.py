@@ -14,6 +14,7 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.diagnostics import Diagnostic, error
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
+from backend.compiler.source import Pos
 from backend.compiler.types import FbType
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 
@@ -25,11 +26,11 @@ def check_programs(
     resource: ResourceConfig,
     programs: list[ProgramConfig],
     config_file: str,
-    positions: dict[str, ast.Pos] | None = None,
+    positions: dict[str, Pos] | None = None,
 ) -> list[Diagnostic]:
     """`positions`: where a CONFIGURATION in the sources declares each program; programs
     from padt.toml are reported at that file."""
-    default = ast.Pos(config_file, 1, 1)
+    default = Pos(config_file, 1, 1)
     diagnostics: list[Diagnostic] = []
     seen_ids: dict[int, str] = {}
     for program in programs:
@@ -61,7 +62,7 @@ def check_programs(
 
 def _check_single_writer(resolved: Resolved, programs: list[ProgramConfig]) -> list[Diagnostic]:
     writers: dict[str, list[str]] = {}
-    first_write: dict[str, ast.Pos] = {}
+    first_write: dict[str, Pos] = {}
     for program in programs:
         if key(program.pou) not in resolved.pous:
             continue
@@ -80,9 +81,9 @@ def _check_single_writer(resolved: Resolved, programs: list[ProgramConfig]) -> l
     return diagnostics
 
 
-def globals_written(resolved: Resolved, pou_key: str) -> dict[str, ast.Pos]:
+def globals_written(resolved: Resolved, pou_key: str) -> dict[str, Pos]:
     """The globals (by key) a POU writes, itself or through the POUs it calls."""
-    written: dict[str, ast.Pos] = {}
+    written: dict[str, Pos] = {}
     for pou in _reachable(resolved, pou_key):
         for target in _write_targets(pou):
             root = _root_name(target)
@@ -129,7 +130,7 @@ def _global(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:
     return variable if variable is not None and variable.kind == "VAR_GLOBAL" else None
 
 
-def _for_variables(pou: PouSymbols) -> Iterator[tuple[str, ast.Pos]]:
+def _for_variables(pou: PouSymbols) -> Iterator[tuple[str, Pos]]:
     for statement in _statements(pou):
         if isinstance(statement, ast.For):
             yield statement.variable, statement.pos

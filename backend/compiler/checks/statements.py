@@ -7,6 +7,7 @@ from backend.compiler.checks.calls import check_call_statement
 from backend.compiler.checks.initializers import check_initializer, mismatch
 from backend.compiler.checks.targets import writable_target
 from backend.compiler.infer import Scope
+from backend.compiler.source import Pos
 from backend.compiler.types import BOOL, ElementaryType, Type, assignable, integer_like
 
 
@@ -54,7 +55,7 @@ def check_case(scope: Scope, case: ast.Case, loop_depth: int) -> None:
         scope.report(
             case.selector.pos, f"CASE selector must be an integer or enum, not {selector.name}"
         )
-    seen: dict[int, ast.Pos] = {}
+    seen: dict[int, Pos] = {}
     for labels, body in case.branches:
         for label in labels:
             bounds = (label.low, label.high) if isinstance(label, ast.CaseRange) else (label, label)
