@@ -5,7 +5,11 @@ from __future__ import annotations
 
 import pytest
 
-from backend.compiler.pipeline import compile_sources
+from backend.compiler import ast
+from backend.compiler.checks.expressions import check_expression
+from backend.compiler.infer import Scope
+from backend.compiler.pipeline import compile_sources, parse_all
+from backend.compiler.resolve import resolve
 from backend.compiler.source import SourceFile
 from runtime.contract.artifact import ProgramConfig
 
@@ -170,3 +174,21 @@ def test_program_ids_unique_and_at_most_32() -> None:
     found = diagnostics(source, many)
     assert "padt.toml:1:1: error: 33 user programs; at most 32" in found
     assert "padt.toml:1:1: error: program ID 33 of 'p33' is not in 1..32" in found
+
+
+def test_typing_reports_nothing_the_expression_rules_do() -> None:
+    """`infer.Scope` only computes types; the rules of `checks/` report, once per node."""
+    source = "PROGRAM P\nVAR x : INT; END_VAR\nx := y + TRUE;\nEND_PROGRAM"
+    units, _ = parse_all([SourceFile("t.st", source)])
+    resolved = resolve(units)
+    pou = resolved.pous["P"]
+    assignment = pou.pou.body[0]
+    assert isinstance(assignment, ast.Assign) and isinstance(assignment.value, ast.Binary)
+    value = assignment.value
+    silent = Scope(resolved, pou)
+    assert silent.type_of(value) is None
+    assert silent.diagnostics == []
+    checked = Scope(resolved, pou, check_expression)
+    checked.type_of(value)
+    checked.type_of(value)
+    assert [str(d) for d in checked.diagnostics] == ["t.st:3:6: error: 'y' is not declared"]

@@ -1,11 +1,14 @@
-"""What may be written: constants, inputs, FB outputs, step flags are protected."""
+"""What may be written: constants, inputs, FB outputs, step flags and read-only system
+variables are protected."""
 
 from __future__ import annotations
 
 from backend.compiler import ast
+from backend.compiler.ast import key
 from backend.compiler.infer import EnumValue, ProgramRef, Scope
 from backend.compiler.resolve import Variable
 from backend.compiler.types import FbType, StructType, Type
+from runtime.contract.system_variables import NAMESPACE
 
 WRITABLE_MEMBER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "MEMBER")
 
@@ -14,11 +17,8 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
     """Type of an assignment target, reporting anything that may not be written."""
     if isinstance(target, ast.NameRef):
         binding = scope.lookup(target.name)
-        if binding is None and scope.system_namespace(target):
-            scope.type_of(target)  # SYS alone: reported as the namespace it is
-            return None
         if binding is None:
-            scope.report(target.pos, f"'{target.name}' is not declared")
+            scope.type_of(target)  # the rules on names say what it is not
             return None
         if isinstance(binding, EnumValue | ProgramRef):
             scope.report(target.pos, f"cannot assign to '{target.name}'")
@@ -31,10 +31,11 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
             scope.warn(target.pos, f"assignment to input '{binding.name}' inside its block")
         return binding.type
     if isinstance(target, ast.MemberRef) and scope.system_namespace(target.base):
-        scope.refuse_system_write(target)  # SYS.COLDSTART: only the runtime writes it
+        refuse_system_write(scope, target)  # SYS.COLDSTART: only the runtime writes it
         return scope.type_of(target)
     if isinstance(target, ast.MemberRef):
         base_type = scope.type_of(target.base)
+        scope.type_of(target)  # a member it does not have: the rules on members report it
         member = scope.member(target)
         if member is None:
             return None
@@ -60,6 +61,18 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
         return scope.type_of(target)
     scope.report(target.pos, "cannot assign to an expression")
     return None
+
+
+def refuse_system_write(scope: Scope, target: ast.Expr) -> None:
+    """Report a write to a read-only system variable (assignment, output, in-out)."""
+    while isinstance(target, ast.BitRef | ast.IndexRef):
+        target = target.base
+    if not isinstance(target, ast.MemberRef) or not scope.system_namespace(target.base):
+        return
+    scope.type_of(target)  # an unknown name is reported by the rules on members
+    variable = scope.resolved.system.get(key(target.member))
+    if variable is not None and variable.constant:
+        scope.report(target.pos, f"{NAMESPACE}.{variable.name} is a read-only system variable")
 
 
 def is_lvalue(expr: ast.Expr) -> bool:

@@ -1,0 +1,14 @@
+"""References that padt does not compile: direct addresses in code and pointers."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.infer import Scope
+
+
+def check_reference(scope: Scope, expr: ast.DirectRef | ast.Deref) -> None:
+    if isinstance(expr, ast.DirectRef):
+        message = "direct addresses in code are not supported; declare a located variable"
+        scope.report(expr.pos, message)
+    else:
+        scope.report(expr.pos, "pointers are not supported")
