@@ -14,6 +14,7 @@ from backend.compiler.checks.initializers import check_constant_initializer, che
 from backend.compiler.checks.nesting import check_nesting
 from backend.compiler.checks.sfc import check_sfc
 from backend.compiler.checks.statements import check_block
+from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import Scope, is_external
 from backend.compiler.resolve import PouSymbols, Resolved
@@ -40,7 +41,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
             if variable.edge is not None and (
                 variable.kind != "VAR_INPUT" or variable.type != BOOL
             ):
-                scope.report(variable.pos, f"{variable.edge} needs a BOOL input")
+                scope.report(variable.pos, Code.EDGE_INPUT, f"{variable.edge} needs a BOOL input")
         if not check_nesting(scope, pou.pou.body):
             diagnostics.extend(scope.diagnostics)  # too deep to type: stop at the limit
             continue

@@ -15,8 +15,9 @@ from typing import Literal
 
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
+from backend.compiler.codes import Code
 from backend.compiler.constants import fold_int, guarded
-from backend.compiler.diagnostics import Diagnostic, error, warning
+from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable
 from backend.compiler.source import Pos
 from backend.compiler.types import (
@@ -160,11 +161,8 @@ class Scope:
     def struct(self, struct: StructType) -> StructInfo:
         return self.resolved.structs[key(struct.name)]
 
-    def report(self, pos: Pos, message: str) -> None:
-        self.diagnostics.append(error(pos, message))
-
-    def warn(self, pos: Pos, message: str) -> None:
-        self.diagnostics.append(warning(pos, message))
+    def report(self, pos: Pos, code: Code, message: str) -> None:
+        self.diagnostics.append(Diagnostic.at(pos, code, message))
 
     # ---- typing
     def type_of(self, expr: ast.Expr) -> Type | None:

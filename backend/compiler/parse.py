@@ -23,6 +23,7 @@ from lark.exceptions import (
 )
 
 from backend.compiler import ast
+from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.source import Pos
 
@@ -209,8 +210,7 @@ class _ToAst(Transformer[Token, Any]):
         try:
             return decode_string_literal(str(token)[1:-1], wide)
         except BadEscape as exc:
-            pos = self._pos(token)
-            self.errors.append(Diagnostic(pos.file, pos.line, pos.col, "error", str(exc)))
+            self.errors.append(Diagnostic.at(self._pos(token), Code.STRING_ESCAPE, str(exc)))
             return ""
 
     def string_literal(self, items: list[Token]) -> ast.StringLiteral:
@@ -629,7 +629,7 @@ def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:
         message = "syntax error: unexpected end of file"
     else:
         message = "syntax error"
-    return Diagnostic(file, line, col, "error", message)
+    return Diagnostic.at(Pos(file, line, col), Code.SYNTAX, message)
 
 
 def _describe(terminal: str) -> str:
@@ -655,7 +655,7 @@ def parse_source(file: str, text: str) -> ast.SourceUnit:
         where = transformer._pos(exc.obj)
         problem = str(exc.orig_exc) or type(exc.orig_exc).__name__
         message = f"invalid literal: {problem}"
-        raise CompileError([Diagnostic(file, where.line, where.col, "error", message)]) from None
+        raise CompileError([Diagnostic.at(where, Code.INVALID_LITERAL, message)]) from None
     if transformer.errors:
         raise CompileError(transformer.errors)
     pous = tuple(i for i in items if isinstance(i, ast.Pou))
@@ -669,6 +669,7 @@ def parse_source(file: str, text: str) -> ast.SourceUnit:
         for block in (*c.globals, *(b for r in c.resources for b in r.globals))
     )
     warnings = tuple(
-        Diagnostic(file, t.line or 1, t.column or 1, "warning", "pragma skipped") for t in _PRAGMAS
+        Diagnostic.at(Pos(file, t.line or 1, t.column or 1), Code.PRAGMA_SKIPPED, "pragma skipped")
+        for t in _PRAGMAS
     )
     return ast.SourceUnit(file, pous, globals_, types, warnings, configurations)

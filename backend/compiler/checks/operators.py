@@ -4,6 +4,7 @@ needs two values that compare."""
 from __future__ import annotations
 
 from backend.compiler import ast
+from backend.compiler.codes import Code
 from backend.compiler.infer import COMPARISONS, Scope
 from backend.compiler.types import (
     BOOL,
@@ -19,7 +20,9 @@ from backend.compiler.types import (
 def check_unary(scope: Scope, expr: ast.Unary, expr_type: Type | None) -> None:
     operand = scope.type_of(expr.operand)
     if operand is not None and expr_type is None:
-        scope.report(expr.pos, f"'{expr.op}' cannot be applied to {operand.name}")
+        scope.report(
+            expr.pos, Code.OPERATOR_TYPES, f"'{expr.op}' cannot be applied to {operand.name}"
+        )
 
 
 def check_binary(scope: Scope, expr: ast.Binary, expr_type: Type | None) -> None:
@@ -31,7 +34,7 @@ def check_binary(scope: Scope, expr: ast.Binary, expr_type: Type | None) -> None
     fits = comparable(expr.op, left, right) if expr.op in COMPARISONS else expr_type is not None
     if not fits:
         message = f"'{expr.op}' cannot be applied to {left.name} and {right.name}"
-        scope.report(expr.pos, message)
+        scope.report(expr.pos, Code.OPERATOR_TYPES, message)
 
 
 def comparable(op: str, left_type: Type, right_type: Type) -> bool:

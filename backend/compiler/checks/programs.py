@@ -12,7 +12,8 @@ from collections.abc import Iterator, Sequence
 
 from backend.compiler import ast
 from backend.compiler.ast import key
-from backend.compiler.diagnostics import Diagnostic, error
+from backend.compiler.codes import Code
+from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
 from backend.compiler.source import Pos
 from backend.compiler.types import FbType
@@ -38,24 +39,30 @@ def check_programs(
         pou = resolved.pous.get(key(program.pou))
         if pou is None or pou.kind != "PROGRAM":
             message = f"user program '{program.name}': no PROGRAM '{program.pou}'"
-            diagnostics.append(error(where, message))
+            diagnostics.append(Diagnostic.at(where, Code.PROGRAM_POU, message))
         if not 1 <= program.program_id <= MAX_PROGRAMS:
             message = f"program ID {program.program_id} of '{program.name}' is not in 1..32"
-            diagnostics.append(error(where, message))
+            diagnostics.append(Diagnostic.at(where, Code.PROGRAM_ID_RANGE, message))
         if program.program_id in seen_ids:
             other = seen_ids[program.program_id]
             message = f"program ID {program.program_id} of '{program.name}' is used by '{other}'"
-            diagnostics.append(error(where, message))
+            diagnostics.append(Diagnostic.at(where, Code.PROGRAM_ID_TAKEN, message))
         seen_ids[program.program_id] = program.name
     if len(programs) > MAX_PROGRAMS:
-        diagnostics.append(error(default, f"{len(programs)} user programs; at most {MAX_PROGRAMS}"))
+        diagnostics.append(
+            Diagnostic.at(
+                default,
+                Code.TOO_MANY_PROGRAMS,
+                f"{len(programs)} user programs; at most {MAX_PROGRAMS}",
+            )
+        )
     sliced = sum(p.max_duration_us for p in programs)
     if sliced > resource.watchdog_ms * 1000:
         message = (
             f"the programs' Max. Duration for Each Cycle add up to {sliced} us, more than "
             f"the watchdog time ({resource.watchdog_ms} ms)"
         )
-        diagnostics.append(error(default, message))
+        diagnostics.append(Diagnostic.at(default, Code.SLICES_EXCEED_WATCHDOG, message))
     diagnostics.extend(_check_single_writer(resolved, programs))
     return diagnostics
 
@@ -77,7 +84,7 @@ def _check_single_writer(resolved: Resolved, programs: list[ProgramConfig]) -> l
                 f"global '{spelled}' is written by the user programs {', '.join(names)}; "
                 "global data must have one writer"
             )
-            diagnostics.append(error(first_write[name], message))
+            diagnostics.append(Diagnostic.at(first_write[name], Code.SECOND_WRITER, message))
     return diagnostics
 
 
