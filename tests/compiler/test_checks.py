@@ -192,3 +192,24 @@ def test_typing_reports_nothing_the_expression_rules_do() -> None:
     checked.type_of(value)
     checked.type_of(value)
     assert [str(d) for d in checked.diagnostics] == ["t.st:3:6: error: 'y' is not declared [E0201]"]
+
+
+@pytest.mark.parametrize(
+    ("body", "expected"),
+    [
+        (
+            "CASE x OF 1.5: ; END_CASE;",
+            "t.st:4:11: error: CASE label must be an integer or enum, not ANY_REAL [E0310]",
+        ),
+        ("nothing[1] := 0;", "t.st:4:1: error: 'nothing' is not declared [E0201]"),
+        ("p.z[1] := 0;", "t.st:4:1: error: 'Point' has no member 'z' [E0204]"),
+    ],
+)
+def test_a_problem_is_reported_once_where_its_node_is_reached_twice(
+    body: str, expected: str
+) -> None:
+    source = (
+        "TYPE Point : STRUCT x : ARRAY[1..2] OF INT; END_STRUCT; END_TYPE\n"
+        f"PROGRAM P\nVAR x : INT; p : Point; END_VAR\n{body}\nEND_PROGRAM"
+    )
+    assert diagnostics(source) == [expected]

@@ -61,11 +61,12 @@ def check_case(scope: Scope, case: ast.Case, loop_depth: int) -> None:
     seen: dict[int, Pos] = {}
     for labels, body in case.branches:
         for label in labels:
-            bounds = (label.low, label.high) if isinstance(label, ast.CaseRange) else (label, label)
+            bounds = (label.low, label.high) if isinstance(label, ast.CaseRange) else (label,)
             values = [case_label_value(scope, bound, selector) for bound in bounds]
-            if values[0] is None or values[1] is None:
+            low, high = values[0], values[-1]  # a single label is checked once
+            if low is None or high is None:
                 continue
-            for value in range(values[0], values[1] + 1) if values[1] - values[0] < 4096 else ():
+            for value in range(low, high + 1) if high - low < 4096 else ():
                 if value in seen:
                     scope.report(
                         label.pos,
