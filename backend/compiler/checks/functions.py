@@ -12,6 +12,16 @@ from backend.compiler.infer import Misfit, NoValue, Scope, StandardFunction, Use
 from backend.compiler.resolve import PouSymbols, Variable
 from backend.compiler.types import assignable
 
+# why a call in an expression gives no value, by what it calls
+NO_VALUE: dict[NoValue, tuple[Code, str]] = {
+    "method": (Code.METHODS, "methods are not supported"),
+    "instance": (Code.INSTANCE_VALUE, "function block instance '{name}' has no value"),
+    "program": (Code.PROGRAM_VALUE, "program '{name}' has no value; call it as a statement"),
+    "external": (Code.EXTERNAL_FUNCTION, "external function '{name}' is not available"),
+    "pointer": (Code.POINTERS, "pointers are not supported (REF and ADR only inside printf)"),
+    "unknown": (Code.NOT_A_FUNCTION, "'{name}' is not a function"),
+}
+
 
 def check_function_call(scope: Scope, call: ast.Call) -> None:
     match scope.callee(call):
@@ -25,16 +35,6 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
         case no_value:
             code, message = NO_VALUE[no_value]
             scope.report(call.pos, code, message.format(name=call.name))
-
-
-NO_VALUE: dict[NoValue, tuple[Code, str]] = {
-    "method": (Code.METHODS, "methods are not supported"),
-    "instance": (Code.INSTANCE_VALUE, "function block instance '{name}' has no value"),
-    "program": (Code.PROGRAM_VALUE, "program '{name}' has no value; call it as a statement"),
-    "external": (Code.EXTERNAL_FUNCTION, "external function '{name}' is not available"),
-    "pointer": (Code.POINTERS, "pointers are not supported (REF and ADR only inside printf)"),
-    "unknown": (Code.NOT_A_FUNCTION, "'{name}' is not a function"),
-}
 
 
 def _misfit(misfit: Misfit, builtin: Builtin) -> tuple[Code, str]:

@@ -34,11 +34,6 @@ def check_member(scope: Scope, member: ast.MemberRef, member_type: Type | None) 
     base_type = scope.type_of(member.base)
     if base_type is None:
         return  # reported where the base is
-    if isinstance(base_type, FbType | StructType):
-        scope.report(
-            member.pos, Code.NO_MEMBER, f"'{base_type.name}' has no member '{member.member}'"
-        )
-    else:
-        scope.report(
-            member.pos, Code.NO_MEMBER, f"{base_type.name} has no member '{member.member}'"
-        )
+    # a structure or function block is named in quotes, as where it is declared
+    owner = f"'{base_type.name}'" if isinstance(base_type, FbType | StructType) else base_type.name
+    scope.report(member.pos, Code.NO_MEMBER, f"{owner} has no member '{member.member}'")
