@@ -408,8 +408,9 @@ class Scope:
     def connect_arguments(
         self, pou: PouSymbols, call: ast.Call
     ) -> list[tuple[ast.Argument, Variable | None]]:
-        """Pair each argument with its parameter: named ones by name, positional ones with
-        the parameters not named, in declaration order (inputs, in-outs, outputs)."""
+        """Pair each argument with its parameter: named ones by name (None: the POU has no
+        such parameter), positional ones with the parameters not named, in declaration order
+        (inputs, in-outs, outputs); positional ones beyond those are left out."""
         params = pou.parameters
         pairs: list[tuple[ast.Argument, Variable | None]] = []
         named: set[str] = set()
@@ -427,7 +428,7 @@ class Scope:
             pairs.append((arg, param))
         free = [p for p in params if key(p.name) not in named]
         positional = [arg for arg in call.args if arg.name is None]
-        for arg, param in zip(positional, free, strict=False):  # any more are left out
+        for arg, param in zip(positional, free, strict=False):
             pairs.append((arg, param))
         return pairs
 
