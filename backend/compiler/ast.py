@@ -8,20 +8,9 @@ comparisons go through `key()` (upper case) everywhere.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from backend.compiler.diagnostics import Diagnostic
-
-
-@dataclass(frozen=True)
-class Pos:
-    file: str
-    line: int
-    col: int
-
-    def __str__(self) -> str:
-        return f"{self.file}:{self.line}:{self.col}"
+from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.source import Pos
 
 
 def key(name: str) -> str:

@@ -1,16 +1,20 @@
 """Stage 3, check: every rule that can be decided before the code runs.
 
 All problems are collected (not only the first) and returned as diagnostics. The rules live
-in `backend.compiler.checks`, one module each; program-level rules (IDs, one writer per
-global) in `checks.programs`, run by the pipeline once the user programs are known.
+in `backend.compiler.checks`, one module each: the statement rules walk the code, and the
+rules on expressions (`checks.expressions`) run on each node as `Scope` types it;
+program-level rules (IDs, one writer per global) are in `checks.programs`, run by the
+pipeline once the user programs are known.
 """
 
 from __future__ import annotations
 
+from backend.compiler.checks.expressions import check_expression
 from backend.compiler.checks.initializers import check_constant_initializer, check_initializer
 from backend.compiler.checks.nesting import check_nesting
 from backend.compiler.checks.sfc import check_sfc
 from backend.compiler.checks.statements import check_block
+from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import Scope, is_external
 from backend.compiler.resolve import PouSymbols, Resolved
@@ -21,7 +25,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
     diagnostics: list[Diagnostic] = []
     if resolved.pous:
         any_pou = resolved.sorted_pous()[0]
-        global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}))
+        global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}), check_expression)
         for variable in resolved.globals:
             check_initializer(global_scope, variable.type, variable.init)
             check_constant_initializer(global_scope, variable)
@@ -29,7 +33,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
     for pou in resolved.sorted_pous():
         if is_external(pou):
             continue
-        scope = Scope(resolved, pou)
+        scope = Scope(resolved, pou, check_expression)
         for variable in pou.variables:
             if variable.kind != "VAR_GLOBAL":
                 check_initializer(scope, variable.type, variable.init)
@@ -37,7 +41,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
             if variable.edge is not None and (
                 variable.kind != "VAR_INPUT" or variable.type != BOOL
             ):
-                scope.report(variable.pos, f"{variable.edge} needs a BOOL input")
+                scope.report(variable.pos, Code.EDGE_INPUT, f"{variable.edge} needs a BOOL input")
         if not check_nesting(scope, pou.pou.body):
             diagnostics.extend(scope.diagnostics)  # too deep to type: stop at the limit
             continue

@@ -1,13 +1,15 @@
-"""Compiler diagnostics, reported as `file:line:col: severity: message`."""
+"""Compiler diagnostics, printed as `file:line:col: severity: message [code]`.
+
+That is the form of gcc and clang, which the problem matchers of editors and CI read; the
+code (from `codes`) comes last so that matchers written for the form without it still work.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
-from backend.compiler.ast import Pos
-
-Severity = Literal["error", "warning"]
+from backend.compiler.codes import Code, Severity
+from backend.compiler.source import Pos
 
 
 @dataclass(frozen=True, order=True)
@@ -17,9 +19,15 @@ class Diagnostic:
     col: int
     severity: Severity
     message: str
+    code: str  # the id of a `Code`; last, so that diagnostics sort by place as before
+
+    @classmethod
+    def at(cls, pos: Pos, code: Code, message: str) -> Diagnostic:
+        """A diagnostic of `code` at `pos`, with the severity of the code."""
+        return cls(pos.file, pos.line, pos.col, code.severity, message, code.id)
 
     def __str__(self) -> str:
-        return f"{self.file}:{self.line}:{self.col}: {self.severity}: {self.message}"
+        return f"{self.file}:{self.line}:{self.col}: {self.severity}: {self.message} [{self.code}]"
 
     def as_json(self) -> dict[str, object]:
         return {
@@ -28,15 +36,8 @@ class Diagnostic:
             "col": self.col,
             "severity": self.severity,
             "message": self.message,
+            "code": self.code,
         }
-
-
-def error(pos: Pos, message: str) -> Diagnostic:
-    return Diagnostic(pos.file, pos.line, pos.col, "error", message)
-
-
-def warning(pos: Pos, message: str) -> Diagnostic:
-    return Diagnostic(pos.file, pos.line, pos.col, "warning", message)
 
 
 class CompileError(Exception):

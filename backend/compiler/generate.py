@@ -18,6 +18,7 @@ from backend.compiler.ast import key
 from backend.compiler.builtins import convert_code, wrap_code
 from backend.compiler.infer import (
     EnumValue,
+    Misfit,
     ProgramRef,
     Scope,
     enable_argument,
@@ -301,7 +302,7 @@ class _Emitter:
         builtin = builtins.lookup(call.name)
         assert builtin is not None, call.name
         args = self.scope.builtin_arguments(builtin, call)
-        assert args is not None
+        assert not isinstance(args, Misfit)
         values = [self.exact(arg) for arg in args]
         result = _type(self.scope, call)
         return _Value(

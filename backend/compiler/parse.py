@@ -23,7 +23,9 @@ from lark.exceptions import (
 )
 
 from backend.compiler import ast
+from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
+from backend.compiler.source import Pos
 
 _UNIT_NS = {
     "D": 86_400_000_000_000,
@@ -176,10 +178,10 @@ class _ToAst(Transformer[Token, Any]):
         self.file = file
         self.errors: list[Diagnostic] = []
 
-    def _pos(self, item: Any) -> ast.Pos:
+    def _pos(self, item: Any) -> Pos:
         if isinstance(item, Token):
-            return ast.Pos(self.file, item.line or 0, item.column or 0)
-        return ast.Pos(self.file, item.meta.line, item.meta.column)
+            return Pos(self.file, item.line or 0, item.column or 0)
+        return Pos(self.file, item.meta.line, item.meta.column)
 
     # ---- literals
     def int_literal(self, items: list[Token]) -> ast.IntLiteral:
@@ -208,8 +210,7 @@ class _ToAst(Transformer[Token, Any]):
         try:
             return decode_string_literal(str(token)[1:-1], wide)
         except BadEscape as exc:
-            pos = self._pos(token)
-            self.errors.append(Diagnostic(pos.file, pos.line, pos.col, "error", str(exc)))
+            self.errors.append(Diagnostic.at(self._pos(token), Code.STRING_ESCAPE, str(exc)))
             return ""
 
     def string_literal(self, items: list[Token]) -> ast.StringLiteral:
@@ -450,7 +451,7 @@ class _ToAst(Transformer[Token, Any]):
         values = tuple(c for c in children if isinstance(c, tuple))
         return ast.EnumSpec(base, values, self._pos(tree))
 
-    def enum_value(self, items: list[Any]) -> tuple[str, ast.Expr | None, ast.Pos]:
+    def enum_value(self, items: list[Any]) -> tuple[str, ast.Expr | None, Pos]:
         return (str(items[0]), items[1] if len(items) > 1 else None, self._pos(items[0]))
 
     @v_args(tree=True)
@@ -489,7 +490,7 @@ class _ToAst(Transformer[Token, Any]):
         edge = edges[0] if edges else None
         return [ast.VarDecl(str(n), type_ref, init, location, self._pos(n), edge) for n in names]
 
-    def _block(self, kind: str, pos: ast.Pos, items: list[Any]) -> ast.VarBlock:
+    def _block(self, kind: str, pos: Pos, items: list[Any]) -> ast.VarBlock:
         qualifiers = tuple(i for i in items if isinstance(i, str))
         decls = tuple(d for group in items if isinstance(group, list) for d in group)
         return ast.VarBlock(kind, qualifiers, decls, pos)
@@ -628,7 +629,7 @@ def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:
         message = "syntax error: unexpected end of file"
     else:
         message = "syntax error"
-    return Diagnostic(file, line, col, "error", message)
+    return Diagnostic.at(Pos(file, line, col), Code.SYNTAX, message)
 
 
 def _describe(terminal: str) -> str:
@@ -654,7 +655,7 @@ def parse_source(file: str, text: str) -> ast.SourceUnit:
         where = transformer._pos(exc.obj)
         problem = str(exc.orig_exc) or type(exc.orig_exc).__name__
         message = f"invalid literal: {problem}"
-        raise CompileError([Diagnostic(file, where.line, where.col, "error", message)]) from None
+        raise CompileError([Diagnostic.at(where, Code.INVALID_LITERAL, message)]) from None
     if transformer.errors:
         raise CompileError(transformer.errors)
     pous = tuple(i for i in items if isinstance(i, ast.Pou))
@@ -668,6 +669,7 @@ def parse_source(file: str, text: str) -> ast.SourceUnit:
         for block in (*c.globals, *(b for r in c.resources for b in r.globals))
     )
     warnings = tuple(
-        Diagnostic(file, t.line or 1, t.column or 1, "warning", "pragma skipped") for t in _PRAGMAS
+        Diagnostic.at(Pos(file, t.line or 1, t.column or 1), Code.PRAGMA_SKIPPED, "pragma skipped")
+        for t in _PRAGMAS
     )
     return ast.SourceUnit(file, pous, globals_, types, warnings, configurations)

@@ -14,7 +14,8 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
 from backend.compiler.checks.programs import check_programs, globals_read, globals_written
-from backend.compiler.diagnostics import CompileError, Diagnostic, error, warning
+from backend.compiler.codes import Code
+from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.generate import (
     action_control,
     class_name,
@@ -27,7 +28,7 @@ from backend.compiler.generate import (
 from backend.compiler.infer import is_external
 from backend.compiler.parse import parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
-from backend.compiler.source import SourceFile, stdlib_sources
+from backend.compiler.source import Pos, SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
 from runtime.contract.accounts import account_problems
 from runtime.contract.artifact import (
@@ -108,7 +109,7 @@ def compile_sources(
     diagnostics.extend(resolved.diagnostics)
     diagnostics.extend(check(resolved))
     configured = _from_configuration(units, diagnostics)
-    positions: dict[str, ast.Pos] = {}
+    positions: dict[str, Pos] = {}
     if resource is None:
         resource = configured[0] if configured else ResourceConfig(name="Resource1")
     if programs is None:
@@ -119,9 +120,7 @@ def compile_sources(
     diagnostics.extend(safe_diagnostics)
     diagnostics.extend(_check_users(users or [], config_file))
     diagnostics.sort()
-    if any(d.severity == "error" for d in diagnostics) or not resolved.pous:
-        if not resolved.pous and not diagnostics:
-            diagnostics.append(error(ast.Pos(config_file, 1, 1), "no POU to compile"))
+    if any(d.severity == "error" for d in diagnostics):
         return CompileResult(tuple(diagnostics), None)
 
     included = _included_pous(resolved, user_pous, programs)
@@ -153,7 +152,7 @@ def compile_sources(
 
 def _from_configuration(
     units: list[ast.SourceUnit], diagnostics: list[Diagnostic]
-) -> tuple[ResourceConfig, list[ProgramConfig], dict[str, ast.Pos]] | None:
+) -> tuple[ResourceConfig, list[ProgramConfig], dict[str, Pos]] | None:
     """Resource and user programs from the first RESOURCE of an IEC CONFIGURATION: each
     PROGRAM ... WITH task is a user program with the task's priority; the CPU cycle is the
     shortest task interval (one cycle for all programs, as on HIMA and M580 controllers)."""
@@ -163,7 +162,11 @@ def _from_configuration(
     chosen = resources[0]
     for extra in resources[1:]:
         diagnostics.append(
-            warning(extra.pos, f"resource '{extra.name}' ignored: one resource per project")
+            Diagnostic.at(
+                extra.pos,
+                Code.EXTRA_RESOURCE,
+                f"resource '{extra.name}' ignored: one resource per project",
+            )
         )
     tasks = {key(t.name): dict(t.params) for t in chosen.tasks}
     intervals = [
@@ -178,7 +181,11 @@ def _from_configuration(
         priority = params.get("PRIORITY")
         if instance.args:
             diagnostics.append(
-                warning(instance.pos, "program arguments in a configuration are ignored")
+                Diagnostic.at(
+                    instance.pos,
+                    Code.PROGRAM_ARGUMENTS,
+                    "program arguments in a configuration are ignored",
+                )
             )
         programs.append(
             ProgramConfig(
@@ -198,18 +205,24 @@ def _safe_values(
 ) -> tuple[tuple[tuple[str, Any], ...], list[Diagnostic]]:
     """Safe values of outputs from the project: each must name a located output (%Q) and
     be a value of its type."""
-    where = ast.Pos(config_file, 1, 1)
+    where = Pos(config_file, 1, 1)
     checked, diagnostics = [], []
     for name, value in sorted(configured.items()):
         variable = resolved.globals_by_key.get(key(name))
         location = variable.location if variable is not None else None
         if variable is None or location is None or not location.upper().startswith("%Q"):
-            diagnostics.append(error(where, f"safe value for '{name}': no global output (%Q)"))
+            diagnostics.append(
+                Diagnostic.at(
+                    where, Code.SAFE_VALUE_TARGET, f"safe value for '{name}': no global output (%Q)"
+                )
+            )
             continue
         try:
             stored = representation(_type_text(variable.type), value)
         except ValueRejected as exc:
-            diagnostics.append(error(where, f"safe value for '{name}': {exc}"))
+            diagnostics.append(
+                Diagnostic.at(where, Code.SAFE_VALUE, f"safe value for '{name}': {exc}")
+            )
             continue
         checked.append((variable.name, stored))
     return tuple(checked), diagnostics
@@ -218,17 +231,21 @@ def _safe_values(
 def _check_users(users: list[UserAccount], config_file: str) -> list[Diagnostic]:
     """PES accounts: valid names, levels and hashes, unique names, and (when there are
     any) at least one Administrator, or nobody could manage them."""
-    where = ast.Pos(config_file, 1, 1)
+    where = Pos(config_file, 1, 1)
     diagnostics = [
-        error(where, problem)
+        Diagnostic.at(where, Code.USER_ACCOUNT, problem)
         for user in users
         for problem in account_problems(user.name, user.level, user.password_hash)
     ]
     names = [user.name for user in users]
     for name in sorted({n for n in names if names.count(n) > 1}):
-        diagnostics.append(error(where, f"user '{name}' is defined twice"))
+        diagnostics.append(
+            Diagnostic.at(where, Code.DUPLICATE_USER, f"user '{name}' is defined twice")
+        )
     if users and not any(user.level == "administrator" for user in users):
-        diagnostics.append(error(where, "the users include no administrator"))
+        diagnostics.append(
+            Diagnostic.at(where, Code.NO_ADMINISTRATOR, "the users include no administrator")
+        )
     return diagnostics
 
 

@@ -13,8 +13,10 @@ from dataclasses import dataclass, field
 
 from backend.compiler import ast
 from backend.compiler.ast import key
+from backend.compiler.codes import Code
 from backend.compiler.constants import fold_int, guarded
-from backend.compiler.diagnostics import Diagnostic, error
+from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
     INT,
@@ -44,7 +46,7 @@ class Variable:
     retain: bool
     location: str | None
     attr: str  # the Python name in generated code
-    pos: ast.Pos
+    pos: Pos
     edge: str | None = None  # R_EDGE / F_EDGE input
 
 
@@ -126,7 +128,11 @@ class _TypeResolver:
             for decl in unit.types:
                 if key(decl.name) in self.decls:
                     first = self.decls[key(decl.name)]
-                    self.report(decl.pos, f"type '{decl.name}' is already declared at {first.pos}")
+                    self.report(
+                        decl.pos,
+                        Code.DUPLICATE_TYPE,
+                        f"type '{decl.name}' is already declared at {first.pos}",
+                    )
                     continue
                 self.decls[key(decl.name)] = decl
             for block in unit.globals:
@@ -134,8 +140,8 @@ class _TypeResolver:
                     for var in block.decls:
                         self.global_constants[key(var.name)] = var.init
 
-    def report(self, pos: ast.Pos, message: str) -> None:
-        self.result.diagnostics.append(error(pos, message))
+    def report(self, pos: Pos, code: Code, message: str) -> None:
+        self.result.diagnostics.append(Diagnostic.at(pos, code, message))
 
     def const_int(
         self, expr: ast.Expr, local_constants: dict[str, ast.Initializer | None]
@@ -172,7 +178,7 @@ class _TypeResolver:
             spec = decl.spec
         return None
 
-    def resolve_named(self, name: str, pos: ast.Pos) -> Type | None:
+    def resolve_named(self, name: str, pos: Pos) -> Type | None:
         found = elementary(name)
         if found is not None:
             return found
@@ -182,7 +188,9 @@ class _TypeResolver:
         decl = self.decls.get(name_key)
         if decl is not None:
             if name_key in self.in_progress:
-                self.report(pos, f"type '{name}' is defined in terms of itself")
+                self.report(
+                    pos, Code.RECURSIVE_TYPE, f"type '{name}' is defined in terms of itself"
+                )
                 return None
             self.in_progress.add(name_key)
             resolved = self.resolve_spec(decl.spec, {}, type_name=decl.name)
@@ -192,7 +200,7 @@ class _TypeResolver:
         pou = self.pou_kinds.get(name_key)
         if pou is not None and pou.kind in ("FUNCTION_BLOCK", "PROGRAM"):
             return FbType(pou.name)
-        self.report(pos, f"unknown type '{name}'")
+        self.report(pos, Code.UNKNOWN_TYPE, f"unknown type '{name}'")
         self.named[name_key] = None
         return None
 
@@ -210,7 +218,9 @@ class _TypeResolver:
                 if length is not None:
                     size = self.const_int(length, local_constants) or 0
                     if size <= 0:
-                        self.report(pos, "string length must be a positive constant")
+                        self.report(
+                            pos, Code.STRING_LENGTH, "string length must be a positive constant"
+                        )
                 return ElementaryType("WSTRING" if wide else "STRING", "string", length=size)
             case ast.ArrayType():
                 return self._array(spec, local_constants)
@@ -231,15 +241,23 @@ class _TypeResolver:
         dims: list[tuple[int, int]] = []
         for bounds in spec.ranges:
             if bounds is None:
-                self.report(spec.pos, "variable-length arrays (ARRAY[*]) are not supported")
+                self.report(
+                    spec.pos,
+                    Code.VARIABLE_LENGTH_ARRAY,
+                    "variable-length arrays (ARRAY[*]) are not supported",
+                )
                 return None
             low = self.const_int(bounds[0], local_constants)
             high = self.const_int(bounds[1], local_constants)
             if low is None or high is None:
-                self.report(bounds[0].pos, "array bounds must be constant integers")
+                self.report(
+                    bounds[0].pos, Code.ARRAY_BOUNDS, "array bounds must be constant integers"
+                )
                 return None
             if high < low:
-                self.report(bounds[0].pos, f"array range {low}..{high} is empty")
+                self.report(
+                    bounds[0].pos, Code.EMPTY_ARRAY_RANGE, f"array range {low}..{high} is empty"
+                )
                 return None
             dims.append((low, high))
         if element is None:
@@ -251,7 +269,11 @@ class _TypeResolver:
         if spec.base is not None:
             found = elementary(spec.base)
             if found is None or not found.is_integer:
-                self.report(spec.pos, f"enum base type must be an integer type, not '{spec.base}'")
+                self.report(
+                    spec.pos,
+                    Code.ENUM_BASE,
+                    f"enum base type must be an integer type, not '{spec.base}'",
+                )
             else:
                 base = found
         enum_type = EnumType(name, base)
@@ -262,11 +284,15 @@ class _TypeResolver:
             if value_expr is not None:
                 evaluated = self.const_int(value_expr, {})
                 if evaluated is None:
-                    self.report(pos, f"value of '{value_name}' must be a constant integer")
+                    self.report(
+                        pos, Code.ENUM_VALUE, f"value of '{value_name}' must be a constant integer"
+                    )
                 else:
                     value = evaluated
             if key(value_name) in info.values:
-                self.report(pos, f"'{value_name}' appears twice in enum '{name}'")
+                self.report(
+                    pos, Code.DUPLICATE_ENUM_VALUE, f"'{value_name}' appears twice in enum '{name}'"
+                )
             info.values[key(value_name)] = (value_name, value)
             next_value = value + 1
         self.result.enums[key(name)] = info
@@ -280,7 +306,11 @@ class _TypeResolver:
             if member_type is None:
                 continue
             if key(decl.name) in info.by_key:
-                self.report(decl.pos, f"member '{decl.name}' appears twice in '{name}'")
+                self.report(
+                    decl.pos,
+                    Code.DUPLICATE_MEMBER,
+                    f"member '{decl.name}' appears twice in '{name}'",
+                )
                 continue
             init = decl.init if decl.init is not None else self.default_init(decl.type)
             variable = Variable(
@@ -304,8 +334,9 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
                 if key(variable.name) in result.globals_by_key:
                     first = result.globals_by_key[key(variable.name)]
                     result.diagnostics.append(
-                        error(
+                        Diagnostic.at(
                             variable.pos,
+                            Code.DUPLICATE_GLOBAL,
                             f"global '{variable.name}' is already declared at {first.pos}",
                         )
                     )
@@ -319,7 +350,11 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
             previous = seen.get(key(pou.name))
             if previous is not None:
                 result.diagnostics.append(
-                    error(pou.pos, f"'{pou.name}' is already declared at {previous.pos}")
+                    Diagnostic.at(
+                        pou.pos,
+                        Code.DUPLICATE_POU,
+                        f"'{pou.name}' is already declared at {previous.pos}",
+                    )
                 )
                 continue
             seen[key(pou.name)] = pou
@@ -336,7 +371,7 @@ def system_variables() -> dict[str, Variable]:
     """The system variables (`SYS.COLDSTART`) as variables of kind SYSTEM; the read-only
     ones are `constant` (only the runtime sets them). Generated code names them
     `_SYS.<NAME>`."""
-    here = ast.Pos("<system>", 1, 1)
+    here = Pos("<system>", 1, 1)
     table: dict[str, Variable] = {}
     for entry in SYSTEM_VARIABLES:
         var_type = elementary(entry.type)
@@ -377,7 +412,11 @@ def _check_self_containment(result: Resolved) -> None:
             current = pending.pop()
             if current == name:
                 result.diagnostics.append(
-                    error(pou.pou.pos, f"'{pou.name}' contains an instance of itself")
+                    Diagnostic.at(
+                        pou.pou.pos,
+                        Code.SELF_CONTAINED,
+                        f"'{pou.name}' contains an instance of itself",
+                    )
                 )
                 break
             if current in seen or current not in result.pous:
@@ -423,7 +462,7 @@ STEP_STRUCT = "SFC_STEP"
 def _step_struct(result: Resolved) -> StructType:
     """The type of an SFC step as ST sees it: `Step.X` (active) and `Step.T` (elapsed)."""
     if key(STEP_STRUCT) not in result.structs:
-        here = ast.Pos("<sfc>", 1, 1)
+        here = Pos("<sfc>", 1, 1)
         members = [
             Variable("X", "MEMBER", BOOL, None, True, False, None, "X", here),
             Variable("T", "MEMBER", TIME, None, True, False, None, "T", here),
@@ -456,14 +495,22 @@ def _resolve_pou(pou: ast.Pou, types: _TypeResolver, result: Resolved) -> PouSym
             if key(variable.name) in symbols.by_key:
                 first = symbols.by_key[key(variable.name)]
                 result.diagnostics.append(
-                    error(variable.pos, f"'{variable.name}' is already declared at {first.pos}")
+                    Diagnostic.at(
+                        variable.pos,
+                        Code.DUPLICATE_VARIABLE,
+                        f"'{variable.name}' is already declared at {first.pos}",
+                    )
                 )
                 continue
             if variable.kind == "VAR_EXTERNAL":
                 declared = result.globals_by_key.get(key(variable.name))
                 if declared is None:
                     result.diagnostics.append(
-                        error(variable.pos, f"VAR_EXTERNAL '{variable.name}' has no VAR_GLOBAL")
+                        Diagnostic.at(
+                            variable.pos,
+                            Code.EXTERNAL_WITHOUT_GLOBAL,
+                            f"VAR_EXTERNAL '{variable.name}' has no VAR_GLOBAL",
+                        )
                     )
                     continue
                 variable = declared  # the same storage as the global
@@ -475,7 +522,11 @@ def _resolve_pou(pou: ast.Pou, types: _TypeResolver, result: Resolved) -> PouSym
             if key(step.name) in symbols.by_key:
                 first = symbols.by_key[key(step.name)]
                 result.diagnostics.append(
-                    error(step.pos, f"step '{step.name}': the name is already used at {first.pos}")
+                    Diagnostic.at(
+                        step.pos,
+                        Code.STEP_NAME,
+                        f"step '{step.name}': the name is already used at {first.pos}",
+                    )
                 )
                 continue
             variable = Variable(

@@ -1,10 +1,21 @@
-"""Source files as the compiler sees them: a display name and the text."""
+"""Source files as the compiler sees them: a display name and the text; and positions in
+them, which every AST node and every diagnostic carries."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+
+
+@dataclass(frozen=True)
+class Pos:
+    file: str
+    line: int
+    col: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.col}"
 
 
 @dataclass(frozen=True)

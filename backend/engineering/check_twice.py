@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from backend.compiler.diagnostics import Diagnostic
+
 # Fixed seeds, so that a failing check fails again when it is repeated.
 SEEDS = ("1", "2")
 _REPO = Path(__file__).resolve().parent.parent
@@ -29,7 +31,7 @@ class CompileRun:
 
     seed: str
     ok: bool
-    diagnostics: tuple[str, ...] = ()  # "file:line:col: severity: message"
+    diagnostics: tuple[str, ...] = ()  # "file:line:col: severity: message [code]"
     configuration: str | None = None  # configuration CRC (None when the compile failed)
     pous: dict[str, str] = field(default_factory=dict)  # POU name -> CRC
     programs: dict[str, str] = field(default_factory=dict)  # user program name -> CRC
@@ -94,8 +96,7 @@ def _finish_compile(process: subprocess.Popen[str], seed: str) -> CompileRun:
 
 
 def _render(diagnostic: dict[str, Any]) -> str:
-    d = diagnostic
-    return f"{d['file']}:{d['line']}:{d['col']}: {d['severity']}: {d['message']}"
+    return str(Diagnostic(**diagnostic))  # as `padt compile` prints it
 
 
 def compare(first: CompileRun, second: CompileRun) -> tuple[str, ...]:

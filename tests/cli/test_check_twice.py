@@ -34,7 +34,7 @@ def test_a_failing_compile_exits_1_with_its_diagnostics(tmp_path: Path) -> None:
     path.write_text("PROGRAM P\nVAR x : INT; END_VAR\nx := nothing;\nEND_PROGRAM\n")
     result = padt("check-twice", str(path))
     assert result.returncode == 1
-    assert f"{path}:3:6: error: 'nothing' is not declared" in result.stderr
+    assert f"{path}:3:6: error: 'nothing' is not declared [E0201]" in result.stderr
     assert "does not compile" in result.stderr
 
 

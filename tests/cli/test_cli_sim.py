@@ -166,7 +166,7 @@ def test_compile_errors_exit_1_with_file_line_col(tmp_path: Path) -> None:
     result = padt("sim", path)
     assert result.returncode == 1
     assert result.stdout == ""
-    assert f"{path}:3:6: error: 'nothing' is not declared" in result.stderr
+    assert f"{path}:3:6: error: 'nothing' is not declared [E0201]" in result.stderr
 
 
 def test_unknown_names_exit_2_before_running(tmp_path: Path) -> None:

@@ -77,10 +77,10 @@ END_PROGRAM
     assert result.artifact is None
     rendered = [str(d) for d in result.diagnostics]
     assert rendered == [
-        "bad.st:3:6: error: 'undefinedName' is not declared",
-        "bad.st:4:9: error: type mismatch: cannot assign INT to BOOL",
-        "bad.st:5:6: error: 40000 is out of range for INT",
-        "bad.st:6:4: error: condition must be BOOL, not INT",
+        "bad.st:3:6: error: 'undefinedName' is not declared [E0201]",
+        "bad.st:4:9: error: type mismatch: cannot assign INT to BOOL [E0209]",
+        "bad.st:5:6: error: 40000 is out of range for INT [E0210]",
+        "bad.st:6:4: error: condition must be BOOL, not INT [E0307]",
     ]
 
 
@@ -114,7 +114,19 @@ def test_cli_compile_json_and_exit_codes(tmp_path: Path) -> None:
     bad_file.write_text("PROGRAM P\nVAR x : INT; END_VAR\nx := y;\nEND_PROGRAM\n")
     bad = padt("compile", str(bad_file))
     assert bad.returncode == 1
-    assert f"{bad_file}:3:6: error: 'y' is not declared" in bad.stdout
+    assert f"{bad_file}:3:6: error: 'y' is not declared [E0201]" in bad.stdout
+    bad_json = padt("compile", "--json", str(bad_file))
+    assert bad_json.returncode == 1
+    assert json.loads(bad_json.stdout)["diagnostics"] == [
+        {
+            "file": str(bad_file),
+            "line": 3,
+            "col": 6,
+            "severity": "error",
+            "message": "'y' is not declared",
+            "code": "E0201",
+        }
+    ]
 
 
 def test_same_crc_in_two_processes_with_different_hash_seeds() -> None:

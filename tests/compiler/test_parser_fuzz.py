@@ -252,7 +252,9 @@ def assert_reported_as_diagnostics(text: str) -> CompileResult:
     for diagnostic in result.diagnostics:
         where = f"{diagnostic.file}:{diagnostic.line}:{diagnostic.col}"
         assert diagnostic.file == FILE and diagnostic.line >= 1 and diagnostic.col >= 1, where
-        assert str(diagnostic).startswith(f"{where}: {diagnostic.severity}: ")
+        assert str(diagnostic) == (
+            f"{where}: {diagnostic.severity}: {diagnostic.message} [{diagnostic.code}]"
+        )
     errors = [d for d in result.diagnostics if d.severity == "error"]
     assert result.ok == (not errors), [str(d) for d in result.diagnostics]
     return result
@@ -284,7 +286,7 @@ def test_the_valid_program_compiles_loads_and_runs() -> None:
     assert result.ok, [str(d) for d in result.diagnostics]
     pragma_line = VALID.splitlines().index("{attribute 'hide'}") + 1
     assert [str(d) for d in result.diagnostics] == [
-        f"{FILE}:{pragma_line}:1: warning: pragma skipped"
+        f"{FILE}:{pragma_line}:1: warning: pragma skipped [W0001]"
     ]
     assert result.artifact is not None
     clock = VirtualClock()
@@ -322,7 +324,7 @@ def test_cli_compile_of_garbage_exits_1_without_traceback(tmp_path: Path) -> Non
     run = padt("compile", str(garbage))
     assert run.returncode == 1, run.stderr
     assert "Traceback" not in run.stderr
-    assert re.search(rf"^{re.escape(str(garbage))}:\d+:\d+: error: ", run.stdout, re.M)
+    assert re.search(rf"^{re.escape(str(garbage))}:\d+:\d+: error: .* \[E0001\]$", run.stdout, re.M)
 
 
 # ---- crashes and gaps found by fuzzing, pinned until they are fixed ------------------------------
@@ -344,18 +346,21 @@ def program(body: str, declarations: str = "x : INT;") -> str:
 @pytest.mark.parametrize("literal", ["16#_", "2#_", "INT#16#_"])
 def test_based_literal_without_digits_is_a_diagnostic(literal: str) -> None:
     found = diagnostics_of(program(f"x := {literal};"))
-    assert found and found[0].startswith(f"{FILE}:3:6: error: ")
+    assert found and found[0].startswith(f"{FILE}:3:6: error: invalid literal: ")
+    assert found[0].endswith(" [E0003]")
 
 
 @pytest.mark.parametrize("literal", ["D#2024-13-01", "D#2024-02-30", "D#0-1-1"])
 def test_impossible_date_is_a_diagnostic(literal: str) -> None:
     found = diagnostics_of(program(f"d := {literal};", "d : DATE;"))
-    assert found and found[0].startswith(f"{FILE}:3:6: error: ")
+    assert found and found[0].startswith(f"{FILE}:3:6: error: invalid literal: ")
+    assert found[0].endswith(" [E0003]")
 
 
 def test_huge_duration_is_a_diagnostic() -> None:
     found = diagnostics_of(program(f"t := T#{'9' * 400}s;", "t : TIME;"))
-    assert found and found[0].startswith(f"{FILE}:3:6: error: ")
+    assert found and found[0].startswith(f"{FILE}:3:6: error: invalid literal: ")
+    assert found[0].endswith(" [E0003]")
 
 
 @pytest.mark.parametrize("depth", [600])
@@ -368,12 +373,12 @@ def test_deeply_nested_code_compiles_or_is_a_diagnostic(depth: int) -> None:
 
 def test_function_block_containing_itself_is_rejected() -> None:
     text = "FUNCTION_BLOCK A\nVAR inner : A; END_VAR\nEND_FUNCTION_BLOCK\n" + program(";", "a : A;")
-    assert any(": error: " in d for d in diagnostics_of(text))
+    assert any(": error: " in d and d.endswith(" [E0109]") for d in diagnostics_of(text))
 
 
 def test_initial_value_reading_a_later_variable_is_rejected() -> None:
     text = program(";", "a : INT := b; b : INT := 5;")
-    assert any(": error: " in d for d in diagnostics_of(text))
+    assert any(": error: " in d and d.endswith(" [E0117]") for d in diagnostics_of(text))
 
 
 @pytest.mark.parametrize(
@@ -381,12 +386,14 @@ def test_initial_value_reading_a_later_variable_is_rejected() -> None:
     [("b := b + b;", "b : BOOL;"), ("b := b / b;", "b : BOOL;"), ("s := s - s;", "s : STRING;")],
 )
 def test_arithmetic_on_bool_and_string_is_rejected(body: str, declarations: str) -> None:
-    assert any(": error: " in d for d in diagnostics_of(program(body, declarations)))
+    found = diagnostics_of(program(body, declarations))
+    assert any(": error: " in d and d.endswith(" [E0211]") for d in found)
 
 
 @pytest.mark.parametrize("literal", ["INT#1.5", "INT#TRUE", "INT#'a'"])
 def test_typed_literal_of_the_wrong_kind_is_rejected(literal: str) -> None:
-    assert any(": error: " in d for d in diagnostics_of(program(f"x := {literal};")))
+    found = diagnostics_of(program(f"x := {literal};"))
+    assert any(": error: " in d and d.endswith(" [E0208]") for d in found)
 
 
 def test_configuration_errors_point_into_the_source() -> None:

@@ -96,51 +96,51 @@ ERRORS = [
     (
         "assignment to a read-only one",
         "PROGRAM P\nVAR b : BOOL; END_VAR\nSYS.COLDSTART := TRUE;\nEND_PROGRAM",
-        ["t.st:3:1: error: SYS.COLDSTART is a read-only system variable"],
+        ["t.st:3:1: error: SYS.COLDSTART is a read-only system variable [E0306]"],
     ),
     (
         "names are case-insensitive, messages use the table's spelling",
         "PROGRAM P\nVAR END_VAR\n  sys.Cycle_Time_Last := T#1s;\nEND_PROGRAM",
-        ["t.st:3:3: error: SYS.CYCLE_TIME_LAST is a read-only system variable"],
+        ["t.st:3:3: error: SYS.CYCLE_TIME_LAST is a read-only system variable [E0306]"],
     ),
     (
         "a bit of a read-only one",
         "PROGRAM P\nVAR END_VAR\nSYS.CONFIGURATION_CRC.3 := TRUE;\nEND_PROGRAM",
-        ["t.st:3:1: error: SYS.CONFIGURATION_CRC is a read-only system variable"],
+        ["t.st:3:1: error: SYS.CONFIGURATION_CRC is a read-only system variable [E0306]"],
     ),
     (
         "unknown member read",
         "PROGRAM P\nVAR b : BOOL; END_VAR\nb := SYS.FOO;\nEND_PROGRAM",
-        ["t.st:3:6: error: SYS has no system variable 'FOO'"],
+        ["t.st:3:6: error: SYS has no system variable 'FOO' [E0203]"],
     ),
     (
         "unknown member written",
         "PROGRAM P\nVAR END_VAR\nSYS.Foo := TRUE;\nEND_PROGRAM",
-        ["t.st:3:1: error: SYS has no system variable 'Foo'"],
+        ["t.st:3:1: error: SYS has no system variable 'Foo' [E0203]"],
     ),
     (
         "SYS alone in an expression",
         "PROGRAM P\nVAR b : BOOL; END_VAR\nb := SYS AND b;\nEND_PROGRAM",
-        ["t.st:3:6: error: SYS holds the system variables; name one, as in SYS.COLDSTART"],
+        ["t.st:3:6: error: SYS holds the system variables; name one, as in SYS.COLDSTART [E0202]"],
     ),
     (
         "SYS alone as a target",
         "PROGRAM P\nVAR END_VAR\nsys := 1;\nEND_PROGRAM",
-        ["t.st:3:1: error: sys holds the system variables; name one, as in sys.COLDSTART"],
+        ["t.st:3:1: error: sys holds the system variables; name one, as in sys.COLDSTART [E0202]"],
     ),
     (
         "typed as in the table",
         "PROGRAM P\nVAR i : INT; END_VAR\ni := SYS.DATE_AND_TIME;\nSYS.EMERGENCY_STOP_1 := T#1s;"
         "\nEND_PROGRAM",
         [
-            "t.st:3:6: error: type mismatch: cannot assign DT to INT",
-            "t.st:4:25: error: type mismatch: cannot assign TIME to BOOL",
+            "t.st:3:6: error: type mismatch: cannot assign DT to INT [E0209]",
+            "t.st:4:25: error: type mismatch: cannot assign TIME to BOOL [E0209]",
         ],
     ),
     (
         "not a constant initial value",
         "PROGRAM P\nVAR b : BOOL := SYS.COLDSTART; END_VAR\nEND_PROGRAM",
-        ["t.st:2:17: error: initial value of 'b' must be a constant expression"],
+        ["t.st:2:17: error: initial value of 'b' must be a constant expression [E0117]"],
     ),
     (
         "output and in-out of a function block",
@@ -149,8 +149,8 @@ ERRORS = [
         "PROGRAM P\nVAR fb : FB; END_VAR\nfb(io := SYS.WARMSTART, o => SYS.START_CYCLE);\n"
         "fb(io := SYS.EMERGENCY_STOP_1, o => SYS.EMERGENCY_STOP_2);\nEND_PROGRAM",
         [
-            "t.st:7:10: error: SYS.WARMSTART is a read-only system variable",
-            "t.st:7:30: error: SYS.START_CYCLE is a read-only system variable",
+            "t.st:7:10: error: SYS.WARMSTART is a read-only system variable [E0306]",
+            "t.st:7:30: error: SYS.START_CYCLE is a read-only system variable [E0306]",
         ],
     ),
     (
@@ -160,8 +160,8 @@ ERRORS = [
         "PROGRAM P\nVAR i : INT; END_VAR\ni := F(io := SYS.COLDSTART, o => SYS.WARMSTART);\n"
         "i := F(io := SYS.FORCE_DEACTIVATION, o => SYS.RELOAD_DEACTIVATION);\nEND_PROGRAM",
         [
-            "t.st:8:14: error: SYS.COLDSTART is a read-only system variable",
-            "t.st:8:34: error: SYS.WARMSTART is a read-only system variable",
+            "t.st:8:14: error: SYS.COLDSTART is a read-only system variable [E0306]",
+            "t.st:8:34: error: SYS.WARMSTART is a read-only system variable [E0306]",
         ],
     ),
     (
@@ -173,10 +173,10 @@ ERRORS = [
         "TRANSITION FROM S1 TO S1 := SYS.NOPE; END_TRANSITION\n"
         "ACTION A: SYS.DATE_AND_TIME := DT#2024-01-01-00:00:00; END_ACTION\nEND_PROGRAM",
         [
-            "t.st:3:1: error: SYS.SYSTEM_TICK is a read-only system variable",
-            "t.st:8:1: error: SYS.WATCHDOG_TIME is a read-only system variable",
-            "t.st:14:11: error: SYS.DATE_AND_TIME is a read-only system variable",
-            "t.st:13:29: error: SYS has no system variable 'NOPE'",
+            "t.st:3:1: error: SYS.SYSTEM_TICK is a read-only system variable [E0306]",
+            "t.st:8:1: error: SYS.WATCHDOG_TIME is a read-only system variable [E0306]",
+            "t.st:14:11: error: SYS.DATE_AND_TIME is a read-only system variable [E0306]",
+            "t.st:13:29: error: SYS has no system variable 'NOPE' [E0203]",
         ],
     ),
 ]
@@ -235,7 +235,7 @@ def test_a_type_named_sys_hides_the_namespace() -> None:
     """
     compiled(declared)  # the user's type is usable
     hidden = declared.replace("b := v.COLDSTART;", "b := SYS.COLDSTART;")
-    assert diagnostics(hidden) == ["t.st:6:10: error: 'SYS' is not declared"]
+    assert diagnostics(hidden) == ["t.st:6:10: error: 'SYS' is not declared [E0201]"]
 
 
 def test_a_function_block_named_sys_hides_the_namespace() -> None:
@@ -252,7 +252,7 @@ def test_a_function_block_named_sys_hides_the_namespace() -> None:
     """
     compiled(text)
     assert diagnostics(text.replace("b := fb.COLDSTART", "b := SYS.WARMSTART")) == [
-        "t.st:9:10: error: 'SYS' is not declared"
+        "t.st:9:10: error: 'SYS' is not declared [E0201]"
     ]
 
 

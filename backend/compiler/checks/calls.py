@@ -1,10 +1,12 @@
-"""Calls of function blocks and programs as statements: arguments and their kinds."""
+"""Calls of function blocks and programs as statements: arguments and their kinds; and the
+arguments of any call of a user POU, which must name its parameters and not be too many."""
 
 from __future__ import annotations
 
 from backend.compiler import ast
 from backend.compiler.checks.initializers import mismatch
-from backend.compiler.checks.targets import is_lvalue, writable_target
+from backend.compiler.checks.targets import is_lvalue, refuse_system_write, writable_target
+from backend.compiler.codes import Code
 from backend.compiler.infer import ProgramRef, Scope
 from backend.compiler.resolve import PouSymbols, Variable
 from backend.compiler.types import FbType, assignable
@@ -19,15 +21,43 @@ def check_call_statement(scope: Scope, call: ast.Call) -> None:
     else:
         scope.type_of(call)  # a function called as a statement
         return
-    for arg, param in scope.connect_arguments(callee, call):
+    pairs = scope.connect_arguments(callee, call)
+    check_connection(scope, callee, call, pairs)
+    for arg, param in pairs:
         if param is None:
             if arg.value is not None:
                 scope.type_of(arg.value)
             continue
         if arg.is_output and param.kind == "VAR_INPUT":
-            scope.report(arg.pos, f"'{param.name}' of '{callee.name}' is an input, not an output")
+            scope.report(
+                arg.pos,
+                Code.INPUT_AS_OUTPUT,
+                f"'{param.name}' of '{callee.name}' is an input, not an output",
+            )
             continue
         check_fb_argument(scope, callee, arg, param)
+
+
+def check_connection(
+    scope: Scope,
+    callee: PouSymbols,
+    call: ast.Call,
+    pairs: list[tuple[ast.Argument, Variable | None]],
+) -> None:
+    """`pairs`: the arguments of `call` as `Scope.connect_arguments` paired them."""
+    for arg, param in pairs:
+        if param is None:
+            scope.report(
+                arg.pos, Code.NO_PARAMETER, f"'{callee.name}' has no parameter '{arg.name}'"
+            )
+    positional = [arg for arg in call.args if arg.name is None]
+    if len(positional) > sum(1 for arg, _ in pairs if arg.name is None):
+        count = len(callee.parameters)
+        scope.report(
+            call.pos,
+            Code.TOO_MANY_ARGUMENTS,
+            f"'{callee.name}' takes {count} arguments, not {len(call.args)}",
+        )
 
 
 def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Variable) -> None:
@@ -36,12 +66,12 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
     if arg.is_output or param.kind == "VAR_OUTPUT":
         target_type = writable_target(scope, arg.value)
         if target_type is not None and not assignable(target_type, param.type):
-            scope.report(arg.value.pos, mismatch(target_type, param.type))
+            scope.report(arg.value.pos, Code.OUTPUT_TYPE, mismatch(target_type, param.type))
         return
     if param.kind == "VAR_IN_OUT" and not is_lvalue(arg.value):
-        scope.report(arg.value.pos, f"in-out '{param.name}' needs a variable")
+        scope.report(arg.value.pos, Code.IN_OUT_VARIABLE, f"in-out '{param.name}' needs a variable")
     elif param.kind == "VAR_IN_OUT":
-        scope.refuse_system_write(arg.value)
+        refuse_system_write(scope, arg.value)
     value_type = scope.type_of(arg.value)
     if value_type is not None and not assignable(param.type, value_type):
-        scope.report(arg.value.pos, mismatch(param.type, value_type))
+        scope.report(arg.value.pos, Code.ARGUMENT_TYPE, mismatch(param.type, value_type))

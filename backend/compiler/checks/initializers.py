@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.compiler.ast import key
+from backend.compiler.codes import Code
 from backend.compiler.infer import EnumValue, Scope
 from backend.compiler.resolve import Variable
 from backend.compiler.types import (
@@ -22,14 +23,22 @@ def check_initializer(scope: Scope, target: Type, init: ast.Initializer | None) 
         return
     if isinstance(init, ast.ArrayInit):
         if not isinstance(target, ArrayType):
-            scope.report(init.pos, f"an array initializer cannot initialise {target.name}")
+            scope.report(
+                init.pos,
+                Code.ARRAY_INITIALIZER,
+                f"an array initializer cannot initialise {target.name}",
+            )
             return
         count = 0
         for repeat, value in init.items:
             times = 1
             if repeat is not None:
                 if not isinstance(repeat, ast.IntLiteral):
-                    scope.report(repeat.pos, "repetition count must be an integer literal")
+                    scope.report(
+                        repeat.pos,
+                        Code.REPETITION_COUNT,
+                        "repetition count must be an integer literal",
+                    )
                 else:
                     times = repeat.value
             element_target: Type = target.element
@@ -41,11 +50,19 @@ def check_initializer(scope: Scope, target: Type, init: ast.Initializer | None) 
             check_initializer(scope, element_target, value)
             count += times
         if count > target.size:
-            scope.report(init.pos, f"{count} initial values for {target.size} elements")
+            scope.report(
+                init.pos,
+                Code.TOO_MANY_INITIAL_VALUES,
+                f"{count} initial values for {target.size} elements",
+            )
         return
     if isinstance(init, ast.StructInit):
         if not isinstance(target, StructType | FbType):
-            scope.report(init.pos, f"a structure initializer cannot initialise {target.name}")
+            scope.report(
+                init.pos,
+                Code.STRUCT_INITIALIZER,
+                f"a structure initializer cannot initialise {target.name}",
+            )
             return
         members = (
             scope.struct(target).by_key
@@ -55,7 +72,7 @@ def check_initializer(scope: Scope, target: Type, init: ast.Initializer | None) 
         for name, value in init.members:
             member = members.get(key(name))
             if member is None:
-                scope.report(init.pos, f"'{target.name}' has no member '{name}'")
+                scope.report(init.pos, Code.NO_MEMBER, f"'{target.name}' has no member '{name}'")
                 continue
             check_initializer(scope, member.type, value)
         return
@@ -68,7 +85,7 @@ def check_value(scope: Scope, target: Type, value: ast.Expr) -> None:
     if value_type is None:
         return
     if not assignable(target, value_type):
-        scope.report(value.pos, mismatch(target, value_type))
+        scope.report(value.pos, Code.TYPE_MISMATCH, mismatch(target, value_type))
     elif isinstance(value, ast.IntLiteral) and value.type_name is None:
         check_range(scope, target, value)
 
@@ -86,7 +103,9 @@ def check_range(scope: Scope, target: Type, literal: ast.IntLiteral) -> None:
     if not (isinstance(integer, ElementaryType) and integer.is_integer):
         return
     if not literal_fits(integer, literal):
-        scope.report(literal.pos, f"{literal.value} is out of range for {integer.name}")
+        scope.report(
+            literal.pos, Code.OUT_OF_RANGE, f"{literal.value} is out of range for {integer.name}"
+        )
 
 
 def mismatch(target: Type, source: Type) -> str:
@@ -106,7 +125,9 @@ def check_constant_initializer(scope: Scope, variable: Variable) -> None:
     for expr in _values(variable.init):
         if not is_constant(scope, expr, not_yet_set):
             scope.report(
-                expr.pos, f"initial value of '{variable.name}' must be a constant expression"
+                expr.pos,
+                Code.NOT_CONSTANT_INITIAL,
+                f"initial value of '{variable.name}' must be a constant expression",
             )
 
 

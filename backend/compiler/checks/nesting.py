@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from backend.compiler import ast
+from backend.compiler.codes import Code
 from backend.compiler.infer import Scope
 
 MAX_EXPRESSION_DEPTH = 60
@@ -18,11 +19,19 @@ def check_nesting(scope: Scope, body: tuple[ast.Statement, ...], depth: int = 1)
     within = True
     for statement in body:
         if depth > MAX_STATEMENT_DEPTH:
-            scope.report(statement.pos, f"statements nested deeper than {MAX_STATEMENT_DEPTH}")
+            scope.report(
+                statement.pos,
+                Code.STATEMENT_DEPTH,
+                f"statements nested deeper than {MAX_STATEMENT_DEPTH}",
+            )
             return False
         for expr in _expressions(statement):
             if expression_depth(expr) > MAX_EXPRESSION_DEPTH:
-                scope.report(expr.pos, f"expression nested deeper than {MAX_EXPRESSION_DEPTH}")
+                scope.report(
+                    expr.pos,
+                    Code.EXPRESSION_DEPTH,
+                    f"expression nested deeper than {MAX_EXPRESSION_DEPTH}",
+                )
                 within = False
         for inner in _bodies(statement):
             within = check_nesting(scope, inner, depth + 1) and within

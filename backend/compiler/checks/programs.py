@@ -12,8 +12,10 @@ from collections.abc import Iterator, Sequence
 
 from backend.compiler import ast
 from backend.compiler.ast import key
-from backend.compiler.diagnostics import Diagnostic, error
+from backend.compiler.codes import Code
+from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
+from backend.compiler.source import Pos
 from backend.compiler.types import FbType
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 
@@ -25,11 +27,11 @@ def check_programs(
     resource: ResourceConfig,
     programs: list[ProgramConfig],
     config_file: str,
-    positions: dict[str, ast.Pos] | None = None,
+    positions: dict[str, Pos] | None = None,
 ) -> list[Diagnostic]:
     """`positions`: where a CONFIGURATION in the sources declares each program; programs
     from padt.toml are reported at that file."""
-    default = ast.Pos(config_file, 1, 1)
+    default = Pos(config_file, 1, 1)
     diagnostics: list[Diagnostic] = []
     seen_ids: dict[int, str] = {}
     for program in programs:
@@ -37,31 +39,37 @@ def check_programs(
         pou = resolved.pous.get(key(program.pou))
         if pou is None or pou.kind != "PROGRAM":
             message = f"user program '{program.name}': no PROGRAM '{program.pou}'"
-            diagnostics.append(error(where, message))
+            diagnostics.append(Diagnostic.at(where, Code.PROGRAM_POU, message))
         if not 1 <= program.program_id <= MAX_PROGRAMS:
             message = f"program ID {program.program_id} of '{program.name}' is not in 1..32"
-            diagnostics.append(error(where, message))
+            diagnostics.append(Diagnostic.at(where, Code.PROGRAM_ID_RANGE, message))
         if program.program_id in seen_ids:
             other = seen_ids[program.program_id]
             message = f"program ID {program.program_id} of '{program.name}' is used by '{other}'"
-            diagnostics.append(error(where, message))
+            diagnostics.append(Diagnostic.at(where, Code.PROGRAM_ID_TAKEN, message))
         seen_ids[program.program_id] = program.name
     if len(programs) > MAX_PROGRAMS:
-        diagnostics.append(error(default, f"{len(programs)} user programs; at most {MAX_PROGRAMS}"))
+        diagnostics.append(
+            Diagnostic.at(
+                default,
+                Code.TOO_MANY_PROGRAMS,
+                f"{len(programs)} user programs; at most {MAX_PROGRAMS}",
+            )
+        )
     sliced = sum(p.max_duration_us for p in programs)
     if sliced > resource.watchdog_ms * 1000:
         message = (
             f"the programs' Max. Duration for Each Cycle add up to {sliced} us, more than "
             f"the watchdog time ({resource.watchdog_ms} ms)"
         )
-        diagnostics.append(error(default, message))
+        diagnostics.append(Diagnostic.at(default, Code.SLICES_EXCEED_WATCHDOG, message))
     diagnostics.extend(_check_single_writer(resolved, programs))
     return diagnostics
 
 
 def _check_single_writer(resolved: Resolved, programs: list[ProgramConfig]) -> list[Diagnostic]:
     writers: dict[str, list[str]] = {}
-    first_write: dict[str, ast.Pos] = {}
+    first_write: dict[str, Pos] = {}
     for program in programs:
         if key(program.pou) not in resolved.pous:
             continue
@@ -76,13 +84,13 @@ def _check_single_writer(resolved: Resolved, programs: list[ProgramConfig]) -> l
                 f"global '{spelled}' is written by the user programs {', '.join(names)}; "
                 "global data must have one writer"
             )
-            diagnostics.append(error(first_write[name], message))
+            diagnostics.append(Diagnostic.at(first_write[name], Code.SECOND_WRITER, message))
     return diagnostics
 
 
-def globals_written(resolved: Resolved, pou_key: str) -> dict[str, ast.Pos]:
+def globals_written(resolved: Resolved, pou_key: str) -> dict[str, Pos]:
     """The globals (by key) a POU writes, itself or through the POUs it calls."""
-    written: dict[str, ast.Pos] = {}
+    written: dict[str, Pos] = {}
     for pou in _reachable(resolved, pou_key):
         for target in _write_targets(pou):
             root = _root_name(target)
@@ -129,7 +137,7 @@ def _global(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:
     return variable if variable is not None and variable.kind == "VAR_GLOBAL" else None
 
 
-def _for_variables(pou: PouSymbols) -> Iterator[tuple[str, ast.Pos]]:
+def _for_variables(pou: PouSymbols) -> Iterator[tuple[str, Pos]]:
     for statement in _statements(pou):
         if isinstance(statement, ast.For):
             yield statement.variable, statement.pos

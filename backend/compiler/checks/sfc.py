@@ -6,6 +6,7 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.checks.statements import check_block, check_condition
+from backend.compiler.codes import Code
 from backend.compiler.infer import Scope
 from backend.compiler.types import BOOL, ElementaryType
 
@@ -41,13 +42,17 @@ def check_sfc(scope: Scope, sfc: ast.Sfc) -> None:
             where = initial[1].pos if len(initial) > 1 else network[0].pos
             names = ", ".join(step.name for step in network)
             scope.report(
-                where, f"the step chain {names} needs exactly one INITIAL_STEP, not {len(initial)}"
+                where,
+                Code.INITIAL_STEP,
+                f"the step chain {names} needs exactly one INITIAL_STEP, not {len(initial)}",
             )
     steps = {key(step.name) for step in sfc.steps}
     actions: dict[str, ast.Action] = {}
     for action in sfc.actions:
         if key(action.name) in actions:
-            scope.report(action.pos, f"action '{action.name}' is declared twice")
+            scope.report(
+                action.pos, Code.DUPLICATE_ACTION, f"action '{action.name}' is declared twice"
+            )
         actions[key(action.name)] = action
         check_block(scope, action.body, loop_depth=0)
     for step in sfc.steps:
@@ -56,7 +61,11 @@ def check_sfc(scope: Scope, sfc: ast.Sfc) -> None:
     for transition in sfc.transitions:
         for name in (*transition.sources, *transition.targets):
             if key(name) not in steps:
-                scope.report(transition.pos, f"transition refers to '{name}', which is no step")
+                scope.report(
+                    transition.pos,
+                    Code.UNKNOWN_STEP,
+                    f"transition refers to '{name}', which is no step",
+                )
         check_condition(scope, transition.condition)
 
 
@@ -68,22 +77,31 @@ def check_association(
         if variable is None or variable.type != BOOL:
             scope.report(
                 association.pos,
+                Code.UNKNOWN_ACTION,
                 f"'{association.action}' is neither an ACTION nor a BOOL variable",
             )
     qualifier = association.qualifier
     if qualifier not in QUALIFIERS:
-        scope.report(association.pos, f"unknown action qualifier '{qualifier}'")
+        scope.report(
+            association.pos, Code.UNKNOWN_QUALIFIER, f"unknown action qualifier '{qualifier}'"
+        )
         return
     if qualifier in TIMED_QUALIFIERS:
         if association.duration is None:
             scope.report(
-                association.pos, f"qualifier {qualifier} needs a time: ({qualifier}, T#1s)"
+                association.pos,
+                Code.QUALIFIER_NEEDS_TIME,
+                f"qualifier {qualifier} needs a time: ({qualifier}, T#1s)",
             )
             return
         duration = scope.type_of(association.duration)
         if duration is not None and not (
             isinstance(duration, ElementaryType) and duration.category == "time"
         ):
-            scope.report(association.pos, f"the time of {qualifier} must be a TIME")
+            scope.report(
+                association.pos, Code.QUALIFIER_TIME_TYPE, f"the time of {qualifier} must be a TIME"
+            )
     elif association.duration is not None:
-        scope.report(association.pos, f"qualifier {qualifier} takes no time")
+        scope.report(
+            association.pos, Code.QUALIFIER_TAKES_NO_TIME, f"qualifier {qualifier} takes no time"
+        )

@@ -6,7 +6,9 @@ from backend.compiler import ast
 from backend.compiler.checks.calls import check_call_statement
 from backend.compiler.checks.initializers import check_initializer, mismatch
 from backend.compiler.checks.targets import writable_target
+from backend.compiler.codes import Code
 from backend.compiler.infer import Scope
+from backend.compiler.source import Pos
 from backend.compiler.types import BOOL, ElementaryType, Type, assignable, integer_like
 
 
@@ -43,7 +45,7 @@ def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> 
         case ast.Exit(pos=pos) | ast.Continue(pos=pos):
             if loop_depth == 0:
                 word = "EXIT" if isinstance(statement, ast.Exit) else "CONTINUE"
-                scope.report(pos, f"{word} outside of a loop")
+                scope.report(pos, Code.OUTSIDE_LOOP, f"{word} outside of a loop")
         case ast.Return():
             pass
 
@@ -52,18 +54,25 @@ def check_case(scope: Scope, case: ast.Case, loop_depth: int) -> None:
     selector = scope.type_of(case.selector)
     if selector is not None and integer_like(selector) is None:
         scope.report(
-            case.selector.pos, f"CASE selector must be an integer or enum, not {selector.name}"
+            case.selector.pos,
+            Code.CASE_SELECTOR_TYPE,
+            f"CASE selector must be an integer or enum, not {selector.name}",
         )
-    seen: dict[int, ast.Pos] = {}
+    seen: dict[int, Pos] = {}
     for labels, body in case.branches:
         for label in labels:
-            bounds = (label.low, label.high) if isinstance(label, ast.CaseRange) else (label, label)
+            bounds = (label.low, label.high) if isinstance(label, ast.CaseRange) else (label,)
             values = [case_label_value(scope, bound, selector) for bound in bounds]
-            if values[0] is None or values[1] is None:
+            low, high = values[0], values[-1]  # a single label is checked once
+            if low is None or high is None:
                 continue
-            for value in range(values[0], values[1] + 1) if values[1] - values[0] < 4096 else ():
+            for value in range(low, high + 1) if high - low < 4096 else ():
                 if value in seen:
-                    scope.report(label.pos, f"CASE label {value} already used at {seen[value]}")
+                    scope.report(
+                        label.pos,
+                        Code.CASE_LABEL_TWICE,
+                        f"CASE label {value} already used at {seen[value]}",
+                    )
                     break
                 seen[value] = label.pos
         check_block(scope, body, loop_depth)
@@ -76,7 +85,11 @@ def case_label_value(scope: Scope, label: ast.Expr, selector: Type | None) -> in
     if label_type is None:
         return None
     if integer_like(label_type) is None:
-        scope.report(label.pos, f"CASE label must be an integer or enum, not {label_type.name}")
+        scope.report(
+            label.pos,
+            Code.CASE_LABEL_TYPE,
+            f"CASE label must be an integer or enum, not {label_type.name}",
+        )
         return None
     return scope.constant_int(label)
 
@@ -84,17 +97,21 @@ def case_label_value(scope: Scope, label: ast.Expr, selector: Type | None) -> in
 def check_for(scope: Scope, loop: ast.For, loop_depth: int) -> None:
     counter = writable_target(scope, ast.NameRef(loop.variable, loop.pos))
     if counter is not None and not (isinstance(counter, ElementaryType) and counter.is_integer):
-        scope.report(loop.pos, f"FOR counter '{loop.variable}' must be an integer")
+        scope.report(
+            loop.pos, Code.FOR_COUNTER_TYPE, f"FOR counter '{loop.variable}' must be an integer"
+        )
     for bound in (loop.start, loop.stop, loop.step):
         if bound is None:
             continue
         bound_type = scope.type_of(bound)
         if counter is not None and bound_type is not None and not assignable(counter, bound_type):
-            scope.report(bound.pos, mismatch(counter, bound_type))
+            scope.report(bound.pos, Code.TYPE_MISMATCH, mismatch(counter, bound_type))
     check_block(scope, loop.body, loop_depth + 1)
 
 
 def check_condition(scope: Scope, condition: ast.Expr) -> None:
     condition_type = scope.type_of(condition)
     if condition_type is not None and condition_type != BOOL:
-        scope.report(condition.pos, f"condition must be BOOL, not {condition_type.name}")
+        scope.report(
+            condition.pos, Code.CONDITION_TYPE, f"condition must be BOOL, not {condition_type.name}"
+        )

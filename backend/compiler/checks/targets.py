@@ -1,11 +1,15 @@
-"""What may be written: constants, inputs, FB outputs, step flags are protected."""
+"""What may be written: constants, inputs, FB outputs, step flags and read-only system
+variables are protected."""
 
 from __future__ import annotations
 
 from backend.compiler import ast
+from backend.compiler.ast import key
+from backend.compiler.codes import Code
 from backend.compiler.infer import EnumValue, ProgramRef, Scope
 from backend.compiler.resolve import Variable
 from backend.compiler.types import FbType, StructType, Type
+from runtime.contract.system_variables import NAMESPACE
 
 WRITABLE_MEMBER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "MEMBER")
 
@@ -14,27 +18,31 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
     """Type of an assignment target, reporting anything that may not be written."""
     if isinstance(target, ast.NameRef):
         binding = scope.lookup(target.name)
-        if binding is None and scope.system_namespace(target):
-            scope.type_of(target)  # SYS alone: reported as the namespace it is
-            return None
         if binding is None:
-            scope.report(target.pos, f"'{target.name}' is not declared")
+            scope.type_of(target)  # the rules on names say what it is not
             return None
         if isinstance(binding, EnumValue | ProgramRef):
-            scope.report(target.pos, f"cannot assign to '{target.name}'")
+            scope.report(target.pos, Code.ASSIGN_NON_VARIABLE, f"cannot assign to '{target.name}'")
             return None
         if binding.constant:
-            scope.report(target.pos, f"cannot assign to constant '{binding.name}'")
+            scope.report(
+                target.pos, Code.ASSIGN_CONSTANT, f"cannot assign to constant '{binding.name}'"
+            )
         elif binding.kind == "VAR_INPUT" and scope.pou.kind != "FUNCTION":
             # CODESYS, matiec and OSCAT write inputs inside the block; it is legal but
             # a trap (the caller's value is gone for the rest of the call): warn
-            scope.warn(target.pos, f"assignment to input '{binding.name}' inside its block")
+            scope.report(
+                target.pos,
+                Code.INPUT_ASSIGNMENT,
+                f"assignment to input '{binding.name}' inside its block",
+            )
         return binding.type
     if isinstance(target, ast.MemberRef) and scope.system_namespace(target.base):
-        scope.refuse_system_write(target)  # SYS.COLDSTART: only the runtime writes it
+        refuse_system_write(scope, target)  # SYS.COLDSTART: only the runtime writes it
         return scope.type_of(target)
     if isinstance(target, ast.MemberRef):
         base_type = scope.type_of(target.base)
+        scope.type_of(target)  # a member it does not have: the rules on members report it
         member = scope.member(target)
         if member is None:
             return None
@@ -44,22 +52,45 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
         if isinstance(root, ast.NameRef):
             root_binding = scope.lookup(root.name)
             if isinstance(root_binding, Variable) and root_binding.kind == "STEP":
-                scope.report(target.pos, f"step flag '{root.name}.{target.member}' is read-only")
+                scope.report(
+                    target.pos,
+                    Code.STEP_FLAG_WRITE,
+                    f"step flag '{root.name}.{target.member}' is read-only",
+                )
                 return member.type
         if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS:
             scope.report(
                 target.pos,
+                Code.FB_MEMBER_WRITE,
                 f"'{target.member}' of '{base_type.name}' cannot be written from outside",
             )
         if isinstance(base_type, StructType) and not is_lvalue(target.base):
-            scope.report(target.pos, "cannot assign to a member of a value")
+            scope.report(
+                target.pos, Code.ASSIGN_MEMBER_OF_VALUE, "cannot assign to a member of a value"
+            )
         return member.type
     if isinstance(target, ast.IndexRef | ast.BitRef):
         if isinstance(target.base, ast.NameRef | ast.MemberRef | ast.IndexRef | ast.BitRef):
             writable_target(scope, target.base)
         return scope.type_of(target)
-    scope.report(target.pos, "cannot assign to an expression")
+    scope.report(target.pos, Code.ASSIGN_EXPRESSION, "cannot assign to an expression")
     return None
+
+
+def refuse_system_write(scope: Scope, target: ast.Expr) -> None:
+    """Report a write to a read-only system variable (assignment, output, in-out)."""
+    while isinstance(target, ast.BitRef | ast.IndexRef):
+        target = target.base
+    if not isinstance(target, ast.MemberRef) or not scope.system_namespace(target.base):
+        return
+    scope.type_of(target)  # an unknown name is reported by the rules on members
+    variable = scope.resolved.system.get(key(target.member))
+    if variable is not None and variable.constant:
+        scope.report(
+            target.pos,
+            Code.SYSTEM_VARIABLE_WRITE,
+            f"{NAMESPACE}.{variable.name} is a read-only system variable",
+        )
 
 
 def is_lvalue(expr: ast.Expr) -> bool:

@@ -36,7 +36,7 @@ from backend.compiler.check import check
 from backend.compiler.infer import EnumValue, ProgramRef, Scope
 from backend.compiler.pipeline import parse_all
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
-from backend.compiler.source import SourceFile, stdlib_sources
+from backend.compiler.source import Pos, SourceFile, stdlib_sources
 from backend.compiler.types import (
     LREAL,
     ElementaryType,
@@ -719,5 +719,5 @@ def _front_end(sources: list[SourceFile]) -> tuple[Resolved, list[str]]:
 
 def _globals_pou(resolved: Resolved) -> PouSymbols:
     """A stand-in POU whose variables are the globals (so that globals are an Instance)."""
-    pou = ast.Pou("GLOBALS", "GLOBALS", None, (), (), ast.Pos("", 1, 1))
+    pou = ast.Pou("GLOBALS", "GLOBALS", None, (), (), Pos("", 1, 1))
     return PouSymbols(pou, list(resolved.globals), {key(v.name): v for v in resolved.globals})

@@ -1,0 +1,38 @@
+"""The rules on single expressions. `Scope` runs `check_expression` on each node once, when
+it has typed the node (its operands are typed by then)."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.checks.access import check_bit_access, check_index
+from backend.compiler.checks.functions import check_function_call
+from backend.compiler.checks.literals import check_enum_literal, check_typed_literal
+from backend.compiler.checks.names import check_member, check_name
+from backend.compiler.checks.operators import check_binary, check_unary
+from backend.compiler.checks.unsupported import check_reference
+from backend.compiler.infer import Scope
+from backend.compiler.types import Type
+
+
+def check_expression(scope: Scope, expr: ast.Expr, expr_type: Type | None) -> None:
+    match expr:
+        case ast.IntLiteral() | ast.RealLiteral() | ast.BoolLiteral() | ast.StringLiteral():
+            check_typed_literal(scope, expr, expr_type)
+        case ast.EnumLiteral():
+            check_enum_literal(scope, expr, expr_type)
+        case ast.NameRef():
+            check_name(scope, expr, expr_type)
+        case ast.MemberRef():
+            check_member(scope, expr, expr_type)
+        case ast.IndexRef():
+            check_index(scope, expr)
+        case ast.BitRef():
+            check_bit_access(scope, expr)
+        case ast.DirectRef() | ast.Deref():
+            check_reference(scope, expr)
+        case ast.Unary():
+            check_unary(scope, expr, expr_type)
+        case ast.Binary():
+            check_binary(scope, expr, expr_type)
+        case ast.Call():
+            check_function_call(scope, expr)

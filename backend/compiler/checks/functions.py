@@ -1,0 +1,77 @@
+"""Calls that give a value: only functions do, user ones with arguments that fit their
+parameters, standard ones with arguments their typing accepts."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.builtins import Builtin
+from backend.compiler.checks.calls import check_connection
+from backend.compiler.checks.targets import refuse_system_write
+from backend.compiler.codes import Code
+from backend.compiler.infer import Misfit, NoValue, Scope, StandardFunction, UserFunction
+from backend.compiler.resolve import PouSymbols, Variable
+from backend.compiler.types import assignable
+
+# why a call in an expression gives no value, by what it calls
+NO_VALUE: dict[NoValue, tuple[Code, str]] = {
+    "method": (Code.METHODS, "methods are not supported"),
+    "instance": (Code.INSTANCE_VALUE, "function block instance '{name}' has no value"),
+    "program": (Code.PROGRAM_VALUE, "program '{name}' has no value; call it as a statement"),
+    "external": (Code.EXTERNAL_FUNCTION, "external function '{name}' is not available"),
+    "pointer": (Code.POINTERS, "pointers are not supported (REF and ADR only inside printf)"),
+    "unknown": (Code.NOT_A_FUNCTION, "'{name}' is not a function"),
+}
+
+
+def check_function_call(scope: Scope, call: ast.Call) -> None:
+    match scope.callee(call):
+        case UserFunction(pou=pou):
+            check_user_call(scope, pou, call)
+        case StandardFunction(builtin=builtin):
+            misfit = scope.standard_call(builtin, call)
+            if isinstance(misfit, Misfit):
+                code, problem = _misfit(misfit, builtin)
+                scope.report(misfit.pos, code, f"'{call.name}' {problem}")
+        case no_value:
+            code, message = NO_VALUE[no_value]
+            scope.report(call.pos, code, message.format(name=call.name))
+
+
+def _misfit(misfit: Misfit, builtin: Builtin) -> tuple[Code, str]:
+    match misfit.kind:
+        case "no parameter":
+            return Code.NO_PARAMETER, f"has no parameter '{misfit.detail}'"
+        case "too many":
+            return Code.TOO_MANY_ARGUMENTS, f"takes {len(builtin.params or ())} arguments"
+        case "missing":
+            return Code.MISSING_ARGUMENTS, f"needs {', '.join(builtin.params or ())}"
+        case "too few":
+            return Code.MISSING_ARGUMENTS, f"needs at least {builtin.min_args} arguments"
+        case "types":
+            return Code.STANDARD_ARGUMENTS, misfit.detail  # what the function's typing says
+
+
+def check_user_call(scope: Scope, pou: PouSymbols, call: ast.Call) -> None:
+    pairs = scope.connect_arguments(pou, call)
+    check_connection(scope, pou, call, pairs)
+    for arg, param in pairs:
+        if param is not None:
+            check_argument(scope, arg, param)
+
+
+def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
+    if arg.value is None:
+        return
+    if param.kind in ("VAR_OUTPUT", "VAR_IN_OUT") or arg.is_output:
+        refuse_system_write(scope, arg.value)
+    value_type = scope.type_of(arg.value)
+    if value_type is None:
+        return
+    if param.kind == "VAR_OUTPUT" or arg.is_output:
+        if not assignable(value_type, param.type):
+            message = f"cannot store {param.type.name} output in {value_type.name}"
+            scope.report(arg.value.pos, Code.OUTPUT_TYPE, message)
+        return
+    if not assignable(param.type, value_type):
+        message = f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
+        scope.report(arg.value.pos, Code.ARGUMENT_TYPE, message)

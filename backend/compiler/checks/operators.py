@@ -1,0 +1,56 @@
+"""Operators and their operands: each operator applies to some types only, and a comparison
+needs two values that compare."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.codes import Code
+from backend.compiler.infer import COMPARISONS, Scope
+from backend.compiler.types import (
+    BOOL,
+    ElementaryType,
+    EnumType,
+    StructType,
+    Type,
+    common_numeric,
+    integer_like,
+)
+
+
+def check_unary(scope: Scope, expr: ast.Unary, expr_type: Type | None) -> None:
+    operand = scope.type_of(expr.operand)
+    if operand is not None and expr_type is None:
+        scope.report(
+            expr.pos, Code.OPERATOR_TYPES, f"'{expr.op}' cannot be applied to {operand.name}"
+        )
+
+
+def check_binary(scope: Scope, expr: ast.Binary, expr_type: Type | None) -> None:
+    left, right = scope.type_of(expr.left), scope.type_of(expr.right)
+    if left is None or right is None:
+        return  # reported where the operand is
+    # a comparison is BOOL whatever it compares; any other operation has a type only when
+    # the operator applies to its operands
+    fits = comparable(expr.op, left, right) if expr.op in COMPARISONS else expr_type is not None
+    if not fits:
+        message = f"'{expr.op}' cannot be applied to {left.name} and {right.name}"
+        scope.report(expr.pos, Code.OPERATOR_TYPES, message)
+
+
+def comparable(op: str, left_type: Type, right_type: Type) -> bool:
+    """Values of the two types can be compared with `op`: enums and structures with = and <>
+    when of the same type (an enum with an integer too); numbers with numbers, values of
+    one category with each other, BOOL with integers."""
+    if op in ("=", "<>") and isinstance(left_type, EnumType | StructType):
+        return left_type == right_type or (
+            isinstance(left_type, EnumType) and integer_like(right_type) is not None
+        )
+    left, right = integer_like(left_type) or left_type, integer_like(right_type) or right_type
+    if not isinstance(left, ElementaryType) or not isinstance(right, ElementaryType):
+        return False
+    return (
+        common_numeric(left, right) is not None
+        or left.category == right.category
+        or (left == BOOL and right.is_integer)
+        or (right == BOOL and left.is_integer)
+    )

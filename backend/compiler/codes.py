@@ -1,0 +1,140 @@
+"""The stable codes of the compiler's diagnostics, each listed once with a short title.
+
+A code names one kind of problem and keeps its meaning across releases, so that tools and
+people can refer to it; the message around it may change. Errors are `E` and warnings `W`
+followed by four digits, grouped by hundreds: 00 syntax and literals, 01 declarations,
+02 names, types and expressions, 03 statements and assignments, 04 calls, 05 sequential
+function charts, 06 the resource (user programs, safe values, users), 07 what padt does not
+compile (features it lacks, limits). docs/diagnostics.md explains every code with a
+failing and a passing example.
+"""
+
+from __future__ import annotations
+
+from enum import Enum, unique
+from typing import Literal
+
+Severity = Literal["error", "warning"]
+
+
+@unique
+class Code(Enum):
+    def __init__(self, id: str, title: str) -> None:
+        self.id = id  # E0123 or W0123
+        self.title = title
+
+    @property
+    def severity(self) -> Severity:
+        return "error" if self.id.startswith("E") else "warning"
+
+    # ---- 00: syntax and literals
+    SYNTAX = "E0001", "syntax error"
+    STRING_ESCAPE = "E0002", "invalid escape in a string literal"
+    INVALID_LITERAL = "E0003", "literal without a value"
+    PRAGMA_SKIPPED = "W0001", "pragma skipped"
+
+    # ---- 01: declarations
+    DUPLICATE_TYPE = "E0101", "type declared twice"
+    DUPLICATE_GLOBAL = "E0102", "global variable declared twice"
+    DUPLICATE_POU = "E0103", "POU declared twice"
+    DUPLICATE_VARIABLE = "E0104", "variable declared twice in a POU"
+    DUPLICATE_ENUM_VALUE = "E0105", "enum value declared twice"
+    DUPLICATE_MEMBER = "E0106", "structure member declared twice"
+    UNKNOWN_TYPE = "E0107", "unknown type"
+    RECURSIVE_TYPE = "E0108", "type defined in terms of itself"
+    SELF_CONTAINED = "E0109", "function block that contains an instance of itself"
+    EXTERNAL_WITHOUT_GLOBAL = "E0110", "VAR_EXTERNAL without a VAR_GLOBAL"
+    STRING_LENGTH = "E0111", "string length not a positive constant"
+    ARRAY_BOUNDS = "E0112", "array bounds not constant integers"
+    EMPTY_ARRAY_RANGE = "E0113", "empty array range"
+    ENUM_BASE = "E0114", "enum base type not an integer type"
+    ENUM_VALUE = "E0115", "enum value not a constant integer"
+    EDGE_INPUT = "E0116", "R_EDGE or F_EDGE on something else than a BOOL input"
+    NOT_CONSTANT_INITIAL = "E0117", "initial value not a constant expression"
+    ARRAY_INITIALIZER = "E0118", "array initializer for something else than an array"
+    STRUCT_INITIALIZER = "E0119", "structure initializer for something else than a structure"
+    REPETITION_COUNT = "E0120", "repetition count not an integer literal"
+    TOO_MANY_INITIAL_VALUES = "E0121", "more initial values than array elements"
+
+    # ---- 02: names, types and expressions
+    UNDECLARED = "E0201", "name not declared"
+    SYSTEM_NAMESPACE = "E0202", "SYS without the name of a system variable"
+    UNKNOWN_SYSTEM_VARIABLE = "E0203", "unknown system variable"
+    NO_MEMBER = "E0204", "no such member"
+    NOT_AN_ENUM = "E0205", "typed literal of a type that is no enum"
+    NO_ENUM_VALUE = "E0206", "enum has no such value"
+    UNKNOWN_LITERAL_TYPE = "E0207", "typed literal of an unknown type"
+    LITERAL_KIND = "E0208", "typed literal of the wrong kind"
+    TYPE_MISMATCH = "E0209", "value of the wrong type"
+    OUT_OF_RANGE = "E0210", "integer literal out of the range of its type"
+    OPERATOR_TYPES = "E0211", "operator that does not apply to its operands"
+    INDEX_TYPE = "E0212", "array index not an integer"
+    NOT_AN_ARRAY = "E0213", "index on something else than an array"
+    INDEX_COUNT = "E0214", "wrong number of array indices"
+    INDEX_OUT_OF_BOUNDS = "E0215", "constant array index outside the bounds"
+    BIT_ACCESS_TYPE = "E0216", "bit access on something else than an integer"
+    BIT_OUT_OF_RANGE = "E0217", "bit access beyond the width of the value"
+
+    # ---- 03: statements and assignments
+    ASSIGN_CONSTANT = "E0301", "assignment to a constant"
+    ASSIGN_NON_VARIABLE = "E0302", "assignment to an enum value or a program"
+    ASSIGN_EXPRESSION = "E0303", "assignment to an expression"
+    ASSIGN_MEMBER_OF_VALUE = "E0304", "assignment to a member of a value"
+    FB_MEMBER_WRITE = "E0305", "function block member not writable from outside"
+    SYSTEM_VARIABLE_WRITE = "E0306", "write to a read-only system variable"
+    CONDITION_TYPE = "E0307", "condition not BOOL"
+    OUTSIDE_LOOP = "E0308", "EXIT or CONTINUE outside of a loop"
+    CASE_SELECTOR_TYPE = "E0309", "CASE selector not an integer or enum"
+    CASE_LABEL_TYPE = "E0310", "CASE label not an integer or enum"
+    CASE_LABEL_TWICE = "E0311", "CASE label used twice"
+    FOR_COUNTER_TYPE = "E0312", "FOR counter not an integer"
+    INPUT_ASSIGNMENT = "W0301", "assignment to an input inside its block"
+
+    # ---- 04: calls
+    ARGUMENT_TYPE = "E0401", "argument of the wrong type"
+    OUTPUT_TYPE = "E0402", "output stored in a variable of the wrong type"
+    NO_PARAMETER = "E0403", "no such parameter"
+    TOO_MANY_ARGUMENTS = "E0404", "too many arguments"
+    MISSING_ARGUMENTS = "E0405", "missing arguments of a standard function"
+    STANDARD_ARGUMENTS = "E0406", "arguments a standard function does not take"
+    INPUT_AS_OUTPUT = "E0407", "input connected as an output"
+    IN_OUT_VARIABLE = "E0408", "in-out argument that is no variable"
+    INSTANCE_VALUE = "E0409", "function block instance used as a value"
+    PROGRAM_VALUE = "E0410", "program used as a value"
+    NOT_A_FUNCTION = "E0411", "call of something that is no function"
+    EXTERNAL_FUNCTION = "E0412", "external function that is not available"
+
+    # ---- 05: sequential function charts
+    INITIAL_STEP = "E0501", "step chain without exactly one initial step"
+    STEP_NAME = "E0502", "step name already used"
+    DUPLICATE_ACTION = "E0503", "action declared twice"
+    STEP_FLAG_WRITE = "E0504", "write to a step flag"
+    UNKNOWN_ACTION = "E0505", "association with neither an action nor a BOOL variable"
+    UNKNOWN_QUALIFIER = "E0506", "unknown action qualifier"
+    QUALIFIER_NEEDS_TIME = "E0507", "timed qualifier without a time"
+    QUALIFIER_TIME_TYPE = "E0508", "time of a qualifier that is no TIME"
+    QUALIFIER_TAKES_NO_TIME = "E0509", "time for a qualifier that takes none"
+    UNKNOWN_STEP = "E0510", "transition from or to an unknown step"
+
+    # ---- 06: the resource: user programs, safe values, users
+    PROGRAM_POU = "E0601", "user program without its PROGRAM"
+    PROGRAM_ID_RANGE = "E0602", "program ID outside 1..32"
+    PROGRAM_ID_TAKEN = "E0603", "program ID used twice"
+    TOO_MANY_PROGRAMS = "E0604", "more than 32 user programs"
+    SLICES_EXCEED_WATCHDOG = "E0605", "time slices longer than the watchdog time"
+    SECOND_WRITER = "E0606", "global written by more than one user program"
+    SAFE_VALUE_TARGET = "E0607", "safe value for something else than a global output"
+    SAFE_VALUE = "E0608", "safe value that is no value of the output's type"
+    USER_ACCOUNT = "E0609", "invalid user account"
+    DUPLICATE_USER = "E0610", "user defined twice"
+    NO_ADMINISTRATOR = "E0611", "users without an administrator"
+    EXTRA_RESOURCE = "W0601", "resource ignored"
+    PROGRAM_ARGUMENTS = "W0602", "program arguments in a configuration ignored"
+
+    # ---- 07: what padt does not compile
+    POINTERS = "E0701", "pointers"
+    METHODS = "E0702", "methods"
+    DIRECT_ADDRESS = "E0703", "direct address in code"
+    VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array"
+    STATEMENT_DEPTH = "E0705", "statements nested too deep"
+    EXPRESSION_DEPTH = "E0706", "expression nested too deep"
