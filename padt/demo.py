@@ -16,6 +16,7 @@ from pathlib import Path
 
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
+from runtime.contract.private_files import write_private
 
 _PR_SET_PDEATHSIG = 1
 
@@ -50,9 +51,7 @@ def demo_administrator(state_dir: Path) -> tuple[UserAccount, str | None]:
         return UserAccount(**json.loads(path.read_text())), None
     password = secrets.token_urlsafe(18)
     account = UserAccount("admin", "administrator", hash_password(password))
-    state_dir.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(dataclasses.asdict(account)))
-    path.chmod(0o600)
+    write_private(path, json.dumps(dataclasses.asdict(account)).encode("utf-8"))
     return account, password
 
 
@@ -65,11 +64,11 @@ def demo_project_with_accounts(state_dir: Path, accounts: list[UserAccount]) -> 
     folder = state_dir / "project"
     folder.mkdir(parents=True, exist_ok=True)
     for source in sorted(demo_project_path().iterdir()):
-        if source.is_file():
+        if source.is_file() and source.name != PROJECT_FILE:
             (folder / source.name).write_text(source.read_text(encoding="utf-8"))
     entries = "".join("\n" + user_entry(account) for account in accounts)
-    with (folder / PROJECT_FILE).open("a", encoding="utf-8") as config:
-        config.write(entries)
+    config = (demo_project_path() / PROJECT_FILE).read_text(encoding="utf-8") + entries
+    write_private(folder / PROJECT_FILE, config.encode("utf-8"))  # it holds the verifiers
     return folder
 
 
@@ -98,9 +97,8 @@ def run(args: argparse.Namespace) -> int:
             print(diagnostic, file=sys.stderr)
         return 1
     resource = result.artifact.resource.name
-    target = artifact_path(args.state_dir)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    target.write_text(result.artifact.to_json())
+    # where the runtime finds it at power-up; it holds the verifiers: owner-only
+    write_private(artifact_path(args.state_dir), result.artifact.to_json().encode("ascii"))
 
     endpoint = f"tcp/127.0.0.1:{args.zenoh_port}"
     try:

@@ -211,6 +211,7 @@ def finish_reload(resource: Resource, job: ReloadJob) -> p.ReloadPlanReply | p.R
     """The second half, between two cycles: the switch-over (or the plan), and the reply."""
     if job.preview:
         if job.plan is None:
-            raise Refusal("reload_failed", f"the new configuration failed: {job.failure}")
+            assert job.failure is not None
+            raise job.failure
         return p.ReloadPlanReply(job.plan.info())
     return p.ReloadReply(reload_switch.finish(resource, job), resource.status())

@@ -319,7 +319,7 @@ class EventLog:
 
     def _append(self, path: Path, lines: list[bytes]) -> None:
         created = not path.exists()
-        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o600)
         try:
             data = memoryview(b"".join(line + b"\n" for line in lines))
             while data:

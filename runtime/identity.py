@@ -5,8 +5,6 @@ without one (simulation, tests)."""
 from __future__ import annotations
 
 import base64
-import contextlib
-import os
 from pathlib import Path
 
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
@@ -16,6 +14,8 @@ from cryptography.hazmat.primitives.serialization import (
     PrivateFormat,
     PublicFormat,
 )
+
+from runtime.contract.private_files import write_private
 
 
 class Identity:
@@ -35,14 +35,7 @@ class Identity:
             return cls(Ed25519PrivateKey.from_private_bytes(path.read_bytes()))
         except (FileNotFoundError, ValueError):
             identity = cls.fresh()
-            path.parent.mkdir(parents=True, exist_ok=True)
-            temporary = path.with_suffix(".tmp")
-            with contextlib.suppress(FileNotFoundError):  # O_CREAT keeps an old file's mode
-                os.unlink(temporary)
-            descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
-            with os.fdopen(descriptor, "wb") as file:
-                file.write(identity._raw())
-            os.replace(temporary, path)
+            write_private(path, identity._raw())
             return identity
 
     def _raw(self) -> bytes:

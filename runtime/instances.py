@@ -8,6 +8,7 @@ from typing import Any
 
 from runtime.code_image import CodeImage, VariablePath
 from runtime.contract.artifact import Artifact
+from runtime.contract.refusal import Refusal
 from runtime.intrinsics import SystemView
 from runtime.user_program import UserProgram
 
@@ -62,3 +63,14 @@ def index(bound: list[BoundVariable]) -> dict[str, BoundVariable]:
     for variable in bound:
         by_name.setdefault(variable.path.path.upper(), variable)
     return by_name
+
+
+def instantiated(artifact: Artifact, system: SystemView) -> Instances:
+    """`instantiate`, with a configuration whose code fails while it is set up refused as
+    `bad_configuration` (the resource keeps what it runs)."""
+    try:
+        return instantiate(artifact, system)
+    except Exception as exc:  # generated code of an artifact that is not sound
+        raise Refusal(
+            "bad_configuration", f"the configuration cannot be set up: {type(exc).__name__}: {exc}"
+        ) from None

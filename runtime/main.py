@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import argparse
 import logging
-import os
 import sys
 from pathlib import Path
 
 from runtime.clock import RealClock
+from runtime.configuration_store import ConfigurationStore
 from runtime.context import ContextInvalid, load_context
-from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
+from runtime.contract.artifact import ArtifactError, load_artifact
 from runtime.contract.keyspace import valid_resource_name
+from runtime.contract.refusal import Refusal
 from runtime.contract.session_options import add_zenoh_options
 from runtime.contract.state_folder import (
     artifact_path,
@@ -46,18 +47,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def store_configuration(state_dir: Path, artifact: Artifact) -> None:
-    """Keep a loaded configuration for the next power-up: written whole or not at all."""
-    path = artifact_path(state_dir)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_suffix(".tmp")
-    with temporary.open("w", encoding="ascii") as file:
-        file.write(artifact.to_json())
-        file.flush()
-        os.fsync(file.fileno())
-    os.replace(temporary, path)
-
-
 def power_up(resource: Resource, state_dir: Path) -> None:
     """What a controller does when it comes up: load the stored configuration, take the
     saved context when it is valid (warm) or not (cold), then Autostart decides."""
@@ -66,8 +55,9 @@ def power_up(resource: Resource, state_dir: Path) -> None:
         return
     try:
         resource.load(load_artifact(path.read_bytes()))
-    except ArtifactError as exc:
+    except (ArtifactError, Refusal) as exc:  # it stays STOP/INVALID; a download mends it
         log.error("stored configuration refused: %s", exc)
+        resource.events.record("state", f"stored configuration refused: {exc}", long_term=True)
         return
     assert resource.artifact is not None
     autostart = resource.artifact.resource.autostart
@@ -93,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     identity = Identity.kept_in(identity_path(args.state_dir))
     resource = Resource(args.resource, clock, events, identity)
     power_up(resource, args.state_dir)
-    resource.on_configuration = lambda artifact: store_configuration(args.state_dir, artifact)
+    resource.store = ConfigurationStore(args.state_dir)
 
     from runtime.context_saver import ContextSaver
     from runtime.contract.session import open_client

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import time
 
+from runtime.configuration_store import ConfigurationStore, Staged
 from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import ProgramState, ReloadOutcome
 from runtime.contract.refusal import Refusal
@@ -45,12 +46,15 @@ class ReloadJob:
         self.instances: Instances | None = None
         self.plan: ReloadPlan | None = None
         self.prepared: SwitchOver | None = None
-        self.failure: str | None = None
+        self.failure: Refusal | None = None  # why preparing failed
         self.preview = False  # only the plan is wanted
         self.expected_crc: str | None = None  # the configuration the user previewed against
+        self.store: ConfigurationStore | None = None  # where a reload that happens is kept
+        self.staged: Staged | None = None
 
     def prepare(self) -> None:
-        """New instances, the plan and the switch-over list; never raises."""
+        """New instances, the plan, the switch-over list, and the new configuration written
+        beside the stored one (off the cycle thread); never raises."""
         try:
             self.instances = instantiate(self.artifact, self.system)
             self.plan = plan_reload(
@@ -65,8 +69,13 @@ class ReloadJob:
                 self.prepared = prepare_switch_over(
                     self.old, self.instances, self.plan, self.renames
                 )
+                if self.store is not None:
+                    self.staged = self.store.stage(self.artifact)
+        except Refusal as refused:  # the disk
+            self.failure = refused
         except Exception as exc:  # generated code that fails while it is set up
-            self.failure = f"{type(exc).__name__}: {exc}"
+            cause = f"{type(exc).__name__}: {exc}"
+            self.failure = Refusal("reload_failed", f"the new configuration failed: {cause}")
 
 
 def begin_preview(resource: Resource, artifact: Artifact, renames: dict[str, str]) -> ReloadJob:
@@ -83,7 +92,8 @@ def preview(resource: Resource, artifact: Artifact, renames: dict[str, str]) -> 
     job = begin_preview(resource, artifact, renames)
     job.prepare()
     if job.plan is None:
-        raise Refusal("reload_failed", f"the new configuration failed: {job.failure}")
+        assert job.failure is not None
+        raise job.failure
     return job.plan
 
 
@@ -105,7 +115,7 @@ def begin(
         raise
     job = _job(resource, artifact, renames)
     job.watchdog_ms, job.target_cycle_ms, job.user = watchdog_ms, target_cycle_ms, user
-    job.expected_crc = expected_crc
+    job.expected_crc, job.store = expected_crc, resource.store
     return job
 
 
@@ -114,6 +124,8 @@ def finish(resource: Resource, job: ReloadJob) -> ReloadOutcome:
     try:
         return _switch(resource, job)
     except Refusal as refused:
+        if job.staged is not None:
+            job.staged.discard()
         resource.refused("reload", refused.message, job.artifact.crc)
         raise
 
@@ -161,7 +173,7 @@ def _switch(resource: Resource, job: ReloadJob) -> ReloadOutcome:
             "changed", f"the resource runs {job.old_artifact.crc}, not {job.expected_crc}"
         )
     if job.failure is not None:
-        raise Refusal("reload_failed", f"the new configuration failed: {job.failure}")
+        raise job.failure
     plan, instances, prepared = job.plan, job.instances, job.prepared
     assert plan is not None and instances is not None
     if plan.refusals:
@@ -210,8 +222,10 @@ def _switch(resource: Resource, job: ReloadJob) -> ReloadOutcome:
         pause_us=outcome.pause_us,
         carried=carried,
     )
-    if resource.on_configuration is not None:
-        resource.on_configuration(artifact)
+    if job.staged is not None and not job.staged.commit():
+        resource.recorder.record(
+            "error", "the reloaded configuration could not be kept for power-up"
+        )
     return outcome
 
 

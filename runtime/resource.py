@@ -17,9 +17,9 @@ needs no locks.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
 
 from runtime.clock import Clock
+from runtime.configuration_store import ConfigurationStore
 from runtime.contract.accounts import AccessControl, Challenge, Proven
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.protocol import ProgramState, ProgramStatus, ResourceState, Status
@@ -31,7 +31,7 @@ from runtime.event_recorder import EventRecorder
 from runtime.force_table import GLOBAL
 from runtime.forcing import Forcing
 from runtime.identity import Identity
-from runtime.instances import Instances, instantiate
+from runtime.instances import Instances, instantiate, instantiated
 from runtime.intrinsics import SystemView
 from runtime.login_audit import LoginAudit
 from runtime.online_values import OnlineValues
@@ -81,8 +81,8 @@ class Resource:
         self._first_cycle = False  # the next CPU cycle is the first after a start
         self._last_start_ns: int | None = None
         self._boot_ns = clock.now_ns()
-        # told every new configuration (load or reload), to keep it for the next power-up
-        self.on_configuration: Callable[[Artifact], None] | None = None
+        # where every new configuration (load or reload) is kept for the next power-up
+        self.store: ConfigurationStore | None = None
 
     @property
     def programs(self) -> list[UserProgram]:
@@ -156,23 +156,26 @@ class Resource:
                 raise Refusal("state", "ERROR STOP: INIT first")
             if self.artifact is not None and not self.params.load_allowed:
                 raise Refusal("not_allowed", "Load Allowed is OFF")
+            # everything that can fail before anything changes: the code, then the disk
+            instances = instantiated(artifact, self.system)
+            staged = self.store.stage(artifact) if self.store is not None else None
         except Refusal as refused:
             self.refused("load", refused.message, artifact.crc)
             raise
         old_crc = self.artifact.crc if self.artifact else None
         self.forcing.reset()
-        self.take(artifact, instantiate(artifact, self.system))
+        self.take(artifact, instances)
         self.state = ResourceState.STOP_VALID
         self.start_kind = "cold"
         self.io.write_outputs(safe=True)
+        if staged is not None and not staged.commit():
+            self.recorder.record("error", "the loaded configuration could not be kept for power-up")
         self.recorder.record(
             "load",
             f"configuration {artifact.project} loaded, CRC {artifact.crc} (cold start)",
             old_crc=old_crc,
             new_crc=artifact.crc,
         )
-        if self.on_configuration is not None:
-            self.on_configuration(artifact)
 
     def take(self, artifact: Artifact, instances: Instances) -> None:
         """A new configuration (download or reload) with its instances: parameters, safe

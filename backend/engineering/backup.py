@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import re
 import tempfile
 import time
@@ -25,6 +24,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
+from runtime.contract.private_files import write_private
 
 DEFAULT_BACKUP_DIR = Path("padt-backups")
 ARTIFACT_ENTRY = "artifact.json"
@@ -168,12 +168,7 @@ def write_backup(
         while path.exists():  # the same configuration twice within a second
             path = folder / f"{name.removesuffix('.zip')}-{number}.zip"
             number += 1
-        temporary = path.with_name(f".{path.name}.tmp")
-        with temporary.open("wb") as file:
-            file.write(data)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temporary, path)
+        write_private(path, data)  # the project's accounts are in it (verifiers)
     except OSError as exc:
         raise BackupError(f"cannot write the backup in {folder}: {exc}") from None
     return path

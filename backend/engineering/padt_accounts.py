@@ -10,8 +10,6 @@ api-user` or by a Security Administrator through the API. There is no default ac
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import threading
 from collections.abc import Callable
 from dataclasses import asdict
@@ -21,6 +19,7 @@ from backend.engineering.padt_levels import ADMINISTRATOR, PADT_LEVELS
 from backend.engineering.resource_client import ResourceLogin
 from runtime.contract.accounts import AccessControl, Session, account_problems, hash_password
 from runtime.contract.artifact import UserAccount
+from runtime.contract.private_files import write_private
 from runtime.contract.refusal import Refusal
 
 FORMAT = "padt-accounts"
@@ -54,18 +53,7 @@ def write_accounts(path: Path, accounts: tuple[UserAccount, ...]) -> None:
     owner only."""
     entries = [asdict(a) for a in sorted(accounts, key=lambda a: a.name)]
     text = json.dumps({"format": FORMAT, "version": VERSION, "accounts": entries}, indent=2)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as file:
-            file.write(text + "\n")
-            file.flush()
-            os.fsync(file.fileno())
-        os.chmod(temporary, 0o600)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+    write_private(path, (text + "\n").encode("utf-8"))
 
 
 def with_account(

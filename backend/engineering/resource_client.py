@@ -39,6 +39,7 @@ from runtime.contract.protocol import (
     WatchValues,
     decode_publication,
     decode_reply,
+    decode_request,
     encode_request,
 )
 from runtime.contract.refusal import Refusal
@@ -103,7 +104,10 @@ class ResourceClient:
 
     def ask(self, command: Command[R], timeout_s: float = COMMAND_TIMEOUT_S) -> R:
         """Send a command; its reply, checked against the protocol. Raises the resource's
-        Refusal, or ResourceUnreachable when no runtime answered."""
+        Refusal, or ResourceUnreachable when no runtime answered. A command the resource's
+        decoder would refuse (a value nested too deep, an argument out of its range: it may
+        come from a REST body or a browser) is refused here, before it is sent."""
+        decode_request(encode_request(command, None))
         reply = self._exchange(
             command.NAME,
             lambda seq: encode_request(command, self._token(), seq),

@@ -603,7 +603,7 @@ def decode_request(payload: bytes, source: str = ANONYMOUS, mac: bytes | None = 
     try:
         data = json.loads(payload)
     except (ValueError, RecursionError):
-        raise Refusal("bad_request", "request is not valid JSON") from None
+        raise Refusal("bad_request", "request is not valid JSON (or nested far too deep)") from None
     if depth(data) > MAX_DEPTH:
         raise Refusal("bad_request", f"request nested deeper than {MAX_DEPTH}")
     if not isinstance(data, dict) or not isinstance(data.get("cmd"), str):

@@ -5,6 +5,7 @@ cut-off artifact."""
 from __future__ import annotations
 
 import json
+import shutil
 import time
 import zipfile
 from collections.abc import Callable
@@ -431,3 +432,33 @@ def test_backups_are_reproducible_and_proven(tmp_path: Path) -> None:
             target.writestr(item, data)
     with pytest.raises(BackupError, match="do not match the manifest"):
         restore_backup(tampered)
+
+
+def test_a_configuration_that_cannot_be_kept_is_refused_before_anything_changes(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    state = tmp_path / "state"
+    (state / "config").parent.mkdir(parents=True)
+    (state / "config").write_text("not a folder")  # nothing can be stored below it
+    project = write_project(tmp_path / "project")
+    with running_resource(RESOURCE, state, zenoh_endpoint) as (_, client):
+        loaded = padt(*online("load", zenoh_endpoint, str(project)), timeout=60)
+        assert loaded.returncode == 1
+        assert "padt load: refused (storage): the configuration cannot be kept in" in loaded.stderr
+        assert status(client)["state"] == "STOP/INVALID CONFIGURATION"
+        # mended, a load goes through; then the folder goes again, and a reload is refused
+        (state / "config").unlink()
+        loaded = padt(*online("load", zenoh_endpoint, str(project)), timeout=60)
+        assert loaded.returncode == 0, loaded.stderr
+        assert client.command("start")["ok"]
+        stored = state / "config" / "artifact.json"
+        assert stored.stat().st_mode & 0o777 == 0o600  # it holds the accounts' verifiers
+        crc = status(client)["crc"]
+        shutil.rmtree(state / "config")
+        (state / "config").write_text("not a folder")
+        write_project(tmp_path / "project", CHANGED_ST)
+        reloaded = padt(*online("reload", zenoh_endpoint, str(project), "--yes"), timeout=60)
+        assert reloaded.returncode == 1
+        assert "refused (storage): the configuration cannot be kept in" in reloaded.stderr
+        assert status(client)["crc"] == crc and status(client)["state"] == "RUN"
+        assert values(client)["Main.counter"] > 0

@@ -222,6 +222,15 @@ def test_the_demo_makes_its_administrator_once_and_keeps_only_the_hash(tmp_path:
         stop_demo(process)
     stored = [p.read_text(errors="replace") for p in tmp_path.rglob("*") if p.is_file()]
     assert not any(password in text for text in stored)
+    # the files that hold verifiers or keys are the owner's alone
+    secret = [
+        p for p in tmp_path.rglob("*") if p.is_file() and "scram$" in p.read_text(errors="replace")
+    ]
+    secret += [tmp_path / "identity.key"]
+    assert {p.name for p in secret} >= {"artifact.json", "padt.toml", "demo-administrator.json"}
+    assert all(p.stat().st_mode & 0o077 == 0 for p in secret), [
+        oct(p.stat().st_mode) for p in secret
+    ]
     again, lines = start_demo(tmp_path, free_port())
     stop_demo(again)
     assert not any(password in line for line in lines)
