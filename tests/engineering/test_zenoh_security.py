@@ -4,15 +4,18 @@ settings; a client without them does not get in at all."""
 
 from __future__ import annotations
 
+import json
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
 
 from backend.engineering.resource_client import ResourceClient
+from runtime.contract.keyspace import command_key, status_key
 from runtime.contract.session import open_client, open_router
 from runtime.contract.session_options import RouterUnreachable
-from tests.conftest import free_port, padt
+from tests.conftest import REPO, free_port, padt
 from tests.support.runtime_process import runtime_process, wait_until_answering, write_demo_artifact
 
 
@@ -111,5 +114,64 @@ def test_user_and_password(tmp_path: Path) -> None:
         check_runtime_and_cli(tmp_path, endpoint, good)
         refused(endpoint, wrong)
         refused(endpoint, anonymous)
+    finally:
+        router.close()
+
+
+def test_only_the_resource_serves_and_publishes_its_keys(tmp_path: Path) -> None:
+    """The shipped access-control configuration (docs/examples/zenoh-router-acl.json5):
+    a PADT user on the bus cannot answer for the resource or publish as it; a user of no
+    subject gets nothing through at all; the resource and the PADT work as ever."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    users = tmp_path / "users.txt"
+    users.write_text("Tank1:Res-secret-1\nengineer:Eng-secret-2\nintruder:Bad-secret-3\n")
+    shipped = (REPO / "docs" / "examples" / "zenoh-router-acl.json5").read_text()
+    router_config = config(
+        tmp_path / "router.json5", shipped.replace("/etc/padt/zenoh-users.txt", str(users))
+    )
+    credentials = {
+        name: config(
+            tmp_path / f"{name}.json5",
+            f'{{transport: {{auth: {{usrpwd: {{user: "{name}", password: "{secret}"}}}}}}}}',
+        )
+        for name, secret in (("Tank1", "Res-secret-1"), ("engineer", "Eng-secret-2"))
+    }
+    intruder = config(
+        tmp_path / "intruder.json5",
+        '{transport: {auth: {usrpwd: {user: "intruder", password: "Bad-secret-3"}}}}',
+    )
+    write_demo_artifact(tmp_path / "state")
+    router = open_router(endpoint, router_config)
+    try:
+        with runtime_process(
+            "Tank1", tmp_path / "state", endpoint, "--zenoh-config", str(credentials["Tank1"])
+        ):
+            rogue = open_client(endpoint, credentials["engineer"])
+            stranger = open_client(endpoint, intruder)
+            victim = open_client(endpoint, credentials["engineer"])
+            try:
+                answered: list[str] = []
+                rogue.declare_queryable(command_key("Tank1"), lambda q: answered.append("rogue"))
+                client = ResourceClient(victim, "Tank1")
+                wait_until_answering(client)
+                seen: list[str] = []
+                client.on_status(lambda status: seen.append(status.state))
+                for forger in (rogue, stranger):
+                    forger.put(status_key("Tank1"), json.dumps({"state": "FORGED"}))
+                shown = padt(
+                    "status", "--resource", "Tank1", "--zenoh", endpoint,
+                    "--zenoh-config", str(credentials["engineer"]),
+                )  # fmt: skip
+                assert shown.returncode == 0, shown.stderr
+                assert "resource Tank1: RUN" in shown.stdout
+                time.sleep(1.5)  # a status a second from the resource
+                assert answered == [], "a PADT user answered for the resource"
+                assert seen and set(seen) == {"RUN"}
+                # a user of no subject reaches nothing
+                replies = list(stranger.get(command_key("Tank1"), payload=b"{}", timeout=1))
+                assert not [r for r in replies if r.ok is not None]
+            finally:
+                for session in (rogue, stranger, victim):
+                    session.close()
     finally:
         router.close()
