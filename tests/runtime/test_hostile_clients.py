@@ -8,6 +8,7 @@ import json
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -15,9 +16,10 @@ import zenoh
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
+from backend.engineering.download import download
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.accounts import hash_password
-from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount
+from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount, load_artifact
 from runtime.contract.keyspace import command_key, status_key
 from runtime.contract.protocol import GetEvents, GetStatus, Status
 from runtime.contract.refusal import Refusal
@@ -281,3 +283,39 @@ def test_memory_stays_flat_under_ten_thousand_hostile_messages(
         after = rss_kib(runtime_pid)
         still_healthy(client)
     assert after <= 1.2 * before, (before, after)
+
+
+def test_a_watch_set_that_grows_without_end_is_refused(tmp_path: Path, zenoh_endpoint: str) -> None:
+    with target(tmp_path, zenoh_endpoint) as client:
+        watch = client.watch(["Main.counter"], lambda message: None, period_ms=10)
+        batch = ["Main.counter"] * 3000
+        refused = 0
+        for _ in range(20):  # 3,000 paths a request, at 10 ms: far past the session's quota
+            reply = client.command(
+                "watch", id=watch.watch_id, variables=batch, period_ms=10, append=True
+            )
+            refused += reply.get("error", {}).get("code") == "quota"
+        assert refused == 20
+        still_healthy(client)
+        assert client.ask(GetStatus()).status.stats.overruns == 0
+        watch.close()
+
+
+def test_a_configuration_whose_code_fails_is_refused_and_the_resource_runs_on(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    with target(tmp_path, zenoh_endpoint) as client:
+        admin = ResourceClient(client.session, RESOURCE)
+        admin.login("admin", PASSWORD)
+        artifact = load_artifact((tmp_path / "config" / "artifact.json").read_bytes())
+        pou = artifact.pous[0]
+        broken = replace(pou, source=pou.source + "\nraise RuntimeError('set up fails')\n")
+        hostile = replace(artifact, pous=(broken, *artifact.pous[1:])).with_crc()
+        assert admin.command("stop")["ok"]
+        try:
+            download(admin, hostile)
+            raise AssertionError("a configuration whose code fails was taken")
+        except Refusal as refused:
+            assert refused.code == "bad_configuration"
+        assert admin.command("start")["ok"]
+        still_healthy(client)
