@@ -5,6 +5,7 @@ from __future__ import annotations
 from tests.bench import (
     bench_compiler,
     bench_context,
+    bench_hostile,
     bench_language,
     bench_reload,
     bench_rest,
@@ -21,6 +22,7 @@ def main() -> None:
     bench_reload.main()
     bench_watch.main()
     bench_rest.main()
+    bench_hostile.main()
 
 
 if __name__ == "__main__":
