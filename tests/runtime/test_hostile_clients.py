@@ -161,6 +161,11 @@ def test_a_rogue_queryable_captures_nothing_that_logs_in(
             captured.append((payload, attachment))
 
         queryable = rogue.declare_queryable(command_key(RESOURCE), listen)
+        deadline = time.monotonic() + 10
+        while not captured:  # until the listener's queryable has reached the router
+            assert time.monotonic() < deadline
+            client.ask(GetStatus())
+        captured.clear()
         try:
             online = ["--resource", RESOURCE, "--zenoh", zenoh_endpoint, "--user", "admin"]
             shown = padt("status", *online, env={"PADT_PASSWORD": PASSWORD})
@@ -192,6 +197,8 @@ def test_a_resource_impostor_gets_no_proof_that_logs_in(
                 salt = "A" * 22 + "=="
                 reply = {"ok": True, "nonce": request["nonce"] + "x" * 24, "salt": salt}
                 reply.update(n=16384, r=8, p=1)
+            elif request["cmd"] != "login":
+                reply = {"ok": False, "error": {"code": "forbidden", "message": "no"}}
             else:
                 proofs.append(query.payload.to_bytes() if query.payload else b"")
                 reply = {"ok": True, "token": "t" * 48, "user": request["user"]}
@@ -202,6 +209,7 @@ def test_a_resource_impostor_gets_no_proof_that_logs_in(
         queryable = rogue.declare_queryable(command_key("Twin"), impostor)
         try:
             victim = ResourceClient(client.session, "Twin")
+            victim.wait_until_answering()  # the impostor's queryable has reached the router
             try:
                 victim.login("admin", PASSWORD)
                 raise AssertionError("the impostor was taken for the resource")
