@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from fastapi import FastAPI
+from fastapi_offline import FastAPIOffline
 
 from backend.api import auth, live, projects, resources
 from backend.api.body_limit import BodyLimit
@@ -20,7 +21,8 @@ The reference is docs/rest-api.md."""
 
 
 def create_app(service: PadtService) -> FastAPI:
-    app = FastAPI(title="PADT REST API", version=API_VERSION, description=DESCRIPTION)
+    # Swagger UI and ReDoc from the package's own files: /docs works without internet
+    app = FastAPIOffline(title="PADT REST API", version=API_VERSION, description=DESCRIPTION)
     app.state.service = service
     install_error_handlers(app)
     app.add_middleware(BodyLimit)
