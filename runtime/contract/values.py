@@ -160,3 +160,18 @@ def format_value(value: Any, type_name: str) -> str:
     if isinstance(value, str):
         return f"'{value}'"
     return str(value)
+
+
+MILLISECOND = 1_000_000
+
+
+def format_for_display(value: Any, type_name: str, time_resolution_ns: int = MILLISECOND) -> str:
+    """A value as an engineer reads it on a screen: TIME cut to `time_resolution_ns` (ms
+    unless asked for more), REAL with the 7 significant digits a single holds (LREAL 15),
+    everything else as `format_value`. Exact values (CLI, API) keep `format_value`."""
+    if type_name in ("TIME", "LTIME") and isinstance(value, int) and not isinstance(value, bool):
+        cut = abs(value) // time_resolution_ns * time_resolution_ns  # toward zero, as clocks
+        return format_value(-cut if value < 0 else cut, type_name)
+    if isinstance(value, float) and math.isfinite(value):
+        return f"{value:.{15 if type_name == 'LREAL' else 7}g}"
+    return format_value(value, type_name)
