@@ -1,30 +1,28 @@
-"""The viser UI server: a GUI per browser, kept up to date from the resource feed by a
-refresher thread ten times a second; every action goes through the engineering services'
-resource client, and so through the resource's own checks."""
+"""The viser UI server: a GUI per browser, each its own session (frontend/browser_session.py),
+kept up to date by a refresher thread ten times a second. Every action goes through the
+engineering services' resource client, and so through the resource's own checks."""
 
 from __future__ import annotations
 
+import logging
 import threading
 
 import viser
 
-from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
-from frontend.resource_feed import ResourceFeed
-from frontend.screens import online_test
-from frontend.screens.online_test import OnlineTestView
-from runtime.contract import protocol as p
-from runtime.contract.refusal import Refusal
+from frontend.browser_session import BrowserSession
+from frontend.ui_context import UiContext
 
 REFRESH_S = 0.1
+log = logging.getLogger("padt.ui")
 
 
 class PadtUi:
-    def __init__(self, client: ResourceClient, host: str = "127.0.0.1", port: int = 8080) -> None:
-        self.client = client
-        self.feed = ResourceFeed(client)
-        self.views: dict[int, OnlineTestView] = {}
+    def __init__(self, context: UiContext, host: str = "127.0.0.1", port: int = 8080) -> None:
+        self.context = context
+        self.browsers: dict[int, BrowserSession] = {}
+        self._lock = threading.Lock()
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
-        self.server.gui.configure_theme(control_width="large", show_logo=False)
+        self.server.gui.configure_theme(show_logo=False, control_width="large")
         self.server.on_client_connect(self._connect)
         self.server.on_client_disconnect(self._disconnect)
         self._stop = threading.Event()
@@ -36,40 +34,38 @@ class PadtUi:
         return f"http://127.0.0.1:{self.server.get_port()}"
 
     def _connect(self, client: viser.ClientHandle) -> None:
-        def act(command: p.Command[p.StatusReply]) -> None:
-            self._act(client, command)
-
-        self.views[client.client_id] = online_test.build(client.gui, self.client.resource, act)
+        session = BrowserSession(client, self.context, self._address(client.client_id))
+        with self._lock:
+            self.browsers[client.client_id] = session
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
-        self.views.pop(client.client_id, None)
+        with self._lock:
+            session = self.browsers.pop(client.client_id, None)
+        if session is not None:
+            session.close()
 
-    def _act(self, client: viser.ClientHandle, command: p.Command[p.StatusReply]) -> None:
-        try:
-            reply = self.client.ask(command)
-        except ResourceUnreachable as exc:
-            client.add_notification("No answer", str(exc), color="red", auto_close_seconds=5)
-            return
-        except Refusal as refused:
-            title = f"{command.NAME} refused"
-            client.add_notification(title, refused.message, color="red", auto_close_seconds=5)
-            return
-        self.feed.show_status(reply.status)
+    def _address(self, client_id: int) -> str:
+        """The browser's address: failed logins lock a name for it only. viser does not
+        publish it; its websocket connection knows it (viser is pinned below 1.2)."""
+        connections = getattr(self.server._websock_server, "_live_connections", {})
+        connection = connections.get(client_id)
+        address = getattr(connection, "remote_address", None)
+        return str(address[0]) if address else f"browser {client_id}"
 
     def _refresh_loop(self) -> None:
-        latest = self.feed.latest
         while not self._stop.wait(REFRESH_S):
-            with latest.lock:
-                version, status, cycle = latest.version, latest.status, latest.cycle
-                values, types, quality = latest.values, latest.types, latest.quality
-            status_html = online_test.render_status(status, cycle)
-            table_html = online_test.render_values(values, types, quality)
-            for view in list(self.views.values()):
-                if view.shown_version != version:
-                    view.status.content = status_html
-                    view.table.content = table_html
-                    view.shown_version = version
+            with self._lock:
+                sessions = list(self.browsers.values())
+            for session in sessions:
+                try:
+                    session.refresh()
+                except Exception:  # one browser's trouble is not the others'
+                    log.exception("refreshing a browser failed")
 
     def close(self) -> None:
         self._stop.set()
+        with self._lock:
+            sessions = list(self.browsers.values())
+        for session in sessions:
+            session.close()
         self.server.stop()

@@ -43,7 +43,18 @@ class ResourceFeed:
         self._watching = threading.Lock()
         client.on_status(self.show_status)
         client.on_alive(self._on_alive)
+        self.restart()
+
+    def restart(self) -> None:
+        """Fetch everything again (after a login to the resource: what it may see now)."""
         threading.Thread(target=self._fetch_initial, daemon=True).start()
+        threading.Thread(target=self._load_variables, daemon=True).start()
+
+    def close(self) -> None:
+        with self._watching:
+            if self._watch is not None:
+                self._watch.close()
+                self._watch = None
 
     def show_status(self, status: Status) -> None:
         with self.latest.lock:

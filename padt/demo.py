@@ -77,20 +77,16 @@ def run(args: argparse.Namespace) -> int:
     from backend.api.service import PadtService
     from backend.engineering.padt_accounts import PadtAccounts, write_accounts
     from backend.engineering.project import compile_project, load_project
-    from backend.engineering.resource_client import ResourceClient
     from backend.engineering.resource_directory import ResourceDirectory
     from frontend.app import PadtUi
+    from frontend.ui_context import UiContext
     from runtime.contract.session import open_client, open_router
     from runtime.contract.state_folder import artifact_path
     from runtime.contract.stop_request import StopRequest
 
     stop = StopRequest()
     admin, admin_password = demo_administrator(args.state_dir)
-    # the UI acts with an account of its own, new at every start: its password lives in
-    # this process only
-    panel_password = secrets.token_urlsafe(18)
-    panel = UserAccount("panel", "read-write", hash_password(panel_password))
-    folder = demo_project_with_accounts(args.state_dir, [admin, panel])
+    folder = demo_project_with_accounts(args.state_dir, [admin])
     result = compile_project(load_project([folder]))
     if result.artifact is None:  # the embedded project always compiles; guard all the same
         for diagnostic in result.diagnostics:
@@ -112,9 +108,7 @@ def run(args: argparse.Namespace) -> int:
     runtime = subprocess.Popen(command, preexec_fn=_die_with_parent)
     session = open_client(endpoint)
     try:
-        client = ResourceClient(session, resource)
-        client.use_credentials(panel.name, panel_password)
-        # the REST API knows the demo's administrator as its Security Administrator
+        # the REST API and the UI know the demo's administrator as its Security Administrator
         accounts_file = args.state_dir / "padt-accounts.json"
         write_accounts(accounts_file, (dataclasses.replace(admin, level="security-administrator"),))
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
@@ -125,11 +119,11 @@ def run(args: argparse.Namespace) -> int:
             api = ApiServer(service, args.host, args.api_port)
         except OSError:  # busy: like the UI, take another port rather than fail
             api = ApiServer(service, args.host, 0)
-        ui = PadtUi(client, host=args.host, port=args.port)
+        ui = PadtUi(UiContext(directory, accounts, endpoint), host=args.host, port=args.port)
         try:
             _announce(args.state_dir, resource, result.artifact.crc, admin, admin_password)
             print(f"padt demo: REST API {api.url}/docs (log in as {admin.name})", flush=True)
-            print(f"padt demo: open {ui.url}", flush=True)
+            print(f"padt demo: open {ui.url} (log in as {admin.name})", flush=True)
             stop.sleep_until_requested(lambda: runtime.poll() is None)
             if runtime.returncode is not None:
                 code = runtime.returncode

@@ -14,12 +14,11 @@ import zenoh
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.engineering.resource_client import ResourceClient
-from frontend.app import PadtUi
+from frontend.resource_feed import ResourceFeed
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.keyspace import alive_key, command_key
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import encode
-from tests.conftest import free_port
 from tests.support.runtime_process import (
     client_session,
     router,
@@ -242,21 +241,21 @@ def test_the_ui_watches_again_when_the_runtime_comes_back(
 ) -> None:
     write_demo_artifact(tmp_path)
     with router(zenoh_endpoint), client_session(zenoh_endpoint) as session:
-        ui = PadtUi(ResourceClient(session, "Tank1"), port=free_port())
+        feed = ResourceFeed(ResourceClient(session, "Tank1"))
         try:
             for attempt in range(2):  # the runtime, then a new one after a crash
                 with runtime_process("Tank1", tmp_path, zenoh_endpoint) as process:
                     deadline = time.monotonic() + 20
                     while True:
-                        with ui.feed.latest.lock:
-                            quality = dict(ui.feed.latest.quality)
+                        with feed.latest.lock:
+                            quality = dict(feed.latest.quality)
                         if quality.get("TankControl.level") == "live":
                             break
                         assert time.monotonic() < deadline, f"no live values (run {attempt})"
                         time.sleep(0.05)
                     process.kill()
                     process.wait()
-                with ui.feed.latest.lock:
-                    ui.feed.latest.quality.clear()
+                with feed.latest.lock:
+                    feed.latest.quality.clear()
         finally:
-            ui.close()
+            feed.close()

@@ -1,4 +1,6 @@
-"""The demo as a user sees it: `padt demo` in its own process, driven in headless Chromium."""
+"""The demo as a user sees it: `padt demo` in its own process, driven in headless Chromium.
+Log in with the password the demo printed, log in to the resource, stop it, step it, start
+it, freeze and step one program, log out."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -16,88 +19,137 @@ from playwright.sync_api import Page
 
 from tests.conftest import REPO, free_port
 from tests.support.browser import chromium
+from tests.ui.browser_steps import (
+    button_enabled,
+    confirm,
+    cycle,
+    log_in,
+    log_in_to_resource,
+    text_of,
+    value,
+    wait_for_text,
+    wait_until,
+)
 
 pytestmark = pytest.mark.browser
 URL_LINE = re.compile(r"padt demo: open (http://\S+)")
+PASSWORD_LINE = re.compile(r"administrator 'admin', password (\S+)")
+
+
+@dataclass(frozen=True)
+class Demo:
+    url: str
+    password: str
 
 
 @pytest.fixture
-def demo_url(tmp_path: Path) -> Iterator[str]:
+def demo(tmp_path: Path) -> Iterator[Demo]:
     command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(tmp_path)]
     command += ["--port", str(free_port()), "--zenoh-port", str(free_port()), "--api-port", "0"]
     process = subprocess.Popen(
         command, cwd=REPO, stdout=subprocess.PIPE, text=True, env=dict(os.environ)
     )
     assert process.stdout is not None
-    url = None
+    url = password = None
     started = time.monotonic()
     for line in process.stdout:
-        match = URL_LINE.search(line)
-        if match:
-            url = match.group(1)
+        password = password or _group(PASSWORD_LINE, line)
+        url = _group(URL_LINE, line)
+        if url:
             break
     assert url is not None, "padt demo printed no URL"
+    assert password is not None, "padt demo printed no administrator password"
     assert time.monotonic() - started < 60
     try:
-        yield url
+        yield Demo(url, password)
     finally:
         process.send_signal(signal.SIGINT)  # Ctrl-C
         assert process.wait(timeout=15) == 0
 
 
-def text_of(page: Page, selector: str) -> str:
-    return page.locator(selector).inner_text(timeout=20_000)
-
-
-def wait_for_text(page: Page, selector: str, wanted: str, timeout_s: float = 15) -> None:
-    deadline = time.monotonic() + timeout_s
-    while text_of(page, selector) != wanted:
-        assert time.monotonic() < deadline, f"{selector} never showed {wanted!r}"
-        time.sleep(0.1)
+def _group(pattern: re.Pattern[str], line: str) -> str | None:
+    match = pattern.search(line)
+    return match.group(1) if match else None
 
 
 def level(page: Page) -> int:
-    return int(text_of(page, '[data-var="TankControl.level"]'))
+    return int(value(page, "TankControl.level"))
 
 
-def cycle(page: Page) -> int:
-    return int(text_of(page, '[data-testid="resource-cycle"]'))
+def shoot(page: Page, name: str) -> None:
+    if "PADT_SHOTS" in os.environ:  # for a person to look at
+        page.screenshot(path=str(Path(os.environ["PADT_SHOTS"]) / f"{name}.png"))
 
 
-def test_run_stop_step_start_in_the_browser(demo_url: str) -> None:
+def test_an_anonymous_browser_reaches_no_control(demo: Demo) -> None:
     with chromium() as browser:
         page = browser.new_page()
-        page.goto(demo_url)
+        page.goto(demo.url)
+        page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+        log_in(page, "admin", "not-the-password")
+        wait_for_text(page, '[data-testid="login-message"]', "unknown user or wrong password")
+        for control in ("Start", "Stop", "Step resource", "Log out"):
+            assert page.get_by_role("button", name=control, exact=True).count() == 0
+        assert page.get_by_role("tab").count() == 0
+        assert page.locator("[data-var]").count() == 0
+
+
+def test_log_in_stop_step_start_freeze_and_log_out(demo: Demo) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(demo.url)
+        page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+        log_in(page, "admin", demo.password)
+        wait_for_text(page, '[data-testid="user"]', "admin")
+        # before the resource login, the commands are greyed out and say why
+        disabled = text_of(page, '[data-testid="commands-disabled"]')
+        assert "log in to the resource first" in disabled
+        assert not button_enabled(page, "Stop")
+        log_in_to_resource(page, "admin", demo.password)
         wait_for_text(page, '[data-testid="resource-state"]', "RUN", timeout_s=30)
         assert re.fullmatch(r"[0-9A-F]{8}", text_of(page, '[data-testid="resource-crc"]'))
-        first = level(page)
-        deadline = time.monotonic() + 10
-        while level(page) == first:
-            assert time.monotonic() < deadline, "the level never changed in RUN"
-            time.sleep(0.1)
+        shoot(page, "resources")
 
-        page.get_by_role("button", name="Stop").click()
+        page.get_by_role("button", name="Stop", exact=True).click()
+        confirm(page, "Tank1")
         wait_for_text(page, '[data-testid="resource-state"]', "STOP/VALID CONFIGURATION")
+
+        page.get_by_role("tab", name="Online test").click()
         time.sleep(0.5)  # let the last values of RUN arrive
         frozen_level, frozen_cycle = level(page), cycle(page)
-        pump = text_of(page, '[data-var="TankControl.pump"]') == "TRUE"
+        pump = value(page, "TankControl.pump") == "TRUE"
         time.sleep(1.0)
         assert (level(page), cycle(page)) == (frozen_level, frozen_cycle)
+        shoot(page, "online-test")
 
-        page.get_by_role("button", name="Step").click()
-        deadline = time.monotonic() + 10
-        while cycle(page) == frozen_cycle:
-            assert time.monotonic() < deadline, "Step did not run a cycle"
-            time.sleep(0.05)
+        page.get_by_role("tab", name="Single step").click()
+        page.get_by_role("button", name="Step resource").click()
+        wait_until("Step resource ran a cycle", lambda: cycle(page) != frozen_cycle)
         assert cycle(page) == frozen_cycle + 1
-        assert level(page) == frozen_level + (8 if pump else 0) - 3  # exactly one cycle
-        if "PADT_SHOTS" in os.environ:  # for a person to look at
-            page.screenshot(path=str(Path(os.environ["PADT_SHOTS"]) / "demo-step.png"))
+        page.get_by_role("tab", name="Online test").click()
+        wait_until(
+            "the level of exactly one more cycle is shown",
+            lambda: level(page) == frozen_level + (8 if pump else 0) - 3,
+        )
 
-        page.get_by_role("button", name="Start").click()
+        page.get_by_role("tab", name="Resources").click()
+        page.get_by_role("button", name="Start", exact=True).click()
+        confirm(page, "Tank1")
         wait_for_text(page, '[data-testid="resource-state"]', "RUN")
-        stepped = cycle(page)
-        deadline = time.monotonic() + 10
-        while cycle(page) < stepped + 3:
-            assert time.monotonic() < deadline, "the resource did not run again"
-            time.sleep(0.1)
+
+        # one program frozen and stepped while the resource runs on
+        page.get_by_role("tab", name="Single step").click()
+        assert "freeze TankControl first" in text_of(page, '[data-testid="step-disabled"]')
+        page.get_by_role("button", name="Freeze", exact=True).click()
+        confirm(page, "TankControl")
+        wait_for_text(page, '[data-step="Program state"]', "RUN_FREEZE")
+        program_cycles = int(text_of(page, '[data-step="Program cycles"]'))
+        page.get_by_role("button", name="Step", exact=True).click()
+        wait_for_text(page, '[data-step="Program cycles"]', str(program_cycles + 1))
+        shoot(page, "single-step")
+        page.get_by_role("button", name="Unfreeze", exact=True).click()
+        wait_for_text(page, '[data-step="Program state"]', "RUN")
+
+        page.get_by_role("button", name="Log out").click()
+        page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=20_000)
+        assert page.get_by_role("button", name="Stop", exact=True).count() == 0

@@ -1,0 +1,160 @@
+"""The Resources screen: every resource on the router with its state, configuration CRC,
+cycle statistics and programs; and the commands of the selected resource (Start, Stop,
+Cold start, Init; each program's Start and Stop), each confirmed, each disabled with the
+reason when the user's levels do not allow it."""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import viser
+
+from frontend.permissions import Allowed
+from runtime.contract import protocol as p
+
+COMMANDS: tuple[tuple[str, type[p.Command[p.StatusReply]], str], ...] = (
+    ("Start", p.Start, "start the resource (RUN)"),
+    ("Stop", p.Stop, "stop the resource: its outputs go to their safe values"),
+    ("Cold start", p.ColdStart, "set every variable to its initial value (in STOP)"),
+    ("Init", p.Init, "leave ERROR STOP for STOP (a cold start follows)"),
+)
+_CELL = "padding:3px 8px;border-bottom:1px solid #e9ecef;white-space:nowrap"
+STATE_COLORS = {"RUN": "#2b8a3e", "ERROR STOP": "#c92a2a"}
+
+
+@dataclass
+class ResourcesScreen:
+    table: viser.GuiHtmlHandle
+    buttons: dict[type[p.Command[p.StatusReply]], viser.GuiButtonHandle]
+    program: viser.GuiDropdownHandle[str]
+    program_buttons: dict[type[p.StartProgram | p.StopProgram], viser.GuiButtonHandle]
+    reason: viser.GuiHtmlHandle
+    shown: str = ""
+    shown_reason: str = ""
+
+
+def build(
+    gui: viser.GuiApi,
+    act: Callable[[str, p.Command[p.StatusReply], str], None],
+    selected: Callable[[], str | None],
+) -> ResourcesScreen:
+    """`act(label, command, what)` asks the user and sends the command to `selected()`."""
+    table = gui.add_html("")
+    buttons: dict[type[p.Command[p.StatusReply]], viser.GuiButtonHandle] = {}
+    with gui.add_folder("Commands of the selected resource"):
+        for label, command, what in COMMANDS:
+            button = gui.add_button(label, disabled=True)
+            buttons[command] = button
+
+            def clicked(
+                _: Any, command: Any = command, label: str = label, what: str = what
+            ) -> None:
+                act(label, command(), what)
+
+            button.on_click(clicked)
+        program = gui.add_dropdown("Program", ("-",))
+        program_buttons: dict[type[p.StartProgram | p.StopProgram], viser.GuiButtonHandle] = {}
+        for label, kind in (("Start program", p.StartProgram), ("Stop program", p.StopProgram)):
+            button = gui.add_button(label, disabled=True)
+            program_buttons[kind] = button
+
+            def program_clicked(_: Any, kind: Any = kind, label: str = label) -> None:
+                name = program.value
+                act(label, kind(name), f"{label.lower()} {name} of {selected()}")
+
+            button.on_click(program_clicked)
+        reason = gui.add_html("")
+    return ResourcesScreen(table, buttons, program, program_buttons, reason)
+
+
+def refresh(
+    screen: ResourcesScreen,
+    online: list[tuple[str, p.Status | None]],
+    selected: str | None,
+    allowed: Callable[[type[p.Command[Any]]], Allowed],
+) -> None:
+    page = render(online, selected)
+    if page != screen.shown:
+        screen.table.content = page
+        screen.shown = page
+    reasons: list[str] = []
+    for command, button in [*screen.buttons.items(), *screen.program_buttons.items()]:
+        verdict = allowed(command) if selected is not None else Allowed(False, "no resource")
+        button.disabled = not verdict.ok
+        button.hint = verdict.reason or None
+        if verdict.reason and verdict.reason not in reasons:
+            reasons.append(verdict.reason)
+    # a tooltip alone is missed: say beside the buttons why they are greyed out
+    note = _disabled_note(reasons)
+    if note != screen.shown_reason:
+        screen.reason.content = note
+        screen.shown_reason = note
+    status = dict(online).get(selected) if selected is not None else None
+    programs = tuple(x.name for x in status.programs) if status is not None else ("-",)
+    if tuple(screen.program.options) != programs:
+        screen.program.options = programs
+
+
+def _disabled_note(reasons: list[str]) -> str:
+    if not reasons:
+        return ""
+    text = "; ".join(html.escape(reason) for reason in reasons)
+    return f'<div data-testid="commands-disabled" style="color:#868e96">Disabled: {text}</div>'
+
+
+def render(online: list[tuple[str, p.Status | None]], selected: str | None) -> str:
+    head = "".join(
+        f'<th style="{_CELL};text-align:left">{name}</th>'
+        for name in ("Resource", "State", "CRC", "Cycle", "Last", "Min", "Max", "Mean",
+                     "Jitter", "Overruns", "Programs")
+    )  # fmt: skip
+    rows = [_row(name, status, name == selected) for name, status in online]
+    if not rows:
+        rows = [f'<tr><td style="{_CELL}" colspan="11">No resource is online.</td></tr>']
+    return (
+        '<div style="overflow-x:auto"><table data-testid="resources" '
+        f'style="font-size:0.85em;border-collapse:collapse"><tr>{head}</tr>{"".join(rows)}'
+        "</table></div>"
+    )
+
+
+def _row(name: str, status: p.Status | None, selected: bool) -> str:
+    weight = "font-weight:600;" if selected else ""
+    cells = [
+        f'<td style="{_CELL};{weight}" data-resource="{html.escape(name)}">{html.escape(name)}</td>'
+    ]
+    if status is None:
+        note = "log in to the resource to see its state"
+        return "".join(cells) + f'<td style="{_CELL};color:#868e96" colspan="10">{note}</td>'
+    stats = status.stats
+    color = STATE_COLORS.get(status.state, "#e67700")
+    cells += [
+        f'<td style="{_CELL};color:{color};font-weight:600" data-state="{html.escape(name)}">'
+        f"{html.escape(status.state)}</td>",
+        f'<td style="{_CELL};font-family:monospace">{html.escape(status.crc or "-")}</td>',
+        f'<td style="{_CELL};text-align:right">{status.cycle}</td>',
+        *(
+            f'<td style="{_CELL};text-align:right">{value:.3f} ms</td>'
+            for value in (
+                stats.last_ms,
+                stats.min_ms,
+                stats.max_ms,
+                stats.mean_ms,
+                stats.jitter_max_ms,
+            )
+        ),
+        f'<td style="{_CELL};text-align:right">{stats.overruns}</td>',
+        f'<td style="{_CELL}">{_programs(status)}</td>',
+    ]
+    return f"<tr>{''.join(cells)}</tr>"
+
+
+def _programs(status: p.Status) -> str:
+    return ", ".join(
+        f'<span data-program="{html.escape(x.name)}">{html.escape(x.name)}: '
+        f"{html.escape(x.state)}</span>"
+        for x in status.programs
+    )

@@ -1,0 +1,16 @@
+"""What every browser of one UI server shares: the resources on the bus, the PADT accounts
+the users log in with, and the router's address (shown in the status bar)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from backend.engineering.padt_accounts import PadtAccounts
+from backend.engineering.resource_directory import ResourceDirectory
+
+
+@dataclass(frozen=True)
+class UiContext:
+    directory: ResourceDirectory
+    accounts: PadtAccounts
+    router: str

@@ -1,0 +1,73 @@
+"""What a user does in the PADT's browser UI, as Playwright steps: fill a field, log in,
+pick a tab, confirm a modal, read what a screen shows."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from playwright.sync_api import Locator, Page
+
+WAIT_S = 20
+
+
+def field(page: Page, label: str) -> Locator:
+    """A viser text input by its label (viser does not link the two for the browser)."""
+    return page.locator(f"div:has(> div > p > label:text-is('{label}')) input").first
+
+
+def text_of(page: Page, selector: str) -> str:
+    return page.locator(selector).first.inner_text(timeout=WAIT_S * 1000)
+
+
+def wait_until(what: str, check: Callable[[], bool], timeout_s: float = WAIT_S) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not check():
+        assert time.monotonic() < deadline, f"never: {what}"
+        time.sleep(0.1)
+
+
+def wait_for_text(page: Page, selector: str, wanted: str, timeout_s: float = WAIT_S) -> None:
+    wait_until(f"{selector} shows {wanted!r}", lambda: text_of(page, selector) == wanted, timeout_s)
+
+
+def log_in(page: Page, user: str, password: str) -> None:
+    field(page, "User").fill(user)
+    field(page, "Password").fill(password)
+    page.get_by_role("button", name="Log in", exact=True).click()
+
+
+def log_in_to_resource(page: Page, user: str, password: str) -> None:
+    page.get_by_role("button", name="Log in to resource").wait_for(timeout=WAIT_S * 1000)
+    field(page, "User").fill(user)
+    field(page, "Password").fill(password)
+    page.get_by_role("button", name="Log in to resource").click()
+    wait_until(
+        "the resource login is shown",
+        lambda: text_of(page, '[data-testid="resource-login"]').startswith("logged in"),
+    )
+
+
+def confirm(page: Page, names: str) -> None:
+    """Check the confirmation says what it is about, then press its OK."""
+    dialog = page.get_by_role("dialog")
+    dialog.wait_for(timeout=WAIT_S * 1000)
+    assert names in dialog.inner_text(), dialog.inner_text()
+    dialog.get_by_role("button", name="OK").click()
+    dialog.wait_for(state="detached", timeout=WAIT_S * 1000)
+
+
+def state(page: Page) -> str:
+    return text_of(page, '[data-testid="resource-state"]')
+
+
+def cycle(page: Page) -> int:
+    return int(text_of(page, '[data-testid="resource-cycle"]'))
+
+
+def value(page: Page, variable: str) -> str:
+    return text_of(page, f'[data-var="{variable}"]')
+
+
+def button_enabled(page: Page, name: str) -> bool:
+    return page.get_by_role("button", name=name, exact=True).first.is_enabled()
