@@ -24,13 +24,7 @@ from runtime.contract.artifact import UserAccount
 from runtime.contract.refusal import Refusal
 from tests.conftest import free_port
 from tests.support.browser import chromium
-from tests.support.runtime_process import (
-    client_session,
-    router,
-    runtime_process,
-    store_artifact,
-    wait_until_answering,
-)
+from tests.support.runtime_process import running_resource, store_artifact
 from tests.ui.browser_steps import (
     button_enabled,
     log_in,
@@ -70,13 +64,8 @@ def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
             UserAccount("guest", "read-only", verifier),
         ),
     )
-    with (
-        router(zenoh_endpoint),
-        runtime_process("Tank1", tmp_path, zenoh_endpoint),
-        client_session(zenoh_endpoint) as session,
-    ):
-        client = ResourceClient(session, "Tank1")
-        wait_until_answering(client)
+    with running_resource("Tank1", tmp_path, zenoh_endpoint) as (_, client):
+        session = client.session
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
         context = UiContext(ResourceDirectory(session), accounts, zenoh_endpoint)
         ui = PadtUi(context, port=free_port())
