@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from backend.compiler.checks.expressions import check_expression
 from backend.compiler.checks.initializers import check_constant_initializer, check_initializer
-from backend.compiler.checks.nesting import check_nesting
 from backend.compiler.checks.sfc import check_sfc
 from backend.compiler.checks.statements import check_block
 from backend.compiler.codes import Code
@@ -42,13 +41,8 @@ def check(resolved: Resolved) -> list[Diagnostic]:
                 variable.kind != "VAR_INPUT" or variable.type != BOOL
             ):
                 scope.report(variable.pos, Code.EDGE_INPUT, f"{variable.edge} needs a BOOL input")
-        if not check_nesting(scope, pou.pou.body):
-            diagnostics.extend(scope.diagnostics)  # too deep to type: stop at the limit
-            continue
         check_block(scope, pou.pou.body, loop_depth=0)
         if pou.pou.sfc is not None:
-            for action in pou.pou.sfc.actions:
-                check_nesting(scope, action.body)
             check_sfc(scope, pou.pou.sfc)
         diagnostics.extend(scope.diagnostics)
     return diagnostics

@@ -138,3 +138,7 @@ class Code(Enum):
     VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array"
     STATEMENT_DEPTH = "E0705", "statements nested too deep"
     EXPRESSION_DEPTH = "E0706", "expression nested too deep"
+    FILE_SIZE = "E0707", "source file too large"
+    PROJECT_SIZE = "E0708", "project too large"
+    LITERAL_LENGTH = "E0709", "literal too long"
+    DATA_DEPTH = "E0711", "data types nested too deep"

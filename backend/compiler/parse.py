@@ -10,6 +10,7 @@ import datetime
 import fractions
 import functools
 import re
+from dataclasses import dataclass
 from importlib import resources
 from typing import Any
 
@@ -25,6 +26,14 @@ from lark.exceptions import (
 from backend.compiler import ast
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
+from backend.compiler.limits import (
+    MAX_DATA_DEPTH,
+    MAX_EXPRESSION_DEPTH,
+    MAX_NUMBER_LITERAL,
+    MAX_PROJECT_TOKENS,
+    MAX_STATEMENT_DEPTH,
+    MAX_STRING_LITERAL,
+)
 from backend.compiler.source import Pos
 
 _UNIT_NS = {
@@ -165,6 +174,19 @@ def _source_char(ch: str, wide: bool) -> str:
     return ch.encode("utf-8").decode("latin-1")
 
 
+# The longest literal of each kind, as written (strings between their quotes), and what a
+# longer one is read as. CPython refuses integers of more than 4,300 digits.
+_LITERAL_LIMITS = {
+    "INTEGER": (MAX_NUMBER_LITERAL, "0"),
+    "BASED_INTEGER": (MAX_NUMBER_LITERAL, "2#0"),
+    "REAL_NUMBER": (MAX_NUMBER_LITERAL, "0.0"),
+    "TIME_LITERAL": (MAX_NUMBER_LITERAL, "T#0s"),
+    "DATE_LITERAL": (MAX_NUMBER_LITERAL, "D#1970-01-01"),
+    "STRING_LITERAL": (MAX_STRING_LITERAL, "''"),
+    "WSTRING_LITERAL": (MAX_STRING_LITERAL, '""'),
+}
+
+
 def _children(tree: Tree[Any]) -> list[Any]:
     """A transformed node's children: AST nodes by now, which lark's types cannot know."""
     return list(tree.children)
@@ -184,10 +206,34 @@ class _ToAst(Transformer[Token, Any]):
         return Pos(self.file, item.meta.line, item.meta.column)
 
     # ---- literals
+    def _literal(self, token: Token) -> Token:
+        """A literal token as written; one too long is reported and read as a harmless
+        stand-in, so that the rest of the file is still checked."""
+        limit, stand_in = _LITERAL_LIMITS[token.type]
+        quoted = token.type in ("STRING_LITERAL", "WSTRING_LITERAL")
+        length = len(token) - 2 if quoted else len(token)
+        if length <= limit:
+            return token
+        message = f"literal of {length:,} characters; at most {limit:,}"
+        self.errors.append(Diagnostic.at(self._pos(token), Code.LITERAL_LENGTH, message))
+        return Token.new_borrow_pos(token.type, stand_in, token)
+
+    # lark passes every token of these terminals through `_literal` before the rules see it
+    INTEGER = BASED_INTEGER = REAL_NUMBER = TIME_LITERAL = DATE_LITERAL = _literal
+    STRING_LITERAL = WSTRING_LITERAL = _literal
+
+    def _integer(self, token: Token) -> int:
+        value = parse_int_literal(str(token))
+        try:
+            float(value)  # REAL#n and n in REAL arithmetic become floats
+        except OverflowError:
+            raise ValueError("a number beyond the range of LREAL") from None
+        return value
+
     def int_literal(self, items: list[Token]) -> ast.IntLiteral:
         token = items[0]
         based = token.type == "BASED_INTEGER"
-        return ast.IntLiteral(parse_int_literal(str(token)), self._pos(token), based=based)
+        return ast.IntLiteral(self._integer(token), self._pos(token), based=based)
 
     def real_literal(self, items: list[Token]) -> ast.RealLiteral:
         text = str(items[0]).replace("_", "")
@@ -226,7 +272,7 @@ class _ToAst(Transformer[Token, Any]):
         negative = len(rest) == 2
         token = rest[-1]
         if token.type in ("INTEGER", "BASED_INTEGER"):
-            value = parse_int_literal(str(token))
+            value = self._integer(token)
             based = token.type == "BASED_INTEGER"
             return ast.IntLiteral(-value if negative else value, pos, type_name, based)
         if token.type == "REAL_NUMBER":
@@ -641,13 +687,94 @@ def _describe(terminal: str) -> str:
     return terminal.lower().replace("_", " ")
 
 
-def parse_source(file: str, text: str) -> ast.SourceUnit:
-    """Parse one ST file. Raises `CompileError` with a `file:line:col` diagnostic."""
-    _PRAGMAS.clear()
+@dataclass
+class TokenBudget:
+    """The tokens a project may still have: each file parsed takes its own, also when it
+    turns out to be wrong, since they cost time all the same."""
+
+    left: int = MAX_PROJECT_TOKENS
+
+    @property
+    def spent(self) -> bool:
+        return self.left < 0
+
+
+def _tree(file: str, text: str, budget: TokenBudget) -> Tree[Token]:
+    """The parse tree; parsing stops at the first token beyond the budget."""
+    parser = _parser().parse_interactive(text)
+    last: Token | None = None
     try:
-        tree = _parser().parse(text)
+        for last in parser.iter_parse():
+            budget.left -= 1
+            if budget.spent:
+                where = Pos(file, last.line or 1, last.column or 1)
+                message = f"the project has more than {MAX_PROJECT_TOKENS:,} tokens"
+                raise CompileError([Diagnostic.at(where, Code.PROJECT_SIZE, message)])
+        end = Token("$END", "", 0, 1, 1) if last is None else Token.new_borrow_pos("$END", "", last)
+        tree: Tree[Token] = parser.feed_token(end)
     except UnexpectedInput as exc:
+        exc.interactive_parser = parser  # as Lark.parse does: it tells what was expected
         raise CompileError([_syntax_diagnostic(file, exc)]) from None
+    return tree
+
+
+# What the nesting limits count, in the parse tree: the walkers of the AST recurse, so a
+# tree too deep for them never becomes one.
+_BLOCKS = frozenset(
+    {"if_statement", "case_statement", "while_statement", "repeat_statement", "for_statement"}
+)
+_STATEMENTS = _BLOCKS | {
+    "assignment", "call_statement", "return_statement", "exit_statement",
+    "continue_statement", "empty_statement",
+}  # fmt: skip
+_OPERATIONS = frozenset({
+    "binary", "unary", "member_ref", "index_ref", "bit_ref", "deref", "call", "keyword_call",
+    "method_call", "array_initializer", "struct_initializer",
+})  # fmt: skip
+_OPERANDS = frozenset({
+    "name_ref", "direct_ref", "int_literal", "real_literal", "time_literal", "date_literal",
+    "bool_literal", "string_literal", "wstring_literal", "typed_literal", "enum_literal",
+})  # fmt: skip
+
+
+def _nesting_problem(file: str, tree: Tree[Token]) -> Diagnostic | None:
+    """The first place, in source order, where statements, an expression or array types
+    nest too deep. A statement counts the blocks around it, and itself; an expression its
+    operations (calls, indices and members included) and the operand at the end."""
+    pending: list[tuple[Tree[Token], int, int, int]] = [(tree, 0, 0, 0)]
+    while pending:
+        node, blocks, operations, arrays = pending.pop()
+        kind = node.data
+        found: tuple[Code, str] | None = None
+        if kind in _STATEMENTS and blocks + 1 > MAX_STATEMENT_DEPTH:
+            found = Code.STATEMENT_DEPTH, f"statements nested deeper than {MAX_STATEMENT_DEPTH}"
+        blocks += 1 if kind in _BLOCKS else 0
+        operations += 1 if kind in _OPERATIONS else 0
+        if operations + (1 if kind in _OPERANDS else 0) > MAX_EXPRESSION_DEPTH:
+            found = Code.EXPRESSION_DEPTH, f"expression nested deeper than {MAX_EXPRESSION_DEPTH}"
+        arrays += 1 if kind == "array_type" else 0
+        if arrays > MAX_DATA_DEPTH:
+            found = Code.DATA_DEPTH, f"array types nested deeper than {MAX_DATA_DEPTH}"
+        if found is not None:
+            meta = node.meta
+            where = Pos(file, 1, 1) if meta.empty else Pos(file, meta.line, meta.column)
+            return Diagnostic.at(where, *found)
+        pending.extend(
+            (child, blocks, operations, arrays)
+            for child in reversed(node.children)
+            if isinstance(child, Tree)
+        )
+    return None
+
+
+def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast.SourceUnit:
+    """Parse one ST file, taking its tokens from the project's `budget`. Raises
+    `CompileError` with a `file:line:col` diagnostic."""
+    _PRAGMAS.clear()
+    tree = _tree(file, text, budget or TokenBudget())
+    too_deep = _nesting_problem(file, tree)
+    if too_deep is not None:
+        raise CompileError([too_deep])
     transformer = _ToAst(file)
     try:
         items = transformer.transform(tree)

@@ -26,9 +26,9 @@ from backend.compiler.generate import (
     struct_class,
 )
 from backend.compiler.infer import is_external
-from backend.compiler.parse import parse_source
+from backend.compiler.parse import TokenBudget, parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
-from backend.compiler.source import Pos, SourceFile, stdlib_sources
+from backend.compiler.source import Pos, ProjectSize, SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
 from runtime.contract.accounts import account_problems
 from runtime.contract.artifact import (
@@ -67,23 +67,35 @@ class CompileResult:
         return {"ok": self.ok, "diagnostics": [d.as_json() for d in self.diagnostics], "crc": crc}
 
 
-# Python frames of the parser and the tree walkers; deep ST is limited by the nesting
-# rules of the check stage long before this (see checks/nesting.py). Set once, when the
+# Python frames of the parser and the tree walkers; deep ST is refused by the nesting
+# limits of the parse stage long before this (see limits.py). Set once, when the
 # compiler is imported.
 RECURSION_LIMIT = 20_000
 sys.setrecursionlimit(max(sys.getrecursionlimit(), RECURSION_LIMIT))
 
 
 def parse_all(sources: list[SourceFile]) -> tuple[list[ast.SourceUnit], list[Diagnostic]]:
+    """Every file of a project parsed, within the limits of size: a file too large is left
+    out, and once the project is too large nothing more is parsed."""
     units: list[ast.SourceUnit] = []
     diagnostics: list[Diagnostic] = []
+    budget = TokenBudget()
+    size = ProjectSize()
     for source in sources:
+        problem = size.add(source.text)
+        if problem is not None:
+            diagnostics.append(Diagnostic.at(Pos(source.name, 1, 1), *problem))
+            if size.exceeded:
+                break
+            continue
         try:
-            unit = parse_source(source.name, source.text)
+            unit = parse_source(source.name, source.text, budget)
             units.append(unit)
             diagnostics.extend(unit.warnings)
         except CompileError as exc:
             diagnostics.extend(exc.diagnostics)
+        if budget.spent:
+            break
     return units, diagnostics
 
 

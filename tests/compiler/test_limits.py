@@ -6,6 +6,7 @@ that needs more fails the test) and within the 10 s the hardening issue allows.
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -15,18 +16,19 @@ from tests.conftest import REPO
 MEMORY_CAP = 1 << 30
 SECONDS = 10
 
-# The child compiles what it reads on stdin, as one file, and prints one JSON line; it
-# caps its own address space before importing the compiler.
+# The child caps its own address space before it imports the compiler, then compiles each
+# project it reads (JSON on stdin: a list of projects, each a list of [name, text] files)
+# and prints one JSON line per project.
 CHILD = f"""
 import json, resource, sys, time
 resource.setrlimit(resource.RLIMIT_AS, ({MEMORY_CAP}, {MEMORY_CAP}))
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-text = sys.stdin.read()
-start = time.monotonic()
-result = compile_sources([SourceFile("big.st", text)])
-seconds = time.monotonic() - start
-print(json.dumps({{"seconds": seconds, "diagnostics": [str(d) for d in result.diagnostics]}}))
+for files in json.load(sys.stdin):
+    start = time.monotonic()
+    result = compile_sources([SourceFile(name, text) for name, text in files])
+    seconds = time.monotonic() - start
+    print(json.dumps({{"seconds": seconds, "diagnostics": [str(d) for d in result.diagnostics]}}))
 """
 
 
@@ -39,36 +41,114 @@ class Outcome:
         return {d.rsplit("[", 1)[-1].rstrip("]") for d in self.diagnostics}
 
 
-def compile_capped(text: str) -> Outcome:
-    """Compile `text` in a capped child; any traceback or crash fails the test."""
+Project = str | list[tuple[str, str]]  # one file, big.st, or named files
+
+
+def compile_capped(*projects: Project) -> list[Outcome]:
+    """Compile each project in a capped child; any traceback or crash fails the test, and
+    so does a compile of 10 s or more."""
+    files = [[("big.st", p)] if isinstance(p, str) else p for p in projects]
     run = subprocess.run(
         [sys.executable, "-c", CHILD],
-        input=text,
+        input=json.dumps(files),
         capture_output=True,
         text=True,
         cwd=REPO,
-        timeout=60,
+        timeout=120,
     )
     assert run.returncode == 0 and "Traceback" not in run.stderr, run.stderr[-2000:]
-    found = json.loads(run.stdout)
-    outcome = Outcome(found["seconds"], found["diagnostics"])
-    assert outcome.seconds < SECONDS, outcome
-    return outcome
+    outcomes = [Outcome(**json.loads(line)) for line in run.stdout.splitlines()]
+    assert len(outcomes) == len(projects)
+    for outcome in outcomes:
+        assert outcome.seconds < SECONDS, outcome
+    return outcomes
+
+
+def refused_with(code: str, *projects: Project) -> None:
+    """Each project compiles to an error with `code`, at a `file:line:col`."""
+    for outcome in compile_capped(*projects):
+        found = [d for d in outcome.diagnostics if d.endswith(f" [{code}]")]
+        assert found and ": error: " in found[0], outcome.diagnostics[:5]
+        assert re.match(r"[^:]+:[1-9][0-9]*:[1-9][0-9]*: ", found[0]), found[0]
 
 
 def program(body: str, declarations: str = "x : DINT;") -> str:
     return f"PROGRAM P\nVAR {declarations} END_VAR\n{body}\nEND_PROGRAM\n"
 
 
-# ---- comments and literals cost memory in proportion to their size, not more ----------------
+# ---- source size --------------------------------------------------------------------------
+
+MiB = 1 << 20
 
 
-def test_a_50_mb_comment_compiles_in_little_memory() -> None:
-    for opening, closing in (("(*", "*)"), ("/*", "*/"), ("{{", "}}")):
-        outcome = compile_capped(opening + "x\n" * 25_000_000 + closing + program("x := 1;"))
-        assert "E0001" not in outcome.codes(), outcome
+def comment(size: int, opening: str = "(*", closing: str = "*)") -> str:
+    """A comment of exactly `size` bytes, in lines of 64."""
+    inner = size - len(opening) - len(closing)
+    return opening + ("x" * 63 + "\n") * (inner // 64) + "x" * (inner % 64) + closing
 
 
-def test_a_string_literal_of_a_million_escapes_lexes_in_little_memory() -> None:
-    outcome = compile_capped(program("s := '" + "$$" * 1_000_000 + "';", "s : STRING;"))
-    assert "E0001" not in outcome.codes(), outcome
+def test_comments_cost_only_their_bytes() -> None:
+    """The largest project of comments: four files of 4 MiB, each kind of comment."""
+    files = [
+        (f"part{i}.st", comment(4 * MiB - 100, opening, closing))
+        for i, (opening, closing) in enumerate((("(*", "*)"), ("/*", "*/"), ("{{", "}}")))
+    ]
+    (outcome,) = compile_capped([*files, ("main.st", program("x := 1;"))])
+    assert not [d for d in outcome.diagnostics if ": error: " in d], outcome.diagnostics
+
+
+def test_a_file_larger_than_4_mib_is_refused() -> None:
+    refused_with("E0707", comment(4 * MiB + 1) + program("x := 1;"), comment(50 * MiB))
+
+
+def test_a_project_beyond_16_mib_2000_files_or_200000_tokens_is_refused() -> None:
+    refused_with(
+        "E0708",
+        [(f"part{i}.st", comment(4 * MiB - 100)) for i in range(5)],
+        [(f"pou{i}.st", f"FUNCTION F{i} : INT END_FUNCTION\n") for i in range(2_001)],
+        program("x := x + 1;\n" * 40_000),
+        program(";" * 1_000_000),
+        [(f"part{i}.st", program("x := x + 1;\n" * 20_000)) for i in range(3)],
+    )
+
+
+def test_a_project_just_within_its_token_limit_compiles_in_time() -> None:
+    """The densest source the limits allow, close to 200,000 tokens."""
+    body = "x := x + 1;\n" * 33_000  # 6 tokens each
+    (outcome,) = compile_capped(program(body))
+    assert not outcome.diagnostics, outcome.diagnostics[:3]
+
+
+# ---- literals ------------------------------------------------------------------------------
+
+
+def test_literals_beyond_their_length_are_refused() -> None:
+    refused_with(
+        "E0709",
+        program("s := '" + "$$" * 1_000_000 + "';", "s : STRING;"),  # lexed in little memory
+        program('s := "' + "x" * 65_536 + '";', "s : WSTRING;"),
+        program("s := STRING#'" + "x" * 65_536 + "';", "s : STRING;"),
+        program("x := " + "9" * 100_000 + ";", "x : LINT;"),
+        program("x := 16#" + "F" * 5_000 + ";", "x : LWORD;"),
+        program("x := 1." + "9" * 1_000_000 + ";", "x : LREAL;"),
+        program("x := T#" + "9" * 100_000 + "ms;", "x : TIME;"),
+        program("x := D#" + "1" * 2_000 + "-1-1;", "x : DATE;"),
+    )
+
+
+def test_literals_within_their_length_compile() -> None:
+    (outcome,) = compile_capped(
+        program(
+            "s := '" + "x" * 65_535 + "'; x := " + "1" * 300 + " + 0.5;", "s : STRING; x : LREAL;"
+        )
+    )
+    assert not outcome.diagnostics, outcome.diagnostics
+
+
+def test_an_integer_beyond_lreal_is_an_invalid_literal() -> None:
+    refused_with(
+        "E0003",
+        program("x := 1" + "0" * 400 + " + 1.0;", "x : LREAL;"),
+        program("x := REAL#1" + "0" * 400 + ";", "x : REAL;"),
+        program("x := 16#1" + "0" * 256 + ";", "x : LREAL;"),
+    )

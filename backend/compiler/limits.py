@@ -1,0 +1,30 @@
+"""The compiler's limits, each reported as an error with its own code (docs/language.md,
+"Limits", gives the figures; docs/diagnostics.md the codes).
+
+They are chosen so that compiling any input stays within about 1 GB of memory and 10 s,
+and that what compiles can be loaded and run by a resource, while real programs (OSCAT, the
+IEC and rusty test corpora) stay far below them.
+"""
+
+from __future__ import annotations
+
+MiB = 1 << 20
+
+# Source: compile time grows with the tokens (about 30 µs each at worst); comments and white
+# space cost only their bytes.
+MAX_FILE_BYTES = 4 * MiB
+MAX_PROJECT_BYTES = 16 * MiB
+MAX_PROJECT_FILES = 2_000
+MAX_PROJECT_TOKENS = 200_000
+
+# Nesting: CPython's parser allows 200 levels of parentheses and 100 of indentation in the
+# generated code, and one ST level can cost up to three of the first and two of the second.
+MAX_STATEMENT_DEPTH = 40
+MAX_EXPRESSION_DEPTH = 60
+# Arrays of arrays, structures and function blocks holding others: generated code nests as
+# deep, and so do copying and instantiating in a resource.
+MAX_DATA_DEPTH = 32
+
+# Literals, as written between their quotes or as their characters.
+MAX_STRING_LITERAL = 65_535
+MAX_NUMBER_LITERAL = 1_000
