@@ -10,7 +10,11 @@ pipeline once the user programs are known.
 from __future__ import annotations
 
 from backend.compiler.checks.expressions import check_expression
-from backend.compiler.checks.initializers import check_constant_initializer, check_initializer
+from backend.compiler.checks.initializers import (
+    check_constant_initializer,
+    check_initializer,
+    declaration_order,
+)
 from backend.compiler.checks.sfc import check_sfc
 from backend.compiler.checks.statements import check_block
 from backend.compiler.codes import Code
@@ -25,18 +29,20 @@ def check(resolved: Resolved) -> list[Diagnostic]:
     if resolved.pous:
         any_pou = resolved.sorted_pous()[0]
         global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}), check_expression)
+        order = declaration_order(resolved.globals)
         for variable in resolved.globals:
             check_initializer(global_scope, variable.type, variable.init)
-            check_constant_initializer(global_scope, variable)
+            check_constant_initializer(global_scope, variable, order)
         diagnostics.extend(global_scope.diagnostics)
     for pou in resolved.sorted_pous():
         if is_external(pou):
             continue
         scope = Scope(resolved, pou, check_expression)
+        order = declaration_order(pou.variables)
         for variable in pou.variables:
             if variable.kind != "VAR_GLOBAL":
                 check_initializer(scope, variable.type, variable.init)
-                check_constant_initializer(scope, variable)
+                check_constant_initializer(scope, variable, order)
             if variable.edge is not None and (
                 variable.kind != "VAR_INPUT" or variable.type != BOOL
             ):

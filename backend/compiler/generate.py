@@ -926,19 +926,20 @@ class _Chart:
             key=lambda item: (item[1].priority if item[1].priority is not None else 0, item[0]),
         )
         fired: list[tuple[str, ast.Transition]] = []
+        leaving: dict[str, list[int]] = {}  # step -> the transitions in `fired` from it
         for _, transition in ordered:
             flag = emitter.temp()
             sources = [
                 f"{emitter.var_code(_step_variable(scope, name))}.X" for name in transition.sources
             ]
-            blockers = [
-                other_flag
-                for other_flag, other in fired
-                if {key(n) for n in other.sources} & {key(n) for n in transition.sources}
-            ]
+            steps = {key(name) for name in transition.sources}
+            earlier = sorted({i for step in steps for i in leaving.get(step, [])})
+            blockers = [fired[i][0] for i in earlier]
             condition = emitter.exact(transition.condition).code
             terms = sources + [f"not {b}" for b in blockers] + [condition]
             emitter.emit(depth, f"{flag} = {' and '.join(terms)}")
+            for step in steps:
+                leaving.setdefault(step, []).append(len(fired))
             fired.append((flag, transition))
         for flag, transition in fired:
             for name in transition.sources:

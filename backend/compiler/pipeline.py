@@ -267,15 +267,15 @@ def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:
     return [ProgramConfig(name=p.name, pou=p.name, program_id=i) for i, p in enumerate(pous, 1)]
 
 
-def _fb_dependencies(resolved: Resolved, name: str) -> list[str]:
-    """The POU keys `name` needs, itself included, in a fixed order."""
-    seen: list[str] = []
-    stack = [name]
+def _fb_dependencies(resolved: Resolved, *names: str) -> list[str]:
+    """The POU keys `names` need, themselves included, sorted."""
+    seen: set[str] = set()
+    stack = list(names)
     while stack:
         current = stack.pop()
         if current in seen:
             continue
-        seen.append(current)
+        seen.add(current)
         for variable in resolved.pous[current].variables:
             stack.extend(_fb_types_in(resolved, variable.type))
     return sorted(seen)
@@ -298,11 +298,8 @@ def _fb_types_in(resolved: Resolved, t: Type) -> list[str]:
 def _included_pous(
     resolved: Resolved, user_pous: set[str], programs: list[ProgramConfig]
 ) -> list[str]:
-    wanted = sorted(user_pous) + [key(p.pou) for p in programs]
-    included: set[str] = set()
-    for name in wanted:
-        included.update(_fb_dependencies(resolved, name))
-    return sorted(name for name in included if not is_external(resolved.pous[name]))
+    included = _fb_dependencies(resolved, *sorted(user_pous), *(key(p.pou) for p in programs))
+    return [name for name in included if not is_external(resolved.pous[name])]
 
 
 def _unit_code(

@@ -122,6 +122,8 @@ class _TypeResolver:
         self.named: dict[str, Type | None] = {}
         self.in_progress: set[str] = set()
         self.global_constants: dict[str, ast.Initializer | None] = {}
+        # every enum value by key, as the first enum declared with it has it
+        self.enum_values: dict[str, int] = {}
         for unit in units:
             for pou in unit.pous:
                 self.pou_kinds.setdefault(key(pou.name), pou)
@@ -157,10 +159,7 @@ class _TypeResolver:
             if name in local_constants or name in self.global_constants:
                 init = local_constants.get(name, self.global_constants.get(name))
                 return fold_int(init, checked) if isinstance(init, ast.Expr) else None
-            for info in self.result.enums.values():
-                if name in info.values:
-                    return info.values[name][1]
-            return None
+            return self.enum_values.get(name)
 
         checked = guarded(leaf)
         return fold_int(expr, checked)
@@ -296,6 +295,8 @@ class _TypeResolver:
             info.values[key(value_name)] = (value_name, value)
             next_value = value + 1
         self.result.enums[key(name)] = info
+        for value_key, (_, value) in info.values.items():
+            self.enum_values.setdefault(value_key, value)
         return enum_type
 
     def _struct(self, spec: ast.StructSpec, name: str) -> Type | None:

@@ -63,7 +63,8 @@ def check_programs(
             f"the watchdog time ({resource.watchdog_ms} ms)"
         )
         diagnostics.append(Diagnostic.at(default, Code.SLICES_EXCEED_WATCHDOG, message))
-    diagnostics.extend(_check_single_writer(resolved, programs))
+    if len(programs) <= MAX_PROGRAMS:  # beyond, one writer per global is beside the point
+        diagnostics.extend(_check_single_writer(resolved, programs))
     return diagnostics
 
 
