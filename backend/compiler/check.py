@@ -9,6 +9,7 @@ pipeline once the user programs are known.
 
 from __future__ import annotations
 
+from backend.compiler.checks.data import check_data
 from backend.compiler.checks.expressions import check_expression
 from backend.compiler.checks.initializers import (
     check_constant_initializer,
@@ -25,7 +26,7 @@ from backend.compiler.types import BOOL
 
 
 def check(resolved: Resolved) -> list[Diagnostic]:
-    diagnostics: list[Diagnostic] = []
+    diagnostics = check_data(resolved)
     if resolved.pous:
         any_pou = resolved.sorted_pous()[0]
         global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}), check_expression)

@@ -141,4 +141,6 @@ class Code(Enum):
     FILE_SIZE = "E0707", "source file too large"
     PROJECT_SIZE = "E0708", "project too large"
     LITERAL_LENGTH = "E0709", "literal too long"
+    ARRAY_SIZE = "E0710", "array too large"
     DATA_DEPTH = "E0711", "data types nested too deep"
+    DATA_SIZE = "E0712", "too much data"

@@ -24,6 +24,10 @@ MAX_EXPRESSION_DEPTH = 60
 # Arrays of arrays, structures and function blocks holding others: generated code nests as
 # deep, and so do copying and instantiating in a resource.
 MAX_DATA_DEPTH = 32
+# Values of data (checks/data.py counts them): a resource gives each up to about 600 bytes
+# (an elementary value inside a structure or block has a path of its own for online values).
+MAX_ARRAY_VALUES = 1_000_000
+MAX_DATA_VALUES = 1_000_000
 
 # Literals, as written between their quotes or as their characters.
 MAX_STRING_LITERAL = 65_535

@@ -16,6 +16,7 @@ from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.constants import fold_int, guarded
 from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.limits import MAX_DATA_DEPTH
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
@@ -191,6 +192,10 @@ class _TypeResolver:
                     pos, Code.RECURSIVE_TYPE, f"type '{name}' is defined in terms of itself"
                 )
                 return None
+            if len(self.in_progress) >= MAX_DATA_DEPTH:  # resolving recurses through them
+                message = f"types defined through one another more than {MAX_DATA_DEPTH} deep"
+                self.report(pos, Code.DATA_DEPTH, message)
+                return None
             self.in_progress.add(name_key)
             resolved = self.resolve_spec(decl.spec, {}, type_name=decl.name)
             self.in_progress.discard(name_key)
@@ -361,7 +366,6 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
             seen[key(pou.name)] = pou
     for name in sorted(seen):
         result.pous[name] = _resolve_pou(seen[name], types, result)
-    _check_self_containment(result)
     user_names = (types.decls, result.pous, result.globals_by_key)
     if not any(key(NAMESPACE) in names for names in user_names):  # the user's SYS wins
         result.system = system_variables()
@@ -382,53 +386,6 @@ def system_variables() -> dict[str, Variable]:
             entry.name, here,
         )  # fmt: skip
     return table
-
-
-def _contained_blocks(result: Resolved, t: Type) -> list[str]:
-    """The FB types (keys) a value of type `t` holds directly, in arrays and structs too."""
-    if isinstance(t, FbType):
-        return [key(t.name)]
-    if isinstance(t, ArrayType):
-        return _contained_blocks(result, t.element)
-    if isinstance(t, StructType) and key(t.name) in result.structs:
-        return [
-            b
-            for m in result.structs[key(t.name)].members
-            for b in _contained_blocks(result, m.type)
-        ]
-    return []
-
-
-def _check_self_containment(result: Resolved) -> None:
-    """A block that holds an instance of itself (directly or further down) has no end."""
-    for name, pou in sorted(result.pous.items()):
-        pending = [
-            b
-            for v in pou.variables
-            if v.kind != "VAR_GLOBAL"
-            for b in _contained_blocks(result, v.type)
-        ]
-        seen: set[str] = set()
-        while pending:
-            current = pending.pop()
-            if current == name:
-                result.diagnostics.append(
-                    Diagnostic.at(
-                        pou.pou.pos,
-                        Code.SELF_CONTAINED,
-                        f"'{pou.name}' contains an instance of itself",
-                    )
-                )
-                break
-            if current in seen or current not in result.pous:
-                continue
-            seen.add(current)
-            pending.extend(
-                b
-                for v in result.pous[current].variables
-                if v.kind != "VAR_GLOBAL"
-                for b in _contained_blocks(result, v.type)
-            )
 
 
 def _block_variables(

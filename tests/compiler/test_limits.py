@@ -10,8 +10,9 @@ import re
 import subprocess
 import sys
 from dataclasses import dataclass
+from pathlib import Path
 
-from tests.conftest import REPO
+from tests.conftest import REPO, padt
 
 MEMORY_CAP = 1 << 30
 SECONDS = 10
@@ -152,3 +153,94 @@ def test_an_integer_beyond_lreal_is_an_invalid_literal() -> None:
         program("x := REAL#1" + "0" * 400 + ";", "x : REAL;"),
         program("x := 16#1" + "0" * 256 + ";", "x : LREAL;"),
     )
+
+
+# ---- data ----------------------------------------------------------------------------------
+
+
+def chain(kind: str, length: int) -> str:
+    """Function blocks, structures or type names, each holding or naming the next."""
+    if kind == "blocks":
+        return (
+            "".join(
+                f"FUNCTION_BLOCK F{i}\nVAR inner : F{i + 1}; END_VAR\nEND_FUNCTION_BLOCK\n"
+                for i in range(length)
+            )
+            + f"FUNCTION_BLOCK F{length} END_FUNCTION_BLOCK\n"
+            + program("f();", "f : F0;")
+        )
+    if kind == "structures":
+        members = "".join(f"S{i} : STRUCT m : S{i + 1}; END_STRUCT;\n" for i in range(length))
+        return f"TYPE\n{members}S{length} : STRUCT m : INT; END_STRUCT;\nEND_TYPE\n" + program(
+            "s.m.m.m := s.m.m.m;", "s : S0;"
+        )
+    names = "".join(f"A{i} : A{i + 1};\n" for i in range(length))
+    return f"TYPE\n{names}A{length} : INT;\nEND_TYPE\n" + program("a := 1;", "a : A0;")
+
+
+def test_data_nested_beyond_32_levels_is_refused() -> None:
+    refused_with(
+        "E0711",
+        program("", "a : " + "ARRAY[0..1] OF " * 25_000 + "BOOL;"),
+        chain("blocks", 15_000),
+        chain("structures", 20_000),
+        chain("names", 40_000),
+        "TYPE A : " + "ARRAY[0..1] OF " * 20 + "BOOL; END_TYPE\n"
+        "TYPE B : " + "ARRAY[0..1] OF " * 20 + "A; END_TYPE\n" + program("", "b : B;"),
+    )
+
+
+def test_data_nested_32_levels_deep_compiles() -> None:
+    # the program is a level too
+    outcomes = compile_capped(chain("blocks", 30), chain("structures", 30), chain("names", 31))
+    for outcome in outcomes:
+        assert not [d for d in outcome.diagnostics if ": error: " in d], outcome.diagnostics
+
+
+def test_a_block_holding_itself_through_a_structure_is_still_refused() -> None:
+    refused_with(
+        "E0109",
+        "TYPE S : STRUCT f : F; END_STRUCT; END_TYPE\n"
+        "FUNCTION_BLOCK F\nVAR s : S; END_VAR\nEND_FUNCTION_BLOCK\n" + program("", "f : F;"),
+    )
+
+
+def test_arrays_beyond_a_million_values_are_refused() -> None:
+    refused_with(
+        "E0710",
+        program("", "a : ARRAY[0..999999999] OF LREAL;"),
+        program("", "a : ARRAY[1..1000, 1..1001] OF BOOL;"),
+        program("", "a : ARRAY[1..1000] OF ARRAY[1..1001] OF BOOL;"),
+        program("", "a : ARRAY[1..100] OF STRING[1000000];"),
+        "TYPE S : STRUCT a, b : ARRAY[1..1000] OF INT; END_STRUCT; END_TYPE\n"
+        + program("", "a : ARRAY[1..501] OF S;"),
+    )
+
+
+def test_a_resource_or_a_call_beyond_a_million_values_is_refused() -> None:
+    blocks = (
+        "FUNCTION_BLOCK A\nVAR x : ARRAY[1..1000] OF LREAL; END_VAR\nEND_FUNCTION_BLOCK\n"
+        "FUNCTION_BLOCK B\nVAR a : ARRAY[1..1000] OF A; END_VAR\nEND_FUNCTION_BLOCK\n"
+    )
+    refused_with(
+        "E0712",
+        blocks + program("", "b : ARRAY[1..1000] OF B;"),
+        program("", "a, b : ARRAY[1..600000] OF LREAL;"),
+        "VAR_GLOBAL g : ARRAY[1..400000] OF LREAL; END_VAR\n"
+        "PROGRAM P1\ng[1] := 1.0;\nEND_PROGRAM\nPROGRAM P2\nEND_PROGRAM\n",
+        "FUNCTION F : INT\nVAR a, b : ARRAY[1..600000] OF LREAL; END_VAR\nF := 1;\nEND_FUNCTION\n"
+        + program("x := F();"),
+    )
+
+
+def test_a_million_values_compile() -> None:
+    (outcome,) = compile_capped(program("a[1] := 1.0;", "a : ARRAY[1..999999] OF LREAL;"))
+    assert not outcome.diagnostics, outcome.diagnostics
+
+
+def test_padt_sim_refuses_an_array_of_a_billion_values(tmp_path: Path) -> None:
+    source = tmp_path / "huge.st"
+    source.write_text(program("a[0] := 1.0;", "a : ARRAY[0..999999999] OF LREAL;"))
+    run = padt("sim", str(source), "--cycles", "1")
+    assert run.returncode == 1 and "Traceback" not in run.stderr, run.stderr
+    assert "[E0710]" in run.stdout + run.stderr
