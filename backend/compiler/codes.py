@@ -144,3 +144,4 @@ class Code(Enum):
     ARRAY_SIZE = "E0710", "array too large"
     DATA_DEPTH = "E0711", "data types nested too deep"
     DATA_SIZE = "E0712", "too much data"
+    CODE_SIZE = "E0713", "generated code too large"

@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.builtins import convert_code, wrap_code
+from backend.compiler.codes import Code
+from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     EnumValue,
     Misfit,
@@ -25,7 +27,9 @@ from backend.compiler.infer import (
     is_external,
     is_implicit,
 )
+from backend.compiler.limits import MAX_INDENT, MAX_UNIT_CODE, MiB
 from backend.compiler.resolve import STEP_STRUCT, PouSymbols, Resolved, StructInfo, Variable
+from backend.compiler.source import Pos
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -77,6 +81,14 @@ def tuple_members(pou: PouSymbols) -> list[Variable]:
     return outputs + [v for v in pou.variables if v.kind == "VAR_IN_OUT"]
 
 
+class GenerationLimit(Exception):
+    """Code that would be too large or too deep for a resource to load; generation stops."""
+
+    def __init__(self, diagnostic: Diagnostic) -> None:
+        super().__init__(str(diagnostic))
+        self.diagnostic = diagnostic
+
+
 @dataclass
 class _Value:
     code: str
@@ -88,6 +100,7 @@ class _Value:
 class _Emitter:
     scope: Scope
     local: bool  # a FUNCTION: its variables are Python locals
+    at: Pos  # what is being generated (a statement, a declaration), where a limit is met
     lines: list[str] = field(default_factory=list)
     pre: list[str] = field(default_factory=list)  # hoisted statements for the next line
     temp_count: int = 0
@@ -98,14 +111,29 @@ class _Emitter:
     # name the line of the source
     st_lines: list[int] = field(default_factory=list)
     st_line: int = 0
+    size: int = 0  # characters generated so far
 
     def emit(self, depth: int, line: str) -> None:
+        if depth > MAX_INDENT:
+            message = f"statements nested {depth} blocks deep in the generated code"
+            raise GenerationLimit(Diagnostic.at(self.at, Code.STATEMENT_DEPTH, message))
         for hoisted in self.pre:
-            self.lines.append(INDENT * depth + hoisted)
-            self.st_lines.append(self.st_line)
+            self._add(INDENT * depth + hoisted)
         self.pre.clear()
-        self.lines.append(INDENT * depth + line)
+        self._add(INDENT * depth + line)
+
+    def _add(self, line: str) -> None:
+        self.make_room(len(line) + 1)
+        self.size += len(line) + 1
+        self.lines.append(line)
         self.st_lines.append(self.st_line)
+
+    def make_room(self, size: int) -> None:
+        """Refuse `size` more characters beyond MAX_UNIT_CODE, before a long line is even
+        built."""
+        if self.size + size > MAX_UNIT_CODE:
+            message = f"the generated code of this unit exceeds {MAX_UNIT_CODE // MiB} MiB"
+            raise GenerationLimit(Diagnostic.at(self.at, Code.CODE_SIZE, message))
 
     def temp(self) -> str:
         self.temp_count += 1
@@ -432,6 +460,7 @@ class _Emitter:
             else:
                 items.extend([self.initial(element, value)] * times)
         missing = array.size - len(items)
+        self.make_room(sum(len(item) + 2 for item in items))  # `n(...)` is written n times
         body = f"[{', '.join(items)}]"
         if missing > 0:
             filler = self.initial(array, None) if is_aggregate(element) else None
@@ -467,9 +496,9 @@ class _Emitter:
         self.emit(depth + 1, "_tick()")
 
     def statement(self, statement: ast.Statement, depth: int) -> None:
-        outer, self.st_line = self.st_line, statement.pos.line
+        outer, self.st_line, self.at = (self.st_line, self.at), statement.pos.line, statement.pos
         self._statement(statement, depth)
-        self.st_line = outer
+        self.st_line, self.at = outer
 
     def _statement(self, statement: ast.Statement, depth: int) -> None:
         match statement:
@@ -801,7 +830,7 @@ class GeneratedPou:
 def generate_pou(resolved: Resolved, pou: PouSymbols) -> GeneratedPou:
     """The Python source of one POU."""
     scope = Scope(resolved, pou)
-    emitter = _Emitter(scope, local=pou.kind == "FUNCTION")
+    emitter = _Emitter(scope, local=pou.kind == "FUNCTION", at=pou.pou.pos)
     if pou.kind == "FUNCTION":
         _generate_function(emitter, pou)
     else:
@@ -988,14 +1017,22 @@ def _data_class(emitter: _Emitter, name: str, fields: list[Variable]) -> str:
     return "\n".join(emitter.lines) + "\n"
 
 
+def declared_at(variables: list[Variable], any_pou: PouSymbols) -> Pos:
+    """Where a structure or the globals are declared, to name in a diagnostic: at the first
+    of their variables."""
+    return variables[0].pos if variables else any_pou.pou.pos
+
+
 def generate_struct(resolved: Resolved, info: StructInfo, any_pou: PouSymbols) -> str:
     if key(info.name) == key(STEP_STRUCT):  # SFC steps also remember when they started
         return f"{struct_class(info.name)} = _SfcStep\n"
-    emitter = _Emitter(Scope(resolved, any_pou), local=False)
+    where = declared_at(info.members, any_pou)
+    emitter = _Emitter(Scope(resolved, any_pou), local=False, at=where)
     return _data_class(emitter, struct_class(info.name), info.members)
 
 
 def generate_globals(resolved: Resolved, any_pou: PouSymbols) -> str:
     """The class whose single instance `_G` holds the global variables."""
-    emitter = _Emitter(Scope(resolved, any_pou), local=False, in_globals=True)
+    where = declared_at(resolved.globals, any_pou)
+    emitter = _Emitter(Scope(resolved, any_pou), local=False, at=where, in_globals=True)
     return _data_class(emitter, "GLOBALS", resolved.globals)

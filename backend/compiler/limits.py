@@ -17,9 +17,16 @@ MAX_PROJECT_BYTES = 16 * MiB
 MAX_PROJECT_FILES = 2_000
 MAX_PROJECT_TOKENS = 200_000
 
-# Nesting: CPython's parser allows 200 levels of parentheses and 100 of indentation in the
-# generated code, and one ST level can cost up to three of the first and two of the second.
+# Nesting, so that a resource can load the generated code: CPython allows 200 levels of
+# parentheses and 99 of indentation, and one ST level can cost up to three of the first and
+# two of the second (the generator refuses deeper indentation itself: an ELSIF whose
+# condition calls a function with outputs nests its branch); 20 nested loops; and its
+# compiler recurses once per `elif`, up to three times the recursion limit (a resource
+# keeps Python's 1,000).
 MAX_STATEMENT_DEPTH = 40
+MAX_LOOP_DEPTH = 20
+MAX_BRANCH_DEPTH = 1_000
+MAX_INDENT = 99
 MAX_EXPRESSION_DEPTH = 60
 # Arrays of arrays, structures and function blocks holding others: generated code nests as
 # deep, and so do copying and instantiating in a resource.
@@ -28,6 +35,12 @@ MAX_DATA_DEPTH = 32
 # (an elementary value inside a structure or block has a path of its own for online values).
 MAX_ARRAY_VALUES = 1_000_000
 MAX_DATA_VALUES = 1_000_000
+
+# Generated code: a resource's Python compiles a unit in up to about 150 bytes per character
+# (a long list of initial values), so a unit stays within 2 MiB; and the artifact within
+# 16 MiB. Repeated initial values (`[100000(1.5)]`) and transitions sharing a step grow it.
+MAX_UNIT_CODE = 2 * MiB
+MAX_PROJECT_CODE = 16 * MiB
 
 # Literals, as written between their quotes or as their characters.
 MAX_STRING_LITERAL = 65_535

@@ -10,7 +10,7 @@ import datetime
 import fractions
 import functools
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import resources
 from typing import Any
 
@@ -27,8 +27,10 @@ from backend.compiler import ast
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.limits import (
+    MAX_BRANCH_DEPTH,
     MAX_DATA_DEPTH,
     MAX_EXPRESSION_DEPTH,
+    MAX_LOOP_DEPTH,
     MAX_NUMBER_LITERAL,
     MAX_PROJECT_TOKENS,
     MAX_STATEMENT_DEPTH,
@@ -720,9 +722,8 @@ def _tree(file: str, text: str, budget: TokenBudget) -> Tree[Token]:
 
 # What the nesting limits count, in the parse tree: the walkers of the AST recurse, so a
 # tree too deep for them never becomes one.
-_BLOCKS = frozenset(
-    {"if_statement", "case_statement", "while_statement", "repeat_statement", "for_statement"}
-)
+_LOOPS = frozenset({"while_statement", "repeat_statement", "for_statement"})
+_BLOCKS = _LOOPS | {"if_statement", "case_statement"}
 _STATEMENTS = _BLOCKS | {
     "assignment", "call_statement", "return_statement", "exit_statement",
     "continue_statement", "empty_statement",
@@ -737,32 +738,75 @@ _OPERANDS = frozenset({
 })  # fmt: skip
 
 
+@dataclass(frozen=True)
+class _Nesting:
+    """How deep a node of the parse tree lies, by what the limits count."""
+
+    blocks: int = 0  # IF, CASE and loops around it
+    loops: int = 0  # WHILE, REPEAT and FOR around it
+    branches: int = 0  # the blocks, and in each the ELSIF or CASE branches before its own
+    operations: int = 0  # operations of an expression, the node's own included
+    arrays: int = 0  # ARRAY ... OF, the node's own included
+
+
+def _too_deep(kind: str, at: _Nesting) -> tuple[Code, str] | None:
+    if kind in _STATEMENTS and at.blocks >= MAX_STATEMENT_DEPTH:
+        return Code.STATEMENT_DEPTH, f"statements nested deeper than {MAX_STATEMENT_DEPTH}"
+    if kind in _LOOPS and at.loops >= MAX_LOOP_DEPTH:
+        return Code.STATEMENT_DEPTH, f"loops nested deeper than {MAX_LOOP_DEPTH}"
+    if at.branches > MAX_BRANCH_DEPTH:
+        message = f"ELSIF and CASE branches nested deeper than {MAX_BRANCH_DEPTH:,}"
+        return Code.STATEMENT_DEPTH, message
+    if at.operations + (1 if kind in _OPERANDS else 0) > MAX_EXPRESSION_DEPTH:
+        return Code.EXPRESSION_DEPTH, f"expression nested deeper than {MAX_EXPRESSION_DEPTH}"
+    if at.arrays > MAX_DATA_DEPTH:
+        return Code.DATA_DEPTH, f"array types nested deeper than {MAX_DATA_DEPTH}"
+    return None
+
+
+def _branch_indices(kind: str, children: list[Tree[Token]]) -> list[int]:
+    """For each child of an IF or CASE, the branch it belongs to: generated code puts each
+    ELSIF and each CASE branch inside the one before (`elif`), and the ELSE inside the last."""
+    indices: list[int] = []
+    branch = 0
+    labels = 0
+    for child in children:
+        if kind == "if_statement" and child.data in ("elsif_clause", "else_clause"):
+            branch += 1
+        elif kind == "case_statement" and child.data == "case_labels":
+            branch, labels = labels, labels + 1
+        elif kind == "case_statement" and child.data == "else_clause":
+            branch = labels
+        indices.append(branch)
+    return indices
+
+
 def _nesting_problem(file: str, tree: Tree[Token]) -> Diagnostic | None:
     """The first place, in source order, where statements, an expression or array types
-    nest too deep. A statement counts the blocks around it, and itself; an expression its
-    operations (calls, indices and members included) and the operand at the end."""
-    pending: list[tuple[Tree[Token], int, int, int]] = [(tree, 0, 0, 0)]
+    nest too deep, without recursion."""
+    pending: list[tuple[Tree[Token], _Nesting]] = [(tree, _Nesting())]
     while pending:
-        node, blocks, operations, arrays = pending.pop()
+        node, around = pending.pop()
         kind = node.data
-        found: tuple[Code, str] | None = None
-        if kind in _STATEMENTS and blocks + 1 > MAX_STATEMENT_DEPTH:
-            found = Code.STATEMENT_DEPTH, f"statements nested deeper than {MAX_STATEMENT_DEPTH}"
-        blocks += 1 if kind in _BLOCKS else 0
-        operations += 1 if kind in _OPERATIONS else 0
-        if operations + (1 if kind in _OPERANDS else 0) > MAX_EXPRESSION_DEPTH:
-            found = Code.EXPRESSION_DEPTH, f"expression nested deeper than {MAX_EXPRESSION_DEPTH}"
-        arrays += 1 if kind == "array_type" else 0
-        if arrays > MAX_DATA_DEPTH:
-            found = Code.DATA_DEPTH, f"array types nested deeper than {MAX_DATA_DEPTH}"
+        at = replace(
+            around,
+            operations=around.operations + (1 if kind in _OPERATIONS else 0),
+            arrays=around.arrays + (1 if kind == "array_type" else 0),
+        )
+        found = _too_deep(kind, at)
         if found is not None:
             meta = node.meta
             where = Pos(file, 1, 1) if meta.empty else Pos(file, meta.line, meta.column)
             return Diagnostic.at(where, *found)
+        children = [child for child in node.children if isinstance(child, Tree)]
+        if kind not in _BLOCKS:
+            pending.extend((child, at) for child in reversed(children))
+            continue
+        inside = replace(at, blocks=at.blocks + 1, loops=at.loops + (1 if kind in _LOOPS else 0))
+        indices = _branch_indices(kind, children)
         pending.extend(
-            (child, blocks, operations, arrays)
-            for child in reversed(node.children)
-            if isinstance(child, Tree)
+            (child, replace(inside, branches=inside.branches + 1 + index))
+            for child, index in reversed(list(zip(children, indices, strict=True)))
         )
     return None
 

@@ -17,8 +17,10 @@ from backend.compiler.checks.programs import check_programs, globals_read, globa
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.generate import (
+    GenerationLimit,
     action_control,
     class_name,
+    declared_at,
     function_name,
     generate_globals,
     generate_pou,
@@ -26,6 +28,7 @@ from backend.compiler.generate import (
     struct_class,
 )
 from backend.compiler.infer import is_external
+from backend.compiler.limits import MAX_PROJECT_CODE, MiB
 from backend.compiler.parse import TokenBudget, parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import Pos, ProjectSize, SourceFile, stdlib_sources
@@ -136,19 +139,11 @@ def compile_sources(
         return CompileResult(tuple(diagnostics), None)
 
     included = _included_pous(resolved, user_pous, programs)
-    codes = {name: _pou_code(resolved, resolved.pous[name]) for name in included}
+    try:
+        codes, types, globals_code = _generate(resolved, included)
+    except GenerationLimit as exc:
+        return CompileResult(tuple(sorted([*diagnostics, exc.diagnostic])), None)
     program_configs = tuple(_program_config(resolved, codes, p) for p in programs)
-    any_pou = resolved.sorted_pous()[0]
-    types = tuple(
-        _unit_code(
-            info.name, "STRUCT", struct_class(info.name),
-            generate_struct(resolved, info, any_pou), info.members,
-        )
-        for _, info in sorted(resolved.structs.items())
-    )  # fmt: skip
-    globals_code = _unit_code(
-        "GLOBALS", "GLOBALS", "GLOBALS", generate_globals(resolved, any_pou), resolved.globals
-    )
     artifact = Artifact(
         project=project,
         resource=resource,
@@ -160,6 +155,42 @@ def compile_sources(
         users=tuple(sorted(users or [], key=lambda u: u.name)),
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
+
+
+def _generate(
+    resolved: Resolved, included: list[str]
+) -> tuple[dict[str, PouCode], tuple[PouCode, ...], PouCode]:
+    """The code of the POUs (by key), the structures and the globals: each unit within
+    MAX_UNIT_CODE (the generator keeps to that), all of them within MAX_PROJECT_CODE."""
+    total = 0
+
+    def counted(code: PouCode, where: Pos) -> PouCode:
+        nonlocal total
+        total += len(code.source)
+        if total > MAX_PROJECT_CODE:
+            message = f"the project's generated code exceeds {MAX_PROJECT_CODE // MiB} MiB"
+            raise GenerationLimit(Diagnostic.at(where, Code.CODE_SIZE, message))
+        return code
+
+    codes = {
+        name: counted(_pou_code(resolved, resolved.pous[name]), resolved.pous[name].pou.pos)
+        for name in included
+    }
+    any_pou = resolved.sorted_pous()[0]
+    types = tuple(
+        counted(
+            _unit_code(
+                info.name, "STRUCT", struct_class(info.name),
+                generate_struct(resolved, info, any_pou), info.members,
+            ),
+            declared_at(info.members, any_pou),
+        )
+        for _, info in sorted(resolved.structs.items())
+    )  # fmt: skip
+    globals_code = _unit_code(
+        "GLOBALS", "GLOBALS", "GLOBALS", generate_globals(resolved, any_pou), resolved.globals
+    )
+    return codes, types, counted(globals_code, declared_at(resolved.globals, any_pou))
 
 
 def _from_configuration(

@@ -114,10 +114,138 @@ def test_a_project_beyond_16_mib_2000_files_or_200000_tokens_is_refused() -> Non
 
 
 def test_a_project_just_within_its_token_limit_compiles_in_time() -> None:
-    """The densest source the limits allow, close to 200,000 tokens."""
-    body = "x := x + 1;\n" * 33_000  # 6 tokens each
-    (outcome,) = compile_capped(program(body))
+    """The densest source the limits allow: close to 200,000 tokens of statements, in ten
+    programs (in one, it would be more code than a unit may have)."""
+    body = "x := x + 1;\n" * 3_290  # 6 tokens each
+    pous = "".join(f"PROGRAM P{i}\nVAR x : DINT; END_VAR\n{body}END_PROGRAM\n" for i in range(10))
+    (outcome,) = compile_capped(pous)
     assert not outcome.diagnostics, outcome.diagnostics[:3]
+
+
+# ---- nesting ------------------------------------------------------------------------------
+
+DEEP = 30_000  # far beyond every nesting limit, within the token limit
+
+
+def right_deep(opening: str, innermost: str, closing: str, depth: int = DEEP) -> str:
+    return opening * depth + innermost + closing * depth
+
+
+def test_expressions_of_every_kind_nested_too_deep_are_refused() -> None:
+    left_deep = " + ".join(["1"] * DEEP)
+    refused_with(
+        "E0706",
+        program("x := " + right_deep("- ", "1", "") + ";"),
+        program("b := " + right_deep("NOT ", "TRUE", "") + ";", "b : BOOL;"),
+        program(f"x := {left_deep};"),
+        program("x := " + right_deep("1 + (", "1", ")") + ";"),
+        program("x := " + " * ".join(["1"] * DEEP) + " MOD 2 ** 1;"),
+        program("b := " + " AND ".join(["b"] * DEEP) + " OR b XOR b;", "b : BOOL;"),
+        program("b := " + " < ".join(["x"] * DEEP) + ";", "b : BOOL; x : DINT;"),
+        program("x := " + right_deep("ABS(", "1", ")") + ";"),
+        program("x := " + right_deep("MAX(1, ", "1", ")") + ";"),
+        program("x := " + right_deep("a[", "0", "]") + ";", "a : ARRAY[0..1] OF DINT; x : DINT;"),
+        program("x := s" + ".m" * DEEP + ";"),
+        program("x := x" + ".0" * DEEP + ";"),
+        program("x := p" + "^" * DEEP + ";", "p, x : DINT;"),
+        program("", "a : ARRAY[0..1] OF INT := " + right_deep("[", "1", "]") + ";"),
+        program("", "s : S := " + right_deep("(m := ", "1", ")") + ";"),
+        program("", f"a : ARRAY[0..{left_deep}] OF INT;"),
+        program("", f"s : STRING[{left_deep}];"),
+        f"TYPE E : (A := {left_deep}); END_TYPE\n" + program(""),
+        program(f"CASE x OF {left_deep}: x := 1; END_CASE;"),
+        program(f"FOR x := 1 TO {left_deep} DO END_FOR;"),
+        "PROGRAM P\nVAR b : BOOL; END_VAR\nINITIAL_STEP S0: END_STEP\nSTEP S1: END_STEP\n"
+        f"TRANSITION FROM S0 TO S1 := {' AND '.join(['b'] * DEEP)}; END_TRANSITION\n"
+        "END_PROGRAM\n",
+    )
+
+
+def test_parentheses_cost_no_nesting() -> None:
+    (outcome,) = compile_capped(program("x := " + right_deep("(", "1", ")", 60_000) + ";"))
+    assert not outcome.diagnostics, outcome.diagnostics
+
+
+def test_statements_of_every_kind_nested_too_deep_are_refused() -> None:
+    depth = DEEP // 2
+    refused_with(
+        "E0705",
+        program(right_deep("IF b THEN ", "x := 1;", " END_IF;", depth), "b : BOOL; x : DINT;"),
+        program(right_deep("IF b THEN ELSE ", "x := 1;", " END_IF;", depth), "b : BOOL; x : DINT;"),
+        program(right_deep("CASE x OF 1: ", "x := 1;", " END_CASE;", depth)),
+        program(right_deep("WHILE b DO ", "x := 1;", " END_WHILE;", depth), "b : BOOL; x : DINT;"),
+        program(
+            right_deep("REPEAT ", "x := 1;", " UNTIL b END_REPEAT;", depth), "b : BOOL; x : DINT;"
+        ),
+        program(right_deep("FOR x := 1 TO 2 DO ", "x := 1;", " END_FOR;", depth)),
+        "PROGRAM P\nVAR b : BOOL; x : DINT; END_VAR\nINITIAL_STEP S0: A(N); END_STEP\n"
+        "ACTION A: " + right_deep("IF b THEN ", "x := 1;", " END_IF;", depth) + " END_ACTION\n"
+        "END_PROGRAM\n",
+        # Python nests 20 loops at most, and each ELSIF and CASE branch in the one before
+        program(right_deep("WHILE x < 1 DO ", "x := 1;", " END_WHILE;", 21)),
+        program(
+            "IF x = 0 THEN "
+            + "".join(f"ELSIF x = {i} THEN x := {i};" for i in range(5_000))
+            + " END_IF;"
+        ),
+        program("CASE x OF " + "".join(f"{i}: x := {i};" for i in range(5_000)) + " END_CASE;"),
+        program(
+            right_deep(
+                "CASE x OF " + "".join(f"{i}: x := {i};" for i in range(30)) + " 99: ",
+                "x := 1;",
+                " END_CASE;",
+                35,
+            )
+        ),
+    )
+
+
+def test_deep_elsif_that_calls_functions_with_outputs_is_refused() -> None:
+    """Each such ELSIF nests its branch in the generated code: 120 would be 100 blocks deep."""
+    function = (
+        "FUNCTION F : BOOL\nVAR_INPUT a : INT; END_VAR\nVAR_OUTPUT o : INT; END_VAR\n"
+        "F := a > 1;\nEND_FUNCTION\n"
+    )
+    branches = "".join(f"ELSIF F(a := x, o => y) THEN x := {i}; " for i in range(120))
+    refused_with(
+        "E0705", function + program(f"IF x = 0 THEN x := 1; {branches} END_IF;", "x, y : INT;")
+    )
+
+
+def test_nesting_up_to_the_limits_compiles() -> None:
+    outcomes = compile_capped(
+        program(right_deep("IF b THEN ", "x := 1;", " END_IF;", 39), "b : BOOL; x : DINT;"),
+        program(right_deep("WHILE x < 1 DO ", "x := 1;", " END_WHILE;", 20)),
+        program("x := " + " + ".join(["1"] * 60) + ";"),
+        program(
+            "IF x = 0 THEN "
+            + "".join(f"ELSIF x = {i} THEN x := {i};" for i in range(999))
+            + " END_IF;"
+        ),
+    )
+    for outcome in outcomes:
+        assert not outcome.diagnostics, outcome.diagnostics
+
+
+# ---- generated code -----------------------------------------------------------------------
+
+
+def test_generated_code_beyond_its_size_is_refused() -> None:
+    transitions = "".join("TRANSITION FROM S0 TO S1 := b; END_TRANSITION\n" for _ in range(2_000))
+    functions = "".join(
+        f"FUNCTION F{i} : INT\nVAR a : ARRAY[1..300000] OF LREAL := [300000(1.5)]; END_VAR\n"
+        f"F{i} := 1;\nEND_FUNCTION\n"
+        for i in range(12)
+    )
+    refused_with(
+        "E0713",
+        program("", "a : ARRAY[1..900000] OF LREAL := [900000(1.5)];"),
+        program("", "a : ARRAY[1..1000] OF ARRAY[1..1000] OF INT := [1000([1000(12345)])];"),
+        "PROGRAM P\nVAR b : BOOL; END_VAR\nINITIAL_STEP S0: END_STEP\nSTEP S1: END_STEP\n"
+        + transitions
+        + "END_PROGRAM\n",
+        functions + program("x := F0();"),
+    )
 
 
 # ---- literals ------------------------------------------------------------------------------
