@@ -51,6 +51,41 @@ _COMPARE = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 LOCAL_KINDS = ("VAR_TEMP", "RETURN")  # Python locals even in a class's __call__
 
 
+def is_python_local(variable: Variable, in_function: bool) -> bool:
+    """Whether a variable of a POU (not a global) is a Python local in its generated code."""
+    return in_function or variable.kind in LOCAL_KINDS
+
+
+def python_locals(pou: PouSymbols) -> list[Variable]:
+    """The variables of a POU that its generated code holds in Python locals (a function's
+    result among them)."""
+    result = pou.by_key.get(key(pou.name))
+    declared = [
+        *pou.variables,
+        *([result] if result is not None and result.kind == "RETURN" else []),
+    ]
+    return [
+        v
+        for v in declared
+        if v.kind not in ("SYSTEM", "VAR_GLOBAL") and is_python_local(v, pou.kind == "FUNCTION")
+    ]
+
+
+def class_members(pou: PouSymbols) -> set[str]:
+    """The names the class of a PROGRAM or FUNCTION_BLOCK has besides its variables: its
+    methods, and the slots of edge memories and action control blocks."""
+    sfc = pou.pou.sfc
+    chart = _Chart(sfc).slots() if sfc is not None else []
+    actions = [_action_method(action.name) for action in sfc.actions] if sfc is not None else []
+    edges = [_edge_memory(v) for v in _instance_variables(pou) if v.edge is not None]
+    return {"__slots__", "__init__", "__call__", *chart, *actions, *edges}
+
+
+def _edge_memory(variable: Variable) -> str:
+    """The slot that remembers an R_EDGE or F_EDGE input's last value."""
+    return f"_edge_{variable.attr}"
+
+
 def _ident(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_]", "_", key(name))
 
@@ -81,12 +116,13 @@ def tuple_members(pou: PouSymbols) -> list[Variable]:
     return outputs + [v for v in pou.variables if v.kind == "VAR_IN_OUT"]
 
 
-class GenerationLimit(Exception):
-    """Code that would be too large or too deep for a resource to load; generation stops."""
+class GenerationError(Exception):
+    """Code a resource could not load (too large, too deep) or that would not work (a name
+    of the user hiding one of its own): generation stops, with what was wrong."""
 
-    def __init__(self, diagnostic: Diagnostic) -> None:
-        super().__init__(str(diagnostic))
-        self.diagnostic = diagnostic
+    def __init__(self, diagnostics: list[Diagnostic]) -> None:
+        super().__init__("\n".join(str(d) for d in diagnostics))
+        self.diagnostics = diagnostics
 
 
 @dataclass
@@ -112,11 +148,12 @@ class _Emitter:
     st_lines: list[int] = field(default_factory=list)
     st_line: int = 0
     size: int = 0  # characters generated so far
+    max_size: int = MAX_UNIT_CODE
 
     def emit(self, depth: int, line: str) -> None:
         if depth > MAX_INDENT:
             message = f"statements nested {depth} blocks deep in the generated code"
-            raise GenerationLimit(Diagnostic.at(self.at, Code.STATEMENT_DEPTH, message))
+            raise GenerationError([Diagnostic.at(self.at, Code.STATEMENT_DEPTH, message)])
         for hoisted in self.pre:
             self._add(INDENT * depth + hoisted)
         self.pre.clear()
@@ -129,11 +166,11 @@ class _Emitter:
         self.st_lines.append(self.st_line)
 
     def make_room(self, size: int) -> None:
-        """Refuse `size` more characters beyond MAX_UNIT_CODE, before a long line is even
-        built."""
-        if self.size + size > MAX_UNIT_CODE:
-            message = f"the generated code of this unit exceeds {MAX_UNIT_CODE // MiB} MiB"
-            raise GenerationLimit(Diagnostic.at(self.at, Code.CODE_SIZE, message))
+        """Refuse `size` more characters beyond the unit's limit, before a long line is
+        even built."""
+        if self.size + size > self.max_size:
+            message = f"the generated code of this unit exceeds {self.max_size // MiB} MiB"
+            raise GenerationError([Diagnostic.at(self.at, Code.CODE_SIZE, message)])
 
     def temp(self) -> str:
         self.temp_count += 1
@@ -145,7 +182,7 @@ class _Emitter:
             return f"_SYS.{variable.attr}"
         if variable.kind == "VAR_GLOBAL":
             return f"{'s' if self.in_globals else '_G'}.{variable.attr}"
-        if self.local or variable.kind in LOCAL_KINDS:
+        if is_python_local(variable, self.local):
             return variable.attr
         return f"s.{variable.attr}"
 
@@ -827,10 +864,12 @@ class GeneratedPou:
     st_lines: tuple[int, ...]  # per line of `source`: the ST line it comes from, 0 for none
 
 
-def generate_pou(resolved: Resolved, pou: PouSymbols) -> GeneratedPou:
-    """The Python source of one POU."""
+def generate_pou(
+    resolved: Resolved, pou: PouSymbols, max_size: int = MAX_UNIT_CODE
+) -> GeneratedPou:
+    """The Python source of one POU, of at most `max_size` characters."""
     scope = Scope(resolved, pou)
-    emitter = _Emitter(scope, local=pou.kind == "FUNCTION", at=pou.pou.pos)
+    emitter = _Emitter(scope, local=pou.kind == "FUNCTION", at=pou.pou.pos, max_size=max_size)
     if pou.kind == "FUNCTION":
         _generate_function(emitter, pou)
     else:
@@ -843,7 +882,7 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
     sfc = pou.pou.sfc
     chart = _Chart(sfc) if sfc is not None else None
     edges = [v for v in fields if v.edge is not None]
-    slots = [v.attr for v in fields] + [f"_edge_{v.attr}" for v in edges]
+    slots = [v.attr for v in fields] + [_edge_memory(v) for v in edges]
     slots += chart.slots() if chart else []
     emitter.emit(0, f"class {class_name(pou.name)}:")
     emitter.emit(1, f"__slots__ = {tuple(slots)!r}")
@@ -857,14 +896,14 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
             code = f"_init({code}, {{'X': True}})"
         emitter.emit(2, f"s.{variable.attr} = {code}")
     for variable in edges:
-        emitter.emit(2, f"s._edge_{variable.attr} = False")
+        emitter.emit(2, f"s.{_edge_memory(variable)} = False")
     if chart is not None:
         for slot in chart.slots():
             emitter.emit(2, f"s.{slot} = _ActionControl()")
     emitter.emit(0, "")
     emitter.emit(1, "def __call__(s):")
     for variable in edges:  # the body sees TRUE only in the call that brings the edge
-        attr, memory = f"s.{variable.attr}", f"s._edge_{variable.attr}"
+        attr, memory = f"s.{variable.attr}", f"s.{_edge_memory(variable)}"
         rising = variable.edge == "R_EDGE"
         edge = f"({attr} and not {memory})" if rising else f"(not {attr} and {memory})"
         emitter.emit(2, f"{attr}, {memory} = {edge}, {attr}")

@@ -207,6 +207,16 @@ class _ToAst(Transformer[Token, Any]):
             return Pos(self.file, item.line or 0, item.column or 0)
         return Pos(self.file, item.meta.line, item.meta.column)
 
+    def _declared(self, name: Token) -> str:
+        """A name being declared. IEC 61131-3 forbids two underscores in a row and one at
+        the end; padt needs both free: generated code names its own things with `__`, and
+        a Python keyword used as a name becomes the name with `_` appended."""
+        text = str(name)
+        if "__" in text or text.endswith("_"):
+            message = f"'{text}': an identifier has no two underscores in a row, none at its end"
+            self.errors.append(Diagnostic.at(self._pos(name), Code.IDENTIFIER, message))
+        return text
+
     # ---- literals
     def _literal(self, token: Token) -> Token:
         """A literal token as written; one too long is reported and read as a harmless
@@ -500,7 +510,7 @@ class _ToAst(Transformer[Token, Any]):
         return ast.EnumSpec(base, values, self._pos(tree))
 
     def enum_value(self, items: list[Any]) -> tuple[str, ast.Expr | None, Pos]:
-        return (str(items[0]), items[1] if len(items) > 1 else None, self._pos(items[0]))
+        return (self._declared(items[0]), items[1] if len(items) > 1 else None, self._pos(items[0]))
 
     @v_args(tree=True)
     def struct_spec(self, tree: Tree[Any]) -> ast.StructSpec:
@@ -516,7 +526,7 @@ class _ToAst(Transformer[Token, Any]):
 
     def type_decl(self, items: list[Any]) -> ast.TypeDecl:
         name, spec, *init = items
-        return ast.TypeDecl(str(name), spec, init[0] if init else None, self._pos(name))
+        return ast.TypeDecl(self._declared(name), spec, init[0] if init else None, self._pos(name))
 
     def type_block(self, items: list[Any]) -> list[ast.TypeDecl]:
         return items
@@ -536,7 +546,10 @@ class _ToAst(Transformer[Token, Any]):
         type_ref = typed[0]
         init = typed[1] if len(typed) > 1 else None
         edge = edges[0] if edges else None
-        return [ast.VarDecl(str(n), type_ref, init, location, self._pos(n), edge) for n in names]
+        return [
+            ast.VarDecl(self._declared(n), type_ref, init, location, self._pos(n), edge)
+            for n in names
+        ]
 
     def _block(self, kind: str, pos: Pos, items: list[Any]) -> ast.VarBlock:
         qualifiers = tuple(i for i in items if isinstance(i, str))
@@ -566,13 +579,13 @@ class _ToAst(Transformer[Token, Any]):
                 tuple(e for e in elements if isinstance(e, ast.Transition)),
                 tuple(e for e in elements if isinstance(e, ast.Action)),
             )
-        return ast.Pou(kind, str(name), return_type, blocks, body, self._pos(tree), sfc)
+        return ast.Pou(kind, self._declared(name), return_type, blocks, body, self._pos(tree), sfc)
 
     # ---- SFC
     def step_decl(self, items: list[Any]) -> ast.Step:
         keyword, name, *associations = items
         initial = str(keyword).upper() == "INITIAL_STEP"
-        return ast.Step(str(name), initial, tuple(associations), self._pos(name))
+        return ast.Step(self._declared(name), initial, tuple(associations), self._pos(name))
 
     def action_association(self, items: list[Any]) -> ast.ActionAssociation:
         name, *rest = items
@@ -606,7 +619,7 @@ class _ToAst(Transformer[Token, Any]):
 
     def action_decl(self, items: list[Any]) -> ast.Action:
         _keyword, name, body = items
-        return ast.Action(str(name), body, self._pos(name))
+        return ast.Action(self._declared(name), body, self._pos(name))
 
     @v_args(tree=True)
     def program_decl(self, tree: Tree[Any]) -> ast.Pou:
@@ -633,7 +646,7 @@ class _ToAst(Transformer[Token, Any]):
         args = tuple(i for i in items if isinstance(i, ast.Argument))
         task = str(names[1]) if len(names) == 3 else None
         return ast.ProgramInstanceDecl(
-            str(names[0]), task, str(names[-1]), args, self._pos(names[0])
+            self._declared(names[0]), task, str(names[-1]), args, self._pos(names[0])
         )
 
     def resource_body(self, items: list[Any]) -> tuple[str, list[Any]]:

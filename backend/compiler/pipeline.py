@@ -13,11 +13,12 @@ from typing import Any
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
+from backend.compiler.checks.generated_names import check_generated_names
 from backend.compiler.checks.programs import check_programs, globals_read, globals_written
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.generate import (
-    GenerationLimit,
+    GenerationError,
     action_control,
     class_name,
     declared_at,
@@ -141,8 +142,8 @@ def compile_sources(
     included = _included_pous(resolved, user_pous, programs)
     try:
         codes, types, globals_code = _generate(resolved, included)
-    except GenerationLimit as exc:
-        return CompileResult(tuple(sorted([*diagnostics, exc.diagnostic])), None)
+    except GenerationError as exc:
+        return CompileResult(tuple(sorted([*diagnostics, *exc.diagnostics])), None)
     program_configs = tuple(_program_config(resolved, codes, p) for p in programs)
     artifact = Artifact(
         project=project,
@@ -161,7 +162,8 @@ def _generate(
     resolved: Resolved, included: list[str]
 ) -> tuple[dict[str, PouCode], tuple[PouCode, ...], PouCode]:
     """The code of the POUs (by key), the structures and the globals: each unit within
-    MAX_UNIT_CODE (the generator keeps to that), all of them within MAX_PROJECT_CODE."""
+    MAX_UNIT_CODE (the generator keeps to that), all of them within MAX_PROJECT_CODE, and no
+    name of the user among the names of a POU's own code."""
     total = 0
 
     def counted(code: PouCode, where: Pos) -> PouCode:
@@ -169,13 +171,17 @@ def _generate(
         total += len(code.source)
         if total > MAX_PROJECT_CODE:
             message = f"the project's generated code exceeds {MAX_PROJECT_CODE // MiB} MiB"
-            raise GenerationLimit(Diagnostic.at(where, Code.CODE_SIZE, message))
+            raise GenerationError([Diagnostic.at(where, Code.CODE_SIZE, message)])
         return code
 
-    codes = {
-        name: counted(_pou_code(resolved, resolved.pous[name]), resolved.pous[name].pou.pos)
-        for name in included
-    }
+    codes: dict[str, PouCode] = {}
+    clashes: list[Diagnostic] = []
+    for name in included:
+        pou = resolved.pous[name]
+        codes[name] = counted(_pou_code(resolved, pou), pou.pou.pos)
+        clashes += check_generated_names(resolved, pou)
+    if clashes:
+        raise GenerationError(clashes)
     any_pou = resolved.sorted_pous()[0]
     types = tuple(
         counted(
