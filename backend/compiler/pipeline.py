@@ -113,6 +113,29 @@ def compile_sources(
     safe_values: dict[str, Any] | None = None,
     users: list[UserAccount] | None = None,
 ) -> CompileResult:
+    try:
+        return _compile(
+            sources, project, resource, programs, config_file, safe_values or {}, users or []
+        )
+    except (RecursionError, MemoryError) as exc:
+        # the limits are meant to make this impossible; should one be missing, the caller
+        # still gets a diagnostic (the project is too large for the compiler), never a
+        # traceback
+        where = Pos(sources[0].name if sources else config_file, 1, 1)
+        cause = "stack" if isinstance(exc, RecursionError) else "memory"
+        message = f"the compiler ran out of {cause} on this project"
+        return CompileResult((Diagnostic.at(where, Code.PROJECT_SIZE, message),), None)
+
+
+def _compile(
+    sources: list[SourceFile],
+    project: str,
+    resource: ResourceConfig | None,
+    programs: list[ProgramConfig] | None,
+    config_file: str,
+    safe_values: dict[str, Any],
+    users: list[UserAccount],
+) -> CompileResult:
     units, diagnostics = parse_all(sources)
     user_pous = {key(p.name) for unit in units for p in unit.pous}
     stdlib_units, stdlib_diagnostics = parse_all(stdlib_sources())
@@ -132,9 +155,9 @@ def compile_sources(
         programs = configured[1] if configured else _default_programs(units)
         positions = configured[2] if configured else {}
     diagnostics.extend(check_programs(resolved, resource, programs, config_file, positions))
-    safe, safe_diagnostics = _safe_values(resolved, safe_values or {}, config_file)
+    safe, safe_diagnostics = _safe_values(resolved, safe_values, config_file)
     diagnostics.extend(safe_diagnostics)
-    diagnostics.extend(_check_users(users or [], config_file))
+    diagnostics.extend(_check_users(users, config_file))
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics):
         return CompileResult(tuple(diagnostics), None)
@@ -153,7 +176,7 @@ def compile_sources(
         types=types,
         globals=globals_code,
         safe_values=safe,
-        users=tuple(sorted(users or [], key=lambda u: u.name)),
+        users=tuple(sorted(users, key=lambda u: u.name)),
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
 

@@ -80,6 +80,8 @@ def _load_folder(folder: Path) -> Project:
         data = tomllib.loads(config_path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ProjectError(f"{config_path}: {exc}") from None
+    except RecursionError:  # tomllib recurses into nested arrays and tables
+        raise ProjectError(f"{config_path}: values nested too deep") from None
     return _project_from_toml(data, sources, str(config_path))
 
 

@@ -12,6 +12,11 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+import pytest
+
+from backend.compiler import pipeline
+from backend.compiler.source import SourceFile
+from backend.engineering.project import ProjectError, load_project
 from tests.conftest import REPO, padt
 
 MEMORY_CAP = 1 << 30
@@ -372,3 +377,34 @@ def test_padt_sim_refuses_an_array_of_a_billion_values(tmp_path: Path) -> None:
     run = padt("sim", str(source), "--cycles", "1")
     assert run.returncode == 1 and "Traceback" not in run.stderr, run.stderr
     assert "[E0710]" in run.stdout + run.stderr
+
+
+# ---- should a limit be missing -------------------------------------------------------------
+
+
+@pytest.mark.parametrize("error", [RecursionError, MemoryError])
+def test_the_compiler_never_lets_recursion_or_memory_errors_out(
+    error: type[Exception], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def exhausted(resolved: object) -> None:
+        raise error()
+
+    monkeypatch.setattr(pipeline, "check", exhausted)
+    result = pipeline.compile_sources([SourceFile("main.st", program("x := 1;"))])
+    assert result.artifact is None
+    assert [str(d) for d in result.diagnostics] == [
+        "main.st:1:1: error: the compiler ran out of "
+        + ("stack" if error is RecursionError else "memory")
+        + " on this project [E0708]"
+    ]
+
+
+def test_a_padt_toml_nested_too_deep_is_a_project_error(tmp_path: Path) -> None:
+    (tmp_path / "padt.toml").write_text(
+        '[resource]\nname = "R"\n[project]\nx = ' + "[" * 100_000 + "]" * 100_000 + "\n"
+    )
+    (tmp_path / "main.st").write_text(program("x := 1;"))
+    with pytest.raises(ProjectError, match="nested too deep"):
+        load_project([tmp_path])
+    run = padt("compile", str(tmp_path))
+    assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
