@@ -945,11 +945,12 @@ class _Chart:
     def __init__(self, sfc: ast.Sfc) -> None:
         self.sfc = sfc
         self.initial = {key(step.name) for step in sfc.steps if step.initial}
-        self.action_order: list[str] = []
-        for step in sfc.steps:
-            for association in step.associations:
-                if association.action not in self.action_order:
-                    self.action_order.append(association.action)
+        named = [(step, a) for step in sfc.steps for a in step.associations]
+        # the actions as first named (spelled as there), and where each is named, by key
+        self.action_order = list(dict.fromkeys(association.action for _, association in named))
+        self.named_by: dict[str, list[tuple[ast.Step, ast.ActionAssociation]]] = {}
+        for step, association in named:
+            self.named_by.setdefault(key(association.action), []).append((step, association))
 
     def slots(self) -> list[str]:
         return [action_control(name) for name in self.action_order]
@@ -965,14 +966,11 @@ class _Chart:
         for action in self.action_order:
             inputs: dict[str, list[str]] = {}
             durations: dict[str, str] = {}
-            for step in self.sfc.steps:
-                for association in step.associations:
-                    if key(association.action) != key(action):
-                        continue
-                    flag = f"{emitter.var_code(_step_variable(scope, step.name))}.X"
-                    inputs.setdefault(association.qualifier, []).append(flag)
-                    if association.duration is not None:
-                        durations[association.qualifier] = emitter.exact(association.duration).code
+            for step, association in self.named_by[key(action)]:
+                flag = f"{emitter.var_code(_step_variable(scope, step.name))}.X"
+                inputs.setdefault(association.qualifier, []).append(flag)
+                if association.duration is not None:
+                    durations[association.qualifier] = emitter.exact(association.duration).code
             arguments = [
                 f"{qualifier}=({' or '.join(flags)})" for qualifier, flags in sorted(inputs.items())
             ] + [f"T{qualifier}={code}" for qualifier, code in sorted(durations.items())]

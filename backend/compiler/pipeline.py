@@ -408,10 +408,7 @@ def _chart(sfc: ast.Sfc | None) -> ChartInfo | None:
         for step in sfc.steps
         for a in step.associations
     )
-    actions: list[str] = []
-    for association in associations:
-        if association.action not in actions:
-            actions.append(association.action)
+    actions = list(dict.fromkeys(association.action for association in associations))
     return ChartInfo(
         steps=tuple(step.name for step in sfc.steps),
         initial=tuple(step.name for step in sfc.steps if step.initial),
