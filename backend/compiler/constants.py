@@ -57,35 +57,38 @@ class _TooDeep(Exception):
     """A constant defined through more names than the folder follows."""
 
 
-def guarded(leaf: Leaf) -> Leaf:
-    """`leaf`, refusing to follow a name into itself (`c : INT := c + 1`), asking it once
-    per name in the source (`c2 := c1 + c1`, `c3 := c2 + c2` ... would double the work with
-    every line), and giving up on a name defined through more than MAX_EXPRESSION_DEPTH
-    others in a row, since the folder recurses through them."""
-    visiting: set[str] = set()
-    known: dict[int, int | None] = {}  # by the id of the name's node
+class Guarded:
+    """A leaf that refuses to follow a name into itself (`c : INT := c + 1`), asks the leaf
+    once per name in the source (`c2 := c1 + c1`, `c3 := c2 + c2` ... would double the work
+    with every line), and gives up on a name defined through more than MAX_EXPRESSION_DEPTH
+    others in a row, since the folder recurses through them (`cut_short` then tells)."""
 
-    def visit(expr: ast.NameRef | ast.EnumLiteral) -> int | None:
+    def __init__(self, leaf: Leaf) -> None:
+        self.leaf = leaf
+        self.visiting: set[str] = set()
+        self.known: dict[int, int | None] = {}  # by the id of the name's node
+        self.cut_short = False
+
+    def __call__(self, expr: ast.NameRef | ast.EnumLiteral) -> int | None:
         name = expr.name.upper() if isinstance(expr, ast.NameRef) else None
         if name is None:
-            return leaf(expr)
-        if id(expr) in known:
-            return known[id(expr)]
-        if name in visiting:
+            return self.leaf(expr)
+        if id(expr) in self.known:
+            return self.known[id(expr)]
+        if name in self.visiting:
             return None
-        if len(visiting) >= MAX_EXPRESSION_DEPTH:
+        if len(self.visiting) >= MAX_EXPRESSION_DEPTH:
+            self.cut_short = True
             raise _TooDeep
-        outermost = not visiting
-        visiting.add(name)
+        outermost = not self.visiting
+        self.visiting.add(name)
         try:
-            value = leaf(expr)
+            value = self.leaf(expr)
         except _TooDeep:
             if not outermost:
                 raise
             return None  # the name counts as no constant
         finally:
-            visiting.discard(name)
-        known[id(expr)] = value
+            self.visiting.discard(name)
+        self.known[id(expr)] = value
         return value
-
-    return visit

@@ -14,9 +14,9 @@ from dataclasses import dataclass, field
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
-from backend.compiler.constants import fold_int, guarded
+from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
-from backend.compiler.limits import MAX_DATA_DEPTH
+from backend.compiler.limits import MAX_DATA_DEPTH, MAX_EXPRESSION_DEPTH
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
@@ -162,8 +162,12 @@ class _TypeResolver:
                 return fold_int(init, checked) if isinstance(init, ast.Expr) else None
             return self.enum_values.get(name)
 
-        checked = guarded(leaf)
-        return fold_int(expr, checked)
+        checked = Guarded(leaf)
+        value = fold_int(expr, checked)
+        if checked.cut_short:
+            message = f"a constant defined through more than {MAX_EXPRESSION_DEPTH} others"
+            self.report(expr.pos, Code.EXPRESSION_DEPTH, message)
+        return value
 
     def default_init(self, spec: ast.TypeRef) -> ast.Initializer | None:
         """The initializer a named type carries (`TYPE T : INT := 5;`), through aliases."""

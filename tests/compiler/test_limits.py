@@ -163,6 +163,11 @@ def test_expressions_of_every_kind_nested_too_deep_are_refused() -> None:
         "PROGRAM P\nVAR b : BOOL; END_VAR\nINITIAL_STEP S0: END_STEP\nSTEP S1: END_STEP\n"
         f"TRANSITION FROM S0 TO S1 := {' AND '.join(['b'] * DEEP)}; END_TRANSITION\n"
         "END_PROGRAM\n",
+        # through the names of constants, which the compiler folds
+        "VAR_GLOBAL CONSTANT c0 : DINT := 1;"
+        + "".join(f"c{i + 1} : DINT := c{i} + 1;" for i in range(10_000))
+        + " END_VAR\n"
+        + program("", "a : ARRAY[0..c10000] OF INT;"),
     )
 
 
