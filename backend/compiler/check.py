@@ -34,6 +34,9 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         for variable in resolved.globals:
             check_initializer(global_scope, variable.type, variable.init)
             check_constant_initializer(global_scope, variable, order)
+        for _, info in sorted(resolved.structs.items()):
+            for member in info.members:
+                check_initializer(global_scope, member.type, member.init)
         diagnostics.extend(global_scope.diagnostics)
     for pou in resolved.sorted_pous():
         if is_external(pou):

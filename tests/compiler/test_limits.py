@@ -370,6 +370,16 @@ def test_a_resource_or_a_call_beyond_a_million_values_is_refused() -> None:
     )
 
 
+def test_a_repetition_beyond_its_array_is_refused_before_it_is_written_out() -> None:
+    """A structure member's initial value was not checked, and `[10^12(0)]` was expanded."""
+    refused_with(
+        "E0121",
+        "TYPE S : STRUCT a : ARRAY[1..10] OF INT := [1000000000000(0)]; END_STRUCT; END_TYPE\n"
+        + program("", "s : S;"),
+        program("", "a : ARRAY[1..10] OF INT := [1000000000000(0)];"),
+    )
+
+
 def test_a_million_values_compile() -> None:
     (outcome,) = compile_capped(program("a[1] := 1.0;", "a : ARRAY[1..999999] OF LREAL;"))
     assert not outcome.diagnostics, outcome.diagnostics
