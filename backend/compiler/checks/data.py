@@ -28,7 +28,7 @@ STRING_VALUE = 64  # characters of a string that count as one value
 @dataclass(frozen=True)
 class Held:
     """A holder's nesting (itself included) and values; None for both when it holds itself,
-    directly or further down."""
+    directly or further down, or holds a block that does."""
 
     depth: int | None
     values: int | None
