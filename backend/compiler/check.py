@@ -9,9 +9,13 @@ pipeline once the user programs are known.
 
 from __future__ import annotations
 
+from backend.compiler.checks.data import check_data
 from backend.compiler.checks.expressions import check_expression
-from backend.compiler.checks.initializers import check_constant_initializer, check_initializer
-from backend.compiler.checks.nesting import check_nesting
+from backend.compiler.checks.initializers import (
+    check_constant_initializer,
+    check_initializer,
+    declaration_order,
+)
 from backend.compiler.checks.sfc import check_sfc
 from backend.compiler.checks.statements import check_block
 from backend.compiler.codes import Code
@@ -22,33 +26,33 @@ from backend.compiler.types import BOOL
 
 
 def check(resolved: Resolved) -> list[Diagnostic]:
-    diagnostics: list[Diagnostic] = []
+    diagnostics = check_data(resolved)
     if resolved.pous:
         any_pou = resolved.sorted_pous()[0]
         global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}), check_expression)
+        order = declaration_order(resolved.globals)
         for variable in resolved.globals:
             check_initializer(global_scope, variable.type, variable.init)
-            check_constant_initializer(global_scope, variable)
+            check_constant_initializer(global_scope, variable, order)
+        for _, info in sorted(resolved.structs.items()):
+            for member in info.members:
+                check_initializer(global_scope, member.type, member.init)
         diagnostics.extend(global_scope.diagnostics)
     for pou in resolved.sorted_pous():
         if is_external(pou):
             continue
         scope = Scope(resolved, pou, check_expression)
+        order = declaration_order(pou.variables)
         for variable in pou.variables:
             if variable.kind != "VAR_GLOBAL":
                 check_initializer(scope, variable.type, variable.init)
-                check_constant_initializer(scope, variable)
+                check_constant_initializer(scope, variable, order)
             if variable.edge is not None and (
                 variable.kind != "VAR_INPUT" or variable.type != BOOL
             ):
                 scope.report(variable.pos, Code.EDGE_INPUT, f"{variable.edge} needs a BOOL input")
-        if not check_nesting(scope, pou.pou.body):
-            diagnostics.extend(scope.diagnostics)  # too deep to type: stop at the limit
-            continue
         check_block(scope, pou.pou.body, loop_depth=0)
         if pou.pou.sfc is not None:
-            for action in pou.pou.sfc.actions:
-                check_nesting(scope, action.body)
             check_sfc(scope, pou.pou.sfc)
         diagnostics.extend(scope.diagnostics)
     return diagnostics

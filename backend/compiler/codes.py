@@ -31,6 +31,7 @@ class Code(Enum):
     SYNTAX = "E0001", "syntax error"
     STRING_ESCAPE = "E0002", "invalid escape in a string literal"
     INVALID_LITERAL = "E0003", "literal without a value"
+    IDENTIFIER = "E0004", "identifier with two underscores in a row or one at its end"
     PRAGMA_SKIPPED = "W0001", "pragma skipped"
 
     # ---- 01: declarations
@@ -55,6 +56,7 @@ class Code(Enum):
     STRUCT_INITIALIZER = "E0119", "structure initializer for something else than a structure"
     REPETITION_COUNT = "E0120", "repetition count not an integer literal"
     TOO_MANY_INITIAL_VALUES = "E0121", "more initial values than array elements"
+    GENERATED_NAME = "E0122", "name the generated code uses itself"
 
     # ---- 02: names, types and expressions
     UNDECLARED = "E0201", "name not declared"
@@ -138,3 +140,10 @@ class Code(Enum):
     VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array"
     STATEMENT_DEPTH = "E0705", "statements nested too deep"
     EXPRESSION_DEPTH = "E0706", "expression nested too deep"
+    FILE_SIZE = "E0707", "source file too large"
+    PROJECT_SIZE = "E0708", "project too large"
+    LITERAL_LENGTH = "E0709", "literal too long"
+    ARRAY_SIZE = "E0710", "array too large"
+    DATA_DEPTH = "E0711", "data types nested too deep"
+    DATA_SIZE = "E0712", "too much data"
+    CODE_SIZE = "E0713", "generated code too large"

@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from backend.compiler import ast
+from backend.compiler.limits import MAX_EXPRESSION_DEPTH
 
 # The value of a leaf that is not a literal (a named constant, an enum value), or None.
 Leaf = Callable[[ast.NameRef | ast.EnumLiteral], int | None]
@@ -27,6 +28,11 @@ _OPERATIONS: dict[str, Callable[[int, int], int]] = {
 }
 
 
+# Folded values are exact, but one of more bits than this is no constant: a chain of squares
+# (`c2 := c1 * c1`, ...) would soon need more memory than there is.
+_MAX_BITS = 4096
+
+
 def fold_int(expr: ast.Initializer | None, leaf: Leaf) -> int | None:
     """The value of a constant integer expression, or None when it is not one (or divides
     by zero, which is left to the run-time check)."""
@@ -40,26 +46,49 @@ def fold_int(expr: ast.Initializer | None, leaf: Leaf) -> int | None:
             a, b = fold_int(left, leaf), fold_int(right, leaf)
             if a is None or b is None or (op in ("/", "MOD") and b == 0):
                 return None
-            return _OPERATIONS[op](a, b)
+            value = _OPERATIONS[op](a, b)
+            return value if value.bit_length() <= _MAX_BITS else None
         case ast.NameRef() | ast.EnumLiteral():
             return leaf(expr)
     return None
 
 
-def guarded(leaf: Leaf) -> Leaf:
-    """`leaf`, refusing to follow a name into itself (`c : INT := c + 1`)."""
-    visiting: set[str] = set()
+class _TooDeep(Exception):
+    """A constant defined through more names than the folder follows."""
 
-    def visit(expr: ast.NameRef | ast.EnumLiteral) -> int | None:
+
+class Guarded:
+    """A leaf that refuses to follow a name into itself (`c : INT := c + 1`), asks the leaf
+    once per name in the source (`c2 := c1 + c1`, `c3 := c2 + c2` ... would double the work
+    with every line), and gives up on a name defined through more than MAX_EXPRESSION_DEPTH
+    others in a row, since the folder recurses through them (`cut_short` then tells)."""
+
+    def __init__(self, leaf: Leaf) -> None:
+        self.leaf = leaf
+        self.visiting: set[str] = set()
+        self.known: dict[int, int | None] = {}  # by the id of the name's node
+        self.cut_short = False
+
+    def __call__(self, expr: ast.NameRef | ast.EnumLiteral) -> int | None:
         name = expr.name.upper() if isinstance(expr, ast.NameRef) else None
         if name is None:
-            return leaf(expr)
-        if name in visiting:
+            return self.leaf(expr)
+        if id(expr) in self.known:
+            return self.known[id(expr)]
+        if name in self.visiting:
             return None
-        visiting.add(name)
+        if len(self.visiting) >= MAX_EXPRESSION_DEPTH:
+            self.cut_short = True
+            raise _TooDeep
+        outermost = not self.visiting
+        self.visiting.add(name)
         try:
-            return leaf(expr)
+            value = self.leaf(expr)
+        except _TooDeep:
+            if not outermost:
+                raise
+            return None  # the name counts as no constant
         finally:
-            visiting.discard(name)
-
-    return visit
+            self.visiting.discard(name)
+        self.known[id(expr)] = value
+        return value

@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.builtins import convert_code, wrap_code
+from backend.compiler.codes import Code
+from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     EnumValue,
     Misfit,
@@ -25,7 +27,9 @@ from backend.compiler.infer import (
     is_external,
     is_implicit,
 )
+from backend.compiler.limits import MAX_INDENT, MAX_UNIT_CODE, MiB
 from backend.compiler.resolve import STEP_STRUCT, PouSymbols, Resolved, StructInfo, Variable
+from backend.compiler.source import Pos
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -45,6 +49,41 @@ from runtime.contract.values import to_real32
 INDENT = "    "
 _COMPARE = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 LOCAL_KINDS = ("VAR_TEMP", "RETURN")  # Python locals even in a class's __call__
+
+
+def is_python_local(variable: Variable, in_function: bool) -> bool:
+    """Whether a variable of a POU (not a global) is a Python local in its generated code."""
+    return in_function or variable.kind in LOCAL_KINDS
+
+
+def python_locals(pou: PouSymbols) -> list[Variable]:
+    """The variables of a POU that its generated code holds in Python locals (a function's
+    result among them)."""
+    result = pou.by_key.get(key(pou.name))
+    declared = [
+        *pou.variables,
+        *([result] if result is not None and result.kind == "RETURN" else []),
+    ]
+    return [
+        v
+        for v in declared
+        if v.kind not in ("SYSTEM", "VAR_GLOBAL") and is_python_local(v, pou.kind == "FUNCTION")
+    ]
+
+
+def class_members(pou: PouSymbols) -> set[str]:
+    """The names the class of a PROGRAM or FUNCTION_BLOCK has besides its variables: its
+    methods, and the slots of edge memories and action control blocks."""
+    sfc = pou.pou.sfc
+    chart = _Chart(sfc).slots() if sfc is not None else []
+    actions = [_action_method(action.name) for action in sfc.actions] if sfc is not None else []
+    edges = [_edge_memory(v) for v in _instance_variables(pou) if v.edge is not None]
+    return {"__slots__", "__init__", "__call__", *chart, *actions, *edges}
+
+
+def _edge_memory(variable: Variable) -> str:
+    """The slot that remembers an R_EDGE or F_EDGE input's last value."""
+    return f"_edge_{variable.attr}"
 
 
 def _ident(name: str) -> str:
@@ -77,6 +116,15 @@ def tuple_members(pou: PouSymbols) -> list[Variable]:
     return outputs + [v for v in pou.variables if v.kind == "VAR_IN_OUT"]
 
 
+class GenerationError(Exception):
+    """Code a resource could not load (too large, too deep) or that would not work (a name
+    of the user hiding one of its own): generation stops, with what was wrong."""
+
+    def __init__(self, diagnostics: list[Diagnostic]) -> None:
+        super().__init__("\n".join(str(d) for d in diagnostics))
+        self.diagnostics = diagnostics
+
+
 @dataclass
 class _Value:
     code: str
@@ -88,6 +136,7 @@ class _Value:
 class _Emitter:
     scope: Scope
     local: bool  # a FUNCTION: its variables are Python locals
+    at: Pos  # what is being generated (a statement, a declaration), where a limit is met
     lines: list[str] = field(default_factory=list)
     pre: list[str] = field(default_factory=list)  # hoisted statements for the next line
     temp_count: int = 0
@@ -98,14 +147,30 @@ class _Emitter:
     # name the line of the source
     st_lines: list[int] = field(default_factory=list)
     st_line: int = 0
+    size: int = 0  # characters generated so far
+    max_size: int = MAX_UNIT_CODE
 
     def emit(self, depth: int, line: str) -> None:
+        if depth > MAX_INDENT:
+            message = f"statements nested {depth} blocks deep in the generated code"
+            raise GenerationError([Diagnostic.at(self.at, Code.STATEMENT_DEPTH, message)])
         for hoisted in self.pre:
-            self.lines.append(INDENT * depth + hoisted)
-            self.st_lines.append(self.st_line)
+            self._add(INDENT * depth + hoisted)
         self.pre.clear()
-        self.lines.append(INDENT * depth + line)
+        self._add(INDENT * depth + line)
+
+    def _add(self, line: str) -> None:
+        self.make_room(len(line) + 1)
+        self.size += len(line) + 1
+        self.lines.append(line)
         self.st_lines.append(self.st_line)
+
+    def make_room(self, size: int) -> None:
+        """Refuse `size` more characters beyond the unit's limit, before a long line is
+        even built."""
+        if self.size + size > self.max_size:
+            message = f"the generated code of this unit exceeds {self.max_size // MiB} MiB"
+            raise GenerationError([Diagnostic.at(self.at, Code.CODE_SIZE, message)])
 
     def temp(self) -> str:
         self.temp_count += 1
@@ -117,7 +182,7 @@ class _Emitter:
             return f"_SYS.{variable.attr}"
         if variable.kind == "VAR_GLOBAL":
             return f"{'s' if self.in_globals else '_G'}.{variable.attr}"
-        if self.local or variable.kind in LOCAL_KINDS:
+        if is_python_local(variable, self.local):
             return variable.attr
         return f"s.{variable.attr}"
 
@@ -432,6 +497,7 @@ class _Emitter:
             else:
                 items.extend([self.initial(element, value)] * times)
         missing = array.size - len(items)
+        self.make_room(sum(len(item) + 2 for item in items))  # `n(...)` is written n times
         body = f"[{', '.join(items)}]"
         if missing > 0:
             filler = self.initial(array, None) if is_aggregate(element) else None
@@ -467,9 +533,9 @@ class _Emitter:
         self.emit(depth + 1, "_tick()")
 
     def statement(self, statement: ast.Statement, depth: int) -> None:
-        outer, self.st_line = self.st_line, statement.pos.line
+        outer, self.st_line, self.at = (self.st_line, self.at), statement.pos.line, statement.pos
         self._statement(statement, depth)
-        self.st_line = outer
+        self.st_line, self.at = outer
 
     def _statement(self, statement: ast.Statement, depth: int) -> None:
         match statement:
@@ -798,10 +864,12 @@ class GeneratedPou:
     st_lines: tuple[int, ...]  # per line of `source`: the ST line it comes from, 0 for none
 
 
-def generate_pou(resolved: Resolved, pou: PouSymbols) -> GeneratedPou:
-    """The Python source of one POU."""
+def generate_pou(
+    resolved: Resolved, pou: PouSymbols, max_size: int = MAX_UNIT_CODE
+) -> GeneratedPou:
+    """The Python source of one POU, of at most `max_size` characters."""
     scope = Scope(resolved, pou)
-    emitter = _Emitter(scope, local=pou.kind == "FUNCTION")
+    emitter = _Emitter(scope, local=pou.kind == "FUNCTION", at=pou.pou.pos, max_size=max_size)
     if pou.kind == "FUNCTION":
         _generate_function(emitter, pou)
     else:
@@ -814,7 +882,7 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
     sfc = pou.pou.sfc
     chart = _Chart(sfc) if sfc is not None else None
     edges = [v for v in fields if v.edge is not None]
-    slots = [v.attr for v in fields] + [f"_edge_{v.attr}" for v in edges]
+    slots = [v.attr for v in fields] + [_edge_memory(v) for v in edges]
     slots += chart.slots() if chart else []
     emitter.emit(0, f"class {class_name(pou.name)}:")
     emitter.emit(1, f"__slots__ = {tuple(slots)!r}")
@@ -828,14 +896,14 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
             code = f"_init({code}, {{'X': True}})"
         emitter.emit(2, f"s.{variable.attr} = {code}")
     for variable in edges:
-        emitter.emit(2, f"s._edge_{variable.attr} = False")
+        emitter.emit(2, f"s.{_edge_memory(variable)} = False")
     if chart is not None:
         for slot in chart.slots():
             emitter.emit(2, f"s.{slot} = _ActionControl()")
     emitter.emit(0, "")
     emitter.emit(1, "def __call__(s):")
     for variable in edges:  # the body sees TRUE only in the call that brings the edge
-        attr, memory = f"s.{variable.attr}", f"s._edge_{variable.attr}"
+        attr, memory = f"s.{variable.attr}", f"s.{_edge_memory(variable)}"
         rising = variable.edge == "R_EDGE"
         edge = f"({attr} and not {memory})" if rising else f"(not {attr} and {memory})"
         emitter.emit(2, f"{attr}, {memory} = {edge}, {attr}")
@@ -877,11 +945,12 @@ class _Chart:
     def __init__(self, sfc: ast.Sfc) -> None:
         self.sfc = sfc
         self.initial = {key(step.name) for step in sfc.steps if step.initial}
-        self.action_order: list[str] = []
-        for step in sfc.steps:
-            for association in step.associations:
-                if association.action not in self.action_order:
-                    self.action_order.append(association.action)
+        named = [(step, a) for step in sfc.steps for a in step.associations]
+        # the actions as first named (spelled as there), and where each is named, by key
+        self.action_order = list(dict.fromkeys(association.action for _, association in named))
+        self.named_by: dict[str, list[tuple[ast.Step, ast.ActionAssociation]]] = {}
+        for step, association in named:
+            self.named_by.setdefault(key(association.action), []).append((step, association))
 
     def slots(self) -> list[str]:
         return [action_control(name) for name in self.action_order]
@@ -897,14 +966,11 @@ class _Chart:
         for action in self.action_order:
             inputs: dict[str, list[str]] = {}
             durations: dict[str, str] = {}
-            for step in self.sfc.steps:
-                for association in step.associations:
-                    if key(association.action) != key(action):
-                        continue
-                    flag = f"{emitter.var_code(_step_variable(scope, step.name))}.X"
-                    inputs.setdefault(association.qualifier, []).append(flag)
-                    if association.duration is not None:
-                        durations[association.qualifier] = emitter.exact(association.duration).code
+            for step, association in self.named_by[key(action)]:
+                flag = f"{emitter.var_code(_step_variable(scope, step.name))}.X"
+                inputs.setdefault(association.qualifier, []).append(flag)
+                if association.duration is not None:
+                    durations[association.qualifier] = emitter.exact(association.duration).code
             arguments = [
                 f"{qualifier}=({' or '.join(flags)})" for qualifier, flags in sorted(inputs.items())
             ] + [f"T{qualifier}={code}" for qualifier, code in sorted(durations.items())]
@@ -926,19 +992,20 @@ class _Chart:
             key=lambda item: (item[1].priority if item[1].priority is not None else 0, item[0]),
         )
         fired: list[tuple[str, ast.Transition]] = []
+        leaving: dict[str, list[int]] = {}  # step -> the transitions in `fired` from it
         for _, transition in ordered:
             flag = emitter.temp()
             sources = [
                 f"{emitter.var_code(_step_variable(scope, name))}.X" for name in transition.sources
             ]
-            blockers = [
-                other_flag
-                for other_flag, other in fired
-                if {key(n) for n in other.sources} & {key(n) for n in transition.sources}
-            ]
+            steps = {key(name) for name in transition.sources}
+            earlier = sorted({i for step in steps for i in leaving.get(step, [])})
+            blockers = [fired[i][0] for i in earlier]
             condition = emitter.exact(transition.condition).code
             terms = sources + [f"not {b}" for b in blockers] + [condition]
             emitter.emit(depth, f"{flag} = {' and '.join(terms)}")
+            for step in steps:
+                leaving.setdefault(step, []).append(len(fired))
             fired.append((flag, transition))
         for flag, transition in fired:
             for name in transition.sources:
@@ -987,14 +1054,22 @@ def _data_class(emitter: _Emitter, name: str, fields: list[Variable]) -> str:
     return "\n".join(emitter.lines) + "\n"
 
 
+def declared_at(variables: list[Variable], any_pou: PouSymbols) -> Pos:
+    """Where a structure or the globals are declared, to name in a diagnostic: at the first
+    of their variables."""
+    return variables[0].pos if variables else any_pou.pou.pos
+
+
 def generate_struct(resolved: Resolved, info: StructInfo, any_pou: PouSymbols) -> str:
     if key(info.name) == key(STEP_STRUCT):  # SFC steps also remember when they started
         return f"{struct_class(info.name)} = _SfcStep\n"
-    emitter = _Emitter(Scope(resolved, any_pou), local=False)
+    where = declared_at(info.members, any_pou)
+    emitter = _Emitter(Scope(resolved, any_pou), local=False, at=where)
     return _data_class(emitter, struct_class(info.name), info.members)
 
 
 def generate_globals(resolved: Resolved, any_pou: PouSymbols) -> str:
     """The class whose single instance `_G` holds the global variables."""
-    emitter = _Emitter(Scope(resolved, any_pou), local=False, in_globals=True)
+    where = declared_at(resolved.globals, any_pou)
+    emitter = _Emitter(Scope(resolved, any_pou), local=False, at=where, in_globals=True)
     return _data_class(emitter, "GLOBALS", resolved.globals)

@@ -16,7 +16,7 @@ from typing import Literal
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
-from backend.compiler.constants import fold_int, guarded
+from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable
 from backend.compiler.source import Pos
@@ -241,7 +241,7 @@ class Scope:
                 return fold_int(init, checked) if isinstance(init, ast.Expr) else None
             return None
 
-        checked = guarded(leaf)
+        checked = Guarded(leaf)
         return fold_int(expr, checked)
 
     def member(self, expr: ast.MemberRef) -> Variable | None:

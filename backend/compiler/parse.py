@@ -10,6 +10,7 @@ import datetime
 import fractions
 import functools
 import re
+from dataclasses import dataclass, replace
 from importlib import resources
 from typing import Any
 
@@ -25,6 +26,16 @@ from lark.exceptions import (
 from backend.compiler import ast
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
+from backend.compiler.limits import (
+    MAX_BRANCH_DEPTH,
+    MAX_DATA_DEPTH,
+    MAX_EXPRESSION_DEPTH,
+    MAX_LOOP_DEPTH,
+    MAX_NUMBER_LITERAL,
+    MAX_PROJECT_TOKENS,
+    MAX_STATEMENT_DEPTH,
+    MAX_STRING_LITERAL,
+)
 from backend.compiler.source import Pos
 
 _UNIT_NS = {
@@ -165,6 +176,19 @@ def _source_char(ch: str, wide: bool) -> str:
     return ch.encode("utf-8").decode("latin-1")
 
 
+# The longest literal of each kind, as written (strings between their quotes), and what a
+# longer one is read as. CPython refuses integers of more than 4,300 digits.
+_LITERAL_LIMITS = {
+    "INTEGER": (MAX_NUMBER_LITERAL, "0"),
+    "BASED_INTEGER": (MAX_NUMBER_LITERAL, "2#0"),
+    "REAL_NUMBER": (MAX_NUMBER_LITERAL, "0.0"),
+    "TIME_LITERAL": (MAX_NUMBER_LITERAL, "T#0s"),
+    "DATE_LITERAL": (MAX_NUMBER_LITERAL, "D#1970-01-01"),
+    "STRING_LITERAL": (MAX_STRING_LITERAL, "''"),
+    "WSTRING_LITERAL": (MAX_STRING_LITERAL, '""'),
+}
+
+
 def _children(tree: Tree[Any]) -> list[Any]:
     """A transformed node's children: AST nodes by now, which lark's types cannot know."""
     return list(tree.children)
@@ -183,11 +207,45 @@ class _ToAst(Transformer[Token, Any]):
             return Pos(self.file, item.line or 0, item.column or 0)
         return Pos(self.file, item.meta.line, item.meta.column)
 
+    def _declared(self, name: Token) -> str:
+        """A name being declared. IEC 61131-3 forbids two underscores in a row and one at
+        the end; padt needs both free: generated code names its own things with `__`, and
+        a Python keyword used as a name becomes the name with `_` appended."""
+        text = str(name)
+        if "__" in text or text.endswith("_"):
+            message = f"'{text}': an identifier has no two underscores in a row, none at its end"
+            self.errors.append(Diagnostic.at(self._pos(name), Code.IDENTIFIER, message))
+        return text
+
     # ---- literals
+    def _literal(self, token: Token) -> Token:
+        """A literal token as written; one too long is reported and read as a harmless
+        stand-in, so that the rest of the file is still checked."""
+        limit, stand_in = _LITERAL_LIMITS[token.type]
+        quoted = token.type in ("STRING_LITERAL", "WSTRING_LITERAL")
+        length = len(token) - 2 if quoted else len(token)
+        if length <= limit:
+            return token
+        message = f"literal of {length:,} characters; at most {limit:,}"
+        self.errors.append(Diagnostic.at(self._pos(token), Code.LITERAL_LENGTH, message))
+        return Token.new_borrow_pos(token.type, stand_in, token)
+
+    # lark passes every token of these terminals through `_literal` before the rules see it
+    INTEGER = BASED_INTEGER = REAL_NUMBER = TIME_LITERAL = DATE_LITERAL = _literal
+    STRING_LITERAL = WSTRING_LITERAL = _literal
+
+    def _integer(self, token: Token) -> int:
+        value = parse_int_literal(str(token))
+        try:
+            float(value)  # REAL#n and n in REAL arithmetic become floats
+        except OverflowError:
+            raise ValueError("a number beyond the range of LREAL") from None
+        return value
+
     def int_literal(self, items: list[Token]) -> ast.IntLiteral:
         token = items[0]
         based = token.type == "BASED_INTEGER"
-        return ast.IntLiteral(parse_int_literal(str(token)), self._pos(token), based=based)
+        return ast.IntLiteral(self._integer(token), self._pos(token), based=based)
 
     def real_literal(self, items: list[Token]) -> ast.RealLiteral:
         text = str(items[0]).replace("_", "")
@@ -226,7 +284,7 @@ class _ToAst(Transformer[Token, Any]):
         negative = len(rest) == 2
         token = rest[-1]
         if token.type in ("INTEGER", "BASED_INTEGER"):
-            value = parse_int_literal(str(token))
+            value = self._integer(token)
             based = token.type == "BASED_INTEGER"
             return ast.IntLiteral(-value if negative else value, pos, type_name, based)
         if token.type == "REAL_NUMBER":
@@ -452,7 +510,7 @@ class _ToAst(Transformer[Token, Any]):
         return ast.EnumSpec(base, values, self._pos(tree))
 
     def enum_value(self, items: list[Any]) -> tuple[str, ast.Expr | None, Pos]:
-        return (str(items[0]), items[1] if len(items) > 1 else None, self._pos(items[0]))
+        return (self._declared(items[0]), items[1] if len(items) > 1 else None, self._pos(items[0]))
 
     @v_args(tree=True)
     def struct_spec(self, tree: Tree[Any]) -> ast.StructSpec:
@@ -468,7 +526,7 @@ class _ToAst(Transformer[Token, Any]):
 
     def type_decl(self, items: list[Any]) -> ast.TypeDecl:
         name, spec, *init = items
-        return ast.TypeDecl(str(name), spec, init[0] if init else None, self._pos(name))
+        return ast.TypeDecl(self._declared(name), spec, init[0] if init else None, self._pos(name))
 
     def type_block(self, items: list[Any]) -> list[ast.TypeDecl]:
         return items
@@ -488,7 +546,10 @@ class _ToAst(Transformer[Token, Any]):
         type_ref = typed[0]
         init = typed[1] if len(typed) > 1 else None
         edge = edges[0] if edges else None
-        return [ast.VarDecl(str(n), type_ref, init, location, self._pos(n), edge) for n in names]
+        return [
+            ast.VarDecl(self._declared(n), type_ref, init, location, self._pos(n), edge)
+            for n in names
+        ]
 
     def _block(self, kind: str, pos: Pos, items: list[Any]) -> ast.VarBlock:
         qualifiers = tuple(i for i in items if isinstance(i, str))
@@ -518,13 +579,13 @@ class _ToAst(Transformer[Token, Any]):
                 tuple(e for e in elements if isinstance(e, ast.Transition)),
                 tuple(e for e in elements if isinstance(e, ast.Action)),
             )
-        return ast.Pou(kind, str(name), return_type, blocks, body, self._pos(tree), sfc)
+        return ast.Pou(kind, self._declared(name), return_type, blocks, body, self._pos(tree), sfc)
 
     # ---- SFC
     def step_decl(self, items: list[Any]) -> ast.Step:
         keyword, name, *associations = items
         initial = str(keyword).upper() == "INITIAL_STEP"
-        return ast.Step(str(name), initial, tuple(associations), self._pos(name))
+        return ast.Step(self._declared(name), initial, tuple(associations), self._pos(name))
 
     def action_association(self, items: list[Any]) -> ast.ActionAssociation:
         name, *rest = items
@@ -558,7 +619,7 @@ class _ToAst(Transformer[Token, Any]):
 
     def action_decl(self, items: list[Any]) -> ast.Action:
         _keyword, name, body = items
-        return ast.Action(str(name), body, self._pos(name))
+        return ast.Action(self._declared(name), body, self._pos(name))
 
     @v_args(tree=True)
     def program_decl(self, tree: Tree[Any]) -> ast.Pou:
@@ -585,7 +646,7 @@ class _ToAst(Transformer[Token, Any]):
         args = tuple(i for i in items if isinstance(i, ast.Argument))
         task = str(names[1]) if len(names) == 3 else None
         return ast.ProgramInstanceDecl(
-            str(names[0]), task, str(names[-1]), args, self._pos(names[0])
+            self._declared(names[0]), task, str(names[-1]), args, self._pos(names[0])
         )
 
     def resource_body(self, items: list[Any]) -> tuple[str, list[Any]]:
@@ -641,13 +702,136 @@ def _describe(terminal: str) -> str:
     return terminal.lower().replace("_", " ")
 
 
-def parse_source(file: str, text: str) -> ast.SourceUnit:
-    """Parse one ST file. Raises `CompileError` with a `file:line:col` diagnostic."""
-    _PRAGMAS.clear()
+@dataclass
+class TokenBudget:
+    """The tokens a project may still have: each file parsed takes its own, also when it
+    turns out to be wrong, since they cost time all the same."""
+
+    left: int = MAX_PROJECT_TOKENS
+
+    @property
+    def spent(self) -> bool:
+        return self.left < 0
+
+
+def _tree(file: str, text: str, budget: TokenBudget) -> Tree[Token]:
+    """The parse tree; parsing stops at the first token beyond the budget."""
+    parser = _parser().parse_interactive(text)
+    last: Token | None = None
     try:
-        tree = _parser().parse(text)
+        for last in parser.iter_parse():
+            budget.left -= 1
+            if budget.spent:
+                where = Pos(file, last.line or 1, last.column or 1)
+                message = f"the project has more than {MAX_PROJECT_TOKENS:,} tokens"
+                raise CompileError([Diagnostic.at(where, Code.PROJECT_SIZE, message)])
+        end = Token("$END", "", 0, 1, 1) if last is None else Token.new_borrow_pos("$END", "", last)
+        tree: Tree[Token] = parser.feed_token(end)
     except UnexpectedInput as exc:
+        exc.interactive_parser = parser  # as Lark.parse does: it tells what was expected
         raise CompileError([_syntax_diagnostic(file, exc)]) from None
+    return tree
+
+
+# What the nesting limits count, in the parse tree: the walkers of the AST recurse, so a
+# tree too deep for them never becomes one.
+_LOOPS = frozenset({"while_statement", "repeat_statement", "for_statement"})
+_BLOCKS = _LOOPS | {"if_statement", "case_statement"}
+_STATEMENTS = _BLOCKS | {
+    "assignment", "call_statement", "return_statement", "exit_statement",
+    "continue_statement", "empty_statement",
+}  # fmt: skip
+_OPERATIONS = frozenset({
+    "binary", "unary", "member_ref", "index_ref", "bit_ref", "deref", "call", "keyword_call",
+    "method_call", "array_initializer", "struct_initializer",
+})  # fmt: skip
+_OPERANDS = frozenset({
+    "name_ref", "direct_ref", "int_literal", "real_literal", "time_literal", "date_literal",
+    "bool_literal", "string_literal", "wstring_literal", "typed_literal", "enum_literal",
+})  # fmt: skip
+
+
+@dataclass(frozen=True)
+class _Nesting:
+    """How deep a node of the parse tree lies, by what the limits count."""
+
+    blocks: int = 0  # IF, CASE and loops around it
+    loops: int = 0  # WHILE, REPEAT and FOR around it
+    branches: int = 0  # the blocks, and in each the ELSIF or CASE branches before its own
+    operations: int = 0  # operations of an expression, the node's own included
+    arrays: int = 0  # ARRAY ... OF, the node's own included
+
+
+def _too_deep(kind: str, at: _Nesting) -> tuple[Code, str] | None:
+    if kind in _STATEMENTS and at.blocks >= MAX_STATEMENT_DEPTH:
+        return Code.STATEMENT_DEPTH, f"statements nested deeper than {MAX_STATEMENT_DEPTH}"
+    if kind in _LOOPS and at.loops >= MAX_LOOP_DEPTH:
+        return Code.STATEMENT_DEPTH, f"loops nested deeper than {MAX_LOOP_DEPTH}"
+    if at.branches > MAX_BRANCH_DEPTH:
+        message = f"ELSIF and CASE branches nested deeper than {MAX_BRANCH_DEPTH:,}"
+        return Code.STATEMENT_DEPTH, message
+    if at.operations + (1 if kind in _OPERANDS else 0) > MAX_EXPRESSION_DEPTH:
+        return Code.EXPRESSION_DEPTH, f"expression nested deeper than {MAX_EXPRESSION_DEPTH}"
+    if at.arrays > MAX_DATA_DEPTH:
+        return Code.DATA_DEPTH, f"array types nested deeper than {MAX_DATA_DEPTH}"
+    return None
+
+
+def _branch_indices(kind: str, children: list[Tree[Token]]) -> list[int]:
+    """For each child of an IF or CASE, the branch it belongs to: generated code puts each
+    ELSIF and each CASE branch inside the one before (`elif`), and the ELSE inside the last."""
+    indices: list[int] = []
+    branch = 0
+    labels = 0
+    for child in children:
+        if kind == "if_statement" and child.data in ("elsif_clause", "else_clause"):
+            branch += 1
+        elif kind == "case_statement" and child.data == "case_labels":
+            branch, labels = labels, labels + 1
+        elif kind == "case_statement" and child.data == "else_clause":
+            branch = labels
+        indices.append(branch)
+    return indices
+
+
+def _nesting_problem(file: str, tree: Tree[Token]) -> Diagnostic | None:
+    """The first place, in source order, where statements, an expression or array types
+    nest too deep, without recursion."""
+    pending: list[tuple[Tree[Token], _Nesting]] = [(tree, _Nesting())]
+    while pending:
+        node, around = pending.pop()
+        kind = node.data
+        at = replace(
+            around,
+            operations=around.operations + (1 if kind in _OPERATIONS else 0),
+            arrays=around.arrays + (1 if kind == "array_type" else 0),
+        )
+        found = _too_deep(kind, at)
+        if found is not None:
+            meta = node.meta
+            where = Pos(file, 1, 1) if meta.empty else Pos(file, meta.line, meta.column)
+            return Diagnostic.at(where, *found)
+        children = [child for child in node.children if isinstance(child, Tree)]
+        if kind not in _BLOCKS:
+            pending.extend((child, at) for child in reversed(children))
+            continue
+        inside = replace(at, blocks=at.blocks + 1, loops=at.loops + (1 if kind in _LOOPS else 0))
+        indices = _branch_indices(kind, children)
+        pending.extend(
+            (child, replace(inside, branches=inside.branches + 1 + index))
+            for child, index in reversed(list(zip(children, indices, strict=True)))
+        )
+    return None
+
+
+def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast.SourceUnit:
+    """Parse one ST file, taking its tokens from the project's `budget`. Raises
+    `CompileError` with a `file:line:col` diagnostic."""
+    _PRAGMAS.clear()
+    tree = _tree(file, text, budget or TokenBudget())
+    too_deep = _nesting_problem(file, tree)
+    if too_deep is not None:
+        raise CompileError([too_deep])
     transformer = _ToAst(file)
     try:
         items = transformer.transform(tree)

@@ -13,12 +13,15 @@ from typing import Any
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
+from backend.compiler.checks.generated_names import check_generated_names
 from backend.compiler.checks.programs import check_programs, globals_read, globals_written
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.generate import (
+    GenerationError,
     action_control,
     class_name,
+    declared_at,
     function_name,
     generate_globals,
     generate_pou,
@@ -26,9 +29,10 @@ from backend.compiler.generate import (
     struct_class,
 )
 from backend.compiler.infer import is_external
-from backend.compiler.parse import parse_source
+from backend.compiler.limits import MAX_PROJECT_CODE, MiB
+from backend.compiler.parse import TokenBudget, parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
-from backend.compiler.source import Pos, SourceFile, stdlib_sources
+from backend.compiler.source import Pos, ProjectSize, SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
 from runtime.contract.accounts import account_problems
 from runtime.contract.artifact import (
@@ -67,23 +71,35 @@ class CompileResult:
         return {"ok": self.ok, "diagnostics": [d.as_json() for d in self.diagnostics], "crc": crc}
 
 
-# Python frames of the parser and the tree walkers; deep ST is limited by the nesting
-# rules of the check stage long before this (see checks/nesting.py). Set once, when the
+# Python frames of the parser and the tree walkers; deep ST is refused by the nesting
+# limits of the parse stage long before this (see limits.py). Set once, when the
 # compiler is imported.
 RECURSION_LIMIT = 20_000
 sys.setrecursionlimit(max(sys.getrecursionlimit(), RECURSION_LIMIT))
 
 
 def parse_all(sources: list[SourceFile]) -> tuple[list[ast.SourceUnit], list[Diagnostic]]:
+    """Every file of a project parsed, within the limits of size: a file too large is left
+    out, and once the project is too large nothing more is parsed."""
     units: list[ast.SourceUnit] = []
     diagnostics: list[Diagnostic] = []
+    budget = TokenBudget()
+    size = ProjectSize()
     for source in sources:
+        problem = size.add(source.text)
+        if problem is not None:
+            diagnostics.append(Diagnostic.at(Pos(source.name, 1, 1), *problem))
+            if size.exceeded:
+                break
+            continue
         try:
-            unit = parse_source(source.name, source.text)
+            unit = parse_source(source.name, source.text, budget)
             units.append(unit)
             diagnostics.extend(unit.warnings)
         except CompileError as exc:
             diagnostics.extend(exc.diagnostics)
+        if budget.spent:
+            break
     return units, diagnostics
 
 
@@ -96,6 +112,29 @@ def compile_sources(
     config_file: str = "padt.toml",
     safe_values: dict[str, Any] | None = None,
     users: list[UserAccount] | None = None,
+) -> CompileResult:
+    try:
+        return _compile(
+            sources, project, resource, programs, config_file, safe_values or {}, users or []
+        )
+    except (RecursionError, MemoryError) as exc:
+        # the limits are meant to make this impossible; should one be missing, the caller
+        # still gets a diagnostic (the project is too large for the compiler), never a
+        # traceback
+        where = Pos(sources[0].name if sources else config_file, 1, 1)
+        cause = "stack" if isinstance(exc, RecursionError) else "memory"
+        message = f"the compiler ran out of {cause} on this project"
+        return CompileResult((Diagnostic.at(where, Code.PROJECT_SIZE, message),), None)
+
+
+def _compile(
+    sources: list[SourceFile],
+    project: str,
+    resource: ResourceConfig | None,
+    programs: list[ProgramConfig] | None,
+    config_file: str,
+    safe_values: dict[str, Any],
+    users: list[UserAccount],
 ) -> CompileResult:
     units, diagnostics = parse_all(sources)
     user_pous = {key(p.name) for unit in units for p in unit.pous}
@@ -116,27 +155,19 @@ def compile_sources(
         programs = configured[1] if configured else _default_programs(units)
         positions = configured[2] if configured else {}
     diagnostics.extend(check_programs(resolved, resource, programs, config_file, positions))
-    safe, safe_diagnostics = _safe_values(resolved, safe_values or {}, config_file)
+    safe, safe_diagnostics = _safe_values(resolved, safe_values, config_file)
     diagnostics.extend(safe_diagnostics)
-    diagnostics.extend(_check_users(users or [], config_file))
+    diagnostics.extend(_check_users(users, config_file))
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics):
         return CompileResult(tuple(diagnostics), None)
 
     included = _included_pous(resolved, user_pous, programs)
-    codes = {name: _pou_code(resolved, resolved.pous[name]) for name in included}
+    try:
+        codes, types, globals_code = _generate(resolved, included)
+    except GenerationError as exc:
+        return CompileResult(tuple(sorted([*diagnostics, *exc.diagnostics])), None)
     program_configs = tuple(_program_config(resolved, codes, p) for p in programs)
-    any_pou = resolved.sorted_pous()[0]
-    types = tuple(
-        _unit_code(
-            info.name, "STRUCT", struct_class(info.name),
-            generate_struct(resolved, info, any_pou), info.members,
-        )
-        for _, info in sorted(resolved.structs.items())
-    )  # fmt: skip
-    globals_code = _unit_code(
-        "GLOBALS", "GLOBALS", "GLOBALS", generate_globals(resolved, any_pou), resolved.globals
-    )
     artifact = Artifact(
         project=project,
         resource=resource,
@@ -145,9 +176,50 @@ def compile_sources(
         types=types,
         globals=globals_code,
         safe_values=safe,
-        users=tuple(sorted(users or [], key=lambda u: u.name)),
+        users=tuple(sorted(users, key=lambda u: u.name)),
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
+
+
+def _generate(
+    resolved: Resolved, included: list[str]
+) -> tuple[dict[str, PouCode], tuple[PouCode, ...], PouCode]:
+    """The code of the POUs (by key), the structures and the globals: each unit within
+    MAX_UNIT_CODE (the generator keeps to that), all of them within MAX_PROJECT_CODE, and no
+    name of the user among the names of a POU's own code."""
+    total = 0
+
+    def counted(code: PouCode, where: Pos) -> PouCode:
+        nonlocal total
+        total += len(code.source)
+        if total > MAX_PROJECT_CODE:
+            message = f"the project's generated code exceeds {MAX_PROJECT_CODE // MiB} MiB"
+            raise GenerationError([Diagnostic.at(where, Code.CODE_SIZE, message)])
+        return code
+
+    codes: dict[str, PouCode] = {}
+    clashes: list[Diagnostic] = []
+    for name in included:
+        pou = resolved.pous[name]
+        codes[name] = counted(_pou_code(resolved, pou), pou.pou.pos)
+        clashes += check_generated_names(resolved, pou)
+    if clashes:
+        raise GenerationError(clashes)
+    any_pou = resolved.sorted_pous()[0]
+    types = tuple(
+        counted(
+            _unit_code(
+                info.name, "STRUCT", struct_class(info.name),
+                generate_struct(resolved, info, any_pou), info.members,
+            ),
+            declared_at(info.members, any_pou),
+        )
+        for _, info in sorted(resolved.structs.items())
+    )  # fmt: skip
+    globals_code = _unit_code(
+        "GLOBALS", "GLOBALS", "GLOBALS", generate_globals(resolved, any_pou), resolved.globals
+    )
+    return codes, types, counted(globals_code, declared_at(resolved.globals, any_pou))
 
 
 def _from_configuration(
@@ -255,15 +327,15 @@ def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:
     return [ProgramConfig(name=p.name, pou=p.name, program_id=i) for i, p in enumerate(pous, 1)]
 
 
-def _fb_dependencies(resolved: Resolved, name: str) -> list[str]:
-    """The POU keys `name` needs, itself included, in a fixed order."""
-    seen: list[str] = []
-    stack = [name]
+def _fb_dependencies(resolved: Resolved, *names: str) -> list[str]:
+    """The POU keys `names` need, themselves included, sorted."""
+    seen: set[str] = set()
+    stack = list(names)
     while stack:
         current = stack.pop()
         if current in seen:
             continue
-        seen.append(current)
+        seen.add(current)
         for variable in resolved.pous[current].variables:
             stack.extend(_fb_types_in(resolved, variable.type))
     return sorted(seen)
@@ -286,11 +358,8 @@ def _fb_types_in(resolved: Resolved, t: Type) -> list[str]:
 def _included_pous(
     resolved: Resolved, user_pous: set[str], programs: list[ProgramConfig]
 ) -> list[str]:
-    wanted = sorted(user_pous) + [key(p.pou) for p in programs]
-    included: set[str] = set()
-    for name in wanted:
-        included.update(_fb_dependencies(resolved, name))
-    return sorted(name for name in included if not is_external(resolved.pous[name]))
+    included = _fb_dependencies(resolved, *sorted(user_pous), *(key(p.pou) for p in programs))
+    return [name for name in included if not is_external(resolved.pous[name])]
 
 
 def _unit_code(
@@ -339,10 +408,7 @@ def _chart(sfc: ast.Sfc | None) -> ChartInfo | None:
         for step in sfc.steps
         for a in step.associations
     )
-    actions: list[str] = []
-    for association in associations:
-        if association.action not in actions:
-            actions.append(association.action)
+    actions = list(dict.fromkeys(association.action for association in associations))
     return ChartInfo(
         steps=tuple(step.name for step in sfc.steps),
         initial=tuple(step.name for step in sfc.steps if step.initial),

@@ -14,8 +14,9 @@ from dataclasses import dataclass, field
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
-from backend.compiler.constants import fold_int, guarded
+from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.limits import MAX_DATA_DEPTH, MAX_EXPRESSION_DEPTH
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
@@ -122,6 +123,8 @@ class _TypeResolver:
         self.named: dict[str, Type | None] = {}
         self.in_progress: set[str] = set()
         self.global_constants: dict[str, ast.Initializer | None] = {}
+        # every enum value by key, as the first enum declared with it has it
+        self.enum_values: dict[str, int] = {}
         for unit in units:
             for pou in unit.pous:
                 self.pou_kinds.setdefault(key(pou.name), pou)
@@ -157,13 +160,14 @@ class _TypeResolver:
             if name in local_constants or name in self.global_constants:
                 init = local_constants.get(name, self.global_constants.get(name))
                 return fold_int(init, checked) if isinstance(init, ast.Expr) else None
-            for info in self.result.enums.values():
-                if name in info.values:
-                    return info.values[name][1]
-            return None
+            return self.enum_values.get(name)
 
-        checked = guarded(leaf)
-        return fold_int(expr, checked)
+        checked = Guarded(leaf)
+        value = fold_int(expr, checked)
+        if checked.cut_short:
+            message = f"a constant defined through more than {MAX_EXPRESSION_DEPTH} others"
+            self.report(expr.pos, Code.EXPRESSION_DEPTH, message)
+        return value
 
     def default_init(self, spec: ast.TypeRef) -> ast.Initializer | None:
         """The initializer a named type carries (`TYPE T : INT := 5;`), through aliases."""
@@ -191,6 +195,10 @@ class _TypeResolver:
                 self.report(
                     pos, Code.RECURSIVE_TYPE, f"type '{name}' is defined in terms of itself"
                 )
+                return None
+            if len(self.in_progress) >= MAX_DATA_DEPTH:  # resolving recurses through them
+                message = f"types defined through one another more than {MAX_DATA_DEPTH} deep"
+                self.report(pos, Code.DATA_DEPTH, message)
                 return None
             self.in_progress.add(name_key)
             resolved = self.resolve_spec(decl.spec, {}, type_name=decl.name)
@@ -296,6 +304,8 @@ class _TypeResolver:
             info.values[key(value_name)] = (value_name, value)
             next_value = value + 1
         self.result.enums[key(name)] = info
+        for value_key, (_, value) in info.values.items():
+            self.enum_values.setdefault(value_key, value)
         return enum_type
 
     def _struct(self, spec: ast.StructSpec, name: str) -> Type | None:
@@ -360,7 +370,6 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
             seen[key(pou.name)] = pou
     for name in sorted(seen):
         result.pous[name] = _resolve_pou(seen[name], types, result)
-    _check_self_containment(result)
     user_names = (types.decls, result.pous, result.globals_by_key)
     if not any(key(NAMESPACE) in names for names in user_names):  # the user's SYS wins
         result.system = system_variables()
@@ -381,53 +390,6 @@ def system_variables() -> dict[str, Variable]:
             entry.name, here,
         )  # fmt: skip
     return table
-
-
-def _contained_blocks(result: Resolved, t: Type) -> list[str]:
-    """The FB types (keys) a value of type `t` holds directly, in arrays and structs too."""
-    if isinstance(t, FbType):
-        return [key(t.name)]
-    if isinstance(t, ArrayType):
-        return _contained_blocks(result, t.element)
-    if isinstance(t, StructType) and key(t.name) in result.structs:
-        return [
-            b
-            for m in result.structs[key(t.name)].members
-            for b in _contained_blocks(result, m.type)
-        ]
-    return []
-
-
-def _check_self_containment(result: Resolved) -> None:
-    """A block that holds an instance of itself (directly or further down) has no end."""
-    for name, pou in sorted(result.pous.items()):
-        pending = [
-            b
-            for v in pou.variables
-            if v.kind != "VAR_GLOBAL"
-            for b in _contained_blocks(result, v.type)
-        ]
-        seen: set[str] = set()
-        while pending:
-            current = pending.pop()
-            if current == name:
-                result.diagnostics.append(
-                    Diagnostic.at(
-                        pou.pou.pos,
-                        Code.SELF_CONTAINED,
-                        f"'{pou.name}' contains an instance of itself",
-                    )
-                )
-                break
-            if current in seen or current not in result.pous:
-                continue
-            seen.add(current)
-            pending.extend(
-                b
-                for v in result.pous[current].variables
-                if v.kind != "VAR_GLOBAL"
-                for b in _contained_blocks(result, v.type)
-            )
 
 
 def _block_variables(

@@ -5,14 +5,16 @@ The TOML format is documented in docs/project-format.md.
 
 from __future__ import annotations
 
+import itertools
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from backend.compiler.limits import MAX_FILE_BYTES, MAX_PROJECT_FILES, MiB
 from backend.compiler.pipeline import CompileResult, compile_sources
-from backend.compiler.source import SourceFile, read_source
+from backend.compiler.source import SourceFile, read_sources
 from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount
 from runtime.contract.parameters import (
     PROGRAM_BY_NAME,
@@ -56,25 +58,30 @@ def load_project(paths: list[Path]) -> Project:
     """A project folder, or loose .st files (then with a default resource)."""
     if len(paths) == 1 and paths[0].is_dir():
         return _load_folder(paths[0])
-    sources = []
     for path in paths:
         if not path.is_file():
             raise ProjectError(f"{path}: no such file")
-        sources.append(read_source(path))
+    sources = read_sources([(path, str(path)) for path in paths])
     name = paths[0].stem if paths else "project"
     return Project(name, "", None, None, sources)
 
 
 def _load_folder(folder: Path) -> Project:
-    st_files = sorted(folder.rglob("*.st"))
-    sources = [read_source(p, str(p.relative_to(folder))) for p in st_files]
+    # a folder with more files than a project may have is refused by the compiler: its
+    # walk stops one file after the limit
+    st_files = sorted(itertools.islice(folder.rglob("*.st"), MAX_PROJECT_FILES + 1))
+    sources = read_sources([(p, str(p.relative_to(folder))) for p in st_files])
     config_path = folder / PROJECT_FILE
     if not config_path.exists():
         return Project(folder.name, "", None, None, sources)
+    if config_path.stat().st_size > MAX_FILE_BYTES:
+        raise ProjectError(f"{config_path}: larger than {MAX_FILE_BYTES // MiB} MiB")
     try:
         data = tomllib.loads(config_path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ProjectError(f"{config_path}: {exc}") from None
+    except RecursionError:  # tomllib recurses into nested arrays and tables
+        raise ProjectError(f"{config_path}: values nested too deep") from None
     return _project_from_toml(data, sources, str(config_path))
 
 

@@ -76,7 +76,23 @@ def _example(code: str, marker: str, blocks: list[tuple[str, str]]) -> Example:
     kinds = [kind for kind, _ in blocks]
     assert kinds in (["st"], ["toml", "st"]), f"{code} {marker} has blocks {kinds}"
     found = dict(blocks)
-    return Example(found["st"], found.get("toml"))
+    return Example(expand(found["st"]), found.get("toml"))
+
+
+REPEATED = re.compile(r"(?P<line>.*) \(\* (?P<count>[0-9]+) times \*\)")
+
+
+def expand(st: str) -> str:
+    """A line that ends in `(* N times *)` stands for N copies of the line before the comment
+    (the examples of limits need long sources)."""
+    lines = []
+    for line in st.splitlines():
+        repeated = REPEATED.fullmatch(line)
+        if repeated is None:
+            lines.append(line)
+        else:
+            lines.extend([repeated["line"]] * int(repeated["count"]))
+    return "\n".join(lines) + "\n"
 
 
 SECTIONS = parse_page(PAGE.read_text(encoding="utf-8"))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
@@ -112,18 +114,25 @@ def mismatch(target: Type, source: Type) -> str:
     return f"type mismatch: cannot assign {source.name} to {target.name}"
 
 
-def check_constant_initializer(scope: Scope, variable: Variable) -> None:
+def declaration_order(storage: list[Variable]) -> dict[int, int]:
+    """The place of each variable (by id) of one storage: a POU, or the globals."""
+    return {id(v): i for i, v in enumerate(storage)}
+
+
+def check_constant_initializer(scope: Scope, variable: Variable, order: dict[int, int]) -> None:
     """An initial value is computed once, before anything runs: IEC allows only constant
     expressions (literals, constants, enum values, standard functions of those). A constant
-    of the same storage (the same POU, or the globals) must be declared before it, since
-    initial values are set in declaration order."""
+    of the same storage (the same POU, or the globals; `order` is its declaration order)
+    must be declared before it, since initial values are set in declaration order."""
     if variable.init is None:
         return
-    storage = scope.resolved.globals if variable.kind == "VAR_GLOBAL" else scope.pou.variables
-    position = next((i for i, v in enumerate(storage) if v is variable), len(storage))
-    not_yet_set = {id(v) for v in storage[position:]}
+    place = order.get(id(variable), len(order))
+
+    def set_before(binding: Variable) -> bool:
+        return order.get(id(binding), -1) < place
+
     for expr in _values(variable.init):
-        if not is_constant(scope, expr, not_yet_set):
+        if not is_constant(scope, expr, set_before):
             scope.report(
                 expr.pos,
                 Code.NOT_CONSTANT_INITIAL,
@@ -139,8 +148,8 @@ def _values(init: ast.Initializer) -> list[ast.Expr]:
     return [init]
 
 
-def is_constant(scope: Scope, expr: ast.Expr, not_yet_set: set[int]) -> bool:
-    """`not_yet_set`: ids of the variables whose initial values are set after this one."""
+def is_constant(scope: Scope, expr: ast.Expr, set_before: Callable[[Variable], bool]) -> bool:
+    """`set_before`: whether a variable's initial value is set before this one's."""
     match expr:
         case (
             ast.IntLiteral() | ast.RealLiteral() | ast.BoolLiteral() | ast.TimeLiteral()
@@ -155,15 +164,15 @@ def is_constant(scope: Scope, expr: ast.Expr, not_yet_set: set[int]) -> bool:
                 isinstance(binding, Variable)
                 and binding.constant
                 and binding.kind != "STEP"
-                and id(binding) not in not_yet_set
+                and set_before(binding)
             )
         case ast.Unary(operand=operand):
-            return is_constant(scope, operand, not_yet_set)
+            return is_constant(scope, operand, set_before)
         case ast.Binary(left=left, right=right):
-            return is_constant(scope, left, not_yet_set) and is_constant(scope, right, not_yet_set)
+            return is_constant(scope, left, set_before) and is_constant(scope, right, set_before)
         case ast.Call(name=name, args=args):
             user_function = key(name) in scope.resolved.pous
             return not user_function and all(
-                arg.value is not None and is_constant(scope, arg.value, not_yet_set) for arg in args
+                arg.value is not None and is_constant(scope, arg.value, set_before) for arg in args
             )
     return False

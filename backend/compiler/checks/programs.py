@@ -12,6 +12,7 @@ from collections.abc import Iterator, Sequence
 
 from backend.compiler import ast
 from backend.compiler.ast import key
+from backend.compiler.checks.data import resource_data
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
@@ -63,7 +64,9 @@ def check_programs(
             f"the watchdog time ({resource.watchdog_ms} ms)"
         )
         diagnostics.append(Diagnostic.at(default, Code.SLICES_EXCEED_WATCHDOG, message))
-    diagnostics.extend(_check_single_writer(resolved, programs))
+    if len(programs) <= MAX_PROGRAMS:  # beyond, one writer per global is beside the point
+        diagnostics.extend(_check_single_writer(resolved, programs))
+    diagnostics.extend(resource_data(resolved, len(programs)))
     return diagnostics
 
 
