@@ -1,14 +1,29 @@
 """What a user does in the PADT's browser UI, as Playwright steps: fill a field, log in,
-pick a tab, confirm a modal, read what a screen shows."""
+pick a tab, confirm a modal, read what a screen shows;
+keep a screenshot for a person to look at (`PADT_SHOTS=folder`)."""
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
 
 from playwright.sync_api import Locator, Page
 
 WAIT_S = 20
+
+
+@dataclass(frozen=True)
+class Demo:
+    url: str
+    password: str
+
+
+def shoot(page: Page, name: str) -> None:
+    if "PADT_SHOTS" in os.environ:  # for a person to look at
+        page.screenshot(path=str(Path(os.environ["PADT_SHOTS"]) / f"{name}.png"))
 
 
 def field(page: Page, label: str) -> Locator:
@@ -46,6 +61,15 @@ def log_in_to_resource(page: Page, user: str, password: str) -> None:
         "the resource login is shown",
         lambda: text_of(page, '[data-testid="resource-login"]').startswith("logged in"),
     )
+
+
+def open_demo_as_admin(page: Page, demo: Demo) -> None:
+    """Open the demo, log in to the PADT and to its resource Tank1 as its administrator."""
+    page.goto(demo.url)
+    page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+    log_in(page, "admin", demo.password)
+    log_in_to_resource(page, "admin", demo.password)
+    wait_until("Tank1 runs", lambda: state(page) == "RUN", timeout_s=30)
 
 
 def confirm(page: Page, names: str) -> None:

@@ -4,27 +4,21 @@ it, freeze and step one program, log out."""
 
 from __future__ import annotations
 
-import os
 import re
-import signal
-import subprocess
-import sys
 import time
-from collections.abc import Iterator
-from dataclasses import dataclass
-from pathlib import Path
 
 import pytest
 from playwright.sync_api import Page
 
-from tests.conftest import REPO, free_port
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
+    Demo,
     button_enabled,
     confirm,
     cycle,
     log_in,
     log_in_to_resource,
+    shoot,
     text_of,
     value,
     wait_for_text,
@@ -32,53 +26,10 @@ from tests.ui.browser_steps import (
 )
 
 pytestmark = pytest.mark.browser
-URL_LINE = re.compile(r"padt demo: open (http://\S+)")
-PASSWORD_LINE = re.compile(r"administrator 'admin', password (\S+)")
-
-
-@dataclass(frozen=True)
-class Demo:
-    url: str
-    password: str
-
-
-@pytest.fixture
-def demo(tmp_path: Path) -> Iterator[Demo]:
-    command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(tmp_path)]
-    command += ["--port", str(free_port()), "--zenoh-port", str(free_port()), "--api-port", "0"]
-    process = subprocess.Popen(
-        command, cwd=REPO, stdout=subprocess.PIPE, text=True, env=dict(os.environ)
-    )
-    assert process.stdout is not None
-    url = password = None
-    started = time.monotonic()
-    for line in process.stdout:
-        password = password or _group(PASSWORD_LINE, line)
-        url = _group(URL_LINE, line)
-        if url:
-            break
-    assert url is not None, "padt demo printed no URL"
-    assert password is not None, "padt demo printed no administrator password"
-    assert time.monotonic() - started < 60
-    try:
-        yield Demo(url, password)
-    finally:
-        process.send_signal(signal.SIGINT)  # Ctrl-C
-        assert process.wait(timeout=15) == 0
-
-
-def _group(pattern: re.Pattern[str], line: str) -> str | None:
-    match = pattern.search(line)
-    return match.group(1) if match else None
 
 
 def level(page: Page) -> int:
     return int(value(page, "TankControl.level"))
-
-
-def shoot(page: Page, name: str) -> None:
-    if "PADT_SHOTS" in os.environ:  # for a person to look at
-        page.screenshot(path=str(Path(os.environ["PADT_SHOTS"]) / f"{name}.png"))
 
 
 def test_an_anonymous_browser_reaches_no_control(demo: Demo) -> None:
