@@ -21,6 +21,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="the PADT accounts (made with padt api-user; default ./padt-accounts.json)",
     )
+    parser.add_argument(
+        "--watch-lists",
+        type=Path,
+        default=Path("padt-watch-lists.json"),
+        metavar="FILE",
+        help="where the users' watch lists are kept (default ./padt-watch-lists.json)",
+    )
     parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
     parser.add_argument("--port", type=int, default=8080, help="HTTP port (next free if busy)")
 
@@ -29,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
     # imported here: `padt` must start fast for commands that never open a UI
     from backend.engineering.padt_accounts import AccountsError, PadtAccounts
     from backend.engineering.resource_directory import ResourceDirectory
+    from backend.engineering.watch_lists import WatchListError, WatchLists
     from frontend.app import PadtUi
     from frontend.ui_context import UiContext
     from runtime.contract.session import open_client
@@ -47,9 +55,15 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
+    try:
+        watch_lists = WatchLists(args.watch_lists)
+    except WatchListError as exc:
+        print(f"padt ui: {exc}", file=sys.stderr)
+        return 2
     session = open_client(args.zenoh, args.zenoh_config)
     directory = ResourceDirectory(session)
-    ui = PadtUi(UiContext(directory, accounts, args.zenoh), host=args.host, port=args.port)
+    context = UiContext(directory, accounts, args.zenoh, watch_lists)
+    ui = PadtUi(context, host=args.host, port=args.port)
     print(f"PADT UI: {ui.url}", flush=True)
     stop.sleep_until_requested()
     ui.close()

@@ -1,12 +1,14 @@
 """What the UI knows of its resource: the last status, the variables and their types, and
-the live values of one watch set of every variable (the runtime sends nothing else), each
-with its quality. Zenoh callbacks write it; the UI's refresher reads it; `version` tells
-the refresher whether anything changed."""
+the live values, each with its quality, of the variables the screens show now. Only those
+are watched: a browser looking at 25 rows of a 10,000-variable resource costs the runtime
+25 values per publication. Zenoh callbacks and one worker thread write it; the UI's
+refresher reads it; `version` tells the refresher whether anything changed."""
 
 from __future__ import annotations
 
 import logging
 import threading
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -15,10 +17,11 @@ from backend.engineering.resource_client import (
     ResourceUnreachable,
     WatchHandle,
 )
-from runtime.contract.protocol import GetStatus, GetValues, GetVariables, Status, WatchValues
+from runtime.contract.protocol import GetStatus, GetVariables, Status, WatchValues
 from runtime.contract.refusal import Refusal
 
 WATCH_PERIOD_MS = 100
+RETRY_S = 1.0  # an unreachable runtime: try again this much later
 log = logging.getLogger("padt.ui")
 
 
@@ -31,6 +34,7 @@ class Latest:
     values: dict[str, Any] = field(default_factory=dict)
     quality: dict[str, str] = field(default_factory=dict)  # live / forced / stale / deleted
     types: dict[str, str] = field(default_factory=dict)
+    types_version: int = 0  # changes with the set of variables (a new configuration)
     cycle: int = 0
     version: int = 0
 
@@ -39,69 +43,111 @@ class ResourceFeed:
     def __init__(self, client: ResourceClient) -> None:
         self.client = client
         self.latest = Latest()
+        self._wanted: tuple[str, ...] = ()
         self._watch: WatchHandle | None = None
-        self._watching = threading.Lock()
+        self._registered: tuple[str, ...] | None = None  # what the runtime's set holds
+        self._variables_known = False
+        self._generation = 0  # counts the reasons to register again (alive, new CRC, login)
+        self._closed = False
+        self._wake = threading.Event()
         client.on_status(self.show_status)
         client.on_alive(self._on_alive)
+        threading.Thread(target=self._keep_watching, daemon=True).start()
         self.restart()
+
+    def show(self, paths: Iterable[str]) -> None:
+        """The variables the screens show now: from the next publication on, only these
+        arrive. Cheap when nothing changed (called ten times a second)."""
+        wanted = tuple(sorted(set(paths)))
+        if wanted != self._wanted:
+            self._wanted = wanted
+            self._wake.set()
 
     def restart(self) -> None:
         """Fetch everything again (after a login to the resource: what it may see now)."""
-        threading.Thread(target=self._fetch_initial, daemon=True).start()
-        threading.Thread(target=self._load_variables, daemon=True).start()
+        threading.Thread(target=self._fetch_status, daemon=True).start()
+        self._forget_registration(variables_too=True)
 
     def close(self) -> None:
-        with self._watching:
-            if self._watch is not None:
-                self._watch.close()
-                self._watch = None
+        self._closed = True
+        self._wake.set()
 
     def show_status(self, status: Status) -> None:
         with self.latest.lock:
             crc_changed = self.latest.status is None or status.crc != self.latest.status.crc
             self.latest.status = status
             self.latest.version += 1
-        if crc_changed:
-            # a (new) configuration: learn its variables; ask outside Zenoh's thread
-            threading.Thread(target=self._load_variables, daemon=True).start()
+        if crc_changed:  # a (new) configuration: learn its variables
+            self._forget_registration(variables_too=True)
 
-    def _fetch_initial(self) -> None:
+    def _fetch_status(self) -> None:
         """Show the resource at once, not only after its next publication."""
         try:
             status = self.client.ask(GetStatus()).status
-            values = self.client.ask(GetValues())
         except (Refusal, ResourceUnreachable) as exc:
             log.info("%s; waiting for its status", exc)
             return
         self.show_status(status)
-        with self.latest.lock:
-            self.latest.values, self.latest.cycle = values.values, values.cycle
-            self.latest.version += 1
 
     def _on_alive(self, present: bool) -> None:
-        """A runtime that (re)appears knows nothing of our watch set: register it again
-        (outside Zenoh's thread)."""
+        """A runtime that (re)appears knows nothing of our watch set: register it again."""
         if present:
-            threading.Thread(target=self._load_variables, daemon=True).start()
+            self._forget_registration(variables_too=False)
+
+    def _forget_registration(self, variables_too: bool) -> None:
+        if variables_too:
+            self._variables_known = False
+        self._registered = None
+        self._generation += 1
+        self._wake.set()
+
+    def _keep_watching(self) -> None:
+        """The one thread that talks to the runtime about the watch set, so that Zenoh's
+        and viser's threads never wait for an answer, and changes come in order."""
+        while not self._closed:
+            self._wake.wait()
+            self._wake.clear()
+            if self._closed:
+                break
+            try:
+                if not self._variables_known:
+                    self._load_variables()
+                self._register()
+            except Refusal as refused:  # e.g. not logged in: again at the next reason
+                log.info("watch of %s: %s", self.client.resource, refused.message)
+            except ResourceUnreachable as exc:
+                log.info("watch of %s: %s; trying again", self.client.resource, exc)
+                self._wake.wait(RETRY_S)  # a pause before the retry, cut short by a change
+                self._wake.set()
+        if self._watch is not None:
+            self._watch.close()
+            self._watch = None
 
     def _load_variables(self) -> None:
-        with self._watching:  # a new configuration and a restarted runtime may coincide
-            try:
-                variables = self.client.ask(GetVariables()).variables
-            except (Refusal, ResourceUnreachable) as exc:
-                log.warning("no variables: %s", exc)
-                return
-            types = {v.path: v.type for v in variables}
-            with self.latest.lock:
-                self.latest.types = types
-                self.latest.version += 1
-            if self._watch is not None:
-                self._watch.close()
-                self._watch = None
-            try:
-                self._watch = self.client.watch(sorted(types), self._on_watch, WATCH_PERIOD_MS)
-            except (Refusal, ResourceUnreachable) as exc:
-                log.warning("no live values: %s", exc)
+        generation = self._generation
+        variables = self.client.ask(GetVariables()).variables
+        with self.latest.lock:
+            self.latest.types = {v.path: v.type for v in variables}
+            self.latest.types_version += 1
+            self.latest.version += 1
+        self._variables_known = generation == self._generation  # else: a newer configuration
+        self._registered = None
+
+    def _register(self) -> None:
+        generation = self._generation
+        with self.latest.lock:
+            known = self.latest.types
+        # a watch list may name variables this configuration lacks: the runtime would
+        # refuse the whole set for one of them; the screen says they are unknown
+        wanted = tuple(path for path in self._wanted if path in known)
+        if wanted == self._registered:
+            return
+        if self._watch is None:
+            self._watch = self.client.watch(list(wanted), self._on_watch, WATCH_PERIOD_MS)
+        else:
+            self.client.change_watch(self._watch, list(wanted), WATCH_PERIOD_MS)
+        if generation == self._generation:  # else a reason came meanwhile: once more
+            self._registered = wanted
 
     def _on_watch(self, message: WatchValues) -> None:
         with self.latest.lock:

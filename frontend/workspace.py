@@ -13,6 +13,7 @@ import viser
 from backend.engineering.resource_client import ResourceClient, ResourceLogin
 from frontend import plant_view, status_bar
 from frontend.confirm import attempt, confirm
+from frontend.gui_value import set_value
 from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
 from frontend.screens import login, online_test, resources, single_step
@@ -71,7 +72,7 @@ class Workspace:
         with self.panel.add_tab("Resources", viser.Icon.SERVER):
             self.resources = resources.build(gui, self._confirm, self.selected)
         with self.panel.add_tab("Online test", viser.Icon.TABLE):
-            self.online_test = online_test.build(gui)
+            self.online_test = online_test.build(gui, session.user, session.context.watch_lists)
         with self.panel.add_tab("Single step", viser.Icon.PLAYER_TRACK_NEXT):
             self.single_step = single_step.build(gui, self._act)
         self.panel.dock_right()
@@ -88,9 +89,7 @@ class Workspace:
         if resource is None:
             return
         user, password = self.resource_user.value.strip(), self.resource_password.value
-        # Not kept in the browser either. viser defines the setter apart from
-        # the getter, which mypy reads as a read-only property.
-        self.resource_password.value = ""  # type: ignore[misc]
+        set_value(self.resource_password, "")  # not kept in the browser either
         attempt(
             self.session.client,
             f"Login to {resource}",
@@ -174,9 +173,10 @@ class Workspace:
         login_there = self.session.resource_login(resource) if resource is not None else None
         self.resource_login.content = _login_note(resource, login_there)
         resources.refresh(self.resources, list(directory.items()), resource, self._allowed)
-        online_test.refresh(
-            self.online_test, self.session.feed_of(resource) if resource is not None else None
-        )
+        feed = self.session.feed_of(resource) if resource is not None else None
+        online_test.refresh(self.online_test, feed)
+        if feed is not None:
+            feed.show(online_test.wanted(self.online_test))
         single_step.refresh(self.single_step, status, self._allowed)
         self.drawing.show(resource, status)
 

@@ -78,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
     from backend.engineering.padt_accounts import PadtAccounts, write_accounts
     from backend.engineering.project import compile_project, load_project
     from backend.engineering.resource_directory import ResourceDirectory
+    from backend.engineering.watch_lists import WatchLists
     from frontend.app import PadtUi
     from frontend.ui_context import UiContext
     from runtime.contract.session import open_client, open_router
@@ -119,7 +120,9 @@ def run(args: argparse.Namespace) -> int:
             api = ApiServer(service, args.host, args.api_port)
         except OSError:  # busy: like the UI, take another port rather than fail
             api = ApiServer(service, args.host, 0)
-        ui = PadtUi(UiContext(directory, accounts, endpoint), host=args.host, port=args.port)
+        watch_lists = WatchLists(args.state_dir / "watch-lists.json")
+        context = UiContext(directory, accounts, endpoint, watch_lists)
+        ui = PadtUi(context, host=args.host, port=args.port)
         try:
             _announce(args.state_dir, resource, result.artifact.crc, admin, admin_password)
             print(f"padt demo: REST API {api.url}/docs (log in as {admin.name})", flush=True)

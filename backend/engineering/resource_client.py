@@ -259,19 +259,25 @@ class ResourceClient:
         token = self.session.liveliness().declare_token(watcher_key(self.resource, watch_id))
         subscriber = self._declare(watch_key(self.resource, watch_id), WatchValues, callback)
         handle = WatchHandle(watch_id, token, subscriber)
-        # a large set goes in several requests, each well inside the request limit
-        size = min(WATCH_BATCH, MAX_WATCHED)
-        batches = [variables[i : i + size] for i in range(0, len(variables), size)]
         try:
-            for number, batch in enumerate(batches or [[]]):
-                reply = self.ask(Watch(watch_id, batch, period_ms, append=number > 0))
-                handle.variables = reply.variables
+            self.change_watch(handle, variables, period_ms)
         except (Refusal, ResourceUnreachable):
             handle.close()
             with contextlib.suppress(Refusal, ResourceUnreachable):  # only tidying up
                 self.ask(Unwatch(watch_id))
             raise
         return handle
+
+    def change_watch(self, handle: WatchHandle, variables: list[str], period_ms: int = 100) -> None:
+        """Make `variables` the whole set of `handle` (what a screen shows now). Raises
+        the resource's Refusal or ResourceUnreachable; the set is then left as it was or
+        partly registered, and the caller tries again or closes it."""
+        # a large set goes in several requests, each well inside the request limit
+        size = min(WATCH_BATCH, MAX_WATCHED)
+        batches = [variables[i : i + size] for i in range(0, len(variables), size)]
+        for number, batch in enumerate(batches or [[]]):
+            reply = self.ask(Watch(handle.watch_id, batch, period_ms, append=number > 0))
+            handle.variables = reply.variables  # the whole set so far
 
     def _declare(
         self, key_expr: str, kind: type[P], callback: Callable[[P], None]

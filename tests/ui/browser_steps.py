@@ -12,13 +12,22 @@ from pathlib import Path
 
 from playwright.sync_api import Locator, Page
 
+from backend.engineering.resource_client import ResourceClient
+
 WAIT_S = 20
+PASSWORD = "correct-horse-7"  # of every account of the `plant` fixture
 
 
 @dataclass(frozen=True)
 class Demo:
     url: str
     password: str
+
+
+@dataclass(frozen=True)
+class Plant:
+    url: str
+    client: ResourceClient
 
 
 def shoot(page: Page, name: str) -> None:
@@ -95,3 +104,20 @@ def value(page: Page, variable: str) -> str:
 
 def button_enabled(page: Page, name: str) -> bool:
     return page.get_by_role("button", name=name, exact=True).first.is_enabled()
+
+
+def open_as(page: Page, plant: Plant, user: str) -> None:
+    page.goto(plant.url)
+    page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+    log_in(page, user, PASSWORD)
+    wait_for_text(page, '[data-testid="user"]', user)
+
+
+def choose(page: Page, label: str, option: str) -> None:
+    """Pick `option` in the viser dropdown labelled `label`."""
+    page.get_by_label(label, exact=True).click()
+    page.get_by_role("option", name=option, exact=True).click()
+    wait_until(
+        f"{label} shows {option}",
+        lambda: page.get_by_label(label, exact=True).input_value() == option,
+    )

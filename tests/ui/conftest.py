@@ -1,5 +1,7 @@
-"""The fixture most browser tests use: `padt demo` in its own process, with the URL and the
-administrator password it printed."""
+"""The fixtures of the browser tests: `padt demo` in its own process, with the URL and the
+administrator password it printed; and `plant`, the demo resource with users of every
+level and the UI in this process, for what needs more than one account or the resource's
+client at hand."""
 
 from __future__ import annotations
 
@@ -14,8 +16,18 @@ from pathlib import Path
 
 import pytest
 
+from backend.engineering.padt_accounts import PadtAccounts, write_accounts
+from backend.engineering.project import compile_project, load_project
+from backend.engineering.resource_directory import ResourceDirectory
+from backend.engineering.watch_lists import WatchLists
+from frontend.app import PadtUi
+from frontend.ui_context import UiContext
+from padt.demo import demo_project_with_accounts
+from runtime.contract.accounts import hash_password
+from runtime.contract.artifact import UserAccount
 from tests.conftest import REPO, free_port
-from tests.ui.browser_steps import Demo
+from tests.support.runtime_process import running_resource, store_artifact
+from tests.ui.browser_steps import PASSWORD, Demo, Plant
 
 URL_LINE = re.compile(r"padt demo: open (http://\S+)")
 PASSWORD_LINE = re.compile(r"administrator 'admin', password (\S+)")
@@ -49,3 +61,36 @@ def demo(tmp_path: Path) -> Iterator[Demo]:
 def _group(pattern: re.Pattern[str], line: str) -> str | None:
     match = pattern.search(line)
     return match.group(1) if match else None
+
+
+@pytest.fixture
+def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
+    """The demo resource with a read-only user `viewer`, and the UI with three PADT
+    accounts: `admin` (security administrator), `viewer` (read-write), `guest` (read-only)."""
+    verifier = hash_password(PASSWORD)
+    resource_users = [
+        UserAccount("admin", "administrator", verifier),
+        UserAccount("viewer", "read", verifier),
+    ]
+    result = compile_project(load_project([demo_project_with_accounts(tmp_path, resource_users)]))
+    assert result.artifact is not None
+    store_artifact(tmp_path, result.artifact)
+    accounts_file = tmp_path / "padt-accounts.json"
+    write_accounts(
+        accounts_file,
+        (
+            UserAccount("admin", "security-administrator", verifier),
+            UserAccount("viewer", "read-write", verifier),
+            UserAccount("guest", "read-only", verifier),
+        ),
+    )
+    with running_resource("Tank1", tmp_path, zenoh_endpoint) as (_, client):
+        session = client.session
+        accounts = PadtAccounts(accounts_file, time.monotonic_ns)
+        lists = WatchLists(tmp_path / "watch-lists.json")
+        context = UiContext(ResourceDirectory(session), accounts, zenoh_endpoint, lists)
+        ui = PadtUi(context, port=free_port())
+        try:
+            yield Plant(ui.url, client)
+        finally:
+            ui.close()
