@@ -1,11 +1,14 @@
 """The viser UI server: a GUI per browser, each its own session (frontend/browser_session.py),
-kept up to date by a refresher thread ten times a second. Every action goes through the
-engineering services' resource client, and so through the resource's own checks."""
+kept up to date by one refresher thread: a browser whose resource sent something new is
+redrawn at once (new values reach the page without waiting for a tick), and every browser
+ten times a second. Every action goes through the engineering services' resource client,
+and so through the resource's own checks."""
 
 from __future__ import annotations
 
 import logging
 import threading
+import time
 
 import viser
 
@@ -13,6 +16,7 @@ from frontend.browser_session import BrowserSession
 from frontend.ui_context import UiContext
 
 REFRESH_S = 0.1
+GATHER_S = 0.005  # news that arrive together are drawn together
 log = logging.getLogger("padt.ui")
 
 
@@ -26,6 +30,7 @@ class PadtUi:
         self.server.on_client_connect(self._connect)
         self.server.on_client_disconnect(self._disconnect)
         self._stop = threading.Event()
+        self._news = threading.Event()
         self._refresher = threading.Thread(target=self._refresh_loop, daemon=True)
         self._refresher.start()
 
@@ -34,7 +39,8 @@ class PadtUi:
         return f"http://127.0.0.1:{self.server.get_port()}"
 
     def _connect(self, client: viser.ClientHandle) -> None:
-        session = BrowserSession(client, self.context, self._address(client.client_id))
+        address = self._address(client.client_id)
+        session = BrowserSession(client, self.context, address, self._news.set)
         with self._lock:
             self.browsers[client.client_id] = session
 
@@ -53,10 +59,19 @@ class PadtUi:
         return str(address[0]) if address else f"browser {client_id}"
 
     def _refresh_loop(self) -> None:
-        while not self._stop.wait(REFRESH_S):
+        last_tick = 0.0
+        while not self._stop.is_set():
+            self._news.wait(REFRESH_S)
+            self._stop.wait(GATHER_S)
+            self._news.clear()
+            now = time.monotonic()
+            tick = now - last_tick >= REFRESH_S
+            last_tick = now if tick else last_tick
             with self._lock:
                 sessions = list(self.browsers.values())
             for session in sessions:
+                if not (session.take_news() or tick):
+                    continue
                 try:
                     session.refresh()
                 except Exception:  # one browser's trouble is not the others'

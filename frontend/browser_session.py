@@ -5,6 +5,7 @@ resource login the user made in this browser; no built-in account acts for a bro
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 
 import viser
 
@@ -17,8 +18,18 @@ from runtime.contract.refusal import Refusal
 
 
 class BrowserSession:
-    def __init__(self, client: viser.ClientHandle, context: UiContext, address: str) -> None:
+    def __init__(
+        self,
+        client: viser.ClientHandle,
+        context: UiContext,
+        address: str,
+        on_news: Callable[[], None] = lambda: None,
+    ) -> None:
+        """`on_news` is called (from Zenoh's threads) when a resource sent something new
+        for this browser; `take_news` then says so once."""
         self.client, self.context, self.address = client, context, address
+        self._on_news = on_news
+        self._news = False
         self.token: str | None = None  # the PADT session of this browser
         self.user, self.level = "", ""
         self._lock = threading.Lock()  # the refresher and the GUI's callbacks
@@ -114,12 +125,20 @@ class BrowserSession:
         with self._lock:
             feed = self._feeds.get(resource)
         if feed is None:
-            feed = ResourceFeed(self.client_of(resource))
+            feed = ResourceFeed(self.client_of(resource), self._heard)
             with self._lock:
                 self._feeds[resource] = feed
         return feed
 
-    # ---- the refresher's call, ten times a second
+    # ---- the refresher's calls
+    def _heard(self) -> None:
+        self._news = True
+        self._on_news()
+
+    def take_news(self) -> bool:
+        news, self._news = self._news, False
+        return news
+
     def refresh(self) -> None:
         if self.workspace is not None and self.valid():
             self.workspace.refresh()

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,12 +36,16 @@ class Latest:
     types: dict[str, str] = field(default_factory=dict)
     types_version: int = 0  # changes with the set of variables (a new configuration)
     cycle: int = 0
-    version: int = 0
+    version: int = 0  # changes with anything above
+    values_version: int = 0  # changes with the values (and their qualities) only
 
 
 class ResourceFeed:
-    def __init__(self, client: ResourceClient) -> None:
+    def __init__(self, client: ResourceClient, on_news: Callable[[], None] = lambda: None) -> None:
+        """`on_news` is called after every change of `latest` (from Zenoh's threads: it
+        must not wait)."""
         self.client = client
+        self._on_news = on_news
         self.latest = Latest()
         self._wanted: tuple[str, ...] = ()
         self._watch: WatchHandle | None = None
@@ -77,6 +81,7 @@ class ResourceFeed:
             crc_changed = self.latest.status is None or status.crc != self.latest.status.crc
             self.latest.status = status
             self.latest.version += 1
+        self._on_news()
         if crc_changed:  # a (new) configuration: learn its variables
             self._forget_registration(variables_too=True)
 
@@ -155,3 +160,5 @@ class ResourceFeed:
             self.latest.quality = {path: entry.quality for path, entry in message.values.items()}
             self.latest.cycle = message.cycle
             self.latest.version += 1
+            self.latest.values_version += 1
+        self._on_news()

@@ -26,7 +26,7 @@ from frontend.resource_feed import ResourceFeed
 from runtime.contract.values import format_for_display
 
 ALL = "All variables"
-PAGE_SIZES = ("25", "50", "100", "200")
+PAGE_SIZES = ("25", "50", "100", "200", "500", "1000")
 MAX_MATCHES = 100  # options in the Matches dropdown
 NO_MATCH = "(no match)"
 NO_INSTANCE = "(no instances)"
@@ -55,6 +55,7 @@ class OnlineTestScreen:
     all_rows: list[str] = field(default_factory=list)  # them in tree order
     types_version: int = -1
     shown: str = ""
+    shown_key: tuple[Any, ...] = ()  # what `shown` was drawn from
     rows: list[str] = field(default_factory=list)  # the page in view
 
 
@@ -213,7 +214,7 @@ def refresh(screen: OnlineTestScreen, feed: ResourceFeed | None) -> None:
     latest = feed.latest
     with latest.lock:
         types_version, types = latest.types_version, latest.types
-        values, quality = latest.values, latest.quality
+        values, quality, values_version = latest.values, latest.quality, latest.values_version
     if types_version != screen.types_version:
         screen.types, screen.types_version = types, types_version
         screen.all_rows = variable_tree.in_tree_order(types)
@@ -235,7 +236,10 @@ def refresh(screen: OnlineTestScreen, feed: ResourceFeed | None) -> None:
         screen.range_note.content = _range_html(range_text)
     if not rows and own_list(screen):
         return _show(screen, "<p>This list is empty: add variables under Compose watch lists.</p>")
-    _show(screen, render_values(screen.rows, types, values, quality, first))
+    key = (values_version, types_version, first, tuple(screen.rows))
+    if key != screen.shown_key:  # drawing a long page costs; only when it changed
+        _show(screen, render_values(screen.rows, types, values, quality, first))
+        screen.shown_key = key
 
 
 def _refresh_buttons(screen: OnlineTestScreen) -> None:
@@ -318,6 +322,7 @@ def _show(screen: OnlineTestScreen, page: str) -> None:
     if page != screen.shown:
         screen.table.content = page
         screen.shown = page
+        screen.shown_key = ()
 
 
 def _say(screen: OnlineTestScreen, text: str, error: bool = False) -> None:

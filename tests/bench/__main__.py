@@ -10,6 +10,7 @@ from tests.bench import (
     bench_reload,
     bench_rest,
     bench_runtime,
+    bench_ui,
     bench_watch,
 )
 
@@ -23,6 +24,7 @@ def main() -> None:
     bench_watch.main()
     bench_rest.main()
     bench_hostile.main()
+    bench_ui.main()
 
 
 if __name__ == "__main__":
