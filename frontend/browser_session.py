@@ -66,6 +66,9 @@ class BrowserSession:
         self.token = None
         self.show_login("Logged out.")
 
+    def time_left_ns(self) -> int:
+        return self.context.accounts.time_left_ns(self.token) if self.token else 0
+
     def valid(self) -> bool:
         """Whether the PADT session still holds; an ended one shows the login again."""
         if self.token is None:

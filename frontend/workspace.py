@@ -31,6 +31,7 @@ class WorkspaceSession(Protocol):
     level: str
 
     def log_out(self) -> None: ...
+    def time_left_ns(self) -> int: ...
     def resource_login(self, resource: str) -> ResourceLogin | None: ...
     def client_of(self, resource: str) -> ResourceClient: ...
     def log_in_to(self, resource: str, user: str, password: str) -> ResourceLogin: ...
@@ -52,6 +53,8 @@ class Workspace:
         self._handles: list[Any] = []
         keep = self._handles.append
         keep(gui.add_html(_header(session.user, session.level)))
+        self.session_note = gui.add_html("")
+        keep(self.session_note)
         logout = gui.add_button("Log out")
         logout.on_click(lambda _: session.log_out())
         keep(logout)
@@ -158,6 +161,9 @@ class Workspace:
 
     # ---- ten times a second
     def refresh(self) -> None:
+        note = _session_note(self.session.time_left_ns())
+        if self.session_note.content != note:
+            self.session_note.content = note
         online = self.session.context.directory.online()
         names = tuple(name for name, _ in online) or (NONE,)
         if tuple(self.resource.options) != names:
@@ -192,6 +198,20 @@ def _header(user: str, level: str) -> str:
         '<div style="padding:4px 0"><b style="font-size:1.15em">PADT</b> '
         f'<span data-testid="user">{user}</span> '
         f'<span style="color:#868e96" data-testid="level">({level})</span></div>'
+    )
+
+
+def _session_note(left_ns: int) -> str:
+    """The PADT session's time left, to the minute (to the second in the last minute)."""
+    seconds = left_ns // 10**9
+    if seconds >= 60:
+        hours, minutes = divmod(seconds // 60, 60)
+        left = f"{hours} h {minutes} min" if hours else f"{minutes} min"
+    else:
+        left = f"{seconds} s"
+    return (
+        '<div data-testid="session-left" style="color:#868e96;font-size:0.85em">'
+        f"session ends in {left}</div>"
     )
 
 

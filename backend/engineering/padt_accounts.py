@@ -132,6 +132,12 @@ class PadtAccounts:
             raise Refusal("unauthenticated", "the PADT has no accounts")
         return session
 
+    def time_left_ns(self, token: str) -> int:
+        """How long the session `token` has before it expires (0 when it has)."""
+        with self._lock:
+            session = self._access.sessions.get(token)
+            return max(0, session.expires_ns - self._access.now_ns()) if session else 0
+
     def accounts(self) -> tuple[UserAccount, ...]:
         with self._lock:
             return self._access.users

@@ -52,6 +52,9 @@ def test_log_in_stop_step_start_freeze_and_log_out(demo: Demo) -> None:
         page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
         log_in(page, "admin", demo.password)
         wait_for_text(page, '[data-testid="user"]', "admin")
+        assert re.fullmatch(
+            r"session ends in (7 h 59|8 h 0) min", text_of(page, '[data-testid="session-left"]')
+        )
         # before the resource login, the commands are greyed out and say why
         disabled = text_of(page, '[data-testid="commands-disabled"]')
         assert "log in to the resource first" in disabled
