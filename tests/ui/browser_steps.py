@@ -95,3 +95,34 @@ def value(page: Page, variable: str) -> str:
 
 def button_enabled(page: Page, name: str) -> bool:
     return page.get_by_role("button", name=name, exact=True).first.is_enabled()
+
+
+# ---- writing and forcing (tests/ui/test_browser_forcing.py)
+
+
+def choose(page: Page, label: str, option: str) -> None:
+    """Pick an option of a viser dropdown by its label."""
+    page.get_by_label(label, exact=True).click()
+    page.get_by_role("option", name=option, exact=True).click()
+
+
+def shoot_both(page: Page, name: str) -> None:
+    """A screenshot at 1400x900 and one at 1920x1080; the page is left at 1400x900."""
+    if "PADT_SHOTS" not in os.environ:
+        return
+    for width, height in ((1920, 1080), (1400, 900)):
+        page.set_viewport_size({"width": width, "height": height})
+        time.sleep(0.5)  # let the panels settle
+        shoot(page, f"{name}-{width}x{height}")
+
+
+def edit_value(page: Page, variable: str, literal: str) -> None:
+    """Fill the Online test's write/force fields."""
+    field(page, "Variable").fill(variable)
+    field(page, "New value").fill(literal)
+
+
+def banner(page: Page) -> str:
+    """The forcing banner's text, "" while it is not shown."""
+    found = page.locator('[data-testid="forcing-banner"]')
+    return found.first.inner_text() if found.count() and found.first.is_visible() else ""
