@@ -344,7 +344,8 @@ def _when(condition: bool, reason: str) -> Allowed:
 
 
 def _error(text: str) -> str:
-    return f'<div data-testid="limit-error" style="color:{_RED}">{html.escape(text)}</div>'
+    style = f"font-size:0.875em;padding:2px 8px;color:{_RED}"  # under its field
+    return f'<div data-testid="limit-error" style="{style}">{html.escape(text)}</div>'
 
 
 def _disabled(reasons: list[str], snapshot: ForcingSnapshot | None) -> str:

@@ -22,6 +22,7 @@ from runtime.contract.values import format_for_display
 
 MAX_MATCHES = 6
 _GREY = "color:#868e96"
+_LINE = "font-size:0.875em;padding:2px 8px"  # a line under a field, as small as its label
 _RED = "#c92a2a"
 
 
@@ -201,14 +202,14 @@ def render_info(
     """The chosen variable: its type, current value and quality, and its force level."""
     if edit.path is None:
         if edit.variable_problem == "choose a variable":
-            return f'<div style="{_GREY}">Type a variable, e.g. TankControl.level.</div>'
+            return f'<div style="{_LINE};{_GREY}">Type a variable, e.g. TankControl.level.</div>'
         text = html.escape(edit.variable_problem)
         hint = ""
         if edit.matches:
             hint = " — did you mean " + ", ".join(
                 f"<code>{html.escape(x)}</code>" for x in edit.matches
             )
-        return f'<div data-testid="edit-info" style="color:{_RED}">{text}{hint}</div>'
+        return f'<div data-testid="edit-info" style="{_LINE};color:{_RED}">{text}{hint}</div>'
     how = quality.get(edit.path, "live")
     current = format_for_display(values[edit.path], edit.type_name) if edit.path in values else "-"
     color = {"forced": _RED, "stale": "#868e96"}.get(how, "inherit")
@@ -217,7 +218,7 @@ def render_info(
         started = "started" if is_started(level, snapshot) else "not started"
         forcing = f' · <span style="{_GREY}">{html.escape(level_name(level))}: {started}</span>'
     return (
-        f'<div data-testid="edit-info"><code>{html.escape(edit.path)}</code> '
+        f'<div data-testid="edit-info" style="{_LINE}"><code>{html.escape(edit.path)}</code> '
         f'<span style="{_GREY}">{html.escape(edit.type_name)}</span> · now '
         f'<b data-testid="edit-current" style="font-family:monospace;color:{color}">'
         f"{html.escape(current)}</b> ({html.escape(how)}){forcing}</div>"
@@ -228,7 +229,7 @@ def render_error(edit: Edit) -> str:
     if edit.path is None or not edit.value_problem or edit.value_problem == "type the new value":
         return ""
     return (
-        f'<div data-testid="value-error" style="color:{_RED}">'
+        f'<div data-testid="value-error" style="{_LINE};color:{_RED}">'
         f"{html.escape(edit.value_problem)}</div>"
     )
 
@@ -237,4 +238,4 @@ def _disabled(reasons: list[str]) -> str:
     if not reasons:
         return ""
     text = "; ".join(html.escape(x) for x in reasons)
-    return f'<div data-testid="edit-disabled" style="{_GREY}">Disabled: {text}</div>'
+    return f'<div data-testid="edit-disabled" style="{_LINE};{_GREY}">Disabled: {text}</div>'
