@@ -67,7 +67,11 @@ class ForcingFeed:
             self._target = target
             if target is None or (before is not None and before.resource != target.resource):
                 self._snapshot = None  # never show one resource's forcing for another
-            changed = before is None or target is None or before.forcing != target.forcing
+            changed = (
+                before is None
+                or target is None
+                or (before.forcing, before.crc) != (target.forcing, target.crc)
+            )
         if changed and target is not None:
             self._wake.set()
 

@@ -29,6 +29,7 @@ NO_ENTRY = "-"
 _CELL = "padding:2px 8px;border-bottom:1px solid #e9ecef;white-space:nowrap"
 _GREY = "color:#868e96"
 _RED = "#c92a2a"
+_TITLE = '<div style="font-weight:600;margin:8px 0 2px;padding:0 8px">{}</div>'
 
 # run(label, commands, question, note): asks `question`, then sends the commands in order
 # to the selected resource; `note` is shown when they were done
@@ -258,14 +259,21 @@ def _clear(screen: ForcingScreen, run: Run) -> None:
     state = screen.snapshot.state if screen.snapshot is not None else None
     if state is None:
         return
-    names = ", ".join(e.variable for e in state.entries) or "none"
+    names = ", ".join(e.variable for e in state.entries)
+    count = len(state.entries)
     commands: list[p.Command[p.StatusReply]] = [p.Unforce(e.variable) for e in state.entries]
     commands += [p.StopForcing(level or None) for level in state.started]
-    stopped = " and stop " + ", ".join(level_name(x or GLOBAL) for x in state.started)
-    question = (
-        f"Remove all {len(state.entries)} force values ({names})"
-        f"{stopped if state.started else ''}: the programs set every variable again."
-    )
+    parts = []
+    if count:
+        parts.append(
+            f"remove the force value of {names}"
+            if count == 1
+            else f"remove all {count} force values ({names})"
+        )
+    if state.started:
+        parts.append("stop " + ", ".join(level_name(x or GLOBAL) for x in state.started))
+    what = " and ".join(parts)
+    question = f"{what[:1].upper()}{what[1:]}: the programs set every variable again."
     run("Clear all forcing", commands, question, None)
 
 
@@ -352,7 +360,8 @@ def _disabled(reasons: list[str], snapshot: ForcingSnapshot | None) -> str:
     lines = []
     if reasons:
         text = "; ".join(html.escape(x) for x in reasons)
-        lines.append(f'<div data-testid="forcing-disabled" style="{_GREY}">Disabled: {text}</div>')
+        style = f"{_GREY};padding:0 8px"
+        lines.append(f'<div data-testid="forcing-disabled" style="{style}">Disabled: {text}</div>')
     if snapshot is not None and snapshot.error:
         lines.append(
             f'<div style="color:{_RED}">No answer about forcing: '
@@ -394,7 +403,8 @@ def render_levels(programs: list[str], snapshot: ForcingSnapshot | None, now: fl
             f'<td style="{_CELL}">{html.escape(timeout_reaction(level, snapshot))}</td></tr>'
         )
     return (
-        '<div style="overflow-x:auto"><table data-testid="forcing-levels" '
+        _TITLE.format("Force levels")
+        + '<div style="overflow-x:auto"><table data-testid="forcing-levels" '
         f'style="font-size:0.9em;border-collapse:collapse;width:100%"><tr>{head}</tr>'
         f"{''.join(rows)}</table></div>"
     )
@@ -408,12 +418,14 @@ def render_entries(
 ) -> str:
     """The prepared force values: variable, type, level, force value, switch, in force or
     waiting for its level to start, and the variable's live value beside it."""
-    title = '<div style="font-weight:600;margin:8px 0 2px">Force values</div>'
+    title = _TITLE.format("Force values")
     if state is None:
-        return title + f'<div style="{_GREY}">Reading the force table ...</div>'
+        return title + f'<div style="{_GREY};padding:0 8px">Reading the force table ...</div>'
     if not state.entries:
         note = "No force value is prepared. Force a value from the Online test tab."
-        return title + f'<div data-testid="no-force-values" style="{_GREY}">{note}</div>'
+        return (
+            title + f'<div data-testid="no-force-values" style="{_GREY};padding:0 8px">{note}</div>'
+        )
     head = "".join(
         f'<th style="{_CELL};text-align:{align}">{name}</th>'
         for name, align in (

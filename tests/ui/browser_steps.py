@@ -124,5 +124,6 @@ def edit_value(page: Page, variable: str, literal: str) -> None:
 
 def banner(page: Page) -> str:
     """The forcing banner's text, "" while it is not shown."""
-    found = page.locator('[data-testid="forcing-banner"]')
-    return found.first.inner_text() if found.count() and found.first.is_visible() else ""
+    # no waiting: the strip comes and goes with the refresher
+    shown = page.locator('[data-testid="forcing-banner"]:visible').all_inner_texts()
+    return shown[0] if shown else ""

@@ -125,7 +125,7 @@ def test_force_the_pump_off_with_a_time_limit_and_clear_all(demo: Demo) -> None:
 
         page.get_by_role("tab", name="Forcing").click()
         page.get_by_role("button", name="Clear all", exact=True).click()
-        confirm(page, "Remove all 1 force values (TankControl.pump)")
+        confirm(page, "Remove the force value of TankControl.pump and stop local forcing")
         wait_until("the banner goes", lambda: banner(page) == "")
         wait_for_text(
             page,
@@ -158,6 +158,7 @@ def test_a_read_user_sees_write_and_force_disabled_and_the_resource_refuses_them
         assert not button_enabled(page, "Force")
         page.get_by_role("tab", name="Forcing").click()
         assert not button_enabled(page, "Start forcing")
+        shoot_both(page, "forcing-read-user")
         forcing_reason = text_of(page, '[data-testid="forcing-disabled"]')
         assert "needs operator at the resource; viewer is read" in forcing_reason
     # what the greyed-out buttons would have sent, sent by hand with the same login
