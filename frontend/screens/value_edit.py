@@ -53,6 +53,8 @@ class ValueEditScreen:
     types: dict[str, str] | None = None
     values: dict[str, Any] | None = None
     shown: tuple[str, str, str] = ("", "", "")
+    # the fields as last read: read again only when they or the variables change
+    read: tuple[str, str, dict[str, str], Edit] | None = None
 
 
 def build(gui: viser.GuiApi, run: Run) -> ValueEditScreen:
@@ -153,7 +155,13 @@ def refresh(
         with feed.latest.lock:
             values, types, quality = feed.latest.values, feed.latest.types, feed.latest.quality
     screen.status, screen.snapshot, screen.types, screen.values = status, snapshot, types, values
-    edit = read_edit(screen.variable.value, screen.new_value.value, types)
+    typed, literal = screen.variable.value, screen.new_value.value
+    known = screen.read
+    if known is not None and known[:2] == (typed, literal) and known[2] is types:
+        edit = known[3]
+    else:
+        edit = read_edit(typed, literal, types)  # a dict of every variable: not ten times a second
+        screen.read = (typed, literal, types, edit)
     level = level_of(edit.path, status) if edit.path is not None else None
     problem = edit.variable_problem or edit.value_problem
     fields = Allowed(not problem, problem)
