@@ -5,7 +5,7 @@ and its programs in the colours of their states."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
 import viser
@@ -13,10 +13,11 @@ import viser
 from backend.engineering.resource_client import ResourceClient, ResourceLogin
 from frontend import plant_view, status_bar
 from frontend.confirm import attempt, confirm
+from frontend.forcing_feed import ForcingFeed, Target
 from frontend.gui_value import set_value
 from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
-from frontend.screens import login, online_test, resources, single_step
+from frontend.screens import forcing, login, online_test, resources, single_step, value_edit
 from frontend.ui_context import UiContext
 from runtime.contract import protocol as p
 
@@ -52,6 +53,9 @@ class Workspace:
         gui.main_panel.set_width(NAVIGATION_WIDTH)
         self._handles: list[Any] = []
         keep = self._handles.append
+        self.forcing_feed = ForcingFeed()
+        self.forcing_banner = forcing.build_banner(gui)  # on top, seen from every tab
+        keep(self.forcing_banner.handle)
         keep(gui.add_html(_header(session.user, session.level)))
         self.session_note = gui.add_html("")
         keep(self.session_note)
@@ -76,8 +80,11 @@ class Workspace:
             self.resources = resources.build(gui, self._confirm, self.selected)
         with self.panel.add_tab("Online test", viser.Icon.TABLE):
             self.online_test = online_test.build(gui, session.user, session.context.watch_lists)
+            self.value_edit = value_edit.build(gui, self._send_all)
         with self.panel.add_tab("Single step", viser.Icon.PLAYER_TRACK_NEXT):
             self.single_step = single_step.build(gui, self._act)
+        with self.panel.add_tab("Forcing", viser.Icon.LOCK):
+            self.forcing = forcing.build(gui, self._send_all)
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -138,6 +145,34 @@ class Workspace:
                 lambda: attempt(self.session.client, f"{label} ({resource})", send),
             )
 
+    def _send_all(
+        self,
+        label: str,
+        commands: Sequence[p.Command[p.StatusReply]],
+        question: str,
+        note: str | None,
+    ) -> None:
+        """Ask `question`; then send the commands in order to the selected resource (the
+        first refusal ends it) and ask the forcing state again; `note` when all were done."""
+        resource = self.selected()
+        if resource is None:
+            return
+        client = self.session.client
+
+        def send() -> None:
+            try:
+                target = self.session.client_of(resource)
+                for command in commands:
+                    target.ask(command)
+            finally:
+                self.forcing_feed.nudge()
+
+        def yes() -> None:
+            if attempt(client, f"{label} ({resource})", send) and note:
+                client.add_notification(label, note, color="yellow", auto_close_seconds=12)
+
+        confirm(client, f"{label}: {resource}", question, yes)
+
     def _send(self, what: str, resource: str, command: p.Command[p.StatusReply]) -> None:
         attempt(self.session.client, what, lambda: self.session.client_of(resource).ask(command))
 
@@ -184,9 +219,25 @@ class Workspace:
         if feed is not None:
             feed.show(online_test.wanted(self.online_test))
         single_step.refresh(self.single_step, status, self._allowed)
+        self._refresh_forcing(resource, status)
         self.drawing.show(resource, status)
 
+    def _refresh_forcing(self, resource: str | None, status: p.Status | None) -> None:
+        login_there = self.session.resource_login(resource) if resource is not None else None
+        looks = status is not None and (login_there is not None or status.access == "open")
+        if resource is None or status is None or not looks:
+            self.forcing_feed.follow(None)
+        else:
+            client = self.session.client_of(resource)
+            self.forcing_feed.follow(Target(resource, client, status.crc, status.forcing))
+        snapshot = self.forcing_feed.snapshot()
+        feed = self.session.feed_of(resource) if resource is not None else None
+        forcing.show_banner(self.forcing_banner, status, snapshot)
+        forcing.refresh(self.forcing, status, snapshot, feed, self._allowed)
+        value_edit.refresh(self.value_edit, status, snapshot, feed, self._allowed)
+
     def remove(self) -> None:
+        self.forcing_feed.close()
         for handle in self._handles:
             handle.remove()
         self.panel.remove()

@@ -121,3 +121,29 @@ def choose(page: Page, label: str, option: str) -> None:
         f"{label} shows {option}",
         lambda: page.get_by_label(label, exact=True).input_value() == option,
     )
+
+
+# ---- writing and forcing (tests/ui/test_browser_forcing.py)
+
+
+def shoot_both(page: Page, name: str) -> None:
+    """A screenshot at 1400x900 and one at 1920x1080; the page is left at 1400x900."""
+    if "PADT_SHOTS" not in os.environ:
+        return
+    for width, height in ((1920, 1080), (1400, 900)):
+        page.set_viewport_size({"width": width, "height": height})
+        time.sleep(0.5)  # let the panels settle
+        shoot(page, f"{name}-{width}x{height}")
+
+
+def edit_value(page: Page, variable: str, literal: str) -> None:
+    """Fill the Online test's write/force fields."""
+    field(page, "Variable").fill(variable)
+    field(page, "New value").fill(literal)
+
+
+def banner(page: Page) -> str:
+    """The forcing banner's text, "" while it is not shown."""
+    # no waiting: the strip comes and goes with the refresher
+    shown = page.locator('[data-testid="forcing-banner"]:visible').all_inner_texts()
+    return shown[0] if shown else ""
