@@ -15,7 +15,7 @@ from frontend import plant_view, status_bar
 from frontend.confirm import attempt, confirm
 from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
-from frontend.screens import login, online_test, resources, single_step
+from frontend.screens import events, login, online_test, parameters, resources, single_step
 from frontend.ui_context import UiContext
 from runtime.contract import protocol as p
 
@@ -74,6 +74,10 @@ class Workspace:
             self.online_test = online_test.build(gui)
         with self.panel.add_tab("Single step", viser.Icon.PLAYER_TRACK_NEXT):
             self.single_step = single_step.build(gui, self._act)
+        with self.panel.add_tab("Parameters", viser.Icon.ADJUSTMENTS):
+            self.parameters = parameters.build(gui, self._change)
+        with self.panel.add_tab("Events", viser.Icon.LIST_DETAILS):
+            self.events = events.build(gui)
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -136,6 +140,25 @@ class Workspace:
                 lambda: attempt(self.session.client, f"{label} ({resource})", send),
             )
 
+    def _change(
+        self,
+        title: str,
+        question: str,
+        command: p.Command[p.StatusReply],
+        then: Callable[[], None],
+    ) -> None:
+        """Ask, send `command` to the selected resource, then `then()` whatever came back
+        (a screen reads again what the command may have changed)."""
+        resource = self.selected()
+        if resource is None:
+            return
+
+        def send() -> None:
+            self._send(f"{title} ({resource})", resource, command)
+            then()
+
+        confirm(self.session.client, f"{title}: {resource}", question, send)
+
     def _send(self, what: str, resource: str, command: p.Command[p.StatusReply]) -> None:
         attempt(self.session.client, what, lambda: self.session.client_of(resource).ask(command))
 
@@ -150,7 +173,7 @@ class Workspace:
         with latest.lock:
             return latest.status
 
-    def _allowed(self, command: type[p.Command[Any]]) -> Allowed:
+    def _allowed(self, command: type[p.Command[Any]] | p.Command[Any]) -> Allowed:
         resource = self.selected()
         status = self._status(resource)
         open_access = status is not None and status.access == "open"
@@ -178,6 +201,10 @@ class Workspace:
             self.online_test, self.session.feed_of(resource) if resource is not None else None
         )
         single_step.refresh(self.single_step, status, self._allowed)
+        token = login_there.token if login_there is not None else None
+        client_of = self.session.client_of
+        parameters.refresh(self.parameters, resource, status, token, client_of, self._allowed)
+        events.refresh(self.events, resource, token, client_of)
         self.drawing.show(resource, status)
 
     def remove(self) -> None:

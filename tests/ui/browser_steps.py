@@ -95,3 +95,13 @@ def value(page: Page, variable: str) -> str:
 
 def button_enabled(page: Page, name: str) -> bool:
     return page.get_by_role("button", name=name, exact=True).first.is_enabled()
+
+
+def choose(page: Page, label: str, option: str) -> None:
+    """Pick an option of a viser dropdown (a Mantine select) by the dropdown's label."""
+    page.get_by_label(label, exact=True).first.click()
+    page.get_by_role("option", name=option, exact=True).first.click()
+
+
+def open_tab(page: Page, name: str) -> None:
+    page.get_by_role("tab", name=name).click()
