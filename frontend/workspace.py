@@ -203,8 +203,11 @@ class Workspace:
         single_step.refresh(self.single_step, status, self._allowed)
         token = login_there.token if login_there is not None else None
         client_of = self.session.client_of
-        parameters.refresh(self.parameters, resource, status, token, client_of, self._allowed)
         events.refresh(self.events, resource, token, client_of)
+        changed = events.live_count(self.events, resource, "parameter")
+        parameters.refresh(
+            self.parameters, resource, status, token, client_of, self._allowed, changed
+        )
         self.drawing.show(resource, status)
 
     def remove(self) -> None:

@@ -54,6 +54,7 @@ class EventFeed:
         self.error = ""
         self.loaded = False  # the short-term log has been read: live events count
         self.version = 0  # goes up with every change, so the screen renders only then
+        self.kinds_seen: dict[str, int] = {}  # live events by kind (other screens read on)
         self._live: list[p.Event] = []
         self._reading_short = False
         self._reading_long = False
@@ -91,6 +92,7 @@ class EventFeed:
                 if event.seq == last + 1 or not self.short:
                     self.short.append(event)
                     self._long_due = True
+                    self.kinds_seen[event.kind] = self.kinds_seen.get(event.kind, 0) + 1
                 elif event.seq > last:  # missed some: read on from the last one we have
                     self._start_locked(self._read_short)
                     break
@@ -115,6 +117,10 @@ class EventFeed:
             if mine.seq < event.seq:
                 return False
         return False
+
+    def live_count(self, kind: str) -> int:
+        with self._lock:
+            return self.kinds_seen.get(kind, 0)
 
     def snapshot(self, long_term: bool) -> tuple[list[p.Event], ChainState, bool, str, int]:
         """The events of one log, the chain, whether read, why not, and the version."""
@@ -344,6 +350,13 @@ def refresh(
     shown, matched = select(events, chosen, now)
     name = "long-term" if long_term else "short-term"
     _update(screen, key, render_chain(chain, loaded), render(shown, matched, len(events), name))
+
+
+def live_count(screen: EventsScreen, resource: str | None, kind: str) -> int:
+    """How many events of a kind came live for the resource: another screen reads again
+    what they changed (the Parameters screen after a `parameter` event from anyone)."""
+    feeds = [feed for (name, _), feed in screen.feeds.items() if name == resource]
+    return feeds[0].live_count(kind) if feeds else 0
 
 
 def _options(dropdown: viser.GuiDropdownHandle[str], options: tuple[str, ...]) -> None:

@@ -73,6 +73,8 @@ WARNING = (
 NO_DOWNLOAD = "changes only with a download (not changeable online)"
 _CELL = "padding:2px 8px;border-bottom:1px solid #e9ecef;line-height:1.25"
 _GREY = "color:#868e96"
+# the same columns in every table, so that the resource's and the programs' line up
+_COLUMNS = "".join(f'<col style="width:{w}">' for w in ("32%", "14%", "39%", "15%"))
 
 
 def unit(name: str) -> str:
@@ -149,7 +151,8 @@ def check_change(
 
 # ---- reading the parameters, outside the refresher and outside Zenoh's threads
 
-Key = tuple[str, str, str | None, int]  # resource, CRC, resource login token, changes made
+# resource, CRC, resource login token, changes sent from here, `parameter` events seen
+Key = tuple[str, str, str | None, int, int]
 
 
 class ParameterSource:
@@ -217,6 +220,8 @@ class ParametersScreen:
     reason: viser.GuiHtmlHandle
     source: ParameterSource = field(default_factory=ParameterSource)
     resource: str | None = None
+    state: str = ""  # of the resource, for the confirmation
+    crc: str = ""
     shown: dict[str, str] = field(default_factory=dict)  # what each html handle holds
     prefilled: tuple[str, str] = ("", "")  # (parameter, value) put into the field
 
@@ -269,9 +274,11 @@ def _clicked(screen: ParametersScreen, change: Change) -> None:
         return
     _show(screen, "error", "")
     old = getattr(reply.resource, name)
+    running = ", at once, while it runs" if screen.state.startswith("RUN") else ""
     question = (
-        f"Change {LABELS[name]} ({name}) of resource {resource} from {show(old, name)} to "
-        f"{show(value, name)}, at once, while it runs. {WARNING}"
+        f"Change {LABELS[name]} ({name}) of resource {resource} (configuration "
+        f"{screen.crc or '-'}, {screen.state or 'state unknown'}) from {show(old, name)} to "
+        f"{show(value, name)}{running}. {WARNING}"
     )
     change(f"Change {LABELS[name]}", question, p.SetParameter(name, value), screen.source.changed)
 
@@ -294,17 +301,23 @@ def refresh(
     login_token: str | None,
     client_of: Callable[[str], ResourceClient],
     allowed: Callable[[p.Command[Any]], Allowed],
+    changed_elsewhere: int = 0,
 ) -> None:
+    """`changed_elsewhere` goes up with every parameter change the resource reports (from
+    any client): then the parameters are read again."""
     if resource != screen.resource:
         screen.resource = resource
         _show(screen, "error", "")
+    screen.state = status.state if status is not None else ""
+    screen.crc = status.crc or "" if status is not None else ""
     if resource is None:
         _show(screen, "header", "<p>Select a resource.</p>")
         _show(screen, "table", "")
         reply: p.ParametersReply | None = None
     else:
         crc = status.crc or "" if status is not None else ""
-        screen.source.ensure((resource, crc, login_token, screen.source.changes), client_of)
+        key = (resource, crc, login_token, screen.source.changes, changed_elsewhere)
+        screen.source.ensure(key, client_of)
         reply, error = screen.source.current(resource)
         _show(screen, "header", render_header(resource, status, reply, error))
         _show(screen, "table", render(reply) if reply is not None else "")
@@ -393,7 +406,7 @@ def render_info(name: str, reply: p.ParametersReply | None) -> str:
     if spec is None or reply is None:
         return ""
     where = f"{program}: " if program else ""
-    text = f"{where}{LABELS[spec.name]} is {_current(name, reply)}; {value_range(spec)}"
+    text = f"{where}{LABELS[spec.name]} is {_current(name, reply)} (range {value_range(spec)})"
     return (
         f'<div data-testid="parameter-info" style="{_GREY};margin:0 0 2px 8px">'
         f"{html.escape(text)}</div>"
@@ -444,12 +457,13 @@ def _table(title: str, prefix: str, specs: tuple[ParameterSpec, ...], config: An
             f'font-family:monospace;font-size:0.9em">{spec.name}</span></td>'
             f'<td style="{_CELL};font-family:monospace;font-weight:600;white-space:nowrap" '
             f'data-param="{where}">{html.escape(value)}</td>'
-            f'<td style="{_CELL}">{html.escape(value_range(spec))}</td>'
-            f'<td style="{_CELL};color:{colour};white-space:nowrap" data-online="{where}">'
+            f'<td style="{_CELL};overflow-wrap:anywhere">{html.escape(value_range(spec))}</td>'
+            f'<td style="{_CELL};color:{colour}" data-online="{where}">'
             f"{online}</td></tr>"
         )
     return (
         f'<div style="font-weight:600;margin:8px 0 2px">{html.escape(title)}</div>'
         f'<table data-testid="parameters-{html.escape(prefix)}" style="font-size:0.85em;'
-        f'border-collapse:collapse;width:100%"><tr>{head}</tr>{"".join(rows)}</table>'
+        f'border-collapse:collapse;width:100%;table-layout:fixed">{_COLUMNS}<tr>{head}</tr>'
+        f"{''.join(rows)}</table>"
     )
