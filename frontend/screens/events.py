@@ -293,8 +293,9 @@ class EventsScreen:
 
 def build(gui: viser.GuiApi) -> EventsScreen:
     log = gui.add_dropdown("Log", LOGS)
-    kind = gui.add_dropdown("Kind", (ALL_KINDS,))
-    user = gui.add_dropdown("User", (ALL_USERS,))
+    kind = gui.add_dropdown("By kind", (ALL_KINDS,))
+    # not "User": the login to the resource has a text field of that name
+    user = gui.add_dropdown("By user", (ALL_USERS,))
     since = gui.add_dropdown("Since", tuple(SINCE))
     chain = gui.add_html("")
     table = gui.add_html("")

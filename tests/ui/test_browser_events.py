@@ -4,9 +4,14 @@ the long-term log's hash chain."""
 
 from __future__ import annotations
 
+import time
+from pathlib import Path
+
 import pytest
 from playwright.sync_api import Page
 
+from runtime.contract.state_folder import events_path
+from runtime.event_log import EventLog
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
     Demo,
@@ -49,14 +54,14 @@ def test_events_arrive_live_are_filtered_and_the_chain_is_verified(demo: Demo) -
         assert rows(page)[0][0] in ("stop", "state")  # newest first
         shoot(page, "events-1400x900")
 
-        choose(page, "Kind", "stop")
+        choose(page, "By kind", "stop")
         wait_until("only stops", lambda: {kind for kind, _ in rows(page)} == {"stop"})
         assert text_of(page, '[data-testid="events-count"]').startswith("1 of ")
-        choose(page, "Kind", "(all kinds)")
-        choose(page, "User", "(no user)")
+        choose(page, "By kind", "(all kinds)")
+        choose(page, "By user", "(no user)")
         wait_until("admin's events hidden", lambda: "admin" not in {u for _, u in rows(page)})
         assert rows(page), "events without a user remain"
-        choose(page, "User", "admin")
+        choose(page, "By user", "admin")
         wait_until("only admin's", lambda: {u for _, u in rows(page)} == {"admin"})
 
         choose(page, "Log", "Long-term (user actions, configuration)")
@@ -66,6 +71,33 @@ def test_events_arrive_live_are_filtered_and_the_chain_is_verified(demo: Demo) -
         )
         wait_until("the stop is in the long-term log", lambda: ("stop", "admin") in rows(page))
         page.set_viewport_size({"width": 1920, "height": 1080})
-        choose(page, "User", "(all users)")
+        choose(page, "By user", "(all users)")
         wait_until("every user again", lambda: len({u for _, u in rows(page)}) > 1)
         shoot(page, "events-1920x1080")
+
+
+@pytest.fixture
+def tampered(tmp_path: Path) -> None:
+    """A long-term log in the demo's state folder in which an old entry was altered."""
+    path = events_path(tmp_path)
+    log = EventLog(time.time_ns, long_path=path)
+    for user in ("anna", "ben", "carl"):
+        log.record("login", f"{user} logged in", user=user, long_term=True)
+    lines = path.read_bytes().splitlines()
+    lines[1] = lines[1].replace(b"ben logged in", b"bob logged in")  # still a valid entry
+    path.write_bytes(b"".join(line + b"\n" for line in lines))
+
+
+def test_an_altered_long_term_log_shows_where_its_chain_breaks(tampered: None, demo: Demo) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_demo_as_admin(page, demo)
+        open_tab(page, "Events")
+        choose(page, "Log", "Long-term (user actions, configuration)")
+        wait_until(
+            "the break is shown",
+            lambda: text_of(page, '[data-testid="event-chain"]').startswith(
+                "✗ broken at seq 3: prev is not the SHA-256"
+            ),
+        )
+        shoot(page, "events-chain-broken")
