@@ -333,17 +333,17 @@ def refresh(
         return
     feed.pump()
     long_term = screen.log.value == LOGS[1]
-    events, chain, loaded, error, version = feed.snapshot(long_term)
-    _options(screen.kind, (ALL_KINDS, *sorted({x.kind for x in events})))
-    users = sorted({x.user for x in events if x.user is not None})
-    _options(screen.user, (ALL_USERS, *users, NO_USER))
     chosen = Filter(screen.kind.value, screen.user.value, SINCE.get(screen.since.value))
     now = time.time_ns()
     # a "since" window moves: then render again once a second even without a new event
     moving = now // 10**9 if chosen.since_s is not None else 0
-    key = (resource, login_token, version, long_term, chosen, moving)
+    key = (resource, login_token, feed.version, long_term, chosen, moving)
     if key == screen.shown_key:
-        return
+        return  # ten times a second: nothing to copy or render unless something changed
+    events, chain, loaded, error, _ = feed.snapshot(long_term)
+    _options(screen.kind, (ALL_KINDS, *sorted({x.kind for x in events})))
+    users = sorted({x.user for x in events if x.user is not None})
+    _options(screen.user, (ALL_USERS, *users, NO_USER))
     if not loaded:
         text = html.escape(error or "reading the event log ...")
         _update(screen, key, "", f'<p data-testid="events-note" style="{_GREY}">{text}</p>')

@@ -220,6 +220,7 @@ class ParametersScreen:
     reason: viser.GuiHtmlHandle
     source: ParameterSource = field(default_factory=ParameterSource)
     resource: str | None = None
+    rendered: p.ParametersReply | None = None  # the reading the table shows
     state: str = ""  # of the resource, for the confirmation
     crc: str = ""
     shown: dict[str, str] = field(default_factory=dict)  # what each html handle holds
@@ -313,6 +314,7 @@ def refresh(
     if resource is None:
         _show(screen, "header", "<p>Select a resource.</p>")
         _show(screen, "table", "")
+        screen.rendered = None
         reply: p.ParametersReply | None = None
     else:
         crc = status.crc or "" if status is not None else ""
@@ -320,7 +322,9 @@ def refresh(
         screen.source.ensure(key, client_of)
         reply, error = screen.source.current(resource)
         _show(screen, "header", render_header(resource, status, reply, error))
-        _show(screen, "table", render(reply) if reply is not None else "")
+        if reply is not screen.rendered:  # the same reading renders the same table
+            screen.rendered = reply
+            _show(screen, "table", render(reply) if reply is not None else "")
     names = editable_names(reply.programs if reply is not None else [])
     if tuple(screen.parameter.options) != names:
         screen.parameter.options = names
