@@ -7,8 +7,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from backend.engineering.event_chain import ChainState, check_chain
+from runtime.contract import protocol as p
 from runtime.contract.protocol import Event
+from runtime.contract.wire import decode
 from runtime.event_log import EventLog
+from tests.support.resource_harness import harness
 
 T0 = 1_750_000_000 * 10**9
 
@@ -52,3 +55,33 @@ def test_a_changed_line_breaks_the_chain_at_the_entry_after_it(tmp_path: Path) -
     assert not state.ok
     assert state.broken_seq == events[2].seq
     assert state.describe().startswith(f"broken at seq {events[2].seq}: prev is not")
+
+
+def test_the_events_command_pages_through_the_long_term_log_with_its_chain() -> None:
+    h = harness("PROGRAM P VAR n : INT; END_VAR n := n + 1; END_PROGRAM")
+    for value in (30, 40, 50):
+        h.ok("set_parameter", name="com_slice_ms", value=value)
+    h.ok("stop")
+    state, after, pages = ChainState(), 0, 0
+    while True:
+        reply = decode(
+            p.EventsReply,
+            {
+                k: v
+                for k, v in h.ok("events", after=after, limit=2, log="long").items()
+                if k != "ok"
+            },
+        )
+        if not reply.events:
+            break
+        assert len(reply.prev) == len(reply.events)
+        state, after, pages = (
+            check_chain(reply.events, reply.prev, state),
+            reply.events[-1].seq,
+            pages + 1,
+        )
+    assert state.ok and pages >= 2
+    assert [e.kind for e in h.resource.events.long_term()][-4:] == ["parameter"] * 3 + ["stop"]
+    assert state.entries == len(h.resource.events.long_term())
+    short = h.ok("events")  # the short-term log as before, without prev
+    assert short.get("prev", []) == [] and len(short["events"]) >= state.entries
