@@ -238,13 +238,16 @@ def render_chain(chain: ChainState, loaded: bool) -> str:
     )
 
 
-def render(shown: list[p.Event], matched: int, total: int, log_name: str) -> str:
+def render(
+    shown: list[p.Event], matched: int, total: int, log_name: str, broken: int | None = None
+) -> str:
+    """The table; `broken`: the seq of the long-term entry where the chain breaks (marked)."""
     offset = datetime.now().astimezone().strftime("%z")
     head = "".join(
         f'<th style="{_CELL};text-align:left;white-space:nowrap">{name}</th>'
         for name in ("Seq", f"Time (UTC{offset[:3]}:{offset[3:]})", "Kind", "User", "Message")
     )
-    rows = [_row(event) for event in shown]
+    rows = [_row(event, event.seq == broken) for event in shown]
     if not rows:
         rows = [f'<tr><td style="{_CELL};{_GREY}" colspan="5">No event matches.</td></tr>']
     more = f", the newest {len(shown)} shown" if matched > len(shown) else ""
@@ -259,13 +262,14 @@ def render(shown: list[p.Event], matched: int, total: int, log_name: str) -> str
     )
 
 
-def _row(event: p.Event) -> str:
+def _row(event: p.Event, broken: bool = False) -> str:
     colour = KIND_COLORS.get(event.kind, "inherit")
     details = ", ".join(f"{k}={v}" for k, v in sorted(event.details.items()))
     title = f' title="{html.escape(details)}"' if details else ""
+    mark = ' style="background:#fff5f5" title="the hash chain breaks here"' if broken else ""
     user = html.escape(event.user) if event.user is not None else f'<span style="{_GREY}">-</span>'
     return (
-        f'<tr data-seq="{event.seq}" data-kind="{html.escape(event.kind)}">'
+        f'<tr data-seq="{event.seq}" data-kind="{html.escape(event.kind)}"{mark}>'
         f'<td style="{_CELL};text-align:right;{_GREY}">{event.seq}</td>'
         f'<td style="{_CELL};white-space:nowrap;font-family:monospace">'
         f"{local_time(event.time_ns)}</td>"
@@ -350,7 +354,9 @@ def refresh(
         return
     shown, matched = select(events, chosen, now)
     name = "long-term" if long_term else "short-term"
-    _update(screen, key, render_chain(chain, loaded), render(shown, matched, len(events), name))
+    broken = chain.broken_seq if long_term else None
+    table = render(shown, matched, len(events), name, broken)
+    _update(screen, key, render_chain(chain, loaded), table)
 
 
 def live_count(screen: EventsScreen, resource: str | None, kind: str) -> int:

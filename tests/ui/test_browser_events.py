@@ -100,4 +100,6 @@ def test_an_altered_long_term_log_shows_where_its_chain_breaks(tampered: None, d
                 "✗ broken at seq 3: prev is not the SHA-256"
             ),
         )
+        marked = page.locator('tr[data-seq="3"]').get_attribute("title")
+        assert marked == "the hash chain breaks here"
         shoot(page, "events-chain-broken")
