@@ -20,9 +20,14 @@ class Allowed:
 
 
 def allowed(
-    padt_level: str, login: ResourceLogin | None, command: type[Command[Any]], open_access: bool
+    padt_level: str,
+    login: ResourceLogin | None,
+    command: type[Command[Any]] | Command[Any],
+    open_access: bool,
 ) -> Allowed:
-    needed = command.LEVEL
+    """For a command class, the level the command needs; for a request (an instance), the
+    level its arguments need (`set_parameter allow_online_settings`: administrator)."""
+    needed = command.level() if isinstance(command, Command) else command.LEVEL
     if needed is None or needed == "read":
         return Allowed(True)
     if padt_level not in PADT_ACTORS:

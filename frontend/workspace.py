@@ -17,7 +17,16 @@ from frontend.forcing_feed import ForcingFeed, Target
 from frontend.gui_value import set_value
 from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
-from frontend.screens import forcing, login, online_test, resources, single_step, value_edit
+from frontend.screens import (
+    events,
+    forcing,
+    login,
+    online_test,
+    parameters,
+    resources,
+    single_step,
+    value_edit,
+)
 from frontend.ui_context import UiContext
 from runtime.contract import protocol as p
 
@@ -85,6 +94,10 @@ class Workspace:
             self.single_step = single_step.build(gui, self._act)
         with self.panel.add_tab("Forcing", viser.Icon.LOCK):
             self.forcing = forcing.build(gui, self._send_all)
+        with self.panel.add_tab("Parameters", viser.Icon.ADJUSTMENTS):
+            self.parameters = parameters.build(gui, self._change)
+        with self.panel.add_tab("Events", viser.Icon.LIST_DETAILS):
+            self.events = events.build(gui)
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -173,6 +186,25 @@ class Workspace:
 
         confirm(client, f"{label}: {resource}", question, yes)
 
+    def _change(
+        self,
+        title: str,
+        question: str,
+        command: p.Command[p.StatusReply],
+        then: Callable[[], None],
+    ) -> None:
+        """Ask, send `command` to the selected resource, then `then()` whatever came back
+        (a screen reads again what the command may have changed)."""
+        resource = self.selected()
+        if resource is None:
+            return
+
+        def send() -> None:
+            self._send(f"{title} ({resource})", resource, command)
+            then()
+
+        confirm(self.session.client, f"{title}: {resource}", question, send)
+
     def _send(self, what: str, resource: str, command: p.Command[p.StatusReply]) -> None:
         attempt(self.session.client, what, lambda: self.session.client_of(resource).ask(command))
 
@@ -187,7 +219,7 @@ class Workspace:
         with latest.lock:
             return latest.status
 
-    def _allowed(self, command: type[p.Command[Any]]) -> Allowed:
+    def _allowed(self, command: type[p.Command[Any]] | p.Command[Any]) -> Allowed:
         resource = self.selected()
         status = self._status(resource)
         open_access = status is not None and status.access == "open"
@@ -220,6 +252,13 @@ class Workspace:
             feed.show(online_test.wanted(self.online_test))
         single_step.refresh(self.single_step, status, self._allowed)
         self._refresh_forcing(resource, status)
+        token = login_there.token if login_there is not None else None
+        client_of = self.session.client_of
+        events.refresh(self.events, resource, token, client_of)
+        changed = events.live_count(self.events, resource, "parameter")
+        parameters.refresh(
+            self.parameters, resource, status, token, client_of, self._allowed, changed
+        )
         self.drawing.show(resource, status)
 
     def _refresh_forcing(self, resource: str | None, status: p.Status | None) -> None:

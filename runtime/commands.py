@@ -56,6 +56,9 @@ def _login(resource: Resource, command: p.Login, request: Request) -> p.LoginRep
 
 
 def _events(resource: Resource, command: p.GetEvents) -> p.EventsReply:
+    if command.log == "long":
+        entries = resource.events.long_term_after(command.after, command.limit)
+        return p.EventsReply([event for event, _ in entries], [prev for _, prev in entries])
     return p.EventsReply(resource.events.recent(command.after, command.limit))
 
 

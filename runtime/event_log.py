@@ -10,7 +10,6 @@ full long-term log.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import tempfile
@@ -21,10 +20,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from runtime.contract.event_chain import GENESIS, canonical, entry_line, line_digest
 from runtime.contract.protocol import Event
-from runtime.contract.wire import encode
 
-GENESIS = "0" * 64
 DAY_NS = 86_400 * 10**9
 ENTRY_FIELDS = ("details", "kind", "message", "prev", "seq", "time_ns", "user")
 _HEX = frozenset("0123456789abcdef")
@@ -36,19 +34,6 @@ class ChainReport:
     entries: int  # lines that verified before the first problem (all of them when ok)
     problem: str | None = None  # "line N: why"
     line: int | None = None  # 1-based number of the first line that fails
-
-
-def canonical(value: Any) -> bytes:
-    """The one byte form of a value that the chain hashes: sorted keys, no spaces, ASCII."""
-    text = json.dumps(
-        value, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False
-    )
-    return text.encode("ascii")
-
-
-def line_digest(line: bytes) -> str:
-    """What the next entry's `prev` holds: SHA-256 of a line without its newline."""
-    return hashlib.sha256(line).hexdigest()
 
 
 def parse_entry(line: bytes) -> tuple[Event, str]:
@@ -214,6 +199,21 @@ class EventLog:
         newer.reverse()
         return newer if limit is None else newer[:limit]
 
+    def long_term_after(
+        self, after_seq: int = 0, limit: int | None = None
+    ) -> list[tuple[Event, str]]:
+        """Long-term entries with seq > after_seq, oldest first, at most limit of them, each
+        with its `prev` as written, so that a reader can check the chain across pages."""
+        found: list[tuple[Event, str]] = []
+        with self._lock:
+            for event, line in zip(self._events, self._lines, strict=True):
+                if event is None or event.seq <= after_seq:
+                    continue
+                found.append((event, json.loads(line)["prev"]))
+                if limit is not None and len(found) == limit:
+                    break
+        return found
+
     def long_term(self) -> list[Event]:
         """The long-term entries, oldest first, "rejected" markers included; lines that
         could not be read back from the file are left out (they stay in the file)."""
@@ -297,7 +297,7 @@ class EventLog:
         lines: list[bytes] = []
         head = self._head
         for event in events:
-            line = canonical({**encode(event), "prev": head})
+            line = entry_line(event, head)
             lines.append(line)
             head = line_digest(line)
         if self._path is not None:

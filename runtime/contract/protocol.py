@@ -16,7 +16,7 @@ import json
 import typing
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Annotated, Any, ClassVar, Generic, TypeVar
+from typing import Annotated, Any, ClassVar, Generic, Literal, TypeVar
 
 from runtime.contract.accounts import ANONYMOUS, NAME_PATTERN, Level
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
@@ -191,6 +191,9 @@ class VariablesReply:
 @dataclass(frozen=True)
 class EventsReply:
     events: list[Event]
+    # the long-term log only: each entry's `prev`, the SHA-256 of the entry before it as
+    # written (docs/event-log.md), so that a client can check the chain itself
+    prev: list[str] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -402,10 +405,12 @@ class GetForcing(Command[ForcingReply], name="forcing", level="read"):
 
 @dataclass(frozen=True)
 class GetEvents(Command[EventsReply], name="events", level="read"):
-    """The short-term event log after sequence number `after`, oldest first."""
+    """The short-term (or long-term) event log after sequence number `after`, oldest
+    first; the long-term entries come with their `prev`."""
 
     after: Annotated[int, Range(0, None)] = 0
     limit: Annotated[int, Range(1, MAX_EVENTS)] = 200
+    log: Literal["short", "long"] = "short"
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ SAMPLES: dict[str, p.Command[Any]] = {
     "variables": p.GetVariables(),
     "parameters": p.GetParameters(),
     "forcing": p.GetForcing(),
-    "events": p.GetEvents(after=5, limit=10),
+    "events": p.GetEvents(after=5, limit=10, log="long"),
     "watch": p.Watch("w1", ["Main.n", "gLevel"], period_ms=50, append=True),
     "unwatch": p.Unwatch("w1"),
     "watches": p.GetWatches(),
@@ -104,6 +104,7 @@ def test_hostile_requests_are_refused_with_a_code() -> None:
         {"cmd": "events", "limit": 10**6},
         {"cmd": "events", "after": "3"},
         {"cmd": "events", "after": True},  # a boolean is no integer
+        {"cmd": "events", "log": "both"},
         {"cmd": "start_forcing", "timeout_ms": 10**100},
         {"cmd": "start_forcing", "timeout_ms": 0},
         {"cmd": "watch", "id": "a/b", "variables": []},

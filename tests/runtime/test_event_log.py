@@ -10,9 +10,10 @@ from pathlib import Path
 
 import pytest
 
+from runtime.contract.event_chain import GENESIS
 from runtime.contract.protocol import Event
 from runtime.contract.wire import encode
-from runtime.event_log import DAY_NS, GENESIS, ChainReport, EventLog, verify_chain
+from runtime.event_log import DAY_NS, ChainReport, EventLog, verify_chain
 
 T0 = 1_750_000_000 * 10**9
 

@@ -114,12 +114,12 @@ def open_as(page: Page, plant: Plant, user: str) -> None:
 
 
 def choose(page: Page, label: str, option: str) -> None:
-    """Pick `option` in the viser dropdown labelled `label`."""
-    page.get_by_label(label, exact=True).click()
-    page.get_by_role("option", name=option, exact=True).click()
+    """Pick `option` in the viser dropdown (a Mantine select) labelled `label`."""
+    page.get_by_label(label, exact=True).first.click()
+    page.get_by_role("option", name=option, exact=True).first.click()
     wait_until(
         f"{label} shows {option}",
-        lambda: page.get_by_label(label, exact=True).input_value() == option,
+        lambda: page.get_by_label(label, exact=True).first.input_value() == option,
     )
 
 
@@ -147,3 +147,7 @@ def banner(page: Page) -> str:
     # no waiting: the strip comes and goes with the refresher
     shown = page.locator('[data-testid="forcing-banner"]:visible').all_inner_texts()
     return shown[0] if shown else ""
+
+
+def open_tab(page: Page, name: str) -> None:
+    page.get_by_role("tab", name=name).click()
