@@ -1,10 +1,14 @@
 """What every browser of one UI server shares: the resources on the bus, the PADT accounts
-the users log in with, and the router's address (shown in the status bar)."""
+the users log in with, the router's address (shown in the status bar), the projects the
+PADT knows (by name, each a folder) and where the backups of what was loaded go."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
 
+from backend.engineering.backup import DEFAULT_BACKUP_DIR
 from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.resource_directory import ResourceDirectory
 
@@ -14,3 +18,5 @@ class UiContext:
     directory: ResourceDirectory
     accounts: PadtAccounts
     router: str
+    projects: Mapping[str, Path] = field(default_factory=dict)  # name -> project folder
+    backup_dir: Path = DEFAULT_BACKUP_DIR

@@ -15,7 +15,7 @@ from frontend import plant_view, status_bar
 from frontend.confirm import attempt, confirm
 from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
-from frontend.screens import login, online_test, resources, single_step
+from frontend.screens import login, online_test, reload, resources, single_step
 from frontend.ui_context import UiContext
 from runtime.contract import protocol as p
 
@@ -74,9 +74,22 @@ class Workspace:
             self.online_test = online_test.build(gui)
         with self.panel.add_tab("Single step", viser.Icon.PLAYER_TRACK_NEXT):
             self.single_step = single_step.build(gui, self._act)
+        with self.panel.add_tab("Reload", viser.Icon.REFRESH):
+            self.reload = reload.build(gui, self._reload_hooks())
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
+
+    def _reload_hooks(self) -> reload.ReloadHooks:
+        session = self.session
+        return reload.ReloadHooks(
+            session.client,
+            session.context.projects,
+            session.context.backup_dir,
+            session.user,
+            self.selected,
+            session.client_of,
+        )
 
     def selected(self) -> str | None:
         value = self.resource.value
@@ -178,6 +191,7 @@ class Workspace:
             self.online_test, self.session.feed_of(resource) if resource is not None else None
         )
         single_step.refresh(self.single_step, status, self._allowed)
+        reload.refresh(self.reload, resource, status, self._allowed)
         self.drawing.show(resource, status)
 
     def remove(self) -> None:

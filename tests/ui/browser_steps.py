@@ -95,3 +95,14 @@ def value(page: Page, variable: str) -> str:
 
 def button_enabled(page: Page, name: str) -> bool:
     return page.get_by_role("button", name=name, exact=True).first.is_enabled()
+
+
+def text_area(page: Page, label: str) -> Locator:
+    """A viser multiline text input by its label."""
+    return page.locator(f"div:has(> div > p > label:text-is('{label}')) textarea").first
+
+
+def choose(page: Page, label: str, option: str) -> None:
+    """Pick an option of a viser dropdown."""
+    page.get_by_label(label, exact=True).click()
+    page.get_by_role("option", name=option, exact=True).click()
