@@ -138,7 +138,7 @@ class ReloadScreen:
     work: Work = field(default_factory=Work)
     checks: list[viser.GuiCheckboxHandle] = field(default_factory=list)
     risk_handles: list[Any] = field(default_factory=list)
-    checks_for: Preview | None = None
+    checks_for: Preview | str | None = "none built yet"  # a str: nothing shown yet
     shown: dict[str, str] = field(default_factory=dict)  # handle name -> HTML shown
     rename_text: str = ""
     rename_changed: float = 0.0
@@ -148,19 +148,20 @@ class ReloadScreen:
 def build(gui: viser.GuiApi, hooks: ReloadHooks) -> ReloadScreen:
     projects = tuple(sorted(hooks.projects)) or (NO_PROJECT,)
     project = gui.add_dropdown("Project", projects)
-    renames = gui.add_text("Renames (old -> new)", "", multiline=True)
+    renames = gui.add_text("Renames", "", multiline=True)
     rename_note = gui.add_html("")
     preview_button = gui.add_button("Preview", color="blue", disabled=True)
     preview_progress = gui.add_progress_bar(100, animated=True, visible=False)
     preview_info = gui.add_html("")
+    # the reload's progress and result at the top, where the eye is after the dialog
+    reload_progress = gui.add_progress_bar(100, animated=True, visible=False)
+    result = gui.add_html("")
     summary = gui.add_html("")
     show = gui.add_dropdown("Show", SHOW, initial_value="all")
     table = gui.add_html("")
     risk_folder = gui.add_folder("Confirm each risk")
     reload_button = gui.add_button("Reload", color="red", disabled=True)
     reason = gui.add_html("")
-    reload_progress = gui.add_progress_bar(100, animated=True, visible=False)
-    result = gui.add_html("")
     screen = ReloadScreen(
         hooks, project, renames, rename_note, preview_button, preview_progress, preview_info,
         summary, show, table, risk_folder, reload_button, reason, reload_progress, result,
@@ -523,7 +524,7 @@ def render_summary(preview: Preview | None, running_crc: str | None, loaded: boo
             f'running <code data-testid="crc-running">{html.escape(plan.old_crc)}</code> '
             f'&rarr; new <code data-testid="crc-new">{html.escape(plan.new_crc)}</code>',
         ),
-        ("Programs", _programs(plan.programs)),
+        ("Programs", f'<span data-testid="reload-programs">{_programs(plan.programs)}</span>'),
         ("Switch-over", f"estimated {plan.estimate_us:.0f} &micro;s between two cycles"),
     ]
     if preview.renames:
@@ -588,7 +589,7 @@ def render_table(plan: p.ReloadPlanInfo | None, show: str) -> str:
     chosen.sort(key=lambda change: (_FATE_ORDER.get(change.action, 9), change.path))
     head = "".join(
         f'<th style="{_CELL};text-align:left;position:sticky;top:0;background:#fff">{name}</th>'
-        for name in ("Variable", "Fate", "Type", "Value from")
+        for name in ("Variable", "Fate", "Type", "Value after the reload")
     )
     rows = [_change_row(change) for change in chosen]
     if not rows:
@@ -605,9 +606,6 @@ def _change_row(change: p.VariableChange) -> str:
         type_text = f"{change.old_type} → {change.new_type}"
     else:
         type_text = change.new_type or change.old_type or ""
-    source = change.source or ""
-    if change.reason and change.reason != f"renamed from {source}":
-        source = f"{source} ({change.reason})" if source else change.reason
     path = html.escape(change.path)
     color = _FATE_COLORS.get(change.action, "inherit")
     return (
@@ -615,8 +613,23 @@ def _change_row(change: p.VariableChange) -> str:
         f'<td style="{_CELL};color:{color};font-weight:600" data-fate="{path}">'
         f"{html.escape(change.action)}</td>"
         f'<td style="{_CELL};{_MUTED}">{html.escape(type_text)}</td>'
-        f'<td style="{_CELL};font-family:monospace">{html.escape(source)}</td></tr>'
+        f'<td style="{_CELL}">{html.escape(value_after(change))}</td></tr>'
     )
+
+
+def value_after(change: p.VariableChange) -> str:
+    """Where the variable's value comes from after the reload, in words."""
+    renamed = change.source is not None and change.source.upper() != change.path.upper()
+    running = f"the value of {change.source}" if renamed else "its running value"
+    said = {
+        "kept": running,
+        "converted": f"{running}, converted",
+        "initialised": "its initial value",
+        "new": "its initial value",
+        "deleted": "none: the value is lost",
+    }.get(change.action, "")
+    own_words = change.reason and not change.reason.startswith("renamed from")
+    return f"{said} ({change.reason})" if own_words else said
 
 
 def _failure(code: str, message: str, diagnostics: list[str]) -> str:
