@@ -60,6 +60,7 @@ _DIAGNOSTIC = re.compile(
 RENAME_SETTLE_S = 0.8  # the rename map is previewed again once the user stops typing
 _CELL = "padding:2px 8px;border-bottom:1px solid #e9ecef"
 _MUTED = "color:#868e96"
+_BOX = "margin:6px 0;padding:4px 8px;border-radius:4px;border:1px solid "  # + its colour
 
 
 @dataclass(frozen=True)
@@ -560,6 +561,7 @@ def render_summary(preview: Preview | None, running_crc: str | None, loaded: boo
             "preview: it will refuse this reload. Preview again.</div>"
         )
     return (
+        '<div style="margin:6px 0 2px 0;font-weight:600">Reload plan</div>'
         f'<table style="font-size:0.9em">{cells}</table>'
         f'<div style="margin:4px 0">{counts}</div>{"".join(notes)}'
     )
@@ -586,7 +588,10 @@ def render_table(plan: p.ReloadPlanInfo | None, show: str) -> str:
         for change in plan.changes
         if show == "all" or change.action == show or (show == "changed" and change.action != "kept")
     ]
-    chosen.sort(key=lambda change: (_FATE_ORDER.get(change.action, 9), change.path))
+    # what is lost or restarts first, then what comes from a renamed variable, kept last
+    chosen.sort(
+        key=lambda change: (_FATE_ORDER.get(change.action, 9), not _renamed(change), change.path)
+    )
     head = "".join(
         f'<th style="{_CELL};text-align:left;position:sticky;top:0;background:#fff">{name}</th>'
         for name in ("Variable", "Fate", "Type", "Value after the reload")
@@ -617,9 +622,13 @@ def _change_row(change: p.VariableChange) -> str:
     )
 
 
+def _renamed(change: p.VariableChange) -> bool:
+    return change.source is not None and change.source.upper() != change.path.upper()
+
+
 def value_after(change: p.VariableChange) -> str:
     """Where the variable's value comes from after the reload, in words."""
-    renamed = change.source is not None and change.source.upper() != change.path.upper()
+    renamed = _renamed(change)
     running = f"the value of {change.source}" if renamed else "its running value"
     said = {
         "kept": running,
@@ -661,7 +670,7 @@ def render_outcome(outcome: Outcome | None) -> str:
         return ""
     if outcome.done is None:
         return (
-            '<div data-testid="reload-refused" style="color:#c92a2a;margin:4px 0">Reload of '
+            f'<div data-testid="reload-refused" style="{_BOX}#c92a2a;color:#c92a2a">Reload of '
             f"{html.escape(outcome.resource)} refused: {html.escape(outcome.refused)}. The "
             "resource runs on with its configuration.</div>"
         )
@@ -696,7 +705,7 @@ def render_outcome(outcome: Outcome | None) -> str:
         for name, value in rows
     )
     return (
-        '<div data-testid="reload-result" style="margin:4px 0"><b style="color:#2b8a3e">'
+        f'<div data-testid="reload-result" style="{_BOX}#2b8a3e"><b style="color:#2b8a3e">'
         f'Reload done</b><table style="font-size:0.9em">{cells}</table></div>'
     )
 
