@@ -364,7 +364,11 @@ def refresh(
 
     plan = preview.plan if preview is not None else None
     running_crc = status.crc if status is not None else None
-    _show(screen, "summary", screen.summary, render_summary(preview, running_crc, loaded))
+    # after a failed preview its refusal says enough; no invitation to preview under it
+    summary = (
+        "" if preview is None and preview_error else render_summary(preview, running_crc, loaded)
+    )
+    _show(screen, "summary", screen.summary, summary)
     _show(screen, "table", screen.table, render_table(plan, screen.show.value))
     if preview is not screen.checks_for:
         _rebuild_risks(screen, preview)

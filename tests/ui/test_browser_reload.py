@@ -158,6 +158,7 @@ def test_preview_and_reload_a_new_variable_keeps_the_running_values(
         for named in ("Tank1", old_crc, new_crc):
             assert named in dialog.inner_text()
         confirm(page, "Tank1")
+        shoot(page, "reload-running-1400")  # most often still compiling or switching over
         wait_for_text(page, '[data-testid="reload-new-crc"]', new_crc, timeout_s=30)
         assert re.fullmatch(r"\d+\.\d{3} ms", text_of(page, '[data-testid="reload-pause"]'))
         backup = text_of(page, '[data-testid="reload-backup"]')
@@ -176,8 +177,9 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
 ) -> None:
     source = tank_source(tmp_path)
     text = source.read_text(encoding="utf-8")
-    # the engineer renames the level and drops the pump start counter
+    # the engineer renames the level, drops the pump start counter and narrows the inflow
     text = re.sub(r"\blevel\b", "tankLevel", text)
+    text = text.replace("inflow : INT := 8;", "inflow : SINT := 8;")
     text = text.replace("  pumpStarts : DINT;           (* how often the pump was started *)\n", "")
     text = text.replace("  pumpStarts := pumpStarts + 1;\n", "")
     source.write_text(text, encoding="utf-8")
@@ -195,7 +197,10 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
         assert fate(page, "TankControl.level") == "deleted"
         assert fate(page, "TankControl.pumpStarts") == "deleted"
         assert count(page, "deleted") == "2 deleted"
-        assert "2 values deleted" in text_of(page, '[data-testid="risk"]')
+        assert "2 values deleted" in page.locator('[data-testid="risk"]').all_inner_texts()[1]
+        # INT to SINT does not convert every value: the initial value is taken
+        assert fate(page, "TankControl.inflow") == "initialised"
+        assert "INT → SINT" in page.locator('tr:has([data-fate="TankControl.inflow"])').inner_text()
 
         # an invalid line is shown at the field and holds the preview back
         text_area(page, "Renames").fill("TankControl.level => tankLevel")
@@ -215,12 +220,21 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
             wait_for_text(each, '[data-count="deleted"]', "1 deleted")
         row = page.locator('tr:has([data-fate="TankControl.tankLevel"])').inner_text()
         assert "the value of TankControl.level" in row
-        assert "TankControl.pumpStarts" in text_of(page, '[data-testid="risk"]')
+        risks = page.locator('[data-testid="risk"]').all_inner_texts()
+        assert "1 value initialised" in risks[0] and "TankControl.inflow" in risks[0]
+        assert "1 value deleted" in risks[1] and "TankControl.pumpStarts" in risks[1]
         reason = text_of(page, '[data-testid="reload-disabled"]')
-        assert "tick each risk above (1 of 1 not ticked)" in reason
+        assert "tick each risk above (2 of 2 not ticked)" in reason
+        page.get_by_label("Accept: 1 value deleted", exact=True).check()
+        wait_for_text(
+            page,
+            '[data-testid="reload-disabled"]',
+            "Disabled: tick each risk above (1 of 2 not ticked)",
+        )
         assert not button_enabled(page, "Reload")
-        for each in (page, other):
-            each.get_by_label("Accept: 1 value deleted", exact=True).check()
+        page.get_by_label("Accept: 1 value initialised", exact=True).check()
+        other.get_by_label("Accept: 1 value deleted", exact=True).check()
+        other.get_by_label("Accept: 1 value initialised", exact=True).check()
         wait_until("Reload is enabled", lambda: button_enabled(page, "Reload"))
         wait_until("Reload is enabled there too", lambda: button_enabled(other, "Reload"))
         shoot(page, "reload-preview-1920")
@@ -235,6 +249,7 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
         shoot(page, "reload-done-1920")
         assert_carried_over(page, "TankControl.tankLevel", before)
         assert page.locator('[data-var="TankControl.level"]').count() == 0
+        assert value(page, "TankControl.inflow") == "8"  # its initial value
 
         # the other browser's preview was made against the configuration before: its
         # reload is refused by the resource, which runs another one by now
@@ -305,3 +320,4 @@ def test_a_read_user_sees_reload_disabled_with_the_reason(viewer_ui: str) -> Non
         assert reason in text_of(page, '[data-testid="preview-disabled"]')
         assert not button_enabled(page, "Preview")
         assert not button_enabled(page, "Reload")
+        shoot(page, "reload-read-user-1400")
