@@ -219,7 +219,7 @@ def _start_preview(screen: ReloadScreen, renames: dict[str, str] | None = None) 
             f"compiling {project} twice",
             time.monotonic(),
         )
-        work.attempted = (resource, project, dict(renames))
+        work.attempted = attempt_key = (resource, project, dict(renames))
         work.version += 1
 
     def run() -> None:
@@ -238,7 +238,8 @@ def _start_preview(screen: ReloadScreen, renames: dict[str, str] | None = None) 
         finally:
             with work.lock:
                 work.busy = ""
-                if preview is not None or error:
+                # unless the user chose another resource or project meanwhile
+                if work.attempted == attempt_key:
                     work.preview, work.loaded, work.preview_error = preview, False, error
                 work.version += 1
 
@@ -306,7 +307,11 @@ def _start_reload(screen: ReloadScreen, preview: Preview) -> None:
             outcome.refused = f"project: {exc}"
             raise Refusal("project", str(exc)) from None
         except Refusal as refused:
-            outcome.refused = f"{refused.code}: {refused.message}"
+            # a project that no longer compiles: where, in the compiler's words
+            where = "; ".join(refused.details.get("diagnostics", []))
+            outcome.refused = f"{refused.code}: {refused.message}" + (
+                f" ({where})" if where else ""
+            )
             raise
         except ResourceUnreachable as exc:
             outcome.refused = f"no answer: {exc}"
@@ -337,8 +342,9 @@ def refresh(
 ) -> None:
     work = screen.work
     project = screen.project.value
-    if screen.choice != (resource, project):
-        # a plan is for one resource and one project: another choice needs its own
+    if resource is not None and screen.choice != (resource, project):
+        # a plan is for one resource and one project: another choice needs its own (a
+        # resource gone for a moment changes nothing: its plan is still the plan)
         screen.choice = (resource, project)
         with work.lock:
             work.preview, work.attempted, work.preview_error, work.outcome = None, None, "", None
@@ -354,7 +360,8 @@ def refresh(
     preview_verdict = _preview_verdict(screen, resource, status, allowed, busy, rename_errors)
     screen.preview_button.disabled = not preview_verdict.ok
     screen.preview_button.hint = preview_verdict.reason or None
-    running = f"{stage} ... {time.monotonic() - started:.1f} s" if busy else ""
+    what = f"{busy} of {resource}" if busy == "Reload" else f"{busy} of {project}"
+    running = f"{what}: {stage} ... {time.monotonic() - started:.1f} s" if busy else ""
     screen.preview_progress.visible = busy == "Preview"
     screen.reload_progress.visible = busy == "Reload"
     info = _note("preview-progress", running) if busy == "Preview" else preview_error
@@ -364,10 +371,10 @@ def refresh(
 
     plan = preview.plan if preview is not None else None
     running_crc = status.crc if status is not None else None
-    # after a failed preview its refusal says enough; no invitation to preview under it
-    summary = (
-        "" if preview is None and preview_error else render_summary(preview, running_crc, loaded)
-    )
+    # after a failed preview its refusal says enough, and whoever may not preview is told
+    # why above: no invitation to preview then
+    quiet = preview is None and (preview_error or not preview_verdict.ok)
+    summary = "" if quiet else render_summary(preview, running_crc, loaded)
     _show(screen, "summary", screen.summary, summary)
     _show(screen, "table", screen.table, render_table(plan, screen.show.value))
     if preview is not screen.checks_for:

@@ -56,12 +56,30 @@ def edit(path: Path, old: str, new: str) -> None:
     path.write_text(text.replace(old, new), encoding="utf-8")
 
 
+PREVIEW_S = 60  # two compiles in two processes, on a machine that may be busy
+
+
 def preview(page: Page) -> None:
     page.get_by_role("button", name="Preview", exact=True).click()
     wait_until(
         "the preview is done",
         lambda: page.locator('[data-testid="preview-progress"]').count() == 0,
+        timeout_s=PREVIEW_S,
     )
+
+
+def wait_for_shown(page: Page, selector: str, wanted: str) -> None:
+    """Like wait_for_text, for what only a preview brings: absent until then."""
+    shown = page.locator(selector)
+    wait_until(
+        f"{selector} shows {wanted!r}",
+        lambda: shown.count() > 0 and shown.first.inner_text() == wanted,
+        timeout_s=PREVIEW_S,
+    )
+
+
+def wait_for_fate(page: Page, path: str, wanted: str) -> None:
+    wait_for_shown(page, f'[data-fate="{path}"]', wanted)
 
 
 def fate(page: Page, path: str) -> str:
@@ -127,7 +145,7 @@ def test_preview_and_reload_a_new_variable_keeps_the_running_values(
         )
         edit(source, "alarmLow := level < 100;", "alarmLow := level < alarmLevel;")
         preview(page)
-        wait_for_text(page, '[data-fate="TankControl.alarmLevel"]', "new")
+        wait_for_fate(page, "TankControl.alarmLevel", "new")
         assert count(page, "new") == "1 new"
         assert count(page, "deleted") == "0 deleted"
         assert count(page, "initialised") == "0 initialised"
@@ -193,7 +211,7 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
 
         # without a rename map the level is lost and a new one starts at 500
         preview(page)
-        wait_for_text(page, '[data-fate="TankControl.tankLevel"]', "new")
+        wait_for_fate(page, "TankControl.tankLevel", "new")
         assert fate(page, "TankControl.level") == "deleted"
         assert fate(page, "TankControl.pumpStarts") == "deleted"
         assert count(page, "deleted") == "2 deleted"
@@ -216,8 +234,8 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
             text_area(each, "Renames").fill("TankControl.level -> TankControl.tankLevel")
         preview(other)
         for each in (page, other):
-            wait_for_text(each, '[data-fate="TankControl.tankLevel"]', "kept")
-            wait_for_text(each, '[data-count="deleted"]', "1 deleted")
+            wait_for_fate(each, "TankControl.tankLevel", "kept")
+            wait_for_shown(each, '[data-count="deleted"]', "1 deleted")
         row = page.locator('tr:has([data-fate="TankControl.tankLevel"])').inner_text()
         assert "the value of TankControl.level" in row
         risks = page.locator('[data-testid="risk"]').all_inner_texts()
