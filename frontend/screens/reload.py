@@ -382,7 +382,14 @@ def refresh(
     verdict = _reload_verdict(screen, preview, loaded, renames, rename_errors, busy, allowed)
     screen.reload_button.disabled = not verdict.ok
     screen.reload_button.hint = verdict.reason or None
-    _show(screen, "reason", screen.reason, _note("reload-disabled", _disabled(verdict)))
+    # under the button too, in one line: the panel is scrolled down to it by then
+    below = _note("reload-under-way", running) if busy == "Reload" else outcome_line(outcome)
+    _show(
+        screen,
+        "reason",
+        screen.reason,
+        below + _note("reload-disabled", _disabled(verdict)),
+    )
     result = _note("reload-progress", running) if busy == "Reload" else render_outcome(outcome)
     _show(screen, "result", screen.result, result)
 
@@ -718,6 +725,23 @@ def render_outcome(outcome: Outcome | None) -> str:
     return (
         f'<div data-testid="reload-result" style="{_BOX}#2b8a3e"><b style="color:#2b8a3e">'
         f'Reload done</b><table style="font-size:0.9em">{cells}</table></div>'
+    )
+
+
+def outcome_line(outcome: Outcome | None) -> str:
+    """The last reload in one line, for under the Reload button (the details are above)."""
+    if outcome is None:
+        return ""
+    if outcome.done is None:
+        return (
+            '<div data-testid="reload-outcome" style="color:#c92a2a">Reload refused: '
+            f"{html.escape(outcome.refused)}</div>"
+        )
+    done = outcome.done.reply.reload
+    return (
+        '<div data-testid="reload-outcome" style="color:#2b8a3e">Reload done: '
+        f"{html.escape(done.old_crc)} &rarr; {html.escape(done.new_crc)}, pause "
+        f"{done.pause_us / 1000:.3f} ms (details at the top)</div>"
     )
 
 

@@ -280,6 +280,8 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
         refused = other.locator('[data-testid="reload-refused"]')
         refused.wait_for(timeout=WAIT_MS)
         assert "changed" in refused.inner_text(), refused.inner_text()
+        # also in one line under the button, where the user is
+        assert "Reload refused: changed" in text_of(other, '[data-testid="reload-outcome"]')
         shoot(other, "reload-refused-1400")
         assert text_of(other, '[data-testid="resource-crc"]') == new_crc
 
