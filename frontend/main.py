@@ -9,7 +9,10 @@ import sys
 import time
 from pathlib import Path
 
+from backend.engineering.project_list import named_folder
 from runtime.contract.session_options import add_zenoh_options
+
+DEFAULT_BACKUP_DIR = Path("padt-backups")  # as backend.engineering.backup's, without loading it
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -28,6 +31,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="where the users' watch lists are kept (default ./padt-watch-lists.json)",
     )
+    parser.add_argument(
+        "--project",
+        type=named_folder,
+        action="append",
+        default=[],
+        metavar="[NAME=]DIR",
+        help="a project folder the Reload screen offers, named NAME or by its folder (repeatable)",
+    )
+    parser.add_argument(
+        "--backup-dir",
+        type=Path,
+        default=DEFAULT_BACKUP_DIR,
+        metavar="DIR",
+        help="folder for the backup archive of what was reloaded (default ./padt-backups)",
+    )
     parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
     parser.add_argument("--port", type=int, default=8080, help="HTTP port (next free if busy)")
 
@@ -35,6 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     # imported here: `padt` must start fast for commands that never open a UI
     from backend.engineering.padt_accounts import AccountsError, PadtAccounts
+    from backend.engineering.project_list import projects_by_name
     from backend.engineering.resource_directory import ResourceDirectory
     from backend.engineering.watch_lists import WatchListError, WatchLists
     from frontend.app import PadtUi
@@ -45,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
     stop = StopRequest()
     try:
         accounts = PadtAccounts(args.accounts, time.monotonic_ns)
-    except AccountsError as exc:
+        projects = projects_by_name(args.project)
+    except (AccountsError, ValueError) as exc:
         print(f"padt ui: {exc}", file=sys.stderr)
         return 2
     if accounts.empty:
@@ -62,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         return 2
     session = open_client(args.zenoh, args.zenoh_config)
     directory = ResourceDirectory(session)
-    context = UiContext(directory, accounts, args.zenoh, watch_lists)
+    context = UiContext(directory, accounts, args.zenoh, watch_lists, projects, args.backup_dir)
     ui = PadtUi(context, host=args.host, port=args.port)
     print(f"PADT UI: {ui.url}", flush=True)
     stop.sleep_until_requested()

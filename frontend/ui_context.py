@@ -1,11 +1,15 @@
 """What every browser of one UI server shares: the resources on the bus, the PADT accounts
-the users log in with, the users' watch lists, and the router's address (shown in the
-status bar)."""
+the users log in with, the router's address (shown in the status bar), the users' watch
+lists, the projects the PADT knows (by name, each a folder) and where the backups of what
+was loaded go."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
 
+from backend.engineering.backup import DEFAULT_BACKUP_DIR
 from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.resource_directory import ResourceDirectory
 from backend.engineering.watch_lists import WatchLists
@@ -17,3 +21,5 @@ class UiContext:
     accounts: PadtAccounts
     router: str
     watch_lists: WatchLists
+    projects: Mapping[str, Path] = field(default_factory=dict)  # name -> project folder
+    backup_dir: Path = DEFAULT_BACKUP_DIR

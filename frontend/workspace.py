@@ -23,6 +23,7 @@ from frontend.screens import (
     login,
     online_test,
     parameters,
+    reload,
     resources,
     single_step,
     value_edit,
@@ -98,9 +99,22 @@ class Workspace:
             self.parameters = parameters.build(gui, self._change)
         with self.panel.add_tab("Events", viser.Icon.LIST_DETAILS):
             self.events = events.build(gui)
+        with self.panel.add_tab("Reload", viser.Icon.REFRESH):
+            self.reload = reload.build(gui, self._reload_hooks())
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
+
+    def _reload_hooks(self) -> reload.ReloadHooks:
+        session = self.session
+        return reload.ReloadHooks(
+            session.client,
+            session.context.projects,
+            session.context.backup_dir,
+            session.user,
+            self.selected,
+            session.client_of,
+        )
 
     def selected(self) -> str | None:
         value = self.resource.value
@@ -259,6 +273,7 @@ class Workspace:
         parameters.refresh(
             self.parameters, resource, status, token, client_of, self._allowed, changed
         )
+        reload.refresh(self.reload, resource, status, self._allowed)
         self.drawing.show(resource, status)
 
     def _refresh_forcing(self, resource: str | None, status: p.Status | None) -> None:

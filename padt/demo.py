@@ -121,7 +121,9 @@ def run(args: argparse.Namespace) -> int:
         except OSError:  # busy: like the UI, take another port rather than fail
             api = ApiServer(service, args.host, 0)
         watch_lists = WatchLists(args.state_dir / "watch-lists.json")
-        context = UiContext(directory, accounts, endpoint, watch_lists)
+        # the UI knows the same project as the API: the demo's copy in the state folder
+        backups = args.state_dir / "backups"
+        context = UiContext(directory, accounts, endpoint, watch_lists, projects, backups)
         ui = PadtUi(context, host=args.host, port=args.port)
         try:
             _announce(args.state_dir, resource, result.artifact.crc, admin, admin_password)

@@ -7,6 +7,7 @@ import argparse
 from pathlib import Path
 
 from backend.engineering.padt_levels import PADT_LEVELS
+from backend.engineering.project_list import named_folder
 from runtime.contract.session_options import add_zenoh_options
 
 DEFAULT_ACCOUNTS = Path("padt-accounts.json")
@@ -21,11 +22,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--project",
-        type=Path,
+        type=named_folder,
         action="append",
         default=[],
-        metavar="DIR",
-        help="a project folder to serve, named by its folder (repeatable)",
+        metavar="[NAME=]DIR",
+        help="a project folder to serve, named NAME or by its folder (repeatable)",
     )
     parser.add_argument(
         "--backup-dir", type=Path, default=Path("padt-backups"), help="where backups go"

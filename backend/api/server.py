@@ -9,13 +9,13 @@ import socket
 import sys
 import threading
 import time
-from pathlib import Path
 
 import uvicorn
 
 from backend.api.app import create_app
 from backend.api.service import PadtService
 from backend.engineering.padt_accounts import AccountsError, PadtAccounts
+from backend.engineering.project_list import projects_by_name
 from backend.engineering.resource_directory import ResourceDirectory
 
 
@@ -59,18 +59,6 @@ def _listening_socket(host: str, port: int) -> socket.socket:
         listening.close()
         raise
     return listening
-
-
-def projects_by_name(folders: list[Path]) -> dict[str, Path]:
-    projects: dict[str, Path] = {}
-    for folder in folders:
-        name = folder.resolve().name
-        if name in projects:
-            raise ValueError(f"two projects are named {name}: {projects[name]} and {folder}")
-        if not folder.is_dir():
-            raise ValueError(f"{folder}: not a project folder")
-        projects[name] = folder
-    return projects
 
 
 def run(args: argparse.Namespace) -> int:

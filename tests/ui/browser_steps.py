@@ -151,3 +151,8 @@ def banner(page: Page) -> str:
 
 def open_tab(page: Page, name: str) -> None:
     page.get_by_role("tab", name=name).click()
+
+
+def text_area(page: Page, label: str) -> Locator:
+    """A viser multiline text input by its label."""
+    return page.locator(f"div:has(> div > p > label:text-is('{label}')) textarea").first

@@ -66,13 +66,15 @@ def _group(pattern: re.Pattern[str], line: str) -> str | None:
 @pytest.fixture
 def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
     """The demo resource with a read-only user `viewer`, and the UI with three PADT
-    accounts: `admin` (security administrator), `viewer` (read-write), `guest` (read-only)."""
+    accounts: `admin` (security administrator), `viewer` (read-write), `guest` (read-only);
+    the UI knows the demo's project as `demo`."""
     verifier = hash_password(PASSWORD)
     resource_users = [
         UserAccount("admin", "administrator", verifier),
         UserAccount("viewer", "read", verifier),
     ]
-    result = compile_project(load_project([demo_project_with_accounts(tmp_path, resource_users)]))
+    folder = demo_project_with_accounts(tmp_path, resource_users)
+    result = compile_project(load_project([folder]))
     assert result.artifact is not None
     store_artifact(tmp_path, result.artifact)
     accounts_file = tmp_path / "padt-accounts.json"
@@ -88,7 +90,9 @@ def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
         session = client.session
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
         lists = WatchLists(tmp_path / "watch-lists.json")
-        context = UiContext(ResourceDirectory(session), accounts, zenoh_endpoint, lists)
+        directory = ResourceDirectory(session)
+        projects = {"demo": folder}
+        context = UiContext(directory, accounts, zenoh_endpoint, lists, projects, tmp_path / "bak")
         ui = PadtUi(context, port=free_port())
         try:
             yield Plant(ui.url, client)
