@@ -13,6 +13,7 @@ from playwright.sync_api import Page
 
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
+    PASSWORD,
     Demo,
     Plant,
     button_enabled,
