@@ -15,7 +15,7 @@ from frontend import plant_view, status_bar
 from frontend.confirm import attempt, confirm
 from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
-from frontend.screens import login, online_test, resources, single_step
+from frontend.screens import code, login, online_test, resources, single_step
 from frontend.ui_context import UiContext
 from runtime.contract import protocol as p
 
@@ -74,6 +74,8 @@ class Workspace:
             self.online_test = online_test.build(gui)
         with self.panel.add_tab("Single step", viser.Icon.PLAYER_TRACK_NEXT):
             self.single_step = single_step.build(gui, self._act)
+        with self.panel.add_tab("Code", viser.Icon.CODE):
+            self.code = code.build(gui)
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -178,6 +180,11 @@ class Workspace:
             self.online_test, self.session.feed_of(resource) if resource is not None else None
         )
         single_step.refresh(self.single_step, status, self._allowed)
+        code.refresh(
+            self.code,
+            self.session.feed_of(resource) if resource is not None else None,
+            self.session.context.projects,
+        )
         self.drawing.show(resource, status)
 
     def remove(self) -> None:

@@ -119,7 +119,9 @@ def run(args: argparse.Namespace) -> int:
             api = ApiServer(service, args.host, args.api_port)
         except OSError:  # busy: like the UI, take another port rather than fail
             api = ApiServer(service, args.host, 0)
-        ui = PadtUi(UiContext(directory, accounts, endpoint), host=args.host, port=args.port)
+        ui = PadtUi(
+            UiContext(directory, accounts, endpoint, projects), host=args.host, port=args.port
+        )
         try:
             _announce(args.state_dir, resource, result.artifact.crc, admin, admin_password)
             print(f"padt demo: REST API {api.url}/docs (log in as {admin.name})", flush=True)

@@ -95,3 +95,20 @@ def value(page: Page, variable: str) -> str:
 
 def button_enabled(page: Page, name: str) -> bool:
     return page.get_by_role("button", name=name, exact=True).first.is_enabled()
+
+
+def choose(page: Page, label: str, option: str) -> None:
+    """Pick `option` in the viser dropdown labelled `label`."""
+    page.get_by_label(label, exact=True).click()
+    page.get_by_role("option", name=option, exact=True).click()
+    wait_until(
+        f"{label} shows {option}",
+        lambda: page.get_by_label(label, exact=True).input_value() == option,
+    )
+
+
+def set_number(page: Page, label: str, number: int) -> None:
+    """Type a number into the viser number input labelled `label`."""
+    box = page.get_by_label(label, exact=True)
+    box.fill(str(number))
+    box.press("Enter")
