@@ -113,6 +113,19 @@ def refresh(screen: CodeScreen, feed: ResourceFeed | None, projects: dict[str, P
     if page != screen.shown:
         screen.view.content = page
         screen.shown = page
+    # nothing to choose or to page through: say so by greying the controls out
+    _enable(screen.instance, tuple(screen.instance.options) != (NO_INSTANCE,))
+    paging = "data-code-line" in page
+    _enable(screen.first, paging)
+    if screen.page.visible != paging:  # viser cannot grey out a button group
+        screen.page.visible = paging
+
+
+def _enable(
+    control: viser.GuiDropdownHandle[str] | viser.GuiNumberHandle[int], enabled: bool
+) -> None:
+    if control.disabled == enabled:  # only changes go to the browser
+        control.disabled = not enabled
 
 
 def _page(
@@ -198,7 +211,7 @@ def _first_line(screen: CodeScreen, chosen: str, source: PouSource) -> int:
 
 _MUTED = "#868e96"
 _LINE_NUMBER = (
-    f"color:{_MUTED};text-align:right;padding:0 8px;user-select:none;"
+    f"color:{_MUTED};text-align:right;padding:0 8px;user-select:none;position:sticky;left:0;"
     "border-right:1px solid #dee2e6;background:#f8f9fa;vertical-align:top"
 )
 _CODE = "white-space:pre;padding:0 12px 0 8px;vertical-align:top;tab-size:4"
@@ -238,8 +251,10 @@ def render_source(
     quality: dict[str, str],
 ) -> str:
     """Lines `first` to `last` of the file with their numbers, each followed on the same
-    line by the values of what it names (as a debugger shows values inline); a long line
-    scrolls sideways within the block, never wraps."""
+    line by the values of what it names (as a debugger shows values inline). A long line
+    never wraps: the work panel scrolls sideways, its line number staying in view. The
+    block has no scroll bar of its own: viser replaces it with every new value, which
+    would throw the reader back to its left edge ten times a second."""
     rows = []
     for number in range(first, last + 1):
         text = source.lines[number - source.first_line]
@@ -251,7 +266,8 @@ def render_source(
             f"{after}</td></tr>"
         )
     return (
-        '<div style="overflow-x:auto;border:1px solid #dee2e6;border-radius:4px">'
+        '<div style="display:inline-block;min-width:100%;border:1px solid #dee2e6;'
+        'border-radius:4px">'
         '<table style="border-collapse:collapse;min-width:100%;font-family:monospace;'
         f'font-size:12px;line-height:1.5">{"".join(rows)}</table></div>'
     )

@@ -5,6 +5,7 @@ TON of its timer; paging; the values standing still once the resource is stopped
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import pytest
 from playwright.sync_api import Page
@@ -23,6 +24,23 @@ from tests.ui.browser_steps import (
 )
 
 pytestmark = pytest.mark.browser
+
+
+# what scrolls the work panel: the first ancestor of the code that scrolls sideways
+SCROLLER = """(() => {
+  let e = document.querySelector('tr[data-line]');
+  while (!['auto', 'scroll'].includes(getComputedStyle(e).overflowX)) e = e.parentElement;
+  return e;
+})()"""
+
+
+def rect(page: Page, selector: str) -> dict[str, float]:
+    """Where an element is now (read at once: the live values redraw the table)."""
+    found: dict[str, float] = page.evaluate(
+        f"(() => {{ const r = document.querySelector('{selector}').getBoundingClientRect();"
+        " return {x: r.x, height: r.height}; })()"
+    )
+    return found
 
 
 def code_value(page: Page, path: str) -> str:
@@ -62,6 +80,17 @@ def test_the_source_of_tankcontrol_with_live_values(demo: Demo) -> None:
         line_28 = page.locator('tr[data-line="28"]').inner_text()
         assert "refillDelay.IN =" in line_28 and "restartDelay = T#2s" in line_28, line_28
         shoot(page, "code-1400")
+        # line 28 with its six values is wider than the work area: it does not wrap, the
+        # panel scrolls sideways and stays there while the values change, the line
+        # numbers in view
+        assert rect(page, 'tr[data-line="28"]')["height"] < 30  # one line of text
+        page.evaluate(f"{SCROLLER}.scrollLeft = 400")
+        time.sleep(1.0)  # ten new values
+        assert page.evaluate(f"{SCROLLER}.scrollLeft") == 400
+        panel = page.evaluate(f"{SCROLLER}.getBoundingClientRect().left")
+        assert rect(page, 'tr[data-line="28"] td')["x"] >= panel - 1
+        shoot(page, "code-1400-scrolled")
+        page.evaluate(f"{SCROLLER}.scrollLeft = 0")
 
         # page on: from line 20, then back to the POU's first line
         set_number(page, "Lines from", 20)
@@ -97,3 +126,22 @@ def test_the_source_of_tankcontrol_with_live_values(demo: Demo) -> None:
         stopped = code_value(page, "TankControl.level")
         time.sleep(1.0)
         assert code_value(page, "TankControl.level") == stopped
+
+
+def test_an_edited_project_is_not_shown_as_the_running_source(demo: Demo, tmp_path: Path) -> None:
+    # the demo's project folder (the fixture's state folder is this test's tmp_path),
+    # edited after the download: it now compiles to another CRC than the one running
+    tank = tmp_path / "project" / "tank.st"
+    tank.write_text(tank.read_text().replace("level + inflow", "level + inflow + 1"))
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_demo_as_admin(page, demo)
+        page.get_by_role("tab", name="Code").click()
+        crc = text_of(page, '[data-testid="resource-crc"]')
+        wanted = f"The source of configuration {crc} is not among the projects this PADT knows"
+        wait_until(
+            "the screen says the source is unknown",
+            lambda: wanted in text_of(page, '[data-testid="code-message"]'),
+        )
+        assert page.locator("[data-code-line]").count() == 0
+        shoot(page, "code-unknown")
