@@ -9,6 +9,7 @@ of scrolling), and only the variables of the lines in view are wanted (`wanted`)
 from __future__ import annotations
 
 import html
+import logging
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -33,13 +34,14 @@ PAGE_LINES = 40
 NO_INSTANCE = "-"
 PREVIOUS, NEXT = "Previous page", "Next page"
 QUALITY_COLORS = {"forced": "#c92a2a", "stale": "#868e96"}  # as the Online test
+log = logging.getLogger("padt.ui")
 
 
 class SourceLookup:
     """The sources of the configuration the resource runs, looked up again (compiling the
     projects, off the refresher's thread) whenever its CRC changes."""
 
-    def __init__(self, find: Callable[[str, dict[str, Path]], ConfigurationSources | None]):
+    def __init__(self, find: Callable[[str, dict[str, Path]], ConfigurationSources | None]) -> None:
         self._find = find
         self._lock = threading.Lock()
         self.crc = ""
@@ -57,6 +59,7 @@ class SourceLookup:
         try:
             found = self._find(crc, projects)
         except Exception:  # a project the compiler chokes on is not the running one
+            log.exception("looking for the source of configuration %s failed", crc)
             found = None
         with self._lock:
             if crc == self.crc:  # not overtaken by another configuration meanwhile
@@ -79,6 +82,8 @@ class CodeScreen:
     shown_instance: str = ""
     instances_of: tuple[int, str] = (0, "")  # (id of the variable table, CRC) listed
     lines: tuple[int, int] = (1, 1)  # the first and last line of the POU shown
+    # the variables the lines in view name, for (CRC, instance, first line, variable table)
+    layout: tuple[object, dict[int, list[Shown]]] = field(default_factory=lambda: (None, {}))
 
 
 def build(gui: viser.GuiApi) -> CodeScreen:
@@ -162,6 +167,9 @@ def _page(
             f"knows ({known}): no source is shown rather than one that may differ from what "
             "runs."
         ), []
+    if not types:
+        _offer(screen, ())
+        return _message("Waiting for the variables of the resource."), []
     if screen.instances_of != (id(types), sources.crc):
         _offer(screen, tuple(instances(sources, types)))
         screen.instances_of = (id(types), sources.crc)
@@ -178,7 +186,10 @@ def _page(
         ]
     first = _first_line(screen, chosen, source)
     last = min(first + PAGE_LINES - 1, source.last_line)
-    mentioned = line_variables(source, chosen, first, last, types)
+    layout = (sources.crc, chosen, first, id(types))  # what the lines name changes with
+    if screen.layout[0] != layout:
+        screen.layout = (layout, line_variables(source, chosen, first, last, types))
+    mentioned = screen.layout[1]
     paths = list(dict.fromkeys(shown.path for line in mentioned.values() for shown in line))
     header = _header(chosen, source, sources, first, last)
     return header + render_source(source, first, last, mentioned, values, types, quality), paths

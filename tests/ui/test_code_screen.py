@@ -3,6 +3,7 @@ variables it wants (those of the lines in view only)."""
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -109,6 +110,23 @@ def test_a_configuration_of_no_known_project_shows_no_source(gui: viser.GuiApi) 
     )
     assert "data-code-line" not in page
     assert code.wanted(screen) == []
+
+
+def test_an_instance_of_a_block_without_st_source_shows_its_interface(
+    gui: viser.GuiApi, demo_sources: ConfigurationSources
+) -> None:
+    without_ton = {name: pou for name, pou in demo_sources.pous.items() if name != "TON"}
+    known = dataclasses.replace(demo_sources, pous=without_ton)
+    screen = code.build(gui)
+    screen.lookup = code.SourceLookup(lambda crc, projects: known)
+    feed = _feed(demo_sources.crc)
+    _refreshed(screen, feed, {})
+    screen.instance.value = "TankControl.refillDelay"  # type: ignore[misc]
+    code.refresh(screen, feed, {})
+    assert "an instance of TON, which has no ST source here" in screen.shown
+    assert 'data-code-var="TankControl.refillDelay.Q"' in screen.shown
+    assert "TankControl.refillDelay.ET" in code.wanted(screen)
+    assert screen.first.disabled and not screen.page.visible  # nothing to page through
 
 
 def test_an_element_of_an_array_of_values_shows_that_element(
