@@ -169,7 +169,9 @@ def _page(
         ), []
     if not types:
         _offer(screen, ())
-        return _message("Waiting for the variables of the resource."), []
+        return _message(
+            "No variables of the resource yet: they come once you are logged in to it."
+        ), []
     if screen.instances_of != (id(types), sources.crc):
         _offer(screen, tuple(instances(sources, types)))
         screen.instances_of = (id(types), sources.crc)
