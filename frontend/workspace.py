@@ -18,6 +18,7 @@ from frontend.gui_value import set_value
 from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
 from frontend.screens import (
+    code,
     events,
     forcing,
     login,
@@ -101,6 +102,8 @@ class Workspace:
             self.events = events.build(gui)
         with self.panel.add_tab("Reload", viser.Icon.REFRESH):
             self.reload = reload.build(gui, self._reload_hooks())
+        with self.panel.add_tab("Code", viser.Icon.CODE):
+            self.code = code.build(gui)
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -262,8 +265,6 @@ class Workspace:
         resources.refresh(self.resources, list(directory.items()), resource, self._allowed)
         feed = self.session.feed_of(resource) if resource is not None else None
         online_test.refresh(self.online_test, feed)
-        if feed is not None:
-            feed.show(online_test.wanted(self.online_test))
         single_step.refresh(self.single_step, status, self._allowed)
         self._refresh_forcing(resource, status)
         token = login_there.token if login_there is not None else None
@@ -274,6 +275,14 @@ class Workspace:
             self.parameters, resource, status, token, client_of, self._allowed, changed
         )
         reload.refresh(self.reload, resource, status, self._allowed)
+        code.refresh(self.code, feed, self.session.context.projects)
+        if feed is not None:  # only what some screen shows is watched
+            feed.show(
+                online_test.wanted(self.online_test)
+                + value_edit.wanted(self.value_edit)
+                + forcing.wanted(self.forcing_feed.snapshot())
+                + code.wanted(self.code)
+            )
         self.drawing.show(resource, status)
 
     def _refresh_forcing(self, resource: str | None, status: p.Status | None) -> None:

@@ -461,3 +461,9 @@ def render_entries(
         f'style="font-size:0.9em;border-collapse:collapse;width:100%"><tr>{head}</tr>'
         f"{''.join(rows)}</table></div>"
     )
+
+
+def wanted(snapshot: ForcingSnapshot | None) -> list[str]:
+    """The forced variables, whose live values the Force values table shows."""
+    state = snapshot.state if snapshot is not None else None
+    return [entry.variable for entry in state.entries] if state is not None else []

@@ -247,3 +247,9 @@ def _disabled(reasons: list[str]) -> str:
         return ""
     text = "; ".join(html.escape(x) for x in reasons)
     return f'<div data-testid="edit-disabled" style="{_LINE};{_GREY}">Disabled: {text}</div>'
+
+
+def wanted(screen: ValueEditScreen) -> list[str]:
+    """The variable being edited, whose current value the screen shows."""
+    edit = screen.read[3] if screen.read is not None else None
+    return [edit.path] if edit is not None and edit.path is not None else []

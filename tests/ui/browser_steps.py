@@ -156,3 +156,10 @@ def open_tab(page: Page, name: str) -> None:
 def text_area(page: Page, label: str) -> Locator:
     """A viser multiline text input by its label."""
     return page.locator(f"div:has(> div > p > label:text-is('{label}')) textarea").first
+
+
+def set_number(page: Page, label: str, number: int) -> None:
+    """Type a number into the viser number input labelled `label`."""
+    box = page.get_by_label(label, exact=True)
+    box.fill(str(number))
+    box.press("Enter")
