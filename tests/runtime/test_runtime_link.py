@@ -242,6 +242,7 @@ def test_the_ui_watches_again_when_the_runtime_comes_back(
     write_demo_artifact(tmp_path)
     with router(zenoh_endpoint), client_session(zenoh_endpoint) as session:
         feed = ResourceFeed(ResourceClient(session, "Tank1"))
+        feed.show(["TankControl.level"])  # what a screen shows
         try:
             for attempt in range(2):  # the runtime, then a new one after a crash
                 with runtime_process("Tank1", tmp_path, zenoh_endpoint) as process:
