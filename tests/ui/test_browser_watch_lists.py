@@ -1,6 +1,6 @@
 """Watch lists in the Online test: a user composes a named list by search and from the
 instance tree, sees its live values page by page with their qualities, finds it again in
-another browser session; and only the rows in view travel on the bus."""
+another browser session; and only what the screens show travels on the bus."""
 
 from __future__ import annotations
 
@@ -56,6 +56,13 @@ def rows(page: Page) -> list[str]:
     return found
 
 
+def code_variables(page: Page) -> list[str]:
+    found: list[str] = page.eval_on_selector_all(
+        "[data-code-var]", "cells => cells.map(c => c.dataset.codeVar)"
+    )
+    return found
+
+
 def open_online_test(page: Page, plant: Plant) -> None:
     open_as(page, plant, "viewer")
     log_in_to_resource(page, "viewer", PASSWORD)
@@ -95,8 +102,14 @@ def test_compose_a_watch_list_and_find_it_again(plant: Plant) -> None:
         wait_until("the row is shown", lambda: rows(page) == ["TankControl.level"])
         first = value(page, "TankControl.level")
         wait_until("its value is live", lambda: value(page, "TankControl.level") != first)
-        # only what is in view travels: one value per publication now
-        wait_until("only the list is watched", lambda: wire.last_size() == 1)
+        # only what the screens show travels: this list's row and the variables of the
+        # Code tab's page (viser does not say which tab is in front)
+        page.get_by_role("tab", name="Code").click()
+        wait_until("the code shows values", lambda: len(code_variables(page)) > 0)
+        shown = set(code_variables(page)) | {"TankControl.level"}
+        page.get_by_role("tab", name="Online test").click()
+        wait_until("only what is shown is watched", lambda: wire.last_size() == len(shown))
+        assert len(shown) < everything
         choose(page, "Instance", "TankControl.refillDelay")
         page.get_by_role("button", name="Add the instance's variables").click()
         wait_until("the timer's members are added", lambda: len(rows(page)) > 1)
