@@ -7,6 +7,7 @@ the browser far less than one input widget per variable."""
 from __future__ import annotations
 
 import html
+import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -55,7 +56,9 @@ class OnlineTestScreen:
     all_rows: list[str] = field(default_factory=list)  # them in tree order
     types_version: int = -1
     shown: str = ""
-    shown_key: tuple[Any, ...] = ()  # what `shown` was drawn from
+    shown_key: tuple[Any, ...] = ()  # the page `shown` was drawn for
+    values: viser.GuiHtmlHandle | None = None  # the values of the page, as a patch
+    patched_version: int = -1
     rows: list[str] = field(default_factory=list)  # the page in view
 
 
@@ -81,6 +84,7 @@ def build(gui: viser.GuiApi, user: str, lists: WatchLists) -> OnlineTestScreen:
     range_note = gui.add_html("")
     gui.add_html(legend())
     table = gui.add_html("")
+    values = gui.add_html("")
     screen = OnlineTestScreen(
         user,
         lists,
@@ -97,6 +101,7 @@ def build(gui: viser.GuiApi, user: str, lists: WatchLists) -> OnlineTestScreen:
         range_note,
         table,
     )
+    screen.values = values
     _set_options(chosen, list_names(screen))
 
     def on(handle: Any, action: Callable[[OnlineTestScreen], None]) -> None:
@@ -236,10 +241,15 @@ def refresh(screen: OnlineTestScreen, feed: ResourceFeed | None) -> None:
         screen.range_note.content = _range_html(range_text)
     if not rows and own_list(screen):
         return _show(screen, "<p>This list is empty: add variables under Compose watch lists.</p>")
-    key = (values_version, types_version, first, tuple(screen.rows))
-    if key != screen.shown_key:  # drawing a long page costs; only when it changed
+    # The table is drawn when the page changes; new values then travel as a patch of
+    # the value cells alone: a fifth of the bytes, and the browser keeps its rows.
+    key = (types_version, first, tuple(screen.rows))
+    if key != screen.shown_key:
         _show(screen, render_values(screen.rows, types, values, quality, first))
         screen.shown_key = key
+    elif values_version != screen.patched_version and screen.values is not None:
+        screen.values.content = render_patch(screen.rows, types, values, quality)
+    screen.patched_version = values_version
 
 
 def _refresh_buttons(screen: OnlineTestScreen) -> None:
@@ -250,7 +260,6 @@ def _refresh_buttons(screen: OnlineTestScreen) -> None:
             button.hint = reason
 
 
-_CELL = "padding:2px 8px;border-bottom:1px solid #e5e5e5;vertical-align:top"
 _QUALITY_STYLES = {
     "forced": "color:#c92a2a;font-weight:600",
     "stale": "color:#868e96",
@@ -276,6 +285,23 @@ def legend() -> str:
     return f'<div data-testid="quality-legend" style="{style}">{items}</div>'
 
 
+# One stylesheet in the page and short classes per cell: a page of 1,000 rows is redrawn
+# ten times a second, and the browser parses every byte of it each time.
+_STYLE = (
+    "<style>.olt{font-size:0.9em;width:100%;table-layout:fixed;border-collapse:collapse}"
+    ".olt td,.olt th{padding:2px 8px;border-bottom:1px solid #e5e5e5;vertical-align:top}"
+    ".olt .n{color:#868e96;text-align:right;width:3em}.olt .p{overflow-wrap:anywhere}"
+    ".olt .t{color:#868e96}.olt .v{text-align:right;font-family:monospace;"
+    "overflow-wrap:anywhere}"
+    + "".join(f".olt .{key}{{{style}}}" for key, style in _QUALITY_STYLES.items())
+    + "</style>"
+)
+_HEAD = (
+    '<tr><th class="n"></th><th style="text-align:left;width:45%">Variable</th>'
+    '<th style="text-align:left;width:15%">Type</th><th style="text-align:right">Value</th></tr>'
+)
+
+
 def render_values(
     rows: list[str],
     types: dict[str, str],
@@ -286,31 +312,49 @@ def render_values(
     lines = []
     for number, path in enumerate(rows, start=first):
         type_name = types.get(path, "")
-        if path not in types:
-            how, shown = "unknown", "not in this configuration"
-        elif path not in values:
-            how, shown = "waiting", "…"
-        else:
-            how = (quality or {}).get(path, "live")
-            shown = format_for_display(values[path], type_name)
+        how, shown = _cell(path, types, values, quality or {})
         name = html.escape(path)
         lines.append(
-            f'<tr><td style="{_CELL};color:#868e96;text-align:right">{number}</td>'
-            f'<td style="{_CELL};overflow-wrap:anywhere">{name}</td>'
-            f'<td style="{_CELL};color:#868e96">{html.escape(type_name)}</td>'
-            f'<td style="{_CELL};text-align:right;font-family:monospace;overflow-wrap:anywhere;'
-            f'{_QUALITY_STYLES.get(how, "")}" data-var="{name}" data-quality="{how}">'
-            f"{html.escape(shown)}</td></tr>"
+            f'<tr><td class="n">{number}</td><td class="p">{name}</td>'
+            f'<td class="t">{html.escape(type_name)}</td><td class="v {how}" '
+            f'data-var="{name}" data-quality="{how}">{html.escape(shown)}</td></tr>'
         )
-    head = (
-        f'<tr><th style="{_CELL};width:3em"></th>'
-        f'<th style="{_CELL};text-align:left;width:45%">Variable</th>'
-        f'<th style="{_CELL};text-align:left;width:15%">Type</th>'
-        f'<th style="{_CELL};text-align:right">Value</th></tr>'
-    )
+    return f'{_STYLE}<table class="olt">{_HEAD}{"".join(lines)}</table>'
+
+
+def _cell(
+    path: str, types: dict[str, str], values: dict[str, Any], quality: dict[str, str]
+) -> tuple[str, str]:
+    """A value cell's quality (its CSS class too) and text."""
+    if path not in types:
+        return "unknown", "not in this configuration"
+    if path not in values:
+        return "waiting", "…"
+    return quality.get(path, "live"), format_for_display(values[path], types[path])
+
+
+# Run by the browser each time the patch arrives (viser runs inline handlers, not
+# <script>): the JSON before the image holds {path: [text, quality]} of the page.
+_APPLY = (
+    "var d=JSON.parse(this.previousElementSibling.textContent);"
+    "document.querySelectorAll('td[data-var]').forEach(function(c){"
+    "var v=d[c.dataset.var];if(!v)return;"
+    "if(c.textContent!==v[0])c.textContent=v[0];"
+    "if(c.dataset.quality!==v[1]){c.dataset.quality=v[1];c.className='v '+v[1];}});"
+)
+
+
+def render_patch(
+    rows: list[str], types: dict[str, str], values: dict[str, Any], quality: dict[str, str]
+) -> str:
+    """The value cells of the page as an invisible patch the browser applies to the table."""
+    cells = {path: _cell(path, types, values, quality) for path in rows}
+    data = json.dumps({path: [text, how] for path, (how, text) in cells.items()})
+    # nothing in a <script> element's text may close it
+    data = data.replace("<", "\\u003c")
     return (
-        '<table style="font-size:0.9em;width:100%;table-layout:fixed;border-collapse:collapse">'
-        f"{head}{''.join(lines)}</table>"
+        f'<div style="display:none"><script type="application/json">{data}</script>'
+        f'<img alt="" src="data:," onerror="{html.escape(_APPLY)}"></div>'
     )
 
 
