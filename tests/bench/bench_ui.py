@@ -190,7 +190,7 @@ def _print(label: str, figures: dict[str, float]) -> None:
     print(
         f"  {label}: change -> DOM p50 {figures['p50']:.0f} ms, p99 {figures['p99']:.0f} ms, "
         f"max {figures['max']:.0f} ms ({figures['seen']:.0%} of {MARKS} changes seen); "
-        f"table redraws {figures['redraws']:.1f}/s per browser; "
+        f"DOM updates {figures['redraws']:.1f}/s per browser; "
         f"CPU: UI server {figures['server_cpu']:.0%} of a core, "
         f"Chromium {figures['browser_cpu']:.0%}"
     )
