@@ -11,6 +11,10 @@ from runtime.force_table import ForceTable
 from runtime.variables import Variables
 from runtime.watch_sets import WatchSet, WatchSets, WatchSnapshot
 
+# plain strings: an enum member's lookup costs more than the rest of a value's work
+_QUALITIES = tuple(
+    str(q.value) for q in (Quality.LIVE, Quality.FORCED, Quality.STALE, Quality.DELETED)
+)
 _RUNNING = (ProgramState.RUN, ProgramState.RUN_FREEZE)
 
 
@@ -45,17 +49,21 @@ class OnlineValues:
         deleted by a reload."""
         forcing = bool(forces.started_levels())
         halted = {id(p) for p in self._variables.programs if p.state not in _RUNNING}
+        # this runs between two cycles for every watched value: names looked up once
+        find, read, is_forced = self._variables.find, self._variables.read, forces.is_forced
+        live, forced, stale, deleted = _QUALITIES
         entries: list[tuple[str, Any, str]] = []
+        append = entries.append
         for path in watch_set.paths:
-            bound = self._variables.find(path)
+            bound = find(path)
             if bound is None:
-                entries.append((path, None, Quality.DELETED))
+                append((path, None, deleted))
                 continue
-            if forcing and forces.is_forced(path):
-                quality = Quality.FORCED
+            if forcing and is_forced(path):
+                quality = forced
             elif not running or (bound.program is not None and id(bound.program) in halted):
-                quality = Quality.STALE
+                quality = stale
             else:
-                quality = Quality.LIVE
-            entries.append((path, self._variables.read(bound), quality))
+                quality = live
+            append((path, read(bound), quality))
         return WatchSnapshot(cycle, entries)
