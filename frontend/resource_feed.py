@@ -162,3 +162,13 @@ class ResourceFeed:
             self.latest.version += 1
             self.latest.values_version += 1
         self._on_news()
+
+
+def latest_values(
+    feed: ResourceFeed | None,
+) -> tuple[dict[str, Any], dict[str, str], dict[str, str]]:
+    """The feed's latest values, types and qualities, read together (empty without one)."""
+    if feed is None:
+        return {}, {}, {}
+    with feed.latest.lock:
+        return feed.latest.values, feed.latest.types, feed.latest.quality

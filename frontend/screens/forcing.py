@@ -17,7 +17,7 @@ import viser
 from backend.engineering.literals import LiteralError, parse_literal
 from frontend.forcing_feed import ForcingSnapshot
 from frontend.permissions import Allowed
-from frontend.resource_feed import ResourceFeed
+from frontend.resource_feed import ResourceFeed, latest_values
 from runtime.contract import protocol as p
 from runtime.contract.values import format_for_display
 
@@ -289,12 +289,7 @@ def refresh(
     feed: ResourceFeed | None,
     allowed: Callable[[type[p.Command[Any]]], Allowed],
 ) -> None:
-    values: dict[str, Any] = {}
-    types: dict[str, str] = {}
-    quality: dict[str, str] = {}
-    if feed is not None:
-        with feed.latest.lock:
-            values, types, quality = feed.latest.values, feed.latest.types, feed.latest.quality
+    values, types, quality = latest_values(feed)
     screen.snapshot, screen.types, screen.values = snapshot, types, values
     programs = [x.name for x in status.programs] if status is not None else []
     options = (GLOBAL_OPTION, *(name + LOCAL_SUFFIX for name in programs))

@@ -15,7 +15,7 @@ import viser
 from backend.engineering.literals import LiteralError, parse_literal
 from frontend.forcing_feed import ForcingSnapshot
 from frontend.permissions import Allowed
-from frontend.resource_feed import ResourceFeed
+from frontend.resource_feed import ResourceFeed, latest_values
 from frontend.screens.forcing import Run, configured, is_started, level_name, level_of
 from runtime.contract import protocol as p
 from runtime.contract.values import format_for_display
@@ -148,12 +148,7 @@ def refresh(
     feed: ResourceFeed | None,
     allowed: Callable[[type[p.Command[Any]]], Allowed],
 ) -> None:
-    values: dict[str, Any] = {}
-    types: dict[str, str] = {}
-    quality: dict[str, str] = {}
-    if feed is not None:
-        with feed.latest.lock:
-            values, types, quality = feed.latest.values, feed.latest.types, feed.latest.quality
+    values, types, quality = latest_values(feed)
     screen.status, screen.snapshot, screen.types, screen.values = status, snapshot, types, values
     typed, literal = screen.variable.value, screen.new_value.value
     known = screen.read
