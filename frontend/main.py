@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="append",
         default=[],
         metavar="[NAME=]DIR",
-        help="a project folder the Reload screen offers, named NAME or by its folder (repeatable)",
+        help="a project for the Reload and Code screens, named NAME or by its folder (repeatable)",
     )
     parser.add_argument(
         "--backup-dir",
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from backend.engineering.padt_accounts import AccountsError, PadtAccounts
     from backend.engineering.project_list import projects_by_name
     from backend.engineering.resource_directory import ResourceDirectory
-    from backend.engineering.watch_lists import WatchListError, WatchLists
+    from backend.engineering.watch_lists import WatchLists
     from frontend.app import PadtUi
     from frontend.ui_context import UiContext
     from runtime.contract.session import open_client
@@ -65,7 +65,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         accounts = PadtAccounts(args.accounts, time.monotonic_ns)
         projects = projects_by_name(args.project)
-    except (AccountsError, ValueError) as exc:
+        watch_lists = WatchLists(args.watch_lists)
+    except (AccountsError, ValueError) as exc:  # WatchListError is a ValueError
         print(f"padt ui: {exc}", file=sys.stderr)
         return 2
     if accounts.empty:
@@ -74,11 +75,6 @@ def run(args: argparse.Namespace) -> int:
             f"padt api-user --accounts {args.accounts} NAME --level security-administrator",
             file=sys.stderr,
         )
-        return 2
-    try:
-        watch_lists = WatchLists(args.watch_lists)
-    except WatchListError as exc:
-        print(f"padt ui: {exc}", file=sys.stderr)
         return 2
     session = open_client(args.zenoh, args.zenoh_config)
     directory = ResourceDirectory(session)

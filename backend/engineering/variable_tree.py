@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+MAX_SEARCH = 200  # characters of a search: a browser may send megabytes
+
 
 def instances(paths: Iterable[str]) -> list[str]:
     """Every path that has members, in tree order (a parent before its children)."""
@@ -31,7 +33,7 @@ def search(paths: Iterable[str], text: str, limit: int) -> tuple[list[str], int]
     """The paths that contain every word of `text` (any case), best first: the variable's
     own name equal to the last word, then starting with it, then the rest; at most
     `limit` of them, and how many matched in all."""
-    words = text.lower().split()
+    words = text[:MAX_SEARCH].lower().split()
     if not words:
         return [], 0
     last = words[-1]

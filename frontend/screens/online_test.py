@@ -52,12 +52,12 @@ class OnlineTestScreen:
     page_size: viser.GuiDropdownHandle[str]
     range_note: viser.GuiHtmlHandle
     table: viser.GuiHtmlHandle
+    patch: viser.GuiHtmlHandle  # the values of the page, as a patch of the table's cells
     types: dict[str, str] = field(default_factory=dict)  # the resource's variables
     all_rows: list[str] = field(default_factory=list)  # them in tree order
     types_version: int = -1
     shown: str = ""
     shown_key: tuple[Any, ...] = ()  # the page `shown` was drawn for
-    values: viser.GuiHtmlHandle | None = None  # the values of the page, as a patch
     patched_version: int = -1
     rows: list[str] = field(default_factory=list)  # the page in view
 
@@ -84,7 +84,7 @@ def build(gui: viser.GuiApi, user: str, lists: WatchLists) -> OnlineTestScreen:
     range_note = gui.add_html("")
     gui.add_html(legend())
     table = gui.add_html("")
-    values = gui.add_html("")
+    patch = gui.add_html("")
     screen = OnlineTestScreen(
         user,
         lists,
@@ -100,8 +100,8 @@ def build(gui: viser.GuiApi, user: str, lists: WatchLists) -> OnlineTestScreen:
         page_size,
         range_note,
         table,
+        patch,
     )
-    screen.values = values
     _set_options(chosen, list_names(screen))
 
     def on(handle: Any, action: Callable[[OnlineTestScreen], None]) -> None:
@@ -247,8 +247,8 @@ def refresh(screen: OnlineTestScreen, feed: ResourceFeed | None) -> None:
     if key != screen.shown_key:
         _show(screen, render_values(screen.rows, types, values, quality, first))
         screen.shown_key = key
-    elif values_version != screen.patched_version and screen.values is not None:
-        screen.values.content = render_patch(screen.rows, types, values, quality)
+    elif values_version != screen.patched_version:
+        screen.patch.content = render_patch(screen.rows, types, values, quality)
     screen.patched_version = values_version
 
 

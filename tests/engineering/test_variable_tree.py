@@ -44,3 +44,9 @@ def test_search_puts_the_variable_named_so_first_and_counts_all() -> None:
     assert variable_tree.search(PATHS, "refill q", 10) == (["TankControl.refillDelay.Q"], 1)
     assert variable_tree.search(PATHS, "LEV", 1) == (["TankControl.level"], 3)
     assert variable_tree.search(PATHS, "   ", 10) == ([], 0)
+
+
+def test_a_search_of_megabytes_reads_only_its_start() -> None:
+    found, count = variable_tree.search(PATHS * 1000, "level " + "x " * 500_000, 10)
+    assert (found, count) == ([], 0)  # the words after the first 200 characters are ignored
+    assert variable_tree.search(PATHS, "level" + " " * 300 + "nothing", 10)[1] == 3
