@@ -12,6 +12,7 @@ import time
 
 import viser
 
+from frontend import viser_wakeup
 from frontend.browser_session import BrowserSession
 from frontend.ui_context import UiContext
 
@@ -25,6 +26,7 @@ class PadtUi:
         self.context = context
         self.browsers: dict[int, BrowserSession] = {}
         self._lock = threading.Lock()
+        viser_wakeup.install()
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.server.gui.configure_theme(show_logo=False, control_width="large")
         self.server.on_client_connect(self._connect)

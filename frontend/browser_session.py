@@ -33,6 +33,9 @@ class BrowserSession:
         self.token: str | None = None  # the PADT session of this browser
         self.user, self.level = "", ""
         self._lock = threading.Lock()  # the refresher and the GUI's callbacks
+        # Held while the screens are drawn, built or removed: a logout in viser's thread
+        # must not remove the handles that the refresher is drawing into.
+        self._drawing = threading.RLock()
         self._clients: dict[str, ResourceClient] = {}
         self._feeds: dict[str, ResourceFeed] = {}
         self._form: login.LoginForm | None = None
@@ -41,8 +44,9 @@ class BrowserSession:
 
     # ---- the PADT login
     def show_login(self, message: str) -> None:
-        self._close_workspace()
-        self._form = login.build(self.client.gui, message, self._log_in)
+        with self._drawing:
+            self._close_workspace()
+            self._form = login.build(self.client.gui, message, self._log_in)
 
     def _log_in(self, user: str, password: str) -> None:
         try:
@@ -50,11 +54,12 @@ class BrowserSession:
         except Refusal as refused:
             self.show_login_message(refused.message)
             return
-        self.token, self.user, self.level = token, session.user, session.level
-        if self._form is not None:
-            self._form.remove()
-            self._form = None
-        self.workspace = Workspace(self)
+        with self._drawing:
+            self.token, self.user, self.level = token, session.user, session.level
+            if self._form is not None:
+                self._form.remove()
+                self._form = None
+            self.workspace = Workspace(self)
 
     def show_login_message(self, message: str) -> None:
         if self._form is not None:
@@ -128,13 +133,14 @@ class BrowserSession:
         with self._lock:
             feed = self._feeds.get(resource)
         if feed is None:
-            feed = ResourceFeed(self.client_of(resource), self._heard)
+            feed = ResourceFeed(self.client_of(resource), self.news)
             with self._lock:
                 self._feeds[resource] = feed
         return feed
 
     # ---- the refresher's calls
-    def _heard(self) -> None:
+    def news(self) -> None:
+        """Something new to show: the refresher draws this browser soon."""
         self._news = True
         self._on_news()
 
@@ -143,8 +149,10 @@ class BrowserSession:
         return news
 
     def refresh(self) -> None:
-        if self.workspace is not None and self.valid():
-            self.workspace.refresh()
+        with self._drawing:
+            if self.workspace is not None and self.valid():
+                self.workspace.refresh()
 
     def close(self) -> None:
-        self._close_workspace()
+        with self._drawing:
+            self._close_workspace()

@@ -11,7 +11,7 @@ from typing import Any, Protocol
 import viser
 
 from backend.engineering.resource_client import ResourceClient, ResourceLogin
-from frontend import plant_view, status_bar
+from frontend import plant_view, status_bar, tab_follower
 from frontend.confirm import attempt, confirm
 from frontend.forcing_feed import ForcingFeed, Target
 from frontend.gui_value import set_value
@@ -44,6 +44,7 @@ class WorkspaceSession(Protocol):
 
     def log_out(self) -> None: ...
     def time_left_ns(self) -> int: ...
+    def news(self) -> None: ...
     def resource_login(self, resource: str) -> ResourceLogin | None: ...
     def client_of(self, resource: str) -> ResourceClient: ...
     def log_in_to(self, resource: str, user: str, password: str) -> ResourceLogin: ...
@@ -86,27 +87,39 @@ class Workspace:
         with gui.add_folder("Status") as status_folder:
             self.status = gui.add_html("")
         keep(status_folder)
+        self.screens: list[str] = []  # the tabs' names, in their order
+        self.shown = "Resources"  # the tab group opens on its first tab
+        self.tab_follower = tab_follower.build(gui, self.shown, self._show)
         self.panel = gui.add_panel()
-        with self.panel.add_tab("Resources", viser.Icon.SERVER):
+        with self._tab("Resources", viser.Icon.SERVER):
             self.resources = resources.build(gui, self._confirm, self.selected)
-        with self.panel.add_tab("Online test", viser.Icon.TABLE):
+        with self._tab("Online test", viser.Icon.TABLE):
             self.online_test = online_test.build(gui, session.user, session.context.watch_lists)
             self.value_edit = value_edit.build(gui, self._send_all)
-        with self.panel.add_tab("Single step", viser.Icon.PLAYER_TRACK_NEXT):
+        with self._tab("Single step", viser.Icon.PLAYER_TRACK_NEXT):
             self.single_step = single_step.build(gui, self._act)
-        with self.panel.add_tab("Forcing", viser.Icon.LOCK):
+        with self._tab("Forcing", viser.Icon.LOCK):
             self.forcing = forcing.build(gui, self._send_all)
-        with self.panel.add_tab("Parameters", viser.Icon.ADJUSTMENTS):
+        with self._tab("Parameters", viser.Icon.ADJUSTMENTS):
             self.parameters = parameters.build(gui, self._change)
-        with self.panel.add_tab("Events", viser.Icon.LIST_DETAILS):
+        with self._tab("Events", viser.Icon.LIST_DETAILS):
             self.events = events.build(gui)
-        with self.panel.add_tab("Reload", viser.Icon.REFRESH):
+        with self._tab("Reload", viser.Icon.REFRESH):
             self.reload = reload.build(gui, self._reload_hooks())
-        with self.panel.add_tab("Code", viser.Icon.CODE):
+        with self._tab("Code", viser.Icon.CODE):
             self.code = code.build(gui)
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
+
+    def _tab(self, name: str, icon: viser.IconName) -> viser.GuiTabHandle:
+        self.screens.append(name)
+        return self.panel.add_tab(name, icon)
+
+    def _show(self, screen: str) -> None:
+        if screen in self.screens:  # what the browser sends is checked like any input
+            self.shown = screen
+            self.session.news()  # drawn at once, not at the next tick
 
     def _reload_hooks(self) -> reload.ReloadHooks:
         session = self.session
@@ -262,21 +275,14 @@ class Workspace:
         )
         login_there = self.session.resource_login(resource) if resource is not None else None
         self.resource_login.content = _login_note(resource, login_there)
-        resources.refresh(self.resources, list(directory.items()), resource, self._allowed)
         feed = self.session.feed_of(resource) if resource is not None else None
-        online_test.refresh(self.online_test, feed)
-        single_step.refresh(self.single_step, status, self._allowed)
-        self._refresh_forcing(resource, status)
+        self._follow_forcing(resource, status, login_there)  # its banner is on every tab
         token = login_there.token if login_there is not None else None
-        client_of = self.session.client_of
-        events.refresh(self.events, resource, token, client_of)
-        changed = events.live_count(self.events, resource, "parameter")
-        parameters.refresh(
-            self.parameters, resource, status, token, client_of, self._allowed, changed
-        )
-        reload.refresh(self.reload, resource, status, self._allowed)
-        code.refresh(self.code, feed, self.session.context.projects)
-        if feed is not None:  # only what some screen shows is watched
+        # always: its live counts tell the Parameters screen what others changed
+        events.refresh(self.events, resource, token, self.session.client_of)
+        self._refresh_shown(resource, status, feed, token, directory)
+        if feed is not None:  # only what some screen shows is watched, seen or not: a
+            # tab opened shows its values at once
             feed.show(
                 online_test.wanted(self.online_test)
                 + value_edit.wanted(self.value_edit)
@@ -285,24 +291,60 @@ class Workspace:
             )
         self.drawing.show(resource, status)
 
-    def _refresh_forcing(self, resource: str | None, status: p.Status | None) -> None:
-        login_there = self.session.resource_login(resource) if resource is not None else None
+    def _refresh_shown(
+        self,
+        resource: str | None,
+        status: p.Status | None,
+        feed: ResourceFeed | None,
+        token: str | None,
+        directory: dict[str, p.Status | None],
+    ) -> None:
+        """Redraw the screen in view; the others wait until they are opened (ten browsers
+        drawing every screen ten times a second cost most of two cores)."""
+        shown = self.shown
+        if shown == "Resources":
+            resources.refresh(self.resources, list(directory.items()), resource, self._allowed)
+        elif shown == "Online test":
+            online_test.refresh(self.online_test, feed)
+            snapshot = self.forcing_feed.snapshot()
+            value_edit.refresh(self.value_edit, status, snapshot, feed, self._allowed)
+        elif shown == "Single step":
+            single_step.refresh(self.single_step, status, self._allowed)
+        elif shown == "Forcing":
+            snapshot = self.forcing_feed.snapshot()
+            forcing.refresh(self.forcing, status, snapshot, feed, self._allowed)
+        elif shown == "Parameters":
+            changed = events.live_count(self.events, resource, "parameter")
+            parameters.refresh(
+                self.parameters,
+                resource,
+                status,
+                token,
+                self.session.client_of,
+                self._allowed,
+                changed,
+            )
+        elif shown == "Reload":
+            reload.refresh(self.reload, resource, status, self._allowed)
+        elif shown == "Code":
+            code.refresh(self.code, feed, self.session.context.projects)
+
+    def _follow_forcing(
+        self, resource: str | None, status: p.Status | None, login_there: ResourceLogin | None
+    ) -> None:
         looks = status is not None and (login_there is not None or status.access == "open")
         if resource is None or status is None or not looks:
             self.forcing_feed.follow(None)
         else:
             client = self.session.client_of(resource)
             self.forcing_feed.follow(Target(resource, client, status.crc, status.forcing))
-        snapshot = self.forcing_feed.snapshot()
-        feed = self.session.feed_of(resource) if resource is not None else None
-        forcing.show_banner(self.forcing_banner, status, snapshot)
-        forcing.refresh(self.forcing, status, snapshot, feed, self._allowed)
-        value_edit.refresh(self.value_edit, status, snapshot, feed, self._allowed)
+        forcing.show_banner(self.forcing_banner, status, self.forcing_feed.snapshot())
 
     def remove(self) -> None:
         self.forcing_feed.close()
         for handle in self._handles:
             handle.remove()
+        self.tab_follower.remove()
         self.panel.remove()
         self.drawing.remove()
 

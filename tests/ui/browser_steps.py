@@ -35,6 +35,9 @@ def shoot(page: Page, name: str) -> None:
         page.screenshot(path=str(Path(os.environ["PADT_SHOTS"]) / f"{name}.png"))
 
 
+WAITING = "…"  # a cell whose first value has not come yet
+
+
 def field(page: Page, label: str) -> Locator:
     """A viser text input by its label (viser does not link the two for the browser)."""
     return page.locator(f"div:has(> div > p > label:text-is('{label}')) input").first
@@ -99,7 +102,11 @@ def cycle(page: Page) -> int:
 
 
 def value(page: Page, variable: str) -> str:
-    return text_of(page, f'[data-var="{variable}"]')
+    """The value shown for a variable, once it came (a tab just opened may show its rows
+    a moment before their first values)."""
+    cell = f'[data-var="{variable}"]'
+    wait_until(f"a value of {variable}", lambda: text_of(page, cell) != WAITING)
+    return text_of(page, cell)
 
 
 def button_enabled(page: Page, name: str) -> bool:
