@@ -11,7 +11,7 @@ from typing import Any, Protocol
 import viser
 
 from backend.engineering.resource_client import ResourceClient, ResourceLogin
-from frontend import plant_view, status_bar, tab_follower
+from frontend import page_clicks, plant_view, status_bar
 from frontend.confirm import attempt, confirm
 from frontend.forcing_feed import ForcingFeed, Target
 from frontend.gui_value import set_value
@@ -89,7 +89,7 @@ class Workspace:
         keep(status_folder)
         self.screens: list[str] = []  # the tabs' names, in their order
         self.shown = "Resources"  # the tab group opens on its first tab
-        self.tab_follower = tab_follower.build(gui, self.shown, self._show)
+        self.page_clicks = page_clicks.build(gui, self._clicked)
         self.panel = gui.add_panel()
         with self._tab("Resources", viser.Icon.SERVER):
             self.resources = resources.build(gui, self._confirm, self.selected)
@@ -116,10 +116,12 @@ class Workspace:
         self.screens.append(name)
         return self.panel.add_tab(name, icon)
 
-    def _show(self, screen: str) -> None:
-        if screen in self.screens:  # what the browser sends is checked like any input
-            self.shown = screen
+    def _clicked(self, click: page_clicks.Click) -> None:
+        if click.kind == "tab" and click.name in self.screens:
+            self.shown = click.name
             self.session.news()  # drawn at once, not at the next tick
+        elif click.kind == "variable":  # checked as typed text by the value editor
+            value_edit.choose(self.value_edit, click.name)
 
     def _reload_hooks(self) -> reload.ReloadHooks:
         session = self.session
@@ -344,7 +346,7 @@ class Workspace:
         self.forcing_feed.close()
         for handle in self._handles:
             handle.remove()
-        self.tab_follower.remove()
+        self.page_clicks.remove()
         self.panel.remove()
         self.drawing.remove()
 

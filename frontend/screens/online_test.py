@@ -292,7 +292,8 @@ _STYLE = (
     ".olt td,.olt th{padding:2px 8px;border-bottom:1px solid #e5e5e5;vertical-align:top}"
     ".olt .n{color:#868e96;text-align:right;width:3em}.olt .p{overflow-wrap:anywhere}"
     ".olt .t{color:#868e96}.olt .v{text-align:right;font-family:monospace;"
-    "overflow-wrap:anywhere}"
+    "overflow-wrap:anywhere}.olt tr:has(td.v){cursor:pointer}"
+    ".olt tr:has(td.v):hover td{background:#f1f3f5}"
     + "".join(f".olt .{key}{{{style}}}" for key, style in _QUALITY_STYLES.items())
     + "</style>"
 )

@@ -59,7 +59,11 @@ class ValueEditScreen:
 
 def build(gui: viser.GuiApi, run: Run) -> ValueEditScreen:
     with gui.add_folder("Write or force a value"):
-        variable = gui.add_text("Variable", "", hint="the variable's path, e.g. TankControl.level")
+        variable = gui.add_text(
+            "Variable",
+            "",
+            hint="the variable's path, e.g. TankControl.level, or click its row in the table",
+        )
         info = gui.add_html("")
         new_value = gui.add_text(
             "New value", "", hint="an ST literal of the variable's type: TRUE, 42, -3.5, T#2s"

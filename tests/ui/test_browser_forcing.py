@@ -73,6 +73,22 @@ def test_write_a_value_and_a_bad_literal_is_refused_at_the_field(demo: Demo) -> 
         confirm(page, "Write TankControl.outflow (INT) once: 3 → 5")
         wait_until("the Online test shows 5", lambda: value(page, "TankControl.outflow") == "5")
 
+        # a click on a row of the table chooses its variable, a second click again
+        page.locator('tr:has(td[data-var="TankControl.pump"])').click()
+        wait_until(
+            "the pump is chosen",
+            lambda: field(page, "Variable").input_value() == "TankControl.pump",
+        )
+        field(page, "Variable").fill("")
+        page.locator('tr:has(td[data-var="TankControl.pump"]) td.p').click()
+        wait_until(
+            "chosen again", lambda: field(page, "Variable").input_value() == "TankControl.pump"
+        )
+        wait_until(
+            "its type and value are shown",
+            lambda: "TankControl.pump BOOL" in text_of(page, '[data-testid="edit-info"]'),
+        )
+
 
 def test_force_the_pump_off_with_a_time_limit_and_clear_all(demo: Demo) -> None:
     with chromium() as browser:

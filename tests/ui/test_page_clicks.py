@@ -1,0 +1,24 @@
+"""What a page reports of a click is read as untrusted text."""
+
+from __future__ import annotations
+
+from frontend.page_clicks import MAX_NAME, Click, read
+
+
+def test_a_tab_and_a_row_are_read() -> None:
+    assert read("tab|Online test|1") == Click("tab", "Online test")
+    assert read("variable|TankControl.level|17") == Click("variable", "TankControl.level")
+
+
+def test_anything_else_is_ignored() -> None:
+    for text in (
+        "",
+        "tab",
+        "tab|Online test",
+        "button|Stop|3",
+        "tab||3",
+        "tab|Online test|x",
+        "variable|a|b|4",
+        f"variable|{'x' * (MAX_NAME + 1)}|1",
+    ):
+        assert read(text) is None, text
