@@ -120,6 +120,16 @@ class ReloadHooks:
 
 
 @dataclass
+class Budget:
+    """A higher watchdog and target cycle for the switch-over cycle only (empty: as
+    configured), as SILworX offers when a reload does not fit the cycle."""
+
+    watchdog: viser.GuiTextHandle
+    target_cycle: viser.GuiTextHandle
+    note: viser.GuiHtmlHandle
+
+
+@dataclass
 class ReloadScreen:
     hooks: ReloadHooks
     project: viser.GuiDropdownHandle[str]
@@ -132,6 +142,7 @@ class ReloadScreen:
     show: viser.GuiDropdownHandle[str]
     table: viser.GuiHtmlHandle
     risk_folder: viser.GuiFolderHandle
+    budget: Budget
     reload_button: viser.GuiButtonHandle
     reason: viser.GuiHtmlHandle
     reload_progress: GuiProgressBarHandle
@@ -161,11 +172,19 @@ def build(gui: viser.GuiApi, hooks: ReloadHooks) -> ReloadScreen:
     show = gui.add_dropdown("Show", SHOW, initial_value="all")
     table = gui.add_html("")
     risk_folder = gui.add_folder("Confirm each risk")
+    with gui.add_folder("Budget of the switch-over", expand_by_default=False):
+        hint = "empty: as configured; only higher, for the cycle of the switch-over only"
+        budget = Budget(
+            gui.add_text("Watchdog for the reload (ms)", "", hint=hint),
+            gui.add_text("Target cycle for the reload (ms)", "", hint=hint),
+            gui.add_html(""),
+        )
     reload_button = gui.add_button("Reload", color="red", disabled=True)
     reason = gui.add_html("")
     screen = ReloadScreen(
         hooks, project, renames, rename_note, preview_button, preview_progress, preview_info,
-        summary, show, table, risk_folder, reload_button, reason, reload_progress, result,
+        summary, show, table, risk_folder, budget, reload_button, reason, reload_progress,
+        result,
     )  # fmt: skip
     preview_button.on_click(lambda _: _start_preview(screen))
     reload_button.on_click(lambda _: _ask_reload(screen))
@@ -196,6 +215,31 @@ def parse_renames(text: str) -> tuple[dict[str, str], list[str]]:
         errors.append(refused.message)
         renames = {}
     return renames, errors
+
+
+def parse_milliseconds(text: str) -> tuple[int | None, str]:
+    """A budget field: None when empty, or whole milliseconds; what is wrong otherwise."""
+    text = text.strip()
+    if not text:
+        return None, ""
+    if not text.isdigit() or not 1 <= int(text) <= p.MAX_MS:
+        return None, f"'{text[:20]}' is no number of milliseconds from 1 to {p.MAX_MS}"
+    return int(text), ""
+
+
+def read_budget(budget: Budget) -> tuple[int | None, int | None, list[str]]:
+    """The watchdog and target cycle for the reload, and what is wrong with the fields."""
+    watchdog, watchdog_error = parse_milliseconds(budget.watchdog.value)
+    target, target_error = parse_milliseconds(budget.target_cycle.value)
+    named = (("watchdog", watchdog_error), ("target cycle", target_error))
+    return watchdog, target, [f"{name}: {error}" for name, error in named if error]
+
+
+def budget_text(watchdog_ms: int | None, target_cycle_ms: int | None) -> str:
+    """The raised budget in words for the confirmation ("" when none is raised)."""
+    named = (("watchdog", watchdog_ms), ("target cycle", target_cycle_ms))
+    raised = [f"{name} {ms} ms" for name, ms in named if ms is not None]
+    return f"For the cycle of the switch-over: {' and '.join(raised)}. " if raised else ""
 
 
 # ---- the work, on a thread of its own
@@ -259,6 +303,9 @@ def _ask_reload(screen: ReloadScreen) -> None:
         return
     plan = preview.plan
     ticked = "; ".join(risk.title for risk in preview.risks)
+    watchdog_ms, target_cycle_ms, errors = read_budget(screen.budget)
+    if errors:
+        return
     confirm(
         screen.hooks.client,
         f"Reload: {preview.resource}",
@@ -266,12 +313,15 @@ def _ask_reload(screen: ReloadScreen) -> None:
         f"configuration {plan.old_crc} is replaced by {plan.new_crc}, "
         f"{_counts_text(plan)}. "
         + (f"You confirmed: {ticked}. " if ticked else "")
+        + budget_text(watchdog_ms, target_cycle_ms)
         + f"The resource refuses the reload if it no longer runs {plan.old_crc}.",
-        lambda: _start_reload(screen, preview),
+        lambda: _start_reload(screen, preview, watchdog_ms, target_cycle_ms),
     )
 
 
-def _start_reload(screen: ReloadScreen, preview: Preview) -> None:
+def _start_reload(
+    screen: ReloadScreen, preview: Preview, watchdog_ms: int | None, target_cycle_ms: int | None
+) -> None:
     hooks, work = screen.hooks, screen.work
     folder = hooks.projects[preview.project]
     resource, plan = preview.resource, preview.plan
@@ -298,7 +348,9 @@ def _start_reload(screen: ReloadScreen, preview: Preview) -> None:
                     f"preview showed {plan.new_crc}: preview again",
                 )
             _stage(work, f"transferring to {resource} and switching over")
-            options = ReloadOptions(dict(preview.renames), expected_crc=plan.old_crc)
+            options = ReloadOptions(
+                dict(preview.renames), plan.old_crc, watchdog_ms, target_cycle_ms
+            )
             how = f"browser UI: reload of project {preview.project} by {hooks.user}"
             outcome.done = reload_checked(
                 hooks.client_of(resource), checked, options, hooks.backup_dir, how
@@ -379,7 +431,11 @@ def refresh(
     _show(screen, "table", screen.table, render_table(plan, screen.show.value))
     if preview is not screen.checks_for:
         _rebuild_risks(screen, preview)
+    budget_errors = read_budget(screen.budget)[2]
+    _show(screen, "budget", screen.budget.note, _budget_note(budget_errors))
     verdict = _reload_verdict(screen, preview, loaded, renames, rename_errors, busy, allowed)
+    if verdict.ok and budget_errors:
+        verdict = Allowed(False, "the budget of the switch-over: " + "; ".join(budget_errors))
     screen.reload_button.disabled = not verdict.ok
     screen.reload_button.hint = verdict.reason or None
     # under the button too, in one line: the panel is scrolled down to it by then
@@ -754,6 +810,17 @@ def _rename_note(errors: list[str]) -> str:
         )
     lines = "".join(f"<div>{html.escape(error)}</div>" for error in errors)
     return f'<div data-testid="rename-errors" style="color:#c92a2a;font-size:0.9em">{lines}</div>'
+
+
+def _budget_note(errors: list[str]) -> str:
+    if not errors:
+        return (
+            f'<div style="{_MUTED};font-size:0.85em">When the plan\'s switch-over does not fit '
+            "what the cycle leaves, the resource refuses the reload (budget): raise the watchdog "
+            "and, with a fixed or dynamic target cycle, the target cycle for that one cycle.</div>"
+        )
+    lines = "".join(f"<div>{html.escape(error)}</div>" for error in errors)
+    return f'<div data-testid="budget-errors" style="color:#c92a2a;font-size:0.9em">{lines}</div>'
 
 
 def _disabled(verdict: Allowed) -> str:

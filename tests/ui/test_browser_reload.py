@@ -19,6 +19,7 @@ from tests.ui.browser_steps import (
     button_enabled,
     choose,
     confirm,
+    field,
     log_in_to_resource,
     open_as,
     open_demo_as_admin,
@@ -157,13 +158,36 @@ def test_preview_and_reload_a_new_variable_keeps_the_running_values(
         wait_until("every variable is listed", lambda: page.locator("[data-fate]").count() > 5)
         shoot(page, "reload-preview-1400")
 
+        # the budget of the switch-over: a field that is no number disables Reload; a
+        # watchdog below the configured one is refused by the resource, a higher one taken
+        page.get_by_text("Budget of the switch-over").click()
+        field(page, "Watchdog for the reload (ms)").fill("lots")
+        wait_until(
+            "the field's error is said",
+            lambda: "'lots' is no number" in text_of(page, '[data-testid="budget-errors"]'),
+        )
+        shoot(page, "reload-budget-error-1400")
+        wait_until("Reload is disabled", lambda: not button_enabled(page, "Reload"))
+        assert "budget of the switch-over" in text_of(page, '[data-testid="reload-disabled"]')
+        field(page, "Watchdog for the reload (ms)").fill("1")
+        wait_until("Reload is enabled", lambda: button_enabled(page, "Reload"))
+        page.get_by_role("button", name="Reload", exact=True).click()
+        confirm(page, "For the cycle of the switch-over: watchdog 1 ms")
+        wait_until(
+            "the resource refuses a lower watchdog",
+            lambda: page.get_by_text("may only raise it").count() > 0,
+            timeout_s=30,
+        )
+        assert text_of(page, '[data-testid="resource-crc"]') == old_crc
+        field(page, "Watchdog for the reload (ms)").fill("5000")
+
         before = falling_level(page, "TankControl.level")
         page.get_by_role("tab", name="Reload").click()
-        assert button_enabled(page, "Reload")
+        wait_until("Reload is enabled", lambda: button_enabled(page, "Reload"))
         page.get_by_role("button", name="Reload", exact=True).click()
         dialog = page.get_by_role("dialog")
         dialog.wait_for(timeout=WAIT_MS)
-        for named in ("Tank1", old_crc, new_crc):
+        for named in ("Tank1", old_crc, new_crc, "watchdog 5000 ms"):
             assert named in dialog.inner_text()
         confirm(page, "Tank1")
         shoot(page, "reload-running-1400")  # most often still compiling or switching over
