@@ -201,6 +201,32 @@ class Filter:
     kind: str = ALL_KINDS
     user: str = ALL_USERS
     since_s: int | None = None
+    from_ns: int | None = None  # the range typed, local time: from its first moment
+    to_ns: int | None = None  # up to and including its last
+
+
+_MOMENT_FORMATS = (  # with how much of its unit "to" takes in
+    ("%Y-%m-%d %H:%M:%S", 1),
+    ("%Y-%m-%d %H:%M", 60),
+    ("%Y-%m-%d", 86_400),
+)
+
+
+def parse_moment(text: str, end: bool) -> tuple[int | None, str]:
+    """A moment typed as local time, "2026-11-24", "2026-11-24 14:05" or with seconds:
+    its first nanosecond, or with `end` its last (the whole day or minute named); None
+    when empty; and what is wrong when it is no such moment."""
+    text = text.strip()
+    if not text:
+        return None, ""
+    for pattern, unit_s in _MOMENT_FORMATS:
+        try:
+            moment = datetime.strptime(text, pattern).astimezone()
+        except ValueError:
+            continue
+        first = int(moment.timestamp()) * 10**9
+        return (first + unit_s * 10**9 - 1 if end else first), ""
+    return None, f"'{text[:40]}' is no date and time like 2026-11-24 14:05"
 
 
 def matches(event: p.Event, chosen: Filter, now_ns: int) -> bool:
@@ -209,6 +235,10 @@ def matches(event: p.Event, chosen: Filter, now_ns: int) -> bool:
     if chosen.user == NO_USER and event.user is not None:
         return False
     if chosen.user not in (ALL_USERS, NO_USER) and event.user != chosen.user:
+        return False
+    if chosen.from_ns is not None and event.time_ns < chosen.from_ns:
+        return False
+    if chosen.to_ns is not None and event.time_ns > chosen.to_ns:
         return False
     return chosen.since_s is None or event.time_ns >= now_ns - chosen.since_s * 10**9
 
@@ -288,6 +318,8 @@ class EventsScreen:
     kind: viser.GuiDropdownHandle[str]
     user: viser.GuiDropdownHandle[str]
     since: viser.GuiDropdownHandle[str]
+    start: viser.GuiTextHandle
+    end: viser.GuiTextHandle
     chain: viser.GuiHtmlHandle
     table: viser.GuiHtmlHandle
     feeds: dict[tuple[str, str | None], EventFeed] = field(default_factory=dict)
@@ -301,9 +333,12 @@ def build(gui: viser.GuiApi) -> EventsScreen:
     # not "User": the login to the resource has a text field of that name
     user = gui.add_dropdown("By user", (ALL_USERS,))
     since = gui.add_dropdown("Since", tuple(SINCE))
+    hint = "local time: 2026-11-24, 2026-11-24 14:05 or 2026-11-24 14:05:30; empty: open"
+    start = gui.add_text("From", "", hint=hint)
+    end = gui.add_text("To", "", hint=hint + " (a day or minute counts whole)")
     chain = gui.add_html("")
     table = gui.add_html("")
-    return EventsScreen(log, kind, user, since, chain, table)
+    return EventsScreen(log, kind, user, since, start, end, chain, table)
 
 
 def _feed(
@@ -337,11 +372,17 @@ def refresh(
         return
     feed.pump()
     long_term = screen.log.value == LOGS[1]
-    chosen = Filter(screen.kind.value, screen.user.value, SINCE.get(screen.since.value))
+    from_ns, from_error = parse_moment(screen.start.value, end=False)
+    to_ns, to_error = parse_moment(screen.end.value, end=True)
+    chosen = Filter(
+        screen.kind.value, screen.user.value, SINCE.get(screen.since.value), from_ns, to_ns
+    )
     now = time.time_ns()
     # a "since" window moves: then render again once a second even without a new event
     moving = now // 10**9 if chosen.since_s is not None else 0
-    key = (resource, login_token, feed.version, long_term, chosen, moving)
+    named = (("From", from_error), ("To", to_error))
+    errors = [f"{name}: {error}" for name, error in named if error]
+    key = (resource, login_token, feed.version, long_term, chosen, moving, tuple(errors))
     if key == screen.shown_key:
         return  # ten times a second: nothing to copy or render unless something changed
     events, chain, loaded, error, _ = feed.snapshot(long_term)
@@ -356,7 +397,14 @@ def refresh(
     name = "long-term" if long_term else "short-term"
     broken = chain.broken_seq if long_term else None
     table = render(shown, matched, len(events), name, broken)
-    _update(screen, key, render_chain(chain, loaded), table)
+    _update(screen, key, render_chain(chain, loaded), _range_errors(errors) + table)
+
+
+def _range_errors(errors: list[str]) -> str:
+    """A range field that is no moment is said in red; it filters nothing meanwhile."""
+    lines = "".join(f"<div>{html.escape(error)}</div>" for error in errors)
+    style = "color:#c92a2a;font-size:0.9em"
+    return f'<div data-testid="range-errors" style="{style}">{lines}</div>' if errors else ""
 
 
 def live_count(screen: EventsScreen, resource: str | None, kind: str) -> int:

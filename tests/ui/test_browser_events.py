@@ -5,6 +5,7 @@ the long-term log's hash chain."""
 from __future__ import annotations
 
 import time
+from datetime import datetime, timedelta
 from pathlib import Path
 
 import pytest
@@ -17,6 +18,7 @@ from tests.ui.browser_steps import (
     Demo,
     choose,
     confirm,
+    field,
     open_demo_as_admin,
     open_tab,
     shoot,
@@ -63,6 +65,26 @@ def test_events_arrive_live_are_filtered_and_the_chain_is_verified(demo: Demo) -
         assert rows(page), "events without a user remain"
         choose(page, "By user", "admin")
         wait_until("only admin's", lambda: {u for _, u in rows(page)} == {"admin"})
+
+        # a range in local time: tomorrow on shows nothing, today everything; a typing
+        # error is said and filters nothing
+        today = datetime.now().strftime("%Y-%m-%d")
+        tomorrow = (datetime.now() + timedelta(days=1)).strftime("%Y-%m-%d")
+        field(page, "From").fill(tomorrow)
+        wait_until("nothing from tomorrow on", lambda: rows(page) == [])
+        field(page, "From").fill(today)
+        field(page, "To").fill(today)
+        wait_until("today's again", lambda: {u for _, u in rows(page)} == {"admin"})
+        field(page, "To").fill("soon")
+        wait_until(
+            "the field's error is said",
+            lambda: (
+                "To: 'soon' is no date and time" in text_of(page, '[data-testid="range-errors"]')
+            ),
+        )
+        assert rows(page)
+        field(page, "From").fill("")
+        field(page, "To").fill("")
 
         choose(page, "Log", "Long-term (user actions, configuration)")
         wait_until(

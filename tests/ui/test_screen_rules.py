@@ -4,6 +4,7 @@ and the event filters select the newest matching rows."""
 
 from __future__ import annotations
 
+from datetime import datetime
 from functools import partial
 
 import pytest
@@ -108,6 +109,23 @@ def test_filters_select_the_newest_first() -> None:
     assert seqs(events.Filter(user=events.NO_USER)) == [1]
     assert seqs(events.Filter(since_s=600)) == [4, 3]
     assert seqs(events.Filter(since_s=3600, user="anna")) == [3, 2]
+
+
+def test_a_range_from_to_in_local_time_takes_in_whole_days_and_minutes() -> None:
+    ago = NOW - 3000 * 10**9  # event 2
+    assert seqs(events.Filter(from_ns=ago)) == [4, 3, 2]
+    assert seqs(events.Filter(from_ns=ago + 1)) == [4, 3]
+    assert seqs(events.Filter(from_ns=ago, to_ns=NOW - 300 * 10**9)) == [3, 2]
+    day = datetime.fromtimestamp(NOW / 1e9).astimezone().strftime("%Y-%m-%d")
+    first, _ = events.parse_moment(day, end=False)
+    last, _ = events.parse_moment(f" {day} ", end=True)
+    assert first is not None and last is not None and last - first == 86_400 * 10**9 - 1
+    minute, _ = events.parse_moment(f"{day} 14:05", end=True)
+    second, _ = events.parse_moment(f"{day} 14:05:59", end=False)
+    assert minute == second + 10**9 - 1 if minute and second else False
+    assert events.parse_moment("", end=False) == (None, "")
+    moment, error = events.parse_moment("yesterday", end=False)
+    assert moment is None and "'yesterday' is no date and time" in error
 
 
 def test_a_long_log_shows_a_bounded_number_of_rows_and_counts_the_rest() -> None:
