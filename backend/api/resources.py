@@ -9,7 +9,7 @@ Each request goes to the resource as a command with the caller's PES session (fr
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Response
 from pydantic import BaseModel, Field
@@ -268,5 +268,14 @@ def events(
     service: Service,
     after: Annotated[int, Query(ge=0, description="only events after this sequence number")] = 0,
     limit: Annotated[int, Query(ge=1, le=MAX_EVENTS)] = 200,
+    log: Annotated[
+        Literal["short", "long"],
+        Query(description="long: user actions and configuration, kept across restarts"),
+    ] = "short",
 ) -> Any:
-    return encode(service.ask(caller, resource, p.GetEvents(after, limit)).events)
+    reply = service.ask(caller, resource, p.GetEvents(after, limit, log))
+    events = encode(reply.events)
+    # a long-term entry carries the SHA-256 of the one before it, to check the chain
+    for event, prev in zip(events, reply.prev, strict=False):
+        event["prev"] = prev
+    return events

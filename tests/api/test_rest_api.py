@@ -18,8 +18,10 @@ from typing import Any
 import pytest
 from websockets.sync.client import connect
 
+from backend.engineering.event_chain import check_chain
 from backend.engineering.padt_accounts import PadtAccounts, read_accounts
 from backend.engineering.project import compile_project, load_project
+from runtime.contract import protocol as p
 from runtime.contract.accounts import LEVELS, SESSION_NS
 from runtime.contract.protocol import COMMAND_LEVELS
 from runtime.contract.refusal import Refusal
@@ -154,6 +156,20 @@ def test_every_state_changing_route_is_refused_by_the_resource_below_its_pes_lev
     assert after["cycle"] > before["cycle"]  # it kept running all along
     events = site.call("GET", f"{R}/events", viewer, params={"after": last}).json()
     assert {e["kind"] for e in events} == {"login"}  # nothing else happened
+
+
+def test_the_long_term_log_comes_with_its_chain_which_a_client_can_check(site: Plant) -> None:
+    viewer = site.session("builder", "viewer")
+    entries = site.call("GET", f"{R}/events", viewer, params={"log": "long", "limit": 1000}).json()
+    assert any(e["kind"] == "login" and e["user"] == "viewer" for e in entries)
+    names = ("seq", "time_ns", "kind", "message", "user", "details")
+    events = [p.Event(*(e[name] for name in names)) for e in entries]
+    chain = check_chain(events, [e["prev"] for e in entries])
+    assert chain.ok and chain.entries == len(entries), chain.describe()
+    short = site.call("GET", f"{R}/events", viewer, params={"limit": 1000}).json()
+    assert "prev" not in short[-1]
+    refused = site.call("GET", f"{R}/events", viewer, params={"log": "all"})
+    assert "log" in error(refused, 400, "bad_request")
 
 
 WELL_FORMED: dict[str, dict[str, Any]] = {
