@@ -21,6 +21,7 @@ from runtime.contract.state_folder import (
     identity_path,
 )
 from runtime.contract.stop_request import StopRequest
+from runtime.cycle_priority import DEFAULT_NICE, NICE_RANGE, raise_priority
 from runtime.event_log import EventLog
 from runtime.identity import Identity
 from runtime.resource import Resource
@@ -44,6 +45,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=1000,
         metavar="MS",
         help="how often the context is saved while the resource runs (default 1000)",
+    )
+    parser.add_argument(
+        "--cycle-nice",
+        type=int,
+        default=DEFAULT_NICE,
+        choices=NICE_RANGE,
+        metavar="N",
+        help=f"priority of the cycle thread as a nice value, -20 (highest) to 19 (default "
+        f"{DEFAULT_NICE}; below 0 needs CAP_SYS_NICE, else it runs at normal priority)",
     )
 
 
@@ -101,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
 
     driver = CycleDriver(resource, clock, link, save, args.context_period_ms * 1_000_000)
     log.info("resource %s: %s, Zenoh %s", args.resource, resource.state.value, args.zenoh)
+    log.info("cycle thread: %s", raise_priority(args.cycle_nice))  # driver.run is this thread
     try:
         driver.run(stop.event)
     finally:
