@@ -10,6 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from playwright.sync_api import Error as PlaywrightError
 from playwright.sync_api import Locator, Page
 
 from backend.engineering.resource_client import ResourceClient
@@ -65,7 +66,10 @@ def log_in(page: Page, user: str, password: str) -> None:
 
 
 def log_in_to_resource(page: Page, user: str, password: str) -> None:
-    page.get_by_role("button", name="Log in to resource").wait_for(timeout=WAIT_S * 1000)
+    try:
+        page.get_by_role("button", name="Log in to resource").wait_for(timeout=WAIT_S * 1000)
+    except PlaywrightError:  # seen rarely under load: say what the page showed instead
+        raise AssertionError(f"no workspace; the page shows: {page.inner_text('body')}") from None
     field(page, "User").fill(user)
     field(page, "Password").fill(password)
     page.get_by_role("button", name="Log in to resource").click()
