@@ -45,6 +45,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="MS",
         help="how often the context is saved while the resource runs (default 1000)",
     )
+    parser.add_argument(
+        "--modbus-port",
+        type=int,
+        default=None,
+        metavar="PORT",
+        help="port of the served Modbus TCP image instead of the configured one (0: any free)",
+    )
 
 
 def power_up(resource: Resource, state_dir: Path) -> None:
@@ -99,12 +106,23 @@ def run(args: argparse.Namespace) -> int:
         if context is not None:
             saver.submit(context)
 
+    from runtime.field_io import FieldIo
+
+    resource.field_io = FieldIo(
+        lambda: resource.artifact,
+        resource.variables,
+        resource.io,
+        resource.recorder,
+        resource.running,
+        args.modbus_port,
+    )
     driver = CycleDriver(resource, clock, link, save, args.context_period_ms * 1_000_000)
     log.info("resource %s: %s, Zenoh %s", args.resource, resource.state.value, args.zenoh)
     try:
         driver.run(stop.event)
     finally:
         driver.close()  # an orderly stop saves the context one last time
+        resource.field_io.close()
         saver.close()
         link.close()
         session.close()

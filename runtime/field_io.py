@@ -1,0 +1,252 @@
+"""Field I/O over Modbus TCP: the exchange between the CPU cycle and the Modbus thread.
+
+Before a cycle (`before_cycle`, on the cycle thread) the inputs the devices delivered go
+into the process image (`ProcessImage.set_inputs`) and the writes of Modbus clients into
+their variables; after it (`after_cycle`) the served points and the output image go to the
+Modbus thread as one immutable snapshot. Neither side waits for the other or holds a lock:
+every hand-over is one reference assignment or a queue. State changes of a device (lost,
+connected) and of the server become events here, on the cycle thread.
+
+It follows the loaded configuration: a load or reload that changes the `modbus` settings
+restarts the server and the pollers; one that keeps them only binds the variables anew.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import queue
+from collections.abc import Callable
+from typing import Any
+
+from runtime.contract.artifact import Artifact
+from runtime.contract.modbus import ModbusConfig, Point
+from runtime.contract.protocol import DeviceStatus, IoPoint, IoStatus, ModbusServerStatus
+from runtime.contract.refusal import Refusal
+from runtime.event_recorder import EventRecorder
+from runtime.instances import BoundVariable
+from runtime.modbus_client import DevicePoller
+from runtime.modbus_loop import ModbusLoop
+from runtime.modbus_server import ImageServer, ImageStore, ServedImage
+from runtime.process_image import ProcessImage
+from runtime.variables import Variables
+
+log = logging.getLogger(__name__)
+
+
+class FieldIo:
+    def __init__(
+        self,
+        artifact: Callable[[], Artifact | None],
+        variables: Variables,
+        io: ProcessImage,
+        recorder: EventRecorder,
+        running: Callable[[], bool],
+        port: int | None = None,
+    ) -> None:
+        """The resource's parts it works with: the loaded configuration (`artifact`), its
+        variables, process image and event recorder, and whether it runs; `port` overrides
+        the configured port of the served image (0: any free one)."""
+        self._loaded, self._variables, self._io = artifact, variables, io
+        self._recorder, self._running_now = recorder, running
+        self._port = port
+        self._loop: ModbusLoop | None = None
+        self._artifact: Artifact | None = None
+        self.config = ModbusConfig()
+        self.server: ImageServer | None = None
+        self.pollers: list[DevicePoller] = []
+        # what runs on the Modbus thread (only that thread touches these three)
+        self._running: tuple[ImageServer | None, list[asyncio.Task[None]]] = (None, [])
+        self._switching: asyncio.Lock | None = None
+        self._served: list[BoundVariable | None] = []
+        self._bound_of: list[BoundVariable] | None = None
+        self._applied = 0  # the last client write taken
+        self._seen: dict[str, tuple[int, str]] = {}  # device -> (delivery seq, state) taken
+        self._server_reported = False
+        self.bad: frozenset[str] = frozenset()  # upper-case paths of inputs of lost devices
+
+    # ---- the cycle thread
+    def before_cycle(self) -> None:
+        self._follow_configuration()
+        if self.server is not None:
+            self._take_writes(self.server.store)
+            self._report_server()
+        io, changed = self._io, False
+        bad: set[str] = set()
+        for poller in self.pollers:
+            delivery, state = poller.delivery, poller.state
+            seen = self._seen.get(poller.device.name, (0, "connecting"))
+            if delivery.seq != seen[0]:
+                io.set_inputs(delivery.values)
+            if state != seen[1]:
+                self._report_device(poller, seen[1])
+                changed = True
+            self._seen[poller.device.name] = (delivery.seq, state)
+            if not delivery.good:
+                bad.update(name.upper() for name in delivery.values)
+        if changed or len(bad) != len(self.bad):
+            self.bad = frozenset(bad)
+
+    def after_cycle(self) -> None:
+        if self.server is None:
+            return
+        outputs, read = self._io.outputs, self._variables.read
+        values = tuple(
+            outputs.get(point.variable, point.safe_value)
+            if point.location.upper().startswith("%Q")
+            else (read(bound) if bound is not None else point.safe_value)
+            for point, bound in zip(self.config.served, self._served, strict=True)
+        )
+        self.server.store.show(ServedImage(values, self._applied))
+
+    def _take_writes(self, store: ImageStore) -> None:
+        variables = self._variables
+        while True:
+            try:
+                write = store.writes.get_nowait()
+            except queue.Empty:
+                return
+            self._applied = write.seq
+            bound = variables.find(write.variable)
+            if bound is None:
+                continue
+            try:
+                variables.store(bound, variables.checked(bound, write.value))
+            except Refusal:  # a value its type cannot hold (the server checked the range)
+                continue
+
+    def _follow_configuration(self) -> None:
+        artifact = self._loaded()
+        if artifact is not self._artifact:
+            self._artifact = artifact
+            config = artifact.modbus if artifact is not None else ModbusConfig()
+            if config != self.config:
+                self._restart(config)
+        bound = self._variables.bound
+        if bound is not self._bound_of:  # a load, reload or program restart
+            self._bound_of = bound
+            find = self._variables.find
+            self._served = [find(point.variable) for point in self.config.served]
+
+    def _restart(self, config: ModbusConfig) -> None:
+        """Stop what serves and polls now, then start what `config` says, on the Modbus
+        thread (the cycle does not wait for either)."""
+        self.config, self.server, self.pollers = config, None, []
+        self._seen, self._server_reported, self.bad = {}, False, frozenset()
+        self._bound_of = None
+        if config.serve:
+            port = self._port if self._port is not None else config.port
+            self.server = ImageServer(ImageStore(config.served), config.host, port)
+        outputs = lambda: self._io.outputs  # noqa: E731  # replaced, never changed
+        self.pollers = [DevicePoller(device, outputs) for device in config.devices]
+        if self._loop is None and (self.server is not None or self.pollers):
+            self._loop = ModbusLoop()
+        if self._loop is not None:
+            self._loop.submit(self._switch(self.server, self.pollers))
+
+    async def _switch(self, server: ImageServer | None, pollers: list[DevicePoller]) -> None:
+        """On the Modbus thread, one switch after the other: what ran stops (its port is
+        free again) before what is new starts."""
+        if self._switching is None:
+            self._switching = asyncio.Lock()
+        async with self._switching:
+            old_server, old_tasks = self._running
+            for task in old_tasks:
+                task.cancel()
+            await asyncio.gather(*old_tasks, return_exceptions=True)
+            if old_server is not None:
+                await old_server.stop()
+            if server is not None:
+                await server.start()
+            self._running = (server, [asyncio.create_task(p.run()) for p in pollers])
+
+    def _report_server(self) -> None:
+        server = self.server
+        if server is None or self._server_reported or not (server.port or server.error):
+            return
+        self._server_reported = True
+        recorder = self._recorder
+        if server.error is not None:
+            recorder.record("io", f"Modbus server: {server.error}", long_term=True)
+        else:
+            recorder.record(
+                "io", f"Modbus server listening on {server.host}:{server.port}", long_term=False
+            )
+
+    def _report_device(self, poller: DevicePoller, before: str) -> None:
+        device, recorder = poller.device, self._recorder
+        if poller.state == "lost":
+            recorder.record(
+                "io", f"Modbus device {device.name} lost: {poller.last_error}; "
+                "its inputs hold their safe values", long_term=True, device=device.name,
+            )  # fmt: skip
+        elif poller.state == "connected":
+            again = " again" if before == "lost" else ""
+            recorder.record(
+                "io", f"Modbus device {device.name} connected{again}", long_term=bool(again),
+                device=device.name,
+            )  # fmt: skip
+
+    # ---- what the status and the `io` command show (cycle thread)
+    def status(self) -> IoStatus | None:
+        if self.server is None and not self.pollers:
+            return None
+        server = None
+        if self.server is not None:
+            counts = self.server.store.counts
+            server = ModbusServerStatus(
+                self.server.host, self.server.port, self.server.port != 0, self.server.error,
+                counts.requests, counts.exceptions, counts.writes,
+            )  # fmt: skip
+        devices = [
+            DeviceStatus(
+                p.device.name,
+                p.device.host,
+                p.device.port,
+                p.device.unit_id,
+                p.state,
+                p.last_error,
+                p.requests,
+                p.failures,
+                round(p.round_trip_ms, 3),
+            )
+            for p in self.pollers
+        ]
+        return IoStatus(server, devices)
+
+    def points(self) -> list[IoPoint]:
+        points: list[IoPoint] = []
+        if self.server is not None:
+            safe = not self._running_now()
+            image = self.server.store.image
+            for point, value in zip(self.config.served, image.values, strict=True):
+                output = point.location.upper().startswith("%Q")
+                quality = "safe" if output and safe else "good"
+                points.append(_io_point("server", point, value, quality))
+        for poller in self.pollers:
+            delivery = poller.delivery
+            for point in poller.device.points:
+                if point.is_input:
+                    value = delivery.values.get(point.variable, point.safe_value)
+                    quality = "good" if delivery.good else "bad"
+                else:
+                    value = poller.sent.get(point.variable)
+                    quality = "good" if point.variable in poller.sent else "bad"
+                points.append(_io_point(poller.device.name, point, value, quality))
+        return points
+
+    def close(self) -> None:
+        if self._loop is None:
+            return
+        try:
+            self._loop.run(self._switch(None, []))
+        except Exception:  # shutting down: what is left goes with the process
+            log.exception("Modbus shutdown")
+        self._loop.close()
+
+
+def _io_point(source: str, point: Point, value: Any, quality: str) -> IoPoint:
+    return IoPoint(
+        source, point.variable, point.location, point.type, point.area, point.address,
+        point.writable, value, quality,
+    )  # fmt: skip

@@ -1,0 +1,217 @@
+"""A runtime process serves its process image over Modbus TCP (OpenPLC's map), read and
+written by real pymodbus clients on 127.0.0.1: every table and encoding, the configured
+writable points only, safe values in STOP, exception responses for what is wrong, and
+malformed frames that leave the cycle untouched."""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+import struct
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from pymodbus.client import ModbusTcpClient
+
+from backend.engineering.project import compile_project, load_project
+from backend.engineering.resource_client import ResourceClient
+from runtime.contract.protocol import GetEvents, GetIo, GetStatus, GetValues, ResourceState, Stop
+from runtime.contract.protocol import Write as WriteValue
+from tests.conftest import free_port
+from tests.support.runtime_process import running_resource, store_artifact
+
+SOURCE = """VAR_GLOBAL
+  run AT %IX0.1 : BOOL;
+  lamp AT %QX0.2 : BOOL;
+  level AT %IW0 : INT;
+  speed AT %QW1 : INT;
+  setpoint AT %MW0 : INT;
+  gain AT %MD0 : REAL;
+  total AT %MD1 : DINT;
+  word AT %MW2 : WORD;
+END_VAR
+PROGRAM Main
+lamp := run;
+speed := setpoint * 2;
+total := 70000 + setpoint;
+END_PROGRAM
+"""
+
+SETTINGS = """[resource]
+name = "Mb1"
+target_cycle_ms = 10
+autostart = "cold"
+safety_operation = false
+
+[modbus]
+writable = ["%MW0", "%MD0", "%MW2", "%QX0.2"]
+word_order = "{word_order}"
+"""
+
+
+def wait_for(check: Callable[[], Any], timeout_s: float = 10.0) -> Any:
+    deadline = time.monotonic() + timeout_s
+    while True:
+        result = check()
+        if result:
+            return result
+        if time.monotonic() > deadline:
+            raise AssertionError(f"not within {timeout_s} s: {check}")
+        time.sleep(0.02)
+
+
+def listening_port(client: ResourceClient) -> int:
+    def port() -> int:
+        io = client.ask(GetStatus()).status.io
+        return io.server.port if io is not None and io.server is not None else 0
+
+    result: int = wait_for(port)
+    return result
+
+
+@pytest.fixture(params=["big", "little"])
+def served(
+    request: pytest.FixtureRequest, tmp_path: Path
+) -> Iterator[tuple[ResourceClient, ModbusTcpClient, str]]:
+    folder = tmp_path / "project"
+    folder.mkdir()
+    (folder / "padt.toml").write_text(SETTINGS.format(word_order=request.param))
+    (folder / "main.st").write_text(SOURCE)
+    result = compile_project(load_project([folder]))
+    assert result.artifact is not None, result.diagnostics
+    state = tmp_path / "state"
+    store_artifact(state, result.artifact)
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with running_resource("Mb1", state, endpoint, "--modbus-port", str(port)) as (_, client):
+        assert listening_port(client) == port
+        modbus = ModbusTcpClient("127.0.0.1", port=port, timeout=3)
+        assert modbus.connect()
+        try:
+            yield client, modbus, request.param
+        finally:
+            modbus.close()
+
+
+def value(client: ResourceClient, name: str) -> Any:
+    return client.ask(GetValues()).values[name]
+
+
+def test_every_table_and_encoding(served: tuple[ResourceClient, ModbusTcpClient, str]) -> None:
+    client, modbus, word_order = served
+    client.ask(WriteValue("run", True))
+    client.ask(WriteValue("level", -7))
+    # %IX0.1 is discrete input 1, %QX0.2 coil 2 (bit reads come padded to a byte)
+    wait_for(lambda: modbus.read_discrete_inputs(0, count=2).bits[:2] == [False, True])
+    wait_for(lambda: modbus.read_coils(2, count=1).bits[0] is True)
+    # %IW0 is input register 0, as a signed 16-bit value
+    assert modbus.read_input_registers(0, count=1).registers == [0x10000 - 7]
+    # %MW0 is holding register 1024, writable: the program doubles it into %QW1
+    assert not modbus.write_register(1024, 21).isError()
+    wait_for(lambda: modbus.read_holding_registers(1, count=1).registers == [42])
+    assert modbus.read_holding_registers(1024, count=1).registers == [21]
+    assert value(client, "setpoint") == 21
+    # %MD0 (REAL) is holding registers 2048-2049, in the configured word order
+    high, low = struct.unpack(">HH", struct.pack(">f", 2.5))
+    words = [high, low] if word_order == "big" else [low, high]
+    assert not modbus.write_registers(2048, words).isError()
+    wait_for(lambda: value(client, "gain") == 2.5)
+    assert modbus.read_holding_registers(2048, count=2).registers == words
+    # %MD1 (DINT) is holding registers 2050-2051
+    high, low = divmod(70021, 0x10000)
+    expected = [high, low] if word_order == "big" else [low, high]
+    wait_for(lambda: modbus.read_holding_registers(2050, count=2).registers == expected)
+    # a WORD takes the whole 16 bits; a coil write reaches its output variable
+    assert not modbus.write_register(1026, 0xBEEF).isError()
+    wait_for(lambda: value(client, "word") == 0xBEEF)
+    assert not modbus.write_coil(2, False).isError()
+    assert modbus.read_holding_registers(1026, count=1).registers == [0xBEEF]
+
+
+def test_what_may_not_be_done_gets_exception_responses(
+    served: tuple[ResourceClient, ModbusTcpClient, str],
+) -> None:
+    client, modbus, _ = served
+    cycle = client.ask(GetStatus()).status.cycle
+    refused = [
+        modbus.write_register(1, 5),  # %QW1 is not writable
+        modbus.write_register(3, 5),  # no variable at holding register 3
+        modbus.write_coil(0, True),  # nor at coil 0
+        modbus.write_registers(1025, [1, 2]),  # 1025 is a gap, 1026 writable: none written
+        modbus.read_input_registers(1, count=1),  # beyond the last input register
+        modbus.read_holding_registers(2048, count=10),  # past %MD1
+        modbus.read_coils(3, count=1),
+    ]
+    assert [getattr(r, "exception_code", None) for r in refused] == [2] * len(refused)
+    assert value(client, "word") == 0 and value(client, "speed") == 0
+    # a register between two mapped ones reads 0 rather than failing the whole read
+    assert modbus.read_holding_registers(0, count=2).registers == [0, 0]
+    io = client.ask(GetIo())
+    assert io.io is not None and io.io.server is not None
+    assert io.io.server.exceptions >= len(refused)
+    assert client.ask(GetStatus()).status.cycle > cycle  # the cycle went on
+
+
+def _frame(transaction: int, pdu: bytes, unit: int = 1, protocol: int = 0) -> bytes:
+    return struct.pack(">HHHB", transaction, protocol, len(pdu) + 1, unit) + pdu
+
+
+def _answer(sock: socket.socket) -> bytes:
+    header = sock.recv(7)
+    assert len(header) == 7, header
+    length = struct.unpack(">H", header[4:6])[0]
+    return header + sock.recv(length - 1)
+
+
+def test_malformed_frames_and_unknown_function_codes(
+    served: tuple[ResourceClient, ModbusTcpClient, str],
+) -> None:
+    client, modbus, _ = served
+    port = modbus.comm_params.port
+    with socket.create_connection(("127.0.0.1", port), timeout=3) as sock:
+        sock.sendall(_frame(1, bytes([0x41, 0, 0])))  # an unknown function code
+        answer = _answer(sock)
+        assert answer[7] == 0xC1 and answer[8] == 1  # ILLEGAL FUNCTION
+        sock.sendall(_frame(2, bytes([0x03, 0x04, 0x00, 0x00, 0x01])))  # read HR 1024
+        answer = _answer(sock)
+        assert answer[7:9] == bytes([0x03, 2])  # the connection still works
+    garbage = [
+        b"\xff" * 300,  # nothing like a frame
+        _frame(3, b"\x03\x00", protocol=7),  # another protocol, truncated PDU
+        struct.pack(">HHHB", 4, 0, 2000, 1) + b"\x03",  # a length beyond any PDU
+        b"\x00\x01",  # a header cut short, then the connection closed
+    ]
+    for junk in garbage:
+        with socket.create_connection(("127.0.0.1", port), timeout=3) as sock:
+            sock.sendall(junk)
+            sock.settimeout(0.5)
+            with contextlib.suppress(TimeoutError, ConnectionResetError):
+                sock.recv(512)
+    cycle = client.ask(GetStatus()).status.cycle
+    wait_for(lambda: client.ask(GetStatus()).status.cycle > cycle + 5)
+    assert client.ask(GetStatus()).status.state == ResourceState.RUN
+    modbus.close()
+    assert modbus.connect()
+    assert modbus.read_holding_registers(1024, count=1).registers == [0]
+
+
+def test_stop_serves_the_safe_values(served: tuple[ResourceClient, ModbusTcpClient, str]) -> None:
+    client, modbus, _ = served
+    client.ask(WriteValue("run", True))
+    assert not modbus.write_register(1024, 5).isError()
+    wait_for(lambda: modbus.read_holding_registers(1, count=1).registers == [10])
+    wait_for(lambda: modbus.read_coils(2, count=1).bits[0] is True)
+    client.ask(Stop())
+    # the outputs are served safe, though the program left them set; memory stays served
+    wait_for(lambda: modbus.read_holding_registers(1, count=1).registers == [0])
+    assert modbus.read_coils(2, count=1).bits[0] is False
+    assert value(client, "speed") == 10
+    assert modbus.read_holding_registers(1024, count=1).registers == [5]
+    points = {p.variable: p for p in client.ask(GetIo()).points}
+    assert (points["speed"].value, points["speed"].quality) == (0, "safe")
+    assert (points["setpoint"].value, points["setpoint"].quality) == (5, "good")
+    events = [e.message for e in client.ask(GetEvents(limit=1000)).events]
+    assert any(m.startswith("Modbus server listening on 127.0.0.1:") for m in events)
