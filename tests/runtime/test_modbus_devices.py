@@ -17,13 +17,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from pymodbus.client import ModbusTcpClient
 
 from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.protocol import DeviceStatus, GetEvents, GetIo, GetStatus, GetValues
 from tests.conftest import REPO, free_port
 from tests.runtime.test_modbus_server import wait_for
+from tests.support.modbus_device import modbus_client, reachable
 from tests.support.runtime_process import running_resource, store_artifact
 
 SOURCE = """VAR_GLOBAL
@@ -121,9 +121,7 @@ def device_process(port: int) -> Iterator[subprocess.Popen[bytes]]:
     command = [sys.executable, "-m", "tests.support.modbus_device", str(port), json.dumps(INITIAL)]
     process = subprocess.Popen(command, cwd=REPO)
     try:
-        probe = ModbusTcpClient("127.0.0.1", port=port, timeout=1)
-        wait_for(probe.connect, 20)
-        probe.close()
+        wait_for(lambda: reachable(port), 20)
         yield process
     finally:
         process.kill()
@@ -166,18 +164,17 @@ def test_polling_every_table_and_encoding(polling: tuple[ResourceClient, int]) -
         wait_for(lambda: device(client).state == "connected")
         wait_for(lambda: values(client)["level"] == 5)
         assert values(client)["flow"] == 1.25 and values(client)["ready"] is True
-        rig = ModbusTcpClient("127.0.0.1", port=port, timeout=3)
-        assert rig.connect()
-        rig.write_registers(10, [0x0001, 0x1170])  # DINT 70000, high word first
-        rig.write_register(12, 0x3412)  # UINT 0x1234, bytes swapped
-        rig.write_coil(7, True)
-        wait_for(lambda: values(client)["count"] == 70000)
-        assert values(client)["temp"] == 0x1234 and values(client)["feedback"] is True
-        # the outputs the program computed reach the device
-        reference = list(struct.unpack(">HH", struct.pack(">f", 2.5)))
-        wait_for(lambda: rig.read_holding_registers(20, count=3).registers == [50, *reference])
-        assert rig.read_coils(5, count=1).bits[0] is True
-        rig.close()
+        with modbus_client(port) as rig:
+            rig.write_registers(10, [0x0001, 0x1170])  # DINT 70000, high word first
+            rig.write_register(12, 0x3412)  # UINT 0x1234, bytes swapped
+            rig.write_coil(7, True)
+            wait_for(lambda: values(client)["count"] == 70000)
+            assert values(client)["temp"] == 0x1234 and values(client)["feedback"] is True
+            # the outputs the program computed reach the device
+            reference = list(struct.unpack(">HH", struct.pack(">f", 2.5)))
+            registers = [50, *reference]
+            wait_for(lambda: rig.read_holding_registers(20, count=3).registers == registers)
+            assert rig.read_coils(5, count=1).bits[0] is True
         status = device(client)
         assert status.requests > 0 and status.last_error is None
         points = {p.variable: p for p in client.ask(GetIo()).points}

@@ -21,6 +21,7 @@ from backend.engineering.resource_client import ResourceClient
 from runtime.contract.protocol import GetEvents, GetIo, GetStatus, GetValues, ResourceState, Stop
 from runtime.contract.protocol import Write as WriteValue
 from tests.conftest import free_port
+from tests.support.modbus_device import modbus_client
 from tests.support.runtime_process import running_resource, store_artifact
 
 SOURCE = """VAR_GLOBAL
@@ -88,12 +89,8 @@ def served(
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with running_resource("Mb1", state, endpoint, "--modbus-port", str(port)) as (_, client):
         assert listening_port(client) == port
-        modbus = ModbusTcpClient("127.0.0.1", port=port, timeout=3)
-        assert modbus.connect()
-        try:
+        with modbus_client(port) as modbus:
             yield client, modbus, request.param
-        finally:
-            modbus.close()
 
 
 def value(client: ResourceClient, name: str) -> Any:
@@ -108,7 +105,7 @@ def test_every_table_and_encoding(served: tuple[ResourceClient, ModbusTcpClient,
     wait_for(lambda: modbus.read_discrete_inputs(0, count=2).bits[:2] == [False, True])
     wait_for(lambda: modbus.read_coils(2, count=1).bits[0] is True)
     # %IW0 is input register 0, as a signed 16-bit value
-    assert modbus.read_input_registers(0, count=1).registers == [0x10000 - 7]
+    wait_for(lambda: modbus.read_input_registers(0, count=1).registers == [0x10000 - 7])
     # %MW0 is holding register 1024, writable: the program doubles it into %QW1
     assert not modbus.write_register(1024, 21).isError()
     wait_for(lambda: modbus.read_holding_registers(1, count=1).registers == [42])
@@ -193,9 +190,8 @@ def test_malformed_frames_and_unknown_function_codes(
     cycle = client.ask(GetStatus()).status.cycle
     wait_for(lambda: client.ask(GetStatus()).status.cycle > cycle + 5)
     assert client.ask(GetStatus()).status.state == ResourceState.RUN
-    modbus.close()
-    assert modbus.connect()
-    assert modbus.read_holding_registers(1024, count=1).registers == [0]
+    with modbus_client(port) as again:
+        assert again.read_holding_registers(1024, count=1).registers == [0]
 
 
 def test_stop_serves_the_safe_values(served: tuple[ResourceClient, ModbusTcpClient, str]) -> None:

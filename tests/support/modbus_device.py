@@ -10,7 +10,10 @@ from __future__ import annotations
 import asyncio
 import json
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 
+from pymodbus.client import ModbusTcpClient
 from pymodbus.server import ModbusTcpServer
 from pymodbus.simulator import DataType, SimData, SimDevice
 
@@ -40,6 +43,26 @@ def device(initial: dict[str, dict[str, int | bool]]) -> SimDevice:
 async def serve(port: int, initial: dict[str, dict[str, int | bool]]) -> None:
     server = ModbusTcpServer(device(initial), address=("127.0.0.1", port))
     await server.serve_forever()
+
+
+def reachable(port: int) -> bool:
+    """Whether a Modbus server takes connections on 127.0.0.1:`port`."""
+    client = ModbusTcpClient("127.0.0.1", port=port, timeout=1)
+    try:
+        return bool(client.connect())  # type: ignore[no-untyped-call]  # pymodbus lacks it
+    finally:
+        client.close()  # type: ignore[no-untyped-call]
+
+
+@contextmanager
+def modbus_client(port: int) -> Iterator[ModbusTcpClient]:
+    """A pymodbus client connected to 127.0.0.1:`port`, closed afterwards."""
+    client = ModbusTcpClient("127.0.0.1", port=port, timeout=3)
+    assert client.connect(), f"no Modbus server on port {port}"  # type: ignore[no-untyped-call]
+    try:
+        yield client
+    finally:
+        client.close()  # type: ignore[no-untyped-call]
 
 
 if __name__ == "__main__":
