@@ -6,8 +6,12 @@ malformed frames that leave the cycle untouched."""
 from __future__ import annotations
 
 import contextlib
+import os
+import re
+import shutil
 import socket
 import struct
+import subprocess
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -211,3 +215,46 @@ def test_stop_serves_the_safe_values(served: tuple[ResourceClient, ModbusTcpClie
     assert (points["setpoint"].value, points["setpoint"].quality) == (5, "good")
     events = [e.message for e in client.ask(GetEvents(limit=1000)).events]
     assert any(m.startswith("Modbus server listening on 127.0.0.1:") for m in events)
+
+
+def mbpoll(port: int, *args: str, write: str | None = None) -> subprocess.CompletedProcess[str]:
+    """Debian's mbpoll (libmodbus), once, zero-based addresses; `write`: a value to write."""
+    if shutil.which("mbpoll") is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail("mbpoll is missing: scripts/install-mbpoll.sh installs it")
+        pytest.skip("mbpoll is not installed (scripts/install-mbpoll.sh)")
+    command = ["mbpoll", "-m", "tcp", "-p", str(port), "-a", "1", "-0", "-1", *args, "127.0.0.1"]
+    command += [write] if write is not None else []
+    return subprocess.run(command, capture_output=True, text=True, timeout=30)
+
+
+def polled(run: subprocess.CompletedProcess[str]) -> dict[int, str]:
+    """mbpoll's `[address]: value` lines."""
+    assert run.returncode == 0, run.stdout + run.stderr
+    found = re.findall(r"^\[(\d+)\]:\s+(.+)$", run.stdout, re.MULTILINE)
+    return {int(address): text.strip() for address, text in found}
+
+
+def test_mbpoll_reads_and_writes_the_image(
+    served: tuple[ResourceClient, ModbusTcpClient, str],
+) -> None:
+    client, modbus, word_order = served
+    port = modbus.comm_params.port
+    client.ask(WriteValue("run", True))
+    client.ask(WriteValue("level", -7))
+    wait_for(lambda: modbus.read_input_registers(0, count=1).registers == [0x10000 - 7])
+    wait_for(lambda: modbus.read_coils(2, count=1).bits[0] is True)
+    assert polled(mbpoll(port, "-t", "3", "-r", "0", "-c", "1")) == {0: "65529 (-7)"}
+    assert polled(mbpoll(port, "-t", "1", "-r", "1", "-c", "1")) == {1: "1"}
+    assert polled(mbpoll(port, "-t", "0", "-r", "2", "-c", "1")) == {2: "1"}
+    written = mbpoll(port, "-t", "4", "-r", "1024", write="21")
+    assert written.returncode == 0 and "Written 1 references" in written.stdout
+    wait_for(lambda: modbus.read_holding_registers(1, count=1).registers == [42])
+    assert polled(mbpoll(port, "-t", "4", "-r", "1", "-c", "1")) == {1: "42"}
+    order = ["-B"] if word_order == "big" else []
+    floated = mbpoll(port, "-t", "4:float", *order, "-r", "2048", write="3.75")
+    assert floated.returncode == 0, floated.stdout
+    wait_for(lambda: client.ask(GetValues()).values["gain"] == 3.75)
+    assert polled(mbpoll(port, "-t", "4:float", *order, "-r", "2048", "-c", "1")) == {2048: "3.75"}
+    refused = mbpoll(port, "-t", "4", "-r", "1", write="99")  # %QW1 is not writable
+    assert refused.returncode != 0 and "Illegal data address" in refused.stdout + refused.stderr
