@@ -90,7 +90,8 @@ class DevicePoller:
         # outputs go in blocks of strictly adjacent points: a gap would overwrite the device
         self._writes = blocks([p for p in device.points if not p.is_input], gap=0)
         self._safe = {p.variable: p.safe_value for p in inputs}
-        self.delivery = Delivery(0, dict(self._safe), False)
+        # until the device first answers, its inputs hold their safe values, marked bad
+        self.delivery = Delivery(1, dict(self._safe), False)
         self.state = "connecting"
         self.last_error: str | None = None
         self.requests = 0
