@@ -58,9 +58,9 @@ class ClientWrite:
 
 @dataclass
 class ServerCounts:
-    requests: int = 0
-    exceptions: int = 0  # exception responses this store gave (pymodbus' own not counted)
-    writes: int = 0
+    requests: int = 0  # frames received
+    exceptions: int = 0  # exception responses sent
+    writes: int = 0  # write requests taken
 
 
 @dataclass
@@ -98,7 +98,6 @@ class ImageStore:
 
     def _read(self, area: str, address: int, count: int) -> list[Any] | ExcCodes:
         if count < 1 or address + count > self._length[area]:
-            self.counts.exceptions += 1
             return ExcCodes.ILLEGAL_ADDRESS
         result: list[Any] = []
         bits = area in BIT_AREAS
@@ -115,10 +114,8 @@ class ImageStore:
     async def async_getValues(
         self, device_id: int, func_code: int, address: int, count: int = 1
     ) -> list[Any] | ExcCodes:
-        self.counts.requests += 1
         area = _AREA_OF_CODE.get(func_code)
         if area is None:
-            self.counts.exceptions += 1
             return ExcCodes.ILLEGAL_FUNCTION
         return self._read(area, address, count)
 
@@ -127,13 +124,11 @@ class ImageStore:
     ) -> ExcCodes | None:
         area = _AREA_OF_CODE.get(func_code)
         if area is None or area not in (COIL, HOLDING_REGISTER):
-            self.counts.exceptions += 1
             return ExcCodes.ILLEGAL_FUNCTION
         touched: dict[int, list[int]] = {}  # point index -> its registers as written
         for number, written in enumerate(values):
             place = self._at.get((area, address + number))
             if place is None or not self.points[place[0]].writable:
-                self.counts.exceptions += 1
                 return ExcCodes.ILLEGAL_ADDRESS
             index, offset = place
             point = self.points[index]
@@ -171,14 +166,19 @@ class ImageServer:
         self._codes: dict[bytes, int] = {}  # transaction id -> function code received
 
     def _trace(self, sending: bool, data: bytes) -> bytes:
-        """pymodbus answers a function code it does not know with code 0x80; Modbus (and
-        libmodbus, which checks it) wants the request's code + 0x80: the answer gets it."""
+        """Every frame in and out (pymodbus' hook): counted; and as pymodbus answers a
+        function code it does not know with code 0x80, where Modbus (and libmodbus, which
+        checks it) wants the request's code + 0x80, the answer gets the request's code."""
+        counts = self.store.counts
         if not sending:
+            counts.requests += 1
             if len(self._codes) > 1024:
                 self._codes.clear()
             if len(data) >= 8:
                 self._codes[data[:2]] = data[7]
             return data
+        if len(data) >= 8 and data[7] & 0x80:
+            counts.exceptions += 1
         if len(data) >= 9 and data[7] == 0x80:
             code = self._codes.get(data[:2])
             if code is not None and code < 0x80:

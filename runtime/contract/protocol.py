@@ -122,8 +122,8 @@ class ModbusServerStatus:
     port: int  # where it listens; 0 while it does not
     listening: bool
     error: str | None  # why it does not listen
-    requests: int  # read and write requests answered from the image
-    exceptions: int  # of them, refused with an exception response
+    requests: int  # Modbus frames received
+    exceptions: int  # exception responses sent (malformed, unknown, out of range, refused)
     writes: int  # write requests taken
 
 

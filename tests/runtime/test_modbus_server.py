@@ -6,6 +6,7 @@ malformed frames that leave the cycle untouched."""
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import re
 import shutil
@@ -15,7 +16,7 @@ import subprocess
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import pytest
 from pymodbus.client import ModbusTcpClient
@@ -24,7 +25,7 @@ from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.protocol import GetEvents, GetIo, GetStatus, GetValues, ResourceState, Stop
 from runtime.contract.protocol import Write as WriteValue
-from tests.conftest import free_port
+from tests.conftest import free_port, padt
 from tests.support.modbus_device import modbus_client
 from tests.support.runtime_process import running_resource, store_artifact
 
@@ -77,10 +78,15 @@ def listening_port(client: ResourceClient) -> int:
     return result
 
 
+class Served(NamedTuple):
+    client: ResourceClient
+    modbus: ModbusTcpClient
+    word_order: str
+    endpoint: str  # the Zenoh router's
+
+
 @pytest.fixture(params=["big", "little"])
-def served(
-    request: pytest.FixtureRequest, tmp_path: Path
-) -> Iterator[tuple[ResourceClient, ModbusTcpClient, str]]:
+def served(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Served]:
     folder = tmp_path / "project"
     folder.mkdir()
     (folder / "padt.toml").write_text(SETTINGS.format(word_order=request.param))
@@ -94,15 +100,15 @@ def served(
     with running_resource("Mb1", state, endpoint, "--modbus-port", str(port)) as (_, client):
         assert listening_port(client) == port
         with modbus_client(port) as modbus:
-            yield client, modbus, request.param
+            yield Served(client, modbus, request.param, endpoint)
 
 
 def value(client: ResourceClient, name: str) -> Any:
     return client.ask(GetValues()).values[name]
 
 
-def test_every_table_and_encoding(served: tuple[ResourceClient, ModbusTcpClient, str]) -> None:
-    client, modbus, word_order = served
+def test_every_table_and_encoding(served: Served) -> None:
+    client, modbus, word_order, _ = served
     client.ask(WriteValue("run", True))
     client.ask(WriteValue("level", -7))
     # %IX0.1 is discrete input 1, %QX0.2 coil 2 (bit reads come padded to a byte)
@@ -133,9 +139,9 @@ def test_every_table_and_encoding(served: tuple[ResourceClient, ModbusTcpClient,
 
 
 def test_what_may_not_be_done_gets_exception_responses(
-    served: tuple[ResourceClient, ModbusTcpClient, str],
+    served: Served,
 ) -> None:
-    client, modbus, _ = served
+    client, modbus, _, _ = served
     cycle = client.ask(GetStatus()).status.cycle
     refused = [
         modbus.write_register(1, 5),  # %QW1 is not writable
@@ -152,8 +158,9 @@ def test_what_may_not_be_done_gets_exception_responses(
     assert modbus.read_holding_registers(0, count=2).registers == [0, 0]
     io = client.ask(GetIo())
     assert io.io is not None and io.io.server is not None
-    assert io.io.server.exceptions >= len(refused)
-    assert client.ask(GetStatus()).status.cycle > cycle  # the cycle went on
+    assert io.io.server.exceptions == len(refused)
+    assert io.io.server.requests >= len(refused) + 1 and io.io.server.writes == 0
+    wait_for(lambda: client.ask(GetStatus()).status.cycle > cycle)  # the cycle went on
 
 
 def _frame(transaction: int, pdu: bytes, unit: int = 1, protocol: int = 0) -> bytes:
@@ -168,9 +175,9 @@ def _answer(sock: socket.socket) -> bytes:
 
 
 def test_malformed_frames_and_unknown_function_codes(
-    served: tuple[ResourceClient, ModbusTcpClient, str],
+    served: Served,
 ) -> None:
-    client, modbus, _ = served
+    client, modbus, _, _ = served
     port = modbus.comm_params.port
     with socket.create_connection(("127.0.0.1", port), timeout=3) as sock:
         sock.sendall(_frame(1, bytes([0x41, 0, 0])))  # an unknown function code
@@ -198,8 +205,8 @@ def test_malformed_frames_and_unknown_function_codes(
         assert again.read_holding_registers(1024, count=1).registers == [0]
 
 
-def test_stop_serves_the_safe_values(served: tuple[ResourceClient, ModbusTcpClient, str]) -> None:
-    client, modbus, _ = served
+def test_stop_serves_the_safe_values(served: Served) -> None:
+    client, modbus, _, _ = served
     client.ask(WriteValue("run", True))
     assert not modbus.write_register(1024, 5).isError()
     wait_for(lambda: modbus.read_holding_registers(1, count=1).registers == [10])
@@ -236,9 +243,9 @@ def polled(run: subprocess.CompletedProcess[str]) -> dict[int, str]:
 
 
 def test_mbpoll_reads_and_writes_the_image(
-    served: tuple[ResourceClient, ModbusTcpClient, str],
+    served: Served,
 ) -> None:
-    client, modbus, word_order = served
+    client, modbus, word_order, _ = served
     port = modbus.comm_params.port
     client.ask(WriteValue("run", True))
     client.ask(WriteValue("level", -7))
@@ -258,3 +265,28 @@ def test_mbpoll_reads_and_writes_the_image(
     assert polled(mbpoll(port, "-t", "4:float", *order, "-r", "2048", "-c", "1")) == {2048: "3.75"}
     refused = mbpoll(port, "-t", "4", "-r", "1", write="99")  # %QW1 is not writable
     assert refused.returncode != 0 and "Illegal data address" in refused.stdout + refused.stderr
+
+
+def test_padt_status_shows_the_server_and_every_point(served: Served) -> None:
+    if served.word_order == "little":
+        pytest.skip("the command line does not depend on the word order")
+    port = served.modbus.comm_params.port
+    base = ["status", "--resource", "Mb1", "--zenoh", served.endpoint]
+    shown = padt(*base, "--io")
+    assert shown.returncode == 0, shown.stderr
+    assert f"Modbus server 127.0.0.1:{port}: " in shown.stdout
+    rows = [line.split() for line in shown.stdout.splitlines() if line.startswith("server ")]
+    assert [
+        "server",
+        "setpoint",
+        "%MW0",
+        "INT",
+        "holding_register",
+        "1024",
+        "yes",
+        "0",
+        "good",
+    ] in rows
+    as_json = json.loads(padt(*base, "--io", "--json").stdout)
+    assert as_json["io"]["server"]["port"] == port
+    assert {p["variable"] for p in as_json["points"]} >= {"run", "lamp", "gain", "total"}
