@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import operator
 import queue
 from collections.abc import Callable
 from typing import Any
@@ -58,7 +59,7 @@ class FieldIo:
         # what runs on the Modbus thread (only that thread touches these three)
         self._running: tuple[ImageServer | None, list[asyncio.Task[None]]] = (None, [])
         self._switching: asyncio.Lock | None = None
-        self._served: list[BoundVariable | None] = []
+        self._reader = ImageReader((), self._variables)
         self._bound_of: list[BoundVariable] | None = None
         self._applied = 0  # the last client write taken
         self._seen: dict[str, tuple[int, str]] = {}  # device -> (delivery seq, state) taken
@@ -90,13 +91,7 @@ class FieldIo:
     def after_cycle(self) -> None:
         if self.server is None:
             return
-        outputs, read = self._io.outputs, self._variables.read
-        values = tuple(
-            outputs.get(point.variable, point.safe_value)
-            if point.location.upper().startswith("%Q")
-            else (read(bound) if bound is not None else point.safe_value)
-            for point, bound in zip(self.config.served, self._served, strict=True)
-        )
+        values = self._reader.values(self._io.outputs, self._variables.globals)
         self.server.store.show(ServedImage(values, self._applied))
 
     def _take_writes(self, store: ImageStore) -> None:
@@ -125,8 +120,8 @@ class FieldIo:
         bound = self._variables.bound
         if bound is not self._bound_of:  # a load, reload or program restart
             self._bound_of = bound
-            find = self._variables.find
-            self._served = [find(point.variable) for point in self.config.served]
+            if self.server is not None:
+                self._reader = ImageReader(self.server.store.points, self._variables)
 
     def _restart(self, config: ModbusConfig) -> None:
         """Stop what serves and polls now, then start what `config` says, on the Modbus
@@ -136,7 +131,9 @@ class FieldIo:
         self._bound_of = None
         if config.serve:
             port = self._port if self._port is not None else config.port
-            self.server = ImageServer(ImageStore(config.served), config.host, port)
+            # outputs first, then the others: each group is read with one call per cycle
+            points = sorted(config.served, key=lambda p: not _is_output(p))
+            self.server = ImageServer(ImageStore(tuple(points)), config.host, port)
         outputs = lambda: self._io.outputs  # noqa: E731  # replaced, never changed
         self.pollers = [DevicePoller(device, outputs) for device in config.devices]
         if self._loop is None and (self.server is not None or self.pollers):
@@ -219,8 +216,8 @@ class FieldIo:
         if self.server is not None:
             safe = not self._running_now()
             image = self.server.store.image
-            for point, value in zip(self.config.served, image.values, strict=True):
-                output = point.location.upper().startswith("%Q")
+            for point, value in zip(self.server.store.points, image.values, strict=True):
+                output = _is_output(point)
                 quality = "safe" if output and safe else "good"
                 points.append(_io_point("server", point, value, quality))
         for poller in self.pollers:
@@ -243,6 +240,52 @@ class FieldIo:
         except Exception:  # shutting down: what is left goes with the process
             log.exception("Modbus shutdown")
         self._loop.close()
+
+
+def _is_output(point: Point) -> bool:
+    return point.location.upper().startswith("%Q")
+
+
+class ImageReader:
+    """The values of the served points after a cycle, in the store's order (outputs
+    first): outputs from the output image (safe in STOP), the others from the globals,
+    each group with one C-level getter call, not a Python loop over 1,000 points."""
+
+    def __init__(self, points: tuple[Point, ...], variables: Variables) -> None:
+        self._variables = variables
+        self._points = points
+        outputs = [p.variable for p in points if _is_output(p)]
+        others = [p for p in points if not _is_output(p)]
+        self._outputs = operator.itemgetter(*outputs) if outputs else None
+        self._single_output = len(outputs) == 1
+        bound = [variables.find(p.variable) for p in others]
+        simple = all(b is not None and b.program is None and len(b.path.attrs) == 1 for b in bound)
+        attrs = [str(b.path.attrs[0]) for b in bound if b is not None] if simple else []
+        self._others = operator.attrgetter(*attrs) if attrs else None
+        self._single_other = len(attrs) == 1
+        self._bound = bound
+        self._other_points = others
+
+    def values(self, outputs: dict[str, Any], globals_: Any) -> tuple[Any, ...]:
+        head = self._output_values(outputs)
+        if self._others is not None:
+            tail = self._others(globals_)
+            return (*head, *((tail,) if self._single_other else tail))
+        read = self._variables.read
+        return (*head, *(
+            read(b) if b is not None else p.safe_value
+            for p, b in zip(self._other_points, self._bound, strict=True)
+        ))  # fmt: skip
+
+    def _output_values(self, outputs: dict[str, Any]) -> tuple[Any, ...]:
+        if self._outputs is None:
+            return ()
+        try:
+            found = self._outputs(outputs)
+        except KeyError:  # no output image yet
+            served = (p for p in self._points if _is_output(p))
+            return tuple(outputs.get(p.variable, p.safe_value) for p in served)
+        return (found,) if self._single_output else tuple(found)
 
 
 def _io_point(source: str, point: Point, value: Any, quality: str) -> IoPoint:
