@@ -118,8 +118,11 @@ class FieldIo:
             if config != self.config:
                 self._restart(config)
         bound = self._variables.bound
-        if bound is not self._bound_of:  # a load, reload or program restart
+        if bound is not self._bound_of:  # a load, reload, cold start or program restart
             self._bound_of = bound
+            # fresh instances hold initial values: the inputs the devices delivered last go
+            # in again at once, not a poll period later
+            self._seen = {name: (0, state) for name, (_, state) in self._seen.items()}
             if self.server is not None:
                 self._reader = ImageReader(self.server.store.points, self._variables)
 

@@ -193,6 +193,16 @@ def test_a_killed_device_is_lost_and_comes_back(polling: tuple[ResourceClient, i
     points = {p.variable: p for p in client.ask(GetIo()).points}
     assert points["level"].quality == "bad" and points["level"].value == -1
     assert any(m.startswith("Modbus device rack lost") for m in events(client))
+    # a watch set shows the device's inputs as bad, the program's own variables as live
+    qualities: dict[str, str] = {}
+    handle = client.watch(
+        ["level", "speed"],
+        lambda m: qualities.update({k: v.quality for k, v in m.values.items()}),
+    )
+    try:
+        wait_for(lambda: qualities == {"level": "bad", "speed": "live"})
+    finally:
+        handle.close()
     failures = device(client).failures
     wait_for(lambda: device(client).failures > failures)  # it keeps trying
     with device_process(port):
