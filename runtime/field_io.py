@@ -204,7 +204,9 @@ class FieldIo:
                 p.device.host,
                 p.device.port,
                 p.device.unit_id,
-                p.state,
+                # the state the cycle has taken, with its inputs: a status that says
+                # "lost" comes after the safe values are in the process image
+                self._seen.get(p.device.name, (0, "connecting"))[1],
                 p.last_error,
                 p.requests,
                 p.failures,
