@@ -75,7 +75,10 @@ class FieldIo:
         io, changed = self._io, False
         bad: set[str] = set()
         for poller in self.pollers:
-            delivery, state = poller.delivery, poller.state
+            # the poller writes its delivery before its state: read in the other order, a
+            # state seen comes with its delivery
+            state = poller.state
+            delivery = poller.delivery
             seen = self._seen.get(poller.device.name, (0, "connecting"))
             if delivery.seq != seen[0]:
                 io.set_inputs(delivery.values)

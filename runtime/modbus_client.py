@@ -125,9 +125,9 @@ class DevicePoller:
     def _lost(self, reason: str) -> None:
         self.failures += 1
         self.last_error = reason
-        self.state = "lost"
         self.sent = {}  # everything goes again after the reconnect
         self.delivery = Delivery(self.delivery.seq + 1, dict(self._safe), False)
+        self.state = "lost"  # after the delivery: the cycle reads them the other way round
         self._close()
 
     def _close(self) -> None:
