@@ -23,8 +23,11 @@ from pymodbus.client import ModbusTcpClient
 
 from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
+from runtime.clock import RealClock
 from runtime.contract.protocol import GetEvents, GetIo, GetStatus, GetValues, ResourceState, Stop
 from runtime.contract.protocol import Write as WriteValue
+from runtime.field_io import FieldIo
+from runtime.resource import Resource
 from tests.conftest import free_port, padt
 from tests.support.modbus_device import modbus_client
 from tests.support.runtime_process import running_resource, store_artifact
@@ -290,3 +293,39 @@ def test_padt_status_shows_the_server_and_every_point(served: Served) -> None:
     as_json = json.loads(padt(*base, "--io", "--json").stdout)
     assert as_json["io"]["server"]["port"] == port
     assert {p["variable"] for p in as_json["points"]} >= {"run", "lamp", "gain", "total"}
+
+
+def test_a_busy_port_is_an_event_and_the_resource_runs_on(tmp_path: Path) -> None:
+    folder = tmp_path / "project"
+    folder.mkdir()
+    (folder / "padt.toml").write_text(SETTINGS.format(word_order="big"))
+    (folder / "main.st").write_text(SOURCE)
+    result = compile_project(load_project([folder]))
+    assert result.artifact is not None
+    resource = Resource("Mb1", RealClock())
+    resource.load(result.artifact)
+    resource.start()
+    with socket.create_server(("127.0.0.1", 0)) as taken:
+        port = taken.getsockname()[1]
+        field_io = FieldIo(
+            lambda: resource.artifact, resource.variables, resource.io, resource.recorder,
+            resource.running, port,
+        )  # fmt: skip
+        resource.field_io = field_io
+
+        def cycle_until_reported() -> bool:
+            field_io.before_cycle()
+            resource.cycle()
+            field_io.after_cycle()
+            return any(e.kind == "io" for e in resource.events.recent(0))
+
+        try:
+            wait_for(cycle_until_reported)
+        finally:
+            field_io.close()
+    (event,) = [e for e in resource.events.recent(0) if e.kind == "io"]
+    assert event.message.startswith(f"Modbus server: cannot listen on 127.0.0.1:{port}")
+    io = resource.status().io
+    assert io is not None and io.server is not None
+    assert not io.server.listening and io.server.error is not None
+    assert resource.state == ResourceState.RUN and resource.cycle_count > 0
