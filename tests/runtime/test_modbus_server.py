@@ -21,15 +21,19 @@ from typing import Any, NamedTuple
 import pytest
 from pymodbus.client import ModbusTcpClient
 
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
 from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
-from runtime.clock import RealClock
+from runtime.clock import RealClock, VirtualClock
+from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.protocol import GetEvents, GetIo, GetStatus, GetValues, ResourceState, Stop
 from runtime.contract.protocol import Write as WriteValue
 from runtime.field_io import FieldIo
 from runtime.resource import Resource
 from tests.conftest import free_port, padt
 from tests.support.modbus_device import modbus_client
+from tests.support.resource_harness import OPEN_RESOURCE, Harness
 from tests.support.runtime_process import running_resource, store_artifact
 
 SOURCE = """VAR_GLOBAL
@@ -329,3 +333,54 @@ def test_a_busy_port_is_an_event_and_the_resource_runs_on(tmp_path: Path) -> Non
     assert io is not None and io.server is not None
     assert not io.server.listening and io.server.error is not None
     assert resource.state == ResourceState.RUN and resource.cycle_count > 0
+
+
+def test_a_reload_keeps_serving_and_takes_new_settings() -> None:
+    """An online change that changes the Modbus settings restarts the server with them;
+    the values carried over are served on."""
+
+    def artifact(writable: list[str], program: str) -> Artifact:
+        source = SOURCE.replace("speed := setpoint * 2;", program)
+        config = ResourceConfig(name="R", **{**OPEN_RESOURCE, "target_cycle_ms": 10})
+        result = compile_sources(
+            [SourceFile("main.st", source)], resource=config, modbus={"writable": writable}
+        )
+        assert result.artifact is not None, result.diagnostics
+        return result.artifact
+
+    clock = VirtualClock()
+    resource = Resource("R", clock)
+    resource.load(artifact(["%MW0"], "speed := setpoint * 2;"))
+    resource.start()
+    h = Harness(resource, clock, 10_000_000)
+    port = free_port()
+    field_io = FieldIo(
+        lambda: resource.artifact, resource.variables, resource.io, resource.recorder,
+        resource.running, port,
+    )  # fmt: skip
+
+    def cycled() -> bool:
+        field_io.before_cycle()
+        h.cycle()
+        field_io.after_cycle()
+        return True
+
+    def served(check: Callable[[], bool]) -> None:
+        wait_for(lambda: cycled() and check())
+
+    try:
+        served(lambda: field_io.server is not None and field_io.server.port == port)
+        with modbus_client(port) as modbus:
+            assert not modbus.write_register(1024, 7).isError()
+            served(lambda: modbus.read_holding_registers(1, count=1).registers == [14])
+            assert modbus.write_register(1026, 1).exception_code == 2  # %MW2: not writable
+        h.send(artifact(["%MW0", "%MW2"], "speed := setpoint * 3;"))
+        assert h.cmd("reload")["ok"]
+        served(lambda: field_io.server is not None and field_io.server.port == port)
+        with modbus_client(port) as modbus:
+            served(lambda: modbus.read_holding_registers(1, count=1).registers == [21])
+            assert modbus.read_holding_registers(1024, count=1).registers == [7]  # carried
+            assert not modbus.write_register(1026, 5).isError()  # writable now
+            served(lambda: resource.variables.value("word") == 5)
+    finally:
+        field_io.close()
