@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import concurrent.futures
+import logging
 import threading
 from collections.abc import Coroutine
 from typing import Any, TypeVar
@@ -14,6 +15,9 @@ T = TypeVar("T")
 
 class ModbusLoop:
     def __init__(self) -> None:
+        # a lost device would log a failed connection every period: what goes wrong on the
+        # bus is reported as events and in the status instead
+        logging.getLogger("pymodbus").setLevel(logging.CRITICAL)
         self.loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._run, name="padt-modbus", daemon=True)
         self._thread.start()
