@@ -83,7 +83,7 @@ class FieldIo:
             if delivery.seq != seen[0]:
                 io.set_inputs(delivery.values)
             if state != seen[1]:
-                self._report_device(poller, seen[1])
+                self._report_device(poller, state, seen[1])
                 changed = True
             self._seen[poller.device.name] = (delivery.seq, state)
             if not delivery.good:
@@ -176,14 +176,14 @@ class FieldIo:
                 "io", f"Modbus server listening on {server.host}:{server.port}", long_term=False
             )
 
-    def _report_device(self, poller: DevicePoller, before: str) -> None:
+    def _report_device(self, poller: DevicePoller, state: str, before: str) -> None:
         device, recorder = poller.device, self._recorder
-        if poller.state == "lost":
+        if state == "lost":
             recorder.record(
                 "io", f"Modbus device {device.name} lost: {poller.last_error}; "
                 "its inputs hold their safe values", long_term=True, device=device.name,
             )  # fmt: skip
-        elif poller.state == "connected":
+        elif state == "connected":
             again = " again" if before == "lost" else ""
             recorder.record(
                 "io", f"Modbus device {device.name} connected{again}", long_term=bool(again),
