@@ -12,7 +12,6 @@ configured writable point, is ILLEGAL ADDRESS; nothing of a refused request is w
 from __future__ import annotations
 
 import asyncio
-import logging
 import queue
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -32,8 +31,6 @@ from runtime.contract.modbus import (
     decode,
     encode,
 )
-
-log = logging.getLogger(__name__)
 
 # function codes by table (pymodbus maps 22 and 23 to holding registers too)
 _AREA_OF_CODE = {1: COIL, 5: COIL, 15: COIL, 2: DISCRETE_INPUT, 4: INPUT_REGISTER}
