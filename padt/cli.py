@@ -295,6 +295,11 @@ def build_parser() -> argparse.ArgumentParser:
     status = sub.add_parser("status", help="show a resource's state, CRC, cycle and programs")
     _resource_options(status)
     status.add_argument("--json", action="store_true", help="print the status object as JSON")
+    status.add_argument(
+        "--io",
+        action="store_true",
+        help="also list every Modbus point with its value on the wire now",
+    )
     status.set_defaults(func=_lazy("padt.operation", "status"))
 
     reload = sub.add_parser(

@@ -13,10 +13,14 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from runtime.contract.private_files import write_private
+
+if TYPE_CHECKING:
+    from runtime.contract.stop_request import StopRequest
 
 _PR_SET_PDEATHSIG = 1
 
@@ -30,6 +34,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--state-dir", type=Path, default=Path("state/demo"), help="the runtime's state folder"
+    )
+    parser.add_argument(
+        "--modbus-port",
+        type=int,
+        default=5020,
+        help="Modbus TCP port of the resource's served image on 127.0.0.1 (0: any free one)",
     )
 
 
@@ -55,10 +65,15 @@ def demo_administrator(state_dir: Path) -> tuple[UserAccount, str | None]:
     return account, password
 
 
-def demo_project_with_accounts(state_dir: Path, accounts: list[UserAccount]) -> Path:
+PLANT_PORT_LINE = "port = 5021  # the plant's port"
+
+
+def demo_project_with_accounts(
+    state_dir: Path, accounts: list[UserAccount], plant_port: int | None = None
+) -> Path:
     """The embedded demo project, copied into the state folder with the demo's accounts
-    added: the runtime gets it from there, and the REST API serves it as `demo`, so a
-    load through the API keeps the accounts."""
+    added (and the port the simulated plant listens on): the runtime gets it from there,
+    and the REST API serves it as `demo`, so a load through the API keeps the accounts."""
     from backend.engineering.project import PROJECT_FILE, demo_project_path, user_entry
 
     folder = state_dir / "project"
@@ -68,11 +83,38 @@ def demo_project_with_accounts(state_dir: Path, accounts: list[UserAccount]) -> 
             (folder / source.name).write_text(source.read_text(encoding="utf-8"))
     entries = "".join("\n" + user_entry(account) for account in accounts)
     config = (demo_project_path() / PROJECT_FILE).read_text(encoding="utf-8") + entries
+    if plant_port is not None:
+        assert PLANT_PORT_LINE in config, "the demo's padt.toml names the plant's port"
+        config = config.replace(PLANT_PORT_LINE, f"port = {plant_port}  # the plant's port")
     write_private(folder / PROJECT_FILE, config.encode("utf-8"))  # it holds the verifiers
     return folder
 
 
 def run(args: argparse.Namespace) -> int:
+    from padt.demo_plant import DemoPlant
+    from runtime.contract.stop_request import StopRequest
+
+    stop = StopRequest()
+    admin, admin_password = demo_administrator(args.state_dir)
+    plant = DemoPlant()
+    try:
+        plant_port = plant.start()
+    except OSError as exc:
+        print(f"padt demo: {exc}", file=sys.stderr)
+        return 1
+    try:
+        return _run_with_plant(args, stop, admin, admin_password, plant_port)
+    finally:
+        plant.close()
+
+
+def _run_with_plant(
+    args: argparse.Namespace,
+    stop: StopRequest,
+    admin: UserAccount,
+    admin_password: str | None,
+    plant_port: int,
+) -> int:
     from backend.api.server import ApiServer
     from backend.api.service import PadtService
     from backend.engineering.padt_accounts import PadtAccounts, write_accounts
@@ -83,11 +125,8 @@ def run(args: argparse.Namespace) -> int:
     from frontend.ui_context import UiContext
     from runtime.contract.session import open_client, open_router
     from runtime.contract.state_folder import artifact_path
-    from runtime.contract.stop_request import StopRequest
 
-    stop = StopRequest()
-    admin, admin_password = demo_administrator(args.state_dir)
-    folder = demo_project_with_accounts(args.state_dir, [admin])
+    folder = demo_project_with_accounts(args.state_dir, [admin], plant_port)
     result = compile_project(load_project([folder]))
     if result.artifact is None:  # the embedded project always compiles; guard all the same
         for diagnostic in result.diagnostics:
@@ -106,6 +145,7 @@ def run(args: argparse.Namespace) -> int:
         return 1
     command = [sys.executable, "-m", "padt.cli", "runtime", "--resource", resource]
     command += ["--state-dir", str(args.state_dir), "--zenoh", endpoint]
+    command += ["--modbus-port", str(args.modbus_port)]
     runtime = subprocess.Popen(command, preexec_fn=_die_with_parent)
     session = open_client(endpoint)
     try:
@@ -129,6 +169,11 @@ def run(args: argparse.Namespace) -> int:
             _announce(args.state_dir, resource, result.artifact.crc, admin, admin_password)
             print(f"padt demo: REST API {api.url}/docs (log in as {admin.name})", flush=True)
             print(f"padt demo: open {ui.url} (log in as {admin.name})", flush=True)
+            print(
+                f"padt demo: Modbus TCP 127.0.0.1:{args.modbus_port}: the tank level is input "
+                f"register 0, the pump command coil 0 (the plant: 127.0.0.1:{plant_port})",
+                flush=True,
+            )
             stop.sleep_until_requested(lambda: runtime.poll() is None)
             if runtime.returncode is not None:
                 code = runtime.returncode

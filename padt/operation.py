@@ -71,17 +71,61 @@ def status_lines(status: p.Status) -> list[str]:
             for x in status.programs
         ]
         lines += table(["program", "id", "priority", "state", "cycles", "crc", "error"], rows)
+    return lines + io_lines(status.io)
+
+
+def io_lines(io: p.IoStatus | None) -> list[str]:
+    """Modbus TCP: the served image and each remote device."""
+    if io is None:
+        return []
+    lines = []
+    server = io.server
+    if server is not None:
+        where = (
+            f"{server.host}:{server.port}"
+            if server.listening
+            else f"not listening ({server.error or 'starting'})"
+        )
+        lines.append(
+            f"Modbus server {where}: {server.requests} requests, {server.exceptions} "
+            f"exception responses, {server.writes} writes"
+        )
+    if io.devices:
+        rows = [
+            [d.name, f"{d.host}:{d.port}", str(d.unit_id), d.state, str(d.requests),
+             str(d.failures), _ms(d.round_trip_ms), d.last_error or ""]
+            for d in io.devices
+        ]  # fmt: skip
+        header = ["device", "address", "unit", "state", "requests", "failures", "round trip"]
+        lines += table([*header, "last error"], rows)
     return lines
+
+
+def point_lines(points: list[p.IoPoint]) -> list[str]:
+    """Every mapped point with what is on the wire now."""
+    rows = [
+        [x.source, x.variable, x.location, x.type, x.area, str(x.address),
+         "yes" if x.writable else "", json.dumps(x.value), x.quality]
+        for x in points
+    ]  # fmt: skip
+    header = ["source", "variable", "location", "type", "table", "address", "writable"]
+    return table([*header, "value", "quality"], rows)
 
 
 def status(args: argparse.Namespace) -> int:
     def body() -> int:
         with resource_client(args) as client:
             current = client.ask(p.GetStatus()).status
+            points = client.ask(p.GetIo()).points if args.io else None
         if args.json:
-            print(json.dumps(encode(current), indent=2, sort_keys=True))
-        else:
-            print("\n".join(status_lines(current)))
+            shown: dict[str, Any] = encode(current)
+            if points is not None:
+                shown["points"] = encode(points)
+            print(json.dumps(shown, indent=2, sort_keys=True))
+            return 0
+        print("\n".join(status_lines(current)))
+        if points:
+            print("\n".join(point_lines(points)))
         return 0
 
     return run("status", args, body)

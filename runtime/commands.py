@@ -104,6 +104,11 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.GetStatus: lambda r, c: _status(r),
     p.GetValues: lambda r, c: p.ValuesReply(r.variables.values(), r.cycle_count),
     p.GetVariables: lambda r, c: p.VariablesReply(r.variables.infos()),
+    p.GetIo: lambda r, c: (
+        p.IoReply(r.field_io.status(), r.field_io.points())
+        if r.field_io is not None
+        else p.IoReply(None, [])
+    ),
     p.GetParameters: lambda r, c: p.ParametersReply(r.params, [x.config for x in r.programs]),
     p.GetForcing: lambda r, c: p.ForcingReply(r.forcing.state()),
     p.GetEvents: _events,

@@ -32,6 +32,7 @@ from runtime.commands import (
     respond,
 )
 from runtime.contract.protocol import (
+    IoStatus,
     Reload,
     ReloadPreview,
     Request,
@@ -83,8 +84,13 @@ class CycleDriver:
         while not stop.is_set():
             start = self.clock.now_ns()
             cycle_before = self.resource.cycle_count
+            field_io = self.resource.field_io
             try:
+                if field_io is not None:
+                    field_io.before_cycle()
                 self.resource.cycle()
+                if field_io is not None:
+                    field_io.after_cycle()
             except Exception as exc:  # a defect of the runtime itself, never of a program
                 log.exception("internal fault")
                 self.resource.error_stop(f"internal fault: {type(exc).__name__}: {exc}")
@@ -215,13 +221,16 @@ class CycleDriver:
             )
         )
         running, forces = resource.running(), resource.forcing.table
+        bad = resource.field_io.bad if resource.field_io is not None else frozenset()
         budget_end = now + resource.params.com_slice_ms * 1_000_000
         due = watches.due(now, all_of_them=at_once)
         for number, watch_set in enumerate(due):
             if number > 0 and self.clock.now_ns() >= budget_end:
                 resource.stats.watch_deferred += len(due) - number
                 return
-            snapshot = resource.online.snapshot(watch_set, resource.cycle_count, running, forces)
+            snapshot = resource.online.snapshot(
+                watch_set, resource.cycle_count, running, forces, bad
+            )
             self.link.publish_watch(watch_set.watch_id, snapshot)
             watches.sent(watch_set, now)
 
@@ -236,9 +245,21 @@ class CycleDriver:
         events that led to a change go first."""
         self._publish_events()
         status = self.resource.status()
-        significant = dataclasses.replace(status, stats=_UNCOUNTED, cycle=0)
+        significant = dataclasses.replace(status, stats=_UNCOUNTED, cycle=0, io=_uncounted(status))
         now = self.clock.now_ns()
         if significant != self._last_status or now - self._last_status_ns >= STATUS_PERIOD_NS:
             self.link.publish_status(status)
             self._last_status = significant
             self._last_status_ns = now
+
+
+def _uncounted(status: Status) -> IoStatus | None:
+    """The I/O status without its counters: a request more is no change to publish."""
+    io = status.io
+    if io is None:
+        return None
+    server = io.server and dataclasses.replace(io.server, requests=0, exceptions=0, writes=0)
+    devices = [
+        dataclasses.replace(d, requests=0, failures=0, round_trip_ms=0.0) for d in io.devices
+    ]
+    return IoStatus(server, devices)

@@ -55,6 +55,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"priority of the cycle thread as a nice value, -20 (highest) to 19 (default "
         f"{DEFAULT_NICE}; below 0 needs CAP_SYS_NICE, else it runs at normal priority)",
     )
+    parser.add_argument(
+        "--modbus-port",
+        type=int,
+        default=None,
+        metavar="PORT",
+        help="port of the served Modbus TCP image instead of the configured one (0: any free)",
+    )
 
 
 def power_up(resource: Resource, state_dir: Path) -> None:
@@ -109,6 +116,16 @@ def run(args: argparse.Namespace) -> int:
         if context is not None:
             saver.submit(context)
 
+    from runtime.field_io import FieldIo
+
+    resource.field_io = FieldIo(
+        lambda: resource.artifact,
+        resource.variables,
+        resource.io,
+        resource.recorder,
+        resource.running,
+        args.modbus_port,
+    )
     driver = CycleDriver(resource, clock, link, save, args.context_period_ms * 1_000_000)
     log.info("resource %s: %s, Zenoh %s", args.resource, resource.state.value, args.zenoh)
     log.info("cycle thread: %s", raise_priority(args.cycle_nice))  # driver.run is this thread
@@ -116,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
         driver.run(stop.event)
     finally:
         driver.close()  # an orderly stop saves the context one last time
+        resource.field_io.close()
         saver.close()
         link.close()
         session.close()

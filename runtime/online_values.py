@@ -13,7 +13,8 @@ from runtime.watch_sets import WatchSet, WatchSets, WatchSnapshot
 
 # plain strings: an enum member's lookup costs more than the rest of a value's work
 _QUALITIES = tuple(
-    str(q.value) for q in (Quality.LIVE, Quality.FORCED, Quality.STALE, Quality.DELETED)
+    str(q.value)
+    for q in (Quality.LIVE, Quality.FORCED, Quality.STALE, Quality.DELETED, Quality.BAD)
 )
 _RUNNING = (ProgramState.RUN, ProgramState.RUN_FREEZE)
 
@@ -43,15 +44,21 @@ class OnlineValues:
         return list(paths)
 
     def snapshot(
-        self, watch_set: WatchSet, cycle: int, running: bool, forces: ForceTable
+        self,
+        watch_set: WatchSet,
+        cycle: int,
+        running: bool,
+        forces: ForceTable,
+        bad: frozenset[str] = frozenset(),
     ) -> WatchSnapshot:
         """A set's values now: live; forced; stale when nothing that could change it runs;
-        deleted by a reload."""
+        deleted by a reload; bad: an input of a lost remote device (`bad`: upper-case
+        paths), holding its safe value."""
         forcing = bool(forces.started_levels())
         halted = {id(p) for p in self._variables.programs if p.state not in _RUNNING}
         # this runs between two cycles for every watched value: names looked up once
         find, read, is_forced = self._variables.find, self._variables.read, forces.is_forced
-        live, forced, stale, deleted = _QUALITIES
+        live, forced, stale, deleted, lost = _QUALITIES
         entries: list[tuple[str, Any, str]] = []
         append = entries.append
         for path in watch_set.paths:
@@ -61,6 +68,8 @@ class OnlineValues:
                 continue
             if forcing and is_forced(path):
                 quality = forced
+            elif bad and path.upper() in bad:
+                quality = lost
             elif not running or (bound.program is not None and id(bound.program) in halted):
                 quality = stale
             else:

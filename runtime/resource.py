@@ -17,6 +17,7 @@ needs no locks.
 from __future__ import annotations
 
 import logging
+from typing import TYPE_CHECKING
 
 from runtime.clock import Clock
 from runtime.configuration_store import ConfigurationStore
@@ -40,6 +41,9 @@ from runtime.scheduler import Scheduler
 from runtime.transfer import IncomingArtifact
 from runtime.user_program import UserProgram
 from runtime.variables import Variables
+
+if TYPE_CHECKING:
+    from runtime.field_io import FieldIo
 
 log = logging.getLogger(__name__)
 
@@ -83,6 +87,7 @@ class Resource:
         self._boot_ns = clock.now_ns()
         # where every new configuration (load or reload) is kept for the next power-up
         self.store: ConfigurationStore | None = None
+        self.field_io: FieldIo | None = None  # Modbus TCP, in a runtime process
 
     @property
     def programs(self) -> list[UserProgram]:
@@ -387,6 +392,7 @@ class Resource:
                 )
                 for p in self.programs
             ],
+            io=self.field_io.status() if self.field_io is not None else None,
         )
 
 

@@ -1,6 +1,6 @@
 """The resources online, and every operation on one: status and statistics, login, load,
 start and stop, programs and single step, reload preview and reload, parameters,
-forcing, values and events.
+forcing, values, field I/O (Modbus) and events.
 
 Each request goes to the resource as a command with the caller's PES session (from `POST
 .../login`); the resource checks the level itself and its refusal comes back unchanged
@@ -224,6 +224,11 @@ def variables(resource: str, caller: ReadOnly, service: Service) -> Any:
 @router.get("/{resource}/values", summary="Every value now (for chosen ones, use /live)")
 def values(resource: str, caller: ReadOnly, service: Service) -> Any:
     return encode(service.ask(caller, resource, p.GetValues()))
+
+
+@router.get("/{resource}/io", summary="Modbus TCP: server, devices, every point and its value")
+def io(resource: str, caller: ReadOnly, service: Service) -> Any:
+    return encode(service.ask(caller, resource, p.GetIo()))
 
 
 @router.put("/{resource}/values/{variable}", summary="Write a value once (not forcing)")

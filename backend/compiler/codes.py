@@ -4,7 +4,7 @@ A code names one kind of problem and keeps its meaning across releases, so that 
 people can refer to it; the message around it may change. Errors are `E` and warnings `W`
 followed by four digits, grouped by hundreds: 00 syntax and literals, 01 declarations,
 02 names, types and expressions, 03 statements and assignments, 04 calls, 05 sequential
-function charts, 06 the resource (user programs, safe values, users), 07 what padt does not
+function charts, 06 the resource (user programs, safe values, users, Modbus), 07 what padt does not
 compile (features it lacks, limits). docs/diagnostics.md explains every code with a
 failing and a passing example.
 """
@@ -130,6 +130,10 @@ class Code(Enum):
     USER_ACCOUNT = "E0609", "invalid user account"
     DUPLICATE_USER = "E0610", "user defined twice"
     NO_ADMINISTRATOR = "E0611", "users without an administrator"
+    MODBUS_SETTING = "E0612", "invalid Modbus setting"
+    MODBUS_VARIABLE = "E0613", "Modbus point on no suitable located variable"
+    MODBUS_TYPE = "E0614", "Modbus point its table cannot hold"
+    MODBUS_OVERLAP = "E0615", "Modbus address or input mapped twice"
     EXTRA_RESOURCE = "W0601", "resource ignored"
     PROGRAM_ARGUMENTS = "W0602", "program arguments in a configuration ignored"
 

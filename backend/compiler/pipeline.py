@@ -14,6 +14,7 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
 from backend.compiler.checks.generated_names import check_generated_names
+from backend.compiler.checks.modbus import check_modbus
 from backend.compiler.checks.programs import check_programs, globals_read, globals_written
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
@@ -112,11 +113,14 @@ def compile_sources(
     config_file: str = "padt.toml",
     safe_values: dict[str, Any] | None = None,
     users: list[UserAccount] | None = None,
+    modbus: Any = None,
+    config_lines: dict[str, int] | None = None,
 ) -> CompileResult:
+    """`modbus` is the `[modbus]` table of padt.toml as read (None: there is none);
+    `config_lines` where each setting of padt.toml is written (`toml_lines.key_lines`)."""
+    settings = _Settings(safe_values or {}, users or [], modbus, config_lines or {})
     try:
-        return _compile(
-            sources, project, resource, programs, config_file, safe_values or {}, users or []
-        )
+        return _compile(sources, project, resource, programs, config_file, settings)
     except (RecursionError, MemoryError) as exc:
         # the limits are meant to make this impossible; should one be missing, the caller
         # still gets a diagnostic (the project is too large for the compiler), never a
@@ -127,15 +131,25 @@ def compile_sources(
         return CompileResult((Diagnostic.at(where, Code.PROJECT_SIZE, message),), None)
 
 
+@dataclass(frozen=True)
+class _Settings:
+    """What padt.toml says besides the resource and its programs."""
+
+    safe_values: dict[str, Any]
+    users: list[UserAccount]
+    modbus: Any
+    lines: dict[str, int]
+
+
 def _compile(
     sources: list[SourceFile],
     project: str,
     resource: ResourceConfig | None,
     programs: list[ProgramConfig] | None,
     config_file: str,
-    safe_values: dict[str, Any],
-    users: list[UserAccount],
+    settings: _Settings,
 ) -> CompileResult:
+    users = settings.users
     units, diagnostics = parse_all(sources)
     user_pous = {key(p.name) for unit in units for p in unit.pous}
     stdlib_units, stdlib_diagnostics = parse_all(stdlib_sources())
@@ -155,8 +169,12 @@ def _compile(
         programs = configured[1] if configured else _default_programs(units)
         positions = configured[2] if configured else {}
     diagnostics.extend(check_programs(resolved, resource, programs, config_file, positions))
-    safe, safe_diagnostics = _safe_values(resolved, safe_values, config_file)
+    safe, safe_diagnostics = _safe_values(resolved, settings.safe_values, config_file)
     diagnostics.extend(safe_diagnostics)
+    modbus, modbus_diagnostics = check_modbus(
+        resolved, settings.modbus, config_file, settings.lines
+    )
+    diagnostics.extend(modbus_diagnostics)
     diagnostics.extend(_check_users(users, config_file))
     diagnostics.sort()
     if any(d.severity == "error" for d in diagnostics):
@@ -177,6 +195,7 @@ def _compile(
         globals=globals_code,
         safe_values=safe,
         users=tuple(sorted(users, key=lambda u: u.name)),
+        modbus=modbus,
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import itertools
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -15,6 +15,7 @@ from typing import Any
 from backend.compiler.limits import MAX_FILE_BYTES, MAX_PROJECT_FILES, MiB
 from backend.compiler.pipeline import CompileResult, compile_sources
 from backend.compiler.source import SourceFile, read_sources
+from backend.compiler.toml_lines import key_lines
 from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount
 from runtime.contract.parameters import (
     PROGRAM_BY_NAME,
@@ -40,6 +41,8 @@ class Project:
     sources: list[SourceFile]
     safe_values: dict[str, Any] = field(default_factory=dict)  # output -> its safe value
     users: list[UserAccount] = field(default_factory=list)  # PES accounts ([[resource.user]])
+    modbus: Any = None  # the [modbus] table as read; the compiler checks it
+    config_lines: dict[str, int] = field(default_factory=dict)  # where each setting is
 
 
 def user_entry(account: UserAccount) -> str:
@@ -77,12 +80,14 @@ def _load_folder(folder: Path) -> Project:
     if config_path.stat().st_size > MAX_FILE_BYTES:
         raise ProjectError(f"{config_path}: larger than {MAX_FILE_BYTES // MiB} MiB")
     try:
-        data = tomllib.loads(config_path.read_text(encoding="utf-8"))
+        text = config_path.read_text(encoding="utf-8")
+        data = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ProjectError(f"{config_path}: {exc}") from None
     except RecursionError:  # tomllib recurses into nested arrays and tables
         raise ProjectError(f"{config_path}: values nested too deep") from None
-    return _project_from_toml(data, sources, str(config_path))
+    project = _project_from_toml(data, sources, str(config_path))
+    return replace(project, config_lines=key_lines(text))
 
 
 def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: str) -> Project:
@@ -134,6 +139,7 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
         sources,
         safe_values,
         users,
+        data.get("modbus"),
     )
 
 
@@ -163,4 +169,6 @@ def compile_project(project: Project, config_file: str = PROJECT_FILE) -> Compil
         config_file=config_file,
         safe_values=project.safe_values,
         users=project.users,
+        modbus=project.modbus,
+        config_lines=project.config_lines,
     )

@@ -264,6 +264,7 @@ _QUALITY_STYLES = {
     "forced": "color:#c92a2a;font-weight:600",
     "stale": "color:#868e96",
     "deleted": "color:#868e96;text-decoration:line-through",
+    "bad": "color:#e8590c;font-style:italic",
     "unknown": "color:#868e96;font-style:italic",
     "waiting": "color:#868e96",
 }
@@ -275,6 +276,7 @@ def legend() -> str:
         ("forced", "forced", "held by forcing"),
         ("stale", "stale", "nothing that could change it runs"),
         ("deleted", "deleted", "gone with a reload"),
+        ("bad", "bad", "input of a lost Modbus device, at its safe value"),
     ]
     items = "".join(
         f'<span style="margin-right:14px"><span style="{_QUALITY_STYLES.get(key, "")}">'

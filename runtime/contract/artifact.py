@@ -14,8 +14,10 @@ import zlib
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from runtime.contract.modbus import ModbusConfig, modbus_config
+
 FORMAT = "padt-artifact"
-VERSION = 2
+VERSION = 3  # 3: Modbus TCP (`modbus`)
 
 
 class ArtifactError(ValueError):
@@ -130,6 +132,8 @@ class Artifact:
     # outputs whose safe value (in STOP and ERROR STOP) is not 0 / FALSE, by path, sorted
     safe_values: tuple[tuple[str, Any], ...] = ()
     users: tuple[UserAccount, ...] = ()  # none: open access (simulation, tests)
+    # the served image and the remote devices (modbus.py)
+    modbus: ModbusConfig = field(default_factory=ModbusConfig)
     crc: str = field(default="")
     format: str = FORMAT
     version: int = VERSION
@@ -200,6 +204,7 @@ def load_artifact(text: str | bytes) -> Artifact:
             globals=_pou_code(data["globals"]) if data["globals"] is not None else None,
             safe_values=tuple((name, value) for name, value in data["safe_values"]),
             users=tuple(UserAccount(**user) for user in data["users"]),
+            modbus=modbus_config(data["modbus"]),
             crc=data["crc"],
         )
     except (KeyError, TypeError) as exc:

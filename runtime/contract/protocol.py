@@ -72,6 +72,7 @@ class Quality(StrEnum):
     FORCED = "forced"
     STALE = "stale"  # nothing that could change it runs
     DELETED = "deleted"  # gone with a reload
+    BAD = "bad"  # an input of a remote device that is lost: it holds its safe value
 
 
 # ---- argument types
@@ -114,6 +115,40 @@ class ProgramStatus:
 
 
 @dataclass(frozen=True)
+class ModbusServerStatus:
+    """The served process image (docs/modbus.md)."""
+
+    host: str
+    port: int  # where it listens; 0 while it does not
+    listening: bool
+    error: str | None  # why it does not listen
+    requests: int  # Modbus frames received
+    exceptions: int  # exception responses sent (malformed, unknown, out of range, refused)
+    writes: int  # write requests taken
+
+
+@dataclass(frozen=True)
+class DeviceStatus:
+    """A remote I/O device the resource polls."""
+
+    name: str
+    host: str
+    port: int
+    unit_id: int
+    state: str  # connecting | connected | lost
+    last_error: str | None
+    requests: int  # Modbus requests sent
+    failures: int  # polls that failed (its inputs then hold their safe values)
+    round_trip_ms: float  # of the last good poll
+
+
+@dataclass(frozen=True)
+class IoStatus:
+    server: ModbusServerStatus | None  # None: the image is not served
+    devices: list[DeviceStatus]
+
+
+@dataclass(frozen=True)
 class Status:
     """Published on `status` on every change and at least every second; also the reply of
     every command that changes a state."""
@@ -130,6 +165,7 @@ class Status:
     access: str  # "open" (no accounts) or "users"
     start: str | None  # how it starts next (cold, warm) or last started (continued)
     programs: list[ProgramStatus]
+    io: IoStatus | None = None  # Modbus TCP; None: the configuration uses none
 
 
 @dataclass(frozen=True)
@@ -175,6 +211,27 @@ class StatusReply:
 class ValuesReply:
     values: dict[str, Value]
     cycle: int
+
+
+@dataclass(frozen=True)
+class IoPoint:
+    """A located variable on Modbus with what is on the wire now."""
+
+    source: str  # "server" (the served image) or the name of a remote device
+    variable: str
+    location: str
+    type: str
+    area: str  # coil | discrete_input | input_register | holding_register
+    address: int
+    writable: bool  # a client may write it (served points)
+    value: Value  # served: as served (safe in STOP); device inputs: as delivered
+    quality: str  # good | bad (its device is lost) | safe (the served output is safe)
+
+
+@dataclass(frozen=True)
+class IoReply:
+    io: IoStatus | None
+    points: list[IoPoint]
 
 
 @dataclass(frozen=True)
@@ -391,6 +448,11 @@ class GetValues(Command[ValuesReply], name="values", level="read"):
 @dataclass(frozen=True)
 class GetVariables(Command[VariablesReply], name="variables", level="read"):
     pass
+
+
+@dataclass(frozen=True)
+class GetIo(Command[IoReply], name="io", level="read"):
+    """The Modbus server and devices with every mapped point and its value now."""
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ from tests.bench import (
     bench_context,
     bench_hostile,
     bench_language,
+    bench_modbus,
     bench_reload,
     bench_rest,
     bench_runtime,
@@ -22,6 +23,7 @@ def main() -> None:
     bench_runtime.main()
     bench_reload.main()
     bench_watch.main()
+    bench_modbus.main()
     bench_rest.main()
     bench_hostile.main()
     bench_ui.main()

@@ -149,10 +149,15 @@ class TimedOnlineValues(OnlineValues):
         self.publication_log = log
 
     def snapshot(
-        self, watch_set: WatchSet, cycle: int, running: bool, forces: ForceTable
+        self,
+        watch_set: WatchSet,
+        cycle: int,
+        running: bool,
+        forces: ForceTable,
+        bad: frozenset[str] = frozenset(),
     ) -> WatchSnapshot:
         started = time.monotonic_ns()
-        snapshot = super().snapshot(watch_set, cycle, running, forces)
+        snapshot = super().snapshot(watch_set, cycle, running, forces, bad)
         self.publication_log.last_watched_ns = time.monotonic_ns() - started
         return snapshot
 

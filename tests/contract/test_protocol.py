@@ -24,6 +24,7 @@ SAMPLES: dict[str, p.Command[Any]] = {
     "values": p.GetValues(),
     "variables": p.GetVariables(),
     "parameters": p.GetParameters(),
+    "io": p.GetIo(),
     "forcing": p.GetForcing(),
     "events": p.GetEvents(after=5, limit=10, log="long"),
     "watch": p.Watch("w1", ["Main.n", "gLevel"], period_ms=50, append=True),
@@ -70,6 +71,15 @@ def test_every_command_has_a_sample_and_survives_the_wire() -> None:
         assert name == command.NAME
         decoded = p.decode_request(p.encode_request(command, "tok"))
         assert decoded.command == command and decoded.token == "tok"
+
+
+def test_the_io_reply_and_status_survive_the_wire() -> None:
+    server = p.ModbusServerStatus("127.0.0.1", 5020, True, None, 10, 1, 2)
+    device = p.DeviceStatus("plant", "127.0.0.1", 5021, 1, "lost", "no answer", 9, 3, 1.5)
+    io = p.IoStatus(server, [device])
+    point = p.IoPoint("plant", "level", "%IW0", "INT", "input_register", 0, False, 0, "bad")
+    reply = p.IoReply(io, [point])
+    assert p.decode_reply(p.GetIo(), p.encode_reply(reply)) == reply
 
 
 def test_the_levels_are_those_of_the_spec() -> None:

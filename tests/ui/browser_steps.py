@@ -23,6 +23,7 @@ PASSWORD = "correct-horse-7"  # of every account of the `plant` fixture
 class Demo:
     url: str
     password: str
+    modbus_port: int = 0  # where the resource serves its image over Modbus TCP
 
 
 @dataclass(frozen=True)

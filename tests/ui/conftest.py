@@ -37,6 +37,8 @@ PASSWORD_LINE = re.compile(r"administrator 'admin', password (\S+)")
 def demo(tmp_path: Path) -> Iterator[Demo]:
     command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(tmp_path)]
     command += ["--port", str(free_port()), "--zenoh-port", str(free_port()), "--api-port", "0"]
+    modbus_port = free_port()  # never the fixed 5020: demos of parallel tests would collide
+    command += ["--modbus-port", str(modbus_port)]
     process = subprocess.Popen(
         command, cwd=REPO, stdout=subprocess.PIPE, text=True, env=dict(os.environ)
     )
@@ -52,7 +54,7 @@ def demo(tmp_path: Path) -> Iterator[Demo]:
     assert password is not None, "padt demo printed no administrator password"
     assert time.monotonic() - started < 60
     try:
-        yield Demo(url, password)
+        yield Demo(url, password, modbus_port)
     finally:
         process.send_signal(signal.SIGINT)  # Ctrl-C
         assert process.wait(timeout=15) == 0
@@ -86,7 +88,7 @@ def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
             UserAccount("guest", "read-only", verifier),
         ),
     )
-    with running_resource("Tank1", tmp_path, zenoh_endpoint) as (_, client):
+    with running_resource("Tank1", tmp_path, zenoh_endpoint, "--modbus-port", "0") as (_, client):
         session = client.session
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
         lists = WatchLists(tmp_path / "watch-lists.json")

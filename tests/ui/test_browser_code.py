@@ -68,7 +68,7 @@ def test_the_source_of_tankcontrol_with_live_values(demo: Demo) -> None:
         header = text_of(page, '[data-testid="code-header"]')
         assert "tank.st of project demo" in header, header
         # the lines with their numbers in the file, the source as written
-        assert shown_lines(page) == list(range(4, 35))
+        assert shown_lines(page) == list(range(4, 36))  # PROGRAM to END_PROGRAM
         wait_for_text(page, '[data-code-line="4"]', "PROGRAM TankControl")
         wait_for_text(page, '[data-code-line="18"]', "  level := level + inflow;")
         # the variables of a line with their live values: the level moves while it runs
@@ -95,7 +95,7 @@ def test_the_source_of_tankcontrol_with_live_values(demo: Demo) -> None:
         # page on: from line 20, then back to the POU's first line
         set_number(page, "Lines from", 20)
         wait_until("the page starts at line 20", lambda: shown_lines(page)[:1] == [20])
-        assert shown_lines(page)[-1] == 34
+        assert shown_lines(page)[-1] == 35
         page.get_by_role("button", name="Previous page").click()
         wait_until("the page starts at line 4", lambda: shown_lines(page)[:1] == [4])
 
