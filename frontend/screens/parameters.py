@@ -11,14 +11,14 @@ from __future__ import annotations
 
 import dataclasses
 import html
-import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import viser
 
-from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
+from backend.engineering.resource_client import ResourceClient
+from frontend.command_reading import CommandReading
 from frontend.permissions import Allowed
 from runtime.contract import protocol as p
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
@@ -31,7 +31,6 @@ from runtime.contract.parameters import (
     ParameterSpec,
     resource_consistency,
 )
-from runtime.contract.refusal import Refusal
 
 # the names of spec section 6, as SILworX shows them
 LABELS = {
@@ -149,59 +148,6 @@ def check_change(
     return value
 
 
-# ---- reading the parameters, outside the refresher and outside Zenoh's threads
-
-# resource, CRC, resource login token, changes sent from here, `parameter` events seen
-Key = tuple[str, str, str | None, int, int]
-
-
-class ParameterSource:
-    """The parameters as last read, read again when the key changes: another resource or
-    configuration (CRC), another login, or a change sent from here."""
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._key: Key | None = None
-        self._busy = False
-        self.reply: p.ParametersReply | None = None
-        self.error = ""
-        self.changes = 0  # goes up with every change sent: read them again
-
-    def ensure(self, key: Key, client_of: Callable[[str], ResourceClient]) -> None:
-        with self._lock:
-            if key == self._key or self._busy:
-                return
-            self._busy = True
-        threading.Thread(target=self._read, args=(key, client_of), daemon=True).start()
-
-    def _read(self, key: Key, client_of: Callable[[str], ResourceClient]) -> None:
-        reply, error = None, ""
-        try:
-            reply = client_of(key[0]).ask(p.GetParameters())
-        except Refusal as refused:
-            error = (
-                "log in to the resource to see its parameters"
-                if refused.code in ("unauthenticated", "forbidden")
-                else f"{refused.code}: {refused.message}"
-            )
-        except ResourceUnreachable as exc:
-            error = str(exc)
-        with self._lock:
-            self._key, self._busy = key, False
-            self.reply, self.error = reply, error
-
-    def current(self, resource: str) -> tuple[p.ParametersReply | None, str]:
-        """What was read of this resource (the last reading while a new one is under way)."""
-        with self._lock:
-            if self._key is None or self._key[0] != resource:
-                return None, ""
-            return self.reply, self.error
-
-    def changed(self) -> None:
-        with self._lock:
-            self.changes += 1
-
-
 # ---- the screen
 
 Change = Callable[[str, str, p.Command[p.StatusReply], Callable[[], None]], None]
@@ -218,7 +164,9 @@ class ParametersScreen:
     error: viser.GuiHtmlHandle
     set_button: viser.GuiButtonHandle
     reason: viser.GuiHtmlHandle
-    source: ParameterSource = field(default_factory=ParameterSource)
+    source: CommandReading[p.ParametersReply] = field(
+        default_factory=lambda: CommandReading(p.GetParameters(), "its parameters")
+    )
     resource: str | None = None
     rendered: p.ParametersReply | None = None  # the reading the table shows
     state: str = ""  # of the resource, for the confirmation
