@@ -21,6 +21,7 @@ from frontend.screens import (
     code,
     events,
     forcing,
+    io,
     login,
     online_test,
     parameters,
@@ -108,6 +109,8 @@ class Workspace:
             self.reload = reload.build(gui, self._reload_hooks())
         with self._tab("Code", viser.Icon.CODE):
             self.code = code.build(gui)
+        with self._tab("I/O", viser.Icon.PLUG_CONNECTED):
+            self.io = io.build(gui)
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -330,6 +333,8 @@ class Workspace:
             reload.refresh(self.reload, resource, status, self._allowed)
         elif shown == "Code":
             code.refresh(self.code, feed, self.session.context.projects)
+        elif shown == "I/O":
+            io.refresh(self.io, resource, status, token, self.session.client_of)
 
     def _follow_forcing(
         self, resource: str | None, status: p.Status | None, login_there: ResourceLogin | None

@@ -1,0 +1,199 @@
+"""The I/O screen: the resource's field I/O over Modbus TCP (docs/modbus.md). The served
+image (where it listens, requests, exception responses, writes taken), each remote device
+(its state, last error, requests, failures, round trip) and every mapped point with what
+is on the wire now: served values (safe ones in STOP), inputs as delivered (their safe
+values with quality bad while the device is lost).
+
+The devices come with the resource's status; the points are read with the `io` command
+twice a second while this screen is in view, off the refresher."""
+
+from __future__ import annotations
+
+import html
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import viser
+
+from backend.engineering.resource_client import ResourceClient
+from frontend.command_reading import CommandReading
+from runtime.contract import protocol as p
+from runtime.contract.values import format_for_display
+
+READS_PER_S = 2
+MAX_ROWS = 500
+ALL_SOURCES = "(all)"
+_CELL = "padding:2px 8px;border-bottom:1px solid #e9ecef;vertical-align:top"
+_GREY = "color:#868e96"
+_STATE_COLORS = {"connected": "#2b8a3e", "connecting": "#e67700", "lost": "#c92a2a"}
+_QUALITY_STYLES = {
+    "good": "color:#2b8a3e",
+    "bad": "color:#e67700;font-style:italic",
+    "safe": "color:#868e96",
+}
+_QUALITY_WORDS = {
+    "good": "as on the wire",
+    "bad": "safe value: its device is lost",
+    "safe": "safe value: the resource does not run",
+}
+
+
+@dataclass
+class IoScreen:
+    server: viser.GuiHtmlHandle
+    devices: viser.GuiHtmlHandle
+    source: viser.GuiDropdownHandle[str]
+    points: viser.GuiHtmlHandle
+    reading: CommandReading[p.IoReply] = field(
+        default_factory=lambda: CommandReading(p.GetIo(), "its I/O")
+    )
+    shown: dict[str, str] = field(default_factory=dict)
+
+
+def build(gui: viser.GuiApi) -> IoScreen:
+    server = gui.add_html("")
+    devices = gui.add_html("")
+    source = gui.add_dropdown("Points of", (ALL_SOURCES,))
+    points = gui.add_html("")
+    return IoScreen(server, devices, source, points)
+
+
+def refresh(
+    screen: IoScreen,
+    resource: str | None,
+    status: p.Status | None,
+    login_token: str | None,
+    client_of: Callable[[str], ResourceClient],
+) -> None:
+    if resource is None or status is None:
+        _show(screen, "server", screen.server, "<p>Select a resource.</p>")
+        _show(screen, "devices", screen.devices, "")
+        _show(screen, "points", screen.points, "")
+        return
+    _show(screen, "server", screen.server, render_server(status.io))
+    _show(screen, "devices", screen.devices, render_devices(status.io))
+    if status.io is None:
+        _show(screen, "points", screen.points, "")
+        return
+    moment = int(time.monotonic() * READS_PER_S)  # read again twice a second
+    screen.reading.ensure((resource, status.crc, login_token, moment), client_of)
+    reply, error = screen.reading.current(resource)
+    points = reply.points if reply is not None else []
+    sources = (ALL_SOURCES, *sorted({x.source for x in points}, key=_source_order))
+    if tuple(screen.source.options) != sources:
+        chosen = screen.source.value
+        screen.source.options = sources
+        if chosen in sources:  # a new device must not reset the choice
+            screen.source.value = chosen  # type: ignore[misc]  # viser's setter
+    chosen = screen.source.value
+    shown = [x for x in points if chosen in (ALL_SOURCES, x.source)]
+    table = render_points(shown, error) if reply is not None or error else _note("reading ...")
+    _show(screen, "points", screen.points, table)
+
+
+def _source_order(source: str) -> tuple[int, str]:
+    return (0 if source == "server" else 1, source)
+
+
+def _show(screen: IoScreen, name: str, handle: viser.GuiHtmlHandle, content: str) -> None:
+    """Send HTML only when it changed."""
+    if screen.shown.get(name) != content:
+        handle.content = content
+        screen.shown[name] = content
+
+
+# ---- what the user reads (pure)
+
+
+def _note(text: str, testid: str = "io-note") -> str:
+    return f'<p data-testid="{testid}" style="{_GREY}">{html.escape(text)}</p>'
+
+
+def _table(head: list[str], rows: list[str], testid: str) -> str:
+    header = "".join(f'<th style="{_CELL};text-align:left">{h}</th>' for h in head)
+    return (
+        f'<table data-testid="{testid}" style="border-collapse:collapse;width:100%;'
+        f'font-size:0.9em"><tr>{header}</tr>{"".join(rows)}</table>'
+    )
+
+
+def render_server(io: p.IoStatus | None) -> str:
+    if io is None:
+        return _note("This configuration has no field I/O over Modbus TCP.")
+    server = io.server
+    if server is None:
+        return _note("The process image is not served over Modbus TCP (serve = false).")
+    where = f"{html.escape(server.host)}:{server.port}"
+    if not server.listening:
+        why = html.escape(server.error or "not listening")
+        return (
+            f'<p data-testid="io-server"><b>Modbus TCP server</b> '
+            f'<span style="color:#c92a2a">does not listen: {why}</span></p>'
+        )
+    return (
+        f'<p data-testid="io-server"><b>Modbus TCP server</b> listening on '
+        f"<code>{where}</code> · {server.requests} requests · "
+        f"{server.exceptions} exception responses · {server.writes} writes taken</p>"
+    )
+
+
+def render_devices(io: p.IoStatus | None) -> str:
+    if io is None:
+        return ""
+    if not io.devices:
+        return _note("No remote I/O devices are configured.")
+    rows = []
+    for device in io.devices:
+        color = _STATE_COLORS.get(device.state, "#495057")
+        error = html.escape(device.last_error or "")
+        trip = f"{device.round_trip_ms:.1f} ms" if device.state == "connected" else ""
+        rows.append(
+            f'<tr data-device="{html.escape(device.name)}">'
+            f'<td style="{_CELL}"><b>{html.escape(device.name)}</b></td>'
+            f'<td style="{_CELL}"><code>{html.escape(device.host)}:{device.port}</code> '
+            f"unit {device.unit_id}</td>"
+            f'<td style="{_CELL};color:{color};font-weight:600" data-state>'
+            f"{html.escape(device.state)}</td>"
+            f'<td style="{_CELL};text-align:right">{device.requests}</td>'
+            f'<td style="{_CELL};text-align:right">{device.failures}</td>'
+            f'<td style="{_CELL};text-align:right">{trip}</td>'
+            f'<td style="{_CELL};color:#c92a2a;overflow-wrap:anywhere">{error}</td></tr>'
+        )
+    head = ["Device", "Address", "State", "Requests", "Failures", "Round trip", "Last error"]
+    return _table(head, rows, "io-devices")
+
+
+def render_points(points: list[p.IoPoint], error: str) -> str:
+    if error:
+        return f'<p data-testid="io-error" style="color:#c92a2a">{html.escape(error)}</p>'
+    if not points:
+        return _note("No mapped points.")
+    rows = []
+    for point in points[:MAX_ROWS]:
+        style = _QUALITY_STYLES.get(point.quality, "")
+        value = format_for_display(point.value, point.type)
+        rows.append(
+            f'<tr><td style="{_CELL}">{html.escape(point.source)}</td>'
+            f'<td style="{_CELL}">{html.escape(point.variable)}</td>'
+            f'<td style="{_CELL}"><code>{html.escape(point.location)}</code></td>'
+            f'<td style="{_CELL}">{html.escape(point.area.replace("_", " "))} '
+            f"{point.address}</td>"
+            f'<td style="{_CELL};{_GREY}">{html.escape(point.type)}</td>'
+            f'<td style="{_CELL}">{"yes" if point.writable else ""}</td>'
+            f'<td style="{_CELL};text-align:right;font-family:monospace;{style}" '
+            f'data-point="{html.escape(point.variable)}" data-quality="{point.quality}" '
+            f'title="{_QUALITY_WORDS.get(point.quality, "")}">{html.escape(value)}</td></tr>'
+        )
+    more = len(points) - MAX_ROWS
+    count = _note(f"the first {MAX_ROWS} of {len(points)} points shown") if more > 0 else ""
+    head = ["Source", "Variable", "Location", "Modbus", "Type", "Writable", "Value"]
+    return count + _table(head, rows, "io-points") + legend()
+
+
+def legend() -> str:
+    items = " · ".join(
+        f'<span style="{_QUALITY_STYLES[q]};font-weight:600">{q}</span> {_QUALITY_WORDS[q]}'
+        for q in ("good", "bad", "safe")
+    )
+    return f'<div style="{_GREY};font-size:0.85em;padding:4px 0">{items}</div>'
