@@ -11,6 +11,7 @@ demo: $(VENV)/.stamp-run
 
 test: $(VENV)/.stamp-dev
 	bash scripts/install-chromium.sh
+	bash scripts/install-document-tools.sh
 	$(MAKE) lint typecheck pytest
 
 lint: $(VENV)/.stamp-dev
