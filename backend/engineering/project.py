@@ -40,6 +40,8 @@ class Project:
     sources: list[SourceFile]
     safe_values: dict[str, Any] = field(default_factory=dict)  # output -> its safe value
     users: list[UserAccount] = field(default_factory=list)  # PES accounts ([[resource.user]])
+    author: str = ""  # [project] author and date: for the cover of the documentation
+    date: str = ""
 
 
 def user_entry(account: UserAccount) -> str:
@@ -134,6 +136,8 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
         sources,
         safe_values,
         users,
+        str(meta.get("author", "")),
+        str(meta.get("date", "")),
     )
 
 
