@@ -239,7 +239,11 @@ def build_parser() -> argparse.ArgumentParser:
         "docs", help="printable documentation of a project: DIR/<project>.html and .pdf"
     )
     docs.add_argument(
-        "paths", nargs="+", type=Path, metavar="PROJECT", help="project folder, .st files or backup zip"
+        "paths",
+        nargs="+",
+        type=Path,
+        metavar="PROJECT",
+        help="project folder, .st files or backup zip",
     )
     docs.add_argument("-o", "--output", type=Path, required=True, metavar="DIR")
     docs.add_argument(

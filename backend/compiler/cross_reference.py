@@ -165,7 +165,9 @@ class _Walker:
                 self.expr(selector, write=False)
                 for labels, body in branches:
                     for label in labels:
-                        parts = [label.low, label.high] if isinstance(label, ast.CaseRange) else [label]
+                        parts = (
+                            [label.low, label.high] if isinstance(label, ast.CaseRange) else [label]
+                        )
                         for part in parts:
                             self.expr(part, write=False)
                     self.statements(body)

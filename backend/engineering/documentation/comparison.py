@@ -132,7 +132,7 @@ def comparison_section(new: Subject, old: Subject) -> Section:
     summary = table(
         ["", "previous version", "this version"],
         [
-            ["version", escape(old.version or "–"), escape(new.version or "–")],
+            ["version", escape(old.version or "-"), escape(new.version or "-")],
             ["configuration CRC", code(old.crc), code(new.crc)],
         ],
     )
@@ -192,9 +192,7 @@ def _diff(old: PouSource | None, new: PouSource | None) -> str:
         rows.append('<div class="ln hunk"><span class="no">…</span></div>')
         for tag, i1, i2, j1, j2 in group:
             if tag == "equal":
-                rows += [
-                    _row("", f" {b_first + j}", b_html[j]) for j in range(j1, j2)
-                ]
+                rows += [_row("", f" {b_first + j}", b_html[j]) for j in range(j1, j2)]
                 continue
             rows += [_row("removed", f"-{a_first + i}", a_html[i]) for i in range(i1, i2)]
             rows += [_row("added", f"+{b_first + j}", b_html[j]) for j in range(j1, j2)]

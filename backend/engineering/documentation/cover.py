@@ -12,9 +12,9 @@ def cover(subject: Subject, compared_with: Subject | None) -> str:
     artifact = subject.artifact
     facts = [
         ("Project", escape(subject.name)),
-        ("Version", escape(subject.version or "–")),
-        ("Author", escape(subject.author or "–")),
-        ("Date", escape(subject.date or "–")),
+        ("Version", escape(subject.version or "-")),
+        ("Author", escape(subject.author or "-")),
+        ("Date", escape(subject.date or "-")),
         ("Resource", escape(artifact.resource.name)),
         ("Configuration CRC", code(artifact.crc)),
     ]
@@ -22,7 +22,7 @@ def cover(subject: Subject, compared_with: Subject | None) -> str:
         facts.append(
             (
                 "Compared with",
-                f"version {escape(compared_with.version or '–')}, CRC {code(compared_with.crc)}",
+                f"version {escape(compared_with.version or '-')}, CRC {code(compared_with.crc)}",
             )
         )
     rows = "".join(f"<tr><th>{name}</th><td>{value}</td></tr>" for name, value in facts)
@@ -36,7 +36,7 @@ def cover(subject: Subject, compared_with: Subject | None) -> str:
     return (
         '<section class="cover">'
         '<p class="kind">Project documentation</p>'
-        f"<h1 class=\"title\">{escape(subject.name)}</h1>"
+        f'<h1 class="title">{escape(subject.name)}</h1>'
         f'<table class="facts">{rows}</table>'
         f"<h3>User programs of resource {escape(artifact.resource.name)}</h3>{programs}"
         "</section>"

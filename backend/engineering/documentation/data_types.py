@@ -47,7 +47,12 @@ def _body(subject: Subject, file: str, decl: ast.TypeDecl) -> str:
             for member in members:
                 text = declared(member, lines)
                 rows.append(
-                    [code(member.name), escape(text.type), escape(text.initial), escape(text.comment)]
+                    [
+                        code(member.name),
+                        escape(text.type),
+                        escape(text.initial),
+                        escape(text.comment),
+                    ]
                 )
             return table(["member", "type", "initial", "description"], rows, "decls")
         case ast.EnumSpec(values=values):

@@ -26,9 +26,7 @@ class Declared:
 def declared(decl: ast.VarDecl, lines: tuple[str, ...]) -> Declared:
     text, comment = _statement_text(lines, decl.pos.line, decl.pos.col)
     type_text, initial = _type_and_initial(text)
-    return Declared(
-        decl.name, type_text, initial, decl.location or "", comment, decl.pos.line
-    )
+    return Declared(decl.name, type_text, initial, decl.location or "", comment, decl.pos.line)
 
 
 def _statement_text(lines: tuple[str, ...], line: int, col: int) -> tuple[str, str]:

@@ -23,14 +23,14 @@ def logic_section(subject: Subject) -> Section:
         sub, sub_entry = heading(2, f"{pou.kind} {pou.name}", anchor("logic", pou.name))
         headings.append(sub_entry)
         crc = crcs.get(pou.name.upper())
-        facts = (
-            f"{escape(file)}, lines {source.first_line} to {source.last_line}"
-            + (f" · CRC {code(crc)}" if crc else "")
+        facts = f"{escape(file)}, lines {source.first_line} to {source.last_line}" + (
+            f" · CRC {code(crc)}" if crc else ""
         )
         chart = ""
         if pou.sfc is not None and pou.sfc.steps:
             svg = chart_svg(pou.sfc, subject.lines.get(file, ()))
-            chart = f'<div class="chart"><p class="caption">SFC chart of {escape(pou.name)}</p>{svg}</div>'
+            caption = f'<p class="caption">SFC chart of {escape(pou.name)}</p>'
+            chart = f'<div class="chart">{caption}{svg}</div>'
         parts.append(
             f'<div class="pou">{sub}<p class="facts">{facts}</p>{chart}'
             f"{listing(source.lines, source.first_line)}</div>"

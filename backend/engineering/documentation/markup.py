@@ -43,9 +43,7 @@ def heading(level: int, title: str, anchor_id: str) -> tuple[str, Heading]:
     return f'<{tag} id="{anchor_id}">{escape(title)}</{tag}>', Heading(level, title, anchor_id)
 
 
-def table(
-    columns: Sequence[str], rows: Iterable[Sequence[str]], css_class: str = ""
-) -> str:
+def table(columns: Sequence[str], rows: Iterable[Sequence[str]], css_class: str = "") -> str:
     """A table whose cells are already HTML (escape text before)."""
     head = "".join(f"<th>{escape(c)}</th>" for c in columns)
     body = "".join("<tr>" + "".join(f"<td>{cell}</td>" for cell in row) + "</tr>" for row in rows)

@@ -12,5 +12,5 @@ def render_pdf(html: str, base: Path | None = None) -> bytes:
     from weasyprint import HTML
 
     data = HTML(string=html, base_url=str(base) if base else None).write_pdf()
-    assert data is not None  # without a target WeasyPrint returns the bytes
+    assert isinstance(data, bytes)  # without a target WeasyPrint returns the bytes
     return data

@@ -9,7 +9,6 @@ from typing import Any
 from backend.engineering.documentation.markup import Section, anchor, code, escape, heading, table
 from backend.engineering.documentation.signals import located_signals
 from backend.engineering.documentation.subject import Subject
-from runtime.contract.artifact import ProgramConfig
 from runtime.contract.keyspace import ROOT
 from runtime.contract.parameters import PROGRAM_PARAMETERS, RESOURCE_PARAMETERS
 from runtime.contract.session_options import DEFAULT_ENDPOINT
@@ -55,15 +54,15 @@ def value_text(value: Any) -> str:
 def _resource_parameters(subject: Subject) -> str:
     resource = subject.artifact.resource
     rows = [
-        [code(spec.name), escape(value_text(getattr(resource, spec.name))), _changeable(spec.online)]
+        [
+            code(spec.name),
+            escape(value_text(getattr(resource, spec.name))),
+            "online" if spec.online else "with a download",
+        ]
         for spec in RESOURCE_PARAMETERS
     ]
     crc = f"<p>Configuration CRC {code(subject.crc)}</p>"
     return crc + table(["parameter", "value", "changeable"], rows)
-
-
-def _changeable(online: bool) -> str:
-    return "online" if online else "with a download"
 
 
 def _programs(subject: Subject) -> str:
@@ -84,16 +83,8 @@ def _names(names: tuple[str, ...]) -> str:
     return ", ".join(escape(n) for n in names) or "none"
 
 
-def program_crcs(programs: tuple[ProgramConfig, ...]) -> list[tuple[str, str]]:
-    return [(p.name, p.crc) for p in sorted(programs, key=lambda p: p.program_id)]
-
-
 def _system_variables(subject: Subject) -> str:
-    used = {
-        entry.name.upper(): entry
-        for entry in subject.uses
-        if entry.kind == "SYSTEM"
-    }
+    used = {entry.name.upper(): entry for entry in subject.uses if entry.kind == "SYSTEM"}
     rows = []
     for variable in SYSTEM_VARIABLES:
         uses = used.get(f"{NAMESPACE}.{variable.name}".upper())
@@ -107,7 +98,7 @@ def _system_variables(subject: Subject) -> str:
                 ", ".join(escape(w) for w in where) or "not used",
             ]
         )
-    return table(["variable", "type", "written by", "meaning", "used in"], rows)
+    return table(["variable", "type", "written by", "meaning", "used in"], rows, "system")
 
 
 def _users(subject: Subject) -> str:
@@ -128,8 +119,11 @@ def _io_and_network(subject: Subject) -> str:
     for signal in located_signals(subject):
         area = signal.location.upper()[1:2]
         safe_value = ""
-        if area == "Q":
-            safe_value = value_text(safe.get(signal.name.upper(), "0 / FALSE"))
+        if area == "Q" and signal.name.upper() in safe:
+            value = safe[signal.name.upper()]
+            safe_value = str(value).upper() if isinstance(value, bool) else str(value)
+        elif area == "Q":
+            safe_value = "0 / FALSE (default)"
         rows.append(
             [
                 code(signal.location),

@@ -17,6 +17,21 @@ _STEP_X, _STEP_W, _STEP_H = 20, 150, 26
 _ACTION_X, _QUALIFIER_W, _ACTION_W, _ACTION_H = 210, 40, 190, 20
 _LINE_X = _STEP_X + _STEP_W // 2
 _MAX_LABEL = 70  # characters of a condition in the diagram (the listing has all of it)
+# presentation attributes, not CSS: WeasyPrint's SVG renderer takes no page style sheet
+_FONT = 'font-family="DejaVu Sans" font-size="11"'
+_STYLES = {
+    "step": 'fill="#ffffff" stroke="#222222" stroke-width="1.2"',
+    "act": 'fill="#f6f8fa" stroke="#555555" stroke-width="0.8"',
+    "flow": 'stroke="#222222" stroke-width="1.2"',
+    "bar": 'stroke="#222222" stroke-width="3"',
+    "arrow": 'fill="none" stroke="#222222" stroke-width="1.2"',
+    "name": f'{_FONT} text-anchor="middle" font-weight="bold"',
+    "qual": f'{_FONT} text-anchor="middle" font-weight="bold"',
+    "action": _FONT,
+    "cond": 'font-family="DejaVu Sans Mono" font-size="10"',
+    "jump": f'{_FONT} font-weight="bold"',
+}
+_CLASS = re.compile(r'class="([a-z]+)"')
 _CONDITION = re.compile(r":=(.*?);\s*END_TRANSITION", re.DOTALL | re.IGNORECASE)
 
 
@@ -71,16 +86,15 @@ def chart_svg(sfc: ast.Sfc, lines: tuple[str, ...]) -> str:
             )
         y += 14
     height = y + 4
+    drawing = _CLASS.sub(lambda m: _STYLES[m.group(1)], "".join(parts))
     return (
         f'<svg xmlns="http://www.w3.org/2000/svg" class="sfc" width="{WIDTH}" height="{height}" '
-        f'viewBox="0 0 {WIDTH} {height}">{"".join(parts)}</svg>'
+        f'viewBox="0 0 {WIDTH} {height}">{drawing}</svg>'
     )
 
 
 def _step_box(step: ast.Step, y: int) -> str:
-    box = (
-        f'<rect x="{_STEP_X}" y="{y}" width="{_STEP_W}" height="{_STEP_H}" class="step"/>'
-    )
+    box = f'<rect x="{_STEP_X}" y="{y}" width="{_STEP_W}" height="{_STEP_H}" class="step"/>'
     if step.initial:
         box += (
             f'<rect x="{_STEP_X + 3}" y="{y + 3}" width="{_STEP_W - 6}" '

@@ -37,9 +37,7 @@ def signals(subject: Subject) -> list[Signal]:
         blocks += [(b, "") for c in unit.configurations for b in c.globals]
         blocks += [(b, "") for c in unit.configurations for r in c.resources for b in r.globals]
         for pou in sorted(unit.pous, key=lambda p: p.name.upper()):
-            blocks += [
-                (b, pou.name) for b in pou.var_blocks if b.kind != "VAR_EXTERNAL"
-            ]
+            blocks += [(b, pou.name) for b in pou.var_blocks if b.kind != "VAR_EXTERNAL"]
         for block, scope in blocks:
             for decl in block.decls:
                 if scope and decl.location is None and block.kind != "VAR_GLOBAL":

@@ -43,7 +43,11 @@ code { font-family: "DejaVu Sans Mono", monospace; font-size: 8pt; }
 table { border-collapse: collapse; width: 100%; margin: 2pt 0 6pt; }
 th, td { border: 0.5pt solid #999; padding: 1.5pt 3pt; text-align: left; vertical-align: top;
   overflow-wrap: break-word; }
-table.xref { table-layout: fixed; }
+table.xref, table.system { table-layout: fixed; }
+table.system th:nth-child(1) { width: 27%; }
+table.system th:nth-child(2) { width: 9%; }
+table.system th:nth-child(3) { width: 14%; }
+table.system th:nth-child(5) { width: 16%; }
 table.xref th:nth-child(1) { width: 27%; }
 table.xref th:nth-child(2) { width: 10%; }
 table.xref th:nth-child(3) { width: 17%; }
@@ -79,16 +83,6 @@ p.warning { color: #a00; font-weight: bold; }
 .chart { break-inside: avoid; margin: 4pt 0 8pt; }
 .caption { font-weight: bold; margin: 0 0 2pt; }
 svg.sfc { width: 100%; height: auto; }
-svg.sfc rect.step { fill: #fff; stroke: #222; stroke-width: 1.2; }
-svg.sfc rect.act { fill: #f6f8fa; stroke: #555; stroke-width: 0.8; }
-svg.sfc line.flow { stroke: #222; stroke-width: 1.2; }
-svg.sfc line.bar { stroke: #222; stroke-width: 3; }
-svg.sfc path.arrow { fill: none; stroke: #222; stroke-width: 1.2; }
-svg.sfc text { font-family: "DejaVu Sans"; font-size: 11px; }
-svg.sfc text.name { text-anchor: middle; font-weight: bold; }
-svg.sfc text.qual { text-anchor: middle; font-weight: bold; }
-svg.sfc text.cond { font-family: "DejaVu Sans Mono"; font-size: 10px; }
-svg.sfc text.jump { font-weight: bold; }
 .diff .ln { padding-left: 20mm; text-indent: -20mm; }
 .diff .ln .no { width: 18mm; }
 """

@@ -27,7 +27,7 @@ def xref_section(subject: Subject) -> Section:
 
 def _row(variable: VariableUses) -> list[str]:
     def cell(how: str) -> str:
-        return ", ".join(escape(p) for p in places(variable.where(how))) or "–"
+        return ", ".join(escape(p) for p in places(variable.where(how))) or "-"
 
     return [
         code(variable.qualified),
