@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from backend.engineering.documentation.declarations import declared
 from backend.engineering.documentation.markup import Section, anchor, code, escape, heading, table
 from backend.engineering.documentation.resource import value_text
-from backend.engineering.documentation.st_highlight import highlight_lines
+from backend.engineering.documentation.st_highlight import Token, numbered, tokenized
 from backend.engineering.documentation.subject import Subject
 from backend.engineering.sources import PouSource, pou_sources
 from runtime.contract.parameters import PROGRAM_PARAMETERS, RESOURCE_PARAMETERS
@@ -185,20 +185,15 @@ def _diff(old: PouSource | None, new: PouSource | None) -> str:
     b = list(new.lines) if new else []
     a_first = old.first_line if old else 1
     b_first = new.first_line if new else 1
-    a_html, b_html = highlight_lines(a), highlight_lines(b)
-    rows = []
+    a_tokens, b_tokens = tokenized(a), tokenized(b)
+    rows: list[tuple[str, list[Token], str]] = []
     matcher = difflib.SequenceMatcher(a=a, b=b, autojunk=False)
     for group in matcher.get_grouped_opcodes(3):
-        rows.append('<div class="ln hunk"><span class="no">…</span></div>')
+        rows.append(("...", [], ""))
         for tag, i1, i2, j1, j2 in group:
             if tag == "equal":
-                rows += [_row("", f" {b_first + j}", b_html[j]) for j in range(j1, j2)]
+                rows += [(str(b_first + j), b_tokens[j], "") for j in range(j1, j2)]
                 continue
-            rows += [_row("removed", f"-{a_first + i}", a_html[i]) for i in range(i1, i2)]
-            rows += [_row("added", f"+{b_first + j}", b_html[j]) for j in range(j1, j2)]
-    return '<div class="listing diff">' + "".join(rows) + "</div>"
-
-
-def _row(css_class: str, number: str, html: str) -> str:
-    klass = f"ln {css_class}" if css_class else "ln"
-    return f'<div class="{klass}"><span class="no">{number}</span>{html or " "}</div>'
+            rows += [(f"-{a_first + i}", a_tokens[i], "removed") for i in range(i1, i2)]
+            rows += [(f"+{b_first + j}", b_tokens[j], "added") for j in range(j1, j2)]
+    return numbered(rows)

@@ -5,7 +5,15 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.engineering.documentation.declarations import declared
-from backend.engineering.documentation.markup import Section, anchor, code, escape, heading, table
+from backend.engineering.documentation.markup import (
+    Section,
+    anchor,
+    code,
+    escape,
+    grid,
+    heading,
+    table,
+)
 from backend.engineering.documentation.subject import Subject
 
 
@@ -30,6 +38,25 @@ def _kind(spec: ast.TypeRef) -> str:
     match spec:
         case ast.StructSpec():
             return "structure"
+        case ast.EnumSpec():
+            return "enumeration"
+        case ast.ArrayType():
+            return "array"
+        case ast.SubrangeSpec():
+            return "subrange"
+    return "alias"
+
+
+def _body(subject: Subject, file: str, decl: ast.TypeDecl) -> str:
+    lines = subject.lines.get(file, ())
+    match decl.spec:
+        case ast.StructSpec(members=members):
+            rows = []
+            for member in members:
+                text = declared(member, lines)
+                rows.append([member.name, text.type, text.initial, text.comment])
+            columns = [("member", 24), ("type", 20), ("initial", 14), ("description", 0)]
+            return grid(columns, rows)
         case ast.EnumSpec():
             return "enumeration"
         case ast.ArrayType():

@@ -5,9 +5,17 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.engineering.documentation.declarations import declared
-from backend.engineering.documentation.markup import Section, anchor, code, escape, heading, table
+from backend.engineering.documentation.markup import Section, anchor, code, escape, grid, heading
 from backend.engineering.documentation.subject import Subject
 
+_COLUMNS = (
+    ("block", 14),
+    ("name", 20),
+    ("type", 18),
+    ("initial", 12),
+    ("address", 8),
+    ("description", 0),
+)
 # the interface first (what a caller connects), then what the POU keeps to itself
 _BLOCK_ORDER = (
     "VAR_INPUT",
@@ -45,17 +53,8 @@ def interface_section(subject: Subject) -> Section:
             kind = " ".join([block.kind, *block.qualifiers])
             for decl in block.decls:
                 text = declared(decl, lines)
-                rows.append(
-                    [
-                        escape(kind),
-                        code(decl.name),
-                        escape(text.type),
-                        escape(text.initial),
-                        code(text.location) if text.location else "",
-                        escape(text.comment),
-                    ]
-                )
-        body = table(["block", "name", "type", "initial", "address", "description"], rows, "decls")
+                rows.append([kind, decl.name, text.type, text.initial, text.location, text.comment])
+        body = grid(_COLUMNS, rows)
         parts.append(f'<div class="pou">{sub}<p class="facts">{" · ".join(facts)}</p>{body}</div>')
     return Section('<section class="part">' + "".join(parts) + "</section>", tuple(headings))
 

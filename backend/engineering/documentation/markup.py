@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import html
 import re
+import textwrap
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -55,3 +56,32 @@ def table(columns: Sequence[str], rows: Iterable[Sequence[str]], css_class: str 
 
 def code(text: object) -> str:
     return f"<code>{escape(text)}</code>"
+
+
+GRID_COLUMNS = 118  # characters on a line of a grid (7 pt DejaVu Sans Mono on A4)
+
+
+def grid(columns: Sequence[tuple[str, int]], rows: Iterable[Sequence[str]]) -> str:
+    """A long table as preformatted text: (title, width in characters) per column, the
+    last taking the rest of the line; cells of plain text wrap inside their column. Laid
+    out many times faster than an HTML table of the same rows, which matters for the
+    cross-reference of a library of 20,000 lines."""
+    widths = [width for _, width in columns[:-1]]
+    widths.append(GRID_COLUMNS - sum(widths) - 2 * (len(columns) - 1))
+    lines = []
+    for row in rows:
+        cells = [
+            textwrap.wrap(text, width, break_on_hyphens=False) or [""]
+            for text, width in zip(row, widths, strict=True)
+        ]
+        for index in range(max(len(cell) for cell in cells)):
+            parts = [cell[index] if index < len(cell) else "" for cell in cells]
+            line = "  ".join(part.ljust(width) for part, width in zip(parts, widths, strict=True))
+            lines.append(escape(line.rstrip()))
+    if not lines:
+        return '<p class="none">none</p>'
+    head = "  ".join(title.ljust(width) for (title, _), width in zip(columns, widths, strict=True))
+    rule = "\u2500" * GRID_COLUMNS
+    return (
+        f'<pre class="grid"><b>{escape(head.rstrip())}</b>\n{rule}\n' + "\n".join(lines) + "</pre>"
+    )

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from backend.engineering.documentation.declarations import declared
-from backend.engineering.documentation.markup import Section, code, escape, heading, table
+from backend.engineering.documentation.markup import Section, grid, heading
 from backend.engineering.documentation.subject import Subject
 
 
@@ -68,17 +68,17 @@ def located_signals(subject: Subject) -> list[Signal]:
 def signal_section(subject: Subject) -> Section:
     title, entry = heading(1, "Signal list", "signals")
     rows = [
-        [
-            code(s.qualified),
-            escape(s.type),
-            escape(s.initial),
-            code(s.location) if s.location else "",
-            escape(s.qualifiers),
-            escape(s.comment),
-            escape(f"{s.file}:{s.line}"),
-        ]
+        [s.qualified, s.type, s.initial, s.location, s.qualifiers, f"{s.file}:{s.line}", s.comment]
         for s in signals(subject)
     ]
-    columns = ["variable", "type", "initial", "address", "", "description", "declared"]
-    body = table(columns, rows, "signals")
+    columns = [
+        ("variable", 24),
+        ("type", 14),
+        ("initial", 10),
+        ("address", 8),
+        ("", 8),
+        ("declared", 16),
+        ("description", 0),
+    ]
+    body = grid(columns, rows)
     return Section(f'<section class="part">{title}{body}</section>', (entry,))

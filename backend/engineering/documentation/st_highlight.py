@@ -1,11 +1,11 @@
 """ST source as HTML with line numbers and syntax highlighting: keywords, comments (also
-across lines), strings and literals each get a class the style sheet colours. Long lines
-wrap inside their line, the number stays in its column."""
+across lines) and strings each get a class the style sheet colours. A line too long for
+the page is cut and continues under its code, the numbers keep their column."""
 
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 
 from backend.engineering.documentation.markup import escape
 
@@ -98,24 +98,27 @@ _TOKEN = re.compile(
 )
 
 
-def highlight_lines(lines: Iterable[str]) -> list[str]:
-    """Each line as HTML; a comment opened on one line continues on the next."""
-    result = []
+Token = tuple[str, str]  # (class, text); class "" for plain text
+CODE_COLUMNS = 104  # characters of code on a line of the listing; the rest wraps
+_NUMBER_COLUMNS = 6
+_CONTINUED = " " * (_NUMBER_COLUMNS - 1) + "\u21b3 "  # a wrapped line's continuation
+
+
+def _token_lines(lines: Iterable[str]) -> Iterator[list[Token]]:
     in_comment = False
     for line in lines:
-        html, in_comment = _line(line.expandtabs(4), in_comment)
-        result.append(html)
-    return result
+        tokens, in_comment = _tokens(line.expandtabs(4), in_comment)
+        yield tokens
 
 
-def _line(line: str, in_comment: bool) -> tuple[str, bool]:
-    parts: list[str] = []
+def _tokens(line: str, in_comment: bool) -> tuple[list[Token], bool]:
+    tokens: list[Token] = []
     position = 0
     if in_comment:
         end = line.find("*)")
         if end < 0:
-            return _span("c", line), True
-        parts.append(_span("c", line[: end + 2]))
+            return [("c", line)], True
+        tokens.append(("c", line[: end + 2]))
         position = end + 2
     while position < len(line):
         match = _TOKEN.match(line, position)
@@ -125,34 +128,69 @@ def _line(line: str, in_comment: bool) -> tuple[str, bool]:
         if kind == "comment_open":
             end = line.find("*)", match.end())
             if end < 0:
-                parts.append(_span("c", line[position:]))
-                return "".join(parts), True
-            parts.append(_span("c", line[position : end + 2]))
+                tokens.append(("c", line[position:]))
+                return tokens, True
+            tokens.append(("c", line[position : end + 2]))
             position = end + 2
             continue
-        if kind == "line_comment":
-            parts.append(_span("c", text))
-        elif kind == "string":
-            parts.append(_span("s", text))
-        elif kind == "literal":
-            parts.append(_span("n", text))
-        elif kind == "word" and text.upper() in KEYWORDS:
-            parts.append(_span("k", text))
+        css_class = _CLASSES.get(kind or "", "")
+        if kind == "word":
+            css_class = "k" if text.upper() in KEYWORDS else ""
+        if tokens and tokens[-1][0] == css_class:  # fewer boxes to lay out: merge runs
+            tokens[-1] = (css_class, tokens[-1][1] + text)
         else:
-            parts.append(escape(text))
+            tokens.append((css_class, text))
         position = match.end()
-    return "".join(parts), False
+    return tokens, False
 
 
-def _span(css_class: str, text: str) -> str:
-    return f'<span class="{css_class}">{escape(text)}</span>'
+# numbers stay plain: every coloured run is a box to lay out, and a library's sources are
+# full of constants
+_CLASSES = {"line_comment": "c", "string": "s"}
 
 
-def listing(lines: Iterable[str], first_line: int, marks: dict[int, str] | None = None) -> str:
-    """Numbered source lines (numbers as in the file); `marks`: line -> a class for the
-    line (the comparison marks added and removed lines)."""
-    rows = []
-    for number, html in enumerate(highlight_lines(lines), first_line):
-        klass = f"ln {marks[number]}" if marks and number in marks else "ln"
-        rows.append(f'<div class="{klass}"><span class="no">{number}</span>{html or " "}</div>')
-    return '<div class="listing">' + "".join(rows) + "</div>"
+def _html(tokens: list[Token]) -> str:
+    return "".join(
+        f'<span class="{css_class}">{escape(text)}</span>' if css_class else escape(text)
+        for css_class, text in tokens
+    )
+
+
+def _wrapped(tokens: list[Token], width: int) -> list[list[Token]]:
+    """The tokens of one line cut into lines of at most `width` characters."""
+    rows: list[list[Token]] = [[]]
+    used = 0
+    for css_class, text in tokens:
+        while text:
+            if used == width:
+                rows.append([])
+                used = 0
+            piece = text[: width - used]
+            rows[-1].append((css_class, piece))
+            used += len(piece)
+            text = text[len(piece) :]
+    return rows
+
+
+def tokenized(lines: Iterable[str]) -> list[list[Token]]:
+    return list(_token_lines(lines))
+
+
+def listing(lines: Iterable[str], first_line: int) -> str:
+    """Numbered source lines (numbers as in the file)."""
+    rows = [(str(n), tokens, "") for n, tokens in enumerate(_token_lines(lines), first_line)]
+    return numbered(rows)
+
+
+def numbered(rows: Iterable[tuple[str, list[Token], str]]) -> str:
+    """(label, tokens, class of the whole line) per line, in one preformatted block: one
+    box per line would make a long program slow to lay out. The label is plain text for
+    the same reason. A line longer than the page is cut and goes on after a continuation
+    mark under its code."""
+    out = []
+    for label, tokens, css_class in rows:
+        for index, row in enumerate(_wrapped(tokens, CODE_COLUMNS)):
+            prefix = f"{label:>{_NUMBER_COLUMNS - 1}} " if index == 0 else _CONTINUED
+            text = prefix + _html(row)
+            out.append(f'<span class="{css_class}">{text}</span>' if css_class else text)
+    return '<pre class="listing">' + "\n".join(out) + "</pre>"

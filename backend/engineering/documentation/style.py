@@ -69,20 +69,15 @@ p.warning { color: #a00; font-weight: bold; }
 .contents li.toc2 { margin-left: 8mm; font-size: 8.5pt; }
 .contents a { color: #111; text-decoration: none; }
 .contents a::after { content: leader(".") target-counter(attr(href), page); }
-.listing { font-family: "DejaVu Sans Mono", monospace; font-size: 7.5pt; line-height: 1.3;
-  border-left: 0.5pt solid #bbb; margin: 4pt 0 8pt; }
-.ln { white-space: pre-wrap; overflow-wrap: anywhere; padding-left: 11mm; text-indent: -11mm; }
-.ln .no { display: inline-block; width: 9mm; margin-right: 2mm; text-indent: 0; text-align: right;
-  color: #888; }
-.ln.added { background: #e3f6e3; }
-.ln.removed { background: #fbe3e3; }
+pre.listing, pre.grid { font-family: "DejaVu Sans Mono", monospace; font-size: 7pt;
+  line-height: 1.3; margin: 4pt 0 8pt; white-space: pre; }
+pre.grid b { font-weight: bold; }
+.added { background: #e3f6e3; }
+.removed { background: #fbe3e3; }
 .k { color: #0b3c9c; font-weight: bold; }
 .c { color: #2f7d32; font-style: italic; }
 .s { color: #a3401a; }
-.n { color: #7a1fa2; }
 .chart { break-inside: avoid; margin: 4pt 0 8pt; }
 .caption { font-weight: bold; margin: 0 0 2pt; }
 svg.sfc { width: 100%; height: auto; }
-.diff .ln { padding-left: 20mm; text-indent: -20mm; }
-.diff .ln .no { width: 18mm; }
 """

@@ -11,6 +11,8 @@ from pathlib import Path
 import pytest
 
 from backend.engineering.documentation.export import DocumentError, document
+from backend.engineering.documentation.subject import load_subject
+from backend.engineering.documentation.xref import xref_rows
 from backend.engineering.project import compile_project, load_project
 from padt.cli import main
 from tests.engineering.documentation.filling_line import write_filling_line
@@ -72,15 +74,15 @@ def test_users_show_names_and_levels_never_hashes(project: Path, written) -> Non
 
 def test_signal_list_has_type_initial_address_and_comment(written) -> None:
     text = " ".join("".join(pages(written[1])).split())
-    assert "start_button BOOL %IX0.0 operator start, NO contact" in text
-    assert "bottles DINT bottles filled since the cold start" in text
+    assert "start_button BOOL %IX0.0 globals.st:8 operator start, NO contact" in text
+    assert "bottles DINT globals.st:12 bottles filled since the cold start" in text
     # I/O: the safe value of an output
     assert re.search(r"%QX0.1 conveyor_run BOOL output FALSE", text)
 
 
 def test_logic_is_numbered_highlighted_and_the_sfc_drawn(written) -> None:
     html = written[0].read_text()
-    assert '<span class="no">25</span>conveyor_run := <span class="k">NOT</span>' in html
+    assert '   25 conveyor_run := <span class="k">NOT</span> bottle_present;' in html
     svg = re.search(r'<svg[^>]*class="sfc".*?</svg>', html, re.S)
     assert svg is not None
     for shown in ("Wait", "Fill", "Settle", "OpenValve", "Count", ">P</text>", "fill_timer.Q"):
@@ -91,17 +93,17 @@ def test_logic_is_numbered_highlighted_and_the_sfc_drawn(written) -> None:
 
 # what the sources of the Filling line declare, read and write, line by line
 EXPECTED_XREF = [
-    ("bottles", "filler.st:6, globals.st:12", "filler.st:26", "filler.st:26"),
+    ("bottles", "filler.st:6; globals.st:12", "filler.st:26", "filler.st:26"),
     (
         "bottle_present",
-        "conveyor.st:18, filler.st:4, globals.st:9",
-        "conveyor.st:25, filler.st:13, filler.st:17",
+        "conveyor.st:18; filler.st:4; globals.st:9",
+        "conveyor.st:25; filler.st:13, 17",
         "-",
     ),
-    ("conveyor_run", "conveyor.st:19, globals.st:11", "-", "conveyor.st:25"),
-    ("recipe", "filler.st:7, globals.st:13", "filler.st:20", "-"),
-    ("start_button", "filler.st:3, globals.st:8", "filler.st:13", "-"),
-    ("valve_open", "filler.st:5, globals.st:10", "-", "filler.st:19, filler.st:23"),
+    ("conveyor_run", "conveyor.st:19; globals.st:11", "-", "conveyor.st:25"),
+    ("recipe", "filler.st:7; globals.st:13", "filler.st:20", "-"),
+    ("start_button", "filler.st:3; globals.st:8", "filler.st:13", "-"),
+    ("valve_open", "filler.st:5; globals.st:10", "-", "filler.st:19, 23"),
     ("Conveyor.clipped", "conveyor.st:23", "conveyor.st:26", "conveyor.st:26"),
     ("Conveyor.speed", "conveyor.st:22", "conveyor.st:26", "conveyor.st:26"),
     ("Filler.Fill", "filler.st:14", "filler.st:20", "-"),
@@ -109,21 +111,23 @@ EXPECTED_XREF = [
     ("Filler.Settle", "filler.st:16", "-", "-"),
     ("Filler.Wait", "filler.st:12", "-", "-"),
     ("Limit100.clipped", "conveyor.st:6", "conveyor.st:9", "conveyor.st:8"),
-    ("Limit100.Limit100", "conveyor.st:1", "-", "conveyor.st:10, conveyor.st:12"),
-    ("Limit100.x", "conveyor.st:3", "conveyor.st:8, conveyor.st:12", "-"),
+    ("Limit100.Limit100", "conveyor.st:1", "-", "conveyor.st:10, 12"),
+    ("Limit100.x", "conveyor.st:3", "conveyor.st:8, 12", "-"),
 ]
 
 
-def test_cross_reference_line_by_line(written) -> None:
-    html = written[0].read_text()
-    table = re.search(r'<table class="xref">.*?</table>', html, re.S)
-    assert table is not None
-    rows = [
-        [re.sub(r"<[^>]+>", "", cell) for cell in re.findall(r"<td>(.*?)</td>", row)]
-        for row in re.findall(r"<tr>(.*?)</tr>", table.group(0))[1:]
-    ]
+def test_cross_reference_line_by_line(project: Path, written) -> None:
+    rows = xref_rows(load_subject([project]))
     assert [(r[0], r[2], r[3], r[4]) for r in rows] == EXPECTED_XREF
-    text = " ".join("".join(pages(written[1])).split())
+    # and the reader finds them: each variable's row starts a line with its name, type and
+    # first declaration (a long cell wraps onto the next lines of its column)
+    start = next(i for i, t in enumerate(pages(written[1])) if "Every variable with" in t)
+    lines = [" ".join(line.split()) for line in pages(written[1])[start].splitlines()]
+    for name, declared, _, _ in EXPECTED_XREF:
+        row = next(r for r in rows if r[0] == name)
+        first = declared.split(";")[0].split(",")[0]
+        assert any(line.startswith(f"{name} {row[1]} {first}") for line in lines), name
+    text = " ".join(lines)
     assert "Filler.fill_timer TON filler.st:10 filler.st:15 filler.st:20" in text
 
 
