@@ -57,31 +57,6 @@ def _body(subject: Subject, file: str, decl: ast.TypeDecl) -> str:
                 rows.append([member.name, text.type, text.initial, text.comment])
             columns = [("member", 24), ("type", 20), ("initial", 14), ("description", 0)]
             return grid(columns, rows)
-        case ast.EnumSpec():
-            return "enumeration"
-        case ast.ArrayType():
-            return "array"
-        case ast.SubrangeSpec():
-            return "subrange"
-    return "alias"
-
-
-def _body(subject: Subject, file: str, decl: ast.TypeDecl) -> str:
-    lines = subject.lines.get(file, ())
-    match decl.spec:
-        case ast.StructSpec(members=members):
-            rows = []
-            for member in members:
-                text = declared(member, lines)
-                rows.append(
-                    [
-                        code(member.name),
-                        escape(text.type),
-                        escape(text.initial),
-                        escape(text.comment),
-                    ]
-                )
-            return table(["member", "type", "initial", "description"], rows, "decls")
         case ast.EnumSpec(values=values):
             return table(["value"], [[code(name)] for name, _, _ in values])
     text = declared(ast.VarDecl(decl.name, decl.spec, decl.init, None, decl.pos), lines)

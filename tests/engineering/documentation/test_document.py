@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from backend.engineering.backup import BackupInfo, write_backup
 from backend.engineering.documentation.export import DocumentError, document
 from backend.engineering.documentation.subject import load_subject
 from backend.engineering.documentation.xref import xref_rows
@@ -180,3 +181,35 @@ def test_a_project_that_does_not_compile_is_refused(tmp_path: Path, capsys) -> N
     assert not (tmp_path / "out").exists()
     with pytest.raises(DocumentError, match="no such file"):
         document([tmp_path / "missing.st"])
+
+
+def test_a_backup_is_documented_and_compared(project: Path, tmp_path: Path) -> None:
+    loaded = load_project([project])
+    artifact = compile_project(loaded).artifact
+    assert artifact is not None
+    info = BackupInfo(loaded.name, loaded.version, "Line1", "load", "padt load")
+    zip_path = write_backup(
+        tmp_path,
+        info,
+        artifact.to_json(),
+        {s.name: s.text for s in loaded.sources},
+        (project / "padt.toml").read_text(),
+        clock=lambda: 1_700_000_000_000_000_000,
+    )
+    from_backup = document([zip_path])
+    assert from_backup.crc == artifact.crc
+    assert from_backup.html == document([project]).html  # the same configuration, the same text
+    compared = document([project], compare=zip_path)
+    assert "No change: both versions are the same configuration." in compared.html
+
+
+def test_a_tampered_backup_is_refused(project: Path, tmp_path: Path) -> None:
+    loaded = load_project([project])
+    artifact = compile_project(loaded).artifact
+    assert artifact is not None
+    sources = {s.name: s.text for s in loaded.sources}
+    sources["conveyor.st"] = sources["conveyor.st"].replace("speed + 5", "speed + 6")
+    info = BackupInfo(loaded.name, loaded.version, "Line1", "load", "padt load")
+    zip_path = write_backup(tmp_path, info, artifact.to_json(), sources, None)
+    with pytest.raises(DocumentError, match=f"the backup holds {artifact.crc}"):
+        document([zip_path])
