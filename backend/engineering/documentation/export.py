@@ -4,6 +4,8 @@ and the UI each call one function of this module."""
 
 from __future__ import annotations
 
+import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -12,7 +14,16 @@ from backend.engineering.documentation.document import document_html
 from backend.engineering.documentation.pdf import render_pdf
 from backend.engineering.documentation.subject import DocumentError, Subject, load_subject
 
-__all__ = ["Document", "DocumentError", "document", "document_of", "write_document"]
+__all__ = [
+    "Document",
+    "DocumentError",
+    "backups_of",
+    "document",
+    "document_of",
+    "version_path",
+    "write_document",
+]
+_BACKUP_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,200}\.zip$")
 
 
 @dataclass(frozen=True)
@@ -48,3 +59,28 @@ def write_document(made: Document, folder: Path) -> tuple[Path, Path]:
     except OSError as exc:
         raise DocumentError(f"cannot write the document in {folder}: {exc}") from None
     return html_path, pdf_path
+
+
+def version_path(name: str, projects: Mapping[str, Path], backup_dir: Path) -> Path:
+    """A version named by a caller (the REST API, the UI): a project the PADT serves, or a
+    backup zip in the backup folder by its bare file name; never any other path."""
+    if name in projects:
+        return projects[name]
+    if not _BACKUP_NAME.match(name):
+        raise DocumentError(f"'{name}' is neither a project nor a backup file name")
+    path = backup_dir / name
+    if not path.is_file():
+        raise DocumentError(f"there is no backup '{name}'")
+    return path
+
+
+def backups_of(backup_dir: Path, project: str | None = None) -> list[str]:
+    """The backup file names in the folder, newest first (the name ends in the UTC time of
+    the load), those of `project` only when it is given."""
+    try:
+        names = [p.name for p in backup_dir.iterdir() if _BACKUP_NAME.match(p.name)]
+    except OSError:
+        return []
+    if project is not None:
+        names = [n for n in names if n.startswith(safe_name(project) + "_")]
+    return sorted(names, key=lambda n: (n.rsplit("_", 1)[-1], n), reverse=True)
