@@ -19,6 +19,7 @@ from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
 from frontend.screens import (
     code,
+    documentation,
     events,
     forcing,
     login,
@@ -104,6 +105,11 @@ class Workspace:
             self.reload = reload.build(gui, self._reload_hooks())
         with self.panel.add_tab("Code", viser.Icon.CODE):
             self.code = code.build(gui)
+        with self.panel.add_tab("Documentation", viser.Icon.FILE_TEXT):
+            context = session.context
+            self.documentation = documentation.build(
+                gui, client, context.projects, context.backup_dir, session.level
+            )
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -276,6 +282,7 @@ class Workspace:
         )
         reload.refresh(self.reload, resource, status, self._allowed)
         code.refresh(self.code, feed, self.session.context.projects)
+        documentation.refresh(self.documentation, resource, status)
         if feed is not None:  # only what some screen shows is watched
             feed.show(
                 online_test.wanted(self.online_test)

@@ -13,6 +13,7 @@ from backend.engineering.backup import safe_name
 from backend.engineering.documentation.document import document_html
 from backend.engineering.documentation.pdf import render_pdf
 from backend.engineering.documentation.subject import DocumentError, Subject, load_subject
+from backend.engineering.sources import find_sources
 
 __all__ = [
     "Document",
@@ -20,6 +21,7 @@ __all__ = [
     "backups_of",
     "document",
     "document_of",
+    "running_version",
     "version_path",
     "write_document",
 ]
@@ -84,3 +86,15 @@ def backups_of(backup_dir: Path, project: str | None = None) -> list[str]:
     if project is not None:
         names = [n for n in names if n.startswith(safe_name(project) + "_")]
     return sorted(names, key=lambda n: (n.rsplit("_", 1)[-1], n), reverse=True)
+
+
+def running_version(crc: str, projects: Mapping[str, Path], backup_dir: Path) -> Path | None:
+    """Where the configuration `crc` a resource runs can be documented from: its newest
+    backup (written when it was loaded), else a project the PADT knows that compiles to
+    it (as the Code screen finds it); None when neither exists."""
+    crc = crc.upper()
+    for name in backups_of(backup_dir):
+        if f"_{crc}_" in name:
+            return backup_dir / name
+    found = find_sources(crc, projects)
+    return projects[found.project] if found is not None else None
