@@ -1,5 +1,7 @@
-"""The interface of every POU of the project: kind, return type, CRC, and each variable
-block with the declarations as written (type, initial value, address, description)."""
+"""The interface of every POU of the project: kind, return type, CRC, and what a caller or
+the plant connects to it: its inputs, outputs, in-outs, the globals it uses, and its
+located variables, as written (type, initial value, address, description). Its internal
+variables are in its listing and in the cross-reference."""
 
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ _COLUMNS = (
     ("address", 8),
     ("description", 0),
 )
+_INTERNAL = ("VAR", "VAR_TEMP")  # shown when located (AT %I, %Q, %M)
 # the interface first (what a caller connects), then what the POU keeps to itself
 _BLOCK_ORDER = (
     "VAR_INPUT",
@@ -49,11 +52,17 @@ def interface_section(subject: Subject) -> Section:
         rows = []
         lines = subject.lines.get(file, ())
         order = {kind: n for n, kind in enumerate(_BLOCK_ORDER)}
+        internal = 0
         for block in sorted(pou.var_blocks, key=lambda b: order.get(b.kind, len(order))):
             kind = " ".join([block.kind, *block.qualifiers])
             for decl in block.decls:
+                if block.kind in _INTERNAL and decl.location is None:
+                    internal += 1
+                    continue
                 text = declared(decl, lines)
                 rows.append([kind, decl.name, text.type, text.initial, text.location, text.comment])
+        if internal:
+            facts.append(f"{internal} internal variable{'s' if internal > 1 else ''}")
         body = grid(_COLUMNS, rows)
         parts.append(f'<div class="pou">{sub}<p class="facts">{" · ".join(facts)}</p>{body}</div>')
     return Section('<section class="part">' + "".join(parts) + "</section>", tuple(headings))
