@@ -81,7 +81,5 @@ def grid(columns: Sequence[tuple[str, int]], rows: Iterable[Sequence[str]]) -> s
     if not lines:
         return '<p class="none">none</p>'
     head = "  ".join(title.ljust(width) for (title, _), width in zip(columns, widths, strict=True))
-    rule = "\u2500" * GRID_COLUMNS
-    return (
-        f'<pre class="grid"><b>{escape(head.rstrip())}</b>\n{rule}\n' + "\n".join(lines) + "</pre>"
-    )
+    head_line = f'<b class="head">{escape(head.rstrip())}</b>'  # a block: underlined
+    return f'<pre class="grid">{head_line}' + "\n".join(lines) + "</pre>"

@@ -56,7 +56,7 @@ th { background: #e8ecf0; font-weight: bold; }
 thead { display: table-header-group; }
 tr { break-inside: avoid; }
 table.xref td, table.signals td, table.decls td { font-size: 7.5pt; }
-p.facts { color: #444; margin: 0 0 4pt; }
+p.facts { color: #444; margin: 0 0 4pt; break-after: avoid; }
 p.none, p.note { color: #555; font-style: italic; }
 p.warning { color: #a00; font-weight: bold; }
 .cover { text-align: left; }
@@ -71,7 +71,8 @@ p.warning { color: #a00; font-weight: bold; }
 .contents a::after { content: leader(".") target-counter(attr(href), page); }
 pre.listing, pre.grid { font-family: "DejaVu Sans Mono", monospace; font-size: 7pt;
   line-height: 1.3; margin: 4pt 0 8pt; white-space: pre; }
-pre.grid b { font-weight: bold; }
+pre.grid b.head { display: block; font-weight: bold; border-bottom: 0.6pt solid #333;
+  margin-bottom: 1pt; break-after: avoid; }
 .added { background: #e3f6e3; }
 .removed { background: #fbe3e3; }
 .k { color: #0b3c9c; font-weight: bold; }
