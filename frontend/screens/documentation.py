@@ -55,8 +55,8 @@ def build(
     level: str,
 ) -> DocumentationScreen:
     gui.add_html(
-        '<div style="color:#495057;font-size:0.9em">Printable documentation for acceptance: cover with the '
-        "CRCs, parameters, users, I/O, signal list, interfaces, the logic, SFC charts, the "
+        '<div style="color:#495057;font-size:0.9em">Printable documentation for acceptance: '
+        "cover with the CRCs, parameters, users, I/O, signal list, interfaces, the logic, SFC charts, the "
         "cross-reference; with a previous version, what changed. Every page carries the "
         "project, the configuration CRC and its page number.</div>"
     )
