@@ -56,9 +56,9 @@ def build(
 ) -> DocumentationScreen:
     gui.add_html(
         '<div style="color:#495057;font-size:0.9em">Printable documentation for acceptance: '
-        "cover with the CRCs, parameters, users, I/O, signal list, interfaces, the logic, SFC charts, the "
-        "cross-reference; with a previous version, what changed. Every page carries the "
-        "project, the configuration CRC and its page number.</div>"
+        "cover with the CRCs, parameters, users, I/O, signal list, interfaces, the logic, "
+        "SFC charts, the cross-reference; with a previous version, what changed. Every page "
+        "carries the project, the configuration CRC and its page number.</div>"
     )
     subject = gui.add_dropdown("Document of", _subjects(projects, None))
     compare = gui.add_dropdown("Compare with", (NOTHING,))
