@@ -3,9 +3,11 @@
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -16,6 +18,7 @@ from backend.engineering.documentation.subject import load_subject
 from backend.engineering.documentation.xref import xref_rows
 from backend.engineering.project import compile_project, load_project
 from padt.cli import main
+from tests.conftest import REPO
 from tests.engineering.documentation.filling_line import write_filling_line
 
 
@@ -213,3 +216,18 @@ def test_a_tampered_backup_is_refused(project: Path, tmp_path: Path) -> None:
     zip_path = write_backup(tmp_path, info, artifact.to_json(), sources, None)
     with pytest.raises(DocumentError, match=f"the backup holds {artifact.crc}"):
         document([zip_path])
+
+
+def test_the_same_bytes_in_processes_with_other_hash_seeds(project: Path, written) -> None:
+    """Nothing of a set's or a dict's order leaks into the document."""
+    for seed in ("1", "4242"):
+        out = project.parent / f"seed-{seed}"
+        subprocess.run(
+            [sys.executable, "-m", "padt.cli", "docs", str(project), "-o", str(out)],
+            check=True,
+            capture_output=True,
+            cwd=REPO,
+            env={**os.environ, "PYTHONHASHSEED": seed},
+        )
+        assert (out / "Filling_line.html").read_bytes() == written[0].read_bytes()
+        assert (out / "Filling_line.pdf").read_bytes() == written[1].read_bytes()
