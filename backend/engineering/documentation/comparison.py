@@ -145,7 +145,7 @@ def comparison_section(new: Subject, old: Subject) -> Section:
     sub, sub_entry = heading(2, "Changes", "comparison-changes")
     headings.append(sub_entry)
     listed = (
-        table(["what", "name", "change", "previous", "this version"], rows, "changes")
+        table(["what", "name", "change", "previous", "this version"], rows)
         if rows
         else '<p class="none">No change: both versions are the same configuration.</p>'
     )

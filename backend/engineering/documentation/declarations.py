@@ -36,18 +36,18 @@ def _statement_text(lines: tuple[str, ...], line: int, col: int) -> tuple[str, s
     chunk = lines[first : first + _MAX_LINES] if 0 <= first < len(lines) else ()
     joined = "\n".join(chunk)[col - 1 :] if chunk else ""
     comments: list[str] = []
-    depth_text: list[str] = []
+    code_parts: list[str] = []
     position = 0
     for match in _COMMENT.finditer(joined):
         before = joined[position : match.start()]
-        depth_text.append(before)
+        code_parts.append(before)
         if ";" in before:
             break
         comments.append((match.group(1) or match.group(2) or "").strip())
         position = match.end()
     else:
-        depth_text.append(joined[position:])
-    code = "".join(depth_text)
+        code_parts.append(joined[position:])
+    code = "".join(code_parts)
     statement, semicolon, _ = code.partition(";")
     if semicolon:  # a comment right after the `;`, on the same line, describes it too
         rest = joined[len(statement) + 1 :].lstrip(" \t")

@@ -12,7 +12,7 @@ from pathlib import Path
 from backend.engineering.backup import safe_name
 from backend.engineering.documentation.document import document_html
 from backend.engineering.documentation.pdf import render_pdf
-from backend.engineering.documentation.subject import DocumentError, Subject, load_subject
+from backend.engineering.documentation.subject import DocumentError, load_subject
 from backend.engineering.sources import find_sources
 
 __all__ = [
@@ -20,7 +20,6 @@ __all__ = [
     "DocumentError",
     "backups_of",
     "document",
-    "document_of",
     "running_version",
     "version_path",
     "write_document",
@@ -37,17 +36,13 @@ class Document:
     pdf: bytes
 
 
-def document_of(subject: Subject, previous: Subject | None = None) -> Document:
-    html = document_html(subject, previous)
-    return Document(safe_name(subject.name), subject.name, subject.crc, html, render_pdf(html))
-
-
 def document(paths: list[Path], compare: Path | None = None) -> Document:
     """The document of a project folder, .st files or a backup zip; `compare`: a previous
     version (a folder or a backup zip) to compare with."""
     subject = load_subject(paths)
     previous = load_subject([compare]) if compare is not None else None
-    return document_of(subject, previous)
+    html = document_html(subject, previous)
+    return Document(safe_name(subject.name), subject.name, subject.crc, html, render_pdf(html))
 
 
 def write_document(made: Document, folder: Path) -> tuple[Path, Path]:

@@ -76,7 +76,7 @@ def _programs(subject: Subject) -> str:
     rows.append(["CRC", *(code(p.crc) for p in programs)])
     rows.append(["globals written", *(_names(p.writes) for p in programs)])
     rows.append(["globals read", *(_names(p.reads) for p in programs)])
-    return table(["parameter", *names], rows, "programs")
+    return table(["parameter", *names], rows)
 
 
 def _names(names: tuple[str, ...]) -> str:

@@ -43,19 +43,14 @@ code { font-family: "DejaVu Sans Mono", monospace; font-size: 8pt; }
 table { border-collapse: collapse; width: 100%; margin: 2pt 0 6pt; }
 th, td { border: 0.5pt solid #999; padding: 1.5pt 3pt; text-align: left; vertical-align: top;
   overflow-wrap: break-word; }
-table.xref, table.system { table-layout: fixed; }
+table.system { table-layout: fixed; }
 table.system th:nth-child(1) { width: 27%; }
 table.system th:nth-child(2) { width: 9%; }
 table.system th:nth-child(3) { width: 14%; }
 table.system th:nth-child(5) { width: 16%; }
-table.xref th:nth-child(1) { width: 27%; }
-table.xref th:nth-child(2) { width: 10%; }
-table.xref th:nth-child(3) { width: 17%; }
-table.xref th:nth-child(5) { width: 20%; }
 th { background: #e8ecf0; font-weight: bold; }
 thead { display: table-header-group; }
 tr { break-inside: avoid; }
-table.xref td, table.signals td, table.decls td { font-size: 7.5pt; }
 p.facts { color: #444; margin: 0 0 4pt; break-after: avoid; }
 p.none, p.note { color: #555; font-style: italic; }
 p.warning { color: #a00; font-weight: bold; }

@@ -37,7 +37,6 @@ class Subject:
     version: str
     author: str
     date: str  # as the project gives it (ISO 8601 when it is a date), or ""
-    origin: str  # the folder, files or backup it was read from
     project: Project
     artifact: Artifact
     units: tuple[ast.SourceUnit, ...]  # the project's own files, parsed
@@ -72,7 +71,6 @@ def _subject(project: Project, origin: str) -> Subject:
         version=project.version,
         author=project.author,
         date=project.date,
-        origin=origin,
         project=project,
         artifact=result.artifact,
         units=tuple(unit for unit in units if unit.file in own),
