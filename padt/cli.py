@@ -243,9 +243,16 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="+",
         type=Path,
         metavar="PROJECT",
-        help="project folder, .st files or backup zip",
+        help="a project folder, .st files, or a backup zip written by padt load/reload",
     )
-    docs.add_argument("-o", "--output", type=Path, required=True, metavar="DIR")
+    docs.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        metavar="DIR",
+        help="the folder for <project>.html and <project>.pdf (created when missing)",
+    )
     docs.add_argument(
         "--compare",
         type=Path,
