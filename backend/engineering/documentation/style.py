@@ -3,20 +3,23 @@ the configuration CRC at the top of every page and "page N of M" at the bottom."
 
 from __future__ import annotations
 
+import re
+
+_PLAIN = re.compile(r"[A-Za-z0-9 _.,:;()#%+=@!?-]")
+
 
 def css_string(text: str) -> str:
-    """A CSS string literal of any text (a project name may hold quotes or backslashes)."""
-    escaped = "".join(
-        ch if ch.isprintable() and ch not in '"\\' else f"\\{ord(ch):x} " for ch in text
-    )
+    """A CSS string literal of any text: a project name may hold quotes, backslashes or
+    `</style>`, so all but plain characters are written as CSS escapes."""
+    escaped = "".join(ch if _PLAIN.match(ch) else f"\\{ord(ch):x} " for ch in text)
     return f'"{escaped}"'
 
 
 def style(project: str, crc: str) -> str:
-    return (
-        _PAGE.replace("PROJECT", css_string(project)).replace("CRC", css_string(f"CRC {crc}"))
-        + _BODY
-    )
+    # the CRC first: a name may hold the word CRC, and what one replace puts in, the next
+    # must not touch (the CRC text holds no PROJECT)
+    page = _PAGE.replace("CRC", css_string(f"CRC {crc}")).replace("PROJECT", css_string(project))
+    return page + _BODY
 
 
 _PAGE = """

@@ -231,3 +231,22 @@ def test_the_same_bytes_in_processes_with_other_hash_seeds(project: Path, writte
         )
         assert (out / "Filling_line.html").read_bytes() == written[0].read_bytes()
         assert (out / "Filling_line.pdf").read_bytes() == written[1].read_bytes()
+
+
+def test_a_hostile_project_name_and_comment_stay_text(project: Path, tmp_path: Path) -> None:
+    hostile = tmp_path / "hostile"
+    shutil.copytree(project, hostile)
+    name = 'CRC "B" \\\\ </style><script>x()</script> PROJECT'
+    config = (hostile / "padt.toml").read_text()
+    (hostile / "padt.toml").write_text(config.replace('name = "Filling line"', f"name = '{name}'"))
+    globals_st = (hostile / "globals.st").read_text()
+    (hostile / "globals.st").write_text(
+        globals_st.replace("(* filling valve *)", "(* <b>valve</b> </pre></svg> *)")
+    )
+    made = document([hostile])
+    assert "<script>" not in made.html and "<b>valve" not in made.html
+    pdf = tmp_path / "hostile.pdf"
+    pdf.write_bytes(made.pdf)
+    texts = pages(pdf)
+    assert all(name in text for text in texts)  # in the running header, as written
+    assert "<b>valve</b> </pre></svg>" in "".join(texts)
