@@ -9,6 +9,7 @@ from __future__ import annotations
 import html
 import logging
 import threading
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +30,7 @@ from runtime.contract import protocol as p
 RUNNING = "the configuration the resource runs"
 NOTHING = "(nothing)"
 FORMATS = ("PDF", "HTML")
+LIST_EVERY_NS = 3_000_000_000  # the backup folder, read again at most this often
 log = logging.getLogger("padt.ui")
 
 
@@ -45,6 +47,8 @@ class DocumentationScreen:
     allowed: bool
     running: tuple[str, str] | None = None  # (resource, CRC) of the selected resource
     busy: bool = False
+    backups: tuple[str, ...] = ()
+    backups_listed_ns: int | None = None  # when the backup folder was last listed
 
 
 def build(
@@ -95,8 +99,12 @@ def refresh(screen: DocumentationScreen, resource: str | None, status: p.Status 
         if chosen in subjects:
             set_value(screen.subject, chosen)
     screen.running = running
+    now = time.monotonic_ns()
+    if screen.backups_listed_ns is None or now - screen.backups_listed_ns > LIST_EVERY_NS:
+        screen.backups = tuple(backups_of(screen.backup_dir))  # not ten times a second
+        screen.backups_listed_ns = now
     versions = (NOTHING, *(f"project {n}" for n in sorted(screen.projects)))
-    versions += tuple(f"backup {name}" for name in backups_of(screen.backup_dir))
+    versions += tuple(f"backup {name}" for name in screen.backups)
     if tuple(screen.compare.options) != versions:
         chosen = screen.compare.value
         screen.compare.options = versions
