@@ -57,6 +57,11 @@ def cross_reference(sources: list[SourceFile]) -> list[VariableUses]:
     """The cross-reference of a project's sources (which must compile): globals first,
     then each POU's variables, each group by name."""
     units, _, user_pous = parse_project(sources)
+    return cross_reference_of(units, user_pous)
+
+
+def cross_reference_of(units: list[ast.SourceUnit], user_pous: set[str]) -> list[VariableUses]:
+    """The same of a project already parsed (`parse_project`)."""
     resolved = resolve(units)
     table = _Table(resolved)
     for variable in resolved.globals:

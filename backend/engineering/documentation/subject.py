@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from backend.compiler import ast
-from backend.compiler.cross_reference import VariableUses, cross_reference
+from backend.compiler.cross_reference import VariableUses, cross_reference_of
 from backend.compiler.pipeline import parse_project
 from backend.engineering.backup import BackupError, restore_backup
 from backend.engineering.project import (
@@ -64,7 +64,7 @@ def _subject(project: Project, origin: str) -> Subject:
     if result.artifact is None:
         first = next(d for d in result.diagnostics if d.severity == "error")
         raise DocumentError(f"{origin} does not compile: {first}")
-    units, _, _ = parse_project(project.sources)
+    units, _, user_pous = parse_project(project.sources)
     own = {source.name for source in project.sources}
     return Subject(
         name=project.name,
@@ -75,7 +75,7 @@ def _subject(project: Project, origin: str) -> Subject:
         artifact=result.artifact,
         units=tuple(unit for unit in units if unit.file in own),
         lines={source.name: tuple(source.text.splitlines()) for source in project.sources},
-        uses=tuple(cross_reference(project.sources)),
+        uses=tuple(cross_reference_of(units, user_pous)),
     )
 
 
