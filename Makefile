@@ -12,6 +12,7 @@ demo: $(VENV)/.stamp-run
 test: $(VENV)/.stamp-dev
 	bash scripts/install-chromium.sh
 	bash scripts/install-mbpoll.sh
+	bash scripts/install-document-tools.sh
 	$(MAKE) lint typecheck pytest
 
 lint: $(VENV)/.stamp-dev

@@ -19,6 +19,7 @@ from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
 from frontend.screens import (
     code,
+    documentation,
     events,
     forcing,
     io,
@@ -111,6 +112,11 @@ class Workspace:
             self.code = code.build(gui)
         with self._tab("I/O", viser.Icon.PLUG_CONNECTED):
             self.io = io.build(gui)
+        with self._tab("Documentation", viser.Icon.FILE_TEXT):
+            context = session.context
+            self.documentation = documentation.build(
+                gui, client, context.projects, context.backup_dir, session.level
+            )
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -335,6 +341,8 @@ class Workspace:
             code.refresh(self.code, feed, self.session.context.projects)
         elif shown == "I/O":
             io.refresh(self.io, resource, status, token, self.session.client_of)
+        elif shown == "Documentation":
+            documentation.refresh(self.documentation, resource, status)
 
     def _follow_forcing(
         self, resource: str | None, status: p.Status | None, login_there: ResourceLogin | None

@@ -44,6 +44,23 @@ def _compile(args: argparse.Namespace) -> int:
     return 0 if result.ok else 1
 
 
+def _docs(args: argparse.Namespace) -> int:
+    from backend.engineering.documentation.export import (
+        DocumentError,
+        document,
+        write_document,
+    )
+
+    try:
+        made = document(args.paths, args.compare)
+        html_path, pdf_path = write_document(made, args.output)
+    except DocumentError as exc:
+        print(f"padt docs: {exc}", file=sys.stderr)
+        return 2
+    print(f"{html_path}\n{pdf_path}\nconfiguration CRC {made.crc}")
+    return 0
+
+
 def _exec(args: argparse.Namespace) -> int:
     from backend.engineering.run_once import run_entry
 
@@ -217,6 +234,32 @@ def build_parser() -> argparse.ArgumentParser:
         "-o", "--output", type=Path, help="write the compiled artifact (JSON) to this file"
     )
     compile_.set_defaults(func=_compile)
+
+    docs = sub.add_parser(
+        "docs", help="printable documentation of a project: DIR/<project>.html and .pdf"
+    )
+    docs.add_argument(
+        "paths",
+        nargs="+",
+        type=Path,
+        metavar="PROJECT",
+        help="a project folder, .st files, or a backup zip written by padt load/reload",
+    )
+    docs.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        metavar="DIR",
+        help="the folder for <project>.html and <project>.pdf (created when missing)",
+    )
+    docs.add_argument(
+        "--compare",
+        type=Path,
+        metavar="OLD",
+        help="a previous version (project folder or backup zip) to compare with",
+    )
+    docs.set_defaults(func=_docs)
 
     exec_ = sub.add_parser(
         "exec", help="compile one .st file and run its FUNCTION main (or --entry) once"

@@ -14,6 +14,12 @@ from typing import Any, TypeVar
 
 from backend.engineering.check_twice import check_twice
 from backend.engineering.compile_gate import compile_checked
+from backend.engineering.documentation.export import (
+    Document,
+    DocumentError,
+    document,
+    version_path,
+)
 from backend.engineering.download import Downloaded, download_checked
 from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.project import ProjectError, compile_project, load_project
@@ -87,6 +93,17 @@ class PadtService:
             "mismatches": list(result.mismatches),
             "runs": [dataclasses.asdict(run) for run in (result.first, result.second)],
         }
+
+    def documentation(self, name: str, compare: str | None) -> Document:
+        """The document of a project served, compared with another project served or a
+        backup in the backup folder (by file name)."""
+        try:
+            previous = None
+            if compare is not None:
+                previous = version_path(compare, self.projects, self.backup_dir)
+            return document([self.project_path(name)], previous)
+        except DocumentError as exc:
+            raise Refusal("project", str(exc)) from None
 
     # ---- resources
 

@@ -104,6 +104,22 @@ def parse_all(sources: list[SourceFile]) -> tuple[list[ast.SourceUnit], list[Dia
     return units, diagnostics
 
 
+def parse_project(
+    sources: list[SourceFile],
+) -> tuple[list[ast.SourceUnit], list[Diagnostic], set[str]]:
+    """The user's files parsed, then the standard library's POUs the user does not replace
+    (a user POU of the same name replaces the standard one); with the diagnostics of the
+    user's files and the keys of the user's POUs."""
+    units, diagnostics = parse_all(sources)
+    user_pous = {key(p.name) for unit in units for p in unit.pous}
+    stdlib_units, stdlib_diagnostics = parse_all(stdlib_sources())
+    assert not stdlib_diagnostics, stdlib_diagnostics
+    for unit in stdlib_units:
+        kept = tuple(p for p in unit.pous if key(p.name) not in user_pous)
+        units.append(replace(unit, pous=kept))
+    return units, diagnostics, user_pous
+
+
 def compile_sources(
     sources: list[SourceFile],
     *,
@@ -150,14 +166,7 @@ def _compile(
     settings: _Settings,
 ) -> CompileResult:
     users = settings.users
-    units, diagnostics = parse_all(sources)
-    user_pous = {key(p.name) for unit in units for p in unit.pous}
-    stdlib_units, stdlib_diagnostics = parse_all(stdlib_sources())
-    assert not stdlib_diagnostics, stdlib_diagnostics
-    for unit in stdlib_units:  # a user POU of the same name replaces the standard one
-        kept = tuple(p for p in unit.pous if key(p.name) not in user_pous)
-        units.append(replace(unit, pous=kept))
-
+    units, diagnostics, user_pous = parse_project(sources)
     resolved = resolve(units)
     diagnostics.extend(resolved.diagnostics)
     diagnostics.extend(check(resolved))

@@ -43,6 +43,8 @@ class Project:
     users: list[UserAccount] = field(default_factory=list)  # PES accounts ([[resource.user]])
     modbus: Any = None  # the [modbus] table as read; the compiler checks it
     config_lines: dict[str, int] = field(default_factory=dict)  # where each setting is
+    author: str = ""  # [project] author and date: for the cover of the documentation
+    date: str = ""
 
 
 def user_entry(account: UserAccount) -> str:
@@ -139,7 +141,9 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
         sources,
         safe_values,
         users,
-        data.get("modbus"),
+        modbus=data.get("modbus"),
+        author=str(meta.get("author", "")),
+        date=str(meta.get("date", "")),
     )
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from tests.bench import (
     bench_compiler,
     bench_context,
+    bench_documentation,
     bench_hostile,
     bench_language,
     bench_modbus,
@@ -27,6 +28,7 @@ def main() -> None:
     bench_rest.main()
     bench_hostile.main()
     bench_ui.main()
+    bench_documentation.main()
 
 
 if __name__ == "__main__":

@@ -1,0 +1,38 @@
+"""The logic: the source of every POU with its line numbers as in the file, highlighted,
+long lines wrapped; an SFC chart also drawn as a diagram."""
+
+from __future__ import annotations
+
+from backend.engineering.documentation.interfaces import project_pous
+from backend.engineering.documentation.markup import Section, anchor, code, escape, heading
+from backend.engineering.documentation.sfc_chart import chart_svg
+from backend.engineering.documentation.st_highlight import listing
+from backend.engineering.documentation.subject import Subject
+from backend.engineering.sources import pou_sources
+
+
+def logic_section(subject: Subject) -> Section:
+    title, entry = heading(1, "Logic", "logic")
+    parts, headings = [title], [entry]
+    sources = pou_sources(subject.project.sources)
+    crcs = {p.name.upper(): p.crc for p in subject.artifact.pous}
+    for file, pou in project_pous(subject):
+        source = sources.get(pou.name.upper())
+        if source is None:
+            continue
+        sub, sub_entry = heading(2, f"{pou.kind} {pou.name}", anchor("logic", pou.name))
+        headings.append(sub_entry)
+        crc = crcs.get(pou.name.upper())
+        facts = f"{escape(file)}, lines {source.first_line} to {source.last_line}" + (
+            f" · CRC {code(crc)}" if crc else ""
+        )
+        chart = ""
+        if pou.sfc is not None and pou.sfc.steps:
+            svg = chart_svg(pou.sfc, subject.lines.get(file, ()))
+            caption = f'<p class="caption">SFC chart of {escape(pou.name)}</p>'
+            chart = f'<div class="chart">{caption}{svg}</div>'
+        parts.append(
+            f'<div class="pou">{sub}<p class="facts">{facts}</p>{chart}'
+            f"{listing(source.lines, source.first_line)}</div>"
+        )
+    return Section('<section class="part">' + "".join(parts) + "</section>", tuple(headings))

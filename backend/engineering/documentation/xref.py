@@ -1,0 +1,43 @@
+"""The cross-reference: every variable, where it is declared, read and written
+(file:line), from the compiler's resolved AST (backend/compiler/cross_reference.py)."""
+
+from __future__ import annotations
+
+from backend.compiler.cross_reference import DECLARED, READ, WRITTEN, Use, VariableUses
+from backend.engineering.documentation.markup import Section, grid, heading
+from backend.engineering.documentation.subject import Subject
+
+
+def places(uses: tuple[Use, ...]) -> str:
+    """The lines of `uses`, file by file: `filler.st:4, 13; globals.st:9` (a file name
+    written once per cell keeps the cross-reference of a large library short)."""
+    lines: dict[str, list[int]] = {}
+    for use in uses:
+        numbers = lines.setdefault(use.pos.file, [])
+        if use.pos.line not in numbers:
+            numbers.append(use.pos.line)
+    return "; ".join(f"{file}:{', '.join(map(str, numbers))}" for file, numbers in lines.items())
+
+
+def xref_section(subject: Subject) -> Section:
+    title, entry = heading(1, "Cross-reference", "xref")
+    intro = (
+        "<p>Every variable with the lines that declare, read and write it. A member, element "
+        "or bit of a variable counts as the variable; calling a function block instance "
+        "writes it; an output or in-out argument writes the variable connected to it.</p>"
+    )
+    columns = [("variable", 30), ("type", 14), ("declared", 22), ("read", 22), ("written", 0)]
+    body = grid(columns, xref_rows(subject))
+    return Section(f'<section class="part">{title}{intro}{body}</section>', (entry,))
+
+
+def xref_rows(subject: Subject) -> list[list[str]]:
+    """Per variable: its name, type, and the places declaring, reading and writing it."""
+    return [_row(variable) for variable in subject.uses]
+
+
+def _row(variable: VariableUses) -> list[str]:
+    def cell(how: str) -> str:
+        return places(variable.where(how)) or "-"
+
+    return [variable.qualified, variable.type, cell(DECLARED), cell(READ), cell(WRITTEN)]

@@ -1,0 +1,252 @@
+"""The printable documentation of a project, read back from the PDF as a reader sees it
+(pdftotext from poppler-utils, page by page)."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from backend.engineering.backup import BackupInfo, write_backup
+from backend.engineering.documentation.export import DocumentError, document
+from backend.engineering.documentation.subject import load_subject
+from backend.engineering.documentation.xref import xref_rows
+from backend.engineering.project import compile_project, load_project
+from padt.cli import main
+from tests.conftest import REPO
+from tests.engineering.documentation.filling_line import write_filling_line
+
+
+def pages(pdf: Path) -> list[str]:
+    """The text of each page, in reading order."""
+    assert shutil.which("pdftotext"), "poppler-utils missing: run scripts/install-document-tools.sh"
+    text = subprocess.run(
+        ["pdftotext", "-layout", str(pdf), "-"], check=True, capture_output=True, text=True
+    ).stdout
+    return text.split("\f")[:-1]  # every page ends with a form feed
+
+
+@pytest.fixture(scope="module")
+def project(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return write_filling_line(tmp_path_factory.mktemp("docs") / "filling-line")
+
+
+@pytest.fixture(scope="module")
+def written(project: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    out = tmp_path_factory.mktemp("out")
+    assert main(["docs", str(project), "-o", str(out)]) == 0
+    return out / "Filling_line.html", out / "Filling_line.pdf"
+
+
+def test_every_page_names_project_crc_and_page_n_of_m(project: Path, written) -> None:
+    crc = compile_project(load_project([project])).artifact.crc  # type: ignore[union-attr]
+    texts = pages(written[1])
+    assert len(texts) >= 8
+    for number, text in enumerate(texts, 1):
+        assert "Filling line" in text, f"page {number}"
+        assert f"CRC {crc}" in text, f"page {number}"
+        assert f"page {number} of {len(texts)}" in text, f"page {number}"
+
+
+def test_cover_and_contents(written) -> None:
+    cover, contents = pages(written[1])[:2]
+    for fact in ("Filling line", "2.1", "A. Engineer", "2026-11-20", "Line1"):
+        assert fact in cover
+    assert re.search(r"Filler\s+1\s+Filler\s+[0-9A-F]{8}", cover)  # a program's CRC
+    # the contents give the page each part starts on
+    found = {
+        title: int(page)
+        for title, page in re.findall(r"^ *(\S[^.\n]*?) \.{3,}\s*(\d+)$", contents, re.M)
+    }
+    texts = pages(written[1])
+    for title in ("Signal list", "Cross-reference", "Logic", "Users"):
+        assert title in texts[found[title] - 1], title
+
+
+def test_users_show_names_and_levels_never_hashes(project: Path, written) -> None:
+    html = written[0].read_text()
+    text = "".join(pages(written[1]))
+    assert re.search(r"admin\s+administrator", text)
+    assert re.search(r"op\s+operator", text)
+    assert "scrypt" not in html and "scrypt" not in text
+
+
+def test_signal_list_has_type_initial_address_and_comment(written) -> None:
+    text = " ".join("".join(pages(written[1])).split())
+    assert "start_button BOOL %IX0.0 globals.st:8 operator start, NO contact" in text
+    assert "bottles DINT globals.st:12 bottles filled since the cold start" in text
+    # I/O: the safe value of an output
+    assert re.search(r"%QX0.1 conveyor_run BOOL output FALSE", text)
+
+
+def test_logic_is_numbered_highlighted_and_the_sfc_drawn(written) -> None:
+    html = written[0].read_text()
+    assert '   25 conveyor_run := <span class="k">NOT</span> bottle_present;' in html
+    svg = re.search(r'<svg[^>]*class="sfc".*?</svg>', html, re.S)
+    assert svg is not None
+    for shown in ("Wait", "Fill", "Settle", "OpenValve", "Count", ">P</text>", "fill_timer.Q"):
+        assert shown in svg.group(0)
+    text = "".join(pages(written[1]))
+    assert "SFC chart of Filler" in text and "OpenValve" in text
+
+
+# what the sources of the Filling line declare, read and write, line by line
+EXPECTED_XREF = [
+    ("bottles", "filler.st:6; globals.st:12", "filler.st:26", "filler.st:26"),
+    (
+        "bottle_present",
+        "conveyor.st:18; filler.st:4; globals.st:9",
+        "conveyor.st:25; filler.st:13, 17",
+        "-",
+    ),
+    ("conveyor_run", "conveyor.st:19; globals.st:11", "-", "conveyor.st:25"),
+    ("recipe", "filler.st:7; globals.st:13", "filler.st:20", "-"),
+    ("start_button", "filler.st:3; globals.st:8", "filler.st:13", "-"),
+    ("valve_open", "filler.st:5; globals.st:10", "-", "filler.st:19, 23"),
+    ("Conveyor.clipped", "conveyor.st:23", "conveyor.st:26", "conveyor.st:26"),
+    ("Conveyor.speed", "conveyor.st:22", "conveyor.st:26", "conveyor.st:26"),
+    ("Filler.Fill", "filler.st:14", "filler.st:20", "-"),
+    ("Filler.fill_timer", "filler.st:10", "filler.st:15", "filler.st:20"),
+    ("Filler.Settle", "filler.st:16", "-", "-"),
+    ("Filler.Wait", "filler.st:12", "-", "-"),
+    ("Limit100.clipped", "conveyor.st:6", "conveyor.st:9", "conveyor.st:8"),
+    ("Limit100.Limit100", "conveyor.st:1", "-", "conveyor.st:10, 12"),
+    ("Limit100.x", "conveyor.st:3", "conveyor.st:8, 12", "-"),
+]
+
+
+def test_cross_reference_line_by_line(project: Path, written) -> None:
+    rows = xref_rows(load_subject([project]))
+    assert [(r[0], r[2], r[3], r[4]) for r in rows] == EXPECTED_XREF
+    # and the reader finds them: each variable's row starts a line with its name, type and
+    # first declaration (a long cell wraps onto the next lines of its column)
+    start = next(i for i, t in enumerate(pages(written[1])) if "Every variable with" in t)
+    lines = [" ".join(line.split()) for line in pages(written[1])[start].splitlines()]
+    for name, declared, _, _ in EXPECTED_XREF:
+        row = next(r for r in rows if r[0] == name)
+        first = declared.split(";")[0].split(",")[0]
+        assert any(line.startswith(f"{name} {row[1]} {first}") for line in lines), name
+    text = " ".join(lines)
+    assert "Filler.fill_timer TON filler.st:10 filler.st:15 filler.st:20" in text
+
+
+def test_same_project_same_bytes(project: Path, written) -> None:
+    again = document([project])
+    assert again.html == written[0].read_text()
+    assert again.pdf == written[1].read_bytes()
+    info = subprocess.run(
+        ["pdfinfo", str(written[1])], check=True, capture_output=True, text=True
+    ).stdout
+    # the project's date, never the clock
+    assert re.search(r"CreationDate:\s+Fri Nov 20 00:00:00 2026 UTC", info)
+    assert re.search(r"ModDate:\s+Fri Nov 20 00:00:00 2026 UTC", info)
+
+
+def test_comparison_names_each_change_and_both_crcs(project: Path, tmp_path: Path) -> None:
+    old = tmp_path / "old"
+    shutil.copytree(project, old)
+    config = (old / "padt.toml").read_text()
+    config = config.replace('version = "2.1"', 'version = "2.0"')
+    config = config.replace("watchdog_ms = 150", "watchdog_ms = 200")
+    config = config.replace('level = "operator"', 'level = "read"')
+    (old / "padt.toml").write_text(config)
+    conveyor = (old / "conveyor.st").read_text().replace("speed + 5", "speed + 2")
+    (old / "conveyor.st").write_text(conveyor.replace("speed : INT := 40", "speed : INT := 30"))
+    old_crc = compile_project(load_project([old])).artifact.crc  # type: ignore[union-attr]
+    new_crc = compile_project(load_project([project])).artifact.crc  # type: ignore[union-attr]
+    assert main(["docs", str(project), "-o", str(tmp_path / "out"), "--compare", str(old)]) == 0
+    texts = pages(tmp_path / "out" / "Filling_line.pdf")
+    start = next(i for i, t in enumerate(texts) if "Version comparison" in t and "previous" in t)
+    text = " ".join("".join(texts[start:]).split())
+    assert f"configuration CRC {old_crc} {new_crc}" in text
+    assert "version 2.0 2.1" in text
+    assert re.search(r"POU Conveyor CRC changed [0-9A-F]{8} [0-9A-F]{8}", text)
+    assert re.search(r"program Conveyor CRC changed [0-9A-F]{8} [0-9A-F]{8}", text)
+    assert "parameter watchdog_ms changed 200 150" in text
+    assert "user op level changed read operator" in text
+    assert "variable Conveyor.speed declaration changed VAR INT := 30 VAR INT := 40" in text
+    assert "-26 speed := Limit100(x := speed + 2" in text
+    assert "+26 speed := Limit100(x := speed + 5" in text
+    assert "-22 speed : INT := 30" in text and "+22 speed : INT := 40" in text
+    assert "Filler" not in text.split("Changed source lines")[1]  # unchanged POUs stay out
+
+
+def test_a_project_that_does_not_compile_is_refused(tmp_path: Path, capsys) -> None:
+    (tmp_path / "bad.st").write_text("PROGRAM P\nx := 1;\nEND_PROGRAM\n")
+    assert main(["docs", str(tmp_path / "bad.st"), "-o", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err
+    assert "does not compile" in error and "bad.st:2:1: error: 'x' is not declared" in error
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(DocumentError, match="no such file"):
+        document([tmp_path / "missing.st"])
+
+
+def test_a_backup_is_documented_and_compared(project: Path, tmp_path: Path) -> None:
+    loaded = load_project([project])
+    artifact = compile_project(loaded).artifact
+    assert artifact is not None
+    info = BackupInfo(loaded.name, loaded.version, "Line1", "load", "padt load")
+    zip_path = write_backup(
+        tmp_path,
+        info,
+        artifact.to_json(),
+        {s.name: s.text for s in loaded.sources},
+        (project / "padt.toml").read_text(),
+        clock=lambda: 1_700_000_000_000_000_000,
+    )
+    from_backup = document([zip_path])
+    assert from_backup.crc == artifact.crc
+    assert from_backup.html == document([project]).html  # the same configuration, the same text
+    compared = document([project], compare=zip_path)
+    assert "No change: both versions are the same configuration." in compared.html
+
+
+def test_a_tampered_backup_is_refused(project: Path, tmp_path: Path) -> None:
+    loaded = load_project([project])
+    artifact = compile_project(loaded).artifact
+    assert artifact is not None
+    sources = {s.name: s.text for s in loaded.sources}
+    sources["conveyor.st"] = sources["conveyor.st"].replace("speed + 5", "speed + 6")
+    info = BackupInfo(loaded.name, loaded.version, "Line1", "load", "padt load")
+    zip_path = write_backup(tmp_path, info, artifact.to_json(), sources, None)
+    with pytest.raises(DocumentError, match=f"the backup holds {artifact.crc}"):
+        document([zip_path])
+
+
+def test_the_same_bytes_in_processes_with_other_hash_seeds(project: Path, written) -> None:
+    """Nothing of a set's or a dict's order leaks into the document."""
+    for seed in ("1", "4242"):
+        out = project.parent / f"seed-{seed}"
+        subprocess.run(
+            [sys.executable, "-m", "padt.cli", "docs", str(project), "-o", str(out)],
+            check=True,
+            capture_output=True,
+            cwd=REPO,
+            env={**os.environ, "PYTHONHASHSEED": seed},
+        )
+        assert (out / "Filling_line.html").read_bytes() == written[0].read_bytes()
+        assert (out / "Filling_line.pdf").read_bytes() == written[1].read_bytes()
+
+
+def test_a_hostile_project_name_and_comment_stay_text(project: Path, tmp_path: Path) -> None:
+    hostile = tmp_path / "hostile"
+    shutil.copytree(project, hostile)
+    name = 'CRC "B" \\\\ </style><script>x()</script> PROJECT'
+    config = (hostile / "padt.toml").read_text()
+    (hostile / "padt.toml").write_text(config.replace('name = "Filling line"', f"name = '{name}'"))
+    globals_st = (hostile / "globals.st").read_text()
+    (hostile / "globals.st").write_text(
+        globals_st.replace("(* filling valve *)", "(* <b>valve</b> </pre></svg> *)")
+    )
+    made = document([hostile])
+    assert "<script>" not in made.html and "<b>valve" not in made.html
+    pdf = tmp_path / "hostile.pdf"
+    pdf.write_bytes(made.pdf)
+    texts = pages(pdf)
+    assert all(name in text for text in texts)  # in the running header, as written
+    assert "<b>valve</b> </pre></svg>" in "".join(texts)
