@@ -234,13 +234,42 @@ class _TypeResolver:
                 return self._array(spec, local_constants)
             case ast.VariadicType():
                 return VariadicType()
-            case ast.SubrangeSpec(base=base, pos=pos):
-                return self.resolve_named(base, pos)  # the range is checked, not represented
+            case ast.SubrangeSpec():
+                return self._subrange(spec, local_constants)
             case ast.EnumSpec():
                 return self._enum(spec, type_name or f"enum@{spec.pos.line}:{spec.pos.col}")
             case ast.StructSpec():
                 return self._struct(spec, type_name or f"struct@{spec.pos.line}:{spec.pos.col}")
         raise AssertionError(f"unhandled type spec {spec!r}")
+
+    def _subrange(
+        self, spec: ast.SubrangeSpec, local_constants: dict[str, ast.Initializer | None]
+    ) -> Type | None:
+        """A subrange is its base type (the range is checked here, not represented): an
+        integer type, and bounds that are constant integers of it, the lower first."""
+        base = self.resolve_named(spec.base, spec.pos)
+        if base is None:
+            return None
+        if not (isinstance(base, ElementaryType) and base.is_integer):
+            message = f"a subrange needs an integer base type, not '{base.name}'"
+            self.report(spec.pos, Code.SUBRANGE_BASE, message)
+            return base
+        bounds = []
+        for bound in (spec.low, spec.high):
+            value = self.const_int(bound, local_constants)
+            if value is None:
+                message = f"subrange bounds must be constant integers of {base.name}"
+                self.report(bound.pos, Code.SUBRANGE_BOUNDS, message)
+                return base
+            if not base.min <= value <= base.max:
+                message = f"subrange bound {value} is outside {base.name}"
+                self.report(bound.pos, Code.SUBRANGE_BOUNDS, message)
+                return base
+            bounds.append(value)
+        low, high = bounds
+        if high < low:
+            self.report(spec.low.pos, Code.EMPTY_SUBRANGE, f"subrange {low}..{high} is empty")
+        return base
 
     def _array(
         self, spec: ast.ArrayType, local_constants: dict[str, ast.Initializer | None]

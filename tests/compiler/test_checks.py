@@ -234,3 +234,22 @@ def test_bool_and_numbers_do_not_mix() -> None:
         "t.st:10:13: error: type mismatch: cannot pass BOOL as INT [E0401]",
         "t.st:10:25: error: type mismatch: cannot pass ANY_INT as BOOL [E0401]",
     ]
+
+
+def test_subranges_are_checked() -> None:
+    """A subrange needs an integer base type and constant bounds of it, the lower first; a
+    valid one (also through a constant) compiles without a word."""
+    source = (
+        "TYPE Bad : INT ('foo' .. 'bar'); Rev : INT (10 .. 1); R : REAL (0 .. 1);\n"
+        "Big : SINT (0 .. 1000); Pct : INT (0 .. 100); END_TYPE\n"
+        "VAR_GLOBAL CONSTANT top : INT := 7; END_VAR\n"
+        "PROGRAM P\nVAR x : INT (-5 .. top); y : UINT (1 .. n); p : Pct; n : INT; END_VAR\n"
+        "END_PROGRAM"
+    )
+    assert diagnostics(source) == [
+        "t.st:1:17: error: subrange bounds must be constant integers of INT [E0124]",
+        "t.st:1:45: error: subrange 10..1 is empty [E0125]",
+        "t.st:1:59: error: a subrange needs an integer base type, not 'REAL' [E0123]",
+        "t.st:2:18: error: subrange bound 1000 is outside SINT [E0124]",
+        "t.st:5:41: error: subrange bounds must be constant integers of UINT [E0124]",
+    ]
