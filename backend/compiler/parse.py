@@ -28,6 +28,7 @@ from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.limits import (
     MAX_BRANCH_DEPTH,
+    MAX_COMMENT_NESTING,
     MAX_DATA_DEPTH,
     MAX_EXPRESSION_DEPTH,
     MAX_LOOP_DEPTH,
@@ -53,6 +54,7 @@ _TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(D|H|MS|M|S|US|NS)", re.IG
 @functools.cache
 def _parser() -> Lark:
     grammar = resources.files("backend.compiler").joinpath("grammar.lark").read_text()
+    grammar = grammar.replace("NESTED_COMMENT_PATTERN", nested_comment(MAX_COMMENT_NESTING))
     # cache=True keeps the built LALR tables in the temp folder: `padt` starts in a fraction;
     # the pragma callback reports skipped pragmas (lark drops ignored tokens otherwise)
     return Lark(
@@ -63,6 +65,17 @@ def _parser() -> Lark:
         cache=True,
         lexer_callbacks={"PRAGMA": _PRAGMAS.append},
     )
+
+
+def nested_comment(depth: int) -> str:
+    """A regular expression for `(* ... *)` holding comments nested up to `depth` levels.
+    Each level reads runs of other characters, a `(` or `*` that opens or closes nothing,
+    or a comment one level down; the possessive repeats keep no backtracking state, so
+    memory stays constant however long the comment."""
+    pattern = r"\(\*(?:[^(*]++|\((?!\*)|\*(?!\)))*+\*\)"
+    for _ in range(depth):
+        pattern = rf"\(\*(?:[^(*]++|\((?!\*)|\*(?!\))|{pattern})*+\*\)"
+    return pattern
 
 
 # Pragmas seen by the lexer during the current parse (the parser is built once, so its
