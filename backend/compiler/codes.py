@@ -139,7 +139,7 @@ class Code(Enum):
     # ---- 07: what padt does not compile
     POINTERS = "E0701", "pointers"
     METHODS = "E0702", "methods"
-    DIRECT_ADDRESS = "E0703", "direct address in code"
+    DIRECT_ADDRESS = "E0703", "direct address of another POU's variable"
     VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array"
     STATEMENT_DEPTH = "E0705", "statements nested too deep"
     EXPRESSION_DEPTH = "E0706", "expression nested too deep"

@@ -214,6 +214,7 @@ class _ToAst(Transformer[Token, Any]):
         super().__init__()
         self.file = file
         self.errors: list[Diagnostic] = []
+        self.addresses: list[tuple[str, Pos]] = []
 
     def _pos(self, item: Any) -> Pos:
         if isinstance(item, Token):
@@ -333,8 +334,12 @@ class _ToAst(Transformer[Token, Any]):
             return ast.BitRef(base, int(text[2:]), base.pos, width)
         return ast.BitRef(base, int(text), base.pos)
 
-    def direct_ref(self, items: list[Token]) -> ast.DirectRef:
-        return ast.DirectRef(str(items[0]).upper(), self._pos(items[0]))
+    def direct_ref(self, items: list[Token]) -> ast.NameRef:
+        """`%IX0.1` in code names the variable located there (resolve declares one where
+        no declaration does): a name like any other, spelled as the address."""
+        address, pos = str(items[0]).upper(), self._pos(items[0])
+        self.addresses.append((address, pos))
+        return ast.NameRef(address, pos)
 
     def deref(self, items: list[Any]) -> ast.Deref:
         return ast.Deref(items[0], items[0].pos)
@@ -564,6 +569,13 @@ class _ToAst(Transformer[Token, Any]):
             for n in names
         ]
 
+    @v_args(meta=True)
+    def unnamed_located(self, meta: Any, items: list[Any]) -> list[ast.VarDecl]:
+        """`AT %IX1.1 : BOOL;`: the variable is named by its address."""
+        location, type_ref, *init = items
+        pos = Pos(self.file, meta.line, meta.column)
+        return [ast.VarDecl(location, type_ref, init[0] if init else None, location, pos)]
+
     def _block(self, kind: str, pos: Pos, items: list[Any]) -> ast.VarBlock:
         qualifiers = tuple(i for i in items if isinstance(i, str))
         decls = tuple(d for group in items if isinstance(group, list) for d in group)
@@ -654,7 +666,15 @@ class _ToAst(Transformer[Token, Any]):
         name, *params = items
         return ast.TaskDecl(str(name), tuple(params), self._pos(name))
 
-    def program_config(self, items: list[Any]) -> ast.ProgramInstanceDecl:
+    @v_args(meta=True)
+    def program_config(self, meta: Any, items: list[Any]) -> ast.ProgramInstanceDecl:
+        # its arguments are ignored (W0602): the addresses they name declare nothing
+        span = ((meta.line, meta.column), (meta.end_line, meta.end_column))
+        self.addresses = [
+            (address, pos)
+            for address, pos in self.addresses
+            if not span[0] <= (pos.line, pos.col) <= span[1]
+        ]
         names = [i for i in items if isinstance(i, Token) and i.type == "NAME"]
         args = tuple(i for i in items if isinstance(i, ast.Argument))
         task = str(names[1]) if len(names) == 3 else None
@@ -869,4 +889,5 @@ def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast
         Diagnostic.at(Pos(file, t.line or 1, t.column or 1), Code.PRAGMA_SKIPPED, "pragma skipped")
         for t in _PRAGMAS
     )
-    return ast.SourceUnit(file, pous, globals_, types, warnings, configurations)
+    addresses = tuple(transformer.addresses)
+    return ast.SourceUnit(file, pous, globals_, types, warnings, configurations, addresses)
