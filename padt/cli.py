@@ -67,6 +67,11 @@ def _exec(args: argparse.Namespace) -> int:
     return run_entry(args.file, args.entry)
 
 
+# `padt sim` exit codes past 0 (ran), 1 (compile errors) and 2 (bad options or project)
+SIM_PROGRAM_ERROR = 3  # a program went to ERROR (run-time error, program watchdog)
+SIM_ERROR_STOP = 4  # the resource went to ERROR STOP (its watchdog: an endless loop)
+
+
 def _sim(args: argparse.Namespace) -> int:
     import logging
 
@@ -105,13 +110,22 @@ def _sim(args: argparse.Namespace) -> int:
     resource_log = logging.getLogger("runtime.resource")
     resource_log.addHandler(logging.NullHandler())
     resource_log.propagate = False
+    faulted = False
     for record in run(simulation):
         print(record.as_json())
-        if record.faults:
+        if record.faults or record.stopped:
             sys.stdout.flush()  # keep stdout and stderr in cycle order on a terminal
             for fault in record.faults:
                 print(f"padt sim: cycle {record.cycle}: program {fault}", file=sys.stderr)
-    return 0
+            faulted = True
+        if record.stopped:
+            name = simulation.resource.name
+            print(
+                f"padt sim: cycle {record.cycle}: resource {name}: ERROR STOP, {record.stopped}",
+                file=sys.stderr,
+            )
+            return SIM_ERROR_STOP
+    return SIM_PROGRAM_ERROR if faulted else 0
 
 
 def _check_twice(args: argparse.Namespace) -> int:
@@ -269,7 +283,10 @@ def build_parser() -> argparse.ArgumentParser:
     exec_.set_defaults(func=_exec)
 
     sim = sub.add_parser(
-        "sim", help="run the user programs on virtual time; print one JSON line per cycle"
+        "sim",
+        help="run the user programs on virtual time; print one JSON line per cycle",
+        epilog="exit codes: 0 ran, 1 compile errors, 2 bad options or project, 3 a program "
+        "went to ERROR, 4 the resource went to ERROR STOP (watchdog)",
     )
     sim.add_argument("paths", nargs="+", type=Path, metavar="PATH")
     sim.add_argument(

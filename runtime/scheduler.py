@@ -109,11 +109,16 @@ class Scheduler:
             return True
         except Halted:  # an Emergency Stop: already in ERROR STOP
             return False
-        except WatchdogExpired:
+        except WatchdogExpired as exc:
             running = [p.name for p in self._variables.programs if p.in_progress]
             cause = f"watchdog: the cycle took longer than {self.watchdog_ns // 1_000_000} ms"
             if running:
                 cause += f" (in program {running[-1]})"
+            # where the cycle was when the watchdog struck: the endless loop, as a rule
+            code = self._variables.code
+            where = code.locate(exc) if code is not None else None
+            if where is not None:
+                cause += f" in {where}"
             self._host.error_stop(cause)
             return False
 

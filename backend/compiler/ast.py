@@ -149,14 +149,6 @@ class BitRef:
 
 
 @dataclass(frozen=True)
-class DirectRef:
-    """A direct address used in code: `%IX0.1`, `%QW3`."""
-
-    address: str
-    pos: Pos
-
-
-@dataclass(frozen=True)
 class Deref:
     base: Expr
     pos: Pos
@@ -207,7 +199,7 @@ class StructInit:
 
 
 Literal = IntLiteral | RealLiteral | BoolLiteral | TimeLiteral | StringLiteral | EnumLiteral
-Expr = Literal | NameRef | MemberRef | IndexRef | BitRef | DirectRef | Deref | Unary | Binary | Call
+Expr = Literal | NameRef | MemberRef | IndexRef | BitRef | Deref | Unary | Binary | Call
 Initializer = Expr | ArrayInit | StructInit
 
 
@@ -414,3 +406,5 @@ class SourceUnit:
     types: tuple[TypeDecl, ...] = field(default=())
     warnings: tuple[Diagnostic, ...] = field(default=())
     configurations: tuple[Configuration, ...] = field(default=())
+    # direct addresses its statements name (`%MW10 := 42;`), upper-case, first use first
+    addresses: tuple[tuple[str, Pos], ...] = field(default=())

@@ -57,6 +57,9 @@ class Code(Enum):
     REPETITION_COUNT = "E0120", "repetition count not an integer literal"
     TOO_MANY_INITIAL_VALUES = "E0121", "more initial values than array elements"
     GENERATED_NAME = "E0122", "name the generated code uses itself"
+    SUBRANGE_BASE = "E0123", "subrange of something else than an integer type"
+    SUBRANGE_BOUNDS = "E0124", "subrange bounds not constant integers of the base type"
+    EMPTY_SUBRANGE = "E0125", "empty subrange"
 
     # ---- 02: names, types and expressions
     UNDECLARED = "E0201", "name not declared"
@@ -140,7 +143,7 @@ class Code(Enum):
     # ---- 07: what padt does not compile
     POINTERS = "E0701", "pointers"
     METHODS = "E0702", "methods"
-    DIRECT_ADDRESS = "E0703", "direct address in code"
+    DIRECT_ADDRESS = "E0703", "direct address of another POU's variable"
     VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array"
     STATEMENT_DEPTH = "E0705", "statements nested too deep"
     EXPRESSION_DEPTH = "E0706", "expression nested too deep"

@@ -18,7 +18,7 @@ from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
-from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable
+from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable, visible
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     ANY_INT,
@@ -104,10 +104,7 @@ class Scope:
 
     # ---- names
     def variable(self, name: str) -> Variable | None:
-        found = self.pou.by_key.get(key(name))
-        if found is not None:
-            return found
-        return self.resolved.globals_by_key.get(key(name))
+        return visible(self.resolved, self.pou, name)
 
     def lookup(self, name: str) -> Binding | None:
         found = self.variable(name)
@@ -206,7 +203,7 @@ class Scope:
                 if base_type is None or integer_like(base_type) is None:
                     return None
                 return {1: BOOL, 8: BYTE, 16: WORD, 32: DWORD}[width]
-            case ast.DirectRef() | ast.Deref():
+            case ast.Deref():
                 return None  # not supported
             case ast.Unary():
                 return self._unary(expr)

@@ -42,6 +42,10 @@ MAX_DATA_VALUES = 1_000_000
 MAX_UNIT_CODE = 2 * MiB
 MAX_PROJECT_CODE = 16 * MiB
 
+# `(* (* *) *)`: how deep comments nest (a regular expression reads them, and cannot count);
+# a comment nested deeper is read as IEC 61131-3 edition 2 reads it, up to its first `*)`.
+MAX_COMMENT_NESTING = 8
+
 # Literals, as written between their quotes or as their characters.
 MAX_STRING_LITERAL = 65_535
 MAX_NUMBER_LITERAL = 1_000

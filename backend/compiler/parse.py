@@ -28,6 +28,7 @@ from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.limits import (
     MAX_BRANCH_DEPTH,
+    MAX_COMMENT_NESTING,
     MAX_DATA_DEPTH,
     MAX_EXPRESSION_DEPTH,
     MAX_LOOP_DEPTH,
@@ -53,6 +54,7 @@ _TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(D|H|MS|M|S|US|NS)", re.IG
 @functools.cache
 def _parser() -> Lark:
     grammar = resources.files("backend.compiler").joinpath("grammar.lark").read_text()
+    grammar = grammar.replace("NESTED_COMMENT_PATTERN", nested_comment(MAX_COMMENT_NESTING))
     # cache=True keeps the built LALR tables in the temp folder: `padt` starts in a fraction;
     # the pragma callback reports skipped pragmas (lark drops ignored tokens otherwise)
     return Lark(
@@ -63,6 +65,17 @@ def _parser() -> Lark:
         cache=True,
         lexer_callbacks={"PRAGMA": _PRAGMAS.append},
     )
+
+
+def nested_comment(depth: int) -> str:
+    """A regular expression for `(* ... *)` holding comments nested up to `depth` levels.
+    Each level reads runs of other characters, a `(` or `*` that opens or closes nothing,
+    or a comment one level down; the possessive repeats keep no backtracking state, so
+    memory stays constant however long the comment."""
+    pattern = r"\(\*(?:[^(*]++|\((?!\*)|\*(?!\)))*+\*\)"
+    for _ in range(depth):
+        pattern = rf"\(\*(?:[^(*]++|\((?!\*)|\*(?!\))|{pattern})*+\*\)"
+    return pattern
 
 
 # Pragmas seen by the lexer during the current parse (the parser is built once, so its
@@ -201,6 +214,7 @@ class _ToAst(Transformer[Token, Any]):
         super().__init__()
         self.file = file
         self.errors: list[Diagnostic] = []
+        self.addresses: list[tuple[str, Pos]] = []
 
     def _pos(self, item: Any) -> Pos:
         if isinstance(item, Token):
@@ -320,8 +334,12 @@ class _ToAst(Transformer[Token, Any]):
             return ast.BitRef(base, int(text[2:]), base.pos, width)
         return ast.BitRef(base, int(text), base.pos)
 
-    def direct_ref(self, items: list[Token]) -> ast.DirectRef:
-        return ast.DirectRef(str(items[0]).upper(), self._pos(items[0]))
+    def direct_ref(self, items: list[Token]) -> ast.NameRef:
+        """`%IX0.1` in code names the variable located there (resolve declares one where
+        no declaration does): a name like any other, spelled as the address."""
+        address, pos = str(items[0]).upper(), self._pos(items[0])
+        self.addresses.append((address, pos))
+        return ast.NameRef(address, pos)
 
     def deref(self, items: list[Any]) -> ast.Deref:
         return ast.Deref(items[0], items[0].pos)
@@ -551,6 +569,13 @@ class _ToAst(Transformer[Token, Any]):
             for n in names
         ]
 
+    @v_args(meta=True)
+    def unnamed_located(self, meta: Any, items: list[Any]) -> list[ast.VarDecl]:
+        """`AT %IX1.1 : BOOL;`: the variable is named by its address."""
+        location, type_ref, *init = items
+        pos = Pos(self.file, meta.line, meta.column)
+        return [ast.VarDecl(location, type_ref, init[0] if init else None, location, pos)]
+
     def _block(self, kind: str, pos: Pos, items: list[Any]) -> ast.VarBlock:
         qualifiers = tuple(i for i in items if isinstance(i, str))
         decls = tuple(d for group in items if isinstance(group, list) for d in group)
@@ -641,7 +666,15 @@ class _ToAst(Transformer[Token, Any]):
         name, *params = items
         return ast.TaskDecl(str(name), tuple(params), self._pos(name))
 
-    def program_config(self, items: list[Any]) -> ast.ProgramInstanceDecl:
+    @v_args(meta=True)
+    def program_config(self, meta: Any, items: list[Any]) -> ast.ProgramInstanceDecl:
+        # its arguments are ignored (W0602): the addresses they name declare nothing
+        span = ((meta.line, meta.column), (meta.end_line, meta.end_column))
+        self.addresses = [
+            (address, pos)
+            for address, pos in self.addresses
+            if not span[0] <= (pos.line, pos.col) <= span[1]
+        ]
         names = [i for i in items if isinstance(i, Token) and i.type == "NAME"]
         args = tuple(i for i in items if isinstance(i, ast.Argument))
         task = str(names[1]) if len(names) == 3 else None
@@ -856,4 +889,5 @@ def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast
         Diagnostic.at(Pos(file, t.line or 1, t.column or 1), Code.PRAGMA_SKIPPED, "pragma skipped")
         for t in _PRAGMAS
     )
-    return ast.SourceUnit(file, pous, globals_, types, warnings, configurations)
+    addresses = tuple(transformer.addresses)
+    return ast.SourceUnit(file, pous, globals_, types, warnings, configurations, addresses)

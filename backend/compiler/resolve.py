@@ -20,8 +20,12 @@ from backend.compiler.limits import MAX_DATA_DEPTH, MAX_EXPRESSION_DEPTH
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
+    BYTE,
+    DWORD,
     INT,
+    LWORD,
     TIME,
+    WORD,
     ArrayType,
     ElementaryType,
     EnumType,
@@ -109,8 +113,47 @@ class Resolved:
 
 
 def python_attr(name: str) -> str:
-    """A Python-safe attribute name for an ST identifier (ST allows Python keywords)."""
+    """A Python-safe attribute name for an ST identifier (ST allows Python keywords), or for
+    a variable named by its address (`%IX1.1` -> `at__IX1_1`: no identifier has `__`)."""
+    if name.startswith("%"):
+        return "at__" + name[1:].replace(".", "_")
     return f"{name}_" if keyword.iskeyword(name) or name in ("None", "True", "False") else name
+
+
+def visible(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:
+    """The variable `name` means inside `pou`: its own, else a global. A direct address
+    (`%IX0.1`) means the variable located there, named or not, of the POU or the globals."""
+    found = pou.by_key.get(key(name)) or resolved.globals_by_key.get(key(name))
+    if found is None and name.startswith("%"):
+        address = name.upper()
+        candidates = (*pou.variables, *resolved.globals)
+        found = next((v for v in candidates if v.location == address), None)
+    return found
+
+
+# the type of a direct address by its size letter: %IX0.1 / %I0.1 a bit, %MW10 a word
+_ADDRESS_SIZES = {"X": BOOL, "B": BYTE, "W": WORD, "D": DWORD, "L": LWORD}
+
+
+def _implicit_globals(units: list[ast.SourceUnit], result: Resolved) -> None:
+    """An address code names that no declaration locates is a global of its own
+    (`%MW10 := 42;` writes the memory word 10), of the type its size letter says."""
+    located = {v.location for p in result.pous.values() for v in p.variables if v.location}
+    located.update(v.location for v in result.globals if v.location)
+    first: dict[str, Pos] = {}
+    for unit in units:
+        for address, pos in unit.addresses:
+            first.setdefault(address, pos)
+    for address in sorted(first):
+        if address in located:
+            continue
+        size = address.lstrip("%IQM")[:1]  # the area letter may be missing (`%B6`)
+        variable = Variable(
+            address, "VAR_GLOBAL", _ADDRESS_SIZES.get(size, BOOL), None, False, False, address,
+            python_attr(address), first[address],
+        )  # fmt: skip
+        result.globals.append(variable)
+        result.globals_by_key[key(address)] = variable
 
 
 class _TypeResolver:
@@ -234,13 +277,42 @@ class _TypeResolver:
                 return self._array(spec, local_constants)
             case ast.VariadicType():
                 return VariadicType()
-            case ast.SubrangeSpec(base=base, pos=pos):
-                return self.resolve_named(base, pos)  # the range is checked, not represented
+            case ast.SubrangeSpec():
+                return self._subrange(spec, local_constants)
             case ast.EnumSpec():
                 return self._enum(spec, type_name or f"enum@{spec.pos.line}:{spec.pos.col}")
             case ast.StructSpec():
                 return self._struct(spec, type_name or f"struct@{spec.pos.line}:{spec.pos.col}")
         raise AssertionError(f"unhandled type spec {spec!r}")
+
+    def _subrange(
+        self, spec: ast.SubrangeSpec, local_constants: dict[str, ast.Initializer | None]
+    ) -> Type | None:
+        """A subrange is its base type (the range is checked here, not represented): an
+        integer type, and bounds that are constant integers of it, the lower first."""
+        base = self.resolve_named(spec.base, spec.pos)
+        if base is None:
+            return None
+        if not (isinstance(base, ElementaryType) and base.is_integer):
+            message = f"a subrange needs an integer base type, not '{base.name}'"
+            self.report(spec.pos, Code.SUBRANGE_BASE, message)
+            return base
+        bounds = []
+        for bound in (spec.low, spec.high):
+            value = self.const_int(bound, local_constants)
+            if value is None:
+                message = f"subrange bounds must be constant integers of {base.name}"
+                self.report(bound.pos, Code.SUBRANGE_BOUNDS, message)
+                return base
+            if not base.min <= value <= base.max:
+                message = f"subrange bound {value} is outside {base.name}"
+                self.report(bound.pos, Code.SUBRANGE_BOUNDS, message)
+                return base
+            bounds.append(value)
+        low, high = bounds
+        if high < low:
+            self.report(spec.low.pos, Code.EMPTY_SUBRANGE, f"subrange {low}..{high} is empty")
+        return base
 
     def _array(
         self, spec: ast.ArrayType, local_constants: dict[str, ast.Initializer | None]
@@ -370,6 +442,7 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
             seen[key(pou.name)] = pou
     for name in sorted(seen):
         result.pous[name] = _resolve_pou(seen[name], types, result)
+    _implicit_globals(units, result)
     user_names = (types.decls, result.pous, result.globals_by_key)
     if not any(key(NAMESPACE) in names for names in user_names):  # the user's SYS wins
         result.system = system_variables()

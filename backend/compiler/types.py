@@ -208,7 +208,7 @@ def assignable(target: Type, source: Type) -> bool:
         return True
     if target.is_numeric and source.is_numeric:
         return True
-    if target.is_integer and source.category == "bool":
-        return True
-    # an integer literal 0 or 1 stands for FALSE / TRUE in many dialects
-    return target.category == "bool" and source == ANY_INT
+    # BOOL widens to a bit string (IEC 61131-3 ed. 3, table 11), but BOOL and the numbers
+    # do not mix: `i := TRUE` and `b := 42` are mistakes (the literals 0 and 1 as BOOL are
+    # a question of the value, answered by the check stage: `bool_literal`)
+    return target.category == "bits" and source.category == "bool"

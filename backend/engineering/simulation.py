@@ -18,7 +18,7 @@ from typing import Any
 from backend.engineering.literals import LiteralError, parse_literal
 from runtime.clock import VirtualClock
 from runtime.contract.artifact import Artifact
-from runtime.contract.protocol import ProgramState
+from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import (
     TIME_TYPES,
@@ -60,6 +60,7 @@ class CycleRecord:
     t_ms: int
     values: dict[str, Any]  # JSON-ready: TIME in ms, strings decoded
     faults: tuple[str, ...] = ()  # "Program: cause" for programs that went to ERROR now
+    stopped: str | None = None  # the cause, when the resource went to ERROR STOP now
 
     def as_json(self) -> str:
         # allow_nan=False: non-finite REALs are already strings, so every line is strict JSON
@@ -208,7 +209,9 @@ def _checked_write(resource: Resource, setting: Setting) -> tuple[str, Any]:
 
 def run(simulation: Simulation) -> Iterator[CycleRecord]:
     """Cycle k runs with the clock at (k-1) x the interval; the resource advances each
-    program's time by the clock's difference between cycles, i.e. exactly one interval."""
+    program's time by the clock's difference between cycles, i.e. exactly one interval.
+    A cycle that puts the resource in ERROR STOP (its watchdog: an endless loop) is the
+    last: nothing runs after it until INIT."""
     resource, clock = simulation.resource, simulation.clock
     resource.start()
     for cycle in range(1, simulation.cycles + 1):
@@ -225,5 +228,9 @@ def run(simulation: Simulation) -> Iterator[CycleRecord]:
             path: display(resource.variables.value(path), simulation.types[path])
             for path in simulation.traced
         }
-        yield CycleRecord(cycle, (cycle - 1) * simulation.cycle_ns // NS_PER_MS, shown, faults)
+        stopped = resource.error if resource.state == ResourceState.ERROR_STOP else None
+        t_ms = (cycle - 1) * simulation.cycle_ns // NS_PER_MS
+        yield CycleRecord(cycle, t_ms, shown, faults, stopped)
+        if stopped is not None:
+            return
         clock.advance(simulation.cycle_ns)

@@ -196,7 +196,7 @@ def test_division_by_zero_puts_the_program_in_error_and_the_run_goes_on(
     tmp_path: Path,
 ) -> None:
     result = padt("sim", write(tmp_path, DIVISION), "--cycles", "4")
-    assert result.returncode == 0, result.stderr
+    assert result.returncode == 3, result.stderr  # all cycles ran, but a program failed
     records = lines(result.stdout)
     assert len(records) == 4
     assert column(records, "Tick.n") == [1, 2, 3, 4]  # the other program runs on
@@ -206,6 +206,38 @@ def test_division_by_zero_puts_the_program_in_error_and_the_run_goes_on(
     source = tmp_path / "prog.st"
     assert result.stderr.splitlines() == [
         f"padt sim: cycle 2: program Divide: integer division by zero in POU Divide ({source}:5)"
+    ]
+
+
+ENDLESS = """
+PROGRAM Spin
+VAR n : INT; END_VAR
+n := n + 1;
+IF n = 3 THEN
+  WHILE TRUE DO n := n; END_WHILE;
+END_IF;
+END_PROGRAM
+
+PROGRAM Tick
+VAR n : INT; END_VAR
+n := n + 1;
+END_PROGRAM
+"""
+
+
+def test_an_endless_loop_ends_the_run_in_error_stop_with_its_place(tmp_path: Path) -> None:
+    """The resource watchdog (200 ms of real time by default) ends the cycle that never
+    ends: the resource goes to ERROR STOP, as on the controller, and nothing runs after."""
+    result = padt("sim", write(tmp_path, ENDLESS), "--cycles", "6")
+    assert result.returncode == 4, result.stderr
+    records = lines(result.stdout)
+    assert [r["cycle"] for r in records] == [1, 2, 3]  # the cycle of the loop is the last
+    assert column(records, "Spin.n") == [1, 2, 3]
+    assert column(records, "Tick.n") == [1, 2, 2]  # Tick runs after Spin: not in cycle 3
+    source = tmp_path / "prog.st"
+    assert result.stderr.splitlines() == [
+        "padt sim: cycle 3: resource Resource1: ERROR STOP, watchdog: the cycle took longer "
+        f"than 200 ms (in program Spin) in POU Spin ({source}:6)"
     ]
 
 

@@ -213,3 +213,43 @@ def test_a_problem_is_reported_once_where_its_node_is_reached_twice(
         f"PROGRAM P\nVAR x : INT; p : Point; END_VAR\n{body}\nEND_PROGRAM"
     )
     assert diagnostics(source) == [expected]
+
+
+def test_bool_and_numbers_do_not_mix() -> None:
+    """`b := 42` and `i := TRUE` are mistakes, in statements, initial values and arguments;
+    the literals 0 and 1 are BOOL values and a BOOL widens to a bit string."""
+    source = (
+        "FUNCTION F : INT\nVAR_INPUT a : INT; c : BOOL; END_VAR\nF := a;\nEND_FUNCTION\n"
+        "PROGRAM P\n"
+        "VAR b : BOOL; i : INT; w : WORD; r : REAL; e : BOOL := 2; ok : BOOL := 1; END_VAR\n"
+        "b := 42;\ni := TRUE;\nr := b;\ni := F(a := FALSE, c := 7);\n"
+        "b := 0;\nb := 1;\nw := b;\ni := F(a := 3, c := 1);\nb := i > 0;\n"
+        "END_PROGRAM"
+    )
+    assert diagnostics(source) == [
+        "t.st:6:56: error: type mismatch: cannot assign ANY_INT to BOOL [E0209]",
+        "t.st:7:6: error: type mismatch: cannot assign ANY_INT to BOOL [E0209]",
+        "t.st:8:6: error: type mismatch: cannot assign BOOL to INT [E0209]",
+        "t.st:9:6: error: type mismatch: cannot assign BOOL to REAL [E0209]",
+        "t.st:10:13: error: type mismatch: cannot pass BOOL as INT [E0401]",
+        "t.st:10:25: error: type mismatch: cannot pass ANY_INT as BOOL [E0401]",
+    ]
+
+
+def test_subranges_are_checked() -> None:
+    """A subrange needs an integer base type and constant bounds of it, the lower first; a
+    valid one (also through a constant) compiles without a word."""
+    source = (
+        "TYPE Bad : INT ('foo' .. 'bar'); Rev : INT (10 .. 1); R : REAL (0 .. 1);\n"
+        "Big : SINT (0 .. 1000); Pct : INT (0 .. 100); END_TYPE\n"
+        "VAR_GLOBAL CONSTANT top : INT := 7; END_VAR\n"
+        "PROGRAM P\nVAR x : INT (-5 .. top); y : UINT (1 .. n); p : Pct; n : INT; END_VAR\n"
+        "END_PROGRAM"
+    )
+    assert diagnostics(source) == [
+        "t.st:1:17: error: subrange bounds must be constant integers of INT [E0124]",
+        "t.st:1:45: error: subrange 10..1 is empty [E0125]",
+        "t.st:1:59: error: a subrange needs an integer base type, not 'REAL' [E0123]",
+        "t.st:2:18: error: subrange bound 1000 is outside SINT [E0124]",
+        "t.st:5:41: error: subrange bounds must be constant integers of UINT [E0124]",
+    ]

@@ -59,8 +59,10 @@ def test_endless_loops_end_in_error_stop(form: str) -> None:
     # generous bound: the watchdog is 50 ms; a hang would never return at all
     assert time.monotonic() - started < 5
     assert resource.state == ResourceState.ERROR_STOP
+    # the cause names the program, and the POU and line the loop is on
+    where = "POU Spinner (loop.st:5)" if form == "nested in an FB" else "POU Loop (loop.st:10)"
     assert resource.status().error == (
-        "watchdog: the cycle took longer than 50 ms (in program Loop)"
+        f"watchdog: the cycle took longer than 50 ms (in program Loop) in {where}"
     )
     with pytest.raises(Refusal, match="INIT first"):
         resource.start()

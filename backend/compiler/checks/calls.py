@@ -4,7 +4,7 @@ arguments of any call of a user POU, which must name its parameters and not be t
 from __future__ import annotations
 
 from backend.compiler import ast
-from backend.compiler.checks.initializers import mismatch
+from backend.compiler.checks.initializers import mismatch, takes
 from backend.compiler.checks.targets import is_lvalue, refuse_system_write, writable_target
 from backend.compiler.codes import Code
 from backend.compiler.infer import ProgramRef, Scope
@@ -73,5 +73,5 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
     elif param.kind == "VAR_IN_OUT":
         refuse_system_write(scope, arg.value)
     value_type = scope.type_of(arg.value)
-    if value_type is not None and not assignable(param.type, value_type):
+    if value_type is not None and not takes(param.type, arg.value, value_type):
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, mismatch(param.type, value_type))

@@ -6,6 +6,7 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.builtins import Builtin
 from backend.compiler.checks.calls import check_connection
+from backend.compiler.checks.initializers import takes
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
 from backend.compiler.infer import Misfit, NoValue, Scope, StandardFunction, UserFunction
@@ -72,6 +73,6 @@ def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
             message = f"cannot store {param.type.name} output in {value_type.name}"
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, message)
         return
-    if not assignable(param.type, value_type):
+    if not takes(param.type, arg.value, value_type):
         message = f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, message)

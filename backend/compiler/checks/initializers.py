@@ -10,6 +10,7 @@ from backend.compiler.codes import Code
 from backend.compiler.infer import EnumValue, Scope
 from backend.compiler.resolve import Variable
 from backend.compiler.types import (
+    BOOL,
     ArrayType,
     ElementaryType,
     EnumType,
@@ -86,10 +87,26 @@ def check_value(scope: Scope, target: Type, value: ast.Expr) -> None:
     value_type = scope.type_of(value)
     if value_type is None:
         return
-    if not assignable(target, value_type):
+    if not takes(target, value, value_type):
         scope.report(value.pos, Code.TYPE_MISMATCH, mismatch(target, value_type))
     elif isinstance(value, ast.IntLiteral) and value.type_name is None:
         check_range(scope, target, value)
+
+
+def takes(target: Type, value: ast.Expr, value_type: Type) -> bool:
+    """Can `value` (of `value_type`) be stored in `target`? The types must be assignable;
+    besides, the plain literals 0 and 1 are BOOL values (IEC 61131-3 boolean literals)."""
+    return assignable(target, value_type) or bool_literal(target, value)
+
+
+def bool_literal(target: Type, value: ast.Expr) -> bool:
+    return (
+        target == BOOL
+        and isinstance(value, ast.IntLiteral)
+        and value.type_name is None
+        and not value.based
+        and value.value in (0, 1)
+    )
 
 
 def literal_fits(target: ElementaryType, literal: ast.IntLiteral) -> bool:

@@ -17,6 +17,13 @@ def check_name(scope: Scope, name: ast.NameRef, name_type: Type | None) -> None:
         spelled = name.name
         message = f"{spelled} holds the system variables; name one, as in {spelled}.COLDSTART"
         scope.report(name.pos, Code.SYSTEM_NAMESPACE, message)
+    elif name.name.startswith("%"):
+        # resolve declares every address no declaration locates: this one is another POU's
+        message = (
+            f"{name.name} is located in a variable of another POU; declare it in a "
+            "VAR_GLOBAL to use it here"
+        )
+        scope.report(name.pos, Code.DIRECT_ADDRESS, message)
     else:
         scope.report(name.pos, Code.UNDECLARED, f"'{name.name}' is not declared")
 

@@ -15,7 +15,7 @@ from backend.compiler.ast import key
 from backend.compiler.checks.data import resource_data
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
-from backend.compiler.resolve import PouSymbols, Resolved, Variable
+from backend.compiler.resolve import PouSymbols, Resolved, Variable, visible
 from backend.compiler.source import Pos
 from backend.compiler.types import FbType
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
@@ -136,7 +136,7 @@ def _reachable(resolved: Resolved, pou_key: str) -> Iterator[PouSymbols]:
 
 def _global(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:
     """The global variable a name in a POU stands for (through VAR_EXTERNAL or not)."""
-    variable = pou.by_key.get(key(name)) or resolved.globals_by_key.get(key(name))
+    variable = visible(resolved, pou, name)
     return variable if variable is not None and variable.kind == "VAR_GLOBAL" else None
 
 

@@ -1,4 +1,4 @@
-"""References that padt does not compile: direct addresses in code and pointers."""
+"""References that padt does not compile: pointers."""
 
 from __future__ import annotations
 
@@ -7,9 +7,5 @@ from backend.compiler.codes import Code
 from backend.compiler.infer import Scope
 
 
-def check_reference(scope: Scope, expr: ast.DirectRef | ast.Deref) -> None:
-    if isinstance(expr, ast.DirectRef):
-        message = "direct addresses in code are not supported; declare a located variable"
-        scope.report(expr.pos, Code.DIRECT_ADDRESS, message)
-    else:
-        scope.report(expr.pos, Code.POINTERS, "pointers are not supported")
+def check_pointer(scope: Scope, expr: ast.Deref) -> None:
+    scope.report(expr.pos, Code.POINTERS, "pointers are not supported")

@@ -340,7 +340,8 @@ class TreeWalker:
         self.block(_Frame(instance, self._typing(pou)), pou.pou.body)
 
     def _ton(self, timer: Instance) -> None:
-        """TON, on-delay: Q follows IN after IN has been TRUE for PT; ET counts up to PT."""
+        """TON, on-delay: Q follows IN after IN has been TRUE for PT; ET counts up to PT;
+        once Q is TRUE, Q and ET hold until IN falls (whatever PT does then)."""
         pou = timer.pou
         time_of = {key(v.name): v.type for v in pou.variables}
 
@@ -351,12 +352,11 @@ class TreeWalker:
             if not timer.value("running"):
                 store("running", True)
                 store("start", self.now_ns)
-            store("ET", int(self.now_ns) - int(timer.value("start")))
-            if int(timer.value("ET")) >= int(timer.value("PT")):
-                store("ET", timer.value("PT"))
-                store("Q", True)
-            else:
-                store("Q", False)
+            if not timer.value("Q"):
+                store("ET", int(self.now_ns) - int(timer.value("start")))
+                if int(timer.value("ET")) >= int(timer.value("PT")):
+                    store("ET", timer.value("PT"))
+                    store("Q", True)
         else:
             store("running", False)
             store("Q", False)
