@@ -106,7 +106,7 @@ def test_the_source_of_tankcontrol_with_live_values(demo: Demo) -> None:
             lambda: "TON" in text_of(page, '[data-testid="code-header"]'),
         )
         assert "standard library" in text_of(page, '[data-testid="code-header"]')
-        wait_for_text(page, '[data-code-line="8"]', "FUNCTION_BLOCK TON")
+        wait_for_text(page, '[data-code-line="9"]', "FUNCTION_BLOCK TON")
         assert code_value(page, "TankControl.refillDelay.PT") == "T#2s"
         shoot(page, "code-ton-1400")
         page.set_viewport_size({"width": 1920, "height": 1080})
