@@ -250,3 +250,16 @@ def test_a_hostile_project_name_and_comment_stay_text(project: Path, tmp_path: P
     texts = pages(pdf)
     assert all(name in text for text in texts)  # in the running header, as written
     assert "<b>valve</b> </pre></svg>" in "".join(texts)
+
+
+def test_the_modbus_maps_of_the_demo(tmp_path: Path) -> None:
+    """The served image and each remote device with its points, as docs/modbus.md maps them."""
+    assert main(["docs", str(REPO / "backend" / "projects" / "demo"), "-o", str(tmp_path)]) == 0
+    text = "\n".join(pages(tmp_path / "Demo_tank.pdf"))
+    field_bus = text[text.index("Field bus (Modbus TCP)") :]
+    assert "served on 127.0.0.1:5020" in field_bus
+    assert re.search(r"input register\s+0\s+%IW0\s+tankLevel\s+INT", field_bus)
+    assert re.search(r"coil\s+0\s+%QX0\.0\s+pumpCommand\s+BOOL", field_bus)
+    device = field_bus[field_bus.index("Remote device plant") :]
+    assert "127.0.0.1:5021 unit 1, polled every 100 ms, lost after 500 ms" in device
+    assert re.search(r"input register\s+0\s+%IW0\s+tankLevel\s+INT\s+big/big\s+-1", device)
