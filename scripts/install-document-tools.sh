@@ -13,15 +13,8 @@ for lib in libpango-1.0.so.0 libpangoft2-1.0.so.0; do
 done
 fonts=$(fc-list 2>/dev/null || true)
 grep -i dejavu <<<"$fonts" >/dev/null || missing+=(fonts-dejavu-core)
-if [ ${#missing[@]} -eq 0 ]; then
-    exit 0
+if [ ${#missing[@]} -gt 0 ]; then
+    # shellcheck disable=SC2046  # one word per package
+    bash "$(dirname "$0")/apt-install.sh" "the documentation export" \
+        $(printf '%s\n' "${missing[@]}" | sort -u)
 fi
-SUDO=""
-if [ "$(id -u)" != "0" ]; then
-    SUDO="sudo"
-fi
-packages=$(printf '%s\n' "${missing[@]}" | sort -u | tr '\n' ' ')
-echo "installing Debian packages for the documentation export: $packages"
-$SUDO apt-get update -qq
-# shellcheck disable=SC2086  # one word per package
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq $packages >/dev/null
