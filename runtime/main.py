@@ -21,11 +21,11 @@ from runtime.contract.state_folder import (
     identity_path,
 )
 from runtime.contract.stop_request import StopRequest
-from runtime.cycle_priority import DEFAULT_NICE, NICE_RANGE, raise_priority
 from runtime.event_log import EventLog
 from runtime.identity import Identity
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
+from runtime.runtime_priority import DEFAULT_NICE, NICE_RANGE, raise_priority
 
 log = logging.getLogger("padt.runtime")
 
@@ -47,12 +47,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="how often the context is saved while the resource runs (default 1000)",
     )
     parser.add_argument(
-        "--cycle-nice",
+        "--nice",
         type=int,
         default=DEFAULT_NICE,
         choices=NICE_RANGE,
         metavar="N",
-        help=f"priority of the cycle thread as a nice value, -20 (highest) to 19 (default "
+        help=f"priority of the runtime as a nice value, -20 (highest) to 19 (default "
         f"{DEFAULT_NICE}; below 0 needs CAP_SYS_NICE, else it runs at normal priority)",
     )
     parser.add_argument(
@@ -95,6 +95,9 @@ def run(args: argparse.Namespace) -> int:
     if not valid_resource_name(args.resource):
         print(f"padt runtime: invalid resource name '{args.resource}'", file=sys.stderr)
         return 2
+    # first: the threads started from here on (Zenoh's, the I/O's, the savers) inherit it,
+    # so that none of them holds the GIL the cycle waits for while it waits for a CPU
+    priority = raise_priority(args.nice)
     clock = RealClock()
     events = EventLog(clock.wall_ns, long_path=events_path(args.state_dir))
     identity = Identity.kept_in(identity_path(args.state_dir))
@@ -128,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
     )
     driver = CycleDriver(resource, clock, link, save, args.context_period_ms * 1_000_000)
     log.info("resource %s: %s, Zenoh %s", args.resource, resource.state.value, args.zenoh)
-    log.info("cycle thread: %s", raise_priority(args.cycle_nice))  # driver.run is this thread
+    log.info("runtime priority: %s", priority)
     try:
         driver.run(stop.event)
     finally:

@@ -1,4 +1,5 @@
-"""The cycle thread asks for a higher priority than the PADT and browsers beside it."""
+"""The runtime asks for a higher priority than the PADT and browsers beside it, for every
+thread it has."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import os
 import threading
 from pathlib import Path
 
-from runtime.cycle_priority import DEFAULT_NICE, raise_priority
+from runtime.runtime_priority import DEFAULT_NICE, raise_priority
 from tests.conftest import free_port
 from tests.support.runtime_process import running_resource, write_demo_artifact
 
@@ -28,11 +29,12 @@ def test_the_priority_is_the_calling_threads_own() -> None:
     assert raise_priority(0) == "normal priority (nice 0)"
 
 
-def test_a_runtime_runs_its_cycle_at_a_higher_priority_when_it_may(tmp_path: Path) -> None:
+def test_every_thread_of_a_runtime_has_the_higher_priority_when_it_may(tmp_path: Path) -> None:
     write_demo_artifact(tmp_path)
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with running_resource("Tank1", tmp_path, endpoint) as (process, client):
         client.wait_until_answering()
-        cycle_thread = os.getpriority(os.PRIO_PROCESS, process.pid)  # the main thread
+        threads = Path(f"/proc/{process.pid}/task")
+        nice = {os.getpriority(os.PRIO_PROCESS, int(task.name)) for task in threads.iterdir()}
     may = os.geteuid() == 0  # CI runs as root; elsewhere CAP_SYS_NICE is rare
-    assert cycle_thread == (DEFAULT_NICE if may else 0)
+    assert nice == {DEFAULT_NICE if may else 0}  # the cycle, Zenoh's threads, the savers
