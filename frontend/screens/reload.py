@@ -805,7 +805,7 @@ def _rename_note(errors: list[str]) -> str:
     if not errors:
         return (
             f'<div style="{_MUTED};font-size:0.85em">One rename a line, full paths, e.g. '
-            "<code>TankControl.level -&gt; TankControl.tankLevel</code>: the new name keeps "
+            "<code>TankControl.level -&gt; TankControl.measuredLevel</code>: the new name keeps "
             "the old one's value.</div>"
         )
     lines = "".join(f"<div>{html.escape(error)}</div>" for error in errors)

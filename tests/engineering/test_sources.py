@@ -64,7 +64,7 @@ def test_the_project_that_compiles_to_the_running_crc_is_found(tmp_path: Path) -
     assert (found.project, found.crc) == ("demo", crc)
     source = found.source_of("TankControl")
     assert source is not None
-    assert (source.name, source.file, source.first_line) == ("TankControl", "tank.st", 4)
+    assert (source.name, source.file, source.first_line) == ("TankControl", "tank.st", 6)
     assert source.lines[0] == "PROGRAM TankControl"
     assert source.lines[-1] == "END_PROGRAM"
     assert not source.standard
@@ -74,7 +74,7 @@ def test_an_edited_project_is_not_taken_for_the_running_one(tmp_path: Path) -> N
     demo = _copy_demo(tmp_path / "demo")
     crc = _crc(demo)
     st = demo / "tank.st"
-    st.write_text(st.read_text().replace("level + inflow", "level + inflow + 1"))
+    st.write_text(st.read_text().replace("level := tankLevel", "level := tankLevel + 1"))
     assert find_sources(crc, {"demo": demo}) is None
     assert find_sources("1A2B3C4D", {"demo": demo}) is None
     assert find_sources(crc, {}) is None
@@ -101,14 +101,15 @@ def test_each_line_names_the_variables_it_mentions_in_their_order(tmp_path: Path
     demo = _copy_demo(tmp_path / "demo")
     found = find_sources(_crc(demo), {"demo": demo})
     assert found is not None
-    assert _named(found, "TankControl", "level := level + inflow") == [
+    assert _named(found, "TankControl", "level := tankLevel") == [
         ("level", "TankControl.level"),
-        ("inflow", "TankControl.inflow"),
+        ("tankLevel", "tankLevel"),  # a global: named by its own path
     ]
     # the call of an FB instance names its inputs as members of the instance
     assert _named(found, "TankControl", "refillDelay(IN") == [
         ("refillDelay.IN", "TankControl.refillDelay.IN"),
         ("pump", "TankControl.pump"),
+        ("alarmPlant", "TankControl.alarmPlant"),
         ("level", "TankControl.level"),
         ("lowLevel", "TankControl.lowLevel"),
         ("refillDelay.PT", "TankControl.refillDelay.PT"),

@@ -46,14 +46,49 @@ def test_start_stop_step_over_zenoh(tmp_path: Path, zenoh_endpoint: str) -> None
         client.command("step")
         after = client.command("values")
         assert after["cycle"] == before["cycle"] + 1
-        level_before = before["values"]["TankControl.level"]
-        pump = before["values"]["TankControl.pump"]
-        expected = level_before + (8 if pump else 0) - 3
-        assert after["values"]["TankControl.level"] == expected
+        # no plant answers here: TankControl holds its last good level, commands the pump off
+        held = after["values"]
+        assert held["tankLevel"] == -1 and held["TankControl.alarmPlant"] is True
+        assert held["TankControl.level"] == before["values"]["TankControl.level"]
+        assert held["pumpCommand"] is False
 
         assert client.command("start")["status"]["state"] == "RUN"
         time.sleep(0.35)
         assert client.command("values")["cycle"] >= after["cycle"] + 2
+
+
+def test_a_frozen_program_stepped_on_forced_levels(tmp_path: Path, zenoh_endpoint: str) -> None:
+    """What a commissioning engineer does without the plant: force the level, freeze the
+    program and step it; the pump stops at the high level, then rests the refill delay
+    (2 s: 20 program cycles of 100 ms) at the low one and starts again."""
+    write_demo_artifact(tmp_path)
+    with running_resource("Tank1", tmp_path, zenoh_endpoint) as (_, client):
+
+        def step_with(**forced: Any) -> dict[str, Any]:
+            for name, value in forced.items():
+                assert client.command("force", variable=name, value=value)["ok"]
+            assert client.command("step_program", program="TankControl")["ok"]
+            return dict(client.command("values")["values"])
+
+        assert client.command("start_forcing")["ok"]  # global: tankLevel is a global
+        assert client.command("freeze", program="TankControl")["ok"]
+        starts = client.command("values")["values"]["TankControl.pumpStarts"]
+        high = step_with(tankLevel=850)
+        assert (high["TankControl.level"], high["TankControl.alarmPlant"]) == (850, False)
+        assert (high["TankControl.pump"], high["pumpCommand"]) == (False, False)
+        resting = [step_with(tankLevel=250)] + [step_with() for _ in range(20)]
+        assert [v["TankControl.level"] for v in resting] == [250] * 21
+        elapsed_ms = [v["TankControl.refillDelay.ET"] // 1_000_000 for v in resting]
+        assert elapsed_ms[:20] == list(range(0, 2000, 100))  # one cycle time per step
+        assert [v["TankControl.pump"] for v in resting] == [False] * 20 + [True]
+        assert resting[-1]["pumpCommand"] is True
+        assert resting[-1]["TankControl.pumpStarts"] == starts + 1
+
+        lost = step_with(tankLevel=-1)  # the plant's level lost: last good level held
+        assert (lost["TankControl.level"], lost["TankControl.alarmPlant"]) == (250, True)
+        assert (lost["TankControl.pump"], lost["pumpCommand"]) == (True, False)
+        assert client.command("unfreeze", program="TankControl")["ok"]
+        assert client.command("stop_forcing")["ok"]
 
 
 def test_bad_commands_get_structured_errors(tmp_path: Path, zenoh_endpoint: str) -> None:

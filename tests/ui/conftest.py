@@ -12,6 +12,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from contextlib import closing
 from pathlib import Path
 
 import pytest
@@ -23,6 +24,7 @@ from backend.engineering.watch_lists import WatchLists
 from frontend.app import PadtUi
 from frontend.ui_context import UiContext
 from padt.demo import demo_project_with_accounts
+from padt.demo_plant import DemoPlant
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from tests.conftest import REPO, free_port
@@ -67,15 +69,16 @@ def _group(pattern: re.Pattern[str], line: str) -> str | None:
 
 @pytest.fixture
 def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
-    """The demo resource with a read-only user `viewer`, and the UI with three PADT
-    accounts: `admin` (security administrator), `viewer` (read-write), `guest` (read-only);
-    the UI knows the demo's project as `demo`."""
+    """The demo resource, polling its simulated plant, with a read-only user `viewer`, and
+    the UI with three PADT accounts: `admin` (security administrator), `viewer`
+    (read-write), `guest` (read-only); the UI knows the demo's project as `demo`."""
     verifier = hash_password(PASSWORD)
     resource_users = [
         UserAccount("admin", "administrator", verifier),
         UserAccount("viewer", "read", verifier),
     ]
-    folder = demo_project_with_accounts(tmp_path, resource_users)
+    tank = DemoPlant()  # the level moves as in `padt demo`: the plant fills and drains it
+    folder = demo_project_with_accounts(tmp_path, resource_users, tank.start())
     result = compile_project(load_project([folder]))
     assert result.artifact is not None
     store_artifact(tmp_path, result.artifact)
@@ -88,7 +91,10 @@ def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
             UserAccount("guest", "read-only", verifier),
         ),
     )
-    with running_resource("Tank1", tmp_path, zenoh_endpoint, "--modbus-port", "0") as (_, client):
+    with (
+        closing(tank),
+        running_resource("Tank1", tmp_path, zenoh_endpoint, "--modbus-port", "0") as (_, client),
+    ):
         session = client.session
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
         lists = WatchLists(tmp_path / "watch-lists.json")

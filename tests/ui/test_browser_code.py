@@ -68,36 +68,39 @@ def test_the_source_of_tankcontrol_with_live_values(demo: Demo) -> None:
         header = text_of(page, '[data-testid="code-header"]')
         assert "tank.st of project demo" in header, header
         # the lines with their numbers in the file, the source as written
-        assert shown_lines(page) == list(range(4, 36))  # PROGRAM to END_PROGRAM
-        wait_for_text(page, '[data-code-line="4"]', "PROGRAM TankControl")
-        wait_for_text(page, '[data-code-line="18"]', "  level := level + inflow;")
-        # the variables of a line with their live values: the level moves while it runs
+        assert shown_lines(page) == list(range(6, 33))  # PROGRAM to END_PROGRAM
+        wait_for_text(page, '[data-code-line="6"]', "PROGRAM TankControl")
+        wait_for_text(page, '[data-code-line="20"]', "  level := tankLevel;")
+        # the variables of a line with their live values: the level moves while it runs,
+        # measured by the plant (the global tankLevel, read over Modbus)
         wait_until("the level is shown", lambda: code_value(page, "TankControl.level").isdigit())
         first = code_value(page, "TankControl.level")
         wait_until("the level changes", lambda: code_value(page, "TankControl.level") != first)
         assert code_value(page, "TankControl.pump") in ("TRUE", "FALSE")
+        assert code_value(page, "TankControl.alarmPlant") == "FALSE"  # the plant answers
+        assert code_value(page, "tankLevel").isdigit()
         assert code_value(page, "TankControl.restartDelay") == "T#2s"
-        line_28 = page.locator('tr[data-line="28"]').inner_text()
-        assert "refillDelay.IN =" in line_28 and "restartDelay = T#2s" in line_28, line_28
+        line_25 = page.locator('tr[data-line="25"]').inner_text()
+        assert "refillDelay.IN =" in line_25 and "restartDelay = T#2s" in line_25, line_25
         shoot(page, "code-1400")
-        # line 28 with its six values is wider than the work area: it does not wrap, the
+        # line 25 with its seven values is wider than the work area: it does not wrap, the
         # panel scrolls sideways and stays there while the values change, the line
         # numbers in view
-        assert rect(page, 'tr[data-line="28"]')["height"] < 30  # one line of text
+        assert rect(page, 'tr[data-line="25"]')["height"] < 30  # one line of text
         page.evaluate(f"{SCROLLER}.scrollLeft = 400")
         time.sleep(1.0)  # ten new values
         assert page.evaluate(f"{SCROLLER}.scrollLeft") == 400
         panel = page.evaluate(f"{SCROLLER}.getBoundingClientRect().left")
-        assert rect(page, 'tr[data-line="28"] td')["x"] >= panel - 1
+        assert rect(page, 'tr[data-line="25"] td')["x"] >= panel - 1
         shoot(page, "code-1400-scrolled")
         page.evaluate(f"{SCROLLER}.scrollLeft = 0")
 
         # page on: from line 20, then back to the POU's first line
         set_number(page, "Lines from", 20)
         wait_until("the page starts at line 20", lambda: shown_lines(page)[:1] == [20])
-        assert shown_lines(page)[-1] == 35
+        assert shown_lines(page)[-1] == 32
         page.get_by_role("button", name="Previous page").click()
-        wait_until("the page starts at line 4", lambda: shown_lines(page)[:1] == [4])
+        wait_until("the page starts at line 6", lambda: shown_lines(page)[:1] == [6])
 
         # the timer: the standard TON, its own variables as members of the instance
         choose(page, "Instance", "TankControl.refillDelay")
@@ -113,7 +116,7 @@ def test_the_source_of_tankcontrol_with_live_values(demo: Demo) -> None:
         shoot(page, "code-ton-1920")
 
         choose(page, "Instance", "TankControl")
-        wait_for_text(page, '[data-code-line="4"]', "PROGRAM TankControl")
+        wait_for_text(page, '[data-code-line="6"]', "PROGRAM TankControl")
         shoot(page, "code-1920")
 
         # after Stop the values stand still
@@ -132,7 +135,7 @@ def test_an_edited_project_is_not_shown_as_the_running_source(demo: Demo, tmp_pa
     # the demo's project folder (the fixture's state folder is this test's tmp_path),
     # edited after the download: it now compiles to another CRC than the one running
     tank = tmp_path / "project" / "tank.st"
-    tank.write_text(tank.read_text().replace("level + inflow", "level + inflow + 1"))
+    tank.write_text(tank.read_text().replace("level := tankLevel", "level := tankLevel + 1"))
     with chromium() as browser:
         page = browser.new_page(viewport={"width": 1400, "height": 900})
         open_demo_as_admin(page, demo)

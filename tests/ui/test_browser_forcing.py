@@ -47,12 +47,14 @@ def test_write_a_value_and_a_bad_literal_is_refused_at_the_field(demo: Demo) -> 
         page = browser.new_page(viewport={"width": 1400, "height": 900})
         open_demo_as_admin(page, demo)
         page.get_by_role("tab", name="Online test").click()
-        assert value(page, "TankControl.outflow") == "3"
+        assert value(page, "TankControl.lowLevel") == "300"
 
-        edit_value(page, "tankcontrol.outflow", "three")  # names are case-insensitive
+        edit_value(page, "tankcontrol.lowlevel", "three")  # names are case-insensitive
         wait_until(
             "the type and value are shown",
-            lambda: "TankControl.outflow INT · now 3" in text_of(page, '[data-testid="edit-info"]'),
+            lambda: (
+                "TankControl.lowLevel INT · now 300" in text_of(page, '[data-testid="edit-info"]')
+            ),
         )
         wait_for_text(page, '[data-testid="value-error"]', "three is not an ST literal of type INT")
         assert not button_enabled(page, "Write")
@@ -60,9 +62,9 @@ def test_write_a_value_and_a_bad_literal_is_refused_at_the_field(demo: Demo) -> 
         shoot_both(page, "value-error")
         time.sleep(0.5)
         assert page.get_by_role("dialog").count() == 0
-        assert value(page, "TankControl.outflow") == "3"  # nothing was sent
+        assert value(page, "TankControl.lowLevel") == "300"  # nothing was sent
 
-        field(page, "New value").fill("5")
+        field(page, "New value").fill("350")
         wait_until(
             "the error goes", lambda: page.locator('[data-testid="value-error"]').count() == 0
         )
@@ -70,8 +72,10 @@ def test_write_a_value_and_a_bad_literal_is_refused_at_the_field(demo: Demo) -> 
         page.get_by_role("button", name="Write", exact=True).click()
         page.get_by_role("dialog").wait_for()
         shoot_both(page, "write-dialog")
-        confirm(page, "Write TankControl.outflow (INT) once: 3 → 5")
-        wait_until("the Online test shows 5", lambda: value(page, "TankControl.outflow") == "5")
+        confirm(page, "Write TankControl.lowLevel (INT) once: 300 → 350")
+        wait_until(
+            "the Online test shows 350", lambda: value(page, "TankControl.lowLevel") == "350"
+        )
 
         # a click on a row of the table chooses its variable, a second click again
         page.locator('tr:has(td[data-var="TankControl.pump"])').click()
@@ -136,10 +140,10 @@ def test_force_the_pump_off_with_a_time_limit_and_clear_all(demo: Demo) -> None:
         wait_until("pump is forced", lambda: quality(page, "TankControl.pump") == "forced")
         assert value(page, "TankControl.pump") == "FALSE"
         assert "FORCING ACTIVE" in banner(page)
+        # the plant's pump stops (its feedback over Modbus) and the tank drains
+        wait_until("the plant's pump stops", lambda: value(page, "pumpRunning") == "FALSE")
         level = int(value(page, "TankControl.level"))
-        wait_until(  # the pump stays off: the tank drains
-            "the level falls", lambda: int(value(page, "TankControl.level")) < level - 6
-        )
+        wait_until("the level falls", lambda: int(value(page, "TankControl.level")) < level - 6)
 
         page.get_by_role("tab", name="Forcing").click()
         page.get_by_role("button", name="Clear all", exact=True).click()

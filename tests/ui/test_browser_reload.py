@@ -82,15 +82,15 @@ def count(page: Page, fate_name: str) -> str:
 
 
 def falling_level(page: Page, variable: str) -> int:
-    """Wait until the pump is off and the level falls, well between the high and the low
-    level, and return it. In that phase a value carried over and one started afresh (500,
-    the pump on, rising) cannot be mistaken for each other; and the level stays above the
-    low level for some 15 s (3 per cycle of 100 ms), so the pump stays off meanwhile."""
+    """Wait until the pump rests and the level falls, well between the high and the low
+    level, and return it. In that phase the pump's state carried over and one started
+    afresh (the pump on) cannot be mistaken for each other; and the plant drains the tank
+    for some 10 s more (3 l per 100 ms) before the pump may restart."""
     page.get_by_role("tab", name="Online test").click()
     wait_until(
-        "the pump is off and the level between 750 and 450",
+        "the pump is off and the level between 780 and 550",
         lambda: (
-            value(page, "TankControl.pump") == "FALSE" and 450 < int(value(page, variable)) < 750
+            value(page, "TankControl.pump") == "FALSE" and 550 < int(value(page, variable)) < 780
         ),
         timeout_s=60,
     )
@@ -98,8 +98,9 @@ def falling_level(page: Page, variable: str) -> int:
 
 
 def assert_carried_over(page: Page, variable: str, before: int) -> None:
-    """The level went on falling from where it was: the pump still off, the level below
-    what it was before the reload (a fresh start would be 500 with the pump on, rising)."""
+    """The program's state went on from where it was: the pump still resting, the level
+    (the plant's) below what it was before the reload (a fresh start would turn the pump
+    on, and the tank would fill)."""
     page.get_by_role("tab", name="Online test").click()
     wait_until(f"{variable} is shown", lambda: page.locator(f'[data-var="{variable}"]').count() > 0)
     assert value(page, "TankControl.pump") == "FALSE"
@@ -118,17 +119,17 @@ def test_preview_and_reload_a_new_variable_keeps_the_running_values(
         page.get_by_role("tab", name="Reload").click()
 
         # a typing error: the preview shows where, with the compiler's code
-        edit(source, "level := level + inflow;", "level := level + inflw;")
+        edit(source, "level := tankLevel;", "level := tankLvel;")
         preview(page)
         assert "No preview (compile)" in text_of(page, '[data-testid="preview-error"]')
         diagnostic = text_of(page, '[data-testid="diagnostic"]')
-        assert "tank.st:18:20" in diagnostic and "E0201" in diagnostic, diagnostic
-        assert "'inflw' is not declared" in diagnostic
+        assert "tank.st:20:12" in diagnostic and "E0201" in diagnostic, diagnostic
+        assert "'tankLvel' is not declared" in diagnostic
         assert not button_enabled(page, "Reload")
         shoot(page, "reload-compile-error-1400")
 
         # corrected, and a new variable: the low alarm's limit becomes a setting
-        edit(source, "level := level + inflw;", "level := level + inflow;")
+        edit(source, "level := tankLvel;", "level := tankLevel;")
         edit(
             source,
             "  alarmLow : BOOL;",
@@ -209,11 +210,11 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
 ) -> None:
     source = tank_source(tmp_path)
     text = source.read_text(encoding="utf-8")
-    # the engineer renames the level, drops the pump start counter and narrows the inflow
-    text = re.sub(r"\blevel\b", "tankLevel", text)
-    text = text.replace("inflow : INT := 8;", "inflow : SINT := 8;")
-    text = text.replace("  pumpStarts : DINT;           (* how often the pump was started *)\n", "")
-    text = text.replace("  pumpStarts := pumpStarts + 1;\n", "")
+    # the engineer renames the level, drops the low alarm and narrows the pump start counter
+    text = text.replace("  alarmLow : BOOL;             (* level critically low *)\n", "")
+    text = text.replace("alarmLow := level < 100;\n", "")
+    text = re.sub(r"\blevel\b", "measuredLevel", text)
+    text = text.replace("pumpStarts : DINT;", "pumpStarts : INT;")
     source.write_text(text, encoding="utf-8")
     with chromium() as browser:
         page = browser.new_page(viewport={"width": 1920, "height": 1080})
@@ -225,36 +226,37 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
 
         # without a rename map the level is lost and a new one starts at 500
         preview(page)
-        wait_for_fate(page, "TankControl.tankLevel", "new")
+        wait_for_fate(page, "TankControl.measuredLevel", "new")
         assert fate(page, "TankControl.level") == "deleted"
-        assert fate(page, "TankControl.pumpStarts") == "deleted"
+        assert fate(page, "TankControl.alarmLow") == "deleted"
         assert count(page, "deleted") == "2 deleted"
         assert "2 values deleted" in page.locator('[data-testid="risk"]').all_inner_texts()[1]
-        # INT to SINT does not convert every value: the initial value is taken
-        assert fate(page, "TankControl.inflow") == "initialised"
-        assert "INT → SINT" in page.locator('tr:has([data-fate="TankControl.inflow"])').inner_text()
+        # DINT to INT does not convert every value: the initial value is taken
+        assert fate(page, "TankControl.pumpStarts") == "initialised"
+        starts = page.locator('tr:has([data-fate="TankControl.pumpStarts"])').inner_text()
+        assert "DINT → INT" in starts
 
         # an invalid line is shown at the field and holds the preview back
-        text_area(page, "Renames").fill("TankControl.level => tankLevel")
+        text_area(page, "Renames").fill("TankControl.level => measuredLevel")
         wait_for_text(
             page,
             '[data-testid="rename-errors"]',
-            "line 1: 'TankControl.level => tankLevel' is not old -> new",
+            "line 1: 'TankControl.level => measuredLevel' is not old -> new",
         )
         assert not button_enabled(page, "Preview")
         assert not button_enabled(page, "Reload")
         # the map corrected: the preview comes again by itself
         for each in (page, other):
-            text_area(each, "Renames").fill("TankControl.level -> TankControl.tankLevel")
+            text_area(each, "Renames").fill("TankControl.level -> TankControl.measuredLevel")
         preview(other)
         for each in (page, other):
-            wait_for_fate(each, "TankControl.tankLevel", "kept")
+            wait_for_fate(each, "TankControl.measuredLevel", "kept")
             wait_for_shown(each, '[data-count="deleted"]', "1 deleted")
-        row = page.locator('tr:has([data-fate="TankControl.tankLevel"])').inner_text()
+        row = page.locator('tr:has([data-fate="TankControl.measuredLevel"])').inner_text()
         assert "the value of TankControl.level" in row
         risks = page.locator('[data-testid="risk"]').all_inner_texts()
-        assert "1 value initialised" in risks[0] and "TankControl.inflow" in risks[0]
-        assert "1 value deleted" in risks[1] and "TankControl.pumpStarts" in risks[1]
+        assert "1 value initialised" in risks[0] and "TankControl.pumpStarts" in risks[0]
+        assert "1 value deleted" in risks[1] and "TankControl.alarmLow" in risks[1]
         reason = text_of(page, '[data-testid="reload-disabled"]')
         assert "tick each risk above (2 of 2 not ticked)" in reason
         page.get_by_label("Accept: 1 value deleted", exact=True).check()
@@ -279,9 +281,10 @@ def test_a_rename_keeps_its_value_a_deletion_is_confirmed_and_a_stale_preview_is
         wait_for_text(page, '[data-testid="reload-new-crc"]', new_crc, timeout_s=30)
         wait_for_text(page, '[data-testid="resource-crc"]', new_crc)
         shoot(page, "reload-done-1920")
-        assert_carried_over(page, "TankControl.tankLevel", before)
+        assert_carried_over(page, "TankControl.measuredLevel", before)
         assert page.locator('[data-var="TankControl.level"]').count() == 0
-        assert value(page, "TankControl.inflow") == "8"  # its initial value
+        assert page.locator('[data-var="TankControl.alarmLow"]').count() == 0
+        assert value(page, "TankControl.pumpStarts") == "0"  # its initial value
 
         # the other browser's preview was made against the configuration before: its
         # reload is refused by the resource, which runs another one by now

@@ -41,8 +41,6 @@ def gui() -> Iterator[viser.GuiApi]:
 TYPES = {
     "TankControl.level": "INT",
     "TankControl.pump": "BOOL",
-    "TankControl.inflow": "INT",
-    "TankControl.outflow": "INT",
     "TankControl.highLevel": "INT",
     "TankControl.lowLevel": "INT",
     "TankControl.refillDelay.IN": "BOOL",
@@ -53,7 +51,10 @@ TYPES = {
     "TankControl.refillDelay.start": "TIME",
     "TankControl.restartDelay": "TIME",
     "TankControl.alarmLow": "BOOL",
+    "TankControl.alarmPlant": "BOOL",
     "TankControl.pumpStarts": "DINT",
+    "tankLevel": "INT",
+    "pumpCommand": "BOOL",
 }
 
 
@@ -86,7 +87,7 @@ def test_the_lines_in_view_and_only_their_variables_are_wanted(
     page = _refreshed(screen, feed, {"demo": demo_project_path()})
     assert screen.instance.value == "TankControl"
     assert tuple(screen.instance.options) == ("TankControl", "TankControl.refillDelay")
-    assert '<span data-code-line="33">alarmLow := level &lt; 100;</span>' in page
+    assert '<span data-code-line="30">alarmLow := level &lt; 100;</span>' in page
     assert 'data-code-var="TankControl.level" data-quality="live"' in page
     assert 'data-code-var="TankControl.pump" data-quality="forced" style="color:#c92a2a"' in page
     assert set(code.wanted(screen)) == set(TYPES) - {
@@ -94,12 +95,12 @@ def test_the_lines_in_view_and_only_their_variables_are_wanted(
         "TankControl.refillDelay.running",
         "TankControl.refillDelay.start",
     }
-    screen.first.value = 20  # type: ignore[misc]
+    screen.first.value = 26  # type: ignore[misc]
     code.refresh(screen, feed, {"demo": demo_project_path()})
-    assert 'data-line="19"' not in screen.shown and 'data-line="20"' in screen.shown
+    assert 'data-line="25"' not in screen.shown and 'data-line="26"' in screen.shown
     wanted = code.wanted(screen)
     assert "TankControl.level" in wanted
-    assert "TankControl.inflow" not in wanted  # named on lines 8 and 18 only
+    assert "TankControl.highLevel" not in wanted  # named on lines 10 and 22 only
 
 
 def test_a_configuration_of_no_known_project_shows_no_source(gui: viser.GuiApi) -> None:

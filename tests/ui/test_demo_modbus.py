@@ -4,6 +4,8 @@ command at coil 0, and they are what the resource holds."""
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 from tests.runtime.test_modbus_server import mbpoll, polled, wait_for
 from tests.support.modbus_device import modbus_client, reachable
 from tests.ui.browser_steps import Demo
@@ -16,14 +18,24 @@ def test_mbpoll_reads_the_demos_level_and_pump(demo: Demo) -> None:
         # the level moves: the plant fills and drains the tank as the pump command says
         first = modbus.read_input_registers(0, count=1).registers[0]
         wait_for(lambda: modbus.read_input_registers(0, count=1).registers[0] != first, 20)
-        # over a whole tank cycle the pump command is on once and off once
-        seen: set[bool] = set()
+        # the loop is closed: TankControl reads the plant's level and commands its pump,
+        # so over a tank cycle (half a minute) the pump stops at the high level (800 l) and
+        # starts again after the refill delay at the low one (300 l), and the level served
+        # stays between them (give or take a poll period and the refill delay's draining)
+        samples: list[tuple[int, bool]] = []
 
-        def both_seen() -> bool:
-            seen.add(modbus.read_coils(0, count=1).bits[0])
-            return len(seen) == 2
+        def restarted() -> bool:
+            level = modbus.read_input_registers(0, count=1).registers[0]
+            samples.append((level, modbus.read_coils(0, count=1).bits[0]))
+            pumping = [on for _, on in samples]
+            runs = pumping[:1] + [on for was, on in pairwise(pumping) if on != was]
+            return runs[-3:] == [True, False, True]  # on, stopped, started again
 
-        wait_for(both_seen, 60)
+        wait_for(restarted, 90)
+        assert all(200 <= level <= 850 for level, _ in samples), samples
+        switches = [i for i in range(1, len(samples)) if samples[i][1] != samples[i - 1][1]]
+        stopped_at, started_at = (samples[i - 1][0] for i in switches[-2:])
+        assert stopped_at >= 780 and started_at <= 300, samples
     level = polled(mbpoll(port, "-t", "3", "-r", "0", "-c", "1"))[0]
     assert 0 <= int(level.split()[0]) <= 1000
     assert polled(mbpoll(port, "-t", "0", "-r", "0", "-c", "1"))[0] in ("0", "1")
