@@ -31,6 +31,13 @@ def _device() -> SimDevice:
     )
 
 
+def tick(level: int, running: bool) -> int:
+    """The tank's level after one tick, the pump running or not."""
+    if running:
+        level = min(MAX_LEVEL, level + INFLOW)
+    return max(0, level - OUTFLOW)
+
+
 class DemoPlant:
     """Runs on a thread of its own; `port` is where it listens once it is started."""
 
@@ -64,9 +71,7 @@ class DemoPlant:
         while True:
             command = await server.async_getValues(0, COIL, 0, 1)
             running = bool(command[0])
-            if running:
-                self.level = min(MAX_LEVEL, self.level + INFLOW)
-            self.level = max(0, self.level - OUTFLOW)
+            self.level = tick(self.level, running)
             await server.async_setValues(0, INPUT_REGISTER, 0, [self.level])
             await server.async_setValues(0, DISCRETE_INPUT, 0, [running])
             await asyncio.sleep(TICK_S)

@@ -9,6 +9,7 @@ from typing import Any
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.engineering.project import demo_project_path
+from padt.demo_plant import START_LEVEL, tick
 from runtime.clock import VirtualClock
 from runtime.resource import Resource
 from tests.conftest import padt
@@ -29,13 +30,19 @@ END_PROGRAM
 """
 
 
-def run_cycles(text: str, cycles: int, cycle_ms: int = 100) -> list[dict[str, Any]]:
+def started(text: str) -> tuple[Resource, VirtualClock]:
+    """A resource running `text`, on a virtual clock."""
     result = compile_sources([SourceFile("t.st", text)])
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
     clock = VirtualClock()
     resource = Resource("R", clock)
     resource.load(result.artifact)
     resource.start()
+    return resource, clock
+
+
+def run_cycles(text: str, cycles: int, cycle_ms: int = 100) -> list[dict[str, Any]]:
+    resource, clock = started(text)
     trace = []
     for _ in range(cycles):
         resource.cycle()
@@ -96,13 +103,25 @@ def test_syntax_errors_in_several_files_are_all_reported() -> None:
     assert all("syntax error" in d.message for d in result.diagnostics)
 
 
-def test_demo_project_compiles_and_runs_the_tank() -> None:
-    text = (demo_project_path() / "tank.st").read_text()
-    trace = run_cycles(text, 300)
-    levels = [v["TankControl.level"] for v in trace]
-    assert levels[0] == 505 and max(levels) <= 805
-    starts = [v["TankControl.pumpStarts"] for v in trace]
-    assert starts[-1] == 1  # the pump rested, then restarted once after the refill delay
+def test_demo_project_compiles_and_runs_the_tank_in_closed_loop_with_its_plant() -> None:
+    """TankControl and the demo's plant (its tank, one tick per cycle of 100 ms) for a
+    minute of virtual time, the plant's level as tankLevel, pumpCommand as its pump."""
+    resource, clock = started((demo_project_path() / "tank.st").read_text())
+    level, running, trace = START_LEVEL, False, []
+    for _ in range(600):
+        resource.io.set_inputs({"tankLevel": level, "pumpRunning": running})
+        resource.cycle()
+        values = resource.variables.values()
+        trace.append((level, values))
+        running = resource.io.outputs["pumpCommand"]
+        level = tick(level, running)
+        clock.advance(100_000_000)
+    assert all(v["TankControl.level"] == plant for plant, v in trace)  # no model of its own
+    assert not any(v["TankControl.alarmPlant"] for _, v in trace)
+    levels = [plant for plant, _ in trace]
+    assert max(levels) <= 805 and min(levels) >= 235  # the marks, give or take the delay
+    starts = [v["TankControl.pumpStarts"] for _, v in trace]
+    assert starts[-1] == 2  # filled, rested, restarted after the refill delay: twice
 
 
 def test_cli_compile_json_and_exit_codes(tmp_path: Path) -> None:
