@@ -166,7 +166,8 @@ def _source_diffs(old: Subject, new: Subject) -> str:
             continue
         shown = (b or a).name  # type: ignore[union-attr]
         status = ADDED if a is None else REMOVED if b is None else CHANGED
-        files = " → ".join(dict.fromkeys(s.file for s in (a, b) if s is not None))
+        names = [old.shown(a.file) if a else "", new.shown(b.file) if b else ""]
+        files = " → ".join(dict.fromkeys(name for name in names if name))
         parts.append(
             f'<h3 id="{anchor("diff", shown)}">{escape(shown)} ({status}, {escape(files)})</h3>'
             + _diff(a, b)

@@ -23,9 +23,8 @@ def logic_section(subject: Subject) -> Section:
         sub, sub_entry = heading(2, f"{pou.kind} {pou.name}", anchor("logic", pou.name))
         headings.append(sub_entry)
         crc = crcs.get(pou.name.upper())
-        facts = f"{escape(file)}, lines {source.first_line} to {source.last_line}" + (
-            f" · CRC {code(crc)}" if crc else ""
-        )
+        lines = f"lines {source.first_line} to {source.last_line}"
+        facts = f"{escape(subject.shown(file))}, {lines}" + (f" · CRC {code(crc)}" if crc else "")
         chart = ""
         if pou.sfc is not None and pou.sfc.steps:
             svg = chart_svg(pou.sfc, subject.lines.get(file, ()))

@@ -9,6 +9,7 @@ machine, so the same project gives the same document.
 
 from __future__ import annotations
 
+import os
 import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -42,10 +43,19 @@ class Subject:
     units: tuple[ast.SourceUnit, ...]  # the project's own files, parsed
     lines: dict[str, tuple[str, ...]]  # file -> its lines
     uses: tuple[VariableUses, ...]
+    # loose files are named by the path they were given as (the CRC covers those names);
+    # the document names them without the folder they share, which says nothing about
+    # the program and would fill every cell of the cross-reference
+    folder: str = ""
 
     @property
     def crc(self) -> str:
         return self.artifact.crc
+
+    def shown(self, file: str) -> str:
+        """A source's name as the document writes it."""
+        prefix = os.path.join(self.folder, "") if self.folder else ""
+        return file[len(prefix) :] if prefix and file.startswith(prefix) else file
 
 
 def load_subject(paths: list[Path]) -> Subject:
@@ -56,7 +66,14 @@ def load_subject(paths: list[Path]) -> Subject:
         project = load_project(paths)
     except (ProjectError, OSError) as exc:
         raise DocumentError(str(exc)) from None
-    return _subject(project, " ".join(str(p) for p in paths))
+    subject = _subject(project, " ".join(str(p) for p in paths))
+    if len(paths) == 1 and paths[0].is_dir():
+        return subject
+    try:  # none when some are given absolute and some relative
+        folder = os.path.commonpath([os.path.dirname(s.name) for s in project.sources])
+    except ValueError:
+        folder = ""
+    return replace(subject, folder=folder)
 
 
 def _subject(project: Project, origin: str) -> Subject:

@@ -3,17 +3,20 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from backend.compiler.cross_reference import DECLARED, READ, WRITTEN, Use, VariableUses
 from backend.engineering.documentation.markup import Section, grid, heading
 from backend.engineering.documentation.subject import Subject
 
 
-def places(uses: tuple[Use, ...]) -> str:
+def places(uses: tuple[Use, ...], shown: Callable[[str], str]) -> str:
     """The lines of `uses`, file by file: `filler.st:4, 13; globals.st:9` (a file name
-    written once per cell keeps the cross-reference of a large library short)."""
+    written once per cell keeps the cross-reference of a large library short); `shown`
+    names a file."""
     lines: dict[str, list[int]] = {}
     for use in uses:
-        numbers = lines.setdefault(use.pos.file, [])
+        numbers = lines.setdefault(shown(use.pos.file), [])
         if use.pos.line not in numbers:
             numbers.append(use.pos.line)
     return "; ".join(f"{file}:{', '.join(map(str, numbers))}" for file, numbers in lines.items())
@@ -33,11 +36,11 @@ def xref_section(subject: Subject) -> Section:
 
 def xref_rows(subject: Subject) -> list[list[str]]:
     """Per variable: its name, type, and the places declaring, reading and writing it."""
-    return [_row(variable) for variable in subject.uses]
+    return [_row(variable, subject.shown) for variable in subject.uses]
 
 
-def _row(variable: VariableUses) -> list[str]:
+def _row(variable: VariableUses, shown: Callable[[str], str]) -> list[str]:
     def cell(how: str) -> str:
-        return places(variable.where(how)) or "-"
+        return places(variable.where(how), shown) or "-"
 
     return [variable.qualified, variable.type, cell(DECLARED), cell(READ), cell(WRITTEN)]

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from backend.engineering.backup import BackupInfo, write_backup
+from backend.engineering.documentation.document import document_html
 from backend.engineering.documentation.export import DocumentError, document
 from backend.engineering.documentation.subject import load_subject
 from backend.engineering.documentation.xref import xref_rows
@@ -263,3 +264,14 @@ def test_the_modbus_maps_of_the_demo(tmp_path: Path) -> None:
     device = field_bus[field_bus.index("Remote device plant") :]
     assert "127.0.0.1:5021 unit 1, polled every 100 ms, lost after 500 ms" in device
     assert re.search(r"input register\s+0\s+%IW0\s+tankLevel\s+INT\s+big/big\s+-1", device)
+
+
+def test_loose_files_are_named_without_their_folder(project: Path) -> None:
+    # given by absolute path (as `padt docs /path/a.st /path/b.st` does), the folder they
+    # share is no part of the program: the cross-reference and the listings leave it out
+    subject = load_subject(sorted(project.resolve().glob("*.st")))
+    rows = {row[0]: row for row in xref_rows(subject)}
+    assert rows["bottles"][2:] == ["filler.st:6; globals.st:12", "filler.st:26", "filler.st:26"]
+    html = document_html(subject)
+    assert str(project.resolve()) not in html
+    assert "filler.st, lines 1 to" in html
