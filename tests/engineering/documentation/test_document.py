@@ -275,3 +275,14 @@ def test_loose_files_are_named_without_their_folder(project: Path) -> None:
     html = document_html(subject)
     assert str(project.resolve()) not in html
     assert "filler.st, lines 1 to" in html
+
+
+def test_one_file_cross_reference_gives_bare_line_numbers(tmp_path: Path) -> None:
+    source = tmp_path / "count.st"
+    source.write_text(
+        "PROGRAM Count\nVAR n : INT; on : BOOL; END_VAR\nIF on THEN\n  n := n + 1;\nEND_IF;\n"
+        "END_PROGRAM\n"
+    )
+    subject = load_subject([source])
+    assert {row[0]: row[2:] for row in xref_rows(subject)}["Count.n"] == ["2", "4", "4"]
+    assert "All lines are lines of <code>count.st</code>." in document_html(subject)
