@@ -68,7 +68,7 @@ p.warning { color: #a00; font-weight: bold; }
 .contents a { color: #111; text-decoration: none; }
 .contents a::after { content: leader("....") target-counter(attr(href), page); }
 pre.listing, pre.grid { font-family: "DejaVu Sans Mono", monospace; font-size: 7pt;
-  line-height: 1.3; margin: 4pt 0 8pt; white-space: pre; }
+  line-height: 1.2; margin: 4pt 0 8pt; white-space: pre; }
 pre.grid b.head { display: block; font-weight: bold; border-bottom: 0.6pt solid #333;
   margin-bottom: 1pt; break-after: avoid; }
 .added { background: #e3f6e3; }
