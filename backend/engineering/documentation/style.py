@@ -62,7 +62,7 @@ p.warning { color: #a00; font-weight: bold; }
 .cover h1.title { font-size: 26pt; border: none; margin: 4pt 0 16pt; }
 .cover table.facts { width: auto; }
 .cover table.facts th { width: 45mm; }
-.contents ul { list-style: none; padding: 0; margin: 0; }
+.contents ul { list-style: none; padding: 0; margin: 0; width: 125mm; }
 .contents li { margin: 1pt 0; }
 .contents li.toc2 { margin-left: 8mm; font-size: 8.5pt; }
 .contents a { color: #111; text-decoration: none; }
