@@ -12,7 +12,7 @@ from backend.engineering.documentation.markup import Section, anchor, code, esca
 from backend.engineering.documentation.resource import value_text
 from backend.engineering.documentation.st_highlight import Token, numbered, tokenized
 from backend.engineering.documentation.subject import Subject
-from backend.engineering.sources import PouSource, pou_sources
+from backend.engineering.sources import PouSource
 from runtime.contract.parameters import PROGRAM_PARAMETERS, RESOURCE_PARAMETERS
 
 ADDED, REMOVED, CHANGED = "added", "removed", "changed"
@@ -176,7 +176,7 @@ def _source_diffs(old: Subject, new: Subject) -> str:
 
 
 def _own_pous(subject: Subject) -> dict[str, PouSource]:
-    return {k: p for k, p in pou_sources(subject.project.sources).items() if not p.standard}
+    return {k: p for k, p in subject.pous.items() if not p.standard}
 
 
 def _diff(old: PouSource | None, new: PouSource | None) -> str:

@@ -8,13 +8,12 @@ from backend.engineering.documentation.markup import Section, anchor, code, esca
 from backend.engineering.documentation.sfc_chart import chart_svg
 from backend.engineering.documentation.st_highlight import listing
 from backend.engineering.documentation.subject import Subject
-from backend.engineering.sources import pou_sources
 
 
 def logic_section(subject: Subject) -> Section:
     title, entry = heading(1, "Logic", "logic")
     parts, headings = [title], [entry]
-    sources = pou_sources(subject.project.sources)
+    sources = subject.pous
     crcs = {p.name.upper(): p.crc for p in subject.artifact.pous}
     for file, pou in project_pous(subject):
         source = sources.get(pou.name.upper())

@@ -24,6 +24,7 @@ from backend.engineering.project import (
     compile_project,
     load_project,
 )
+from backend.engineering.sources import PouSource, pou_sources_of
 from runtime.contract.artifact import Artifact, load_artifact
 
 
@@ -42,6 +43,7 @@ class Subject:
     artifact: Artifact
     units: tuple[ast.SourceUnit, ...]  # the project's own files, parsed
     lines: dict[str, tuple[str, ...]]  # file -> its lines
+    pous: dict[str, PouSource]  # the source of each of the project's POUs, by upper name
     uses: tuple[VariableUses, ...]
     # loose files are named by the path they were given as (the CRC covers those names);
     # the document names them without the folder they share, which says nothing about
@@ -83,6 +85,7 @@ def _subject(project: Project, origin: str) -> Subject:
         raise DocumentError(f"{origin} does not compile: {first}")
     units, _, user_pous = parse_project(project.sources)
     own = {source.name for source in project.sources}
+    own_units = tuple(unit for unit in units if unit.file in own)
     return Subject(
         name=project.name,
         version=project.version,
@@ -90,8 +93,9 @@ def _subject(project: Project, origin: str) -> Subject:
         date=project.date,
         project=project,
         artifact=result.artifact,
-        units=tuple(unit for unit in units if unit.file in own),
+        units=own_units,
         lines={source.name: tuple(source.text.splitlines()) for source in project.sources},
+        pous=pou_sources_of(own_units, project.sources),
         uses=tuple(cross_reference_of(units, user_pous)),
     )
 
