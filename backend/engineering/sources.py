@@ -121,6 +121,13 @@ def pou_sources(files: list[SourceFile]) -> dict[str, PouSource]:
     """Every POU of `files` with its lines and what each line mentions; a user POU of the
     same name as a standard one replaces it, as in the compiler."""
     units, _ = parse_all(files)
+    return pou_sources_of(units, files)
+
+
+def pou_sources_of(
+    units: Iterable[ast.SourceUnit], files: list[SourceFile]
+) -> dict[str, PouSource]:
+    """`pou_sources` of files already parsed into `units`."""
     texts = {source.name: source.text.splitlines() for source in files}
     found: dict[str, PouSource] = {}
     for unit in units:

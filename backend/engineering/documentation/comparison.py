@@ -12,7 +12,7 @@ from backend.engineering.documentation.markup import Section, anchor, code, esca
 from backend.engineering.documentation.resource import value_text
 from backend.engineering.documentation.st_highlight import Token, numbered, tokenized
 from backend.engineering.documentation.subject import Subject
-from backend.engineering.sources import PouSource, pou_sources
+from backend.engineering.sources import PouSource
 from runtime.contract.parameters import PROGRAM_PARAMETERS, RESOURCE_PARAMETERS
 
 ADDED, REMOVED, CHANGED = "added", "removed", "changed"
@@ -166,7 +166,8 @@ def _source_diffs(old: Subject, new: Subject) -> str:
             continue
         shown = (b or a).name  # type: ignore[union-attr]
         status = ADDED if a is None else REMOVED if b is None else CHANGED
-        files = " → ".join(dict.fromkeys(s.file for s in (a, b) if s is not None))
+        names = [old.shown(a.file) if a else "", new.shown(b.file) if b else ""]
+        files = " → ".join(dict.fromkeys(name for name in names if name))
         parts.append(
             f'<h3 id="{anchor("diff", shown)}">{escape(shown)} ({status}, {escape(files)})</h3>'
             + _diff(a, b)
@@ -175,7 +176,7 @@ def _source_diffs(old: Subject, new: Subject) -> str:
 
 
 def _own_pous(subject: Subject) -> dict[str, PouSource]:
-    return {k: p for k, p in pou_sources(subject.project.sources).items() if not p.standard}
+    return {k: p for k, p in subject.pous.items() if not p.standard}
 
 
 def _diff(old: PouSource | None, new: PouSource | None) -> str:

@@ -29,7 +29,8 @@ def data_type_section(subject: Subject) -> Section:
     for file, decl in types:
         sub, sub_entry = heading(2, decl.name, anchor("type", decl.name))
         headings.append(sub_entry)
-        where = f'<p class="facts">{escape(file)}:{decl.pos.line} · {_kind(decl.spec)}</p>'
+        place = f"{escape(subject.shown(file))}:{decl.pos.line}"
+        where = f'<p class="facts">{place} · {_kind(decl.spec)}</p>'
         parts.append(f'<div class="pou">{sub}{where}{_body(subject, file, decl)}</div>')
     return Section('<section class="part">' + "".join(parts) + "</section>", tuple(headings))
 

@@ -44,7 +44,7 @@ def interface_section(subject: Subject) -> Section:
     for file, pou in project_pous(subject):
         sub, sub_entry = heading(2, f"{pou.kind} {pou.name}", anchor("interface", pou.name))
         headings.append(sub_entry)
-        facts = [f"{escape(file)}:{pou.pos.line}"]
+        facts = [f"{escape(subject.shown(file))}:{pou.pos.line}"]
         if pou.return_type is not None:
             facts.append(f"returns {code(_return_type(subject, file, pou))}")
         crc = crcs.get(pou.name.upper())

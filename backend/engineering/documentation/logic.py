@@ -8,13 +8,12 @@ from backend.engineering.documentation.markup import Section, anchor, code, esca
 from backend.engineering.documentation.sfc_chart import chart_svg
 from backend.engineering.documentation.st_highlight import listing
 from backend.engineering.documentation.subject import Subject
-from backend.engineering.sources import pou_sources
 
 
 def logic_section(subject: Subject) -> Section:
     title, entry = heading(1, "Logic", "logic")
     parts, headings = [title], [entry]
-    sources = pou_sources(subject.project.sources)
+    sources = subject.pous
     crcs = {p.name.upper(): p.crc for p in subject.artifact.pous}
     for file, pou in project_pous(subject):
         source = sources.get(pou.name.upper())
@@ -23,9 +22,8 @@ def logic_section(subject: Subject) -> Section:
         sub, sub_entry = heading(2, f"{pou.kind} {pou.name}", anchor("logic", pou.name))
         headings.append(sub_entry)
         crc = crcs.get(pou.name.upper())
-        facts = f"{escape(file)}, lines {source.first_line} to {source.last_line}" + (
-            f" · CRC {code(crc)}" if crc else ""
-        )
+        lines = f"lines {source.first_line} to {source.last_line}"
+        facts = f"{escape(subject.shown(file))}, {lines}" + (f" · CRC {code(crc)}" if crc else "")
         chart = ""
         if pou.sfc is not None and pou.sfc.steps:
             svg = chart_svg(pou.sfc, subject.lines.get(file, ()))

@@ -52,7 +52,7 @@ def signals(subject: Subject) -> list[Signal]:
                         text.location,
                         " ".join(q for q in block.qualifiers),
                         text.comment,
-                        unit.file,
+                        subject.shown(unit.file),
                         decl.pos.line,
                     )
                 )

@@ -136,12 +136,21 @@ def _tokens(line: str, in_comment: bool) -> tuple[list[Token], bool]:
         css_class = _CLASSES.get(kind or "", "")
         if kind == "word":
             css_class = "k" if text.upper() in KEYWORDS else ""
-        if tokens and tokens[-1][0] == css_class:  # fewer boxes to lay out: merge runs
-            tokens[-1] = (css_class, tokens[-1][1] + text)
-        else:
-            tokens.append((css_class, text))
+        _append(tokens, css_class, text)
         position = match.end()
     return tokens, False
+
+
+def _append(tokens: list[Token], css_class: str, text: str) -> None:
+    """Every run of one class is a box WeasyPrint lays out and draws, the dearest part of
+    a listing: runs of a class merge, and so do two of a class with only blanks between
+    them (`END_IF END_IF`, `AND NOT`), since a blank looks the same in every class."""
+    if tokens and tokens[-1][0] == css_class:
+        tokens[-1] = (css_class, tokens[-1][1] + text)
+    elif css_class and len(tokens) > 1 and tokens[-2][0] == css_class and tokens[-1][1].isspace():
+        tokens[-2:] = [(css_class, tokens[-2][1] + tokens[-1][1] + text)]
+    else:
+        tokens.append((css_class, text))
 
 
 # numbers stay plain: every coloured run is a box to lay out, and a library's sources are

@@ -62,13 +62,13 @@ p.warning { color: #a00; font-weight: bold; }
 .cover h1.title { font-size: 26pt; border: none; margin: 4pt 0 16pt; }
 .cover table.facts { width: auto; }
 .cover table.facts th { width: 45mm; }
-.contents ul { list-style: none; padding: 0; margin: 0; }
+.contents ul { list-style: none; padding: 0; margin: 0; width: 125mm; }
 .contents li { margin: 1pt 0; }
 .contents li.toc2 { margin-left: 8mm; font-size: 8.5pt; }
 .contents a { color: #111; text-decoration: none; }
-.contents a::after { content: leader(".") target-counter(attr(href), page); }
+.contents a::after { content: leader("....") target-counter(attr(href), page); }
 pre.listing, pre.grid { font-family: "DejaVu Sans Mono", monospace; font-size: 7pt;
-  line-height: 1.3; margin: 4pt 0 8pt; white-space: pre; }
+  line-height: 1.2; margin: 4pt 0 8pt; white-space: pre; }
 pre.grid b.head { display: block; font-weight: bold; border-bottom: 0.6pt solid #333;
   margin-bottom: 1pt; break-after: avoid; }
 .added { background: #e3f6e3; }

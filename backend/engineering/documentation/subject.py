@@ -9,6 +9,7 @@ machine, so the same project gives the same document.
 
 from __future__ import annotations
 
+import os
 import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -23,6 +24,7 @@ from backend.engineering.project import (
     compile_project,
     load_project,
 )
+from backend.engineering.sources import PouSource, pou_sources_of
 from runtime.contract.artifact import Artifact, load_artifact
 
 
@@ -41,11 +43,21 @@ class Subject:
     artifact: Artifact
     units: tuple[ast.SourceUnit, ...]  # the project's own files, parsed
     lines: dict[str, tuple[str, ...]]  # file -> its lines
+    pous: dict[str, PouSource]  # the source of each of the project's POUs, by upper name
     uses: tuple[VariableUses, ...]
+    # loose files are named by the path they were given as (the CRC covers those names);
+    # the document names them without the folder they share, which says nothing about
+    # the program and would fill every cell of the cross-reference
+    folder: str = ""
 
     @property
     def crc(self) -> str:
         return self.artifact.crc
+
+    def shown(self, file: str) -> str:
+        """A source's name as the document writes it."""
+        prefix = os.path.join(self.folder, "") if self.folder else ""
+        return file[len(prefix) :] if prefix and file.startswith(prefix) else file
 
 
 def load_subject(paths: list[Path]) -> Subject:
@@ -56,7 +68,14 @@ def load_subject(paths: list[Path]) -> Subject:
         project = load_project(paths)
     except (ProjectError, OSError) as exc:
         raise DocumentError(str(exc)) from None
-    return _subject(project, " ".join(str(p) for p in paths))
+    subject = _subject(project, " ".join(str(p) for p in paths))
+    if len(paths) == 1 and paths[0].is_dir():
+        return subject
+    try:  # none when some are given absolute and some relative
+        folder = os.path.commonpath([os.path.dirname(s.name) for s in project.sources])
+    except ValueError:
+        folder = ""
+    return replace(subject, folder=folder)
 
 
 def _subject(project: Project, origin: str) -> Subject:
@@ -66,6 +85,7 @@ def _subject(project: Project, origin: str) -> Subject:
         raise DocumentError(f"{origin} does not compile: {first}")
     units, _, user_pous = parse_project(project.sources)
     own = {source.name for source in project.sources}
+    own_units = tuple(unit for unit in units if unit.file in own)
     return Subject(
         name=project.name,
         version=project.version,
@@ -73,8 +93,9 @@ def _subject(project: Project, origin: str) -> Subject:
         date=project.date,
         project=project,
         artifact=result.artifact,
-        units=tuple(unit for unit in units if unit.file in own),
+        units=own_units,
         lines={source.name: tuple(source.text.splitlines()) for source in project.sources},
+        pous=pou_sources_of(own_units, project.sources),
         uses=tuple(cross_reference_of(units, user_pous)),
     )
 

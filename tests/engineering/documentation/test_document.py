@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from backend.engineering.backup import BackupInfo, write_backup
+from backend.engineering.documentation.document import document_html
 from backend.engineering.documentation.export import DocumentError, document
 from backend.engineering.documentation.subject import load_subject
 from backend.engineering.documentation.xref import xref_rows
@@ -58,10 +59,11 @@ def test_cover_and_contents(written) -> None:
     for fact in ("Filling line", "2.1", "A. Engineer", "2026-11-20", "Line1"):
         assert fact in cover
     assert re.search(r"Filler\s+1\s+Filler\s+[0-9A-F]{8}", cover)  # a program's CRC
-    # the contents give the page each part starts on
+    # the contents give the page each part starts on (the leader, repeated whole, may
+    # stop short of the title: spaces before the dots)
     found = {
         title: int(page)
-        for title, page in re.findall(r"^ *(\S[^.\n]*?) \.{3,}\s*(\d+)$", contents, re.M)
+        for title, page in re.findall(r"^ *(\S[^.\n]*?) *\.{3,}\s*(\d+)$", contents, re.M)
     }
     texts = pages(written[1])
     for title in ("Signal list", "Cross-reference", "Logic", "Users"):
@@ -263,3 +265,25 @@ def test_the_modbus_maps_of_the_demo(tmp_path: Path) -> None:
     device = field_bus[field_bus.index("Remote device plant") :]
     assert "127.0.0.1:5021 unit 1, polled every 100 ms, lost after 500 ms" in device
     assert re.search(r"input register\s+0\s+%IW0\s+tankLevel\s+INT\s+big/big\s+-1", device)
+
+
+def test_loose_files_are_named_without_their_folder(project: Path) -> None:
+    # given by absolute path (as `padt docs /path/a.st /path/b.st` does), the folder they
+    # share is no part of the program: the cross-reference and the listings leave it out
+    subject = load_subject(sorted(project.resolve().glob("*.st")))
+    rows = {row[0]: row for row in xref_rows(subject)}
+    assert rows["bottles"][2:] == ["filler.st:6; globals.st:12", "filler.st:26", "filler.st:26"]
+    html = document_html(subject)
+    assert str(project.resolve()) not in html
+    assert "filler.st, lines 1 to" in html
+
+
+def test_one_file_cross_reference_gives_bare_line_numbers(tmp_path: Path) -> None:
+    source = tmp_path / "count.st"
+    source.write_text(
+        "PROGRAM Count\nVAR n : INT; on : BOOL; END_VAR\nIF on THEN\n  n := n + 1;\nEND_IF;\n"
+        "END_PROGRAM\n"
+    )
+    subject = load_subject([source])
+    assert {row[0]: row[2:] for row in xref_rows(subject)}["Count.n"] == ["2", "4", "4"]
+    assert "All lines are lines of <code>count.st</code>." in document_html(subject)
