@@ -4,6 +4,10 @@ liveliness.
 Zenoh calls back on its own threads; the callbacks only queue a query or note a watcher
 coming or going, and the cycle driver handles them in the housekeeping part of the cycle
 (so commands never race the cycle).
+
+Everything the resource publishes is encoded, signed and put by one publisher thread: the
+status and the events must reach every subscriber (Zenoh then blocks while a subscriber is
+slow, as a busy PADT with ten browsers was), and the cycle must never wait for that.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ from __future__ import annotations
 import json
 import queue
 import threading
+from collections import deque
 
 import zenoh
 
@@ -44,11 +49,15 @@ class ResourceLink:
         )
         self._session = session
         self._resource = resource
+        # what the publisher thread has yet to put: every event in order, the newest
+        # status (an older one not yet sent is outdated), each watch set's newest values
         self._pending: dict[str, WatchSnapshot] = {}
+        self._pending_events: deque[Event] = deque()
+        self._pending_status: Status | None = None
         self._pending_lock = threading.Condition()
         self._closing = False
         self._publisher = threading.Thread(
-            target=self._publish_loop, name="padt-watch-publisher", daemon=True
+            target=self._publish_loop, name="padt-publisher", daemon=True
         )
         self._publisher.start()
         # the watch sets whose client holds its liveliness token (Zenoh's threads add and
@@ -67,12 +76,16 @@ class ResourceLink:
             self.watchers.discard(watch_id)
 
     def publish_status(self, status: Status) -> None:
-        payload = json.dumps(encode(status)).encode()
-        self._status.put(payload, attachment=self._identity.sign(payload))
+        """Sent by the publisher thread; a newer status replaces one not yet sent."""
+        with self._pending_lock:
+            self._pending_status = status
+            self._pending_lock.notify()
 
     def publish_event(self, event: Event) -> None:
-        payload = json.dumps(encode(event)).encode()
-        self._events.put(payload, attachment=self._identity.sign(payload))
+        """Sent by the publisher thread, every one, in order."""
+        with self._pending_lock:
+            self._pending_events.append(event)
+            self._pending_lock.notify()
 
     def publish_watch(self, watch_id: str, snapshot: WatchSnapshot) -> None:
         """A watch set's values, read in this cycle; the message is built, encoded and put
@@ -86,19 +99,34 @@ class ResourceLink:
     def _publish_loop(self) -> None:
         while True:
             with self._pending_lock:
-                while not self._pending and not self._closing:
+                while not (self._pending or self._pending_events or self._pending_status):
+                    if self._closing:
+                        return
                     self._pending_lock.wait()
+                events, self._pending_events = list(self._pending_events), deque()
+                status, self._pending_status = self._pending_status, None
+                watched = next(iter(self._pending.items()), None)
+                if watched is not None:
+                    del self._pending[watched[0]]
                 if self._closing:
-                    return
-                watch_id, snapshot = next(iter(self._pending.items()))
-                del self._pending[watch_id]
-            payload = json.dumps(snapshot.message()).encode()
-            self._session.put(
-                watch_key(self._resource, watch_id),
-                payload,
-                attachment=self._identity.sign(payload),
-                congestion_control=zenoh.CongestionControl.DROP,
-            )
+                    watched = None  # the last events and status go out, values no more
+            for event in events:
+                self._put(self._events, encode(event))
+            if status is not None:
+                self._put(self._status, encode(status))
+            if watched is not None:
+                watch_id, snapshot = watched
+                payload = json.dumps(snapshot.message()).encode()
+                self._session.put(
+                    watch_key(self._resource, watch_id),
+                    payload,
+                    attachment=self._identity.sign(payload),
+                    congestion_control=zenoh.CongestionControl.DROP,
+                )
+
+    def _put(self, publisher: zenoh.Publisher, message: object) -> None:
+        payload = json.dumps(message).encode()
+        publisher.put(payload, attachment=self._identity.sign(payload))
 
     @staticmethod
     def payload(query: zenoh.Query) -> bytes:
