@@ -7,6 +7,7 @@ BIN    := $(VENV)/bin
 .PHONY: demo test lint typecheck pytest bench clean
 
 demo: $(VENV)/.stamp-run
+	bash scripts/install-document-tools.sh  # the Documentation screen renders PDF
 	$(BIN)/padt demo
 
 test: $(VENV)/.stamp-dev
