@@ -72,7 +72,7 @@ class FieldIo:
         if self.server is not None:
             self._take_writes(self.server.store)
             self._report_server()
-        io, changed = self._io, False
+        io = self._io
         bad: set[str] = set()
         for poller in self.pollers:
             # the poller writes its delivery before its state: read in the other order, a
@@ -84,11 +84,10 @@ class FieldIo:
                 io.set_inputs(delivery.values)
             if state != seen[1]:
                 self._report_device(poller, state, seen[1])
-                changed = True
             self._seen[poller.device.name] = (delivery.seq, state)
             if not delivery.good:
                 bad.update(name.upper() for name in delivery.values)
-        if changed or len(bad) != len(self.bad):
+        if bad != self.bad:
             self.bad = frozenset(bad)
 
     def after_cycle(self) -> None:
