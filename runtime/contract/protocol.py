@@ -48,6 +48,11 @@ MAX_SETS_PER_SESSION = 8
 MAX_SET_VARIABLES = 20_000
 MAX_VALUES_PER_SECOND = 200_000
 ADMINISTRATOR_PARAMETERS = ("allow_online_settings",)
+# recordings (docs/recording.md)
+MAX_RECORDED = 4096  # variable paths or `Prefix*` patterns in one record_start
+MAX_RECORDING_READ = 48 * 1024  # bytes of a recording file per record_read (base64 in the reply)
+MAX_PRE_CYCLES = 100_000
+MAX_RECORD_CYCLES = 1_000_000_000
 
 
 class ResourceState(StrEnum):
@@ -365,6 +370,45 @@ class ReloadReply:
 
 
 @dataclass(frozen=True)
+class RecordingFile:
+    name: str  # `<recording id>-<n>.mcap`, in the resource's state folder
+    size: int  # bytes so far
+
+
+@dataclass(frozen=True)
+class RecordingInfo:
+    """One recording of the resource (docs/recording.md)."""
+
+    id: str
+    state: Literal["waiting", "recording", "done", "failed"]  # waiting: for its trigger
+    variables: int  # elementary variables recorded
+    all_inputs: bool
+    cycles: int  # CPU cycles written so far
+    dropped: int  # cycles lost because the writer fell behind (the queue was full)
+    started_ns: int  # wall-clock time the recording was started (Unix ns)
+    files: list[RecordingFile]
+    error: str | None = None  # why it failed or was cut short
+    trigger_cycle: int | None = None  # the CPU cycle the trigger fired in
+
+
+@dataclass(frozen=True)
+class RecordingReply:
+    recording: RecordingInfo
+
+
+@dataclass(frozen=True)
+class RecordingsReply:
+    recordings: list[RecordingInfo]
+
+
+@dataclass(frozen=True)
+class RecordingChunk:
+    data: str  # base64 of the bytes from `offset`
+    offset: int
+    size: int  # of the whole file now (it may still grow)
+
+
+@dataclass(frozen=True)
 class LoginChallenge:
     nonce: str  # the client's nonce, extended by the resource's part
     salt: str  # base64
@@ -638,6 +682,68 @@ class Reload(Command[ReloadReply], name="reload", level="read-write"):
     watchdog_ms: Milliseconds | None = None
     target_cycle_ms: Milliseconds | None = None
     expected_crc: Crc | None = None
+
+
+RecordingId = Annotated[str, Pattern(r"[A-Za-z0-9_-]{1,64}", "1 to 64 of A-Z a-z 0-9 _ -")]
+RecordingFileName = Annotated[
+    str, Pattern(r"[A-Za-z0-9_-]{1,64}-[0-9]{1,6}\.mcap", "a file name of record_list")
+]
+
+
+@dataclass(frozen=True)
+class Trigger:
+    """Start writing when `variable op value` becomes true (it was false the cycle before);
+    a BOOL variable alone is `variable = TRUE`."""
+
+    variable: VariableName
+    op: Literal["=", "<>", "<", "<=", ">", ">="] = "="
+    value: Value = True
+
+
+@dataclass(frozen=True)
+class RecordStart(Command[RecordingReply], name="record_start", level="operator"):
+    """Record `variables` (paths, or `Prefix*` for every variable whose path starts so) every
+    CPU cycle into MCAP files in the state folder. With `all_inputs`, also everything
+    the programs take from outside, for `padt replay`. With a trigger, `pre_cycles` cycles
+    before it are kept too. It ends after `cycles` CPU cycles or `seconds` (counted from the
+    trigger when there is one) or at record_stop; a file is closed and the next one begun
+    every `rotate_mb` megabytes or `rotate_s` seconds."""
+
+    variables: Annotated[list[VariableName], MaxLength(MAX_RECORDED)]
+    all_inputs: bool = False
+    trigger: Trigger | None = None
+    pre_cycles: Annotated[int, Range(0, MAX_PRE_CYCLES)] = 0
+    cycles: Annotated[int, Range(1, MAX_RECORD_CYCLES)] | None = None
+    seconds: Annotated[int, Range(1, 7 * 86_400)] | None = None
+    rotate_mb: Annotated[int, Range(1, 4096)] = 256
+    rotate_s: Annotated[int, Range(1, 7 * 86_400)] | None = None
+    id: RecordingId | None = None  # chosen by the resource when not given
+
+
+@dataclass(frozen=True)
+class RecordStop(Command[RecordingReply], name="record_stop", level="operator"):
+    id: RecordingId
+
+
+@dataclass(frozen=True)
+class RecordList(Command[RecordingsReply], name="record_list", level="read"):
+    """The recordings in the state folder, the running ones first."""
+
+
+@dataclass(frozen=True)
+class RecordRead(Command[RecordingChunk], name="record_read", level="read"):
+    """Up to `length` bytes of a recording file from `offset` (for a download)."""
+
+    file: RecordingFileName
+    offset: Annotated[int, Range(0, None)] = 0
+    length: Annotated[int, Range(1, MAX_RECORDING_READ)] = MAX_RECORDING_READ
+
+
+@dataclass(frozen=True)
+class RecordDelete(Command[RecordingsReply], name="record_delete", level="operator"):
+    """Delete a recording that has ended, with its files."""
+
+    id: RecordingId
 
 
 # ---- requests and replies on the wire

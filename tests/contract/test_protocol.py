@@ -52,6 +52,19 @@ SAMPLES: dict[str, p.Command[Any]] = {
     "load": p.Load(),
     "reload_preview": p.ReloadPreview({"Main.total": "Main.count"}),
     "reload": p.Reload({}, watchdog_ms=300, target_cycle_ms=None, expected_crc="0BADC0DE"),
+    "record_start": p.RecordStart(
+        ["Main.*", "gLevel"],
+        all_inputs=True,
+        trigger=p.Trigger("gLevel", ">", 80),
+        pre_cycles=10,
+        cycles=100,
+        rotate_mb=8,
+        id="trace-1",
+    ),
+    "record_stop": p.RecordStop("trace-1"),
+    "record_list": p.RecordList(),
+    "record_read": p.RecordRead("trace-1-1.mcap", offset=4096, length=1024),
+    "record_delete": p.RecordDelete("trace-1"),
 }
 
 

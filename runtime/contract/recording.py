@@ -1,0 +1,295 @@
+"""The recording file (docs/recording.md): MCAP with JSON-schema channels that Foxglove and
+the mcap tools open. The resource writes it (`runtime/recorder.py`); the PADT reads it for
+trends and replay (`read_recording`). A file cut short by a crash reads up to its last
+whole chunk.
+
+What is in a file:
+- metadata `padt.recording`: the header (`RecordingHeader`), every value a string;
+- channel `/<resource>/values` (schema `padt.CycleValues`): one message per CPU cycle,
+  `{"cycle": n, "values": {...}}` with the values nested by the dots of their paths
+  (`TankControl.level` -> `values.TankControl.level`), so that a Foxglove plot path reads
+  like the variable;
+- with all inputs, channel `/<resource>/inputs` (schema `padt.CycleInputs`): per CPU cycle
+  what the programs took from outside (`CycleInputs`), and the attachments
+  `artifact.json` (the configuration that ran) and `start.json` (its state when the
+  recording began: `StartState`).
+The log time of a message is the start of its CPU cycle in calendar time (Unix ns).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, BinaryIO
+
+from mcap.exceptions import McapError
+from mcap.records import Attachment, Channel, Message, Metadata
+from mcap.stream_reader import StreamReader
+
+FORMAT = "padt-recording"
+VERSION = 1
+PROFILE = ""  # no well-known profile: JSON-schema channels with JSON messages
+METADATA = "padt.recording"
+VALUES_SCHEMA = "padt.CycleValues"
+INPUTS_SCHEMA = "padt.CycleInputs"
+ARTIFACT_ATTACHMENT = "artifact.json"
+START_ATTACHMENT = "start.json"
+
+
+def values_topic(resource: str) -> str:
+    return f"/{resource}/values"
+
+
+def inputs_topic(resource: str) -> str:
+    return f"/{resource}/inputs"
+
+
+@dataclass(frozen=True)
+class RecordingHeader:
+    resource: str
+    project: str
+    crc: str  # the configuration CRC at the start
+    variables: list[tuple[str, str]]  # (path, IEC type), in the order of the values
+    all_inputs: bool
+    started_ns: int  # wall-clock time the recording began (Unix ns)
+    recording: str  # its id
+    part: int  # 1, 2, ... as the files rotate
+    trigger: str = ""  # `variable op value`, or empty
+    pre_cycles: int = 0
+
+    def metadata(self) -> dict[str, str]:
+        """As MCAP metadata: a map of strings."""
+        data = asdict(self)
+        return {
+            "format": FORMAT,
+            "version": str(VERSION),
+            **{k: v if isinstance(v, str) else json.dumps(v) for k, v in data.items()},
+        }
+
+    @staticmethod
+    def from_metadata(data: dict[str, str]) -> RecordingHeader:
+        if data.get("format") != FORMAT or data.get("version") != str(VERSION):
+            raise RecordingUnreadable(
+                f"not a padt recording of version {VERSION} "
+                f"(format {data.get('format')!r}, version {data.get('version')!r})"
+            )
+        try:
+            return RecordingHeader(
+                resource=data["resource"],
+                project=data["project"],
+                crc=data["crc"],
+                variables=[(str(p), str(t)) for p, t in json.loads(data["variables"])],
+                all_inputs=bool(json.loads(data["all_inputs"])),
+                started_ns=int(data["started_ns"]),
+                recording=data["recording"],
+                part=int(data["part"]),
+                trigger=data.get("trigger", ""),
+                pre_cycles=int(data.get("pre_cycles", "0")),
+            )
+        except (KeyError, ValueError, TypeError) as exc:
+            raise RecordingUnreadable(f"the recording's header is damaged ({exc})") from None
+
+
+@dataclass
+class CycleInputs:
+    """What the programs of one CPU cycle took from outside, in the order it happened:
+    `before`: every variable set from outside since the programs of the cycle before
+    ended (inputs, writes, forces, Modbus clients: `[path, value]`); `after`: those set
+    after the programs ran and before the outputs were written (forces); `system`: the
+    system variables that changed; `programs`: the programs' states that changed;
+    `begin_ns`: the resource clock at the cycle's start, which every program's time
+    follows. A cycle that ran no programs (STOP) is not recorded."""
+
+    cycle: int
+    begin_ns: int
+    wall_ns: int
+    before: list[tuple[str, Any]] = field(default_factory=list)
+    after: list[tuple[str, Any]] = field(default_factory=list)
+    system: dict[str, Any] = field(default_factory=dict)
+    programs: dict[str, str] = field(default_factory=dict)
+    cut: list[str] = field(default_factory=list)  # programs whose time slice ended them
+
+    def json(self) -> dict[str, Any]:
+        return {
+            "cycle": self.cycle,
+            "begin_ns": self.begin_ns,
+            "wall_ns": self.wall_ns,
+            "before": [[p, v] for p, v in self.before],
+            "after": [[p, v] for p, v in self.after],
+            "system": self.system,
+            "programs": self.programs,
+            "cut": self.cut,
+        }
+
+    @staticmethod
+    def from_json(data: dict[str, Any]) -> CycleInputs:
+        return CycleInputs(
+            cycle=int(data["cycle"]),
+            begin_ns=int(data["begin_ns"]),
+            wall_ns=int(data["wall_ns"]),
+            before=[(str(p), v) for p, v in data["before"]],
+            after=[(str(p), v) for p, v in data["after"]],
+            system=dict(data["system"]),
+            programs={str(k): str(v) for k, v in data["programs"].items()},
+            cut=[str(name) for name in data.get("cut", [])],
+        )
+
+
+@dataclass(frozen=True)
+class StartState:
+    """The state of the configuration the moment the recording began: the context of a
+    warm start (runtime/restart.py) with every program's clock."""
+
+    context: dict[str, Any]  # take_context's fields, as JSON
+    programs: dict[str, dict[str, Any]]  # name -> {"last_start_ns", "count", "state"}
+    system: dict[str, Any]  # every system variable
+    cycle: int  # the CPU cycle count
+
+
+def nest(paths: list[str], values: list[Any]) -> dict[str, Any]:
+    """Values nested by the dots of their paths (`A.b.c` -> {"A": {"b": {"c": v}}})."""
+    root: dict[str, Any] = {}
+    for path, value in zip(paths, values, strict=True):
+        node = root
+        *parents, leaf = path.split(".")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = value
+    return root
+
+
+def pick(nested: dict[str, Any], path: str) -> Any:
+    node: Any = nested
+    for part in path.split("."):
+        node = node[part]
+    return node
+
+
+_JSON_TYPES = {"BOOL": "boolean", "REAL": "number", "LREAL": "number"}
+
+
+def json_type(iec_type: str) -> dict[str, Any]:
+    upper = iec_type.upper()
+    if upper.startswith("ARRAY"):
+        return {"type": "array"}
+    if upper.startswith(("STRING", "WSTRING", "CHAR", "WCHAR")):
+        return {"type": "string"}
+    # non-finite REALs are written as text, as strict JSON has no NaN
+    if upper in ("REAL", "LREAL"):
+        return {"type": ["number", "string"]}
+    return {"type": _JSON_TYPES.get(upper, "integer")}
+
+
+def values_schema(variables: list[tuple[str, str]]) -> dict[str, Any]:
+    """The JSON schema of a values message: the nesting of `nest`, with each type."""
+    tree: dict[str, Any] = {"type": "object", "properties": {}}
+    for path, iec_type in variables:
+        node = tree
+        *parents, leaf = path.split(".")
+        for part in parents:
+            node = node["properties"].setdefault(part, {"type": "object", "properties": {}})
+        node["properties"][leaf] = {**json_type(iec_type), "description": iec_type}
+    return {
+        "type": "object",
+        "properties": {"cycle": {"type": "integer"}, "values": tree},
+    }
+
+
+INPUTS_JSON_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "properties": {
+        "cycle": {"type": "integer"},
+        "begin_ns": {"type": "integer"},
+        "wall_ns": {"type": "integer"},
+        "before": {"type": "array", "description": "[path, value] set before the programs"},
+        "after": {"type": "array", "description": "[path, value] set after the programs"},
+        "system": {"type": "object"},
+        "programs": {"type": "object"},
+        "cut": {"type": "array"},
+    },
+}
+
+
+class RecordingUnreadable(ValueError):
+    """Not a recording of ours, or damaged before its first whole chunk."""
+
+
+@dataclass
+class Recording:
+    """A recording file read back. `complete` is False when the file was cut short (the
+    process writing it was killed): everything up to its last whole chunk is here."""
+
+    header: RecordingHeader
+    cycles: list[int] = field(default_factory=list)
+    times_ns: list[int] = field(default_factory=list)  # log time of each values message
+    rows: list[list[Any]] = field(default_factory=list)  # per cycle, in header.variables order
+    inputs: list[CycleInputs] = field(default_factory=list)
+    artifact: str | None = None  # the configuration's artifact text (with all inputs)
+    start: StartState | None = None
+    complete: bool = True
+    problem: str = ""  # what ended the reading early
+
+    def column(self, path: str) -> list[Any]:
+        index = [p for p, _ in self.header.variables].index(path)
+        return [row[index] for row in self.rows]
+
+
+def read_recording(source: Path | BinaryIO) -> Recording:
+    """Read one recording file; raises RecordingUnreadable when it is not one of ours."""
+    if isinstance(source, Path):
+        with source.open("rb") as stream:
+            return read_recording(stream)
+    header: RecordingHeader | None = None
+    recording: Recording | None = None
+    channels: dict[int, str] = {}  # channel id -> schema kind
+    pending: list[Any] = []  # records met before the header (none in our files)
+    complete, problem = True, ""
+    try:
+        for record in _records(source):
+            if isinstance(record, Metadata) and record.name == METADATA:
+                header = RecordingHeader.from_metadata(dict(record.metadata))
+                recording = Recording(header)
+                for early in pending:
+                    _take(recording, early, channels)
+                pending.clear()
+            elif isinstance(record, Channel):
+                channels[record.id] = record.topic.rsplit("/", 1)[-1]
+            elif recording is None:
+                pending.append(record)
+            else:
+                _take(recording, record, channels)
+    except (McapError, EOFError, ValueError, KeyError, TypeError, OSError) as exc:
+        if isinstance(exc, RecordingUnreadable):
+            raise
+        complete, problem = False, f"{type(exc).__name__}: {exc}".strip()
+    if recording is None:
+        raise RecordingUnreadable(
+            "no padt recording header found" + (f" ({problem})" if problem else "")
+        )
+    recording.complete, recording.problem = complete, problem
+    return recording
+
+
+def _records(source: BinaryIO) -> Iterator[Any]:
+    yield from StreamReader(source, record_size_limit=1 << 30).records
+
+
+def _take(recording: Recording, record: Any, channels: dict[int, str]) -> None:
+    if isinstance(record, Message):
+        kind = channels.get(record.channel_id)
+        data = json.loads(record.data)
+        if kind == "values":
+            recording.cycles.append(int(data["cycle"]))
+            recording.times_ns.append(record.log_time)
+            nested = data["values"]
+            recording.rows.append([pick(nested, p) for p, _ in recording.header.variables])
+        elif kind == "inputs":
+            recording.inputs.append(CycleInputs.from_json(data))
+    elif isinstance(record, Attachment):
+        if record.name == ARTIFACT_ATTACHMENT:
+            recording.artifact = record.data.decode("utf-8")
+        elif record.name == START_ATTACHMENT:
+            data = json.loads(record.data)
+            recording.start = StartState(**data)
