@@ -12,7 +12,8 @@ from __future__ import annotations
 import base64
 import binascii
 import re
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 from backend.engineering.literals import LiteralError, parse_literal
@@ -29,6 +30,9 @@ from runtime.contract.protocol import (
     Trigger,
 )
 from runtime.contract.refusal import Refusal
+
+ENDED = ("done", "failed")
+POLL_S = 0.25  # how often a recording's progress is asked for while it is awaited
 
 
 class TriggerError(ValueError):
@@ -140,6 +144,33 @@ def find(client: ResourceClient, recording_id: str) -> RecordingInfo:
         if recording.id == recording_id:
             return recording
     raise Refusal("not_found", f"resource {client.resource} has no recording '{recording_id}'")
+
+
+def wait_until_ended(
+    client: ResourceClient,
+    recording_id: str,
+    stop_asked: Callable[[], bool] = lambda: False,
+    poll_s: float = POLL_S,
+) -> RecordingInfo:
+    """Wait until the recording has ended by itself (its cycles or seconds reached, or it
+    failed), or until `stop_asked()`: then it is stopped and its files closed."""
+    stopping = False
+    while True:
+        current = find(client, recording_id)
+        if current.state in ENDED:
+            return current
+        if stop_asked() and not stopping:
+            stopping = True  # the writer thread closes the file: wait for it to be done
+            try:
+                stopped = stop(client, recording_id)
+            except Refusal:
+                stopped = find(client, recording_id)  # it may have ended meanwhile
+                if stopped.state not in ENDED:
+                    raise
+            if stopped.state in ENDED:
+                return stopped
+            continue
+        time.sleep(poll_s)
 
 
 def delete(client: ResourceClient, recording_id: str) -> list[RecordingInfo]:
