@@ -169,6 +169,11 @@ def _positive(text: str) -> int:
     return number
 
 
+def _whole(text: str) -> int:
+    """A whole number, 0 or more."""
+    return 0 if text.strip() == "0" else _positive(text)
+
+
 def _runtime(args: argparse.Namespace) -> int:
     from runtime.main import run
 
@@ -398,6 +403,7 @@ def build_parser() -> argparse.ArgumentParser:
     reload.set_defaults(func=_lazy("padt.configuration", "reload"))
 
     _online_test_commands(sub)
+    _recording_commands(sub)
 
     passwd = sub.add_parser(
         "passwd",
@@ -498,6 +504,75 @@ def _online_test_commands(sub: Any) -> None:
     )
     params.add_argument("--json", action="store_true", help="print the parameters as JSON")
     params.set_defaults(func=_lazy("padt.operation", "params"))
+
+
+def _recording_commands(sub: Any) -> None:
+    """record, recordings (docs/recording.md)."""
+    record = sub.add_parser(
+        "record",
+        help="record variables of a running resource into an MCAP file",
+        description="Record variables of a running resource every CPU cycle (or from a "
+        "trigger on) into MCAP files, wait until it is done (--cycles or --seconds reached, "
+        "or Ctrl-C), then download its files (FILE.mcap, FILE-2.mcap... as they rotated).",
+    )
+    _resource_options(record)
+    record.add_argument(
+        "--var",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="a variable, or PREFIX* for every variable whose path starts so; repeatable",
+    )
+    record.add_argument(
+        "--all-inputs",
+        action="store_true",
+        help="also every input of every cycle (for padt replay)",
+    )
+    record.add_argument(
+        "--trigger",
+        metavar="EXPR",
+        help="start writing when EXPR becomes true: 'Main.level > 80', Main.alarm, "
+        "'NOT Main.alarm' (ops = <> < <= > >=, the value an ST literal)",
+    )
+    record.add_argument(
+        "--pre-cycles",
+        type=_whole,
+        default=0,
+        metavar="N",
+        help="with --trigger: also the N cycles before it (default 0)",
+    )
+    until = record.add_mutually_exclusive_group()
+    until.add_argument("--cycles", type=_positive, metavar="N", help="end after N cycles")
+    until.add_argument("--seconds", type=_positive, metavar="S", help="end after S seconds")
+    record.add_argument(
+        "--rotate-mb",
+        type=_positive,
+        default=256,
+        metavar="N",
+        help="begin a new file every N megabytes (default 256)",
+    )
+    record.add_argument(
+        "--rotate-s", type=_positive, metavar="N", help="begin a new file every N seconds"
+    )
+    record.add_argument(
+        "--keep",
+        action="store_true",
+        help="leave the recording on the resource (by default it is deleted there once downloaded)",
+    )
+    record.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        metavar="FILE.mcap",
+        help="where the recording goes (the next parts beside it: FILE-2.mcap, ...)",
+    )
+    record.set_defaults(func=_lazy("padt.recording", "record"))
+
+    listing = sub.add_parser("recordings", help="the recordings kept on a running resource")
+    _resource_options(listing)
+    listing.add_argument("--json", action="store_true", help="print them as JSON")
+    listing.set_defaults(func=_lazy("padt.recording", "recordings_list"))
 
 
 def _api(args: argparse.Namespace) -> int:
