@@ -61,6 +61,54 @@ def _docs(args: argparse.Namespace) -> int:
     return 0
 
 
+# `padt replay` exit codes
+REPLAY_DIFFERS, REPLAY_CANNOT, REPLAY_COMPILE_ERRORS = 1, 2, 3
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from backend.engineering.project import ProjectError, compile_project, load_project
+    from backend.engineering.replay import ReplayError, read_parts, replay
+    from runtime.contract.recording import RecordingUnreadable
+
+    try:
+        recording = read_parts(args.recording)
+        project = load_project(args.paths)
+    except (OSError, RecordingUnreadable, ProjectError) as exc:
+        print(f"padt replay: {exc}", file=sys.stderr)
+        return REPLAY_CANNOT
+    result = compile_project(project)
+    for diagnostic in result.diagnostics:
+        print(diagnostic, file=sys.stderr)
+    if result.artifact is None:
+        return REPLAY_COMPILE_ERRORS
+    if result.artifact.resource.name != recording.header.resource:
+        print(
+            f"padt replay: the recording is of resource {recording.header.resource}, "
+            f"the project's is {result.artifact.resource.name}",
+            file=sys.stderr,
+        )
+        return REPLAY_CANNOT
+    try:
+        outcome = replay(recording, result.artifact)
+    except ReplayError as exc:
+        print(f"padt replay: {exc}", file=sys.stderr)
+        return REPLAY_CANNOT
+    if outcome.reloaded:
+        print(
+            f"padt replay: recorded configuration {outcome.recorded_crc}, replayed with "
+            f"{outcome.replayed_crc} (values carried over as by a reload)",
+            file=sys.stderr,
+        )
+    if not recording.complete:
+        print(
+            f"padt replay: the file was cut short ({recording.problem}); "
+            "compared up to its last whole chunk",
+            file=sys.stderr,
+        )
+    print(outcome.summary())
+    return 0 if outcome.difference is None else REPLAY_DIFFERS
+
+
 def _exec(args: argparse.Namespace) -> int:
     from backend.engineering.run_once import run_entry
 
@@ -317,6 +365,27 @@ def build_parser() -> argparse.ArgumentParser:
         help="print only these variables (or everything below an instance); repeatable",
     )
     sim.set_defaults(func=_sim)
+
+    replay = sub.add_parser(
+        "replay",
+        help="run a recording made with --all-inputs again on virtual time; compare each cycle",
+        epilog="exit codes: 0 identical, 1 a cycle differs (the first is named), 2 the "
+        "recording cannot be replayed or the project not read, 3 compile errors",
+    )
+    replay.add_argument(
+        "recording",
+        type=Path,
+        metavar="FILE.mcap",
+        help="the recording (its rotated parts FILE-2.mcap, ... are read after it)",
+    )
+    replay.add_argument(
+        "paths",
+        nargs="+",
+        type=Path,
+        metavar="PROJECT",
+        help="the project to replay with: the recorded version or a new one",
+    )
+    replay.set_defaults(func=_replay)
 
     check = sub.add_parser(
         "check-twice", help="compile in two processes with different hash seeds; compare CRCs"
