@@ -137,6 +137,8 @@ class Recording:
     def info(self) -> p.RecordingInfo:
         error = self.writer.error or self.ended
         state = "failed" if self.writer.error else self.state
+        if state == "done" and not self.writer.finished:
+            state = "recording"  # ended, but its writer is still finishing the file
         return p.RecordingInfo(
             id=self.id,
             state=state,  # type: ignore[arg-type]
