@@ -143,7 +143,9 @@ def find(client: ResourceClient, recording_id: str) -> RecordingInfo:
     for recording in list_recordings(client):
         if recording.id == recording_id:
             return recording
-    raise Refusal("not_found", f"resource {client.resource} has no recording '{recording_id}'")
+    raise Refusal(
+        "unknown_recording", f"resource {client.resource} has no recording '{recording_id}'"
+    )
 
 
 def wait_until_ended(
