@@ -63,11 +63,12 @@ def record(args: argparse.Namespace) -> int:
                 flush=True,
             )
             ended = recordings.wait_until_ended(client, started.id, stop_request.event.is_set)
-            if ended.state == "failed" and not ended.files:
-                raise Failed(f"recording {ended.id} failed: {ended.error or 'no reason given'}")
             written = _fetch(client, ended, args.output)
             if not args.keep:
                 recordings.delete(client, ended.id)
+        if not written:  # stopped before its first cycle, or its trigger never fired
+            why = f"failed: {ended.error}" if ended.state == "failed" else "wrote no file"
+            raise Failed(f"recording {ended.id} {why}: nothing was recorded")
         names = ", ".join(str(path) for path, _ in written)
         size = sum(size for _, size in written)
         print(f"recorded {ended.cycles} cycles, {ended.dropped} dropped -> {names} ({_size(size)})")
@@ -104,8 +105,6 @@ def _fetch(
         except OSError as exc:
             raise Failed(f"cannot write {path}: {exc.strerror or exc}") from None
         written.append((path, len(data)))
-    if not written:
-        raise Failed(f"recording {recording.id} has no file: nothing was recorded")
     return written
 
 

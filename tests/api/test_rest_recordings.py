@@ -52,7 +52,8 @@ def test_record_list_download_and_delete(site: Plant) -> None:
     reader = site.session("reader", "viewer")
     body = {"variables": ["P.n", "P.flag"], "cycles": 50, "id": "rest"}
     started = ok(site.call("POST", f"{R}/recordings", operator, json=body))
-    assert started["recording"]["id"] == "rest" and started["recording"]["variables"] == 2
+    assert started["id"] == "rest" and started["variables"] == 2
+    assert started["state"] == "recording" and started["all_inputs"] is False
 
     done = ended(site, reader, "rest")  # a read-only PADT user may follow it
     assert (done["state"], done["cycles"], done["dropped"]) == ("done", 50, 0)
@@ -71,7 +72,7 @@ def test_record_list_download_and_delete(site: Plant) -> None:
     assert recording.column("P.flag") == [n > 10 for n in counts]
 
     left = ok(site.call("DELETE", f"{R}/recordings/rest", operator))
-    assert "rest" not in {r["id"] for r in left["recordings"]}
+    assert "rest" not in {r["id"] for r in left}
     assert "rest" not in {r["id"] for r in ok(site.call("GET", f"{R}/recordings", reader))}
 
 
@@ -80,7 +81,7 @@ def test_stop_a_running_recording(site: Plant) -> None:
     body = {"variables": ["P*"], "id": "open", "trigger": "P.flag"}
     ok(site.call("POST", f"{R}/recordings", operator, json=body))
     time.sleep(0.5)
-    stopped = ok(site.call("POST", f"{R}/recordings/open/stop", operator))["recording"]
+    stopped = ok(site.call("POST", f"{R}/recordings/open/stop", operator))
     assert stopped["id"] == "open"
     done = ended(site, operator, "open")
     assert done["state"] == "done"
@@ -110,10 +111,11 @@ def test_refusals_are_structured(site: Plant) -> None:
     error(site.call("POST", f"{R}/recordings", operator, json=out_of_range), 400, "bad_request")
     unknown = {"variables": ["P.nothing"], "cycles": 5}
     reply = site.call("POST", f"{R}/recordings", operator, json=unknown)
-    assert reply.status_code in (400, 404, 409) and "P.nothing" in reply.json()["error"]["message"]
+    assert "P.nothing" in error(reply, 404, "unknown_variable")
     error(site.call("GET", f"{R}/recordings/files/identity.key", operator), 400, "bad_request")
     missing = site.call("GET", f"{R}/recordings/files/never-1.mcap", operator)
-    assert missing.status_code in (404, 409) and set(missing.json()) == {"error"}
+    assert "never-1.mcap" in error(missing, 404, "unknown_recording")
     absent = site.call("POST", f"{R}/recordings/never/stop", operator)
-    assert absent.status_code in (404, 409) and set(absent.json()) == {"error"}
+    assert "never" in error(absent, 404, "unknown_recording")
+    error(site.call("DELETE", f"{R}/recordings/never", operator), 404, "unknown_recording")
     error(site.call("GET", f"{R}/recordings", None), 401, "unauthenticated")

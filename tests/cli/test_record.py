@@ -10,11 +10,14 @@ import re
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
+from backend.engineering import recordings
+from runtime.contract.protocol import GetValues
 from runtime.contract.recording import read_recording
 from tests.conftest import REPO, free_port, padt
 from tests.support.recording_cell import PASSWORDS, RESOURCE, Cell, recording_cell
@@ -72,6 +75,9 @@ def test_ctrl_c_stops_the_recording_and_keep_leaves_it_listed(cell: Cell, tmp_pa
     started = process.stderr.readline()
     assert "until Ctrl-C" in started, started
     recording_id = started.split()[1].rstrip(":")
+    viewer = cell.logged_in("viewer")
+    while recordings.find(viewer, recording_id).cycles < 10:  # some cycles in: then Ctrl-C
+        time.sleep(0.05)
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=60)
     assert process.returncode == 0, err
@@ -94,15 +100,39 @@ def test_ctrl_c_stops_the_recording_and_keep_leaves_it_listed(cell: Cell, tmp_pa
     assert found[recording_id]["cycles"] == int(summary[1])
 
 
+def test_ctrl_c_before_the_trigger_fired_records_nothing(cell: Cell, tmp_path: Path) -> None:
+    output = tmp_path / "never.mcap"
+    command = [sys.executable, "-m", "padt.cli", "record", "--var", "Main.count"]
+    command += ["--trigger", "Main.count < 0", "--cycles", "5", "-o", str(output)]
+    command += ["--resource", RESOURCE, "--zenoh", cell.endpoint, "--user", "op"]
+    env = {**os.environ, "PADT_PASSWORD": PASSWORDS["op"]}
+    process = subprocess.Popen(
+        command, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    assert process.stderr is not None
+    started = process.stderr.readline()
+    assert "after Main.count < 0 becomes true, for 5 cycles" in started, started
+    recording_id = started.split()[1].rstrip(":")
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == 1 and out == ""
+    assert f"padt record: recording {recording_id} wrote no file: nothing was recorded" in err
+    assert not output.exists()
+    listed = recordings.list_recordings(cell.logged_in("viewer"))
+    assert recording_id not in {r.id for r in listed}
+
+
 def test_a_trigger_with_cycles_before_it(cell: Cell, tmp_path: Path) -> None:
     output = tmp_path / "trig.mcap"
-    args = ["--var", "Main.alarm", "--var", "Main.count", "--trigger", "Main.alarm"]
+    now = cell.logged_in("viewer").ask(GetValues()).values["Main.count"]
+    trigger = f"Main.count >= {now + 30}"  # fires once the three cycles before it are in
+    args = ["--var", "Main.count", "--trigger", trigger]
     args += ["--pre-cycles", "3", "--cycles", "10", "-o", str(output)]
     done = as_user(cell, "op", "record", *args)
     assert done.returncode == 0, done.stderr
-    assert "after Main.alarm becomes true" in done.stderr
-    alarms = read_recording(output).column("Main.alarm")
-    assert alarms.index(True) == 3 and len(alarms) == 13
+    assert f"after {trigger} becomes true" in done.stderr
+    counts = read_recording(output).column("Main.count")
+    assert counts == list(range(now + 30 - 3, now + 30 + 10))
 
 
 def test_rotated_parts_are_written_beside_the_file(cell: Cell, tmp_path: Path) -> None:

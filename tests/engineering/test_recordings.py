@@ -20,7 +20,7 @@ from backend.engineering import recordings
 from backend.engineering.recordings import RecordingSpec
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.keyspace import command_key
-from runtime.contract.protocol import MAX_RECORDING_READ
+from runtime.contract.protocol import MAX_RECORDING_READ, GetValues
 from runtime.contract.recording import Recording, read_recording
 from runtime.contract.refusal import Refusal
 from tests.support.recording_cell import Cell, recording_cell
@@ -79,7 +79,7 @@ def test_fifty_cycles_recorded_downloaded_and_deleted(cell: Cell) -> None:
     assert not on_disk.exists()
     with pytest.raises(Refusal) as gone:
         recordings.download(op, name)
-    assert gone.value.code in ("not_found", "unknown_recording")
+    assert gone.value.code == "unknown_recording"
 
 
 def test_a_prefix_records_every_variable_below_it(cell: Cell) -> None:
@@ -92,25 +92,47 @@ def test_a_prefix_records_every_variable_below_it(cell: Cell) -> None:
     recordings.delete(op, "prefix")
 
 
+def soon(cell: Cell, cycles: int) -> int:
+    """Main.count some cycles from now: a trigger on it fires once its pre-cycles are in."""
+    count: int = cell.logged_in("viewer").ask(GetValues()).values["Main.count"]
+    return count + cycles
+
+
 def test_a_trigger_keeps_the_cycles_before_it(cell: Cell) -> None:
     op = cell.logged_in("op")
+    threshold = soon(cell, 30)
     spec = RecordingSpec(
-        ("Main.count", "Main.alarm"), trigger="Main.alarm", pre_cycles=5, cycles=20, id="trig"
+        ("Main.count", "Main.alarm"),
+        trigger=f"Main.count >= {threshold}",
+        pre_cycles=5,
+        cycles=20,
+        id="trig",
     )
     started = recordings.start(op, spec)
-    assert started.state in ("waiting", "recording")
+    assert started.state == "waiting"
     ended = recordings.wait_until_ended(op, "trig")
     assert ended.state == "done" and ended.trigger_cycle is not None
     [(_, data)] = recordings.download_recording(op, "trig")
     recording = read(data)
-    alarms = recording.column("Main.alarm")
-    fired = alarms.index(True)
-    assert fired == 5, alarms  # five cycles before the trigger, then the trigger's
-    assert recording.cycles[fired] == ended.trigger_cycle
-    assert recording.column("Main.count")[fired] % 25 == 0
-    assert len(recording.rows) == 5 + 20
-    assert recording.header.trigger and recording.header.pre_cycles == 5
+    counts = recording.column("Main.count")
+    # five cycles before the trigger, the trigger's, and 19 after it: 20 from the trigger
+    assert counts == list(range(threshold - 5, threshold + 20))
+    assert recording.cycles[5] == ended.trigger_cycle
+    assert recording.header.trigger.startswith("Main.count >= ")
+    assert recording.header.pre_cycles == 5
     recordings.delete(op, "trig")
+
+
+def test_a_bool_trigger_fires_when_it_becomes_true(cell: Cell) -> None:
+    op = cell.logged_in("op")
+    spec = RecordingSpec(("Main.alarm", "Main.count"), trigger="Main.alarm", cycles=3, id="edge")
+    recordings.start(op, spec)
+    recordings.wait_until_ended(op, "edge")
+    [(_, data)] = recordings.download_recording(op, "edge")
+    recording = read(data)
+    assert recording.column("Main.alarm") == [True, False, False]
+    assert recording.column("Main.count")[0] % 25 == 0
+    recordings.delete(op, "edge")
 
 
 def test_rotated_files_come_in_order_and_continue_each_other(cell: Cell) -> None:
@@ -166,7 +188,7 @@ def test_unknown_variables_and_recordings_are_refused(cell: Cell) -> None:
         recordings.stop(op, "never")
     with pytest.raises(Refusal) as refused:
         recordings.download_recording(op, "never")
-    assert refused.value.code == "not_found"
+    assert refused.value.code == "unknown_recording"
     with pytest.raises(Refusal) as refused:
         recordings.download(op, "../identity-1.mcap")  # not a name record_list gives
     assert refused.value.code == "bad_request"
