@@ -57,7 +57,8 @@ def record(args: argparse.Namespace) -> int:
             started = recordings.start(client, spec)
             until = _until(args)
             print(
-                f"recording {started.id}: {started.variables} variables"
+                f"recording {started.id}: {started.variables} "
+                f"variable{'' if started.variables == 1 else 's'}"
                 f"{' and all inputs' if started.all_inputs else ''}, {until}",
                 file=sys.stderr,
                 flush=True,

@@ -36,11 +36,14 @@ def error(reply: Any, status: int, code: str) -> str:
     return message
 
 
+def listed(site: Plant, token: str) -> dict[str, dict[str, Any]]:
+    return {r["id"]: r for r in ok(site.call("GET", f"{R}/recordings", token))}
+
+
 def ended(site: Plant, token: str, recording_id: str) -> dict[str, Any]:
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline:
-        listed = {r["id"]: r for r in ok(site.call("GET", f"{R}/recordings", token))}
-        found: dict[str, Any] = listed[recording_id]
+        found = listed(site, token)[recording_id]
         if found["state"] in ("done", "failed"):
             return found
         time.sleep(0.1)
@@ -78,17 +81,18 @@ def test_record_list_download_and_delete(site: Plant) -> None:
 
 def test_stop_a_running_recording(site: Plant) -> None:
     operator = site.session("builder", "op")
-    body = {"variables": ["P*"], "id": "open", "trigger": "P.flag"}
-    ok(site.call("POST", f"{R}/recordings", operator, json=body))
-    time.sleep(0.5)
+    ok(site.call("POST", f"{R}/recordings", operator, json={"variables": ["P*"], "id": "open"}))
+    while listed(site, operator)["open"]["cycles"] < 10:  # some cycles in, then stop it
+        time.sleep(0.05)
     stopped = ok(site.call("POST", f"{R}/recordings/open/stop", operator))
-    assert stopped["id"] == "open"
+    assert stopped["id"] == "open" and stopped["state"] in ("recording", "done")
     done = ended(site, operator, "open")
-    assert done["state"] == "done"
-    if done["files"]:  # the trigger may not have fired yet: then nothing was written
-        name = done["files"][0]["name"]
-        data = site.call("GET", f"{R}/recordings/files/{name}", operator).content
-        assert len(read_recording(io.BytesIO(data)).rows) == done["cycles"]
+    assert done["state"] == "done" and done["cycles"] >= 10
+    [file] = done["files"]
+    data = site.call("GET", f"{R}/recordings/files/{file['name']}", operator).content
+    recording = read_recording(io.BytesIO(data))
+    assert recording.complete and len(recording.rows) == done["cycles"]
+    assert {"P.n", "P.limit", "P.flag"} <= {path for path, _ in recording.header.variables}
     ok(site.call("DELETE", f"{R}/recordings/open", operator))
 
 

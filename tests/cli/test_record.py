@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -17,7 +18,6 @@ from pathlib import Path
 import pytest
 
 from backend.engineering import recordings
-from runtime.contract.protocol import GetValues
 from runtime.contract.recording import read_recording
 from tests.conftest import REPO, free_port, padt
 from tests.support.recording_cell import PASSWORDS, RESOURCE, Cell, recording_cell
@@ -124,15 +124,20 @@ def test_ctrl_c_before_the_trigger_fired_records_nothing(cell: Cell, tmp_path: P
 
 def test_a_trigger_with_cycles_before_it(cell: Cell, tmp_path: Path) -> None:
     output = tmp_path / "trig.mcap"
-    now = cell.logged_in("viewer").ask(GetValues()).values["Main.count"]
-    trigger = f"Main.count >= {now + 30}"  # fires once the three cycles before it are in
-    args = ["--var", "Main.count", "--trigger", trigger]
+    # Main.level rises from 0 to 49.5 every 100 cycles: it passes 25 at every count 50, 150...
+    args = ["--var", "Main.count", "--var", "Main.level", "--trigger", "Main.level >= 25.0"]
     args += ["--pre-cycles", "3", "--cycles", "10", "-o", str(output)]
     done = as_user(cell, "op", "record", *args)
     assert done.returncode == 0, done.stderr
-    assert f"after {trigger} becomes true" in done.stderr
-    counts = read_recording(output).column("Main.count")
-    assert counts == list(range(now + 30 - 3, now + 30 + 10))
+    assert "after Main.level >= 25.0 becomes true, for 10 cycles" in done.stderr
+    recording = read_recording(output)
+    counts, levels = recording.column("Main.count"), recording.column("Main.level")
+    assert counts == list(range(counts[0], counts[0] + len(counts)))
+    fired = len(counts) - 10  # the trigger's cycle and 9 after it
+    # three cycles before it (fewer only when the recording began less than three before)
+    assert 0 <= fired <= 3
+    assert counts[fired] % 100 == 50 and levels[fired] == 25.0
+    assert all(level < 25.0 for level in levels[:fired])
 
 
 def test_rotated_parts_are_written_beside_the_file(cell: Cell, tmp_path: Path) -> None:
@@ -147,6 +152,28 @@ def test_rotated_parts_are_written_beside_the_file(cell: Cell, tmp_path: Path) -
     assert counts == list(range(counts[0], counts[0] + len(counts)))
     summary = SUMMARY.fullmatch(done.stdout.strip())
     assert summary is not None and summary[1] == str(len(counts))
+
+
+def test_all_inputs_recorded_replay_identically_and_a_change_is_found(
+    cell: Cell, tmp_path: Path
+) -> None:
+    output = tmp_path / "all.mcap"
+    args = ["--all-inputs", "--var", "Main.count", "--cycles", "100", "-o", str(output)]
+    done = as_user(cell, "op", "record", *args)
+    assert done.returncode == 0, done.stderr
+    assert ": 1 variable and all inputs, for 100 cycles" in done.stderr
+    assert read_recording(output).artifact is not None
+
+    same = padt("replay", str(output), str(cell.project))
+    assert same.returncode == 0, same.stderr
+    assert same.stdout.strip() == "replay: 100 cycles, identical"
+    changed = tmp_path / "changed"
+    shutil.copytree(cell.project, changed)
+    main = changed / "main.st"
+    main.write_text(main.read_text().replace("count := count + 1;", "count := count + 2;"))
+    differs = padt("replay", str(output), str(changed))
+    assert differs.returncode == 1, differs.stderr
+    assert "(the 1st recorded) differs in Main.count" in differs.stdout
 
 
 def test_refusals_and_bad_options(cell: Cell, tmp_path: Path) -> None:

@@ -100,7 +100,7 @@ def soon(cell: Cell, cycles: int) -> int:
 
 def test_a_trigger_keeps_the_cycles_before_it(cell: Cell) -> None:
     op = cell.logged_in("op")
-    threshold = soon(cell, 30)
+    threshold = soon(cell, 50)
     spec = RecordingSpec(
         ("Main.count", "Main.alarm"),
         trigger=f"Main.count >= {threshold}",
