@@ -638,10 +638,24 @@ def _recording_commands(sub: Any) -> None:
     )
     record.set_defaults(func=_lazy("padt.recording", "record"))
 
-    listing = sub.add_parser("recordings", help="the recordings kept on a running resource")
-    _resource_options(listing)
-    listing.add_argument("--json", action="store_true", help="print them as JSON")
-    listing.set_defaults(func=_lazy("padt.recording", "recordings_list"))
+    kept = sub.add_parser(
+        "recordings", help="the recordings kept on a running resource; download or delete one"
+    )
+    _resource_options(kept)
+    kept.add_argument("--json", action="store_true", help="print them as JSON")
+    what = kept.add_mutually_exclusive_group()
+    what.add_argument(
+        "--download", metavar="ID", help="download recording ID's files (with -o FILE.mcap)"
+    )
+    what.add_argument("--delete", metavar="ID", help="delete recording ID (it has ended)")
+    kept.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        metavar="FILE.mcap",
+        help="with --download: where it goes (the next parts beside it: FILE-2.mcap, ...)",
+    )
+    kept.set_defaults(func=_lazy("padt.recording", "kept_recordings"))
 
 
 def _api(args: argparse.Namespace) -> int:

@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 from backend.engineering.literals import LiteralError, parse_literal
-from backend.engineering.resource_client import ResourceClient
+from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
 from runtime.contract.protocol import (
     MAX_RECORDING_READ,
     RecordDelete,
@@ -33,6 +33,7 @@ from runtime.contract.refusal import Refusal
 
 ENDED = ("done", "failed")
 POLL_S = 0.25  # how often a recording's progress is asked for while it is awaited
+PATIENCE_S = 60.0  # how long a resource may not answer while a recording is awaited
 
 
 class TriggerError(ValueError):
@@ -153,12 +154,25 @@ def wait_until_ended(
     recording_id: str,
     stop_asked: Callable[[], bool] = lambda: False,
     poll_s: float = POLL_S,
+    patience_s: float = PATIENCE_S,
 ) -> RecordingInfo:
     """Wait until the recording has ended by itself (its cycles or seconds reached, or it
-    failed), or until `stop_asked()`: then it is stopped and its files closed."""
+    failed), or until `stop_asked()`: then it is stopped and its files closed. The
+    resource may stop answering for up to `patience_s` (a network hiccup, a restart of
+    the runtime) without ending the wait: the recording goes on there."""
     stopping = False
+    unanswered_since: float | None = None
     while True:
-        current = find(client, recording_id)
+        try:
+            current = find(client, recording_id)
+        except ResourceUnreachable:
+            now = time.monotonic()
+            unanswered_since = unanswered_since or now
+            if now - unanswered_since > patience_s or stop_asked():
+                raise  # Ctrl-C now: the resource could not be told to stop
+            time.sleep(poll_s)
+            continue
+        unanswered_since = None
         if current.state in ENDED:
             return current
         if stop_asked() and not stopping:

@@ -18,9 +18,18 @@ from pathlib import Path
 import pytest
 
 from backend.engineering import recordings
+from backend.engineering.project import compile_project, load_project
+from backend.engineering.resource_client import ResourceClient
 from runtime.contract.recording import read_recording
 from tests.conftest import REPO, free_port, padt
-from tests.support.recording_cell import PASSWORDS, RESOURCE, Cell, recording_cell
+from tests.support.recording_cell import (
+    PASSWORDS,
+    RESOURCE,
+    Cell,
+    recording_cell,
+    write_project,
+)
+from tests.support.runtime_process import client_session, router, runtime_process, store_artifact
 
 
 @pytest.fixture(scope="module")
@@ -98,6 +107,21 @@ def test_ctrl_c_stops_the_recording_and_keep_leaves_it_listed(cell: Cell, tmp_pa
     as_json = as_user(cell, "viewer", "recordings", "--json")
     found = {r["id"]: r for r in json.loads(as_json.stdout)}
     assert found[recording_id]["cycles"] == int(summary[1])
+
+    # kept: downloaded again later, then deleted
+    again = tmp_path / "again.mcap"
+    fetched = as_user(cell, "viewer", "recordings", "--download", recording_id, "-o", str(again))
+    assert fetched.returncode == 0, fetched.stderr
+    assert fetched.stdout.startswith(f"downloaded {recording_id} -> {again} (")
+    assert again.read_bytes() == output.read_bytes()
+    refused = as_user(cell, "viewer", "recordings", "--delete", recording_id)
+    assert refused.returncode == 1 and "refused (forbidden)" in refused.stderr
+    deleted = as_user(cell, "op", "recordings", "--delete", recording_id)
+    assert deleted.returncode == 0 and deleted.stdout.startswith(f"deleted {recording_id};")
+    gone = as_user(cell, "viewer", "recordings", "--download", recording_id, "-o", str(again))
+    assert gone.returncode == 1 and "refused (unknown_recording)" in gone.stderr
+    no_output = as_user(cell, "viewer", "recordings", "--download", recording_id)
+    assert no_output.returncode == 2 and "--download needs -o FILE.mcap" in no_output.stderr
 
 
 def test_ctrl_c_before_the_trigger_fired_records_nothing(cell: Cell, tmp_path: Path) -> None:
@@ -203,3 +227,42 @@ def test_refusals_and_bad_options(cell: Cell, tmp_path: Path) -> None:
                     "--zenoh", cell.endpoint)  # fmt: skip
     assert no_login.returncode == 1 and "unauthenticated" in no_login.stderr
     assert not output.exists()
+
+
+def test_a_restart_of_the_runtime_during_a_recording_is_waited_out(tmp_path: Path) -> None:
+    """The runtime ends (it finishes the file) and comes back: padt record waits, logs in
+    again and fetches what was recorded."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    project = write_project(tmp_path / "project")
+    artifact = compile_project(load_project([project])).artifact
+    assert artifact is not None
+    state_dir = tmp_path / "state"
+    store_artifact(state_dir, artifact)
+    output = tmp_path / "restart.mcap"
+    command = [sys.executable, "-m", "padt.cli", "record", "--var", "Main.count"]
+    command += ["--seconds", "60", "-o", str(output), "--resource", RESOURCE]
+    command += ["--zenoh", endpoint, "--user", "op"]
+    env = {**os.environ, "PADT_PASSWORD": PASSWORDS["op"]}
+    with router(endpoint), client_session(endpoint) as session:
+        client = ResourceClient(session, RESOURCE)
+        with runtime_process(RESOURCE, state_dir, endpoint):
+            client.wait_until_answering()
+            client.login("viewer", PASSWORDS["viewer"])
+            process = subprocess.Popen(
+                command, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                text=True,
+            )  # fmt: skip
+            assert process.stderr is not None
+            recording_id = process.stderr.readline().split()[1].rstrip(":")
+            while recordings.find(client, recording_id).cycles < 10:
+                time.sleep(0.05)
+        # the runtime is gone; it comes back with the same state folder
+        with runtime_process(RESOURCE, state_dir, endpoint):
+            out, err = process.communicate(timeout=90)
+    assert process.returncode == 0, err
+    recording = read_recording(output)
+    assert recording.complete, recording.problem
+    counts = recording.column("Main.count")
+    assert out.startswith(f"recorded {len(counts)} cycles (the runtime restarted: dropped ones")
+    assert f"-> {output} (" in out
+    assert len(counts) >= 10 and counts == list(range(counts[0], counts[0] + len(counts)))
