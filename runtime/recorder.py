@@ -5,7 +5,8 @@ all inputs, everything the programs take from outside, for an exact replay.
 The cycle thread only copies values into a queue (`TraceWriter.offer`); a writer thread per
 recording encodes, compresses and writes. A full queue drops the cycle and counts it.
 A recording ends with its cycle or time limit, at `record_stop`, or when the configuration
-it records changes (load, reload, cold start, program restart).
+it records changes (load, reload, cold start, program restart); one with all inputs also
+when the resource stops.
 """
 
 from __future__ import annotations
@@ -301,6 +302,13 @@ class Recordings:
         states and clocks as the programs will find them."""
         if any(r.all_inputs for r in self._running.values()):
             self._found = (_system(resource), _programs(resource))
+
+    def idle(self, resource: Resource) -> None:
+        """The resource does not run: a replay cannot cross that, so the recordings of all
+        inputs end (recordings of values wait for cycles to come)."""
+        for recording in list(self._running.values()):
+            if recording.all_inputs:
+                self._end(resource, recording, "ended: the resource stopped")
 
     def cycled(
         self,
