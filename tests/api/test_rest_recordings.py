@@ -5,12 +5,14 @@ and the resource's levels; structured refusals."""
 from __future__ import annotations
 
 import io
+import os
 import time
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
+from runtime.contract.protocol import MAX_RECORDING_READ
 from runtime.contract.recording import read_recording
 from tests.support.rest_plant import Plant, plant
 
@@ -123,3 +125,19 @@ def test_refusals_are_structured(site: Plant) -> None:
     assert "never" in error(absent, 404, "unknown_recording")
     error(site.call("DELETE", f"{R}/recordings/never", operator), 404, "unknown_recording")
     error(site.call("GET", f"{R}/recordings", None), 401, "unauthenticated")
+
+
+def test_a_file_of_many_chunks_streams_whole(site: Plant) -> None:
+    # a file as a long recording leaves it: larger than one record_read of the resource
+    folder = site.state_dir / "recordings"
+    folder.mkdir(parents=True, exist_ok=True)
+    data = os.urandom(5 * MAX_RECORDING_READ + 77)
+    (folder / "long-1.mcap").write_bytes(data)
+    reader = site.session("reader", "viewer")
+    assert [f["name"] for f in listed(site, reader)["long"]["files"]] == ["long-1.mcap"]
+    download = site.call("GET", f"{R}/recordings/files/long-1.mcap", reader)
+    assert download.status_code == 200
+    assert int(download.headers["content-length"]) == len(data)
+    assert download.content == data
+    ok(site.call("DELETE", f"{R}/recordings/long", site.session("builder", "op")))
+    assert not (folder / "long-1.mcap").exists()
