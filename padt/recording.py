@@ -109,18 +109,26 @@ def _until(args: argparse.Namespace) -> str:
 def _fetch(
     client: ResourceClient, recording: RecordingInfo, output: Path
 ) -> list[tuple[Path, int]]:
-    """Every file of the recording to `output`, `output-2`...; each written whole or not at
-    all (a download that breaks off leaves no file that looks complete)."""
+    """Every file of the recording to `output`, `output-2`...; each streamed to a `.part`
+    file and renamed when whole, so a download that breaks off leaves no file that looks
+    complete, and a file of gigabytes never sits in memory."""
     written: list[tuple[Path, int]] = []
-    for name, data in recordings.download_recording(client, recording.id):
+    for name in recordings.file_names(client, recording.id):
         path = part_path(output, recordings.part_number(name))
         partial = path.with_name(path.name + ".part")
         try:
-            partial.write_bytes(data)
+            size, pieces = recordings.download_chunks(client, name)
+            with partial.open("wb") as stream:
+                for piece in pieces:
+                    stream.write(piece)
             partial.replace(path)
         except OSError as exc:
+            partial.unlink(missing_ok=True)
             raise Failed(f"cannot write {path}: {exc.strerror or exc}") from None
-        written.append((path, len(data)))
+        except BaseException:
+            partial.unlink(missing_ok=True)
+            raise
+        written.append((path, size))
     return written
 
 

@@ -126,8 +126,8 @@ def _literal(text: str) -> bool | int | float | str | None:
 
 
 def start(client: ResourceClient, spec: RecordingSpec) -> RecordingInfo:
-    """Start a recording; the resource's refusal (level, unknown variable, one running
-    already...) as a Refusal, a trigger that is no condition as TriggerError."""
+    """Start a recording; the resource's refusal (the level, an unknown variable, too many
+    running) as a Refusal, a trigger that is no condition as TriggerError."""
     return client.ask(spec.command()).recording
 
 
@@ -225,10 +225,14 @@ def download(client: ResourceClient, file_name: str) -> bytes:
     return b"".join(pieces)
 
 
+def file_names(client: ResourceClient, recording_id: str) -> list[str]:
+    """The files of a recording, in order (its parts as the files rotated)."""
+    return sorted((f.name for f in find(client, recording_id).files), key=part_number)
+
+
 def download_recording(client: ResourceClient, recording_id: str) -> list[tuple[str, bytes]]:
     """Every file of a recording, in order (its parts as the files rotated)."""
-    files = sorted(find(client, recording_id).files, key=lambda f: part_number(f.name))
-    return [(f.name, download(client, f.name)) for f in files]
+    return [(name, download(client, name)) for name in file_names(client, recording_id)]
 
 
 def part_number(file_name: str) -> int:

@@ -22,6 +22,7 @@ from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.recording import read_recording
 from tests.conftest import REPO, free_port, padt
+from tests.support.lying_resource import FILE, lying_resource
 from tests.support.recording_cell import (
     PASSWORDS,
     RESOURCE,
@@ -266,3 +267,21 @@ def test_a_restart_of_the_runtime_during_a_recording_is_waited_out(tmp_path: Pat
     assert out.startswith(f"recorded {len(counts)} cycles (the runtime restarted: dropped ones")
     assert f"-> {output} (" in out
     assert len(counts) >= 10 and counts == list(range(counts[0], counts[0] + len(counts)))
+
+
+@pytest.mark.parametrize("lie", ["none", "offset"])
+def test_a_broken_download_leaves_no_file_that_looks_whole(lie: str, tmp_path: Path) -> None:
+    output = tmp_path / "x.mcap"
+    with lying_resource(f"tcp/127.0.0.1:{free_port()}") as liar:
+        liar.lie = lie
+        online = ["--resource", "Fake", "--zenoh", liar.endpoint]
+        fetched = padt("recordings", "--download", "x", "-o", str(output), *online)
+    if lie == "none":
+        assert fetched.returncode == 0, fetched.stderr
+        assert output.read_bytes() == FILE and list(tmp_path.iterdir()) == [output]
+    else:
+        assert fetched.returncode == 1
+        assert "padt recordings: refused (bad_reply): resource Fake sent bytes from" in (
+            fetched.stderr
+        )
+        assert list(tmp_path.iterdir()) == []  # neither x.mcap nor x.mcap.part
