@@ -13,7 +13,7 @@ import base64
 import binascii
 import re
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 from backend.engineering.literals import LiteralError, parse_literal
@@ -45,7 +45,7 @@ class RecordingSpec:
     """What to record, as a user chooses it (the arguments of `record_start`, with the
     trigger as text)."""
 
-    variables: tuple[str, ...] = ()  # paths, or `Prefix*` for every path starting so
+    variables: Sequence[str] = ()  # paths, or `Prefix*` for every path starting so
     all_inputs: bool = False  # also everything the programs take from outside (replay)
     trigger: str | None = None  # `Main.level > 80`, `Main.alarm`, `NOT Main.alarm`
     pre_cycles: int = 0  # with a trigger: cycles kept from before it
