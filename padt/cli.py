@@ -284,7 +284,7 @@ def build_parser() -> argparse.ArgumentParser:
     docs.add_argument(
         "--each",
         action="store_true",
-        help="every PATH a document of its own (loose .st files otherwise form one project)",
+        help="every PROJECT a document of its own (loose .st files otherwise form one project)",
     )
     docs.add_argument(
         "-j",
