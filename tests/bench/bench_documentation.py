@@ -4,10 +4,10 @@ chapter is complete in itself (they repeat shared POUs), so each is its own docu
 
 Measured twice in the same run, each with its wall time and its CPU time (the workers'
 included): the baseline, one chapter after another in this process with the cycle
-collector on (as `padt docs` made them before `--jobs`, but with today's compile), and `padt docs --each` as it
-makes them now (a worker per CPU, the collector off while a document is made). The ratio
-says what that brings on this machine as loaded now (a shared machine: the load is
-printed before and after)."""
+collector on (as `padt docs` made them before `--jobs`, but with today's compile), and
+`padt docs --each` as it makes them now (a worker per CPU, the collector off while a
+document is made). The ratio says what that brings on this machine as loaded now (a
+shared machine: the load is printed before and after)."""
 
 from __future__ import annotations
 
