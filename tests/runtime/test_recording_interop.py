@@ -1,0 +1,263 @@
+"""Recordings of a real runtime process, opened by an MCAP reader nobody here wrote (the
+TypeScript `@mcap/core` under node, tests/support/mcap_reader.cjs): every message, channel,
+schema, the header metadata and the attachments it finds are those our reader finds. And a
+runtime killed (SIGKILL) in the middle of a recording leaves a file both read up to its last
+whole chunk."""
+
+from __future__ import annotations
+
+import base64
+import itertools
+import json
+import os
+import signal
+import time
+from collections.abc import Callable
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from backend.engineering.resource_client import ResourceClient
+from runtime.contract import protocol as p
+from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
+from runtime.contract.recording import (
+    ARTIFACT_ATTACHMENT,
+    INPUTS_SCHEMA,
+    METADATA,
+    START_ATTACHMENT,
+    VALUES_SCHEMA,
+    Recording,
+    RecordingHeader,
+    inputs_topic,
+    pick,
+    read_recording,
+    values_topic,
+)
+from runtime.contract.state_folder import recordings_path
+from tests.support.mcap_node import node_or_skip, read_with_node
+from tests.support.runtime_process import running_resource, store_artifact
+
+PLANT = """
+TYPE Reading : STRUCT raw : INT; scaled : REAL; ok : BOOL; END_STRUCT; END_TYPE
+VAR_GLOBAL
+  level AT %IW0 : INT;
+  pump AT %QX0.0 : BOOL;
+  alarms : DINT;
+  mode : STRING[16] := 'auto';
+END_VAR
+PROGRAM Control
+VAR_EXTERNAL level : INT; pump : BOOL; alarms : DINT; mode : STRING[16]; END_VAR
+VAR
+  t : TON; n : DINT; seed : UDINT := 7; noise : LREAL; r : Reading;
+  history : ARRAY[0..3] OF INT; held : TIME; high : BOOL;
+END_VAR
+n := n + 1;
+seed := seed * 1103515245 + 12345;
+noise := UDINT_TO_LREAL(seed MOD 1000) / 1000.0;
+r.raw := level;
+r.scaled := INT_TO_REAL(level) / 10.0 + LREAL_TO_REAL(noise);
+r.ok := level > 0;
+history[n MOD 4] := level;
+IF level < 300 THEN pump := TRUE; ELSIF level > 700 THEN pump := FALSE; END_IF;
+t(IN := level > 650, PT := T#50ms);
+IF t.Q AND NOT high THEN alarms := alarms + 1; mode := 'alarm'; END_IF;
+high := t.Q;
+held := t.ET;
+END_PROGRAM
+"""
+
+
+def compiled(source: str, program: str) -> Artifact:
+    config = ResourceConfig(
+        name="Plant", target_cycle_ms=10, safety_operation=False, global_forcing_allowed=True
+    )
+    result = compile_sources(
+        [SourceFile("plant.st", source)],
+        resource=config,
+        programs=[ProgramConfig(program, program, 1)],
+    )
+    assert result.artifact is not None, [str(d) for d in result.diagnostics]
+    return result.artifact
+
+
+def wait_for(what: str, check: Callable[[], bool], timeout_s: float = 30) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not check():
+        assert time.monotonic() < deadline, f"waited {timeout_s:g} s for {what}"
+        time.sleep(0.05)
+
+
+def info_of(client: ResourceClient, recording_id: str) -> p.RecordingInfo:
+    [info] = [r for r in client.ask(p.RecordList()).recordings if r.id == recording_id]
+    return info
+
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def download(client: ResourceClient, name: str, into: Path) -> bytes:
+    """The file over the bus by record_read, as a user downloads it, once its writer has
+    finished it (it ends with the MCAP magic)."""
+
+    def whole() -> bytes:
+        data, offset = b"", 0
+        while True:
+            chunk = client.ask(p.RecordRead(name, offset))
+            data += base64.b64decode(chunk.data)
+            offset = len(data)
+            if offset >= chunk.size:
+                return data
+
+    got = [b""]
+
+    def finished() -> bool:
+        got[0] = whole()
+        return len(got[0]) > 16 and got[0].endswith(MCAP_MAGIC)
+
+    wait_for(f"{name} to be finished", finished)
+    into.write_bytes(got[0])
+    return got[0]
+
+
+def values_rows(recording: Recording, messages: list[dict[str, Any]]) -> list[list[Any]]:
+    """The node reader's values messages as our reader's rows (the header's order)."""
+    paths = [path for path, _ in recording.header.variables]
+    return [[pick(m["data"]["values"], path) for path in paths] for m in messages]
+
+
+def test_a_recording_with_all_inputs_reads_the_same_in_node(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    node_or_skip()  # before minutes of work: skip at once without the reader
+    store_artifact(tmp_path, compiled(PLANT, "Control"))
+    with running_resource("Plant", tmp_path, zenoh_endpoint) as (_process, client):
+        assert client.command("write", variable="level", value=500)["ok"]
+        assert client.command("start")["ok"]
+        started = client.ask(
+            p.RecordStart(["Control.*", "level", "alarms", "mode"], all_inputs=True, id="io")
+        ).recording
+        assert started.state == "recording" and started.all_inputs
+        # what the programs take from outside: writes, a forced input, forcing ended
+        for level in (250, 680, 720, 400):
+            time.sleep(0.3)
+            assert client.command("write", variable="level", value=level)["ok"]
+        assert client.command("force", variable="level", value=690)["ok"]
+        assert client.command("start_forcing")["ok"]
+        time.sleep(0.4)
+        assert client.command("stop_forcing")["ok"]
+        time.sleep(0.3)
+        stopped = client.ask(p.RecordStop("io")).recording
+        assert stopped.state == "done" and stopped.dropped == 0
+        [file] = stopped.files
+        data = download(client, file.name, tmp_path / "io.mcap")
+    assert data == (recordings_path(tmp_path) / file.name).read_bytes()
+
+    ours = read_recording(tmp_path / "io.mcap")
+    theirs = read_with_node(tmp_path / "io.mcap", every_message=True)
+    assert ours.complete and theirs["complete"] and theirs["error"] is None, theirs["error"]
+    assert len(ours.rows) == stopped.cycles > 100
+    assert theirs["header"] == {"profile": "", "library": "padt"}
+
+    # schemas and channels: the same, each channel with its schema
+    assert sorted((s["name"], s["encoding"]) for s in theirs["schemas"]) == [
+        (INPUTS_SCHEMA, "jsonschema"),
+        (VALUES_SCHEMA, "jsonschema"),
+    ]
+    assert sorted((c["topic"], c["message_encoding"], c["schema"]) for c in theirs["channels"]) == [
+        (inputs_topic("Plant"), "json", INPUTS_SCHEMA),
+        (values_topic("Plant"), "json", VALUES_SCHEMA),
+    ]
+    [values_schema] = [s["data"] for s in theirs["schemas"] if s["name"] == VALUES_SCHEMA]
+    recorded = values_schema["properties"]["values"]["properties"]
+    assert recorded["Control"]["properties"]["r"]["properties"]["scaled"]["description"] == "REAL"
+
+    # the header metadata and the attachments of an all-inputs recording
+    [metadata] = theirs["metadata"]
+    assert metadata["name"] == METADATA
+    assert RecordingHeader.from_metadata(metadata["metadata"]) == ours.header
+    assert ours.header.all_inputs and ours.header.resource == "Plant"
+    attachments = {a["name"]: a for a in theirs["attachments"]}
+    assert sorted(attachments) == [ARTIFACT_ATTACHMENT, START_ATTACHMENT]
+    assert attachments[ARTIFACT_ATTACHMENT]["text"] == ours.artifact
+    assert json.loads(attachments[ARTIFACT_ATTACHMENT]["text"])["crc"] == ours.header.crc
+    assert ours.start is not None
+    assert json.loads(attachments[START_ATTACHMENT]["text"]) == json.loads(
+        json.dumps(asdict(ours.start))
+    )
+
+    # every message: counts, cycles, log times, values
+    values = theirs["messages"][values_topic("Plant")]
+    inputs = theirs["messages"][inputs_topic("Plant")]
+    assert values["count"] == len(ours.rows) and inputs["count"] == len(ours.inputs)
+    statistics = theirs["statistics"]
+    assert int(statistics["message_count"]) == len(ours.rows) + len(ours.inputs)
+    assert [m["data"]["cycle"] for m in values["all"]] == ours.cycles
+    assert [int(m["log_time"]) for m in values["all"]] == ours.times_ns
+    assert values["first"]["cycle"] == ours.cycles[0]
+    assert values_rows(ours, [{"data": values["first"]}]) == [ours.rows[0]]
+    assert values_rows(ours, values["all"]) == ours.rows
+    assert [m["data"]["cycle"] for m in inputs["all"]] == [i.cycle for i in ours.inputs]
+    assert [m["data"]["before"] for m in inputs["all"]] == [
+        [list(pair) for pair in i.before] for i in ours.inputs
+    ]
+    assert [m["data"]["after"] for m in inputs["all"]] == [
+        [list(pair) for pair in i.after] for i in ours.inputs
+    ]
+    # the run did what the plant did: the writes and the forced level are in the inputs
+    written = {value for i in ours.inputs for path, value in i.before if path == "level"}
+    assert {250, 680, 720, 400, 690} <= written
+    assert max(ours.column("alarms")) >= 1 and "alarm" in ours.column("mode")
+    assert all(b == a + 1 for a, b in itertools.pairwise(ours.cycles))
+
+
+POINTS = 100  # x3 variables: a counter, a noisy REAL and a BOOL each
+
+
+def big_program() -> str:
+    """A program with a few hundred variables that change every cycle like a plant's: some
+    counting, some noisy REALs, some switching."""
+    declarations = [f"  c{n} : DINT; r{n} : REAL; b{n} : BOOL;" for n in range(POINTS)]
+    body = [
+        f"c{n} := c{n} + {n % 7 + 1}; seed := seed * 1103515245 + 12345; "
+        f"r{n} := {n}.5 + UDINT_TO_REAL(seed MOD 1000) / 100.0; b{n} := (c{n} MOD 5) = 0;"
+        for n in range(POINTS)
+    ]
+    lines = ["PROGRAM Big", "VAR", "  seed : UDINT := 1;", *declarations, "END_VAR", *body]
+    return "\n".join([*lines, "END_PROGRAM"])
+
+
+def test_sigkill_during_a_recording_leaves_a_file_read_to_its_last_whole_chunk(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    store_artifact(tmp_path, compiled(big_program(), "Big"))
+    with running_resource("Plant", tmp_path, zenoh_endpoint) as (process, client):
+        assert client.command("start")["ok"]
+        started = client.ask(p.RecordStart(["Big.*"], id="cut")).recording
+        assert started.variables == 3 * POINTS + 1
+        wait_for("300 cycles recorded", lambda: info_of(client, "cut").cycles >= 300)
+        time.sleep(1.5)  # the last chunk is being filled
+        os.kill(process.pid, signal.SIGKILL)
+        process.wait()
+    [path] = sorted(recordings_path(tmp_path).glob("cut-*.mcap"))
+
+    ours = read_recording(path)
+    assert not ours.complete and ours.problem
+    assert len(ours.rows) >= 100, (len(ours.rows), ours.problem)
+    assert all(len(row) == 3 * POINTS + 1 and None not in row for row in ours.rows)
+    assert all(b == a + 1 for a, b in itertools.pairwise(ours.cycles))
+    counters = ours.column("Big.c3")
+    assert all(b - a == 4 for a, b in itertools.pairwise(counters))  # not a cycle lost inside
+
+    node_or_skip()
+    theirs = read_with_node(path, every_message=True)
+    # the stream reader stops at the cut: waiting for bytes that never come, or with an error
+    assert not theirs["complete"]
+    assert theirs["header"] == {"profile": "", "library": "padt"}
+    [metadata] = theirs["metadata"]
+    assert RecordingHeader.from_metadata(metadata["metadata"]) == ours.header
+    values = theirs["messages"][values_topic("Plant")]
+    assert values["count"] == len(ours.rows)
+    assert [m["data"]["cycle"] for m in values["all"]] == ours.cycles
+    assert values_rows(ours, values["all"]) == ours.rows
