@@ -55,7 +55,9 @@ def value_reader(
     variables: list[BoundVariable], globals_of: Callable[[], Any]
 ) -> Callable[[], list[Any]]:
     """A function that reads the variables' values now, fast: the attributes of one owner
-    are read by one `attrgetter` (in C), arrays copied (the programs go on changing them)."""
+    are read by one `attrgetter` (in C), the results put in order by one `itemgetter`
+    (a loop in Python over the values would cost as much again), arrays copied (the
+    programs go on changing them)."""
     groups: dict[int, tuple[Any, list[int], list[str]]] = {}
     slow: list[tuple[int, BoundVariable]] = []
     for index, bound in enumerate(variables):
@@ -68,29 +70,36 @@ def value_reader(
             groups[key][2].append(".".join(str(a) for a in attrs))
         else:
             slow.append((index, bound))
-    count = len(variables)
     readers = [
-        (owner, indices, operator.attrgetter(*names), len(names) == 1)
-        for owner, indices, names in groups.values()
+        (owner, operator.attrgetter(*names), len(names) == 1) for owner, _, names in groups.values()
     ]
+    # where each variable's value is in what the readers give, one after the other
+    read_order = [i for _, indices, _ in groups.values() for i in indices]
+    read_order += [i for i, _ in slow]
+    position = {index: n for n, index in enumerate(read_order)}
+    reorder = (
+        None
+        if read_order == list(range(len(variables))) or len(variables) < 2
+        else operator.itemgetter(*(position[i] for i in range(len(variables))))
+    )
     arrays = [i for i, b in enumerate(variables) if b.path.type.upper().startswith("ARRAY")]
 
     def read() -> list[Any]:
-        out: list[Any] = [None] * count
+        got: list[Any] = []
         the_globals = globals_of()
-        for owner, indices, getter, single in readers:
-            got = getter(owner.instance if owner is not None else the_globals)
+        for owner, getter, single in readers:
+            value = getter(owner.instance if owner is not None else the_globals)
             if single:
-                out[indices[0]] = got
+                got.append(value)
             else:
-                for index, value in zip(indices, got, strict=True):
-                    out[index] = value
-        for index, bound in slow:
+                got.extend(value)
+        for _, bound in slow:
             root = bound.program.instance if bound.program is not None else the_globals
             value = root
             for accessor in bound.path.attrs:
                 value = value[accessor] if isinstance(accessor, int) else getattr(value, accessor)
-            out[index] = value
+            got.append(value)
+        out = got if reorder is None else list(reorder(got))
         for index in arrays:
             out[index] = deepcopy(out[index])
         return out

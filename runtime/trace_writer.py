@@ -11,9 +11,11 @@ from __future__ import annotations
 import collections
 import json
 import logging
+import math
 import threading
 import time
 from dataclasses import replace
+from itertools import chain
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -74,6 +76,7 @@ class TraceWriter:
         self._attachments = attachments  # written into the first file only
         self._rotate_bytes, self._rotate_ns = rotate_bytes, rotate_ns
         self._paths = [v for v, _ in header.variables]
+        self._values: ValuesEncoder | None = None  # laid out by the writer thread
         self._limit = max(64, MAX_QUEUED_VALUES // max(1, len(self._paths)))
         self._queue: collections.deque[Item] = collections.deque()
         self.dropped = 0  # cycles not written: the queue was full (counted by the cycle)
@@ -115,6 +118,7 @@ class TraceWriter:
     def _run(self) -> None:
         last_flush = time.monotonic()
         try:
+            self._values = ValuesEncoder(self._paths)
             while True:
                 closing = self._closing.is_set()
                 wrote = self._drain()
@@ -147,9 +151,10 @@ class TraceWriter:
             self._begin_file(item.time_ns)
         assert self._mcap is not None
         if isinstance(item, Values):
-            message = {"cycle": item.cycle, "values": nest(self._paths, item.values)}
+            assert self._values is not None
+            message = self._values.encode(item.cycle, item.values)
             self._mcap.add_message(
-                self._channels[0], item.time_ns, _json(message), item.time_ns, item.cycle
+                self._channels[0], item.time_ns, message, item.time_ns, item.cycle
             )
             self.written += 1
         else:
@@ -196,6 +201,53 @@ class TraceWriter:
         if self._stream is not None:
             self._stream.close()
             self._stream = None
+
+
+class ValuesEncoder:
+    """A values message as JSON text, byte for byte what `_json({"cycle": n, "values":
+    nest(paths, values)})` gives, without building the nested dictionaries: `json.dumps`
+    of a dictionary makes a tuple per entry, and tens of thousands of them per message set
+    off the garbage collector, whose full collections stop the cycle thread for tens of
+    milliseconds in a large process. The text between two values is laid out once; a
+    value is encoded in Python, so the cycle thread gets the interpreter in between."""
+
+    def __init__(self, paths: list[str]) -> None:
+        self._pieces: list[str] = []  # the text before each value
+        self._order: list[int] = []  # which value comes next in the text
+        pending = [',"values":']
+
+        def lay_out(node: dict[str, Any]) -> None:
+            pending.append("{")
+            for n, (key, child) in enumerate(node.items()):
+                pending.append(("," if n else "") + json.dumps(key) + ":")
+                if isinstance(child, dict):
+                    lay_out(child)
+                else:
+                    self._pieces.append("".join(pending))
+                    pending.clear()
+                    self._order.append(child)
+            pending.append("}")
+
+        lay_out(nest(paths, list(range(len(paths)))))
+        self._tail = "".join(pending) + "}"
+        self._in_order = self._order == list(range(len(paths)))
+
+    def encode(self, cycle: int, values: list[Any]) -> bytes:
+        if not self._in_order:
+            values = [values[i] for i in self._order]
+        body = "".join(chain.from_iterable(zip(self._pieces, map(_leaf, values), strict=True)))
+        return f'{{"cycle":{int(cycle)}{body}{self._tail}'.encode()
+
+
+def _leaf(value: Any) -> str:
+    kind = type(value)
+    if kind is int:
+        return int.__repr__(value)
+    if kind is float and math.isfinite(value):
+        return float.__repr__(value)
+    if kind is bool:
+        return "true" if value else "false"
+    return _json(value).decode()
 
 
 def _json(data: Any) -> bytes:
