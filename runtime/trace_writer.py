@@ -14,6 +14,7 @@ import logging
 import math
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from itertools import chain
 from pathlib import Path
@@ -39,7 +40,35 @@ log = logging.getLogger(__name__)
 FLUSH_S = 1.0  # the longest a message waits in an open chunk
 CHUNK_BYTES = 512 * 1024  # uncompressed bytes of a chunk
 MAX_QUEUED_VALUES = 2_000_000  # values waiting for the writer, over all queued cycles
+MAX_PAUSE_S = 0.05  # the longest a writer waits for a CPU cycle to end
 _IDLE_S = 0.02
+_SLICE = 1_000  # values encoded between two looks at the cycle
+
+
+class CycleGate:
+    """Tells the writer threads when a CPU cycle runs, so that they wait for its end
+    instead of taking the interpreter from it (the threads of a process share one, and
+    each would get it every switch interval): a recording then costs the cycle only its
+    own copying of the values. A cycle that has run MAX_PAUSE_S (or never said it ended:
+    the resource stopped in it) holds them back no longer."""
+
+    def __init__(self) -> None:
+        self._idle = threading.Event()
+        self._idle.set()
+        self._began = 0.0
+
+    def begins(self) -> None:
+        self._began = time.monotonic()
+        self._idle.clear()
+
+    def ends(self) -> None:
+        self._idle.set()
+
+    def wait(self) -> None:
+        if not self._idle.is_set():
+            left = MAX_PAUSE_S - (time.monotonic() - self._began)
+            if left > 0:
+                self._idle.wait(left)
 
 
 class Values:
@@ -71,12 +100,15 @@ class TraceWriter:
         attachments: dict[str, bytes],
         rotate_bytes: int,
         rotate_ns: int | None,
+        gate: CycleGate | None = None,
     ) -> None:
         self.folder, self.header = folder, header
+        self._gate = gate or CycleGate()
         self._attachments = attachments  # written into the first file only
         self._rotate_bytes, self._rotate_ns = rotate_bytes, rotate_ns
         self._paths = [v for v, _ in header.variables]
         self._values: ValuesEncoder | None = None  # laid out by the writer thread
+        self._schema = b""  # the values' JSON schema, the same in every file
         self._limit = max(64, MAX_QUEUED_VALUES // max(1, len(self._paths)))
         self._queue: collections.deque[Item] = collections.deque()
         self.dropped = 0  # cycles not written: the queue was full (counted by the cycle)
@@ -140,6 +172,7 @@ class TraceWriter:
     def _drain(self) -> bool:
         wrote = False
         while self._queue:
+            self._gate.wait()
             item = self._queue.popleft()
             self._write(item)
             wrote = True
@@ -152,7 +185,7 @@ class TraceWriter:
         assert self._mcap is not None
         if isinstance(item, Values):
             assert self._values is not None
-            message = self._values.encode(item.cycle, item.values)
+            message = self._values.encode(item.cycle, item.values, self._gate.wait)
             self._mcap.add_message(
                 self._channels[0], item.time_ns, message, item.time_ns, item.cycle
             )
@@ -181,9 +214,9 @@ class TraceWriter:
         mcap = Writer(self._stream, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)
         mcap.start(profile="", library="padt")
         mcap.add_metadata("padt.recording", header.metadata())
-        schema = mcap.register_schema(
-            VALUES_SCHEMA, "jsonschema", _json(values_schema(header.variables))
-        )
+        if not self._schema:
+            self._schema = _json(values_schema(header.variables))
+        schema = mcap.register_schema(VALUES_SCHEMA, "jsonschema", self._schema)
         values = mcap.register_channel(values_topic(header.resource), "json", schema)
         inputs = 0
         if header.all_inputs:
@@ -232,11 +265,21 @@ class ValuesEncoder:
         self._tail = "".join(pending) + "}"
         self._in_order = self._order == list(range(len(paths)))
 
-    def encode(self, cycle: int, values: list[Any]) -> bytes:
+    def encode(
+        self, cycle: int, values: list[Any], pause: Callable[[], None] = lambda: None
+    ) -> bytes:
+        """The message; `pause` is called every _SLICE values (to let a cycle run)."""
         if not self._in_order:
             values = [values[i] for i in self._order]
-        body = "".join(chain.from_iterable(zip(self._pieces, map(_leaf, values), strict=True)))
-        return f'{{"cycle":{int(cycle)}{body}{self._tail}'.encode()
+        parts = [f'{{"cycle":{int(cycle)}']
+        for start in range(0, len(values), _SLICE):
+            if start:
+                pause()
+            end = start + _SLICE
+            pieces = zip(self._pieces[start:end], map(_leaf, values[start:end]), strict=True)
+            parts.append("".join(chain.from_iterable(pieces)))
+        parts.append(self._tail)
+        return "".join(parts).encode()
 
 
 def _leaf(value: Any) -> str:

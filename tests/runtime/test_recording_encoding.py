@@ -2,16 +2,19 @@
 (`value_reader`) and encoding them as JSON on the writer thread (`ValuesEncoder`). Both
 are tuned for thousands of variables every 10 ms; these tests hold them to the plain
 definitions: the values `Variables.read` gives, the text `json.dumps` of the nested
-message gives."""
+message gives. And the writer keeps out of the cycle's way (`CycleGate`)."""
 
 from __future__ import annotations
 
 import gc
 import math
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -19,10 +22,10 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
-from runtime.contract.recording import nest
+from runtime.contract.recording import RecordingHeader, nest, read_recording
 from runtime.recorder import value_reader
 from runtime.resource import Resource
-from runtime.trace_writer import ValuesEncoder, _json
+from runtime.trace_writer import CycleGate, TraceWriter, Values, ValuesEncoder, _json
 
 PLANT = """
 TYPE Point : STRUCT x : REAL; n : DINT; name : STRING[8]; END_STRUCT; END_TYPE
@@ -145,3 +148,38 @@ def test_encoding_ten_thousand_values_sets_off_no_garbage_collection() -> None:
             encoder.encode(cycle, values)
     # allow a few that another thread of the test process may set off meanwhile
     assert counted[0] < 10, counted[0]
+
+
+def header(paths: list[str]) -> RecordingHeader:
+    return RecordingHeader(
+        resource="P",
+        project="p",
+        crc="0",
+        variables=[(path, "DINT") for path in paths],
+        all_inputs=False,
+        started_ns=1_700_000_000 * 10**9,
+        recording="g",
+        part=1,
+    )
+
+
+def test_a_writer_waits_while_a_cycle_runs_but_not_for_a_cycle_that_never_ends(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    gate = CycleGate()
+    writer = TraceWriter(tmp_path, header(["P.n"]), {}, 1 << 30, None, gate)
+    monkeypatch.setattr("runtime.trace_writer.MAX_PAUSE_S", 60.0)
+    gate.begins()
+    assert writer.offer(Values(1, 1_700_000_000 * 10**9, [1]))
+    time.sleep(0.3)
+    assert writer.written == 0  # the cycle has the interpreter
+    gate.ends()
+    # the resource stopped inside a cycle: the writer goes on after MAX_PAUSE_S
+    monkeypatch.setattr("runtime.trace_writer.MAX_PAUSE_S", 0.01)
+    gate.begins()
+    for cycle in range(2, 41):
+        assert writer.offer(Values(cycle, 1_700_000_000 * 10**9 + cycle, [cycle]))
+    writer.close()
+    writer.join(30)
+    assert writer.finished and writer.error is None
+    assert read_recording(tmp_path / "g-1.mcap").column("P.n") == list(range(1, 41))
