@@ -127,37 +127,12 @@ def values_rows(recording: Recording, messages: list[dict[str, Any]]) -> list[li
     return [[pick(m["data"]["values"], path) for path in paths] for m in messages]
 
 
-def test_a_recording_with_all_inputs_reads_the_same_in_node(
-    tmp_path: Path, zenoh_endpoint: str
-) -> None:
-    node_or_skip()  # before minutes of work: skip at once without the reader
-    store_artifact(tmp_path, compiled(PLANT, "Control"))
-    with running_resource("Plant", tmp_path, zenoh_endpoint) as (_process, client):
-        assert client.command("write", variable="level", value=500)["ok"]
-        assert client.command("start")["ok"]
-        started = client.ask(
-            p.RecordStart(["Control.*", "level", "alarms", "mode"], all_inputs=True, id="io")
-        ).recording
-        assert started.state == "recording" and started.all_inputs
-        # what the programs take from outside: writes, a forced input, forcing ended
-        for level in (250, 680, 720, 400):
-            time.sleep(0.3)
-            assert client.command("write", variable="level", value=level)["ok"]
-        assert client.command("force", variable="level", value=690)["ok"]
-        assert client.command("start_forcing")["ok"]
-        time.sleep(0.4)
-        assert client.command("stop_forcing")["ok"]
-        time.sleep(0.3)
-        stopped = client.ask(p.RecordStop("io")).recording
-        assert stopped.state == "done" and stopped.dropped == 0
-        [file] = stopped.files
-        data = download(client, file.name, tmp_path / "io.mcap")
-    assert data == (recordings_path(tmp_path) / file.name).read_bytes()
-
-    ours = read_recording(tmp_path / "io.mcap")
-    theirs = read_with_node(tmp_path / "io.mcap", every_message=True)
+def same_in_node(path: Path) -> tuple[Recording, dict[str, Any]]:
+    """One complete file as our reader and @mcap/core read it: the same header, schemas,
+    channels, metadata and every message."""
+    ours = read_recording(path)
+    theirs = read_with_node(path, every_message=True)
     assert ours.complete and theirs["complete"] and theirs["error"] is None, theirs["error"]
-    assert len(ours.rows) == stopped.cycles > 100
     assert theirs["header"] == {"profile": "", "library": "padt"}
 
     # schemas and channels: the same, each channel with its schema
@@ -173,21 +148,12 @@ def test_a_recording_with_all_inputs_reads_the_same_in_node(
     recorded = values_schema["properties"]["values"]["properties"]
     assert recorded["Control"]["properties"]["r"]["properties"]["scaled"]["description"] == "REAL"
 
-    # the header metadata and the attachments of an all-inputs recording
+    # the header metadata, with the part
     [metadata] = theirs["metadata"]
     assert metadata["name"] == METADATA
     assert RecordingHeader.from_metadata(metadata["metadata"]) == ours.header
-    assert ours.header.all_inputs and ours.header.resource == "Plant"
-    attachments = {a["name"]: a for a in theirs["attachments"]}
-    assert sorted(attachments) == [ARTIFACT_ATTACHMENT, START_ATTACHMENT]
-    assert attachments[ARTIFACT_ATTACHMENT]["text"] == ours.artifact
-    assert json.loads(attachments[ARTIFACT_ATTACHMENT]["text"])["crc"] == ours.header.crc
-    assert ours.start is not None
-    assert json.loads(attachments[START_ATTACHMENT]["text"]) == json.loads(
-        json.dumps(asdict(ours.start))
-    )
 
-    # every message: counts, cycles, log times, values
+    # every message: counts, cycles, log times, values, inputs
     values = theirs["messages"][values_topic("Plant")]
     inputs = theirs["messages"][inputs_topic("Plant")]
     assert values["count"] == len(ours.rows) and inputs["count"] == len(ours.inputs)
@@ -205,11 +171,65 @@ def test_a_recording_with_all_inputs_reads_the_same_in_node(
     assert [m["data"]["after"] for m in inputs["all"]] == [
         [list(pair) for pair in i.after] for i in ours.inputs
     ]
+    return ours, theirs
+
+
+def test_a_recording_with_all_inputs_reads_the_same_in_node(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    node_or_skip()  # before minutes of work: skip at once without the reader
+    store_artifact(tmp_path, compiled(PLANT, "Control"))
+    with running_resource("Plant", tmp_path, zenoh_endpoint) as (_process, client):
+        assert client.command("write", variable="level", value=500)["ok"]
+        assert client.command("start")["ok"]
+        every = ["Control.*", "level", "alarms", "mode"]
+        started = client.ask(p.RecordStart(every, all_inputs=True, rotate_s=1, id="io"))
+        assert started.recording.state == "recording" and started.recording.all_inputs
+        # what the programs take from outside: writes, a forced input, forcing ended
+        for level in (250, 680, 720, 400):
+            time.sleep(0.3)
+            assert client.command("write", variable="level", value=level)["ok"]
+        assert client.command("force", variable="level", value=690)["ok"]
+        assert client.command("start_forcing")["ok"]
+        time.sleep(0.4)
+        assert client.command("stop_forcing")["ok"]
+        time.sleep(0.5)
+        stopped = client.ask(p.RecordStop("io")).recording
+        assert stopped.state == "done" and stopped.dropped == 0
+        assert len(stopped.files) >= 2  # a new file every second
+        paths = []
+        for file in stopped.files:
+            paths.append(tmp_path / file.name)
+            data = download(client, file.name, paths[-1])
+            assert data == (recordings_path(tmp_path) / file.name).read_bytes()
+
+    parts = [same_in_node(path) for path in paths]
+    ours = [recording for recording, _ in parts]
+    assert [r.header.part for r in ours] == list(range(1, len(paths) + 1))
+    cycles = [cycle for recording in ours for cycle in recording.cycles]
+    assert len(cycles) == stopped.cycles > 100
+    assert all(b == a + 1 for a, b in itertools.pairwise(cycles))  # none lost at a rotation
+
+    # the attachments of an all-inputs recording, in its first file only
+    first, theirs = parts[0]
+    assert first.header.all_inputs and first.header.resource == "Plant"
+    attachments = {a["name"]: a for a in theirs["attachments"]}
+    assert sorted(attachments) == [ARTIFACT_ATTACHMENT, START_ATTACHMENT]
+    assert attachments[ARTIFACT_ATTACHMENT]["text"] == first.artifact
+    assert json.loads(attachments[ARTIFACT_ATTACHMENT]["text"])["crc"] == first.header.crc
+    assert first.start is not None
+    assert json.loads(attachments[START_ATTACHMENT]["text"]) == json.loads(
+        json.dumps(asdict(first.start))
+    )
+    assert all(not later["attachments"] for _, later in parts[1:])
+
     # the run did what the plant did: the writes and the forced level are in the inputs
-    written = {value for i in ours.inputs for path, value in i.before if path == "level"}
+    inputs = [i for recording in ours for i in recording.inputs]
+    written = {value for i in inputs for path, value in i.before if path == "level"}
     assert {250, 680, 720, 400, 690} <= written
-    assert max(ours.column("alarms")) >= 1 and "alarm" in ours.column("mode")
-    assert all(b == a + 1 for a, b in itertools.pairwise(ours.cycles))
+    alarms = [v for recording in ours for v in recording.column("alarms")]
+    modes = [v for recording in ours for v in recording.column("mode")]
+    assert max(alarms) >= 1 and "alarm" in modes
 
 
 POINTS = 100  # x3 variables: a counter, a noisy REAL and a BOOL each
