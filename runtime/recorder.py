@@ -3,7 +3,8 @@ cycle, or from a trigger with cycles before it, into MCAP files in the state fol
 all inputs, everything the programs take from outside, for an exact replay.
 
 The cycle thread only copies values into a queue (`TraceWriter.offer`); a writer thread per
-recording encodes, compresses and writes. A full queue drops the cycle and counts it.
+recording encodes, compresses and writes, between the cycles. A full queue drops the
+cycle and counts it.
 A recording ends with its cycle or time limit, at `record_stop`, or when the configuration
 it records changes (load, reload, cold start, program restart).
 """

@@ -1,6 +1,8 @@
 """The writer thread of a recording: takes what the cycle queued and writes it into MCAP
 files (runtime/contract/recording.py), compressing chunks, rotating files by size or time.
-The cycle never waits for it: `offer` appends to a bounded queue or counts a drop.
+The cycle never waits for it: `offer` appends to a bounded queue or counts a drop; and
+while a cycle runs, the writer waits for its end (`CycleGate`) rather than compete with it
+for the interpreter.
 
 A chunk is closed at least every `FLUSH_S` seconds, so a file cut by a crash (SIGKILL,
 power) loses at most that much: readers take it up to its last whole chunk.
