@@ -1,8 +1,8 @@
 """Recordings of a real runtime process, opened by an MCAP reader nobody here wrote (the
 TypeScript `@mcap/core` under node, tests/support/mcap_reader.cjs): every message, channel,
 schema, the header metadata and the attachments it finds are those our reader finds. And a
-runtime killed (SIGKILL) in the middle of a recording leaves a file both read up to its last
-whole chunk."""
+runtime killed (SIGKILL) in the middle of a recording, or a file cut at any byte, leaves a
+file both read up to its last whole chunk."""
 
 from __future__ import annotations
 
@@ -20,6 +20,7 @@ from typing import Any
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.engineering.resource_client import ResourceClient
+from runtime.clock import VirtualClock
 from runtime.contract import protocol as p
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.recording import (
@@ -36,6 +37,8 @@ from runtime.contract.recording import (
     values_topic,
 )
 from runtime.contract.state_folder import recordings_path
+from runtime.recorder import Recordings
+from runtime.resource import Resource
 from tests.support.mcap_node import node_or_skip, read_with_node
 from tests.support.runtime_process import running_resource, store_artifact
 
@@ -281,3 +284,42 @@ def test_sigkill_during_a_recording_leaves_a_file_read_to_its_last_whole_chunk(
     assert values["count"] == len(ours.rows)
     assert [m["data"]["cycle"] for m in values["all"]] == ours.cycles
     assert values_rows(ours, values["all"]) == ours.rows
+
+
+def test_a_file_cut_anywhere_reads_the_same_in_both_readers(tmp_path: Path) -> None:
+    """Power can fail at any byte: whatever is left, both readers find the same messages,
+    those of the whole chunks before the cut."""
+    resource = Resource("Plant", VirtualClock(epoch_ns=1_700_000_000 * 10**9))
+    recordings = Recordings(tmp_path / "recordings")
+    resource.recordings = recordings
+    resource.load(compiled(big_program(), "Big"))
+    resource.start()
+    recordings.start(resource, p.RecordStart(["Big.*"], cycles=400, id="whole"))
+    clock = resource.clock
+    assert isinstance(clock, VirtualClock)
+    for _ in range(400):
+        resource.cycle()
+        clock.advance(10_000_000)
+    recordings.close()
+    data = (tmp_path / "recordings" / "whole-1.mcap").read_bytes()
+    assert len(read_recording(tmp_path / "recordings" / "whole-1.mcap").rows) == 400
+
+    cuts: list[tuple[Path, Recording]] = []
+    for fraction in (0.1, 0.25, 0.4, 0.55, 0.7, 0.85, 0.97):
+        cut = tmp_path / f"cut-{fraction}.mcap"
+        cut.write_bytes(data[: int(len(data) * fraction)])
+        ours = read_recording(cut)  # a cut inside a record's fields was a struct.error
+        assert not ours.complete and ours.problem, fraction
+        cuts.append((cut, ours))
+    found = [len(ours.rows) for _, ours in cuts]
+    assert found == sorted(found) and found[0] < found[-1]  # more bytes, more cycles
+    assert found[-1] == 400  # a cut in the summary at the end loses no message
+
+    node_or_skip()
+    for cut, ours in cuts:
+        theirs = read_with_node(cut, every_message=True)
+        assert not theirs["complete"], cut.name
+        messages = theirs["messages"].get(values_topic("Plant"), {"count": 0, "all": []})
+        assert messages["count"] == len(ours.rows), cut.name
+        assert [m["data"]["cycle"] for m in messages["all"]] == ours.cycles, cut.name
+        assert values_rows(ours, messages["all"]) == ours.rows, cut.name
