@@ -14,6 +14,7 @@ test: $(VENV)/.stamp-dev
 	bash scripts/install-chromium.sh
 	bash scripts/install-mbpoll.sh
 	bash scripts/install-document-tools.sh
+	bash scripts/install-mcap-reader.sh
 	$(MAKE) lint typecheck pytest
 
 lint: $(VENV)/.stamp-dev

@@ -3,7 +3,8 @@ cycle, or from a trigger with cycles before it, into MCAP files in the state fol
 all inputs, everything the programs take from outside, for an exact replay.
 
 The cycle thread only copies values into a queue (`TraceWriter.offer`); a writer thread per
-recording encodes, compresses and writes. A full queue drops the cycle and counts it.
+recording encodes, compresses and writes, between the cycles. A full queue drops the
+cycle and counts it.
 A recording ends with its cycle or time limit, at `record_stop`, or when the configuration
 it records changes (load, reload, cold start, program restart); one with all inputs also
 when the resource stops.
@@ -32,7 +33,7 @@ from runtime.contract.recording import (
 from runtime.contract.refusal import Refusal
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.instances import BoundVariable
-from runtime.trace_writer import Inputs, TraceWriter, Values
+from runtime.trace_writer import CycleGate, Inputs, TraceWriter, Values
 from runtime.value_reader import value_reader
 
 if TYPE_CHECKING:
@@ -116,6 +117,7 @@ class Recordings:
         self._ended: dict[str, Recording] = {}  # of this process, for their counts
         self._serial = 0
         self._found: tuple[dict[str, Any], dict[str, Any]] = ({}, {})  # before_programs
+        self._gate = CycleGate()  # the writers wait while the cycle runs
 
     @property
     def active(self) -> bool:
@@ -168,6 +170,7 @@ class Recordings:
             attachments,
             command.rotate_mb * 1024 * 1024,
             command.rotate_s * 1_000_000_000 if command.rotate_s else None,
+            self._gate,
         )
         recording = Recording(
             id=recording_id,
@@ -255,6 +258,7 @@ class Recordings:
     def before_programs(self, resource: Resource) -> None:
         """Just before the user programs run: the system variables and the programs'
         states and clocks as the programs will find them."""
+        self._gate.begins()
         if any(r.all_inputs for r in self._running.values()):
             self._found = (_system(resource), _programs(resource))
 
@@ -278,6 +282,7 @@ class Recordings:
                 self._end(resource, recording, "ended: the configuration changed")
                 continue
             self._capture(resource, recording, begin_ns, before, after)
+        self._gate.ends()
 
     def _capture(
         self,

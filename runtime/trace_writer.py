@@ -1,6 +1,8 @@
 """The writer thread of a recording: takes what the cycle queued and writes it into MCAP
 files (runtime/contract/recording.py), compressing chunks, rotating files by size or time.
-The cycle never waits for it: `offer` appends to a bounded queue or counts a drop.
+The cycle never waits for it: `offer` appends to a bounded queue or counts a drop; and
+while a cycle runs, the writer waits for its end (`CycleGate`) rather than compete with it
+for the interpreter.
 
 A chunk is closed at least every `FLUSH_S` seconds, so a file cut by a crash (SIGKILL,
 power) loses at most that much: readers take it up to its last whole chunk.
@@ -11,9 +13,12 @@ from __future__ import annotations
 import collections
 import json
 import logging
+import math
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import replace
+from itertools import chain
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -37,7 +42,35 @@ log = logging.getLogger(__name__)
 FLUSH_S = 1.0  # the longest a message waits in an open chunk
 CHUNK_BYTES = 512 * 1024  # uncompressed bytes of a chunk
 MAX_QUEUED_VALUES = 2_000_000  # values waiting for the writer, over all queued cycles
+MAX_PAUSE_S = 0.05  # the longest a writer waits for a CPU cycle to end
 _IDLE_S = 0.02
+_SLICE = 1_000  # values encoded between two looks at the cycle
+
+
+class CycleGate:
+    """Tells the writer threads when a CPU cycle runs, so that they wait for its end
+    instead of taking the interpreter from it (the threads of a process share one, and
+    each would get it every switch interval): a recording then costs the cycle only its
+    own copying of the values. A cycle that has run MAX_PAUSE_S (or never said it ended:
+    the resource stopped in it) holds them back no longer."""
+
+    def __init__(self) -> None:
+        self._idle = threading.Event()
+        self._idle.set()
+        self._began = 0.0
+
+    def begins(self) -> None:
+        self._began = time.monotonic()
+        self._idle.clear()
+
+    def ends(self) -> None:
+        self._idle.set()
+
+    def wait(self) -> None:
+        if not self._idle.is_set():
+            left = MAX_PAUSE_S - (time.monotonic() - self._began)
+            if left > 0:
+                self._idle.wait(left)
 
 
 class Values:
@@ -69,11 +102,15 @@ class TraceWriter:
         attachments: dict[str, bytes],
         rotate_bytes: int,
         rotate_ns: int | None,
+        gate: CycleGate | None = None,
     ) -> None:
         self.folder, self.header = folder, header
+        self._gate = gate or CycleGate()
         self._attachments = attachments  # written into the first file only
         self._rotate_bytes, self._rotate_ns = rotate_bytes, rotate_ns
         self._paths = [v for v, _ in header.variables]
+        self._values: ValuesEncoder | None = None  # laid out by the writer thread
+        self._schema = b""  # the values' JSON schema, the same in every file
         self._limit = max(64, MAX_QUEUED_VALUES // max(1, len(self._paths)))
         self._queue: collections.deque[Item] = collections.deque()
         self.dropped = 0  # cycles not written: the queue was full (counted by the cycle)
@@ -115,6 +152,7 @@ class TraceWriter:
     def _run(self) -> None:
         last_flush = time.monotonic()
         try:
+            self._values = ValuesEncoder(self._paths)
             while True:
                 closing = self._closing.is_set()
                 wrote = self._drain()
@@ -136,6 +174,7 @@ class TraceWriter:
     def _drain(self) -> bool:
         wrote = False
         while self._queue:
+            self._gate.wait()
             item = self._queue.popleft()
             self._write(item)
             wrote = True
@@ -147,9 +186,10 @@ class TraceWriter:
             self._begin_file(item.time_ns)
         assert self._mcap is not None
         if isinstance(item, Values):
-            message = {"cycle": item.cycle, "values": nest(self._paths, item.values)}
+            assert self._values is not None
+            message = self._values.encode(item.cycle, item.values, self._gate.wait)
             self._mcap.add_message(
-                self._channels[0], item.time_ns, _json(message), item.time_ns, item.cycle
+                self._channels[0], item.time_ns, message, item.time_ns, item.cycle
             )
             self.written += 1
         else:
@@ -176,9 +216,9 @@ class TraceWriter:
         mcap = Writer(self._stream, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)
         mcap.start(profile="", library="padt")
         mcap.add_metadata("padt.recording", header.metadata())
-        schema = mcap.register_schema(
-            VALUES_SCHEMA, "jsonschema", _json(values_schema(header.variables))
-        )
+        if not self._schema:
+            self._schema = _json(values_schema(header.variables))
+        schema = mcap.register_schema(VALUES_SCHEMA, "jsonschema", self._schema)
         values = mcap.register_channel(values_topic(header.resource), "json", schema)
         inputs = 0
         if header.all_inputs:
@@ -196,6 +236,63 @@ class TraceWriter:
         if self._stream is not None:
             self._stream.close()
             self._stream = None
+
+
+class ValuesEncoder:
+    """A values message as JSON text, byte for byte what `_json({"cycle": n, "values":
+    nest(paths, values)})` gives, without building the nested dictionaries: `json.dumps`
+    of a dictionary makes a tuple per entry, and tens of thousands of them per message set
+    off the garbage collector, whose full collections stop the cycle thread for tens of
+    milliseconds in a large process. The text between two values is laid out once; a
+    value is encoded in Python, so the cycle thread gets the interpreter in between."""
+
+    def __init__(self, paths: list[str]) -> None:
+        self._pieces: list[str] = []  # the text before each value
+        self._order: list[int] = []  # which value comes next in the text
+        pending = [',"values":']
+
+        def lay_out(node: dict[str, Any]) -> None:
+            pending.append("{")
+            for n, (key, child) in enumerate(node.items()):
+                pending.append(("," if n else "") + json.dumps(key) + ":")
+                if isinstance(child, dict):
+                    lay_out(child)
+                else:
+                    self._pieces.append("".join(pending))
+                    pending.clear()
+                    self._order.append(child)
+            pending.append("}")
+
+        lay_out(nest(paths, list(range(len(paths)))))
+        self._tail = "".join(pending) + "}"
+        self._in_order = self._order == list(range(len(paths)))
+
+    def encode(
+        self, cycle: int, values: list[Any], pause: Callable[[], None] = lambda: None
+    ) -> bytes:
+        """The message; `pause` is called every _SLICE values (to let a cycle run)."""
+        if not self._in_order:
+            values = [values[i] for i in self._order]
+        parts = [f'{{"cycle":{int(cycle)}']
+        for start in range(0, len(values), _SLICE):
+            if start:
+                pause()
+            end = start + _SLICE
+            pieces = zip(self._pieces[start:end], map(_leaf, values[start:end]), strict=True)
+            parts.append("".join(chain.from_iterable(pieces)))
+        parts.append(self._tail)
+        return "".join(parts).encode()
+
+
+def _leaf(value: Any) -> str:
+    kind = type(value)
+    if kind is int:
+        return int.__repr__(value)
+    if kind is float and math.isfinite(value):
+        return float.__repr__(value)
+    if kind is bool:
+        return "true" if value else "false"
+    return _json(value).decode()
 
 
 def _json(data: Any) -> bytes:

@@ -31,27 +31,35 @@ def value_reader(
         group = groups.setdefault(key, (bound.program, head, [], []))
         group[2].append(index)
         group[3].append(".".join(str(a) for a in tail))
-    count = len(variables)
     readers = [
-        (owner, head, indices, operator.attrgetter(*names) if names != [""] else None)
+        (owner, head, operator.attrgetter(*names) if names != [""] else None, len(indices) == 1)
         for owner, head, indices, names in groups.values()
     ]
+    # where each variable's value is in what the readers give one after the other: one
+    # `itemgetter` puts them in order (a loop in Python would cost as much as the reading)
+    read_order = [i for _, _, indices, _ in groups.values() for i in indices]
+    position = {index: n for n, index in enumerate(read_order)}
+    reorder = (
+        None
+        if read_order == list(range(len(variables))) or len(variables) < 2
+        else operator.itemgetter(*(position[i] for i in range(len(variables))))
+    )
     arrays = [i for i, b in enumerate(variables) if b.path.type.upper().startswith("ARRAY")]
 
     def read() -> list[Any]:
-        out: list[Any] = [None] * count
+        got: list[Any] = []
         the_globals = globals_of()
-        for owner, head, indices, getter in readers:
+        for owner, head, getter, single in readers:
             value = owner.instance if owner is not None else the_globals
             for accessor in head:
                 value = value[accessor] if isinstance(accessor, int) else getattr(value, accessor)
             if getter is None:  # the element itself: `values[3]`
-                out[indices[0]] = value
-            elif len(indices) == 1:
-                out[indices[0]] = getter(value)
+                got.append(value)
+            elif single:
+                got.append(getter(value))
             else:
-                for index, got in zip(indices, getter(value), strict=True):
-                    out[index] = got
+                got.extend(getter(value))
+        out = got if reorder is None else list(reorder(got))
         for index in arrays:
             out[index] = deepcopy(out[index])
         return out

@@ -19,6 +19,7 @@ The log time of a message is the start of its CPU cycle in calendar time (Unix n
 from __future__ import annotations
 
 import json
+import struct
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -261,7 +262,8 @@ def read_recording(source: Path | BinaryIO) -> Recording:
                 pending.append(record)
             else:
                 _take(recording, record, channels)
-    except (McapError, EOFError, ValueError, KeyError, TypeError, OSError) as exc:
+    # a cut inside a record's fixed fields ends in struct.error (not a ValueError)
+    except (McapError, EOFError, ValueError, KeyError, TypeError, OSError, struct.error) as exc:
         if isinstance(exc, RecordingUnreadable):
             raise
         complete, problem = False, f"{type(exc).__name__}: {exc}".strip()

@@ -9,6 +9,7 @@ from tests.bench import (
     bench_hostile,
     bench_language,
     bench_modbus,
+    bench_recording,
     bench_reload,
     bench_rest,
     bench_runtime,
@@ -24,6 +25,7 @@ def main() -> None:
     bench_runtime.main()
     bench_reload.main()
     bench_watch.main()
+    bench_recording.main()
     bench_modbus.main()
     bench_rest.main()
     bench_hostile.main()
