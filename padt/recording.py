@@ -17,7 +17,6 @@ from backend.engineering.recordings import RecordingSpec, TriggerError
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
 from padt.online import Failed, resource_client, run, table
 from runtime.contract.protocol import RecordingInfo
-from runtime.contract.recording import read_recording
 from runtime.contract.stop_request import StopRequest
 from runtime.contract.wire import encode
 
@@ -78,7 +77,7 @@ def record(args: argparse.Namespace) -> int:
         if not written:  # stopped before its first cycle, or its trigger never fired
             why = f"failed: {ended.error}" if ended.state == "failed" else "wrote no file"
             raise Failed(f"recording {ended.id} {why}: nothing was recorded")
-        print(f"recorded {_counts(ended, written)} -> {_files(written)}")
+        print(f"recorded {_counts(ended)} -> {_files(written)}")
         if ended.state == "failed":  # what it wrote before is kept all the same
             raise Failed(f"recording {ended.id} failed: {ended.error or 'no reason given'}")
         if ended.error:  # cut short, e.g. by a reload that removed a recorded variable
@@ -88,13 +87,12 @@ def record(args: argparse.Namespace) -> int:
     return run("record", args, body)
 
 
-def _counts(recording: RecordingInfo, written: list[tuple[Path, int]]) -> str:
+def _counts(recording: RecordingInfo) -> str:
     """`50 cycles, 0 dropped`; for a recording the runtime knows by its files only (it
-    restarted meanwhile: no start time, no counts) the cycles counted in the files."""
-    if recording.started_ns > 0:
+    restarted meanwhile) the drops are not known."""
+    if not recording.from_files:
         return f"{recording.cycles} cycles, {recording.dropped} dropped"
-    counted = sum(len(read_recording(path).rows) for path, _ in written)
-    return f"{counted} cycles (the runtime restarted: dropped ones unknown)"
+    return f"{recording.cycles} cycles (the runtime restarted: dropped ones unknown)"
 
 
 def _until(args: argparse.Namespace) -> str:

@@ -148,10 +148,21 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.Reload: _reload,
     p.RecordStart: lambda r, c: p.RecordingReply(_recordings(r).start(r, c)),
     p.RecordStop: lambda r, c: p.RecordingReply(_recordings(r).stop(r, c.id)),
-    p.RecordList: lambda r, c: p.RecordingsReply(_recordings(r).infos()),
-    p.RecordRead: lambda r, c: _recordings(r).read(c.file, c.offset, c.length),
     p.RecordDelete: lambda r, c: p.RecordingsReply(_recordings(r).delete(c.id)),
 }
+
+
+# commands whose answer reads files: checked on the cycle thread, where they return the
+# work that reads, which the runtime process runs on another thread (the cycle never waits
+# on a disk); `answer` runs it at once
+LATER_HANDLERS: dict[type[p.Command[Any]], Callable[[Resource, Any], Callable[[], Any]]] = {
+    p.RecordList: lambda r, c: _in_reply(_recordings(r).listing(), p.RecordingsReply),
+    p.RecordRead: lambda r, c: _recordings(r).reading(c.file, c.offset, c.length),
+}
+
+
+def _in_reply(work: Callable[[], Any], reply: Callable[[Any], Any]) -> Callable[[], Any]:
+    return lambda: reply(work())
 
 
 # the commands that act on the request's session itself, or need to know where it came from
@@ -198,6 +209,8 @@ def answer(resource: Resource, request: Request) -> Any:
     kind = type(request.command)
     if kind in SESSION_HANDLERS:
         return SESSION_HANDLERS[kind](resource, request.command, request)
+    if kind in LATER_HANDLERS:
+        return LATER_HANDLERS[kind](resource, request.command)()
     return HANDLERS[kind](resource, request.command)
 
 

@@ -19,11 +19,14 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
 
 import zenoh
 
 from runtime.clock import Clock
 from runtime.commands import (
+    LATER_HANDLERS,
     answer,
     authorize,
     begin_reload,
@@ -39,6 +42,7 @@ from runtime.contract.protocol import (
     Status,
     decode_request,
     encode_refusal,
+    encode_reply,
 )
 from runtime.contract.refusal import Refusal
 from runtime.cycle_stats import CycleStats
@@ -73,6 +77,8 @@ class CycleDriver:
         self._last_status: Status | None = None
         self._last_status_ns = 0
         self._reload: tuple[zenoh.Query, ReloadJob, threading.Thread] | None = None
+        # reads files for the commands that need them (LATER_HANDLERS), off the cycle
+        self._files = ThreadPoolExecutor(1, thread_name_prefix="padt-files")
         # events before the driver started (power-up: warm or cold start) go out too
         self._events_sent = 0
 
@@ -132,6 +138,7 @@ class CycleDriver:
 
     def close(self) -> None:
         """An orderly shutdown saves the context one last time."""
+        self._files.shutdown(wait=True, cancel_futures=True)
         if self._save_context is not None:
             self._save_context()
 
@@ -179,11 +186,28 @@ class CycleDriver:
             if isinstance(request.command, Reload | ReloadPreview):
                 self._start_reload(query, request)
                 return None
+            later = LATER_HANDLERS.get(type(request.command))
+            if later is not None:
+                authorize(self.resource, request)
+                work = later(self.resource, request.command)
+                self._files.submit(self._reply_later, query, work)
+                return None
         except Refusal as refusal:
             return encode_refusal(refusal)
         except Exception as exc:
             return encode_refusal(internal_failure(self.resource, exc))
         return respond(self.resource, lambda: answer(self.resource, request))
+
+    def _reply_later(self, query: zenoh.Query, work: Callable[[], Any]) -> None:
+        """On the files thread: the reply of a command that reads files."""
+        try:
+            reply = encode_reply(work())
+        except Refusal as refusal:
+            reply = encode_refusal(refusal)
+        except Exception as exc:  # a defect: logged; the event log is the cycle thread's
+            log.exception("internal error while reading files for a command")
+            reply = encode_refusal(Refusal("internal", f"internal error ({type(exc).__name__})"))
+        self.link.reply(query, reply)
 
     def _start_reload(self, query: zenoh.Query, request: Request) -> None:
         """A reload (or its preview) prepares on a worker thread while cycles go on

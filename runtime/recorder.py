@@ -16,19 +16,26 @@ import base64
 import json
 import operator
 import re
+import struct
 from collections import deque
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
+
 from runtime.contract import protocol as p
 from runtime.contract.recording import (
     ARTIFACT_ATTACHMENT,
+    METADATA,
     START_ATTACHMENT,
     CycleInputs,
     RecordingHeader,
+    RecordingUnreadable,
     StartState,
+    read_recording,
 )
 from runtime.contract.refusal import Refusal
 from runtime.contract.system_variables import SYSTEM_VARIABLES
@@ -211,27 +218,43 @@ class Recordings:
         return recording.info()
 
     def infos(self) -> list[p.RecordingInfo]:
-        known = {**self._ended, **self._running}
-        infos = [r.info() for r in self._running.values()]
-        infos += [r.info() for key, r in sorted(self._ended.items()) if key not in self._running]
-        for recording_id, files in sorted(self._on_disk().items()):
-            if recording_id not in known:
-                infos.append(_from_disk(recording_id, files))
+        return self.listing()()
+
+    def listing(self) -> Callable[[], list[p.RecordingInfo]]:
+        """The recordings, the running ones first: what this process knows is taken now
+        (on the cycle thread); the files are looked at when the result is called (on
+        another thread: the cycle never waits on a disk)."""
+        known = [*self._running.values()]
+        known += [r for key, r in sorted(self._ended.items()) if key not in self._running]
+
+        def infos() -> list[p.RecordingInfo]:
+            found = [r.info() for r in known]
+            names = {r.id for r in known}
+            for recording_id, files in sorted(self._on_disk().items()):
+                if recording_id not in names:
+                    found.append(_from_disk(recording_id, files))
+            return found
+
         return infos
 
-    def read(self, name: str, offset: int, length: int) -> p.RecordingChunk:
+    def reading(self, name: str, offset: int, length: int) -> Callable[[], p.RecordingChunk]:
+        """`record_read`: the name checked now, the file read when the result is called."""
         match = _FILE.fullmatch(name)
         if self.folder is None or match is None:
             raise Refusal("unknown_recording", f"no recording file '{name}'")
         path = self.folder / name
-        try:
-            with path.open("rb") as stream:
-                size = stream.seek(0, 2)
-                stream.seek(min(offset, size))
-                data = stream.read(length)
-        except OSError:
-            raise Refusal("unknown_recording", f"no recording file '{name}'") from None
-        return p.RecordingChunk(base64.b64encode(data).decode("ascii"), offset, size)
+
+        def read() -> p.RecordingChunk:
+            try:
+                with path.open("rb") as stream:
+                    size = stream.seek(0, 2)
+                    stream.seek(min(offset, size))
+                    data = stream.read(length)
+            except OSError:
+                raise Refusal("unknown_recording", f"no recording file '{name}'") from None
+            return p.RecordingChunk(base64.b64encode(data).decode("ascii"), offset, size)
+
+        return read
 
     def delete(self, recording_id: str) -> list[p.RecordingInfo]:
         if recording_id in self._running:
@@ -476,14 +499,48 @@ def _size(path: Path) -> int:
 
 
 def _from_disk(recording_id: str, files: list[Path]) -> p.RecordingInfo:
-    """A recording of an earlier run of the runtime: known by its files only."""
+    """A recording of an earlier run of the runtime, known by its files: its header and
+    the count of its values messages, from the MCAP summary (a file cut short by a crash
+    has none: it is read through)."""
+    header: RecordingHeader | None = None
+    cycles = 0
+    problem: str | None = None
+    for path in files:
+        try:
+            with path.open("rb") as stream:
+                reader = make_reader(stream)
+                summary = reader.get_summary()
+                if summary is None or summary.statistics is None:
+                    raise McapError("no summary")
+                for metadata in reader.iter_metadata():
+                    if metadata.name == METADATA and header is None:
+                        header = RecordingHeader.from_metadata(dict(metadata.metadata))
+                values = [
+                    channel.id
+                    for channel in summary.channels.values()
+                    if channel.topic.endswith("/values")
+                ]
+                counts = summary.statistics.channel_message_counts
+                cycles += sum(counts.get(channel, 0) for channel in values)
+        except (OSError, McapError, ValueError, struct.error):
+            try:  # cut short: read through it
+                recording = read_recording(path)
+            except (OSError, RecordingUnreadable) as exc:
+                problem = f"{path.name}: {exc}"
+                continue
+            header = header or recording.header
+            cycles += len(recording.rows)
+            if not recording.complete:
+                problem = f"{path.name} was cut short ({recording.problem})"
     return p.RecordingInfo(
         id=recording_id,
         state="done",
-        variables=0,
-        all_inputs=False,
-        cycles=0,
+        variables=len(header.variables) if header else 0,
+        all_inputs=header.all_inputs if header else False,
+        cycles=cycles,
         dropped=0,
-        started_ns=0,
+        started_ns=header.started_ns if header else 0,
         files=[p.RecordingFile(f.name, _size(f)) for f in files],
+        error=problem,
+        from_files=True,
     )

@@ -417,6 +417,8 @@ class RecordingInfo:
     files: list[RecordingFile]
     error: str | None = None  # why it failed or was cut short
     trigger_cycle: int | None = None  # the CPU cycle the trigger fired in
+    # known from its files only (the runtime restarted since): its drops are not known
+    from_files: bool = False
 
 
 @dataclass(frozen=True)

@@ -147,7 +147,7 @@ def test_refusals_name_what_is_wrong(tmp_path: Path) -> None:
             recordings.start(resource, command)
         assert refused.value.code == code, command
     with pytest.raises(Refusal) as refused:
-        recordings.read("../../etc-1.mcap", 0, 10)
+        recordings.reading("../../etc-1.mcap", 0, 10)
     assert refused.value.code == "unknown_recording"
     assert recordings.infos() == []
 
@@ -231,3 +231,19 @@ def test_non_finite_reals_survive_the_file(tmp_path: Path) -> None:
     finished(resource)
     ratios = read_recording(tmp_path / "recordings" / "inf-1.mcap").column("Control.ratio")
     assert ratios and all(math.isinf(float(r)) for r in ratios)
+
+
+def test_the_recordings_of_an_earlier_run_are_listed_from_their_files(tmp_path: Path) -> None:
+    resource = started(tmp_path)
+    recordings = recordings_of(resource)
+    recordings.start(resource, p.RecordStart(["Control.*"], cycles=25, rotate_s=1, id="old"))
+    run(resource, 25, [500])
+    finished(resource)
+    before = recordings.infos()[0]
+    (tmp_path / "recordings" / "cut-1.mcap").write_bytes(
+        (tmp_path / "recordings" / "old-1.mcap").read_bytes()[:-300]  # cut before its end
+    )
+    [cut, old] = Recordings(tmp_path / "recordings").infos()  # the runtime restarted
+    assert (old.id, old.state, old.cycles, old.variables) == ("old", "done", 25, 11)
+    assert old.started_ns == before.started_ns and old.files == before.files
+    assert cut.id == "cut" and cut.cycles == 25 and "cut short" in (cut.error or "")
