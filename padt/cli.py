@@ -61,6 +61,54 @@ def _docs(args: argparse.Namespace) -> int:
     return 0
 
 
+# `padt replay` exit codes
+REPLAY_DIFFERS, REPLAY_CANNOT, REPLAY_COMPILE_ERRORS = 1, 2, 3
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from backend.engineering.project import ProjectError, compile_project, load_project
+    from backend.engineering.replay import ReplayError, read_parts, replay
+    from runtime.contract.recording import RecordingUnreadable
+
+    try:
+        recording = read_parts(args.recording)
+        project = load_project(args.paths)
+    except (OSError, RecordingUnreadable, ProjectError) as exc:
+        print(f"padt replay: {exc}", file=sys.stderr)
+        return REPLAY_CANNOT
+    result = compile_project(project)
+    for diagnostic in result.diagnostics:
+        print(diagnostic, file=sys.stderr)
+    if result.artifact is None:
+        return REPLAY_COMPILE_ERRORS
+    if result.artifact.resource.name != recording.header.resource:
+        print(
+            f"padt replay: the recording is of resource {recording.header.resource}, "
+            f"the project's is {result.artifact.resource.name}",
+            file=sys.stderr,
+        )
+        return REPLAY_CANNOT
+    try:
+        outcome = replay(recording, result.artifact)
+    except ReplayError as exc:
+        print(f"padt replay: {exc}", file=sys.stderr)
+        return REPLAY_CANNOT
+    if outcome.reloaded:
+        print(
+            f"padt replay: recorded configuration {outcome.recorded_crc}, replayed with "
+            f"{outcome.replayed_crc} (values carried over as by a reload)",
+            file=sys.stderr,
+        )
+    if not recording.complete:
+        print(
+            f"padt replay: the file was cut short ({recording.problem}); "
+            "compared up to its last whole chunk",
+            file=sys.stderr,
+        )
+    print(outcome.summary())
+    return 0 if outcome.difference is None else REPLAY_DIFFERS
+
+
 def _exec(args: argparse.Namespace) -> int:
     from backend.engineering.run_once import run_entry
 
@@ -167,6 +215,11 @@ def _positive(text: str) -> int:
     if number < 1:
         raise argparse.ArgumentTypeError(f"{number} is not at least 1")
     return number
+
+
+def _whole(text: str) -> int:
+    """A whole number, 0 or more."""
+    return 0 if text.strip() == "0" else _positive(text)
 
 
 def _runtime(args: argparse.Namespace) -> int:
@@ -313,6 +366,27 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sim.set_defaults(func=_sim)
 
+    replay = sub.add_parser(
+        "replay",
+        help="run a recording made with --all-inputs again on virtual time; compare each cycle",
+        epilog="exit codes: 0 identical, 1 a cycle differs (the first is named), 2 the "
+        "recording cannot be replayed or the project not read, 3 compile errors",
+    )
+    replay.add_argument(
+        "recording",
+        type=Path,
+        metavar="FILE.mcap",
+        help="the recording (its rotated parts FILE-2.mcap, ... are read after it)",
+    )
+    replay.add_argument(
+        "paths",
+        nargs="+",
+        type=Path,
+        metavar="PROJECT",
+        help="the project to replay with: the recorded version or a new one",
+    )
+    replay.set_defaults(func=_replay)
+
     check = sub.add_parser(
         "check-twice", help="compile in two processes with different hash seeds; compare CRCs"
     )
@@ -398,6 +472,7 @@ def build_parser() -> argparse.ArgumentParser:
     reload.set_defaults(func=_lazy("padt.configuration", "reload"))
 
     _online_test_commands(sub)
+    _recording_commands(sub)
 
     passwd = sub.add_parser(
         "passwd",
@@ -498,6 +573,75 @@ def _online_test_commands(sub: Any) -> None:
     )
     params.add_argument("--json", action="store_true", help="print the parameters as JSON")
     params.set_defaults(func=_lazy("padt.operation", "params"))
+
+
+def _recording_commands(sub: Any) -> None:
+    """record, recordings (docs/recording.md)."""
+    record = sub.add_parser(
+        "record",
+        help="record variables of a running resource into an MCAP file",
+        description="Record variables of a running resource every CPU cycle (or from a "
+        "trigger on) into MCAP files, wait until it is done (--cycles or --seconds reached, "
+        "or Ctrl-C), then download its files (FILE.mcap, FILE-2.mcap... as they rotated).",
+    )
+    _resource_options(record)
+    record.add_argument(
+        "--var",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="a variable, or PREFIX* for every variable whose path starts so; repeatable",
+    )
+    record.add_argument(
+        "--all-inputs",
+        action="store_true",
+        help="also every input of every cycle (for padt replay)",
+    )
+    record.add_argument(
+        "--trigger",
+        metavar="EXPR",
+        help="start writing when EXPR becomes true: 'Main.level > 80', Main.alarm, "
+        "'NOT Main.alarm' (ops = <> < <= > >=, the value an ST literal)",
+    )
+    record.add_argument(
+        "--pre-cycles",
+        type=_whole,
+        default=0,
+        metavar="N",
+        help="with --trigger: also the N cycles before it (default 0)",
+    )
+    until = record.add_mutually_exclusive_group()
+    until.add_argument("--cycles", type=_positive, metavar="N", help="end after N cycles")
+    until.add_argument("--seconds", type=_positive, metavar="S", help="end after S seconds")
+    record.add_argument(
+        "--rotate-mb",
+        type=_positive,
+        default=256,
+        metavar="N",
+        help="begin a new file every N megabytes (default 256)",
+    )
+    record.add_argument(
+        "--rotate-s", type=_positive, metavar="N", help="begin a new file every N seconds"
+    )
+    record.add_argument(
+        "--keep",
+        action="store_true",
+        help="leave the recording on the resource (by default it is deleted there once downloaded)",
+    )
+    record.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        metavar="FILE.mcap",
+        help="where the recording goes (the next parts beside it: FILE-2.mcap, ...)",
+    )
+    record.set_defaults(func=_lazy("padt.recording", "record"))
+
+    listing = sub.add_parser("recordings", help="the recordings kept on a running resource")
+    _resource_options(listing)
+    listing.add_argument("--json", action="store_true", help="print them as JSON")
+    listing.set_defaults(func=_lazy("padt.recording", "recordings_list"))
 
 
 def _api(args: argparse.Namespace) -> int:

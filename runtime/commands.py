@@ -19,6 +19,7 @@ from runtime.contract.accounts import ANONYMOUS
 from runtime.contract.protocol import Request, decode_request, encode_refusal, encode_reply
 from runtime.contract.refusal import Refusal
 from runtime.online_parameters import set_parameter
+from runtime.recorder import Recordings
 from runtime.reload_switch import ReloadJob
 from runtime.resource import Resource
 
@@ -100,6 +101,13 @@ def _reload(resource: Resource, command: p.Reload | p.ReloadPreview) -> Any:
     return finish_reload(resource, job)
 
 
+def _recordings(resource: Resource) -> Recordings:
+    recordings = resource.recordings
+    if not isinstance(recordings, Recordings):
+        raise Refusal("not_allowed", "this resource has no state folder to record into")
+    return recordings
+
+
 HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.GetStatus: lambda r, c: _status(r),
     p.GetValues: lambda r, c: p.ValuesReply(r.variables.values(), r.cycle_count),
@@ -138,6 +146,11 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.Load: _load,
     p.ReloadPreview: _reload,
     p.Reload: _reload,
+    p.RecordStart: lambda r, c: p.RecordingReply(_recordings(r).start(r, c)),
+    p.RecordStop: lambda r, c: p.RecordingReply(_recordings(r).stop(r, c.id)),
+    p.RecordList: lambda r, c: p.RecordingsReply(_recordings(r).infos()),
+    p.RecordRead: lambda r, c: _recordings(r).read(c.file, c.offset, c.length),
+    p.RecordDelete: lambda r, c: p.RecordingsReply(_recordings(r).delete(c.id)),
 }
 
 

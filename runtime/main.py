@@ -19,6 +19,7 @@ from runtime.contract.state_folder import (
     context_path,
     events_path,
     identity_path,
+    recordings_path,
 )
 from runtime.contract.stop_request import StopRequest
 from runtime.event_log import EventLog
@@ -129,6 +130,10 @@ def run(args: argparse.Namespace) -> int:
         resource.running,
         args.modbus_port,
     )
+    from runtime.recorder import Recordings
+
+    recordings = Recordings(recordings_path(args.state_dir))
+    resource.recordings = recordings
     driver = CycleDriver(resource, clock, link, save, args.context_period_ms * 1_000_000)
     log.info("resource %s: %s, Zenoh %s", args.resource, resource.state.value, args.zenoh)
     log.info("runtime priority: %s", priority)
@@ -137,6 +142,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         driver.close()  # an orderly stop saves the context one last time
         resource.field_io.close()
+        recordings.close()
         saver.close()
         link.close()
         session.close()

@@ -17,7 +17,7 @@ needs no locks.
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol
 
 from runtime.clock import Clock
 from runtime.configuration_store import ConfigurationStore
@@ -49,6 +49,23 @@ log = logging.getLogger(__name__)
 
 EMERGENCY_STOPS = tuple(v.name for v in SYSTEM_VARIABLES if v.name.startswith("EMERGENCY_STOP"))
 _RUNNING = (ResourceState.RUN, ResourceState.RUN_UP_STOP)
+
+
+class CycleRecorder(Protocol):
+    """What the CPU cycle tells the recordings (runtime/recorder.py)."""
+
+    @property
+    def active(self) -> bool: ...
+
+    def before_programs(self, resource: Resource) -> None: ...
+
+    def cycled(
+        self,
+        resource: Resource,
+        begin_ns: int,
+        before: list[tuple[str, Any]],
+        after: list[tuple[str, Any]],
+    ) -> None: ...
 
 
 class Resource:
@@ -88,6 +105,8 @@ class Resource:
         # where every new configuration (load or reload) is kept for the next power-up
         self.store: ConfigurationStore | None = None
         self.field_io: FieldIo | None = None  # Modbus TCP, in a runtime process
+        # the recordings (runtime/recorder.py), in a runtime process with a state folder
+        self.recordings: CycleRecorder | None = None
 
     @property
     def programs(self) -> list[UserProgram]:
@@ -303,12 +322,12 @@ class Resource:
         self._update_system(begin)
         self._react_to_force_timeouts(begin)
         self.forcing.apply()
-        finished: list[UserProgram] = []
-        if not self.scheduler.guarded(lambda: self.scheduler.run(begin, finished)):
+        before = self.variables.tapped()
+        if self.recordings is not None and self.recordings.active:
+            self.recordings.before_programs(self)
+        if not self.run_programs(begin):
             return
-        self.variables.publish(finished)
-        self.forcing.check_deactivation()
-        self.forcing.apply()
+        after = self.variables.tapped()
         self.io.write_outputs(safe=False)
         if self._first_cycle:
             self._first_cycle = False
@@ -318,6 +337,20 @@ class Resource:
             self.stats.record(self.scheduler.used_ns)
         else:
             self.stats.record(self.clock.now_ns() - begin)
+        if self.recordings is not None and self.recordings.active:
+            self.recordings.cycled(self, begin, before, after)
+
+    def run_programs(self, begin: int) -> bool:
+        """The user programs of a CPU cycle and what follows them up to the outputs (an
+        exact replay runs just this, its inputs taken from a recording). False when the
+        resource halted."""
+        finished: list[UserProgram] = []
+        if not self.scheduler.guarded(lambda: self.scheduler.run(begin, finished)):
+            return False
+        self.variables.publish(finished)
+        self.forcing.check_deactivation()
+        self.forcing.apply()
+        return True
 
     def step(self) -> None:
         """In STOP: one CPU cycle of every program, time advancing one interval."""

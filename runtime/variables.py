@@ -4,6 +4,7 @@ read, check against its type and store wherever its readers see it."""
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 from runtime.code_image import CodeImage, read_path, write_path
@@ -22,6 +23,8 @@ class Variables:
         self.globals: Any = None  # the globals as all programs see them between cycles
         self.bound: list[BoundVariable] = []
         self._by_name: dict[str, BoundVariable] = {}
+        # while an all-inputs recording runs: every store from outside the programs, in order
+        self.tap: list[tuple[str, Any]] | None = None
 
     def adopt(self, instances: Instances) -> None:
         self.code, self.programs, self.globals = (
@@ -69,6 +72,9 @@ class Variables:
     def store(self, bound: BoundVariable, value: Any) -> None:
         """Write a variable where every reader sees it: a global into the globals and into
         every program's view of them."""
+        if self.tap is not None:
+            kept = copy.deepcopy(value) if isinstance(value, list) else value
+            self.tap.append((bound.path.path, kept))
         if bound.program is not None:
             write_path(bound.program.instance, bound.path, value)
             return
@@ -85,6 +91,13 @@ class Variables:
             return representation(bound.path.type, value)
         except ValueRejected as exc:
             raise Refusal("bad_value", f"'{bound.path.path}': {exc}") from None
+
+    def tapped(self) -> list[tuple[str, Any]]:
+        """The stores from outside since the last call (none when not tapped)."""
+        if self.tap is None:
+            return []
+        taken, self.tap = self.tap, []
+        return taken
 
     def values(self) -> dict[str, Any]:
         """Every elementary variable: `Program.var`, `Program.fb.var`, globals by their bare

@@ -35,6 +35,7 @@ HTTP_STATUS = {
     "unknown_variable": 404,
     "unknown_project": 404,
     "unknown_resource": 404,
+    "unknown_recording": 404,
     "not_found": 404,
     "method_not_allowed": 405,
     "compile": 422,

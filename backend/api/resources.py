@@ -1,6 +1,6 @@
 """The resources online, and every operation on one: status and statistics, login, load,
 start and stop, programs and single step, reload preview and reload, parameters,
-forcing, values, field I/O (Modbus) and events.
+forcing, values, field I/O (Modbus), events and recordings.
 
 Each request goes to the resource as a command with the caller's PES session (from `POST
 .../login`); the resource checks the level itself and its refusal comes back unchanged
@@ -12,12 +12,24 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Response
+from fastapi import Path as PathParameter
+from fastapi.responses import StreamingResponse
 from pydantic import BaseModel, Field
 
 from backend.api.auth import Credentials, ReadOnly, ReadWrite, Service
+from backend.engineering import recordings
+from backend.engineering.recordings import RecordingSpec, TriggerError
 from backend.engineering.reload import ReloadOptions, rename_map
 from runtime.contract import protocol as p
-from runtime.contract.protocol import MAX_EVENTS, MAX_MS
+from runtime.contract.protocol import (
+    MAX_EVENTS,
+    MAX_MS,
+    MAX_PATH,
+    MAX_PRE_CYCLES,
+    MAX_RECORD_CYCLES,
+    MAX_RECORDED,
+)
+from runtime.contract.refusal import Refusal
 from runtime.contract.wire import encode
 
 router = APIRouter(prefix="/api/resources", tags=["resources"])
@@ -284,3 +296,92 @@ def events(
     for event, prev in zip(events, reply.prev, strict=False):
         event["prev"] = prev
     return events
+
+
+WEEK_S = 7 * 86_400
+
+
+class RecordingRequest(BaseModel):
+    variables: list[Annotated[str, Field(max_length=MAX_PATH)]] = Field(
+        default_factory=list,
+        max_length=MAX_RECORDED,
+        description="variable paths, or `Prefix*` for every variable whose path starts so",
+    )
+    all_inputs: bool = Field(
+        default=False, description="also every input of every cycle (for `padt replay`)"
+    )
+    trigger: str | None = Field(
+        default=None,
+        max_length=2 * MAX_PATH,
+        description="start writing when it becomes true: `Main.level > 80`, `Main.alarm`, "
+        "`NOT Main.alarm` (= <> < <= > >=, the value an ST literal)",
+    )
+    pre_cycles: int = Field(default=0, ge=0, le=MAX_PRE_CYCLES, description="before the trigger")
+    cycles: int | None = Field(default=None, ge=1, le=MAX_RECORD_CYCLES)
+    seconds: int | None = Field(default=None, ge=1, le=WEEK_S)
+    rotate_mb: int = Field(default=256, ge=1, le=4096, description="a new file every N MB")
+    rotate_s: int | None = Field(default=None, ge=1, le=WEEK_S, description="... or N seconds")
+    id: str | None = Field(default=None, pattern=r"^[A-Za-z0-9_-]{1,64}$")
+
+    def spec(self) -> RecordingSpec:
+        spec = RecordingSpec(
+            tuple(self.variables), self.all_inputs, self.trigger, self.pre_cycles,
+            self.cycles, self.seconds, self.rotate_mb, self.rotate_s, self.id,
+        )  # fmt: skip
+        try:
+            spec.command()
+        except TriggerError as exc:
+            raise Refusal("bad_request", f"trigger: {exc}") from None
+        return spec
+
+
+RecordingId = Annotated[str, PathParameter(pattern=r"^[A-Za-z0-9_-]{1,64}$")]
+
+
+@router.post("/{resource}/recordings", summary="Start a recording (MCAP, in the resource)")
+def start_recording(
+    resource: str, body: RecordingRequest, caller: ReadWrite, service: Service
+) -> Any:
+    spec = body.spec()
+    return encode(service.act(caller, resource, lambda client: recordings.start(client, spec)))
+
+
+@router.get("/{resource}/recordings", summary="The recordings, the running ones first")
+def list_recordings(resource: str, caller: ReadOnly, service: Service) -> Any:
+    return encode(service.act(caller, resource, recordings.list_recordings))
+
+
+@router.post("/{resource}/recordings/{recording}/stop", summary="Stop a recording")
+def stop_recording(
+    resource: str, recording: RecordingId, caller: ReadWrite, service: Service
+) -> Any:
+    return encode(service.act(caller, resource, lambda c: recordings.stop(c, recording)))
+
+
+@router.delete("/{resource}/recordings/{recording}", summary="Delete a recording that has ended")
+def delete_recording(
+    resource: str, recording: RecordingId, caller: ReadWrite, service: Service
+) -> Any:
+    return encode(service.act(caller, resource, lambda c: recordings.delete(c, recording)))
+
+
+@router.get(
+    "/{resource}/recordings/files/{name}",
+    summary="Download a recording file (MCAP)",
+    response_class=Response,
+    responses={200: {"content": {"application/octet-stream": {}}}},
+)
+def recording_file(
+    resource: str,
+    name: Annotated[str, PathParameter(pattern=r"^[A-Za-z0-9_-]{1,64}-[0-9]{1,6}\.mcap$")],
+    caller: ReadOnly,
+    service: Service,
+) -> Response:
+    # the first piece is read here, so that a file the resource refuses is an error
+    # reply; the others stream as the client takes them, never the whole file in memory
+    size, pieces = service.act(caller, resource, lambda c: recordings.download_chunks(c, name))
+    headers = {
+        "Content-Disposition": f'attachment; filename="{name}"',
+        "Content-Length": str(size),
+    }
+    return StreamingResponse(pieces, media_type="application/octet-stream", headers=headers)

@@ -6,7 +6,7 @@ adds only who the caller is and which PES session it holds for each resource."""
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -117,6 +117,12 @@ class PadtService:
         its refusal."""
         with self._refusals(caller, resource):
             return self.client(caller, resource).ask(command)
+
+    def act(self, caller: Caller, resource: str, operation: Callable[[ResourceClient], R]) -> R:
+        """An operation of a service on the resource (several commands, as a download) with
+        the caller's PES session: its result, or its refusal."""
+        with self._refusals(caller, resource):
+            return operation(self.client(caller, resource))
 
     def log_in(self, caller: Caller, resource: str, user: str, password: str) -> ResourceLogin:
         client = self.client(caller, resource)

@@ -98,7 +98,8 @@ class CycleInputs:
     `before`: every variable set from outside since the programs of the cycle before
     ended (inputs, writes, forces, Modbus clients: `[path, value]`); `after`: those set
     after the programs ran and before the outputs were written (forces); `system`: the
-    system variables that changed; `programs`: the programs' states that changed;
+    system variables that changed; `programs`: each program whose state or start time
+    changed, `[state, clock time its program cycle last started]`;
     `begin_ns`: the resource clock at the cycle's start, which every program's time
     follows. A cycle that ran no programs (STOP) is not recorded."""
 
@@ -108,7 +109,7 @@ class CycleInputs:
     before: list[tuple[str, Any]] = field(default_factory=list)
     after: list[tuple[str, Any]] = field(default_factory=list)
     system: dict[str, Any] = field(default_factory=dict)
-    programs: dict[str, str] = field(default_factory=dict)
+    programs: dict[str, Any] = field(default_factory=dict)  # name -> [state, last start]
     cut: list[str] = field(default_factory=list)  # programs whose time slice ended them
 
     def json(self) -> dict[str, Any]:
@@ -132,7 +133,7 @@ class CycleInputs:
             before=[(str(p), v) for p, v in data["before"]],
             after=[(str(p), v) for p, v in data["after"]],
             system=dict(data["system"]),
-            programs={str(k): str(v) for k, v in data["programs"].items()},
+            programs={str(k): v for k, v in data["programs"].items()},
             cut=[str(name) for name in data.get("cut", [])],
         )
 

@@ -26,3 +26,8 @@ def events_path(state_dir: Path) -> Path:
 def identity_path(state_dir: Path) -> Path:
     """The resource's signing key (owner-only)."""
     return state_dir / "identity.key"
+
+
+def recordings_path(state_dir: Path) -> Path:
+    """The MCAP files of the resource's recordings (docs/recording.md)."""
+    return state_dir / "recordings"

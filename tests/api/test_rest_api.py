@@ -73,6 +73,9 @@ RESOURCE_ROUTES: list[tuple[str, str, dict[str, Any] | None, str]] = [
     ("POST", f"{R}/forcing/stop", {}, "operator"),
     ("PUT", f"{R}/forces/P.n", {"value": 5}, "operator"),
     ("DELETE", f"{R}/forces/P.n", None, "operator"),
+    ("POST", f"{R}/recordings", {"variables": ["P.n"], "cycles": 5}, "operator"),
+    ("POST", f"{R}/recordings/r1/stop", None, "operator"),
+    ("DELETE", f"{R}/recordings/r1", None, "operator"),
     ("POST", f"{R}/init", None, "read-write"),
     ("POST", f"{R}/cold-start", None, "read-write"),
     ("POST", f"{R}/step", None, "read-write"),
@@ -185,6 +188,10 @@ WELL_FORMED: dict[str, dict[str, Any]] = {
     "set_parameter": {"name": "watchdog_ms", "value": 100},
     "transfer_begin": {"size": 10, "crc": "0000ABCD"},
     "transfer_chunk": {"offset": 0, "data": "x"},
+    "record_start": {"variables": ["P.n"], "cycles": 5},
+    "record_stop": {"id": "r1"},
+    "record_read": {"file": "r1-1.mcap"},
+    "record_delete": {"id": "r1"},
 }
 
 
