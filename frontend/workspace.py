@@ -120,7 +120,7 @@ class Workspace:
                 gui, client, context.projects, context.backup_dir, session.level
             )
         with self._tab("Trends", viser.Icon.CHART_LINE):
-            self.trends = trends.build(gui, session.user, session.context.watch_lists)
+            self.trends = trends.build(gui, client, session.user, session.context.watch_lists)
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -297,7 +297,7 @@ class Workspace:
         token = login_there.token if login_there is not None else None
         # always: its live counts tell the Parameters screen what others changed
         events.refresh(self.events, resource, token, self.session.client_of)
-        trends.collect(self.trends, feed)  # its history goes on in any tab
+        trends.collect(self.trends, resource, feed)  # its history goes on in any tab
         self._refresh_shown(resource, status, feed, token, directory)
         if feed is not None:  # only what some screen shows is watched, seen or not: a
             # tab opened shows its values at once
@@ -352,7 +352,8 @@ class Workspace:
         elif shown == "Documentation":
             documentation.refresh(self.documentation, resource, status)
         elif shown == "Trends":
-            trends.refresh(self.trends, feed)
+            client_of = self.session.client_of
+            trends.refresh(self.trends, resource, feed, token, client_of, self._allowed)
 
     def _follow_forcing(
         self, resource: str | None, status: p.Status | None, login_there: ResourceLogin | None

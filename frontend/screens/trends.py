@@ -5,9 +5,9 @@ and the current ones in a table beneath.
 - **Live**: the values the resource feed receives (10 a second) for the charted
   variables, kept for 11 minutes per browser (frontend/trend_history.py) whether the tab
   is in view or not; a window of 30 s, 2 min or 10 min; pause to look at a moment while
-  the history goes on collecting.
-- **Recorded**: the resource's recordings (docs/recording.md), one chosen downloaded, read
-  and charted against its cycles' times; the charted variables recorded from here."""
+  the history goes on collecting. The charted variables are recorded into an MCAP file
+  on the resource with one button (operator level).
+- **Recorded**: the resource's recordings (frontend/screens/trends_recorded.py)."""
 
 from __future__ import annotations
 
@@ -20,20 +20,30 @@ from typing import Any
 
 import viser
 
-from backend.engineering import variable_tree
+from backend.engineering import recordings, variable_tree
+from backend.engineering.recordings import RecordingSpec
+from backend.engineering.resource_client import ResourceClient
 from backend.engineering.watch_lists import WatchLists
-from frontend import trend_plot
+from frontend import trend_chart, trend_plot
+from frontend.command_reading import CommandReading
+from frontend.confirm import attempt
+from frontend.permissions import Allowed
 from frontend.resource_feed import ResourceFeed
-from frontend.trend_history import TrendHistory
+from frontend.screens import trends_recorded
+from frontend.trend_chart import TrendChart
+from frontend.trend_history import HISTORY_S, TrendHistory
 from frontend.trend_plot import MAX_CHARTED, Trace
+from runtime.contract import protocol as p
 from runtime.contract.values import format_for_display
 
 WINDOWS = {"30 s": 30, "2 min": 120, "10 min": 600}
-CHART_HEIGHT = 430
 LIVE_POINTS = 2000  # per variable and redraw: 10 min at 10 Hz is cut to min/max pairs
+LIST_READS_PER_S = 1  # the recordings' progress, while the screen is in view
 MAX_MATCHES = 100
 NO_MATCH, NOTHING, NO_LIST = "(no match)", "(none charted)", "(no watch lists)"
 PAUSE, RESUME = "Pause", "Resume"
+RECORD, STOP = "Record the charted variables", "Stop recording"
+ACTIVE = ("waiting", "recording")
 _GREY = "color:#868e96"
 
 
@@ -45,50 +55,50 @@ def wall_clock() -> Callable[[], float]:
 
 
 @dataclass
-class LiveChart:
-    """The chart of the Live tab and what it last drew."""
+class Target:
+    """The resource the screen works on, as the last refresh saw it."""
 
-    gui: viser.GuiApi
-    container: viser.GuiTabHandle
-    order: float  # its place in the tab, kept when it is made again
-    placeholder: viser.GuiHtmlHandle
-    plot: viser.GuiUplotHandle | None = None
-    charted: tuple[Trace, ...] = ()  # what `plot` was made for
-    y_range: tuple[float, float] | None = None
-    extremes: dict[str, tuple[float, float] | None] = field(default_factory=dict)  # drawn
-    drawn_at: float = -math.inf  # when (clock) it was last drawn
+    resource: str
+    client_of: Callable[[str], ResourceClient]
+    allowed: Callable[[type[p.Command[Any]]], Allowed]
 
 
 @dataclass
 class TrendsScreen:
+    client: viser.ClientHandle
     user: str
     lists: WatchLists
     clock: Callable[[], float]
     bar: viser.GuiButtonGroupHandle
     status: viser.GuiHtmlHandle
-    chart: LiveChart
+    chart: TrendChart
     table: viser.GuiHtmlHandle
+    record: viser.GuiButtonHandle
+    record_note: viser.GuiHtmlHandle
     search: viser.GuiTextHandle
     matches: viser.GuiDropdownHandle[str]
-    add: viser.GuiButtonHandle
     watch_list: viser.GuiDropdownHandle[str]
-    add_list: viser.GuiButtonHandle
     charted_choice: viser.GuiDropdownHandle[str]
-    remove: viser.GuiButtonHandle
     note: viser.GuiHtmlHandle
+    recorded: trends_recorded.RecordedTab
     history: TrendHistory = field(default_factory=TrendHistory)
     paths: list[str] = field(default_factory=list)  # the charted variables, in order
     types: dict[str, str] = field(default_factory=dict)  # the resource's variables
     types_version: int = -1
     values_version: int = -1  # of the feed's values last sampled
+    resource: str | None = None  # whose values the history holds
     window_s: int = 30
     paused: bool = False
-    shown_table: str = ""
-    shown_status: str = ""
+    target: Target | None = None
+    recording: str | None = None  # the id of the recording started here
+    listing: CommandReading[p.RecordingsReply] = field(
+        default_factory=lambda: CommandReading(p.RecordList(), "its recordings")
+    )
+    shown: dict[str, str] = field(default_factory=dict)  # HTML sent, by part
 
 
 def build(
-    gui: viser.GuiApi, user: str, lists: WatchLists, clock: Callable[[], float] | None = None
+    gui: viser.GuiApi, client: viser.ClientHandle, user: str, lists: WatchLists
 ) -> TrendsScreen:
     tabs = gui.add_tab_group()
     with tabs.add_tab("Live", viser.Icon.CHART_LINE) as live:
@@ -97,6 +107,8 @@ def build(
         status = gui.add_html("")
         placeholder = gui.add_html(_placeholder())
         table = gui.add_html("")
+        record = gui.add_button(RECORD, icon=viser.Icon.PLAYER_RECORD)
+        record_note = gui.add_html("")
         with gui.add_folder("Variables"):
             search = gui.add_text("Find variable", "")
             matches = gui.add_dropdown("Found", (NO_MATCH,))
@@ -106,24 +118,28 @@ def build(
             charted_choice = gui.add_dropdown("Charted", (NOTHING,))
             remove = gui.add_button("Remove from chart", icon=viser.Icon.MINUS)
             note = gui.add_html("")
+    with tabs.add_tab("Recorded", viser.Icon.DATABASE) as recorded_tab:
+        recorded = trends_recorded.build(gui, client, recorded_tab)
     screen = TrendsScreen(
+        client,
         user,
         lists,
-        clock or wall_clock(),
+        wall_clock(),
         bar,
         status,
-        LiveChart(gui, live, placeholder.order, placeholder),
+        TrendChart(gui, live, placeholder),
         table,
+        record,
+        record_note,
         search,
         matches,
-        add,
         watch_list,
-        add_list,
         charted_choice,
-        remove,
         note,
+        recorded,
     )
     bar.on_click(lambda event: _bar_clicked(screen, event.target.value))
+    record.on_click(lambda _: _record_clicked(screen))
     search.on_update(lambda _: show_matches(screen))
     add.on_click(lambda _: chart_variables(screen, [screen.matches.value]))
     add_list.on_click(lambda _: chart_variables(screen, list(_list_variables(screen))))
@@ -181,6 +197,28 @@ def show_matches(screen: TrendsScreen) -> None:
         _say(screen, f"{count} variable{'s' if count != 1 else ''} to chart match{more}")
 
 
+def _record_clicked(screen: TrendsScreen) -> None:
+    """Start recording the charted variables on the resource, or stop the recording
+    started here."""
+    target = screen.target
+    if target is None:
+        return
+    client = target.client_of(target.resource)
+    running = screen.recording
+    if running is not None and _state_of(screen, running) in ACTIVE:
+        attempt(
+            screen.client, f"Stop recording {running}", lambda: recordings.stop(client, running)
+        )
+    elif screen.paths:
+        spec = RecordingSpec(variables=tuple(screen.paths))
+
+        def start() -> None:
+            screen.recording = recordings.start(client, spec).id
+
+        attempt(screen.client, f"Record {len(screen.paths)} variables of {target.resource}", start)
+    screen.listing.changed()
+
+
 def _after_change(screen: TrendsScreen) -> None:
     _set_options(screen.charted_choice, screen.paths or [NOTHING])
     _redraw_soon(screen)
@@ -202,9 +240,13 @@ def wanted(screen: TrendsScreen) -> list[str]:
     return screen.paths
 
 
-def collect(screen: TrendsScreen, feed: ResourceFeed | None) -> None:
+def collect(screen: TrendsScreen, resource: str | None, feed: ResourceFeed | None) -> None:
     """Take the feed's new values into the history (cheap: called on every refresh, the
-    tab in view or not)."""
+    tab in view or not). Another resource starts the history anew."""
+    if resource != screen.resource:
+        screen.resource = resource
+        screen.history.clear()
+        screen.recording = None
     if feed is None:
         return
     latest = feed.latest
@@ -222,104 +264,98 @@ def collect(screen: TrendsScreen, feed: ResourceFeed | None) -> None:
     screen.history.add(screen.clock(), sample)
 
 
-def refresh(screen: TrendsScreen, feed: ResourceFeed | None) -> None:
-    """Draw the tab in view: the chart as often as its window needs (a point a pixel: ten
-    times a second for 30 s, about twice for 10 min), the table of current values."""
+def refresh(
+    screen: TrendsScreen,
+    resource: str | None,
+    feed: ResourceFeed | None,
+    token: str | None,
+    client_of: Callable[[str], ResourceClient],
+    allowed: Callable[[type[p.Command[Any]]], Allowed],
+) -> None:
+    """Draw the screen in view: the live chart as often as its window needs (a point a
+    pixel: ten times a second for 30 s, about twice a second for 10 min), the table of
+    current values, the recordings (read once a second)."""
+    screen.target = Target(resource, client_of, allowed) if resource is not None else None
     _set_options(screen.watch_list, [x.name for x in screen.lists.of(screen.user)] or [NO_LIST])
+    listed: list[p.RecordingInfo] = []
+    error = ""
+    if resource is not None:
+        moment = int(time.monotonic() * LIST_READS_PER_S)
+        key = (resource, token, moment, screen.listing.changes)
+        screen.listing.ensure(key, client_of)
+        reply, error = screen.listing.current(resource)
+        listed = reply.recordings if reply is not None else []
     now = screen.clock()
-    seconds = screen.window_s
     chart = screen.chart
-    if not screen.paused and now - chart.drawn_at >= max(0.09, seconds / 1000):
+    if not screen.paused and now - chart.drawn_at >= max(0.09, screen.window_s / 1000):
         chart.drawn_at = now
-        _draw(screen, now - seconds)
+        start = now - screen.window_s
+        charted = _traces(screen)
+        times, by_path = screen.history.since(start)
+        chart.draw(charted, times, [by_path[t.path] for t in charted], start, LIVE_POINTS)
     values = feed.latest.values if feed is not None else {}
-    _show_table(screen, values)
-    _show_status(screen, feed, seconds)
+    _show(screen, "table", screen.table, _values_table(screen, values))
+    _show(screen, "status", screen.status, _status(screen, feed))
+    _refresh_record(screen, listed, allowed)
+    target = screen.target
+    trends_recorded.refresh(
+        screen.recorded,
+        resource,
+        target.client_of if target else None,
+        listed,
+        error,
+    )
 
 
-def _draw(screen: TrendsScreen, start_s: float) -> None:
-    chart = screen.chart
-    charted = tuple(trend_plot.traces([(p, screen.types.get(p, "")) for p in screen.paths]))
-    if not charted:
-        if chart.plot is not None:
-            chart.plot.remove()
-            chart.plot = None
-        chart.placeholder.visible = True
-        return
-    times, by_path = screen.history.since(start_s)
-    columns = [by_path[t.path] for t in charted]
-    numbers = [c for c, t in zip(columns, charted, strict=True) if not t.is_bool]
-    y_range = trend_plot.y_range(numbers, chart.y_range)
-    bools = [t.is_bool for t in charted]
-    data = trend_plot.data(times, columns, bools, start_s, LIVE_POINTS)
-    # A chart of other variables or another y range is made anew rather than changed:
-    # viser carries the x zoom over a rebuild of its uPlot as a fraction of the data's
-    # span, and the rebuild that new scales cause left the time axis at 1970.
-    if chart.plot is None or charted != chart.charted or y_range != chart.y_range:
-        if chart.plot is not None:
-            chart.plot.remove()
-        with chart.container:  # in the chart's place, under the placeholder it replaces
-            chart.plot = chart.gui.add_uplot(
-                data,
-                height=CHART_HEIGHT,
-                order=chart.order + 0.001,
-                **trend_plot.options(charted, y_range),
-            )
-        chart.charted, chart.y_range = charted, y_range
-        chart.placeholder.visible = False
-    else:
-        chart.plot.data = data
-    chart.extremes = {
-        t.path: trend_plot.extremes(column) for t, column in zip(charted, columns, strict=True)
-    }
+def _refresh_record(
+    screen: TrendsScreen,
+    listed: list[p.RecordingInfo],
+    allowed: Callable[[type[p.Command[Any]]], Allowed],
+) -> None:
+    ours = next((x for x in listed if x.id == screen.recording), None)
+    running = ours is not None and ours.state in ACTIVE
+    label = f"{STOP} {ours.id}" if running and ours is not None else RECORD
+    if screen.record.label != label:
+        screen.record.label = label
+        screen.record.icon = viser.Icon.PLAYER_STOP if running else viser.Icon.PLAYER_RECORD
+        screen.record.color = "red" if running else None
+    verdict = allowed(p.RecordStop if running else p.RecordStart)
+    reason = verdict.reason if not verdict.ok else ""
+    if not reason and not running and not screen.paths:
+        reason = "chart variables first: the recording takes the charted ones"
+    if screen.target is None:
+        reason = "select a resource"
+    if screen.record.disabled != bool(reason):
+        screen.record.disabled = bool(reason)
+    _show(screen, "record", screen.record_note, _record_note(ours, reason))
 
 
-def _show_table(screen: TrendsScreen, values: dict[str, Any]) -> None:
+def _state_of(screen: TrendsScreen, recording: str) -> str:
+    reply, _ = screen.listing.current(screen.resource or "")
+    found = [x.state for x in (reply.recordings if reply else []) if x.id == recording]
+    return found[0] if found else ""
+
+
+def _traces(screen: TrendsScreen) -> list[Trace]:
+    return trend_plot.traces([(p, screen.types.get(p, "")) for p in screen.paths])
+
+
+# ---- what the user reads
+def _values_table(screen: TrendsScreen, values: dict[str, Any]) -> str:
     """The charted variables with their colour, type, current value and the lowest and
     highest value in the chart; the values under the cursor are in the chart's legend."""
-    page = ""
-    if screen.paths:
-        extremes = screen.chart.extremes
-        rows = []
-        for trace in trend_plot.traces([(p, screen.types.get(p, "")) for p in screen.paths]):
-            name = html.escape(trace.path)
-            now = (
-                format_for_display(values[trace.path], trace.type) if trace.path in values else "…"
-            )
-            low, high = extremes.get(trace.path) or (math.nan, math.nan)
-            rows.append(
-                f'<tr><td><span class="sw" style="background:{trace.colour}"></span></td>'
-                f'<td>{name}</td><td class="t">{html.escape(trace.type)}</td>'
-                f'<td class="v" data-trend="{name}">{html.escape(now)}</td>'
-                f'<td class="v">{trend_plot.shown(low, trace)}</td>'
-                f'<td class="v">{trend_plot.shown(high, trace)}</td></tr>'
-            )
-        page = _TABLE_HEAD + "".join(rows) + "</table>"
-    if page != screen.shown_table:
-        screen.table.content = page
-        screen.shown_table = page
+    if not screen.paths:
+        return ""
+    extremes = screen.chart.extremes
+    rows = []
+    for trace in _traces(screen):
+        value = values.get(trace.path)
+        now = "…" if value is None else format_for_display(value, trace.type)
+        rows.append(trend_chart.table_row(trace, extremes.get(trace.path), now))
+    return trend_chart.table(rows, with_now=True, testid="trend-values")
 
 
-# uPlot's legend (the values under the cursor) in viser is small and pale: read at a glance
-_LEGEND_STYLE = (
-    "<style>.uplot .u-legend{font-size:0.8em}.uplot .u-legend .u-value{color:#212529;"
-    "font-family:monospace}</style>"
-)
-_TABLE_HEAD = (
-    "<style>.trv{width:calc(100% - 24px);margin:0 14px 0 10px;font-size:0.85em;"
-    "border-collapse:collapse}"
-    ".trv td,.trv th{padding:1px 6px;border-bottom:1px solid #f1f3f5}"
-    ".trv th{color:#868e96;font-weight:500;text-align:left}.trv .t{color:#868e96}"
-    ".trv .v{text-align:right;font-family:monospace;white-space:nowrap}"
-    ".trv .sw{display:inline-block;width:18px;height:3px;vertical-align:middle}</style>"
-    '<table class="trv" data-testid="trend-values"><tr><th style="width:22px"></th>'
-    '<th>Variable</th><th>Type</th><th style="text-align:right">Now</th>'
-    '<th style="text-align:right">Min in chart</th>'
-    '<th style="text-align:right">Max in chart</th></tr>'
-)
-
-
-def _show_status(screen: TrendsScreen, feed: ResourceFeed | None, seconds: int) -> None:
+def _status(screen: TrendsScreen, feed: ResourceFeed | None) -> str:
     if feed is None:
         text = "Select a resource you are logged in to."
     elif not screen.paths:
@@ -333,17 +369,30 @@ def _show_status(screen: TrendsScreen, feed: ResourceFeed | None, seconds: int) 
             else '<b style="color:#2f9e44">live</b>'
         )
         text = (
-            f"{state} · last {_duration(seconds)} shown · {count} variable"
-            f"{'s' if count != 1 else ''} · {held} of history kept (up to 11 min) · "
-            "drag across the chart to zoom, double-click to show it all"
+            f"{state} · last {_duration(screen.window_s)} shown · {count} variable"
+            f"{'s' if count != 1 else ''} · {held} of history kept (up to "
+            f"{HISTORY_S // 60} min) · drag across the chart to zoom, double-click to "
+            "show it all"
         )
-    page = (
+    return (
         f'<div data-testid="trend-status" style="font-size:0.85em;padding:0 10px;{_GREY}">'
-        f"{text}</div>{_LEGEND_STYLE}"
+        f"{text}</div>{trend_chart.LEGEND_STYLE}"
     )
-    if page != screen.shown_status:
-        screen.status.content = page
-        screen.shown_status = page
+
+
+def _record_note(ours: p.RecordingInfo | None, reason: str) -> str:
+    lines = []
+    if ours is not None:
+        lines.append(html.escape(trends_recorded.progress(ours)))
+    if reason:
+        lines.append(f"Disabled: {html.escape(reason)}")
+    if not lines:
+        return ""
+    return (
+        f'<div data-testid="record-note" style="font-size:0.85em;padding:0 10px;{_GREY}">'
+        + "<br>".join(lines)
+        + "</div>"
+    )
 
 
 def _duration(seconds: float) -> str:
@@ -353,7 +402,7 @@ def _duration(seconds: float) -> str:
 
 def _placeholder() -> str:
     return (
-        f'<div data-testid="trend-empty" style="{_GREY};padding:24px 8px">'
+        f'<div data-testid="trend-empty" style="{_GREY};padding:24px 10px">'
         "Choose variables to chart under <b>Variables</b> below: by search, or a whole "
         "watch list. Numbers are drawn as lines on the left axis, BOOLs as 0/1 steps on "
         "the right.</div>"
@@ -362,8 +411,15 @@ def _placeholder() -> str:
 
 def _say(screen: TrendsScreen, text: str, error: bool = False) -> None:
     colour = "#c92a2a" if error else "#495057"
-    shown = f'<div data-testid="trend-note" style="color:{colour}">{html.escape(text)}</div>'
-    screen.note.content = shown if text else ""
+    shown = f'<div data-testid="trend-note" style="color:{colour};padding:0 4px">'
+    screen.note.content = f"{shown}{html.escape(text)}</div>" if text else ""
+
+
+def _show(screen: TrendsScreen, part: str, handle: viser.GuiHtmlHandle, content: str) -> None:
+    """Send HTML only when it changed."""
+    if screen.shown.get(part) != content:
+        handle.content = content
+        screen.shown[part] = content
 
 
 def _set_options(dropdown: viser.GuiDropdownHandle[str], options: list[str]) -> None:

@@ -1,6 +1,8 @@
 """The Trends screen as a user sees it, through the demo: variables chosen by search are
 charted live (the chart's data grows as the demo runs, the level moves, the pump is a
-0/1 step), the cursor's legend shows the values under it, and a pause holds the chart."""
+0/1 step), the cursor's legend shows the values under it, and a pause holds the chart;
+the charted variables recorded on the resource, listed, charted from the file and saved
+as an .mcap file that an MCAP reader opens."""
 
 from __future__ import annotations
 
@@ -10,6 +12,7 @@ from typing import Any
 import pytest
 from playwright.sync_api import Page
 
+from runtime.contract.recording import read_recording
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
     Demo,
@@ -26,18 +29,29 @@ from tests.ui.browser_steps import (
 pytestmark = pytest.mark.browser
 
 
-def chart(page: Page) -> dict[str, Any]:
-    """What the page's uPlot chart holds: its series' labels and how many points."""
-    found: dict[str, Any] = page.evaluate(
-        """() => {
-            const charts = Object.values(window.__viserTestpoints?.uplots ?? {});
-            if (charts.length === 0) return {series: [], points: 0, charts: 0};
-            const u = charts[0].chart;
-            return {series: u.series.map(s => s.label), points: u.data[0].length,
-                    charts: charts.length, last: u.data.map(d => d[d.length - 1])};
-        }"""
+def charts(page: Page) -> list[dict[str, Any]]:
+    """What the page's uPlot charts hold: their series' labels, how many points, the
+    last point."""
+    found: list[dict[str, Any]] = page.evaluate(
+        """() => Object.values(window.__viserTestpoints?.uplots ?? {}).map(c => c.chart)
+            .map(u => ({series: u.series.map(s => s.label), points: u.data[0].length,
+                        first: u.data.map(d => d[0]), last: u.data.map(d => d[d.length - 1])}))"""
     )
     return found
+
+
+def chart(page: Page) -> dict[str, Any]:
+    """The live chart (the first made)."""
+    found = charts(page)
+    return found[0] if found else {"series": [], "points": 0}
+
+
+def close_notifications(page: Page) -> None:
+    """Close the toasts in the top left corner (software WebGL, commands done)."""
+    buttons = page.locator(".mantine-Notification-closeButton")
+    while buttons.count():
+        buttons.first.click()
+        page.wait_for_timeout(300)  # their fade
 
 
 def chart_variable(page: Page, path: str) -> None:
@@ -88,3 +102,51 @@ def test_variables_chosen_are_charted_live_with_their_values(demo: Demo) -> None
         assert chart(page)["last"][0] == held
         page.get_by_role("button", name="Resume").click()
         wait_until("it goes on", lambda: chart(page)["last"][0] > held)
+
+
+def test_the_charted_variables_recorded_listed_charted_and_saved(demo: Demo) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900}, accept_downloads=True)
+        open_demo_as_admin(page, demo)
+        open_tab(page, "Trends")
+        chart_variable(page, "TankControl.level")
+        chart_variable(page, "TankControl.pump")
+
+        page.get_by_role("button", name="Record the charted variables").click()
+        wait_until(
+            "it records",
+            lambda: "recording:" in text_of(page, '[data-testid="record-note"]'),
+        )
+        stop = page.get_by_role("button", name=re.compile("^Stop recording"))
+        page.wait_for_timeout(2000)  # two seconds of the demo
+        shoot(page, "trends-recording-1400x900")
+        stop.click()
+        wait_until("it is done", lambda: " done:" in text_of(page, '[data-testid="record-note"]'))
+        note = text_of(page, '[data-testid="record-note"]')
+        recording = note.split(" ")[0]
+        cycles = int(note.split("done: ")[1].split(" cycles")[0].replace(",", ""))
+        assert cycles >= 10, note  # 2 s of 50 ms cycles, and some
+
+        close_notifications(page)  # they lie over the Trends screen's own tabs
+        page.get_by_role("tab", name="Recorded").click()
+        row = f'[data-recording="{recording}"]'
+        wait_until("it is listed", lambda: text_of(page, f"{row} [data-state]") == "done")
+        assert text_of(page, f"{row} [data-cycles]") == f"{cycles:,}"
+        choose(page, "Recording", recording)
+        page.get_by_role("button", name="Chart it").click()
+        wait_until("it is charted", lambda: len(charts(page)) == 2)
+        recorded = charts(page)[1]
+        assert recorded["series"] == ["time", "TankControl.level", "TankControl.pump"]
+        assert recorded["points"] >= cycles  # every cycle, pump changes doubled as steps
+        span = recorded["last"][0] - recorded["first"][0]
+        assert 1.5 < span < 30, span  # the cycles' log times: the seconds recorded
+        assert f"{cycles:,} cycles" in text_of(page, '[data-testid="recorded-note"]')
+        shoot_both(page, "trends-recorded")
+
+        with page.expect_download() as download:
+            page.get_by_role("button", name="Download .mcap").click()
+        saved = download.value
+        assert saved.suggested_filename == f"{recording}-1.mcap"
+        path = saved.path()
+        assert path.read_bytes()[:8] == b"\x89MCAP0\r\n"
+        assert len(read_recording(path).rows) == cycles

@@ -1,0 +1,275 @@
+"""The Recorded tab of the Trends screen: the resource's recordings (docs/recording.md) with
+their state, cycles, dropped cycles and size; the chosen one downloaded from the resource
+(backend/engineering/recordings.py), read (`read_recording`) and charted against its
+cycles' log time, with the same cursor as the live chart; its .mcap files saved by the
+browser for Foxglove or the mcap tools. Downloads and reading run on a thread of their own:
+the screen stays usable meanwhile."""
+
+from __future__ import annotations
+
+import html
+import io
+import logging
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from datetime import datetime
+
+import numpy as np
+import viser
+
+from backend.engineering import recordings
+from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
+from frontend import trend_chart, trend_plot
+from frontend.trend_chart import TrendChart
+from frontend.trend_plot import MAX_CHARTED, Floats, Trace
+from runtime.contract import protocol as p
+from runtime.contract.recording import Recording, RecordingUnreadable, read_recording
+from runtime.contract.refusal import Refusal
+
+RECORDED_POINTS = 10_000  # per variable: a long recording is cut to min/max pairs
+MAX_OPEN_BYTES = 64 * 1024 * 1024  # larger recordings: download them, open in Foxglove
+NONE_YET = "(no recordings)"
+CHART, DOWNLOAD = "Chart it", "Download .mcap"
+_GREY = "color:#868e96"
+log = logging.getLogger("padt.ui")
+
+
+@dataclass(frozen=True)
+class Opened:
+    """A recording read back, as the chart draws it."""
+
+    id: str
+    traces: list[Trace]
+    times: Floats  # Unix seconds, each cycle's log time
+    columns: list[Floats]
+    note: str  # what the user should know about it
+
+
+@dataclass
+class RecordedTab:
+    client: viser.ClientHandle
+    choice: viser.GuiDropdownHandle[str]
+    listing: viser.GuiHtmlHandle
+    note: viser.GuiHtmlHandle
+    chart: TrendChart
+    table: viser.GuiHtmlHandle
+    resource: str | None = None
+    client_of: Callable[[str], ResourceClient] | None = None
+    listed: list[p.RecordingInfo] = field(default_factory=list)
+    opened: Opened | None = None
+    drawn: Opened | None = None
+    busy: bool = False
+    message: tuple[str, str] = ("", "")  # text, colour: the last download's outcome
+    shown: dict[str, str] = field(default_factory=dict)
+
+
+def build(gui: viser.GuiApi, client: viser.ClientHandle, tab: viser.GuiTabHandle) -> RecordedTab:
+    choice = gui.add_dropdown("Recording", (NONE_YET,))
+    actions = gui.add_button_group("Recording actions", (CHART, DOWNLOAD))
+    note = gui.add_html("")
+    placeholder = gui.add_html(
+        f'<div data-testid="recorded-empty" style="{_GREY};padding:16px 10px">Choose a '
+        f"recording and <b>{CHART}</b>: it is downloaded from the resource and drawn "
+        "against its cycles' times.</div>"
+    )
+    table = gui.add_html("")
+    listing = gui.add_html("")
+    screen = RecordedTab(client, choice, listing, note, TrendChart(gui, tab, placeholder), table)
+    actions.on_click(lambda event: _act(screen, event.target.value))
+    return screen
+
+
+def _act(screen: RecordedTab, action: str) -> None:
+    chosen = next((x for x in screen.listed if x.id == screen.choice.value), None)
+    if chosen is None or screen.client_of is None or screen.resource is None or screen.busy:
+        return
+    client = screen.client_of(screen.resource)
+    screen.busy = True
+    what = "downloading and reading" if action == CHART else "downloading"
+    screen.message = (f"{what} {chosen.id} ({_size(chosen)}) ...", "#495057")
+    work = _open if action == CHART else _download
+    threading.Thread(target=_guarded, args=(screen, work, client, chosen), daemon=True).start()
+
+
+def _guarded(
+    screen: RecordedTab,
+    work: Callable[[RecordedTab, ResourceClient, p.RecordingInfo], None],
+    client: ResourceClient,
+    chosen: p.RecordingInfo,
+) -> None:
+    """Run a download; whatever goes wrong is said on the screen, never raised."""
+    try:
+        work(screen, client, chosen)
+    except (Refusal, RecordingUnreadable, ResourceUnreachable) as exc:
+        text = f"{exc.code}: {exc.message}" if isinstance(exc, Refusal) else str(exc)
+        screen.message = (f"{chosen.id}: {text}", "#c92a2a")
+    except Exception:  # the screen stays usable whatever went wrong
+        log.exception("opening recording %s failed", chosen.id)
+        screen.message = (f"{chosen.id} could not be read (see the PADT's log)", "#c92a2a")
+    finally:
+        screen.busy = False
+
+
+def _files(chosen: p.RecordingInfo) -> list[p.RecordingFile]:
+    return sorted(chosen.files, key=lambda f: recordings.part_number(f.name))
+
+
+def _download(screen: RecordedTab, client: ResourceClient, chosen: p.RecordingInfo) -> None:
+    for file in _files(chosen):
+        data = recordings.download(client, file.name)
+        screen.client.send_file_download(file.name, data, save_immediately=True)
+    names = ", ".join(f.name for f in _files(chosen))
+    screen.message = (f"saved by the browser: {names}", "#2f9e44")
+
+
+def _open(screen: RecordedTab, client: ResourceClient, chosen: p.RecordingInfo) -> None:
+    total = sum(f.size for f in chosen.files)
+    if total > MAX_OPEN_BYTES:
+        raise RecordingUnreadable(
+            f"{_size(chosen)} is too much to chart here: download it and open it in Foxglove"
+        )
+    parts = [
+        read_recording(io.BytesIO(recordings.download(client, f.name))) for f in _files(chosen)
+    ]
+    screen.opened = opened(chosen, parts)
+    screen.message = ("", "")
+
+
+def opened(chosen: p.RecordingInfo, parts: list[Recording]) -> Opened:
+    """The recording's parts (its files, in order) as the chart draws them: the first
+    MAX_CHARTED variables that have a line, against each cycle's log time."""
+    header = parts[0].header
+    fit = [(i, v) for i, v in enumerate(header.variables) if trend_plot.chartable(v[1])]
+    traces = trend_plot.traces([v for _, v in fit[:MAX_CHARTED]])
+    rows = [row for part in parts for row in part.rows]
+    times = np.array([t for part in parts for t in part.times_ns], dtype=np.float64) / 1e9
+    columns = [
+        np.fromiter((trend_plot.number(row[i], t.type) for row in rows), np.float64, len(rows))
+        for (i, _), t in zip(fit[:MAX_CHARTED], traces, strict=True)
+    ]
+    said = [f"{len(rows):,} cycles"]
+    if rows:
+        said.append(f"from {_clock(times[0])} to {_clock(times[-1])}")
+    said.append(f"{len(traces)} of {len(header.variables)} variables charted")
+    if len(fit) > MAX_CHARTED:
+        said.append(f"at most {MAX_CHARTED} on one chart")
+    if chosen.dropped:
+        said.append(f"{chosen.dropped:,} cycles dropped while recording")
+    cut = [part.problem for part in parts if not part.complete]
+    if chosen.state in ("waiting", "recording"):
+        said.append("still recording: shown as far as written")
+    elif cut:
+        said.append(f"the file ends early ({cut[0]}): shown up to its last whole chunk")
+    return Opened(chosen.id, traces, times, columns, " · ".join(said))
+
+
+# ---- while the screen is in view
+def refresh(
+    screen: RecordedTab,
+    resource: str | None,
+    client_of: Callable[[str], ResourceClient] | None,
+    listed: list[p.RecordingInfo],
+    error: str,
+) -> None:
+    if resource != screen.resource:
+        screen.opened = None
+    screen.resource, screen.client_of, screen.listed = resource, client_of, listed
+    ids = [x.id for x in listed] or [NONE_YET]
+    if tuple(screen.choice.options) != tuple(ids):
+        chosen = screen.choice.value
+        screen.choice.options = tuple(ids)
+        if chosen in ids:  # a new recording must not change the choice
+            screen.choice.value = chosen  # type: ignore[misc]  # viser's setter
+    _show(screen, "listing", screen.listing, render_listing(listed, error))
+    opened = screen.opened
+    if opened is not screen.drawn:
+        screen.chart.clear()  # a new y range for a new recording
+        if opened is not None:
+            screen.chart.draw(opened.traces, opened.times, opened.columns, None, RECORDED_POINTS)
+        screen.drawn = opened
+    extremes = screen.chart.extremes
+    rows = (
+        [trend_chart.table_row(t, extremes.get(t.path), None) for t in opened.traces]
+        if opened
+        else []
+    )
+    table = trend_chart.table(rows, with_now=False, testid="recorded-values") if rows else ""
+    _show(screen, "table", screen.table, table)
+    text, colour = screen.message
+    if not text and opened is not None:
+        text, colour = f"{opened.id}: {opened.note}", "#495057"
+    style = f"color:{colour};padding:0 10px;font-size:0.9em"
+    note = f'<div data-testid="recorded-note" style="{style}">{html.escape(text)}</div>'
+    _show(screen, "note", screen.note, note if text else "")
+
+
+# ---- what the user reads
+def progress(recording: p.RecordingInfo) -> str:
+    """One line of a recording's state: `rec-1 recording: 1,234 cycles, 0 dropped, 56 KB`."""
+    state = {"waiting": "waiting for its trigger"}.get(recording.state, recording.state)
+    line = (
+        f"{recording.id} {state}: {recording.cycles:,} cycles, {recording.dropped:,} dropped, "
+        f"{_size(recording)}"
+    )
+    return line + (f" ({recording.error})" if recording.error else "")
+
+
+_STATE_COLOURS = {"recording": "#c92a2a", "waiting": "#e8590c", "done": "#2f9e44"}
+
+
+def render_listing(listed: list[p.RecordingInfo], error: str) -> str:
+    if error or not listed:
+        colour = "#c92a2a" if error else "#868e96"
+        text = html.escape(error) or (
+            "No recordings on this resource yet: record the charted variables on the Live "
+            "tab, or with <code>padt record</code>."
+        )
+        return f'<div data-testid="recordings" style="color:{colour};padding:0 10px">{text}</div>'
+    cell = "padding:2px 8px;border-bottom:1px solid #e9ecef"
+    rows = []
+    for x in listed:
+        colour = _STATE_COLOURS.get(x.state, "#868e96")
+        dropped = f'<span style="color:#c92a2a">{x.dropped:,}</span>' if x.dropped else "0"
+        inputs = " + inputs" if x.all_inputs else ""
+        name = html.escape(x.id)
+        rows.append(
+            f'<tr data-recording="{name}"><td style="{cell}">{name}</td>'
+            f'<td style="{cell};color:{colour}" data-state>{html.escape(x.state)}</td>'
+            f'<td style="{cell};text-align:right">{x.variables:,}{inputs}</td>'
+            f'<td style="{cell};text-align:right" data-cycles>{x.cycles:,}</td>'
+            f'<td style="{cell};text-align:right">{dropped}</td>'
+            f'<td style="{cell};text-align:right">{_size(x)}</td>'
+            f'<td style="{cell}">{_clock(x.started_ns / 1e9, date=True)}</td></tr>'
+        )
+    head = "".join(
+        f'<th style="{cell};text-align:{align};color:#868e96;font-weight:500">{name}</th>'
+        for name, align in (
+            ("Recording", "left"), ("State", "left"), ("Variables", "right"),
+            ("Cycles", "right"), ("Dropped", "right"), ("Size", "right"), ("Started", "left"),
+        )
+    )  # fmt: skip
+    style = "width:calc(100% - 24px);margin:8px 14px 0 10px;border-collapse:collapse"
+    return (
+        f'<table data-testid="recordings" style="{style};font-size:0.85em"><tr>{head}</tr>'
+        f"{''.join(rows)}</table>"
+    )
+
+
+def _size(recording: p.RecordingInfo) -> str:
+    size = sum(f.size for f in recording.files)
+    if size >= 1024 * 1024:
+        return f"{size / 1024 / 1024:.1f} MB"
+    return f"{size / 1024:.0f} KB" if size >= 1024 else f"{size} B"
+
+
+def _clock(unix_s: float, date: bool = False) -> str:
+    """The PADT's local time, to the millisecond (or the second with the date)."""
+    moment = datetime.fromtimestamp(unix_s)
+    return moment.strftime("%Y-%m-%d %H:%M:%S") if date else moment.strftime("%H:%M:%S.%f")[:-3]
+
+
+def _show(screen: RecordedTab, part: str, handle: viser.GuiHtmlHandle, content: str) -> None:
+    if screen.shown.get(part) != content:
+        handle.content = content
+        screen.shown[part] = content
