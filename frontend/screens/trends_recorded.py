@@ -18,32 +18,39 @@ from datetime import datetime
 import numpy as np
 import viser
 
-from backend.engineering import recordings
+from backend.engineering import recordings, variable_tree
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
 from frontend import trend_chart, trend_plot
 from frontend.trend_chart import TrendChart
-from frontend.trend_plot import MAX_CHARTED, Floats, Trace
+from frontend.trend_plot import MAX_CHARTED, Floats, Trace, chartable
 from runtime.contract import protocol as p
 from runtime.contract.recording import Recording, RecordingUnreadable, read_recording
 from runtime.contract.refusal import Refusal
 
 RECORDED_POINTS = 10_000  # per variable: a long recording is cut to min/max pairs
-MAX_OPEN_BYTES = 64 * 1024 * 1024  # larger recordings: download them, open in Foxglove
+MAX_OPEN_BYTES = 32 * 1024 * 1024  # larger recordings: download them, open in Foxglove
 NONE_YET = "(no recordings)"
 CHART, DOWNLOAD = "Chart it", "Download .mcap"
 _GREY = "color:#868e96"
 log = logging.getLogger("padt.ui")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # the same when it is the same reading (numpy inside)
 class Opened:
-    """A recording read back, as the chart draws it."""
+    """A recording read back: its files' contents in order, with its info of the moment."""
 
-    id: str
-    traces: list[Trace]
+    info: p.RecordingInfo
+    parts: list[Recording]
     times: Floats  # Unix seconds, each cycle's log time
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The variables of an opened recording the chart shows, with their values."""
+
+    traces: list[Trace]
     columns: list[Floats]
-    note: str  # what the user should know about it
+    note: str  # what the user should know about the recording and the choice
 
 
 @dataclass
@@ -57,8 +64,10 @@ class RecordedTab:
     resource: str | None = None
     client_of: Callable[[str], ResourceClient] | None = None
     listed: list[p.RecordingInfo] = field(default_factory=list)
+    choose: viser.GuiTextHandle | None = None
     opened: Opened | None = None
-    drawn: Opened | None = None
+    selection: Selection | None = None
+    drawn: tuple[Opened | None, str, tuple[str, ...]] = (None, "", ())  # what is charted
     busy: bool = False
     message: tuple[str, str] = ("", "")  # text, colour: the last download's outcome
     shown: dict[str, str] = field(default_factory=dict)
@@ -75,7 +84,9 @@ def build(gui: viser.GuiApi, client: viser.ClientHandle, tab: viser.GuiTabHandle
     )
     table = gui.add_html("")
     listing = gui.add_html("")
+    choose = gui.add_text("Variables to chart", "")
     screen = RecordedTab(client, choice, listing, note, TrendChart(gui, tab, placeholder), table)
+    screen.choose = choose
     actions.on_click(lambda event: _act(screen, event.target.value))
     return screen
 
@@ -132,36 +143,42 @@ def _open(screen: RecordedTab, client: ResourceClient, chosen: p.RecordingInfo) 
     parts = [
         read_recording(io.BytesIO(recordings.download(client, f.name))) for f in _files(chosen)
     ]
-    screen.opened = opened(chosen, parts)
+    times = np.array([t for part in parts for t in part.times_ns], dtype=np.float64) / 1e9
+    screen.opened = Opened(chosen, parts, times)
     screen.message = ("", "")
 
 
-def opened(chosen: p.RecordingInfo, parts: list[Recording]) -> Opened:
-    """The recording's parts (its files, in order) as the chart draws them: the first
-    MAX_CHARTED variables that have a line, against each cycle's log time."""
-    header = parts[0].header
-    fit = [(i, v) for i, v in enumerate(header.variables) if trend_plot.chartable(v[1])]
-    traces = trend_plot.traces([v for _, v in fit[:MAX_CHARTED]])
-    rows = [row for part in parts for row in part.rows]
-    times = np.array([t for part in parts for t in part.times_ns], dtype=np.float64) / 1e9
+def select(opened: Opened, words: str, preferred: list[str]) -> Selection:
+    """The variables to chart: those matching `words` (as the variable search does), else
+    those charted live that the recording has, else its first ones; at most MAX_CHARTED
+    that have a line."""
+    header = opened.parts[0].header
+    fit = {path: (i, kind) for i, (path, kind) in enumerate(header.variables) if chartable(kind)}
+    if words.strip():
+        chosen, _ = variable_tree.search(fit, words, MAX_CHARTED)
+    else:
+        chosen = [x for x in preferred if x in fit] or list(fit)[:MAX_CHARTED]
+    traces = trend_plot.traces([(path, fit[path][1]) for path in chosen])
+    rows = [row for part in opened.parts for row in part.rows]
     columns = [
-        np.fromiter((trend_plot.number(row[i], t.type) for row in rows), np.float64, len(rows))
-        for (i, _), t in zip(fit[:MAX_CHARTED], traces, strict=True)
+        np.fromiter((trend_plot.number(row[fit[t.path][0]], t.type) for row in rows), np.float64)
+        for t in traces
     ]
+    info, times = opened.info, opened.times
     said = [f"{len(rows):,} cycles"]
     if rows:
         said.append(f"from {_clock(times[0])} to {_clock(times[-1])}")
     said.append(f"{len(traces)} of {len(header.variables)} variables charted")
-    if len(fit) > MAX_CHARTED:
-        said.append(f"at most {MAX_CHARTED} on one chart")
-    if chosen.dropped:
-        said.append(f"{chosen.dropped:,} cycles dropped while recording")
-    cut = [part.problem for part in parts if not part.complete]
-    if chosen.state in ("waiting", "recording"):
+    if len(fit) > len(traces):
+        said.append("type in Variables to chart to choose others")
+    if info.dropped:
+        said.append(f"{info.dropped:,} cycles dropped while recording")
+    cut = [part.problem for part in opened.parts if not part.complete]
+    if info.state in ("waiting", "recording"):
         said.append("still recording: shown as far as written")
     elif cut:
         said.append(f"the file ends early ({cut[0]}): shown up to its last whole chunk")
-    return Opened(chosen.id, traces, times, columns, " · ".join(said))
+    return Selection(traces, columns, " · ".join(said))
 
 
 # ---- while the screen is in view
@@ -171,7 +188,9 @@ def refresh(
     client_of: Callable[[str], ResourceClient] | None,
     listed: list[p.RecordingInfo],
     error: str,
+    preferred: list[str],
 ) -> None:
+    """`preferred`: the variables charted live, charted first when the recording has them."""
     if resource != screen.resource:
         screen.opened = None
     screen.resource, screen.client_of, screen.listed = resource, client_of, listed
@@ -183,22 +202,24 @@ def refresh(
             screen.choice.value = chosen  # type: ignore[misc]  # viser's setter
     _show(screen, "listing", screen.listing, render_listing(listed, error))
     opened = screen.opened
-    if opened is not screen.drawn:
-        screen.chart.clear()  # a new y range for a new recording
-        if opened is not None:
-            screen.chart.draw(opened.traces, opened.times, opened.columns, None, RECORDED_POINTS)
-        screen.drawn = opened
+    words = screen.choose.value if screen.choose is not None else ""
+    wanted = (opened, words, tuple(preferred))
+    if wanted != screen.drawn:
+        screen.chart.clear()  # a new y range for new variables
+        screen.selection = None if opened is None else select(opened, words, preferred)
+        if opened is not None and screen.selection is not None:
+            picked = screen.selection
+            screen.chart.draw(picked.traces, opened.times, picked.columns, None, RECORDED_POINTS)
+        screen.drawn = wanted
+    selection = screen.selection
     extremes = screen.chart.extremes
-    rows = (
-        [trend_chart.table_row(t, extremes.get(t.path), None) for t in opened.traces]
-        if opened
-        else []
-    )
+    traces = selection.traces if selection else []
+    rows = [trend_chart.table_row(t, extremes.get(t.path), None) for t in traces]
     table = trend_chart.table(rows, with_now=False, testid="recorded-values") if rows else ""
     _show(screen, "table", screen.table, table)
     text, colour = screen.message
-    if not text and opened is not None:
-        text, colour = f"{opened.id}: {opened.note}", "#495057"
+    if not text and opened is not None and selection is not None:
+        text, colour = f"{opened.info.id}: {selection.note}", "#495057"
     style = f"color:{colour};padding:0 10px;font-size:0.9em"
     note = f'<div data-testid="recorded-note" style="{style}">{html.escape(text)}</div>'
     _show(screen, "note", screen.note, note if text else "")

@@ -15,9 +15,13 @@ from playwright.sync_api import Page
 from runtime.contract.recording import read_recording
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
+    PASSWORD,
     Demo,
+    Plant,
     choose,
     field,
+    log_in_to_resource,
+    open_as,
     open_demo_as_admin,
     open_tab,
     shoot,
@@ -27,13 +31,15 @@ from tests.ui.browser_steps import (
 )
 
 pytestmark = pytest.mark.browser
+NOTE = '[data-testid="record-note"]'
 
 
 def charts(page: Page) -> list[dict[str, Any]]:
-    """What the page's uPlot charts hold: their series' labels, how many points, the
-    last point."""
+    """What the page's uPlot charts in view hold (the other tab's are hidden): their
+    series' labels, how many points, the first and the last point."""
     found: list[dict[str, Any]] = page.evaluate(
         """() => Object.values(window.__viserTestpoints?.uplots ?? {}).map(c => c.chart)
+            .filter(u => u.root.offsetParent !== null)
             .map(u => ({series: u.series.map(s => s.label), points: u.data[0].length,
                         first: u.data.map(d => d[0]), last: u.data.map(d => d[d.length - 1])}))"""
     )
@@ -41,7 +47,7 @@ def charts(page: Page) -> list[dict[str, Any]]:
 
 
 def chart(page: Page) -> dict[str, Any]:
-    """The live chart (the first made)."""
+    """The chart in view."""
     found = charts(page)
     return found[0] if found else {"series": [], "points": 0}
 
@@ -134,14 +140,18 @@ def test_the_charted_variables_recorded_listed_charted_and_saved(demo: Demo) -> 
         assert text_of(page, f"{row} [data-cycles]") == f"{cycles:,}"
         choose(page, "Recording", recording)
         page.get_by_role("button", name="Chart it").click()
-        wait_until("it is charted", lambda: len(charts(page)) == 2)
-        recorded = charts(page)[1]
+        wait_until("it is charted", lambda: chart(page)["points"] > 1)
+        recorded = chart(page)
         assert recorded["series"] == ["time", "TankControl.level", "TankControl.pump"]
         assert recorded["points"] >= cycles  # every cycle, pump changes doubled as steps
         span = recorded["last"][0] - recorded["first"][0]
         assert 1.5 < span < 30, span  # the cycles' log times: the seconds recorded
         assert f"{cycles:,} cycles" in text_of(page, '[data-testid="recorded-note"]')
         shoot_both(page, "trends-recorded")
+        field(page, "Variables to chart").fill("level")
+        wait_until(
+            "the level alone", lambda: chart(page)["series"] == ["time", "TankControl.level"]
+        )
 
         with page.expect_download() as download:
             page.get_by_role("button", name="Download .mcap").click()
@@ -150,3 +160,23 @@ def test_the_charted_variables_recorded_listed_charted_and_saved(demo: Demo) -> 
         path = saved.path()
         assert path.read_bytes()[:8] == b"\x89MCAP0\r\n"
         assert len(read_recording(path).rows) == cycles
+
+
+def test_a_read_user_charts_but_may_not_record(plant: Plant) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_as(page, plant, "viewer")
+        log_in_to_resource(page, "viewer", PASSWORD)  # read at the resource
+        open_tab(page, "Trends")
+        chart_variable(page, "TankControl.level")
+        wait_until("a chart", lambda: chart(page)["series"] == ["time", "TankControl.level"])
+        record = page.get_by_role("button", name="Record the charted variables")
+        wait_until("the reason is said", lambda: "Disabled" in text_of(page, NOTE))
+        assert not record.is_enabled()
+        assert "needs operator at the resource; viewer is read" in text_of(page, NOTE)
+        close_notifications(page)
+        page.get_by_role("tab", name="Recorded").click()  # reading them needs read only
+        wait_until(
+            "the recordings are listed",
+            lambda: "No recordings" in text_of(page, '[data-testid="recordings"]'),
+        )
