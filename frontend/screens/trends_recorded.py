@@ -57,6 +57,7 @@ class Selection:
 class RecordedTab:
     client: viser.ClientHandle
     choice: viser.GuiDropdownHandle[str]
+    choose: viser.GuiTextHandle  # words of the variables to chart
     listing: viser.GuiHtmlHandle
     note: viser.GuiHtmlHandle
     chart: TrendChart
@@ -64,7 +65,6 @@ class RecordedTab:
     resource: str | None = None
     client_of: Callable[[str], ResourceClient] | None = None
     listed: list[p.RecordingInfo] = field(default_factory=list)
-    choose: viser.GuiTextHandle | None = None
     opened: Opened | None = None
     selection: Selection | None = None
     drawn: tuple[Opened | None, str, tuple[str, ...]] = (None, "", ())  # what is charted
@@ -76,6 +76,7 @@ class RecordedTab:
 def build(gui: viser.GuiApi, client: viser.ClientHandle, tab: viser.GuiTabHandle) -> RecordedTab:
     choice = gui.add_dropdown("Recording", (NONE_YET,))
     actions = gui.add_button_group("Recording actions", (CHART, DOWNLOAD))
+    choose = gui.add_text("Variables to chart", "")
     note = gui.add_html("")
     placeholder = gui.add_html(
         f'<div data-testid="recorded-empty" style="{_GREY};padding:16px 10px">Choose a '
@@ -84,9 +85,8 @@ def build(gui: viser.GuiApi, client: viser.ClientHandle, tab: viser.GuiTabHandle
     )
     table = gui.add_html("")
     listing = gui.add_html("")
-    choose = gui.add_text("Variables to chart", "")
-    screen = RecordedTab(client, choice, listing, note, TrendChart(gui, tab, placeholder), table)
-    screen.choose = choose
+    chart = TrendChart(gui, tab, placeholder)
+    screen = RecordedTab(client, choice, choose, listing, note, chart, table)
     actions.on_click(lambda event: _act(screen, event.target.value))
     return screen
 
@@ -202,7 +202,7 @@ def refresh(
             screen.choice.value = chosen  # type: ignore[misc]  # viser's setter
     _show(screen, "listing", screen.listing, render_listing(listed, error))
     opened = screen.opened
-    words = screen.choose.value if screen.choose is not None else ""
+    words = screen.choose.value
     wanted = (opened, words, tuple(preferred))
     if wanted != screen.drawn:
         screen.chart.clear()  # a new y range for new variables

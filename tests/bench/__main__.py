@@ -12,6 +12,7 @@ from tests.bench import (
     bench_reload,
     bench_rest,
     bench_runtime,
+    bench_trends,
     bench_ui,
     bench_watch,
 )
@@ -29,6 +30,7 @@ def main() -> None:
     bench_hostile.main()
     bench_ui.main()
     bench_documentation.main()
+    bench_trends.main()
 
 
 if __name__ == "__main__":
