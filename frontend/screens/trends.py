@@ -30,6 +30,7 @@ from frontend.confirm import attempt
 from frontend.permissions import Allowed
 from frontend.resource_feed import ResourceFeed
 from frontend.screens import trends_recorded
+from frontend.screens.trends_recorded import ACTIVE, Target
 from frontend.trend_chart import TrendChart
 from frontend.trend_history import HISTORY_S, TrendHistory
 from frontend.trend_plot import MAX_CHARTED, Trace
@@ -44,7 +45,6 @@ MAX_MATCHES = 100
 NO_MATCH, NOTHING, NO_LIST = "(no match)", "(none charted)", "(no watch lists)"
 PAUSE, RESUME = "Pause", "Resume"
 RECORD, STOP = "Record the charted variables", "Stop recording"
-ACTIVE = ("waiting", "recording")
 _GREY = "color:#868e96"
 
 
@@ -53,15 +53,6 @@ def wall_clock() -> Callable[[], float]:
     calendar time once, then the monotonic clock."""
     offset = time.time() - time.monotonic()
     return lambda: offset + time.monotonic()
-
-
-@dataclass
-class Target:
-    """The resource the screen works on, as the last refresh saw it."""
-
-    resource: str
-    client_of: Callable[[str], ResourceClient]
-    allowed: Callable[[type[p.Command[Any]]], Allowed]
 
 
 @dataclass
@@ -299,14 +290,8 @@ def refresh(
     _show(screen, "table", screen.table, _values_table(screen, values))
     _show(screen, "status", screen.status, _status(screen, feed))
     _refresh_record(screen, listed, allowed)
-    target = screen.target
     trends_recorded.refresh(
-        screen.recorded,
-        resource,
-        target.client_of if target else None,
-        listed,
-        error,
-        screen.paths,
+        screen.recorded, screen.target, listed, error, screen.paths, screen.listing.changed
     )
 
 

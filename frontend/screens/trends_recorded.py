@@ -14,6 +14,7 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime
+from typing import Any
 
 import numpy as np
 import viser
@@ -21,11 +22,15 @@ import viser
 from backend.engineering import recordings, variable_tree
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
 from frontend import trend_chart, trend_plot
+from frontend.confirm import attempt, confirm
+from frontend.permissions import Allowed
 from frontend.trend_chart import TrendChart
 from frontend.trend_plot import MAX_CHARTED, Floats, Trace, chartable
 from runtime.contract import protocol as p
 from runtime.contract.recording import Recording, RecordingUnreadable, read_recording
 from runtime.contract.refusal import Refusal
+
+ACTIVE = ("waiting", "recording")  # a recording that has not ended
 
 RECORDED_POINTS = 10_000  # per variable: a long recording is cut to min/max pairs
 MAX_OPEN_BYTES = 32 * 1024 * 1024  # larger recordings: download them, open in Foxglove
@@ -33,6 +38,15 @@ NONE_YET = "(no recordings)"
 CHART, DOWNLOAD = "Chart it", "Download .mcap"
 _GREY = "color:#868e96"
 log = logging.getLogger("padt.ui")
+
+
+@dataclass(frozen=True)
+class Target:
+    """The resource the Trends screen works on, as the last refresh saw it."""
+
+    resource: str
+    client_of: Callable[[str], ResourceClient]
+    allowed: Callable[[type[p.Command[Any]]], Allowed]
 
 
 @dataclass(frozen=True, eq=False)  # the same when it is the same reading (numpy inside)
@@ -62,14 +76,16 @@ class RecordedTab:
     note: viser.GuiHtmlHandle
     chart: TrendChart
     table: viser.GuiHtmlHandle
-    resource: str | None = None
-    client_of: Callable[[str], ResourceClient] | None = None
+    manage: viser.GuiButtonHandle  # stop the chosen recording, or delete it
+    manage_note: viser.GuiHtmlHandle
+    target: Target | None = None
     listed: list[p.RecordingInfo] = field(default_factory=list)
     opened: Opened | None = None
     selection: Selection | None = None
     drawn: tuple[Opened | None, str, tuple[str, ...]] = (None, "", ())  # what is charted
     busy: bool = False
     message: tuple[str, str] = ("", "")  # text, colour: the last download's outcome
+    relist: Callable[[], None] = lambda: None  # read the recordings again now
     shown: dict[str, str] = field(default_factory=dict)
 
 
@@ -85,22 +101,65 @@ def build(gui: viser.GuiApi, client: viser.ClientHandle, tab: viser.GuiTabHandle
     )
     table = gui.add_html("")
     listing = gui.add_html("")
+    # under the list: what is done to the recording chosen in it, seldom and for good
+    manage = gui.add_button(
+        "Delete the recording", icon=viser.Icon.TRASH, color="gray", disabled=True
+    )
+    manage_note = gui.add_html("")
     chart = TrendChart(gui, tab, placeholder)
-    screen = RecordedTab(client, choice, choose, listing, note, chart, table)
+    screen = RecordedTab(client, choice, choose, listing, note, chart, table, manage, manage_note)
     actions.on_click(lambda event: _act(screen, event.target.value))
+    manage.on_click(lambda _: _manage(screen))
     return screen
 
 
+def _chosen(screen: RecordedTab) -> p.RecordingInfo | None:
+    return next((x for x in screen.listed if x.id == screen.choice.value), None)
+
+
 def _act(screen: RecordedTab, action: str) -> None:
-    chosen = next((x for x in screen.listed if x.id == screen.choice.value), None)
-    if chosen is None or screen.client_of is None or screen.resource is None or screen.busy:
+    chosen, target = _chosen(screen), screen.target
+    if chosen is None or target is None or screen.busy:
         return
-    client = screen.client_of(screen.resource)
+    client = target.client_of(target.resource)
     screen.busy = True
     what = "downloading and reading" if action == CHART else "downloading"
     screen.message = (f"{what} {chosen.id} ({_size(chosen)}) ...", "#495057")
     work = _open if action == CHART else _download
     threading.Thread(target=_guarded, args=(screen, work, client, chosen), daemon=True).start()
+
+
+def _manage(screen: RecordedTab) -> None:
+    """Stop the chosen recording while it runs (whoever started it); delete it, asked
+    first, once it has ended."""
+    chosen, target = _chosen(screen), screen.target
+    if chosen is None or target is None:
+        return
+    client = target.client_of(target.resource)
+    if chosen.state in ACTIVE:
+        attempt(
+            screen.client, f"Stop recording {chosen.id}", lambda: recordings.stop(client, chosen.id)
+        )
+        screen.relist()
+        return
+
+    def delete() -> None:
+        what = f"Delete recording {chosen.id}"
+        deleted = attempt(screen.client, what, lambda: recordings.delete(client, chosen.id))
+        opened = screen.opened
+        if deleted and opened is not None and opened.info.id == chosen.id:
+            screen.opened = None
+        screen.relist()
+
+    files = len(chosen.files)
+    confirm(
+        screen.client,
+        f"Delete recording {chosen.id}: {target.resource}",
+        f"Its {files} file{'s' if files != 1 else ''} ({_size(chosen)}, {chosen.cycles:,} "
+        f"cycles) are deleted from the state folder of {target.resource}. This cannot be "
+        "undone: download it first to keep it.",
+        delete,
+    )
 
 
 def _guarded(
@@ -174,7 +233,7 @@ def select(opened: Opened, words: str, preferred: list[str]) -> Selection:
     if info.dropped:
         said.append(f"{info.dropped:,} cycles dropped while recording")
     cut = [part.problem for part in opened.parts if not part.complete]
-    if info.state in ("waiting", "recording"):
+    if info.state in ACTIVE:
         said.append("still recording: shown as far as written")
     elif cut:
         said.append(f"the file ends early ({cut[0]}): shown up to its last whole chunk")
@@ -184,16 +243,18 @@ def select(opened: Opened, words: str, preferred: list[str]) -> Selection:
 # ---- while the screen is in view
 def refresh(
     screen: RecordedTab,
-    resource: str | None,
-    client_of: Callable[[str], ResourceClient] | None,
+    target: Target | None,
     listed: list[p.RecordingInfo],
     error: str,
     preferred: list[str],
+    relist: Callable[[], None],
 ) -> None:
-    """`preferred`: the variables charted live, charted first when the recording has them."""
-    if resource != screen.resource:
+    """`preferred`: the variables charted live, charted first when the recording has them;
+    `relist`: read the recordings again now."""
+    resource = target.resource if target is not None else None
+    if resource != (screen.target.resource if screen.target is not None else None):
         screen.opened = None
-    screen.resource, screen.client_of, screen.listed = resource, client_of, listed
+    screen.target, screen.listed, screen.relist = target, listed, relist
     ids = [x.id for x in listed] or [NONE_YET]
     if tuple(screen.choice.options) != tuple(ids):
         chosen = screen.choice.value
@@ -201,6 +262,7 @@ def refresh(
         if chosen in ids:  # a new recording must not change the choice
             screen.choice.value = chosen  # type: ignore[misc]  # viser's setter
     _show(screen, "listing", screen.listing, render_listing(listed, error))
+    _refresh_manage(screen)
     opened = screen.opened
     words = screen.choose.value
     wanted = (opened, words, tuple(preferred))
@@ -223,6 +285,32 @@ def refresh(
     style = f"color:{colour};padding:0 10px;font-size:0.9em"
     note = f'<div data-testid="recorded-note" style="{style}">{html.escape(text)}</div>'
     _show(screen, "note", screen.note, note if text else "")
+
+
+def _refresh_manage(screen: RecordedTab) -> None:
+    chosen, target = _chosen(screen), screen.target
+    running = chosen is not None and chosen.state in ACTIVE
+    if chosen is None:
+        label = "Delete the recording"
+    else:
+        label = f"Stop recording {chosen.id}" if running else f"Delete recording {chosen.id}"
+    if screen.manage.label != label:
+        screen.manage.label = label
+        screen.manage.icon = viser.Icon.PLAYER_STOP if running else viser.Icon.TRASH
+        screen.manage.color = "red" if running else "gray"
+    reason = ""
+    if target is not None and chosen is not None:
+        verdict = target.allowed(p.RecordStop if running else p.RecordDelete)
+        reason = verdict.reason if not verdict.ok else ""
+    if screen.manage.disabled != (chosen is None or bool(reason)):
+        screen.manage.disabled = chosen is None or bool(reason)
+    note = (
+        f'<div data-testid="manage-disabled" style="{_GREY};font-size:0.85em;padding:0 10px">'
+        f"Disabled: {html.escape(reason)}</div>"
+        if reason
+        else ""
+    )
+    _show(screen, "manage", screen.manage_note, note)
 
 
 # ---- what the user reads

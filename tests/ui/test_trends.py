@@ -19,6 +19,7 @@ from tests.ui.browser_steps import (
     Demo,
     Plant,
     choose,
+    confirm,
     field,
     log_in_to_resource,
     open_as,
@@ -160,6 +161,15 @@ def test_the_charted_variables_recorded_listed_charted_and_saved(demo: Demo) -> 
         path = saved.path()
         assert path.read_bytes()[:8] == b"\x89MCAP0\r\n"
         assert len(read_recording(path).rows) == cycles
+
+        # deleted, asked first: gone from the resource
+        close_notifications(page)
+        page.get_by_role("button", name=f"Delete recording {recording}").click()
+        confirm(page, "cannot be undone")
+        wait_until(
+            "it is gone",
+            lambda: "No recordings" in text_of(page, '[data-testid="recordings"]'),
+        )
 
 
 def test_a_read_user_charts_but_may_not_record(plant: Plant) -> None:
