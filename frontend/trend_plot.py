@@ -148,8 +148,8 @@ def options(charted: Sequence[Trace], y_range: tuple[float, float]) -> dict[str,
 
 
 def y_range(columns: Sequence[Floats], shown: tuple[float, float] | None) -> tuple[float, float]:
-    """The left axis' range: the values with a margin, in round steps; `shown` is kept
-    while the values fill at least a third of it, so that the axis stays still."""
+    """The left axis' range: the values with a small margin, on round numbers; `shown` is
+    kept while the values fill at least a third of it, so that the axis stays still."""
     finite = [column[np.isfinite(column)] for column in columns]
     finite = [values for values in finite if values.size]
     if not finite:
@@ -160,10 +160,17 @@ def y_range(columns: Sequence[Floats], shown: tuple[float, float] | None) -> tup
     if shown is not None and fits and high - low >= (shown[1] - shown[0]) / 3:
         return shown
     span = high - low if high > low else max(abs(high), 1.0)
-    step = _round_step(span / 4)
-    bottom = math.floor((low - span * 0.05) / step) * step
-    top = math.ceil((high + span * 0.05) / step) * step
-    return (float(bottom), float(top))
+    # the ticks come every `step`; the ends fall on a fifth of it, a little outside the
+    # values, so that a line at 0 or at a limit does not lie on the chart's edge
+    grain = _round_step(span / 4) / 5
+    bottom = math.floor((low - span * 0.03) / grain) * grain
+    top = math.ceil((high + span * 0.03) / grain) * grain
+    return (_tidy(bottom), _tidy(top))
+
+
+def _tidy(number: float) -> float:
+    """4.8 rather than 4.800000000000001 (the axis shows the range's ends)."""
+    return float(f"{number:.12g}")
 
 
 def _round_step(rough: float) -> float:

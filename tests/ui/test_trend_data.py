@@ -57,7 +57,9 @@ def test_the_window_is_drawn_whole_from_its_start() -> None:
 
 def test_the_y_axis_stays_still_while_the_signal_moves_inside_it() -> None:
     first = trend_plot.y_range([np.array([300.0, 800.0])], None)
-    assert first[0] <= 300 and first[1] >= 800
+    assert first == (280.0, 840.0)  # a margin, on round numbers
+    assert trend_plot.y_range([np.array([0.0, 2000.0])], None) == (-100.0, 2100.0)
+    assert trend_plot.y_range([np.array([5.0])], None) == (4.8, 5.2)  # a constant
     assert trend_plot.y_range([np.array([350.0, 700.0])], first) == first
     # far smaller: a new range that shows it
     small = trend_plot.y_range([np.array([500.0, 510.0])], first)
