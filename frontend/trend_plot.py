@@ -60,12 +60,13 @@ def traces(variables: Sequence[tuple[str, str]]) -> list[Trace]:
 
 
 def number(value: Any, type_name: str) -> float:
-    """A value as the chart draws it: BOOL 0/1, TIME in ms, NaN for what is no number."""
+    """A value as the chart draws it: BOOL 0/1, TIME in ms; NaN (a gap) for what is no
+    number and for a non-finite REAL (a recording writes those as text)."""
     if isinstance(value, bool):
         return 1.0 if value else 0.0
     if isinstance(value, int):
         return value * _MS_PER_NS if type_name.upper() in ("TIME", "LTIME") else float(value)
-    if isinstance(value, float):
+    if isinstance(value, float) and math.isfinite(value):
         return value
     return math.nan
 

@@ -110,6 +110,21 @@ def test_variables_chosen_are_charted_live_with_their_values(demo: Demo) -> None
         page.get_by_role("button", name="Resume").click()
         wait_until("it goes on", lambda: chart(page)["last"][0] > held)
 
+        # another tab in front: the chart is not drawn, its history goes on
+        left = chart(page)["last"][0]
+        close_notifications(page)  # they lie over the tabs' left end
+        open_tab(page, "Resources")
+        page.wait_for_timeout(3000)
+        open_tab(page, "Trends")
+        wait_until("drawn again", lambda: chart(page)["last"][0] > left + 2.5)
+        meanwhile = page.evaluate(
+            """([from, to]) => Object.values(window.__viserTestpoints.uplots)
+                .map(c => c.chart).filter(u => u.root.offsetParent !== null)[0]
+                .data[0].filter(x => x > from && x < to).length""",
+            [left, left + 2.5],
+        )
+        assert meanwhile >= 15, meanwhile  # ten a second while the tab was away
+
 
 def test_the_charted_variables_recorded_listed_charted_and_saved(demo: Demo) -> None:
     with chromium() as browser:
