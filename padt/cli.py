@@ -45,20 +45,27 @@ def _compile(args: argparse.Namespace) -> int:
 
 
 def _docs(args: argparse.Namespace) -> int:
-    from backend.engineering.documentation.export import (
+    from backend.engineering.documentation.batch import (
         DocumentError,
-        document,
-        write_document,
+        default_jobs,
+        document_all,
+        requests_of,
+        write_all,
     )
 
     try:
-        made = document(args.paths, args.compare)
-        html_path, pdf_path = write_document(made, args.output)
+        requests = requests_of(args.paths, args.each, args.compare)
     except DocumentError as exc:
         print(f"padt docs: {exc}", file=sys.stderr)
         return 2
-    print(f"{html_path}\n{pdf_path}\nconfiguration CRC {made.crc}")
-    return 0
+    outcomes = document_all(requests, args.jobs or default_jobs())
+    told = write_all(outcomes, args.output)
+    for written, text in told:
+        print(text if written else f"padt docs: {text}", file=sys.stdout if written else sys.stderr)
+    failed = sum(not written for written, _ in told)
+    if failed and len(told) > 1:
+        print(f"padt docs: {failed} of {len(told)} not documented", file=sys.stderr)
+    return 2 if failed else 0
 
 
 # `padt replay` exit codes
@@ -310,7 +317,8 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="+",
         type=Path,
         metavar="PROJECT",
-        help="a project folder, .st files, or a backup zip written by padt load/reload",
+        help="project folders, .st files, or backup zips written by padt load/reload: a "
+        "document each, the loose .st files together one",
     )
     docs.add_argument(
         "-o",
@@ -325,6 +333,18 @@ def build_parser() -> argparse.ArgumentParser:
         type=Path,
         metavar="OLD",
         help="a previous version (project folder or backup zip) to compare with",
+    )
+    docs.add_argument(
+        "--each",
+        action="store_true",
+        help="every PROJECT a document of its own (loose .st files otherwise form one project)",
+    )
+    docs.add_argument(
+        "-j",
+        "--jobs",
+        type=_positive,
+        metavar="N",
+        help="documents made at once, each in a process of its own (default: the CPUs)",
     )
     docs.set_defaults(func=_docs)
 
@@ -638,10 +658,24 @@ def _recording_commands(sub: Any) -> None:
     )
     record.set_defaults(func=_lazy("padt.recording", "record"))
 
-    listing = sub.add_parser("recordings", help="the recordings kept on a running resource")
-    _resource_options(listing)
-    listing.add_argument("--json", action="store_true", help="print them as JSON")
-    listing.set_defaults(func=_lazy("padt.recording", "recordings_list"))
+    kept = sub.add_parser(
+        "recordings", help="the recordings kept on a running resource; download or delete one"
+    )
+    _resource_options(kept)
+    kept.add_argument("--json", action="store_true", help="print them as JSON")
+    what = kept.add_mutually_exclusive_group()
+    what.add_argument(
+        "--download", metavar="ID", help="download recording ID's files (with -o FILE.mcap)"
+    )
+    what.add_argument("--delete", metavar="ID", help="delete recording ID (it has ended)")
+    kept.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        metavar="FILE.mcap",
+        help="with --download: where it goes (the next parts beside it: FILE-2.mcap, ...)",
+    )
+    kept.set_defaults(func=_lazy("padt.recording", "kept_recordings"))
 
 
 def _api(args: argparse.Namespace) -> int:

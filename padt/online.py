@@ -63,6 +63,9 @@ def _log_in(client: ResourceClient, user: str) -> None:
         client.login(user, password)
     except Refusal as refused:
         raise Failed(f"login refused ({refused.code}): {refused.message}") from None
+    # a command that runs long (a recording, --follow) logs in again when the session
+    # ends: its expiry, or a restart of the runtime
+    client.use_credentials(user, password)
 
 
 def run(name: str, args: argparse.Namespace, body: Callable[[], int]) -> int:

@@ -1,7 +1,8 @@
 """`padt record` and `padt recordings`: record variables of a running resource into MCAP
-files and fetch them, from a terminal or a CI job (docs/cli.md, docs/recording.md). The
-resource records into its state folder; this waits until the recording is done (its
-cycles or seconds reached, or Ctrl-C), downloads its files and deletes them there."""
+files and fetch them, from a terminal or a CI job (docs/cli.md). The resource records
+into its state folder; `padt record` waits until the recording is done (its cycles or
+seconds reached, or Ctrl-C), downloads its files and deletes them there. `padt
+recordings` lists what the resource keeps, and downloads or deletes one of them."""
 
 from __future__ import annotations
 
@@ -13,9 +14,10 @@ from pathlib import Path
 
 from backend.engineering import recordings
 from backend.engineering.recordings import RecordingSpec, TriggerError
-from backend.engineering.resource_client import ResourceClient
+from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
 from padt.online import Failed, resource_client, run, table
 from runtime.contract.protocol import RecordingInfo
+from runtime.contract.recording import read_recording
 from runtime.contract.stop_request import StopRequest
 from runtime.contract.wire import encode
 
@@ -57,21 +59,26 @@ def record(args: argparse.Namespace) -> int:
             started = recordings.start(client, spec)
             until = _until(args)
             print(
-                f"recording {started.id}: {started.variables} variables"
+                f"recording {started.id}: {started.variables} "
+                f"variable{'' if started.variables == 1 else 's'}"
                 f"{' and all inputs' if started.all_inputs else ''}, {until}",
                 file=sys.stderr,
                 flush=True,
             )
-            ended = recordings.wait_until_ended(client, started.id, stop_request.event.is_set)
+            try:
+                ended = recordings.wait_until_ended(client, started.id, stop_request.event.is_set)
+            except ResourceUnreachable as exc:
+                raise Failed(
+                    f"{exc}; recording {started.id} goes on in the resource: fetch it later "
+                    f"with padt recordings --download {started.id} -o {args.output}"
+                ) from None
             written = _fetch(client, ended, args.output)
             if not args.keep:
                 recordings.delete(client, ended.id)
         if not written:  # stopped before its first cycle, or its trigger never fired
             why = f"failed: {ended.error}" if ended.state == "failed" else "wrote no file"
             raise Failed(f"recording {ended.id} {why}: nothing was recorded")
-        names = ", ".join(str(path) for path, _ in written)
-        size = sum(size for _, size in written)
-        print(f"recorded {ended.cycles} cycles, {ended.dropped} dropped -> {names} ({_size(size)})")
+        print(f"recorded {_counts(ended, written)} -> {_files(written)}")
         if ended.state == "failed":  # what it wrote before is kept all the same
             raise Failed(f"recording {ended.id} failed: {ended.error or 'no reason given'}")
         if ended.error:  # cut short, e.g. by a reload that removed a recorded variable
@@ -79,6 +86,15 @@ def record(args: argparse.Namespace) -> int:
         return 0
 
     return run("record", args, body)
+
+
+def _counts(recording: RecordingInfo, written: list[tuple[Path, int]]) -> str:
+    """`50 cycles, 0 dropped`; for a recording the runtime knows by its files only (it
+    restarted meanwhile: no start time, no counts) the cycles counted in the files."""
+    if recording.started_ns > 0:
+        return f"{recording.cycles} cycles, {recording.dropped} dropped"
+    counted = sum(len(read_recording(path).rows) for path, _ in written)
+    return f"{counted} cycles (the runtime restarted: dropped ones unknown)"
 
 
 def _until(args: argparse.Namespace) -> str:
@@ -93,18 +109,26 @@ def _until(args: argparse.Namespace) -> str:
 def _fetch(
     client: ResourceClient, recording: RecordingInfo, output: Path
 ) -> list[tuple[Path, int]]:
-    """Every file of the recording to `output`, `output-2`...; each written whole or not at
-    all (a download that breaks off leaves no file that looks complete)."""
+    """Every file of the recording to `output`, `output-2`...; each streamed to a `.part`
+    file and renamed when whole, so a download that breaks off leaves no file that looks
+    complete, and a file of gigabytes never sits in memory."""
     written: list[tuple[Path, int]] = []
-    for name, data in recordings.download_recording(client, recording.id):
+    for name in recordings.file_names(client, recording.id):
         path = part_path(output, recordings.part_number(name))
         partial = path.with_name(path.name + ".part")
         try:
-            partial.write_bytes(data)
+            size, pieces = recordings.download_chunks(client, name)
+            with partial.open("wb") as stream:
+                for piece in pieces:
+                    stream.write(piece)
             partial.replace(path)
         except OSError as exc:
+            partial.unlink(missing_ok=True)
             raise Failed(f"cannot write {path}: {exc.strerror or exc}") from None
-        written.append((path, len(data)))
+        except BaseException:
+            partial.unlink(missing_ok=True)
+            raise
+        written.append((path, size))
     return written
 
 
@@ -116,12 +140,27 @@ def _size(size: int) -> str:
     return f"{size / 1_000_000:.1f} MB"
 
 
-def recordings_list(args: argparse.Namespace) -> int:
+def kept_recordings(args: argparse.Namespace) -> int:
+    """The recordings a resource keeps; or one of them downloaded, or deleted."""
+
     def body() -> int:
+        if args.download is not None and args.output is None:
+            raise Failed("--download needs -o FILE.mcap", 2)
         with resource_client(args) as client:
-            found = recordings.list_recordings(client)
+            if args.download is not None:
+                found = recordings.find(client, args.download)
+                written = _fetch(client, found, args.output)
+                if not written:
+                    raise Failed(f"recording {found.id} has no file")
+                print(f"downloaded {found.id} -> {_files(written)}")
+                return 0
+            if args.delete is not None:
+                left = recordings.delete(client, args.delete)
+                print(f"deleted {args.delete}; {len(left)} recordings left")
+                return 0
+            found_all = recordings.list_recordings(client)
         if args.json:
-            print(json.dumps(encode(found), indent=2, sort_keys=True))
+            print(json.dumps(encode(found_all), indent=2, sort_keys=True))
             return 0
         rows = [
             [
@@ -130,13 +169,26 @@ def recordings_list(args: argparse.Namespace) -> int:
                 str(r.variables) + (" + inputs" if r.all_inputs else ""),
                 str(r.cycles),
                 str(r.dropped),
-                datetime.fromtimestamp(r.started_ns / 1e9, UTC).strftime("%Y-%m-%d %H:%M:%S"),
+                _calendar(r.started_ns),
                 " ".join(f"{f.name} ({_size(f.size)})" for f in r.files),
             ]
-            for r in found
+            for r in found_all
         ]
         header = ["id", "state", "variables", "cycles", "dropped", "started (UTC)", "files"]
         print("\n".join(table(header, rows)))
         return 0
 
     return run("recordings", args, body)
+
+
+def _calendar(time_ns: int) -> str:
+    # a recording of an earlier run of the runtime is known by its files only
+    if time_ns <= 0:
+        return "-"
+    return datetime.fromtimestamp(time_ns / 1e9, UTC).strftime("%Y-%m-%d %H:%M:%S")
+
+
+def _files(written: list[tuple[Path, int]]) -> str:
+    """`x.mcap, x-2.mcap (1.2 MB)`."""
+    names = ", ".join(str(path) for path, _ in written)
+    return f"{names} ({_size(sum(size for _, size in written))})"

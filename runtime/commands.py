@@ -67,10 +67,10 @@ def _watch(resource: Resource, command: p.Watch, request: Request) -> p.WatchRep
     """A watch set belongs to the session that makes it (none when access is open)."""
     owner = None if resource.access.open else request.token
     online, now = resource.online, resource.clock.now_ns()
-    paths = online.watch(
+    paths, revision = online.watch(
         command.id, command.variables, command.period_ms, command.append, owner, now
     )
-    return p.WatchReply(command.id, paths)
+    return p.WatchReply(command.id, paths, revision)
 
 
 def _logout(resource: Resource, command: p.Logout, request: Request) -> p.Done:

@@ -116,7 +116,7 @@ class ResourceLink:
                 self._put(self._status, encode(status))
             if watched is not None:
                 watch_id, snapshot = watched
-                payload = json.dumps(snapshot.message()).encode()
+                payload = snapshot.message()
                 self._session.put(
                     watch_key(self._resource, watch_id),
                     payload,

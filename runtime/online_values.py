@@ -4,25 +4,41 @@ cycles; the message is built on the link's publisher thread (`WatchSnapshot.mess
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
-from runtime.contract.protocol import ProgramState, Quality
+from runtime.contract.protocol import LETTER_OF_QUALITY, ProgramState, Quality
 from runtime.force_table import ForceTable
+from runtime.instances import BoundVariable
+from runtime.value_reader import value_reader
 from runtime.variables import Variables
 from runtime.watch_sets import WatchSet, WatchSets, WatchSnapshot
 
-# plain strings: an enum member's lookup costs more than the rest of a value's work
-_QUALITIES = tuple(
-    str(q.value)
+_RUNNING = (ProgramState.RUN, ProgramState.RUN_FREEZE)
+_LIVE, _FORCED, _STALE, _DELETED, _BAD = (
+    LETTER_OF_QUALITY[q]
     for q in (Quality.LIVE, Quality.FORCED, Quality.STALE, Quality.DELETED, Quality.BAD)
 )
-_RUNNING = (ProgramState.RUN, ProgramState.RUN_FREEZE)
+
+
+@dataclass
+class _Plan:
+    """How to read one watch set, made once per set and configuration (not per cycle)."""
+
+    paths: tuple[str, ...]
+    bound_of: list[BoundVariable]  # the configuration's variable list it was made for
+    found: list[BoundVariable | None]  # per path; None: deleted by a reload
+    read: Callable[[], list[Any]]  # the values of the paths found, in order
+    owners: list[int]  # per path: id of its program, 0 for a global, -1 when deleted
+    upper: list[str]  # per path, upper case: how forcing and lost devices name it
 
 
 class OnlineValues:
     def __init__(self, variables: Variables) -> None:
         self._variables = variables
         self.watches = WatchSets()
+        self._plans: dict[str, _Plan] = {}
 
     def watch(
         self,
@@ -32,16 +48,19 @@ class OnlineValues:
         append: bool,
         owner: str | None,
         now_ns: int,
-    ) -> list[str]:
+    ) -> tuple[list[str], int]:
         """Register what a client views, for the session `owner`; returns the canonical
-        paths (all names must exist: a typo gets an error, not a silently empty field).
-        `append` adds to a set (a large set arrives in several requests)."""
+        paths (all names must exist: a typo gets an error, not a silently empty field) and
+        the set's revision. `append` adds to a set (a large set arrives in several
+        requests)."""
         paths = tuple(self._variables.lookup(name).path.path for name in names)
-        existing = self.watches.get(watch_id) if append else None
-        if existing is not None:
+        existing = self.watches.get(watch_id)
+        if existing is not None and append:
             paths = existing.paths + paths
-        self.watches.set(WatchSet(watch_id, paths, period_ms * 1_000_000, owner, now_ns))
-        return list(paths)
+        revision = existing.revision + 1 if existing is not None else 1
+        period = period_ms * 1_000_000
+        self.watches.set(WatchSet(watch_id, paths, period, owner, now_ns, revision=revision))
+        return list(paths), revision
 
     def snapshot(
         self,
@@ -53,26 +72,63 @@ class OnlineValues:
     ) -> WatchSnapshot:
         """A set's values now: live; forced; stale when nothing that could change it runs;
         deleted by a reload; bad: an input of a lost remote device (`bad`: upper-case
-        paths), holding its safe value."""
+        paths), holding its safe value. This runs on the cycle thread for every watched
+        value: the common case (all live) costs one read of the values and no more."""
+        plan = self._plan(watch_set)
+        found = plan.read()
+        values = found if len(found) == len(plan.paths) else _with_deleted(plan, found)
         forcing = bool(forces.started_levels())
         halted = {id(p) for p in self._variables.programs if p.state not in _RUNNING}
-        # this runs between two cycles for every watched value: names looked up once
-        find, read, is_forced = self._variables.find, self._variables.read, forces.is_forced
-        live, forced, stale, deleted, lost = _QUALITIES
-        entries: list[tuple[str, Any, str]] = []
-        append = entries.append
-        for path in watch_set.paths:
-            bound = find(path)
-            if bound is None:
-                append((path, None, deleted))
-                continue
-            if forcing and is_forced(path):
-                quality = forced
-            elif bad and path.upper() in bad:
-                quality = lost
-            elif not running or (bound.program is not None and id(bound.program) in halted):
-                quality = stale
-            else:
-                quality = live
-            append((path, read(bound), quality))
-        return WatchSnapshot(cycle, entries)
+        if running and not forcing and not bad and not halted and len(found) == len(values):
+            qualities = _LIVE * len(values)
+        else:
+            qualities = "".join(
+                _quality(owner, upper, running, halted, forcing and forces.is_forced(upper), bad)
+                for owner, upper in zip(plan.owners, plan.upper, strict=True)
+            )
+        return WatchSnapshot(cycle, watch_set.revision, values, qualities)
+
+    def _plan(self, watch_set: WatchSet) -> _Plan:
+        plan = self._plans.get(watch_set.watch_id)
+        variables = self._variables
+        if (
+            plan is None
+            or plan.paths is not watch_set.paths
+            or plan.bound_of is not variables.bound
+        ):
+            if len(self._plans) > 2 * len(self.watches.ids()) + 8:  # sets that are gone
+                self._plans = {k: v for k, v in self._plans.items() if self.watches.get(k)}
+            found = [variables.find(path) for path in watch_set.paths]
+            present = [bound for bound in found if bound is not None]
+            plan = _Plan(
+                paths=watch_set.paths,
+                bound_of=variables.bound,
+                found=found,
+                read=value_reader(present, lambda: variables.globals),
+                owners=[
+                    -1 if b is None else id(b.program) if b.program is not None else 0
+                    for b in found
+                ],
+                upper=[path.upper() for path in watch_set.paths],
+            )
+            self._plans[watch_set.watch_id] = plan
+        return plan
+
+
+def _with_deleted(plan: _Plan, found: list[Any]) -> list[Any]:
+    present = iter(found)
+    return [next(present) if bound is not None else None for bound in plan.found]
+
+
+def _quality(
+    owner: int, upper: str, running: bool, halted: set[int], forced: bool, bad: frozenset[str]
+) -> str:
+    if owner == -1:
+        return _DELETED
+    if forced:
+        return _FORCED
+    if upper in bad:
+        return _BAD
+    if not running or owner in halted:
+        return _STALE
+    return _LIVE

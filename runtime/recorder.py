@@ -5,7 +5,8 @@ all inputs, everything the programs take from outside, for an exact replay.
 The cycle thread only copies values into a queue (`TraceWriter.offer`); a writer thread per
 recording encodes, compresses and writes. A full queue drops the cycle and counts it.
 A recording ends with its cycle or time limit, at `record_stop`, or when the configuration
-it records changes (load, reload, cold start, program restart).
+it records changes (load, reload, cold start, program restart); one with all inputs also
+when the resource stops.
 """
 
 from __future__ import annotations
@@ -16,7 +17,6 @@ import operator
 import re
 from collections import deque
 from collections.abc import Callable
-from copy import deepcopy
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -33,6 +33,7 @@ from runtime.contract.refusal import Refusal
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.instances import BoundVariable
 from runtime.trace_writer import Inputs, TraceWriter, Values
+from runtime.value_reader import value_reader
 
 if TYPE_CHECKING:
     from runtime.resource import Resource
@@ -49,53 +50,6 @@ _COMPARE: dict[str, Callable[[Any, Any], bool]] = {
     ">": operator.gt,
     ">=": operator.ge,
 }
-
-
-def value_reader(
-    variables: list[BoundVariable], globals_of: Callable[[], Any]
-) -> Callable[[], list[Any]]:
-    """A function that reads the variables' values now, fast: the attributes of one owner
-    are read by one `attrgetter` (in C), arrays copied (the programs go on changing them)."""
-    groups: dict[int, tuple[Any, list[int], list[str]]] = {}
-    slow: list[tuple[int, BoundVariable]] = []
-    for index, bound in enumerate(variables):
-        attrs = bound.path.attrs
-        if all(isinstance(a, str) for a in attrs):
-            owner = bound.program
-            key = id(owner) if owner is not None else 0
-            groups.setdefault(key, (owner, [], []))
-            groups[key][1].append(index)
-            groups[key][2].append(".".join(str(a) for a in attrs))
-        else:
-            slow.append((index, bound))
-    count = len(variables)
-    readers = [
-        (owner, indices, operator.attrgetter(*names), len(names) == 1)
-        for owner, indices, names in groups.values()
-    ]
-    arrays = [i for i, b in enumerate(variables) if b.path.type.upper().startswith("ARRAY")]
-
-    def read() -> list[Any]:
-        out: list[Any] = [None] * count
-        the_globals = globals_of()
-        for owner, indices, getter, single in readers:
-            got = getter(owner.instance if owner is not None else the_globals)
-            if single:
-                out[indices[0]] = got
-            else:
-                for index, value in zip(indices, got, strict=True):
-                    out[index] = value
-        for index, bound in slow:
-            root = bound.program.instance if bound.program is not None else the_globals
-            value = root
-            for accessor in bound.path.attrs:
-                value = value[accessor] if isinstance(accessor, int) else getattr(value, accessor)
-            out[index] = value
-        for index in arrays:
-            out[index] = deepcopy(out[index])
-        return out
-
-    return read
 
 
 @dataclass
@@ -303,6 +257,13 @@ class Recordings:
         states and clocks as the programs will find them."""
         if any(r.all_inputs for r in self._running.values()):
             self._found = (_system(resource), _programs(resource))
+
+    def idle(self, resource: Resource) -> None:
+        """The resource does not run: a replay cannot cross that, so the recordings of all
+        inputs end (recordings of values wait for cycles to come)."""
+        for recording in list(self._running.values()):
+            if recording.all_inputs:
+                self._end(resource, recording, "ended: the resource stopped")
 
     def cycled(
         self,

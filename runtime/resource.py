@@ -59,6 +59,9 @@ class CycleRecorder(Protocol):
 
     def before_programs(self, resource: Resource) -> None: ...
 
+    def idle(self, resource: Resource) -> None:
+        """A cycle in which no program runs (STOP, ERROR STOP)."""
+
     def cycled(
         self,
         resource: Resource,
@@ -314,6 +317,8 @@ class Resource:
         begin = self.clock.now_ns()
         self.io.read_inputs()
         if not self.running():
+            if self.recordings is not None and self.recordings.active:
+                self.recordings.idle(self)
             return
         if self._last_start_ns is not None:
             period = begin - self._last_start_ns

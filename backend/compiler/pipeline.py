@@ -104,9 +104,12 @@ def parse_all(sources: list[SourceFile]) -> tuple[list[ast.SourceUnit], list[Dia
     return units, diagnostics
 
 
-def parse_project(
-    sources: list[SourceFile],
-) -> tuple[list[ast.SourceUnit], list[Diagnostic], set[str]]:
+# a project parsed: its units (the user's, then the standard library's it does not
+# replace), the diagnostics of the user's files, the keys of the user's POUs
+Parsed = tuple[list[ast.SourceUnit], list[Diagnostic], set[str]]
+
+
+def parse_project(sources: list[SourceFile]) -> Parsed:
     """The user's files parsed, then the standard library's POUs the user does not replace
     (a user POU of the same name replaces the standard one); with the diagnostics of the
     user's files and the keys of the user's POUs."""
@@ -131,12 +134,15 @@ def compile_sources(
     users: list[UserAccount] | None = None,
     modbus: Any = None,
     config_lines: dict[str, int] | None = None,
+    parsed: Parsed | None = None,
 ) -> CompileResult:
     """`modbus` is the `[modbus]` table of padt.toml as read (None: there is none);
-    `config_lines` where each setting of padt.toml is written (`toml_lines.key_lines`)."""
+    `config_lines` where each setting of padt.toml is written (`toml_lines.key_lines`);
+    `parsed`: `parse_project(sources)` when the caller has it already (the documentation
+    needs the parse too; the AST is immutable, so sharing it is safe)."""
     settings = _Settings(safe_values or {}, users or [], modbus, config_lines or {})
     try:
-        return _compile(sources, project, resource, programs, config_file, settings)
+        return _compile(sources, project, resource, programs, config_file, settings, parsed)
     except (RecursionError, MemoryError) as exc:
         # the limits are meant to make this impossible; should one be missing, the caller
         # still gets a diagnostic (the project is too large for the compiler), never a
@@ -164,9 +170,11 @@ def _compile(
     programs: list[ProgramConfig] | None,
     config_file: str,
     settings: _Settings,
+    parsed: Parsed | None,
 ) -> CompileResult:
     users = settings.users
-    units, diagnostics, user_pous = parse_project(sources)
+    units, parse_diagnostics, user_pous = parsed if parsed is not None else parse_project(sources)
+    diagnostics = list(parse_diagnostics)  # the caller's parse stays as it was
     resolved = resolve(units)
     diagnostics.extend(resolved.diagnostics)
     diagnostics.extend(check(resolved))

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from backend.compiler.limits import MAX_FILE_BYTES, MAX_PROJECT_FILES, MiB
-from backend.compiler.pipeline import CompileResult, compile_sources
+from backend.compiler.pipeline import CompileResult, Parsed, compile_sources
 from backend.compiler.source import SourceFile, read_sources
 from backend.compiler.toml_lines import key_lines
 from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount
@@ -164,7 +164,10 @@ def _parameters(
     return checked
 
 
-def compile_project(project: Project, config_file: str = PROJECT_FILE) -> CompileResult:
+def compile_project(
+    project: Project, config_file: str = PROJECT_FILE, parsed: Parsed | None = None
+) -> CompileResult:
+    """`parsed`: the project's sources parsed already (`parse_project`), not parsed again."""
     return compile_sources(
         project.sources,
         project=project.name,
@@ -175,4 +178,5 @@ def compile_project(project: Project, config_file: str = PROJECT_FILE) -> Compil
         users=project.users,
         modbus=project.modbus,
         config_lines=project.config_lines,
+        parsed=parsed,
     )

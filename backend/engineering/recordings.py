@@ -13,11 +13,11 @@ import base64
 import binascii
 import re
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 from backend.engineering.literals import LiteralError, parse_literal
-from backend.engineering.resource_client import ResourceClient
+from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
 from runtime.contract.protocol import (
     MAX_RECORDING_READ,
     RecordDelete,
@@ -33,6 +33,7 @@ from runtime.contract.refusal import Refusal
 
 ENDED = ("done", "failed")
 POLL_S = 0.25  # how often a recording's progress is asked for while it is awaited
+PATIENCE_S = 60.0  # how long a resource may not answer while a recording is awaited
 
 
 class TriggerError(ValueError):
@@ -44,7 +45,7 @@ class RecordingSpec:
     """What to record, as a user chooses it (the arguments of `record_start`, with the
     trigger as text)."""
 
-    variables: tuple[str, ...] = ()  # paths, or `Prefix*` for every path starting so
+    variables: Sequence[str] = ()  # paths, or `Prefix*` for every path starting so
     all_inputs: bool = False  # also everything the programs take from outside (replay)
     trigger: str | None = None  # `Main.level > 80`, `Main.alarm`, `NOT Main.alarm`
     pre_cycles: int = 0  # with a trigger: cycles kept from before it
@@ -125,8 +126,8 @@ def _literal(text: str) -> bool | int | float | str | None:
 
 
 def start(client: ResourceClient, spec: RecordingSpec) -> RecordingInfo:
-    """Start a recording; the resource's refusal (level, unknown variable, one running
-    already...) as a Refusal, a trigger that is no condition as TriggerError."""
+    """Start a recording; the resource's refusal (the level, an unknown variable, too many
+    running) as a Refusal, a trigger that is no condition as TriggerError."""
     return client.ask(spec.command()).recording
 
 
@@ -153,12 +154,25 @@ def wait_until_ended(
     recording_id: str,
     stop_asked: Callable[[], bool] = lambda: False,
     poll_s: float = POLL_S,
+    patience_s: float = PATIENCE_S,
 ) -> RecordingInfo:
     """Wait until the recording has ended by itself (its cycles or seconds reached, or it
-    failed), or until `stop_asked()`: then it is stopped and its files closed."""
+    failed), or until `stop_asked()`: then it is stopped and its files closed. The
+    resource may stop answering for up to `patience_s` (a network hiccup, a restart of
+    the runtime) without ending the wait: the recording goes on there."""
     stopping = False
+    unanswered_since: float | None = None
     while True:
-        current = find(client, recording_id)
+        try:
+            current = find(client, recording_id)
+        except ResourceUnreachable:
+            now = time.monotonic()
+            unanswered_since = unanswered_since or now
+            if now - unanswered_since > patience_s or stop_asked():
+                raise  # Ctrl-C now: the resource could not be told to stop
+            time.sleep(poll_s)
+            continue
+        unanswered_since = None
         if current.state in ENDED:
             return current
         if stop_asked() and not stopping:
@@ -211,10 +225,14 @@ def download(client: ResourceClient, file_name: str) -> bytes:
     return b"".join(pieces)
 
 
+def file_names(client: ResourceClient, recording_id: str) -> list[str]:
+    """The files of a recording, in order (its parts as the files rotated)."""
+    return sorted((f.name for f in find(client, recording_id).files), key=part_number)
+
+
 def download_recording(client: ResourceClient, recording_id: str) -> list[tuple[str, bytes]]:
     """Every file of a recording, in order (its parts as the files rotated)."""
-    files = sorted(find(client, recording_id).files, key=lambda f: part_number(f.name))
-    return [(f.name, download(client, f.name)) for f in files]
+    return [(name, download(client, name)) for name in file_names(client, recording_id)]
 
 
 def part_number(file_name: str) -> int:

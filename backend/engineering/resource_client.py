@@ -28,6 +28,7 @@ from runtime.contract.keyspace import (
 )
 from runtime.contract.protocol import (
     MAX_WATCHED,
+    QUALITY_LETTERS,
     Command,
     Event,
     GetStatus,
@@ -36,6 +37,8 @@ from runtime.contract.protocol import (
     Status,
     Unwatch,
     Watch,
+    WatchedValue,
+    WatchPublication,
     WatchValues,
     decode_publication,
     decode_reply,
@@ -65,6 +68,7 @@ class WatchHandle:
     ) -> None:
         self.watch_id = watch_id
         self.variables: list[str] = []  # canonical paths, as the runtime names them
+        self.revision = 0  # of the set as last registered: older values are not taken
         self._token = token
         self._subscriber = subscriber
 
@@ -257,8 +261,34 @@ class ResourceClient:
         the resource's Refusal (an unknown variable, a bad period) or ResourceUnreachable."""
         watch_id = secrets.token_hex(8)
         token = self.session.liveliness().declare_token(watcher_key(self.resource, watch_id))
-        subscriber = self._declare(watch_key(self.resource, watch_id), WatchValues, callback)
+        handles: list[WatchHandle] = []
+
+        def by_path(message: WatchPublication) -> None:
+            """The values named by the set's paths, when they are of the set as it is."""
+            if not handles:
+                return
+            paths = handles[0].variables
+            if message.revision != handles[0].revision or len(message.values) != len(paths):
+                return  # of a set that has changed since: the next period brings the new
+            if len(message.qualities) != len(paths):
+                log.warning("watch values on %s dropped: qualities do not match", watch_id)
+                return
+            qualities = message.qualities
+            callback(
+                WatchValues(
+                    message.cycle,
+                    {
+                        path: WatchedValue(value, QUALITY_LETTERS[letter])
+                        for path, value, letter in zip(
+                            paths, message.values, qualities, strict=True
+                        )
+                    },
+                )
+            )
+
+        subscriber = self._declare(watch_key(self.resource, watch_id), WatchPublication, by_path)
         handle = WatchHandle(watch_id, token, subscriber)
+        handles.append(handle)
         try:
             self.change_watch(handle, variables, period_ms)
         except (Refusal, ResourceUnreachable):
@@ -277,7 +307,7 @@ class ResourceClient:
         batches = [variables[i : i + size] for i in range(0, len(variables), size)]
         for number, batch in enumerate(batches or [[]]):
             reply = self.ask(Watch(handle.watch_id, batch, period_ms, append=number > 0))
-            handle.variables = reply.variables  # the whole set so far
+            handle.variables, handle.revision = reply.variables, reply.revision
 
     def _declare(
         self, key_expr: str, kind: type[P], callback: Callable[[P], None]

@@ -185,8 +185,11 @@ _FLAT = frozenset({bool, int, float, str, type(None)})
 def _union(options: tuple[Any, ...]) -> Decoder:
     decoders = [_decoder(option) for option in options]
     names = " or ".join(_describe(option) for option in options)
+    not_null = [d for d, option in zip(decoders, options, strict=True) if option is not type(None)]
 
     def decode_union(data: Any, where: str) -> Any:
+        if data is not None and len(not_null) == 1:  # `X | None`: X's own refusal says more
+            return not_null[0](data, where)
         for decoder in decoders:
             try:
                 return decoder(data, where)
@@ -198,6 +201,8 @@ def _union(options: tuple[Any, ...]) -> Decoder:
 
 
 def _describe(kind: Any) -> str:
+    if typing.get_origin(kind) is typing.Annotated:
+        kind = typing.get_args(kind)[0]
     return {type(None): "null", bool: "true or false", int: "an integer", str: "a text"}.get(
         kind, "a " + getattr(kind, "__name__", str(kind))
     )
@@ -271,10 +276,15 @@ def _check(mark: Any, value: Any, where: str) -> None:
 
 def _bounds(mark: Range) -> str:
     if mark.high is None:
-        return f"at least {mark.low:g}"
+        return f"at least {_number(mark.low)}"
     if mark.low is None:
-        return f"at most {mark.high:g}"
-    return f"from {mark.low:g} to {mark.high:g}"
+        return f"at most {_number(mark.high)}"
+    return f"from {_number(mark.low)} to {_number(mark.high)}"
+
+
+def _number(bound: float | None) -> str:
+    """As people write it: 1000000000, not 1e+09; 0.5 as 0.5."""
+    return str(bound) if isinstance(bound, int) else f"{bound:g}"
 
 
 def _dataclass(kind: type) -> Decoder:

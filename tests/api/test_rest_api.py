@@ -188,7 +188,7 @@ WELL_FORMED: dict[str, dict[str, Any]] = {
     "set_parameter": {"name": "watchdog_ms", "value": 100},
     "transfer_begin": {"size": 10, "crc": "0000ABCD"},
     "transfer_chunk": {"offset": 0, "data": "x"},
-    "record_start": {"variables": ["P.n"], "cycles": 5},
+    "record_start": {"variables": ["P.n"]},
     "record_stop": {"id": "r1"},
     "record_read": {"file": "r1-1.mcap"},
     "record_delete": {"id": "r1"},

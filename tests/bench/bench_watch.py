@@ -414,16 +414,15 @@ def _report(
         resource.running(),
         resource.forcing.table,
     )
-    message = snapshot.message()
-    encoded = json.dumps(message)
+    encoded = snapshot.message()
     dumps_ns = []
     for _ in range(DUMPS_ROUNDS):  # what the publisher thread does, off the cycle thread
         started = time.monotonic_ns()
-        json.dumps(snapshot.message())
+        snapshot.message()
         dumps_ns.append(time.monotonic_ns() - started)
     print(
-        f"  message: {len(message['values']):,} values, {len(encoded.encode()):,} bytes "
-        f"({len(encoded.encode()) / 1024:,.1f} KiB) of JSON"
+        f"  message: {len(snapshot.values):,} values, {len(encoded):,} bytes "
+        f"({len(encoded) / 1024:,.1f} KiB) of JSON"
     )
 
     gaps = Counter(b - a for a, b in pairwise(sorted(sent_cycles)))

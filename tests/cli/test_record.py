@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -17,10 +18,19 @@ from pathlib import Path
 import pytest
 
 from backend.engineering import recordings
-from runtime.contract.protocol import GetValues
+from backend.engineering.project import compile_project, load_project
+from backend.engineering.resource_client import ResourceClient
 from runtime.contract.recording import read_recording
 from tests.conftest import REPO, free_port, padt
-from tests.support.recording_cell import PASSWORDS, RESOURCE, Cell, recording_cell
+from tests.support.lying_resource import FILE, lying_resource
+from tests.support.recording_cell import (
+    PASSWORDS,
+    RESOURCE,
+    Cell,
+    recording_cell,
+    write_project,
+)
+from tests.support.runtime_process import client_session, router, runtime_process, store_artifact
 
 
 @pytest.fixture(scope="module")
@@ -99,6 +109,21 @@ def test_ctrl_c_stops_the_recording_and_keep_leaves_it_listed(cell: Cell, tmp_pa
     found = {r["id"]: r for r in json.loads(as_json.stdout)}
     assert found[recording_id]["cycles"] == int(summary[1])
 
+    # kept: downloaded again later, then deleted
+    again = tmp_path / "again.mcap"
+    fetched = as_user(cell, "viewer", "recordings", "--download", recording_id, "-o", str(again))
+    assert fetched.returncode == 0, fetched.stderr
+    assert fetched.stdout.startswith(f"downloaded {recording_id} -> {again} (")
+    assert again.read_bytes() == output.read_bytes()
+    refused = as_user(cell, "viewer", "recordings", "--delete", recording_id)
+    assert refused.returncode == 1 and "refused (forbidden)" in refused.stderr
+    deleted = as_user(cell, "op", "recordings", "--delete", recording_id)
+    assert deleted.returncode == 0 and deleted.stdout.startswith(f"deleted {recording_id};")
+    gone = as_user(cell, "viewer", "recordings", "--download", recording_id, "-o", str(again))
+    assert gone.returncode == 1 and "refused (unknown_recording)" in gone.stderr
+    no_output = as_user(cell, "viewer", "recordings", "--download", recording_id)
+    assert no_output.returncode == 2 and "--download needs -o FILE.mcap" in no_output.stderr
+
 
 def test_ctrl_c_before_the_trigger_fired_records_nothing(cell: Cell, tmp_path: Path) -> None:
     output = tmp_path / "never.mcap"
@@ -124,15 +149,20 @@ def test_ctrl_c_before_the_trigger_fired_records_nothing(cell: Cell, tmp_path: P
 
 def test_a_trigger_with_cycles_before_it(cell: Cell, tmp_path: Path) -> None:
     output = tmp_path / "trig.mcap"
-    now = cell.logged_in("viewer").ask(GetValues()).values["Main.count"]
-    trigger = f"Main.count >= {now + 30}"  # fires once the three cycles before it are in
-    args = ["--var", "Main.count", "--trigger", trigger]
+    # Main.level rises from 0 to 49.5 every 100 cycles: it passes 25 at every count 50, 150...
+    args = ["--var", "Main.count", "--var", "Main.level", "--trigger", "Main.level >= 25.0"]
     args += ["--pre-cycles", "3", "--cycles", "10", "-o", str(output)]
     done = as_user(cell, "op", "record", *args)
     assert done.returncode == 0, done.stderr
-    assert f"after {trigger} becomes true" in done.stderr
-    counts = read_recording(output).column("Main.count")
-    assert counts == list(range(now + 30 - 3, now + 30 + 10))
+    assert "after Main.level >= 25.0 becomes true, for 10 cycles" in done.stderr
+    recording = read_recording(output)
+    counts, levels = recording.column("Main.count"), recording.column("Main.level")
+    assert counts == list(range(counts[0], counts[0] + len(counts)))
+    fired = len(counts) - 10  # the trigger's cycle and 9 after it
+    # three cycles before it (fewer only when the recording began less than three before)
+    assert 0 <= fired <= 3
+    assert counts[fired] % 100 == 50 and levels[fired] == 25.0
+    assert all(level < 25.0 for level in levels[:fired])
 
 
 def test_rotated_parts_are_written_beside_the_file(cell: Cell, tmp_path: Path) -> None:
@@ -147,6 +177,28 @@ def test_rotated_parts_are_written_beside_the_file(cell: Cell, tmp_path: Path) -
     assert counts == list(range(counts[0], counts[0] + len(counts)))
     summary = SUMMARY.fullmatch(done.stdout.strip())
     assert summary is not None and summary[1] == str(len(counts))
+
+
+def test_all_inputs_recorded_replay_identically_and_a_change_is_found(
+    cell: Cell, tmp_path: Path
+) -> None:
+    output = tmp_path / "all.mcap"
+    args = ["--all-inputs", "--var", "Main.count", "--cycles", "100", "-o", str(output)]
+    done = as_user(cell, "op", "record", *args)
+    assert done.returncode == 0, done.stderr
+    assert ": 1 variable and all inputs, for 100 cycles" in done.stderr
+    assert read_recording(output).artifact is not None
+
+    same = padt("replay", str(output), str(cell.project))
+    assert same.returncode == 0, same.stderr
+    assert same.stdout.strip() == "replay: 100 cycles, identical"
+    changed = tmp_path / "changed"
+    shutil.copytree(cell.project, changed)
+    main = changed / "main.st"
+    main.write_text(main.read_text().replace("count := count + 1;", "count := count + 2;"))
+    differs = padt("replay", str(output), str(changed))
+    assert differs.returncode == 1, differs.stderr
+    assert "(the 1st recorded) differs in Main.count" in differs.stdout
 
 
 def test_refusals_and_bad_options(cell: Cell, tmp_path: Path) -> None:
@@ -176,3 +228,60 @@ def test_refusals_and_bad_options(cell: Cell, tmp_path: Path) -> None:
                     "--zenoh", cell.endpoint)  # fmt: skip
     assert no_login.returncode == 1 and "unauthenticated" in no_login.stderr
     assert not output.exists()
+
+
+def test_a_restart_of_the_runtime_during_a_recording_is_waited_out(tmp_path: Path) -> None:
+    """The runtime ends (it finishes the file) and comes back: padt record waits, logs in
+    again and fetches what was recorded."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    project = write_project(tmp_path / "project")
+    artifact = compile_project(load_project([project])).artifact
+    assert artifact is not None
+    state_dir = tmp_path / "state"
+    store_artifact(state_dir, artifact)
+    output = tmp_path / "restart.mcap"
+    command = [sys.executable, "-m", "padt.cli", "record", "--var", "Main.count"]
+    command += ["--seconds", "60", "-o", str(output), "--resource", RESOURCE]
+    command += ["--zenoh", endpoint, "--user", "op"]
+    env = {**os.environ, "PADT_PASSWORD": PASSWORDS["op"]}
+    with router(endpoint), client_session(endpoint) as session:
+        client = ResourceClient(session, RESOURCE)
+        with runtime_process(RESOURCE, state_dir, endpoint):
+            client.wait_until_answering()
+            client.login("viewer", PASSWORDS["viewer"])
+            process = subprocess.Popen(
+                command, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                text=True,
+            )  # fmt: skip
+            assert process.stderr is not None
+            recording_id = process.stderr.readline().split()[1].rstrip(":")
+            while recordings.find(client, recording_id).cycles < 10:
+                time.sleep(0.05)
+        # the runtime is gone; it comes back with the same state folder
+        with runtime_process(RESOURCE, state_dir, endpoint):
+            out, err = process.communicate(timeout=90)
+    assert process.returncode == 0, err
+    recording = read_recording(output)
+    assert recording.complete, recording.problem
+    counts = recording.column("Main.count")
+    assert out.startswith(f"recorded {len(counts)} cycles (the runtime restarted: dropped ones")
+    assert f"-> {output} (" in out
+    assert len(counts) >= 10 and counts == list(range(counts[0], counts[0] + len(counts)))
+
+
+@pytest.mark.parametrize("lie", ["none", "offset"])
+def test_a_broken_download_leaves_no_file_that_looks_whole(lie: str, tmp_path: Path) -> None:
+    output = tmp_path / "x.mcap"
+    with lying_resource(f"tcp/127.0.0.1:{free_port()}") as liar:
+        liar.lie = lie
+        online = ["--resource", "Fake", "--zenoh", liar.endpoint]
+        fetched = padt("recordings", "--download", "x", "-o", str(output), *online)
+    if lie == "none":
+        assert fetched.returncode == 0, fetched.stderr
+        assert output.read_bytes() == FILE and list(tmp_path.iterdir()) == [output]
+    else:
+        assert fetched.returncode == 1
+        assert "padt recordings: refused (bad_reply): resource Fake sent bytes from" in (
+            fetched.stderr
+        )
+        assert list(tmp_path.iterdir()) == []  # neither x.mcap nor x.mcap.part

@@ -4,6 +4,7 @@ nothing a hostile client can send gets past it as anything but a structured refu
 from __future__ import annotations
 
 import json
+import math
 from typing import Any
 
 import pytest
@@ -13,6 +14,7 @@ from hypothesis import strategies as st
 from runtime.contract import protocol as p
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import MAX_DEPTH, decode, encode
+from runtime.watch_sets import WatchSnapshot
 from tests.conftest import REPO
 
 # one well-formed instance of every command
@@ -187,10 +189,17 @@ def test_replies_are_checked_on_the_client_too() -> None:
         with pytest.raises(Refusal) as wrong:
             p.decode_reply(status, bad)
         assert wrong.value.code == "bad_reply"
-    watch = p.WatchValues(3, {"Main.n": p.WatchedValue(5, p.Quality.FORCED)})
-    assert p.decode_publication(p.WatchValues, json.dumps(encode(watch)).encode()) == watch
-    with pytest.raises(Refusal):
-        p.decode_publication(p.WatchValues, b'{"cycle": 1, "values": {"x": {"value": 1}}}')
+    watch = p.WatchPublication(3, 2, [5, [1.5, "nan"], "text", None], "FLSD")
+    assert p.decode_publication(p.WatchPublication, json.dumps(encode(watch)).encode()) == watch
+    snapshot = WatchSnapshot(3, 2, [5, [1.5, math.nan], "text", None], "FLSD")
+    assert p.decode_publication(p.WatchPublication, snapshot.message()) == watch
+    for bad in (
+        b'{"cycle": 1, "values": {"x": {"value": 1}}}',
+        b'{"cycle": 1, "revision": 1, "values": [1], "qualities": "X"}',
+        b'{"cycle": 1, "revision": 1, "values": 1, "qualities": "L"}',
+    ):
+        with pytest.raises(Refusal):
+            p.decode_publication(p.WatchPublication, bad)
 
 
 def test_decoding_makes_the_declared_types() -> None:

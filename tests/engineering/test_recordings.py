@@ -5,32 +5,24 @@ rotated files, levels; and a hostile peer on the resource's key whose replies to
 
 from __future__ import annotations
 
-import base64
 import io
-import json
-import os
 import time
 from collections.abc import Iterator
-from typing import Any
 
 import pytest
-import zenoh
 
 from backend.engineering import recordings
 from backend.engineering.recordings import RecordingSpec
-from backend.engineering.resource_client import ResourceClient
-from runtime.contract.keyspace import command_key
 from runtime.contract.protocol import MAX_RECORDING_READ, GetValues
 from runtime.contract.recording import Recording, read_recording
 from runtime.contract.refusal import Refusal
+from tests.conftest import free_port
+from tests.support.lying_resource import FILE, Liar, lying_resource
 from tests.support.recording_cell import Cell, recording_cell
-from tests.support.runtime_process import client_session, router
 
 
 @pytest.fixture(scope="module")
 def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
-    from tests.conftest import free_port
-
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with recording_cell(tmp_path_factory.mktemp("recordings"), endpoint) as found:
         yield found
@@ -100,7 +92,7 @@ def soon(cell: Cell, cycles: int) -> int:
 
 def test_a_trigger_keeps_the_cycles_before_it(cell: Cell) -> None:
     op = cell.logged_in("op")
-    threshold = soon(cell, 30)
+    threshold = soon(cell, 50)
     spec = RecordingSpec(
         ("Main.count", "Main.alarm"),
         trigger=f"Main.count >= {threshold}",
@@ -197,59 +189,16 @@ def test_unknown_variables_and_recordings_are_refused(cell: Cell) -> None:
 # ---- a hostile peer answering on the resource's key
 
 
-FILE = os.urandom(3 * MAX_RECORDING_READ + 1234)  # four chunks
-
-
-def answer(request: dict[str, Any], lie: str) -> dict[str, Any]:
-    offset, length = request["offset"], request["length"]
-    data = FILE[offset : offset + length]
-    reply: dict[str, Any] = {"ok": True, "offset": offset, "size": len(FILE)}
-    reply["data"] = base64.b64encode(data).decode()
-    if offset > 0 and lie == "offset":
-        reply["offset"] = offset - 10
-    elif offset > 0 and lie == "shrinks":
-        reply["size"] = offset
-    elif offset > 0 and lie == "base64":
-        reply["data"] = "not base64!"
-    elif offset > 0 and lie == "empty":
-        reply["data"] = ""
-    elif lie == "negative":
-        reply["size"] = -1
-    return reply
-
-
 @pytest.fixture(scope="module")
-def peer() -> Iterator[tuple[ResourceClient, list[str]]]:
-    """A client of resource `Fake`, whose replies come from a peer that lies as told."""
-    from tests.conftest import free_port
-
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    lie: list[str] = ["none"]
-
-    def reply(query: zenoh.Query) -> None:
-        request = json.loads(query.payload.to_bytes() if query.payload else b"{}")
-        if request["cmd"] == "record_read":
-            body = answer(request, lie[0])
-        else:
-            body = {"ok": True, "status": None}
-        query.reply(query.key_expr, json.dumps(body))
-
-    with router(endpoint), client_session(endpoint) as fake, client_session(endpoint) as ours:
-        queryable = fake.declare_queryable(command_key("Fake"), reply)
-        try:
-            client = ResourceClient(ours, "Fake")
-            client.wait_until_answering()
-            yield client, lie
-        finally:
-            queryable.undeclare()
+def liar() -> Iterator[Liar]:
+    with lying_resource(f"tcp/127.0.0.1:{free_port()}") as found:
+        yield found
 
 
-def test_a_download_takes_the_file_in_chunks_in_order(
-    peer: tuple[ResourceClient, list[str]],
-) -> None:
-    client, lie = peer
-    lie[0] = "none"
-    assert recordings.download(client, "x-1.mcap") == FILE
+def test_a_download_takes_the_file_in_chunks_in_order(liar: Liar) -> None:
+    liar.lie = "none"
+    assert recordings.download(liar.client, "x-1.mcap") == FILE
+    assert recordings.download_recording(liar.client, "x") == [("x-1.mcap", FILE)]
 
 
 @pytest.mark.parametrize(
@@ -259,22 +208,14 @@ def test_a_download_takes_the_file_in_chunks_in_order(
         ("shrinks", f"the file shrank from {len(FILE)} to {MAX_RECORDING_READ} bytes"),
         ("base64", "data that is not base64"),
         ("empty", f"no bytes at {MAX_RECORDING_READ} of {len(FILE)}"),
+        ("negative", "a size of -1 bytes"),
     ],
 )
 def test_a_reply_that_is_not_the_part_asked_for_ends_the_download(
-    peer: tuple[ResourceClient, list[str]], lie: str, says: str
+    liar: Liar, lie: str, says: str
 ) -> None:
-    client, told = peer
-    told[0] = lie
+    liar.lie = lie
     with pytest.raises(Refusal) as refused:
-        recordings.download(client, "x-1.mcap")
+        recordings.download(liar.client, "x-1.mcap")
     assert refused.value.code == "bad_reply"
     assert says in refused.value.message and "x-1.mcap" in refused.value.message
-
-
-def test_a_negative_size_is_refused(peer: tuple[ResourceClient, list[str]]) -> None:
-    client, told = peer
-    told[0] = "negative"
-    with pytest.raises(Refusal) as refused:
-        recordings.download(client, "x-1.mcap")
-    assert refused.value.code in ("bad_reply", "bad_request")

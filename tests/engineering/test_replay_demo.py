@@ -34,6 +34,7 @@ def test_the_demo_replays_identically_and_a_change_is_named(
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1500)
 def test_ten_minutes_of_the_demo_replay_identically(tmp_path: Path, zenoh_endpoint: str) -> None:
     record_and_replay(tmp_path, zenoh_endpoint, 600.0)
 

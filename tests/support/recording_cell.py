@@ -61,6 +61,7 @@ END_PROGRAM
 
 @dataclass
 class Cell:
+    project: Path
     state_dir: Path
     endpoint: str
     client: ResourceClient  # not logged in
@@ -84,9 +85,10 @@ def write_project(folder: Path) -> Path:
 
 @contextmanager
 def recording_cell(base: Path, endpoint: str) -> Iterator[Cell]:
-    result = compile_project(load_project([write_project(base / "project")]))
+    project = write_project(base / "project")
+    result = compile_project(load_project([project]))
     assert result.artifact is not None, result.diagnostics
     state_dir = base / "state"
     store_artifact(state_dir, result.artifact)
     with running_resource(RESOURCE, state_dir, endpoint) as (_, client):
-        yield Cell(state_dir, endpoint, client)
+        yield Cell(project, state_dir, endpoint, client)

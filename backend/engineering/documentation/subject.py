@@ -79,11 +79,12 @@ def load_subject(paths: list[Path]) -> Subject:
 
 
 def _subject(project: Project, origin: str) -> Subject:
-    result = compile_project(project)
+    parsed = parse_project(project.sources)  # the listings and the cross-reference read it too
+    result = compile_project(project, parsed=parsed)
     if result.artifact is None:
         first = next(d for d in result.diagnostics if d.severity == "error")
         raise DocumentError(f"{origin} does not compile: {first}")
-    units, _, user_pous = parse_project(project.sources)
+    units, _, user_pous = parsed
     own = {source.name for source in project.sources}
     own_units = tuple(unit for unit in units if unit.file in own)
     return Subject(
