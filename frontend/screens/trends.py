@@ -21,7 +21,7 @@ from typing import Any
 import viser
 
 from backend.engineering import recordings, variable_tree
-from backend.engineering.recordings import RecordingSpec
+from backend.engineering.recordings import RecordingSpec, TriggerError, parse_trigger
 from backend.engineering.resource_client import ResourceClient
 from backend.engineering.watch_lists import WatchLists
 from frontend import trend_chart, trend_plot
@@ -35,6 +35,7 @@ from frontend.trend_chart import TrendChart
 from frontend.trend_history import HISTORY_S, TrendHistory
 from frontend.trend_plot import MAX_CHARTED, Trace
 from runtime.contract import protocol as p
+from runtime.contract.protocol import MAX_PRE_CYCLES
 from runtime.contract.values import format_for_display
 
 WINDOWS = {"30 s": 30, "2 min": 120, "10 min": 600}
@@ -56,6 +57,29 @@ def wall_clock() -> Callable[[], float]:
 
 
 @dataclass
+class RecordOptions:
+    """What a recording started here takes besides the charted variables."""
+
+    trigger: viser.GuiTextHandle  # an ST condition; empty: record from now
+    pre_cycles: viser.GuiNumberHandle[int]
+    seconds: viser.GuiNumberHandle[int]  # 0: until stopped
+    note: viser.GuiHtmlHandle
+
+    def spec(self, paths: list[str]) -> RecordingSpec:
+        """Raises TriggerError for a trigger that is no condition."""
+        trigger = self.trigger.value.strip() or None
+        if trigger is not None:
+            parse_trigger(trigger)
+        seconds = int(self.seconds.value)
+        return RecordingSpec(
+            variables=tuple(paths),
+            trigger=trigger,
+            pre_cycles=int(self.pre_cycles.value) if trigger else 0,
+            seconds=seconds or None,
+        )
+
+
+@dataclass
 class TrendsScreen:
     client: viser.ClientHandle
     user: str
@@ -67,6 +91,7 @@ class TrendsScreen:
     table: viser.GuiHtmlHandle
     record: viser.GuiButtonHandle
     record_note: viser.GuiHtmlHandle
+    options: RecordOptions
     search: viser.GuiTextHandle
     matches: viser.GuiDropdownHandle[str]
     watch_list: viser.GuiDropdownHandle[str]
@@ -101,6 +126,11 @@ def build(
         table = gui.add_html("")
         record = gui.add_button(RECORD, icon=viser.Icon.PLAYER_RECORD)
         record_note = gui.add_html("")
+        with gui.add_folder("Recording options", expand_by_default=False):
+            trigger = gui.add_text("Trigger", "", hint="TankControl.alarmLow, level > 800")
+            pre_cycles = gui.add_number("Cycles before it", 0, min=0, max=MAX_PRE_CYCLES, step=1)
+            seconds = gui.add_number("Stop after (s)", 0, min=0, max=7 * 86_400, step=1)
+            options_note = gui.add_html(_options_note(""))
         with gui.add_folder("Variables"):
             search = gui.add_text("Find variable", "")
             matches = gui.add_dropdown("Found", (NO_MATCH,))
@@ -123,6 +153,7 @@ def build(
         table,
         record,
         record_note,
+        RecordOptions(trigger, pre_cycles, seconds, options_note),
         search,
         matches,
         watch_list,
@@ -132,6 +163,7 @@ def build(
     )
     bar.on_click(lambda event: _bar_clicked(screen, event.target.value))
     record.on_click(lambda _: _record_clicked(screen))
+    trigger.on_update(lambda _: _check_trigger(screen.options))
     search.on_update(lambda _: show_matches(screen))
     add.on_click(lambda _: chart_variables(screen, [screen.matches.value]))
     add_list.on_click(lambda _: chart_variables(screen, list(_list_variables(screen))))
@@ -202,13 +234,29 @@ def _record_clicked(screen: TrendsScreen) -> None:
             screen.client, f"Stop recording {running}", lambda: recordings.stop(client, running)
         )
     elif screen.paths:
-        spec = RecordingSpec(variables=tuple(screen.paths))
+        try:
+            spec = screen.options.spec(screen.paths)
+        except TriggerError as wrong:
+            screen.options.note.content = _options_note(str(wrong))
+            return
 
         def start() -> None:
             screen.recording = recordings.start(client, spec).id
 
         attempt(screen.client, f"Record {len(screen.paths)} variables of {target.resource}", start)
     screen.listing.changed()
+
+
+def _check_trigger(options: RecordOptions) -> None:
+    """Say at once what is wrong with the trigger typed, as it is typed."""
+    text = options.trigger.value.strip()
+    try:
+        if text:
+            parse_trigger(text)
+    except TriggerError as wrong:
+        options.note.content = _options_note(str(wrong))
+        return
+    options.note.content = _options_note("")
 
 
 def _after_change(screen: TrendsScreen) -> None:
@@ -380,6 +428,19 @@ def _record_note(ours: p.RecordingInfo | None, reason: str) -> str:
         f'<div data-testid="record-note" style="font-size:0.85em;padding:0 10px;{_GREY}">'
         + "<br>".join(lines)
         + "</div>"
+    )
+
+
+def _options_note(error: str) -> str:
+    """What is wrong with the trigger, or how the options work."""
+    if error:
+        red = 'data-testid="trigger-error" style="color:#c92a2a;font-size:0.85em"'
+        return f"<div {red}>{html.escape(error)}</div>"
+    return (
+        f'<div style="{_GREY};font-size:0.85em">With a trigger (an ST condition: '
+        "<code>TankControl.alarmLow</code>, <code>NOT TankControl.pump</code>, "
+        "<code>TankControl.level &gt; 800</code>) the recording waits for it to become true "
+        "and keeps the cycles before it; Stop after 0 s records until stopped.</div>"
     )
 
 

@@ -1,8 +1,9 @@
 """The Trends screen as a user sees it, through the demo: variables chosen by search are
 charted live (the chart's data grows as the demo runs, the level moves, the pump is a
 0/1 step), the cursor's legend shows the values under it, and a pause holds the chart;
-the charted variables recorded on the resource, listed, charted from the file and saved
-as an .mcap file that an MCAP reader opens."""
+the charted variables recorded on the resource, listed, charted from the file, saved as an
+.mcap file that an MCAP reader opens and deleted; a recording with a trigger waits for it;
+a user without Operator at the resource sees Record greyed out with the reason."""
 
 from __future__ import annotations
 
@@ -33,6 +34,7 @@ from tests.ui.browser_steps import (
 
 pytestmark = pytest.mark.browser
 NOTE = '[data-testid="record-note"]'
+TRIGGER_ERROR = '[data-testid="trigger-error"]'
 
 
 def charts(page: Page) -> list[dict[str, Any]]:
@@ -185,6 +187,22 @@ def test_the_charted_variables_recorded_listed_charted_and_saved(demo: Demo) -> 
             "it is gone",
             lambda: "No recordings" in text_of(page, '[data-testid="recordings"]'),
         )
+
+        # with a trigger: what is no condition is said as it is typed; a recording that
+        # waits for its trigger records nothing until it comes
+        page.get_by_role("tab", name="Live").click()
+        page.get_by_text("Recording options").click()
+        field(page, "Trigger").fill("TankControl.level >")
+        wait_until("it is refused", lambda: page.locator(TRIGGER_ERROR).count() == 1)
+        assert "is not a trigger" in text_of(page, TRIGGER_ERROR)
+        field(page, "Trigger").fill("TankControl.level > 5000")
+        wait_until("it is taken", lambda: page.locator(TRIGGER_ERROR).count() == 0)
+        page.get_by_role("button", name="Record the charted variables").click()
+        wait_until("it waits", lambda: "waiting for its trigger" in text_of(page, NOTE))
+        shoot(page, "trends-trigger-1400x900")
+        close_notifications(page)
+        page.get_by_role("button", name=re.compile("^Stop recording")).click()
+        wait_until("it is done", lambda: " done: 0 cycles" in text_of(page, NOTE))
 
 
 def test_a_read_user_charts_but_may_not_record(plant: Plant) -> None:
