@@ -15,6 +15,7 @@ from frontend import trend_plot
 from frontend.trend_plot import Floats, Trace
 
 HEIGHT = 430  # px: most of a 900-pixel window under the tab bar and the scope's bar
+AXIS_EACH, AXIS_ONE = "Axis per variable", "One axis"  # the button that switches between
 
 
 @dataclass
@@ -24,7 +25,7 @@ class TrendChart:
     placeholder: viser.GuiHtmlHandle  # shown instead of the chart while nothing is charted
     plot: viser.GuiUplotHandle | None = None
     charted: tuple[Trace, ...] = ()  # what `plot` was made for
-    y_range: tuple[float, float] | None = None
+    y_ranges: tuple[tuple[float, float], ...] = ()  # one for all numbers, or one each
     extremes: dict[str, tuple[float, float] | None] = field(default_factory=dict)  # drawn
     drawn_at: float = -math.inf  # when (the screen's clock) it was last drawn
 
@@ -35,21 +36,30 @@ class TrendChart:
         columns: Sequence[Floats],
         start_s: float | None,
         max_points: int,
+        own_axes: bool = False,
     ) -> None:
         """Show these variables' values at these times (Unix seconds), from `start_s` on
-        when given, in at most about `max_points` points."""
+        when given, in at most about `max_points` points; the numbers in one range, or
+        with `own_axes` each in its own."""
         charted = tuple(charted)
         if not charted:
             self.clear()
             return
         numbers = [c for c, t in zip(columns, charted, strict=True) if not t.is_bool]
-        y_range = trend_plot.y_range(numbers, self.y_range)
+        if own_axes and len(numbers) > 1:
+            before = self.y_ranges if len(self.y_ranges) == len(numbers) else (None,) * len(numbers)
+            y_ranges = tuple(
+                trend_plot.y_range([c], shown) for c, shown in zip(numbers, before, strict=True)
+            )
+        else:
+            shared = self.y_ranges[0] if len(self.y_ranges) == 1 else None
+            y_ranges = (trend_plot.y_range(numbers, shared),)
         bools = [t.is_bool for t in charted]
         data = trend_plot.data(times, columns, bools, start_s, max_points)
         # Other variables or another y range: a chart made anew rather than changed.
         # viser carries the x zoom over a rebuild of its uPlot as a fraction of the data's
         # span, and the rebuild that new scales cause left the time axis at 1970.
-        if self.plot is None or charted != self.charted or y_range != self.y_range:
+        if self.plot is None or charted != self.charted or y_ranges != self.y_ranges:
             if self.plot is not None:
                 self.plot.remove()
             with self.container:  # in the chart's place, right under the placeholder
@@ -57,9 +67,9 @@ class TrendChart:
                     data,
                     height=HEIGHT,
                     order=self.placeholder.order + 0.001,
-                    **trend_plot.options(charted, y_range),
+                    **trend_plot.options(charted, y_ranges),
                 )
-            self.charted, self.y_range = charted, y_range
+            self.charted, self.y_ranges = charted, y_ranges
             self.placeholder.visible = False
         else:
             self.plot.data = data
@@ -71,7 +81,7 @@ class TrendChart:
         if self.plot is not None:
             self.plot.remove()
             self.plot = None
-        self.charted, self.y_range, self.extremes = (), None, {}
+        self.charted, self.y_ranges, self.extremes = (), (), {}
         self.placeholder.visible = True
 
 

@@ -24,6 +24,7 @@ _INTEGERS = (
 )
 CHARTABLE = frozenset(("BOOL", "REAL", "LREAL", "TIME", "LTIME", *_INTEGERS))
 MAX_CHARTED = 16  # variables on one chart
+MAX_AXES = 4  # with an axis each, the first so many numbers have one (more crowd the chart)
 COLOURS = (
     "#1971c2", "#e8590c", "#2f9e44", "#c2255c", "#7048e8", "#0c8599", "#f08c00", "#5c940d",
     "#862e9c", "#d6336c", "#1098ad", "#74b816", "#495057", "#a61e4d", "#364fc7", "#c92a2a",
@@ -103,11 +104,14 @@ _TIME_AXIS = (  # uPlot's table of time ticks with a 24-hour clock (its own is 1
 )  # fmt: skip
 
 
-def options(charted: Sequence[Trace], y_range: tuple[float, float]) -> dict[str, Any]:
-    """add_uplot's keyword arguments but the data: a time axis, the numbers on the left
-    axis in `y_range`, the BOOLs on their own axis on the right (0/1 in the lower third),
-    the cursor's values in uPlot's legend under the chart."""
-    numbers = any(not trace.is_bool for trace in charted)
+def options(charted: Sequence[Trace], y_ranges: Sequence[tuple[float, float]]) -> dict[str, Any]:
+    """add_uplot's keyword arguments but the data: a time axis; the numbers on the left, in
+    one range (one item in `y_ranges`) or each in its own (an item per number, the first
+    MAX_AXES with an axis in their colour); the BOOLs on their own axis on the right (0/1
+    in the lower third); the cursor's values in uPlot's legend under the chart."""
+    numbers = [trace for trace in charted if not trace.is_bool]
+    each = len(y_ranges) > 1
+    scale_of = {t.path: (f"y{k}" if each else "y") for k, t in enumerate(numbers)}
     series: list[dict[str, Any]] = [{"label": "time", "value": "{HH}:{mm}:{ss}.{fff}"}]
     for trace in charted:
         series.append(
@@ -115,13 +119,22 @@ def options(charted: Sequence[Trace], y_range: tuple[float, float]) -> dict[str,
                 "label": trace.path + (f" ({trace.unit})" if trace.unit else ""),
                 "stroke": trace.colour,
                 "width": 1.5,
-                "scale": "b" if trace.is_bool else "y",
+                "scale": "b" if trace.is_bool else scale_of[trace.path],
                 "points": {"show": False},
             }
         )
     axes: list[dict[str, Any]] = [{"values": _TIME_AXIS, "space": 70}]
-    if numbers:
-        axes.append({"scale": "y", "size": 60})
+    scales: dict[str, Any] = {"x": {"time": True}, "b": {"range": list(BOOL_RANGE)}}
+    if each:
+        for k, (trace, y_range) in enumerate(zip(numbers, y_ranges, strict=True)):
+            scales[f"y{k}"] = {"range": list(y_range)}
+            if k < MAX_AXES:
+                colour = {"stroke": trace.colour, "ticks": {"stroke": trace.colour}}
+                axes.append({"scale": f"y{k}", "size": 56, "grid": {"show": k == 0}, **colour})
+    else:
+        scales["y"] = {"range": list(y_ranges[0])}
+        if numbers:
+            axes.append({"scale": "y", "size": 60})
     if any(trace.is_bool for trace in charted):
         axes.append(
             {
@@ -135,11 +148,7 @@ def options(charted: Sequence[Trace], y_range: tuple[float, float]) -> dict[str,
         )
     return {
         "series": tuple(series),
-        "scales": {
-            "x": {"time": True},
-            "y": {"range": list(y_range)},
-            "b": {"range": list(BOOL_RANGE)},
-        },
+        "scales": scales,
         "axes": tuple(axes),
         "legend": {"live": True},
         "padding": (12, 8, 0, 0),  # room for the top label of the axes

@@ -106,6 +106,7 @@ class TrendsScreen:
     resource: str | None = None  # whose values the history holds
     window_s: int = 30
     paused: bool = False
+    own_axes: bool = False  # each number on an axis of its own
     target: Target | None = None
     recording: str | None = None  # the id of the recording started here
     listing: CommandReading[p.RecordingsReply] = field(
@@ -120,7 +121,7 @@ def build(
     tabs = gui.add_tab_group()
     with tabs.add_tab("Live", viser.Icon.CHART_LINE) as live:
         # the scope's bar: the window and pause in one row, what is shown under it
-        bar = gui.add_button_group("Window", (*WINDOWS, PAUSE))
+        bar = gui.add_button_group("Window", (*WINDOWS, PAUSE, trend_chart.AXIS_EACH))
         status = gui.add_html("")
         placeholder = gui.add_html(_placeholder())
         table = gui.add_html("")
@@ -202,14 +203,13 @@ def remove_variable(screen: TrendsScreen, path: str) -> None:
 def _bar_clicked(screen: TrendsScreen, button: str) -> None:
     if button in WINDOWS:
         screen.window_s = WINDOWS[button]
+    elif button in (PAUSE, RESUME):
+        screen.paused = not screen.paused
     else:
-        toggle_pause(screen)
+        screen.own_axes = not screen.own_axes
+    axes = trend_chart.AXIS_ONE if screen.own_axes else trend_chart.AXIS_EACH
+    screen.bar.options = (*WINDOWS, RESUME if screen.paused else PAUSE, axes)
     _redraw_soon(screen)
-
-
-def toggle_pause(screen: TrendsScreen) -> None:
-    screen.paused = not screen.paused
-    screen.bar.options = (*WINDOWS, RESUME if screen.paused else PAUSE)
 
 
 def show_matches(screen: TrendsScreen) -> None:
@@ -333,7 +333,8 @@ def refresh(
         start = now - screen.window_s
         charted = _traces(screen)
         times, by_path = screen.history.since(start)
-        chart.draw(charted, times, [by_path[t.path] for t in charted], start, LIVE_POINTS)
+        columns = [by_path[t.path] for t in charted]
+        chart.draw(charted, times, columns, start, LIVE_POINTS, screen.own_axes)
     values = feed.latest.values if feed is not None else {}
     _show(screen, "table", screen.table, _values_table(screen, values))
     _show(screen, "status", screen.status, _status(screen, feed))

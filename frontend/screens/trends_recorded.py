@@ -24,7 +24,7 @@ from backend.engineering.resource_client import ResourceClient, ResourceUnreacha
 from frontend import trend_chart, trend_plot
 from frontend.confirm import attempt, confirm
 from frontend.permissions import Allowed
-from frontend.trend_chart import TrendChart
+from frontend.trend_chart import AXIS_EACH, AXIS_ONE, TrendChart
 from frontend.trend_plot import MAX_CHARTED, Floats, Trace, chartable
 from runtime.contract import protocol as p
 from runtime.contract.recording import Recording, RecordingUnreadable, read_recording
@@ -71,6 +71,7 @@ class Selection:
 class RecordedTab:
     client: viser.ClientHandle
     choice: viser.GuiDropdownHandle[str]
+    actions: viser.GuiButtonGroupHandle
     choose: viser.GuiTextHandle  # words of the variables to chart
     listing: viser.GuiHtmlHandle
     note: viser.GuiHtmlHandle
@@ -82,16 +83,17 @@ class RecordedTab:
     listed: list[p.RecordingInfo] = field(default_factory=list)
     opened: Opened | None = None
     selection: Selection | None = None
-    drawn: tuple[Opened | None, str, tuple[str, ...]] = (None, "", ())  # what is charted
+    drawn: tuple[Opened | None, str, tuple[str, ...], bool] = (None, "", (), False)  # charted
     busy: bool = False
     message: tuple[str, str] = ("", "")  # text, colour: the last download's outcome
     relist: Callable[[], None] = lambda: None  # read the recordings again now
+    own_axes: bool = False  # each number on an axis of its own
     shown: dict[str, str] = field(default_factory=dict)
 
 
 def build(gui: viser.GuiApi, client: viser.ClientHandle, tab: viser.GuiTabHandle) -> RecordedTab:
     choice = gui.add_dropdown("Recording", (NONE_YET,))
-    actions = gui.add_button_group("Recording actions", (CHART, DOWNLOAD))
+    actions = gui.add_button_group("Recording actions", (CHART, DOWNLOAD, AXIS_EACH))
     choose = gui.add_text("Variables to chart", "")
     note = gui.add_html("")
     placeholder = gui.add_html(
@@ -107,7 +109,9 @@ def build(gui: viser.GuiApi, client: viser.ClientHandle, tab: viser.GuiTabHandle
     )
     manage_note = gui.add_html("")
     chart = TrendChart(gui, tab, placeholder)
-    screen = RecordedTab(client, choice, choose, listing, note, chart, table, manage, manage_note)
+    screen = RecordedTab(
+        client, choice, actions, choose, listing, note, chart, table, manage, manage_note
+    )
     actions.on_click(lambda event: _act(screen, event.target.value))
     manage.on_click(lambda _: _manage(screen))
     return screen
@@ -118,6 +122,11 @@ def _chosen(screen: RecordedTab) -> p.RecordingInfo | None:
 
 
 def _act(screen: RecordedTab, action: str) -> None:
+    if action in (AXIS_EACH, AXIS_ONE):
+        screen.own_axes = not screen.own_axes
+        axes = AXIS_ONE if screen.own_axes else AXIS_EACH
+        screen.actions.options = (CHART, DOWNLOAD, axes)
+        return
     chosen, target = _chosen(screen), screen.target
     if chosen is None or target is None or screen.busy:
         return
@@ -265,13 +274,14 @@ def refresh(
     _refresh_manage(screen)
     opened = screen.opened
     words = screen.choose.value
-    wanted = (opened, words, tuple(preferred))
+    wanted = (opened, words, tuple(preferred), screen.own_axes)
     if wanted != screen.drawn:
         screen.chart.clear()  # a new y range for new variables
         screen.selection = None if opened is None else select(opened, words, preferred)
         if opened is not None and screen.selection is not None:
             picked = screen.selection
-            screen.chart.draw(picked.traces, opened.times, picked.columns, None, RECORDED_POINTS)
+            columns, times = picked.columns, opened.times
+            screen.chart.draw(picked.traces, times, columns, None, RECORDED_POINTS, screen.own_axes)
         screen.drawn = wanted
     selection = screen.selection
     extremes = screen.chart.extremes

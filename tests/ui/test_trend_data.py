@@ -65,3 +65,16 @@ def test_the_y_axis_stays_still_while_the_signal_moves_inside_it() -> None:
     small = trend_plot.y_range([np.array([500.0, 510.0])], first)
     assert small != first and small[0] <= 500 and small[1] >= 510
     assert trend_plot.y_range([np.array([np.nan])], None) == (0.0, 1.0)
+
+
+def test_each_number_on_an_axis_of_its_own_or_all_on_one() -> None:
+    charted = trend_plot.traces([("a", "INT"), ("b", "REAL"), ("c", "BOOL")])
+    one = trend_plot.options(charted, [(0.0, 10.0)])
+    assert [s.get("scale") for s in one["series"][1:]] == ["y", "y", "b"]
+    assert one["scales"]["y"] == {"range": [0.0, 10.0]}
+    each = trend_plot.options(charted, [(0.0, 10.0), (-1.0, 1.0)])
+    assert [s.get("scale") for s in each["series"][1:]] == ["y0", "y1", "b"]
+    assert each["scales"]["y1"] == {"range": [-1.0, 1.0]}
+    # an axis each, in the variable's colour, and the BOOLs' on the right
+    assert [a.get("scale") for a in each["axes"]] == [None, "y0", "y1", "b"]
+    assert each["axes"][2]["stroke"] == charted[1].colour

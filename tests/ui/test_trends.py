@@ -49,6 +49,17 @@ def charts(page: Page) -> list[dict[str, Any]]:
     return found
 
 
+def scales(page: Page) -> list[str]:
+    """The scale of each series of the chart in view: x for the time, b for the BOOLs, y
+    for the numbers on one axis, y0, y1, ... for each on its own."""
+    found: list[str] = page.evaluate(
+        """() => Object.values(window.__viserTestpoints?.uplots ?? {}).map(c => c.chart)
+            .filter(u => u.root.offsetParent !== null)
+            .map(u => u.series.map(s => s.scale))[0] ?? []"""
+    )
+    return found
+
+
 def chart(page: Page) -> dict[str, Any]:
     """The chart in view."""
     found = charts(page)
@@ -126,6 +137,14 @@ def test_variables_chosen_are_charted_live_with_their_values(demo: Demo) -> None
             [left, left + 2.5],
         )
         assert meanwhile >= 15, meanwhile  # ten a second while the tab was away
+
+        # a third variable, and each number on an axis of its own
+        chart_variable(page, "TankControl.refillDelay.ET")
+        page.get_by_role("button", name="Axis per variable").click()
+        wait_until("an axis each", lambda: scales(page) == ["x", "y0", "b", "y1"])
+        shoot(page, "trends-axes-1400x900")
+        page.get_by_role("button", name="One axis").click()
+        wait_until("one axis", lambda: scales(page) == ["x", "y", "b", "y"])
 
 
 def test_the_charted_variables_recorded_listed_charted_and_saved(demo: Demo) -> None:
