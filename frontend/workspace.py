@@ -29,6 +29,7 @@ from frontend.screens import (
     reload,
     resources,
     single_step,
+    trends,
     value_edit,
 )
 from frontend.ui_context import UiContext
@@ -55,6 +56,7 @@ class WorkspaceSession(Protocol):
 
 NAVIGATION_WIDTH = 300
 WORK_WIDTH = 780
+TRENDS_WIDTH = 1100  # a chart wants width: the drawing gives way while Trends is in front
 NONE = "(none online)"
 
 
@@ -117,6 +119,8 @@ class Workspace:
             self.documentation = documentation.build(
                 gui, client, context.projects, context.backup_dir, session.level
             )
+        with self._tab("Trends", viser.Icon.CHART_LINE):
+            self.trends = trends.build(gui, client, session.user, session.context.watch_lists)
         self.panel.dock_right()
         self.panel.set_width(WORK_WIDTH)
         self.drawing = plant_view.PlantView(client)
@@ -127,6 +131,8 @@ class Workspace:
 
     def _clicked(self, click: page_clicks.Click) -> None:
         if click.kind == "tab" and click.name in self.screens:
+            if (click.name == "Trends") != (self.shown == "Trends"):
+                self.panel.set_width(TRENDS_WIDTH if click.name == "Trends" else WORK_WIDTH)
             self.shown = click.name
             self.session.news()  # drawn at once, not at the next tick
         elif click.kind == "variable":  # checked as typed text by the value editor
@@ -291,6 +297,7 @@ class Workspace:
         token = login_there.token if login_there is not None else None
         # always: its live counts tell the Parameters screen what others changed
         events.refresh(self.events, resource, token, self.session.client_of)
+        trends.collect(self.trends, resource, feed)  # its history goes on in any tab
         self._refresh_shown(resource, status, feed, token, directory)
         if feed is not None:  # only what some screen shows is watched, seen or not: a
             # tab opened shows its values at once
@@ -299,6 +306,7 @@ class Workspace:
                 + value_edit.wanted(self.value_edit)
                 + forcing.wanted(self.forcing_feed.snapshot())
                 + code.wanted(self.code)
+                + trends.wanted(self.trends)
             )
         self.drawing.show(resource, status)
 
@@ -343,6 +351,9 @@ class Workspace:
             io.refresh(self.io, resource, status, token, self.session.client_of)
         elif shown == "Documentation":
             documentation.refresh(self.documentation, resource, status)
+        elif shown == "Trends":
+            client_of = self.session.client_of
+            trends.refresh(self.trends, resource, feed, token, client_of, self._allowed)
 
     def _follow_forcing(
         self, resource: str | None, status: p.Status | None, login_there: ResourceLogin | None

@@ -13,6 +13,7 @@ from tests.bench import (
     bench_reload,
     bench_rest,
     bench_runtime,
+    bench_trends,
     bench_ui,
     bench_watch,
 )
@@ -31,6 +32,7 @@ def main() -> None:
     bench_hostile.main()
     bench_ui.main()
     bench_documentation.main()
+    bench_trends.main()
 
 
 if __name__ == "__main__":
