@@ -307,7 +307,8 @@ class ResourceClient:
         batches = [variables[i : i + size] for i in range(0, len(variables), size)]
         for number, batch in enumerate(batches or [[]]):
             reply = self.ask(Watch(handle.watch_id, batch, period_ms, append=number > 0))
-            handle.variables, handle.revision = reply.variables, reply.revision
+        # values of the set only once it is whole: those of a part are not passed on
+        handle.variables, handle.revision = reply.variables, reply.revision
 
     def _declare(
         self, key_expr: str, kind: type[P], callback: Callable[[P], None]

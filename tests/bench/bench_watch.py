@@ -93,6 +93,7 @@ class Publication:
     cycle: int  # the message's "cycle": the CPU cycle whose values it carries
     watched_ns: int  # Resource.watched: reading the values, with their quality
     publish_ns: int  # ResourceLink.publish_watch on the cycle thread: the hand-over
+    values: int = 0  # in the message: fewer while a large set is still being registered
 
     @property
     def total_ns(self) -> int:
@@ -175,7 +176,11 @@ class TimedLink(ResourceLink):
         super().publish_watch(watch_id, snapshot)
         spent = time.monotonic_ns() - started
         log = self.publication_log
-        log.publications.append(Publication(watch_id, snapshot.cycle, log.last_watched_ns, spent))
+        log.publications.append(
+            Publication(
+                watch_id, snapshot.cycle, log.last_watched_ns, spent, len(snapshot.values)
+            )
+        )
 
 
 def select(paths: Sequence[str], count: int) -> list[str]:
@@ -402,7 +407,11 @@ def _report(
     def in_window(cycle: int) -> bool:
         return cycle in ends and window_start <= ends[cycle] < window_end
 
-    mine = [p for p in log.publications if p.watch_id == watch_id]
+    # a set registered in several requests is published part by part meanwhile; a client
+    # takes only the whole set's messages (their revision), so only those count
+    mine = [
+        p for p in log.publications if p.watch_id == watch_id and p.values == len(selection)
+    ]
     sent = [p for p in mine if in_window(p.cycle)]
     sent_cycles = {p.cycle for p in sent}
     cycles = sorted(c for c in ends if in_window(c))
