@@ -555,6 +555,19 @@ class _Emitter:
         for line in after_tick:
             self.emit(depth + 2, line)
 
+    def tested_loop(self, condition: str, depth: int) -> None:
+        """A loop header testing `condition` before every pass. Statements hoisted out of
+        the condition (a call with outputs) belong inside the loop, before the test, so
+        that they run for every test, not once before the loop."""
+        if not self.pre:
+            self.loop(depth, f"while {condition}:")
+            return
+        hoisted, self.pre = self.pre, []
+        self.loop(depth, "while True:")
+        self.pre = hoisted
+        self.emit(depth + 1, f"if not ({condition}):")
+        self.emit(depth + 2, "break")
+
     def statement(self, statement: ast.Statement, depth: int) -> None:
         outer, self.st_line, self.at = (self.st_line, self.at), statement.pos.line, statement.pos
         self._statement(statement, depth)
@@ -571,13 +584,7 @@ class _Emitter:
             case ast.Case():
                 self.case(statement, depth)
             case ast.While(condition=condition, body=body):
-                condition_code = self.exact(condition).code
-                if self.pre:
-                    self.loop(depth, "while True:")
-                    self.emit(depth + 1, f"if not {condition_code}:")
-                    self.emit(depth + 2, "break")
-                else:
-                    self.loop(depth, f"while {condition_code}:")
+                self.tested_loop(self.exact(condition).code, depth)
                 self.block(body, depth + 1)
             case ast.Repeat(body=body, until=until):
                 self.repeat(body, until, depth)
@@ -727,7 +734,7 @@ class _Emitter:
         if step_constant is not None and not _has_continue(loop.body):
             stop = self.exact(loop.stop).code
             comparison = "<=" if step_constant >= 0 else ">="
-            self.loop(depth, f"while {ref} {comparison} {stop}:")
+            self.tested_loop(f"{ref} {comparison} {stop}", depth)
             self.block(loop.body, depth + 1)
             for line in increment:
                 self.emit(depth + 1, line)

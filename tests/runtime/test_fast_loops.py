@@ -112,3 +112,30 @@ END_PROGRAM
     h.cycle()
     assert h.state() == "ERROR STOP"
     assert "watchdog" in str(h.resource.error) and "test.st:" in str(h.resource.error)
+
+
+def test_a_loop_condition_with_a_call_of_outputs_is_evaluated_for_every_test() -> None:
+    # the call is hoisted out of the condition (its output is stored first): it belongs in
+    # the loop, so that WHILE and the end of FOR see the values of this pass
+    text = """
+    FUNCTION Echo : INT
+    VAR_INPUT x : INT; END_VAR
+    VAR_OUTPUT y : INT; END_VAR
+    y := x; Echo := x;
+    END_FUNCTION
+    PROGRAM P
+    VAR n, o, i, limit, passes : INT; END_VAR
+    n := 0;
+    WHILE Echo(x := n, y => o) < 5 DO n := n + 1; END_WHILE;
+    limit := 3; passes := 0;
+    FOR i := 1 TO Echo(x := limit, y => o) DO limit := limit + 1; passes := passes + 1;
+      IF passes > 20 THEN EXIT; END_IF;
+    END_FOR;
+    END_PROGRAM
+    """
+    h = harness(text, [{"name": "P"}])
+    h.cycle()
+    assert h.value("P.n") == 5  # once before the loop, it would never end
+    # the end grows with every pass (evaluated at each test: the last before pass 21 saw
+    # limit 23): EXIT ends it
+    assert (h.value("P.passes"), h.value("P.o")) == (21, 23)
