@@ -79,8 +79,9 @@ class CodeImage:
         assert self.artifact.globals is not None
         return self._namespace[self.artifact.globals.class_name]()
 
-    def use(self, globals_view: Any, tick: Callable[[], None]) -> None:
-        """What `_G` and `_tick` mean for the code that runs next."""
+    def use(self, globals_view: Any, tick: Callable[[], None] | None) -> None:
+        """What `_G` and `_tick` mean for the code that runs next (`_tick` None: loop
+        passes are not metered)."""
         self._namespace["_G"] = globals_view
         self._namespace["_tick"] = tick
 

@@ -34,7 +34,7 @@ class ForceLevel:
 class ForceTable:
     def __init__(self) -> None:
         self._entries: dict[str, ForceEntry] = {}  # by upper-case path
-        self._levels: dict[str, ForceLevel] = {}  # levels where forcing is started
+        self.levels: dict[str, ForceLevel] = {}  # levels where forcing is started
 
     # ---- entries
     def set(self, entry: ForceEntry) -> ForceEntry | None:
@@ -60,27 +60,27 @@ class ForceTable:
     # ---- levels
     def start(self, level: str, now_ns: int, timeout_ns: int | None) -> None:
         deadline = now_ns + timeout_ns if timeout_ns is not None else None
-        self._levels[level] = ForceLevel(now_ns, deadline)
+        self.levels[level] = ForceLevel(now_ns, deadline)
 
     def stop(self, level: str) -> bool:
         """End forcing at a level; True when it was started."""
-        return self._levels.pop(level, None) is not None
+        return self.levels.pop(level, None) is not None
 
     def stop_all(self) -> list[str]:
         """End forcing everywhere; the levels that were started."""
-        stopped = sorted(self._levels)
-        self._levels.clear()
+        stopped = sorted(self.levels)
+        self.levels.clear()
         return stopped
 
     def started(self, level: str) -> bool:
-        return level in self._levels
+        return level in self.levels
 
     def started_levels(self) -> list[str]:
-        return sorted(self._levels)
+        return sorted(self.levels)
 
     def remaining_ns(self, level: str, now_ns: int) -> int | None:
         """Time left at a started level with a limit; None without a limit or not started."""
-        state = self._levels.get(level)
+        state = self.levels.get(level)
         if state is None or state.deadline_ns is None:
             return None
         return max(0, state.deadline_ns - now_ns)
@@ -89,16 +89,16 @@ class ForceTable:
         """Started levels whose time limit has run out."""
         return [
             level
-            for level, state in sorted(self._levels.items())
+            for level, state in sorted(self.levels.items())
             if state.deadline_ns is not None and now_ns >= state.deadline_ns
         ]
 
     def active(self) -> list[ForceEntry]:
         """The entries in force now: switch ON and forcing started at their level."""
-        if not self._levels:  # the usual case, checked twice per cycle
+        if not self.levels:  # the usual case, checked twice per cycle
             return []
-        return [e for e in self.entries() if e.switch and e.level in self._levels]
+        return [e for e in self.entries() if e.switch and e.level in self.levels]
 
     def is_forced(self, path: str) -> bool:
         entry = self._entries.get(path.upper())
-        return entry is not None and entry.switch and entry.level in self._levels
+        return entry is not None and entry.switch and entry.level in self.levels

@@ -40,7 +40,7 @@ class Forcing:
         self._settings, self._variables = settings, variables
         self._recorder, self._clock = recorder, clock
         self.table = ForceTable()
-        self._deactivated = False  # Force Deactivation as last seen (its OFF -> ON ends forcing)
+        self.deactivated = False  # Force Deactivation as last seen (its OFF -> ON ends forcing)
 
     def reset(self) -> None:
         """A download ends forcing, and its entries lose their meaning."""
@@ -121,9 +121,9 @@ class Forcing:
     def check_deactivation(self) -> None:
         """Force Deactivation OFF -> ON ends all forcing at once (ON also blocks it)."""
         now_on = bool(self._settings.system.FORCE_DEACTIVATION)
-        if now_on and not self._deactivated:
+        if now_on and not self.deactivated:
             self.end_all("Force Deactivation ON")
-        self._deactivated = now_on
+        self.deactivated = now_on
 
     def end_all(self, why: str) -> None:
         for level in self.table.stop_all():

@@ -409,10 +409,6 @@ class _ActionControl:
         self.A = active or pulse or final_scan
 
 
-def no_tick() -> None:
-    """Loop passes of programs without a time slice are not metered."""
-
-
 class Namespace:
     """A plain attribute holder (`_P`: program instances by class name)."""
 
@@ -434,7 +430,8 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         },
         "__name__": "padt_generated",
         "_SYS": system,
-        "_tick": no_tick,  # replaced while a program with a time slice runs
+        # loop passes are not metered (None), or a SliceMeter's tick while a sliced program runs
+        "_tick": None,
         "_idiv": _idiv,
         "_imod": _imod,
         "_fdiv": _fdiv,

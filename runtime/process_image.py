@@ -51,6 +51,8 @@ class ProcessImage:
         self._inputs.update(values)
 
     def read_inputs(self) -> None:
+        if not self._inputs:  # nothing new from the I/O (and none without I/O)
+            return
         for path, value in sorted(self._inputs.items()):
             bound = self._variables.find(path)
             if bound is not None:

@@ -17,6 +17,7 @@ needs no locks.
 from __future__ import annotations
 
 import logging
+from operator import attrgetter
 from typing import TYPE_CHECKING, Any, Protocol
 
 from runtime.clock import Clock
@@ -48,6 +49,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 EMERGENCY_STOPS = tuple(v.name for v in SYSTEM_VARIABLES if v.name.startswith("EMERGENCY_STOP"))
+_emergency_stops = attrgetter(*EMERGENCY_STOPS)
 _RUNNING = (ResourceState.RUN, ResourceState.RUN_UP_STOP)
 
 
@@ -288,6 +290,8 @@ class Resource:
                 program.state = ProgramState.STOP
 
     def emergency_stopped(self) -> bool:
+        if True not in _emergency_stops(self.system):  # the usual case: one C call
+            return False
         for number, name in enumerate(EMERGENCY_STOPS, 1):
             if getattr(self.system, name) and self.state != ResourceState.ERROR_STOP:
                 self.error_stop(f"Emergency Stop {number} set")
@@ -313,48 +317,58 @@ class Resource:
 
     # ---- the CPU cycle
     def cycle(self) -> None:
-        """One CPU cycle; in STOP only inputs are read (outputs stay safe)."""
-        begin = self.clock.now_ns()
+        """One CPU cycle; in STOP only inputs are read (outputs stay safe). What the usual
+        cycle does not need (forcing, recording, the tap of outside stores) costs a test
+        of an attribute each."""
+        clock, stats, recordings = self.clock, self.stats, self.recordings
+        begin = clock.now_ns()
         self.io.read_inputs()
-        if not self.running():
-            if self.recordings is not None and self.recordings.active:
-                self.recordings.idle(self)
+        recording = recordings is not None and recordings.active
+        if self.state not in _RUNNING:
+            if recording:
+                assert recordings is not None
+                recordings.idle(self)
             return
         if self._last_start_ns is not None:
-            period = begin - self._last_start_ns
-            self.stats.record_period(period, self.params.target_cycle_ms * 1_000_000)
+            target_ns = self.params.target_cycle_ms * 1_000_000
+            stats.record_period(begin - self._last_start_ns, target_ns)
         self._last_start_ns = begin
         self._update_system(begin)
-        self._react_to_force_timeouts(begin)
-        self.forcing.apply()
-        before = self.variables.tapped()
-        if self.recordings is not None and self.recordings.active:
-            self.recordings.before_programs(self)
+        if self.forcing.table.levels:  # forcing started: time limits, values in force
+            self._react_to_force_timeouts(begin)
+            self.forcing.apply()
+        tapped = self.variables.tap is not None  # stores from outside, for a recording
+        before = self.variables.tapped() if tapped else []
+        if recording:
+            assert recordings is not None
+            recordings.before_programs(self)
         if not self.run_programs(begin):
             return
-        after = self.variables.tapped()
+        after = self.variables.tapped() if tapped else []
         self.io.write_outputs(safe=False)
         if self._first_cycle:
             self._first_cycle = False
             self.start_kind = None
         self.cycle_count += 1
-        if self.clock.virtual:  # what the programs used, counted in loop passes
-            self.stats.record(self.scheduler.used_ns)
+        if clock.virtual:  # what the programs used, counted in loop passes
+            stats.record(self.scheduler.used_ns)
         else:
-            self.stats.record(self.clock.now_ns() - begin)
-        if self.recordings is not None and self.recordings.active:
-            self.recordings.cycled(self, begin, before, after)
+            stats.record(clock.now_ns() - begin)
+        if recordings is not None and recordings.active:
+            recordings.cycled(self, begin, before, after)
 
     def run_programs(self, begin: int) -> bool:
         """The user programs of a CPU cycle and what follows them up to the outputs (an
         exact replay runs just this, its inputs taken from a recording). False when the
         resource halted."""
         finished: list[UserProgram] = []
-        if not self.scheduler.guarded(lambda: self.scheduler.run(begin, finished)):
+        if not self.scheduler.guarded(self.scheduler.run, begin, finished):
             return False
         self.variables.publish(finished)
-        self.forcing.check_deactivation()
-        self.forcing.apply()
+        if self.system.FORCE_DEACTIVATION or self.forcing.deactivated:  # ON, or just OFF
+            self.forcing.check_deactivation()
+        if self.forcing.table.levels:
+            self.forcing.apply()
         return True
 
     def step(self) -> None:
@@ -372,16 +386,17 @@ class Resource:
         self.cycle_count += 1
 
     def _update_system(self, begin: int) -> None:
-        system = self.system
-        system.START_CYCLE = self._first_cycle
-        system.COLDSTART = self._first_cycle and self.start_kind == "cold"
-        system.WARMSTART = self._first_cycle and self.start_kind == "warm"
-        system.CYCLE_TIME_LAST = self.stats.last_ns
-        system.CYCLE_TIME_MIN = self.stats.min_ns
-        system.CYCLE_TIME_MAX = self.stats.max_ns
-        system.CYCLE_TIME_MEAN = self.stats.mean_ns
+        system, stats, first = self.system, self.stats, self._first_cycle
+        system.START_CYCLE = first
+        system.COLDSTART = first and self.start_kind == "cold"
+        system.WARMSTART = first and self.start_kind == "warm"
+        system.CYCLE_TIME_LAST = stats.last_ns
+        system.CYCLE_TIME_MIN = stats.min_ns
+        system.CYCLE_TIME_MAX = stats.max_ns
+        system.CYCLE_TIME_MEAN = stats.mean_ns
         system.SYSTEM_TICK = ((begin - self._boot_ns) // 1_000_000) & 0xFFFFFFFF
-        system.FORCE_TIME_REMAINING = self.forcing.table.remaining_ns(GLOBAL, begin) or 0
+        forces = self.forcing.table
+        system.FORCE_TIME_REMAINING = (forces.levels and forces.remaining_ns(GLOBAL, begin)) or 0
         system.DATE_AND_TIME = self.clock.wall_ns()
 
     def _react_to_force_timeouts(self, now: int) -> None:

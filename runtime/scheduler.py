@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from time import perf_counter_ns
 from typing import Any, Protocol
 
 from runtime.clock import Clock
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.protocol import ProgramState
 from runtime.event_recorder import EventRecorder
-from runtime.intrinsics import ProgramFault, SystemView, no_tick
+from runtime.intrinsics import ProgramFault, SystemView
 from runtime.slicing import SliceMeter
 from runtime.user_program import UserProgram
 from runtime.variables import Variables
@@ -69,7 +70,10 @@ class Scheduler:
             if program.state != ProgramState.RUN:
                 continue
             budget = program.config.max_duration_us * 1000 or None
-            if not program.in_progress:
+            if budget is None and program.run is None:
+                self._run_whole(program, begin, finished)
+                continue
+            if program.run is None:  # a new program cycle
                 program.begin_cycle(self._delta(program, begin), self._variables.globals)
             used, done = self._slice(program, budget)
             if done:
@@ -99,13 +103,19 @@ class Scheduler:
         while program.in_progress and program.state not in (ProgramState.ERROR,):
             self._slice(program, None)
 
-    def guarded(self, work: Callable[[], None]) -> bool:
+    def guarded(self, work: Callable[..., None], *args: Any) -> bool:
         """Work under the resource watchdog: a CPU cycle longer than the watchdog time (an
         endless loop, say) ends in ERROR STOP, and the runtime still answers. False when
         the resource halted."""
+        watchdog = self.watchdog
         try:
-            with self.watchdog.guard(self.watchdog_ns):
-                work()
+            watchdog.arm(self._host.params.watchdog_ms * 1_000_000)
+            try:
+                work(*args)
+            finally:
+                fired = watchdog.disarm()
+            if fired:  # it fired just as the work ended: too long all the same
+                raise WatchdogExpired()
             return True
         except Halted:  # an Emergency Stop: already in ERROR STOP
             return False
@@ -127,24 +137,16 @@ class Scheduler:
     ) -> tuple[int, bool]:
         """Run a program on for at most `budget_ns`; (time used, program cycle ended).
         A run-time error puts the program in ERROR; the others go on."""
-        code, view, meter, system = (
-            self._variables.code,
-            program.view,
-            self.meter,
-            self._host.system,
-        )
+        code, meter = self._variables.code, self.meter
         assert code is not None
-
-        def before() -> None:
-            system.now_ns = program.cycle_time_ns
-            code.use(view, meter.tick if budget_ns is not None else no_tick)
-            meter.begin(budget_ns)
-
         done = False
         try:
             if extra:  # more time for a program in its CPU cycle: not another CPU cycle
                 program.cpu_cycles -= 1
-            done = program.resume(before)
+            self._host.system.now_ns = program.cycle_time_ns
+            code.use(program.view, meter.tick if budget_ns is not None else None)
+            meter.begin(budget_ns)
+            done = program.resume()
         except (Exception, RecursionError) as exc:
             self._program_fault(program, exc)
         used = meter.used_ns()
@@ -152,6 +154,26 @@ class Scheduler:
         if self._host.emergency_stopped():
             raise Halted()
         return used, done
+
+    def _run_whole(self, program: UserProgram, begin: int, finished: list[UserProgram]) -> None:
+        """The usual case, kept short: a program without a time slice runs its whole
+        program cycle in one call, its loop passes not metered; what `_slice` does for a
+        slice that has no limit."""
+        code, system = self._variables.code, self._host.system
+        assert code is not None
+        program.begin_cycle(self._delta(program, begin), self._variables.globals)
+        system.now_ns = program.cycle_time_ns
+        code.use(program.view, None)
+        started = perf_counter_ns()
+        try:
+            program.resume()
+            finished.append(program)
+        except (Exception, RecursionError) as exc:
+            self._program_fault(program, exc)
+        if not self.meter.virtual:  # on a virtual clock, only metered passes count
+            self.used_ns += perf_counter_ns() - started
+        if self._host.emergency_stopped():
+            raise Halted()
 
     def _check_program_watchdog(self, program: UserProgram) -> None:
         """A program cycle may span Max. Cycles CPU cycles of Max. Duration each."""

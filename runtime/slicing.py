@@ -2,9 +2,10 @@
 this CPU cycle is suspended and resumes where it stopped in the next CPU cycle.
 
 Generated code calls `_tick()` at the start of every loop pass (straight-line code between
-two passes is bounded by the size of the program). While a sliced program runs, `_tick` is
-a `SliceMeter`'s tick: when the slice is used up it switches from the program's greenlet
-back to the CPU cycle, which resumes the greenlet in a later CPU cycle. A greenlet keeps
+two passes is bounded by the size of the program) when it is not None: it reads `_tick`
+once before the loop. While a sliced program runs, `_tick` is a `SliceMeter`'s tick: when
+the slice is used up it switches from the program's greenlet back to the CPU cycle, which
+resumes the greenlet in a later CPU cycle. A greenlet keeps
 the whole Python stack of the program (FB calls, loops, temporaries), so the program goes
 on exactly where it stopped, in the same thread as the cycle (the watchdog's asynchronous
 exception still reaches it).
@@ -52,9 +53,10 @@ class SliceMeter:
                 over = (self._passes + 1) * VIRTUAL_PASS_NS > self._budget_ns
             else:
                 over = time.perf_counter_ns() - self._start_ns >= self._budget_ns
-            current = greenlet.getcurrent()
-            if over and current.parent is not None:  # inside a ProgramRun: suspend it
-                current.parent.switch(_SUSPENDED)
+            if over:
+                current = greenlet.getcurrent()
+                if current.parent is not None:  # inside a ProgramRun: suspend it
+                    current.parent.switch(_SUSPENDED)
         self._passes += 1
 
 

@@ -4,7 +4,6 @@ progress (which may span several CPU cycles when it has a time slice)."""
 from __future__ import annotations
 
 import copy
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -90,13 +89,12 @@ class UserProgram:
         if self.view is not master:
             copy_globals(master, self.view, self.config.reads)
         # only a program that may be suspended needs a stack of its own
-        self.run = ProgramRun(self.instance) if self.sliced else _DIRECT
+        self.run = ProgramRun(self.instance) if self.config.max_duration_us > 0 else _DIRECT
         self.cpu_cycles = 0
 
-    def resume(self, before: Callable[[], None]) -> bool:
+    def resume(self) -> bool:
         """Run the program cycle on until it ends (True) or its slice is used (False)."""
         assert self.run is not None
-        before()
         self.cpu_cycles += 1
         if isinstance(self.run, ProgramRun):
             finished = self.run.resume()

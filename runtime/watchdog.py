@@ -5,8 +5,8 @@ One watchdog thread per process polls the armed deadlines every millisecond on t
 monotonic clock (also in simulation: an endless loop must end there too). When a deadline
 passes, it raises `WatchdogExpired` in the thread that armed it; CPython delivers such an
 asynchronous exception at the next bytecode boundary, and generated code is plain Python
-bytecode. Arming and disarming are a few assignments under a lock, with no system call per
-cycle; after a second with nothing armed the thread sleeps until the next arming.
+bytecode. Arming and disarming are a few assignments under a plain lock, with no system
+call per cycle; after a second with nothing armed the thread sleeps until the next arming.
 """
 
 from __future__ import annotations
@@ -14,7 +14,8 @@ from __future__ import annotations
 import ctypes
 import threading
 import time
-from types import TracebackType
+from threading import get_ident
+from time import monotonic_ns
 
 POLL_S = 0.001
 IDLE_AFTER_NS = 1_000_000_000
@@ -33,70 +34,58 @@ def _raise_in(thread_id: int, exception: type[BaseException] | None) -> None:
 
 class Watchdog:
     def __init__(self) -> None:
-        self._lock = threading.Condition()
+        # a plain lock (a C object: `with` costs no Python call) for the armed deadlines,
+        # and an event that wakes the thread from its idle sleep
+        self._lock = threading.Lock()
+        self._wake = threading.Event()
         self._deadlines: dict[int, int] = {}  # thread id -> monotonic ns
         self._fired: set[int] = set()
         self._last_armed_ns = 0
-        self._idle = True
+        self._idle = False  # the thread sleeps until `arm` wakes it
         self._thread = threading.Thread(target=self._watch, name="padt-watchdog", daemon=True)
         self._thread.start()
 
-    def guard(self, budget_ns: int) -> _Guard:
-        """`with watchdog.guard(ns):` the block must end within `ns`, or WatchdogExpired."""
-        return _Guard(self, budget_ns)
+    def arm(self, budget_ns: int) -> None:
+        """The calling thread must disarm within `budget_ns`, or WatchdogExpired."""
+        # no lock: one dict store is atomic, and `_fired` never holds this thread here
+        # (`disarm` took it out), so the watching thread sees the old deadline or the new
+        now = monotonic_ns()
+        self._deadlines[get_ident()] = now + budget_ns
+        self._last_armed_ns = now
+        if self._idle:
+            self._wake.set()
 
-    def _arm(self, budget_ns: int) -> None:
-        with self._lock:
-            now = time.monotonic_ns()
-            self._deadlines[threading.get_ident()] = now + budget_ns
-            self._fired.discard(threading.get_ident())
-            self._last_armed_ns = now
-            if self._idle:
-                self._lock.notify()
-
-    def _disarm(self) -> bool:
+    def disarm(self) -> bool:
         """True when the watchdog fired; a still pending exception is taken back."""
-        thread_id = threading.get_ident()
+        thread_id = get_ident()
         with self._lock:
             self._deadlines.pop(thread_id, None)
-            fired = thread_id in self._fired
-            if fired:
-                self._fired.discard(thread_id)
-                _raise_in(thread_id, None)
-            return fired
+            if thread_id not in self._fired:
+                return False
+            self._fired.discard(thread_id)
+            _raise_in(thread_id, None)
+            return True
 
     def _watch(self) -> None:
-        with self._lock:
-            while True:
-                recently = time.monotonic_ns() - self._last_armed_ns < IDLE_AFTER_NS
-                self._idle = not self._deadlines and not recently
-                self._lock.wait(None if self._idle else POLL_S)
-                now = time.monotonic_ns()
+        while True:
+            if not self._deadlines and monotonic_ns() - self._last_armed_ns >= IDLE_AFTER_NS:
+                # idle: `arm` stores its deadline before it reads `_idle`, and this thread
+                # sets `_idle` before it looks at the deadlines again, so one of the two
+                # sees the other and no arming is missed
+                self._wake.clear()
+                self._idle = True
+                if not self._deadlines:
+                    self._wake.wait()
+                self._idle = False
+            else:
+                time.sleep(POLL_S)
+            with self._lock:
+                now = monotonic_ns()
                 for thread_id, deadline in list(self._deadlines.items()):
                     if now > deadline:
                         del self._deadlines[thread_id]
                         self._fired.add(thread_id)
                         _raise_in(thread_id, WatchdogExpired)
-
-
-class _Guard:
-    def __init__(self, watchdog: Watchdog, budget_ns: int) -> None:
-        self._watchdog = watchdog
-        self._budget_ns = budget_ns
-
-    def __enter__(self) -> None:
-        self._watchdog._arm(self._budget_ns)
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        fired = self._watchdog._disarm()
-        if fired and exc_type is None:
-            # it fired just as the block ended: the cycle was too long all the same
-            raise WatchdogExpired()
 
 
 _shared: Watchdog | None = None

@@ -11,7 +11,8 @@ commutes with those.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from collections.abc import Iterator
+from dataclasses import dataclass, field, fields, is_dataclass
 
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
@@ -149,6 +150,8 @@ class _Emitter:
     st_line: int = 0
     size: int = 0  # characters generated so far
     max_size: int = MAX_UNIT_CODE
+    # FOR counters held in a Python local while their loop runs: (kind, attr) -> local
+    counters: dict[tuple[str, str], str] = field(default_factory=dict)
 
     def emit(self, depth: int, line: str) -> None:
         if depth > MAX_INDENT:
@@ -178,6 +181,9 @@ class _Emitter:
 
     # ---- storage
     def var_code(self, variable: Variable) -> str:
+        counter = self.counters.get((variable.kind, variable.attr))
+        if counter is not None:
+            return counter
         if variable.kind == "SYSTEM":  # SYS.COLDSTART
             return f"_SYS.{variable.attr}"
         if variable.kind == "VAR_GLOBAL":
@@ -265,11 +271,21 @@ class _Emitter:
             if constant is not None and low <= constant <= high:
                 offset = repr(constant - low)
             else:
-                offset = f"_ix({self.exact(index_expr).code}, {low}, {high})"
+                offset = self._checked_offset(self.exact(index_expr).code, low, high)
             parts.append(offset if stride == 1 else f"{offset} * {stride}")
             stride *= high - low + 1
         flat = " + ".join(reversed(parts))
         return _Value(f"{base.code}[{flat}]", array.element)
+
+    def _checked_offset(self, index: str, low: int, high: int) -> str:
+        """The list offset of an array index, checked against the bounds inline (the
+        index evaluated once); `_ix` is called only to raise the fault outside them."""
+        if index.isidentifier():  # a Python local: read it twice
+            value, bound = index, index
+        else:
+            value = self.temp()
+            bound = f"({value} := {index})"
+        return f"({value} - {low} if {low} <= {bound} <= {high} else _ix({value}, {low}, {high}))"
 
     def _unary(self, expr: ast.Unary) -> _Value:
         result = _type(self.scope, expr)
@@ -526,11 +542,31 @@ class _Emitter:
         if len(self.lines) == start:
             self.emit(depth, "pass")
 
-    def loop(self, depth: int, header: str) -> None:
-        """A loop header. Each pass starts with `_tick()`: where a program with a time
-        slice may be suspended until the next CPU cycle (see runtime/slicing.py)."""
+    def loop(self, depth: int, header: str, after_tick: tuple[str, ...] = ()) -> None:
+        """A loop header. Each pass starts with a tick where a program with a time slice
+        may be suspended until the next CPU cycle (see runtime/slicing.py). `_tick` is
+        None while no slice is metered: read once before the loop, a pass then costs a
+        test of a local instead of a call (the resource watchdog needs no tick)."""
+        tick = self.temp()
+        self.emit(depth, f"{tick} = _tick")
         self.emit(depth, header)
-        self.emit(depth + 1, "_tick()")
+        self.emit(depth + 1, f"if {tick} is not None:")
+        self.emit(depth + 2, f"{tick}()")
+        for line in after_tick:
+            self.emit(depth + 2, line)
+
+    def tested_loop(self, condition: str, depth: int) -> None:
+        """A loop header testing `condition` before every pass. Statements hoisted out of
+        the condition (a call with outputs) belong inside the loop, before the test, so
+        that they run for every test, not once before the loop."""
+        if not self.pre:
+            self.loop(depth, f"while {condition}:")
+            return
+        hoisted, self.pre = self.pre, []
+        self.loop(depth, "while True:")
+        self.pre = hoisted
+        self.emit(depth + 1, f"if not ({condition}):")
+        self.emit(depth + 2, "break")
 
     def statement(self, statement: ast.Statement, depth: int) -> None:
         outer, self.st_line, self.at = (self.st_line, self.at), statement.pos.line, statement.pos
@@ -548,13 +584,7 @@ class _Emitter:
             case ast.Case():
                 self.case(statement, depth)
             case ast.While(condition=condition, body=body):
-                condition_code = self.exact(condition).code
-                if self.pre:
-                    self.loop(depth, "while True:")
-                    self.emit(depth + 1, f"if not {condition_code}:")
-                    self.emit(depth + 2, "break")
-                else:
-                    self.loop(depth, f"while {condition_code}:")
+                self.tested_loop(self.exact(condition).code, depth)
                 self.block(body, depth + 1)
             case ast.Repeat(body=body, until=until):
                 self.repeat(body, until, depth)
@@ -683,6 +713,16 @@ class _Emitter:
         ref = self.var_code(counter)
         self.emit(depth, f"{ref} = {self.converted(counter.type, loop.start)}")
         step_constant = self.scope.constant_int(loop.step) if loop.step is not None else 1
+        stop_constant = self.scope.constant_int(loop.stop)
+        if (
+            step_constant is not None
+            and stop_constant is not None
+            and not _has_continue(loop.body)
+            and self._counter_private(counter, loop.body)
+        ):
+            stop = self.exact(loop.stop).code  # a constant: the same at every test
+            self.counted_loop(loop, counter, ref, step_constant, stop, depth)
+            return
         step = self.temp() if step_constant is None else repr(step_constant)
         following = self.temp()
         increment = [
@@ -694,7 +734,7 @@ class _Emitter:
         if step_constant is not None and not _has_continue(loop.body):
             stop = self.exact(loop.stop).code
             comparison = "<=" if step_constant >= 0 else ">="
-            self.loop(depth, f"while {ref} {comparison} {stop}:")
+            self.tested_loop(f"{ref} {comparison} {stop}", depth)
             self.block(loop.body, depth + 1)
             for line in increment:
                 self.emit(depth + 1, line)
@@ -716,6 +756,60 @@ class _Emitter:
         self.emit(depth + 1, f"if not ({test}):")
         self.emit(depth + 2, "break")
         self.block(loop.body, depth + 1)
+
+    def counted_loop(
+        self, loop: ast.For, counter: Variable, ref: str, step: int, stop: str, depth: int
+    ) -> None:
+        """A FOR whose end and step are constants and whose counter nothing but the loop
+        writes: the counter lives in a Python local (stored back after every step), the
+        end needs no evaluation, and a step past the end of the type is a comparison. A
+        write from outside while a sliced program was suspended at the tick (an online
+        write, a force) is taken over, as the plain loop would."""
+        assert isinstance(counter.type, ElementaryType)
+        local = self.temp()
+        self.emit(depth, f"{local} = {ref}")
+        self.loop(
+            depth, f"while {local} {'<=' if step >= 0 else '>='} {stop}:", (f"{local} = {ref}",)
+        )
+        key_ = (counter.kind, counter.attr)
+        self.counters[key_] = local
+        try:
+            self.block(loop.body, depth + 1)
+        finally:
+            del self.counters[key_]
+        self.emit(depth + 1, f"{local} += {step}")
+        past = f"> {counter.type.max}" if step >= 0 else f"< {counter.type.min}"
+        self.emit(depth + 1, f"if {local} {past}:")
+        self.emit(depth + 2, f"{ref} = {wrap_code(local, counter.type)}")
+        self.emit(depth + 2, "break")
+        self.emit(depth + 1, f"{ref} = {local}")
+
+    def _counter_private(self, counter: Variable, body: tuple[ast.Statement, ...]) -> bool:
+        """Nothing but the loop itself writes the counter while the body runs: the body
+        assigns it nowhere, passes it to no call, and when it is a slot of the instance
+        (which another POU may reach, `Prog.var`), calls no POU at all."""
+        if counter.kind in ("VAR_GLOBAL", "VAR_EXTERNAL", "SYSTEM"):
+            return False
+        slot = not is_python_local(counter, self.local)
+        name = key(counter.name)
+        for node in _nodes(body):
+            match node:
+                case ast.Assign(target=target) if key_of_root(target) == name:
+                    return False
+                case ast.For(variable=variable) if key(variable) == name:
+                    return False
+                case ast.Call(name=called, args=args, receiver=receiver):
+                    if any(
+                        isinstance(a.value, ast.NameRef) and key(a.value.name) == name for a in args
+                    ):
+                        return False
+                    if slot and (
+                        receiver is not None
+                        or key(called) in self.scope.resolved.pous
+                        or self.scope.lookup(called) is not None
+                    ):
+                        return False
+        return True
 
     def call_statement(self, call: ast.Call, depth: int) -> None:
         binding = self.scope.lookup(call.name) if call.receiver is None else None
@@ -842,6 +936,24 @@ def _has_continue(body: tuple[ast.Statement, ...]) -> bool:
                 if any(_has_continue(b) for _, b in branches) or _has_continue(orelse):
                     return True
     return False
+
+
+def _nodes(value: object) -> Iterator[object]:
+    """Every node below a statement list (statements, expressions, arguments)."""
+    if isinstance(value, tuple | list):
+        for item in value:
+            yield from _nodes(item)
+    elif is_dataclass(value) and not isinstance(value, Pos | type):
+        yield value
+        for item in fields(value):
+            yield from _nodes(getattr(value, item.name))
+
+
+def key_of_root(target: ast.Expr) -> str | None:
+    """The key of the variable an assignment target belongs to (`a` of `a.b[1].3`)."""
+    while isinstance(target, ast.MemberRef | ast.IndexRef | ast.BitRef):
+        target = target.base
+    return key(target.name) if isinstance(target, ast.NameRef) else None
 
 
 def _is_lvalue(expr: ast.Expr) -> bool:

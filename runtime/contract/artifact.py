@@ -17,7 +17,7 @@ from typing import Any
 from runtime.contract.modbus import ModbusConfig, modbus_config
 
 FORMAT = "padt-artifact"
-VERSION = 3  # 3: Modbus TCP (`modbus`)
+VERSION = 4  # 3: Modbus TCP (`modbus`); 4: `_tick` is None while no slice is metered
 
 
 class ArtifactError(ValueError):

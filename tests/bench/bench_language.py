@@ -1,4 +1,5 @@
-"""Language benchmarks: parse and compile speed on OSCAT, cycle time compiled vs tree walker.
+"""Language benchmarks: parse and compile speed on OSCAT, the cycle time of a 1,000-statement
+program beside a baseline's.
 
 Run with `python -m tests.bench.bench_language`. It prints figures and asserts nothing
 about time (machines are shared and noisy).
@@ -7,22 +8,17 @@ about time (machines are shared and noisy).
 from __future__ import annotations
 
 import random
-import statistics
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 from backend.compiler.diagnostics import CompileError
 from backend.compiler.parse import parse_source
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
-from runtime.clock import VirtualClock
-from runtime.resource import Resource
-from tests.support.oracle.tree_walker import TreeWalker
+from tests.bench.baseline import compare
 
 REPO = Path(__file__).resolve().parents[2]
 OSCAT = REPO.parent / "shared" / "corpus" / "oscat" / "st"
-CYCLE_NS = 100_000_000
 
 
 def _lines(text: str) -> int:
@@ -70,29 +66,16 @@ def bench_pipeline(sources: list[SourceFile]) -> None:
 
 # ---- a generated program of 1,000 simple statements ----------------------------------------------
 
-STEP_FB = """\
-FUNCTION_BLOCK Step
-VAR_INPUT
-  enable : BOOL;
-  step : INT;
-END_VAR
-VAR_OUTPUT
-  value : INT;
-  high : BOOL;
-END_VAR
-IF enable THEN
-  value := value + step;
-END_IF;
-high := value > 1000;
-END_FUNCTION_BLOCK
-"""
+ARRAY_LENGTH = 16
 
 
 def thousand_statements(seed: int = 61131) -> str:
-    """INT arithmetic that wraps, BOOL logic, and 50 FB calls (25 of a small user FB, 25
-    of TON), shuffled into one PROGRAM of 1,000 statements; the same text for a seed."""
+    """INT arithmetic that wraps, BOOL logic, IF, FOR over an array and 48 TON calls,
+    shuffled into one PROGRAM of 1,000 statements (a FOR or an IF counts as one); the same
+    text for a seed. The mix of the program that issue 16 measured against matiec's C and
+    ironplc's VM."""
     rng = random.Random(seed)
-    ints, bools, fbs, timers = 20, 10, 25, 25
+    ints, bools, timers, loops, ifs = 20, 10, 48, 8, 50
 
     def a() -> str:
         return f"a{rng.randrange(ints)}"
@@ -100,84 +83,91 @@ def thousand_statements(seed: int = 61131) -> str:
     def b() -> str:
         return f"b{rng.randrange(bools)}"
 
-    statements: list[str] = []
-    for n in range(fbs):
-        statements.append(f"f{n}(enable := {b()}, step := {a()});")
-        statements.append(f"t{n}(IN := {b()}, PT := T#{rng.choice([200, 300, 500])}ms);")
+    statements = [
+        f"t{n}(IN := {b()}, PT := T#{rng.choice([200, 300, 500])}ms);" for n in range(timers)
+    ]
+    for _ in range(loops):
+        statements.append(
+            f"FOR k := 1 TO {ARRAY_LENGTH} DO arr[k] := arr[k] {rng.choice('+-')} {a()}; END_FOR;"
+        )
+    for _ in range(ifs):
+        statements.append(
+            f"IF {a()} > {a()} THEN {a()} := {a()} + {rng.randrange(1, 100)}; "
+            f"ELSE {b()} := NOT {b()}; END_IF;"
+        )
     while len(statements) < 1000:
         if rng.random() < 0.65:
             op1, op2 = rng.choice("+-*"), rng.choice("+-")
             constant = rng.randrange(1, 500)
             statements.append(f"{a()} := {a()} {op1} {a()} {op2} {constant};")
         else:
-            outputs = [f"f{rng.randrange(fbs)}.high", f"t{rng.randrange(timers)}.Q"]
-            operand = rng.choice([b(), f"({a()} > {a()})", *outputs])
+            operand = rng.choice(
+                [
+                    b(),
+                    f"({a()} > {a()})",
+                    f"t{rng.randrange(timers)}.Q",
+                    f"(arr[{rng.randrange(1, ARRAY_LENGTH + 1)}] > {a()})",
+                ]
+            )
             statements.append(f"{b()} := {b()} {rng.choice(['AND', 'OR', 'XOR'])} NOT {operand};")
     rng.shuffle(statements)
     declarations = [f"  a{n} : INT := {rng.randrange(-1000, 1000)};" for n in range(ints)]
     declarations += [f"  b{n} : BOOL := {rng.choice(['TRUE', 'FALSE'])};" for n in range(bools)]
-    declarations += [f"  f{n} : Step;" for n in range(fbs)]
     declarations += [f"  t{n} : TON;" for n in range(timers)]
+    declarations += [f"  arr : ARRAY[1..{ARRAY_LENGTH}] OF INT;", "  k : INT;"]
     lines = ["PROGRAM Bench", "VAR", *declarations, "END_VAR", *statements, "END_PROGRAM"]
-    return STEP_FB + "\n" + "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n"
 
 
-def _median_us(cycle: Callable[[], None], cycles: int) -> float:
-    samples = []
-    for _ in range(cycles):
-        started = time.perf_counter_ns()
-        cycle()
-        samples.append(time.perf_counter_ns() - started)
-    return statistics.median(samples) / 1000
-
-
-def bench_cycles(compiled_cycles: int = 2000, walker_cycles: int = 100) -> None:
-    sources = [SourceFile("bench.st", thousand_statements())]
+def bench_cycles(cycles: int = 2_000, check_cycles: int = 100) -> None:
+    """The 1,000-statement program per CPU cycle, today's code beside the baseline's
+    (tests/bench/baseline.py), each in a process of its own on a virtual clock."""
+    text = thousand_statements()
     started = time.perf_counter()
-    result = compile_sources(sources)
+    result = compile_sources([SourceFile("bench.st", text)])
     compile_s = time.perf_counter() - started
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
-
-    def compiled_run() -> tuple[Resource, VirtualClock]:
-        clock = VirtualClock()
-        resource = Resource("bench", clock)
-        assert result.artifact is not None
-        resource.load(result.artifact)
-        resource.start()
-        return resource, clock
-
-    resource, clock = compiled_run()
-
-    def compiled_cycle() -> None:
-        resource.cycle()
-        clock.advance(CYCLE_NS)
-
-    compiled_us = _median_us(compiled_cycle, compiled_cycles)
+    request = {"program": text, "cycles": cycles, "check_cycles": check_cycles}
+    compared = compare(request, "program_us")
+    now_us = compared.now["program_us"]
     print(
         f"1,000-statement program: compiled in {compile_s * 1e3:.0f} ms; "
-        f"{compiled_us:,.1f} us per cycle compiled (median of {compiled_cycles:,})"
+        f"{now_us:,.1f} us per cycle (median of {cycles:,}, best of the rounds)"
     )
+    if compared.before is not None:
+        before_us = compared.before["program_us"]
+        same = compared.before["values"] == compared.now["values"]
+        print(
+            f"  baseline ({compared.name}): {before_us:,.1f} us per cycle: "
+            f"today's is {before_us / now_us:.2f}x faster; "
+            f"the same values after {check_cycles} cycles: {same}"
+        )
 
-    walker = TreeWalker(sources)
-    walker_clock = VirtualClock()
 
-    def walker_cycle() -> None:
-        walker.run_cycle(walker_clock.now_ns())
-        walker_clock.advance(CYCLE_NS)
+ARRAY_LOOP = """\
+PROGRAM Loop
+VAR arr : ARRAY[1..1000] OF INT; i : INT; END_VAR
+FOR i := 1 TO 1000 DO
+  arr[i] := arr[i] + i;
+END_FOR;
+END_PROGRAM
+"""
 
-    walker_us = _median_us(walker_cycle, walker_cycles)
-    print(
-        f"1,000-statement program: {walker_us:,.1f} us per cycle in the tree walker "
-        f"(median of {walker_cycles:,}); compiled is {walker_us / compiled_us:.1f}x faster"
-    )
 
-    # the figures only mean something if both did the same work
-    check, check_clock = compiled_run()
-    for _ in range(walker_cycles):
-        check.cycle()
-        check_clock.advance(CYCLE_NS)
-    agree = check.variables.values() == walker.values()
-    print(f"compiled and tree walker agree after {walker_cycles} cycles: {agree}")
+def bench_array_loop(cycles: int = 500, check_cycles: int = 10) -> None:
+    """The FOR pass on its own (the loop tick and the bounds check were two calls each)."""
+    request = {"program": ARRAY_LOOP, "cycles": cycles, "check_cycles": check_cycles}
+    compared = compare(request, "program_us")
+    now_us = compared.now["program_us"]
+    line = f"FOR over an array, 1,000 passes: {now_us:,.1f} us per cycle ({now_us:.0f} ns per pass)"
+    if compared.before is not None:
+        before_us = compared.before["program_us"]
+        same = compared.before["values"] == compared.now["values"]
+        line += (
+            f"; baseline {before_us:,.1f} us: {before_us / now_us:.2f}x faster; "
+            f"the same values: {same}"
+        )
+    print(line)
 
 
 def main() -> None:
@@ -186,6 +176,7 @@ def main() -> None:
         bench_parse(sources)
         bench_pipeline(sources)
     bench_cycles()
+    bench_array_loop()
 
 
 if __name__ == "__main__":

@@ -30,6 +30,7 @@ from runtime.contract.wire import encode
 from runtime.cycle_driver import CycleDriver
 from runtime.link import ResourceLink
 from runtime.resource import Resource
+from tests.bench.baseline import compare
 from tests.bench.bench_language import thousand_statements
 
 TARGET_MS = 10
@@ -165,6 +166,19 @@ def bench_overhead(cycles: int = 20_000) -> None:
     )
     _print_overhead(f"FOR loop of 1,000 passes, max_duration_us {slice_us}", metered)
     print(f"  -> sliced / unsliced (1,000 loop passes, mean): {metered.mean / plain.mean:.2f}")
+    bench_fixed_cost(cycles)
+
+
+def bench_fixed_cost(cycles: int) -> None:
+    """The fixed cost of a CPU cycle, today's code beside the baseline's, each in a fresh
+    process (tests/bench/baseline.py)."""
+    compared = compare({"fixed_cycles": cycles}, "fixed_us")
+    now_us = compared.now["fixed_us"]
+    line = f"  fixed cost of a CPU cycle (1 empty program, median, own process): {now_us:.2f} us"
+    if compared.before is not None:
+        before_us = compared.before["fixed_us"]
+        line += f"; baseline ({compared.name}) {before_us:.2f} us: {before_us / now_us:.2f}x less"
+    print(line)
 
 
 # ---- 2. jitter at a 10 ms target cycle, under the real cycle driver --------------------------
