@@ -177,9 +177,7 @@ class TimedLink(ResourceLink):
         spent = time.monotonic_ns() - started
         log = self.publication_log
         log.publications.append(
-            Publication(
-                watch_id, snapshot.cycle, log.last_watched_ns, spent, len(snapshot.values)
-            )
+            Publication(watch_id, snapshot.cycle, log.last_watched_ns, spent, len(snapshot.values))
         )
 
 
@@ -409,9 +407,7 @@ def _report(
 
     # a set registered in several requests is published part by part meanwhile; a client
     # takes only the whole set's messages (their revision), so only those count
-    mine = [
-        p for p in log.publications if p.watch_id == watch_id and p.values == len(selection)
-    ]
+    mine = [p for p in log.publications if p.watch_id == watch_id and p.values == len(selection)]
     sent = [p for p in mine if in_window(p.cycle)]
     sent_cycles = {p.cycle for p in sent}
     cycles = sorted(c for c in ends if in_window(c))
