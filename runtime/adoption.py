@@ -118,9 +118,15 @@ def plan_adoption(old: Instances, new: Instances, plan: ReloadPlan) -> Adoption:
         for depth in range(len(attrs)):
             node = (bound.program, attrs[:depth])
             if node not in decided:
-                proposal = proposals.get(node)
                 decided[node] = _adopt(
-                    node, proposal, members[node], old_members, old, new, new_children, adoption
+                    node,
+                    proposals.get(node),
+                    members[node],
+                    old_members,
+                    old,
+                    new,
+                    new_children,
+                    adoption,
                 )
             if decided[node]:
                 adoption.paths.add(bound.path.path.upper())
