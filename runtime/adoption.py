@@ -42,7 +42,9 @@ class Graft:
     new_parent: Any  # None: it replaces the root object of `new_owner` (or the globals)
     last: Accessor | None
     fresh: Any  # the new object it replaces
-    values: int  # declared variables below it
+    values: int  # declared variables that come along
+    # (slot, new object): children that are new, set into the adopted object at the end
+    patches: tuple[tuple[str, Any], ...] = ()
 
 
 @dataclass
@@ -50,6 +52,8 @@ class Adoption:
     grafts: list[Graft] = field(default_factory=list)
     paths: set[str] = field(default_factory=set)  # upper-case new paths carried by grafts
     replaced: set[int] = field(default_factory=set)  # ids of new objects grafts replace
+    # ids of new objects replaced by an adopted one that takes some new children over
+    shallow: set[int] = field(default_factory=set)
     classes: dict[type, type] = field(default_factory=dict)  # old class -> new class
     children: dict[type, tuple[str, ...]] = field(default_factory=dict)  # of old classes
     objects: int = 0  # generated objects whose class the switch-over changes
@@ -72,7 +76,7 @@ def compatible_classes(old: CodeImage, new: CodeImage) -> dict[type, type]:
     compatible = {}
     for name, kind in old.classes().items():
         other = renewed.get(name)
-        if other is None:
+        if other is None or other is kind:  # a class of the runtime's own (a step)
             continue
         probe: Any = object.__new__(kind)
         if tuple(slot_names(probe)) != tuple(slot_names(object.__new__(other))):
@@ -87,82 +91,153 @@ def compatible_classes(old: CodeImage, new: CodeImage) -> dict[type, type]:
 
 def plan_adoption(old: Instances, new: Instances, plan: ReloadPlan) -> Adoption:
     """The objects to adopt (see the module's docstring)."""
-    classes = compatible_classes(old.image, new.image)
-    adoption = Adoption(classes=classes, children=old.image.object_attrs())
-    new_children = new.image.object_attrs()
-    changes = {change.path.upper(): change for change in plan.changes}
-    old_members = Counter(_prefixes(old.bound))
-    members: Counter[Node] = Counter()
-    # what each node of the new tree would be adopted from; None where nothing can be
-    proposals: dict[Node, tuple[UserProgram | None, tuple[Accessor, ...]] | None] = {}
-    for bound in new.bound:
-        change = changes.get(bound.path.path.upper())
-        source = None
-        if change is not None and change.action == KEPT and change.source is not None:
-            source = old.by_name.get(change.source.upper())
-        attrs = bound.path.attrs
-        for depth in range(len(attrs)):
-            node = (bound.program, attrs[:depth])
-            members[node] += 1
-            suffix = attrs[depth:]
-            origin = source.path.attrs if source is not None else ()
-            if source is None or origin[len(origin) - len(suffix) :] != suffix:
-                proposals[node] = None
-                continue
-            proposal = (source.program, origin[: len(origin) - len(suffix)])
-            if proposals.setdefault(node, proposal) != proposal:
-                proposals[node] = None
-    decided: dict[Node, bool] = {}
-    for bound in new.bound:
-        attrs = bound.path.attrs
-        for depth in range(len(attrs)):
-            node = (bound.program, attrs[:depth])
-            if node not in decided:
-                decided[node] = _adopt(
-                    node,
-                    proposals.get(node),
-                    members[node],
-                    old_members,
-                    old,
-                    new,
-                    new_children,
-                    adoption,
-                )
-            if decided[node]:
-                adoption.paths.add(bound.path.path.upper())
-                break
-    return adoption
+    return _Planner(old, new, plan).adoption
 
 
-def _adopt(
-    node: Node,
-    proposal: tuple[UserProgram | None, tuple[Accessor, ...]] | None,
-    count: int,
-    old_members: Counter[Node],
-    old: Instances,
-    new: Instances,
-    new_children: dict[type, tuple[str, ...]],
-    adoption: Adoption,
-) -> bool:
-    """Adopt the object at `node` if it can be; records the graft."""
-    if proposal is None or old_members[proposal] != count or _taken(proposal, adoption):
+Origin = tuple[UserProgram | None, tuple[Accessor, ...]]  # a node of the old tree
+
+
+class _Planner:
+    """Works out the adoption: for every node of the new tree (walked from the roots down,
+    leaf by leaf) whether it is adopted with everything below it (`deep`), adopted itself
+    with some of its children new (`shallow`), adopted with its shallow parent (`inplace`),
+    new below a shallow parent and all copied (`blocked`), or not adopted (`no`)."""
+
+    def __init__(self, old: Instances, new: Instances, plan: ReloadPlan) -> None:
+        self.old, self.new = old, new
+        self.adoption = Adoption(
+            classes=compatible_classes(old.image, new.image), children=old.image.object_attrs()
+        )
+        self.new_children = new.image.object_attrs()
+        self.old_members = Counter(_prefixes(old.bound))
+        self.old_direct = Counter((b.program, b.path.attrs[:-1]) for b in old.bound)
+        self.members: Counter[Node] = Counter()
+        self.direct: Counter[Node] = Counter()
+        # what each node would be adopted from, by all leaves below it and by its own
+        # leaves; None where the leaves disagree or one of them is not simply kept
+        self.proposals: dict[Node, Origin | None] = {}
+        self.direct_proposals: dict[Node, Origin | None] = {}
+        changes = {change.path.upper(): change for change in plan.changes}
+        for bound in new.bound:
+            change = changes.get(bound.path.path.upper())
+            source = None
+            if change is not None and change.action == KEPT and change.source is not None:
+                source = old.by_name.get(change.source.upper())
+            attrs = bound.path.attrs
+            for depth in range(len(attrs)):
+                node = (bound.program, attrs[:depth])
+                self.members[node] += 1
+                self._propose(self.proposals, node, source, attrs[depth:])
+            self.direct[(bound.program, attrs[:-1])] += 1
+            self._propose(self.direct_proposals, (bound.program, attrs[:-1]), source, attrs[-1:])
+        self.state: dict[Node, str] = {}
+        for bound in new.bound:
+            if self._adopted(bound.program, bound.path.attrs):
+                self.adoption.paths.add(bound.path.path.upper())
+
+    @staticmethod
+    def _propose(
+        proposals: dict[Node, Origin | None], node: Node, source: Any, suffix: tuple[Accessor, ...]
+    ) -> None:
+        origin = source.path.attrs if source is not None else ()
+        if source is None or origin[len(origin) - len(suffix) :] != suffix:
+            proposals[node] = None
+            return
+        proposal = (source.program, origin[: len(origin) - len(suffix)])
+        if proposals.setdefault(node, proposal) != proposal:
+            proposals[node] = None
+
+    def _adopted(self, owner: UserProgram | None, attrs: tuple[Accessor, ...]) -> bool:
+        """Whether the leaf at `attrs` comes along with an adopted object."""
+        for depth in range(len(attrs)):
+            node = (owner, attrs[:depth])
+            if node not in self.state:
+                self.state[node] = self._decide(node)
+            state = self.state[node]
+            if state in ("deep", "inplace"):
+                return True
+            if state == "blocked":
+                return False
+            if state == "shallow" and depth == len(attrs) - 1:
+                return True  # one of the shallow object's own variables
         return False
-    owner, attrs = node
-    old_owner, old_attrs = proposal
-    old_root = old_owner.instance if old_owner is not None else old.globals
-    new_root = owner.instance if owner is not None else new.globals
-    fresh = resolve(new_root, attrs)
-    objects = _same_layout(resolve(old_root, old_attrs), fresh, adoption.classes, new_children)
-    if objects is None:
-        return False
-    adoption.objects += len(objects)
-    adoption.replaced.update(objects)
-    parent = resolve(new_root, attrs[:-1]) if attrs else None
-    last = attrs[-1] if attrs else None
-    adoption.taken.add(proposal)
-    adoption.under.update((old_owner, old_attrs[:depth]) for depth in range(len(old_attrs)))
-    adoption.grafts.append(Graft(old_root, old_attrs, owner, parent, last, fresh, count))
-    return True
+
+    def _roots(self, node: Node, origin: Origin) -> tuple[Any, Any]:
+        old_root = origin[0].instance if origin[0] is not None else self.old.globals
+        new_root = node[0].instance if node[0] is not None else self.new.globals
+        return old_root, new_root
+
+    def _deep(self, node: Node, origin: Origin | None) -> set[int] | None:
+        """The new objects below `node` when it can be adopted from `origin` whole."""
+        if origin is None or self.old_members[origin] != self.members[node]:
+            return None
+        if _taken(origin, self.adoption):
+            return None
+        old_root, new_root = self._roots(node, origin)
+        before, after = resolve(old_root, origin[1]), resolve(new_root, node[1])
+        return _same_layout(before, after, self.adoption.classes, self.new_children)
+
+    def _decide(self, node: Node) -> str:
+        origin = self.proposals.get(node)
+        objects = self._deep(node, origin)
+        if objects is not None:
+            assert origin is not None
+            self._graft(node, origin, objects, self.members[node], ())
+            return "deep"
+        return "shallow" if self._shallow(node) else "no"
+
+    def _shallow(self, node: Node) -> bool:
+        """Adopt the object at `node` itself when its own variables are all kept and its
+        class is compatible; each child comes along or is new (set into it at the end)."""
+        origin = self.direct_proposals.get(node)
+        if origin is None or self.old_direct[origin] != self.direct[node]:
+            return False
+        if _taken(origin, self.adoption):
+            return False
+        old_root, new_root = self._roots(node, origin)
+        before, after = resolve(old_root, origin[1]), resolve(new_root, node[1])
+        kind = type(after)
+        if kind not in self.new_children or isinstance(after, list):
+            return False
+        if self.adoption.classes.get(type(before), type(before)) is not kind:
+            return False
+        objects, values, patches = {id(after)}, self.direct[node], []
+        for attr in self.new_children[kind]:
+            child = (node[0], (*node[1], attr))
+            inner = (origin[0], (*origin[1], attr))
+            found = self._deep(child, inner) if self.proposals.get(child) == inner else None
+            if found is None:
+                self.state[child] = "blocked"
+                patches.append((attr, getattr(after, attr)))
+            else:
+                self.state[child] = "inplace"
+                objects |= found
+                values += self.members[child]
+        self.adoption.shallow.add(id(after))
+        self._graft(node, origin, objects - {id(after)}, values, tuple(patches))
+        self.adoption.objects += 1
+        return True
+
+    def _graft(
+        self,
+        node: Node,
+        origin: Origin,
+        objects: set[int],
+        values: int,
+        patches: tuple[tuple[str, Any], ...],
+    ) -> None:
+        owner, attrs = node
+        old_root, new_root = self._roots(node, origin)
+        adoption = self.adoption
+        adoption.objects += len(objects)
+        adoption.replaced.update(objects)
+        adoption.taken.add(origin)
+        adoption.under.update((origin[0], origin[1][:depth]) for depth in range(len(origin[1])))
+        parent = resolve(new_root, attrs[:-1]) if attrs else None
+        last = attrs[-1] if attrs else None
+        fresh = resolve(new_root, attrs)
+        graft = Graft(old_root, origin[1], owner, parent, last, fresh, values, patches)
+        adoption.grafts.append(graft)
 
 
 def _same_layout(
@@ -183,7 +258,7 @@ def _same_layout(
         if isinstance(after, _VALUES):  # an unbound VAR_IN_OUT; it is bound at each call
             continue
         kind = type(after)
-        if kind not in children or classes.get(type(before)) is not kind:
+        if kind not in children or classes.get(type(before), type(before)) is not kind:
             return None
         found.add(id(after))
         stack.extend((getattr(before, attr), getattr(after, attr)) for attr in children[kind])

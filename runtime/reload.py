@@ -168,7 +168,8 @@ def prepare_switch_over(
     old_declared, new_declared = old.image.declared_attrs(), new.image.declared_attrs()
     old_objects = dict(_objects(old))
     internal = []
-    for path, target in _objects(new, adoption.replaced):  # not what is adopted anyway
+    # not what is adopted anyway (but what is new below an object adopted on its own)
+    for path, target in _objects(new, adoption.replaced, adoption.shallow):
         counterpart = old_objects.get(rename_source(path, renames).upper())
         if counterpart is None or type(counterpart).__name__ != type(target).__name__:
             continue
@@ -228,7 +229,11 @@ def switch_over(prepared: SwitchOver, new: Instances, deadline_ns: int | None) -
     share_globals(new.globals, new.programs)
     if deadline_ns is not None and time.perf_counter_ns() > deadline_ns:
         raise SwitchOverTooLong()
-    # the point of no return: the adopted objects run the new code from now on
+    # the point of no return: the adopted objects take their new children and run the
+    # new code from now on
+    for graft, target in zip(prepared.adoption.grafts, adopted, strict=True):
+        for slot, child in graft.patches:
+            setattr(target, slot, child)
     rebind(adopted, prepared.adoption.classes, prepared.adoption.children)
     return prepared.carried + sum(len(slots) for _, _, slots in prepared.internal)
 
@@ -264,10 +269,12 @@ def _owner(instances: Instances, bound: BoundVariable) -> Any:
     return bound.program.instance if bound.program is not None else instances.globals
 
 
-def _objects(instances: Instances, skip: Set[int] = frozenset()) -> Iterator[tuple[str, Any]]:
+def _objects(
+    instances: Instances, skip: Set[int] = frozenset(), hide: Set[int] = frozenset()
+) -> Iterator[tuple[str, Any]]:
     """Every generated object below the program and global instances, by a path of
     attribute names (`Main.fb`, `Main.arr#2` for the third object of a list); not the
-    objects (and what is below them) whose id is in `skip`."""
+    objects whose id is in `skip` and what is below them, nor those in `hide`."""
     roots: list[tuple[str, Any]] = [(p.name, p.instance) for p in instances.programs]
     if instances.globals is not None:
         roots.append(("", instances.globals))
@@ -276,7 +283,8 @@ def _objects(instances: Instances, skip: Set[int] = frozenset()) -> Iterator[tup
         path, target = stack.pop()
         if id(target) in skip:
             continue
-        yield path.upper(), target
+        if id(target) not in hide:
+            yield path.upper(), target
         for slot in slot_names(target):
             value = getattr(target, slot, None)
             inner = f"{path}.{slot}" if path else slot

@@ -53,6 +53,10 @@ END_PROGRAM
 
 # one small POU's code changes: nothing changes its layout
 ONE_POU = PLANT.replace("y := x * 2;", "y := x * 3;")
+# one small POU gains a variable: its instance is new, the program holding it is adopted
+SMALL_LAYOUT = ONE_POU.replace(
+    "VAR_OUTPUT y : INT; END_VAR", "VAR_OUTPUT y : INT; END_VAR VAR k : INT; END_VAR"
+)
 # every type of the project gains a variable: its objects are new, their values copied
 EDITS = (
     ("tag : STRING[8]; END_STRUCT", "tag : STRING[8]; z : INT; END_STRUCT"),
@@ -125,6 +129,20 @@ def runs_on(h: Harness, added: tuple[str, ...] = ()) -> None:
     assert values["Main.Busy.X"] is True and values["Main.Busy.T"] > 0
 
 
+def test_a_pou_that_gains_a_variable_is_copied_and_the_program_around_it_adopted() -> None:
+    h = running()
+    before = state(h.resource)
+    main = h.resource.programs[0].instance
+    counter, small = main.c, main.s
+    job = prepared(h, SMALL_LAYOUT)
+    assert job.prepared.copied == 2  # Small's x and y; everything else comes along
+    reload_switch.finish(h.resource, job)
+    assert h.resource.programs[0].instance is main and main.c is counter
+    assert main.s is not small and h.value("Main.s.k") == 0
+    assert without(state(h.resource), {"k"}) == before
+    runs_on(h, ("Main.s.k",))
+
+
 def after_values(h: Harness) -> list[str]:
     return list(h.resource.variables.values())
 
@@ -143,7 +161,9 @@ def test_a_reload_that_changes_every_layout_copies_every_value() -> None:
     runs_on(h, tuple(k for k in after_values(h) if k.rpartition(".")[2] in NEW_MEMBERS))
 
 
-@pytest.mark.parametrize("text", [ONE_POU, EVERYTHING], ids=["one POU", "everything"])
+@pytest.mark.parametrize(
+    "text", [ONE_POU, SMALL_LAYOUT, EVERYTHING], ids=["one POU", "one layout", "everything"]
+)
 def test_adopting_gives_what_copying_gives(text: str, monkeypatch: pytest.MonkeyPatch) -> None:
     adopted, copied = running(), running()
     assert reload_switch.finish(adopted.resource, prepared(adopted, text))
