@@ -6,10 +6,13 @@ is adopted when copying it would give exactly what the plan says anyway: every v
 below it is kept (same relative path, same type, no rename inside, none new or deleted)
 and every generated object below it has a class of the same name whose slots are laid out
 exactly as before, so the object can be switched to the new class (its code may have
-changed) by assigning `__class__`. Only the topmost such objects are adopted; the rest
-of the values are copied. The decisions are made while preparing (off the cycle thread);
-the switch-over then grafts the adopted objects into the new configuration (writing only
-into the new one) and, past the point of no return, switches their classes.
+changed) by assigning `__class__`. An object whose own variables are all kept and whose
+class is compatible is adopted on its own even when some children are new (their layout
+changed): those are filled by copying and set into it at the end. Only the topmost such
+objects are adopted; the rest of the values are copied. The decisions are made while
+preparing (off the cycle thread); the switch-over then grafts the adopted objects into the
+new configuration (writing only into the new one) and, past the point of no return, sets
+the new children into them and switches their classes.
 """
 
 from __future__ import annotations
