@@ -222,3 +222,34 @@ def test_a_context_saved_after_an_adopting_reload_restores_warm() -> None:
     warm_start(fresh.resource, context)
     assert fresh.resource.variables.values() == h.resource.variables.values()
     assert state(fresh.resource) == state(h.resource)
+
+
+TWO_PROGRAMS = [{"name": "Main"}, {"name": "Other", "pou": "OtherPou"}]
+OTHER = """
+PROGRAM OtherPou
+VAR_EXTERNAL total : DINT; points : ARRAY[1..3] OF Point; END_VAR
+VAR seen : DINT; END_VAR
+seen := total + points[2].x;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("text", [ONE_POU, EVERYTHING], ids=["one POU", "everything"])
+def test_two_programs_see_the_globals_as_before(text: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """With two programs each has its own view of the globals, filled from them."""
+    adopted, copied = harness(PLANT + OTHER, TWO_PROGRAMS), harness(PLANT + OTHER, TWO_PROGRAMS)
+    adopted.cycle(6)
+    copied.cycle(6)
+    new = compiled(text + OTHER, TWO_PROGRAMS)
+    assert reload_switch.reload(adopted.resource, new, {})
+    with monkeypatch.context() as patch:
+        copy_only(patch)
+        assert reload_switch.reload(copied.resource, new, {})
+    for _ in range(4):
+        assert state(adopted.resource) == state(copied.resource)
+        views = [snapshot(p.view) for p in adopted.resource.programs]
+        assert views == [snapshot(p.view) for p in copied.resource.programs]
+        assert adopted.cycle() == copied.cycle()
+    assert (
+        adopted.value("Other.seen") == adopted.value("total") - 1 + adopted.value("points[2].x") - 1
+    )
