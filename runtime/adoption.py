@@ -45,7 +45,6 @@ class Graft:
     new_parent: Any  # None: it replaces the root object of `new_owner` (or the globals)
     last: Accessor | None
     fresh: Any  # the new object it replaces
-    values: int  # declared variables that come along
     # (slot, new object): children that are new, set into the adopted object at the end
     patches: tuple[tuple[str, Any], ...] = ()
 
@@ -185,7 +184,7 @@ class _Planner:
         objects = self._deep(node, origin)
         if objects is not None:
             assert origin is not None
-            self._graft(node, origin, objects, self.members[node], ())
+            self._graft(node, origin, objects, ())
             return "deep"
         return "shallow" if self._shallow(node) else "no"
 
@@ -204,7 +203,7 @@ class _Planner:
             return False
         if self.adoption.classes.get(type(before), type(before)) is not kind:
             return False
-        objects, values, patches = {id(after)}, self.direct[node], []
+        objects, patches = {id(after)}, []
         for attr in self.new_children[kind]:
             child = (node[0], (*node[1], attr))
             inner = (origin[0], (*origin[1], attr))
@@ -215,9 +214,8 @@ class _Planner:
             else:
                 self.state[child] = "inplace"
                 objects |= found
-                values += self.members[child]
         self.adoption.shallow.add(id(after))
-        self._graft(node, origin, objects - {id(after)}, values, tuple(patches))
+        self._graft(node, origin, objects - {id(after)}, tuple(patches))
         self.adoption.objects += 1
         return True
 
@@ -226,7 +224,6 @@ class _Planner:
         node: Node,
         origin: Origin,
         objects: set[int],
-        values: int,
         patches: tuple[tuple[str, Any], ...],
     ) -> None:
         owner, attrs = node
@@ -239,7 +236,7 @@ class _Planner:
         parent = resolve(new_root, attrs[:-1]) if attrs else None
         last = attrs[-1] if attrs else None
         fresh = resolve(new_root, attrs)
-        graft = Graft(old_root, origin[1], owner, parent, last, fresh, values, patches)
+        graft = Graft(old_root, origin[1], owner, parent, last, fresh, patches)
         adoption.grafts.append(graft)
 
 
