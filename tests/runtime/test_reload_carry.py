@@ -39,10 +39,11 @@ y := x * 2;
 END_FUNCTION_BLOCK
 PROGRAM Main
 VAR_EXTERNAL total : DINT; points : ARRAY[1..3] OF Point; flags : ARRAY[0..3] OF BOOL; END_VAR
-VAR c : Counter; cs : ARRAY[1..2] OF Counter; s : Small; n : INT; r : REAL; END_VAR
+VAR c : Counter; cs : ARRAY[1..2] OF Counter; s : Small; n : INT; r : REAL; last : Point; END_VAR
 n := n + 1; r := r + 0.5;
 c(go := TRUE); cs[2].go := n > 1; s(x := n);
 points[2].x := n; points[2].y := r; points[3].tag := 'abc'; flags[1] := n > 2;
+last := points[2];  (* a new struct object each cycle *)
 INITIAL_STEP Idle: END_STEP
 STEP Busy: Work(L, T#5s); END_STEP
 TRANSITION FROM Idle TO Busy := n > 2; END_TRANSITION
@@ -63,7 +64,7 @@ EDITS = (
     ("OF BOOL; END_VAR\nFUNCTION_BLOCK", "OF BOOL; more : INT; END_VAR\nFUNCTION_BLOCK"),
     ("OF Point; END_VAR", "OF Point; e : INT; END_VAR"),
     ("VAR_OUTPUT y : INT; END_VAR", "VAR_OUTPUT y : INT; END_VAR VAR k : INT; END_VAR"),
-    ("n : INT; r : REAL; END_VAR", "n : INT; r : REAL; added : INT := 7; END_VAR"),
+    ("r : REAL;", "r : REAL; added : INT := 7;"),
     ("y := x * 2;", "y := x * 3;"),
 )
 EVERYTHING = functools.reduce(lambda text, edit: text.replace(*edit), EDITS, PLANT)
@@ -253,3 +254,16 @@ def test_two_programs_see_the_globals_as_before(text: str, monkeypatch: pytest.M
     assert (
         adopted.value("Other.seen") == adopted.value("total") - 1 + adopted.value("points[2].x") - 1
     )
+
+
+@pytest.mark.parametrize("text", [ONE_POU, SMALL_LAYOUT], ids=["one POU", "one layout"])
+def test_cycles_between_preparing_and_switching_are_carried(text: str) -> None:
+    """The cycles go on while a reload prepares: the switch-over takes the objects and
+    values as they are then (a struct assignment makes a new object every cycle)."""
+    h = running()
+    job = prepared(h, text)
+    h.cycle(2)
+    before = state(h.resource)
+    reload_switch.finish(h.resource, job)
+    assert without(state(h.resource), {"k"}) == before
+    assert h.value("Main.last.x") == h.value("Main.n") == 8
