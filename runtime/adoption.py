@@ -51,24 +51,23 @@ class Graft:
 
 @dataclass
 class Adoption:
+    """What the switch-over does with the adopted objects."""
+
     grafts: list[Graft] = field(default_factory=list)
-    paths: set[str] = field(default_factory=set)  # upper-case new paths carried by grafts
-    replaced: set[int] = field(default_factory=set)  # ids of new objects grafts replace
-    # ids of new objects replaced by an adopted one that takes some new children over
-    shallow: set[int] = field(default_factory=set)
     classes: dict[type, type] = field(default_factory=dict)  # old class -> new class
     children: dict[type, tuple[str, ...]] = field(default_factory=dict)  # of old classes
     objects: int = 0  # generated objects whose class the switch-over changes
-    # the old objects adopted, and every object above them: one old object goes to one
-    # place (a rename map may name a source twice; the second one is copied)
-    taken: set[Node] = field(default_factory=set)
-    under: set[Node] = field(default_factory=set)
 
 
-def _taken(node: Node, adoption: Adoption) -> bool:
-    owner, attrs = node
-    above = any((owner, attrs[:depth]) in adoption.taken for depth in range(len(attrs) + 1))
-    return above or node in adoption.under
+@dataclass
+class Adopted:
+    """What comes along with the adopted objects, for working out the rest (only while
+    preparing: the cycle thread need not free it)."""
+
+    paths: set[str] = field(default_factory=set)  # upper-case new paths
+    replaced: set[int] = field(default_factory=set)  # ids of the new objects replaced
+    # ids of new objects replaced by an adopted one that takes some new children over
+    shallow: set[int] = field(default_factory=set)
 
 
 def compatible_classes(old: CodeImage, new: CodeImage) -> dict[type, type]:
@@ -91,9 +90,10 @@ def compatible_classes(old: CodeImage, new: CodeImage) -> dict[type, type]:
     return compatible
 
 
-def plan_adoption(old: Instances, new: Instances, plan: ReloadPlan) -> Adoption:
+def plan_adoption(old: Instances, new: Instances, plan: ReloadPlan) -> tuple[Adoption, Adopted]:
     """The objects to adopt (see the module's docstring)."""
-    return _Planner(old, new, plan).adoption
+    planner = _Planner(old, new, plan)
+    return planner.adoption, planner.adopted
 
 
 Origin = tuple[UserProgram | None, tuple[Accessor, ...]]  # a node of the old tree
@@ -110,6 +110,11 @@ class _Planner:
         self.adoption = Adoption(
             classes=compatible_classes(old.image, new.image), children=old.image.object_attrs()
         )
+        self.adopted = Adopted()
+        # the old objects adopted, and every object above them: one old object goes to one
+        # place (a rename map may name a source twice; the second one is copied)
+        self.taken: set[Node] = set()
+        self.under: set[Node] = set()
         self.new_children = new.image.object_attrs()
         self.old_members = Counter(_prefixes(old.bound))
         self.old_direct = Counter((b.program, b.path.attrs[:-1]) for b in old.bound)
@@ -135,7 +140,7 @@ class _Planner:
         self.state: dict[Node, str] = {}
         for bound in new.bound:
             if self._adopted(bound.program, bound.path.attrs):
-                self.adoption.paths.add(bound.path.path.upper())
+                self.adopted.paths.add(bound.path.path.upper())
 
     @staticmethod
     def _propose(
@@ -164,6 +169,11 @@ class _Planner:
                 return True  # one of the shallow object's own variables
         return False
 
+    def _taken(self, origin: Origin) -> bool:
+        owner, attrs = origin
+        above = any((owner, attrs[:depth]) in self.taken for depth in range(len(attrs) + 1))
+        return above or origin in self.under
+
     def _roots(self, node: Node, origin: Origin) -> tuple[Any, Any]:
         old_root = origin[0].instance if origin[0] is not None else self.old.globals
         new_root = node[0].instance if node[0] is not None else self.new.globals
@@ -173,7 +183,7 @@ class _Planner:
         """The new objects below `node` when it can be adopted from `origin` whole."""
         if origin is None or self.old_members[origin] != self.members[node]:
             return None
-        if _taken(origin, self.adoption):
+        if self._taken(origin):
             return None
         old_root, new_root = self._roots(node, origin)
         before, after = resolve(old_root, origin[1]), resolve(new_root, node[1])
@@ -194,7 +204,7 @@ class _Planner:
         origin = self.direct_proposals.get(node)
         if origin is None or self.old_direct[origin] != self.direct[node]:
             return False
-        if _taken(origin, self.adoption):
+        if self._taken(origin):
             return False
         old_root, new_root = self._roots(node, origin)
         before, after = resolve(old_root, origin[1]), resolve(new_root, node[1])
@@ -214,7 +224,7 @@ class _Planner:
             else:
                 self.state[child] = "inplace"
                 objects |= found
-        self.adoption.shallow.add(id(after))
+        self.adopted.shallow.add(id(after))
         self._graft(node, origin, objects - {id(after)}, tuple(patches))
         self.adoption.objects += 1
         return True
@@ -230,9 +240,9 @@ class _Planner:
         old_root, new_root = self._roots(node, origin)
         adoption = self.adoption
         adoption.objects += len(objects)
-        adoption.replaced.update(objects)
-        adoption.taken.add(origin)
-        adoption.under.update((origin[0], origin[1][:depth]) for depth in range(len(origin[1])))
+        self.adopted.replaced.update(objects)
+        self.taken.add(origin)
+        self.under.update((origin[0], origin[1][:depth]) for depth in range(len(origin[1])))
         parent = resolve(new_root, attrs[:-1]) if attrs else None
         last = attrs[-1] if attrs else None
         fresh = resolve(new_root, attrs)

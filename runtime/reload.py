@@ -134,14 +134,14 @@ class SwitchOver:
 def prepare_switch_over(
     old: Instances, new: Instances, plan: ReloadPlan, renames: Mapping[str, str]
 ) -> SwitchOver:
-    adoption = plan_adoption(old, new, plan)
+    adoption, adopted = plan_adoption(old, new, plan)
     groups: dict[tuple[int, tuple[Accessor, ...], int], tuple[Moves, list[str]]] = {}
     carried = 0
     for change in plan.changes:
         if change.action not in (KEPT, CONVERTED) or change.source is None:
             continue
         carried += 1
-        if change.path.upper() in adoption.paths:
+        if change.path.upper() in adopted.paths:
             continue
         source, target = old.by_name[change.source.upper()], new.by_name[change.path.upper()]
         converter: Converter = None
@@ -169,7 +169,7 @@ def prepare_switch_over(
     old_objects = dict(_objects(old))
     internal = []
     # not what is adopted anyway (but what is new below an object adopted on its own)
-    for path, target in _objects(new, adoption.replaced, adoption.shallow):
+    for path, target in _objects(new, adopted.replaced, adopted.shallow):
         counterpart = old_objects.get(rename_source(path, renames).upper())
         if counterpart is None or type(counterpart).__name__ != type(target).__name__:
             continue
@@ -188,7 +188,22 @@ def prepare_switch_over(
         for program in new.programs
         if (previous := old_programs.get(rename_source(program.name, renames).upper()))
     ]
+    # what the adopted objects replace is garbage: freed here, on the worker thread, rather
+    # than by the cycle thread after the switch-over
+    for graft in adoption.grafts:
+        if not graft.patches:
+            _empty(graft.fresh)
     return SwitchOver(adoption, [m for m, _ in groups.values()], internal, programs, carried)
+
+
+def _empty(target: Any) -> None:
+    """Drop what a fresh object holds (it is replaced, and only its identity matters)."""
+    if isinstance(target, list):
+        target.clear()
+        return
+    for slot in slot_names(target):
+        if not isinstance(getattr(target, slot, None), _SCALARS):
+            setattr(target, slot, None)
 
 
 def switch_over(prepared: SwitchOver, new: Instances, deadline_ns: int | None) -> int:

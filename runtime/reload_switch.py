@@ -70,8 +70,13 @@ class ReloadJob:
                 self.prepared = prepare_switch_over(
                     self.old, self.instances, self.plan, self.renames
                 )
-                # what this switch-over costs, knowing which objects are adopted
-                self.plan = replace(self.plan, estimate_ns=self.prepared.estimate_ns)
+                # what this switch-over costs, knowing which objects are adopted; a reload
+                # needs no change per variable any more: they are freed here, on the worker
+                # thread, rather than by the cycle thread after the switch-over
+                changes = self.plan.changes if self.preview else ()
+                self.plan = replace(
+                    self.plan, estimate_ns=self.prepared.estimate_ns, changes=changes
+                )
                 if self.store is not None and not self.preview:
                     self.staged = self.store.stage(self.artifact)
         except Refusal as refused:  # the disk

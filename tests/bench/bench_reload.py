@@ -15,6 +15,7 @@ time (machines are shared and noisy).
 from __future__ import annotations
 
 import statistics
+import sys
 import threading
 import time
 import traceback
@@ -26,12 +27,13 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime import reload as reload_module
 from runtime import reload_switch
-from runtime.adoption import Adoption
+from runtime.adoption import Adopted, Adoption
 from runtime.clock import RealClock
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
 from runtime.contract.protocol import ProgramState, ReloadOutcome, ResourceState
 from runtime.contract.refusal import Refusal
+from runtime.cycle_driver import SWITCH_INTERVAL_S
 from runtime.instances import instantiate
 from runtime.intrinsics import SystemView
 from runtime.reload_plan import (
@@ -170,6 +172,7 @@ class Run:
     carried: list[int] = field(default_factory=list)
     estimates_ns: list[int] = field(default_factory=list)  # the runtime's plan estimate
     copied: list[int] = field(default_factory=list)  # values copied (the rest adopted)
+    preparing: set[int] = field(default_factory=set)  # cycles while a worker prepared
 
     def cycle(self, resource: Resource) -> None:
         started = time.perf_counter_ns()
@@ -218,8 +221,10 @@ class Reloader:
         worker = threading.Thread(target=job.prepare)
         worker.start()
         while worker.is_alive():
+            run.preparing.add(len(run.starts_ns))
             run.cycle(self.resource)
         worker.join()
+        run.cycle(self.resource)  # the cycle after which the driver finds the job prepared
         outcome = reload_switch.finish(self.resource, job)
         assert job.plan is not None and job.prepared is not None
         run.estimates_ns.append(job.plan.estimate_ns)
@@ -234,6 +239,18 @@ def drive(old: Artifact, new: Artifact, reloads: int = RELOADS) -> tuple[Run, Re
     resource = _running(old)
     reloader = Reloader(resource)
     run = Run()
+    switch_interval = sys.getswitchinterval()
+    sys.setswitchinterval(SWITCH_INTERVAL_S)  # as the cycle driver runs
+    try:
+        _reloads(resource, reloader, run, old, new, reloads)
+    finally:
+        sys.setswitchinterval(switch_interval)
+    return run, reloader
+
+
+def _reloads(
+    resource: Resource, reloader: Reloader, run: Run, old: Artifact, new: Artifact, reloads: int
+) -> None:
     for n in range(reloads):
         for _ in range(CYCLES_BETWEEN):
             run.cycle(resource)
@@ -248,14 +265,13 @@ def drive(old: Artifact, new: Artifact, reloads: int = RELOADS) -> tuple[Run, Re
     for program in resource.programs:
         if program.state != ProgramState.RUN:
             print(f"  WARNING: program {program.name} is {program.state}: {program.error}")
-    return run, reloader
 
 
 @contextmanager
 def copying_everything() -> Iterator[None]:
     """The baseline: the switch-over with nothing adopted, every value copied."""
     adopt = getattr(reload_module, "plan_adoption")  # noqa: B009 (replaced for a while)
-    setattr(reload_module, "plan_adoption", lambda old, new, plan: Adoption())  # noqa: B010
+    setattr(reload_module, "plan_adoption", lambda old, new, plan: (Adoption(), Adopted()))  # noqa: B010
     try:
         yield
     finally:
@@ -270,7 +286,9 @@ def report(name: str, run: Run, reloader: Reloader, baseline: Run) -> None:
     periods = [b - a for a, b in zip(run.starts_ns, run.starts_ns[1:], strict=False)]
     with_reload = [periods[i] for i in sorted(run.reload_after)]
     after = {i + 1 for i in run.reload_after}  # the first cycle on the new instances
-    normal = [p for i, p in enumerate(periods) if i not in run.reload_after and i not in after]
+    special = run.reload_after.keys() | after | run.preparing
+    normal = [p for i, p in enumerate(periods) if i not in special]
+    preparing = [periods[i] for i in sorted(run.preparing) if i < len(periods)]
     normal_period = statistics.median(normal)
     copied = f"{min(run.copied):,}-{max(run.copied):,}"
     print(f"  {name} ({max(run.carried):,} values carried, {copied} of them copied):")
@@ -282,6 +300,15 @@ def report(name: str, run: Run, reloader: Reloader, baseline: Run) -> None:
     print(
         f"    longest period with a reload {max(with_reload) / 1e3:8.0f} us   vs median period "
         f"{normal_period / 1e3:8.0f} us   (ratio {max(with_reload) / normal_period:.2f})"
+    )
+    first = [periods[i] for i in sorted(after) if i < len(periods)]
+    print(
+        f"    first period on the new code {max(first) / 1e3:8.0f} us   (ratio "
+        f"{max(first) / normal_period:.2f}, longest)"
+    )
+    print(
+        f"    periods while preparing (a worker thread, {len(preparing)} of them): median "
+        f"{statistics.median(preparing) / 1e3:8.0f} us   max {max(preparing) / 1e3:8.0f} us"
     )
     ratios = [e / 1e3 / p for e, p in zip(run.estimates_ns, run.pauses_us, strict=True)]
     print(

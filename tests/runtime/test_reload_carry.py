@@ -14,7 +14,7 @@ import pytest
 
 from runtime import reload as reload_module
 from runtime import reload_switch
-from runtime.adoption import Adoption
+from runtime.adoption import Adopted, Adoption
 from runtime.context_snapshot import snapshot
 from runtime.reload import SwitchOverTooLong, switch_over
 from runtime.resource import Resource
@@ -102,7 +102,9 @@ def prepared(h: Harness, text: str, renames: dict[str, str] | None = None) -> An
 
 def copy_only(monkeypatch: pytest.MonkeyPatch) -> None:
     """The switch-over as it was before objects were adopted: every value copied."""
-    monkeypatch.setattr(reload_module, "plan_adoption", lambda old, new, plan: Adoption())
+    monkeypatch.setattr(
+        reload_module, "plan_adoption", lambda old, new, plan: (Adoption(), Adopted())
+    )
 
 
 def test_a_reload_of_one_pou_adopts_the_running_objects_and_carries_everything() -> None:
