@@ -29,7 +29,7 @@ TIMED_QUALIFIERS = ("L", "D", "SD", "DS", "SL")
 # tests/bench/bench_reload.py on the reference machine, rounded up); a plan made without
 # the running instances assumes every transferred value is copied, the runtime's own plan
 # knows which objects it adopts instead (runtime/reload.py)
-SWITCH_NS_PER_VALUE = 300
+SWITCH_NS_PER_VALUE = 250
 
 
 @dataclass(frozen=True)
