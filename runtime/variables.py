@@ -28,13 +28,13 @@ class Variables:
         self.tap: list[tuple[str, Any]] | None = None
 
     def adopt(self, instances: Instances) -> None:
+        self.outputs = instances.outputs
         self.code, self.programs, self.globals = (
             instances.image,
             instances.programs,
             instances.globals,
         )
         self.bound, self._by_name = instances.bound, instances.by_name
-        self.outputs = instances.outputs
 
     def instances(self) -> Instances:
         """What is loaded now (a reload plans against it; the program list is a copy, as a
