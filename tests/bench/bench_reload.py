@@ -5,8 +5,8 @@ the reload at a 10 ms fixed target cycle with the default parameters, and the ru
 estimate next to the measured pause. The kinds of change: one small POU's code; one small
 POU gaining a variable (its instance and the program holding it are copied, the rest
 adopted); every instance migrated (every type gains a variable: every value copied). The
-baseline of the same run: the same switch-over with every value copied (as the runtime did
-before it adopted objects) and the median cycle.
+baseline of the same run: the same switch-over with every value copied (what the runtime
+did before it adopted objects, with today's grouped copying) and the median cycle.
 
 Run with `python -m tests.bench.bench_reload`. It prints figures and asserts nothing about
 time (machines are shared and noisy).
