@@ -65,14 +65,46 @@ class CodeImage:
         """Per generated class, the attributes that are declared variables; other slots
         (edge memories, action control blocks, step start times) are internal state."""
         declared: dict[type, frozenset[str]] = {}
-        units = [*self.artifact.types, *self.artifact.pous]
-        if self.artifact.globals is not None:
-            units.append(self.artifact.globals)
-        for unit in units:
+        for unit in self._units():
             kind = self._namespace.get(unit.class_name)
             if isinstance(kind, type):
                 declared[kind] = frozenset(v.attr for v in unit.variables)
         return declared
+
+    def classes(self) -> dict[str, type]:
+        """The generated classes (structs, function blocks, programs, the globals) by name."""
+        found = {unit.class_name: self._namespace.get(unit.class_name) for unit in self._units()}
+        return {name: kind for name, kind in found.items() if isinstance(kind, type)}
+
+    def object_attrs(self) -> dict[type, tuple[str, ...]]:
+        """Per generated class, the declared attributes that hold generated objects or
+        arrays of them (the edges a walk over the instances follows)."""
+        classes = self.classes()
+        return {
+            classes[unit.class_name]: tuple(
+                v.attr for v in unit.variables if self._is_aggregate(v.type)
+            )
+            for unit in self._units()
+            if unit.class_name in classes
+        }
+
+    def adopt_program(self, fresh: Any, adopted: Any) -> None:
+        """A program instance carried over from the configuration before a reload takes
+        the place of the fresh one `prog();` calls reach."""
+        programs = self._namespace["_P"]
+        for name, instance in list(vars(programs).items()):
+            if instance is fresh:
+                setattr(programs, name, adopted)
+
+    def adopt_globals(self, adopted: Any) -> None:
+        """The globals carried over from the configuration before a reload become these."""
+        self.globals = self._namespace["_G"] = adopted
+
+    def _units(self) -> list[PouCode]:
+        units = [*self.artifact.types, *self.artifact.pous]
+        if self.artifact.globals is not None:
+            units.append(self.artifact.globals)
+        return units
 
     def new_globals(self) -> Any:
         """Another instance of the globals: a user program's own view of them."""

@@ -28,6 +28,7 @@ class Instances:
     globals: Any
     bound: list[BoundVariable]
     by_name: dict[str, BoundVariable]
+    outputs: list[BoundVariable]  # the output points (located %Q variables)
 
 
 def instantiate(artifact: Artifact, system: SystemView) -> Instances:
@@ -54,7 +55,7 @@ def instantiate(artifact: Artifact, system: SystemView) -> Instances:
         *(BoundVariable(p, path) for p in programs for path in p.paths),
         *(BoundVariable(None, path) for path in image.global_paths()),
     ]
-    return Instances(image, programs, image.globals, bound, index(bound))
+    return Instances(image, programs, image.globals, bound, index(bound), output_points(bound))
 
 
 def index(bound: list[BoundVariable]) -> dict[str, BoundVariable]:
@@ -63,6 +64,12 @@ def index(bound: list[BoundVariable]) -> dict[str, BoundVariable]:
     for variable in bound:
         by_name.setdefault(variable.path.path.upper(), variable)
     return by_name
+
+
+def output_points(bound: list[BoundVariable]) -> list[BoundVariable]:
+    """The located %Q variables: listed with the instances (for a reload on its worker
+    thread), not by the cycle that first writes outputs."""
+    return [b for b in bound if b.path.location and b.path.location.upper().startswith("%Q")]
 
 
 def instantiated(artifact: Artifact, system: SystemView) -> Instances:

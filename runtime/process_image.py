@@ -7,7 +7,6 @@ from __future__ import annotations
 from typing import Any
 
 from runtime.contract.artifact import Artifact
-from runtime.instances import BoundVariable
 from runtime.variables import Variables
 
 
@@ -28,23 +27,10 @@ class ProcessImage:
         self._variables = variables
         self.outputs: dict[str, Any] = {}  # the output image as last written to the field
         self._inputs: dict[str, Any] = {}  # what the I/O last delivered
-        self._output_points: list[BoundVariable] = []
-        self._points_of: list[BoundVariable] | None = None  # the variables they were taken from
         self._safe_values: dict[str, Any] = {}  # configured safe values by upper-case path
 
     def configure(self, artifact: Artifact) -> None:
         self._safe_values = {name.upper(): value for name, value in artifact.safe_values}
-
-    def _points(self) -> list[BoundVariable]:
-        """The output points (located %Q variables): listed again only when the variables
-        change (a load, a reload, a program restart), not every cycle."""
-        bound = self._variables.bound
-        if self._points_of is not bound:
-            self._points_of = bound
-            self._output_points = [
-                b for b in bound if b.path.location and b.path.location.upper().startswith("%Q")
-            ]
-        return self._output_points
 
     def set_inputs(self, values: dict[str, Any]) -> None:
         """What the I/O delivered for located inputs; read at the next cycle's start."""
@@ -62,7 +48,7 @@ class ProcessImage:
     def write_outputs(self, safe: bool) -> None:
         """The output image (located %Q variables) as the I/O sends it to the field."""
         image: dict[str, Any] = {}
-        for bound in self._points():
+        for bound in self._variables.outputs:
             if safe:
                 configured = self._safe_values.get(bound.path.path.upper())
                 image[bound.path.path] = (

@@ -25,9 +25,11 @@ from runtime.intrinsics import SystemView
 
 KEPT, CONVERTED, INITIALISED, NEW, DELETED = "kept", "converted", "initialised", "new", "deleted"
 TIMED_QUALIFIERS = ("L", "D", "SD", "DS", "SL")
-# per transferred value, what the switch-over between two cycles costs (measured by
-# tests/bench/bench_reload.py on the reference machine, rounded up)
-SWITCH_NS_PER_VALUE = 3_000
+# per value copied, what the switch-over between two cycles costs (measured by
+# tests/bench/bench_reload.py on the reference machine, rounded up); a plan made without
+# the running instances assumes every transferred value is copied, the runtime's own plan
+# knows which objects it adopts instead (runtime/reload.py)
+SWITCH_NS_PER_VALUE = 250
 
 
 @dataclass(frozen=True)

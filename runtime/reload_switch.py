@@ -6,6 +6,7 @@ between two cycles, all or nothing, within the time the cycle leaves."""
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 from runtime.configuration_store import ConfigurationStore, Staged
 from runtime.contract.artifact import Artifact
@@ -65,11 +66,18 @@ class ReloadJob:
                 [b.path for b in self.old.bound],
                 [b.path for b in self.instances.bound],
             )
-            if not self.plan.refusals and not self.preview:
+            if not self.plan.refusals:
                 self.prepared = prepare_switch_over(
                     self.old, self.instances, self.plan, self.renames
                 )
-                if self.store is not None:
+                # what this switch-over costs, knowing which objects are adopted; a reload
+                # needs no change per variable any more: they are freed here, on the worker
+                # thread, rather than by the cycle thread after the switch-over
+                changes = self.plan.changes if self.preview else ()
+                self.plan = replace(
+                    self.plan, estimate_ns=self.prepared.estimate_ns, changes=changes
+                )
+                if self.store is not None and not self.preview:
                     self.staged = self.store.stage(self.artifact)
         except Refusal as refused:  # the disk
             self.failure = refused

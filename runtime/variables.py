@@ -12,7 +12,7 @@ from runtime.code_image import CodeImage, read_path, write_path
 from runtime.contract.protocol import VariableInfo
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import ValueRejected, representation
-from runtime.instances import BoundVariable, Instances, index
+from runtime.instances import BoundVariable, Instances, index, output_points
 from runtime.user_program import UserProgram
 
 
@@ -24,10 +24,12 @@ class Variables:
         self.globals: Any = None  # the globals as all programs see them between cycles
         self.bound: list[BoundVariable] = []
         self._by_name: dict[str, BoundVariable] = {}
+        self.outputs: list[BoundVariable] = []  # the output points
         # while an all-inputs recording runs: every store from outside the programs, in order
         self.tap: list[tuple[str, Any]] | None = None
 
     def adopt(self, instances: Instances) -> None:
+        self.outputs = instances.outputs
         self.code, self.programs, self.globals = (
             instances.image,
             instances.programs,
@@ -44,13 +46,16 @@ class Variables:
         """What is loaded now (a reload plans against it; the program list is a copy, as a
         restart replaces a program)."""
         assert self.code is not None
-        return Instances(self.code, list(self.programs), self.globals, self.bound, self._by_name)
+        return Instances(
+            self.code, list(self.programs), self.globals, self.bound, self._by_name, self.outputs
+        )
 
     def replace_program(self, old: UserProgram, new: UserProgram) -> None:
         """A program restarted from fresh instances (it leaves ERROR by a start)."""
         self.programs[self.programs.index(old)] = new
         self.bound = [BoundVariable(new, b.path) if b.program is old else b for b in self.bound]
         self._by_name = index(self.bound)
+        self.outputs = output_points(self.bound)
 
     def program(self, name: str) -> UserProgram:
         for program in self.programs:

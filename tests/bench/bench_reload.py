@@ -1,7 +1,12 @@
 """Reload benchmark, for a program with 10,000 variables: the time to compute the reload
-plan, the switch-over pause inside the cycle, and the longest cycle during a reload versus
-the normal cycle, as a ratio; the measured cost per carried value next to the estimate the
-budget check uses (`SWITCH_NS_PER_VALUE`).
+plan, and for each kind of change the switch-over pause inside the cycle, the longest
+cycle during a reload versus the normal cycle (a ratio), whether the budget check accepts
+the reload at a 10 ms fixed target cycle with the default parameters, and the runtime's
+estimate next to the measured pause. The kinds of change: one small POU's code; one small
+POU gaining a variable (its instance and the program holding it are copied, the rest
+adopted); every instance migrated (every type gains a variable: every value copied). The
+baseline of the same run: the same switch-over with every value copied (what the runtime
+did before it adopted objects, with today's grouped copying) and the median cycle.
 
 Run with `python -m tests.bench.bench_reload`. It prints figures and asserts nothing about
 time (machines are shared and noisy).
@@ -10,20 +15,25 @@ time (machines are shared and noisy).
 from __future__ import annotations
 
 import statistics
+import sys
 import threading
 import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
+from runtime import reload as reload_module
 from runtime import reload_switch
+from runtime.adoption import Adopted, Adoption
 from runtime.clock import RealClock
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
 from runtime.contract.protocol import ProgramState, ReloadOutcome, ResourceState
 from runtime.contract.refusal import Refusal
+from runtime.cycle_driver import SWITCH_INTERVAL_S
 from runtime.instances import instantiate
 from runtime.intrinsics import SystemView
 from runtime.reload_plan import (
@@ -40,39 +50,60 @@ from runtime.resource import Resource
 from tests.bench.bench_runtime import mean_and_best_ms, ten_thousand_paths
 
 PLAN_ROUNDS = 5
-RELOADS = 10  # alternating old -> new -> old ...
+RELOADS = 6  # alternating old -> new -> old ...
 CYCLES_BETWEEN = 40  # normal CPU cycles before each reload
 WARMUP_CYCLES = 20
 FIXED_TARGET_MS = 10  # the jitter benchmark's target cycle, for the budget check
 # the refusals a higher watchdog (or target cycle time) for the reload can overcome
 BUDGET_CODES = ("budget", "interrupted")
 
-# the "new" version: one more variable, one statement changed; everything else is kept
-OLD_DECLARATION = "  i : DINT;"
-NEW_DECLARATION = "  i : DINT;\n  added : DINT := 7;"
-OLD_STATEMENT = "points[i].name := 'p';"
-NEW_STATEMENT = "points[i].name := 'q';"
+# a small function block inside the 10,000-variable program
+SMALL = """FUNCTION_BLOCK Small
+VAR_INPUT x : DINT; END_VAR
+VAR_OUTPUT y : DINT; END_VAR
+y := x * 2;
+END_FUNCTION_BLOCK
+"""
+# (anchor in the program, what replaces it): the program with a Small instance
+WITH_SMALL = (
+    ("  i : DINT;", "  i : DINT;\n  small : Small;"),
+    ("END_FOR;", "END_FOR;\nsmall(x := i);"),
+)
+# the kinds of change, each as edits of the program with a Small instance
+CHANGES: dict[str, tuple[tuple[str, str], ...]] = {
+    "one small POU's code": (("y := x * 2;", "y := x * 3;"),),
+    "one small POU gains a variable": (
+        ("y := x * 2;", "y := x * 3;"),
+        ("VAR_OUTPUT y : DINT; END_VAR", "VAR_OUTPUT y : DINT; END_VAR VAR z : DINT; END_VAR"),
+    ),
+    "every instance migrated": (
+        ("name : STRING[16]; END_STRUCT", "name : STRING[16]; z : DINT; END_STRUCT"),
+        ("VAR_GLOBAL points", "VAR_GLOBAL added : DINT; points"),
+        ("  i : DINT;", "  i : DINT;\n  added : DINT := 7;"),
+        ("points[i].name := 'p';", "points[i].name := 'q';"),
+    ),
+}
 
 
-def versions() -> tuple[str, str]:
-    """The 10,000-variable program of the runtime benchmark, and a slightly changed copy."""
-    old = ten_thousand_paths()
-    for anchor in (OLD_DECLARATION, OLD_STATEMENT):
-        if old.count(anchor) != 1:
-            raise RuntimeError(f"ten_thousand_paths() no longer has one {anchor!r}")
-    new = old.replace(OLD_DECLARATION, NEW_DECLARATION).replace(OLD_STATEMENT, NEW_STATEMENT)
-    return old, new
+def _edited(text: str, edits: tuple[tuple[str, str], ...]) -> str:
+    for anchor, replacement in edits:
+        if text.count(anchor) != 1:
+            raise RuntimeError(f"the benchmark program no longer has one {anchor!r}")
+        text = text.replace(anchor, replacement)
+    return text
+
+
+def versions() -> dict[str, str]:
+    """The 10,000-variable program of the runtime benchmark with a small FB in it (under
+    "before"), and a changed copy per kind of change."""
+    before = _edited(SMALL + ten_thousand_paths(), WITH_SMALL)
+    return {"before": before} | {name: _edited(before, edits) for name, edits in CHANGES.items()}
 
 
 def _compile(text: str, config: ResourceConfig) -> Artifact:
     result = compile_sources([SourceFile("bench.st", text)], resource=config)
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
     return result.artifact
-
-
-def _pair(config: ResourceConfig) -> tuple[Artifact, Artifact]:
-    old, new = versions()
-    return _compile(old, config), _compile(new, config)
 
 
 def _running(artifact: Artifact) -> Resource:
@@ -121,12 +152,13 @@ def bench_plan(old: Artifact, new: Artifact, rounds: int = PLAN_ROUNDS) -> None:
         f"possible {plan.possible}"
     )
     print(
-        f"  estimated switch-over: {plan.estimate_ns / 1e3:,.0f} us "
+        f"  estimate without the running instances (every value copied): "
+        f"{plan.estimate_ns / 1e3:,.0f} us "
         f"({SWITCH_NS_PER_VALUE:,} ns x {plan.count(KEPT) + plan.count(CONVERTED):,} values)"
     )
 
 
-# ---- 2-4. the switch-over inside a running cycle loop -----------------------------------------
+# ---- 2. the switch-over inside a running cycle loop, per kind of change -----------------------
 
 
 @dataclass
@@ -136,10 +168,11 @@ class Run:
     starts_ns: list[int] = field(default_factory=list)  # when each cycle() began
     work_ns: list[int] = field(default_factory=list)  # time inside each cycle()
     reload_after: dict[int, int] = field(default_factory=dict)  # cycle index -> reload index
-    pauses_us: list[float] = field(default_factory=list)  # Resource.reload's pause_us
+    pauses_us: list[float] = field(default_factory=list)  # the reload's pause_us
     carried: list[int] = field(default_factory=list)
-    calls_ns: list[int] = field(default_factory=list)  # request to switch-over done
-    refusals: list[str] = field(default_factory=list)  # with the default parameters
+    estimates_ns: list[int] = field(default_factory=list)  # the runtime's plan estimate
+    copied: list[int] = field(default_factory=list)  # values copied (the rest adopted)
+    preparing: set[int] = field(default_factory=set)  # cycles while a worker prepared
 
     def cycle(self, resource: Resource) -> None:
         started = time.perf_counter_ns()
@@ -149,8 +182,8 @@ class Run:
 
 
 class Reloader:
-    """Resource.reload with the configured parameters first; when the budget refuses,
-    once more (and from then on) with the watchdog (and target cycle) raised for it."""
+    """A reload with the configured parameters first; when the budget refuses, once more
+    (and from then on) with the watchdog (and target cycle) raised for it."""
 
     def __init__(self, resource: Resource) -> None:
         self.resource = resource
@@ -161,12 +194,12 @@ class Reloader:
     def raised(self) -> str:
         return f"watchdog_ms={self.watchdog_ms}, target_cycle_ms={self.target_cycle_ms}"
 
-    def __call__(self, artifact: Artifact, keep_cycling: Callable[[], None]) -> ReloadOutcome:
+    def __call__(self, artifact: Artifact, run: Run) -> ReloadOutcome:
         """As the runtime process reloads: the job prepares on a worker thread while the
         cycles go on, and switches over between two cycles."""
         if self.refusal is None:
             try:
-                return self._reload(artifact, keep_cycling)
+                return self._reload(artifact, run)
             except Refusal as refused:
                 if refused.code not in BUDGET_CODES:
                     raise
@@ -175,9 +208,9 @@ class Reloader:
                 self.watchdog_ms = _raised_ms(params)
                 if params.target_cycle_ms and params.target_cycle_mode in ("fixed", "dynamic"):
                     self.target_cycle_ms = self.watchdog_ms
-        return self._reload(artifact, keep_cycling)
+        return self._reload(artifact, run)
 
-    def _reload(self, artifact: Artifact, keep_cycling: Callable[[], None]) -> ReloadOutcome:
+    def _reload(self, artifact: Artifact, run: Run) -> ReloadOutcome:
         job = reload_switch.begin(
             self.resource,
             artifact,
@@ -188,9 +221,15 @@ class Reloader:
         worker = threading.Thread(target=job.prepare)
         worker.start()
         while worker.is_alive():
-            keep_cycling()
+            run.preparing.add(len(run.starts_ns))
+            run.cycle(self.resource)
         worker.join()
-        return reload_switch.finish(self.resource, job)
+        run.cycle(self.resource)  # the cycle after which the driver finds the job prepared
+        outcome = reload_switch.finish(self.resource, job)
+        assert job.plan is not None and job.prepared is not None
+        run.estimates_ns.append(job.plan.estimate_ns)
+        run.copied.append(job.prepared.copied)
+        return outcome
 
 
 def drive(old: Artifact, new: Artifact, reloads: int = RELOADS) -> tuple[Run, Reloader]:
@@ -200,12 +239,22 @@ def drive(old: Artifact, new: Artifact, reloads: int = RELOADS) -> tuple[Run, Re
     resource = _running(old)
     reloader = Reloader(resource)
     run = Run()
+    switch_interval = sys.getswitchinterval()
+    sys.setswitchinterval(SWITCH_INTERVAL_S)  # as the cycle driver runs
+    try:
+        _reloads(resource, reloader, run, old, new, reloads)
+    finally:
+        sys.setswitchinterval(switch_interval)
+    return run, reloader
+
+
+def _reloads(
+    resource: Resource, reloader: Reloader, run: Run, old: Artifact, new: Artifact, reloads: int
+) -> None:
     for n in range(reloads):
         for _ in range(CYCLES_BETWEEN):
             run.cycle(resource)
-        started = time.perf_counter_ns()
-        outcome = reloader(new if n % 2 == 0 else old, lambda: run.cycle(resource))
-        run.calls_ns.append(time.perf_counter_ns() - started)
+        outcome = reloader(new if n % 2 == 0 else old, run)
         run.reload_after[len(run.starts_ns) - 1] = n
         run.pauses_us.append(outcome.pause_us)
         run.carried.append(outcome.carried)
@@ -216,131 +265,95 @@ def drive(old: Artifact, new: Artifact, reloads: int = RELOADS) -> tuple[Run, Re
     for program in resource.programs:
         if program.state != ProgramState.RUN:
             print(f"  WARNING: program {program.name} is {program.state}: {program.error}")
-    return run, reloader
 
 
-def _ms(ns: float) -> str:
-    return f"{ns / 1e6:8.2f} ms"
+@contextmanager
+def copying_everything() -> Iterator[None]:
+    """The baseline: the switch-over with nothing adopted, every value copied."""
+    adopt = getattr(reload_module, "plan_adoption")  # noqa: B009 (replaced for a while)
+    setattr(reload_module, "plan_adoption", lambda old, new, plan: (Adoption(), Adopted()))  # noqa: B010
+    try:
+        yield
+    finally:
+        setattr(reload_module, "plan_adoption", adopt)  # noqa: B010
 
 
-def report_pause(run: Run, reloader: Reloader, config: ResourceConfig) -> None:
-    print(
-        f"2. switch-over pause (Resource.reload pause_us, RealClock), {len(run.pauses_us)} "
-        f"reloads alternating old/new; resource watchdog {config.watchdog_ms} ms, "
-        f"target cycle {config.target_cycle_ms} ms:"
-    )
-    if reloader.refusal is not None:
-        print(f"  with the default parameters the reload was REFUSED: {reloader.refusal}")
-        print(f"  -> reloaded with {reloader.raised()} for the reload")
-    else:
-        print("  accepted with the default parameters (no raise needed)")
-    pauses = run.pauses_us
-    low, high = min(run.carried), max(run.carried)
-    carried = f"{low:,}" if low == high else f"{low:,}-{high:,}"
-    print(
-        f"  pause: mean {statistics.fmean(pauses):9.1f} us   max {max(pauses):9.1f} us   "
-        f"min {min(pauses):9.1f} us   ({carried} values carried each)"
-    )
-    calls = run.calls_ns
-    print(
-        f"  request to done (prepared on a worker thread while cycles ran): mean "
-        f"{_ms(statistics.fmean(calls))}   max {_ms(max(calls))}"
-    )
+def _us(values: list[float]) -> str:
+    return f"median {statistics.median(values):8.0f} us   max {max(values):8.0f} us"
 
 
-def report_cycles(run: Run) -> None:
+def report(name: str, run: Run, reloader: Reloader, baseline: Run) -> None:
     periods = [b - a for a, b in zip(run.starts_ns, run.starts_ns[1:], strict=False)]
     with_reload = [periods[i] for i in sorted(run.reload_after)]
     after = {i + 1 for i in run.reload_after}  # the first cycle on the new instances
-    normal = [p for i, p in enumerate(periods) if i not in run.reload_after and i not in after]
+    special = run.reload_after.keys() | after | run.preparing
+    normal = [p for i, p in enumerate(periods) if i not in special]
+    preparing = [periods[i] for i in sorted(run.preparing) if i < len(periods)]
     normal_period = statistics.median(normal)
-    normal_work = statistics.median(
-        w for i, w in enumerate(run.work_ns) if i not in run.reload_after and i not in after
-    )
-    first_work = [run.work_ns[i] for i in sorted(after)]
-    switch_only = max(run.work_ns[i] + run.pauses_us[n] * 1e3 for i, n in run.reload_after.items())
+    copied = f"{min(run.copied):,}-{max(run.copied):,}"
+    print(f"  {name} ({max(run.carried):,} values carried, {copied} of them copied):")
     print(
-        f"3. longest cycle during a reload vs the normal cycle (cycles back to back, "
-        f"{len(periods):,} periods, {len(with_reload)} with a reload):"
-    )
-    print(f"  normal period (median):                       {_ms(normal_period)}")
-    print(
-        f"  period containing the reload (longest):       {_ms(max(with_reload))}   "
-        f"ratio {max(with_reload) / normal_period:7.1f}   (mean "
-        f"{_ms(statistics.fmean(with_reload))})"
+        f"    pause:                      {_us(run.pauses_us)}   vs copying everything "
+        f"{statistics.median(baseline.pauses_us):8.0f} us   (ratio "
+        f"{statistics.median(run.pauses_us) / statistics.median(baseline.pauses_us):.2f})"
     )
     print(
-        f"  cycle work + switch-over pause only (longest): {_ms(switch_only)}   "
-        f"ratio {switch_only / normal_period:7.1f}"
+        f"    longest period with a reload {max(with_reload) / 1e3:8.0f} us   vs median period "
+        f"{normal_period / 1e3:8.0f} us   (ratio {max(with_reload) / normal_period:.2f})"
+    )
+    first = [periods[i] for i in sorted(after) if i < len(periods)]
+    print(
+        f"    first period on the new code {max(first) / 1e3:8.0f} us   (ratio "
+        f"{max(first) / normal_period:.2f}, longest)"
     )
     print(
-        f"  first cycle on the new instances (longest):   {_ms(max(first_work))}   "
-        f"vs median cycle work {_ms(normal_work)}"
+        f"    periods while preparing (a worker thread, {len(preparing)} of them): median "
+        f"{statistics.median(preparing) / 1e3:8.0f} us   max {max(preparing) / 1e3:8.0f} us"
     )
-
-
-def report_per_value(run: Run, old: Artifact, new: Artifact) -> None:
-    per_value = [p * 1e3 / c for p, c in zip(run.pauses_us, run.carried, strict=True) if c]
-    estimate = plan_reload(old, new).estimate_ns
-    print("4. switch-over cost per carried value (pause / carried):")
+    ratios = [e / 1e3 / p for e, p in zip(run.estimates_ns, run.pauses_us, strict=True)]
     print(
-        f"  measured: mean {statistics.fmean(per_value):7.0f} ns   max {max(per_value):7.0f} ns"
-        f"   vs SWITCH_NS_PER_VALUE {SWITCH_NS_PER_VALUE:,} ns   (measured / constant, "
-        f"max: {max(per_value) / SWITCH_NS_PER_VALUE:.2f})"
+        f"    estimate / measured pause:  min {min(ratios):.2f}   max {max(ratios):.2f}   "
+        f"(estimate median {statistics.median(run.estimates_ns) / 1e3:,.0f} us)"
     )
+    if reloader.refusal is not None:
+        print(f"    REFUSED with the default parameters: {reloader.refusal}")
+
+
+def bench_switch_over(artifacts: dict[str, Artifact]) -> None:
     print(
-        f"  plan estimate old -> new {estimate / 1e3:,.0f} us vs measured pause max "
-        f"{max(run.pauses_us):,.0f} us"
+        f"2. switch-over (RealClock, cycles back to back, {RELOADS} reloads alternating "
+        "before/after per kind of change; baseline: the same reloads copying every value):"
     )
+    before = artifacts["before"]
+    for name in CHANGES:
+        run, reloader = drive(before, artifacts[name])
+        with copying_everything():
+            baseline, _ = drive(before, artifacts[name], reloads=2)
+        report(name, run, reloader, baseline)
 
 
-def bench_switch_over(old: Artifact, new: Artifact, config: ResourceConfig) -> None:
-    run, reloader = drive(old, new)
-    report_pause(run, reloader, config)
-    report_cycles(run)
-    report_per_value(run, old, new)
+# ---- 3. the budget check with a fixed target cycle time ---------------------------------------
 
 
-# ---- the budget check with a target cycle time ------------------------------------------------
-
-
-def _attempt(
-    resource: Resource,
-    artifact: Artifact,
-    watchdog_ms: int | None = None,
-    target_cycle_ms: int | None = None,
-) -> str:
-    try:
-        outcome = reload_switch.reload(
-            resource, artifact, {}, watchdog_ms=watchdog_ms, target_cycle_ms=target_cycle_ms
-        )
-    except Refusal as refused:
-        return f"REFUSED [{refused.code}] {refused.message}"
-    return f"done, pause {outcome.pause_us:,.0f} us, {outcome.carried:,} values carried"
-
-
-def bench_budget(config: ResourceConfig) -> None:
+def bench_budget(texts: dict[str, str]) -> None:
     """With a target cycle in the 'fixed' mode the budget is what the target cycle leaves
-    after the last cycle: the reload needs a raised target cycle time, not only a raised
-    watchdog."""
-    old, new = _pair(config)
-    resource = _running(old)
-    raised = _raised_ms(resource.params)
+    after the last cycle."""
+    config = ResourceConfig(name="R", target_cycle_ms=FIXED_TARGET_MS, target_cycle_mode="fixed")
+    before = _compile(texts["before"], config)
+    resource = _running(before)
     print(
-        f"budget check, target cycle {config.target_cycle_ms} ms '{config.target_cycle_mode}', "
-        f"watchdog {config.watchdog_ms} ms (last cycle "
-        f"{resource.stats.last_ns / 1e6:.2f} ms, estimate "
-        f"{reload_switch.preview(resource, new, {}).estimate_ns / 1e3:,.0f} us):"
+        f"3. budget check, target cycle {config.target_cycle_ms} ms '{config.target_cycle_mode}', "
+        f"watchdog {config.watchdog_ms} ms, default parameters (last cycle "
+        f"{resource.stats.last_ns / 1e6:.2f} ms):"
     )
-    for label, watchdog_ms, target_cycle_ms in (
-        ("default parameters", None, None),
-        (f"watchdog_ms={raised}", raised, None),
-        (f"watchdog_ms={raised}, target_cycle_ms={raised}", raised, raised),
-    ):
-        running = resource.artifact.crc if resource.artifact is not None else None
-        artifact = new if running == old.crc else old
-        outcome = _attempt(resource, artifact, watchdog_ms, target_cycle_ms)
-        print(f"  {label + ':':<42} {outcome}")
+    for name in CHANGES:
+        for label, artifact in ((name, _compile(texts[name], config)), ("and back", before)):
+            try:
+                outcome = reload_switch.reload(resource, artifact, {})
+                result = f"done, pause {outcome.pause_us:,.0f} us"
+            except Refusal as refused:
+                result = f"REFUSED [{refused.code}] {refused.message}"
+            print(f"  {label + ':':<34} {result}")
 
 
 # ---- entry point -------------------------------------------------------------------------------
@@ -358,15 +371,15 @@ def _section(work: Callable[[], None]) -> None:
 def main() -> None:
     config = ResourceConfig(name="R")  # the defaults: watchdog 200 ms, no target cycle
     started = time.perf_counter()
-    old, new = _pair(config)
+    texts = versions()
+    artifacts = {name: _compile(text, config) for name, text in texts.items()}
     print(
-        f"reload benchmark: {len(_running(old).variables.values()):,} variables "
-        f"(compiled twice in {time.perf_counter() - started:.1f} s)"
+        f"reload benchmark: {len(_running(artifacts['before']).variables.values()):,} variables "
+        f"({len(texts)} versions compiled in {time.perf_counter() - started:.1f} s)"
     )
-    _section(lambda: bench_plan(old, new))
-    _section(lambda: bench_switch_over(old, new, config))
-    fixed = ResourceConfig(name="R", target_cycle_ms=FIXED_TARGET_MS, target_cycle_mode="fixed")
-    _section(lambda: bench_budget(fixed))
+    _section(lambda: bench_plan(artifacts["before"], artifacts["every instance migrated"]))
+    _section(lambda: bench_switch_over(artifacts))
+    _section(lambda: bench_budget(texts))
 
 
 if __name__ == "__main__":

@@ -142,13 +142,14 @@ def test_a_program_in_the_middle_of_its_cycle_is_not_switched() -> None:
 
 
 def test_a_reload_over_budget_is_refused_and_the_old_configuration_runs_on() -> None:
-    # 4,000 values at the estimated switch-over cost do not fit a 6 ms watchdog
-    text = "PROGRAM Big VAR n : DINT; a : ARRAY[1..4000] OF Point; END_VAR n := n + 1; END_PROGRAM"
-    text = "TYPE Point : STRUCT x : INT; END_STRUCT; END_TYPE\n" + text
+    # a struct that gains a member: each of its 8,000 instances is copied into a new one,
+    # 32,000 values at the estimated switch-over cost do not fit a 6 ms watchdog
+    text = "PROGRAM Big VAR n : DINT; a : ARRAY[1..8000] OF Point; END_VAR n := n + 1; END_PROGRAM"
+    text = "TYPE Point : STRUCT x, y, z, w : INT; END_STRUCT; END_TYPE\n" + text
     h = harness(text, watchdog_ms=6, safety_time_ms=20, target_cycle_ms=5)
     h.cycle(3)
     trace_before = [v["Big.n"] for v in h.trace]
-    changed = text.replace("n := n + 1;", "n := n + 100;")
+    changed = text.replace("n := n + 1;", "n := n + 100;").replace("w : INT;", "w, v : INT;")
     h.send(compiled(changed, watchdog_ms=6, safety_time_ms=20, target_cycle_ms=5))
     refused = h.cmd("reload")
     assert refused["error"]["code"] == "budget", refused
