@@ -25,6 +25,7 @@ from typing import Any
 import zenoh
 
 from runtime.clock import Clock
+from runtime.collector import COLLECTOR
 from runtime.commands import (
     LATER_HANDLERS,
     answer,
@@ -122,6 +123,7 @@ class CycleDriver:
                 planned = self.clock.now_ns()
 
     def _after_cycle(self, cycled: bool) -> None:
+        COLLECTOR.between_cycles()
         if cycled:
             self._publish_values()
         self._publish_status()

@@ -5,10 +5,10 @@ read, check against its type and store wherever its readers see it."""
 from __future__ import annotations
 
 import copy
-import gc
 from typing import Any
 
 from runtime.code_image import CodeImage, read_path, write_path
+from runtime.collector import COLLECTOR
 from runtime.contract.protocol import VariableInfo
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import ValueRejected, representation
@@ -36,11 +36,7 @@ class Variables:
             instances.globals,
         )
         self.bound, self._by_name = instances.bound, instances.by_name
-        # The configuration's objects live as long as it runs: out of the cycle collector's
-        # sight, a full collection no longer walks them (with 10,000 variables it took
-        # 46 ms, on whatever thread allocated, the cycle's included). They are still freed
-        # by their reference counts when a reload or cold start drops them.
-        gc.freeze()
+        COLLECTOR.configuration_changed()  # frozen out of the collector's sight soon
 
     def instances(self) -> Instances:
         """What is loaded now (a reload plans against it; the program list is a copy, as a
