@@ -5,6 +5,7 @@ read, check against its type and store wherever its readers see it."""
 from __future__ import annotations
 
 import copy
+from collections.abc import Callable
 from typing import Any
 
 from runtime.code_image import CodeImage, read_path, write_path
@@ -14,6 +15,7 @@ from runtime.contract.refusal import Refusal
 from runtime.contract.values import ValueRejected, representation
 from runtime.instances import BoundVariable, Instances, index, output_points
 from runtime.user_program import UserProgram
+from runtime.value_reader import value_reader
 
 
 class Variables:
@@ -27,6 +29,10 @@ class Variables:
         self.outputs: list[BoundVariable] = []  # the output points
         # while an all-inputs recording runs: every store from outside the programs, in order
         self.tap: list[tuple[str, Any]] | None = None
+        # `values()`: a reader of every variable, for the configuration it was made for
+        self._all_of: list[BoundVariable] | None = None
+        self._read_all: Callable[[], list[Any]] = list
+        self._all_paths: list[str] = []
 
     def adopt(self, instances: Instances) -> None:
         self.outputs = instances.outputs
@@ -109,7 +115,12 @@ class Variables:
     def values(self) -> dict[str, Any]:
         """Every elementary variable: `Program.var`, `Program.fb.var`, globals by their bare
         name; struct and FB members with dots; arrays of elementary values as lists."""
-        return {bound.path.path: self.read(bound) for bound in self.bound}
+        bound = self.bound
+        if self._all_of is not bound:  # read through one reader, made once per configuration
+            self._all_of = bound
+            self._read_all = value_reader(bound, lambda: self.globals)
+            self._all_paths = [b.path.path for b in bound]
+        return dict(zip(self._all_paths, self._read_all(), strict=True))
 
     def infos(self) -> list[VariableInfo]:
         return [VariableInfo(bound.path.path, bound.path.type) for bound in self.bound]

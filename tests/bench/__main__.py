@@ -13,6 +13,7 @@ from tests.bench import (
     bench_reload,
     bench_rest,
     bench_runtime,
+    bench_scale,
     bench_trends,
     bench_ui,
     bench_watch,
@@ -25,6 +26,7 @@ def main() -> None:
     bench_context.main()
     bench_runtime.main()
     bench_reload.main()
+    bench_scale.main()
     bench_watch.main()
     bench_recording.main()
     bench_modbus.main()

@@ -1,0 +1,130 @@
+"""A resource of 100,000 variables (issue 16): how long loading it, reading all its values
+(the online test's `values`), a watch set of 20,000 of them, taking and saving its context,
+a warm start and a reload of one small POU take, beside the same for 10,000 variables
+measured in the same run. Each figure says whether it runs on the cycle thread (between
+two cycles: it delays the next one) or elsewhere.
+
+Run with `python -m tests.bench.bench_scale`; it prints figures and asserts nothing.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from runtime.clock import VirtualClock
+from runtime.context import encode_context, save_context
+from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
+from runtime.contract.protocol import MAX_SET_VARIABLES
+from runtime.reload_switch import reload
+from runtime.resource import Resource
+from runtime.restart import take_context, warm_start
+from runtime.watch_sets import WatchSet
+
+SIZES = (10_000, 100_000)
+ROUNDS = 3
+
+
+def source(variables: int, step: int = 1) -> str:
+    """`variables` elementary variables: an array of structures of five members in the
+    globals, and a small program that changes some of them every cycle."""
+    points = variables // 5
+    return "\n".join(
+        [
+            "TYPE Point : STRUCT x, y : REAL; n : DINT; ok : BOOL; t : TIME; END_STRUCT; END_TYPE",
+            f"VAR_GLOBAL points : ARRAY[1..{points}] OF Point; END_VAR",
+            "PROGRAM Small",
+            "VAR i, k : DINT; END_VAR",
+            f"k := k + {step};",
+            "FOR i := 1 TO 100 DO points[(k + i) MOD "
+            f"{points} + 1].n := k; points[i].x := DINT_TO_REAL(k); END_FOR;",
+            "END_PROGRAM",
+        ]
+    )
+
+
+def compiled(variables: int, step: int = 1) -> tuple[Artifact, float]:
+    config = ResourceConfig(name="R", target_cycle_ms=10, watchdog_ms=60_000)
+    started = time.process_time()
+    result = compile_sources(
+        [SourceFile("scale.st", source(variables, step))],
+        resource=config,
+        programs=[ProgramConfig("Small", "Small", 1)],
+    )
+    assert result.artifact is not None, [str(d) for d in result.diagnostics]
+    return result.artifact, time.process_time() - started
+
+
+def best_ms(work: Callable[[], object]) -> float:
+    times = []
+    for _ in range(ROUNDS):
+        started = time.perf_counter()
+        work()
+        times.append(time.perf_counter() - started)
+    return min(times) * 1000
+
+
+def measure(variables: int) -> dict[str, float]:
+    artifact, compile_s = compiled(variables)
+    changed, _ = compiled(variables, step=2)
+    figures = {"compile (CPU, PADT)": compile_s * 1000}
+    resource = Resource("R", VirtualClock())
+    figures["load: instances (STOP)"] = best_ms(lambda: resource.load(artifact))
+    resource.start()
+    for _ in range(20):  # past Python's warm-up of new code
+        resource.cycle()
+    figures["CPU cycle of the small program"] = best_ms(resource.cycle)
+    figures["values(): every variable (cycle thread)"] = best_ms(resource.variables.values)
+    paths = tuple(b.path.path for b in resource.variables.bound)[:MAX_SET_VARIABLES]
+    watch_set = WatchSet("w", paths, 100_000_000)
+    table = resource.forcing.table
+
+    def watched() -> object:
+        return resource.online.snapshot(watch_set, 1, True, table).message()
+
+    figures["watch set (all, at most 20,000): read + encode"] = best_ms(watched)
+    context = take_context(resource)
+    assert context is not None
+    figures["take_context (cycle thread)"] = best_ms(lambda: take_context(resource))
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "context.json"
+        figures["encode + save context (saver thread)"] = best_ms(
+            lambda: save_context(path, context)
+        )
+        size = len(encode_context(context))
+    resource.stop()
+
+    def warm() -> None:
+        fresh = Resource("R", VirtualClock())
+        fresh.load(artifact)
+        started = time.perf_counter()
+        warm_start(fresh, context)
+        warm.ms = (time.perf_counter() - started) * 1000  # type: ignore[attr-defined]
+
+    warm()
+    figures["warm start: restore (STOP)"] = warm.ms  # type: ignore[attr-defined]
+    resource.start()
+    outcome = reload(resource, changed, {})
+    figures["reload of the small program: pause (cycle thread)"] = outcome.pause_us / 1000
+    figures["context size (MB)"] = size / 1e6
+    return figures
+
+
+def main() -> None:
+    print("scale benchmark: a resource of 10,000 and of 100,000 variables, best of 3 (ms)")
+    compiled(10)  # the compiler's own start-up (grammar, imports) counts in neither
+    results = {n: measure(n) for n in SIZES}
+    small, large = results[SIZES[0]], results[SIZES[1]]
+    width = max(len(name) for name in large)
+    print(f"  {'':{width}}  {'10,000':>10}  {'100,000':>10}  ratio")
+    for name, value in large.items():
+        ratio = value / small[name] if small[name] else float("nan")
+        print(f"  {name:{width}}  {small[name]:10.2f}  {value:10.2f}  {ratio:5.1f}x")
+
+
+if __name__ == "__main__":
+    main()
