@@ -9,6 +9,7 @@ pipeline once the user programs are known.
 
 from __future__ import annotations
 
+from backend.compiler.checks.actions import check_action_names
 from backend.compiler.checks.data import check_data
 from backend.compiler.checks.expressions import check_expression
 from backend.compiler.checks.initializers import (
@@ -54,5 +55,6 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         check_block(scope, pou.pou.body, loop_depth=0)
         if pou.pou.sfc is not None:
             check_sfc(scope, pou.pou.sfc)
+            check_action_names(scope, pou.pou.sfc)
         diagnostics.extend(scope.diagnostics)
     return diagnostics

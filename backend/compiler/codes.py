@@ -120,6 +120,10 @@ class Code(Enum):
     QUALIFIER_TIME_TYPE = "E0508", "time of a qualifier that is no TIME"
     QUALIFIER_TAKES_NO_TIME = "E0509", "time for a qualifier that takes none"
     UNKNOWN_STEP = "E0510", "transition from or to an unknown step"
+    ACTIONS_OWNER = "E0511", "ACTIONS block of no PROGRAM or FUNCTION_BLOCK"
+    ACTION_CALL_ARGUMENTS = "E0512", "action called with arguments"
+    ACTION_NAME = "E0513", "action named like a variable of its POU"
+    ACTION_VALUE = "E0514", "action used as a value"
 
     # ---- 06: the resource: user programs, safe values, users
     PROGRAM_POU = "E0601", "user program without its PROGRAM"

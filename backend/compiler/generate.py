@@ -20,6 +20,7 @@ from backend.compiler.builtins import convert_code, wrap_code
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
+    ActionCall,
     EnumValue,
     Misfit,
     ProgramRef,
@@ -805,6 +806,7 @@ class _Emitter:
                         return False
                     if slot and (
                         receiver is not None
+                        or self.scope.action_call(node) is not None
                         or key(called) in self.scope.resolved.pous
                         or self.scope.lookup(called) is not None
                     ):
@@ -812,6 +814,10 @@ class _Emitter:
         return True
 
     def call_statement(self, call: ast.Call, depth: int) -> None:
+        action = self.scope.action_call(call)
+        if action is not None:
+            self.emit(depth, f"{self._action_instance(action)}.{_action_method(call.name)}()")
+            return
         binding = self.scope.lookup(call.name) if call.receiver is None else None
         if isinstance(binding, ProgramRef):
             callee, instance = binding.pou, f"_P.{class_name(binding.pou.name)}"
@@ -849,6 +855,16 @@ class _Emitter:
             self.emit(
                 depth, self.store(arg.value, convert_value(_Value(value, param.type), target_type))
             )
+
+    def _action_instance(self, action: ActionCall) -> str:
+        """The object whose action is called: this POU's own, a program's, an instance's."""
+        match action.instance:
+            case None:
+                return "s"
+            case ProgramRef(pou=pou):
+                return f"_P.{class_name(pou.name)}"
+            case receiver:
+                return self.expr(receiver).code
 
 
 def wrap_constant(value: int, t: ElementaryType) -> int:
@@ -1019,17 +1035,24 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
         rising = variable.edge == "R_EDGE"
         edge = f"({attr} and not {memory})" if rising else f"(not {attr} and {memory})"
         emitter.emit(2, f"{attr}, {memory} = {edge}, {attr}")
-    for variable in pou.variables:
-        if variable.kind == "VAR_TEMP":
-            emitter.emit(2, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
-    if pou.pou.body or chart is None:  # a chart alone needs no `pass` before it
+    _emit_temporaries(emitter, pou)
+    steps = chart is not None and bool(chart.sfc.steps)
+    if pou.pou.body or not steps:  # a chart alone needs no `pass` before it
         emitter.block(pou.pou.body, 2)
     if chart is not None:
-        chart.emit_cycle(emitter, 2)
+        if steps:  # actions without steps run only when called
+            chart.emit_cycle(emitter, 2)
         for action in chart.sfc.actions:
             emitter.emit(0, "")
             emitter.emit(1, f"def {_action_method(action.name)}(s):")
+            _emit_temporaries(emitter, pou)  # an action's call has temporaries of its own
             emitter.block(action.body, 2)
+
+
+def _emit_temporaries(emitter: _Emitter, pou: PouSymbols) -> None:
+    for variable in pou.variables:
+        if variable.kind == "VAR_TEMP":
+            emitter.emit(2, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
 
 
 def _action_method(name: str) -> str:

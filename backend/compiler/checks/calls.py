@@ -4,6 +4,7 @@ arguments of any call of a user POU, which must name its parameters and not be t
 from __future__ import annotations
 
 from backend.compiler import ast
+from backend.compiler.checks.actions import check_action_call
 from backend.compiler.checks.initializers import mismatch, takes
 from backend.compiler.checks.targets import is_lvalue, refuse_system_write, writable_target
 from backend.compiler.codes import Code
@@ -13,6 +14,10 @@ from backend.compiler.types import FbType, assignable
 
 
 def check_call_statement(scope: Scope, call: ast.Call) -> None:
+    action = scope.action_call(call)
+    if action is not None:
+        check_action_call(scope, call, action)
+        return
     binding = scope.lookup(call.name) if call.receiver is None else None
     if isinstance(binding, ProgramRef):
         callee = binding.pou

@@ -16,6 +16,7 @@ from backend.compiler.types import assignable
 # why a call in an expression gives no value, by what it calls
 NO_VALUE: dict[NoValue, tuple[Code, str]] = {
     "method": (Code.METHODS, "methods are not supported"),
+    "action": (Code.ACTION_VALUE, "action '{name}' has no value; call it as a statement"),
     "instance": (Code.INSTANCE_VALUE, "function block instance '{name}' has no value"),
     "program": (Code.PROGRAM_VALUE, "program '{name}' has no value; call it as a statement"),
     "external": (Code.EXTERNAL_FUNCTION, "external function '{name}' is not available"),
