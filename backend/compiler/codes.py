@@ -108,6 +108,7 @@ class Code(Enum):
     PROGRAM_VALUE = "E0410", "program used as a value"
     NOT_A_FUNCTION = "E0411", "call of something that is no function"
     EXTERNAL_FUNCTION = "E0412", "external function that is not available"
+    OPEN_ARRAY_UNCONNECTED = "E0413", "variable-length array parameter left unconnected"
 
     # ---- 05: sequential function charts
     INITIAL_STEP = "E0501", "step chain without exactly one initial step"
@@ -148,7 +149,7 @@ class Code(Enum):
     POINTERS = "E0701", "pointers"
     METHODS = "E0702", "methods"
     DIRECT_ADDRESS = "E0703", "direct address of another POU's variable"
-    VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array"
+    VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array where it cannot be"
     STATEMENT_DEPTH = "E0705", "statements nested too deep"
     EXPRESSION_DEPTH = "E0706", "expression nested too deep"
     FILE_SIZE = "E0707", "source file too large"

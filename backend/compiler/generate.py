@@ -40,6 +40,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    OpenArrayType,
     StructType,
     Type,
     VariadicType,
@@ -105,7 +106,7 @@ def struct_class(struct_name: str) -> str:
 
 
 def is_aggregate(t: Type) -> bool:
-    return isinstance(t, ArrayType | StructType | FbType)
+    return isinstance(t, ArrayType | OpenArrayType | StructType | FbType)
 
 
 def returns_tuple(pou: PouSymbols) -> bool:
@@ -264,6 +265,8 @@ class _Emitter:
     def _index(self, expr: ast.IndexRef) -> _Value:
         base = self.expr(expr.base)
         array = base.type
+        if isinstance(array, OpenArrayType):
+            return self._open_index(base.code, array, expr.indices)
         assert isinstance(array, ArrayType)
         parts: list[str] = []
         stride = 1
@@ -277,6 +280,30 @@ class _Emitter:
             stride *= high - low + 1
         flat = " + ".join(reversed(parts))
         return _Value(f"{base.code}[{flat}]", array.element)
+
+    def _open_index(self, base: str, array: OpenArrayType, indices: tuple[ast.Expr, ...]) -> _Value:
+        """An element of a variable-length array, `[items, bounds]` at run time: its offset
+        in the items from the bounds of the array passed, each index checked by `_ix`."""
+        offset = ""
+        for dim, index_expr in enumerate(indices):
+            low, high = f"{base}[1][{dim}][0]", f"{base}[1][{dim}][1]"
+            checked = f"_ix({self.exact(index_expr).code}, {low}, {high})"
+            offset = checked if dim == 0 else f"({offset}) * ({high} - {low} + 1) + {checked}"
+        return _Value(f"{base}[0][{offset}]", array.element)
+
+    def open_array_argument(self, param: Variable, value_expr: ast.Expr) -> str:
+        """What a variable-length array parameter is bound to: the items of the array passed
+        (the caller's own for an in-out, a copy for an input) and its bounds, in lists, which
+        a saved context holds (the items as an alias of the caller's array)."""
+        passed = self.expr(value_expr)
+        if isinstance(passed.type, OpenArrayType):  # passed on: its items and bounds
+            items, bounds = f"{passed.code}[0]", f"{passed.code}[1]"
+        else:
+            assert isinstance(passed.type, ArrayType)
+            items, bounds = passed.code, repr([list(dim) for dim in passed.type.dims])
+        if param.kind == "VAR_IN_OUT":
+            return passed.code if isinstance(passed.type, OpenArrayType) else f"[{items}, {bounds}]"
+        return f"[_copy({items}), {bounds}]"
 
     def _checked_offset(self, index: str, low: int, high: int) -> str:
         """The list offset of an array index, checked against the bounds inline (the
@@ -403,6 +430,9 @@ class _Emitter:
             arg = assigned.get(key(param.name))
             if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
                 continue
+            if isinstance(param.type, OpenArrayType):
+                keywords.append(f"{param.attr}={self.open_array_argument(param, arg.value)}")
+                continue
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
         code = f"{function_name(pou.name)}({', '.join(keywords)})"
         result = pou.return_type or BOOL
@@ -420,6 +450,8 @@ class _Emitter:
         # outputs are stored in the order the call names them (as CODESYS does)
         for arg, connected in pairs:
             if connected is None or arg.value is None or key(connected.name) not in slots:
+                continue
+            if isinstance(connected.type, OpenArrayType):  # its items were changed in place
                 continue
             if not _is_lvalue(arg.value):
                 continue
@@ -501,6 +533,8 @@ class _Emitter:
                 return {"bool": "False", "real": "0.0", "string": "''"}.get(category, "0")
             case VariadicType():
                 return "()"
+            case OpenArrayType():  # bound to an array at each call
+                return "None"
         raise AssertionError(f"no initial value for {var_type!r}")
 
     def _array_initial(self, array: ArrayType, init: ast.ArrayInit) -> str:
@@ -839,6 +873,10 @@ class _Emitter:
             if arg.is_output or param.kind == "VAR_OUTPUT":
                 outputs.append((arg, param))
                 continue
+            if isinstance(param.type, OpenArrayType):
+                bound = self.open_array_argument(param, arg.value)
+                self.emit(depth, f"{handle}.{param.attr} = {bound}")
+                continue
             if param.kind == "VAR_IN_OUT":
                 self.emit(depth, f"{handle}.{param.attr} = {self.expr(arg.value).code}")
                 if not is_aggregate(param.type):
@@ -846,6 +884,11 @@ class _Emitter:
                 continue
             self.emit(depth, f"{handle}.{param.attr} = {self.converted(param.type, arg.value)}")
         self.emit(depth, f"{handle}()")
+        for param in callee.parameters:
+            # bound for the call only (each call binds one): no caller's array is kept in
+            # the instance, for a saved context or a reload to carry
+            if isinstance(param.type, OpenArrayType):
+                self.emit(depth, f"{handle}.{param.attr} = None")
         for arg, param in outputs:
             assert arg.value is not None
             value = f"{handle}.{param.attr}"

@@ -36,6 +36,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    OpenArrayType,
     StructType,
     Type,
     VariadicType,
@@ -292,6 +293,8 @@ class Scope:
         for index in expr.indices:
             self.type_of(index)
         if isinstance(base_type, ArrayType) and len(expr.indices) == len(base_type.dims):
+            return base_type.element
+        if isinstance(base_type, OpenArrayType) and len(expr.indices) == base_type.rank:
             return base_type.element
         return None
 

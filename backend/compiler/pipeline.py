@@ -34,7 +34,14 @@ from backend.compiler.limits import MAX_PROJECT_CODE, MiB
 from backend.compiler.parse import TokenBudget, parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import Pos, ProjectSize, SourceFile, stdlib_sources
-from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
+from backend.compiler.types import (
+    ArrayType,
+    ElementaryType,
+    FbType,
+    OpenArrayType,
+    StructType,
+    Type,
+)
 from runtime.contract.accounts import account_problems
 from runtime.contract.artifact import (
     Artifact,
@@ -429,7 +436,12 @@ def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
     if pou.kind == "FUNCTION":
         code = _unit_code(pou.name, pou.kind, function_name(pou.name), generated.source, [])
     else:
-        stored = [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
+        # a variable-length in-out is the caller's array, shown where the caller has it
+        stored = [
+            v
+            for v in pou.variables
+            if v.kind not in ("VAR_GLOBAL", "VAR_TEMP") and not isinstance(v.type, OpenArrayType)
+        ]
         code = _unit_code(pou.name, pou.kind, class_name(pou.name), generated.source, stored)
     return replace(
         code, file=pou.pou.pos.file, st_lines=generated.st_lines, chart=_chart(pou.pou.sfc)

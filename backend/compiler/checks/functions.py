@@ -6,7 +6,8 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.builtins import Builtin
 from backend.compiler.checks.calls import check_connection
-from backend.compiler.checks.initializers import takes
+from backend.compiler.checks.initializers import takes_argument
+from backend.compiler.checks.open_arrays import check_open_array_connections
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
 from backend.compiler.infer import Misfit, NoValue, Scope, StandardFunction, UserFunction
@@ -56,6 +57,7 @@ def _misfit(misfit: Misfit, builtin: Builtin) -> tuple[Code, str]:
 def check_user_call(scope: Scope, pou: PouSymbols, call: ast.Call) -> None:
     pairs = scope.connect_arguments(pou, call)
     check_connection(scope, pou, call, pairs)
+    check_open_array_connections(scope, pou, call, pairs)
     for arg, param in pairs:
         if param is not None:
             check_argument(scope, arg, param)
@@ -74,6 +76,6 @@ def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
             message = f"cannot store {param.type.name} output in {value_type.name}"
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, message)
         return
-    if not takes(param.type, arg.value, value_type):
+    if not takes_argument(param.type, arg.value, value_type):
         message = f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, message)
