@@ -142,6 +142,10 @@ class Code(Enum):
     MODBUS_VARIABLE = "E0613", "Modbus point on no suitable located variable"
     MODBUS_TYPE = "E0614", "Modbus point its table cannot hold"
     MODBUS_OVERLAP = "E0615", "Modbus address or input mapped twice"
+    UNCONFIGURED_LOCATION = "E0616", "partly specified location without its address"
+    VAR_CONFIG_PATH = "E0617", "VAR_CONFIG for no partly located variable"
+    VAR_CONFIG_ADDRESS = "E0618", "VAR_CONFIG entry that does not fit its variable"
+    ACCESS_PATH = "E0619", "access path to no variable of its type"
     EXTRA_RESOURCE = "W0601", "resource ignored"
     PROGRAM_ARGUMENTS = "W0602", "program arguments in a configuration ignored"
 

@@ -372,6 +372,9 @@ class _ToAst(Transformer[Token, Any]):
         """`%IX0.1` in code names the variable located there (resolve declares one where
         no declaration does): a name like any other, spelled as the address."""
         address, pos = str(items[0]).upper(), self._pos(items[0])
+        if address.endswith("*"):
+            message = f"{address} is a partly specified location: it only locates a declaration"
+            self.errors.append(Diagnostic.at(pos, Code.SYNTAX, message))
         self.addresses.append((address, pos))
         return ast.NameRef(address, pos)
 
@@ -746,7 +749,35 @@ class _ToAst(Transformer[Token, Any]):
         for item in rest:  # a configuration without RESOURCE is one unnamed resource
             if isinstance(item, tuple):
                 resources.append(self._resource(name, [], item[1]))
-        return ast.Configuration(str(name), blocks, tuple(resources), self._pos(name))
+        lists = [i for i in rest if isinstance(i, list)]
+        access = tuple(a for group in lists for a in group if isinstance(a, ast.AccessDecl))
+        inits = tuple(c for group in lists for c in group if isinstance(c, ast.ConfigInit))
+        pos = self._pos(name)
+        return ast.Configuration(str(name), blocks, tuple(resources), pos, access, inits)
+
+    def access_block(self, items: list[ast.AccessDecl]) -> list[ast.AccessDecl]:
+        return items
+
+    def access_path(self, items: list[Token]) -> tuple[str, ...]:
+        return tuple(str(i).upper() if i.type == "DIRECT_ADDRESS" else str(i) for i in items)
+
+    def access_decl(self, items: list[Any]) -> ast.AccessDecl:
+        name, path, type_ref, *direction = items
+        writable = bool(direction) and str(direction[0]).upper() == "READ_WRITE"
+        return ast.AccessDecl(str(name), path, type_ref, writable, self._pos(name))
+
+    def config_block(self, items: list[ast.ConfigInit]) -> list[ast.ConfigInit]:
+        return items
+
+    def config_init(self, items: list[Any]) -> ast.ConfigInit:
+        names = [i for i in items if isinstance(i, Token)]
+        rest = [i for i in items if not isinstance(i, Token)]
+        location = rest.pop(0) if rest and isinstance(rest[0], str) else None
+        type_ref, *init = rest
+        path = tuple(str(n) for n in names)
+        return ast.ConfigInit(
+            path, location, type_ref, init[0] if init else None, self._pos(names[0])
+        )
 
     def start(self, items: list[Any]) -> list[Any]:
         return items

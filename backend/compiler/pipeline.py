@@ -16,6 +16,7 @@ from backend.compiler.check import check
 from backend.compiler.checks.generated_names import check_generated_names
 from backend.compiler.checks.modbus import check_modbus
 from backend.compiler.checks.programs import check_programs, globals_read, globals_written
+from backend.compiler.checks.var_config import check_configuration
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.generate import (
@@ -193,6 +194,9 @@ def _compile(
         programs = configured[1] if configured else _default_programs(units)
         positions = configured[2] if configured else {}
     diagnostics.extend(check_programs(resolved, resource, programs, config_file, positions))
+    configurations = [c for unit in units for c in unit.configurations]
+    instance_io = check_configuration(resolved, configurations, resource.name, programs)
+    diagnostics.extend(instance_io.diagnostics)
     safe, safe_diagnostics = _safe_values(resolved, settings.safe_values, config_file)
     diagnostics.extend(safe_diagnostics)
     modbus, modbus_diagnostics = check_modbus(
@@ -220,6 +224,8 @@ def _compile(
         safe_values=safe,
         users=tuple(sorted(users, key=lambda u: u.name)),
         modbus=modbus,
+        located=instance_io.located,
+        access_paths=instance_io.access_paths,
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
 
