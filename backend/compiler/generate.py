@@ -301,7 +301,7 @@ class _Emitter:
         else:
             assert isinstance(passed.type, ArrayType)
             items, bounds = passed.code, repr([list(dim) for dim in passed.type.dims])
-        if param.kind == "VAR_IN_OUT":
+        if param.kind != "VAR_INPUT":  # an in-out, or a function's output: the caller's
             return passed.code if isinstance(passed.type, OpenArrayType) else f"[{items}, {bounds}]"
         return f"[_copy({items}), {bounds}]"
 
@@ -428,10 +428,10 @@ class _Emitter:
         keywords: list[str] = []
         for param in pou.parameters:
             arg = assigned.get(key(param.name))
-            if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
-                continue
-            if isinstance(param.type, OpenArrayType):
+            if arg is not None and arg.value is not None and isinstance(param.type, OpenArrayType):
                 keywords.append(f"{param.attr}={self.open_array_argument(param, arg.value)}")
+                continue
+            if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
                 continue
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
         code = f"{function_name(pou.name)}({', '.join(keywords)})"
@@ -1206,14 +1206,20 @@ def _step_variable(scope: Scope, name: str) -> Variable:
 
 
 def _generate_function(emitter: _Emitter, pou: PouSymbols) -> None:
-    inputs = [v for v in pou.variables if v.kind in ("VAR_INPUT", "VAR_IN_OUT")]
+    inputs = [
+        v
+        for v in pou.variables
+        if v.kind in ("VAR_INPUT", "VAR_IN_OUT") or isinstance(v.type, OpenArrayType)
+    ]  # a variable-length output is bound to the caller's array like an in-out
     params = ", ".join(f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs)
     emitter.emit(0, f"def {function_name(pou.name)}({params}):")
     result = pou.by_key.get(key(pou.name))
     if result is not None and result.kind == "RETURN":
         emitter.emit(1, f"{result.attr} = {emitter.initial(result.type, None)}")
     for variable in pou.variables:
-        if variable.kind in ("VAR", "VAR_TEMP", "VAR_OUTPUT", "VAR_STAT", "VAR_INST"):
+        if variable.kind in ("VAR", "VAR_TEMP", "VAR_STAT", "VAR_INST") or (
+            variable.kind == "VAR_OUTPUT" and variable not in inputs
+        ):
             emitter.emit(1, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
     emitter.block(pou.pou.body, 1)
     emitter.emit(1, emitter.return_line())

@@ -84,6 +84,26 @@ def test_open_arrays_take_any_bounds_and_write_through_in_outs(tmp_path: Path) -
     assert "Main.sc.m" not in t
 
 
+def test_a_function_output_fills_the_array_the_caller_connects(tmp_path: Path) -> None:
+    source = """
+FUNCTION Ramp : BOOL
+VAR_OUTPUT out : ARRAY[*] OF INT; END_VAR
+VAR_INPUT step : INT; END_VAR
+VAR i : DINT; END_VAR
+FOR i := LOWER_BOUND(out, 1) TO UPPER_BOUND(out, 1) DO
+  out[i] := out[i] + step;
+END_FOR;
+Ramp := TRUE;
+END_FUNCTION
+PROGRAM Main
+VAR data : ARRAY[2..4] OF INT; ok : BOOL; END_VAR
+ok := Ramp(step := 5, out => data);
+END_PROGRAM
+"""
+    # bound to the caller's array, not reset at the call: it keeps adding up
+    assert sim_trace(tmp_path, source, 3)["Main.data"] == [[5, 5, 5], [10, 10, 10], [15] * 3]
+
+
 def test_an_index_outside_the_bounds_passed_stops_the_program(tmp_path: Path) -> None:
     path = tmp_path / "main.st"
     path.write_text(PROGRAM)
@@ -102,19 +122,18 @@ FUNCTION_BLOCK FB
 VAR_INPUT i : ARRAY[*] OF INT; END_VAR
 END_FUNCTION_BLOCK
 FUNCTION F : INT
-VAR_OUTPUT o : ARRAY[*] OF INT; END_VAR
+VAR o : ARRAY[*] OF INT; END_VAR
 VAR mix : ARRAY[*, 1..2] OF INT; END_VAR
 F := 0;
 END_FUNCTION
 """
-    only = "only a function's VAR_INPUT or VAR_IN_OUT and a function block's VAR_IN_OUT can"
+    only = "only a function's parameters and a function block's VAR_IN_OUT can"
     assert diagnostics(source) == [
         f"t.st:2:17: error: 'm' cannot be a variable-length array (ARRAY[*] OF INT): {only}"
         " [E0704]",
         f"t.st:4:11: error: 'i' cannot be a variable-length array (ARRAY[*] OF INT): {only}"
         " [E0704]",
-        f"t.st:7:12: error: 'o' cannot be a variable-length array (ARRAY[*] OF INT): {only}"
-        " [E0704]",
+        f"t.st:7:5: error: 'o' cannot be a variable-length array (ARRAY[*] OF INT): {only} [E0704]",
         "t.st:8:11: error: an array has either all its ranges open (*) or none [E0704]",
     ]
 

@@ -12,7 +12,7 @@ from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
 from backend.compiler.infer import Misfit, NoValue, Scope, StandardFunction, UserFunction
 from backend.compiler.resolve import PouSymbols, Variable
-from backend.compiler.types import assignable
+from backend.compiler.types import OpenArrayType, assignable
 
 # why a call in an expression gives no value, by what it calls
 NO_VALUE: dict[NoValue, tuple[Code, str]] = {
@@ -72,7 +72,11 @@ def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
     if value_type is None:
         return
     if param.kind == "VAR_OUTPUT" or arg.is_output:
-        if not assignable(value_type, param.type):
+        if isinstance(param.type, OpenArrayType):
+            fits = param.type.binds(value_type)  # bound to the array connected
+        else:
+            fits = assignable(value_type, param.type)
+        if not fits:
             message = f"cannot store {param.type.name} output in {value_type.name}"
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, message)
         return

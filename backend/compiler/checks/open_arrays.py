@@ -1,6 +1,7 @@
 """Variable-length arrays (`ARRAY[*] OF T`): only parameters that an array is bound to at
-each call may have one, the inputs and in-outs of a function and the in-outs of a function
-block (IEC 61131-3 ed. 3, 6.5.3); a block's input would have to keep an array between calls."""
+each call may have one, the inputs, outputs and in-outs of a function and the in-outs of a
+function block (IEC 61131-3 ed. 3, 6.5.3); a block's input or output would have to keep an
+array between calls. A function's output is bound to the array the caller connects (`=>`)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,10 @@ from backend.compiler.infer import Scope
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
 from backend.compiler.types import OpenArrayType
 
-ALLOWED = {"FUNCTION": ("VAR_INPUT", "VAR_IN_OUT"), "FUNCTION_BLOCK": ("VAR_IN_OUT",)}
+ALLOWED = {
+    "FUNCTION": ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT"),
+    "FUNCTION_BLOCK": ("VAR_IN_OUT",),
+}
 
 
 def check_open_array_variables(scope: Scope) -> None:
@@ -50,5 +54,5 @@ def check_open_array_connections(
 def _refusal(variable: Variable) -> str:
     return (
         f"'{variable.name}' cannot be a variable-length array ({variable.type.name}): only "
-        "a function's VAR_INPUT or VAR_IN_OUT and a function block's VAR_IN_OUT can"
+        "a function's parameters and a function block's VAR_IN_OUT can"
     )
