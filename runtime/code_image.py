@@ -141,14 +141,27 @@ class CodeImage:
         """Every elementary variable of a program instance, FB members included."""
         paths: list[VariablePath] = []
         self._collect(self._pous[pou_name.upper()], program, (), False, paths)
-        return paths
+        return self._configured(paths)
 
     def global_paths(self) -> list[VariablePath]:
         """Every elementary global variable (paths below `_G`), named without a prefix."""
         paths: list[VariablePath] = []
         if self.artifact.globals is not None:
             self._collect(self.artifact.globals, "", (), False, paths)
-        return paths
+        return self._configured(paths)
+
+    def _configured(self, paths: list[VariablePath]) -> list[VariablePath]:
+        """The paths with the addresses VAR_CONFIG gave their partly specified locations
+        (`AT %Q*` becomes `%QX0.1` there: an output point like any other)."""
+        located = {path.upper(): location for path, location in self.artifact.located}
+        if not located:
+            return paths
+        return [
+            dataclasses.replace(p, location=located[p.path.upper()])
+            if p.path.upper() in located
+            else p
+            for p in paths
+        ]
 
     def _collect(
         self,

@@ -381,11 +381,35 @@ class ResourceDecl:
 
 
 @dataclass(frozen=True)
+class ConfigInit:
+    """A VAR_CONFIG entry: `Resource.Program.inst.var AT %IX1.0 : BOOL;`."""
+
+    path: tuple[str, ...]
+    location: str | None
+    type: TypeRef
+    init: Initializer | None
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class AccessDecl:
+    """A VAR_ACCESS entry: `name : Resource.Program.var : TYPE READ_ONLY;`."""
+
+    name: str
+    path: tuple[str, ...]  # the last part may be a direct address
+    type: TypeRef
+    writable: bool  # READ_WRITE; READ_ONLY is the default
+    pos: Pos
+
+
+@dataclass(frozen=True)
 class Configuration:
     name: str
     globals: tuple[VarBlock, ...]
     resources: tuple[ResourceDecl, ...]
     pos: Pos
+    access: tuple[AccessDecl, ...] = ()
+    var_config: tuple[ConfigInit, ...] = ()
 
 
 @dataclass(frozen=True)

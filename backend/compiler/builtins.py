@@ -24,6 +24,7 @@ from backend.compiler.types import (
     ArrayType,
     ElementaryType,
     EnumType,
+    OpenArrayType,
     Type,
     common_numeric,
     elementary,
@@ -352,12 +353,14 @@ def _limit_typing(args: list[Type]) -> Type | str:
 
 def _bound(kind: str) -> Builtin:
     def typing(args: list[Type]) -> Type | str:
-        if len(args) != 2 or not isinstance(args[0], ArrayType):
+        if len(args) != 2 or not isinstance(args[0], ArrayType | OpenArrayType):
             return "takes an array and a dimension"
         return DINT
 
     def emit(codes: list[str], args: list[Type], result: Type) -> str:
         array = args[0]
+        if isinstance(array, OpenArrayType):  # [items, bounds] of the array passed
+            return f"{codes[0]}[1][{codes[1]} - 1][{0 if kind == 'LOWER' else 1}]"
         assert isinstance(array, ArrayType)
         values = [lo if kind == "LOWER" else hi for lo, hi in array.dims]
         return f"{tuple(values)!r}[{codes[1]} - 1]"

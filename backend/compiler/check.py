@@ -9,6 +9,7 @@ pipeline once the user programs are known.
 
 from __future__ import annotations
 
+from backend.compiler.checks.actions import check_action_names
 from backend.compiler.checks.data import check_data
 from backend.compiler.checks.expressions import check_expression
 from backend.compiler.checks.initializers import (
@@ -16,6 +17,7 @@ from backend.compiler.checks.initializers import (
     check_initializer,
     declaration_order,
 )
+from backend.compiler.checks.open_arrays import check_open_array_data, check_open_array_variables
 from backend.compiler.checks.sfc import check_sfc
 from backend.compiler.checks.statements import check_block
 from backend.compiler.codes import Code
@@ -37,6 +39,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         for _, info in sorted(resolved.structs.items()):
             for member in info.members:
                 check_initializer(global_scope, member.type, member.init)
+        check_open_array_data(global_scope, resolved)
         diagnostics.extend(global_scope.diagnostics)
     for pou in resolved.sorted_pous():
         if is_external(pou):
@@ -51,8 +54,10 @@ def check(resolved: Resolved) -> list[Diagnostic]:
                 variable.kind != "VAR_INPUT" or variable.type != BOOL
             ):
                 scope.report(variable.pos, Code.EDGE_INPUT, f"{variable.edge} needs a BOOL input")
+        check_open_array_variables(scope)
         check_block(scope, pou.pou.body, loop_depth=0)
         if pou.pou.sfc is not None:
             check_sfc(scope, pou.pou.sfc)
+            check_action_names(scope, pou.pou.sfc)
         diagnostics.extend(scope.diagnostics)
     return diagnostics

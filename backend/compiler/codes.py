@@ -108,6 +108,7 @@ class Code(Enum):
     PROGRAM_VALUE = "E0410", "program used as a value"
     NOT_A_FUNCTION = "E0411", "call of something that is no function"
     EXTERNAL_FUNCTION = "E0412", "external function that is not available"
+    OPEN_ARRAY_UNCONNECTED = "E0413", "variable-length array parameter left unconnected"
 
     # ---- 05: sequential function charts
     INITIAL_STEP = "E0501", "step chain without exactly one initial step"
@@ -120,6 +121,10 @@ class Code(Enum):
     QUALIFIER_TIME_TYPE = "E0508", "time of a qualifier that is no TIME"
     QUALIFIER_TAKES_NO_TIME = "E0509", "time for a qualifier that takes none"
     UNKNOWN_STEP = "E0510", "transition from or to an unknown step"
+    ACTIONS_OWNER = "E0511", "ACTIONS block of no PROGRAM or FUNCTION_BLOCK"
+    ACTION_CALL_ARGUMENTS = "E0512", "action called with arguments"
+    ACTION_NAME = "E0513", "action named like a variable of its POU"
+    ACTION_VALUE = "E0514", "action used as a value"
 
     # ---- 06: the resource: user programs, safe values, users
     PROGRAM_POU = "E0601", "user program without its PROGRAM"
@@ -137,6 +142,10 @@ class Code(Enum):
     MODBUS_VARIABLE = "E0613", "Modbus point on no suitable located variable"
     MODBUS_TYPE = "E0614", "Modbus point its table cannot hold"
     MODBUS_OVERLAP = "E0615", "Modbus address or input mapped twice"
+    UNCONFIGURED_LOCATION = "E0616", "partly specified location without its address"
+    VAR_CONFIG_PATH = "E0617", "VAR_CONFIG for no partly located variable"
+    VAR_CONFIG_ADDRESS = "E0618", "VAR_CONFIG entry that does not fit its variable"
+    ACCESS_PATH = "E0619", "access path to no variable of its type"
     EXTRA_RESOURCE = "W0601", "resource ignored"
     PROGRAM_ARGUMENTS = "W0602", "program arguments in a configuration ignored"
 
@@ -144,7 +153,7 @@ class Code(Enum):
     POINTERS = "E0701", "pointers"
     METHODS = "E0702", "methods"
     DIRECT_ADDRESS = "E0703", "direct address of another POU's variable"
-    VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array"
+    VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array where it cannot be"
     STATEMENT_DEPTH = "E0705", "statements nested too deep"
     EXPRESSION_DEPTH = "E0706", "expression nested too deep"
     FILE_SIZE = "E0707", "source file too large"

@@ -20,6 +20,7 @@ from backend.compiler.builtins import convert_code, wrap_code
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
+    ActionCall,
     EnumValue,
     Misfit,
     ProgramRef,
@@ -39,6 +40,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    OpenArrayType,
     StructType,
     Type,
     VariadicType,
@@ -104,7 +106,7 @@ def struct_class(struct_name: str) -> str:
 
 
 def is_aggregate(t: Type) -> bool:
-    return isinstance(t, ArrayType | StructType | FbType)
+    return isinstance(t, ArrayType | OpenArrayType | StructType | FbType)
 
 
 def returns_tuple(pou: PouSymbols) -> bool:
@@ -263,6 +265,8 @@ class _Emitter:
     def _index(self, expr: ast.IndexRef) -> _Value:
         base = self.expr(expr.base)
         array = base.type
+        if isinstance(array, OpenArrayType):
+            return self._open_index(base.code, array, expr.indices)
         assert isinstance(array, ArrayType)
         parts: list[str] = []
         stride = 1
@@ -276,6 +280,30 @@ class _Emitter:
             stride *= high - low + 1
         flat = " + ".join(reversed(parts))
         return _Value(f"{base.code}[{flat}]", array.element)
+
+    def _open_index(self, base: str, array: OpenArrayType, indices: tuple[ast.Expr, ...]) -> _Value:
+        """An element of a variable-length array, `[items, bounds]` at run time: its offset
+        in the items from the bounds of the array passed, each index checked by `_ix`."""
+        offset = ""
+        for dim, index_expr in enumerate(indices):
+            low, high = f"{base}[1][{dim}][0]", f"{base}[1][{dim}][1]"
+            checked = f"_ix({self.exact(index_expr).code}, {low}, {high})"
+            offset = checked if dim == 0 else f"({offset}) * ({high} - {low} + 1) + {checked}"
+        return _Value(f"{base}[0][{offset}]", array.element)
+
+    def open_array_argument(self, param: Variable, value_expr: ast.Expr) -> str:
+        """What a variable-length array parameter is bound to: the items of the array passed
+        (the caller's own for an in-out, a copy for an input) and its bounds, in lists, which
+        a saved context holds (the items as an alias of the caller's array)."""
+        passed = self.expr(value_expr)
+        if isinstance(passed.type, OpenArrayType):  # passed on: its items and bounds
+            items, bounds = f"{passed.code}[0]", f"{passed.code}[1]"
+        else:
+            assert isinstance(passed.type, ArrayType)
+            items, bounds = passed.code, repr([list(dim) for dim in passed.type.dims])
+        if param.kind != "VAR_INPUT":  # an in-out, or a function's output: the caller's
+            return passed.code if isinstance(passed.type, OpenArrayType) else f"[{items}, {bounds}]"
+        return f"[_copy({items}), {bounds}]"
 
     def _checked_offset(self, index: str, low: int, high: int) -> str:
         """The list offset of an array index, checked against the bounds inline (the
@@ -400,6 +428,9 @@ class _Emitter:
         keywords: list[str] = []
         for param in pou.parameters:
             arg = assigned.get(key(param.name))
+            if arg is not None and arg.value is not None and isinstance(param.type, OpenArrayType):
+                keywords.append(f"{param.attr}={self.open_array_argument(param, arg.value)}")
+                continue
             if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
                 continue
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
@@ -419,6 +450,8 @@ class _Emitter:
         # outputs are stored in the order the call names them (as CODESYS does)
         for arg, connected in pairs:
             if connected is None or arg.value is None or key(connected.name) not in slots:
+                continue
+            if isinstance(connected.type, OpenArrayType):  # its items were changed in place
                 continue
             if not _is_lvalue(arg.value):
                 continue
@@ -500,6 +533,8 @@ class _Emitter:
                 return {"bool": "False", "real": "0.0", "string": "''"}.get(category, "0")
             case VariadicType():
                 return "()"
+            case OpenArrayType():  # bound to an array at each call
+                return "None"
         raise AssertionError(f"no initial value for {var_type!r}")
 
     def _array_initial(self, array: ArrayType, init: ast.ArrayInit) -> str:
@@ -805,6 +840,7 @@ class _Emitter:
                         return False
                     if slot and (
                         receiver is not None
+                        or self.scope.action_call(node) is not None
                         or key(called) in self.scope.resolved.pous
                         or self.scope.lookup(called) is not None
                     ):
@@ -812,6 +848,10 @@ class _Emitter:
         return True
 
     def call_statement(self, call: ast.Call, depth: int) -> None:
+        action = self.scope.action_call(call)
+        if action is not None:
+            self.emit(depth, f"{self._action_instance(action)}.{_action_method(call.name)}()")
+            return
         binding = self.scope.lookup(call.name) if call.receiver is None else None
         if isinstance(binding, ProgramRef):
             callee, instance = binding.pou, f"_P.{class_name(binding.pou.name)}"
@@ -833,6 +873,10 @@ class _Emitter:
             if arg.is_output or param.kind == "VAR_OUTPUT":
                 outputs.append((arg, param))
                 continue
+            if isinstance(param.type, OpenArrayType):
+                bound = self.open_array_argument(param, arg.value)
+                self.emit(depth, f"{handle}.{param.attr} = {bound}")
+                continue
             if param.kind == "VAR_IN_OUT":
                 self.emit(depth, f"{handle}.{param.attr} = {self.expr(arg.value).code}")
                 if not is_aggregate(param.type):
@@ -840,6 +884,11 @@ class _Emitter:
                 continue
             self.emit(depth, f"{handle}.{param.attr} = {self.converted(param.type, arg.value)}")
         self.emit(depth, f"{handle}()")
+        for param in callee.parameters:
+            # bound for the call only (each call binds one): no caller's array is kept in
+            # the instance, for a saved context or a reload to carry
+            if isinstance(param.type, OpenArrayType):
+                self.emit(depth, f"{handle}.{param.attr} = None")
         for arg, param in outputs:
             assert arg.value is not None
             value = f"{handle}.{param.attr}"
@@ -849,6 +898,16 @@ class _Emitter:
             self.emit(
                 depth, self.store(arg.value, convert_value(_Value(value, param.type), target_type))
             )
+
+    def _action_instance(self, action: ActionCall) -> str:
+        """The object whose action is called: this POU's own, a program's, an instance's."""
+        match action.instance:
+            case None:
+                return "s"
+            case ProgramRef(pou=pou):
+                return f"_P.{class_name(pou.name)}"
+            case receiver:
+                return self.expr(receiver).code
 
 
 def wrap_constant(value: int, t: ElementaryType) -> int:
@@ -1019,17 +1078,24 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
         rising = variable.edge == "R_EDGE"
         edge = f"({attr} and not {memory})" if rising else f"(not {attr} and {memory})"
         emitter.emit(2, f"{attr}, {memory} = {edge}, {attr}")
-    for variable in pou.variables:
-        if variable.kind == "VAR_TEMP":
-            emitter.emit(2, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
-    if pou.pou.body or chart is None:  # a chart alone needs no `pass` before it
+    _emit_temporaries(emitter, pou)
+    steps = chart is not None and bool(chart.sfc.steps)
+    if pou.pou.body or not steps:  # a chart alone needs no `pass` before it
         emitter.block(pou.pou.body, 2)
     if chart is not None:
-        chart.emit_cycle(emitter, 2)
+        if steps:  # actions without steps run only when called
+            chart.emit_cycle(emitter, 2)
         for action in chart.sfc.actions:
             emitter.emit(0, "")
             emitter.emit(1, f"def {_action_method(action.name)}(s):")
+            _emit_temporaries(emitter, pou)  # an action's call has temporaries of its own
             emitter.block(action.body, 2)
+
+
+def _emit_temporaries(emitter: _Emitter, pou: PouSymbols) -> None:
+    for variable in pou.variables:
+        if variable.kind == "VAR_TEMP":
+            emitter.emit(2, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
 
 
 def _action_method(name: str) -> str:
@@ -1140,14 +1206,20 @@ def _step_variable(scope: Scope, name: str) -> Variable:
 
 
 def _generate_function(emitter: _Emitter, pou: PouSymbols) -> None:
-    inputs = [v for v in pou.variables if v.kind in ("VAR_INPUT", "VAR_IN_OUT")]
+    inputs = [
+        v
+        for v in pou.variables
+        if v.kind in ("VAR_INPUT", "VAR_IN_OUT") or isinstance(v.type, OpenArrayType)
+    ]  # a variable-length output is bound to the caller's array like an in-out
     params = ", ".join(f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs)
     emitter.emit(0, f"def {function_name(pou.name)}({params}):")
     result = pou.by_key.get(key(pou.name))
     if result is not None and result.kind == "RETURN":
         emitter.emit(1, f"{result.attr} = {emitter.initial(result.type, None)}")
     for variable in pou.variables:
-        if variable.kind in ("VAR", "VAR_TEMP", "VAR_OUTPUT", "VAR_STAT", "VAR_INST"):
+        if variable.kind in ("VAR", "VAR_TEMP", "VAR_STAT", "VAR_INST") or (
+            variable.kind == "VAR_OUTPUT" and variable not in inputs
+        ):
             emitter.emit(1, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
     emitter.block(pou.pou.body, 1)
     emitter.emit(1, emitter.return_line())

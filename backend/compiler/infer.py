@@ -36,6 +36,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    OpenArrayType,
     StructType,
     Type,
     VariadicType,
@@ -61,6 +62,16 @@ Binding = Variable | EnumValue | ProgramRef
 
 
 @dataclass(frozen=True)
+class ActionCall:
+    """A call of an ACTION: `act()` inside its POU (`instance` None), `inst.act()` on an
+    instance of a function block (`instance` the expression) or `Prog.act()` on a program."""
+
+    owner: PouSymbols
+    action: ast.Action
+    instance: ast.Expr | ProgramRef | None
+
+
+@dataclass(frozen=True)
 class UserFunction:
     pou: PouSymbols
 
@@ -71,7 +82,7 @@ class StandardFunction:
 
 
 # What else a call in an expression may name; none of these gives a value.
-NoValue = Literal["method", "instance", "program", "external", "pointer", "unknown"]
+NoValue = Literal["method", "action", "instance", "program", "external", "pointer", "unknown"]
 Callee = UserFunction | StandardFunction | NoValue
 
 
@@ -118,6 +129,27 @@ class Scope:
         if pou is not None and pou.kind == "PROGRAM":
             return ProgramRef(pou)
         return None
+
+    def action_call(self, call: ast.Call) -> ActionCall | None:
+        """The action `call` calls, if it calls one (a variable of the name hides it)."""
+        receiver = call.receiver
+        instance: ast.Expr | ProgramRef | None = None
+        if receiver is None:
+            if self.variable(call.name) is not None:
+                return None
+            owner = self.pou
+        elif isinstance(receiver, ast.NameRef) and isinstance(
+            program := self.lookup(receiver.name), ProgramRef
+        ):
+            owner, instance = program.pou, program
+        else:
+            receiver_type = self.type_of(receiver)
+            if not isinstance(receiver_type, FbType):
+                return None
+            owner, instance = self.fb_symbols(receiver_type), receiver
+        actions = owner.pou.sfc.actions if owner.pou.sfc is not None else ()
+        found = [a for a in actions if key(a.name) == key(call.name)]
+        return ActionCall(owner, found[0], instance) if found else None
 
     def system_namespace(self, expr: ast.Expr) -> bool:
         """`expr` is the name SYS of the system variables (`SYS.COLDSTART`): no declaration
@@ -262,6 +294,8 @@ class Scope:
             self.type_of(index)
         if isinstance(base_type, ArrayType) and len(expr.indices) == len(base_type.dims):
             return base_type.element
+        if isinstance(base_type, OpenArrayType) and len(expr.indices) == base_type.rank:
+            return base_type.element
         return None
 
     def _unary(self, expr: ast.Unary) -> Type | None:
@@ -329,6 +363,8 @@ class Scope:
 
     def callee(self, call: ast.Call) -> Callee:
         """What a call in an expression calls."""
+        if self.action_call(call) is not None:
+            return "action"
         if call.receiver is not None:
             return "method"
         binding = self.lookup(call.name)

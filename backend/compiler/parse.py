@@ -207,6 +207,40 @@ def _children(tree: Tree[Any]) -> list[Any]:
     return list(tree.children)
 
 
+@dataclass(frozen=True)
+class _ActionsBlock:
+    """`ACTIONS [pou] ... END_ACTIONS`: actions declared after the POU they belong to."""
+
+    owner: str | None  # None: the POU right before the block
+    actions: tuple[ast.Action, ...]
+    pos: Pos
+
+
+def _with_actions_blocks(items: list[Any]) -> tuple[list[Any], list[Diagnostic]]:
+    """The file's items with each ACTIONS block's actions moved into the PROGRAM or
+    FUNCTION_BLOCK of the same file that it names (or that comes right before it)."""
+    result: list[Any] = []
+    errors: list[Diagnostic] = []
+    for item in items:
+        if not isinstance(item, _ActionsBlock):
+            result.append(item)
+            continue
+        pous = [(i, p) for i, p in enumerate(result) if isinstance(p, ast.Pou)]
+        if item.owner is None:
+            owner = pous[-1:] if result and isinstance(result[-1], ast.Pou) else []
+        else:
+            owner = [(i, p) for i, p in pous if ast.key(p.name) == ast.key(item.owner)]
+        if not owner or owner[0][1].kind == "FUNCTION":
+            named = f" of '{item.owner}'" if item.owner else ""
+            message = f"these ACTIONS{named} follow no PROGRAM or FUNCTION_BLOCK of this file"
+            errors.append(Diagnostic.at(item.pos, Code.ACTIONS_OWNER, message))
+            continue
+        index, pou = owner[0]
+        sfc = pou.sfc or ast.Sfc((), (), ())
+        result[index] = replace(pou, sfc=replace(sfc, actions=sfc.actions + item.actions))
+    return result, errors
+
+
 class _ToAst(Transformer[Token, Any]):
     """Bottom-up conversion of the lark tree into AST nodes."""
 
@@ -338,6 +372,9 @@ class _ToAst(Transformer[Token, Any]):
         """`%IX0.1` in code names the variable located there (resolve declares one where
         no declaration does): a name like any other, spelled as the address."""
         address, pos = str(items[0]).upper(), self._pos(items[0])
+        if address.endswith("*"):
+            message = f"{address} is a partly specified location: it only locates a declaration"
+            self.errors.append(Diagnostic.at(pos, Code.SYNTAX, message))
         self.addresses.append((address, pos))
         return ast.NameRef(address, pos)
 
@@ -646,6 +683,15 @@ class _ToAst(Transformer[Token, Any]):
         _keyword, name, body = items
         return ast.Action(self._declared(name), body, self._pos(name))
 
+    def actions_item(self, items: list[Any]) -> ast.Action:
+        name, body = items
+        return ast.Action(self._declared(name), body, self._pos(name))
+
+    def actions_block(self, items: list[Any]) -> _ActionsBlock:
+        keyword, *rest = items
+        owner = str(rest.pop(0)) if rest and isinstance(rest[0], Token) else None
+        return _ActionsBlock(owner, tuple(rest), self._pos(keyword))
+
     @v_args(tree=True)
     def program_decl(self, tree: Tree[Any]) -> ast.Pou:
         return self._pou("PROGRAM", tree)
@@ -703,7 +749,35 @@ class _ToAst(Transformer[Token, Any]):
         for item in rest:  # a configuration without RESOURCE is one unnamed resource
             if isinstance(item, tuple):
                 resources.append(self._resource(name, [], item[1]))
-        return ast.Configuration(str(name), blocks, tuple(resources), self._pos(name))
+        lists = [i for i in rest if isinstance(i, list)]
+        access = tuple(a for group in lists for a in group if isinstance(a, ast.AccessDecl))
+        inits = tuple(c for group in lists for c in group if isinstance(c, ast.ConfigInit))
+        pos = self._pos(name)
+        return ast.Configuration(str(name), blocks, tuple(resources), pos, access, inits)
+
+    def access_block(self, items: list[ast.AccessDecl]) -> list[ast.AccessDecl]:
+        return items
+
+    def access_path(self, items: list[Token]) -> tuple[str, ...]:
+        return tuple(str(i).upper() if i.type == "DIRECT_ADDRESS" else str(i) for i in items)
+
+    def access_decl(self, items: list[Any]) -> ast.AccessDecl:
+        name, path, type_ref, *direction = items
+        writable = bool(direction) and str(direction[0]).upper() == "READ_WRITE"
+        return ast.AccessDecl(str(name), path, type_ref, writable, self._pos(name))
+
+    def config_block(self, items: list[ast.ConfigInit]) -> list[ast.ConfigInit]:
+        return items
+
+    def config_init(self, items: list[Any]) -> ast.ConfigInit:
+        names = [i for i in items if isinstance(i, Token)]
+        rest = [i for i in items if not isinstance(i, Token)]
+        location = rest.pop(0) if rest and isinstance(rest[0], str) else None
+        type_ref, *init = rest
+        path = tuple(str(n) for n in names)
+        return ast.ConfigInit(
+            path, location, type_ref, init[0] if init else None, self._pos(names[0])
+        )
 
     def start(self, items: list[Any]) -> list[Any]:
         return items
@@ -873,8 +947,9 @@ def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast
         problem = str(exc.orig_exc) or type(exc.orig_exc).__name__
         message = f"invalid literal: {problem}"
         raise CompileError([Diagnostic.at(where, Code.INVALID_LITERAL, message)]) from None
-    if transformer.errors:
-        raise CompileError(transformer.errors)
+    items, misplaced = _with_actions_blocks(items)
+    if transformer.errors or misplaced:
+        raise CompileError(transformer.errors + misplaced)
     pous = tuple(i for i in items if isinstance(i, ast.Pou))
     globals_ = tuple(i for i in items if isinstance(i, ast.VarBlock))
     types = tuple(t for i in items if isinstance(i, list) for t in i)

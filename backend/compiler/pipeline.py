@@ -16,6 +16,7 @@ from backend.compiler.check import check
 from backend.compiler.checks.generated_names import check_generated_names
 from backend.compiler.checks.modbus import check_modbus
 from backend.compiler.checks.programs import check_programs, globals_read, globals_written
+from backend.compiler.checks.var_config import check_configuration
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.generate import (
@@ -34,7 +35,14 @@ from backend.compiler.limits import MAX_PROJECT_CODE, MiB
 from backend.compiler.parse import TokenBudget, parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import Pos, ProjectSize, SourceFile, stdlib_sources
-from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
+from backend.compiler.types import (
+    ArrayType,
+    ElementaryType,
+    FbType,
+    OpenArrayType,
+    StructType,
+    Type,
+)
 from runtime.contract.accounts import account_problems
 from runtime.contract.artifact import (
     Artifact,
@@ -186,6 +194,9 @@ def _compile(
         programs = configured[1] if configured else _default_programs(units)
         positions = configured[2] if configured else {}
     diagnostics.extend(check_programs(resolved, resource, programs, config_file, positions))
+    configurations = [c for unit in units for c in unit.configurations]
+    instance_io = check_configuration(resolved, configurations, resource.name, programs)
+    diagnostics.extend(instance_io.diagnostics)
     safe, safe_diagnostics = _safe_values(resolved, settings.safe_values, config_file)
     diagnostics.extend(safe_diagnostics)
     modbus, modbus_diagnostics = check_modbus(
@@ -213,6 +224,8 @@ def _compile(
         safe_values=safe,
         users=tuple(sorted(users, key=lambda u: u.name)),
         modbus=modbus,
+        located=instance_io.located,
+        access_paths=instance_io.access_paths,
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
 
@@ -429,7 +442,12 @@ def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
     if pou.kind == "FUNCTION":
         code = _unit_code(pou.name, pou.kind, function_name(pou.name), generated.source, [])
     else:
-        stored = [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
+        # a variable-length in-out is the caller's array, shown where the caller has it
+        stored = [
+            v
+            for v in pou.variables
+            if v.kind not in ("VAR_GLOBAL", "VAR_TEMP") and not isinstance(v.type, OpenArrayType)
+        ]
         code = _unit_code(pou.name, pou.kind, class_name(pou.name), generated.source, stored)
     return replace(
         code, file=pou.pou.pos.file, st_lines=generated.st_lines, chart=_chart(pou.pou.sfc)

@@ -30,6 +30,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    OpenArrayType,
     StructType,
     Type,
     VariadicType,
@@ -318,14 +319,18 @@ class _TypeResolver:
         self, spec: ast.ArrayType, local_constants: dict[str, ast.Initializer | None]
     ) -> Type | None:
         element = self.resolve_spec(spec.element, local_constants)
+        if isinstance(element, OpenArrayType):
+            message = "an array of variable-length arrays cannot be stored; give its bounds"
+            self.report(spec.element.pos, Code.VARIABLE_LENGTH_ARRAY, message)
+            return None
+        open_ranges = sum(1 for bounds in spec.ranges if bounds is None)
+        if open_ranges == len(spec.ranges):
+            return None if element is None else OpenArrayType(element, open_ranges)
         dims: list[tuple[int, int]] = []
         for bounds in spec.ranges:
             if bounds is None:
-                self.report(
-                    spec.pos,
-                    Code.VARIABLE_LENGTH_ARRAY,
-                    "variable-length arrays (ARRAY[*]) are not supported",
-                )
+                message = "an array has either all its ranges open (*) or none"
+                self.report(spec.pos, Code.VARIABLE_LENGTH_ARRAY, message)
                 return None
             low = self.const_int(bounds[0], local_constants)
             high = self.const_int(bounds[1], local_constants)

@@ -68,6 +68,29 @@ class ArrayType:
 
 
 @dataclass(frozen=True)
+class OpenArrayType:
+    """`ARRAY[*] OF T` (`ARRAY[*, *]`, ...): a parameter bound to an array of any bounds
+    at each call; LOWER_BOUND and UPPER_BOUND read the bounds of the array passed."""
+
+    element: Type
+    rank: int
+
+    @property
+    def name(self) -> str:
+        return f"ARRAY[{', '.join('*' * self.rank)}] OF {self.element.name}"
+
+    def binds(self, source: Type) -> bool:
+        """Can an argument of `source` be passed for this parameter?"""
+        if isinstance(source, OpenArrayType):
+            return source == self
+        return (
+            isinstance(source, ArrayType)
+            and len(source.dims) == self.rank
+            and source.element == self.element
+        )
+
+
+@dataclass(frozen=True)
 class StructType:
     name: str
 
@@ -90,7 +113,7 @@ class VariadicType:
     name: str = "..."
 
 
-Type = ElementaryType | ArrayType | StructType | EnumType | FbType | VariadicType
+Type = ElementaryType | ArrayType | OpenArrayType | StructType | EnumType | FbType | VariadicType
 
 
 def _int(name: str, bits: int, signed: bool, category: str = "int") -> ElementaryType:
@@ -193,7 +216,10 @@ def assignable(target: Type, source: Type) -> bool:
 
     Generous where real PLC compilers are (implicit numeric conversions between integer
     widths and to REAL); the check stage warns where a value may not fit.
+    A variable-length array is no value: it is only passed on (`OpenArrayType.binds`).
     """
+    if isinstance(target, OpenArrayType) or isinstance(source, OpenArrayType):
+        return False
     if target == source:
         return True
     if isinstance(target, EnumType):

@@ -122,6 +122,22 @@ class UserAccount:
 
 
 @dataclass(frozen=True)
+class AccessPath:
+    """A VAR_ACCESS entry of the configuration: a name for a variable of the resource."""
+
+    name: str
+    path: str  # the variable's path in the resource (`Main.d1.open`) or a direct address
+    type: str
+    writable: bool  # READ_WRITE; else READ_ONLY
+
+
+# fields added within version 4: left out of the CRC while empty, so that a configuration
+# that does not use them keeps its CRC (and a runtime that does not know them refuses one
+# that does: its CRC does not match)
+_OPTIONAL_FIELDS = ("located", "access_paths")
+
+
+@dataclass(frozen=True)
 class Artifact:
     project: str
     resource: ResourceConfig
@@ -134,6 +150,10 @@ class Artifact:
     users: tuple[UserAccount, ...] = ()  # none: open access (simulation, tests)
     # the served image and the remote devices (modbus.py)
     modbus: ModbusConfig = field(default_factory=ModbusConfig)
+    # variables with a partly specified location (`AT %I*`) by path, with the address the
+    # configuration's VAR_CONFIG gives them, sorted
+    located: tuple[tuple[str, str], ...] = ()
+    access_paths: tuple[AccessPath, ...] = ()  # sorted by name
     crc: str = field(default="")
     format: str = FORMAT
     version: int = VERSION
@@ -148,6 +168,9 @@ class Artifact:
         """Canonical JSON of everything the configuration CRC covers."""
         data = asdict(self)
         del data["crc"]
+        for name in _OPTIONAL_FIELDS:
+            if not data[name]:
+                del data[name]
         return canonical_json(data)
 
     def with_crc(self) -> Artifact:
@@ -205,6 +228,8 @@ def load_artifact(text: str | bytes) -> Artifact:
             safe_values=tuple((name, value) for name, value in data["safe_values"]),
             users=tuple(UserAccount(**user) for user in data["users"]),
             modbus=modbus_config(data["modbus"]),
+            located=tuple((path, location) for path, location in data.get("located", ())),
+            access_paths=tuple(AccessPath(**entry) for entry in data.get("access_paths", ())),
             crc=data["crc"],
         )
     except (KeyError, TypeError) as exc:

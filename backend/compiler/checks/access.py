@@ -6,7 +6,7 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.codes import Code
 from backend.compiler.infer import Scope
-from backend.compiler.types import ArrayType, integer_like
+from backend.compiler.types import ArrayType, OpenArrayType, integer_like
 
 
 def check_index(scope: Scope, expr: ast.IndexRef) -> None:
@@ -18,6 +18,11 @@ def check_index(scope: Scope, expr: ast.IndexRef) -> None:
             )
     base_type = scope.type_of(expr.base)
     if base_type is None:
+        return
+    if isinstance(base_type, OpenArrayType):  # its bounds are checked as it runs
+        if len(expr.indices) != base_type.rank:
+            message = f"{base_type.name} needs {base_type.rank} indices"
+            scope.report(expr.pos, Code.INDEX_COUNT, message)
         return
     if not isinstance(base_type, ArrayType):
         scope.report(expr.pos, Code.NOT_AN_ARRAY, f"{base_type.name} is not an array")

@@ -4,7 +4,9 @@ arguments of any call of a user POU, which must name its parameters and not be t
 from __future__ import annotations
 
 from backend.compiler import ast
-from backend.compiler.checks.initializers import mismatch, takes
+from backend.compiler.checks.actions import check_action_call
+from backend.compiler.checks.initializers import mismatch, takes_argument
+from backend.compiler.checks.open_arrays import check_open_array_connections
 from backend.compiler.checks.targets import is_lvalue, refuse_system_write, writable_target
 from backend.compiler.codes import Code
 from backend.compiler.infer import ProgramRef, Scope
@@ -13,6 +15,10 @@ from backend.compiler.types import FbType, assignable
 
 
 def check_call_statement(scope: Scope, call: ast.Call) -> None:
+    action = scope.action_call(call)
+    if action is not None:
+        check_action_call(scope, call, action)
+        return
     binding = scope.lookup(call.name) if call.receiver is None else None
     if isinstance(binding, ProgramRef):
         callee = binding.pou
@@ -23,6 +29,7 @@ def check_call_statement(scope: Scope, call: ast.Call) -> None:
         return
     pairs = scope.connect_arguments(callee, call)
     check_connection(scope, callee, call, pairs)
+    check_open_array_connections(scope, callee, call, pairs)
     for arg, param in pairs:
         if param is None:
             if arg.value is not None:
@@ -73,5 +80,5 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
     elif param.kind == "VAR_IN_OUT":
         refuse_system_write(scope, arg.value)
     value_type = scope.type_of(arg.value)
-    if value_type is not None and not takes(param.type, arg.value, value_type):
+    if value_type is not None and not takes_argument(param.type, arg.value, value_type):
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, mismatch(param.type, value_type))

@@ -6,16 +6,18 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.builtins import Builtin
 from backend.compiler.checks.calls import check_connection
-from backend.compiler.checks.initializers import takes
+from backend.compiler.checks.initializers import takes_argument
+from backend.compiler.checks.open_arrays import check_open_array_connections
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
 from backend.compiler.infer import Misfit, NoValue, Scope, StandardFunction, UserFunction
 from backend.compiler.resolve import PouSymbols, Variable
-from backend.compiler.types import assignable
+from backend.compiler.types import OpenArrayType, assignable
 
 # why a call in an expression gives no value, by what it calls
 NO_VALUE: dict[NoValue, tuple[Code, str]] = {
     "method": (Code.METHODS, "methods are not supported"),
+    "action": (Code.ACTION_VALUE, "action '{name}' has no value; call it as a statement"),
     "instance": (Code.INSTANCE_VALUE, "function block instance '{name}' has no value"),
     "program": (Code.PROGRAM_VALUE, "program '{name}' has no value; call it as a statement"),
     "external": (Code.EXTERNAL_FUNCTION, "external function '{name}' is not available"),
@@ -55,6 +57,7 @@ def _misfit(misfit: Misfit, builtin: Builtin) -> tuple[Code, str]:
 def check_user_call(scope: Scope, pou: PouSymbols, call: ast.Call) -> None:
     pairs = scope.connect_arguments(pou, call)
     check_connection(scope, pou, call, pairs)
+    check_open_array_connections(scope, pou, call, pairs)
     for arg, param in pairs:
         if param is not None:
             check_argument(scope, arg, param)
@@ -69,10 +72,14 @@ def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
     if value_type is None:
         return
     if param.kind == "VAR_OUTPUT" or arg.is_output:
-        if not assignable(value_type, param.type):
+        if isinstance(param.type, OpenArrayType):
+            fits = param.type.binds(value_type)  # bound to the array connected
+        else:
+            fits = assignable(value_type, param.type)
+        if not fits:
             message = f"cannot store {param.type.name} output in {value_type.name}"
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, message)
         return
-    if not takes(param.type, arg.value, value_type):
+    if not takes_argument(param.type, arg.value, value_type):
         message = f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, message)

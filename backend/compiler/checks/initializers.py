@@ -15,6 +15,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    OpenArrayType,
     StructType,
     Type,
     assignable,
@@ -97,6 +98,14 @@ def takes(target: Type, value: ast.Expr, value_type: Type) -> bool:
     """Can `value` (of `value_type`) be stored in `target`? The types must be assignable;
     besides, the plain literals 0 and 1 are BOOL values (IEC 61131-3 boolean literals)."""
     return assignable(target, value_type) or bool_literal(target, value)
+
+
+def takes_argument(param: Type, value: ast.Expr, value_type: Type) -> bool:
+    """Can `value` be passed for a parameter of type `param`? As stored, or bound to it
+    when the parameter is a variable-length array."""
+    if isinstance(param, OpenArrayType):
+        return param.binds(value_type)
+    return takes(param, value, value_type)
 
 
 def bool_literal(target: Type, value: ast.Expr) -> bool:

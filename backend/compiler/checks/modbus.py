@@ -104,7 +104,12 @@ def check_modbus(
 ) -> tuple[ModbusConfig, list[Diagnostic]]:
     """The Modbus configuration of a project from its `[modbus]` table (None: absent)."""
     checker = _Checker(resolved, config_file, lines)
-    located = [v for _, v in sorted(resolved.globals_by_key.items()) if v.location]
+    # a partly specified location (`AT %Q*`) has no Modbus address of its own
+    located = [
+        v
+        for _, v in sorted(resolved.globals_by_key.items())
+        if v.location and not v.location.endswith("*")
+    ]
     if settings is None:
         settings = {}
         serve_default = bool(located)  # nothing located, nothing to serve
