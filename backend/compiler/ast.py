@@ -116,6 +116,7 @@ class EnumLiteral:
     type_name: str
     value: str
     pos: Pos
+    qualified: bool = False  # written `Color.Red` (CODESYS/TwinCAT), not `Color#Red`
 
 
 @dataclass(frozen=True)

@@ -5,8 +5,10 @@ people can refer to it; the message around it may change. Errors are `E` and war
 followed by four digits, grouped by hundreds: 00 syntax and literals, 01 declarations,
 02 names, types and expressions, 03 statements and assignments, 04 calls, 05 sequential
 function charts, 06 the resource (user programs, safe values, users, Modbus), 07 what padt does not
-compile (features it lacks, limits). docs/diagnostics.md explains every code with a
-failing and a passing example.
+compile (features it lacks, limits), 08 extensions of other dialects (CODESYS, TwinCAT) that
+padt accepts, each with a warning that it is not IEC 61131-3. Notes (`N`) tell what was
+ignored without changing what the program does. docs/diagnostics.md explains every code
+with a failing and a passing example.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from __future__ import annotations
 from enum import Enum, unique
 from typing import Literal
 
-Severity = Literal["error", "warning"]
+Severity = Literal["error", "warning", "note"]
 
 
 @unique
@@ -25,7 +27,8 @@ class Code(Enum):
 
     @property
     def severity(self) -> Severity:
-        return "error" if self.id.startswith("E") else "warning"
+        severities: dict[str, Severity] = {"E": "error", "W": "warning", "N": "note"}
+        return severities[self.id[0]]
 
     # ---- 00: syntax and literals
     SYNTAX = "E0001", "syntax error"
@@ -154,3 +157,11 @@ class Code(Enum):
     DATA_DEPTH = "E0711", "data types nested too deep"
     DATA_SIZE = "E0712", "too much data"
     CODE_SIZE = "E0713", "generated code too large"
+
+    # ---- 08: extensions of other dialects, accepted with a warning
+    QUALIFIED_ENUM = "W0801", "qualified enumeration value E.Value (CODESYS/TwinCAT)"
+    SIZEOF = "W0802", "SIZEOF (CODESYS/TwinCAT)"
+    SET_RESET_ASSIGNMENT = "W0803", "S= or R= assignment (CODESYS/TwinCAT)"
+    TRAILING_COMMA = "W0804", "trailing comma in a call (CODESYS/TwinCAT)"
+    ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
+    SIZEOF_ARGUMENT = "E0801", "SIZEOF of something without a CODESYS size"

@@ -24,6 +24,7 @@ from backend.compiler.infer import (
     Misfit,
     ProgramRef,
     Scope,
+    SizeOf,
     enable_argument,
     is_external,
     is_implicit,
@@ -380,6 +381,8 @@ class _Emitter:
         pou = self.scope.resolved.pous.get(key(call.name))
         if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
             return self._user_call(pou, call)
+        if isinstance(self.scope.callee(call), SizeOf):  # a constant: its argument never runs
+            return _Value(repr(self.scope.size_of(call)), _type(self.scope, call))
         builtin = builtins.lookup(call.name)
         assert builtin is not None, call.name
         args = self.scope.builtin_arguments(builtin, call)

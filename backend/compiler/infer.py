@@ -19,6 +19,7 @@ from backend.compiler.codes import Code
 from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable, visible
+from backend.compiler.sizes import codesys_layout
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     ANY_INT,
@@ -30,6 +31,10 @@ from backend.compiler.types import (
     LTIME,
     STRING,
     TIME,
+    UDINT,
+    UINT,
+    ULINT,
+    USINT,
     WORD,
     WSTRING,
     ArrayType,
@@ -70,9 +75,14 @@ class StandardFunction:
     builtin: builtins.Builtin
 
 
+@dataclass(frozen=True)
+class SizeOf:
+    """CODESYS SIZEOF(x): the size of x in bytes, a constant (W0802)."""
+
+
 # What else a call in an expression may name; none of these gives a value.
 NoValue = Literal["method", "instance", "program", "external", "pointer", "unknown"]
-Callee = UserFunction | StandardFunction | NoValue
+Callee = UserFunction | StandardFunction | SizeOf | NoValue
 
 
 @dataclass(frozen=True)
@@ -325,7 +335,21 @@ class Scope:
         if isinstance(callee, StandardFunction):
             result = self.standard_call(callee.builtin, call)
             return None if isinstance(result, Misfit) else result
+        if isinstance(callee, SizeOf):
+            size = self.size_of(call)
+            return None if size is None else smallest_unsigned(size)
         return None
+
+    def size_of(self, call: ast.Call) -> int | None:
+        """The bytes SIZEOF(x) counts, as CODESYS does (`sizes`); None for a call that is
+        not one variable or expression with such a size."""
+        if len(call.args) != 1 or call.args[0].name is not None or call.args[0].value is None:
+            return None
+        argument_type = self.type_of(call.args[0].value)
+        if argument_type is None:
+            return None
+        layout = codesys_layout(self.resolved, argument_type)
+        return None if layout is None else layout.size
 
     def callee(self, call: ast.Call) -> Callee:
         """What a call in an expression calls."""
@@ -339,6 +363,8 @@ class Scope:
         pou = self.resolved.pous.get(key(call.name))
         if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
             return UserFunction(pou)
+        if key(call.name) == "SIZEOF":
+            return SizeOf()
         builtin = builtins.lookup(call.name)
         if builtin is not None:
             return StandardFunction(builtin)
@@ -435,6 +461,11 @@ IMPLICIT_PARAMETERS = {
     "EN": Variable("EN", "VAR_INPUT", BOOL, None, False, False, None, "EN", Pos("", 0, 0)),
     "ENO": Variable("ENO", "VAR_OUTPUT", BOOL, None, False, False, None, "ENO", Pos("", 0, 0)),
 }
+
+
+def smallest_unsigned(value: int) -> ElementaryType:
+    """The type CODESYS gives SIZEOF: the smallest unsigned integer that holds the size."""
+    return next(t for t in (USINT, UINT, UDINT) if value <= t.max) if value <= UDINT.max else ULINT
 
 
 def is_implicit(param: Variable) -> bool:

@@ -17,6 +17,7 @@ from backend.compiler.codes import Code
 from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.limits import MAX_DATA_DEPTH, MAX_EXPRESSION_DEPTH
+from backend.compiler.qualified_enums import qualify_enum_values
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
@@ -405,6 +406,7 @@ class _TypeResolver:
 
 
 def resolve(units: list[ast.SourceUnit]) -> Resolved:
+    units = qualify_enum_values(units)  # CODESYS `Color.Red` is `Color#Red`
     result = Resolved()
     types = _TypeResolver(units, result)
     for name in sorted(types.decls):  # every declared type, used or not, is checked

@@ -6,10 +6,18 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.builtins import Builtin
 from backend.compiler.checks.calls import check_connection
+from backend.compiler.checks.dialects import check_size_of
 from backend.compiler.checks.initializers import takes
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
-from backend.compiler.infer import Misfit, NoValue, Scope, StandardFunction, UserFunction
+from backend.compiler.infer import (
+    Misfit,
+    NoValue,
+    Scope,
+    SizeOf,
+    StandardFunction,
+    UserFunction,
+)
 from backend.compiler.resolve import PouSymbols, Variable
 from backend.compiler.types import assignable
 
@@ -28,6 +36,8 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
     match scope.callee(call):
         case UserFunction(pou=pou):
             check_user_call(scope, pou, call)
+        case SizeOf():
+            check_size_of(scope, call)
         case StandardFunction(builtin=builtin):
             misfit = scope.standard_call(builtin, call)
             if isinstance(misfit, Misfit):
