@@ -47,6 +47,14 @@ class VariadicType:
 
 
 @dataclass(frozen=True)
+class RefType:
+    """`REF_TO T` (IEC 61131-3 ed. 3)."""
+
+    target: TypeRef
+    pos: Pos
+
+
+@dataclass(frozen=True)
 class EnumSpec:
     base: str | None
     values: tuple[tuple[str, Expr | None, Pos], ...]
@@ -67,7 +75,16 @@ class SubrangeSpec:
     pos: Pos
 
 
-TypeRef = NamedType | StringType | ArrayType | VariadicType | EnumSpec | StructSpec | SubrangeSpec
+TypeRef = (
+    NamedType
+    | StringType
+    | ArrayType
+    | VariadicType
+    | RefType
+    | EnumSpec
+    | StructSpec
+    | SubrangeSpec
+)
 
 
 # ---- expressions -------------------------------------------------------------------------
@@ -117,6 +134,13 @@ class EnumLiteral:
     value: str
     pos: Pos
     qualified: bool = False  # written `Color.Red` (CODESYS/TwinCAT), not `Color#Red`
+
+
+@dataclass(frozen=True)
+class NullLiteral:
+    """NULL, the reference to nothing (IEC 61131-3 ed. 3)."""
+
+    pos: Pos
 
 
 @dataclass(frozen=True)
@@ -199,7 +223,9 @@ class StructInit:
     pos: Pos
 
 
-Literal = IntLiteral | RealLiteral | BoolLiteral | TimeLiteral | StringLiteral | EnumLiteral
+Literal = (
+    IntLiteral | RealLiteral | BoolLiteral | TimeLiteral | StringLiteral | EnumLiteral | NullLiteral
+)
 Expr = Literal | NameRef | MemberRef | IndexRef | BitRef | Deref | Unary | Binary | Call
 Initializer = Expr | ArrayInit | StructInit
 

@@ -82,6 +82,8 @@ class Code(Enum):
     INDEX_OUT_OF_BOUNDS = "E0215", "constant array index outside the bounds"
     BIT_ACCESS_TYPE = "E0216", "bit access on something else than an integer"
     BIT_OUT_OF_RANGE = "E0217", "bit access beyond the width of the value"
+    NOT_A_REFERENCE = "E0218", "dereference of something that is no reference"
+    REFERENCE_TARGET = "E0219", "reference to something that is no lasting variable"
 
     # ---- 03: statements and assignments
     ASSIGN_CONSTANT = "E0301", "assignment to a constant"

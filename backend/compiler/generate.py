@@ -23,6 +23,7 @@ from backend.compiler.infer import (
     EnumValue,
     Misfit,
     ProgramRef,
+    RefOf,
     Scope,
     SizeOf,
     enable_argument,
@@ -36,10 +37,12 @@ from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
     BOOL,
+    NULL_TYPE,
     ArrayType,
     ElementaryType,
     EnumType,
     FbType,
+    RefType,
     StructType,
     Type,
     VariadicType,
@@ -248,6 +251,10 @@ class _Emitter:
                 return _Value(f"{self.expr(base).code}.{member.attr}", member.type)
             case ast.IndexRef():
                 return self._index(expr)
+            case ast.NullLiteral():
+                return _Value("None", NULL_TYPE)
+            case ast.Deref(base=base):  # NULL is a program fault (`_deref`)
+                return _Value(f"_deref({self.expr(base).code})", _type(self.scope, expr))
             case ast.BitRef(base=base, bit=bit, width=width):
                 shifted = f"(({self.exact(base).code}) >> {bit * width})"
                 if width == 1:
@@ -265,6 +272,10 @@ class _Emitter:
         base = self.expr(expr.base)
         array = base.type
         assert isinstance(array, ArrayType)
+        return _Value(f"{base.code}[{self._flat_offset(expr, array)}]", array.element)
+
+    def _flat_offset(self, expr: ast.IndexRef, array: ArrayType) -> str:
+        """The list offset of an element, each index checked against its bounds."""
         parts: list[str] = []
         stride = 1
         for index_expr, (low, high) in reversed(list(zip(expr.indices, array.dims, strict=True))):
@@ -275,8 +286,54 @@ class _Emitter:
                 offset = self._checked_offset(self.exact(index_expr).code, low, high)
             parts.append(offset if stride == 1 else f"{offset} * {stride}")
             stride *= high - low + 1
-        flat = " + ".join(reversed(parts))
-        return _Value(f"{base.code}[{flat}]", array.element)
+        return " + ".join(reversed(parts))
+
+    def reference(self, expr: ast.Expr) -> str:
+        """Code of REF(expr): `_ref(root, steps, label)`, the object that holds the variable,
+        the accessors below it (a list offset computed now) and its ST path below the root
+        (the runtime puts the root's path before it)."""
+        root, steps, label, whole = self._place(expr)
+        return f"_ref({root}, ({''.join(s + ', ' for s in steps)}), {label}, {whole})"
+
+    def _place(self, expr: ast.Expr) -> tuple[str, list[str], str, bool]:
+        """(root code, accessor codes, label code, whether the label is a whole path)."""
+        match expr:
+            case ast.NameRef(name=name):
+                binding = self.scope.lookup(name)
+                if isinstance(binding, ProgramRef):
+                    return f"_P.{class_name(binding.pou.name)}", [], repr(name), False
+                assert isinstance(binding, Variable)
+                root, _, attr = self.var_code(binding).rpartition(".")
+                return root, [repr(attr)], repr(binding.name), False
+            case ast.MemberRef(base=base, member=member_name):
+                member = self.scope.member(expr)
+                assert member is not None
+                root, steps, label, whole = self._place(base)
+                return root, [*steps, repr(member.attr)], f"{label} + {'.' + member_name!r}", whole
+            case ast.IndexRef(base=base, indices=indices):
+                array = _type(self.scope, base)
+                assert isinstance(array, ArrayType)
+                held = [self.temp() for _ in indices]  # each index evaluated once
+                for temp, index in zip(held, indices, strict=True):
+                    self.pre.append(f"{temp} = {self.exact(index).code}")
+                offset = self._offset_of_held(array, held)
+                root, steps, label, whole = self._place(base)
+                shown = " + ', ' + ".join(f"str({t})" for t in held)
+                return root, [*steps, f"({offset})"], f"{label} + '[' + {shown} + ']'", whole
+            case ast.Deref(base=base):  # REF(r^.x): below what r refers to, named by r
+                code = self.expr(base).code
+                return f"_deref({code})", [], f"str({code}) + '^'", True
+        raise AssertionError(f"no place for {expr!r}")
+
+    def _offset_of_held(self, array: ArrayType, held: list[str]) -> str:
+        """The list offset of an element whose indices are held in `held`."""
+        parts: list[str] = []
+        stride = 1
+        for index, (low, high) in reversed(list(zip(held, array.dims, strict=True))):
+            offset = self._checked_offset(index, low, high)
+            parts.append(offset if stride == 1 else f"{offset} * {stride}")
+            stride *= high - low + 1
+        return " + ".join(reversed(parts))
 
     def _checked_offset(self, index: str, low: int, high: int) -> str:
         """The list offset of an array index, checked against the bounds inline (the
@@ -381,8 +438,13 @@ class _Emitter:
         pou = self.scope.resolved.pous.get(key(call.name))
         if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
             return self._user_call(pou, call)
-        if isinstance(self.scope.callee(call), SizeOf):  # a constant: its argument never runs
+        callee = self.scope.callee(call)
+        if isinstance(callee, SizeOf):  # a constant: its argument never runs
             return _Value(repr(self.scope.size_of(call)), _type(self.scope, call))
+        if isinstance(callee, RefOf):
+            referenced = self.scope.referenced(call)
+            assert referenced is not None
+            return _Value(self.reference(referenced), _type(self.scope, call))
         builtin = builtins.lookup(call.name)
         assert builtin is not None, call.name
         args = self.scope.builtin_arguments(builtin, call)
@@ -503,6 +565,8 @@ class _Emitter:
                 return {"bool": "False", "real": "0.0", "string": "''"}.get(category, "0")
             case VariadicType():
                 return "()"
+            case RefType():
+                return "None"  # NULL
         raise AssertionError(f"no initial value for {var_type!r}")
 
     def _array_initial(self, array: ArrayType, init: ast.ArrayInit) -> str:
@@ -630,7 +694,15 @@ class _Emitter:
             shift, width = target.bit * target.width, target.width
             updated = f"_setbits({base.code}, {shift}, {width}, {code})"
             integer = integer_like(base.type)
-            return f"{base.code} = {wrap_code(updated, integer) if integer else updated}"
+            return self._assignment(
+                target.base, wrap_code(updated, integer) if integer else updated
+            )
+        return self._assignment(target, code)
+
+    def _assignment(self, target: ast.Expr, code: str) -> str:
+        """`target := code`; through a reference (`r^ := v`) the place it refers to."""
+        if isinstance(target, ast.Deref):
+            return f"_deref_set({self.expr(target.base).code}, {code})"
         return f"{self.expr(target).code} = {code}"
 
     def if_statement(

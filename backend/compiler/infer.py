@@ -29,6 +29,7 @@ from backend.compiler.types import (
     DWORD,
     ELEMENTARY,
     LTIME,
+    NULL_TYPE,
     STRING,
     TIME,
     UDINT,
@@ -41,6 +42,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    RefType,
     StructType,
     Type,
     VariadicType,
@@ -76,13 +78,18 @@ class StandardFunction:
 
 
 @dataclass(frozen=True)
+class RefOf:
+    """REF(x): a reference to the variable x (IEC 61131-3 ed. 3)."""
+
+
+@dataclass(frozen=True)
 class SizeOf:
     """CODESYS SIZEOF(x): the size of x in bytes, a constant (W0802)."""
 
 
 # What else a call in an expression may name; none of these gives a value.
 NoValue = Literal["method", "instance", "program", "external", "pointer", "unknown"]
-Callee = UserFunction | StandardFunction | SizeOf | NoValue
+Callee = UserFunction | StandardFunction | RefOf | SizeOf | NoValue
 
 
 @dataclass(frozen=True)
@@ -213,8 +220,11 @@ class Scope:
                 if base_type is None or integer_like(base_type) is None:
                     return None
                 return {1: BOOL, 8: BYTE, 16: WORD, 32: DWORD}[width]
-            case ast.Deref():
-                return None  # not supported
+            case ast.NullLiteral():
+                return NULL_TYPE
+            case ast.Deref(base=base):
+                base_type = self.type_of(base)
+                return base_type.target if isinstance(base_type, RefType) else None
             case ast.Unary():
                 return self._unary(expr)
             case ast.Binary():
@@ -297,7 +307,7 @@ class Scope:
         if left_type is None or right_type is None:
             return None
         op = expr.op
-        if op in ("=", "<>") and isinstance(left_type, EnumType | StructType):
+        if op in ("=", "<>") and isinstance(left_type, EnumType | StructType | RefType):
             return BOOL  # whether the two compare is a rule (checks.operators)
         left, right = integer_like(left_type) or left_type, integer_like(right_type) or right_type
         if not isinstance(left, ElementaryType) or not isinstance(right, ElementaryType):
@@ -338,7 +348,17 @@ class Scope:
         if isinstance(callee, SizeOf):
             size = self.size_of(call)
             return None if size is None else smallest_unsigned(size)
+        if isinstance(callee, RefOf):
+            referenced = self.referenced(call)
+            target = self.type_of(referenced) if referenced is not None else None
+            return None if target is None else RefType(target)
         return None
+
+    def referenced(self, call: ast.Call) -> ast.Expr | None:
+        """The variable of REF(x): its one unnamed argument."""
+        if len(call.args) != 1 or call.args[0].name is not None:
+            return None
+        return call.args[0].value
 
     def size_of(self, call: ast.Call) -> int | None:
         """The bytes SIZEOF(x) counts, as CODESYS does (`sizes`); None for a call that is
@@ -365,12 +385,14 @@ class Scope:
             return UserFunction(pou)
         if key(call.name) == "SIZEOF":
             return SizeOf()
+        if key(call.name) == "REF":
+            return RefOf()
         builtin = builtins.lookup(call.name)
         if builtin is not None:
             return StandardFunction(builtin)
         if pou is not None and pou.kind == "FUNCTION":
             return "external"
-        if key(call.name) in ("REF", "ADR"):
+        if key(call.name) == "ADR":
             return "pointer"
         return "unknown"
 

@@ -315,6 +315,9 @@ class _ToAst(Transformer[Token, Any]):
         prefix, value = items
         return ast.EnumLiteral(str(prefix)[:-1], str(value), self._pos(prefix))
 
+    def null_literal(self, items: list[Token]) -> ast.NullLiteral:
+        return ast.NullLiteral(self._pos(items[0]))
+
     # ---- expressions
     def name_ref(self, items: list[Token]) -> ast.NameRef:
         return ast.NameRef(str(items[0]), self._pos(items[0]))
@@ -538,6 +541,9 @@ class _ToAst(Transformer[Token, Any]):
 
     def variadic_type(self, items: list[Token]) -> ast.VariadicType:
         return ast.VariadicType(self._pos(items[0]))
+
+    def ref_type(self, items: list[Any]) -> ast.RefType:
+        return ast.RefType(items[1], self._pos(items[0]))
 
     @v_args(tree=True)
     def enum_spec(self, tree: Tree[Any]) -> ast.EnumSpec:
@@ -804,6 +810,7 @@ _OPERATIONS = frozenset({
 _OPERANDS = frozenset({
     "name_ref", "direct_ref", "int_literal", "real_literal", "time_literal", "date_literal",
     "bool_literal", "string_literal", "wstring_literal", "typed_literal", "enum_literal",
+    "null_literal",
 })  # fmt: skip
 
 

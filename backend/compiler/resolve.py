@@ -31,6 +31,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    RefType,
     StructType,
     Type,
     VariadicType,
@@ -278,6 +279,9 @@ class _TypeResolver:
                 return self._array(spec, local_constants)
             case ast.VariadicType():
                 return VariadicType()
+            case ast.RefType(target=target):
+                inner = self.resolve_spec(target, local_constants)
+                return None if inner is None else RefType(inner)
             case ast.SubrangeSpec():
                 return self._subrange(spec, local_constants)
             case ast.EnumSpec():

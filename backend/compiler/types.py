@@ -90,7 +90,21 @@ class VariadicType:
     name: str = "..."
 
 
-Type = ElementaryType | ArrayType | StructType | EnumType | FbType | VariadicType
+@dataclass(frozen=True)
+class RefType:
+    """A reference (IEC 61131-3 ed. 3 `REF_TO T`); `target` None is the type of NULL,
+    which fits every reference type."""
+
+    target: Type | None
+
+    @property
+    def name(self) -> str:
+        return "REF_TO " + self.target.name if self.target is not None else "NULL"
+
+
+NULL_TYPE = RefType(None)
+
+Type = ElementaryType | ArrayType | StructType | EnumType | FbType | VariadicType | RefType
 
 
 def _int(name: str, bits: int, signed: bool, category: str = "int") -> ElementaryType:
@@ -196,6 +210,8 @@ def assignable(target: Type, source: Type) -> bool:
     """
     if target == source:
         return True
+    if isinstance(target, RefType) or isinstance(source, RefType):
+        return isinstance(target, RefType) and source == NULL_TYPE
     if isinstance(target, EnumType):
         return (isinstance(source, EnumType) and source.name == target.name) or source == ANY_INT
     if isinstance(source, EnumType):

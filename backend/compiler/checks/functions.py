@@ -8,11 +8,13 @@ from backend.compiler.builtins import Builtin
 from backend.compiler.checks.calls import check_connection
 from backend.compiler.checks.dialects import check_size_of
 from backend.compiler.checks.initializers import takes
+from backend.compiler.checks.references import check_ref
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
 from backend.compiler.infer import (
     Misfit,
     NoValue,
+    RefOf,
     Scope,
     SizeOf,
     StandardFunction,
@@ -27,7 +29,7 @@ NO_VALUE: dict[NoValue, tuple[Code, str]] = {
     "instance": (Code.INSTANCE_VALUE, "function block instance '{name}' has no value"),
     "program": (Code.PROGRAM_VALUE, "program '{name}' has no value; call it as a statement"),
     "external": (Code.EXTERNAL_FUNCTION, "external function '{name}' is not available"),
-    "pointer": (Code.POINTERS, "pointers are not supported (REF and ADR only inside printf)"),
+    "pointer": (Code.POINTERS, "pointers are not supported (ADR only inside printf)"),
     "unknown": (Code.NOT_A_FUNCTION, "'{name}' is not a function"),
 }
 
@@ -38,6 +40,8 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
             check_user_call(scope, pou, call)
         case SizeOf():
             check_size_of(scope, call)
+        case RefOf():
+            check_ref(scope, call)
         case StandardFunction(builtin=builtin):
             misfit = scope.standard_call(builtin, call)
             if isinstance(misfit, Misfit):

@@ -8,8 +8,10 @@ from backend.compiler.codes import Code
 from backend.compiler.infer import COMPARISONS, Scope
 from backend.compiler.types import (
     BOOL,
+    NULL_TYPE,
     ElementaryType,
     EnumType,
+    RefType,
     StructType,
     Type,
     common_numeric,
@@ -41,6 +43,15 @@ def comparable(op: str, left_type: Type, right_type: Type) -> bool:
     """Values of the two types can be compared with `op`: enums and structures with = and <>
     when of the same type (an enum with an integer too); numbers with numbers, values of
     one category with each other, BOOL with integers."""
+    if isinstance(left_type, RefType) or isinstance(right_type, RefType):
+        # references compare with = and <> when they may refer to the same: same target,
+        # or NULL
+        return (
+            op in ("=", "<>")
+            and isinstance(left_type, RefType)
+            and isinstance(right_type, RefType)
+            and (left_type == right_type or NULL_TYPE in (left_type, right_type))
+        )
     if op in ("=", "<>") and isinstance(left_type, EnumType | StructType):
         return left_type == right_type or (
             isinstance(left_type, EnumType) and integer_like(right_type) is not None

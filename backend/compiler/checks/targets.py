@@ -73,6 +73,8 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
         if isinstance(target.base, ast.NameRef | ast.MemberRef | ast.IndexRef | ast.BitRef):
             writable_target(scope, target.base)
         return scope.type_of(target)
+    if isinstance(target, ast.Deref):  # `r^ := v` writes what r refers to
+        return scope.type_of(target)
     scope.report(target.pos, Code.ASSIGN_EXPRESSION, "cannot assign to an expression")
     return None
 
@@ -94,4 +96,4 @@ def refuse_system_write(scope: Scope, target: ast.Expr) -> None:
 
 
 def is_lvalue(expr: ast.Expr) -> bool:
-    return isinstance(expr, ast.NameRef | ast.MemberRef | ast.IndexRef)
+    return isinstance(expr, ast.NameRef | ast.MemberRef | ast.IndexRef | ast.Deref)

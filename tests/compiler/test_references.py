@@ -1,0 +1,142 @@
+"""References of IEC 61131-3 edition 3 (REF_TO, REF(), `^`, NULL) through the compiler and
+`padt sim`: every construct traced cycle by cycle, a dereference of NULL as a program fault
+that names file and line, the refusals with their codes. What the runtime does with
+references (OLT, writes, forcing, reload, warm start) is in tests/runtime/test_references.py."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from tests.conftest import padt, sim_trace
+
+
+def diagnostics(source: str) -> list[str]:
+    return [str(d) for d in compile_sources([SourceFile("t.st", source)]).diagnostics]
+
+
+def test_a_reference_reads_and_writes_what_it_refers_to(tmp_path: Path) -> None:
+    source = """VAR_GLOBAL g : INT := 7; END_VAR
+PROGRAM Main
+VAR_EXTERNAL g : INT; END_VAR
+VAR a : INT := 100; arr : ARRAY[1..3] OF INT; k : INT := 2; n, seen : INT; END_VAR
+VAR r : REF_TO INT; END_VAR
+n := n + 1;
+IF n = 2 THEN r := REF(a); ELSIF n = 3 THEN r := REF(arr[k]); ELSIF n = 4 THEN r := REF(g); END_IF;
+IF r <> NULL THEN
+  seen := r^;
+  r^ := r^ + 1;
+END_IF;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 5)
+    assert trace["Main.r"] == ["NULL", "Main.a", "Main.arr[2]", "g", "g"]
+    assert trace["Main.seen"] == [0, 100, 0, 7, 8]
+    assert trace["Main.a"] == [100, 101, 101, 101, 101]
+    assert trace["Main.arr"] == [[0, 0, 0], [0, 0, 0], [0, 1, 0], [0, 1, 0], [0, 1, 0]]
+    assert trace["g"] == [7, 7, 7, 8, 9]
+
+
+def test_a_reference_passed_to_a_block_changes_the_callers_variable(tmp_path: Path) -> None:
+    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+FUNCTION_BLOCK Bump
+VAR_INPUT target : REF_TO INT; point : REF_TO Point; END_VAR
+VAR own : INT; mine : REF_TO INT; END_VAR
+IF target <> NULL THEN target^ := target^ + 1; END_IF;
+IF point <> NULL THEN point^.x := point^.x + 10; END_IF;
+mine := REF(own);
+mine^ := mine^ + 2;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR count : INT; p : Point; bump : Bump; END_VAR
+bump(target := REF(count), point := REF(p));
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.count"] == [1, 2, 3]
+    assert trace["Main.p.x"] == [10, 20, 30]
+    assert trace["Main.bump.own"] == [2, 4, 6]
+    # references read as the path they refer to, also one made inside the block
+    assert trace["Main.bump.target"] == ["Main.count"] * 3
+    assert trace["Main.bump.point"] == ["Main.p"] * 3
+    assert trace["Main.bump.mine"] == ["Main.bump.own"] * 3
+
+
+def test_a_reference_survives_a_structure_assignment_below_its_root(tmp_path: Path) -> None:
+    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+PROGRAM Main
+VAR p, q : Point; r : REF_TO INT; n : INT; END_VAR
+n := n + 1;
+IF n = 1 THEN r := REF(p.y); END_IF;
+q.y := 40 + n;
+p := q;
+n := n + 0;
+r^ := r^ + 1000;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.r"] == ["Main.p.y"] * 3
+    assert trace["Main.p.y"] == [1041, 1042, 1043]
+
+
+def test_references_compare_equal_when_they_refer_to_the_same_place(tmp_path: Path) -> None:
+    source = """PROGRAM Main
+VAR a, b : INT; r1, r2 : REF_TO INT; same, isnull : BOOL; n : INT; END_VAR
+n := n + 1;
+isnull := r1 = NULL;
+r1 := REF(a);
+IF n = 1 THEN r2 := REF(a); ELSE r2 := REF(b); END_IF;
+same := r1 = r2;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 2)
+    assert trace["Main.isnull"] == [True, False]
+    assert trace["Main.same"] == [True, False]
+
+
+def test_a_dereference_of_null_is_a_program_fault_naming_the_line(tmp_path: Path) -> None:
+    path = tmp_path / "null.st"
+    path.write_text(
+        "PROGRAM Main\nVAR r : REF_TO INT; n : INT; END_VAR\nn := n + 1;\n"
+        "IF n = 3 THEN\n  n := r^;\nEND_IF;\nEND_PROGRAM\n"
+    )
+    run = padt("sim", str(path), "--cycles", "4", "--trace", "Main.n")
+    assert run.returncode == 3, run.stderr
+    assert f"cycle 3: program Main: dereference of NULL in POU Main ({path}:5)" in run.stderr
+    values = [line for line in run.stdout.splitlines() if line]
+    assert '"Main.n": 3' in values[-1]  # the program stopped in ERROR at its third cycle
+
+
+def test_what_references_may_not_do_is_refused_with_its_code() -> None:
+    found = diagnostics("""FUNCTION F : INT
+VAR x : INT; r : REF_TO INT; END_VAR
+r := REF(x);
+END_FUNCTION
+PROGRAM Main
+VAR CONSTANT c : INT := 1; END_VAR
+VAR_TEMP t : INT; END_VAR
+VAR r : REF_TO INT; d : REF_TO DINT; n : INT; w : WORD; b : BOOL; END_VAR
+r := REF(t);
+r := REF(c);
+r := REF(w.3);
+n := n^;
+d := REF(n);
+b := r = d;
+b := r < NULL;
+r := 5;
+END_PROGRAM
+""")
+    assert found == [
+        "t.st:3:6: error: REF of 'x', a variable of a function (it is gone when the call ends)"
+        " [E0219]",
+        "t.st:9:6: error: REF of 't', a VAR_TEMP (it is gone when the call ends) [E0219]",
+        "t.st:10:6: error: REF of constant 'c' [E0219]",
+        "t.st:11:6: error: REF of a single bit [E0219]",
+        "t.st:11:6: error: type mismatch: cannot assign REF_TO BOOL to REF_TO INT [E0209]",
+        "t.st:12:6: error: '^' needs a reference, not a value of type INT [E0218]",
+        "t.st:13:6: error: type mismatch: cannot assign REF_TO INT to REF_TO DINT [E0209]",
+        "t.st:14:8: error: '=' cannot be applied to REF_TO INT and REF_TO DINT [E0211]",
+        "t.st:15:8: error: '<' cannot be applied to REF_TO INT and NULL [E0211]",
+        "t.st:16:6: error: type mismatch: cannot assign ANY_INT to REF_TO INT [E0209]",
+    ]
