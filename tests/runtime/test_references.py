@@ -9,8 +9,8 @@ from pathlib import Path
 
 from runtime.context import ContextInvalid, load_context, save_context
 from runtime.contract.values import format_value
-from runtime.restart import take_context, warm_start
 from runtime.resource import Resource
+from runtime.restart import take_context, warm_start
 from tests.support.resource_harness import compiled, harness
 
 PLANT = """
