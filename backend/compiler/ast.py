@@ -48,10 +48,11 @@ class VariadicType:
 
 @dataclass(frozen=True)
 class RefType:
-    """`REF_TO T` (IEC 61131-3 ed. 3)."""
+    """`REF_TO T` (IEC 61131-3 ed. 3), or CODESYS `POINTER TO T` (`pointer`)."""
 
     target: TypeRef
     pos: Pos
+    pointer: bool = False
 
 
 @dataclass(frozen=True)

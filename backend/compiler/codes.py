@@ -146,7 +146,7 @@ class Code(Enum):
     PROGRAM_ARGUMENTS = "W0602", "program arguments in a configuration ignored"
 
     # ---- 07: what padt does not compile
-    POINTERS = "E0701", "pointers"
+    POINTERS = "E0701", "pointer arithmetic"
     METHODS = "E0702", "methods"
     DIRECT_ADDRESS = "E0703", "direct address of another POU's variable"
     VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array"
@@ -165,5 +165,6 @@ class Code(Enum):
     SIZEOF = "W0802", "SIZEOF (CODESYS/TwinCAT)"
     SET_RESET_ASSIGNMENT = "W0803", "S= or R= assignment (CODESYS/TwinCAT)"
     TRAILING_COMMA = "W0804", "trailing comma in a call (CODESYS/TwinCAT)"
+    POINTER = "W0805", "POINTER TO and ADR (CODESYS/TwinCAT)"
     ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
     SIZEOF_ARGUMENT = "E0801", "SIZEOF of something without a CODESYS size"

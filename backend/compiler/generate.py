@@ -18,6 +18,7 @@ from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.builtins import convert_code, wrap_code
 from backend.compiler.codes import Code
+from backend.compiler.constants import is_zero_literal
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     EnumValue,
@@ -364,6 +365,14 @@ class _Emitter:
     def _binary(self, expr: ast.Binary) -> _Value:
         result = _type(self.scope, expr)
         op = expr.op
+        if op in _COMPARE and isinstance(_type(self.scope, expr.left), RefType):
+            right = (
+                "None" if is_zero_literal(expr.right) else self.exact(expr.right).code
+            )  # CODESYS 0
+            return _Value(f"({self.exact(expr.left).code} {_COMPARE[op]} {right})", BOOL)
+        if op in _COMPARE and isinstance(_type(self.scope, expr.right), RefType):
+            left = "None" if is_zero_literal(expr.left) else self.exact(expr.left).code
+            return _Value(f"({left} {_COMPARE[op]} {self.exact(expr.right).code})", BOOL)
         if op in _COMPARE:
             common = _comparison_type(self.scope, expr)
             left, right = self.operand(expr.left, common), self.operand(expr.right, common)

@@ -79,7 +79,10 @@ class StandardFunction:
 
 @dataclass(frozen=True)
 class RefOf:
-    """REF(x): a reference to the variable x (IEC 61131-3 ed. 3)."""
+    """REF(x): a reference to the variable x (IEC 61131-3 ed. 3); ADR(x) of CODESYS is the
+    same as a `POINTER TO` (`pointer`)."""
+
+    pointer: bool = False
 
 
 @dataclass(frozen=True)
@@ -88,7 +91,7 @@ class SizeOf:
 
 
 # What else a call in an expression may name; none of these gives a value.
-NoValue = Literal["method", "instance", "program", "external", "pointer", "unknown"]
+NoValue = Literal["method", "instance", "program", "external", "unknown"]
 Callee = UserFunction | StandardFunction | RefOf | SizeOf | NoValue
 
 
@@ -351,7 +354,7 @@ class Scope:
         if isinstance(callee, RefOf):
             referenced = self.referenced(call)
             target = self.type_of(referenced) if referenced is not None else None
-            return None if target is None else RefType(target)
+            return None if target is None else RefType(target, callee.pointer)
         return None
 
     def referenced(self, call: ast.Call) -> ast.Expr | None:
@@ -385,15 +388,13 @@ class Scope:
             return UserFunction(pou)
         if key(call.name) == "SIZEOF":
             return SizeOf()
-        if key(call.name) == "REF":
-            return RefOf()
+        if key(call.name) in ("REF", "ADR"):
+            return RefOf(pointer=key(call.name) == "ADR")
         builtin = builtins.lookup(call.name)
         if builtin is not None:
             return StandardFunction(builtin)
         if pou is not None and pou.kind == "FUNCTION":
             return "external"
-        if key(call.name) == "ADR":
-            return "pointer"
         return "unknown"
 
     def builtin_arguments(

@@ -543,7 +543,8 @@ class _ToAst(Transformer[Token, Any]):
         return ast.VariadicType(self._pos(items[0]))
 
     def ref_type(self, items: list[Any]) -> ast.RefType:
-        return ast.RefType(items[1], self._pos(items[0]))
+        pointer = items[0].type == "POINTER_TO"
+        return ast.RefType(items[1], self._pos(items[0]), pointer)
 
     @v_args(tree=True)
     def enum_spec(self, tree: Tree[Any]) -> ast.EnumSpec:

@@ -279,9 +279,12 @@ class _TypeResolver:
                 return self._array(spec, local_constants)
             case ast.VariadicType():
                 return VariadicType()
-            case ast.RefType(target=target):
+            case ast.RefType(target=target, pointer=pointer, pos=pos):
+                if pointer:
+                    message = "POINTER TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO"
+                    self.report(pos, Code.POINTER, message)
                 inner = self.resolve_spec(target, local_constants)
-                return None if inner is None else RefType(inner)
+                return None if inner is None else RefType(inner, pointer)
             case ast.SubrangeSpec():
                 return self._subrange(spec, local_constants)
             case ast.EnumSpec():

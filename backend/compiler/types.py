@@ -96,10 +96,13 @@ class RefType:
     which fits every reference type."""
 
     target: Type | None
+    pointer: bool = False  # CODESYS `POINTER TO T`: the same, made by ADR
 
     @property
     def name(self) -> str:
-        return "REF_TO " + self.target.name if self.target is not None else "NULL"
+        if self.target is None:
+            return "NULL"
+        return ("POINTER TO " if self.pointer else "REF_TO ") + self.target.name
 
 
 NULL_TYPE = RefType(None)

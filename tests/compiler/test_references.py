@@ -140,3 +140,42 @@ END_PROGRAM
         "t.st:15:8: error: '<' cannot be applied to REF_TO INT and NULL [E0211]",
         "t.st:16:6: error: type mismatch: cannot assign ANY_INT to REF_TO INT [E0209]",
     ]
+
+
+def test_codesys_pointers_are_references_with_a_warning(tmp_path: Path) -> None:
+    source = """PROGRAM Main
+VAR a : ARRAY[0..2] OF INT; p : POINTER TO INT; i : INT; valid : INT; END_VAR
+IF p <> 0 THEN valid := valid + 1; END_IF;
+i := i + 1;
+p := ADR(a[i MOD 3]);
+p^ := p^ + 10;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.p"] == ["Main.a[1]", "Main.a[2]", "Main.a[0]"]
+    assert trace["Main.a"] == [[0, 10, 0], [0, 10, 10], [10, 10, 10]]
+    assert trace["Main.valid"] == [0, 1, 2]  # NULL before the first ADR
+    assert diagnostics(source) == [
+        "t.st:2:33: warning: POINTER TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO [W0805]",
+        "t.st:5:6: warning: ADR is CODESYS/TwinCAT; IEC 61131-3 writes REF (no address "
+        "arithmetic) [W0805]",
+    ]
+
+
+def test_pointer_arithmetic_is_refused() -> None:
+    found = diagnostics("""PROGRAM Main
+VAR a : ARRAY[0..2] OF INT; p : POINTER TO INT; r : REF_TO INT; n : DWORD; END_VAR
+p := ADR(a[0]) + 2;
+n := p - 1;
+r := REF(a[0]);
+r := r + 1;
+p := REF(a[1]);
+END_PROGRAM
+""")
+    arithmetic = [d for d in found if "[E0701]" in d]
+    assert [d.split(": error:")[0] for d in arithmetic] == ["t.st:3:16", "t.st:4:8", "t.st:6:8"]
+    assert "padt has no pointer arithmetic" in arithmetic[0]
+    # a POINTER is not a REF_TO: the two do not mix
+    assert (
+        "t.st:7:6: error: type mismatch: cannot assign REF_TO INT to POINTER TO INT [E0209]"
+    ) in found

@@ -29,7 +29,6 @@ NO_VALUE: dict[NoValue, tuple[Code, str]] = {
     "instance": (Code.INSTANCE_VALUE, "function block instance '{name}' has no value"),
     "program": (Code.PROGRAM_VALUE, "program '{name}' has no value; call it as a statement"),
     "external": (Code.EXTERNAL_FUNCTION, "external function '{name}' is not available"),
-    "pointer": (Code.POINTERS, "pointers are not supported (ADR only inside printf)"),
     "unknown": (Code.NOT_A_FUNCTION, "'{name}' is not a function"),
 }
 
@@ -40,8 +39,8 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
             check_user_call(scope, pou, call)
         case SizeOf():
             check_size_of(scope, call)
-        case RefOf():
-            check_ref(scope, call)
+        case RefOf(pointer=pointer):
+            check_ref(scope, call, pointer)
         case StandardFunction(builtin=builtin):
             misfit = scope.standard_call(builtin, call)
             if isinstance(misfit, Misfit):

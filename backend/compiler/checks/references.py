@@ -16,19 +16,23 @@ def check_deref(scope: Scope, expr: ast.Deref) -> None:
         scope.report(expr.pos, Code.NOT_A_REFERENCE, message)
 
 
-def check_ref(scope: Scope, call: ast.Call) -> None:
+def check_ref(scope: Scope, call: ast.Call, pointer: bool = False) -> None:
     """REF(x): x is a variable that lives as long as its instance, so that the reference
     stays good between calls: no function's variable, no VAR_TEMP, no in-out (its place
     is the caller's), no constant, no single bit, no system variable."""
+    name = "ADR" if pointer else "REF"
     referenced = scope.referenced(call)
     if referenced is None:
-        scope.report(call.pos, Code.REFERENCE_TARGET, "REF takes one variable, unnamed")
+        scope.report(call.pos, Code.REFERENCE_TARGET, f"{name} takes one variable, unnamed")
         return
     if scope.type_of(referenced) is None:
         return  # reported where the argument is
     problem = _unreferenceable(scope, referenced)
     if problem is not None:
-        scope.report(call.pos, Code.REFERENCE_TARGET, f"REF of {problem}")
+        scope.report(call.pos, Code.REFERENCE_TARGET, f"{name} of {problem}")
+    elif pointer:
+        message = "ADR is CODESYS/TwinCAT; IEC 61131-3 writes REF (no address arithmetic)"
+        scope.report(call.pos, Code.POINTER, message)
 
 
 def _unreferenceable(scope: Scope, expr: ast.Expr) -> str | None:
