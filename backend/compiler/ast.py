@@ -53,6 +53,7 @@ class RefType:
     target: TypeRef
     pos: Pos
     pointer: bool = False
+    implicit: bool = False  # CODESYS `REFERENCE TO T`: used as the T it refers to
 
 
 @dataclass(frozen=True)
@@ -239,6 +240,7 @@ class Assign:
     target: Expr
     value: Initializer
     pos: Pos
+    bind: bool = False  # CODESYS `r REF= x`: the REFERENCE TO r now refers to x (value REF(x))
 
 
 @dataclass(frozen=True)

@@ -84,6 +84,7 @@ class Code(Enum):
     BIT_OUT_OF_RANGE = "E0217", "bit access beyond the width of the value"
     NOT_A_REFERENCE = "E0218", "dereference of something that is no reference"
     REFERENCE_TARGET = "E0219", "reference to something that is no lasting variable"
+    REFERENCE_BINDING = "E0220", "misused REFERENCE TO"
 
     # ---- 03: statements and assignments
     ASSIGN_CONSTANT = "E0301", "assignment to a constant"
@@ -166,5 +167,6 @@ class Code(Enum):
     SET_RESET_ASSIGNMENT = "W0803", "S= or R= assignment (CODESYS/TwinCAT)"
     TRAILING_COMMA = "W0804", "trailing comma in a call (CODESYS/TwinCAT)"
     POINTER = "W0805", "POINTER TO and ADR (CODESYS/TwinCAT)"
+    IMPLICIT_REFERENCE = "W0806", "REFERENCE TO and REF= (CODESYS/TwinCAT)"
     ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
     SIZEOF_ARGUMENT = "E0801", "SIZEOF of something without a CODESYS size"

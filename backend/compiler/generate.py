@@ -49,6 +49,8 @@ from backend.compiler.types import (
     VariadicType,
     common_numeric,
     integer_like,
+    is_implicit_reference,
+    value_type,
 )
 from runtime.contract.values import to_real32
 
@@ -243,13 +245,13 @@ class _Emitter:
                 if isinstance(binding, ProgramRef):
                     return _Value(f"_P.{class_name(binding.pou.name)}", FbType(binding.pou.name))
                 assert binding is not None
-                return _Value(self.var_code(binding), binding.type)
+                return _implicit(self.var_code(binding), binding.type)
             case ast.MemberRef(base=base):
                 member = self.scope.member(expr)
                 assert member is not None
                 if member.kind == "SYSTEM":
                     return _Value(self.var_code(member), member.type)
-                return _Value(f"{self.expr(base).code}.{member.attr}", member.type)
+                return _implicit(f"{self.expr(base).code}.{member.attr}", member.type)
             case ast.IndexRef():
                 return self._index(expr)
             case ast.NullLiteral():
@@ -293,6 +295,9 @@ class _Emitter:
         """Code of REF(expr): `_ref(root, steps, label)`, the object that holds the variable,
         the accessors below it (a list offset computed now) and its ST path below the root
         (the runtime puts the root's path before it)."""
+        held = self.held_reference(expr)
+        if held is not None:  # REF of a REFERENCE TO: the reference it holds
+            return held
         root, steps, label, whole = self._place(expr)
         return f"_ref({root}, ({''.join(s + ', ' for s in steps)}), {label}, {whole})"
 
@@ -651,8 +656,8 @@ class _Emitter:
 
     def _statement(self, statement: ast.Statement, depth: int) -> None:
         match statement:
-            case ast.Assign(target=target, value=value):
-                self.assign(target, value, depth)
+            case ast.Assign(target=target, value=value, bind=bind):
+                self.assign(target, value, depth, bind)
             case ast.CallStatement(call=call):
                 self.call_statement(call, depth)
             case ast.If(branches=branches, orelse=orelse):
@@ -684,7 +689,12 @@ class _Emitter:
             return f"return ({result_code}, {members})"
         return f"return {result_code}"
 
-    def assign(self, target: ast.Expr, value: ast.Initializer, depth: int) -> None:
+    def assign(self, target: ast.Expr, value: ast.Initializer, depth: int, bind: bool) -> None:
+        if bind:  # `r REF= x`: the REFERENCE TO itself now holds REF(x)
+            held = self.held_reference(target)
+            assert held is not None and isinstance(value, ast.Call)
+            self.emit(depth, f"{held} = {self.expr(value).code}")
+            return
         target_type = _type(self.scope, target)
         if isinstance(value, ast.ArrayInit | ast.StructInit):
             code = self.initial(target_type, value)
@@ -709,10 +719,27 @@ class _Emitter:
         return self._assignment(target, code)
 
     def _assignment(self, target: ast.Expr, code: str) -> str:
-        """`target := code`; through a reference (`r^ := v`) the place it refers to."""
+        """`target := code`; through a reference (`r^ := v`, a REFERENCE TO r) the place it
+        refers to."""
         if isinstance(target, ast.Deref):
             return f"_deref_set({self.expr(target.base).code}, {code})"
+        held = self.held_reference(target)
+        if held is not None:
+            return f"_deref_set({held}, {code})"
         return f"{self.expr(target).code} = {code}"
+
+    def held_reference(self, expr: ast.Expr) -> str | None:
+        """The code of the slot of a REFERENCE TO variable `expr` names (None: it names
+        no such variable), the reference itself rather than what it refers to."""
+        if isinstance(expr, ast.NameRef):
+            binding = self.scope.lookup(expr.name)
+            if isinstance(binding, Variable) and is_implicit_reference(binding.type):
+                return self.var_code(binding)
+        if isinstance(expr, ast.MemberRef):
+            member = self.scope.member(expr)
+            if member is not None and is_implicit_reference(member.type):
+                return f"{self.expr(expr.base).code}.{member.attr}"
+        return None
 
     def if_statement(
         self, branches: tuple[tuple[ast.Expr, tuple[ast.Statement, ...]], ...],
@@ -1005,6 +1032,13 @@ def _exact(value: _Value) -> _Value:
     if value.unwrapped and isinstance(value.type, ElementaryType):
         return _Value(wrap_code(value.code, value.type), value.type)
     return value
+
+
+def _implicit(code: str, declared: Type) -> _Value:
+    """A variable's value: a REFERENCE TO reads as what it refers to (NULL: a fault)."""
+    if is_implicit_reference(declared):
+        return _Value(f"_deref({code})", value_type(declared))
+    return _Value(code, declared)
 
 
 def _has_continue(body: tuple[ast.Statement, ...]) -> bool:

@@ -49,6 +49,7 @@ from backend.compiler.types import (
     common_numeric,
     elementary,
     integer_like,
+    value_type,
 )
 from runtime.contract.system_variables import NAMESPACE
 
@@ -211,11 +212,11 @@ class Scope:
                 if binding is None:
                     return None
                 if isinstance(binding, Variable | EnumValue):
-                    return binding.type
+                    return value_type(binding.type)
                 return FbType(binding.pou.name)
             case ast.MemberRef():
                 member = self.member(expr)
-                return member.type if member is not None else None
+                return value_type(member.type) if member is not None else None
             case ast.IndexRef():
                 return self._index(expr)
             case ast.BitRef(base=base, width=width):

@@ -440,6 +440,15 @@ class _ToAst(Transformer[Token, Any]):
         store = ast.Assign(target, ast.BoolLiteral(setting, self._pos(operator)), pos)
         return ast.If(((condition, (store,)),), (), pos)
 
+    @v_args(tree=True)
+    def ref_assignment(self, tree: Tree[Any]) -> ast.Assign:
+        """CODESYS `r REF= x;`: r (a REFERENCE TO) refers to x from now on; held as the
+        assignment of REF(x) to the reference itself."""
+        target, _operator, referenced = _children(tree)
+        pos = self._pos(tree)
+        argument = ast.Argument(None, referenced, False, referenced.pos)
+        return ast.Assign(target, ast.Call("REF", (argument,), referenced.pos), pos, bind=True)
+
     def call_statement(self, items: list[Any]) -> ast.CallStatement:
         return ast.CallStatement(items[0], items[0].pos)
 
@@ -543,8 +552,8 @@ class _ToAst(Transformer[Token, Any]):
         return ast.VariadicType(self._pos(items[0]))
 
     def ref_type(self, items: list[Any]) -> ast.RefType:
-        pointer = items[0].type == "POINTER_TO"
-        return ast.RefType(items[1], self._pos(items[0]), pointer)
+        pointer, implicit = items[0].type == "POINTER_TO", items[0].type == "REFERENCE_TO"
+        return ast.RefType(items[1], self._pos(items[0]), pointer, implicit)
 
     @v_args(tree=True)
     def enum_spec(self, tree: Tree[Any]) -> ast.EnumSpec:
@@ -801,8 +810,8 @@ def _tree(file: str, text: str, budget: TokenBudget) -> Tree[Token]:
 _LOOPS = frozenset({"while_statement", "repeat_statement", "for_statement"})
 _BLOCKS = _LOOPS | {"if_statement", "case_statement"}
 _STATEMENTS = _BLOCKS | {
-    "assignment", "set_reset_assignment", "call_statement", "return_statement", "exit_statement",
-    "continue_statement", "empty_statement",
+    "assignment", "set_reset_assignment", "ref_assignment", "call_statement",
+    "return_statement", "exit_statement", "continue_statement", "empty_statement",
 }  # fmt: skip
 _OPERATIONS = frozenset({
     "binary", "unary", "member_ref", "index_ref", "bit_ref", "deref", "call", "keyword_call",

@@ -279,12 +279,15 @@ class _TypeResolver:
                 return self._array(spec, local_constants)
             case ast.VariadicType():
                 return VariadicType()
-            case ast.RefType(target=target, pointer=pointer, pos=pos):
+            case ast.RefType(target=target, pointer=pointer, implicit=implicit, pos=pos):
                 if pointer:
                     message = "POINTER TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO"
                     self.report(pos, Code.POINTER, message)
+                if implicit:
+                    message = "REFERENCE TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO and ^"
+                    self.report(pos, Code.IMPLICIT_REFERENCE, message)
                 inner = self.resolve_spec(target, local_constants)
-                return None if inner is None else RefType(inner, pointer)
+                return None if inner is None else RefType(inner, pointer, implicit)
             case ast.SubrangeSpec():
                 return self._subrange(spec, local_constants)
             case ast.EnumSpec():

@@ -6,8 +6,8 @@ code computing buffer lengths with SIZEOF gets the numbers it was written for. A
 lays out its members in order, each at a multiple of its own alignment (at most 8), and
 ends padded to a multiple of its largest alignment; an array is its elements back to back;
 a STRING[n] takes n + 1 bytes, a WSTRING[n] 2 (n + 1); TIME, DATE, TOD and DT are 32-bit
-as in CODESYS, their L-forms 64-bit. A function block instance has no size here: CODESYS
-adds hidden members of its own implementation to it.
+as in CODESYS, their L-forms 64-bit; a reference or pointer 8. A function block instance
+has no size here: CODESYS adds hidden members of its own implementation to it.
 """
 
 from __future__ import annotations
@@ -16,7 +16,14 @@ from dataclasses import dataclass
 
 from backend.compiler.ast import key
 from backend.compiler.resolve import Resolved
-from backend.compiler.types import ArrayType, ElementaryType, EnumType, StructType, Type
+from backend.compiler.types import (
+    ArrayType,
+    ElementaryType,
+    EnumType,
+    RefType,
+    StructType,
+    Type,
+)
 
 MAX_ALIGNMENT = 8  # CODESYS pack_mode 8, the default on 64-bit targets
 _THIRTY_TWO_BIT_TIMES = ("TIME", "DATE", "TOD", "DT")
@@ -35,6 +42,8 @@ def codesys_layout(resolved: Resolved, value_type: Type) -> Layout | None:
             return _elementary(value_type)
         case EnumType(base=base):
             return _elementary(base)
+        case RefType():
+            return Layout(8, 8)  # an address on a 64-bit target
         case ArrayType(element=element):
             inner = codesys_layout(resolved, element)
             return None if inner is None else Layout(inner.size * value_type.size, inner.alignment)

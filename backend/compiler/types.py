@@ -97,12 +97,25 @@ class RefType:
 
     target: Type | None
     pointer: bool = False  # CODESYS `POINTER TO T`: the same, made by ADR
+    implicit: bool = False  # CODESYS `REFERENCE TO T`: read and written as the T
 
     @property
     def name(self) -> str:
         if self.target is None:
             return "NULL"
-        return ("POINTER TO " if self.pointer else "REF_TO ") + self.target.name
+        kind = "REFERENCE TO " if self.implicit else "POINTER TO " if self.pointer else "REF_TO "
+        return kind + self.target.name
+
+
+def value_type(declared: Type) -> Type:
+    """The type a variable of `declared` type is used as: a REFERENCE TO T as a T."""
+    if isinstance(declared, RefType) and declared.implicit and declared.target is not None:
+        return declared.target
+    return declared
+
+
+def is_implicit_reference(declared: Type) -> bool:
+    return isinstance(declared, RefType) and declared.implicit
 
 
 NULL_TYPE = RefType(None)

@@ -179,3 +179,63 @@ END_PROGRAM
     assert (
         "t.st:7:6: error: type mismatch: cannot assign REF_TO INT to POINTER TO INT [E0209]"
     ) in found
+
+
+def test_codesys_reference_to_reads_and_writes_what_it_is_bound_to(tmp_path: Path) -> None:
+    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+PROGRAM Main
+VAR a, b, n : INT; p : Point; END_VAR
+VAR ra : REFERENCE TO INT; rp : REFERENCE TO Point; r : REF_TO INT; END_VAR
+n := n + 1;
+IF n = 1 THEN ra REF= a; ELSIF n = 3 THEN ra REF= b; END_IF;
+ra := ra + 10;
+rp REF= p;
+rp.x := rp.x + 1;
+r := REF(ra);
+r^ := r^ + 100;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.ra"] == ["Main.a", "Main.a", "Main.b"]
+    assert trace["Main.a"] == [110, 220, 220]
+    assert trace["Main.b"] == [0, 0, 110]
+    assert trace["Main.p.x"] == [1, 2, 3]
+    assert trace["Main.r"] == ["Main.a", "Main.a", "Main.b"]  # REF of a REFERENCE TO
+    found = diagnostics(source)
+    assert (
+        "t.st:4:10: warning: REFERENCE TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO and ^ "
+        "[W0806]"
+    ) in found
+    assert sum("REF= is CODESYS/TwinCAT" in d for d in found) == 3
+
+
+def test_an_unbound_reference_to_is_a_program_fault(tmp_path: Path) -> None:
+    path = tmp_path / "unbound.st"
+    path.write_text("PROGRAM Main\nVAR ra : REFERENCE TO INT; END_VAR\nra := 5;\nEND_PROGRAM\n")
+    run = padt("sim", str(path), "--cycles", "2")
+    assert run.returncode == 3, run.stderr
+    assert f"program Main: dereference of NULL in POU Main ({path}:3)" in run.stderr
+
+
+def test_misused_reference_to_is_refused() -> None:
+    found = diagnostics("""FUNCTION_BLOCK Fb
+VAR_INPUT ri : REFERENCE TO INT; END_VAR
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a : INT; d : DINT; ra : REFERENCE TO INT; fb : Fb; END_VAR
+a REF= d;
+ra REF= d;
+fb();
+END_PROGRAM
+""")
+    assert (
+        "t.st:2:11: error: 'ri': a REFERENCE TO cannot be a VAR_INPUT in padt; declare it "
+        "VAR_IN_OUT of the type it refers to [E0220]"
+    ) in found
+    assert (
+        "t.st:6:1: error: REF= needs a REFERENCE TO on its left, not a variable of type INT [E0220]"
+        in found
+    )
+    assert (
+        "t.st:7:1: error: type mismatch: REFERENCE TO INT cannot refer to a DINT [E0209]"
+    ) in found

@@ -6,7 +6,7 @@ from backend.compiler import ast
 from backend.compiler.codes import Code
 from backend.compiler.infer import EnumValue, ProgramRef, Scope
 from backend.compiler.resolve import Variable
-from backend.compiler.types import RefType
+from backend.compiler.types import RefType, Type, is_implicit_reference
 
 
 def check_deref(scope: Scope, expr: ast.Deref) -> None:
@@ -67,3 +67,51 @@ def _lasting(scope: Scope, variable: Variable) -> str | None:
     if variable.kind in ("SYSTEM", "STEP"):
         return f"'{variable.name}', which the runtime keeps"
     return None
+
+
+def check_binding(scope: Scope, target: ast.Expr, value: ast.Initializer) -> None:
+    """CODESYS `r REF= x;` (held as r := REF(x), `bind`): r is a REFERENCE TO of x's type,
+    and x a variable REF accepts."""
+    declared = _declared_type(scope, target)
+    referenced = scope.type_of(value) if isinstance(value, ast.Call) else None
+    if declared is None:
+        scope.type_of(target)  # the rules on names say what it is not
+        return
+    if not is_implicit_reference(declared):
+        message = f"REF= needs a REFERENCE TO on its left, not a variable of type {declared.name}"
+        scope.report(target.pos, Code.REFERENCE_BINDING, message)
+        return
+    message = "REF= is CODESYS/TwinCAT; IEC 61131-3 writes r := REF(x) with r : REF_TO"
+    scope.report(target.pos, Code.IMPLICIT_REFERENCE, message)
+    assert isinstance(declared, RefType)
+    if isinstance(referenced, RefType) and referenced.target != declared.target:
+        assert referenced.target is not None
+        message = f"type mismatch: {declared.name} cannot refer to a {referenced.target.name}"
+        scope.report(target.pos, Code.TYPE_MISMATCH, message)
+
+
+def _declared_type(scope: Scope, target: ast.Expr) -> Type | None:
+    """The type `target` is declared with (a REFERENCE TO is not yet what it refers to)."""
+    if isinstance(target, ast.NameRef):
+        binding = scope.lookup(target.name)
+        return binding.type if isinstance(binding, Variable) else None
+    if isinstance(target, ast.MemberRef):
+        scope.type_of(target.base)
+        member = scope.member(target)
+        return member.type if member is not None else None
+    return None
+
+
+def check_reference_parameter(scope: Scope, variable: Variable) -> None:
+    """A REFERENCE TO as an input, output or in-out: CODESYS binds it by the call, padt
+    passes values; an in-out does what is meant."""
+    if is_implicit_reference(variable.type) and variable.kind in (
+        "VAR_INPUT",
+        "VAR_OUTPUT",
+        "VAR_IN_OUT",
+    ):
+        message = (
+            f"'{variable.name}': a REFERENCE TO cannot be a {variable.kind} in padt; "
+            "declare it VAR_IN_OUT of the type it refers to"
+        )
+        scope.report(variable.pos, Code.REFERENCE_BINDING, message)
