@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from runtime.context import ContextInvalid, load_context, save_context
+from runtime.contract.recording import values_schema
 from runtime.contract.values import format_value
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
@@ -94,3 +95,10 @@ def test_a_warm_start_begins_references_as_null(tmp_path: Path) -> None:
     assert again.variables.value("Main.level") == 4
     assert again.variables.value("Main.r") is None
     assert again.variables.value("Main.follow.source") is None
+
+
+def test_a_recording_declares_a_reference_as_a_path_or_null() -> None:
+    schema = values_schema([("Main.r", "REF_TO INT"), ("Main.p", "POINTER TO Point")])
+    main = schema["properties"]["values"]["properties"]["Main"]["properties"]
+    assert main["r"] == {"type": ["string", "null"], "description": "REF_TO INT"}
+    assert main["p"]["type"] == ["string", "null"]
