@@ -106,6 +106,12 @@ class CodeImage:
             units.append(self.artifact.globals)
         return units
 
+    def reference_roots(self) -> dict[int, str]:
+        """The paths of instances by id, that references made by the code read as paths
+        (`runtime.instances.name_reference_roots` fills it)."""
+        roots: dict[int, str] = self._namespace["_reference_roots"]
+        return roots
+
     def new_globals(self) -> Any:
         """Another instance of the globals: a user program's own view of them."""
         assert self.artifact.globals is not None

@@ -14,6 +14,8 @@ from math import isfinite
 from operator import attrgetter
 from typing import Any
 
+from runtime.intrinsics import Reference
+
 # Node tags. Slot names are identifiers, so no tag can be taken for a field; a dict node is
 # told apart by its keys.
 _IEEE = "ieee"  # {"ieee": "7ff8000000000000"}: NaN or an infinity, by its bits
@@ -170,6 +172,8 @@ def _node(value: Any, seen: dict[int, int]) -> Any:
     kind = type(value)
     if kind in _PLAIN:
         return value
+    if kind is Reference:
+        return None  # a warm start begins with every reference NULL (docs/context.md)
     if kind is float:
         return value if isfinite(value) else _nonfinite(value)
     if id(value) in seen:

@@ -58,6 +58,32 @@ def instantiate(artifact: Artifact, system: SystemView) -> Instances:
     return Instances(image, programs, image.globals, bound, index(bound), output_points(bound))
 
 
+def name_reference_roots(
+    image: CodeImage, programs: list[UserProgram], bound: list[BoundVariable]
+) -> None:
+    """Tell the references of the generated code (`REF(x)`) the path of every instance
+    that may hold the variable they refer to: the program instances, the globals, and the
+    function block and structure instances below them (by the first variable below each),
+    so that a reference reads as `Main.fb.count`. Arrays of instances are not walked: a
+    reference into one reads as its path below the element."""
+    roots = image.reference_roots()
+    roots.clear()
+    for view in (image.globals, *(program.view for program in programs)):
+        roots[id(view)] = ""
+    for program in programs:
+        roots[id(program.instance)] = program.name
+    for variable in bound:
+        owner = variable.program.instance if variable.program is not None else image.globals
+        names = variable.path.path.split(".")
+        skip = 1 if variable.program is not None else 0
+        held = owner
+        for depth, attr in enumerate(variable.path.attrs[:-1]):
+            held = getattr(held, attr, None) if isinstance(attr, str) else None
+            if held is None or isinstance(held, list):
+                break
+            roots.setdefault(id(held), ".".join(names[: skip + depth + 1]))
+
+
 def index(bound: list[BoundVariable]) -> dict[str, BoundVariable]:
     """Variables by upper-case path (ST names are case-insensitive); the first wins."""
     by_name: dict[str, BoundVariable] = {}

@@ -31,6 +31,85 @@ class IndexOutOfRange(ProgramFault):
         super().__init__(f"array index {index} outside {low}..{high}")
 
 
+class NullDereference(ProgramFault):
+    def __init__(self) -> None:
+        super().__init__("dereference of NULL")
+
+
+class Reference(str):
+    """A value of `REF_TO T` (NULL is None): the place it refers to, as the object that
+    holds it (`root`: an instance, the globals) and the accessors below it, followed anew
+    at every use, so that an assignment that replaces a structure or array below the root
+    leaves the reference good. As a string it is the path of that place, which is what
+    every reader outside the program (OLT, recordings, `padt sim`) shows; two references
+    are equal when they refer to the same place."""
+
+    root: Any
+    steps: tuple[str | int, ...]
+
+    def __new__(cls, text: str, root: Any, steps: tuple[str | int, ...]) -> Reference:
+        made = super().__new__(cls, text)
+        made.root, made.steps = root, steps
+        return made
+
+    def get(self) -> Any:
+        value = self.root
+        for step in self.steps:
+            value = value[step] if isinstance(step, int) else getattr(value, step)
+        return value
+
+    def set(self, value: Any) -> None:
+        target = self.root
+        for step in self.steps[:-1]:
+            target = target[step] if isinstance(step, int) else getattr(target, step)
+        last = self.steps[-1]
+        if isinstance(last, int):
+            target[last] = value
+        else:
+            setattr(target, last, value)
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Reference):  # ST `r1 = r2`: the same place
+            return other.root is self.root and other.steps == self.steps
+        return str.__eq__(self, other)  # a reader outside the program: the path
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    __hash__ = str.__hash__
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> Reference:
+        return self  # copying a structure copies its references, not what they refer to
+
+    def __copy__(self) -> Reference:
+        return self
+
+
+def reference_maker(roots: dict[int, str]) -> Callable[..., Reference]:
+    """`_ref` of generated code: REF(x) as the object holding x (`root`), the accessors
+    below it and the ST text below it (`label`); `roots` names the instances the runtime
+    knows (`Instances`), so that the reference reads as a whole path. A label that is
+    already whole (below a dereference: `REF(r^.x)`) is taken as it is."""
+
+    def make(root: Any, steps: tuple[str | int, ...], label: str, whole: bool = False) -> Reference:
+        prefix = "" if whole else roots.get(id(root), "")
+        return Reference(f"{prefix}.{label}" if prefix else label, root, steps)
+
+    return make
+
+
+def _deref(reference: Reference | None) -> Any:
+    if reference is None:
+        raise NullDereference()
+    return reference.get()
+
+
+def _deref_set(reference: Reference | None, value: Any) -> None:
+    if reference is None:
+        raise NullDereference()
+    reference.set(value)
+
+
 @dataclass
 class SystemView:
     """The system values a program sees; the scheduler sets them before each program cycle.
@@ -415,6 +494,7 @@ class Namespace:
 
 def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -> dict[str, Any]:
     """A fresh global namespace for one resource's generated code."""
+    reference_roots: dict[int, str] = {}  # filled by `Instances`: the paths of instances
     return {
         # only what generated classes need: user code cannot reach open(), import, ...
         "__builtins__": {
@@ -439,6 +519,10 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         "_pow": _pow,
         "_f32": to_real32,
         "_ix": _ix,
+        "_reference_roots": reference_roots,
+        "_ref": reference_maker(reference_roots),
+        "_deref": _deref,
+        "_deref_set": _deref_set,
         "_setbits": _setbits,
         "_copy": copy.deepcopy,
         "_init": _init,

@@ -20,7 +20,7 @@ from runtime.code_image import CodeImage, VariablePath
 from runtime.contract.artifact import Artifact, ChartInfo, PouCode, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
 from runtime.contract.protocol import Hazard, ProgramChanges, ReloadPlanInfo, VariableChange
-from runtime.contract.values import array_shape, base_type
+from runtime.contract.values import array_shape, base_type, is_reference_type
 from runtime.intrinsics import SystemView
 
 KEPT, CONVERTED, INITIALISED, NEW, DELETED = "kept", "converted", "initialised", "new", "deleted"
@@ -155,7 +155,13 @@ def _changes(
         used.add(source.path.upper())
         renamed = source.path if source.path.upper() != path.path.upper() else None
         how = conversion(source.type, path.type)
-        if how is None:
+        if is_reference_type(path.type):
+            # what it refers to is an object of the configuration being replaced
+            reason = "a reference does not carry over a reload: it starts again as NULL"
+            changes.append(
+                VariableChange(path.path, INITIALISED, source.type, path.type, renamed, reason)
+            )
+        elif how is None:
             reason = f"type {source.type} does not convert exactly to {path.type}"
             changes.append(
                 VariableChange(path.path, INITIALISED, source.type, path.type, renamed, reason)

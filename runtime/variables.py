@@ -13,7 +13,13 @@ from runtime.collector import COLLECTOR
 from runtime.contract.protocol import VariableInfo
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import ValueRejected, representation
-from runtime.instances import BoundVariable, Instances, index, output_points
+from runtime.instances import (
+    BoundVariable,
+    Instances,
+    index,
+    name_reference_roots,
+    output_points,
+)
 from runtime.user_program import UserProgram
 from runtime.value_reader import value_reader
 
@@ -42,6 +48,7 @@ class Variables:
             instances.globals,
         )
         self.bound, self._by_name = instances.bound, instances.by_name
+        name_reference_roots(self.code, self.programs, self.bound)
         COLLECTOR.configuration_changed()  # frozen out of the collector's sight soon
 
     def instances(self) -> Instances:
@@ -57,6 +64,8 @@ class Variables:
         self.programs[self.programs.index(old)] = new
         self.bound = [BoundVariable(new, b.path) if b.program is old else b for b in self.bound]
         self._by_name = index(self.bound)
+        if self.code is not None:
+            name_reference_roots(self.code, self.programs, self.bound)
         self.outputs = output_points(self.bound)
 
     def program(self, name: str) -> UserProgram:

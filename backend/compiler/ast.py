@@ -47,6 +47,16 @@ class VariadicType:
 
 
 @dataclass(frozen=True)
+class RefType:
+    """`REF_TO T` (IEC 61131-3 ed. 3), or CODESYS `POINTER TO T` (`pointer`)."""
+
+    target: TypeRef
+    pos: Pos
+    pointer: bool = False
+    implicit: bool = False  # CODESYS `REFERENCE TO T`: used as the T it refers to
+
+
+@dataclass(frozen=True)
 class EnumSpec:
     base: str | None
     values: tuple[tuple[str, Expr | None, Pos], ...]
@@ -67,7 +77,16 @@ class SubrangeSpec:
     pos: Pos
 
 
-TypeRef = NamedType | StringType | ArrayType | VariadicType | EnumSpec | StructSpec | SubrangeSpec
+TypeRef = (
+    NamedType
+    | StringType
+    | ArrayType
+    | VariadicType
+    | RefType
+    | EnumSpec
+    | StructSpec
+    | SubrangeSpec
+)
 
 
 # ---- expressions -------------------------------------------------------------------------
@@ -115,6 +134,14 @@ class StringLiteral:
 class EnumLiteral:
     type_name: str
     value: str
+    pos: Pos
+    qualified: bool = False  # written `Color.Red` (CODESYS/TwinCAT), not `Color#Red`
+
+
+@dataclass(frozen=True)
+class NullLiteral:
+    """NULL, the reference to nothing (IEC 61131-3 ed. 3)."""
+
     pos: Pos
 
 
@@ -198,7 +225,9 @@ class StructInit:
     pos: Pos
 
 
-Literal = IntLiteral | RealLiteral | BoolLiteral | TimeLiteral | StringLiteral | EnumLiteral
+Literal = (
+    IntLiteral | RealLiteral | BoolLiteral | TimeLiteral | StringLiteral | EnumLiteral | NullLiteral
+)
 Expr = Literal | NameRef | MemberRef | IndexRef | BitRef | Deref | Unary | Binary | Call
 Initializer = Expr | ArrayInit | StructInit
 
@@ -211,6 +240,7 @@ class Assign:
     target: Expr
     value: Initializer
     pos: Pos
+    bind: bool = False  # CODESYS `r REF= x`: the REFERENCE TO r now refers to x (value REF(x))
 
 
 @dataclass(frozen=True)

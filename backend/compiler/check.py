@@ -18,6 +18,7 @@ from backend.compiler.checks.initializers import (
     declaration_order,
 )
 from backend.compiler.checks.open_arrays import check_open_array_data, check_open_array_variables
+from backend.compiler.checks.references import check_reference_parameter
 from backend.compiler.checks.sfc import check_sfc
 from backend.compiler.checks.statements import check_block
 from backend.compiler.codes import Code
@@ -50,6 +51,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
             if variable.kind != "VAR_GLOBAL":
                 check_initializer(scope, variable.type, variable.init)
                 check_constant_initializer(scope, variable, order)
+            check_reference_parameter(scope, variable)
             if variable.edge is not None and (
                 variable.kind != "VAR_INPUT" or variable.type != BOOL
             ):

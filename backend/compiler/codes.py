@@ -5,8 +5,10 @@ people can refer to it; the message around it may change. Errors are `E` and war
 followed by four digits, grouped by hundreds: 00 syntax and literals, 01 declarations,
 02 names, types and expressions, 03 statements and assignments, 04 calls, 05 sequential
 function charts, 06 the resource (user programs, safe values, users, Modbus), 07 what padt does not
-compile (features it lacks, limits). docs/diagnostics.md explains every code with a
-failing and a passing example.
+compile (features it lacks, limits), 08 extensions of other dialects (CODESYS, TwinCAT) that
+padt accepts, each with a warning that it is not IEC 61131-3. Notes (`N`) tell what was
+ignored without changing what the program does. docs/diagnostics.md explains every code
+with a failing and a passing example.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from __future__ import annotations
 from enum import Enum, unique
 from typing import Literal
 
-Severity = Literal["error", "warning"]
+Severity = Literal["error", "warning", "note"]
 
 
 @unique
@@ -25,7 +27,8 @@ class Code(Enum):
 
     @property
     def severity(self) -> Severity:
-        return "error" if self.id.startswith("E") else "warning"
+        severities: dict[str, Severity] = {"E": "error", "W": "warning", "N": "note"}
+        return severities[self.id[0]]
 
     # ---- 00: syntax and literals
     SYNTAX = "E0001", "syntax error"
@@ -79,6 +82,9 @@ class Code(Enum):
     INDEX_OUT_OF_BOUNDS = "E0215", "constant array index outside the bounds"
     BIT_ACCESS_TYPE = "E0216", "bit access on something else than an integer"
     BIT_OUT_OF_RANGE = "E0217", "bit access beyond the width of the value"
+    NOT_A_REFERENCE = "E0218", "dereference of something that is no reference"
+    REFERENCE_TARGET = "E0219", "reference to something that is no lasting variable"
+    REFERENCE_BINDING = "E0220", "misused REFERENCE TO"
 
     # ---- 03: statements and assignments
     ASSIGN_CONSTANT = "E0301", "assignment to a constant"
@@ -150,7 +156,7 @@ class Code(Enum):
     PROGRAM_ARGUMENTS = "W0602", "program arguments in a configuration ignored"
 
     # ---- 07: what padt does not compile
-    POINTERS = "E0701", "pointers"
+    POINTERS = "E0701", "pointer arithmetic"
     METHODS = "E0702", "methods"
     DIRECT_ADDRESS = "E0703", "direct address of another POU's variable"
     VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array where it cannot be"
@@ -163,3 +169,13 @@ class Code(Enum):
     DATA_DEPTH = "E0711", "data types nested too deep"
     DATA_SIZE = "E0712", "too much data"
     CODE_SIZE = "E0713", "generated code too large"
+
+    # ---- 08: extensions of other dialects, accepted with a warning
+    QUALIFIED_ENUM = "W0801", "qualified enumeration value E.Value (CODESYS/TwinCAT)"
+    SIZEOF = "W0802", "SIZEOF (CODESYS/TwinCAT)"
+    SET_RESET_ASSIGNMENT = "W0803", "S= or R= assignment (CODESYS/TwinCAT)"
+    TRAILING_COMMA = "W0804", "trailing comma in a call (CODESYS/TwinCAT)"
+    POINTER = "W0805", "POINTER TO and ADR (CODESYS/TwinCAT)"
+    IMPLICIT_REFERENCE = "W0806", "REFERENCE TO and REF= (CODESYS/TwinCAT)"
+    ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
+    SIZEOF_ARGUMENT = "E0801", "SIZEOF of something without a CODESYS size"

@@ -53,6 +53,11 @@ def fold_int(expr: ast.Initializer | None, leaf: Leaf) -> int | None:
     return None
 
 
+def is_zero_literal(expr: ast.Expr) -> bool:
+    """The untyped literal 0: what CODESYS compares a POINTER with for NULL (`p <> 0`)."""
+    return isinstance(expr, ast.IntLiteral) and expr.value == 0 and expr.type_name is None
+
+
 class _TooDeep(Exception):
     """A constant defined through more names than the folder follows."""
 

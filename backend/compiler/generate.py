@@ -18,13 +18,16 @@ from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.builtins import convert_code, wrap_code
 from backend.compiler.codes import Code
+from backend.compiler.constants import is_zero_literal
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     ActionCall,
     EnumValue,
     Misfit,
     ProgramRef,
+    RefOf,
     Scope,
+    SizeOf,
     enable_argument,
     is_external,
     is_implicit,
@@ -36,16 +39,20 @@ from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
     BOOL,
+    NULL_TYPE,
     ArrayType,
     ElementaryType,
     EnumType,
     FbType,
     OpenArrayType,
+    RefType,
     StructType,
     Type,
     VariadicType,
     common_numeric,
     integer_like,
+    is_implicit_reference,
+    value_type,
 )
 from runtime.contract.values import to_real32
 
@@ -240,15 +247,19 @@ class _Emitter:
                 if isinstance(binding, ProgramRef):
                     return _Value(f"_P.{class_name(binding.pou.name)}", FbType(binding.pou.name))
                 assert binding is not None
-                return _Value(self.var_code(binding), binding.type)
+                return _implicit(self.var_code(binding), binding.type)
             case ast.MemberRef(base=base):
                 member = self.scope.member(expr)
                 assert member is not None
                 if member.kind == "SYSTEM":
                     return _Value(self.var_code(member), member.type)
-                return _Value(f"{self.expr(base).code}.{member.attr}", member.type)
+                return _implicit(f"{self.expr(base).code}.{member.attr}", member.type)
             case ast.IndexRef():
                 return self._index(expr)
+            case ast.NullLiteral():
+                return _Value("None", NULL_TYPE)
+            case ast.Deref(base=base):  # NULL is a program fault (`_deref`)
+                return _Value(f"_deref({self.expr(base).code})", _type(self.scope, expr))
             case ast.BitRef(base=base, bit=bit, width=width):
                 shifted = f"(({self.exact(base).code}) >> {bit * width})"
                 if width == 1:
@@ -268,6 +279,10 @@ class _Emitter:
         if isinstance(array, OpenArrayType):
             return self._open_index(base.code, array, expr.indices)
         assert isinstance(array, ArrayType)
+        return _Value(f"{base.code}[{self._flat_offset(expr, array)}]", array.element)
+
+    def _flat_offset(self, expr: ast.IndexRef, array: ArrayType) -> str:
+        """The list offset of an element, each index checked against its bounds."""
         parts: list[str] = []
         stride = 1
         for index_expr, (low, high) in reversed(list(zip(expr.indices, array.dims, strict=True))):
@@ -278,8 +293,57 @@ class _Emitter:
                 offset = self._checked_offset(self.exact(index_expr).code, low, high)
             parts.append(offset if stride == 1 else f"{offset} * {stride}")
             stride *= high - low + 1
-        flat = " + ".join(reversed(parts))
-        return _Value(f"{base.code}[{flat}]", array.element)
+        return " + ".join(reversed(parts))
+
+    def reference(self, expr: ast.Expr) -> str:
+        """Code of REF(expr): `_ref(root, steps, label)`, the object that holds the variable,
+        the accessors below it (a list offset computed now) and its ST path below the root
+        (the runtime puts the root's path before it)."""
+        held = self.held_reference(expr)
+        if held is not None:  # REF of a REFERENCE TO: the reference it holds
+            return held
+        root, steps, label, whole = self._place(expr)
+        return f"_ref({root}, ({''.join(s + ', ' for s in steps)}), {label}, {whole})"
+
+    def _place(self, expr: ast.Expr) -> tuple[str, list[str], str, bool]:
+        """(root code, accessor codes, label code, whether the label is a whole path)."""
+        match expr:
+            case ast.NameRef(name=name):
+                binding = self.scope.lookup(name)
+                if isinstance(binding, ProgramRef):
+                    return f"_P.{class_name(binding.pou.name)}", [], repr(name), False
+                assert isinstance(binding, Variable)
+                root, _, attr = self.var_code(binding).rpartition(".")
+                return root, [repr(attr)], repr(binding.name), False
+            case ast.MemberRef(base=base, member=member_name):
+                member = self.scope.member(expr)
+                assert member is not None
+                root, steps, label, whole = self._place(base)
+                return root, [*steps, repr(member.attr)], f"{label} + {'.' + member_name!r}", whole
+            case ast.IndexRef(base=base, indices=indices):
+                array = _type(self.scope, base)
+                assert isinstance(array, ArrayType)
+                held = [self.temp() for _ in indices]  # each index evaluated once
+                for temp, index in zip(held, indices, strict=True):
+                    self.pre.append(f"{temp} = {self.exact(index).code}")
+                offset = self._offset_of_held(array, held)
+                root, steps, label, whole = self._place(base)
+                shown = " + ', ' + ".join(f"str({t})" for t in held)
+                return root, [*steps, f"({offset})"], f"{label} + '[' + {shown} + ']'", whole
+            case ast.Deref(base=base):  # REF(r^.x): below what r refers to, named by r
+                code = self.expr(base).code
+                return f"_deref({code})", [], f"str({code}) + '^'", True
+        raise AssertionError(f"no place for {expr!r}")
+
+    def _offset_of_held(self, array: ArrayType, held: list[str]) -> str:
+        """The list offset of an element whose indices are held in `held`."""
+        parts: list[str] = []
+        stride = 1
+        for index, (low, high) in reversed(list(zip(held, array.dims, strict=True))):
+            offset = self._checked_offset(index, low, high)
+            parts.append(offset if stride == 1 else f"{offset} * {stride}")
+            stride *= high - low + 1
+        return " + ".join(reversed(parts))
 
     def _open_index(self, base: str, array: OpenArrayType, indices: tuple[ast.Expr, ...]) -> _Value:
         """An element of a variable-length array, `[items, bounds]` at run time: its offset
@@ -334,6 +398,14 @@ class _Emitter:
     def _binary(self, expr: ast.Binary) -> _Value:
         result = _type(self.scope, expr)
         op = expr.op
+        if op in _COMPARE and isinstance(_type(self.scope, expr.left), RefType):
+            right = (
+                "None" if is_zero_literal(expr.right) else self.exact(expr.right).code
+            )  # CODESYS 0
+            return _Value(f"({self.exact(expr.left).code} {_COMPARE[op]} {right})", BOOL)
+        if op in _COMPARE and isinstance(_type(self.scope, expr.right), RefType):
+            left = "None" if is_zero_literal(expr.left) else self.exact(expr.left).code
+            return _Value(f"({left} {_COMPARE[op]} {self.exact(expr.right).code})", BOOL)
         if op in _COMPARE:
             common = _comparison_type(self.scope, expr)
             left, right = self.operand(expr.left, common), self.operand(expr.right, common)
@@ -408,6 +480,13 @@ class _Emitter:
         pou = self.scope.resolved.pous.get(key(call.name))
         if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
             return self._user_call(pou, call)
+        callee = self.scope.callee(call)
+        if isinstance(callee, SizeOf):  # a constant: its argument never runs
+            return _Value(repr(self.scope.size_of(call)), _type(self.scope, call))
+        if isinstance(callee, RefOf):
+            referenced = self.scope.referenced(call)
+            assert referenced is not None
+            return _Value(self.reference(referenced), _type(self.scope, call))
         builtin = builtins.lookup(call.name)
         assert builtin is not None, call.name
         args = self.scope.builtin_arguments(builtin, call)
@@ -535,6 +614,8 @@ class _Emitter:
                 return "()"
             case OpenArrayType():  # bound to an array at each call
                 return "None"
+            case RefType():
+                return "None"  # NULL
         raise AssertionError(f"no initial value for {var_type!r}")
 
     def _array_initial(self, array: ArrayType, init: ast.ArrayInit) -> str:
@@ -610,8 +691,8 @@ class _Emitter:
 
     def _statement(self, statement: ast.Statement, depth: int) -> None:
         match statement:
-            case ast.Assign(target=target, value=value):
-                self.assign(target, value, depth)
+            case ast.Assign(target=target, value=value, bind=bind):
+                self.assign(target, value, depth, bind)
             case ast.CallStatement(call=call):
                 self.call_statement(call, depth)
             case ast.If(branches=branches, orelse=orelse):
@@ -643,7 +724,12 @@ class _Emitter:
             return f"return ({result_code}, {members})"
         return f"return {result_code}"
 
-    def assign(self, target: ast.Expr, value: ast.Initializer, depth: int) -> None:
+    def assign(self, target: ast.Expr, value: ast.Initializer, depth: int, bind: bool) -> None:
+        if bind:  # `r REF= x`: the REFERENCE TO itself now holds REF(x)
+            held = self.held_reference(target)
+            assert held is not None and isinstance(value, ast.Call)
+            self.emit(depth, f"{held} = {self.expr(value).code}")
+            return
         target_type = _type(self.scope, target)
         if isinstance(value, ast.ArrayInit | ast.StructInit):
             code = self.initial(target_type, value)
@@ -662,8 +748,33 @@ class _Emitter:
             shift, width = target.bit * target.width, target.width
             updated = f"_setbits({base.code}, {shift}, {width}, {code})"
             integer = integer_like(base.type)
-            return f"{base.code} = {wrap_code(updated, integer) if integer else updated}"
+            return self._assignment(
+                target.base, wrap_code(updated, integer) if integer else updated
+            )
+        return self._assignment(target, code)
+
+    def _assignment(self, target: ast.Expr, code: str) -> str:
+        """`target := code`; through a reference (`r^ := v`, a REFERENCE TO r) the place it
+        refers to."""
+        if isinstance(target, ast.Deref):
+            return f"_deref_set({self.expr(target.base).code}, {code})"
+        held = self.held_reference(target)
+        if held is not None:
+            return f"_deref_set({held}, {code})"
         return f"{self.expr(target).code} = {code}"
+
+    def held_reference(self, expr: ast.Expr) -> str | None:
+        """The code of the slot of a REFERENCE TO variable `expr` names (None: it names
+        no such variable), the reference itself rather than what it refers to."""
+        if isinstance(expr, ast.NameRef):
+            binding = self.scope.lookup(expr.name)
+            if isinstance(binding, Variable) and is_implicit_reference(binding.type):
+                return self.var_code(binding)
+        if isinstance(expr, ast.MemberRef):
+            member = self.scope.member(expr)
+            if member is not None and is_implicit_reference(member.type):
+                return f"{self.expr(expr.base).code}.{member.attr}"
+        return None
 
     def if_statement(
         self, branches: tuple[tuple[ast.Expr, tuple[ast.Statement, ...]], ...],
@@ -980,6 +1091,13 @@ def _exact(value: _Value) -> _Value:
     if value.unwrapped and isinstance(value.type, ElementaryType):
         return _Value(wrap_code(value.code, value.type), value.type)
     return value
+
+
+def _implicit(code: str, declared: Type) -> _Value:
+    """A variable's value: a REFERENCE TO reads as what it refers to (NULL: a fault)."""
+    if is_implicit_reference(declared):
+        return _Value(f"_deref({code})", value_type(declared))
+    return _Value(code, declared)
 
 
 def _has_continue(body: tuple[ast.Statement, ...]) -> bool:

@@ -19,6 +19,7 @@ from backend.compiler.codes import Code
 from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable, visible
+from backend.compiler.sizes import codesys_layout
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     ANY_INT,
@@ -28,8 +29,13 @@ from backend.compiler.types import (
     DWORD,
     ELEMENTARY,
     LTIME,
+    NULL_TYPE,
     STRING,
     TIME,
+    UDINT,
+    UINT,
+    ULINT,
+    USINT,
     WORD,
     WSTRING,
     ArrayType,
@@ -37,12 +43,14 @@ from backend.compiler.types import (
     EnumType,
     FbType,
     OpenArrayType,
+    RefType,
     StructType,
     Type,
     VariadicType,
     common_numeric,
     elementary,
     integer_like,
+    value_type,
 )
 from runtime.contract.system_variables import NAMESPACE
 
@@ -81,9 +89,22 @@ class StandardFunction:
     builtin: builtins.Builtin
 
 
+@dataclass(frozen=True)
+class RefOf:
+    """REF(x): a reference to the variable x (IEC 61131-3 ed. 3); ADR(x) of CODESYS is the
+    same as a `POINTER TO` (`pointer`)."""
+
+    pointer: bool = False
+
+
+@dataclass(frozen=True)
+class SizeOf:
+    """CODESYS SIZEOF(x): the size of x in bytes, a constant (W0802)."""
+
+
 # What else a call in an expression may name; none of these gives a value.
-NoValue = Literal["method", "action", "instance", "program", "external", "pointer", "unknown"]
-Callee = UserFunction | StandardFunction | NoValue
+NoValue = Literal["method", "action", "instance", "program", "external", "unknown"]
+Callee = UserFunction | StandardFunction | RefOf | SizeOf | NoValue
 
 
 @dataclass(frozen=True)
@@ -223,11 +244,11 @@ class Scope:
                 if binding is None:
                     return None
                 if isinstance(binding, Variable | EnumValue):
-                    return binding.type
+                    return value_type(binding.type)
                 return FbType(binding.pou.name)
             case ast.MemberRef():
                 member = self.member(expr)
-                return member.type if member is not None else None
+                return value_type(member.type) if member is not None else None
             case ast.IndexRef():
                 return self._index(expr)
             case ast.BitRef(base=base, width=width):
@@ -235,8 +256,11 @@ class Scope:
                 if base_type is None or integer_like(base_type) is None:
                     return None
                 return {1: BOOL, 8: BYTE, 16: WORD, 32: DWORD}[width]
-            case ast.Deref():
-                return None  # not supported
+            case ast.NullLiteral():
+                return NULL_TYPE
+            case ast.Deref(base=base):
+                base_type = self.type_of(base)
+                return base_type.target if isinstance(base_type, RefType) else None
             case ast.Unary():
                 return self._unary(expr)
             case ast.Binary():
@@ -321,7 +345,7 @@ class Scope:
         if left_type is None or right_type is None:
             return None
         op = expr.op
-        if op in ("=", "<>") and isinstance(left_type, EnumType | StructType):
+        if op in ("=", "<>") and isinstance(left_type, EnumType | StructType | RefType):
             return BOOL  # whether the two compare is a rule (checks.operators)
         left, right = integer_like(left_type) or left_type, integer_like(right_type) or right_type
         if not isinstance(left, ElementaryType) or not isinstance(right, ElementaryType):
@@ -359,7 +383,31 @@ class Scope:
         if isinstance(callee, StandardFunction):
             result = self.standard_call(callee.builtin, call)
             return None if isinstance(result, Misfit) else result
+        if isinstance(callee, SizeOf):
+            size = self.size_of(call)
+            return None if size is None else smallest_unsigned(size)
+        if isinstance(callee, RefOf):
+            referenced = self.referenced(call)
+            target = self.type_of(referenced) if referenced is not None else None
+            return None if target is None else RefType(target, callee.pointer)
         return None
+
+    def referenced(self, call: ast.Call) -> ast.Expr | None:
+        """The variable of REF(x): its one unnamed argument."""
+        if len(call.args) != 1 or call.args[0].name is not None:
+            return None
+        return call.args[0].value
+
+    def size_of(self, call: ast.Call) -> int | None:
+        """The bytes SIZEOF(x) counts, as CODESYS does (`sizes`); None for a call that is
+        not one variable or expression with such a size."""
+        if len(call.args) != 1 or call.args[0].name is not None or call.args[0].value is None:
+            return None
+        argument_type = self.type_of(call.args[0].value)
+        if argument_type is None:
+            return None
+        layout = codesys_layout(self.resolved, argument_type)
+        return None if layout is None else layout.size
 
     def callee(self, call: ast.Call) -> Callee:
         """What a call in an expression calls."""
@@ -375,13 +423,15 @@ class Scope:
         pou = self.resolved.pous.get(key(call.name))
         if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
             return UserFunction(pou)
+        if key(call.name) == "SIZEOF":
+            return SizeOf()
+        if key(call.name) in ("REF", "ADR"):
+            return RefOf(pointer=key(call.name) == "ADR")
         builtin = builtins.lookup(call.name)
         if builtin is not None:
             return StandardFunction(builtin)
         if pou is not None and pou.kind == "FUNCTION":
             return "external"
-        if key(call.name) in ("REF", "ADR"):
-            return "pointer"
         return "unknown"
 
     def builtin_arguments(
@@ -471,6 +521,11 @@ IMPLICIT_PARAMETERS = {
     "EN": Variable("EN", "VAR_INPUT", BOOL, None, False, False, None, "EN", Pos("", 0, 0)),
     "ENO": Variable("ENO", "VAR_OUTPUT", BOOL, None, False, False, None, "ENO", Pos("", 0, 0)),
 }
+
+
+def smallest_unsigned(value: int) -> ElementaryType:
+    """The type CODESYS gives SIZEOF: the smallest unsigned integer that holds the size."""
+    return next(t for t in (USINT, UINT, UDINT) if value <= t.max) if value <= UDINT.max else ULINT
 
 
 def is_implicit(param: Variable) -> bool:

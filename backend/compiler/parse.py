@@ -249,6 +249,7 @@ class _ToAst(Transformer[Token, Any]):
         self.file = file
         self.errors: list[Diagnostic] = []
         self.addresses: list[tuple[str, Pos]] = []
+        self.warnings: list[Diagnostic] = []  # the dialect extensions met (W08xx)
 
     def _pos(self, item: Any) -> Pos:
         if isinstance(item, Token):
@@ -348,6 +349,9 @@ class _ToAst(Transformer[Token, Any]):
         prefix, value = items
         return ast.EnumLiteral(str(prefix)[:-1], str(value), self._pos(prefix))
 
+    def null_literal(self, items: list[Token]) -> ast.NullLiteral:
+        return ast.NullLiteral(self._pos(items[0]))
+
     # ---- expressions
     def name_ref(self, items: list[Token]) -> ast.NameRef:
         return ast.NameRef(str(items[0]), self._pos(items[0]))
@@ -404,19 +408,29 @@ class _ToAst(Transformer[Token, Any]):
     def positional_arg(self, items: list[Any]) -> ast.Argument:
         return ast.Argument(None, items[0], False, items[0].pos)
 
+    def _arguments(self, items: list[Any]) -> tuple[ast.Argument, ...]:
+        """The arguments of a call, without the trailing comma of CODESYS (reported)."""
+        for item in items:
+            if isinstance(item, Token) and item.type == "COMMA":
+                message = "a comma after the last argument is CODESYS/TwinCAT, not IEC 61131-3"
+                self.warnings.append(Diagnostic.at(self._pos(item), Code.TRAILING_COMMA, message))
+        return tuple(a for a in items if isinstance(a, ast.Argument))
+
     def call(self, items: list[Any]) -> ast.Call:
         name, *args = items
-        return ast.Call(str(name), tuple(a for a in args if a is not None), self._pos(name))
+        return ast.Call(str(name), self._arguments(args), self._pos(name))
 
     def keyword_call(self, items: list[Any]) -> ast.Call:
         keyword, *args = items
         name = str(keyword).rstrip("( \t\r\n")
-        return ast.Call(name, tuple(a for a in args if a is not None), self._pos(keyword))
+        return ast.Call(name, self._arguments(args), self._pos(keyword))
 
     def method_call(self, items: list[Any]) -> ast.Call:
         receiver, name, *args = items
-        arguments = tuple(a for a in args if a is not None)
-        return ast.Call(str(name), arguments, self._pos(name), receiver=receiver)
+        return ast.Call(str(name), self._arguments(args), self._pos(name), receiver=receiver)
+
+    def trailing_comma(self, items: list[Token]) -> Token:
+        return items[0]
 
     # ---- initializers
     @v_args(tree=True)
@@ -450,6 +464,27 @@ class _ToAst(Transformer[Token, Any]):
     def assignment(self, tree: Tree[Any]) -> ast.Assign:
         target, value = _children(tree)
         return ast.Assign(target, value, self._pos(tree))
+
+    @v_args(tree=True)
+    def set_reset_assignment(self, tree: Tree[Any]) -> ast.If:
+        """CODESYS `x S= c;` is `IF c THEN x := TRUE; END_IF`, `x R= c;` the same with
+        FALSE: written so, every later stage checks and runs it as IEC code."""
+        target, operator, condition = _children(tree)
+        setting = str(operator).upper().startswith("S")
+        pos = self._pos(tree)
+        message = f"'{str(operator).upper()}' is CODESYS/TwinCAT, not IEC 61131-3"
+        self.warnings.append(Diagnostic.at(pos, Code.SET_RESET_ASSIGNMENT, message))
+        store = ast.Assign(target, ast.BoolLiteral(setting, self._pos(operator)), pos)
+        return ast.If(((condition, (store,)),), (), pos)
+
+    @v_args(tree=True)
+    def ref_assignment(self, tree: Tree[Any]) -> ast.Assign:
+        """CODESYS `r REF= x;`: r (a REFERENCE TO) refers to x from now on; held as the
+        assignment of REF(x) to the reference itself."""
+        target, _operator, referenced = _children(tree)
+        pos = self._pos(tree)
+        argument = ast.Argument(None, referenced, False, referenced.pos)
+        return ast.Assign(target, ast.Call("REF", (argument,), referenced.pos), pos, bind=True)
 
     def call_statement(self, items: list[Any]) -> ast.CallStatement:
         return ast.CallStatement(items[0], items[0].pos)
@@ -552,6 +587,10 @@ class _ToAst(Transformer[Token, Any]):
 
     def variadic_type(self, items: list[Token]) -> ast.VariadicType:
         return ast.VariadicType(self._pos(items[0]))
+
+    def ref_type(self, items: list[Any]) -> ast.RefType:
+        pointer, implicit = items[0].type == "POINTER_TO", items[0].type == "REFERENCE_TO"
+        return ast.RefType(items[1], self._pos(items[0]), pointer, implicit)
 
     @v_args(tree=True)
     def enum_spec(self, tree: Tree[Any]) -> ast.EnumSpec:
@@ -845,8 +884,8 @@ def _tree(file: str, text: str, budget: TokenBudget) -> Tree[Token]:
 _LOOPS = frozenset({"while_statement", "repeat_statement", "for_statement"})
 _BLOCKS = _LOOPS | {"if_statement", "case_statement"}
 _STATEMENTS = _BLOCKS | {
-    "assignment", "call_statement", "return_statement", "exit_statement",
-    "continue_statement", "empty_statement",
+    "assignment", "set_reset_assignment", "ref_assignment", "call_statement",
+    "return_statement", "exit_statement", "continue_statement", "empty_statement",
 }  # fmt: skip
 _OPERATIONS = frozenset({
     "binary", "unary", "member_ref", "index_ref", "bit_ref", "deref", "call", "keyword_call",
@@ -855,6 +894,7 @@ _OPERATIONS = frozenset({
 _OPERANDS = frozenset({
     "name_ref", "direct_ref", "int_literal", "real_literal", "time_literal", "date_literal",
     "bool_literal", "string_literal", "wstring_literal", "typed_literal", "enum_literal",
+    "null_literal",
 })  # fmt: skip
 
 
@@ -931,6 +971,18 @@ def _nesting_problem(file: str, tree: Tree[Token]) -> Diagnostic | None:
     return None
 
 
+def _pragma_diagnostic(file: str, token: Token) -> Diagnostic:
+    """A skipped `{{ C code }}` block changes what runs: a warning; a `{...}` pragma of
+    CODESYS or TwinCAT (`{attribute 'hide'}`, `{warning '...'}`) only a note."""
+    where = Pos(file, token.line or 1, token.column or 1)
+    if str(token).startswith("{{"):
+        return Diagnostic.at(where, Code.PRAGMA_SKIPPED, "pragma skipped")
+    words = str(token)[1:-1].split()
+    name = words[0] if words else ""
+    message = f"pragma '{name[:40]}' ignored: CODESYS/TwinCAT, not IEC 61131-3"
+    return Diagnostic.at(where, Code.ATTRIBUTE_PRAGMA, message)
+
+
 def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast.SourceUnit:
     """Parse one ST file, taking its tokens from the project's `budget`. Raises
     `CompileError` with a `file:line:col` diagnostic."""
@@ -960,9 +1012,6 @@ def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast
         for c in configurations
         for block in (*c.globals, *(b for r in c.resources for b in r.globals))
     )
-    warnings = tuple(
-        Diagnostic.at(Pos(file, t.line or 1, t.column or 1), Code.PRAGMA_SKIPPED, "pragma skipped")
-        for t in _PRAGMAS
-    )
+    warnings = (*(_pragma_diagnostic(file, t) for t in _PRAGMAS), *transformer.warnings)
     addresses = tuple(transformer.addresses)
     return ast.SourceUnit(file, pous, globals_, types, warnings, configurations, addresses)

@@ -17,6 +17,7 @@ from backend.compiler.codes import Code
 from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.limits import MAX_DATA_DEPTH, MAX_EXPRESSION_DEPTH
+from backend.compiler.qualified_enums import qualify_enum_values
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
@@ -31,6 +32,7 @@ from backend.compiler.types import (
     EnumType,
     FbType,
     OpenArrayType,
+    RefType,
     StructType,
     Type,
     VariadicType,
@@ -278,6 +280,15 @@ class _TypeResolver:
                 return self._array(spec, local_constants)
             case ast.VariadicType():
                 return VariadicType()
+            case ast.RefType(target=target, pointer=pointer, implicit=implicit, pos=pos):
+                if pointer:
+                    message = "POINTER TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO"
+                    self.report(pos, Code.POINTER, message)
+                if implicit:
+                    message = "REFERENCE TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO and ^"
+                    self.report(pos, Code.IMPLICIT_REFERENCE, message)
+                inner = self.resolve_spec(target, local_constants)
+                return None if inner is None else RefType(inner, pointer, implicit)
             case ast.SubrangeSpec():
                 return self._subrange(spec, local_constants)
             case ast.EnumSpec():
@@ -410,6 +421,7 @@ class _TypeResolver:
 
 
 def resolve(units: list[ast.SourceUnit]) -> Resolved:
+    units = qualify_enum_values(units)  # CODESYS `Color.Red` is `Color#Red`
     result = Resolved()
     types = _TypeResolver(units, result)
     for name in sorted(types.decls):  # every declared type, used or not, is checked

@@ -113,7 +113,46 @@ class VariadicType:
     name: str = "..."
 
 
-Type = ElementaryType | ArrayType | OpenArrayType | StructType | EnumType | FbType | VariadicType
+@dataclass(frozen=True)
+class RefType:
+    """A reference (IEC 61131-3 ed. 3 `REF_TO T`); `target` None is the type of NULL,
+    which fits every reference type."""
+
+    target: Type | None
+    pointer: bool = False  # CODESYS `POINTER TO T`: the same, made by ADR
+    implicit: bool = False  # CODESYS `REFERENCE TO T`: read and written as the T
+
+    @property
+    def name(self) -> str:
+        if self.target is None:
+            return "NULL"
+        kind = "REFERENCE TO " if self.implicit else "POINTER TO " if self.pointer else "REF_TO "
+        return kind + self.target.name
+
+
+def value_type(declared: Type) -> Type:
+    """The type a variable of `declared` type is used as: a REFERENCE TO T as a T."""
+    if isinstance(declared, RefType) and declared.implicit and declared.target is not None:
+        return declared.target
+    return declared
+
+
+def is_implicit_reference(declared: Type) -> bool:
+    return isinstance(declared, RefType) and declared.implicit
+
+
+NULL_TYPE = RefType(None)
+
+Type = (
+    ElementaryType
+    | ArrayType
+    | OpenArrayType
+    | StructType
+    | EnumType
+    | FbType
+    | VariadicType
+    | RefType
+)
 
 
 def _int(name: str, bits: int, signed: bool, category: str = "int") -> ElementaryType:
@@ -222,6 +261,8 @@ def assignable(target: Type, source: Type) -> bool:
         return False
     if target == source:
         return True
+    if isinstance(target, RefType) or isinstance(source, RefType):
+        return isinstance(target, RefType) and source == NULL_TYPE
     if isinstance(target, EnumType):
         return (isinstance(source, EnumType) and source.name == target.name) or source == ANY_INT
     if isinstance(source, EnumType):

@@ -15,7 +15,7 @@ from backend.compiler.parse import (
     parse_int_literal,
     parse_time_literal,
 )
-from runtime.contract.values import TIME_TYPES, base_type
+from runtime.contract.values import TIME_TYPES, base_type, is_reference_type
 
 
 class LiteralError(ValueError):
@@ -42,6 +42,10 @@ _SETTABLE = {*_TYPE_PREFIXES, *TIME_TYPES, *_DATES}
 def parse_literal(text: str, type_name: str) -> Any:
     """An ST literal (`TRUE`, `-3.5`, `16#FF`, `T#20ms`, `'text'`) as a value of
     `type_name` in its run-time representation (TIME in nanoseconds)."""
+    if is_reference_type(type_name):
+        raise LiteralError(
+            f"a reference ({type_name}) is set by the program only: it cannot be written or forced"
+        )
     target, _length = base_type(type_name)  # the length is checked when the value is written
     if target not in _SETTABLE:  # enumerations, arrays: the artifact has no literals for them
         raise LiteralError(f"variables of type {type_name} cannot be set")

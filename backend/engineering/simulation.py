@@ -24,6 +24,7 @@ from runtime.contract.values import (
     TIME_TYPES,
     ValueRejected,
     array_shape,
+    is_reference_type,
     representation,
 )
 from runtime.intrinsics import to_bytes
@@ -109,6 +110,8 @@ def trace_names(options: list[str] | None) -> tuple[str, ...] | None:
 def display(value: Any, type_name: str) -> Any:
     """A value as `padt sim` prints it: TIME in milliseconds (an int when whole), text
     decoded, non-finite REALs as "NaN" / "Infinity" / "-Infinity"."""
+    if is_reference_type(type_name):
+        return "NULL" if value is None else str(value)  # the path it refers to
     if isinstance(value, list):
         shape = array_shape(type_name)
         element = shape.element if shape is not None else ""

@@ -29,6 +29,8 @@ from mcap.exceptions import McapError
 from mcap.records import Attachment, Channel, Message, Metadata
 from mcap.stream_reader import StreamReader
 
+from runtime.contract.values import is_reference_type
+
 FORMAT = "padt-recording"
 VERSION = 1
 PROFILE = ""  # no well-known profile: JSON-schema channels with JSON messages
@@ -178,6 +180,8 @@ def json_type(iec_type: str) -> dict[str, Any]:
         return {"type": "array"}
     if upper.startswith(("STRING", "WSTRING", "CHAR", "WCHAR")):
         return {"type": "string"}
+    if is_reference_type(upper):  # the path it refers to, null for NULL
+        return {"type": ["string", "null"]}
     # non-finite REALs are written as text, as strict JSON has no NaN
     if upper in ("REAL", "LREAL"):
         return {"type": ["number", "string"]}

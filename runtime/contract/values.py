@@ -110,12 +110,25 @@ class ValueRejected(ValueError):
     """A value that a variable of the given type cannot hold; the message says why."""
 
 
+REFERENCE_PREFIXES = ("REF_TO ", "POINTER TO ", "REFERENCE TO ")
+
+
+def is_reference_type(type_name: str) -> bool:
+    """`REF_TO INT` and the like: a reference, which the program alone sets; at run time it
+    reads as the path of what it refers to, or None for NULL."""
+    return type_name.upper().startswith(REFERENCE_PREFIXES)
+
+
 def representation(type_name: str, value: Any) -> Any:
     """`value` as generated code keeps a variable of `type_name`, or ValueRejected.
 
     Generated code relies on every stored value being in the range of its type (it wraps at
     each store), so values from outside (OLT, simulation) are checked, never wrapped.
     """
+    if is_reference_type(type_name):
+        raise ValueRejected(
+            f"a reference ({type_name}) is set by the program only: it cannot be written or forced"
+        )
     name, length = base_type(type_name)
     if name == "BOOL":
         if isinstance(value, bool):
@@ -153,6 +166,8 @@ def representation(type_name: str, value: Any) -> Any:
 
 
 def format_value(value: Any, type_name: str) -> str:
+    if is_reference_type(type_name):
+        return "NULL" if value is None else str(value)
     if isinstance(value, bool):
         return "TRUE" if value else "FALSE"
     if type_name in ("TIME", "LTIME") and isinstance(value, int):

@@ -132,9 +132,14 @@ CASES = [
         "t.st:1:34: error: initial value of 'c' must be a constant expression [E0117]",
     ),
     (
-        "pragmas are skipped with a warning",
-        "PROGRAM P\n{attribute 'x'}\nEND_PROGRAM",
+        "blocks of C code are skipped with a warning",
+        "PROGRAM P\n{{ int x; }}\nEND_PROGRAM",
         "t.st:2:1: warning: pragma skipped [W0001]",
+    ),
+    (
+        "CODESYS pragmas are ignored with a note",
+        "PROGRAM P\n{attribute 'x'}\nEND_PROGRAM",
+        "t.st:2:1: note: pragma 'attribute' ignored: CODESYS/TwinCAT, not IEC 61131-3 [N0801]",
     ),
 ]
 

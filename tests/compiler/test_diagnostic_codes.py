@@ -17,7 +17,7 @@ from backend.compiler.source import SourceFile
 from backend.engineering.project import PROJECT_FILE, compile_project, load_project
 
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "diagnostics.md"
-CODE = re.compile(r"[EW]\d{4}")
+CODE = re.compile(r"[EWN]\d{4}")
 HEADING = re.compile(r"## (?P<code>\S+): (?P<title>.+)")
 MARKERS = ("Fails:", "Passes:")
 
@@ -113,7 +113,7 @@ def test_codes_are_well_formed_and_unique() -> None:
     assert len(ids) == len(set(ids))
     for code in Code:
         assert CODE.fullmatch(code.id), code
-        assert code.severity == ("error" if code.id[0] == "E" else "warning"), code
+        assert code.severity == {"E": "error", "W": "warning", "N": "note"}[code.id[0]], code
         assert code.title and code.title == code.title.strip(), code
 
 

@@ -286,7 +286,8 @@ def test_the_valid_program_compiles_loads_and_runs() -> None:
     assert result.ok, [str(d) for d in result.diagnostics]
     pragma_line = VALID.splitlines().index("{attribute 'hide'}") + 1
     assert [str(d) for d in result.diagnostics] == [
-        f"{FILE}:{pragma_line}:1: warning: pragma skipped [W0001]"
+        f"{FILE}:{pragma_line}:1: note: pragma 'attribute' ignored: CODESYS/TwinCAT, "
+        "not IEC 61131-3 [N0801]"
     ]
     assert result.artifact is not None
     clock = VirtualClock()

@@ -5,11 +5,12 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.compiler.checks.access import check_bit_access, check_index
+from backend.compiler.checks.dialects import check_qualified_enum
 from backend.compiler.checks.functions import check_function_call
 from backend.compiler.checks.literals import check_enum_literal, check_typed_literal
 from backend.compiler.checks.names import check_member, check_name
 from backend.compiler.checks.operators import check_binary, check_unary
-from backend.compiler.checks.unsupported import check_pointer
+from backend.compiler.checks.references import check_deref
 from backend.compiler.infer import Scope
 from backend.compiler.types import Type
 
@@ -20,6 +21,7 @@ def check_expression(scope: Scope, expr: ast.Expr, expr_type: Type | None) -> No
             check_typed_literal(scope, expr, expr_type)
         case ast.EnumLiteral():
             check_enum_literal(scope, expr, expr_type)
+            check_qualified_enum(scope, expr)
         case ast.NameRef():
             check_name(scope, expr, expr_type)
         case ast.MemberRef():
@@ -29,7 +31,7 @@ def check_expression(scope: Scope, expr: ast.Expr, expr_type: Type | None) -> No
         case ast.BitRef():
             check_bit_access(scope, expr)
         case ast.Deref():
-            check_pointer(scope, expr)
+            check_deref(scope, expr)
         case ast.Unary():
             check_unary(scope, expr, expr_type)
         case ast.Binary():

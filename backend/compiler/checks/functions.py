@@ -6,11 +6,21 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.builtins import Builtin
 from backend.compiler.checks.calls import check_connection
+from backend.compiler.checks.dialects import check_size_of
 from backend.compiler.checks.initializers import takes_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
+from backend.compiler.checks.references import check_ref
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
-from backend.compiler.infer import Misfit, NoValue, Scope, StandardFunction, UserFunction
+from backend.compiler.infer import (
+    Misfit,
+    NoValue,
+    RefOf,
+    Scope,
+    SizeOf,
+    StandardFunction,
+    UserFunction,
+)
 from backend.compiler.resolve import PouSymbols, Variable
 from backend.compiler.types import OpenArrayType, assignable
 
@@ -21,7 +31,6 @@ NO_VALUE: dict[NoValue, tuple[Code, str]] = {
     "instance": (Code.INSTANCE_VALUE, "function block instance '{name}' has no value"),
     "program": (Code.PROGRAM_VALUE, "program '{name}' has no value; call it as a statement"),
     "external": (Code.EXTERNAL_FUNCTION, "external function '{name}' is not available"),
-    "pointer": (Code.POINTERS, "pointers are not supported (REF and ADR only inside printf)"),
     "unknown": (Code.NOT_A_FUNCTION, "'{name}' is not a function"),
 }
 
@@ -30,6 +39,10 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
     match scope.callee(call):
         case UserFunction(pou=pou):
             check_user_call(scope, pou, call)
+        case SizeOf():
+            check_size_of(scope, call)
+        case RefOf(pointer=pointer):
+            check_ref(scope, call, pointer)
         case StandardFunction(builtin=builtin):
             misfit = scope.standard_call(builtin, call)
             if isinstance(misfit, Misfit):

@@ -5,6 +5,7 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.checks.calls import check_call_statement
 from backend.compiler.checks.initializers import check_initializer, mismatch
+from backend.compiler.checks.references import check_binding
 from backend.compiler.checks.targets import writable_target
 from backend.compiler.codes import Code
 from backend.compiler.infer import Scope
@@ -19,6 +20,8 @@ def check_block(scope: Scope, body: tuple[ast.Statement, ...], loop_depth: int) 
 
 def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> None:
     match statement:
+        case ast.Assign(target=target, value=value, bind=True):
+            check_binding(scope, target, value)
         case ast.Assign(target=target, value=value):
             target_type = writable_target(scope, target)
             if target_type is not None:

@@ -8,7 +8,7 @@ from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.infer import EnumValue, ProgramRef, Scope
 from backend.compiler.resolve import Variable
-from backend.compiler.types import FbType, StructType, Type
+from backend.compiler.types import FbType, StructType, Type, value_type
 from runtime.contract.system_variables import NAMESPACE
 
 WRITABLE_MEMBER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "MEMBER")
@@ -36,7 +36,7 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
                 Code.INPUT_ASSIGNMENT,
                 f"assignment to input '{binding.name}' inside its block",
             )
-        return binding.type
+        return value_type(binding.type)
     if isinstance(target, ast.MemberRef) and scope.system_namespace(target.base):
         refuse_system_write(scope, target)  # SYS.COLDSTART: only the runtime writes it
         return scope.type_of(target)
@@ -57,7 +57,7 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
                     Code.STEP_FLAG_WRITE,
                     f"step flag '{root.name}.{target.member}' is read-only",
                 )
-                return member.type
+                return value_type(member.type)
         if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS:
             scope.report(
                 target.pos,
@@ -68,10 +68,12 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
             scope.report(
                 target.pos, Code.ASSIGN_MEMBER_OF_VALUE, "cannot assign to a member of a value"
             )
-        return member.type
+        return value_type(member.type)
     if isinstance(target, ast.IndexRef | ast.BitRef):
         if isinstance(target.base, ast.NameRef | ast.MemberRef | ast.IndexRef | ast.BitRef):
             writable_target(scope, target.base)
+        return scope.type_of(target)
+    if isinstance(target, ast.Deref):  # `r^ := v` writes what r refers to
         return scope.type_of(target)
     scope.report(target.pos, Code.ASSIGN_EXPRESSION, "cannot assign to an expression")
     return None
@@ -94,4 +96,4 @@ def refuse_system_write(scope: Scope, target: ast.Expr) -> None:
 
 
 def is_lvalue(expr: ast.Expr) -> bool:
-    return isinstance(expr, ast.NameRef | ast.MemberRef | ast.IndexRef)
+    return isinstance(expr, ast.NameRef | ast.MemberRef | ast.IndexRef | ast.Deref)

@@ -1,0 +1,37 @@
+"""Extensions of CODESYS and TwinCAT that padt accepts, each with a warning that names the
+dialect (W08xx): what IEC 61131-3 writes otherwise, or does not have."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.codes import Code
+from backend.compiler.infer import Scope
+from backend.compiler.types import FbType
+
+
+def check_qualified_enum(scope: Scope, literal: ast.EnumLiteral) -> None:
+    if literal.qualified:
+        message = (
+            f"'{literal.type_name}.{literal.value}' is CODESYS/TwinCAT; "
+            f"IEC 61131-3 writes '{literal.type_name}#{literal.value}'"
+        )
+        scope.report(literal.pos, Code.QUALIFIED_ENUM, message)
+
+
+def check_size_of(scope: Scope, call: ast.Call) -> None:
+    """SIZEOF(x): one variable or expression whose size CODESYS defines."""
+    arguments = call.args
+    if len(arguments) != 1 or arguments[0].name is not None or arguments[0].value is None:
+        message = "SIZEOF takes one variable or expression, unnamed"
+        scope.report(call.pos, Code.SIZEOF_ARGUMENT, message)
+        return
+    argument_type = scope.type_of(arguments[0].value)
+    if argument_type is None:
+        return  # reported where the argument is typed
+    if scope.size_of(call) is None:
+        why = " (a function block instance)" if isinstance(argument_type, FbType) else ""
+        message = f"SIZEOF of a {argument_type.name}{why}: padt knows no CODESYS size of it"
+        scope.report(call.pos, Code.SIZEOF_ARGUMENT, message)
+        return
+    message = "SIZEOF is CODESYS/TwinCAT, not IEC 61131-3 (sizes as CODESYS counts them)"
+    scope.report(call.pos, Code.SIZEOF, message)

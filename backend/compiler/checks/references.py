@@ -1,0 +1,117 @@
+"""References (IEC 61131-3 ed. 3): what `^` and REF() may apply to."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.codes import Code
+from backend.compiler.infer import EnumValue, ProgramRef, Scope
+from backend.compiler.resolve import Variable
+from backend.compiler.types import RefType, Type, is_implicit_reference
+
+
+def check_deref(scope: Scope, expr: ast.Deref) -> None:
+    base_type = scope.type_of(expr.base)
+    if base_type is not None and not isinstance(base_type, RefType):
+        message = f"'^' needs a reference, not a value of type {base_type.name}"
+        scope.report(expr.pos, Code.NOT_A_REFERENCE, message)
+
+
+def check_ref(scope: Scope, call: ast.Call, pointer: bool = False) -> None:
+    """REF(x): x is a variable that lives as long as its instance, so that the reference
+    stays good between calls: no function's variable, no VAR_TEMP, no in-out (its place
+    is the caller's), no constant, no single bit, no system variable."""
+    name = "ADR" if pointer else "REF"
+    referenced = scope.referenced(call)
+    if referenced is None:
+        scope.report(call.pos, Code.REFERENCE_TARGET, f"{name} takes one variable, unnamed")
+        return
+    if scope.type_of(referenced) is None:
+        return  # reported where the argument is
+    problem = _unreferenceable(scope, referenced)
+    if problem is not None:
+        scope.report(call.pos, Code.REFERENCE_TARGET, f"{name} of {problem}")
+    elif pointer:
+        message = "ADR is CODESYS/TwinCAT; IEC 61131-3 writes REF (no address arithmetic)"
+        scope.report(call.pos, Code.POINTER, message)
+
+
+def _unreferenceable(scope: Scope, expr: ast.Expr) -> str | None:
+    match expr:
+        case ast.NameRef(name=name):
+            binding = scope.lookup(name)
+            if isinstance(binding, EnumValue | ProgramRef) or binding is None:
+                return f"'{name}', which is no variable"
+            return _lasting(scope, binding)
+        case ast.MemberRef(base=base):
+            if scope.system_namespace(base):
+                return "a system variable"
+            return _unreferenceable(scope, base)
+        case ast.IndexRef(base=base):
+            return _unreferenceable(scope, base)
+        case ast.Deref():
+            return None  # what a reference refers to lasts by construction
+        case ast.BitRef():
+            return "a single bit"
+    return "an expression; it needs a variable"
+
+
+def _lasting(scope: Scope, variable: Variable) -> str | None:
+    if variable.constant:
+        return f"constant '{variable.name}'"
+    if scope.pou.kind == "FUNCTION" and variable.kind != "VAR_GLOBAL":
+        return f"'{variable.name}', a variable of a function (it is gone when the call ends)"
+    if variable.kind == "VAR_TEMP":
+        return f"'{variable.name}', a VAR_TEMP (it is gone when the call ends)"
+    if variable.kind == "VAR_IN_OUT":
+        return f"'{variable.name}', an in-out (its place belongs to the caller)"
+    if variable.kind in ("SYSTEM", "STEP"):
+        return f"'{variable.name}', which the runtime keeps"
+    return None
+
+
+def check_binding(scope: Scope, target: ast.Expr, value: ast.Initializer) -> None:
+    """CODESYS `r REF= x;` (held as r := REF(x), `bind`): r is a REFERENCE TO of x's type,
+    and x a variable REF accepts."""
+    declared = _declared_type(scope, target)
+    referenced = scope.type_of(value) if isinstance(value, ast.Call) else None
+    if declared is None:
+        scope.type_of(target)  # the rules on names say what it is not
+        return
+    if not is_implicit_reference(declared):
+        message = f"REF= needs a REFERENCE TO on its left, not a variable of type {declared.name}"
+        scope.report(target.pos, Code.REFERENCE_BINDING, message)
+        return
+    message = "REF= is CODESYS/TwinCAT; IEC 61131-3 writes r := REF(x) with r : REF_TO"
+    scope.report(target.pos, Code.IMPLICIT_REFERENCE, message)
+    assert isinstance(declared, RefType)
+    if isinstance(referenced, RefType) and referenced.target != declared.target:
+        assert referenced.target is not None
+        message = f"type mismatch: {declared.name} cannot refer to a {referenced.target.name}"
+        scope.report(target.pos, Code.TYPE_MISMATCH, message)
+
+
+def _declared_type(scope: Scope, target: ast.Expr) -> Type | None:
+    """The type `target` is declared with (a REFERENCE TO is not yet what it refers to)."""
+    if isinstance(target, ast.NameRef):
+        binding = scope.lookup(target.name)
+        return binding.type if isinstance(binding, Variable) else None
+    if isinstance(target, ast.MemberRef):
+        scope.type_of(target.base)
+        member = scope.member(target)
+        return member.type if member is not None else None
+    return None
+
+
+def check_reference_parameter(scope: Scope, variable: Variable) -> None:
+    """A REFERENCE TO as an input, output or in-out: CODESYS binds it by the call, padt
+    passes values; an in-out does what is meant."""
+    if is_implicit_reference(variable.type) and variable.kind in (
+        "VAR_INPUT",
+        "VAR_OUTPUT",
+        "VAR_IN_OUT",
+    ):
+        message = (
+            f"'{variable.name}': a REFERENCE TO cannot be a {variable.kind} in padt; "
+            "declare it VAR_IN_OUT of the type it refers to"
+        )
+        scope.report(variable.pos, Code.REFERENCE_BINDING, message)

@@ -1,0 +1,97 @@
+"""CODESYS/TwinCAT qualified enumeration values: `Color.Red` where IEC 61131-3 writes
+`Color#Red`.
+
+The parser reads `Color.Red` as a member access. Before resolve, every such access whose
+base names an enumeration type of the project that has that value becomes the typed
+enumeration literal, marked as qualified so that the check stage warns (W0801). IEC wins
+where the text means something else there: when the base is also a variable visible in the
+POU (its own, a global, an SFC step) or a POU, it stays a member access.
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields, is_dataclass, replace
+from typing import Any
+
+from backend.compiler import ast
+from backend.compiler.ast import key
+from backend.compiler.source import Pos
+
+
+def qualify_enum_values(units: list[ast.SourceUnit]) -> list[ast.SourceUnit]:
+    """The units with every CODESYS qualified enumeration value made an `EnumLiteral`."""
+    enums = {
+        key(decl.name): {key(name) for name, _, _ in decl.spec.values}
+        for unit in units
+        for decl in unit.types
+        if isinstance(decl.spec, ast.EnumSpec)
+    }
+    if not enums:
+        return units
+    hidden = {key(pou.name) for unit in units for pou in unit.pous}
+    hidden |= {key(d.name) for unit in units for block in _global_blocks(unit) for d in block.decls}
+    enums = {name: values for name, values in enums.items() if name not in hidden}
+    if not enums:
+        return units
+    result = []
+    for unit in units:
+        pous = tuple(_Qualifier(enums, _own_names(pou)).node(pou) for pou in unit.pous)
+        rest = _Qualifier(enums, set())
+        result.append(
+            replace(
+                unit,
+                pous=pous,
+                globals=rest.node(unit.globals),
+                types=rest.node(unit.types),
+                configurations=rest.node(unit.configurations),
+            )
+        )
+    return result
+
+
+def _global_blocks(unit: ast.SourceUnit) -> list[ast.VarBlock]:
+    blocks = list(unit.globals)
+    for configuration in unit.configurations:
+        blocks += configuration.globals
+        blocks += [b for resource in configuration.resources for b in resource.globals]
+    return blocks
+
+
+def _own_names(pou: ast.Pou) -> set[str]:
+    names = {key(d.name) for block in pou.var_blocks for d in block.decls}
+    if pou.sfc is not None:
+        names |= {key(step.name) for step in pou.sfc.steps}
+    return names
+
+
+class _Qualifier:
+    """Rebuilds a subtree with the qualified values replaced; a node without one is
+    returned as it is (the AST is immutable, so sharing it is safe)."""
+
+    def __init__(self, enums: dict[str, set[str]], hidden: set[str]) -> None:
+        self.enums = {name: values for name, values in enums.items() if name not in hidden}
+
+    def node(self, value: Any) -> Any:
+        if isinstance(value, tuple):
+            items = tuple(self.node(item) for item in value)
+            return value if all(a is b for a, b in zip(items, value, strict=True)) else items
+        if not is_dataclass(value) or isinstance(value, Pos | type):
+            return value
+        literal = self._literal(value)
+        if literal is not None:
+            return literal
+        changed = {}
+        for item in fields(value):
+            old = getattr(value, item.name)
+            new = self.node(old)
+            if new is not old:
+                changed[item.name] = new
+        return replace(value, **changed) if changed else value
+
+    def _literal(self, value: object) -> ast.EnumLiteral | None:
+        if not isinstance(value, ast.MemberRef) or not isinstance(value.base, ast.NameRef):
+            return None
+        values = self.enums.get(key(value.base.name))
+        if values is None or key(value.member) not in values:
+            return None
+        return ast.EnumLiteral(value.base.name, value.member, value.pos, qualified=True)

@@ -1,0 +1,241 @@
+"""References of IEC 61131-3 edition 3 (REF_TO, REF(), `^`, NULL) through the compiler and
+`padt sim`: every construct traced cycle by cycle, a dereference of NULL as a program fault
+that names file and line, the refusals with their codes. What the runtime does with
+references (OLT, writes, forcing, reload, warm start) is in tests/runtime/test_references.py."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from tests.conftest import padt, sim_trace
+
+
+def diagnostics(source: str) -> list[str]:
+    return [str(d) for d in compile_sources([SourceFile("t.st", source)]).diagnostics]
+
+
+def test_a_reference_reads_and_writes_what_it_refers_to(tmp_path: Path) -> None:
+    source = """VAR_GLOBAL g : INT := 7; END_VAR
+PROGRAM Main
+VAR_EXTERNAL g : INT; END_VAR
+VAR a : INT := 100; arr : ARRAY[1..3] OF INT; k : INT := 2; n, seen : INT; END_VAR
+VAR r : REF_TO INT; END_VAR
+n := n + 1;
+IF n = 2 THEN r := REF(a); ELSIF n = 3 THEN r := REF(arr[k]); ELSIF n = 4 THEN r := REF(g); END_IF;
+IF r <> NULL THEN
+  seen := r^;
+  r^ := r^ + 1;
+END_IF;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 5)
+    assert trace["Main.r"] == ["NULL", "Main.a", "Main.arr[2]", "g", "g"]
+    assert trace["Main.seen"] == [0, 100, 0, 7, 8]
+    assert trace["Main.a"] == [100, 101, 101, 101, 101]
+    assert trace["Main.arr"] == [[0, 0, 0], [0, 0, 0], [0, 1, 0], [0, 1, 0], [0, 1, 0]]
+    assert trace["g"] == [7, 7, 7, 8, 9]
+
+
+def test_a_reference_passed_to_a_block_changes_the_callers_variable(tmp_path: Path) -> None:
+    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+FUNCTION_BLOCK Bump
+VAR_INPUT target : REF_TO INT; point : REF_TO Point; END_VAR
+VAR own : INT; mine : REF_TO INT; END_VAR
+IF target <> NULL THEN target^ := target^ + 1; END_IF;
+IF point <> NULL THEN point^.x := point^.x + 10; END_IF;
+mine := REF(own);
+mine^ := mine^ + 2;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR count : INT; p : Point; bump : Bump; END_VAR
+bump(target := REF(count), point := REF(p));
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.count"] == [1, 2, 3]
+    assert trace["Main.p.x"] == [10, 20, 30]
+    assert trace["Main.bump.own"] == [2, 4, 6]
+    # references read as the path they refer to, also one made inside the block
+    assert trace["Main.bump.target"] == ["Main.count"] * 3
+    assert trace["Main.bump.point"] == ["Main.p"] * 3
+    assert trace["Main.bump.mine"] == ["Main.bump.own"] * 3
+
+
+def test_a_reference_survives_a_structure_assignment_below_its_root(tmp_path: Path) -> None:
+    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+PROGRAM Main
+VAR p, q : Point; r : REF_TO INT; n : INT; END_VAR
+n := n + 1;
+IF n = 1 THEN r := REF(p.y); END_IF;
+q.y := 40 + n;
+p := q;
+n := n + 0;
+r^ := r^ + 1000;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.r"] == ["Main.p.y"] * 3
+    assert trace["Main.p.y"] == [1041, 1042, 1043]
+
+
+def test_references_compare_equal_when_they_refer_to_the_same_place(tmp_path: Path) -> None:
+    source = """PROGRAM Main
+VAR a, b : INT; r1, r2 : REF_TO INT; same, isnull : BOOL; n : INT; END_VAR
+n := n + 1;
+isnull := r1 = NULL;
+r1 := REF(a);
+IF n = 1 THEN r2 := REF(a); ELSE r2 := REF(b); END_IF;
+same := r1 = r2;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 2)
+    assert trace["Main.isnull"] == [True, False]
+    assert trace["Main.same"] == [True, False]
+
+
+def test_a_dereference_of_null_is_a_program_fault_naming_the_line(tmp_path: Path) -> None:
+    path = tmp_path / "null.st"
+    path.write_text(
+        "PROGRAM Main\nVAR r : REF_TO INT; n : INT; END_VAR\nn := n + 1;\n"
+        "IF n = 3 THEN\n  n := r^;\nEND_IF;\nEND_PROGRAM\n"
+    )
+    run = padt("sim", str(path), "--cycles", "4", "--trace", "Main.n")
+    assert run.returncode == 3, run.stderr
+    assert f"cycle 3: program Main: dereference of NULL in POU Main ({path}:5)" in run.stderr
+    values = [line for line in run.stdout.splitlines() if line]
+    assert '"Main.n": 3' in values[-1]  # the program stopped in ERROR at its third cycle
+
+
+def test_what_references_may_not_do_is_refused_with_its_code() -> None:
+    found = diagnostics("""FUNCTION F : INT
+VAR x : INT; r : REF_TO INT; END_VAR
+r := REF(x);
+END_FUNCTION
+PROGRAM Main
+VAR CONSTANT c : INT := 1; END_VAR
+VAR_TEMP t : INT; END_VAR
+VAR r : REF_TO INT; d : REF_TO DINT; n : INT; w : WORD; b : BOOL; END_VAR
+r := REF(t);
+r := REF(c);
+r := REF(w.3);
+n := n^;
+d := REF(n);
+b := r = d;
+b := r < NULL;
+r := 5;
+END_PROGRAM
+""")
+    assert found == [
+        "t.st:3:6: error: REF of 'x', a variable of a function (it is gone when the call ends)"
+        " [E0219]",
+        "t.st:9:6: error: REF of 't', a VAR_TEMP (it is gone when the call ends) [E0219]",
+        "t.st:10:6: error: REF of constant 'c' [E0219]",
+        "t.st:11:6: error: REF of a single bit [E0219]",
+        "t.st:11:6: error: type mismatch: cannot assign REF_TO BOOL to REF_TO INT [E0209]",
+        "t.st:12:6: error: '^' needs a reference, not a value of type INT [E0218]",
+        "t.st:13:6: error: type mismatch: cannot assign REF_TO INT to REF_TO DINT [E0209]",
+        "t.st:14:8: error: '=' cannot be applied to REF_TO INT and REF_TO DINT [E0211]",
+        "t.st:15:8: error: '<' cannot be applied to REF_TO INT and NULL [E0211]",
+        "t.st:16:6: error: type mismatch: cannot assign ANY_INT to REF_TO INT [E0209]",
+    ]
+
+
+def test_codesys_pointers_are_references_with_a_warning(tmp_path: Path) -> None:
+    source = """PROGRAM Main
+VAR a : ARRAY[0..2] OF INT; p : POINTER TO INT; i : INT; valid : INT; END_VAR
+IF p <> 0 THEN valid := valid + 1; END_IF;
+i := i + 1;
+p := ADR(a[i MOD 3]);
+p^ := p^ + 10;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.p"] == ["Main.a[1]", "Main.a[2]", "Main.a[0]"]
+    assert trace["Main.a"] == [[0, 10, 0], [0, 10, 10], [10, 10, 10]]
+    assert trace["Main.valid"] == [0, 1, 2]  # NULL before the first ADR
+    assert diagnostics(source) == [
+        "t.st:2:33: warning: POINTER TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO [W0805]",
+        "t.st:5:6: warning: ADR is CODESYS/TwinCAT; IEC 61131-3 writes REF (no address "
+        "arithmetic) [W0805]",
+    ]
+
+
+def test_pointer_arithmetic_is_refused() -> None:
+    found = diagnostics("""PROGRAM Main
+VAR a : ARRAY[0..2] OF INT; p : POINTER TO INT; r : REF_TO INT; n : DWORD; END_VAR
+p := ADR(a[0]) + 2;
+n := p - 1;
+r := REF(a[0]);
+r := r + 1;
+p := REF(a[1]);
+END_PROGRAM
+""")
+    arithmetic = [d for d in found if "[E0701]" in d]
+    assert [d.split(": error:")[0] for d in arithmetic] == ["t.st:3:16", "t.st:4:8", "t.st:6:8"]
+    assert "padt has no pointer arithmetic" in arithmetic[0]
+    # a POINTER is not a REF_TO: the two do not mix
+    assert (
+        "t.st:7:6: error: type mismatch: cannot assign REF_TO INT to POINTER TO INT [E0209]"
+    ) in found
+
+
+def test_codesys_reference_to_reads_and_writes_what_it_is_bound_to(tmp_path: Path) -> None:
+    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+PROGRAM Main
+VAR a, b, n : INT; p : Point; END_VAR
+VAR ra : REFERENCE TO INT; rp : REFERENCE TO Point; r : REF_TO INT; END_VAR
+n := n + 1;
+IF n = 1 THEN ra REF= a; ELSIF n = 3 THEN ra REF= b; END_IF;
+ra := ra + 10;
+rp REF= p;
+rp.x := rp.x + 1;
+r := REF(ra);
+r^ := r^ + 100;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.ra"] == ["Main.a", "Main.a", "Main.b"]
+    assert trace["Main.a"] == [110, 220, 220]
+    assert trace["Main.b"] == [0, 0, 110]
+    assert trace["Main.p.x"] == [1, 2, 3]
+    assert trace["Main.r"] == ["Main.a", "Main.a", "Main.b"]  # REF of a REFERENCE TO
+    found = diagnostics(source)
+    assert (
+        "t.st:4:10: warning: REFERENCE TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO and ^ "
+        "[W0806]"
+    ) in found
+    assert sum("REF= is CODESYS/TwinCAT" in d for d in found) == 3
+
+
+def test_an_unbound_reference_to_is_a_program_fault(tmp_path: Path) -> None:
+    path = tmp_path / "unbound.st"
+    path.write_text("PROGRAM Main\nVAR ra : REFERENCE TO INT; END_VAR\nra := 5;\nEND_PROGRAM\n")
+    run = padt("sim", str(path), "--cycles", "2")
+    assert run.returncode == 3, run.stderr
+    assert f"program Main: dereference of NULL in POU Main ({path}:3)" in run.stderr
+
+
+def test_misused_reference_to_is_refused() -> None:
+    found = diagnostics("""FUNCTION_BLOCK Fb
+VAR_INPUT ri : REFERENCE TO INT; END_VAR
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a : INT; d : DINT; ra : REFERENCE TO INT; fb : Fb; END_VAR
+a REF= d;
+ra REF= d;
+fb();
+END_PROGRAM
+""")
+    assert (
+        "t.st:2:11: error: 'ri': a REFERENCE TO cannot be a VAR_INPUT in padt; declare it "
+        "VAR_IN_OUT of the type it refers to [E0220]"
+    ) in found
+    assert (
+        "t.st:6:1: error: REF= needs a REFERENCE TO on its left, not a variable of type INT [E0220]"
+        in found
+    )
+    assert (
+        "t.st:7:1: error: type mismatch: REFERENCE TO INT cannot refer to a DINT [E0209]"
+    ) in found
