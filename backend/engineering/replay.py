@@ -23,9 +23,12 @@ from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
 from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.contract.recording import CycleInputs, Recording, read_recording
 from runtime.contract.refusal import Refusal
+from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.reload_switch import reload
 from runtime.resource import Resource
 from runtime.user_program import share_globals
+
+_SYSTEM = frozenset(v.name for v in SYSTEM_VARIABLES)
 
 
 class ReplayError(ValueError):
@@ -97,7 +100,10 @@ def replay(recording: Recording, artifact: Artifact) -> ReplayResult:
         recorded = load_artifact(recording.artifact)
     except ArtifactError as exc:
         raise ReplayError(f"the recorded configuration is damaged: {exc}") from None
-    resource = _started(_unsliced(recorded), recording)
+    try:
+        resource = _started(_unsliced(recorded), recording)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ReplayError(f"the recording's start state is damaged ({exc!r})") from None
     reloaded = artifact.crc != recorded.crc
     if reloaded:
         try:
@@ -119,7 +125,10 @@ def replay(recording: Recording, artifact: Artifact) -> ReplayResult:
                 f"in cycle {cycle} the time slice cut program(s) {', '.join(item.cut)}: "
                 "where it was cut cannot be repeated"
             )
-        _replay_cycle(resource, clock, item)
+        try:
+            _replay_cycle(resource, clock, item)
+        except (IndexError, KeyError, TypeError, ValueError) as exc:
+            raise ReplayError(f"the inputs of cycle {cycle} are damaged ({exc!r})") from None
         for path, value in zip(names, row, strict=True):
             where = bound[path]
             mine = resource.variables.read(where) if where is not None else "(no such variable)"
@@ -165,8 +174,7 @@ def _started(artifact: Artifact, recording: Recording) -> Resource:
         program.time_ns = int(saved["time_ns"])
         program.last_start_ns = saved["last_start_ns"]
         program.stats.count = int(saved["count"])
-    for name, value in start.system.items():
-        setattr(resource.system, name, value)
+    _set_system(resource, start.system)
     resource.cycle_count = start.cycle
     return resource
 
@@ -178,12 +186,19 @@ def _replay_cycle(resource: Resource, clock: VirtualClock, item: CycleInputs) ->
         if changed is not None:
             program.state = ProgramState(changed[0])
             program.last_start_ns = changed[1]
-    for name, value in item.system.items():
-        setattr(resource.system, name, value)
+    _set_system(resource, item.system)
     _store(resource, item.before)
     resource.run_programs(item.begin_ns)
     _store(resource, item.after)
     resource.cycle_count = item.cycle
+
+
+def _set_system(resource: Resource, values: dict[str, Any]) -> None:
+    """System variables as recorded: only those that are system variables."""
+    for name, value in values.items():
+        if name not in _SYSTEM:
+            raise ValueError(f"{name!r} is no system variable")
+        setattr(resource.system, name, value)
 
 
 def _store(resource: Resource, stores: list[tuple[str, Any]]) -> None:

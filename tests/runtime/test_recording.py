@@ -247,3 +247,38 @@ def test_the_recordings_of_an_earlier_run_are_listed_from_their_files(tmp_path: 
     assert (old.id, old.state, old.cycles, old.variables) == ("old", "done", 25, 11)
     assert old.started_ns == before.started_ns and old.files == before.files
     assert cut.id == "cut" and cut.cycles == 25 and "cut short" in (cut.error or "")
+
+
+def test_the_variables_recorded_at_once_are_limited_over_all_recordings(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr("runtime.recorder.MAX_VARIABLES", 15)
+    resource = started(tmp_path)
+    recordings = recordings_of(resource)
+    first = recordings.start(resource, p.RecordStart(["Control.*"], id="a"))
+    assert first.variables == 11
+    with pytest.raises(Refusal) as refused:  # 11 running + 5 more is over 15
+        recordings.start(
+            resource, p.RecordStart(["Other.*", "level", "pump", "alarms", "Control.n"])
+        )
+    assert refused.value.code == "too_many" and "11 by the recordings running" in str(refused.value)
+    # many patterns, each found by bisection, and a prefix of any case
+    patterns = [f"control.h{'i' * (n % 3)}*" for n in range(4096)]
+    with pytest.raises(Refusal) as refused:
+        recordings.start(resource, p.RecordStart(patterns))
+    assert refused.value.code == "unknown_variable"  # control.hii*: no such variable
+    hits = recordings.start(resource, p.RecordStart(["CONTROL.HI*", "other.s*"], id="b"))
+    assert hits.variables == 3  # Control.high, Control.history, Other.seen
+    finished(resource)
+
+
+def test_a_damaged_recording_is_refused_by_replay_not_run(tmp_path: Path) -> None:
+    recording = read_recording(recorded_run(tmp_path))
+    recording.inputs[3].system = {"now_ns": 5}  # no system variable: a hostile file
+    with pytest.raises(ReplayError, match="inputs of cycle .* are damaged"):
+        replay(recording, compiled())
+    recording = read_recording(tmp_path / "recordings" / "all-1.mcap")
+    assert recording.start is not None
+    recording.start.programs["Control"]["state"] = "FLYING"
+    with pytest.raises(ReplayError, match="start state is damaged"):
+        replay(recording, compiled())
