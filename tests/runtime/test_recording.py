@@ -275,7 +275,7 @@ def test_the_variables_recorded_at_once_are_limited_over_all_recordings(
 def test_a_damaged_recording_is_refused_by_replay_not_run(tmp_path: Path) -> None:
     recording = read_recording(recorded_run(tmp_path))
     recording.inputs[3].system = {"now_ns": 5}  # no system variable: a hostile file
-    with pytest.raises(ReplayError, match="inputs of cycle .* are damaged"):
+    with pytest.raises(ReplayError, match=r"inputs of cycle .* are damaged"):
         replay(recording, compiled())
     recording = read_recording(tmp_path / "recordings" / "all-1.mcap")
     assert recording.start is not None
