@@ -7,6 +7,7 @@ from tests.bench import (
     bench_context,
     bench_documentation,
     bench_hostile,
+    bench_jitter_loaded,
     bench_language,
     bench_modbus,
     bench_recording,
@@ -30,6 +31,7 @@ def main() -> None:
     bench_watch.main()
     bench_recording.main()
     bench_modbus.main()
+    bench_jitter_loaded.main()
     bench_rest.main()
     bench_hostile.main()
     bench_ui.main()

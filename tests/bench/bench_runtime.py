@@ -16,7 +16,8 @@ import socket
 import statistics
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from itertools import pairwise
 
@@ -215,9 +216,11 @@ def _free_port() -> int:
         return port
 
 
-def _drive(resource: Resource, clock: Clock, seconds: float) -> None:
-    """The real cycle loop with its Zenoh link (a router in this process, on loopback),
-    in this thread as `padt runtime` runs it, until a timer stops it."""
+@contextmanager
+def driven(resource: Resource, clock: Clock) -> Iterator[str]:
+    """The real cycle loop with its Zenoh link (a router in this process, on loopback), on
+    a thread of its own as `padt runtime` runs it, until the block ends; yields the
+    router's endpoint for clients."""
     endpoint = f"tcp/127.0.0.1:{_free_port()}"
     router = open_router(endpoint)
     try:
@@ -226,18 +229,25 @@ def _drive(resource: Resource, clock: Clock, seconds: float) -> None:
             link = ResourceLink(session, resource.name, resource.identity)
             try:
                 stop = threading.Event()
-                timer = threading.Timer(seconds, stop.set)
-                timer.start()
+                driver = CycleDriver(resource, clock, link)
+                thread = threading.Thread(target=driver.run, args=(stop,), name="padt-cycle")
+                thread.start()
                 try:
-                    CycleDriver(resource, clock, link).run(stop)
+                    yield endpoint
                 finally:
-                    timer.cancel()
+                    stop.set()
+                    thread.join()
             finally:
                 link.close()
         finally:
             session.close()
     finally:
         router.close()
+
+
+def _drive(resource: Resource, clock: Clock, seconds: float) -> None:
+    with driven(resource, clock):
+        time.sleep(seconds)
 
 
 def _ms(spread: Spread) -> str:
