@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from runtime.code_image import CodeImage, VariablePath
-from runtime.contract.artifact import Artifact
+from runtime.contract.artifact import Artifact, VarInfo
 from runtime.contract.refusal import Refusal
 from runtime.intrinsics import SystemView
 from runtime.user_program import UserProgram
@@ -58,30 +58,46 @@ def instantiate(artifact: Artifact, system: SystemView) -> Instances:
     return Instances(image, programs, image.globals, bound, index(bound), output_points(bound))
 
 
-def name_reference_roots(
-    image: CodeImage, programs: list[UserProgram], bound: list[BoundVariable]
-) -> None:
+def name_reference_roots(image: CodeImage, programs: list[UserProgram]) -> None:
     """Tell the references of the generated code (`REF(x)`) the path of every instance
     that may hold the variable they refer to: the program instances, the globals, and the
-    function block and structure instances below them (by the first variable below each),
-    so that a reference reads as `Main.fb.count`. Arrays of instances are not walked: a
-    reference into one reads as its path below the element."""
+    function block and structure instances below them, so that a reference reads as
+    `Main.fb.count`. Arrays of instances are not walked: a reference into one reads as its
+    path below the element. Only code that makes references needs them."""
     roots = image.reference_roots()
     roots.clear()
+    if not image.makes_references:
+        return
     for view in (image.globals, *(program.view for program in programs)):
         roots[id(view)] = ""
     for program in programs:
         roots[id(program.instance)] = program.name
-    for variable in bound:
-        owner = variable.program.instance if variable.program is not None else image.globals
-        names = variable.path.path.split(".")
-        skip = 1 if variable.program is not None else 0
-        held = owner
-        for depth, attr in enumerate(variable.path.attrs[:-1]):
-            held = getattr(held, attr, None) if isinstance(attr, str) else None
-            if held is None or isinstance(held, list):
-                break
-            roots.setdefault(id(held), ".".join(names[: skip + depth + 1]))
+    for program in programs:
+        members = image.members(program.config.pou)
+        _name_members(image, roots, program.instance, members, program.name)
+    if image.globals is not None and image.artifact.globals is not None:
+        _name_members(image, roots, image.globals, image.artifact.globals.variables, "")
+
+
+def _name_members(
+    image: CodeImage,
+    roots: dict[int, str],
+    instance: Any,
+    members: tuple[VarInfo, ...],
+    prefix: str,
+) -> None:
+    """Name the struct and function block instances below `instance` (declaration order,
+    depth first; the first name of an instance met twice wins)."""
+    for var in members:
+        inner = image.members(var.type)
+        if not inner:
+            continue  # elementary, or an array: not walked
+        held = getattr(instance, var.attr, None)
+        if held is None or id(held) in roots:
+            continue
+        path = f"{prefix}.{var.name}" if prefix else var.name
+        roots[id(held)] = path
+        _name_members(image, roots, held, inner, path)
 
 
 def index(bound: list[BoundVariable]) -> dict[str, BoundVariable]:

@@ -239,3 +239,21 @@ END_PROGRAM
     assert (
         "t.st:7:1: error: type mismatch: REFERENCE TO INT cannot refer to a DINT [E0209]"
     ) in found
+
+
+def test_a_reference_made_in_a_global_block_reads_as_its_global_path(tmp_path: Path) -> None:
+    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+FUNCTION_BLOCK Keep
+VAR own : INT; spot : Point; mine, there : REF_TO INT; END_VAR
+mine := REF(own);
+there := REF(spot.y);
+END_FUNCTION_BLOCK
+VAR_GLOBAL keeper : Keep; END_VAR
+PROGRAM Main
+VAR_EXTERNAL keeper : Keep; END_VAR
+keeper();
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 1)
+    assert trace["keeper.mine"] == ["keeper.own"]
+    assert trace["keeper.there"] == ["keeper.spot.y"]
