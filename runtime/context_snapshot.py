@@ -2,6 +2,11 @@
 values of every variable below a program instance or the globals as a JSON tree
 (`snapshot`), and written back into fresh instances of the same code (`restore`), with a
 `ContextMismatch` that names the path where a tree does not fit.
+
+`capture` takes the same tree for the periodic save, with the bulk left for later: an
+array of structs that hold values only stays as `Records`, rows of their values, which
+`Records.nodes` turns into the tree's nodes on the thread that encodes the file. The cycle
+thread then copies values in C-level passes only.
 """
 
 from __future__ import annotations
@@ -139,6 +144,51 @@ def _no_fast_path(instance: Any) -> tuple[Any, ...]:
 # ---- snapshot
 
 
+@dataclass(frozen=True)
+class Records:
+    """An array of records of one class that hold values only, as `capture` took it: the
+    rows of their slots' values (tuples: later changes of the instances do not reach them).
+    It stands for the list of record nodes `nodes` makes."""
+
+    name: str
+    slots: tuple[str, ...]
+    rows: list[tuple[Any, ...]]
+
+    def nodes(self, start: int = 0, stop: int | None = None) -> list[dict[str, Any]]:
+        """The record nodes of rows[start:stop], as `snapshot` writes them."""
+        rows = self.rows[start:stop]
+        if not _only_values(chain.from_iterable(rows)):
+            rows = [tuple(map(_value_node, row)) for row in rows]
+        name, slots = self.name, self.slots
+        return [{_CLASS: name, _FIELDS: dict(zip(slots, row, strict=True))} for row in rows]
+
+
+def _value_node(value: Any) -> Any:
+    kind = type(value)
+    if kind is float:
+        return value if isfinite(value) else _nonfinite(value)
+    if kind in _PLAIN:
+        return value
+    raise UnsupportedValue(f"cannot save a value of type {kind.__qualname__}")
+
+
+def capture(root: Any) -> Any:
+    """`snapshot(root)`, except that arrays of value-only records stay `Records`: what the
+    cycle thread takes for the periodic save (`context.encode_context` expands them)."""
+    return _node(root, {}, True)
+
+
+def expand(tree: Any) -> Any:
+    """The tree `capture` took, as `snapshot` would have written it."""
+    if type(tree) is Records:
+        return tree.nodes()
+    if type(tree) is list:
+        return [expand(item) for item in tree]
+    if type(tree) is dict:
+        return {key: expand(item) for key, item in tree.items()}
+    return tree
+
+
 def snapshot(root: Any) -> Any:
     """A JSON-able tree of every value below `root` (an instance, a list or a value).
 
@@ -148,7 +198,7 @@ def snapshot(root: Any) -> Any:
     container met twice (a VAR_IN_OUT array bound to the caller's array, or a cycle) becomes
     an alias to its first occurrence.
     """
-    return _node(root, {})
+    return _node(root, {}, False)
 
 
 def _nonfinite(value: float) -> dict[str, str]:
@@ -168,7 +218,7 @@ def _only_values(values: Iterable[Any]) -> bool:
     return all(map(isfinite, floats))
 
 
-def _node(value: Any, seen: dict[int, int]) -> Any:
+def _node(value: Any, seen: dict[int, int], defer: bool) -> Any:
     kind = type(value)
     if kind in _PLAIN:
         return value
@@ -184,11 +234,11 @@ def _node(value: Any, seen: dict[int, int]) -> Any:
     # numbered before the children, so that a cycle refers back to an ancestor
     seen[id(value)] = len(seen)
     if plan is None:
-        return _list_node(value, seen)
-    return {_CLASS: plan.name, _FIELDS: _fields_node(value, plan, seen)}
+        return _list_node(value, seen, defer)
+    return {_CLASS: plan.name, _FIELDS: _fields_node(value, plan, seen, defer)}
 
 
-def _fields_node(instance: Any, plan: _Plan, seen: dict[int, int]) -> dict[str, Any]:
+def _fields_node(instance: Any, plan: _Plan, seen: dict[int, int], defer: bool) -> dict[str, Any]:
     pairs: Iterable[tuple[str, Any]]
     try:
         # one C call fetches every slot; most records (timers, structs of numbers) hold
@@ -209,17 +259,17 @@ def _fields_node(instance: Any, plan: _Plan, seen: dict[int, int]) -> dict[str, 
             fields[name] = item if isfinite(item) else _nonfinite(item)
         else:
             try:
-                fields[name] = _node(item, seen)
+                fields[name] = _node(item, seen, defer)
             except UnsupportedValue as exc:
                 exc.path.insert(0, name)
                 raise
     return fields
 
 
-def _list_node(items: list[Any], seen: dict[int, int]) -> list[Any]:
+def _list_node(items: list[Any], seen: dict[int, int], defer: bool) -> list[Any] | Records:
     if _only_values(items):
         return items.copy()  # an array of elementary values, the common case
-    records = _records_node(items, seen)
+    records = _records_node(items, seen, defer)
     if records is not None:
         return records
     out: list[Any] = []
@@ -232,16 +282,19 @@ def _list_node(items: list[Any], seen: dict[int, int]) -> list[Any]:
             append(item if isfinite(item) else _nonfinite(item))
         else:
             try:
-                append(_node(item, seen))
+                append(_node(item, seen, defer))
             except UnsupportedValue as exc:
                 exc.path.insert(0, index)
                 raise
     return out
 
 
-def _records_node(items: list[Any], seen: dict[int, int]) -> list[Any] | None:
+def _records_node(
+    items: list[Any], seen: dict[int, int], defer: bool
+) -> list[Any] | Records | None:
     """An array of structs of one class that hold values only (the bulk of a large
-    program's data) in a few C-level passes; None when the general path must do it."""
+    program's data) in a few C-level passes: its record nodes, or `Records` when `defer`;
+    None when the general path must do it."""
     kinds = set(map(type, items))
     plan = _plan(next(iter(kinds))) if len(kinds) == 1 else None
     if plan is None or plan.has_dict:
@@ -253,11 +306,18 @@ def _records_node(items: list[Any], seen: dict[int, int]) -> list[Any] | None:
         rows = list(map(plan.get_all, items))
     except AttributeError:
         return None
-    if not _only_values(chain.from_iterable(rows)):
+    # ST is typed: a slot holds the same kind of value in every element, so the first row
+    # tells them all; only a reference slot varies (NULL or not), and None sends the array
+    # down the checking path. `Records.nodes` checks every value later.
+    if defer and not set(map(type, rows[0])) <= _VALUES - {type(None)}:
+        defer = False
+    if not defer and not _only_values(chain.from_iterable(rows)):
         return None
     first = len(seen)  # no element holds a container, so pre-order numbers them one by one
     seen.update(zip(ids, range(first, first + len(ids)), strict=True))
     name, slots = plan.name, plan.slots
+    if defer:
+        return Records(name, slots, rows)
     return [{_CLASS: name, _FIELDS: dict(zip(slots, row, strict=True))} for row in rows]
 
 
@@ -352,6 +412,8 @@ class _Restorer:
         return True
 
     def _check_list(self, target: list[Any], node: Any) -> None:
+        if type(node) is Records:
+            node = node.nodes()
         if type(node) is not list or len(node) != len(target):
             raise ContextMismatch(f"expected an array of {len(target)}, found {_kind_name(node)}")
         if set(map(type, target)) <= _VALUES and set(map(type, node)) <= _VALUES:
@@ -377,7 +439,11 @@ class _Restorer:
             return _nonfinite_value(node[_IEEE]) if is_ieee else node
         if kind is dict and len(node) == 1 and _ALIAS in node:
             return self._alias(current, node[_ALIAS])
-        if kind is not list and not (kind is dict and node.keys() == {_CLASS, _FIELDS}):
+        if (
+            kind is not list
+            and kind is not Records
+            and not (kind is dict and node.keys() == {_CLASS, _FIELDS})
+        ):
             raise ContextMismatch(f"malformed node {_clip(node)}")
         if self._is_value(current):
             raise ContextMismatch(f"expected a value, found {_kind_name(node)}")

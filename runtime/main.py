@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
     saver = ContextSaver(context_path(args.state_dir))
 
     def save() -> None:
-        context = take_context(resource)
+        context = take_context(resource, deferred=True)
         if context is not None:
             saver.submit(context)
 

@@ -4,18 +4,21 @@ taking a valid one back at power-up. Safety-related programs always cold-start."
 from __future__ import annotations
 
 from runtime.context import Context
-from runtime.context_snapshot import ContextMismatch, restore, snapshot
+from runtime.context_snapshot import ContextMismatch, capture, restore, snapshot
 from runtime.contract.protocol import ProgramState
 from runtime.resource import Resource
 from runtime.user_program import share_globals
 
 
-def take_context(resource: Resource) -> Context | None:
-    """A consistent image of everything a warm start needs (taken between cycles)."""
+def take_context(resource: Resource, *, deferred: bool = False) -> Context | None:
+    """A consistent image of everything a warm start needs (taken between cycles). With
+    `deferred`, arrays of value-only structs are taken as rows and made tree nodes when
+    the context is encoded (`capture`): what the periodic save on the cycle thread uses."""
     if resource.artifact is None:
         return None
+    take = capture if deferred else snapshot
     programs = {
-        p.name: {"state": p.state.value, "time_ns": p.time_ns, "values": snapshot(p.instance)}
+        p.name: {"state": p.state.value, "time_ns": p.time_ns, "values": take(p.instance)}
         for p in resource.programs
     }
     globals_ = resource.variables.globals
@@ -24,7 +27,7 @@ def take_context(resource: Resource) -> Context | None:
         saved_ns=resource.clock.wall_ns(),
         resource={"state": resource.state.value, "cycle": resource.cycle_count},
         programs=programs,
-        globals=snapshot(globals_) if globals_ is not None else None,
+        globals=take(globals_) if globals_ is not None else None,
     )
 
 
