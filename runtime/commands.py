@@ -110,7 +110,6 @@ def _recordings(resource: Resource) -> Recordings:
 
 HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.GetStatus: lambda r, c: _status(r),
-    p.GetValues: lambda r, c: p.ValuesReply(r.variables.values(), r.cycle_count),
     p.GetVariables: lambda r, c: p.VariablesReply(r.variables.infos()),
     p.GetIo: lambda r, c: (
         p.IoReply(r.field_io.status(), r.field_io.points())
@@ -152,13 +151,20 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
 }
 
 
-# commands whose answer reads files: checked on the cycle thread, where they return the
-# work that reads, which the runtime process runs on another thread (the cycle never waits
-# on a disk); `answer` runs it at once
+# commands whose answer reads files or is long to build: checked on the cycle thread, where
+# they return the work that reads or builds, which the runtime process runs on another
+# thread (the cycle never waits on a disk, nor on encoding 100,000 values); `answer` runs
+# it at once
 LATER_HANDLERS: dict[type[p.Command[Any]], Callable[[Resource, Any], Callable[[], Any]]] = {
+    p.GetValues: lambda r, c: _values_later(r),
     p.RecordList: lambda r, c: _in_reply(_recordings(r).listing(), p.RecordingsReply),
     p.RecordRead: lambda r, c: _recordings(r).reading(c.file, c.offset, c.length),
 }
+
+
+def _values_later(resource: Resource) -> Callable[[], p.ValuesReply]:
+    cycle, values = resource.cycle_count, resource.variables.read_values()
+    return lambda: p.ValuesReply(values(), cycle)
 
 
 def _in_reply(work: Callable[[], Any], reply: Callable[[Any], Any]) -> Callable[[], Any]:

@@ -10,6 +10,7 @@ Run with `python -m tests.bench.bench_scale`; it prints figures and asserts noth
 from __future__ import annotations
 
 import tempfile
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -19,7 +20,7 @@ from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
 from runtime.context import encode_context, save_context
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
-from runtime.contract.protocol import MAX_SET_VARIABLES
+from runtime.contract.protocol import MAX_SET_VARIABLES, ValuesReply, encode_reply
 from runtime.reload_switch import reload
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
@@ -68,6 +69,30 @@ def best_ms(work: Callable[[], object]) -> float:
     return min(times) * 1000
 
 
+def longest_wait_ms(work: Callable[[], object]) -> float:
+    """The longest a thread that asks for the GIL every 0.5 ms waits beyond that while
+    `work` runs: what the cycle thread would wait for the work's longest hold of it."""
+    done = threading.Event()
+    longest = [0.0]
+
+    def ticker() -> None:
+        last = time.perf_counter()
+        while not done.is_set():
+            time.sleep(0.0005)
+            now = time.perf_counter()
+            longest[0] = max(longest[0], now - last - 0.0005)
+            last = now
+
+    thread = threading.Thread(target=ticker)
+    thread.start()
+    try:
+        work()
+    finally:
+        done.set()
+        thread.join()
+    return longest[0] * 1000
+
+
 def measure(variables: int) -> dict[str, float]:
     artifact, compile_s = compiled(variables)
     changed, _ = compiled(variables, step=2)
@@ -78,7 +103,14 @@ def measure(variables: int) -> dict[str, float]:
     for _ in range(20):  # past Python's warm-up of new code
         resource.cycle()
     figures["CPU cycle of the small program"] = best_ms(resource.cycle)
-    figures["values(): every variable (cycle thread)"] = best_ms(resource.variables.values)
+    figures["values: every variable, read (cycle thread)"] = best_ms(resource.variables.read_values)
+    values = resource.variables.read_values()
+
+    def reply() -> object:
+        return encode_reply(ValuesReply(values(), 1))
+
+    figures["values: reply built + encoded (files thread)"] = best_ms(reply)
+    figures["  longest wait of another thread meanwhile "] = longest_wait_ms(reply)
     paths = tuple(b.path.path for b in resource.variables.bound)[:MAX_SET_VARIABLES]
     watch_set = WatchSet("w", paths, 100_000_000)
     table = resource.forcing.table
@@ -89,13 +121,21 @@ def measure(variables: int) -> dict[str, float]:
     figures["watch set (all, at most 20,000): read + encode"] = best_ms(watched)
     context = take_context(resource)
     assert context is not None
-    figures["take_context (cycle thread)"] = best_ms(lambda: take_context(resource))
+    figures["take_context, whole tree (before)"] = best_ms(lambda: take_context(resource))
+    figures["take_context, periodic save (cycle thread)"] = best_ms(
+        lambda: take_context(resource, deferred=True)
+    )
+    deferred = take_context(resource, deferred=True)
+    assert deferred is not None
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "context.json"
         figures["encode + save context (saver thread)"] = best_ms(
-            lambda: save_context(path, context)
+            lambda: save_context(path, deferred)
         )
-        size = len(encode_context(context))
+        figures["  longest wait of another thread meanwhile"] = longest_wait_ms(
+            lambda: save_context(path, deferred)
+        )
+        size = len(encode_context(deferred))
     resource.stop()
 
     def warm() -> None:

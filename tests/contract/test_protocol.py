@@ -231,3 +231,12 @@ def test_the_protocol_reference_lists_every_command_with_its_level() -> None:
     for name, kind in p.COMMANDS.items():
         assert name in rows, f"docs/protocol.md has no row for {name}"
         assert rows[name] == (kind.LEVEL or "none"), name
+
+
+def test_a_large_reply_is_encoded_in_batches_to_the_same_bytes() -> None:
+    values: dict[str, p.Value] = {f"Main.v{n}": n * 0.5 for n in range(5_001)}
+    values["Main.text"] = 'a "quoted" \u00e9'
+    reply = p.ValuesReply(values, 7)
+    encoded = p.encode_reply(reply)
+    assert encoded == json.dumps({"ok": True, **encode(reply)}).encode()
+    assert p.decode_reply(p.GetValues(), encoded) == reply
