@@ -1,0 +1,108 @@
+"""The service behind `padt import FILE.xml -o DIR`: a PLCopen TC6 XML file into a padt
+project folder.
+
+Everything is read and every file made in memory first: a file that cannot be imported
+leaves DIR untouched. POUs in FBD, LD or IL are not imported; the rest of the project is
+still written (an engineer gets the ST and SFC parts), and those POUs are named in one
+error and at the top of padt.toml. docs/plcopen-import.md is the user's description.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from backend.compiler.diagnostics import Diagnostic
+from backend.engineering.plcopen.issues import ImportCode, ImportFailed, Where, diagnostic
+from backend.engineering.plcopen.model import NotImported, PlcProject
+from backend.engineering.plcopen.project_files import project_files
+from backend.engineering.plcopen.reader import read_project
+from backend.engineering.plcopen.xml_tree import MAX_XML_BYTES, parse_xml
+
+PROJECT_FILE = "padt.toml"
+
+
+class FolderRefused(Exception):
+    """DIR cannot take the project (not empty without force, not a folder, not writable)."""
+
+
+@dataclass
+class ImportResult:
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    written: list[str] = field(default_factory=list)  # relative paths, sorted
+    not_imported: list[NotImported] = field(default_factory=list)
+
+    @property
+    def complete(self) -> bool:
+        return bool(self.written) and not self.not_imported
+
+
+def read_plcopen(xml: Path) -> PlcProject:
+    """The model of the file; ImportFailed when it cannot be imported at all."""
+    try:
+        with xml.open("rb") as handle:
+            data = handle.read(MAX_XML_BYTES + 1)
+    except OSError as exc:
+        raise ImportFailed(
+            Where(1, 1), ImportCode.UNREADABLE, f"cannot read the file: {exc.strerror}"
+        ) from None
+    project = read_project(parse_xml(data))
+    seen: dict[str, str] = {}
+    for name, where in [(t.name, t.where) for t in project.types] + [
+        (p.name, p.where) for p in (*project.pous, *project.not_imported)
+    ]:
+        if name.upper() in seen:
+            raise ImportFailed(
+                where, ImportCode.DUPLICATE, f"{name} is declared twice (also {seen[name.upper()]})"
+            )
+        seen[name.upper()] = f"line {where.line}"
+    return project
+
+
+def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult:
+    """Import `xml` into `folder`. ImportFailed (nothing written) for a file that cannot be
+    imported, FolderRefused for a folder that cannot take it."""
+    display = str(xml)
+    project = read_plcopen(xml)
+    files = project_files(project, xml.name)
+    result = ImportResult([], sorted(files.contents), project.not_imported)
+    if project.not_imported:
+        first = project.not_imported[0]
+        listed = ", ".join(f"{m.name} ({m.reason})" for m in project.not_imported)
+        result.diagnostics.append(
+            diagnostic(
+                display,
+                first.where,
+                ImportCode.NOT_IMPORTED,
+                f"{_pous(len(project.not_imported))} not imported, padt compiles ST and SFC "
+                f"only: {listed}",
+            )
+        )
+    result.diagnostics += [diagnostic(display, w, c, m) for w, c, m in files.warnings]
+    _prepare(folder, force)
+    for name, text in files.contents.items():
+        path = folder / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8", newline="\n")
+    return result
+
+
+def _pous(count: int) -> str:
+    return "1 POU" if count == 1 else f"{count} POUs"
+
+
+def _prepare(folder: Path, force: bool) -> None:
+    """An empty or new folder; with force, a project folder whose padt.toml and .st files
+    go (anything else in it stays)."""
+    if folder.exists() and not folder.is_dir():
+        raise FolderRefused(f"{folder} is a file, not a folder")
+    if folder.is_dir() and any(folder.iterdir()):
+        if not force:
+            raise FolderRefused(
+                f"{folder} is not empty: choose a new folder, or --force to replace the "
+                "project in it (its padt.toml and .st files)"
+            )
+        for old in [*sorted(folder.rglob("*.st")), folder / PROJECT_FILE]:
+            if old.is_file() or old.is_symlink():
+                old.unlink()
+    folder.mkdir(parents=True, exist_ok=True)

@@ -1,0 +1,178 @@
+"""The files of the padt project an import writes: a `.st` file per POU, the data types,
+the global variables, and `padt.toml` with the resource, its tasks and program instances.
+
+One resource per project: the first resource of the first configuration is imported, as
+the compiler does with an IEC CONFIGURATION (docs/language.md), and by the same rules:
+each program instance is a user program with the priority of its task, the CPU cycle is
+the shortest task interval.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+from backend.engineering.plcopen.issues import ImportCode, Where
+from backend.engineering.plcopen.model import NotImported, PlcProject, Resource, VarSection
+from backend.engineering.plcopen.st_text import globals_text, pou_text, types_text
+from runtime.contract.artifact import ResourceConfig
+from runtime.contract.parameters import PROGRAM_BY_NAME, RESOURCE_BY_NAME
+
+TYPES_FILE = "data-types.st"  # a '-' in the name: no POU can be called so
+GLOBALS_FILE = "global-variables.st"
+DEFAULT_RESOURCE = "Resource1"
+DEFAULT_CYCLE_MS = 100  # no task has an interval: as for an IEC CONFIGURATION
+
+
+@dataclass
+class Files:
+    contents: dict[str, str] = field(default_factory=dict)  # relative path -> text
+    warnings: list[tuple[Where, ImportCode, str]] = field(default_factory=list)
+
+
+def project_files(project: PlcProject, source_name: str) -> Files:
+    files = Files()
+    for pou in project.pous:
+        files.contents[f"{pou.name}.st"] = pou_text(pou)
+    if project.types:
+        files.contents[TYPES_FILE] = types_text(project.types)
+    chosen = _chosen_resource(project, files)
+    sections: list[VarSection] = [
+        section for c in project.configurations[:1] for section in c.globals
+    ]
+    if chosen is not None:
+        sections += chosen.globals
+    if sections:
+        files.contents[GLOBALS_FILE] = globals_text(sections)
+    files.contents["padt.toml"] = _toml(project, source_name, chosen, files)
+    files.contents = dict(sorted(files.contents.items()))
+    return files
+
+
+def _chosen_resource(project: PlcProject, files: Files) -> Resource | None:
+    resources = [r for c in project.configurations for r in c.resources]
+    for extra in resources[1:]:
+        files.warnings.append(
+            (
+                extra.where,
+                ImportCode.EXTRA_RESOURCE,
+                f"resource {extra.name} ignored, with its tasks, programs and global "
+                "variables: a padt project has one resource",
+            )
+        )
+    return resources[0] if resources else None
+
+
+def _string(text: str) -> str:
+    return json.dumps(text)  # a JSON string is a TOML basic string
+
+
+def _not_imported_lines(missing: list[NotImported]) -> list[str]:
+    if not missing:
+        return []
+    lines = ["# Not imported (padt compiles ST and SFC; see docs/plcopen-import.md):"]
+    lines += [f"#   {m.name}: {m.reason}" for m in missing]
+    return lines
+
+
+def _toml(project: PlcProject, source_name: str, chosen: Resource | None, files: Files) -> str:
+    lines = [f"# Imported from {source_name} by padt import."]
+    lines += _not_imported_lines(project.not_imported)
+    lines += ["", "[project]", f"name = {_string(project.name or source_name)}"]
+    if chosen is None:
+        lines += [
+            "",
+            "# the file has no configuration: every PROGRAM runs, in source order",
+            "[resource]",
+            f'name = "{DEFAULT_RESOURCE}"',
+            f"target_cycle_ms = {DEFAULT_CYCLE_MS}",
+        ]
+        return "\n".join(lines) + "\n"
+    lines += ["", "[resource]", f"name = {_string(chosen.name)}"]
+    lines += _cycle_lines(chosen, files)
+    lines += _program_lines(project, chosen, files)
+    return "\n".join(lines) + "\n"
+
+
+def _cycle_lines(chosen: Resource, files: Files) -> list[str]:
+    intervals = [t.interval_ms for t in chosen.tasks if t.interval_ms is not None]
+    for task in chosen.tasks:
+        if task.interval_ms is None:
+            files.warnings.append(
+                (
+                    task.where,
+                    ImportCode.TASK,
+                    f"task {task.name} has no interval (an event task): its programs run "
+                    "in every CPU cycle",
+                )
+            )
+    cycle = max(1, min(intervals)) if intervals else DEFAULT_CYCLE_MS
+    limit = RESOURCE_BY_NAME["target_cycle_ms"].high
+    assert limit is not None
+    if cycle > limit:
+        shortest = next(t for t in chosen.tasks if t.interval_ms == min(intervals))
+        files.warnings.append(
+            (
+                shortest.where,
+                ImportCode.TASK,
+                f"task {shortest.name}: interval {cycle} ms is longer than the longest CPU "
+                f"cycle, {limit} ms, which the resource takes instead",
+            )
+        )
+        cycle = limit
+    lines = [
+        f"target_cycle_ms = {cycle}  # the shortest task interval",
+        'target_cycle_mode = "fixed"',
+    ]
+    defaults = ResourceConfig(name="")
+    if cycle > defaults.watchdog_ms:  # the watchdog must allow the cycle, the safety time
+        watchdog = min(2 * cycle, limit)  # twice the watchdog (parameters.md)
+        lines += [
+            f"watchdog_ms = {watchdog}",
+            f"safety_time_ms = {max(defaults.safety_time_ms, 2 * watchdog)}",
+        ]
+    return lines
+
+
+def _program_lines(project: PlcProject, chosen: Resource, files: Files) -> list[str]:
+    missing = {m.name.upper(): m for m in project.not_imported}
+    tasks = {t.name.upper(): t for t in chosen.tasks}
+    highest = PROGRAM_BY_NAME["priority"].high
+    assert highest is not None
+    entries: list[str] = []
+    for instance in chosen.instances:
+        if instance.pou.upper() in missing:
+            files.warnings.append(
+                (
+                    instance.where,
+                    ImportCode.INSTANCE_LEFT_OUT,
+                    f"program instance {instance.name} left out: its POU {instance.pou} is "
+                    f"not imported ({missing[instance.pou.upper()].reason})",
+                )
+            )
+            continue
+        task = tasks.get(instance.task.upper())
+        priority = task.priority if task is not None else 0
+        if priority > highest:
+            files.warnings.append(
+                (
+                    instance.where,
+                    ImportCode.TASK,
+                    f"program instance {instance.name}: task priority {priority} is "
+                    f"lower than padt's lowest, {highest}, which it gets",
+                )
+            )
+            priority = highest
+        number = len(entries) + 1
+        where = f"  # task {task.name}" if task is not None else "  # no task"
+        entries += [
+            "",
+            "[[resource.program]]",
+            f"name = {_string(instance.name)}",
+            f"pou = {_string(instance.pou)}",
+            f"id = {number}",
+            f"priority = {priority}{where}",
+        ]
+    if not entries and chosen.instances:  # none imported: no other PROGRAM may run instead
+        return ["program = []  # no program instance could be imported"]
+    return entries
