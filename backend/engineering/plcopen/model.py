@@ -100,6 +100,7 @@ class Configuration:
 @dataclass
 class PlcProject:
     name: str
+    version: str = ""
     types: list[DataType] = field(default_factory=list)
     pous: list[Pou] = field(default_factory=list)
     not_imported: list[NotImported] = field(default_factory=list)

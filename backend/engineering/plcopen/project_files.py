@@ -79,6 +79,8 @@ def _toml(project: PlcProject, source_name: str, chosen: Resource | None, files:
     lines = [f"# Imported from {source_name} by padt import."]
     lines += _not_imported_lines(project.not_imported)
     lines += ["", "[project]", f"name = {_string(project.name or source_name)}"]
+    if project.version:
+        lines.append(f"version = {_string(project.version)}")
     if chosen is None:
         lines += [
             "",
@@ -140,6 +142,7 @@ def _program_lines(project: PlcProject, chosen: Resource, files: Files) -> list[
     highest = PROGRAM_BY_NAME["priority"].high
     assert highest is not None
     entries: list[str] = []
+    number = 0
     for instance in chosen.instances:
         if instance.pou.upper() in missing:
             files.warnings.append(
@@ -163,7 +166,7 @@ def _program_lines(project: PlcProject, chosen: Resource, files: Files) -> list[
                 )
             )
             priority = highest
-        number = len(entries) + 1
+        number += 1
         where = f"  # task {task.name}" if task is not None else "  # no task"
         entries += [
             "",

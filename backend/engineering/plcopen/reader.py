@@ -433,7 +433,8 @@ def read_project(root: Element) -> PlcProject:
             ImportCode.NOT_PLCOPEN,
         )
     header = root.child("contentHeader")
-    project = PlcProject(header.attrs.get("name", "") if header is not None else "")
+    attrs = header.attrs if header is not None else {}
+    project = PlcProject(attrs.get("name", ""), attrs.get("version", ""))
     types = required(root, "types")
     for element in (types.child("dataTypes") or types).all("dataType"):
         project.types.append(data_type(element))

@@ -1,0 +1,214 @@
+"""`padt import FILE.xml -o DIR` as a user runs it, on PLCopen files written for these tests
+(fixtures/): what is written, that it compiles and runs, and how bad files are refused."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from backend.engineering.plcopen.importer import import_plcopen
+from backend.engineering.plcopen.issues import ImportFailed
+from tests.conftest import padt
+
+FIXTURES = Path(__file__).parent / "fixtures"
+
+
+def imported(tmp_path: Path, name: str, *options: str) -> tuple[Path, int, str]:
+    folder = tmp_path / name
+    run = padt("import", str(FIXTURES / f"{name}.xml"), "-o", str(folder), *options)
+    assert "Traceback" not in run.stderr
+    return folder, run.returncode, run.stderr
+
+
+def test_every_part_of_a_project_is_imported(tmp_path: Path) -> None:
+    folder, code, stderr = imported(tmp_path, "plant")
+    assert code == 0, stderr
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "Dosing.st", "Scale.st", "Sequence.st", "Totaliser.st",
+        "data-types.st", "global-variables.st", "padt.toml",
+    ]  # fmt: skip
+    types = (folder / "data-types.st").read_text()
+    for declaration in (
+        "Mode : (Idle, Filling, Mixing) := Idle;",
+        "Alarm : INT (NoAlarm := 0, High := 10);",
+        "Percent : INT (0..100) := 50;",
+        "Litres : REAL := 1.5;",
+        "name : STRING[16] := 'water';",
+        "steps : ARRAY [1..3] OF INT := [1, 2(7)];",
+        "Levels : ARRAY [0..3] OF Percent := [4(10)];",
+    ):
+        assert declaration in types
+    dosing = (folder / "Dosing.st").read_text()
+    for line in (
+        "raw AT %IW0 : INT;",
+        "valve AT %QX0.0 : BOOL;",
+        "VAR CONSTANT\n    LIMIT : REAL := 4.0;",
+        "VAR_EXTERNAL\n    gSetpoint : REAL;",
+        "label : STRING := 'dosing line';",  # an unquoted string value gets its quotes
+        "counter : Totaliser; (* the dosed volume ( * ) *)",  # a comment that stays one
+    ):
+        assert line in dosing
+    totaliser = (folder / "Totaliser.st").read_text()
+    assert "VAR RETAIN\n    kept : Recipe := (volume := 2.5);\nEND_VAR" in totaliser
+    assert "VAR_IN_OUT\n    count : DINT;" in totaliser
+    assert "VAR_TEMP\n    step : REAL;" in totaliser
+    assert (
+        (folder / "Scale.st")
+        .read_text()
+        .startswith(
+            "(* Raw counts to engineering units ( * ) ends no comment. *)\nFUNCTION Scale : REAL\n"
+        )
+    )
+    globals_ = (folder / "global-variables.st").read_text()
+    assert "VAR_GLOBAL RETAIN\n    gRuns : UDINT;" in globals_
+    assert "VAR_GLOBAL CONSTANT\n    gMax : INT := 100;" in globals_
+    toml = (folder / "padt.toml").read_text()
+    assert 'name = "Mixing plant"\nversion = "2.1"' in toml
+    assert 'name = "Mixer"\ntarget_cycle_ms = 50' in toml  # the shortest task interval
+    assert 'name = "Dose"\npou = "Dosing"\nid = 1\npriority = 1  # task Fast' in toml
+    assert 'name = "Seq"\npou = "Sequence"\nid = 2\npriority = 5  # task Slow' in toml
+    compiled = padt("compile", str(folder))
+    assert compiled.returncode == 0, compiled.stdout + compiled.stderr
+    assert "program Dose: CRC" in compiled.stdout and "program Seq: CRC" in compiled.stdout
+
+
+def test_the_same_file_gives_the_same_bytes(tmp_path: Path) -> None:
+    first = tmp_path / "first"
+    second = tmp_path / "elsewhere" / "second"
+    import_plcopen(FIXTURES / "plant.xml", first)
+    shutil.copy(FIXTURES / "plant.xml", tmp_path / "plant.xml")
+    import_plcopen(tmp_path / "plant.xml", second)
+    names = sorted(p.name for p in first.iterdir())
+    assert names == sorted(p.name for p in second.iterdir())
+    for name in names:
+        assert (first / name).read_bytes() == (second / name).read_bytes(), name
+
+
+def trace(folder: Path, cycles: int, names: list[str], *sets: str) -> dict[str, list[object]]:
+    args = ["sim", str(folder), "--cycles", str(cycles), "--trace", ",".join(names)]
+    for setting in sets:
+        args += ["--set", setting]
+    run = padt(*args)
+    assert run.returncode == 0, run.stderr
+    rows = [json.loads(line) for line in run.stdout.splitlines()]
+    return {name: [row["values"][name] for row in rows] for name in names}
+
+
+def test_the_sfc_runs_as_drawn(tmp_path: Path) -> None:
+    """Wait -> Filling (its action Fill, a named transition Full) -> Mixing and Heating
+    together (inline N and P actions) -> Wait when both are done."""
+    folder, code, stderr = imported(tmp_path, "plant")
+    assert code == 0, stderr
+    chart = (folder / "Sequence.st").read_text()
+    assert "TRANSITION FROM Filling TO (Mixing, Heating) := filled >= 2;" in chart
+    assert "TRANSITION FROM (Mixing, Heating) TO Wait := mixed >= 2;" in chart
+    steps = ["Seq.Wait.X", "Seq.Filling.X", "Seq.Mixing.X", "Seq.Heating.X"]
+    values = trace(folder, 7, [*steps, "Seq.filled", "Seq.mixed", "Seq.heated"], "Seq.start=TRUE@2")
+    active = [[name.split(".")[1] for name in steps if values[name][cycle]] for cycle in range(7)]
+    assert active == [
+        ["Wait"], ["Filling"], ["Filling"], ["Mixing", "Heating"], ["Mixing", "Heating"],
+        ["Wait"], ["Filling"],
+    ]  # fmt: skip
+    # Fill runs while Filling is active, once more as its final scan (docs/language.md)
+    assert values["Seq.filled"] == [0, 0, 1, 2, 3, 3, 3]
+    assert values["Seq.mixed"] == [0, 0, 0, 0, 1, 2, 3]
+    assert values["Seq.heated"] == [0, 0, 0, 0, 1, 1, 1]  # P: once per activation
+
+
+def test_the_st_programs_run_with_their_function_and_block(tmp_path: Path) -> None:
+    folder, _, _ = imported(tmp_path, "plant")
+    names = ["Dose.flow", "Dose.calls", "Dose.counter.total", "Dose.valve", "gSetpoint"]
+    values = trace(folder, 3, names, "Dose.raw=4")
+    assert values["Dose.flow"] == [2.0, 2.0, 2.0]  # Scale: 4 * 0.5
+    assert values["Dose.calls"] == [1, 2, 3]  # the in-out of Totaliser
+    assert values["Dose.counter.total"] == [2.0, 4.0, 6.0]
+    assert values["Dose.valve"] == [True, False, False]  # below LIMIT (a constant) first
+    assert values["gSetpoint"] == [2.0, 4.0, 6.0]  # the global of the configuration
+
+
+def test_graphical_pous_are_named_in_one_error_and_the_rest_is_written(tmp_path: Path) -> None:
+    folder, code, stderr = imported(tmp_path, "graphical")
+    assert code == 1
+    errors = [line for line in stderr.splitlines() if ": error: " in line]
+    assert errors == [
+        f"{FIXTURES / 'graphical.xml'}:22:7: error: 3 POUs not imported, padt compiles ST and "
+        "SFC only: Adder (FBD), Ladder (LD), Lister (IL) [P0006]"
+    ]
+    assert "program instance AdderInstance left out" in stderr
+    assert sorted(p.name for p in folder.iterdir()) == ["Main.st", "Twice.st", "padt.toml"]
+    toml = (folder / "padt.toml").read_text()
+    assert "#   Adder: FBD\n#   Ladder: LD\n#   Lister: IL\n" in toml
+    assert 'name = "MainInstance"' in toml and "AdderInstance" not in toml
+    compiled = padt("compile", str(folder))
+    assert compiled.returncode == 0, compiled.stdout + compiled.stderr
+
+
+@pytest.mark.parametrize(
+    ("name", "message"),
+    [
+        ("malformed", ":6:7: error: not well-formed XML: mismatched tag [P0001]"),
+        ("entity_bomb", ":2:19: error: refused: a DOCTYPE (PLCopen files have none) [P0002]"),
+        ("external_entity", ":2:19: error: refused: a DOCTYPE (PLCopen files have none) [P0002]"),
+    ],
+)
+def test_a_bad_file_is_refused_at_its_place_and_nothing_written(
+    tmp_path: Path, name: str, message: str
+) -> None:
+    folder, code, stderr = imported(tmp_path, name)
+    assert code == 2
+    assert stderr.splitlines() == [
+        f"{FIXTURES / name}.xml{message}",
+        "padt import: nothing written",
+    ]
+    assert not folder.exists()
+
+
+def test_a_file_of_another_kind_is_no_plcopen_project(tmp_path: Path) -> None:
+    xml = tmp_path / "other.xml"
+    xml.write_text('<?xml version="1.0"?>\n<svg xmlns="http://www.w3.org/2000/svg"/>\n')
+    run = padt("import", str(xml), "-o", str(tmp_path / "out"))
+    assert run.returncode == 2
+    assert f"{xml}:2:1: error: the root element is <svg>" in run.stderr
+    assert "[P0003]" in run.stderr
+
+
+def test_names_that_are_no_identifiers_are_refused(tmp_path: Path) -> None:
+    """A POU name becomes a file name: `../x` must never leave DIR."""
+    text = (FIXTURES / "graphical.xml").read_text().replace('"Twice"', '"../../Twice"')
+    xml = tmp_path / "escape.xml"
+    xml.write_text(text)
+    with pytest.raises(ImportFailed) as refused:
+        import_plcopen(xml, tmp_path / "out")
+    assert refused.value.code.id == "P0005"
+    assert refused.value.where.line == 15
+    assert not (tmp_path / "out").exists() and not (tmp_path / "Twice.st").exists()
+
+
+def test_a_folder_that_is_not_empty_needs_force(tmp_path: Path) -> None:
+    folder = tmp_path / "project"
+    (folder / "old").mkdir(parents=True)
+    (folder / "old" / "Stale.st").write_text("PROGRAM Stale END_PROGRAM\n")
+    (folder / "notes.txt").write_text("keep me\n")
+    run = padt("import", str(FIXTURES / "plant.xml"), "-o", str(folder))
+    assert run.returncode == 2
+    assert "is not empty" in run.stderr and "--force" in run.stderr
+    assert (folder / "old" / "Stale.st").exists() and not (folder / "padt.toml").exists()
+    run = padt("import", str(FIXTURES / "plant.xml"), "-o", str(folder), "--force")
+    assert run.returncode == 0, run.stderr
+    assert not (folder / "old" / "Stale.st").exists()  # it would be compiled with the project
+    assert (folder / "notes.txt").read_text() == "keep me\n"
+    assert (folder / "Sequence.st").exists()
+
+
+def test_every_cut_of_a_file_is_refused_or_imported_never_a_crash(tmp_path: Path) -> None:
+    data = (FIXTURES / "plant.xml").read_bytes()
+    for number, end in enumerate(range(0, len(data), max(1, len(data) // 60))):
+        xml = tmp_path / f"cut{number}.xml"
+        xml.write_bytes(data[:end])
+        try:
+            import_plcopen(xml, tmp_path / f"out{number}")
+        except ImportFailed as refused:
+            assert refused.where.line >= 1 and refused.code.id.startswith("P")
