@@ -48,9 +48,10 @@ def read_plcopen(xml: Path) -> PlcProject:
         ) from None
     project = read_project(parse_xml(data))
     seen: dict[str, str] = {}
-    for name, where in [(t.name, t.where) for t in project.types] + [
-        (p.name, p.where) for p in (*project.pous, *project.not_imported)
-    ]:
+    declared = [(t.name, t.where) for t in project.types]
+    declared += [(p.name, p.where) for p in project.pous]
+    declared += [(m.name, m.where) for m in project.not_imported]
+    for name, where in declared:
         if name.upper() in seen:
             raise ImportFailed(
                 where, ImportCode.DUPLICATE, f"{name} is declared twice (also {seen[name.upper()]})"

@@ -160,14 +160,14 @@ def type_text(wrapper: Element) -> str:
         return f"{base} ({_bound(bounds, lower)}..{_bound(bounds, upper)})"
     if tag == "enum":
         values = []
-        for value in required(element, "values").all("value"):
-            name = name_of(value)
-            number = value.attrs.get("value")
-            values.append(f"{name} := {_bound(value, number)}" if number else name)
+        for entry in required(element, "values").all("value"):
+            name = name_of(entry)
+            number = entry.attrs.get("value")
+            values.append(f"{name} := {_bound(entry, number)}" if number else name)
         if not values:
             raise fail(element, "<enum> without a <value>")
-        base = element.child("baseType")
-        prefix = f"{type_text(base)} " if base is not None else ""
+        declared = element.child("baseType")
+        prefix = f"{type_text(declared)} " if declared is not None else ""
         return f"{prefix}({', '.join(values)})"
     if tag == "struct":
         members = "".join(f"    {v.declaration()};\n" for v in variables(element))
@@ -191,12 +191,12 @@ def value_text(wrapper: Element) -> str:
     """The ST initializer of <initialValue> (or of a <value> inside an array or struct)."""
     element = single_child(wrapper)
     if element.tag == "simpleValue":
-        value = element.attrs.get("value")
-        if value is None:
+        simple = element.attrs.get("value")
+        if simple is None:
             raise fail(element, "<simpleValue> without its value")
-        if "\n" in value or "\r" in value:  # a declaration ends at its line in the ST file
+        if "\n" in simple or "\r" in simple:  # a declaration ends at its line in the ST file
             raise fail(element, "a value that spans lines")
-        return value.strip()
+        return simple.strip()
     if element.tag == "arrayValue":
         items = []
         for value in element.all("value"):

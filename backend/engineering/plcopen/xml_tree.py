@@ -97,7 +97,7 @@ def parse_xml(data: bytes) -> Element:
     parser.CharacterDataHandler = characters
     parser.StartDoctypeDeclHandler = lambda *_: refuse("a DOCTYPE (PLCopen files have none)")
     parser.EntityDeclHandler = lambda *_: refuse("an entity declaration")
-    parser.ExternalEntityRefHandler = lambda *_: refuse("an external entity")  # type: ignore[assignment,return-value]
+    parser.ExternalEntityRefHandler = lambda *_: refuse("an external entity")  # type: ignore[assignment]
     try:
         parser.Parse(data, True)
     except _Refused:
