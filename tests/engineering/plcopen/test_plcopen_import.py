@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from backend.engineering.plcopen.importer import import_plcopen
-from backend.engineering.plcopen.issues import ImportFailed
-from tests.conftest import padt
+from backend.engineering.plcopen.issues import ImportCode, ImportFailed
+from tests.conftest import REPO, padt
 
 FIXTURES = Path(__file__).parent / "fixtures"
 
@@ -212,3 +212,10 @@ def test_every_cut_of_a_file_is_refused_or_imported_never_a_crash(tmp_path: Path
             import_plcopen(xml, tmp_path / f"out{number}")
         except ImportFailed as refused:
             assert refused.where.line >= 1 and refused.code.id.startswith("P")
+
+
+def test_every_code_is_documented() -> None:
+    page = (REPO / "docs" / "plcopen-import.md").read_text()
+    rows = {line.split("|")[1].strip(): line.split("|")[2].strip() for line in page.splitlines()
+            if line.startswith("| P0")}  # fmt: skip
+    assert rows == {code.id: code.severity for code in ImportCode}
