@@ -14,7 +14,7 @@ from pathlib import Path
 
 from backend.compiler.diagnostics import Diagnostic
 from backend.engineering.plcopen.issues import ImportCode, ImportFailed, Where, diagnostic
-from backend.engineering.plcopen.model import NotImported, PlcProject
+from backend.engineering.plcopen.model import Dropped, NotImported, PlcProject
 from backend.engineering.plcopen.project_files import project_files
 from backend.engineering.plcopen.reader import read_project
 from backend.engineering.plcopen.xml_tree import MAX_XML_BYTES, parse_xml
@@ -31,10 +31,11 @@ class ImportResult:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     written: list[str] = field(default_factory=list)  # relative paths, sorted
     not_imported: list[NotImported] = field(default_factory=list)
+    dropped: list[Dropped] = field(default_factory=list)
 
     @property
     def complete(self) -> bool:
-        return bool(self.written) and not self.not_imported
+        return bool(self.written) and not self.not_imported and not self.dropped
 
 
 def read_plcopen(xml: Path) -> PlcProject:
@@ -66,7 +67,7 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
     display = str(xml)
     project = read_plcopen(xml)
     files = project_files(project, xml.name)
-    result = ImportResult([], sorted(files.contents), project.not_imported)
+    result = ImportResult([], sorted(files.contents), project.not_imported, project.dropped)
     if project.not_imported:
         first = project.not_imported[0]
         listed = ", ".join(f"{m.name} ({m.reason})" for m in project.not_imported)
@@ -79,7 +80,18 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
                 f"only: {listed}",
             )
         )
+    result.diagnostics += [
+        diagnostic(
+            display,
+            dropped.where,
+            ImportCode.PARTS_NOT_IMPORTED,
+            f"POU {dropped.pou} is imported without its CODESYS {dropped.what} (padt does "
+            "not read them from <addData>)",
+        )
+        for dropped in project.dropped
+    ]
     result.diagnostics += [diagnostic(display, w, c, m) for w, c, m in files.warnings]
+    result.diagnostics.sort(key=lambda d: (d.line, d.col))
     _prepare(folder, force)
     for name, text in files.contents.items():
         path = folder / name

@@ -105,3 +105,15 @@ class PlcProject:
     pous: list[Pou] = field(default_factory=list)
     not_imported: list[NotImported] = field(default_factory=list)
     configurations: list[Configuration] = field(default_factory=list)
+    # global variable lists outside the configuration (CODESYS puts its GVLs in <addData>)
+    globals: list[VarSection] = field(default_factory=list)
+    dropped: list[Dropped] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Dropped:
+    """Part of an imported POU that is not imported (CODESYS methods in <addData>)."""
+
+    pou: str
+    what: str
+    where: Where

@@ -13,7 +13,7 @@ import json
 from dataclasses import dataclass, field
 
 from backend.engineering.plcopen.issues import ImportCode, Where
-from backend.engineering.plcopen.model import NotImported, PlcProject, Resource, VarSection
+from backend.engineering.plcopen.model import PlcProject, Resource
 from backend.engineering.plcopen.st_text import globals_text, pou_text, types_text
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.parameters import PROGRAM_BY_NAME, RESOURCE_BY_NAME
@@ -37,9 +37,8 @@ def project_files(project: PlcProject, source_name: str) -> Files:
     if project.types:
         files.contents[TYPES_FILE] = types_text(project.types)
     chosen = _chosen_resource(project, files)
-    sections: list[VarSection] = [
-        section for c in project.configurations[:1] for section in c.globals
-    ]
+    sections = [*project.globals]
+    sections += [section for c in project.configurations[:1] for section in c.globals]
     if chosen is not None:
         sections += chosen.globals
     if sections:
@@ -67,17 +66,18 @@ def _string(text: str) -> str:
     return json.dumps(text)  # a JSON string is a TOML basic string
 
 
-def _not_imported_lines(missing: list[NotImported]) -> list[str]:
-    if not missing:
+def _not_imported_lines(project: PlcProject) -> list[str]:
+    if not project.not_imported and not project.dropped:
         return []
     lines = ["# Not imported (padt compiles ST and SFC; see docs/plcopen-import.md):"]
-    lines += [f"#   {m.name}: {m.reason}" for m in missing]
+    lines += [f"#   {m.name}: {m.reason}" for m in project.not_imported]
+    lines += [f"#   {d.pou}: its CODESYS {d.what}" for d in project.dropped]
     return lines
 
 
 def _toml(project: PlcProject, source_name: str, chosen: Resource | None, files: Files) -> str:
     lines = [f"# Imported from {source_name} by padt import."]
-    lines += _not_imported_lines(project.not_imported)
+    lines += _not_imported_lines(project)
     lines += ["", "[project]", f"name = {_string(project.name or source_name)}"]
     if project.version:
         lines.append(f"version = {_string(project.version)}")

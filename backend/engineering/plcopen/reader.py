@@ -15,6 +15,7 @@ from backend.engineering.plcopen.model import (
     Action,
     Configuration,
     DataType,
+    Dropped,
     Instance,
     NotImported,
     PlcProject,
@@ -89,6 +90,14 @@ ELEMENTARY = frozenset(
 )
 GRAPHICAL = ("FBD", "LD", "IL")
 NOT_TYPES = ("documentation", "addData")
+# CODESYS keeps these in a POU's <addData>, under `<data name=".../KIND">`; padt reads none
+CODESYS_PARTS = {
+    "method": "methods",
+    "property": "properties",
+    "pouinheritance": "EXTENDS",
+    "implements": "IMPLEMENTS",
+    "transition": "transitions",
+}
 
 
 def fail(element: Element, message: str, code: ImportCode = ImportCode.STRUCTURE) -> ImportFailed:
@@ -373,6 +382,22 @@ def _body(
 # ---- data types, configurations ---------------------------------------------------------
 
 
+def codesys_parts(element: Element) -> list[Dropped]:
+    """What CODESYS adds to a POU in <addData> that changes its meaning (methods,
+    properties, inheritance): named, since the import does not read it."""
+    found = []
+    holder = element.child("addData")
+    for data in holder.all("data") if holder is not None else []:
+        kind = data.attrs.get("name", "").rstrip("/").rpartition("/")[2].lower()
+        if kind in CODESYS_PARTS:
+            names = [
+                c.attrs["name"] for c in data.children if IDENTIFIER.match(c.attrs.get("name", ""))
+            ]
+            listed = f" {', '.join(names)}" if names else ""
+            found.append(Dropped(name_of(element), f"{CODESYS_PARTS[kind]}{listed}", data.where))
+    return found
+
+
 def data_type(element: Element) -> DataType:
     name = name_of(element)
     declaration = type_text(required(element, "baseType"))
@@ -442,8 +467,12 @@ def read_project(root: Element) -> PlcProject:
         read = pou(element)
         if isinstance(read, Pou):
             project.pous.append(read)
+            project.dropped += codesys_parts(element)
         else:
             project.not_imported.append(read)
+    extra = root.child("addData")
+    for data in extra.all("data") if extra is not None else []:
+        project.globals += [var_section(g, "VAR_GLOBAL") for g in data.all("globalVars")]
     instances = root.child("instances")
     holder = instances.child("configurations") if instances is not None else None
     for configuration in holder.all("configuration") if holder is not None else []:

@@ -114,8 +114,6 @@ def _targets(network: _Network, transition: Element) -> list[str]:
         if element.tag in PASS_ON or element.tag in ("connector", "continuation"):
             todo.extend(network.following(element))
             return []
-        if element.tag == "actionBlock":
-            return []
         raise SfcProblem(f"the transition at line {transition.where.line} leads to <{element.tag}>")
 
     todo = network.following(transition)
@@ -144,7 +142,7 @@ def _inline_st(holder: Element, what: str) -> str:
     st = holder.child("ST")
     if st is None:
         languages = [c.tag for c in holder.children if c.tag not in NOT_PARTS]
-        raise SfcProblem(f"{what} in {', '.join(languages) or 'no language'} (padt takes ST)")
+        raise SfcProblem(f"{what} in {', '.join(languages) or 'no language'}")
     return st_source(st)
 
 
@@ -163,7 +161,7 @@ def _condition(transition: Element, named: dict[str, str]) -> str:
         if name.upper() not in named:
             raise SfcProblem(f"{where} names transition {name!r}, which the POU does not have")
         return named[name.upper()]
-    raise SfcProblem(f"{where} has its condition in FBD or LD (padt takes ST)")
+    raise SfcProblem(f"{where} has its condition in FBD or LD")
 
 
 def sfc_text(sfc: Element, named: dict[str, str], actions: set[str]) -> Chart:
@@ -203,7 +201,7 @@ def sfc_text(sfc: Element, named: dict[str, str], actions: set[str]) -> Chart:
                 f"{condition};\nEND_TRANSITION\n"
             )
         elif element.tag == "macroStep":
-            raise SfcProblem(f"a macro step at line {element.where.line} (padt has none)")
+            raise SfcProblem(f"a macro step at line {element.where.line}")
     if not any(e.tag == "step" for e in network.by_id.values()):
         raise SfcProblem("a chart without a step")
     chart.text = "\n".join([*steps, *transitions]).rstrip("\n")
@@ -246,5 +244,5 @@ def _association(action: Element, step: str, taken: set[str], chart: Chart) -> s
             raise SfcProblem(f"the {qualifier} action at line {action.where.line} needs a time")
         parts.append(duration)
     if action.attrs.get("indicator", "").strip():
-        raise SfcProblem(f"an indicator variable at line {action.where.line} (padt has none)")
+        raise SfcProblem(f"an indicator variable at line {action.where.line}")
     return f"{name}({', '.join(parts)});"

@@ -219,3 +219,56 @@ def test_every_code_is_documented() -> None:
     rows = {line.split("|")[1].strip(): line.split("|")[2].strip() for line in page.splitlines()
             if line.startswith("| P0")}  # fmt: skip
     assert rows == {code.id: code.severity for code in ImportCode}
+
+
+def test_a_codesys_export_with_its_global_variable_list(tmp_path: Path) -> None:
+    """CODESYS keeps GVLs in the project's <addData> (imported) and methods in the block's
+    (not read: named in an error, the block written without them)."""
+    folder, code, stderr = imported(tmp_path, "codesys")
+    assert code == 1
+    assert (
+        f"{FIXTURES / 'codesys.xml'}:28:11: error: POU FB_Belt is imported without its "
+        "CODESYS methods Reset (padt does not read them from <addData>) [P0010]"
+    ) in stderr.splitlines()
+    assert "#   FB_Belt: its CODESYS methods Reset\n" in (folder / "padt.toml").read_text()
+    assert (folder / "global-variables.st").read_text() == (
+        "VAR_GLOBAL\n    GVL_Start : BOOL := TRUE;\n    GVL_Count : DINT;\nEND_VAR\n"
+    )
+    values = trace(folder, 3, ["GVL_Count"])  # no configuration: every PROGRAM runs
+    assert values["GVL_Count"] == [1, 2, 3]
+
+
+def test_task_settings_padt_cannot_keep_are_reported(tmp_path: Path) -> None:
+    folder, code, stderr = imported(tmp_path, "tasks")
+    assert code == 1
+    lines = [line.removeprefix(f"{FIXTURES / 'tasks.xml'}:") for line in stderr.splitlines()]
+    assert lines == [
+        "19:7: error: 1 POU not imported, padt compiles ST and SFC only: Drawn (SFC: the "
+        "transition at line 25 has its condition in FBD or LD) [P0006]",
+        "42:13: warning: program instance SlowOne: task priority 40 is lower than padt's "
+        "lowest, 31, which it gets [P0102]",
+        "44:11: warning: task Alarm has no interval (an event task): its programs run in every "
+        "CPU cycle [P0102]",
+        "48:13: warning: program instance DrawnOne left out: its POU Drawn is not imported "
+        "(SFC: the transition at line 25 has its condition in FBD or LD) [P0103]",
+        "51:9: warning: resource Cpu2 ignored, with its tasks, programs and global variables: "
+        "a padt project has one resource [P0101]",
+    ]
+    toml = (folder / "padt.toml").read_text()
+    # 00:00:01.5 (TC6 1.0's xsd:time) is the shortest interval; the watchdog allows it
+    assert "target_cycle_ms = 1500" in toml
+    assert "watchdog_ms = 3000\nsafety_time_ms = 6000\n" in toml
+    assert 'name = "SlowOne"\npou = "Slow"\nid = 1\npriority = 31' in toml
+    assert 'name = "EventOne"\npou = "OnEvent"\nid = 2\npriority = 2' in toml
+    compiled = padt("compile", str(folder))
+    assert compiled.returncode == 0, compiled.stdout + compiled.stderr
+
+
+def test_a_pou_declared_twice_is_refused(tmp_path: Path) -> None:
+    text = (FIXTURES / "graphical.xml").read_text().replace('"Main"', '"TWICE"')
+    xml = tmp_path / "twice.xml"
+    xml.write_text(text)
+    with pytest.raises(ImportFailed) as refused:
+        import_plcopen(xml, tmp_path / "out")
+    assert refused.value.code.id == "P0007"
+    assert refused.value.message == "TWICE is declared twice (also line 15)"
