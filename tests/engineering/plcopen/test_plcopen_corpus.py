@@ -5,6 +5,7 @@ tests/compiler/corpus/plcopen_known_failures.tsv (where a listed file must still
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -12,6 +13,7 @@ import pytest
 from backend.compiler.diagnostics import Diagnostic
 from backend.engineering.plcopen.importer import import_plcopen
 from backend.engineering.project import compile_project, load_project
+from tests.conftest import padt
 from tests.support.corpus_paths import CORPUS, corpus_dir, known_failures
 
 KNOWN = known_failures("plcopen_known_failures.tsv")
@@ -63,3 +65,23 @@ def test_oscat_xml_compiles_as_well_as_the_oscat_st() -> None:
             st_fails = f"oscat/st/{stem}.st" in iec
             assert st_fails or "of the XML only" in reason, name
     assert len(xml_files("oscat/plcopen")) == 24
+
+
+def test_matiecs_sfc_test_runs_after_import(tmp_path: Path) -> None:
+    """matiec's SFC test project (selection and simultaneous branches, jumps, named and
+    inline actions, TC6 1.0) imported, then run by `padt sim` on its own resource."""
+    source = corpus_dir("matiec/tests") / "SFC_TEST.xml"
+    folder = tmp_path / "sfc"
+    assert import_plcopen(source, folder).complete
+    steps = ["GO", "STEP1", "STEP2", "A1"]
+    names = [f"MAIN_INSTANCE.{step}.X" for step in steps]
+    run = padt(
+        "sim", str(folder), "--cycles", "4", "--trace", ",".join(names),
+        "--set", "MAIN_INSTANCE.IX2=TRUE@3",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    rows = [json.loads(line)["values"] for line in run.stdout.splitlines()]
+    active = [[step for step, name in zip(steps, names, strict=True) if row[name]] for row in rows]
+    # GO -> STEP1 at once (IX1 is FALSE); STEP1 -> STEP2 when IX2; then the first branch
+    # whose condition holds (QX1 and QX2 both FALSE after STEP2's P action: A1)
+    assert active == [["STEP1"], ["STEP1"], ["STEP2"], ["A1"]]

@@ -8,6 +8,8 @@ import shutil
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from backend.engineering.plcopen.importer import import_plcopen
 from backend.engineering.plcopen.issues import ImportCode, ImportFailed
@@ -272,3 +274,36 @@ def test_a_pou_declared_twice_is_refused(tmp_path: Path) -> None:
         import_plcopen(xml, tmp_path / "out")
     assert refused.value.code.id == "P0007"
     assert refused.value.message == "TWICE is declared twice (also line 15)"
+
+
+PIECES = [b"<", b">", b'"', b"/>", b"</step>", b'localId="1"', b'refLocalId="9"', b"&amp;", b"\xff"]
+
+
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    source=st.sampled_from(["plant", "tasks", "codesys", "graphical"]),
+    edits=st.lists(
+        st.tuples(st.floats(0, 1), st.integers(0, 40), st.sampled_from(PIECES)),
+        min_size=1,
+        max_size=4,
+    ),
+)
+def test_a_damaged_file_is_refused_or_imported_never_a_crash(
+    tmp_path: Path, source: str, edits: list[tuple[float, int, bytes]]
+) -> None:
+    """Bytes cut out and pieces of markup put in anywhere: the import refuses the file at a
+    place, or imports it; it never fails in another way."""
+    data = bytearray((FIXTURES / f"{source}.xml").read_bytes())
+    for where, cut, piece in edits:
+        at = int(where * (len(data) - 1))
+        data[at : at + cut] = piece
+    xml = tmp_path / "damaged.xml"
+    xml.write_bytes(bytes(data))
+    out = tmp_path / "out"
+    shutil.rmtree(out, ignore_errors=True)
+    try:
+        import_plcopen(xml, out)
+    except ImportFailed as refused:
+        assert refused.where.line >= 1 and refused.code.id.startswith("P")
