@@ -204,8 +204,7 @@ def _import(args: argparse.Namespace) -> int:
         return IMPORT_NOTHING
     for diagnostic in result.diagnostics:
         print(diagnostic, file=sys.stderr)
-    count = len(result.written)
-    print(f"padt import: {count} file{'' if count == 1 else 's'} written to {args.output}")
+    print(f"padt import: {result.summary} written to {args.output}")
     return 0 if result.complete else IMPORT_INCOMPLETE
 
 

@@ -32,6 +32,7 @@ class ImportResult:
     written: list[str] = field(default_factory=list)  # relative paths, sorted
     not_imported: list[NotImported] = field(default_factory=list)
     dropped: list[Dropped] = field(default_factory=list)
+    summary: str = ""  # what was imported, in numbers
 
     @property
     def complete(self) -> bool:
@@ -67,7 +68,13 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
     display = str(xml)
     project = read_plcopen(xml)
     files = project_files(project, xml.name)
-    result = ImportResult([], sorted(files.contents), project.not_imported, project.dropped)
+    summary = (
+        f"{_count(len(project.pous), 'POU')}, {_count(len(project.types), 'data type')}, "
+        f"{_count(files.global_variables, 'global variable')}, {_count(files.programs, 'program')}"
+    )
+    result = ImportResult(
+        [], sorted(files.contents), project.not_imported, project.dropped, summary
+    )
     if project.not_imported:
         first = project.not_imported[0]
         listed = ", ".join(f"{m.name} ({m.reason})" for m in project.not_imported)
@@ -76,8 +83,8 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
                 display,
                 first.where,
                 ImportCode.NOT_IMPORTED,
-                f"{_pous(len(project.not_imported))} not imported, padt compiles ST and SFC "
-                f"only: {listed}",
+                f"{_count(len(project.not_imported), 'POU')} not imported, padt compiles "
+                f"ST and SFC only: {listed}",
             )
         )
     result.diagnostics += [
@@ -100,8 +107,8 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
     return result
 
 
-def _pous(count: int) -> str:
-    return "1 POU" if count == 1 else f"{count} POUs"
+def _count(count: int, thing: str) -> str:
+    return f"{count} {thing}" if count == 1 else f"{count} {thing}s"
 
 
 def _prepare(folder: Path, force: bool) -> None:

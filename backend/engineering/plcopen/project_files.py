@@ -28,6 +28,8 @@ DEFAULT_CYCLE_MS = 100  # no task has an interval: as for an IEC CONFIGURATION
 class Files:
     contents: dict[str, str] = field(default_factory=dict)  # relative path -> text
     warnings: list[tuple[Where, ImportCode, str]] = field(default_factory=list)
+    programs: int = 0  # user programs in padt.toml
+    global_variables: int = 0
 
 
 def project_files(project: PlcProject, source_name: str) -> Files:
@@ -41,6 +43,7 @@ def project_files(project: PlcProject, source_name: str) -> Files:
     sections += [section for c in project.configurations[:1] for section in c.globals]
     if chosen is not None:
         sections += chosen.globals
+    files.global_variables = sum(len(section.variables) for section in sections)
     if sections:
         files.contents[GLOBALS_FILE] = globals_text(sections)
     files.contents["padt.toml"] = _toml(project, source_name, chosen, files)
@@ -167,6 +170,7 @@ def _program_lines(project: PlcProject, chosen: Resource, files: Files) -> list[
             )
             priority = highest
         number += 1
+        files.programs = number
         where = f"  # task {task.name}" if task is not None else "  # no task"
         entries += [
             "",

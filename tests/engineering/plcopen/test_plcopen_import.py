@@ -22,12 +22,19 @@ def imported(tmp_path: Path, name: str, *options: str) -> tuple[Path, int, str]:
     folder = tmp_path / name
     run = padt("import", str(FIXTURES / f"{name}.xml"), "-o", str(folder), *options)
     assert "Traceback" not in run.stderr
+    if run.returncode < 2:
+        assert run.stdout.endswith(f" written to {folder}\n")
     return folder, run.returncode, run.stderr
 
 
 def test_every_part_of_a_project_is_imported(tmp_path: Path) -> None:
-    folder, code, stderr = imported(tmp_path, "plant")
-    assert code == 0, stderr
+    folder = tmp_path / "plant"
+    run = padt("import", str(FIXTURES / "plant.xml"), "-o", str(folder))
+    assert run.returncode == 0, run.stderr
+    assert run.stdout == (
+        f"padt import: 4 POUs, 6 data types, 4 global variables, 2 programs written to {folder}\n"
+    )
+    assert run.stderr == ""
     assert sorted(p.name for p in folder.iterdir()) == [
         "Dosing.st", "Scale.st", "Sequence.st", "Totaliser.st",
         "data-types.st", "global-variables.st", "padt.toml",
