@@ -92,7 +92,7 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
             display,
             dropped.where,
             ImportCode.PARTS_NOT_IMPORTED,
-            f"POU {dropped.pou} is imported without its CODESYS {dropped.what} (padt does "
+            f"{dropped.owner} is imported without its CODESYS {dropped.what} (padt does "
             "not read them from <addData>)",
         )
         for dropped in project.dropped

@@ -112,8 +112,9 @@ class PlcProject:
 
 @dataclass(frozen=True)
 class Dropped:
-    """Part of an imported POU that is not imported (CODESYS methods in <addData>)."""
+    """Part of an imported POU or data type that is not imported (CODESYS methods in
+    <addData>)."""
 
-    pou: str
+    owner: str
     what: str
     where: Where

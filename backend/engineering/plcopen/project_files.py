@@ -74,7 +74,7 @@ def _not_imported_lines(project: PlcProject) -> list[str]:
         return []
     lines = ["# Not imported (padt compiles ST and SFC; see docs/plcopen-import.md):"]
     lines += [f"#   {m.name}: {m.reason}" for m in project.not_imported]
-    lines += [f"#   {d.pou}: its CODESYS {d.what}" for d in project.dropped]
+    lines += [f"#   {d.owner}: its CODESYS {d.what}" for d in project.dropped]
     return lines
 
 

@@ -49,55 +49,23 @@ QUALIFIERS = (
     ("persistent", "PERSISTENT"),
 )
 # the elementary types of TC6 (elements named as the IEC type) and the generic ones
-ELEMENTARY = frozenset(
-    (
-        "BOOL",
-        "BYTE",
-        "WORD",
-        "DWORD",
-        "LWORD",
-        "SINT",
-        "INT",
-        "DINT",
-        "LINT",
-        "USINT",
-        "UINT",
-        "UDINT",
-        "ULINT",
-        "REAL",
-        "LREAL",
-        "TIME",
-        "DATE",
-        "DT",
-        "TOD",
-        "LTIME",
-        "LDATE",
-        "LDT",
-        "LTOD",
-        "CHAR",
-        "WCHAR",
-        "ANY",
-        "ANY_DERIVED",
-        "ANY_ELEMENTARY",
-        "ANY_MAGNITUDE",
-        "ANY_NUM",
-        "ANY_REAL",
-        "ANY_INT",
-        "ANY_BIT",
-        "ANY_STRING",
-        "ANY_DATE",
-    )
-)
+ELEMENTARY = frozenset((
+    "BOOL", "BYTE", "WORD", "DWORD", "LWORD", "SINT", "INT", "DINT", "LINT", "USINT", "UINT",
+    "UDINT", "ULINT", "REAL", "LREAL", "TIME", "DATE", "DT", "TOD", "LTIME", "LDATE", "LDT",
+    "LTOD", "CHAR", "WCHAR", "ANY", "ANY_DERIVED", "ANY_ELEMENTARY", "ANY_MAGNITUDE",
+    "ANY_NUM", "ANY_REAL", "ANY_INT", "ANY_BIT", "ANY_STRING", "ANY_DATE",
+))  # fmt: skip
 GRAPHICAL = ("FBD", "LD", "IL")
 NOT_TYPES = ("documentation", "addData")
-# CODESYS keeps these in a POU's <addData>, under `<data name=".../KIND">`; padt reads none
-CODESYS_PARTS = {
-    "method": "methods",
-    "property": "properties",
-    "pouinheritance": "EXTENDS",
-    "implements": "IMPLEMENTS",
-    "transition": "transitions",
-}
+# CODESYS keeps these in the <addData> of a POU, its interface or a data type, under
+# `<data name="http://www.3s-software.com/plcopenxml/method">` and the like: a part of the
+# name -> what padt does not read there
+CODESYS_PARTS = (
+    ("method", "methods"),
+    ("property", "properties"),
+    ("inheritance", "EXTENDS"),
+    ("implement", "IMPLEMENTS"),
+)
 
 
 def fail(element: Element, message: str, code: ImportCode = ImportCode.STRUCTURE) -> ImportFailed:
@@ -383,18 +351,21 @@ def _body(
 
 
 def codesys_parts(element: Element) -> list[Dropped]:
-    """What CODESYS adds to a POU in <addData> that changes its meaning (methods,
-    properties, inheritance): named, since the import does not read it."""
+    """What CODESYS adds to a POU or data type in <addData> that changes its meaning
+    (methods, properties, inheritance): named, since the import does not read it."""
     found = []
-    holder = element.child("addData")
-    for data in holder.all("data") if holder is not None else []:
+    interface = element.child("interface")
+    holders = [
+        element.child("addData"),
+        interface.child("addData") if interface is not None else None,
+    ]
+    for data in (d for h in holders if h is not None for d in h.all("data")):
         kind = data.attrs.get("name", "").rstrip("/").rpartition("/")[2].lower()
-        if kind in CODESYS_PARTS:
-            names = [
-                c.attrs["name"] for c in data.children if IDENTIFIER.match(c.attrs.get("name", ""))
-            ]
-            listed = f" {', '.join(names)}" if names else ""
-            found.append(Dropped(name_of(element), f"{CODESYS_PARTS[kind]}{listed}", data.where))
+        what = next((what for part, what in CODESYS_PARTS if part in kind), None)
+        if what is not None:
+            names = [c.attrs.get("name", "") for c in data.children]
+            listed = ", ".join(n for n in names if IDENTIFIER.match(n))
+            found.append(Dropped(name_of(element), f"{what} {listed}".strip(), data.where))
     return found
 
 
@@ -463,6 +434,7 @@ def read_project(root: Element) -> PlcProject:
     types = required(root, "types")
     for element in (types.child("dataTypes") or types).all("dataType"):
         project.types.append(data_type(element))
+        project.dropped += codesys_parts(element)
     for element in (types.child("pous") or types).all("pou"):
         read = pou(element)
         if isinstance(read, Pou):

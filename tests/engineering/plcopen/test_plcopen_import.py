@@ -236,7 +236,7 @@ def test_a_codesys_export_with_its_global_variable_list(tmp_path: Path) -> None:
     folder, code, stderr = imported(tmp_path, "codesys")
     assert code == 1
     assert (
-        f"{FIXTURES / 'codesys.xml'}:28:11: error: POU FB_Belt is imported without its "
+        f"{FIXTURES / 'codesys.xml'}:28:11: error: FB_Belt is imported without its "
         "CODESYS methods Reset (padt does not read them from <addData>) [P0010]"
     ) in stderr.splitlines()
     assert "#   FB_Belt: its CODESYS methods Reset\n" in (folder / "padt.toml").read_text()
