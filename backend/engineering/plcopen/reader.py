@@ -254,7 +254,7 @@ def st_text(body: Element) -> str:
     """The ST of a body, an action or a transition."""
     language = [c for c in body.children if c.tag not in NOT_TYPES]
     if len(language) != 1:
-        raise fail(body, f"<{body.tag}> must hold one language element, not {len(language)}")
+        raise _Refused(f"a <{body.tag}> at line {body.where.line} with {len(language)} languages")
     element = language[0]
     if element.tag in GRAPHICAL:
         raise _Refused(element.tag)
@@ -317,9 +317,10 @@ def _transitions(element: Element) -> dict[str, str]:
     for transition in holder.all("transition"):
         name = name_of(transition)
         try:
-            found[name.upper()] = transition_condition(name, st_text(required(transition, "body")))
+            text = st_text(required(transition, "body"))
         except _Refused as refused:
             raise _Refused(f"transition {name} in {refused.reason}") from None
+        found[name.upper()] = transition_condition(name, text)
     return found
 
 
