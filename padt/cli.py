@@ -446,7 +446,7 @@ def build_parser() -> argparse.ArgumentParser:
     import_.add_argument(
         "--force",
         action="store_true",
-        help="replace the project in a DIR that is not empty (its padt.toml and .st files)",
+        help="replace the project in a project folder DIR (its padt.toml and .st files)",
     )
     import_.set_defaults(func=_import)
 

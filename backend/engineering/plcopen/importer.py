@@ -112,8 +112,9 @@ def _count(count: int, thing: str) -> str:
 
 
 def _prepare(folder: Path, force: bool) -> None:
-    """An empty or new folder; with force, a project folder whose padt.toml and .st files
-    go (anything else in it stays)."""
+    """An empty or new folder; with force, a project folder (one with a padt.toml) whose
+    padt.toml and .st files go, anything else in it staying. A folder without padt.toml
+    is never emptied: `-o ~ --force` must not delete a home folder's .st files."""
     if folder.exists() and not folder.is_dir():
         raise FolderRefused(f"{folder} is a file, not a folder")
     if folder.is_dir() and any(folder.iterdir()):
@@ -121,6 +122,11 @@ def _prepare(folder: Path, force: bool) -> None:
             raise FolderRefused(
                 f"{folder} is not empty: choose a new folder, or --force to replace the "
                 "project in it (its padt.toml and .st files)"
+            )
+        if not (folder / PROJECT_FILE).is_file():
+            raise FolderRefused(
+                f"{folder} is not empty and holds no {PROJECT_FILE}: --force replaces only a "
+                "project folder"
             )
         for old in [*sorted(folder.rglob("*.st")), folder / PROJECT_FILE]:
             if old.is_file() or old.is_symlink():

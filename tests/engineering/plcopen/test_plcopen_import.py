@@ -204,11 +204,17 @@ def test_a_folder_that_is_not_empty_needs_force(tmp_path: Path) -> None:
     run = padt("import", str(FIXTURES / "plant.xml"), "-o", str(folder))
     assert run.returncode == 2
     assert "is not empty" in run.stderr and "--force" in run.stderr
-    assert (folder / "old" / "Stale.st").exists() and not (folder / "padt.toml").exists()
+    # no padt.toml: not a project folder, so not even --force empties it
+    run = padt("import", str(FIXTURES / "plant.xml"), "-o", str(folder), "--force")
+    assert run.returncode == 2
+    assert "holds no padt.toml: --force replaces only a project folder" in run.stderr
+    assert (folder / "old" / "Stale.st").exists() and not (folder / "Sequence.st").exists()
+    (folder / "padt.toml").write_text('[resource]\nname = "Old"\n')
     run = padt("import", str(FIXTURES / "plant.xml"), "-o", str(folder), "--force")
     assert run.returncode == 0, run.stderr
     assert not (folder / "old" / "Stale.st").exists()  # it would be compiled with the project
     assert (folder / "notes.txt").read_text() == "keep me\n"
+    assert 'name = "Mixer"' in (folder / "padt.toml").read_text()
     assert (folder / "Sequence.st").exists()
 
 
