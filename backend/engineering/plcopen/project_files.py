@@ -10,6 +10,7 @@ the shortest task interval.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass, field
 
 from backend.engineering.plcopen.issues import ImportCode, Where
@@ -69,17 +70,22 @@ def _string(text: str) -> str:
     return json.dumps(text)  # a JSON string is a TOML basic string
 
 
+def _comment(text: str) -> str:
+    """Text for a TOML comment, which ends at a line break (a file name may hold one)."""
+    return re.sub(r"[\x00-\x1f\x7f]", " ", text)
+
+
 def _not_imported_lines(project: PlcProject) -> list[str]:
     if not project.not_imported and not project.dropped:
         return []
     lines = ["# Not imported (padt compiles ST and SFC; see docs/plcopen-import.md):"]
-    lines += [f"#   {m.name}: {m.reason}" for m in project.not_imported]
+    lines += [f"#   {m.name}: {_comment(m.reason)}" for m in project.not_imported]
     lines += [f"#   {d.owner}: its CODESYS {d.what}" for d in project.dropped]
     return lines
 
 
 def _toml(project: PlcProject, source_name: str, chosen: Resource | None, files: Files) -> str:
-    lines = [f"# Imported from {source_name} by padt import."]
+    lines = [f"# Imported from {_comment(source_name)} by padt import."]
     lines += _not_imported_lines(project)
     lines += ["", "[project]", f"name = {_string(project.name or source_name)}"]
     if project.version:

@@ -320,3 +320,12 @@ def test_a_damaged_file_is_refused_or_imported_never_a_crash(
         import_plcopen(xml, out)
     except ImportFailed as refused:
         assert refused.where.line >= 1 and refused.code.id.startswith("P")
+
+
+def test_a_file_name_with_a_line_break_stays_in_its_comment(tmp_path: Path) -> None:
+    xml = tmp_path / 'x\n[resource]\nname = "Evil".xml'
+    shutil.copy(FIXTURES / "plant.xml", xml)
+    import_plcopen(xml, tmp_path / "out")
+    toml = (tmp_path / "out" / "padt.toml").read_text()
+    assert toml.startswith('# Imported from x [resource] name = "Evil".xml by padt import.\n')
+    assert 'name = "Mixer"' in toml
