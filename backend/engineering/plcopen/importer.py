@@ -98,6 +98,10 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
         for dropped in project.dropped
     ]
     result.diagnostics += [diagnostic(display, w, c, m) for w, c, m in files.warnings]
+    result.diagnostics += [
+        diagnostic(display, where, ImportCode.CONFIGURATION_PART, what)
+        for where, what in project.left_out
+    ]
     result.diagnostics.sort(key=lambda d: (d.line, d.col))
     _prepare(folder, force)
     for name, text in files.contents.items():

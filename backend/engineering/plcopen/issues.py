@@ -35,6 +35,7 @@ class ImportCode(Enum):
     EXTRA_RESOURCE = "P0101", "warning", "resource ignored: one resource per project"
     TASK = "P0102", "warning", "task setting padt cannot keep"
     INSTANCE_LEFT_OUT = "P0103", "warning", "program instance of a POU not imported"
+    CONFIGURATION_PART = "P0104", "warning", "VAR_ACCESS or VAR_CONFIG of a configuration"
 
 
 @dataclass(frozen=True)

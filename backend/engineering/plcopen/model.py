@@ -108,6 +108,8 @@ class PlcProject:
     # global variable lists outside the configuration (CODESYS puts its GVLs in <addData>)
     globals: list[VarSection] = field(default_factory=list)
     dropped: list[Dropped] = field(default_factory=list)
+    # what the import reads and leaves out, to be reported (accessVars, configVars)
+    left_out: list[tuple[Where, str]] = field(default_factory=list)
 
 
 @dataclass(frozen=True)

@@ -56,6 +56,7 @@ ELEMENTARY = frozenset((
     "ANY_NUM", "ANY_REAL", "ANY_INT", "ANY_BIT", "ANY_STRING", "ANY_DATE",
 ))  # fmt: skip
 GRAPHICAL = ("FBD", "LD", "IL")
+CONFIGURATION_PARTS = {"accessVars": "VAR_ACCESS", "configVars": "VAR_CONFIG"}
 NOT_TYPES = ("documentation", "addData")
 # CODESYS keeps these in the <addData> of a POU, its interface or a data type, under
 # `<data name="http://www.3s-software.com/plcopenxml/method">` and the like: a part of the
@@ -449,6 +450,11 @@ def read_project(root: Element) -> PlcProject:
     instances = root.child("instances")
     holder = instances.child("configurations") if instances is not None else None
     for configuration in holder.all("configuration") if holder is not None else []:
+        for part in configuration.children:
+            if part.tag in CONFIGURATION_PARTS:
+                project.left_out.append(
+                    (part.where, f"{CONFIGURATION_PARTS[part.tag]} of configuration left out")
+                )
         project.configurations.append(
             Configuration(
                 name_of(configuration),

@@ -266,7 +266,8 @@ def test_task_settings_padt_cannot_keep_are_reported(tmp_path: Path) -> None:
         "CPU cycle [P0102]",
         "48:13: warning: program instance DrawnOne left out: its POU Drawn is not imported "
         "(SFC: the transition at line 25 has its condition in FBD or LD) [P0103]",
-        "51:9: warning: resource Cpu2 ignored, with its tasks, programs and global variables: "
+        "51:9: warning: VAR_CONFIG of configuration left out [P0104]",
+        "54:9: warning: resource Cpu2 ignored, with its tasks, programs and global variables: "
         "a padt project has one resource [P0101]",
     ]
     toml = (folder / "padt.toml").read_text()
