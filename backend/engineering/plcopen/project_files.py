@@ -131,8 +131,9 @@ def _cycle_lines(chosen: Resource, files: Files) -> list[str]:
             )
         )
         cycle = limit
+    why = "the shortest task interval" if intervals else "no task has an interval"
     lines = [
-        f"target_cycle_ms = {cycle}  # the shortest task interval",
+        f"target_cycle_ms = {cycle}  # {why}",
         'target_cycle_mode = "fixed"',
     ]
     defaults = ResourceConfig(name="")
