@@ -57,6 +57,8 @@ def test_every_part_of_a_project_is_imported(tmp_path: Path) -> None:
         "VAR CONSTANT\n    LIMIT : REAL := 4.0;",
         "VAR_EXTERNAL\n    gSetpoint : REAL;",
         "label : STRING := 'dosing line';",  # an unquoted string value gets its quotes
+        "batches : ARRAY [1..2, 0..1] OF Recipe := [(volume := 1.0), "
+        "3((name := 'oil', steps := [3(2)]))];",
         "counter : Totaliser; (* the dosed volume ( * ) *)",  # a comment that stays one
     ):
         assert line in dosing
@@ -136,6 +138,23 @@ def test_the_st_programs_run_with_their_function_and_block(tmp_path: Path) -> No
     assert values["Dose.counter.total"] == [2.0, 4.0, 6.0]
     assert values["Dose.valve"] == [True, False, False]  # below LIMIT (a constant) first
     assert values["gSetpoint"] == [2.0, 4.0, 6.0]  # the global of the configuration
+
+
+def test_initial_values_of_types_and_variables_meet(tmp_path: Path) -> None:
+    """The initial values of the XML's data types (Recipe's name and steps, the alias
+    Litres) under those of a variable (an array of structures, with repetitions)."""
+    folder, _, _ = imported(tmp_path, "plant")
+    run = padt("sim", str(folder), "--cycles", "1", "--trace", "Dose.batches,Dose.label")
+    assert run.returncode == 0, run.stderr
+    values = json.loads(run.stdout)["values"]
+    first, last = "Dose.batches[1,0]", "Dose.batches[2,1]"
+    assert [values[f"{first}.{member}"] for member in ("name", "volume", "steps")] == [
+        "water", 1.0, [1, 7, 7],
+    ]  # fmt: skip
+    assert [values[f"{last}.{member}"] for member in ("name", "volume", "steps")] == [
+        "oil", 1.5, [2, 2, 2],
+    ]  # fmt: skip
+    assert values["Dose.label"] == "dosing line"
 
 
 def test_graphical_pous_are_named_in_one_error_and_the_rest_is_written(tmp_path: Path) -> None:
