@@ -74,6 +74,8 @@ def _network(sfc: Element) -> _Network:
         if local in by_id:
             raise SfcProblem(f"localId {local} used twice (line {element.where.line})")
         by_id[local] = element
+        if element.tag == "step" and not IDENTIFIER.match(element.attrs.get("name", "")):
+            raise SfcProblem(f"the step at line {element.where.line} has no valid name")
         if element.tag == "connector":
             connectors[element.attrs.get("name", "").upper()] = local
         sources = [
@@ -88,7 +90,7 @@ def _network(sfc: Element) -> _Network:
 
 
 def _sources(network: _Network, transition: Element) -> list[str]:
-    def back(element: Element) -> list[str] | None:
+    def back(element: Element) -> list[str]:
         if element.tag == "step":
             return [element.attrs["name"]]
         if element.tag in PASS_BACK or element.tag in ("connector", "continuation"):
@@ -98,12 +100,12 @@ def _sources(network: _Network, transition: Element) -> list[str]:
             f"the transition at line {transition.where.line} follows a <{element.tag}>"
         )
 
-    todo = network.previous(transition)
+    todo = list(network.previous(transition))
     return _walk(network, todo, back)
 
 
 def _targets(network: _Network, transition: Element) -> list[str]:
-    def forward(element: Element) -> list[str] | None:
+    def forward(element: Element) -> list[str]:
         if element.tag == "step":
             return [element.attrs["name"]]
         if element.tag == "jumpStep":
@@ -120,10 +122,9 @@ def _targets(network: _Network, transition: Element) -> list[str]:
     return _walk(network, todo, forward)
 
 
-def _walk(
-    network: _Network, todo: list[str], step: Callable[[Element], list[str] | None]
-) -> list[str]:
-    """`_walk` over a list that `step` may extend while it is walked."""
+def _walk(network: _Network, todo: list[str], step: Callable[[Element], list[str]]) -> list[str]:
+    """The step names reached from the elements in `todo`: `step` gives an element's names,
+    or adds the elements to walk on to `todo`."""
     names: list[str] = []
     seen: set[str] = set()
     while todo:
@@ -134,7 +135,7 @@ def _walk(
         element = network.by_id.get(local)
         if element is None:
             raise SfcProblem(f"a connection to localId {local}, which is no element")
-        names += [n for n in step(element) or [] if n not in names]
+        names += [n for n in step(element) if n not in names]
     return names
 
 
@@ -173,9 +174,7 @@ def sfc_text(sfc: Element, named: dict[str, str], actions: set[str]) -> Chart:
     steps, transitions = [], []
     for local, element in network.by_id.items():
         if element.tag == "step":
-            name = element.attrs.get("name", "")
-            if not IDENTIFIER.match(name):
-                raise SfcProblem(f"the step at line {element.where.line} has no valid name")
+            name = element.attrs["name"]  # checked by _network
             taken.add(name.upper())
             associations = []
             for block_id in network.after.get(local, []):

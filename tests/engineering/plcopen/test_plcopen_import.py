@@ -309,7 +309,10 @@ def test_a_pou_declared_twice_is_refused(tmp_path: Path) -> None:
     assert refused.value.message == "TWICE is declared twice (also line 15)"
 
 
-PIECES = [b"<", b">", b'"', b"/>", b"</step>", b'localId="1"', b'refLocalId="9"', b"&amp;", b"\xff"]
+PIECES = [
+    *(b"<", b">", b'"', b"/>", b"</step>", b'localId="1"', b'refLocalId="9"', b"&amp;", b"\xff"),
+    *(b'<step localId="77"/>', b'<connection refLocalId="3"/>', b'<transition localId="78"/>'),
+]
 
 
 @settings(

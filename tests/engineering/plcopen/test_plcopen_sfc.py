@@ -160,6 +160,14 @@ def _jump(local: int, after: int, target: str = "Run") -> str:
             "",
             "SFC: a connection to localId 7, which is no element",
         ),
+        (
+            step(1, "A", None, True)
+            + transition(2, 1)
+            + '<step localId="3"><connectionPointIn><connection refLocalId="2"/>'
+            "</connectionPointIn></step>",
+            "",
+            "SFC: the step at line 9 has no valid name",
+        ),
     ],
 )
 def test_networks_without_a_textual_form(
