@@ -107,10 +107,24 @@ def single_child(element: Element) -> Element:
 # ---- types and values -------------------------------------------------------------------
 
 
-def type_text(wrapper: Element) -> str:
-    """The ST of the type inside <type>, <baseType> or <returnType>."""
+# ST declares an enum, a structure or a subrange without a name only in some places: a
+# variable or a data type takes any; a structure member a subrange; the element type of an
+# array, the target of a pointer and the base type of an enum or a subrange none
+ANONYMOUS = {"enum", "struct", "subrangeSigned", "subrangeUnsigned"}
+TAKES = {"declaration": ANONYMOUS, "member": {"subrangeSigned", "subrangeUnsigned"}, "named": set()}
+
+
+def type_text(wrapper: Element, place: str = "declaration") -> str:
+    """The ST of the type inside <type>, <baseType> or <returnType>, at `place` (a key of
+    TAKES)."""
     element = single_child(wrapper)
     tag = element.tag
+    if tag in ANONYMOUS and tag not in TAKES[place]:
+        raise fail(
+            element,
+            f"an <{tag}> without a name inside <{wrapper.tag}> has no ST form: declare it as a "
+            "data type and use its name",
+        )
     if tag in ("string", "wstring"):
         length = element.attrs.get("length", "").strip()
         if length and not length.isdigit():
@@ -128,13 +142,14 @@ def type_text(wrapper: Element) -> str:
             ranges.append(f"{_bound(dimension, lower)}..{_bound(dimension, upper)}")
         if not ranges:
             raise fail(element, "<array> without a <dimension>")
-        return f"ARRAY [{', '.join(ranges)}] OF {type_text(required(element, 'baseType'))}"
+        element_type = type_text(required(element, "baseType"), "named")
+        return f"ARRAY [{', '.join(ranges)}] OF {element_type}"
     if tag in ("subrangeSigned", "subrangeUnsigned"):
         bounds = required(element, "range")
         lower, upper = bounds.attrs.get("lower"), bounds.attrs.get("upper")
         if lower is None or upper is None:
             raise fail(bounds, "<range> needs lower and upper")
-        base = type_text(required(element, "baseType"))
+        base = type_text(required(element, "baseType"), "named")
         return f"{base} ({_bound(bounds, lower)}..{_bound(bounds, upper)})"
     if tag == "enum":
         values = []
@@ -145,13 +160,15 @@ def type_text(wrapper: Element) -> str:
         if not values:
             raise fail(element, "<enum> without a <value>")
         declared = element.child("baseType")
-        prefix = f"{type_text(declared)} " if declared is not None else ""
+        prefix = f"{type_text(declared, 'named')} " if declared is not None else ""
         return f"{prefix}({', '.join(values)})"
     if tag == "struct":
-        members = "".join(f"    {v.declaration()};\n" for v in variables(element))
+        members = "".join(f"    {v.declaration()};\n" for v in variables(element, "member"))
+        if not members:
+            raise fail(element, "<struct> without a member")
         return f"STRUCT\n{members}END_STRUCT"
     if tag == "pointer":
-        return f"REF_TO {type_text(required(element, 'baseType'))}"
+        return f"REF_TO {type_text(required(element, 'baseType'), 'named')}"
     if tag in ELEMENTARY:
         return tag
     raise fail(element, f"<{tag}> is no type padt knows")
@@ -215,14 +232,14 @@ def _comment(element: Element) -> str:
     return documentation.text().strip()
 
 
-def variables(section: Element) -> tuple[Variable, ...]:
+def variables(section: Element, place: str = "declaration") -> tuple[Variable, ...]:
     found = []
     for variable in section.all("variable"):
         address = variable.attrs.get("address", "").strip()
         if address and not ADDRESS.match(address):
             raise fail(variable, f"address {address!r} is no direct address (%IX0.0, %QW3, ...)")
         initial = variable.child("initialValue")
-        type_st = type_text(required(variable, "type"))
+        type_st = type_text(required(variable, "type"), place)
         found.append(
             Variable(
                 name=name_of(variable),

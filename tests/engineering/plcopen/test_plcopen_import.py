@@ -352,3 +352,22 @@ def test_a_file_name_with_a_line_break_stays_in_its_comment(tmp_path: Path) -> N
     toml = (tmp_path / "out" / "padt.toml").read_text()
     assert toml.startswith('# Imported from x [resource] name = "Evil".xml by padt import.\n')
     assert 'name = "Mixer"' in toml
+
+
+def test_an_anonymous_type_where_st_has_no_place_for_one(tmp_path: Path) -> None:
+    """PLCopen can nest an enum inside an array; ST cannot: refused at its place."""
+    enum = "<enum><values><value name='Red'/></values></enum>"
+    text = (FIXTURES / "plant.xml").read_text()
+    text = text.replace(
+        '<dimension lower="0" upper="3"/>\n            <baseType><derived name="Percent"/>',
+        f'<dimension lower="0" upper="3"/>\n            <baseType>{enum}',
+    )
+    xml = tmp_path / "anonymous.xml"
+    xml.write_text(text)
+    with pytest.raises(ImportFailed) as refused:
+        import_plcopen(xml, tmp_path / "out")
+    assert (refused.value.where.line, refused.value.code.id) == (83, "P0004")
+    assert refused.value.message == (
+        "an <enum> without a name inside <baseType> has no ST form: declare it as a data type "
+        "and use its name"
+    )
