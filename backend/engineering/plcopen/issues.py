@@ -36,6 +36,7 @@ class ImportCode(Enum):
     TASK = "P0102", "warning", "task setting padt cannot keep"
     INSTANCE_LEFT_OUT = "P0103", "warning", "program instance of a POU not imported"
     CONFIGURATION_PART = "P0104", "warning", "VAR_ACCESS or VAR_CONFIG of a configuration"
+    TOO_MANY_PROGRAMS = "P0105", "warning", "program instance beyond the 32 a resource runs"
 
 
 @dataclass(frozen=True)

@@ -150,7 +150,8 @@ def _program_lines(project: PlcProject, chosen: Resource, files: Files) -> list[
     missing = {m.name.upper(): m for m in project.not_imported}
     tasks = {t.name.upper(): t for t in chosen.tasks}
     highest = PROGRAM_BY_NAME["priority"].high
-    assert highest is not None
+    most = PROGRAM_BY_NAME["program_id"].high
+    assert highest is not None and most is not None
     entries: list[str] = []
     number = 0
     for instance in chosen.instances:
@@ -161,6 +162,16 @@ def _program_lines(project: PlcProject, chosen: Resource, files: Files) -> list[
                     ImportCode.INSTANCE_LEFT_OUT,
                     f"program instance {instance.name} left out: its POU {instance.pou} is "
                     f"not imported ({missing[instance.pou.upper()].reason})",
+                )
+            )
+            continue
+        if number == most:
+            files.warnings.append(
+                (
+                    instance.where,
+                    ImportCode.TOO_MANY_PROGRAMS,
+                    f"program instance {instance.name} left out: a resource runs at most "
+                    f"{most} programs",
                 )
             )
             continue

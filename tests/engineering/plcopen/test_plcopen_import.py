@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 
 from backend.engineering.plcopen.importer import import_plcopen
 from backend.engineering.plcopen.issues import ImportCode, ImportFailed
+from backend.engineering.project import load_project
 from tests.conftest import REPO, padt
 
 FIXTURES = Path(__file__).parent / "fixtures"
@@ -371,3 +372,18 @@ def test_an_anonymous_type_where_st_has_no_place_for_one(tmp_path: Path) -> None
         "an <enum> without a name inside <baseType> has no ST form: declare it as a data type "
         "and use its name"
     )
+
+
+def test_program_instances_beyond_32_are_left_out(tmp_path: Path) -> None:
+    instances = "".join(f'<pouInstance name="Run{k}" typeName="Main"/>' for k in range(1, 34))
+    text = (FIXTURES / "graphical.xml").read_text()
+    text = text.replace('<pouInstance name="MainInstance" typeName="Main"/>', instances)
+    xml = tmp_path / "many.xml"
+    xml.write_text(text)
+    result = import_plcopen(xml, tmp_path / "out")
+    assert [d.message for d in result.diagnostics if d.code == "P0105"] == [
+        "program instance Run33 left out: a resource runs at most 32 programs"
+    ]
+    project = load_project([tmp_path / "out"])
+    assert project.programs is not None
+    assert [p.name for p in project.programs][-1] == "Run32"
