@@ -331,7 +331,7 @@ def test_a_damaged_file_is_refused_or_imported_never_a_crash(
     tmp_path: Path, source: str, edits: list[tuple[float, int, bytes]]
 ) -> None:
     """Bytes cut out and pieces of markup put in anywhere: the import refuses the file at a
-    place, or imports it; it never fails in another way."""
+    place, or imports it into a project that loads; it never fails in another way."""
     data = bytearray((FIXTURES / f"{source}.xml").read_bytes())
     for where, cut, piece in edits:
         at = int(where * (len(data) - 1))
@@ -344,6 +344,8 @@ def test_a_damaged_file_is_refused_or_imported_never_a_crash(
         import_plcopen(xml, out)
     except ImportFailed as refused:
         assert refused.where.line >= 1 and refused.code.id.startswith("P")
+    else:
+        load_project([out])  # what an import writes always loads
 
 
 def test_a_file_name_with_a_line_break_stays_in_its_comment(tmp_path: Path) -> None:
