@@ -67,7 +67,8 @@ def _chosen_resource(project: PlcProject, files: Files) -> Resource | None:
 
 
 def _string(text: str) -> str:
-    return json.dumps(text)  # a JSON string is a TOML basic string
+    """A TOML basic string: JSON's, with DEL escaped too (TOML forbids it bare)."""
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 def _comment(text: str) -> str:

@@ -389,3 +389,27 @@ def test_program_instances_beyond_32_are_left_out(tmp_path: Path) -> None:
     project = load_project([tmp_path / "out"])
     assert project.programs is not None
     assert [p.name for p in project.programs][-1] == "Run32"
+
+
+def test_elements_nested_too_deep_are_refused(tmp_path: Path) -> None:
+    xml = tmp_path / "deep.xml"
+    xml.write_text(
+        '<project xmlns="http://www.plcopen.org/xml/tc6_0201">' + "<a>" * 300 + "</a>" * 300
+        + "</project>"
+    )  # fmt: skip
+    with pytest.raises(ImportFailed) as refused:
+        import_plcopen(xml, tmp_path / "out")
+    assert refused.value.message == "refused: elements nested deeper than 200"
+    assert refused.value.code.id == "P0004"
+
+
+def test_a_project_name_of_any_characters_reads_back(tmp_path: Path) -> None:
+    name = 'Größe "A"\\B\x7f\ttab'
+    text = (FIXTURES / "plant.xml").read_text().replace("Mixing plant", "NAME")
+    xml = tmp_path / "named.xml"
+    xml.write_bytes(
+        text.encode().replace(b"NAME", b"Gr\xc3\xb6\xc3\x9fe &quot;A&quot;\\B&#127;&#9;tab")
+    )
+    import_plcopen(xml, tmp_path / "out")
+    assert load_project([tmp_path / "out"]).name == name
+    assert 'name = "Größe' in (tmp_path / "out" / "padt.toml").read_text()
