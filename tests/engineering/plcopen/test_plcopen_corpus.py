@@ -85,3 +85,22 @@ def test_matiecs_sfc_test_runs_after_import(tmp_path: Path) -> None:
     # GO -> STEP1 at once (IX1 is FALSE); STEP1 -> STEP2 when IX2; then the first branch
     # whose condition holds (QX1 and QX2 both FALSE after STEP2's P action: A1)
     assert active == [["STEP1"], ["STEP1"], ["STEP2"], ["A1"]]
+
+
+def test_oscat_building_through_the_command_line(tmp_path: Path) -> None:
+    """As a user does it: `padt import` (exit 1: the FBD test program is named and left
+    out), then `padt compile` on the folder it wrote."""
+    source = corpus_dir("oscat/plcopen") / "BUILDING_1.0.xml"
+    folder = tmp_path / "building"
+    run = padt("import", str(source), "-o", str(folder))
+    assert run.returncode == 1, run.stderr
+    assert "1 POU not imported, padt compiles ST and SFC only: program0 (FBD) [P0006]" in (
+        run.stderr
+    )
+    assert (
+        run.stdout
+        == f"padt import: 105 POUs, 4 data types, 0 global variables, 0 programs written to {folder}\n"
+    )
+    compiled = padt("compile", str(folder))
+    assert compiled.returncode == 0, compiled.stdout
+    assert "configuration CRC" in compiled.stdout
