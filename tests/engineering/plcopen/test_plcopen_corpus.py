@@ -97,10 +97,8 @@ def test_oscat_building_through_the_command_line(tmp_path: Path) -> None:
     assert "1 POU not imported, padt compiles ST and SFC only: program0 (FBD) [P0006]" in (
         run.stderr
     )
-    assert (
-        run.stdout
-        == f"padt import: 105 POUs, 4 data types, 0 global variables, 0 programs written to {folder}\n"
-    )
+    imported = "105 POUs, 4 data types, 0 global variables, 0 programs"
+    assert run.stdout == f"padt import: {imported} written to {folder}\n"
     compiled = padt("compile", str(folder))
     assert compiled.returncode == 0, compiled.stdout
     assert "configuration CRC" in compiled.stdout
