@@ -18,12 +18,11 @@ from backend.engineering.plcopen.model import Dropped, NotImported, PlcProject
 from backend.engineering.plcopen.project_files import project_files
 from backend.engineering.plcopen.reader import read_project
 from backend.engineering.plcopen.xml_tree import MAX_XML_BYTES, parse_xml
-
-PROJECT_FILE = "padt.toml"
+from backend.engineering.project import PROJECT_FILE
 
 
 class FolderRefused(Exception):
-    """DIR cannot take the project (not empty without force, not a folder, not writable)."""
+    """DIR cannot take the project (not empty without force, or a file)."""
 
 
 @dataclass
@@ -36,7 +35,7 @@ class ImportResult:
 
     @property
     def complete(self) -> bool:
-        return bool(self.written) and not self.not_imported and not self.dropped
+        return not self.not_imported and not self.dropped
 
 
 def read_plcopen(xml: Path) -> PlcProject:
@@ -105,9 +104,7 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
     result.diagnostics.sort(key=lambda d: (d.line, d.col))
     _prepare(folder, force)
     for name, text in files.contents.items():
-        path = folder / name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text, encoding="utf-8", newline="\n")
+        (folder / name).write_text(text, encoding="utf-8", newline="\n")
     return result
 
 

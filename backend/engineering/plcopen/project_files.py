@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from backend.engineering.plcopen.issues import ImportCode, Where
 from backend.engineering.plcopen.model import PlcProject, Resource
 from backend.engineering.plcopen.st_text import globals_text, pou_text, types_text
+from backend.engineering.project import PROJECT_FILE
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.parameters import PROGRAM_BY_NAME, RESOURCE_BY_NAME
 
@@ -47,7 +48,7 @@ def project_files(project: PlcProject, source_name: str) -> Files:
     files.global_variables = sum(len(section.variables) for section in sections)
     if sections:
         files.contents[GLOBALS_FILE] = globals_text(sections)
-    files.contents["padt.toml"] = _toml(project, source_name, chosen, files)
+    files.contents[PROJECT_FILE] = _toml(project, source_name, chosen, files)
     files.contents = dict(sorted(files.contents.items()))
     return files
 
