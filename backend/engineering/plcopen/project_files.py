@@ -14,7 +14,7 @@ import re
 from dataclasses import dataclass, field
 
 from backend.engineering.plcopen.issues import ImportCode, Where
-from backend.engineering.plcopen.model import PlcProject, Resource
+from backend.engineering.plcopen.model import Configuration, PlcProject, Resource
 from backend.engineering.plcopen.st_text import globals_text, pou_text, types_text
 from backend.engineering.project import PROJECT_FILE
 from runtime.contract.artifact import ResourceConfig
@@ -40,9 +40,10 @@ def project_files(project: PlcProject, source_name: str) -> Files:
         files.contents[f"{pou.name}.st"] = pou_text(pou)
     if project.types:
         files.contents[TYPES_FILE] = types_text(project.types)
-    chosen = _chosen_resource(project, files)
+    configuration, chosen = _chosen(project, files)
     sections = [*project.globals]
-    sections += [section for c in project.configurations[:1] for section in c.globals]
+    if configuration is not None:
+        sections += configuration.globals
     if chosen is not None:
         sections += chosen.globals
     files.global_variables = sum(len(section.variables) for section in sections)
@@ -53,9 +54,14 @@ def project_files(project: PlcProject, source_name: str) -> Files:
     return files
 
 
-def _chosen_resource(project: PlcProject, files: Files) -> Resource | None:
-    resources = [r for c in project.configurations for r in c.resources]
-    for extra in resources[1:]:
+def _chosen(project: PlcProject, files: Files) -> tuple[Configuration | None, Resource | None]:
+    """The first resource and its configuration (whose global variables come along); every
+    other resource, and the global variables of every other configuration, reported."""
+    resources = [(c, r) for c in project.configurations for r in c.resources]
+    configuration, chosen = resources[0] if resources else (None, None)
+    if configuration is None and project.configurations:
+        configuration = project.configurations[0]
+    for _, extra in resources[1:]:
         files.warnings.append(
             (
                 extra.where,
@@ -64,7 +70,17 @@ def _chosen_resource(project: PlcProject, files: Files) -> Resource | None:
                 "variables: a padt project has one resource",
             )
         )
-    return resources[0] if resources else None
+    for other in project.configurations:
+        if other is not configuration and other.globals:
+            files.warnings.append(
+                (
+                    other.where,
+                    ImportCode.EXTRA_RESOURCE,
+                    f"configuration {other.name} ignored, with its global variables: a padt "
+                    "project has one resource",
+                )
+            )
+    return configuration, chosen
 
 
 def _string(text: str) -> str:

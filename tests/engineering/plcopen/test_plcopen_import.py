@@ -413,3 +413,23 @@ def test_a_project_name_of_any_characters_reads_back(tmp_path: Path) -> None:
     import_plcopen(xml, tmp_path / "out")
     assert load_project([tmp_path / "out"]).name == name
     assert 'name = "Größe' in (tmp_path / "out" / "padt.toml").read_text()
+
+
+def test_a_second_configuration_is_reported_with_its_globals(tmp_path: Path) -> None:
+    spare = (
+        '<configuration name="Spare"><globalVars><variable name="gSpare"><type><INT/></type>'
+        "</variable></globalVars></configuration>"
+    )
+    text = (
+        (FIXTURES / "plant.xml")
+        .read_text()
+        .replace("</configurations>", spare + "\n</configurations>")
+    )
+    xml = tmp_path / "two.xml"
+    xml.write_text(text)
+    result = import_plcopen(xml, tmp_path / "out")
+    assert [(d.code, d.message) for d in result.diagnostics] == [
+        ("P0101", "configuration Spare ignored, with its global variables: a padt project has "
+         "one resource"),
+    ]  # fmt: skip
+    assert "gSpare" not in (tmp_path / "out" / "global-variables.st").read_text()
