@@ -195,12 +195,14 @@ def _import(args: argparse.Namespace) -> int:
     try:
         result = import_plcopen(args.file, args.output, force=args.force)
     except ImportFailed as exc:
-        where = f"{args.file}:{exc.where.line}:{exc.where.col}"
-        print(f"{where}: error: {exc.message} [{exc.code.id}]", file=sys.stderr)
+        print(exc.diagnostic(str(args.file)), file=sys.stderr)
         print("padt import: nothing written", file=sys.stderr)
         return IMPORT_NOTHING
-    except (FolderRefused, OSError) as exc:
+    except FolderRefused as exc:
         print(f"padt import: {exc}; nothing written", file=sys.stderr)
+        return IMPORT_NOTHING
+    except OSError as exc:  # the folder could not be written (a full disk, no permission)
+        print(f"padt import: {exc}; {args.output} may be incomplete", file=sys.stderr)
         return IMPORT_NOTHING
     for diagnostic in result.diagnostics:
         print(diagnostic, file=sys.stderr)

@@ -56,6 +56,9 @@ class ImportFailed(Exception):
         self.code = code
         self.message = message
 
+    def diagnostic(self, file: str) -> Diagnostic:
+        return diagnostic(file, self.where, self.code, self.message)
+
 
 def diagnostic(file: str, where: Where, code: ImportCode, message: str) -> Diagnostic:
     return Diagnostic(file, where.line, where.col, code.severity, message, code.id)

@@ -433,3 +433,11 @@ def test_a_second_configuration_is_reported_with_its_globals(tmp_path: Path) -> 
          "one resource"),
     ]  # fmt: skip
     assert "gSpare" not in (tmp_path / "out" / "global-variables.st").read_text()
+
+
+def test_a_folder_that_cannot_be_made_is_an_error_not_a_traceback(tmp_path: Path) -> None:
+    (tmp_path / "file").write_text("")
+    for target, said in (("file", "is a file, not a folder"), ("file/sub", "Not a directory")):
+        run = padt("import", str(FIXTURES / "plant.xml"), "-o", str(tmp_path / target))
+        assert run.returncode == 2
+        assert said in run.stderr and "Traceback" not in run.stderr
