@@ -183,6 +183,33 @@ def _sim(args: argparse.Namespace) -> int:
     return SIM_PROGRAM_ERROR if faulted else 0
 
 
+# `padt import` exit codes past 0 (all imported)
+IMPORT_INCOMPLETE = 1  # written, but POUs in FBD, LD or IL (or CODESYS methods) were not
+IMPORT_NOTHING = 2  # nothing written: the file cannot be imported or DIR cannot take it
+
+
+def _import(args: argparse.Namespace) -> int:
+    from backend.engineering.plcopen.importer import FolderRefused, import_plcopen
+    from backend.engineering.plcopen.issues import ImportFailed
+
+    try:
+        result = import_plcopen(args.file, args.output, force=args.force)
+    except ImportFailed as exc:
+        print(exc.diagnostic(str(args.file)), file=sys.stderr)
+        print("padt import: nothing written", file=sys.stderr)
+        return IMPORT_NOTHING
+    except FolderRefused as exc:
+        print(f"padt import: {exc}; nothing written", file=sys.stderr)
+        return IMPORT_NOTHING
+    except OSError as exc:  # the folder could not be written (a full disk, no permission)
+        print(f"padt import: {exc}; {args.output} may be incomplete", file=sys.stderr)
+        return IMPORT_NOTHING
+    for diagnostic in result.diagnostics:
+        print(diagnostic, file=sys.stderr)
+    print(f"padt import: {result.summary} written to {args.output}")
+    return 0 if result.complete else IMPORT_INCOMPLETE
+
+
 def _check_twice(args: argparse.Namespace) -> int:
     from backend.engineering.check_twice import check_twice
 
@@ -406,6 +433,24 @@ def build_parser() -> argparse.ArgumentParser:
         help="the project to replay with: the recorded version or a new one",
     )
     replay.set_defaults(func=_replay)
+
+    import_ = sub.add_parser(
+        "import",
+        help="a PLCopen TC6 XML file (Beremiz, OpenPLC, CODESYS export) into a project folder",
+        epilog="exit codes: 0 imported, 1 written but POUs in FBD, LD or IL (or CODESYS "
+        "methods) not imported, named in an error, 2 nothing written (the file cannot be "
+        "imported, or DIR cannot take it)",
+    )
+    import_.add_argument("file", type=Path, metavar="FILE.xml")
+    import_.add_argument(
+        "-o", "--output", type=Path, required=True, metavar="DIR", help="the project folder"
+    )
+    import_.add_argument(
+        "--force",
+        action="store_true",
+        help="replace the project in a project folder DIR (its padt.toml and .st files)",
+    )
+    import_.set_defaults(func=_import)
 
     check = sub.add_parser(
         "check-twice", help="compile in two processes with different hash seeds; compare CRCs"

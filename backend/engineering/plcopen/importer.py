@@ -1,0 +1,135 @@
+"""The service behind `padt import FILE.xml -o DIR`: a PLCopen TC6 XML file into a padt
+project folder.
+
+Everything is read and every file made in memory first: a file that cannot be imported
+leaves DIR untouched. POUs in FBD, LD or IL are not imported; the rest of the project is
+still written (an engineer gets the ST and SFC parts), and those POUs are named in one
+error and at the top of padt.toml. docs/plcopen-import.md is the user's description.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from backend.compiler.diagnostics import Diagnostic
+from backend.engineering.plcopen.issues import ImportCode, ImportFailed, Where, diagnostic
+from backend.engineering.plcopen.model import Dropped, NotImported, PlcProject
+from backend.engineering.plcopen.project_files import project_files
+from backend.engineering.plcopen.reader import read_project
+from backend.engineering.plcopen.xml_tree import MAX_XML_BYTES, parse_xml
+from backend.engineering.project import PROJECT_FILE
+
+
+class FolderRefused(Exception):
+    """DIR cannot take the project (not empty without force, or a file)."""
+
+
+@dataclass
+class ImportResult:
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    written: list[str] = field(default_factory=list)  # relative paths, sorted
+    not_imported: list[NotImported] = field(default_factory=list)
+    dropped: list[Dropped] = field(default_factory=list)
+    summary: str = ""  # what was imported, in numbers
+
+    @property
+    def complete(self) -> bool:
+        return not self.not_imported and not self.dropped
+
+
+def read_plcopen(xml: Path) -> PlcProject:
+    """The model of the file; ImportFailed when it cannot be imported at all."""
+    try:
+        with xml.open("rb") as handle:
+            data = handle.read(MAX_XML_BYTES + 1)
+    except OSError as exc:
+        raise ImportFailed(
+            Where(1, 1), ImportCode.UNREADABLE, f"cannot read the file: {exc.strerror}"
+        ) from None
+    project = read_project(parse_xml(data))
+    seen: dict[str, str] = {}
+    declared = [(t.name, t.where) for t in project.types]
+    declared += [(p.name, p.where) for p in project.pous]
+    declared += [(m.name, m.where) for m in project.not_imported]
+    for name, where in declared:
+        if name.upper() in seen:
+            raise ImportFailed(
+                where, ImportCode.DUPLICATE, f"{name} is declared twice (also {seen[name.upper()]})"
+            )
+        seen[name.upper()] = f"line {where.line}"
+    return project
+
+
+def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult:
+    """Import `xml` into `folder`. ImportFailed (nothing written) for a file that cannot be
+    imported, FolderRefused for a folder that cannot take it."""
+    display = str(xml)
+    project = read_plcopen(xml)
+    files = project_files(project, xml.name)
+    summary = (
+        f"{_count(len(project.pous), 'POU')}, {_count(len(project.types), 'data type')}, "
+        f"{_count(files.global_variables, 'global variable')}, {_count(files.programs, 'program')}"
+    )
+    result = ImportResult(
+        [], sorted(files.contents), project.not_imported, project.dropped, summary
+    )
+    if project.not_imported:
+        first = project.not_imported[0]
+        listed = ", ".join(f"{m.name} ({m.reason})" for m in project.not_imported)
+        result.diagnostics.append(
+            diagnostic(
+                display,
+                first.where,
+                ImportCode.NOT_IMPORTED,
+                f"{_count(len(project.not_imported), 'POU')} not imported, padt compiles "
+                f"ST and SFC only: {listed}",
+            )
+        )
+    result.diagnostics += [
+        diagnostic(
+            display,
+            dropped.where,
+            ImportCode.PARTS_NOT_IMPORTED,
+            f"{dropped.owner} is imported without its CODESYS {dropped.what} (padt does "
+            "not read them from <addData>)",
+        )
+        for dropped in project.dropped
+    ]
+    result.diagnostics += [diagnostic(display, w, c, m) for w, c, m in files.warnings]
+    result.diagnostics += [
+        diagnostic(display, where, ImportCode.CONFIGURATION_PART, what)
+        for where, what in project.left_out
+    ]
+    result.diagnostics.sort(key=lambda d: (d.line, d.col))
+    _prepare(folder, force)
+    for name, text in files.contents.items():
+        (folder / name).write_text(text, encoding="utf-8", newline="\n")
+    return result
+
+
+def _count(count: int, thing: str) -> str:
+    return f"{count} {thing}" if count == 1 else f"{count} {thing}s"
+
+
+def _prepare(folder: Path, force: bool) -> None:
+    """An empty or new folder; with force, a project folder (one with a padt.toml) whose
+    padt.toml and .st files go, anything else in it staying. A folder without padt.toml
+    is never emptied: `-o ~ --force` must not delete a home folder's .st files."""
+    if folder.exists() and not folder.is_dir():
+        raise FolderRefused(f"{folder} is a file, not a folder")
+    if folder.is_dir() and any(folder.iterdir()):
+        if not force:
+            raise FolderRefused(
+                f"{folder} is not empty: choose a new folder, or --force to replace the "
+                "project in it (its padt.toml and .st files)"
+            )
+        if not (folder / PROJECT_FILE).is_file():
+            raise FolderRefused(
+                f"{folder} is not empty and holds no {PROJECT_FILE}: --force replaces only a "
+                "project folder"
+            )
+        for old in [*sorted(folder.rglob("*.st")), folder / PROJECT_FILE]:
+            if old.is_file() or old.is_symlink():
+                old.unlink()
+    folder.mkdir(parents=True, exist_ok=True)
