@@ -211,6 +211,9 @@ class Call:
     args: tuple[Argument, ...]
     pos: Pos
     receiver: Expr | None = None  # `instance.method(...)`
+    # the function block instance called, given by an expression (`fbs[1](...)`); `name`
+    # is then its spelling, for messages
+    instance: Expr | None = None
 
 
 @dataclass(frozen=True)

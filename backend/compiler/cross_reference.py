@@ -193,6 +193,8 @@ class _Walker:
     def call(self, call: ast.Call) -> None:
         if call.receiver is not None:
             self.expr(call.receiver, write=True)
+        if call.instance is not None:  # `fbs[i](...)` changes fbs, reads i
+            self.expr(call.instance, write=True)
         instance = self.variable(call.name) if call.receiver is None else None
         if instance is not None:
             self.name(call.name, call.pos, WRITTEN)

@@ -964,10 +964,13 @@ class _Emitter:
             self.emit(depth, f"{self._action_instance(action)}.{_action_method(call.name)}()")
             return
         binding = self.scope.lookup(call.name) if call.receiver is None else None
+        called = self.scope.called_instance(call)
         if isinstance(binding, ProgramRef):
             callee, instance = binding.pou, f"_P.{class_name(binding.pou.name)}"
         elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
             callee, instance = self.scope.fb_symbols(binding.type), self.var_code(binding)
+        elif called is not None:
+            callee, instance = self.scope.fb_symbols(called[1]), self.expr(called[0]).code
         else:
             self.emit(depth, self.exact(call).code)
             return

@@ -133,6 +133,8 @@ class Scope:
     _types: dict[int, tuple[Type | None, ast.Expr]] = field(default_factory=dict)
     # enum values named without their type, resolved from where they are used
     _enum_hints: dict[int, tuple[EnumValue, ast.Expr]] = field(default_factory=dict)
+    # `s.fb(...)`: the member a call on a receiver names, by id() of the call (kept alongside)
+    _called_members: dict[int, tuple[ast.MemberRef, ast.Call]] = field(default_factory=dict)
 
     # ---- names
     def variable(self, name: str) -> Variable | None:
@@ -171,6 +173,24 @@ class Scope:
         actions = owner.pou.sfc.actions if owner.pou.sfc is not None else ()
         found = [a for a in actions if key(a.name) == key(call.name)]
         return ActionCall(owner, found[0], instance) if found else None
+
+    def called_instance(self, call: ast.Call) -> tuple[ast.Expr, FbType] | None:
+        """The function block instance `call` calls when an expression gives it (IEC ed. 3,
+        CODESYS): `fbs[1](...)`, `p^(...)`, or `s.fb(...)` on a member that is an instance
+        (and no action of the receiver)."""
+        instance: ast.Expr
+        if call.instance is not None:
+            instance = call.instance
+        elif call.receiver is not None and self.action_call(call) is None:
+            member = ast.MemberRef(call.receiver, call.name, call.pos)
+            variable = self.member(member)
+            if variable is None or not isinstance(variable.type, FbType):
+                return None
+            instance = self._called_members.setdefault(id(call), (member, call))[0]
+        else:
+            return None
+        found = self.type_of(instance)
+        return (instance, found) if isinstance(found, FbType) else None
 
     def system_namespace(self, expr: ast.Expr) -> bool:
         """`expr` is the name SYS of the system variables (`SYS.COLDSTART`): no declaration
@@ -413,6 +433,8 @@ class Scope:
         """What a call in an expression calls."""
         if self.action_call(call) is not None:
             return "action"
+        if self.called_instance(call) is not None:
+            return "instance"
         if call.receiver is not None:
             return "method"
         binding = self.lookup(call.name)

@@ -429,6 +429,11 @@ class _ToAst(Transformer[Token, Any]):
         receiver, name, *args = items
         return ast.Call(str(name), self._arguments(args), self._pos(name), receiver=receiver)
 
+    def instance_call(self, items: list[Any]) -> ast.Call:
+        instance, *args = items
+        name = _spelling(instance)
+        return ast.Call(name, self._arguments(args), instance.pos, instance=instance)
+
     def trailing_comma(self, items: list[Token]) -> Token:
         return items[0]
 
@@ -820,6 +825,23 @@ class _ToAst(Transformer[Token, Any]):
 
     def start(self, items: list[Any]) -> list[Any]:
         return items
+
+
+def _spelling(expr: ast.Expr) -> str:
+    """How a called instance reads in messages: `fbs[...]`, `s.fb`, `p^`."""
+    match expr:
+        case ast.NameRef(name=name):
+            return name
+        case ast.MemberRef(base=base, member=member):
+            return f"{_spelling(base)}.{member}"
+        case ast.IndexRef(base=base):
+            return f"{_spelling(base)}[...]"
+        case ast.Deref(base=base):
+            return f"{_spelling(base)}^"
+        case ast.BitRef(base=base, bit=bit):
+            return f"{_spelling(base)}.{bit}"
+        case _:
+            return "..."
 
 
 def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:

@@ -176,7 +176,8 @@ def _write_targets(pou: PouSymbols) -> Iterator[ast.Expr]:
                 for arg in call.args:
                     if arg.is_output and arg.value is not None:
                         yield arg.value
-                yield ast.NameRef(call.name, call.pos)  # calling an FB instance changes it
+                # calling an FB instance changes it
+                yield call.instance or call.receiver or ast.NameRef(call.name, call.pos)
 
 
 def _root_name(expr: ast.Expr) -> ast.NameRef | None:
@@ -224,7 +225,9 @@ def _calls_in(statement: ast.Statement) -> Iterator[ast.Call]:
 def _nodes(expr: ast.Initializer) -> Iterator[ast.Initializer]:
     yield expr
     match expr:
-        case ast.Call(args=args):
+        case ast.Call(args=args, instance=instance):
+            if instance is not None:
+                yield from _nodes(instance)
             for arg in args:
                 if arg.value is not None:
                     yield from _nodes(arg.value)
