@@ -161,6 +161,8 @@ class _Walker:
                 self.expr(target, write=True)
             case ast.CallStatement(call=call):
                 self.call(call)
+            case ast.ExprStatement(expr=expr):
+                self.expr(expr, write=False)
             case ast.If(branches=branches, orelse=orelse):
                 for condition, body in branches:
                     self.expr(condition, write=False)

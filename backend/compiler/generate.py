@@ -695,6 +695,8 @@ class _Emitter:
                 self.assign(target, value, depth, bind)
             case ast.CallStatement(call=call):
                 self.call_statement(call, depth)
+            case ast.ExprStatement(expr=expr):
+                self.emit(depth, self.exact(expr).code)  # for its calls; the value is dropped
             case ast.If(branches=branches, orelse=orelse):
                 self.if_statement(branches, orelse, depth)
             case ast.Case():

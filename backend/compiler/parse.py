@@ -431,7 +431,7 @@ class _ToAst(Transformer[Token, Any]):
 
     def instance_call(self, items: list[Any]) -> ast.Call:
         instance, *args = items
-        name = _spelling(instance)
+        name = ast.spelling(instance)
         return ast.Call(name, self._arguments(args), instance.pos, instance=instance)
 
     def trailing_comma(self, items: list[Token]) -> Token:
@@ -491,8 +491,11 @@ class _ToAst(Transformer[Token, Any]):
         argument = ast.Argument(None, referenced, False, referenced.pos)
         return ast.Assign(target, ast.Call("REF", (argument,), referenced.pos), pos, bind=True)
 
-    def call_statement(self, items: list[Any]) -> ast.CallStatement:
-        return ast.CallStatement(items[0], items[0].pos)
+    def call_statement(self, items: list[Any]) -> ast.CallStatement | ast.ExprStatement:
+        expr = items[0]
+        if isinstance(expr, ast.Call):
+            return ast.CallStatement(expr, expr.pos)
+        return ast.ExprStatement(expr, _start(expr))
 
     def statement_list(self, items: list[Any]) -> tuple[ast.Statement, ...]:
         return tuple(s for s in items if s is not None)
@@ -827,21 +830,11 @@ class _ToAst(Transformer[Token, Any]):
         return items
 
 
-def _spelling(expr: ast.Expr) -> str:
-    """How a called instance reads in messages: `fbs[...]`, `s.fb`, `p^`."""
-    match expr:
-        case ast.NameRef(name=name):
-            return name
-        case ast.MemberRef(base=base, member=member):
-            return f"{_spelling(base)}.{member}"
-        case ast.IndexRef(base=base):
-            return f"{_spelling(base)}[...]"
-        case ast.Deref(base=base):
-            return f"{_spelling(base)}^"
-        case ast.BitRef(base=base, bit=bit):
-            return f"{_spelling(base)}.{bit}"
-        case _:
-            return "..."
+def _start(expr: ast.Expr) -> Pos:
+    """Where an expression's text starts (a binary operation is placed at its operator)."""
+    while isinstance(expr, ast.Binary):
+        expr = expr.left
+    return expr.pos
 
 
 def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:

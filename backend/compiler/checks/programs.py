@@ -204,6 +204,8 @@ def _expressions_in(statement: ast.Statement) -> Iterator[ast.Initializer]:
             roots: Sequence[ast.Initializer] = [target, value]
         case ast.CallStatement(call=call):
             roots = [call]
+        case ast.ExprStatement(expr=expr):
+            roots = [expr]
         case ast.If(branches=branches):
             roots = [condition for condition, _ in branches]
         case ast.Case(selector=selector):
