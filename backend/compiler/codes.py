@@ -178,5 +178,6 @@ class Code(Enum):
     POINTER = "W0805", "POINTER TO and ADR (CODESYS/TwinCAT)"
     IMPLICIT_REFERENCE = "W0806", "REFERENCE TO and REF= (CODESYS/TwinCAT)"
     EXPRESSION_STATEMENT = "W0807", "expression as a statement (CODESYS/TwinCAT)"
+    NON_FINITE_CONSTANT = "W0808", "INF_REAL, NAN_REAL, INF_LREAL, NAN_LREAL (rusty)"
     ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
     SIZEOF_ARGUMENT = "E0801", "SIZEOF of something without a CODESYS size"

@@ -24,6 +24,7 @@ from backend.compiler.infer import (
     ActionCall,
     EnumValue,
     Misfit,
+    NonFinite,
     ProgramRef,
     RefOf,
     Scope,
@@ -244,6 +245,8 @@ class _Emitter:
                 binding = self.scope.enum_hint(expr) or self.scope.lookup(name)
                 if isinstance(binding, EnumValue):
                     return _Value(repr(binding.value), binding.type)
+                if isinstance(binding, NonFinite):  # float('inf'), float('nan')
+                    return _Value(f"float({str(binding.value)!r})", binding.type)
                 if isinstance(binding, ProgramRef):
                     return _Value(f"_P.{class_name(binding.pou.name)}", FbType(binding.pou.name))
                 assert binding is not None

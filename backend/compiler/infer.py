@@ -9,6 +9,7 @@ run on each node as soon as the node is typed.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
@@ -66,7 +67,23 @@ class ProgramRef:
     pou: PouSymbols
 
 
-Binding = Variable | EnumValue | ProgramRef
+@dataclass(frozen=True)
+class NonFinite:
+    """rusty's INF_REAL, NAN_REAL, INF_LREAL, NAN_LREAL (W0808): IEEE infinity and NaN,
+    which IEC 61131-3 cannot write; a declaration of the name hides them."""
+
+    name: str
+    type: ElementaryType
+    value: float
+
+
+NON_FINITE = {
+    f"{kind}_{type_name}": NonFinite(f"{kind}_{type_name}", ELEMENTARY[type_name], value)
+    for kind, value in (("INF", math.inf), ("NAN", math.nan))
+    for type_name in ("REAL", "LREAL")
+}
+
+Binding = Variable | EnumValue | ProgramRef | NonFinite
 
 
 @dataclass(frozen=True)
@@ -151,7 +168,7 @@ class Scope:
         pou = self.resolved.pous.get(key(name))
         if pou is not None and pou.kind == "PROGRAM":
             return ProgramRef(pou)
-        return None
+        return NON_FINITE.get(key(name))
 
     def action_call(self, call: ast.Call) -> ActionCall | None:
         """The action `call` calls, if it calls one (a variable of the name hides it)."""
@@ -263,7 +280,7 @@ class Scope:
                 binding = self.enum_hint(expr) or self.lookup(name)
                 if binding is None:
                     return None
-                if isinstance(binding, Variable | EnumValue):
+                if isinstance(binding, Variable | EnumValue | NonFinite):
                     return value_type(binding.type)
                 return FbType(binding.pou.name)
             case ast.MemberRef():

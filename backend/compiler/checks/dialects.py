@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.compiler.codes import Code
-from backend.compiler.infer import Scope
+from backend.compiler.infer import NonFinite, Scope
 from backend.compiler.types import FbType
 
 DIALECT_STATEMENT = "an expression as a statement is CODESYS/TwinCAT, not IEC 61131-3"
@@ -58,3 +58,14 @@ def check_expression_statement(scope: Scope, statement: ast.ExprStatement) -> No
 
 def _is_variable(expr: ast.Expr) -> bool:
     return isinstance(expr, ast.NameRef | ast.MemberRef | ast.IndexRef | ast.BitRef | ast.Deref)
+
+
+def check_non_finite(scope: Scope, name: ast.NameRef) -> None:
+    constant = scope.lookup(name.name)
+    if isinstance(constant, NonFinite):
+        meaning = "infinity" if constant.name.startswith("INF") else "NaN"
+        message = (
+            f"'{name.name}', the {constant.type.name} {meaning}, is a constant of rusty; "
+            "IEC 61131-3 has no way to write it"
+        )
+        scope.report(name.pos, Code.NON_FINITE_CONSTANT, message)
