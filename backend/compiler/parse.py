@@ -842,8 +842,11 @@ def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:
     if isinstance(exc, UnexpectedToken):
         token = exc.token
         found = "end of file" if token.type == "$END" else f"'{token}'"
-        expected = sorted(exc.accepts or exc.expected)
-        hint = ", ".join(_describe(t) for t in expected[:8])
+        # what ends or assigns a statement first: an expression may also stand there now
+        # (W0807), whose operators would push `:=` out of the eight shown
+        described = [_describe(t) for t in sorted(exc.accepts or exc.expected)]
+        described.sort(key=lambda text: text not in ("':='", "';'"))
+        hint = ", ".join(described[:8])
         message = f"syntax error: unexpected {found}; expected {hint}"
     elif isinstance(exc, UnexpectedCharacters):
         message = f"syntax error: unexpected character {exc.char!r}"

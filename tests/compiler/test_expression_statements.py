@@ -83,3 +83,12 @@ END_PROGRAM
     t = sim_trace(tmp_path, source, 3)
     assert t["Main.x"] == [7, 7, 7]
     assert t["Main.calls"] == [2, 4, 6]
+
+
+def test_a_statement_that_is_no_expression_still_asks_for_the_assignment() -> None:
+    # an expression may stand there now, and its operators must not hide `:=` from the hint
+    found = diagnostics("PROGRAM Main\nVAR x : INT; END_VAR\nx 5;\nEND_PROGRAM\n")
+    assert found == [
+        "t.st:3:3: error: syntax error: unexpected '5'; expected ';', ':=', add op, and, '^', "
+        "'.', '=', '(' [E0001]"
+    ]
