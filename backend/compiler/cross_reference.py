@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 from backend.compiler import ast
 from backend.compiler.ast import key
+from backend.compiler.infer import Scope
 from backend.compiler.pipeline import parse_project
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import Pos, SourceFile
@@ -215,6 +216,9 @@ class _Walker:
     def _in_out_parameters(self, call: ast.Call, instance: Variable | None) -> Iterator[str]:
         if instance is not None and isinstance(instance.type, FbType):
             callee = self.table.resolved.pous.get(key(instance.type.name))
+        elif call.instance is not None or call.receiver is not None:  # `fbs[i](...)`, `s.fb()`
+            called = Scope(self.table.resolved, self.pou).called_instance(call)
+            callee = self.table.resolved.pous.get(key(called[1].name)) if called else None
         else:
             callee = self.table.resolved.pous.get(key(call.name))
         if callee is not None:
