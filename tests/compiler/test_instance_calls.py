@@ -107,3 +107,35 @@ END_PROGRAM
     t = sim_trace(tmp_path, source, 3)
     assert t["Main.t.Q"] == [False, True, True]
     assert t["Main.q"] == [False, True, True]
+
+
+def test_a_global_written_in_an_element_is_seen_by_the_other_programs(tmp_path: Path) -> None:
+    source = """
+VAR_GLOBAL g : INT; END_VAR
+FUNCTION_BLOCK Bump
+VAR_EXTERNAL g : INT; END_VAR
+g := g + 1;
+END_FUNCTION_BLOCK
+TYPE Holder : STRUCT b : Bump; END_STRUCT; END_TYPE
+PROGRAM Main
+VAR fbs : ARRAY[1..2] OF Bump; h : Holder; END_VAR
+fbs[2]();
+h.b();
+END_PROGRAM
+PROGRAM Reader
+VAR_EXTERNAL g : INT; END_VAR
+VAR seen : INT; END_VAR
+seen := g;
+END_PROGRAM
+CONFIGURATION C
+  RESOURCE R ON PLC
+    TASK T1 (INTERVAL := T#100ms, PRIORITY := 1);
+    PROGRAM Main WITH T1 : Main;
+    PROGRAM Reader WITH T1 : Reader;
+  END_RESOURCE
+END_CONFIGURATION
+"""
+    t = sim_trace(tmp_path, source, 3)
+    # Reader runs after Main in a cycle and sees Main's writes from the next cycle on
+    assert t["g"] == [2, 4, 6]
+    assert t["Reader.seen"] == [0, 2, 4]

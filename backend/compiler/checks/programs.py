@@ -15,6 +15,7 @@ from backend.compiler.ast import key
 from backend.compiler.checks.data import resource_data
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.infer import Scope
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, visible
 from backend.compiler.source import Pos
 from backend.compiler.types import FbType
@@ -187,13 +188,18 @@ def _root_name(expr: ast.Expr) -> ast.NameRef | None:
 
 
 def _callees(resolved: Resolved, pou: PouSymbols) -> set[str]:
-    """POUs this one may run: its FB instances' types and every function or program named
-    in a call."""
+    """POUs this one may run: its FB instances' types, every function or program named
+    in a call, and the type of every instance a call gives by an expression (`fbs[i]()`,
+    `s.fb()`, `p^()`)."""
     found = {key(v.type.name) for v in pou.variables if isinstance(v.type, FbType)}
+    scope = Scope(resolved, pou)
     for statement in _statements(pou):
         for call in _calls_in(statement):
             if key(call.name) in resolved.pous:
                 found.add(key(call.name))
+            called = scope.called_instance(call)
+            if called is not None:
+                found.add(key(called[1].name))
     return found
 
 
