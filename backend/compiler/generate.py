@@ -949,13 +949,14 @@ class _Emitter:
                     return False
                 case ast.For(variable=variable) if key(variable) == name:
                     return False
-                case ast.Call(name=called, args=args, receiver=receiver):
+                case ast.Call(name=called, args=args, receiver=receiver, instance=instance):
                     if any(
                         isinstance(a.value, ast.NameRef) and key(a.value.name) == name for a in args
                     ):
                         return False
                     if slot and (
                         receiver is not None
+                        or instance is not None
                         or self.scope.action_call(node) is not None
                         or key(called) in self.scope.resolved.pous
                         or self.scope.lookup(called) is not None
