@@ -907,7 +907,7 @@ _STATEMENTS = _BLOCKS | {
 }  # fmt: skip
 _OPERATIONS = frozenset({
     "binary", "unary", "member_ref", "index_ref", "bit_ref", "deref", "call", "keyword_call",
-    "method_call", "array_initializer", "struct_initializer",
+    "method_call", "instance_call", "array_initializer", "struct_initializer",
 })  # fmt: skip
 _OPERANDS = frozenset({
     "name_ref", "direct_ref", "int_literal", "real_literal", "time_literal", "date_literal",

@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from tests.compiler.test_checks import diagnostics
+from tests.compiler.test_limits import program, refused_with, right_deep
 from tests.conftest import sim_trace
 
 TIMERS = """
@@ -139,3 +140,11 @@ END_CONFIGURATION
     # Reader runs after Main in a cycle and sees Main's writes from the next cycle on
     assert t["g"] == [2, 4, 6]
     assert t["Reader.seen"] == [0, 2, 4]
+
+
+def test_instance_calls_nested_too_deep_are_refused_not_crashed() -> None:
+    refused_with(
+        "E0706",
+        program(right_deep("a[0](IN := ", "TRUE", ")") + ";", "a : ARRAY[0..1] OF TON;"),
+        program(right_deep("- ", "1", "") + ";"),  # an expression statement (W0807)
+    )
