@@ -13,7 +13,7 @@ from typing import Any
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.context import ContextInvalid, load_context, save_context
-from runtime.contract.values import format_value
+from runtime.contract.values import format_for_display, format_value
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
 from tests.support.resource_harness import compiled, harness
@@ -71,6 +71,9 @@ def test_the_online_values_and_a_watch_set_show_them_as_text() -> None:
     assert values["Main.samples"] == ["nan", 1.5] and values["ceiling"] == "inf"
     assert values["Main.is_nan"] is True and values["Main.is_top"] is True
     assert format_value(h.value("Main.bottom"), "LREAL") == "-inf"
+    # what the OLT shows, from the values as they arrived: a number, not a quoted text
+    shown = [format_for_display(values[name], "REAL") for name in ("Main.top", "Main.unknown")]
+    assert shown == ["inf", "nan"]
 
     h.ok("watch", id="w", variables=["Main.top", "Main.unknown", "Main.samples"])
     watch_set = h.resource.online.watches.get("w")
