@@ -49,7 +49,7 @@ class Forcing:
     # ---- commands
     def force(self, name: str, value: Any, switch: bool = True) -> None:
         """Prepare a force value and its switch; it acts while forcing runs at its level."""
-        bound = self._variables.lookup(name)
+        bound = self._variables.lookup_to_write(name)
         level = GLOBAL if bound.program is None else bound.program.name
         self._check_allowed(level)
         stored = self._variables.checked(bound, value)

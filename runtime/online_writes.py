@@ -14,7 +14,7 @@ def write(resource: Resource, name: str, value: object) -> None:
     if resource.params.safety_operation:
         raise Refusal("safety_operation", "no writes from OLT in safety operation")
     variables = resource.variables
-    bound = variables.lookup(name)
+    bound = variables.lookup_to_write(name)
     stored = variables.checked(bound, value)
     old = variables.read(bound)
     variables.store(bound, stored)

@@ -210,6 +210,7 @@ class Resource:
         """A new configuration (download or reload) with its instances: parameters, safe
         values, accounts and the system variables that describe it follow it."""
         self.variables.adopt(instances)
+        self.variables.access = {a.name.upper(): a for a in artifact.access_paths}
         self.artifact, self.params = artifact, artifact.resource
         self.io.configure(artifact)
         self.access.replace_users(artifact.users)  # sessions of removed accounts end

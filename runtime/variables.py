@@ -10,6 +10,7 @@ from typing import Any
 
 from runtime.code_image import CodeImage, read_path, write_path
 from runtime.collector import COLLECTOR
+from runtime.contract.artifact import AccessPath
 from runtime.contract.protocol import VariableInfo
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import ValueRejected, representation
@@ -32,6 +33,8 @@ class Variables:
         self.globals: Any = None  # the globals as all programs see them between cycles
         self.bound: list[BoundVariable] = []
         self._by_name: dict[str, BoundVariable] = {}
+        # the configuration's VAR_ACCESS by upper-case name: more names for variables
+        self.access: dict[str, AccessPath] = {}
         self.outputs: list[BoundVariable] = []  # the output points
         # while an all-inputs recording runs: every store from outside the programs, in order
         self.tap: list[tuple[str, Any]] | None = None
@@ -78,10 +81,20 @@ class Variables:
         return self._by_name.get(path.upper())  # ST names are case-insensitive
 
     def lookup(self, name: str) -> BoundVariable:
+        """A variable by its path or by an access path (VAR_ACCESS) that names it."""
         bound = self.find(name)
+        if bound is None and name.upper() in self.access:
+            bound = self.find(self.access[name.upper()].path)
         if bound is None:
             raise Refusal("unknown_variable", f"resource {self._resource} has no variable '{name}'")
         return bound
+
+    def lookup_to_write(self, name: str) -> BoundVariable:
+        """`lookup`, refusing an access path that is READ_ONLY."""
+        access = self.access.get(name.upper())
+        if self.find(name) is None and access is not None and not access.writable:
+            raise Refusal("read_only", f"access path '{access.name}' is READ_ONLY")
+        return self.lookup(name)
 
     def value(self, name: str) -> Any:
         """The value of one variable, as `values()` has it."""

@@ -211,6 +211,9 @@ class Call:
     args: tuple[Argument, ...]
     pos: Pos
     receiver: Expr | None = None  # `instance.method(...)`
+    # the function block instance called, given by an expression (`fbs[1](...)`); `name`
+    # is then its spelling, for messages
+    instance: Expr | None = None
 
 
 @dataclass(frozen=True)
@@ -246,6 +249,15 @@ class Assign:
 @dataclass(frozen=True)
 class CallStatement:
     call: Call
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class ExprStatement:
+    """An expression other than a call as a statement (`+x;`): CODESYS evaluates it and
+    drops its value (W0807)."""
+
+    expr: Expr
     pos: Pos
 
 
@@ -310,7 +322,19 @@ class Return:
     pos: Pos
 
 
-Statement = Assign | CallStatement | If | Case | While | Repeat | For | Exit | Continue | Return
+Statement = (
+    Assign
+    | CallStatement
+    | ExprStatement
+    | If
+    | Case
+    | While
+    | Repeat
+    | For
+    | Exit
+    | Continue
+    | Return
+)
 
 
 # ---- declarations and POUs -----------------------------------------------------------------
@@ -462,3 +486,20 @@ class SourceUnit:
     configurations: tuple[Configuration, ...] = field(default=())
     # direct addresses its statements name (`%MW10 := 42;`), upper-case, first use first
     addresses: tuple[tuple[str, Pos], ...] = field(default=())
+
+
+def spelling(expr: Expr) -> str:
+    """How a variable reads in messages: `fbs[...]`, `s.fb`, `p^`."""
+    match expr:
+        case NameRef(name=name):
+            return name
+        case MemberRef(base=base, member=member):
+            return f"{spelling(base)}.{member}"
+        case IndexRef(base=base):
+            return f"{spelling(base)}[...]"
+        case Deref(base=base):
+            return f"{spelling(base)}^"
+        case BitRef(base=base, bit=bit):
+            return f"{spelling(base)}.{bit}"
+        case _:
+            return "..."

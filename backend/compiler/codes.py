@@ -177,5 +177,7 @@ class Code(Enum):
     TRAILING_COMMA = "W0804", "trailing comma in a call (CODESYS/TwinCAT)"
     POINTER = "W0805", "POINTER TO and ADR (CODESYS/TwinCAT)"
     IMPLICIT_REFERENCE = "W0806", "REFERENCE TO and REF= (CODESYS/TwinCAT)"
+    EXPRESSION_STATEMENT = "W0807", "expression as a statement (CODESYS/TwinCAT)"
+    NON_FINITE_CONSTANT = "W0808", "INF_REAL, NAN_REAL, INF_LREAL, NAN_LREAL (rusty)"
     ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
     SIZEOF_ARGUMENT = "E0801", "SIZEOF of something without a CODESYS size"

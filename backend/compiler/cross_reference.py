@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 from backend.compiler import ast
 from backend.compiler.ast import key
+from backend.compiler.infer import Scope
 from backend.compiler.pipeline import parse_project
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import Pos, SourceFile
@@ -161,6 +162,8 @@ class _Walker:
                 self.expr(target, write=True)
             case ast.CallStatement(call=call):
                 self.call(call)
+            case ast.ExprStatement(expr=expr):
+                self.expr(expr, write=False)
             case ast.If(branches=branches, orelse=orelse):
                 for condition, body in branches:
                     self.expr(condition, write=False)
@@ -193,6 +196,8 @@ class _Walker:
     def call(self, call: ast.Call) -> None:
         if call.receiver is not None:
             self.expr(call.receiver, write=True)
+        if call.instance is not None:  # `fbs[i](...)` changes fbs, reads i
+            self.expr(call.instance, write=True)
         instance = self.variable(call.name) if call.receiver is None else None
         if instance is not None:
             self.name(call.name, call.pos, WRITTEN)
@@ -211,6 +216,9 @@ class _Walker:
     def _in_out_parameters(self, call: ast.Call, instance: Variable | None) -> Iterator[str]:
         if instance is not None and isinstance(instance.type, FbType):
             callee = self.table.resolved.pous.get(key(instance.type.name))
+        elif call.instance is not None or call.receiver is not None:  # `fbs[i](...)`, `s.fb()`
+            called = Scope(self.table.resolved, self.pou).called_instance(call)
+            callee = self.table.resolved.pous.get(key(called[1].name)) if called else None
         else:
             callee = self.table.resolved.pous.get(key(call.name))
         if callee is not None:

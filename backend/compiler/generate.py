@@ -24,6 +24,7 @@ from backend.compiler.infer import (
     ActionCall,
     EnumValue,
     Misfit,
+    NonFinite,
     ProgramRef,
     RefOf,
     Scope,
@@ -244,6 +245,8 @@ class _Emitter:
                 binding = self.scope.enum_hint(expr) or self.scope.lookup(name)
                 if isinstance(binding, EnumValue):
                     return _Value(repr(binding.value), binding.type)
+                if isinstance(binding, NonFinite):  # float('inf'), float('nan')
+                    return _Value(f"float({str(binding.value)!r})", binding.type)
                 if isinstance(binding, ProgramRef):
                     return _Value(f"_P.{class_name(binding.pou.name)}", FbType(binding.pou.name))
                 assert binding is not None
@@ -695,6 +698,8 @@ class _Emitter:
                 self.assign(target, value, depth, bind)
             case ast.CallStatement(call=call):
                 self.call_statement(call, depth)
+            case ast.ExprStatement(expr=expr):
+                self.emit(depth, self.exact(expr).code)  # for its calls; the value is dropped
             case ast.If(branches=branches, orelse=orelse):
                 self.if_statement(branches, orelse, depth)
             case ast.Case():
@@ -944,13 +949,14 @@ class _Emitter:
                     return False
                 case ast.For(variable=variable) if key(variable) == name:
                     return False
-                case ast.Call(name=called, args=args, receiver=receiver):
+                case ast.Call(name=called, args=args, receiver=receiver, instance=instance):
                     if any(
                         isinstance(a.value, ast.NameRef) and key(a.value.name) == name for a in args
                     ):
                         return False
                     if slot and (
                         receiver is not None
+                        or instance is not None
                         or self.scope.action_call(node) is not None
                         or key(called) in self.scope.resolved.pous
                         or self.scope.lookup(called) is not None
@@ -964,10 +970,13 @@ class _Emitter:
             self.emit(depth, f"{self._action_instance(action)}.{_action_method(call.name)}()")
             return
         binding = self.scope.lookup(call.name) if call.receiver is None else None
+        called = self.scope.called_instance(call)
         if isinstance(binding, ProgramRef):
             callee, instance = binding.pou, f"_P.{class_name(binding.pou.name)}"
         elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
             callee, instance = self.scope.fb_symbols(binding.type), self.var_code(binding)
+        elif called is not None:
+            callee, instance = self.scope.fb_symbols(called[1]), self.expr(called[0]).code
         else:
             self.emit(depth, self.exact(call).code)
             return

@@ -9,6 +9,7 @@ run on each node as soon as the node is typed.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
@@ -66,7 +67,23 @@ class ProgramRef:
     pou: PouSymbols
 
 
-Binding = Variable | EnumValue | ProgramRef
+@dataclass(frozen=True)
+class NonFinite:
+    """rusty's INF_REAL, NAN_REAL, INF_LREAL, NAN_LREAL (W0808): IEEE infinity and NaN,
+    which IEC 61131-3 cannot write; a declaration of the name hides them."""
+
+    name: str
+    type: ElementaryType
+    value: float
+
+
+NON_FINITE = {
+    f"{kind}_{type_name}": NonFinite(f"{kind}_{type_name}", ELEMENTARY[type_name], value)
+    for kind, value in (("INF", math.inf), ("NAN", math.nan))
+    for type_name in ("REAL", "LREAL")
+}
+
+Binding = Variable | EnumValue | ProgramRef | NonFinite
 
 
 @dataclass(frozen=True)
@@ -133,6 +150,8 @@ class Scope:
     _types: dict[int, tuple[Type | None, ast.Expr]] = field(default_factory=dict)
     # enum values named without their type, resolved from where they are used
     _enum_hints: dict[int, tuple[EnumValue, ast.Expr]] = field(default_factory=dict)
+    # `s.fb(...)`: the member a call on a receiver names, by id() of the call (kept alongside)
+    _called_members: dict[int, tuple[ast.MemberRef, ast.Call]] = field(default_factory=dict)
 
     # ---- names
     def variable(self, name: str) -> Variable | None:
@@ -149,7 +168,7 @@ class Scope:
         pou = self.resolved.pous.get(key(name))
         if pou is not None and pou.kind == "PROGRAM":
             return ProgramRef(pou)
-        return None
+        return NON_FINITE.get(key(name))
 
     def action_call(self, call: ast.Call) -> ActionCall | None:
         """The action `call` calls, if it calls one (a variable of the name hides it)."""
@@ -171,6 +190,24 @@ class Scope:
         actions = owner.pou.sfc.actions if owner.pou.sfc is not None else ()
         found = [a for a in actions if key(a.name) == key(call.name)]
         return ActionCall(owner, found[0], instance) if found else None
+
+    def called_instance(self, call: ast.Call) -> tuple[ast.Expr, FbType] | None:
+        """The function block instance `call` calls when an expression gives it (IEC ed. 3,
+        CODESYS): `fbs[1](...)`, `p^(...)`, or `s.fb(...)` on a member that is an instance
+        (and no action of the receiver)."""
+        instance: ast.Expr
+        if call.instance is not None:
+            instance = call.instance
+        elif call.receiver is not None and self.action_call(call) is None:
+            member = ast.MemberRef(call.receiver, call.name, call.pos)
+            variable = self.member(member)
+            if variable is None or not isinstance(variable.type, FbType):
+                return None
+            instance = self._called_members.setdefault(id(call), (member, call))[0]
+        else:
+            return None
+        found = self.type_of(instance)
+        return (instance, found) if isinstance(found, FbType) else None
 
     def system_namespace(self, expr: ast.Expr) -> bool:
         """`expr` is the name SYS of the system variables (`SYS.COLDSTART`): no declaration
@@ -243,7 +280,7 @@ class Scope:
                 binding = self.enum_hint(expr) or self.lookup(name)
                 if binding is None:
                     return None
-                if isinstance(binding, Variable | EnumValue):
+                if isinstance(binding, Variable | EnumValue | NonFinite):
                     return value_type(binding.type)
                 return FbType(binding.pou.name)
             case ast.MemberRef():
@@ -413,6 +450,8 @@ class Scope:
         """What a call in an expression calls."""
         if self.action_call(call) is not None:
             return "action"
+        if self.called_instance(call) is not None:
+            return "instance"
         if call.receiver is not None:
             return "method"
         binding = self.lookup(call.name)

@@ -429,6 +429,11 @@ class _ToAst(Transformer[Token, Any]):
         receiver, name, *args = items
         return ast.Call(str(name), self._arguments(args), self._pos(name), receiver=receiver)
 
+    def instance_call(self, items: list[Any]) -> ast.Call:
+        instance, *args = items
+        name = ast.spelling(instance)
+        return ast.Call(name, self._arguments(args), instance.pos, instance=instance)
+
     def trailing_comma(self, items: list[Token]) -> Token:
         return items[0]
 
@@ -486,8 +491,11 @@ class _ToAst(Transformer[Token, Any]):
         argument = ast.Argument(None, referenced, False, referenced.pos)
         return ast.Assign(target, ast.Call("REF", (argument,), referenced.pos), pos, bind=True)
 
-    def call_statement(self, items: list[Any]) -> ast.CallStatement:
-        return ast.CallStatement(items[0], items[0].pos)
+    def call_statement(self, items: list[Any]) -> ast.CallStatement | ast.ExprStatement:
+        expr = items[0]
+        if isinstance(expr, ast.Call):
+            return ast.CallStatement(expr, expr.pos)
+        return ast.ExprStatement(expr, _start(expr))
 
     def statement_list(self, items: list[Any]) -> tuple[ast.Statement, ...]:
         return tuple(s for s in items if s is not None)
@@ -822,13 +830,23 @@ class _ToAst(Transformer[Token, Any]):
         return items
 
 
+def _start(expr: ast.Expr) -> Pos:
+    """Where an expression's text starts (a binary operation is placed at its operator)."""
+    while isinstance(expr, ast.Binary):
+        expr = expr.left
+    return expr.pos
+
+
 def _syntax_diagnostic(file: str, exc: UnexpectedInput) -> Diagnostic:
     line, col = exc.line if exc.line > 0 else 1, exc.column if exc.column > 0 else 1
     if isinstance(exc, UnexpectedToken):
         token = exc.token
         found = "end of file" if token.type == "$END" else f"'{token}'"
-        expected = sorted(exc.accepts or exc.expected)
-        hint = ", ".join(_describe(t) for t in expected[:8])
+        # what ends or assigns a statement first: an expression may also stand there now
+        # (W0807), whose operators would push `:=` out of the eight shown
+        described = [_describe(t) for t in sorted(exc.accepts or exc.expected)]
+        described.sort(key=lambda text: text not in ("':='", "';'"))
+        hint = ", ".join(described[:8])
         message = f"syntax error: unexpected {found}; expected {hint}"
     elif isinstance(exc, UnexpectedCharacters):
         message = f"syntax error: unexpected character {exc.char!r}"
@@ -889,7 +907,7 @@ _STATEMENTS = _BLOCKS | {
 }  # fmt: skip
 _OPERATIONS = frozenset({
     "binary", "unary", "member_ref", "index_ref", "bit_ref", "deref", "call", "keyword_call",
-    "method_call", "array_initializer", "struct_initializer",
+    "method_call", "instance_call", "array_initializer", "struct_initializer",
 })  # fmt: skip
 _OPERANDS = frozenset({
     "name_ref", "direct_ref", "int_literal", "real_literal", "time_literal", "date_literal",

@@ -255,13 +255,15 @@ def _references(node: object, declared: dict[str, bool]) -> Iterator[tuple[str, 
         yield from _inside_chain(node, declared)
         return
     if isinstance(node, ast.Call):
-        if node.receiver is None and node.name.upper() in declared:  # an FB instance
+        called = _called_instance(node, declared)
+        if called is not None:  # an FB instance
             for argument in node.args:
                 if argument.name is not None:
-                    yield f"{node.name}.{argument.name}", argument.pos
+                    yield f"{called}.{argument.name}", argument.pos
         for argument in node.args:
             yield from _references(argument.value, declared)
         yield from _references(node.receiver, declared)
+        yield from _references(node.instance, declared)
         return
     if isinstance(node, ast.For):
         yield node.variable, node.pos
@@ -271,6 +273,25 @@ def _references(node: object, declared: dict[str, bool]) -> Iterator[tuple[str, 
     elif dataclasses.is_dataclass(node) and not isinstance(node, (type, Pos)):
         for item in dataclasses.fields(node):
             yield from _references(getattr(node, item.name), declared)
+
+
+def _called_instance(call: ast.Call, declared: dict[str, bool]) -> str | None:
+    """The text of the one FB instance a call runs: `fb`, `fbs[2]`, `axis.timer`; None for
+    `fbs[i]` (any of them) and for a call of no instance."""
+    instance: ast.Expr
+    if call.instance is not None:
+        instance = call.instance
+    elif call.receiver is not None:
+        instance = ast.MemberRef(call.receiver, call.name, call.pos)
+    else:
+        return call.name if call.name.upper() in declared else None
+    text = _chain(instance)
+    match instance:
+        case ast.IndexRef() if text is not None and text.endswith("]"):
+            return text
+        case ast.MemberRef(member=member) if text is not None and text.endswith(f".{member}"):
+            return text
+    return None
 
 
 def _chain(node: ast.Expr) -> str | None:

@@ -172,6 +172,8 @@ def format_value(value: Any, type_name: str) -> str:
         return "TRUE" if value else "FALSE"
     if type_name in ("TIME", "LTIME") and isinstance(value, int):
         return format_time(value, "LTIME#" if type_name == "LTIME" else "T#")
+    if type_name in _REALS and value in ("inf", "-inf", "nan"):
+        return str(value)  # a non-finite REAL as JSON carries it (`jsonable`): no string
     if isinstance(value, str):
         return f"'{value}'"
     return str(value)

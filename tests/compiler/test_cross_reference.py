@@ -69,3 +69,24 @@ def test_the_standard_library_stays_out_and_the_order_is_fixed() -> None:
     names = [v.qualified for v in cross_reference([SourceFile("p.st", SOURCE)])]
     assert not any(name.startswith("TON.") for name in names)
     assert names == ["alarm", "level", "SYS.COLDSTART", *sorted(names[3:], key=str.upper)]
+
+
+def test_an_instance_given_by_an_expression_is_written_and_its_in_outs_too() -> None:
+    source = """\
+FUNCTION_BLOCK Acc
+VAR_IN_OUT total : INT; END_VAR
+total := total + 1;
+END_FUNCTION_BLOCK
+PROGRAM P
+VAR accs : ARRAY[1..2] OF Acc; k : INT := 1; sum : INT; END_VAR
+accs[k](total := sum);
+END_PROGRAM
+"""
+    table = cross_reference([SourceFile("p.st", source)])
+    found = {
+        v.qualified: {how: [u.pos.line for u in v.where(how)] for how in (READ, WRITTEN)}
+        for v in table
+    }
+    assert found["P.accs"] == {READ: [], WRITTEN: [7]}
+    assert found["P.k"] == {READ: [7], WRITTEN: []}
+    assert found["P.sum"] == {READ: [7], WRITTEN: [7]}

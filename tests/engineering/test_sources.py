@@ -153,6 +153,8 @@ FOR i := 0 TO 3 DO
 END_FOR;
 points[1].x := counts[2];
 valves[2].open := TRUE;
+valves[1](open := counts[0] > 0);
+valves[i - 2](open := TRUE);  (* i is 4 after the loop *)
 gTotal := gTotal + BOOL_TO_DINT(valves[1].opened);
 END_PROGRAM
 PROGRAM Chart
@@ -186,6 +188,12 @@ def test_arrays_structs_globals_temporaries_and_steps(tmp_path: Path) -> None:
         ("points[1].x", "Line.points[1].x"),
         ("counts[2]", "Line.counts", "2"),  # an element of an array of values
     ]
+    # an instance called as an element names its inputs as members; `valves[i - 2]` is any one
+    assert _named(found, "Line", "valves[1](open") == [
+        ("valves[1].open", "Line.valves[1].open"),
+        ("counts[0]", "Line.counts", "0"),
+    ]
+    assert _named(found, "Line", "valves[i - 2](open") == [("i", "Line.i")]
     # a global through VAR_EXTERNAL is named by its bare path
     assert _named(found, "Line", "gTotal := gTotal") == [
         ("gTotal", "gTotal"),

@@ -20,10 +20,13 @@ def check_call_statement(scope: Scope, call: ast.Call) -> None:
         check_action_call(scope, call, action)
         return
     binding = scope.lookup(call.name) if call.receiver is None else None
+    called = scope.called_instance(call)
     if isinstance(binding, ProgramRef):
         callee = binding.pou
     elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
         callee = scope.fb_symbols(binding.type)
+    elif called is not None:
+        callee = scope.fb_symbols(called[1])
     else:
         scope.type_of(call)  # a function called as a statement
         return

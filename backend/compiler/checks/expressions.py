@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.compiler.checks.access import check_bit_access, check_index
-from backend.compiler.checks.dialects import check_qualified_enum
+from backend.compiler.checks.dialects import check_non_finite, check_qualified_enum
 from backend.compiler.checks.functions import check_function_call
 from backend.compiler.checks.literals import check_enum_literal, check_typed_literal
 from backend.compiler.checks.names import check_member, check_name
@@ -24,6 +24,7 @@ def check_expression(scope: Scope, expr: ast.Expr, expr_type: Type | None) -> No
             check_qualified_enum(scope, expr)
         case ast.NameRef():
             check_name(scope, expr, expr_type)
+            check_non_finite(scope, expr)
         case ast.MemberRef():
             check_member(scope, expr, expr_type)
         case ast.IndexRef():

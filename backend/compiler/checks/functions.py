@@ -49,6 +49,8 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
                 code, problem = _misfit(misfit, builtin)
                 scope.report(misfit.pos, code, f"'{call.name}' {problem}")
         case no_value:
+            if call.instance is not None and scope.type_of(call.instance) is None:
+                return  # reported where the instance is named
             code, message = NO_VALUE[no_value]
             scope.report(call.pos, code, message.format(name=call.name))
 

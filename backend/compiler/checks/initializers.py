@@ -7,7 +7,7 @@ from collections.abc import Callable
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
-from backend.compiler.infer import EnumValue, Scope
+from backend.compiler.infer import EnumValue, NonFinite, Scope
 from backend.compiler.resolve import Variable
 from backend.compiler.types import (
     BOOL,
@@ -184,7 +184,7 @@ def is_constant(scope: Scope, expr: ast.Expr, set_before: Callable[[Variable], b
             return True
         case ast.NameRef(name=name):
             binding = scope.enum_hint(expr) or scope.lookup(name)
-            if isinstance(binding, EnumValue):
+            if isinstance(binding, EnumValue | NonFinite):
                 return True
             return (
                 isinstance(binding, Variable)

@@ -15,6 +15,7 @@ from backend.compiler.ast import key
 from backend.compiler.checks.data import resource_data
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.infer import Scope
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, visible
 from backend.compiler.source import Pos
 from backend.compiler.types import FbType
@@ -176,7 +177,8 @@ def _write_targets(pou: PouSymbols) -> Iterator[ast.Expr]:
                 for arg in call.args:
                     if arg.is_output and arg.value is not None:
                         yield arg.value
-                yield ast.NameRef(call.name, call.pos)  # calling an FB instance changes it
+                # calling an FB instance changes it
+                yield call.instance or call.receiver or ast.NameRef(call.name, call.pos)
 
 
 def _root_name(expr: ast.Expr) -> ast.NameRef | None:
@@ -186,13 +188,18 @@ def _root_name(expr: ast.Expr) -> ast.NameRef | None:
 
 
 def _callees(resolved: Resolved, pou: PouSymbols) -> set[str]:
-    """POUs this one may run: its FB instances' types and every function or program named
-    in a call."""
+    """POUs this one may run: its FB instances' types, every function or program named
+    in a call, and the type of every instance a call gives by an expression (`fbs[i]()`,
+    `s.fb()`, `p^()`)."""
     found = {key(v.type.name) for v in pou.variables if isinstance(v.type, FbType)}
+    scope = Scope(resolved, pou)
     for statement in _statements(pou):
         for call in _calls_in(statement):
             if key(call.name) in resolved.pous:
                 found.add(key(call.name))
+            called = scope.called_instance(call)
+            if called is not None:
+                found.add(key(called[1].name))
     return found
 
 
@@ -203,6 +210,8 @@ def _expressions_in(statement: ast.Statement) -> Iterator[ast.Initializer]:
             roots: Sequence[ast.Initializer] = [target, value]
         case ast.CallStatement(call=call):
             roots = [call]
+        case ast.ExprStatement(expr=expr):
+            roots = [expr]
         case ast.If(branches=branches):
             roots = [condition for condition, _ in branches]
         case ast.Case(selector=selector):
@@ -224,7 +233,9 @@ def _calls_in(statement: ast.Statement) -> Iterator[ast.Call]:
 def _nodes(expr: ast.Initializer) -> Iterator[ast.Initializer]:
     yield expr
     match expr:
-        case ast.Call(args=args):
+        case ast.Call(args=args, instance=instance):
+            if instance is not None:
+                yield from _nodes(instance)
             for arg in args:
                 if arg.value is not None:
                     yield from _nodes(arg.value)

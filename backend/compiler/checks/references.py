@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.compiler.codes import Code
-from backend.compiler.infer import EnumValue, ProgramRef, Scope
+from backend.compiler.infer import EnumValue, NonFinite, ProgramRef, Scope
 from backend.compiler.resolve import Variable
 from backend.compiler.types import RefType, Type, is_implicit_reference
 
@@ -39,7 +39,7 @@ def _unreferenceable(scope: Scope, expr: ast.Expr) -> str | None:
     match expr:
         case ast.NameRef(name=name):
             binding = scope.lookup(name)
-            if isinstance(binding, EnumValue | ProgramRef) or binding is None:
+            if isinstance(binding, EnumValue | ProgramRef | NonFinite) or binding is None:
                 return f"'{name}', which is no variable"
             return _lasting(scope, binding)
         case ast.MemberRef(base=base):

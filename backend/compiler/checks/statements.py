@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.compiler.checks.calls import check_call_statement
+from backend.compiler.checks.dialects import check_expression_statement
 from backend.compiler.checks.initializers import check_initializer, mismatch
 from backend.compiler.checks.references import check_binding
 from backend.compiler.checks.targets import writable_target
@@ -30,6 +31,8 @@ def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> 
                 scope.type_of(value)
         case ast.CallStatement(call=call):
             check_call_statement(scope, call)
+        case ast.ExprStatement():
+            check_expression_statement(scope, statement)
         case ast.If(branches=branches, orelse=orelse):
             for condition, block in branches:
                 check_condition(scope, condition)

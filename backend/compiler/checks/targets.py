@@ -6,7 +6,7 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
-from backend.compiler.infer import EnumValue, ProgramRef, Scope
+from backend.compiler.infer import EnumValue, NonFinite, ProgramRef, Scope
 from backend.compiler.resolve import Variable
 from backend.compiler.types import FbType, StructType, Type, value_type
 from runtime.contract.system_variables import NAMESPACE
@@ -21,7 +21,7 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
         if binding is None:
             scope.type_of(target)  # the rules on names say what it is not
             return None
-        if isinstance(binding, EnumValue | ProgramRef):
+        if isinstance(binding, EnumValue | ProgramRef | NonFinite):
             scope.report(target.pos, Code.ASSIGN_NON_VARIABLE, f"cannot assign to '{target.name}'")
             return None
         if binding.constant:

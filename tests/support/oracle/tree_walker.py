@@ -33,7 +33,7 @@ from typing import TypeGuard
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
-from backend.compiler.infer import EnumValue, ProgramRef, Scope
+from backend.compiler.infer import EnumValue, NonFinite, ProgramRef, Scope
 from backend.compiler.pipeline import parse_all
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import Pos, SourceFile, stdlib_sources
@@ -380,6 +380,8 @@ class TreeWalker:
                 self.store(frame, target, convert(result, frame.typing.of(value), target_type))
             case ast.CallStatement(call=call):
                 self.call_statement(frame, call)
+            case ast.ExprStatement(expr=expr):
+                self.eval(frame, expr)  # CODESYS: evaluated, the value dropped
             case ast.If(branches=branches, orelse=orelse):
                 for condition, body in branches:
                     if self.eval(frame, condition):
@@ -542,7 +544,7 @@ class TreeWalker:
                 return nanoseconds
             case ast.NameRef(name=name):
                 binding = frame.scope.lookup(name)
-                if isinstance(binding, EnumValue):
+                if isinstance(binding, EnumValue | NonFinite):
                     return binding.value
                 if binding is None or isinstance(binding, ProgramRef):
                     raise Unsupported(f"'{name}' as a value")
