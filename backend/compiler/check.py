@@ -9,6 +9,7 @@ pipeline once the user programs are known.
 
 from __future__ import annotations
 
+from backend.compiler.ast import key
 from backend.compiler.checks.actions import check_action_names
 from backend.compiler.checks.data import check_data
 from backend.compiler.checks.expressions import check_expression
@@ -17,6 +18,7 @@ from backend.compiler.checks.initializers import (
     check_initializer,
     declaration_order,
 )
+from backend.compiler.checks.methods import check_abstract_instance, check_block_declaration
 from backend.compiler.checks.open_arrays import check_open_array_data, check_open_array_variables
 from backend.compiler.checks.references import check_reference_parameter
 from backend.compiler.checks.sfc import check_sfc
@@ -35,6 +37,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}), check_expression)
         order = declaration_order(resolved.globals)
         for variable in resolved.globals:
+            check_abstract_instance(global_scope, variable)
             check_initializer(global_scope, variable.type, variable.init)
             check_constant_initializer(global_scope, variable, order)
         for _, info in sorted(resolved.structs.items()):
@@ -47,8 +50,12 @@ def check(resolved: Resolved) -> list[Diagnostic]:
             continue
         scope = Scope(resolved, pou, check_expression)
         order = declaration_order(pou.variables)
+        inherited = _inherited(resolved, pou)
         for variable in pou.variables:
+            if id(variable) in inherited:
+                continue  # checked with the block that declares it
             if variable.kind != "VAR_GLOBAL":
+                check_abstract_instance(scope, variable)
                 check_initializer(scope, variable.type, variable.init)
                 check_constant_initializer(scope, variable, order)
             check_reference_parameter(scope, variable)
@@ -61,5 +68,32 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         if pou.pou.sfc is not None:
             check_sfc(scope, pou.pou.sfc)
             check_action_names(scope, pou.pou.sfc)
+        check_block_declaration(scope, pou)
         diagnostics.extend(scope.diagnostics)
+        for _, method in sorted(pou.methods.items()):
+            if method.declared_in == key(pou.name):
+                diagnostics.extend(_check_method(resolved, method))
     return diagnostics
+
+
+def _inherited(resolved: Resolved, pou: PouSymbols) -> set[int]:
+    """The variables a derived block has from its base (by id)."""
+    if pou.base is None:
+        return set()
+    return {id(v) for v in resolved.pous[pou.base].variables}
+
+
+def _check_method(resolved: Resolved, method: PouSymbols) -> list[Diagnostic]:
+    """A method's variables and body, in a scope of its own that sees its block's
+    variables."""
+    scope = Scope(resolved, method, check_expression)
+    order = declaration_order(method.variables)
+    for variable in method.variables:
+        if variable.kind != "VAR_GLOBAL":
+            check_abstract_instance(scope, variable)
+            check_initializer(scope, variable.type, variable.init)
+            check_constant_initializer(scope, variable, order)
+        check_reference_parameter(scope, variable)
+    check_open_array_variables(scope)
+    check_block(scope, method.pou.body, loop_depth=0)
+    return scope.diagnostics

@@ -133,6 +133,9 @@ def _walk_pou(table: _Table, pou: PouSymbols) -> None:
         for action in sfc.actions:
             walker.statements(action.body)
     walker.statements(pou.pou.body)
+    for _, method in sorted(pou.methods.items()):
+        if method.declared_in == key(pou.name):  # a method's uses are its block's
+            _Walker(table, method).statements(method.pou.body)
 
 
 class _Walker:
@@ -143,12 +146,22 @@ class _Walker:
         self.pou = pou
 
     def variable(self, name: str) -> Variable | None:
-        return self.pou.by_key.get(key(name)) or self.table.resolved.globals_by_key.get(key(name))
+        """The variable a name means; in a method its block's (its own are temporaries)."""
+        pou = self.pou
+        if pou.outer is not None:
+            if key(name) in pou.by_key:
+                return None
+            pou = pou.outer
+        return pou.by_key.get(key(name)) or self.table.resolved.globals_by_key.get(key(name))
+
+    @property
+    def owner(self) -> str:
+        return self.pou.outer.name if self.pou.outer is not None else self.pou.name
 
     def name(self, name: str, pos: Pos, how: str) -> None:
         variable = self.variable(name)
         if variable is not None:
-            self.table.add(self.pou.name, variable, how, pos)
+            self.table.add(self.owner, variable, how, pos)
 
     def statements(self, body: tuple[ast.Statement, ...]) -> None:
         for statement in body:
@@ -226,7 +239,7 @@ class _Walker:
             ):
                 system = self.table.resolved.system.get(key(member))
                 if system is not None:
-                    self.table.add(self.pou.name, system, how, pos)
+                    self.table.add(self.owner, system, how, pos)
             case ast.MemberRef(base=base) | ast.BitRef(base=base) | ast.Deref(base=base):
                 self.expr(base, write=write)
             case ast.IndexRef(base=base, indices=indices):

@@ -23,6 +23,7 @@ from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     ActionCall,
     EnumValue,
+    MethodCall,
     Misfit,
     ProgramRef,
     RefOf,
@@ -88,7 +89,13 @@ def class_members(pou: PouSymbols) -> set[str]:
     chart = _Chart(sfc).slots() if sfc is not None else []
     actions = [_action_method(action.name) for action in sfc.actions] if sfc is not None else []
     edges = [_edge_memory(v) for v in _instance_variables(pou) if v.edge is not None]
-    return {"__slots__", "__init__", "__call__", *chart, *actions, *edges}
+    methods = [method_attr(m.name) for m in pou.methods.values()]
+    return {"__slots__", "__init__", "__call__", *chart, *actions, *edges, *methods}
+
+
+def method_attr(name: str) -> str:
+    """A method of the class of a FUNCTION_BLOCK or PROGRAM (no variable has `__`)."""
+    return f"M__{_ident(name)}"
 
 
 def _edge_memory(variable: Variable) -> str:
@@ -161,6 +168,8 @@ class _Emitter:
     max_size: int = MAX_UNIT_CODE
     # FOR counters held in a Python local while their loop runs: (kind, attr) -> local
     counters: dict[tuple[str, str], str] = field(default_factory=dict)
+    # generating a method: its own variables (by id), Python locals of its function
+    method_locals: frozenset[int] = frozenset()
 
     def emit(self, depth: int, line: str) -> None:
         if depth > MAX_INDENT:
@@ -197,7 +206,7 @@ class _Emitter:
             return f"_SYS.{variable.attr}"
         if variable.kind == "VAR_GLOBAL":
             return f"{'s' if self.in_globals else '_G'}.{variable.attr}"
-        if is_python_local(variable, self.local):
+        if id(variable) in self.method_locals or is_python_local(variable, self.local):
             return variable.attr
         return f"s.{variable.attr}"
 
@@ -258,6 +267,8 @@ class _Emitter:
                 return self._index(expr)
             case ast.NullLiteral():
                 return _Value("None", NULL_TYPE)
+            case ast.Deref() if self.scope.self_deref(expr) is not None:
+                return _Value("s", _type(self.scope, expr))  # THIS^, SUPER^: the instance
             case ast.Deref(base=base):  # NULL is a program fault (`_deref`)
                 return _Value(f"_deref({self.expr(base).code})", _type(self.scope, expr))
             case ast.BitRef(base=base, bit=bit, width=width):
@@ -477,10 +488,12 @@ class _Emitter:
 
     # ---- calls
     def call(self, call: ast.Call) -> _Value:
+        callee = self.scope.callee(call)
+        if isinstance(callee, MethodCall):
+            return self._method_call(callee, call)
         pou = self.scope.resolved.pous.get(key(call.name))
         if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
-            return self._user_call(pou, call)
-        callee = self.scope.callee(call)
+            return self._user_call(pou, call, function_name(pou.name))
         if isinstance(callee, SizeOf):  # a constant: its argument never runs
             return _Value(repr(self.scope.size_of(call)), _type(self.scope, call))
         if isinstance(callee, RefOf):
@@ -497,14 +510,28 @@ class _Emitter:
             builtin.emit([v.code for v in values], [v.type for v in values], result), result
         )
 
-    def _user_call(self, pou: PouSymbols, call: ast.Call) -> _Value:
+    def _method_call(self, target: MethodCall, call: ast.Call) -> _Value:
+        """`inst.M(...)`: the method the instance's class has (an override, dispatched by
+        Python); `SUPER^.M(...)`: the base's own, called on this instance."""
+        method = method_attr(target.method.name)
+        if target.static is not None:
+            return self._user_call(
+                target.method, call, f"{class_name(target.static.name)}.{method}", "s"
+            )
+        receiver = "s" if target.receiver is None else self.expr(target.receiver).code
+        return self._user_call(target.method, call, f"{receiver}.{method}")
+
+    def _user_call(
+        self, pou: PouSymbols, call: ast.Call, callee: str, first: str | None = None
+    ) -> _Value:
+        """A call of a function (or a method: `first` the instance a static call passes)."""
         pairs = self.scope.connect_arguments(pou, call)
         assigned = {
             key(param.name): arg
             for arg, param in pairs
             if param is not None and not is_implicit(param)
         }
-        keywords: list[str] = []
+        keywords: list[str] = [first] if first is not None else []
         for param in pou.parameters:
             arg = assigned.get(key(param.name))
             if arg is not None and arg.value is not None and isinstance(param.type, OpenArrayType):
@@ -513,7 +540,7 @@ class _Emitter:
             if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
                 continue
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
-        code = f"{function_name(pou.name)}({', '.join(keywords)})"
+        code = f"{callee}({', '.join(keywords)})"
         result = pou.return_type or BOOL
         enable = self._enable(call, pou)
         if enable is not None:  # EN FALSE: the function does not run and gives its default
@@ -715,7 +742,7 @@ class _Emitter:
 
     def return_line(self) -> str:
         pou = self.scope.pou
-        if pou.kind != "FUNCTION":
+        if pou.kind not in ("FUNCTION", "METHOD"):
             return "return"
         result = pou.by_key.get(key(pou.name))
         result_code = result.attr if result is not None and result.kind == "RETURN" else "None"
@@ -952,6 +979,7 @@ class _Emitter:
                     if slot and (
                         receiver is not None
                         or self.scope.action_call(node) is not None
+                        or self.scope.method_call(node) is not None
                         or key(called) in self.scope.resolved.pous
                         or self.scope.lookup(called) is not None
                     ):
@@ -959,6 +987,14 @@ class _Emitter:
         return True
 
     def call_statement(self, call: ast.Call, depth: int) -> None:
+        method = self.scope.method_call(call)
+        if method is not None:
+            self.emit(depth, self._method_call(method, call).code)
+            return
+        base = self.scope.super_body(call)
+        if base is not None:  # SUPER^(): the base's body on this instance
+            self.emit(depth, f"{class_name(base.base.name)}.__call__(s)")
+            return
         action = self.scope.action_call(call)
         if action is not None:
             self.emit(depth, f"{self._action_instance(action)}.{_action_method(call.name)}()")
@@ -1208,6 +1244,7 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
             emitter.emit(1, f"def {_action_method(action.name)}(s):")
             _emit_temporaries(emitter, pou)  # an action's call has temporaries of its own
             emitter.block(action.body, 2)
+    _generate_methods(emitter, pou)
 
 
 def _emit_temporaries(emitter: _Emitter, pou: PouSymbols) -> None:
@@ -1323,24 +1360,54 @@ def _step_variable(scope: Scope, name: str) -> Variable:
     return variable
 
 
-def _generate_function(emitter: _Emitter, pou: PouSymbols) -> None:
+def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0) -> None:
+    """A FUNCTION as a Python function; a method (kind METHOD, `depth` 1) as a function of
+    its block's class, whose first parameter is the instance."""
     inputs = [
         v
         for v in pou.variables
         if v.kind in ("VAR_INPUT", "VAR_IN_OUT") or isinstance(v.type, OpenArrayType)
     ]  # a variable-length output is bound to the caller's array like an in-out
-    params = ", ".join(f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs)
-    emitter.emit(0, f"def {function_name(pou.name)}({params}):")
+    params = [f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs]
+    if pou.kind == "METHOD":
+        header = f"def {method_attr(pou.name)}({', '.join(['s', *params])}):"
+    else:
+        header = f"def {function_name(pou.name)}({', '.join(params)}):"
+    emitter.emit(depth, header)
     result = pou.by_key.get(key(pou.name))
     if result is not None and result.kind == "RETURN":
-        emitter.emit(1, f"{result.attr} = {emitter.initial(result.type, None)}")
+        emitter.emit(depth + 1, f"{result.attr} = {emitter.initial(result.type, None)}")
     for variable in pou.variables:
         if variable.kind in ("VAR", "VAR_TEMP", "VAR_STAT", "VAR_INST") or (
             variable.kind == "VAR_OUTPUT" and variable not in inputs
         ):
-            emitter.emit(1, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
-    emitter.block(pou.pou.body, 1)
-    emitter.emit(1, emitter.return_line())
+            initial = emitter.initial(variable.type, variable.init)
+            emitter.emit(depth + 1, f"{variable.attr} = {initial}")
+    emitter.block(pou.pou.body, depth + 1)
+    emitter.emit(depth + 1, emitter.return_line())
+
+
+def _generate_methods(emitter: _Emitter, pou: PouSymbols) -> None:
+    """The methods of a block's class: its own, and for each one it inherits and does not
+    override, one that calls the base's (looked up when called: the classes of a
+    configuration are made in any order)."""
+    resolved = emitter.scope.resolved
+    for _, method in sorted(pou.methods.items()):
+        emitter.emit(0, "")
+        attr = method_attr(method.name)
+        if method.declared_in != key(pou.name):
+            owner = class_name(resolved.pous[method.declared_in].name)
+            emitter.emit(1, f"def {attr}(s, *args, **kwargs):")
+            emitter.emit(2, f"return {owner}.{attr}(s, *args, **kwargs)")
+            continue
+        own = [*method.variables, *method.by_key.values()]
+        inner = _Emitter(
+            Scope(resolved, method), local=False, at=method.pou.pos, lines=emitter.lines,
+            temp_count=emitter.temp_count, st_lines=emitter.st_lines, size=emitter.size,
+            max_size=emitter.max_size, method_locals=frozenset(id(v) for v in own),
+        )  # fmt: skip
+        _generate_function(inner, method, depth=1)
+        emitter.size, emitter.temp_count = inner.size, inner.temp_count
 
 
 def _data_class(emitter: _Emitter, name: str, fields: list[Variable]) -> str:

@@ -102,9 +102,30 @@ class SizeOf:
     """CODESYS SIZEOF(x): the size of x in bytes, a constant (W0802)."""
 
 
+@dataclass(frozen=True)
+class MethodCall:
+    """A call of a method: `inst.M()`, `M()` inside its block, `THIS^.M()` (`receiver`
+    None for the block the code runs in), or `SUPER^.M()`: the base's method itself
+    (`static`), not the one the instance overrides it with."""
+
+    method: PouSymbols
+    receiver: ast.Expr | None
+    static: PouSymbols | None = None
+
+
+@dataclass(frozen=True)
+class SuperBody:
+    """`SUPER^()`: the body of the base function block, run on this instance."""
+
+    base: PouSymbols
+
+
 # What else a call in an expression may name; none of these gives a value.
-NoValue = Literal["method", "action", "instance", "program", "external", "unknown"]
-Callee = UserFunction | StandardFunction | RefOf | SizeOf | NoValue
+NoValue = Literal["method", "action", "instance", "program", "external", "unknown", "super"]
+Callee = UserFunction | StandardFunction | RefOf | SizeOf | MethodCall | NoValue
+
+# THIS and SUPER: references to the instance the code runs on, as itself or as its base
+SELF_NAMES = ("THIS", "SUPER")
 
 
 @dataclass(frozen=True)
@@ -133,10 +154,76 @@ class Scope:
     _types: dict[int, tuple[Type | None, ast.Expr]] = field(default_factory=dict)
     # enum values named without their type, resolved from where they are used
     _enum_hints: dict[int, tuple[EnumValue, ast.Expr]] = field(default_factory=dict)
+    # the nodes `^` follows (THIS and SUPER need it)
+    _dereferenced: set[int] = field(default_factory=set)
+
+    def dereferenced(self, expr: ast.Expr) -> bool:
+        return id(expr) in self._dereferenced
 
     # ---- names
     def variable(self, name: str) -> Variable | None:
-        return visible(self.resolved, self.pou, name)
+        found = visible(self.resolved, self.pou, name)
+        if found is None and key(name) in SELF_NAMES:
+            return self._self_reference(key(name))
+        return found
+
+    def block(self) -> PouSymbols | None:
+        """The PROGRAM or FUNCTION_BLOCK whose instance the code runs on (a method's too)."""
+        if self.pou.outer is not None:
+            return self.pou.outer
+        return self.pou if self.pou.kind in ("PROGRAM", "FUNCTION_BLOCK") else None
+
+    def _self_reference(self, name: str) -> Variable | None:
+        """THIS (a REF_TO the block) or SUPER (a REF_TO its base), as variables of kind
+        THIS and SUPER that only `^` may follow."""
+        block = self.block()
+        if block is None or (name == "SUPER" and block.base is None):
+            return None
+        target = block if name == "THIS" else self.resolved.pous[block.base or ""]
+        here = self.pou.pou.pos
+        return Variable(
+            name, name, RefType(FbType(target.name)), None, True, False, None, "s", here
+        )
+
+    def self_deref(self, expr: ast.Expr) -> str | None:
+        """ "THIS" or "SUPER" for `THIS^` and `SUPER^`, else None."""
+        if isinstance(expr, ast.Deref) and isinstance(expr.base, ast.NameRef):
+            found = self.variable(expr.base.name)
+            if found is not None and found.kind in SELF_NAMES:
+                return found.kind
+        return None
+
+    def method_call(self, call: ast.Call) -> MethodCall | None:
+        """The method `call` calls, if it calls one."""
+        receiver = call.receiver
+        if call.name == "^":
+            return None
+        if receiver is None:
+            block = self.block()
+            if block is None or self.variable(call.name) is not None:
+                return None
+            found = block.methods.get(key(call.name))
+            return MethodCall(found, None) if found is not None else None
+        if self.self_deref(receiver) == "SUPER":
+            block = self.block()
+            assert block is not None and block.base is not None
+            base = self.resolved.pous[block.base]
+            found = base.methods.get(key(call.name))
+            return MethodCall(found, receiver, base) if found is not None else None
+        receiver_type = self.type_of(receiver)
+        if isinstance(receiver_type, FbType):
+            owner = self.fb_symbols(receiver_type)
+            found = owner.methods.get(key(call.name))
+            return MethodCall(found, receiver) if found is not None else None
+        return None
+
+    def super_body(self, call: ast.Call) -> SuperBody | None:
+        """`SUPER^()` in a derived function block."""
+        if call.name != "^" or call.receiver is None or self.self_deref(call.receiver) != "SUPER":
+            return None
+        block = self.block()
+        assert block is not None and block.base is not None
+        return SuperBody(self.resolved.pous[block.base])
 
     def lookup(self, name: str) -> Binding | None:
         found = self.variable(name)
@@ -259,6 +346,7 @@ class Scope:
             case ast.NullLiteral():
                 return NULL_TYPE
             case ast.Deref(base=base):
+                self._dereferenced.add(id(base))  # the node is kept alive by the Deref's entry
                 base_type = self.type_of(base)
                 return base_type.target if isinstance(base_type, RefType) else None
             case ast.Unary():
@@ -380,6 +468,11 @@ class Scope:
                 if arg.value is not None:
                     self.type_of(arg.value)
             return callee.pou.return_type or ELEMENTARY["DINT"]
+        if isinstance(callee, MethodCall):
+            for arg, _ in self.connect_arguments(callee.method, call):
+                if arg.value is not None:
+                    self.type_of(arg.value)
+            return callee.method.return_type
         if isinstance(callee, StandardFunction):
             result = self.standard_call(callee.builtin, call)
             return None if isinstance(result, Misfit) else result
@@ -413,6 +506,11 @@ class Scope:
         """What a call in an expression calls."""
         if self.action_call(call) is not None:
             return "action"
+        method = self.method_call(call)
+        if method is not None:
+            return method
+        if call.name == "^":
+            return "super"
         if call.receiver is not None:
             return "method"
         binding = self.lookup(call.name)

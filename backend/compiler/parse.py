@@ -241,6 +241,14 @@ def _with_actions_blocks(items: list[Any]) -> tuple[list[Any], list[Diagnostic]]
     return result, errors
 
 
+@dataclass(frozen=True)
+class _Clause:
+    """`EXTENDS A, B` or `IMPLEMENTS I1, I2` of a declaration."""
+
+    keyword: str
+    names: tuple[str, ...]
+
+
 class _ToAst(Transformer[Token, Any]):
     """Bottom-up conversion of the lark tree into AST nodes."""
 
@@ -666,9 +674,13 @@ class _ToAst(Transformer[Token, Any]):
         return self._block("VAR_GLOBAL", self._pos(tree), _children(tree))
 
     def _pou(self, kind: str, tree: Tree[Any]) -> ast.Pou:
-        name, *rest = _children(tree)
+        children = _children(tree)
+        modifiers = tuple(
+            str(c).upper() for c in children if isinstance(c, Token) and c.type == "OOP_MODIFIER"
+        )
+        name, *rest = [c for c in children if not (isinstance(c, Token) and c.type != "NAME")]
         return_type = None
-        if kind == "FUNCTION" and rest and not isinstance(rest[0], ast.VarBlock | tuple):
+        if kind == "FUNCTION" and rest and not isinstance(rest[0], ast.VarBlock | tuple | _Clause):
             return_type, *rest = rest
         blocks = tuple(r for r in rest if isinstance(r, ast.VarBlock))
         body = next(r for r in rest if isinstance(r, tuple))
@@ -680,7 +692,87 @@ class _ToAst(Transformer[Token, Any]):
                 tuple(e for e in elements if isinstance(e, ast.Transition)),
                 tuple(e for e in elements if isinstance(e, ast.Action)),
             )
-        return ast.Pou(kind, self._declared(name), return_type, blocks, body, self._pos(tree), sfc)
+        clauses = {c.keyword: c.names for c in rest if isinstance(c, _Clause)}
+        return ast.Pou(
+            kind, self._declared(name), return_type, blocks, body, self._pos(tree), sfc,
+            methods=tuple(r for r in rest if isinstance(r, ast.Method)),
+            properties=tuple(r for r in rest if isinstance(r, ast.Property)),
+            extends=clauses.get("EXTENDS", ()),
+            implements=clauses.get("IMPLEMENTS", ()),
+            modifiers=modifiers,
+        )  # fmt: skip
+
+    # ---- object orientation
+    def extends_clause(self, items: list[Token]) -> _Clause:
+        return _Clause("EXTENDS", tuple(str(i) for i in items))
+
+    def implements_clause(self, items: list[Token]) -> _Clause:
+        return _Clause("IMPLEMENTS", tuple(str(i) for i in items))
+
+    def oop_specifier(self, items: list[Token]) -> Token:
+        return items[0]
+
+    @staticmethod
+    def _specifiers(items: list[Any]) -> tuple[str | None, tuple[str, ...], list[Any]]:
+        """(access, modifiers, the rest) of a method's or property's children."""
+        access = [
+            str(i).upper() for i in items if isinstance(i, Token) and i.type == "ACCESS_SPECIFIER"
+        ]
+        modifiers = tuple(
+            str(i).upper() for i in items if isinstance(i, Token) and i.type == "OOP_MODIFIER"
+        )
+        rest = [
+            i
+            for i in items
+            if not (isinstance(i, Token) and i.type in ("ACCESS_SPECIFIER", "OOP_MODIFIER"))
+        ]
+        return (access[0] if access else None), modifiers, rest
+
+    def method_decl(self, items: list[Any]) -> ast.Method:
+        _keyword, *items = items
+        access, modifiers, (name, *rest) = self._specifiers(items)
+        return_type = None
+        if rest and not isinstance(rest[0], ast.VarBlock | tuple):
+            return_type, *rest = rest
+        blocks = tuple(r for r in rest if isinstance(r, ast.VarBlock))
+        body = next(r for r in rest if isinstance(r, tuple))
+        return ast.Method(
+            self._declared(name), access, modifiers, return_type, blocks, body, self._pos(name)
+        )
+
+    def property_accessor(self, items: list[Any]) -> ast.Accessor:
+        keyword, *rest = items
+        blocks = tuple(r for r in rest if isinstance(r, ast.VarBlock))
+        body = next(r for r in rest if isinstance(r, tuple))
+        return ast.Accessor(str(keyword).upper(), blocks, body, self._pos(keyword))
+
+    def property_decl(self, items: list[Any]) -> ast.Property:
+        _keyword, *items = items
+        access, modifiers, (name, type_ref, *rest) = self._specifiers(items)
+        accessors = tuple(r for r in rest if isinstance(r, ast.Accessor))
+        return ast.Property(
+            self._declared(name), access, modifiers, type_ref, accessors, self._pos(name)
+        )
+
+    def interface_decl(self, items: list[Any]) -> ast.Interface:
+        name, *rest = items
+        clauses = {c.keyword: c.names for c in rest if isinstance(c, _Clause)}
+        return ast.Interface(
+            self._declared(name),
+            clauses.get("EXTENDS", ()),
+            tuple(r for r in rest if isinstance(r, ast.Method)),
+            tuple(r for r in rest if isinstance(r, ast.Property)),
+            self._pos(name),
+        )
+
+    @v_args(tree=True)
+    def assignment_attempt(self, tree: Tree[Any]) -> ast.Assign:
+        target, _op, value = _children(tree)
+        return ast.Assign(target, value, self._pos(tree), attempt=True)
+
+    def deref_call(self, items: list[Any]) -> ast.Call:
+        """`SUPER^()`: a call named `^` on the dereferenced receiver."""
+        return ast.Call("^", (), items[0].pos, receiver=ast.Deref(items[0], items[0].pos))
 
     # ---- SFC
     def step_decl(self, items: list[Any]) -> ast.Step:
@@ -1014,4 +1106,7 @@ def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast
     )
     warnings = (*(_pragma_diagnostic(file, t) for t in _PRAGMAS), *transformer.warnings)
     addresses = tuple(transformer.addresses)
-    return ast.SourceUnit(file, pous, globals_, types, warnings, configurations, addresses)
+    interfaces = tuple(i for i in items if isinstance(i, ast.Interface))
+    return ast.SourceUnit(
+        file, pous, globals_, types, warnings, configurations, addresses, interfaces
+    )

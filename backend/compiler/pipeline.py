@@ -377,7 +377,9 @@ def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:
 
 
 def _fb_dependencies(resolved: Resolved, *names: str) -> list[str]:
-    """The POU keys `names` need, themselves included, sorted."""
+    """The POU keys `names` need, themselves included, sorted: the blocks of their
+    instances, the bases they extend (whose methods and body their code calls), and the
+    blocks of their methods' temporary instances."""
     seen: set[str] = set()
     stack = list(names)
     while stack:
@@ -385,7 +387,11 @@ def _fb_dependencies(resolved: Resolved, *names: str) -> list[str]:
         if current in seen:
             continue
         seen.add(current)
-        for variable in resolved.pous[current].variables:
+        pou = resolved.pous[current]
+        if pou.base is not None:
+            stack.append(pou.base)
+        methods = [m for m in pou.methods.values() if m.declared_in == current]
+        for variable in (*pou.variables, *(v for m in methods for v in m.variables)):
             stack.extend(_fb_types_in(resolved, variable.type))
     return sorted(seen)
 

@@ -9,7 +9,7 @@ declaration order, never in hash order.
 from __future__ import annotations
 
 import keyword
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from backend.compiler import ast
 from backend.compiler.ast import key
@@ -64,6 +64,19 @@ class PouSymbols:
     variables: list[Variable]
     by_key: dict[str, Variable]
     return_type: Type | None = None
+    # a PROGRAM's or FUNCTION_BLOCK's methods by key, the inherited ones among them
+    methods: dict[str, PouSymbols] = field(default_factory=dict)
+    # a method (kind METHOD): the function block or program it belongs to, whose variables
+    # its body sees, and the key of the one that declares it
+    outer: PouSymbols | None = None
+    method: ast.Method | None = None
+    declared_in: str = ""
+    base: str | None = None  # the key of the function block this one EXTENDS
+
+    @property
+    def access(self) -> str:
+        """A method's access; IEC 61131-3 makes one without a specifier PROTECTED."""
+        return (self.method.access if self.method is not None else None) or "PROTECTED"
 
     @property
     def name(self) -> str:
@@ -126,7 +139,11 @@ def python_attr(name: str) -> str:
 def visible(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:
     """The variable `name` means inside `pou`: its own, else a global. A direct address
     (`%IX0.1`) means the variable located there, named or not, of the POU or the globals."""
-    found = pou.by_key.get(key(name)) or resolved.globals_by_key.get(key(name))
+    found = pou.by_key.get(key(name))
+    if found is None and pou.outer is not None:  # a method sees its block's variables
+        found = pou.outer.by_key.get(key(name))
+    if found is None:
+        found = resolved.globals_by_key.get(key(name))
     if found is None and name.startswith("%"):
         address = name.upper()
         candidates = (*pou.variables, *resolved.globals)
@@ -459,6 +476,8 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
             seen[key(pou.name)] = pou
     for name in sorted(seen):
         result.pous[name] = _resolve_pou(seen[name], types, result)
+    _resolve_methods(types, result)
+    _inherit(result)
     _implicit_globals(units, result)
     user_names = (types.decls, result.pous, result.globals_by_key)
     if not any(key(NAMESPACE) in names for names in user_names):  # the user's SYS wins
@@ -588,3 +607,87 @@ def _resolve_pou(pou: ast.Pou, types: _TypeResolver, result: Resolved) -> PouSym
             symbols.variables.append(variable)
             symbols.by_key[key(step.name)] = variable
     return symbols
+
+
+def _resolve_method(
+    method: ast.Method, owner: PouSymbols, types: _TypeResolver, result: Resolved
+) -> PouSymbols:
+    """A method as a POU of kind METHOD: its parameters and locals, all temporary (Python
+    locals named `x__`, which no name of the user or of the generated code is), and its
+    result under its name."""
+    pseudo = ast.Pou(
+        "METHOD", method.name, method.return_type, method.var_blocks, method.body, method.pos
+    )
+    symbols = _resolve_pou(pseudo, types, result)
+    apart = {
+        id(v): replace(v, attr=f"{v.attr}__")
+        for v in [*symbols.variables, *symbols.by_key.values()]
+        if v.kind not in ("VAR_GLOBAL", "STEP")
+    }
+    symbols.variables = [apart.get(id(v), v) for v in symbols.variables]
+    symbols.by_key = {k: apart.get(id(v), v) for k, v in symbols.by_key.items()}
+    symbols.outer, symbols.method, symbols.declared_in = owner, method, key(owner.name)
+    return symbols
+
+
+def _resolve_methods(types: _TypeResolver, result: Resolved) -> None:
+    """The methods each PROGRAM and FUNCTION_BLOCK declares itself."""
+    for _, pou in sorted(result.pous.items()):
+        for method in pou.pou.methods:
+            name = key(method.name)
+            clash = pou.methods[name].pou.pos if name in pou.methods else None
+            variable = pou.by_key.get(name)
+            if variable is not None and variable.kind != "RETURN":
+                clash = variable.pos
+            if clash is not None:
+                message = f"method '{method.name}': the name is already used at {clash}"
+                result.diagnostics.append(Diagnostic.at(method.pos, Code.METHOD_NAME, message))
+                continue
+            pou.methods[name] = _resolve_method(method, pou, types, result)
+
+
+def _inherit(result: Resolved) -> None:
+    """EXTENDS: a derived function block has its base's variables first (ordinary members
+    of its instances) and its base's methods, which its own replace (OVERRIDE). A base that
+    is unknown, no function block, or the block itself through its bases is refused."""
+    done: set[str] = set()
+
+    def settle(name: str, chain: tuple[str, ...]) -> None:
+        pou = result.pous[name]
+        if name in done or not pou.pou.extends:
+            done.add(name)
+            return
+        done.add(name)
+        if pou.kind != "FUNCTION_BLOCK" or len(pou.pou.extends) > 1:
+            message = "only a FUNCTION_BLOCK extends, and one function block at most"
+            result.diagnostics.append(Diagnostic.at(pou.pou.pos, Code.EXTENDS, message))
+            return
+        base_name = pou.pou.extends[0]
+        base = result.pous.get(key(base_name))
+        if base is None or base.kind != "FUNCTION_BLOCK":
+            message = f"'{pou.name}' extends '{base_name}', which is no function block"
+            result.diagnostics.append(Diagnostic.at(pou.pou.pos, Code.EXTENDS, message))
+            return
+        if key(base_name) in (*chain, name):
+            message = f"'{pou.name}' extends itself through '{base_name}'"
+            result.diagnostics.append(Diagnostic.at(pou.pou.pos, Code.CYCLIC_EXTENDS, message))
+            return
+        settle(key(base_name), (*chain, name))
+        pou.base = key(base_name)
+        inherited = [v for v in base.variables if v.kind != "STEP"]
+        for variable in inherited:
+            own = pou.by_key.get(key(variable.name))
+            if own is not None:
+                message = (
+                    f"'{own.name}' is already a variable of '{base.name}' (declared at "
+                    f"{variable.pos}); a derived block cannot declare it again"
+                )
+                result.diagnostics.append(Diagnostic.at(own.pos, Code.DUPLICATE_VARIABLE, message))
+                pou.variables.remove(own)
+        pou.variables[:0] = inherited
+        for variable in inherited:
+            pou.by_key[key(variable.name)] = variable
+        pou.methods = {**base.methods, **pou.methods}
+
+    for name in sorted(result.pous):
+        settle(name, ())

@@ -121,7 +121,8 @@ def globals_read(resolved: Resolved, pou_key: str) -> list[str]:
 
 
 def _reachable(resolved: Resolved, pou_key: str) -> Iterator[PouSymbols]:
-    """A POU and every POU it may run (its FBs, the functions and programs it calls)."""
+    """A POU and every POU it may run (its FBs, the functions and programs it calls, its
+    base block and the methods of each)."""
     visited: set[str] = set()
     pending = [pou_key]
     while pending:
@@ -132,6 +133,12 @@ def _reachable(resolved: Resolved, pou_key: str) -> Iterator[PouSymbols]:
         pou = resolved.pous[current]
         yield pou
         pending.extend(sorted(_callees(resolved, pou)))
+        if pou.base is not None:  # its body and methods may run on the instance
+            pending.append(pou.base)
+        for _, method in sorted(pou.methods.items()):  # the inherited ones with their base
+            if method.declared_in == current:
+                yield method
+                pending.extend(sorted(_callees(resolved, method)))
 
 
 def _global(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:

@@ -60,6 +60,8 @@ def _lasting(scope: Scope, variable: Variable) -> str | None:
         return f"constant '{variable.name}'"
     if scope.pou.kind == "FUNCTION" and variable.kind != "VAR_GLOBAL":
         return f"'{variable.name}', a variable of a function (it is gone when the call ends)"
+    if scope.pou.kind == "METHOD" and any(v is variable for v in scope.pou.by_key.values()):
+        return f"'{variable.name}', a variable of a method (it is gone when the call ends)"
     if variable.kind == "VAR_TEMP":
         return f"'{variable.name}', a VAR_TEMP (it is gone when the call ends)"
     if variable.kind == "VAR_IN_OUT":

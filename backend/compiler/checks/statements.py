@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 from backend.compiler import ast
+from backend.compiler.ast import key
 from backend.compiler.checks.calls import check_call_statement
 from backend.compiler.checks.initializers import check_initializer, mismatch
+from backend.compiler.checks.methods import check_method_call
 from backend.compiler.checks.references import check_binding
 from backend.compiler.checks.targets import writable_target
 from backend.compiler.codes import Code
@@ -29,7 +31,19 @@ def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> 
             elif not isinstance(value, ast.ArrayInit | ast.StructInit):
                 scope.type_of(value)
         case ast.CallStatement(call=call):
-            check_call_statement(scope, call)
+            method = scope.method_call(call)
+            if method is not None:
+                check_method_call(scope, call, method, as_value=False)
+            elif call.name == "^" and call.receiver is not None:
+                if scope.super_body(call) is None:  # `x^()` of anything but SUPER
+                    scope.type_of(call.receiver)
+                    base = call.receiver.base if isinstance(call.receiver, ast.Deref) else None
+                    if isinstance(base, ast.NameRef) and key(base.name) == "SUPER":
+                        return  # no SUPER here: the rules on names said so
+                    message = "only SUPER^() calls a body through '^'"
+                    scope.report(call.pos, Code.THIS_SUPER, message)
+            else:
+                check_call_statement(scope, call)
         case ast.If(branches=branches, orelse=orelse):
             for condition, block in branches:
                 check_condition(scope, condition)

@@ -58,7 +58,8 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
                     f"step flag '{root.name}.{target.member}' is read-only",
                 )
                 return value_type(member.type)
-        if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS:
+        own = scope.self_deref(target.base) is not None  # THIS^.x: the block's own
+        if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS and not own:
             scope.report(
                 target.pos,
                 Code.FB_MEMBER_WRITE,

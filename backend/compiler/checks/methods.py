@@ -1,0 +1,143 @@
+"""Methods and inheritance (IEC 61131-3 ed. 3): who may call a method (its access
+specifier), THIS and SUPER, and what EXTENDS, ABSTRACT, FINAL and OVERRIDE demand of the
+blocks that declare them."""
+
+from __future__ import annotations
+
+from backend.compiler import ast
+from backend.compiler.ast import key
+from backend.compiler.checks.calls import check_connection
+from backend.compiler.checks.functions import check_argument
+from backend.compiler.checks.open_arrays import check_open_array_connections
+from backend.compiler.codes import Code
+from backend.compiler.infer import SELF_NAMES, MethodCall, Scope
+from backend.compiler.resolve import PouSymbols, Resolved, Variable
+from backend.compiler.types import ArrayType, FbType, StructType, Type
+
+
+def check_method_call(scope: Scope, call: ast.Call, target: MethodCall, as_value: bool) -> None:
+    method = target.method
+    if as_value and method.return_type is None:
+        message = f"method '{method.name}' has no result; call it as a statement"
+        scope.report(call.pos, Code.METHOD_VALUE, message)
+    if not _may_call(scope.resolved, scope.block(), method):
+        where = scope.resolved.pous[method.declared_in].name
+        message = f"method '{method.name}' of '{where}' is {method.access}"
+        if method.method is not None and method.method.access is None:
+            message += (
+                " (IEC 61131-3 makes a method without access specifier PROTECTED; "
+                "declare it METHOD PUBLIC to call it from outside)"
+            )
+        scope.report(call.pos, Code.METHOD_ACCESS, message)
+    if target.static is not None and "ABSTRACT" in _modifiers(method):
+        message = f"SUPER^.{method.name}() calls an ABSTRACT method, which has no body"
+        scope.report(call.pos, Code.ABSTRACT_METHOD, message)
+    pairs = scope.connect_arguments(method, call)
+    check_connection(scope, method, call, pairs)
+    check_open_array_connections(scope, method, call, pairs)
+    for arg, param in pairs:
+        if param is not None:
+            check_argument(scope, arg, param)
+
+
+def _may_call(resolved: Resolved, caller: PouSymbols | None, method: PouSymbols) -> bool:
+    """PUBLIC and INTERNAL (a project is one namespace) from anywhere; PRIVATE from the
+    block that declares the method; PROTECTED from it and the blocks derived from it."""
+    if method.access in ("PUBLIC", "INTERNAL"):
+        return True
+    block = caller
+    while block is not None:
+        if key(block.name) == method.declared_in:
+            return True
+        if method.access == "PRIVATE" or block.base is None:
+            return False
+        block = resolved.pous[block.base]
+    return False
+
+
+def check_self_name(scope: Scope, name: ast.NameRef, dereferenced: bool) -> None:
+    """THIS and SUPER: only inside a block (SUPER in one that extends another), followed
+    by `^`."""
+    if key(name.name) not in SELF_NAMES:
+        return
+    found = scope.variable(name.name)
+    if found is None and scope.lookup(name.name) is None:
+        where = "in a block that extends another" if key(name.name) == "SUPER" else "in a block"
+        message = f"{name.name} exists only {where} and its methods"
+        scope.report(name.pos, Code.THIS_SUPER, message)
+    elif found is not None and found.kind in SELF_NAMES and not dereferenced:
+        message = f"{name.name} is a reference to the instance: write {name.name}^"
+        scope.report(name.pos, Code.THIS_SUPER, message)
+
+
+def _modifiers(method: PouSymbols) -> tuple[str, ...]:
+    return method.method.modifiers if method.method is not None else ()
+
+
+def _signature(method: PouSymbols) -> tuple[object, ...]:
+    return (
+        method.return_type,
+        tuple((v.kind, key(v.name), v.type) for v in method.parameters),
+    )
+
+
+def check_block_declaration(scope: Scope, pou: PouSymbols) -> None:
+    """The methods a block declares, against its kind and its base's methods."""
+    abstract_block = "ABSTRACT" in pou.pou.modifiers
+    base = scope.resolved.pous[pou.base] if pou.base is not None else None
+    if base is not None and "FINAL" in base.pou.modifiers:
+        message = f"'{pou.name}' cannot extend '{base.name}', which is FINAL"
+        scope.report(pou.pou.pos, Code.FINAL_OVERRIDE, message)
+    for name, method in sorted(pou.methods.items()):
+        modifiers = _modifiers(method)
+        if method.declared_in != key(pou.name):  # inherited, not overridden
+            if "ABSTRACT" in modifiers and not abstract_block:
+                message = (
+                    f"'{pou.name}' does not implement the ABSTRACT method '{method.name}' of "
+                    f"'{scope.resolved.pous[method.declared_in].name}'; implement it or "
+                    "declare the block ABSTRACT"
+                )
+                scope.report(pou.pou.pos, Code.ABSTRACT_METHOD, message)
+            continue
+        assert method.method is not None
+        if "ABSTRACT" in modifiers and (method.method.body or not abstract_block):
+            message = (
+                f"ABSTRACT method '{method.name}' has no body, and only an ABSTRACT block "
+                "declares one"
+            )
+            scope.report(method.pou.pos, Code.ABSTRACT_METHOD, message)
+        overridden = base.methods.get(name) if base is not None else None
+        if overridden is None:
+            continue
+        if "FINAL" in _modifiers(overridden):
+            message = f"method '{method.name}' of '{base.name if base else ''}' is FINAL"
+            scope.report(method.pou.pos, Code.FINAL_OVERRIDE, message)
+        if _signature(overridden) != _signature(method):
+            message = (
+                f"method '{method.name}' overrides the one of "
+                f"'{scope.resolved.pous[overridden.declared_in].name}' with other parameters "
+                "or another result type"
+            )
+            scope.report(method.pou.pos, Code.OVERRIDE_SIGNATURE, message)
+
+
+def check_abstract_instance(scope: Scope, variable: Variable) -> None:
+    """No instance of an ABSTRACT block (a reference to one is fine)."""
+    abstract = _abstract_in(scope.resolved, variable.type)
+    if abstract is not None:
+        message = f"'{variable.name}': '{abstract}' is ABSTRACT and has no instances"
+        scope.report(variable.pos, Code.ABSTRACT_INSTANCE, message)
+
+
+def _abstract_in(resolved: Resolved, t: Type) -> str | None:
+    if isinstance(t, FbType):
+        pou = resolved.pous.get(key(t.name))
+        return t.name if pou is not None and "ABSTRACT" in pou.pou.modifiers else None
+    if isinstance(t, ArrayType):
+        return _abstract_in(resolved, t.element)
+    if isinstance(t, StructType):
+        for member in resolved.structs[key(t.name)].members:
+            found = _abstract_in(resolved, member.type)
+            if found is not None:
+                return found
+    return None

@@ -1,0 +1,252 @@
+"""Object orientation of IEC 61131-3 edition 3 (docs/language.md, "Object orientation"):
+methods, EXTENDS with THIS and SUPER, interfaces, `?=`; each construct traced cycle by cycle
+through `padt sim` (100 ms cycles), and the refusals with their codes. What the runtime
+does with such instances (OLT paths, forcing, reload) is in tests/runtime/test_oop.py."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from tests.compiler.test_references import diagnostics
+from tests.conftest import sim_trace
+
+COUNTER = """
+FUNCTION_BLOCK Counter
+VAR_INPUT step : INT := 1; END_VAR
+VAR_OUTPUT n : INT; END_VAR
+VAR calls : INT; END_VAR
+METHOD PUBLIC Add : INT
+VAR_INPUT k : INT; END_VAR
+VAR_OUTPUT before : INT; END_VAR
+VAR tmp : INT; END_VAR
+tmp := tmp + 1;        (* a method's locals start afresh in every call *)
+before := n;
+n := n + k * tmp;
+THIS^.calls := calls + 1;
+Add := n;
+END_METHOD
+METHOD PRIVATE Wipe
+n := 0;
+END_METHOD
+METHOD PUBLIC Clear
+Wipe();
+END_METHOD
+n := n + step;
+END_FUNCTION_BLOCK
+"""
+
+
+def test_a_method_sees_its_block_and_gives_a_result_and_outputs(tmp_path: Path) -> None:
+    source = (
+        COUNTER
+        + """
+PROGRAM Main
+VAR c : Counter; r, b : INT; END_VAR
+c(step := 2);
+r := c.Add(k := 10, before => b);
+c.Add(5);
+IF r > 50 THEN c.Clear(); END_IF;
+END_PROGRAM
+"""
+    )
+    t = sim_trace(tmp_path, source, 5)
+    # body +2, Add(10) +10 (its local tmp is 1 in every call), Add(5) +5
+    assert t["Main.r"] == [12, 29, 46, 63, 12]
+    assert t["Main.b"] == [2, 19, 36, 53, 2]
+    # Clear (public) calls Wipe (private) in cycle 4, after both Adds
+    assert t["Main.c.n"] == [17, 34, 51, 0, 17]
+    assert t["Main.c.calls"] == [2, 4, 6, 8, 10]
+    assert "Main.c.tmp" not in t and "Main.c.k" not in t  # temporaries are no members
+
+
+def test_methods_of_a_program_called_inside_and_from_another_program(tmp_path: Path) -> None:
+    source = """
+PROGRAM Pump
+VAR runs : INT; END_VAR
+METHOD PUBLIC Stop
+runs := 0;
+END_METHOD
+METHOD Twice : INT
+VAR_INPUT x : INT; END_VAR
+Twice := 2 * x;
+END_METHOD
+runs := Twice(runs) + 1;
+END_PROGRAM
+PROGRAM Main
+VAR k : INT; END_VAR
+k := k + 1;
+IF k = 3 THEN Pump.Stop(); END_IF;
+END_PROGRAM
+CONFIGURATION C
+  RESOURCE R ON PLC
+    TASK T (INTERVAL := T#100ms, PRIORITY := 1);
+    PROGRAM Pump WITH T : Pump;
+    PROGRAM Main WITH T : Main;
+  END_RESOURCE
+END_CONFIGURATION
+"""
+    t = sim_trace(tmp_path, source, 5)
+    assert t["Pump.runs"] == [1, 3, 0, 1, 3]
+
+
+def test_a_method_called_in_a_for_loop_that_writes_the_counter_slot(tmp_path: Path) -> None:
+    source = """
+FUNCTION_BLOCK Walker
+VAR i : INT; visits : INT; END_VAR
+METHOD Skip
+i := i + 1;
+END_METHOD
+FOR i := 1 TO 6 DO
+  visits := visits + 1;
+  Skip();
+END_FOR;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR w : Walker; END_VAR
+w();
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 2)
+    assert t["Main.w.visits"] == [3, 6]  # 1, 3, 5: the method moved the counter on
+
+
+DRIVES = """
+FUNCTION_BLOCK Drive
+VAR_INPUT speed : INT; END_VAR
+VAR_OUTPUT log : INT; END_VAR
+METHOD PUBLIC Code : INT
+Code := 1;
+END_METHOD
+METHOD PUBLIC Run
+log := log * 10 + THIS^.Code();   (* the instance's own Code: dispatched *)
+END_METHOD
+log := log + speed;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Servo EXTENDS Drive
+VAR turns : INT; END_VAR
+METHOD PUBLIC OVERRIDE Code : INT
+Code := 2 + SUPER^.Code();
+END_METHOD
+turns := turns + 1;
+SUPER^();                           (* the base's body: log := log + speed *)
+END_FUNCTION_BLOCK
+"""
+
+
+def test_extends_inherits_members_overrides_and_calls_super(tmp_path: Path) -> None:
+    source = (
+        DRIVES
+        + """
+PROGRAM Main
+VAR d : Drive; s : Servo; x : INT; END_VAR
+d(speed := 1); s(speed := 2);
+d.Run(); s.Run();
+x := s.Code();
+END_PROGRAM
+"""
+    )
+    t = sim_trace(tmp_path, source, 3)
+    assert t["Main.d.log"] == [11, 121, 1221]
+    # Servo: body adds 2 through SUPER^(), Run appends its Code 3 (2 + the base's 1)
+    assert t["Main.s.log"] == [23, 253, 2553]
+    assert t["Main.s.turns"] == [1, 2, 3]
+    assert t["Main.s.speed"] == [2, 2, 2]  # an inherited input is a member like any other
+    assert t["Main.x"] == [3, 3, 3]
+
+
+def test_a_derived_block_without_body_runs_none_and_a_base_method_sees_it(tmp_path: Path) -> None:
+    source = (
+        DRIVES
+        + """
+FUNCTION_BLOCK Quiet EXTENDS Drive
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR q : Quiet; END_VAR
+q(speed := 5);
+q.Run();
+END_PROGRAM
+"""
+    )
+    t = sim_trace(tmp_path, source, 2)
+    assert t["Main.q.log"] == [1, 11]  # its own (empty) body: the base's is not run
+
+
+def test_the_refusals_of_methods_and_inheritance() -> None:
+    source = """
+FUNCTION_BLOCK ABSTRACT A
+METHOD PUBLIC FINAL F : INT
+END_METHOD
+METHOD PUBLIC ABSTRACT G : INT
+END_METHOD
+METHOD PRIVATE P
+END_METHOD
+METHOD Q
+END_METHOD
+METHOD PUBLIC NoResult
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK B EXTENDS A
+METHOD PUBLIC F : INT
+END_METHOD
+METHOD PUBLIC G : BOOL
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK C EXTENDS D
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK D EXTENDS C
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK E EXTENDS Nothing
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a : A; b : B; x : INT; t : TON; END_VAR
+b.P();
+b.Q();
+x := b.NoResult();
+b.Missing();
+x := THIS;
+SUPER^();
+x := t.Elapsed();
+END_PROGRAM
+"""
+    found = diagnostics(source)
+    expected = [
+        "t.st:15:15: error: method 'F' of 'A' is FINAL [E0129]",
+        "t.st:17:15: error: method 'G' overrides the one of 'A' with other parameters or "
+        "another result type [E0132]",
+        "t.st:22:1: error: 'D' extends itself through 'C' [E0128]",
+        "t.st:24:1: error: 'E' extends 'Nothing', which is no function block [E0127]",
+        "t.st:27:5: error: 'a': 'A' is ABSTRACT and has no instances [E0130]",
+        "t.st:28:3: error: method 'P' of 'A' is PRIVATE [E0414]",
+        "t.st:29:3: error: method 'Q' of 'A' is PROTECTED (IEC 61131-3 makes a method without "
+        "access specifier PROTECTED; declare it METHOD PUBLIC to call it from outside) [E0414]",
+        "t.st:30:8: error: method 'NoResult' has no result; call it as a statement [E0415]",
+        "t.st:31:3: error: 'Missing' is no method of what it is called on [E0416]",
+        "t.st:32:6: error: THIS is a reference to the instance: write THIS^ [E0221]",
+        "t.st:33:1: error: SUPER exists only in a block that extends another and its methods "
+        "[E0221]",
+        "t.st:34:8: error: 'Elapsed' is no method of what it is called on [E0416]",
+    ]
+    for line in expected:
+        assert line in found, (line, found)
+
+
+def test_protected_methods_are_called_from_derived_blocks() -> None:
+    source = (
+        DRIVES
+        + """
+FUNCTION_BLOCK Helper
+METHOD Inner : INT
+Inner := 7;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Special EXTENDS Helper
+VAR v : INT; END_VAR
+v := Inner() + THIS^.Inner();
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR s : Special; END_VAR
+s();
+END_PROGRAM
+"""
+    )
+    assert [d for d in diagnostics(source) if "error" in d] == []

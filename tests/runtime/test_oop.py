@@ -1,0 +1,83 @@
+"""Instances with methods and inherited members in the runtime's world (docs/language.md,
+"Object orientation"): an inherited member is an ordinary member of the instance for the
+OLT, writes and forcing; a reload that changes a method's code only carries every value
+over and runs the new code; one that adds a variable to a base block changes the layout of
+every block derived from it, whose values are carried by name."""
+
+from __future__ import annotations
+
+from tests.support.resource_harness import compiled, harness
+
+PLANT = """
+FUNCTION_BLOCK Drive
+VAR_INPUT enable : BOOL; END_VAR
+VAR_OUTPUT speed : INT; END_VAR
+METHOD PUBLIC Ramp : INT
+VAR_INPUT step : INT; END_VAR
+speed := speed + step;
+Ramp := speed;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Pump EXTENDS Drive
+VAR strokes : INT; END_VAR
+IF enable THEN strokes := strokes + Ramp(1); END_IF;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR pump : Pump; on : BOOL := TRUE; END_VAR
+pump(enable := on);
+END_PROGRAM
+"""
+
+
+def test_inherited_members_are_members_for_the_olt_writes_and_forcing() -> None:
+    h = harness(PLANT, programs=[{"name": "Main", "local_forcing_allowed": True}])
+    h.cycle(3)
+    variables = {v["path"]: v["type"] for v in h.ok("variables")["variables"]}
+    assert variables["Main.pump.speed"] == "INT"  # declared by the base, Drive
+    assert variables["Main.pump.strokes"] == "INT"
+    assert not any(path.upper().endswith(".STEP") for path in variables)  # a method's local
+    assert h.ok("values")["values"]["Main.pump.speed"] == 3
+    assert h.cmd("write", variable="Main.pump.speed", value=100)["ok"]
+    h.cycle()
+    assert h.value("Main.pump.speed") == 101
+    h.ok("force", variable="Main.pump.speed", value=7)  # an inherited output
+    h.ok("start_forcing", program="Main")
+    h.cycle(2)
+    assert h.value("Main.pump.speed") == 7
+    assert h.ok("values")["values"]["Main.pump.speed"] == 7
+
+
+def test_a_reload_of_a_method_body_is_a_code_change_that_keeps_every_value() -> None:
+    h = harness(PLANT)
+    h.cycle(3)
+    changed = PLANT.replace("speed := speed + step;", "speed := speed + 10 * step;")
+    h.send(compiled(changed))
+    plan = h.ok("reload_preview")["plan"]
+    assert {c["action"] for c in plan["changes"]} == {"kept"}
+    assert plan["programs"]["changed"] == ["Main"]  # the base block is its code too
+    h.send(compiled(changed))
+    assert h.cmd("reload")["ok"]
+    assert (h.value("Main.pump.speed"), h.value("Main.pump.strokes")) == (3, 6)
+    h.cycle()
+    assert h.value("Main.pump.speed") == 13  # the new code of the method runs
+    assert h.value("Main.pump.strokes") == 6 + 13
+
+
+def test_a_variable_added_to_a_base_block_keeps_the_values_of_derived_instances() -> None:
+    h = harness(PLANT)
+    h.cycle(4)
+    changed = PLANT.replace(
+        "VAR_OUTPUT speed : INT; END_VAR",
+        "VAR_OUTPUT speed : INT; END_VAR\nVAR limit : INT := 50; END_VAR",
+    )
+    h.send(compiled(changed))
+    plan = h.ok("reload_preview")["plan"]
+    changes = {c["path"]: c["action"] for c in plan["changes"]}
+    assert changes["Main.pump.limit"] == "new"
+    assert changes["Main.pump.speed"] == changes["Main.pump.strokes"] == "kept"
+    h.send(compiled(changed))
+    assert h.cmd("reload")["ok"]
+    assert h.value("Main.pump.speed") == 4 and h.value("Main.pump.strokes") == 10
+    assert h.value("Main.pump.limit") == 50
+    h.cycle()
+    assert h.value("Main.pump.speed") == 5 and h.value("Main.pump.strokes") == 15
