@@ -18,7 +18,12 @@ from backend.compiler.checks.initializers import (
     check_initializer,
     declaration_order,
 )
-from backend.compiler.checks.methods import check_abstract_instance, check_block_declaration
+from backend.compiler.checks.methods import (
+    check_abstract_instance,
+    check_block_declaration,
+    check_implementations,
+    check_interface,
+)
 from backend.compiler.checks.open_arrays import check_open_array_data, check_open_array_variables
 from backend.compiler.checks.references import check_reference_parameter
 from backend.compiler.checks.sfc import check_sfc
@@ -44,6 +49,8 @@ def check(resolved: Resolved) -> list[Diagnostic]:
             for member in info.members:
                 check_initializer(global_scope, member.type, member.init)
         check_open_array_data(global_scope, resolved)
+        for interface_key in sorted(resolved.interfaces):
+            check_interface(global_scope, interface_key)
         diagnostics.extend(global_scope.diagnostics)
     for pou in resolved.sorted_pous():
         if is_external(pou):
@@ -69,6 +76,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
             check_sfc(scope, pou.pou.sfc)
             check_action_names(scope, pou.pou.sfc)
         check_block_declaration(scope, pou)
+        check_implementations(scope, pou)
         diagnostics.extend(scope.diagnostics)
         for _, method in sorted(pou.methods.items()):
             if method.declared_in == key(pou.name):

@@ -70,6 +70,8 @@ class Code(Enum):
     ABSTRACT_INSTANCE = "E0130", "instance of an ABSTRACT function block"
     ABSTRACT_METHOD = "E0131", "ABSTRACT method with a body or left without one"
     OVERRIDE_SIGNATURE = "E0132", "method that overrides with another signature"
+    INTERFACE = "E0133", "IMPLEMENTS or EXTENDS of something that is no interface"
+    INTERFACE_METHOD = "E0134", "interface method not implemented as declared"
 
     # ---- 02: names, types and expressions
     UNDECLARED = "E0201", "name not declared"

@@ -45,6 +45,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    InterfaceType,
     OpenArrayType,
     RefType,
     StructType,
@@ -90,7 +91,7 @@ def class_members(pou: PouSymbols) -> set[str]:
     actions = [_action_method(action.name) for action in sfc.actions] if sfc is not None else []
     edges = [_edge_memory(v) for v in _instance_variables(pou) if v.edge is not None]
     methods = [method_attr(m.name) for m in pou.methods.values()]
-    return {"__slots__", "__init__", "__call__", *chart, *actions, *edges, *methods}
+    return {"__slots__", "KIND__", "__init__", "__call__", *chart, *actions, *edges, *methods}
 
 
 def method_attr(name: str) -> str:
@@ -409,12 +410,12 @@ class _Emitter:
     def _binary(self, expr: ast.Binary) -> _Value:
         result = _type(self.scope, expr)
         op = expr.op
-        if op in _COMPARE and isinstance(_type(self.scope, expr.left), RefType):
+        if op in _COMPARE and isinstance(_type(self.scope, expr.left), RefType | InterfaceType):
             right = (
                 "None" if is_zero_literal(expr.right) else self.exact(expr.right).code
             )  # CODESYS 0
             return _Value(f"({self.exact(expr.left).code} {_COMPARE[op]} {right})", BOOL)
-        if op in _COMPARE and isinstance(_type(self.scope, expr.right), RefType):
+        if op in _COMPARE and isinstance(_type(self.scope, expr.right), RefType | InterfaceType):
             left = "None" if is_zero_literal(expr.left) else self.exact(expr.left).code
             return _Value(f"({left} {_COMPARE[op]} {self.exact(expr.right).code})", BOOL)
         if op in _COMPARE:
@@ -519,6 +520,10 @@ class _Emitter:
                 target.method, call, f"{class_name(target.static.name)}.{method}", "s"
             )
         receiver = "s" if target.receiver is None else self.expr(target.receiver).code
+        if target.receiver is not None and isinstance(
+            _type(self.scope, target.receiver), InterfaceType
+        ):  # the instance it refers to; none is a program fault, as NULL^ is
+            receiver = f"_deref({receiver})"
         return self._user_call(target.method, call, f"{receiver}.{method}")
 
     def _user_call(
@@ -591,6 +596,8 @@ class _Emitter:
     def converted(self, target: Type, value_expr: ast.Expr) -> str:
         """Code for `value_expr` stored into a variable of type `target`."""
         self.scope.expect(value_expr, target)
+        if isinstance(target, InterfaceType) and isinstance(_type(self.scope, value_expr), FbType):
+            return self.reference(value_expr)  # an interface refers to the instance
         integer = integer_like(target)
         if integer is not None and _type(self.scope, value_expr) == ANY_INT:
             constant = self.scope.constant_int(value_expr)
@@ -641,7 +648,7 @@ class _Emitter:
                 return "()"
             case OpenArrayType():  # bound to an array at each call
                 return "None"
-            case RefType():
+            case RefType() | InterfaceType():
                 return "None"  # NULL
         raise AssertionError(f"no initial value for {var_type!r}")
 
@@ -718,8 +725,8 @@ class _Emitter:
 
     def _statement(self, statement: ast.Statement, depth: int) -> None:
         match statement:
-            case ast.Assign(target=target, value=value, bind=bind):
-                self.assign(target, value, depth, bind)
+            case ast.Assign(target=target, value=value, bind=bind, attempt=attempt):
+                self.assign(target, value, depth, bind, attempt)
             case ast.CallStatement(call=call):
                 self.call_statement(call, depth)
             case ast.If(branches=branches, orelse=orelse):
@@ -751,7 +758,13 @@ class _Emitter:
             return f"return ({result_code}, {members})"
         return f"return {result_code}"
 
-    def assign(self, target: ast.Expr, value: ast.Initializer, depth: int, bind: bool) -> None:
+    def assign(
+        self, target: ast.Expr, value: ast.Initializer, depth: int, bind: bool, attempt: bool
+    ) -> None:
+        if attempt:
+            assert isinstance(value, ast.Expr)
+            self.emit(depth, self.store(target, self.attempt(_type(self.scope, target), value)))
+            return
         if bind:  # `r REF= x`: the REFERENCE TO itself now holds REF(x)
             held = self.held_reference(target)
             assert held is not None and isinstance(value, ast.Call)
@@ -763,6 +776,23 @@ class _Emitter:
         else:
             code = self.converted(target_type, value)
         self.emit(depth, self.store(target, code))
+
+    def attempt(self, target: Type, value: ast.Expr) -> str:
+        """`t ?= x`: a reference to the instance x is or refers to where that instance is
+        a `target` (its block, a base of it, an interface it implements), else NULL. The
+        test reads the instance's class: its name, and `KIND__` (what it conforms to) of
+        a block that extends or implements anything."""
+        wanted = target.target if isinstance(target, RefType) else target
+        assert isinstance(wanted, FbType | InterfaceType)
+        source = _type(self.scope, value)
+        reference = self.reference(value) if isinstance(source, FbType) else self.expr(value).code
+        held = self.temp()
+        kind = f"_deref({held}).__class__"  # generated code has no type() nor getattr()
+        fits = (
+            f"{kind}.__name__ == {class_name(wanted.name)!r} or "
+            f"{key(wanted.name)!r} in {kind}.__dict__.get('KIND__', ())"
+        )
+        return f"({held} if (({held} := {reference}) is not None and ({fits})) else None)"
 
     def store(self, target: ast.Expr, code: str) -> str:
         """The statement that stores `code` (already converted) into `target`."""
@@ -1211,6 +1241,9 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
     slots += chart.slots() if chart else []
     emitter.emit(0, f"class {class_name(pou.name)}:")
     emitter.emit(1, f"__slots__ = {tuple(slots)!r}")
+    kinds = _kinds(emitter.scope.resolved, pou)
+    if len(kinds) > 1:  # what `?=` finds it conforms to (an instance of a plain block: its name)
+        emitter.emit(1, f"KIND__ = {kinds!r}")
     emitter.emit(0, "")
     emitter.emit(1, "def __init__(s):")
     if not slots:
@@ -1245,6 +1278,16 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
             _emit_temporaries(emitter, pou)  # an action's call has temporaries of its own
             emitter.block(action.body, 2)
     _generate_methods(emitter, pou)
+
+
+def _kinds(resolved: Resolved, pou: PouSymbols) -> tuple[str, ...]:
+    """The keys an instance of `pou` conforms to: its block, its bases, its interfaces."""
+    found = [key(pou.name), *pou.interfaces]
+    base = pou.base
+    while base is not None:
+        found.append(base)
+        base = resolved.pous[base].base
+    return tuple(sorted(set(found)))
 
 
 def _emit_temporaries(emitter: _Emitter, pou: PouSymbols) -> None:

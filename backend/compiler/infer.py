@@ -42,6 +42,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    InterfaceType,
     OpenArrayType,
     RefType,
     StructType,
@@ -215,7 +216,29 @@ class Scope:
             owner = self.fb_symbols(receiver_type)
             found = owner.methods.get(key(call.name))
             return MethodCall(found, receiver) if found is not None else None
+        if isinstance(receiver_type, InterfaceType):
+            interface = self.resolved.interfaces[key(receiver_type.name)]
+            found = interface.methods.get(key(call.name))
+            return MethodCall(found, receiver) if found is not None else None
         return None
+
+    def conforms(self, target: Type, source: Type) -> bool:
+        """What object orientation adds to `assignable`: an instance (or an interface
+        extending it) into an interface variable, a reference to a derived block into a
+        reference to its base."""
+        if isinstance(target, InterfaceType):
+            if isinstance(source, FbType):
+                return self.resolved.conforms(key(source.name), key(target.name))
+            if isinstance(source, InterfaceType):
+                extended = self.resolved.interfaces[key(source.name)].extends
+                return key(source.name) == key(target.name) or key(target.name) in extended
+            return False
+        if isinstance(target, RefType) and isinstance(source, RefType):
+            ends = (target.target, source.target)
+            if isinstance(ends[0], FbType) and isinstance(ends[1], FbType):
+                same_kind = (target.pointer, target.implicit) == (source.pointer, source.implicit)
+                return same_kind and self.resolved.conforms(key(ends[1].name), key(ends[0].name))
+        return False
 
     def super_body(self, call: ast.Call) -> SuperBody | None:
         """`SUPER^()` in a derived function block."""
@@ -433,7 +456,9 @@ class Scope:
         if left_type is None or right_type is None:
             return None
         op = expr.op
-        if op in ("=", "<>") and isinstance(left_type, EnumType | StructType | RefType):
+        if op in ("=", "<>") and isinstance(
+            left_type, EnumType | StructType | RefType | InterfaceType
+        ):
             return BOOL  # whether the two compare is a rule (checks.operators)
         left, right = integer_like(left_type) or left_type, integer_like(right_type) or right_type
         if not isinstance(left, ElementaryType) or not isinstance(right, ElementaryType):

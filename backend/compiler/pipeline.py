@@ -39,6 +39,7 @@ from backend.compiler.types import (
     ArrayType,
     ElementaryType,
     FbType,
+    InterfaceType,
     OpenArrayType,
     StructType,
     Type,
@@ -440,6 +441,8 @@ def _type_text(t: Type) -> str:
     runtime can check what it writes."""
     if isinstance(t, ElementaryType) and t.category == "string" and t.name in ("STRING", "WSTRING"):
         return f"{t.name}[{t.max_length}]"
+    if isinstance(t, InterfaceType):  # a reference to the instance it is assigned
+        return f"INTERFACE {t.name}"
     return t.name
 
 

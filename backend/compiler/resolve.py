@@ -31,6 +31,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    InterfaceType,
     OpenArrayType,
     RefType,
     StructType,
@@ -72,6 +73,8 @@ class PouSymbols:
     method: ast.Method | None = None
     declared_in: str = ""
     base: str | None = None  # the key of the function block this one EXTENDS
+    # the keys of the interfaces it implements: its own, its base's, and what they extend
+    interfaces: tuple[str, ...] = ()
 
     @property
     def access(self) -> str:
@@ -106,6 +109,19 @@ class EnumInfo:
 
 
 @dataclass
+class InterfaceInfo:
+    decl: ast.Interface
+    # its method prototypes by key, those of the interfaces it extends among them (their
+    # `declared_in` the interface's key; always PUBLIC)
+    methods: dict[str, PouSymbols] = field(default_factory=dict)
+    extends: tuple[str, ...] = ()  # the keys of every interface it extends, transitively
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+
+@dataclass
 class Resolved:
     pous: dict[str, PouSymbols] = field(default_factory=dict)
     structs: dict[str, StructInfo] = field(default_factory=dict)
@@ -115,6 +131,17 @@ class Resolved:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     # `SYS.<NAME>` by key; empty when a type, POU or global of the user is named SYS
     system: dict[str, Variable] = field(default_factory=dict)
+    interfaces: dict[str, InterfaceInfo] = field(default_factory=dict)
+
+    def conforms(self, block: str, kind: str) -> bool:
+        """Whether an instance of block `block` (a key) is also a `kind` (a key): the block
+        itself, a base of it, or an interface it implements."""
+        current: str | None = block
+        while current is not None:
+            if current == kind:
+                return True
+            current = self.pous[current].base if current in self.pous else None
+        return block in self.pous and kind in self.pous[block].interfaces
 
     def sorted_pous(self) -> list[PouSymbols]:
         return [self.pous[k] for k in sorted(self.pous)]
@@ -182,6 +209,7 @@ class _TypeResolver:
     def __init__(self, units: list[ast.SourceUnit], result: Resolved) -> None:
         self.result = result
         self.pou_kinds: dict[str, ast.Pou] = {}
+        self.interfaces: dict[str, ast.Interface] = {}
         self.decls: dict[str, ast.TypeDecl] = {}
         self.named: dict[str, Type | None] = {}
         self.in_progress: set[str] = set()
@@ -191,6 +219,8 @@ class _TypeResolver:
         for unit in units:
             for pou in unit.pous:
                 self.pou_kinds.setdefault(key(pou.name), pou)
+            for interface in unit.interfaces:
+                self.interfaces.setdefault(key(interface.name), interface)
             for decl in unit.types:
                 if key(decl.name) in self.decls:
                     first = self.decls[key(decl.name)]
@@ -271,6 +301,8 @@ class _TypeResolver:
         pou = self.pou_kinds.get(name_key)
         if pou is not None and pou.kind in ("FUNCTION_BLOCK", "PROGRAM"):
             return FbType(pou.name)
+        if name_key in self.interfaces:
+            return InterfaceType(self.interfaces[name_key].name)
         self.report(pos, Code.UNKNOWN_TYPE, f"unknown type '{name}'")
         self.named[name_key] = None
         return None
@@ -476,8 +508,10 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
             seen[key(pou.name)] = pou
     for name in sorted(seen):
         result.pous[name] = _resolve_pou(seen[name], types, result)
+    _resolve_interfaces(units, types, result)
     _resolve_methods(types, result)
     _inherit(result)
+    _implemented(result)
     _implicit_globals(units, result)
     user_names = (types.decls, result.pous, result.globals_by_key)
     if not any(key(NAMESPACE) in names for names in user_names):  # the user's SYS wins
@@ -610,7 +644,11 @@ def _resolve_pou(pou: ast.Pou, types: _TypeResolver, result: Resolved) -> PouSym
 
 
 def _resolve_method(
-    method: ast.Method, owner: PouSymbols, types: _TypeResolver, result: Resolved
+    method: ast.Method,
+    owner: PouSymbols | None,
+    types: _TypeResolver,
+    result: Resolved,
+    declared_in: str = "",
 ) -> PouSymbols:
     """A method as a POU of kind METHOD: its parameters and locals, all temporary (Python
     locals named `x__`, which no name of the user or of the generated code is), and its
@@ -626,7 +664,8 @@ def _resolve_method(
     }
     symbols.variables = [apart.get(id(v), v) for v in symbols.variables]
     symbols.by_key = {k: apart.get(id(v), v) for k, v in symbols.by_key.items()}
-    symbols.outer, symbols.method, symbols.declared_in = owner, method, key(owner.name)
+    symbols.outer, symbols.method = owner, method
+    symbols.declared_in = key(owner.name) if owner is not None else declared_in
     return symbols
 
 
@@ -691,3 +730,81 @@ def _inherit(result: Resolved) -> None:
 
     for name in sorted(result.pous):
         settle(name, ())
+
+
+def _resolve_interfaces(
+    units: list[ast.SourceUnit], types: _TypeResolver, result: Resolved
+) -> None:
+    """Every INTERFACE: its method prototypes (PUBLIC), with those of the interfaces it
+    extends; an interface named like another, a type or a POU is refused."""
+    for unit in units:
+        for interface in unit.interfaces:
+            name = key(interface.name)
+            if name in result.interfaces or name in types.decls or name in types.pou_kinds:
+                message = f"'{interface.name}' is already declared"
+                result.diagnostics.append(
+                    Diagnostic.at(interface.pos, Code.DUPLICATE_TYPE, message)
+                )
+                continue
+            info = InterfaceInfo(interface)
+            for method in interface.methods:
+                public = replace(method, access="PUBLIC")
+                prototype = _resolve_method(public, None, types, result, declared_in=name)
+                if key(method.name) in info.methods:
+                    message = f"method '{method.name}' is declared twice in '{interface.name}'"
+                    result.diagnostics.append(Diagnostic.at(method.pos, Code.METHOD_NAME, message))
+                info.methods[key(method.name)] = prototype
+            result.interfaces[name] = info
+    done: set[str] = set()
+
+    def settle(name: str, chain: tuple[str, ...]) -> None:
+        info = result.interfaces[name]
+        if name in done:
+            return
+        done.add(name)
+        closure: list[str] = []
+        for base_name in info.decl.extends:
+            base = key(base_name)
+            if base not in result.interfaces:
+                message = f"'{info.name}' extends '{base_name}', which is no interface"
+                result.diagnostics.append(Diagnostic.at(info.decl.pos, Code.INTERFACE, message))
+                continue
+            if base in (*chain, name):
+                message = f"'{info.name}' extends itself through '{base_name}'"
+                result.diagnostics.append(
+                    Diagnostic.at(info.decl.pos, Code.CYCLIC_EXTENDS, message)
+                )
+                continue
+            settle(base, (*chain, name))
+            closure += [base, *result.interfaces[base].extends]
+            info.methods = {**result.interfaces[base].methods, **info.methods}
+        info.extends = tuple(sorted(set(closure)))
+
+    for name in sorted(result.interfaces):
+        settle(name, ())
+
+
+def _implemented(result: Resolved) -> None:
+    """The interfaces each block implements: named by IMPLEMENTS, its base's, and the ones
+    these extend (an unknown name is refused)."""
+    for name in sorted(result.pous, key=lambda n: _depth(result, n)):
+        pou = result.pous[name]
+        found: list[str] = list(result.pous[pou.base].interfaces) if pou.base else []
+        for interface in pou.pou.implements:
+            info = result.interfaces.get(key(interface))
+            if info is None or pou.kind != "FUNCTION_BLOCK":
+                message = f"'{pou.name}' implements '{interface}', which is no interface"
+                if pou.kind != "FUNCTION_BLOCK":
+                    message = "only a FUNCTION_BLOCK implements interfaces"
+                result.diagnostics.append(Diagnostic.at(pou.pou.pos, Code.INTERFACE, message))
+                continue
+            found += [key(interface), *info.extends]
+        pou.interfaces = tuple(sorted(set(found)))
+
+
+def _depth(result: Resolved, name: str) -> tuple[int, str]:
+    """How many bases a block has (bases first), then its name."""
+    depth, current = 0, result.pous[name].base
+    while current is not None and depth <= len(result.pous):
+        depth, current = depth + 1, result.pous[current].base
+    return depth, name

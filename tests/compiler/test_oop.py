@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from tests.compiler.test_references import diagnostics
-from tests.conftest import sim_trace
+from tests.conftest import padt, sim_trace
 
 COUNTER = """
 FUNCTION_BLOCK Counter
@@ -250,3 +250,160 @@ END_PROGRAM
 """
     )
     assert [d for d in diagnostics(source) if "error" in d] == []
+
+
+MACHINES = """
+INTERFACE IRunnable
+METHOD Run : INT
+VAR_INPUT k : INT; END_VAR
+END_METHOD
+END_INTERFACE
+INTERFACE INamed EXTENDS IRunnable
+METHOD Code : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Mixer IMPLEMENTS INamed
+VAR n : INT; END_VAR
+METHOD PUBLIC Run : INT
+VAR_INPUT k : INT; END_VAR
+n := n + k;
+Run := n;
+END_METHOD
+METHOD PUBLIC Code : INT
+Code := 1;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FastMixer EXTENDS Mixer
+METHOD PUBLIC OVERRIDE Run : INT
+VAR_INPUT k : INT; END_VAR
+n := n + 100 * k;
+Run := n;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Valve
+END_FUNCTION_BLOCK
+"""
+
+
+def test_calls_through_an_interface_dispatch_on_the_instance_assigned(tmp_path: Path) -> None:
+    source = (
+        MACHINES
+        + """
+PROGRAM Main
+VAR slow : Mixer; fast : FastMixer; i : IRunnable; k, r : INT; END_VAR
+k := k + 1;
+IF k MOD 2 = 1 THEN i := slow; ELSE i := fast; END_IF;
+r := i.Run(1);
+END_PROGRAM
+"""
+    )
+    t = sim_trace(tmp_path, source, 4)
+    assert t["Main.i"] == ["Main.slow", "Main.fast", "Main.slow", "Main.fast"]
+    assert t["Main.r"] == [1, 100, 2, 200]
+    assert t["Main.slow.n"] == [1, 1, 2, 2]
+    assert t["Main.fast.n"] == [0, 100, 100, 200]
+
+
+def test_a_reference_to_a_base_block_calls_the_override(tmp_path: Path) -> None:
+    source = (
+        MACHINES
+        + """
+PROGRAM Main
+VAR slow : Mixer; fast : FastMixer; r : REF_TO Mixer; k, got : INT; END_VAR
+k := k + 1;
+IF k = 1 THEN r := REF(slow); ELSE r := REF(fast); END_IF;
+got := r^.Run(2);
+END_PROGRAM
+"""
+    )
+    t = sim_trace(tmp_path, source, 3)
+    assert t["Main.r"] == ["Main.slow", "Main.fast", "Main.fast"]
+    assert t["Main.got"] == [2, 200, 400]
+
+
+def test_an_assignment_attempt_gives_null_where_the_instance_does_not_fit(
+    tmp_path: Path,
+) -> None:
+    source = (
+        MACHINES
+        + """
+PROGRAM Main
+VAR slow : Mixer; fast : FastMixer; i : IRunnable; named : INamed; k : INT;
+    asFast : REF_TO FastMixer; asValve : REF_TO Valve; valve : Valve; code : INT; END_VAR
+k := k + 1;
+IF k = 1 THEN i := slow; ELSIF k = 2 THEN i := fast; ELSE i := NULL; END_IF;
+named ?= i;             (* both implement INamed *)
+asFast ?= i;            (* only fast is a FastMixer *)
+asValve ?= valve;
+IF named <> NULL THEN code := named.Code(); ELSE code := -1; END_IF;
+END_PROGRAM
+"""
+    )
+    t = sim_trace(tmp_path, source, 3)
+    assert t["Main.named"] == ["Main.slow", "Main.fast", "NULL"]
+    assert t["Main.asFast"] == ["NULL", "Main.fast", "NULL"]
+    assert t["Main.asValve"] == ["Main.valve"] * 3
+    assert t["Main.code"] == [1, 1, -1]
+
+
+def test_a_call_through_an_unassigned_interface_is_a_program_error(tmp_path: Path) -> None:
+    source = (
+        MACHINES
+        + """
+PROGRAM Main
+VAR i : IRunnable; r : INT; END_VAR
+r := i.Run(1);
+END_PROGRAM
+"""
+    )
+    path = tmp_path / "sim.st"
+    path.write_text(source)
+    run = padt("sim", str(path), "--cycles", "2")
+    assert run.returncode == 3
+    assert "dereference of NULL in POU Main" in run.stderr and "sim.st:34)" in run.stderr
+
+
+def test_the_refusals_of_interfaces() -> None:
+    source = """
+INTERFACE IRun
+METHOD Run : INT
+END_METHOD
+METHOD Stop
+END_METHOD
+END_INTERFACE
+INTERFACE IBad EXTENDS Nope
+METHOD Go
+Go();
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK A IMPLEMENTS IRun, Missing
+METHOD PUBLIC Run : BOOL
+END_METHOD
+METHOD Stop
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK C
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a : A; c : C; i : IRun; x : INT; END_VAR
+i := c;
+i ?= x;
+i.Fly();
+END_PROGRAM
+"""
+    found = diagnostics(source)
+    expected = [
+        "t.st:8:11: error: 'IBad' extends 'Nope', which is no interface [E0133]",
+        "t.st:9:8: error: method 'Go' of an interface has no body [E0134]",
+        "t.st:13:1: error: 'A' implements 'Missing', which is no interface [E0133]",
+        "t.st:13:1: error: method 'Run' of interface 'IRun': 'A' implements it with other "
+        "parameters or another result type [E0134]",
+        "t.st:13:1: error: method 'Stop' of interface 'IRun': 'A' implements it PROTECTED; "
+        "an interface's methods are PUBLIC [E0134]",
+        "t.st:23:6: error: type mismatch: cannot assign C to IRun [E0209]",
+        "t.st:24:1: error: ?= assigns an instance, an interface or a reference to an instance "
+        "to an interface or a REF_TO a function block [E0209]",
+        "t.st:25:3: error: 'Fly' is no method of what it is called on [E0416]",
+    ]
+    for line in expected:
+        assert line in found, (line, found)

@@ -81,3 +81,52 @@ def test_a_variable_added_to_a_base_block_keeps_the_values_of_derived_instances(
     assert h.value("Main.pump.limit") == 50
     h.cycle()
     assert h.value("Main.pump.speed") == 5 and h.value("Main.pump.strokes") == 15
+
+
+DISPATCH = """
+INTERFACE ISource
+METHOD Level : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Tank IMPLEMENTS ISource
+VAR fill : INT := 40; END_VAR
+METHOD PUBLIC Level : INT
+Level := fill;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR tank : Tank; source : ISource; seen : INT; END_VAR
+source := tank;
+seen := source.Level();
+END_PROGRAM
+"""
+
+
+def test_an_interface_variable_reads_as_its_instance_and_only_the_program_sets_it() -> None:
+    h = harness(DISPATCH, programs=[{"name": "Main", "local_forcing_allowed": True}])
+    variables = {v["path"]: v["type"] for v in h.ok("variables")["variables"]}
+    assert variables["Main.source"] == "INTERFACE ISource"
+    assert h.ok("values")["values"]["Main.source"] is None
+    h.cycle()
+    assert h.ok("values")["values"]["Main.source"] == "Main.tank"
+    reply = h.cmd("write", variable="Main.source", value="Main.tank")
+    assert not reply["ok"] and reply["error"]["code"] == "bad_value"
+    assert h.cmd("write", variable="Main.tank.fill", value=7)["ok"]
+    h.cycle()
+    assert h.value("Main.seen") == 7
+
+
+def test_a_reload_begins_an_interface_as_null_and_the_program_sets_it_again() -> None:
+    h = harness(DISPATCH)
+    h.cycle(2)
+    changed = DISPATCH.replace("Level := fill;", "Level := fill + 1;")
+    h.send(compiled(changed))
+    plan = h.ok("reload_preview")["plan"]
+    changes = {c["path"]: c for c in plan["changes"]}
+    assert changes["Main.source"]["action"] == "initialised"
+    assert changes["Main.tank.fill"]["action"] == "kept"
+    h.send(compiled(changed))
+    assert h.cmd("reload")["ok"]
+    assert h.value("Main.source") is None
+    h.cycle()
+    assert (h.value("Main.source"), h.value("Main.seen")) == ("Main.tank", 41)

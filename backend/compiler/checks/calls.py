@@ -80,5 +80,5 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
     elif param.kind == "VAR_IN_OUT":
         refuse_system_write(scope, arg.value)
     value_type = scope.type_of(arg.value)
-    if value_type is not None and not takes_argument(param.type, arg.value, value_type):
+    if value_type is not None and not takes_argument(param.type, arg.value, value_type, scope):
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, mismatch(param.type, value_type))

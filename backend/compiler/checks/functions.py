@@ -97,6 +97,6 @@ def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
             message = f"cannot store {param.type.name} output in {value_type.name}"
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, message)
         return
-    if not takes_argument(param.type, arg.value, value_type):
+    if not takes_argument(param.type, arg.value, value_type, scope):
         message = f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, message)

@@ -9,10 +9,11 @@ from backend.compiler.ast import key
 from backend.compiler.checks.calls import check_connection
 from backend.compiler.checks.functions import check_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
+from backend.compiler.checks.targets import is_lvalue, writable_target
 from backend.compiler.codes import Code
 from backend.compiler.infer import SELF_NAMES, MethodCall, Scope
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
-from backend.compiler.types import ArrayType, FbType, StructType, Type
+from backend.compiler.types import ArrayType, FbType, InterfaceType, RefType, StructType, Type
 
 
 def check_method_call(scope: Scope, call: ast.Call, target: MethodCall, as_value: bool) -> None:
@@ -119,6 +120,63 @@ def check_block_declaration(scope: Scope, pou: PouSymbols) -> None:
                 "or another result type"
             )
             scope.report(method.pou.pos, Code.OVERRIDE_SIGNATURE, message)
+
+
+def check_implementations(scope: Scope, pou: PouSymbols) -> None:
+    """A block that is not ABSTRACT implements every method of the interfaces it names,
+    PUBLIC and with the prototype's parameters and result type."""
+    if "ABSTRACT" in pou.pou.modifiers:
+        return
+    for interface_key in pou.interfaces:
+        interface = scope.resolved.interfaces[interface_key]
+        for name, prototype in sorted(interface.methods.items()):
+            if prototype.declared_in != interface_key:
+                continue  # checked with the interface that declares it
+            method = pou.methods.get(name)
+            problem = None
+            if method is None:
+                problem = "does not implement it"
+            elif _signature(method) != _signature(prototype):
+                problem = "implements it with other parameters or another result type"
+            elif method.access not in ("PUBLIC", "INTERNAL"):
+                problem = f"implements it {method.access}; an interface's methods are PUBLIC"
+            if problem is not None:
+                message = (
+                    f"method '{prototype.name}' of interface '{interface.name}': "
+                    f"'{pou.name}' {problem}"
+                )
+                scope.report(pou.pou.pos, Code.INTERFACE_METHOD, message)
+
+
+def check_interface(scope: Scope, interface_key: str) -> None:
+    """An interface declares prototypes only: methods without a body."""
+    for prototype in scope.resolved.interfaces[interface_key].decl.methods:
+        if prototype.body:
+            message = f"method '{prototype.name}' of an interface has no body"
+            scope.report(prototype.pos, Code.INTERFACE_METHOD, message)
+
+
+def check_attempt(scope: Scope, target: ast.Expr, value: ast.Initializer) -> None:
+    """`t ?= x`: t an interface or a REF_TO a function block; x an instance, an interface,
+    or a reference to an instance."""
+    target_type = writable_target(scope, target)
+    source = scope.type_of(value) if isinstance(value, ast.Expr) else None
+    if target_type is None or (source is None and isinstance(value, ast.Expr)):
+        return
+    takes = isinstance(target_type, InterfaceType) or (
+        isinstance(target_type, RefType) and isinstance(target_type.target, FbType)
+    )
+    gives = (
+        isinstance(source, InterfaceType)
+        or (isinstance(source, FbType) and isinstance(value, ast.Expr) and is_lvalue(value))
+        or (isinstance(source, RefType) and isinstance(source.target, FbType))
+    )
+    if not (takes and gives):
+        message = (
+            "?= assigns an instance, an interface or a reference to an instance to an "
+            "interface or a REF_TO a function block"
+        )
+        scope.report(target.pos, Code.TYPE_MISMATCH, message)
 
 
 def check_abstract_instance(scope: Scope, variable: Variable) -> None:

@@ -6,7 +6,7 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.checks.calls import check_call_statement
 from backend.compiler.checks.initializers import check_initializer, mismatch
-from backend.compiler.checks.methods import check_method_call
+from backend.compiler.checks.methods import check_attempt, check_method_call
 from backend.compiler.checks.references import check_binding
 from backend.compiler.checks.targets import writable_target
 from backend.compiler.codes import Code
@@ -24,6 +24,8 @@ def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> 
     match statement:
         case ast.Assign(target=target, value=value, bind=True):
             check_binding(scope, target, value)
+        case ast.Assign(target=target, value=value, attempt=True):
+            check_attempt(scope, target, value)
         case ast.Assign(target=target, value=value):
             target_type = writable_target(scope, target)
             if target_type is not None:
