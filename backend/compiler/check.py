@@ -9,7 +9,6 @@ pipeline once the user programs are known.
 
 from __future__ import annotations
 
-from backend.compiler.ast import key
 from backend.compiler.checks.actions import check_action_names
 from backend.compiler.checks.data import check_data
 from backend.compiler.checks.expressions import check_expression
@@ -78,9 +77,8 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         check_block_declaration(scope, pou)
         check_implementations(scope, pou)
         diagnostics.extend(scope.diagnostics)
-        for _, method in sorted(pou.methods.items()):
-            if method.declared_in == key(pou.name):
-                diagnostics.extend(_check_method(resolved, method))
+        for routine in pou.own_routines():
+            diagnostics.extend(_check_method(resolved, routine))
     return diagnostics
 
 

@@ -109,6 +109,7 @@ class Code(Enum):
     CASE_LABEL_TYPE = "E0310", "CASE label not an integer or enum"
     CASE_LABEL_TWICE = "E0311", "CASE label used twice"
     FOR_COUNTER_TYPE = "E0312", "FOR counter not an integer"
+    PROPERTY_ACCESSOR = "E0313", "property read without GET or written without SET"
     INPUT_ASSIGNMENT = "W0301", "assignment to an input inside its block"
 
     # ---- 04: calls

@@ -133,9 +133,8 @@ def _walk_pou(table: _Table, pou: PouSymbols) -> None:
         for action in sfc.actions:
             walker.statements(action.body)
     walker.statements(pou.pou.body)
-    for _, method in sorted(pou.methods.items()):
-        if method.declared_in == key(pou.name):  # a method's uses are its block's
-            _Walker(table, method).statements(method.pou.body)
+    for routine in pou.own_routines():  # a method's uses are its block's
+        _Walker(table, routine).statements(routine.pou.body)
 
 
 class _Walker:

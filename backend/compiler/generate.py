@@ -26,6 +26,7 @@ from backend.compiler.infer import (
     MethodCall,
     Misfit,
     ProgramRef,
+    PropertyAccess,
     RefOf,
     Scope,
     SizeOf,
@@ -91,12 +92,22 @@ def class_members(pou: PouSymbols) -> set[str]:
     actions = [_action_method(action.name) for action in sfc.actions] if sfc is not None else []
     edges = [_edge_memory(v) for v in _instance_variables(pou) if v.edge is not None]
     methods = [method_attr(m.name) for m in pou.methods.values()]
+    methods += [f(p.name) for p in pou.properties.values() for f in (getter_attr, setter_attr)]
     return {"__slots__", "KIND__", "__init__", "__call__", *chart, *actions, *edges, *methods}
 
 
 def method_attr(name: str) -> str:
     """A method of the class of a FUNCTION_BLOCK or PROGRAM (no variable has `__`)."""
     return f"M__{_ident(name)}"
+
+
+def getter_attr(name: str) -> str:
+    """The GET of a property, a method of the block's class."""
+    return f"GET__{_ident(name)}"
+
+
+def setter_attr(name: str) -> str:
+    return f"SET__{_ident(name)}"
 
 
 def _edge_memory(variable: Variable) -> str:
@@ -256,11 +267,13 @@ class _Emitter:
                     return _Value(repr(binding.value), binding.type)
                 if isinstance(binding, ProgramRef):
                     return _Value(f"_P.{class_name(binding.pou.name)}", FbType(binding.pou.name))
-                assert binding is not None
+                if binding is None:  # a property of the block
+                    return self._property_get(expr)
                 return _implicit(self.var_code(binding), binding.type)
             case ast.MemberRef(base=base):
                 member = self.scope.member(expr)
-                assert member is not None
+                if member is None:
+                    return self._property_get(expr)
                 if member.kind == "SYSTEM":
                     return _Value(self.var_code(member), member.type)
                 return _implicit(f"{self.expr(base).code}.{member.attr}", member.type)
@@ -510,6 +523,32 @@ class _Emitter:
         return _Value(
             builtin.emit([v.code for v in values], [v.type for v in values], result), result
         )
+
+    def _accessor_owner(self, access: PropertyAccess) -> tuple[str, str | None]:
+        """(the object or class whose accessor runs, the instance a static call passes)."""
+        if access.static is not None:
+            return class_name(access.static.name), "s"
+        if access.receiver is None:
+            return "s", None
+        receiver = self.expr(access.receiver).code
+        if isinstance(_type(self.scope, access.receiver), InterfaceType):
+            receiver = f"_deref({receiver})"
+        return receiver, None
+
+    def _property_get(self, expr: ast.Expr) -> _Value:
+        access = self.scope.property_access(expr)
+        assert access is not None
+        owner, first = self._accessor_owner(access)
+        return _Value(f"{owner}.{getter_attr(access.prop.name)}({first or ''})", access.prop.type)
+
+    def _property_set(self, target: ast.Expr, code: str) -> str | None:
+        """The statement that writes `code` through a property's SET (None: no property)."""
+        access = self.scope.property_access(target)
+        if access is None:
+            return None
+        owner, first = self._accessor_owner(access)
+        arguments = f"{first}, {code}" if first else code
+        return f"{owner}.{setter_attr(access.prop.name)}({arguments})"
 
     def _method_call(self, target: MethodCall, call: ast.Call) -> _Value:
         """`inst.M(...)`: the method the instance's class has (an override, dispatched by
@@ -815,6 +854,9 @@ class _Emitter:
         refers to."""
         if isinstance(target, ast.Deref):
             return f"_deref_set({self.expr(target.base).code}, {code})"
+        through_setter = self._property_set(target, code)
+        if through_setter is not None:
+            return through_setter
         held = self.held_reference(target)
         if held is not None:
             return f"_deref_set({held}, {code})"
@@ -1403,9 +1445,10 @@ def _step_variable(scope: Scope, name: str) -> Variable:
     return variable
 
 
-def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0) -> None:
-    """A FUNCTION as a Python function; a method (kind METHOD, `depth` 1) as a function of
-    its block's class, whose first parameter is the instance."""
+def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0, name: str = "") -> None:
+    """A FUNCTION as a Python function; a method (kind METHOD, `depth` 1) as the function
+    `name` of its block's class (a property's GET and SET too), whose first parameter is
+    the instance."""
     inputs = [
         v
         for v in pou.variables
@@ -1413,7 +1456,7 @@ def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0) -> No
     ]  # a variable-length output is bound to the caller's array like an in-out
     params = [f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs]
     if pou.kind == "METHOD":
-        header = f"def {method_attr(pou.name)}({', '.join(['s', *params])}):"
+        header = f"def {name}({', '.join(['s', *params])}):"
     else:
         header = f"def {function_name(pou.name)}({', '.join(params)}):"
     emitter.emit(depth, header)
@@ -1435,9 +1478,14 @@ def _generate_methods(emitter: _Emitter, pou: PouSymbols) -> None:
     override, one that calls the base's (looked up when called: the classes of a
     configuration are made in any order)."""
     resolved = emitter.scope.resolved
-    for _, method in sorted(pou.methods.items()):
+    accessors = [(method_attr(m.name), m) for _, m in sorted(pou.methods.items())]
+    for _, prop in sorted(pou.properties.items()):
+        if prop.getter is not None:
+            accessors.append((getter_attr(prop.name), prop.getter))
+        if prop.setter is not None:
+            accessors.append((setter_attr(prop.name), prop.setter))
+    for attr, method in accessors:
         emitter.emit(0, "")
-        attr = method_attr(method.name)
         if method.declared_in != key(pou.name):
             owner = class_name(resolved.pous[method.declared_in].name)
             emitter.emit(1, f"def {attr}(s, *args, **kwargs):")
@@ -1449,7 +1497,7 @@ def _generate_methods(emitter: _Emitter, pou: PouSymbols) -> None:
             temp_count=emitter.temp_count, st_lines=emitter.st_lines, size=emitter.size,
             max_size=emitter.max_size, method_locals=frozenset(id(v) for v in own),
         )  # fmt: skip
-        _generate_function(inner, method, depth=1)
+        _generate_function(inner, method, depth=1, name=attr)
         emitter.size, emitter.temp_count = inner.size, inner.temp_count
 
 

@@ -18,7 +18,14 @@ from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
-from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable, visible
+from backend.compiler.resolve import (
+    PouSymbols,
+    PropertyInfo,
+    Resolved,
+    StructInfo,
+    Variable,
+    visible,
+)
 from backend.compiler.sizes import codesys_layout
 from backend.compiler.source import Pos
 from backend.compiler.types import (
@@ -115,6 +122,16 @@ class MethodCall:
 
 
 @dataclass(frozen=True)
+class PropertyAccess:
+    """A property read or written: `inst.P`, `itf.P`, `P` or `THIS^.P` inside its block
+    (`receiver` None), `SUPER^.P` (`static`: the base's accessors themselves)."""
+
+    prop: PropertyInfo
+    receiver: ast.Expr | None
+    static: PouSymbols | None = None
+
+
+@dataclass(frozen=True)
 class SuperBody:
     """`SUPER^()`: the body of the base function block, run on this instance."""
 
@@ -157,6 +174,8 @@ class Scope:
     _enum_hints: dict[int, tuple[EnumValue, ast.Expr]] = field(default_factory=dict)
     # the nodes `^` follows (THIS and SUPER need it)
     _dereferenced: set[int] = field(default_factory=set)
+    # the nodes written (assignment targets): a property there is set, not read
+    written: set[int] = field(default_factory=set)
 
     def dereferenced(self, expr: ast.Expr) -> bool:
         return id(expr) in self._dereferenced
@@ -238,6 +257,46 @@ class Scope:
             if isinstance(ends[0], FbType) and isinstance(ends[1], FbType):
                 same_kind = (target.pointer, target.implicit) == (source.pointer, source.implicit)
                 return same_kind and self.resolved.conforms(key(ends[1].name), key(ends[0].name))
+        return False
+
+    def property_access(self, expr: ast.Expr) -> PropertyAccess | None:
+        """The property `expr` names, if it names one (a variable of the name hides it)."""
+        if isinstance(expr, ast.NameRef):
+            block = self.block()
+            if block is None or self.lookup(expr.name) is not None:
+                return None
+            found = block.properties.get(key(expr.name))
+            return PropertyAccess(found, None) if found is not None else None
+        if not isinstance(expr, ast.MemberRef) or self.system_namespace(expr.base):
+            return None
+        if self.self_deref(expr.base) == "SUPER":
+            block = self.block()
+            assert block is not None and block.base is not None
+            base = self.resolved.pous[block.base]
+            found = base.properties.get(key(expr.member))
+            return PropertyAccess(found, expr.base, base) if found is not None else None
+        base_type = self.type_of(expr.base)
+        if isinstance(base_type, FbType):
+            found = self.fb_symbols(base_type).properties.get(key(expr.member))
+        elif isinstance(base_type, InterfaceType):
+            found = self.resolved.interfaces[key(base_type.name)].properties.get(key(expr.member))
+        else:
+            return None
+        return PropertyAccess(found, expr.base) if found is not None else None
+
+    def may_call(self, method: PouSymbols) -> bool:
+        """Whether the code here may call a method (or a property's accessor): PUBLIC and
+        INTERNAL ones from anywhere (a project is one namespace); PRIVATE ones from the
+        block that declares them; PROTECTED ones from it and the blocks derived from it."""
+        if method.access in ("PUBLIC", "INTERNAL"):
+            return True
+        block = self.block()
+        while block is not None:
+            if key(block.name) == method.declared_in:
+                return True
+            if method.access == "PRIVATE" or block.base is None:
+                return False
+            block = self.resolved.pous[block.base]
         return False
 
     def super_body(self, call: ast.Call) -> SuperBody | None:
@@ -352,13 +411,17 @@ class Scope:
             case ast.NameRef(name=name):
                 binding = self.enum_hint(expr) or self.lookup(name)
                 if binding is None:
-                    return None
+                    found = self.property_access(expr)
+                    return found.prop.type if found is not None else None
                 if isinstance(binding, Variable | EnumValue):
                     return value_type(binding.type)
                 return FbType(binding.pou.name)
             case ast.MemberRef():
                 member = self.member(expr)
-                return value_type(member.type) if member is not None else None
+                if member is None:
+                    found = self.property_access(expr)
+                    return found.prop.type if found is not None else None
+                return value_type(member.type)
             case ast.IndexRef():
                 return self._index(expr)
             case ast.BitRef(base=base, width=width):

@@ -391,8 +391,8 @@ def _fb_dependencies(resolved: Resolved, *names: str) -> list[str]:
         pou = resolved.pous[current]
         if pou.base is not None:
             stack.append(pou.base)
-        methods = [m for m in pou.methods.values() if m.declared_in == current]
-        for variable in (*pou.variables, *(v for m in methods for v in m.variables)):
+        routines = pou.own_routines()
+        for variable in (*pou.variables, *(v for r in routines for v in r.variables)):
             stack.extend(_fb_types_in(resolved, variable.type))
     return sorted(seen)
 

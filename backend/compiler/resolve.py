@@ -75,6 +75,16 @@ class PouSymbols:
     base: str | None = None  # the key of the function block this one EXTENDS
     # the keys of the interfaces it implements: its own, its base's, and what they extend
     interfaces: tuple[str, ...] = ()
+    # its properties by key, the inherited ones among them
+    properties: dict[str, PropertyInfo] = field(default_factory=dict)
+
+    def own_routines(self) -> list[PouSymbols]:
+        """The methods and property accessors this block declares itself (not inherited),
+        by name: code that runs on its instances."""
+        routines = [m for _, m in sorted(self.methods.items())]
+        for _, prop in sorted(self.properties.items()):
+            routines += [a for a in (prop.getter, prop.setter) if a is not None]
+        return [r for r in routines if r.declared_in == key(self.name)]
 
     @property
     def access(self) -> str:
@@ -108,6 +118,25 @@ class EnumInfo:
     values: dict[str, tuple[str, int]]  # key -> (spelling, value), in declaration order
 
 
+@dataclass(frozen=True)
+class PropertyInfo:
+    """A PROPERTY: its GET as a method without parameters whose result is the property's
+    value, its SET as a method whose one input, named like the property, is the value
+    written (either may be missing: read-only, write-only)."""
+
+    name: str
+    type: Type
+    getter: PouSymbols | None
+    setter: PouSymbols | None
+    declared_in: str
+    pos: Pos
+
+    @property
+    def access(self) -> str:
+        accessor = self.getter or self.setter
+        return accessor.access if accessor is not None else "PROTECTED"
+
+
 @dataclass
 class InterfaceInfo:
     decl: ast.Interface
@@ -115,6 +144,7 @@ class InterfaceInfo:
     # `declared_in` the interface's key; always PUBLIC)
     methods: dict[str, PouSymbols] = field(default_factory=dict)
     extends: tuple[str, ...] = ()  # the keys of every interface it extends, transitively
+    properties: dict[str, PropertyInfo] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -510,6 +540,7 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
         result.pous[name] = _resolve_pou(seen[name], types, result)
     _resolve_interfaces(units, types, result)
     _resolve_methods(types, result)
+    _resolve_properties(types, result)
     _inherit(result)
     _implemented(result)
     _implicit_globals(units, result)
@@ -727,6 +758,7 @@ def _inherit(result: Resolved) -> None:
         for variable in inherited:
             pou.by_key[key(variable.name)] = variable
         pou.methods = {**base.methods, **pou.methods}
+        pou.properties = {**base.properties, **pou.properties}
 
     for name in sorted(result.pous):
         settle(name, ())
@@ -754,6 +786,11 @@ def _resolve_interfaces(
                     message = f"method '{method.name}' is declared twice in '{interface.name}'"
                     result.diagnostics.append(Diagnostic.at(method.pos, Code.METHOD_NAME, message))
                 info.methods[key(method.name)] = prototype
+            for prop in interface.properties:
+                public_property = replace(prop, access="PUBLIC")
+                found = resolve_property(public_property, None, types, result, name)
+                if found is not None:
+                    info.properties[key(prop.name)] = found
             result.interfaces[name] = info
     done: set[str] = set()
 
@@ -778,6 +815,7 @@ def _resolve_interfaces(
             settle(base, (*chain, name))
             closure += [base, *result.interfaces[base].extends]
             info.methods = {**result.interfaces[base].methods, **info.methods}
+            info.properties = {**result.interfaces[base].properties, **info.properties}
         info.extends = tuple(sorted(set(closure)))
 
     for name in sorted(result.interfaces):
@@ -808,3 +846,60 @@ def _depth(result: Resolved, name: str) -> tuple[int, str]:
     while current is not None and depth <= len(result.pous):
         depth, current = depth + 1, result.pous[current].base
     return depth, name
+
+
+def _accessor(prop: ast.Property, accessor: ast.Accessor, prop_type: ast.TypeRef) -> ast.Method:
+    """A GET or SET as the method it is: GET gives the property's value (its result named
+    like the property), SET takes it (an input named like the property)."""
+    blocks = accessor.var_blocks
+    if accessor.kind == "SET":
+        value = ast.VarDecl(prop.name, prop_type, None, None, prop.pos)
+        blocks = (ast.VarBlock("VAR_INPUT", (), (value,), accessor.pos), *blocks)
+    return_type = prop_type if accessor.kind == "GET" else None
+    return ast.Method(
+        prop.name, prop.access, prop.modifiers, return_type, blocks, accessor.body, accessor.pos
+    )
+
+
+def resolve_property(
+    prop: ast.Property,
+    owner: PouSymbols | None,
+    types: _TypeResolver,
+    result: Resolved,
+    declared_in: str,
+) -> PropertyInfo | None:
+    """A property of a block (`owner`) or an interface (`declared_in`)."""
+    prop_type = types.resolve_spec(prop.type, {})
+    if prop_type is None:
+        return None
+    accessors: dict[str, PouSymbols] = {}
+    for accessor in prop.accessors:
+        if accessor.kind in accessors:
+            message = f"property '{prop.name}' has two {accessor.kind}s"
+            result.diagnostics.append(Diagnostic.at(accessor.pos, Code.METHOD_NAME, message))
+            continue
+        method = _accessor(prop, accessor, prop.type)
+        accessors[accessor.kind] = _resolve_method(method, owner, types, result, declared_in)
+    return PropertyInfo(
+        prop.name, prop_type, accessors.get("GET"), accessors.get("SET"), declared_in, prop.pos
+    )
+
+
+def _resolve_properties(types: _TypeResolver, result: Resolved) -> None:
+    """The properties each PROGRAM and FUNCTION_BLOCK declares itself."""
+    for _, pou in sorted(result.pous.items()):
+        for prop in pou.pou.properties:
+            name = key(prop.name)
+            variable = pou.by_key.get(name)
+            clash = variable.pos if variable is not None and variable.kind != "RETURN" else None
+            if name in pou.methods:
+                clash = pou.methods[name].pou.pos
+            if name in pou.properties:
+                clash = pou.properties[name].pos
+            if clash is not None:
+                message = f"property '{prop.name}': the name is already used at {clash}"
+                result.diagnostics.append(Diagnostic.at(prop.pos, Code.METHOD_NAME, message))
+                continue
+            info = resolve_property(prop, pou, types, result, key(pou.name))
+            if info is not None:
+                pou.properties[name] = info

@@ -407,3 +407,148 @@ END_PROGRAM
     ]
     for line in expected:
         assert line in found, (line, found)
+
+
+MOTOR = """
+FUNCTION_BLOCK Motor
+VAR speed : INT; limit : INT := 100; writes : INT; END_VAR
+PROPERTY PUBLIC Velocity : INT
+GET
+  Velocity := speed;
+END_GET
+SET
+  VAR clipped : INT; END_VAR
+  clipped := MIN(Velocity, limit);
+  speed := clipped;
+  writes := writes + 1;
+END_SET
+END_PROPERTY
+PROPERTY PUBLIC MaxSpeed : INT
+GET
+  MaxSpeed := limit;
+END_GET
+END_PROPERTY
+speed := speed + 1;
+IF Velocity > 50 THEN Velocity := 10; END_IF;  (* inside the block: by its name *)
+END_FUNCTION_BLOCK
+"""
+
+
+def test_a_property_runs_its_get_when_read_and_its_set_when_written(tmp_path: Path) -> None:
+    source = (
+        MOTOR
+        + """
+PROGRAM Main
+VAR m : Motor; k, seen, most : INT; END_VAR
+k := k + 1;
+m();
+IF k = 2 THEN m.Velocity := 500; END_IF;
+seen := m.Velocity;
+most := m.MaxSpeed;
+END_PROGRAM
+"""
+    )
+    t = sim_trace(tmp_path, source, 4)
+    # cycle 2: the SET clips 500 to the limit; cycle 3: the body's own write sets 10
+    assert t["Main.m.speed"] == [1, 100, 10, 11]
+    assert t["Main.seen"] == [1, 100, 10, 11]
+    assert t["Main.m.writes"] == [0, 1, 2, 2]
+    assert t["Main.most"] == [100] * 4
+    assert "Main.m.Velocity" not in t and "Main.m.clipped" not in t  # no variables
+
+
+def test_properties_through_interfaces_overrides_and_super(tmp_path: Path) -> None:
+    source = """
+INTERFACE IGauge
+PROPERTY Value : INT
+GET END_GET
+END_PROPERTY
+END_INTERFACE
+INTERFACE ISettable EXTENDS IGauge
+PROPERTY Value : INT
+GET END_GET
+SET END_SET
+END_PROPERTY
+END_INTERFACE
+FUNCTION_BLOCK Tank IMPLEMENTS ISettable
+VAR fill : INT; END_VAR
+PROPERTY PUBLIC Value : INT
+GET Value := fill; END_GET
+SET fill := Value; END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK BigTank EXTENDS Tank
+PROPERTY PUBLIC Value : INT
+GET Value := 1000 + SUPER^.Value; END_GET
+SET SUPER^.Value := Value * 2; END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR t : Tank; b : BigTank; g : IGauge; s : ISettable; x : INT; k : INT; END_VAR
+k := k + 1;
+IF k = 1 THEN s := t; ELSE s := b; END_IF;
+g := s;
+s.Value := s.Value + 1;
+x := g.Value;
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 3)
+    assert t["Main.g"] == ["Main.t", "Main.b", "Main.b"]
+    assert t["Main.t.fill"] == [1, 1, 1]
+    # BigTank reads 1000 + fill and stores twice what it is given: (1000 + 0 + 1) * 2
+    assert t["Main.b.fill"] == [0, 2002, 6006]
+    assert t["Main.x"] == [1, 3002, 7006]
+
+
+def test_the_refusals_of_properties() -> None:
+    source = """
+INTERFACE ISettable
+PROPERTY Value : INT
+GET END_GET
+SET END_SET
+END_PROPERTY
+END_INTERFACE
+TYPE P : STRUCT x : INT; END_STRUCT END_TYPE
+FUNCTION_BLOCK Tank
+VAR p0 : P; END_VAR
+PROPERTY PRIVATE Secret : INT
+GET Secret := 1; END_GET
+END_PROPERTY
+PROPERTY PUBLIC RO : INT
+GET RO := 1; END_GET
+END_PROPERTY
+PROPERTY PUBLIC WO : INT
+SET p0.x := WO; END_SET
+END_PROPERTY
+PROPERTY PUBLIC Pt : P
+GET Pt := p0; END_GET
+SET p0 := Pt; END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Bad IMPLEMENTS ISettable
+PROPERTY PUBLIC Value : INT
+GET Value := 1; END_GET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR t : Tank; b : Bad; x : INT; r : REF_TO INT; END_VAR
+x := t.Secret;
+t.RO := 3;
+x := t.WO;
+t.Pt.x := 5;
+r := REF(t.RO);
+END_PROGRAM
+"""
+    found = diagnostics(source)
+    expected = [
+        "t.st:25:1: error: property 'Value' of interface 'ISettable': 'Bad' implements it "
+        "without the GET or SET the interface declares [E0134]",
+        "t.st:32:6: error: property 'Secret' of 'Tank' is PRIVATE [E0414]",
+        "t.st:33:1: error: property 'RO' is read-only: it has no SET [E0313]",
+        "t.st:34:6: error: property 'WO' is write-only: it has no GET [E0313]",
+        "t.st:35:1: error: a property is written whole: read it, change the copy, write it "
+        "back [E0313]",
+        "t.st:36:6: error: REF of a property, which is no variable [E0219]",
+    ]
+    for line in expected:
+        assert line in found, (line, found)

@@ -9,7 +9,7 @@ from backend.compiler.ast import key
 from backend.compiler.checks.calls import check_connection
 from backend.compiler.checks.functions import check_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
-from backend.compiler.checks.targets import is_lvalue, writable_target
+from backend.compiler.checks.targets import check_accessor, is_lvalue, writable_target
 from backend.compiler.codes import Code
 from backend.compiler.infer import SELF_NAMES, MethodCall, Scope
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
@@ -21,7 +21,7 @@ def check_method_call(scope: Scope, call: ast.Call, target: MethodCall, as_value
     if as_value and method.return_type is None:
         message = f"method '{method.name}' has no result; call it as a statement"
         scope.report(call.pos, Code.METHOD_VALUE, message)
-    if not _may_call(scope.resolved, scope.block(), method):
+    if not scope.may_call(method):
         where = scope.resolved.pous[method.declared_in].name
         message = f"method '{method.name}' of '{where}' is {method.access}"
         if method.method is not None and method.method.access is None:
@@ -41,19 +41,12 @@ def check_method_call(scope: Scope, call: ast.Call, target: MethodCall, as_value
             check_argument(scope, arg, param)
 
 
-def _may_call(resolved: Resolved, caller: PouSymbols | None, method: PouSymbols) -> bool:
-    """PUBLIC and INTERNAL (a project is one namespace) from anywhere; PRIVATE from the
-    block that declares the method; PROTECTED from it and the blocks derived from it."""
-    if method.access in ("PUBLIC", "INTERNAL"):
-        return True
-    block = caller
-    while block is not None:
-        if key(block.name) == method.declared_in:
-            return True
-        if method.access == "PRIVATE" or block.base is None:
-            return False
-        block = resolved.pous[block.base]
-    return False
+def check_property_read(scope: Scope, expr: ast.Expr) -> None:
+    """A property read (not an assignment's target): it has a GET the code may call."""
+    found = scope.property_access(expr)
+    if found is None or id(expr) in scope.written:
+        return
+    check_accessor(scope, expr, found, "GET")
 
 
 def check_self_name(scope: Scope, name: ast.NameRef, dereferenced: bool) -> None:
@@ -146,14 +139,40 @@ def check_implementations(scope: Scope, pou: PouSymbols) -> None:
                     f"'{pou.name}' {problem}"
                 )
                 scope.report(pou.pou.pos, Code.INTERFACE_METHOD, message)
+        for name, wanted in sorted(interface.properties.items()):
+            if wanted.declared_in != interface_key:
+                continue
+            prop = pou.properties.get(name)
+            problem = None
+            if prop is None:
+                problem = "does not implement it"
+            elif prop.type != wanted.type:
+                problem = f"implements it of type {prop.type.name}, not {wanted.type.name}"
+            elif (wanted.getter and not prop.getter) or (wanted.setter and not prop.setter):
+                problem = "implements it without the GET or SET the interface declares"
+            elif prop.access not in ("PUBLIC", "INTERNAL"):
+                problem = f"implements it {prop.access}; an interface's properties are PUBLIC"
+            if problem is not None:
+                message = (
+                    f"property '{wanted.name}' of interface '{interface.name}': "
+                    f"'{pou.name}' {problem}"
+                )
+                scope.report(pou.pou.pos, Code.INTERFACE_METHOD, message)
 
 
 def check_interface(scope: Scope, interface_key: str) -> None:
-    """An interface declares prototypes only: methods without a body."""
-    for prototype in scope.resolved.interfaces[interface_key].decl.methods:
+    """An interface declares prototypes only: methods and property accessors without a
+    body."""
+    decl = scope.resolved.interfaces[interface_key].decl
+    for prototype in decl.methods:
         if prototype.body:
             message = f"method '{prototype.name}' of an interface has no body"
             scope.report(prototype.pos, Code.INTERFACE_METHOD, message)
+    for prop in decl.properties:
+        for accessor in prop.accessors:
+            if accessor.body:
+                message = f"{accessor.kind} of property '{prop.name}' of an interface has no body"
+                scope.report(accessor.pos, Code.INTERFACE_METHOD, message)
 
 
 def check_attempt(scope: Scope, target: ast.Expr, value: ast.Initializer) -> None:

@@ -135,10 +135,9 @@ def _reachable(resolved: Resolved, pou_key: str) -> Iterator[PouSymbols]:
         pending.extend(sorted(_callees(resolved, pou)))
         if pou.base is not None:  # its body and methods may run on the instance
             pending.append(pou.base)
-        for _, method in sorted(pou.methods.items()):  # the inherited ones with their base
-            if method.declared_in == current:
-                yield method
-                pending.extend(sorted(_callees(resolved, method)))
+        for routine in pou.own_routines():  # the inherited ones come with their base
+            yield routine
+            pending.extend(sorted(_callees(resolved, routine)))
 
 
 def _global(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:

@@ -45,6 +45,8 @@ def _unreferenceable(scope: Scope, expr: ast.Expr) -> str | None:
         case ast.MemberRef(base=base):
             if scope.system_namespace(base):
                 return "a system variable"
+            if scope.property_access(expr) is not None:
+                return "a property, which is no variable"
             return _unreferenceable(scope, base)
         case ast.IndexRef(base=base):
             return _unreferenceable(scope, base)
