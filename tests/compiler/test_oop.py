@@ -552,3 +552,22 @@ END_PROGRAM
     ]
     for line in expected:
         assert line in found, (line, found)
+
+
+def test_a_block_with_temporaries_and_methods_compiles_and_runs(tmp_path: Path) -> None:
+    source = """
+FUNCTION_BLOCK F
+VAR_TEMP t : INT; END_VAR
+VAR n : INT; END_VAR
+METHOD PUBLIC Two : INT
+Two := 2;
+END_METHOD
+t := Two();
+n := n + t;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; END_VAR
+f();
+END_PROGRAM
+"""
+    assert sim_trace(tmp_path, source, 2)["Main.f.n"] == [2, 4]

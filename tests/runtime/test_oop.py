@@ -1,11 +1,17 @@
 """Instances with methods and inherited members in the runtime's world (docs/language.md,
 "Object orientation"): an inherited member is an ordinary member of the instance for the
-OLT, writes and forcing; a reload that changes a method's code only carries every value
-over and runs the new code; one that adds a variable to a base block changes the layout of
-every block derived from it, whose values are carried by name."""
+OLT, writes, forcing and a warm start; an interface variable is a reference. A reload that
+changes a method's code only carries every value over and runs the new code; one that
+adds a variable to a base block changes the layout of every block derived from it, whose
+values are carried by name."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
+from runtime.context import ContextInvalid, load_context, save_context
+from runtime.resource import Resource
+from runtime.restart import take_context, warm_start
 from tests.support.resource_harness import compiled, harness
 
 PLANT = """
@@ -130,3 +136,24 @@ def test_a_reload_begins_an_interface_as_null_and_the_program_sets_it_again() ->
     assert h.value("Main.source") is None
     h.cycle()
     assert (h.value("Main.source"), h.value("Main.seen")) == ("Main.tank", 41)
+
+
+def test_a_warm_start_keeps_inherited_members_and_begins_interfaces_as_null(
+    tmp_path: Path,
+) -> None:
+    plant = PLANT + DISPATCH.replace("PROGRAM Main", "PROGRAM Other")
+    h = harness(plant)
+    h.cycle(3)
+    assert h.value("Other.source") == "Other.tank"
+    context = take_context(h.resource)
+    assert context is not None
+    save_context(tmp_path / "context.json", context)
+    artifact = compiled(plant)
+    again = Resource("R", h.clock)
+    again.load(artifact)
+    saved = load_context(tmp_path / "context.json", artifact.crc)
+    assert not isinstance(saved, ContextInvalid), saved
+    warm_start(again, saved)
+    assert again.variables.value("Main.pump.speed") == 3  # declared by the base block
+    assert again.variables.value("Main.pump.strokes") == 6
+    assert again.variables.value("Other.source") is None
