@@ -95,6 +95,12 @@ def _check_method(resolved: Resolved, method: PouSymbols) -> list[Diagnostic]:
     scope = Scope(resolved, method, check_expression)
     order = declaration_order(method.variables)
     for variable in method.variables:
+        if variable.kind in ("VAR_INST", "VAR_STAT"):
+            message = (
+                f"'{variable.name}': padt has no {variable.kind} in methods yet (a method's "
+                "variables are temporary); declare it a VAR of the block"
+            )
+            scope.report(variable.pos, Code.METHOD_STATIC, message)
         if variable.kind != "VAR_GLOBAL":
             check_abstract_instance(scope, variable)
             check_initializer(scope, variable.type, variable.init)

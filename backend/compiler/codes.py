@@ -182,6 +182,7 @@ class Code(Enum):
     DATA_DEPTH = "E0711", "data types nested too deep"
     DATA_SIZE = "E0712", "too much data"
     CODE_SIZE = "E0713", "generated code too large"
+    METHOD_STATIC = "E0714", "static variables of a method (VAR_INST, VAR_STAT)"
 
     # ---- 08: extensions of other dialects, accepted with a warning
     QUALIFIED_ENUM = "W0801", "qualified enumeration value E.Value (CODESYS/TwinCAT)"

@@ -571,3 +571,33 @@ f();
 END_PROGRAM
 """
     assert sim_trace(tmp_path, source, 2)["Main.f.n"] == [2, 4]
+
+
+def test_a_global_a_method_writes_is_written_by_each_program_that_calls_it() -> None:
+    source = """
+VAR_GLOBAL g : INT; END_VAR
+FUNCTION_BLOCK F
+VAR_EXTERNAL g : INT; END_VAR
+METHOD PUBLIC Bump
+g := g + 1;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Pump
+VAR_EXTERNAL g : INT; END_VAR
+METHOD PUBLIC Reset
+g := 0;
+END_METHOD
+END_PROGRAM
+PROGRAM A
+VAR f : F; END_VAR
+f.Bump();
+END_PROGRAM
+PROGRAM B
+Pump.Reset();
+END_PROGRAM
+"""
+    found = [d for d in diagnostics(source) if "[E0606]" in d]
+    assert found == [
+        "t.st:12:1: error: global 'g' is written by the user programs Pump, A, B; global data "
+        "must have one writer [E0606]"
+    ]

@@ -193,12 +193,15 @@ def _root_name(expr: ast.Expr) -> ast.NameRef | None:
 
 def _callees(resolved: Resolved, pou: PouSymbols) -> set[str]:
     """POUs this one may run: its FB instances' types and every function or program named
-    in a call."""
+    in a call (or whose method or action it calls)."""
     found = {key(v.type.name) for v in pou.variables if isinstance(v.type, FbType)}
     for statement in _statements(pou):
         for call in _calls_in(statement):
             if key(call.name) in resolved.pous:
                 found.add(key(call.name))
+            receiver = call.receiver
+            if isinstance(receiver, ast.NameRef) and key(receiver.name) in resolved.pous:
+                found.add(key(receiver.name))  # `Prog.Method()`, `Prog.Action()`
     return found
 
 
