@@ -327,7 +327,7 @@ class Scope:
         if receiver is None:
             if self.variable(call.name) is not None:
                 return None
-            owner = self.pou
+            owner = self.block() or self.pou  # a method calls its block's actions
         elif isinstance(receiver, ast.NameRef) and isinstance(
             program := self.lookup(receiver.name), ProgramRef
         ):

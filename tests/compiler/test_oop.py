@@ -601,3 +601,41 @@ END_PROGRAM
         "t.st:12:1: error: global 'g' is written by the user programs Pump, A, B; global data "
         "must have one writer [E0606]"
     ]
+
+
+def test_a_block_extends_a_standard_function_block(tmp_path: Path) -> None:
+    source = """
+FUNCTION_BLOCK HalfTon EXTENDS TON
+VAR_OUTPUT half : BOOL; END_VAR
+SUPER^();                 (* the timer itself *)
+half := ET >= PT / 2;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR t : HalfTon; END_VAR
+t(IN := TRUE, PT := T#400ms);
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 6)
+    assert t["Main.t.ET"] == [0, 100, 200, 300, 400, 400]
+    assert t["Main.t.half"] == [False, False, True, True, True, True]
+    assert t["Main.t.Q"] == [False, False, False, False, True, True]
+
+
+def test_a_method_calls_an_action_of_its_block(tmp_path: Path) -> None:
+    source = """
+FUNCTION_BLOCK Pump
+VAR strokes : INT; END_VAR
+METHOD PUBLIC Prime
+Stroke();
+Stroke();
+END_METHOD
+ACTION Stroke:
+  strokes := strokes + 1;
+END_ACTION
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR p : Pump; END_VAR
+p.Prime();
+END_PROGRAM
+"""
+    assert sim_trace(tmp_path, source, 2)["Main.p.strokes"] == [2, 4]
