@@ -72,6 +72,7 @@ class Code(Enum):
     OVERRIDE_SIGNATURE = "E0132", "method that overrides with another signature"
     INTERFACE = "E0133", "IMPLEMENTS or EXTENDS of something that is no interface"
     INTERFACE_METHOD = "E0134", "interface method not implemented as declared"
+    MEMBER_OWNER = "E0135", "method or property after no block or interface"
 
     # ---- 02: names, types and expressions
     UNDECLARED = "E0201", "name not declared"

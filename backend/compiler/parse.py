@@ -222,6 +222,9 @@ def _with_actions_blocks(items: list[Any]) -> tuple[list[Any], list[Diagnostic]]
     result: list[Any] = []
     errors: list[Diagnostic] = []
     for item in items:
+        if isinstance(item, ast.Method | ast.Property):
+            errors.extend(_attach_member(result, item))
+            continue
         if not isinstance(item, _ActionsBlock):
             result.append(item)
             continue
@@ -247,6 +250,27 @@ class _Clause:
 
     keyword: str
     names: tuple[str, ...]
+
+
+def _attach_member(result: list[Any], member: ast.Method | ast.Property) -> list[Diagnostic]:
+    """A METHOD or PROPERTY after END_FUNCTION_BLOCK, END_PROGRAM or END_INTERFACE (the
+    text form of TwinCAT): a member of the last block or interface before it."""
+    owners = [
+        i
+        for i, item in enumerate(result)
+        if isinstance(item, ast.Interface)
+        or (isinstance(item, ast.Pou) and item.kind != "FUNCTION")
+    ]
+    if not owners:
+        kind = "method" if isinstance(member, ast.Method) else "property"
+        message = f"{kind} '{member.name}' follows no FUNCTION_BLOCK, PROGRAM or INTERFACE"
+        return [Diagnostic.at(member.pos, Code.MEMBER_OWNER, message)]
+    owner = result[owners[-1]]
+    if isinstance(member, ast.Method):
+        result[owners[-1]] = replace(owner, methods=(*owner.methods, member))
+    else:
+        result[owners[-1]] = replace(owner, properties=(*owner.properties, member))
+    return []
 
 
 class _ToAst(Transformer[Token, Any]):

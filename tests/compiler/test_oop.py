@@ -639,3 +639,56 @@ p.Prime();
 END_PROGRAM
 """
     assert sim_trace(tmp_path, source, 2)["Main.p.strokes"] == [2, 4]
+
+
+def test_methods_and_properties_after_the_block_as_twincat_writes_them(tmp_path: Path) -> None:
+    source = """
+INTERFACE I_Counter
+END_INTERFACE
+
+METHOD Tick : INT
+END_METHOD
+
+FUNCTION_BLOCK FB_Counter
+VAR
+    iLast : INT;
+    calls : INT;
+END_VAR
+calls := calls + 1;
+END_FUNCTION_BLOCK
+
+METHOD PUBLIC Tick : INT
+iLast := iLast + 1;
+Tick := iLast;
+END_METHOD
+
+PROPERTY PUBLIC Count : INT
+GET
+Count := calls;
+END_GET
+END_PROPERTY
+
+FUNCTION_BLOCK FB_Ten IMPLEMENTS I_Counter
+VAR n : INT; END_VAR
+END_FUNCTION_BLOCK
+
+METHOD PUBLIC Tick : INT
+n := n + 10;
+Tick := n;
+END_METHOD
+
+PROGRAM Main
+VAR fb : FB_Counter; ten : FB_Ten; c : I_Counter; a, b : INT; END_VAR
+fb();
+a := fb.Tick() + fb.Count;
+c := ten;
+b := c.Tick();
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 2)
+    assert t["Main.a"] == [2, 4]
+    assert t["Main.b"] == [10, 20]
+    orphan = "METHOD PUBLIC Start\nEND_METHOD\n" + source
+    assert diagnostics(orphan) == [
+        "t.st:1:15: error: method 'Start' follows no FUNCTION_BLOCK, PROGRAM or INTERFACE [E0135]"
+    ]
