@@ -95,7 +95,7 @@ class Code(Enum):
     NOT_A_REFERENCE = "E0218", "dereference of something that is no reference"
     REFERENCE_TARGET = "E0219", "reference to something that is no lasting variable"
     REFERENCE_BINDING = "E0220", "misused REFERENCE TO"
-    THIS_SUPER = "E0221", "THIS or SUPER where there is none, or without ^"
+    THIS_SUPER = "E0221", "THIS or SUPER where there is none, or SUPER without ^"
 
     # ---- 03: statements and assignments
     ASSIGN_CONSTANT = "E0301", "assignment to a constant"

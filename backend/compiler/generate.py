@@ -269,6 +269,8 @@ class _Emitter:
                     return _Value(f"_P.{class_name(binding.pou.name)}", FbType(binding.pou.name))
                 if binding is None:  # a property of the block
                     return self._property_get(expr)
+                if binding.kind == "THIS":  # a reference to the instance the code runs on
+                    return _Value("_ref(s, (), '')", binding.type)
                 return _implicit(self.var_code(binding), binding.type)
             case ast.MemberRef(base=base):
                 member = self.scope.member(expr)
@@ -344,7 +346,8 @@ class _Emitter:
                 member = self.scope.member(expr)
                 assert member is not None
                 root, steps, label, whole = self._place(base)
-                return root, [*steps, repr(member.attr)], f"{label} + {'.' + member_name!r}", whole
+                named = repr(member_name) if label == "''" else f"{label} + {'.' + member_name!r}"
+                return root, [*steps, repr(member.attr)], named, whole
             case ast.IndexRef(base=base, indices=indices):
                 array = _type(self.scope, base)
                 assert isinstance(array, ArrayType)
@@ -355,6 +358,8 @@ class _Emitter:
                 root, steps, label, whole = self._place(base)
                 shown = " + ', ' + ".join(f"str({t})" for t in held)
                 return root, [*steps, f"({offset})"], f"{label} + '[' + {shown} + ']'", whole
+            case ast.Deref() if self.scope.self_deref(expr) is not None:
+                return "s", [], "''", False  # THIS^: the instance, named by its own path
             case ast.Deref(base=base):  # REF(r^.x): below what r refers to, named by r
                 code = self.expr(base).code
                 return f"_deref({code})", [], f"str({code}) + '^'", True

@@ -221,7 +221,7 @@ END_PROGRAM
         "access specifier PROTECTED; declare it METHOD PUBLIC to call it from outside) [E0414]",
         "t.st:30:8: error: method 'NoResult' has no result; call it as a statement [E0415]",
         "t.st:31:3: error: 'Missing' is no method of what it is called on [E0416]",
-        "t.st:32:6: error: THIS is a reference to the instance: write THIS^ [E0221]",
+        "t.st:32:6: error: type mismatch: cannot assign REF_TO Main to INT [E0209]",
         "t.st:33:1: error: SUPER exists only in a block that extends another and its methods "
         "[E0221]",
         "t.st:34:8: error: 'Elapsed' is no method of what it is called on [E0416]",
@@ -692,3 +692,48 @@ END_PROGRAM
     assert diagnostics(orphan) == [
         "t.st:1:15: error: method 'Start' follows no FUNCTION_BLOCK, PROGRAM or INTERFACE [E0135]"
     ]
+
+
+def test_an_instance_hands_itself_over_as_this(tmp_path: Path) -> None:
+    source = """
+INTERFACE IListener
+METHOD Notify
+VAR_INPUT v : INT; END_VAR
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Bus
+VAR listener : IListener; END_VAR
+METHOD PUBLIC Subscribe
+VAR_INPUT who : IListener; END_VAR
+listener := who;
+END_METHOD
+METHOD PUBLIC Send
+VAR_INPUT v : INT; END_VAR
+IF listener <> NULL THEN listener.Notify(v); END_IF;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Display IMPLEMENTS IListener
+VAR shown : INT; me : REF_TO Display; field : REF_TO INT; END_VAR
+METHOD PUBLIC Notify
+VAR_INPUT v : INT; END_VAR
+shown := v;
+END_METHOD
+METHOD PUBLIC Attach
+VAR_IN_OUT bus : Bus; END_VAR
+bus.Subscribe(THIS^);      (* the instance, as the interface it implements *)
+me := THIS;                (* THIS alone: a REF_TO the block *)
+field := REF(THIS^.shown);
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR bus : Bus; d : Display; k : INT; END_VAR
+k := k + 1;
+IF k = 1 THEN d.Attach(bus); END_IF;
+bus.Send(k * 7);
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 2)
+    assert t["Main.bus.listener"] == ["Main.d", "Main.d"]
+    assert t["Main.d.shown"] == [7, 14]
+    assert t["Main.d.me"] == ["Main.d", "Main.d"]
+    assert t["Main.d.field"] == ["Main.d.shown", "Main.d.shown"]

@@ -50,8 +50,8 @@ def check_property_read(scope: Scope, expr: ast.Expr) -> None:
 
 
 def check_self_name(scope: Scope, name: ast.NameRef, dereferenced: bool) -> None:
-    """THIS and SUPER: only inside a block (SUPER in one that extends another), followed
-    by `^`."""
+    """THIS and SUPER: only inside a block (SUPER in one that extends another); SUPER
+    only followed by `^` (THIS alone is a REF_TO the block)."""
     if key(name.name) not in SELF_NAMES:
         return
     found = scope.variable(name.name)
@@ -59,8 +59,8 @@ def check_self_name(scope: Scope, name: ast.NameRef, dereferenced: bool) -> None
         where = "in a block that extends another" if key(name.name) == "SUPER" else "in a block"
         message = f"{name.name} exists only {where} and its methods"
         scope.report(name.pos, Code.THIS_SUPER, message)
-    elif found is not None and found.kind in SELF_NAMES and not dereferenced:
-        message = f"{name.name} is a reference to the instance: write {name.name}^"
+    elif found is not None and found.kind == "SUPER" and not dereferenced:
+        message = "SUPER is used with ^: SUPER^.M(), SUPER^()"
         scope.report(name.pos, Code.THIS_SUPER, message)
 
 

@@ -68,6 +68,8 @@ def _lasting(scope: Scope, variable: Variable) -> str | None:
         return f"'{variable.name}', a VAR_TEMP (it is gone when the call ends)"
     if variable.kind == "VAR_IN_OUT":
         return f"'{variable.name}', an in-out (its place belongs to the caller)"
+    if variable.kind in ("THIS", "SUPER"):
+        return f"{variable.name}, which is a reference already"
     if variable.kind in ("SYSTEM", "STEP"):
         return f"'{variable.name}', which the runtime keeps"
     return None
