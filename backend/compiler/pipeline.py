@@ -443,6 +443,9 @@ def _type_text(t: Type) -> str:
         return f"{t.name}[{t.max_length}]"
     if isinstance(t, InterfaceType):  # a reference to the instance it is assigned
         return f"INTERFACE {t.name}"
+    if isinstance(t, ArrayType) and isinstance(t.element, InterfaceType):  # elements too
+        ranges = ", ".join(f"{low}..{high}" for low, high in t.dims)
+        return f"ARRAY[{ranges}] OF {_type_text(t.element)}"
     return t.name
 
 

@@ -157,3 +157,25 @@ def test_a_warm_start_keeps_inherited_members_and_begins_interfaces_as_null(
     assert again.variables.value("Main.pump.speed") == 3  # declared by the base block
     assert again.variables.value("Main.pump.strokes") == 6
     assert again.variables.value("Other.source") is None
+
+
+def test_an_array_of_interfaces_holds_references_that_a_reload_begins_as_null() -> None:
+    plant = DISPATCH.replace(
+        "VAR tank : Tank; source : ISource; seen : INT; END_VAR",
+        "VAR tank : Tank; source : ISource; seen : INT; all : ARRAY[1..2] OF ISource; END_VAR",
+    ).replace("seen := source.Level();", "seen := source.Level();\nall[2] := tank;")
+    h = harness(plant)
+    variables = {v["path"]: v["type"] for v in h.ok("variables")["variables"]}
+    assert variables["Main.all"] == "ARRAY[1..2] OF INTERFACE ISource"
+    h.cycle()
+    assert h.ok("values")["values"]["Main.all"] == [None, "Main.tank"]
+    changed = plant.replace("Level := fill;", "Level := fill + 1;")
+    h.send(compiled(changed))
+    changes = {c["path"]: c for c in h.ok("reload_preview")["plan"]["changes"]}
+    assert changes["Main.all"]["action"] == "initialised"
+    assert "starts again as NULL" in changes["Main.all"]["reason"]
+    h.send(compiled(changed))
+    assert h.cmd("reload")["ok"]
+    assert h.value("Main.all") == [None, None]
+    h.cycle()
+    assert h.value("Main.all") == [None, "Main.tank"]
