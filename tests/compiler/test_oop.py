@@ -737,3 +737,30 @@ END_PROGRAM
     assert t["Main.d.shown"] == [7, 14]
     assert t["Main.d.me"] == ["Main.d", "Main.d"]
     assert t["Main.d.field"] == ["Main.d.shown", "Main.d.shown"]
+
+
+def test_a_method_with_an_in_out_a_loop_and_en(tmp_path: Path) -> None:
+    source = """
+FUNCTION_BLOCK Acc
+VAR total : DINT; END_VAR
+METHOD PUBLIC SumTo : DINT
+VAR_INPUT n : INT; END_VAR
+VAR_IN_OUT calls : INT; END_VAR
+VAR i : INT; END_VAR
+FOR i := 1 TO n DO
+  SumTo := SumTo + i;
+END_FOR;
+calls := calls + 1;
+total := total + SumTo;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a : Acc; c : INT; r : DINT; go : BOOL; END_VAR
+r := a.SumTo(n := 4, calls := c);
+a.SumTo(n := 2, calls := c, EN := go);   (* runs from cycle 2 on *)
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 3, "Main.go=TRUE@2")
+    assert t["Main.r"] == [10, 10, 10]  # the result starts at 0 in every call
+    assert t["Main.c"] == [1, 3, 5]
+    assert t["Main.a.total"] == [10, 23, 36]
