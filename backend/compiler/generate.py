@@ -1479,9 +1479,9 @@ def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0, name:
 
 
 def _generate_methods(emitter: _Emitter, pou: PouSymbols) -> None:
-    """The methods of a block's class: its own, and for each one it inherits and does not
-    override, one that calls the base's (looked up when called: the classes of a
-    configuration are made in any order)."""
+    """The methods of a block's class: its own, and each one it inherits and does not
+    override as the declaring block's function itself (the artifact lists, and the runtime
+    makes, a block's class after the classes of the blocks it extends)."""
     resolved = emitter.scope.resolved
     accessors = [(method_attr(m.name), m) for _, m in sorted(pou.methods.items())]
     for _, prop in sorted(pou.properties.items()):
@@ -1491,10 +1491,8 @@ def _generate_methods(emitter: _Emitter, pou: PouSymbols) -> None:
             accessors.append((setter_attr(prop.name), prop.setter))
     for attr, method in accessors:
         emitter.emit(0, "")
-        if method.declared_in != key(pou.name):
-            owner = class_name(resolved.pous[method.declared_in].name)
-            emitter.emit(1, f"def {attr}(s, *args, **kwargs):")
-            emitter.emit(2, f"return {owner}.{attr}(s, *args, **kwargs)")
+        if method.declared_in != key(pou.name):  # the declaring class's own function
+            emitter.emit(1, f"{attr} = {class_name(resolved.pous[method.declared_in].name)}.{attr}")
             continue
         own = [*method.variables, *method.by_key.values()]
         inner = _Emitter(

@@ -218,7 +218,7 @@ def _compile(
     artifact = Artifact(
         project=project,
         resource=resource,
-        pous=tuple(codes[name] for name in sorted(codes)),
+        pous=tuple(codes[name] for name in sorted(codes, key=lambda n: _run_order(resolved, n))),
         programs=program_configs,
         types=types,
         globals=globals_code,
@@ -320,6 +320,15 @@ def _from_configuration(
     positions = {p.name: p.pos for p in chosen.programs}  # where each program was declared
     resource = ResourceConfig(name=chosen.name, target_cycle_ms=cycle_ms, target_cycle_mode="fixed")
     return resource, programs, positions
+
+
+def _run_order(resolved: Resolved, pou_key: str) -> tuple[int, str]:
+    """Where a POU comes in the artifact, which runs its code in that order: a block after
+    the blocks it extends (its class takes their methods as they are), by name otherwise."""
+    depth, base = 0, resolved.pous[pou_key].base
+    while base is not None:
+        depth, base = depth + 1, resolved.pous[base].base
+    return depth, pou_key
 
 
 def _safe_values(

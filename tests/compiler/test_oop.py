@@ -764,3 +764,33 @@ END_PROGRAM
     assert t["Main.r"] == [10, 10, 10]  # the result starts at 0 in every call
     assert t["Main.c"] == [1, 3, 5]
     assert t["Main.a.total"] == [10, 23, 36]
+
+
+def test_three_generations_whose_names_sort_against_their_order(tmp_path: Path) -> None:
+    source = """
+FUNCTION_BLOCK Zeta
+VAR n : INT; END_VAR
+METHOD PUBLIC Step : INT
+n := n + 1;
+Step := n;
+END_METHOD
+METHOD PUBLIC Twice : INT
+Twice := 2 * Step();
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Mid EXTENDS Zeta
+METHOD PUBLIC OVERRIDE Step : INT
+n := n + 10;
+Step := n;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Alpha EXTENDS Mid
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a : Alpha; r : INT; END_VAR
+r := a.Twice();     (* Zeta's Twice, Mid's Step *)
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 2)
+    assert t["Main.r"] == [20, 40]
+    assert t["Main.a.n"] == [10, 20]
