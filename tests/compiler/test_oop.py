@@ -794,3 +794,24 @@ END_PROGRAM
     t = sim_trace(tmp_path, source, 2)
     assert t["Main.r"] == [20, 40]
     assert t["Main.a.n"] == [10, 20]
+
+
+def test_a_method_takes_a_variable_length_array(tmp_path: Path) -> None:
+    source = """
+FUNCTION_BLOCK A
+VAR calls : INT; END_VAR
+METHOD PUBLIC Sum : INT
+VAR_INPUT x : ARRAY[*] OF INT; END_VAR
+VAR i : DINT; END_VAR
+FOR i := LOWER_BOUND(x, 1) TO UPPER_BOUND(x, 1) DO Sum := Sum + x[i]; END_FOR;
+calls := calls + 1;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a : A; v : ARRAY[1..3] OF INT := [1, 2, 3]; w : ARRAY[0..1] OF INT := [10, 20];
+    r : INT; END_VAR
+r := a.Sum(v) + a.Sum(x := w);
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 1)
+    assert (t["Main.r"], t["Main.a.calls"]) == ([36], [2])
