@@ -1076,14 +1076,15 @@ class _Emitter:
         if action is not None:
             self.emit(depth, f"{self._action_instance(action)}.{_action_method(call.name)}()")
             return
-        binding = self.scope.lookup(call.name) if call.receiver is None else None
-        if isinstance(binding, ProgramRef):
-            callee, instance = binding.pou, f"_P.{class_name(binding.pou.name)}"
-        elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
-            callee, instance = self.scope.fb_symbols(binding.type), self.var_code(binding)
-        else:
+        callee = self.scope.called_instance(call)
+        if callee is None:
             self.emit(depth, self.exact(call).code)
             return
+        if call.name == "^":  # `r^(...)`: the instance r refers to
+            assert call.receiver is not None
+            instance = self.expr(call.receiver).code
+        else:  # a program, an instance, what a REFERENCE TO refers to
+            instance = self.expr(ast.NameRef(call.name, call.pos)).code
         enable = self._enable(call, callee)
         if enable is not None:
             self.emit(depth, f"if {enable}:")

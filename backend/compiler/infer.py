@@ -299,6 +299,24 @@ class Scope:
             block = self.resolved.pous[block.base]
         return False
 
+    def called_instance(self, call: ast.Call) -> PouSymbols | None:
+        """The block (or program) whose body a call statement runs: a program, an
+        instance, a REFERENCE TO one (`ref(...)`), or the instance a reference refers to
+        (`r^(...)`; not SUPER^(), which runs the base's body)."""
+        if call.name == "^" and call.receiver is not None:
+            if self.self_deref(call.receiver) is not None:
+                return None
+            target = self.type_of(call.receiver)
+            return self.fb_symbols(target) if isinstance(target, FbType) else None
+        binding = self.lookup(call.name) if call.receiver is None else None
+        if isinstance(binding, ProgramRef):
+            return binding.pou
+        if isinstance(binding, Variable) and isinstance(value_type(binding.type), FbType):
+            instance = value_type(binding.type)
+            assert isinstance(instance, FbType)
+            return self.fb_symbols(instance)
+        return None
+
     def super_body(self, call: ast.Call) -> SuperBody | None:
         """`SUPER^()` in a derived function block."""
         if call.name != "^" or call.receiver is None or self.self_deref(call.receiver) != "SUPER":

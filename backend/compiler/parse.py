@@ -795,8 +795,10 @@ class _ToAst(Transformer[Token, Any]):
         return ast.Assign(target, value, self._pos(tree), attempt=True)
 
     def deref_call(self, items: list[Any]) -> ast.Call:
-        """`SUPER^()`: a call named `^` on the dereferenced receiver."""
-        return ast.Call("^", (), items[0].pos, receiver=ast.Deref(items[0], items[0].pos))
+        """`SUPER^()`, `r^(...)`: a call named `^` on the dereferenced receiver."""
+        receiver, *args = items
+        deref = ast.Deref(receiver, receiver.pos)
+        return ast.Call("^", self._arguments(args), receiver.pos, receiver=deref)
 
     # ---- SFC
     def step_decl(self, items: list[Any]) -> ast.Step:

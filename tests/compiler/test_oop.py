@@ -815,3 +815,57 @@ END_PROGRAM
 """
     t = sim_trace(tmp_path, source, 1)
     assert (t["Main.r"], t["Main.a.calls"]) == ([36], [2])
+
+
+def test_a_block_called_through_a_reference(tmp_path: Path) -> None:
+    source = """
+FUNCTION_BLOCK Cnt
+VAR_INPUT step : INT := 1; END_VAR
+VAR_OUTPUT n : INT; END_VAR
+n := n + step;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a, b : Cnt; r : REF_TO Cnt; k, out : INT; END_VAR
+k := k + 1;
+IF k MOD 2 = 1 THEN r := REF(a); ELSE r := REF(b); END_IF;
+r^(step := 10, n => out);
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 3)
+    assert t["Main.a.n"] == [10, 10, 20]
+    assert t["Main.b.n"] == [0, 10, 10]
+    assert t["Main.out"] == [10, 10, 20]
+    refusals = """
+PROGRAM Main
+VAR r : REF_TO INT; END_VAR
+r^(1);
+THIS^();
+END_PROGRAM
+FUNCTION_BLOCK B
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK D EXTENDS B
+SUPER^(1);
+END_FUNCTION_BLOCK
+"""
+    assert diagnostics(refusals) == [
+        "t.st:4:1: error: r^() calls the function block r refers to, not a value of type INT "
+        "[E0218]",
+        "t.st:5:1: error: THIS^() would run the block's body from inside it: call a method [E0221]",
+        "t.st:10:8: error: SUPER^() runs the base's body: it takes no arguments [E0221]",
+    ]
+
+
+def test_a_block_called_through_a_reference_to_of_codesys(tmp_path: Path) -> None:
+    source = """
+FUNCTION_BLOCK Cnt
+VAR_INPUT step : INT := 1; END_VAR
+VAR_OUTPUT n : INT; END_VAR
+n := n + step;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a : Cnt; ref : REFERENCE TO Cnt; END_VAR
+ref REF= a;
+ref(step := 2);
+END_PROGRAM
+"""
+    assert sim_trace(tmp_path, source, 2)["Main.a.n"] == [2, 4]

@@ -9,9 +9,9 @@ from backend.compiler.checks.initializers import mismatch, takes_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
 from backend.compiler.checks.targets import is_lvalue, refuse_system_write, writable_target
 from backend.compiler.codes import Code
-from backend.compiler.infer import ProgramRef, Scope
+from backend.compiler.infer import Scope
 from backend.compiler.resolve import PouSymbols, Variable
-from backend.compiler.types import FbType, assignable
+from backend.compiler.types import assignable
 
 
 def check_call_statement(scope: Scope, call: ast.Call) -> None:
@@ -19,12 +19,8 @@ def check_call_statement(scope: Scope, call: ast.Call) -> None:
     if action is not None:
         check_action_call(scope, call, action)
         return
-    binding = scope.lookup(call.name) if call.receiver is None else None
-    if isinstance(binding, ProgramRef):
-        callee = binding.pou
-    elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
-        callee = scope.fb_symbols(binding.type)
-    else:
+    callee = scope.called_instance(call)
+    if callee is None:
         scope.type_of(call)  # a function called as a statement
         return
     pairs = scope.connect_arguments(callee, call)
