@@ -757,11 +757,32 @@ def _inherit(result: Resolved) -> None:
         pou.variables[:0] = inherited
         for variable in inherited:
             pou.by_key[key(variable.name)] = variable
+        _name_clashes(pou, base, result)
         pou.methods = {**base.methods, **pou.methods}
         pou.properties = {**base.properties, **pou.properties}
 
     for name in sorted(result.pous):
         settle(name, ())
+
+
+def _name_clashes(pou: PouSymbols, base: PouSymbols, result: Resolved) -> None:
+    """A derived block's own method or property named like a variable of its base, or its
+    own variable named like a method or property of its base."""
+    members = {**base.methods, **base.properties}
+    own = {k: m.pou.pos for k, m in pou.methods.items()}
+    own.update({k: p.pos for k, p in pou.properties.items()})
+    for name in sorted(own):
+        variable = base.by_key.get(name)
+        if variable is not None and variable.kind != "RETURN":
+            message = (
+                f"'{variable.name}' is a variable of '{base.name}' (declared at {variable.pos})"
+            )
+            result.diagnostics.append(Diagnostic.at(own[name], Code.METHOD_NAME, message))
+    for variable in pou.variables:
+        name = key(variable.name)
+        if name in members and name not in base.by_key:
+            message = f"'{variable.name}' is a method or property of '{base.name}'"
+            result.diagnostics.append(Diagnostic.at(variable.pos, Code.METHOD_NAME, message))
 
 
 def _resolve_interfaces(

@@ -869,3 +869,25 @@ ref(step := 2);
 END_PROGRAM
 """
     assert sim_trace(tmp_path, source, 2)["Main.a.n"] == [2, 4]
+
+
+def test_a_derived_block_cannot_reuse_its_bases_names() -> None:
+    source = """
+FUNCTION_BLOCK B
+VAR x : INT; END_VAR
+METHOD PUBLIC M
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK D EXTENDS B
+VAR m : INT; END_VAR
+METHOD PUBLIC X
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR d : D; END_VAR
+END_PROGRAM
+"""
+    assert diagnostics(source) == [
+        "t.st:8:5: error: 'm' is a method or property of 'B' [E0126]",
+        "t.st:9:15: error: 'x' is a variable of 'B' (declared at t.st:3:5) [E0126]",
+    ]
