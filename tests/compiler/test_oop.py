@@ -891,3 +891,30 @@ END_PROGRAM
         "t.st:8:5: error: 'm' is a method or property of 'B' [E0126]",
         "t.st:9:15: error: 'x' is a variable of 'B' (declared at t.st:3:5) [E0126]",
     ]
+
+
+def test_an_interface_output_goes_to_an_interface_it_extends(tmp_path: Path) -> None:
+    source = """
+INTERFACE IBase
+END_INTERFACE
+INTERFACE IMore EXTENDS IBase
+END_INTERFACE
+FUNCTION_BLOCK Impl IMPLEMENTS IMore
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Giver
+VAR_OUTPUT out : IMore; END_VAR
+VAR own : Impl; END_VAR
+METHOD PUBLIC Give
+VAR_OUTPUT o : IMore; END_VAR
+o := own;
+END_METHOD
+out := own;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR g : Giver; b, c : IBase; END_VAR
+g(out => b);
+g.Give(o => c);
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 1)
+    assert (t["Main.b"], t["Main.c"]) == (["Main.g.own"], ["Main.g.own"])

@@ -68,7 +68,8 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
         return
     if arg.is_output or param.kind == "VAR_OUTPUT":
         target_type = writable_target(scope, arg.value)
-        if target_type is not None and not assignable(target_type, param.type):
+        fits = target_type is None or assignable(target_type, param.type)
+        if target_type is not None and not (fits or scope.conforms(target_type, param.type)):
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, mismatch(target_type, param.type))
         return
     if param.kind == "VAR_IN_OUT" and not is_lvalue(arg.value):

@@ -92,7 +92,7 @@ def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
         if isinstance(param.type, OpenArrayType):
             fits = param.type.binds(value_type)  # bound to the array connected
         else:
-            fits = assignable(value_type, param.type)
+            fits = assignable(value_type, param.type) or scope.conforms(value_type, param.type)
         if not fits:
             message = f"cannot store {param.type.name} output in {value_type.name}"
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, message)
