@@ -87,13 +87,15 @@ class Reference(str):
 
 def reference_maker(roots: dict[int, str]) -> Callable[..., Reference]:
     """`_ref` of generated code: REF(x) as the object holding x (`root`), the accessors
-    below it and the ST text below it (`label`); `roots` names the instances the runtime
-    knows (`Instances`), so that the reference reads as a whole path. A label that is
-    already whole (below a dereference: `REF(r^.x)`) is taken as it is."""
+    below it and the ST text below it (`label`, empty for the root itself); `roots` names
+    the instances the runtime knows (`Instances`), so that the reference reads as a whole
+    path. A label that is already whole (below a dereference: `REF(r^.x)`) is taken as it
+    is."""
 
     def make(root: Any, steps: tuple[str | int, ...], label: str, whole: bool = False) -> Reference:
         prefix = "" if whole else roots.get(id(root), "")
-        return Reference(f"{prefix}.{label}" if prefix else label, root, steps)
+        # an empty label: the root itself (THIS, a reference to the instance)
+        return Reference(f"{prefix}.{label}" if prefix and label else prefix or label, root, steps)
 
     return make
 

@@ -140,6 +140,12 @@ def variable_paths(artifact: Artifact) -> list[VariablePath]:
     return paths + image.global_paths()
 
 
+def _holds_references(type_name: str) -> bool:
+    """A reference (REF_TO, an interface variable), or an array of them (one value)."""
+    shape = array_shape(type_name)
+    return is_reference_type(shape.element if shape is not None else type_name)
+
+
 def _changes(
     old: list[VariablePath], new: list[VariablePath], renames: Mapping[str, str]
 ) -> list[VariableChange]:
@@ -155,7 +161,7 @@ def _changes(
         used.add(source.path.upper())
         renamed = source.path if source.path.upper() != path.path.upper() else None
         how = conversion(source.type, path.type)
-        if is_reference_type(path.type):
+        if _holds_references(path.type):
             # what it refers to is an object of the configuration being replaced
             reason = "a reference does not carry over a reload: it starts again as NULL"
             changes.append(

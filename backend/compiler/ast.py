@@ -244,6 +244,7 @@ class Assign:
     value: Initializer
     pos: Pos
     bind: bool = False  # CODESYS `r REF= x`: the REFERENCE TO r now refers to x (value REF(x))
+    attempt: bool = False  # `itf ?= x`: x where it fits the target's type, else NULL
 
 
 @dataclass(frozen=True)
@@ -399,6 +400,42 @@ class Sfc:
 
 
 @dataclass(frozen=True)
+class Method:
+    """`METHOD [access] [ABSTRACT|FINAL|OVERRIDE] Name [: Type] ... END_METHOD` of a function
+    block, program or interface (a prototype there, without a body)."""
+
+    name: str
+    access: str | None  # PUBLIC, PRIVATE, PROTECTED, INTERNAL; None: not written
+    modifiers: tuple[str, ...]  # ABSTRACT, FINAL, OVERRIDE
+    return_type: TypeRef | None
+    var_blocks: tuple[VarBlock, ...]
+    body: tuple[Statement, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class Accessor:
+    """The GET or SET of a property."""
+
+    kind: str  # GET or SET
+    var_blocks: tuple[VarBlock, ...]
+    body: tuple[Statement, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
+class Property:
+    """`PROPERTY [access] Name : Type GET ... END_GET SET ... END_SET END_PROPERTY`."""
+
+    name: str
+    access: str | None
+    modifiers: tuple[str, ...]
+    type: TypeRef
+    accessors: tuple[Accessor, ...]
+    pos: Pos
+
+
+@dataclass(frozen=True)
 class Pou:
     kind: str  # PROGRAM, FUNCTION_BLOCK, FUNCTION
     name: str
@@ -407,6 +444,22 @@ class Pou:
     body: tuple[Statement, ...]
     pos: Pos
     sfc: Sfc | None = None
+    methods: tuple[Method, ...] = ()
+    properties: tuple[Property, ...] = ()
+    extends: tuple[str, ...] = ()  # the base function block (IEC allows one)
+    implements: tuple[str, ...] = ()
+    modifiers: tuple[str, ...] = ()  # ABSTRACT, FINAL
+
+
+@dataclass(frozen=True)
+class Interface:
+    """`INTERFACE Name [EXTENDS I1, I2] METHOD ... END_METHOD ... END_INTERFACE`."""
+
+    name: str
+    extends: tuple[str, ...]
+    methods: tuple[Method, ...]
+    properties: tuple[Property, ...]
+    pos: Pos
 
 
 @dataclass(frozen=True)
@@ -486,6 +539,7 @@ class SourceUnit:
     configurations: tuple[Configuration, ...] = field(default=())
     # direct addresses its statements name (`%MW10 := 42;`), upper-case, first use first
     addresses: tuple[tuple[str, Pos], ...] = field(default=())
+    interfaces: tuple[Interface, ...] = field(default=())
 
 
 def spelling(expr: Expr) -> str:

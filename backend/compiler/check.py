@@ -17,6 +17,12 @@ from backend.compiler.checks.initializers import (
     check_initializer,
     declaration_order,
 )
+from backend.compiler.checks.methods import (
+    check_abstract_instance,
+    check_block_declaration,
+    check_implementations,
+    check_interface,
+)
 from backend.compiler.checks.open_arrays import check_open_array_data, check_open_array_variables
 from backend.compiler.checks.references import check_reference_parameter
 from backend.compiler.checks.sfc import check_sfc
@@ -35,20 +41,27 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}), check_expression)
         order = declaration_order(resolved.globals)
         for variable in resolved.globals:
+            check_abstract_instance(global_scope, variable)
             check_initializer(global_scope, variable.type, variable.init)
             check_constant_initializer(global_scope, variable, order)
         for _, info in sorted(resolved.structs.items()):
             for member in info.members:
                 check_initializer(global_scope, member.type, member.init)
         check_open_array_data(global_scope, resolved)
+        for interface_key in sorted(resolved.interfaces):
+            check_interface(global_scope, interface_key)
         diagnostics.extend(global_scope.diagnostics)
     for pou in resolved.sorted_pous():
         if is_external(pou):
             continue
         scope = Scope(resolved, pou, check_expression)
         order = declaration_order(pou.variables)
+        inherited = _inherited(resolved, pou)
         for variable in pou.variables:
+            if id(variable) in inherited:
+                continue  # checked with the block that declares it
             if variable.kind != "VAR_GLOBAL":
+                check_abstract_instance(scope, variable)
                 check_initializer(scope, variable.type, variable.init)
                 check_constant_initializer(scope, variable, order)
             check_reference_parameter(scope, variable)
@@ -61,5 +74,38 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         if pou.pou.sfc is not None:
             check_sfc(scope, pou.pou.sfc)
             check_action_names(scope, pou.pou.sfc)
+        check_block_declaration(scope, pou)
+        check_implementations(scope, pou)
         diagnostics.extend(scope.diagnostics)
+        for routine in pou.own_routines():
+            diagnostics.extend(_check_method(resolved, routine))
     return diagnostics
+
+
+def _inherited(resolved: Resolved, pou: PouSymbols) -> set[int]:
+    """The variables a derived block has from its base (by id)."""
+    if pou.base is None:
+        return set()
+    return {id(v) for v in resolved.pous[pou.base].variables}
+
+
+def _check_method(resolved: Resolved, method: PouSymbols) -> list[Diagnostic]:
+    """A method's variables and body, in a scope of its own that sees its block's
+    variables."""
+    scope = Scope(resolved, method, check_expression)
+    order = declaration_order(method.variables)
+    for variable in method.variables:
+        if variable.kind in ("VAR_INST", "VAR_STAT"):
+            message = (
+                f"'{variable.name}': padt has no {variable.kind} in methods yet (a method's "
+                "variables are temporary); declare it a VAR of the block"
+            )
+            scope.report(variable.pos, Code.METHOD_STATIC, message)
+        if variable.kind != "VAR_GLOBAL":
+            check_abstract_instance(scope, variable)
+            check_initializer(scope, variable.type, variable.init)
+            check_constant_initializer(scope, variable, order)
+        check_reference_parameter(scope, variable)
+    check_open_array_variables(scope)
+    check_block(scope, method.pou.body, loop_depth=0)
+    return scope.diagnostics

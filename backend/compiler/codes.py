@@ -63,6 +63,16 @@ class Code(Enum):
     SUBRANGE_BASE = "E0123", "subrange of something else than an integer type"
     SUBRANGE_BOUNDS = "E0124", "subrange bounds not constant integers of the base type"
     EMPTY_SUBRANGE = "E0125", "empty subrange"
+    METHOD_NAME = "E0126", "method named like a variable or another method"
+    EXTENDS = "E0127", "EXTENDS of something else than one function block"
+    CYCLIC_EXTENDS = "E0128", "function block that extends itself"
+    FINAL_OVERRIDE = "E0129", "override of a FINAL method or extension of a FINAL block"
+    ABSTRACT_INSTANCE = "E0130", "instance of an ABSTRACT function block"
+    ABSTRACT_METHOD = "E0131", "ABSTRACT method with a body or left without one"
+    OVERRIDE_SIGNATURE = "E0132", "method that overrides with another signature"
+    INTERFACE = "E0133", "IMPLEMENTS or EXTENDS of something that is no interface"
+    INTERFACE_METHOD = "E0134", "interface method not implemented as declared"
+    MEMBER_OWNER = "E0135", "method or property after no block or interface"
 
     # ---- 02: names, types and expressions
     UNDECLARED = "E0201", "name not declared"
@@ -85,6 +95,7 @@ class Code(Enum):
     NOT_A_REFERENCE = "E0218", "dereference of something that is no reference"
     REFERENCE_TARGET = "E0219", "reference to something that is no lasting variable"
     REFERENCE_BINDING = "E0220", "misused REFERENCE TO"
+    THIS_SUPER = "E0221", "THIS or SUPER where there is none, or SUPER without ^"
 
     # ---- 03: statements and assignments
     ASSIGN_CONSTANT = "E0301", "assignment to a constant"
@@ -99,6 +110,7 @@ class Code(Enum):
     CASE_LABEL_TYPE = "E0310", "CASE label not an integer or enum"
     CASE_LABEL_TWICE = "E0311", "CASE label used twice"
     FOR_COUNTER_TYPE = "E0312", "FOR counter not an integer"
+    PROPERTY_ACCESSOR = "E0313", "property read without GET or written without SET"
     INPUT_ASSIGNMENT = "W0301", "assignment to an input inside its block"
 
     # ---- 04: calls
@@ -115,6 +127,9 @@ class Code(Enum):
     NOT_A_FUNCTION = "E0411", "call of something that is no function"
     EXTERNAL_FUNCTION = "E0412", "external function that is not available"
     OPEN_ARRAY_UNCONNECTED = "E0413", "variable-length array parameter left unconnected"
+    METHOD_ACCESS = "E0414", "method its access specifier hides here"
+    METHOD_VALUE = "E0415", "method without a result used as a value"
+    NO_METHOD = "E0416", "call of a method the block does not have"
 
     # ---- 05: sequential function charts
     INITIAL_STEP = "E0501", "step chain without exactly one initial step"
@@ -157,7 +172,6 @@ class Code(Enum):
 
     # ---- 07: what padt does not compile
     POINTERS = "E0701", "pointer arithmetic"
-    METHODS = "E0702", "methods"
     DIRECT_ADDRESS = "E0703", "direct address of another POU's variable"
     VARIABLE_LENGTH_ARRAY = "E0704", "variable-length array where it cannot be"
     STATEMENT_DEPTH = "E0705", "statements nested too deep"
@@ -169,6 +183,7 @@ class Code(Enum):
     DATA_DEPTH = "E0711", "data types nested too deep"
     DATA_SIZE = "E0712", "too much data"
     CODE_SIZE = "E0713", "generated code too large"
+    METHOD_STATIC = "E0714", "static variables of a method (VAR_INST, VAR_STAT)"
 
     # ---- 08: extensions of other dialects, accepted with a warning
     QUALIFIED_ENUM = "W0801", "qualified enumeration value E.Value (CODESYS/TwinCAT)"

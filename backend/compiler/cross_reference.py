@@ -134,6 +134,8 @@ def _walk_pou(table: _Table, pou: PouSymbols) -> None:
         for action in sfc.actions:
             walker.statements(action.body)
     walker.statements(pou.pou.body)
+    for routine in pou.own_routines():  # a method's uses are its block's
+        _Walker(table, routine).statements(routine.pou.body)
 
 
 class _Walker:
@@ -144,12 +146,22 @@ class _Walker:
         self.pou = pou
 
     def variable(self, name: str) -> Variable | None:
-        return self.pou.by_key.get(key(name)) or self.table.resolved.globals_by_key.get(key(name))
+        """The variable a name means; in a method its block's (its own are temporaries)."""
+        pou = self.pou
+        if pou.outer is not None:
+            if key(name) in pou.by_key:
+                return None
+            pou = pou.outer
+        return pou.by_key.get(key(name)) or self.table.resolved.globals_by_key.get(key(name))
+
+    @property
+    def owner(self) -> str:
+        return self.pou.outer.name if self.pou.outer is not None else self.pou.name
 
     def name(self, name: str, pos: Pos, how: str) -> None:
         variable = self.variable(name)
         if variable is not None:
-            self.table.add(self.pou.name, variable, how, pos)
+            self.table.add(self.owner, variable, how, pos)
 
     def statements(self, body: tuple[ast.Statement, ...]) -> None:
         for statement in body:
@@ -217,7 +229,7 @@ class _Walker:
         if instance is not None and isinstance(instance.type, FbType):
             callee = self.table.resolved.pous.get(key(instance.type.name))
         elif call.instance is not None or call.receiver is not None:  # `fbs[i](...)`, `s.fb()`
-            called = Scope(self.table.resolved, self.pou).called_instance(call)
+            called = Scope(self.table.resolved, self.pou).expression_instance(call)
             callee = self.table.resolved.pous.get(key(called[1].name)) if called else None
         else:
             callee = self.table.resolved.pous.get(key(call.name))
@@ -234,7 +246,7 @@ class _Walker:
             ):
                 system = self.table.resolved.system.get(key(member))
                 if system is not None:
-                    self.table.add(self.pou.name, system, how, pos)
+                    self.table.add(self.owner, system, how, pos)
             case ast.MemberRef(base=base) | ast.BitRef(base=base) | ast.Deref(base=base):
                 self.expr(base, write=write)
             case ast.IndexRef(base=base, indices=indices):

@@ -23,9 +23,11 @@ from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     ActionCall,
     EnumValue,
+    MethodCall,
     Misfit,
     NonFinite,
     ProgramRef,
+    PropertyAccess,
     RefOf,
     Scope,
     SizeOf,
@@ -45,6 +47,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    InterfaceType,
     OpenArrayType,
     RefType,
     StructType,
@@ -89,7 +92,23 @@ def class_members(pou: PouSymbols) -> set[str]:
     chart = _Chart(sfc).slots() if sfc is not None else []
     actions = [_action_method(action.name) for action in sfc.actions] if sfc is not None else []
     edges = [_edge_memory(v) for v in _instance_variables(pou) if v.edge is not None]
-    return {"__slots__", "__init__", "__call__", *chart, *actions, *edges}
+    methods = [method_attr(m.name) for m in pou.methods.values()]
+    methods += [f(p.name) for p in pou.properties.values() for f in (getter_attr, setter_attr)]
+    return {"__slots__", "KIND__", "__init__", "__call__", *chart, *actions, *edges, *methods}
+
+
+def method_attr(name: str) -> str:
+    """A method of the class of a FUNCTION_BLOCK or PROGRAM (no variable has `__`)."""
+    return f"M__{_ident(name)}"
+
+
+def getter_attr(name: str) -> str:
+    """The GET of a property, a method of the block's class."""
+    return f"GET__{_ident(name)}"
+
+
+def setter_attr(name: str) -> str:
+    return f"SET__{_ident(name)}"
 
 
 def _edge_memory(variable: Variable) -> str:
@@ -162,6 +181,8 @@ class _Emitter:
     max_size: int = MAX_UNIT_CODE
     # FOR counters held in a Python local while their loop runs: (kind, attr) -> local
     counters: dict[tuple[str, str], str] = field(default_factory=dict)
+    # generating a method: its own variables (by id), Python locals of its function
+    method_locals: frozenset[int] = frozenset()
 
     def emit(self, depth: int, line: str) -> None:
         if depth > MAX_INDENT:
@@ -198,7 +219,7 @@ class _Emitter:
             return f"_SYS.{variable.attr}"
         if variable.kind == "VAR_GLOBAL":
             return f"{'s' if self.in_globals else '_G'}.{variable.attr}"
-        if is_python_local(variable, self.local):
+        if id(variable) in self.method_locals or is_python_local(variable, self.local):
             return variable.attr
         return f"s.{variable.attr}"
 
@@ -249,11 +270,15 @@ class _Emitter:
                     return _Value(f"float({str(binding.value)!r})", binding.type)
                 if isinstance(binding, ProgramRef):
                     return _Value(f"_P.{class_name(binding.pou.name)}", FbType(binding.pou.name))
-                assert binding is not None
+                if binding is None:  # a property of the block
+                    return self._property_get(expr)
+                if binding.kind == "THIS":  # a reference to the instance the code runs on
+                    return _Value("_ref(s, (), '')", binding.type)
                 return _implicit(self.var_code(binding), binding.type)
             case ast.MemberRef(base=base):
                 member = self.scope.member(expr)
-                assert member is not None
+                if member is None:
+                    return self._property_get(expr)
                 if member.kind == "SYSTEM":
                     return _Value(self.var_code(member), member.type)
                 return _implicit(f"{self.expr(base).code}.{member.attr}", member.type)
@@ -261,6 +286,8 @@ class _Emitter:
                 return self._index(expr)
             case ast.NullLiteral():
                 return _Value("None", NULL_TYPE)
+            case ast.Deref() if self.scope.self_deref(expr) is not None:
+                return _Value("s", _type(self.scope, expr))  # THIS^, SUPER^: the instance
             case ast.Deref(base=base):  # NULL is a program fault (`_deref`)
                 return _Value(f"_deref({self.expr(base).code})", _type(self.scope, expr))
             case ast.BitRef(base=base, bit=bit, width=width):
@@ -322,7 +349,8 @@ class _Emitter:
                 member = self.scope.member(expr)
                 assert member is not None
                 root, steps, label, whole = self._place(base)
-                return root, [*steps, repr(member.attr)], f"{label} + {'.' + member_name!r}", whole
+                named = repr(member_name) if label == "''" else f"{label} + {'.' + member_name!r}"
+                return root, [*steps, repr(member.attr)], named, whole
             case ast.IndexRef(base=base, indices=indices):
                 array = _type(self.scope, base)
                 assert isinstance(array, ArrayType)
@@ -333,6 +361,8 @@ class _Emitter:
                 root, steps, label, whole = self._place(base)
                 shown = " + ', ' + ".join(f"str({t})" for t in held)
                 return root, [*steps, f"({offset})"], f"{label} + '[' + {shown} + ']'", whole
+            case ast.Deref() if self.scope.self_deref(expr) is not None:
+                return "s", [], "''", False  # THIS^: the instance, named by its own path
             case ast.Deref(base=base):  # REF(r^.x): below what r refers to, named by r
                 code = self.expr(base).code
                 return f"_deref({code})", [], f"str({code}) + '^'", True
@@ -401,12 +431,12 @@ class _Emitter:
     def _binary(self, expr: ast.Binary) -> _Value:
         result = _type(self.scope, expr)
         op = expr.op
-        if op in _COMPARE and isinstance(_type(self.scope, expr.left), RefType):
+        if op in _COMPARE and isinstance(_type(self.scope, expr.left), RefType | InterfaceType):
             right = (
                 "None" if is_zero_literal(expr.right) else self.exact(expr.right).code
             )  # CODESYS 0
             return _Value(f"({self.exact(expr.left).code} {_COMPARE[op]} {right})", BOOL)
-        if op in _COMPARE and isinstance(_type(self.scope, expr.right), RefType):
+        if op in _COMPARE and isinstance(_type(self.scope, expr.right), RefType | InterfaceType):
             left = "None" if is_zero_literal(expr.left) else self.exact(expr.left).code
             return _Value(f"({left} {_COMPARE[op]} {self.exact(expr.right).code})", BOOL)
         if op in _COMPARE:
@@ -480,10 +510,12 @@ class _Emitter:
 
     # ---- calls
     def call(self, call: ast.Call) -> _Value:
+        callee = self.scope.callee(call)
+        if isinstance(callee, MethodCall):
+            return self._method_call(callee, call)
         pou = self.scope.resolved.pous.get(key(call.name))
         if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
-            return self._user_call(pou, call)
-        callee = self.scope.callee(call)
+            return self._user_call(pou, call, function_name(pou.name))
         if isinstance(callee, SizeOf):  # a constant: its argument never runs
             return _Value(repr(self.scope.size_of(call)), _type(self.scope, call))
         if isinstance(callee, RefOf):
@@ -500,14 +532,58 @@ class _Emitter:
             builtin.emit([v.code for v in values], [v.type for v in values], result), result
         )
 
-    def _user_call(self, pou: PouSymbols, call: ast.Call) -> _Value:
+    def _accessor_owner(self, access: PropertyAccess) -> tuple[str, str | None]:
+        """(the object or class whose accessor runs, the instance a static call passes)."""
+        if access.static is not None:
+            return class_name(access.static.name), "s"
+        if access.receiver is None:
+            return "s", None
+        receiver = self.expr(access.receiver).code
+        if isinstance(_type(self.scope, access.receiver), InterfaceType):
+            receiver = f"_deref({receiver})"
+        return receiver, None
+
+    def _property_get(self, expr: ast.Expr) -> _Value:
+        access = self.scope.property_access(expr)
+        assert access is not None
+        owner, first = self._accessor_owner(access)
+        return _Value(f"{owner}.{getter_attr(access.prop.name)}({first or ''})", access.prop.type)
+
+    def _property_set(self, target: ast.Expr, code: str) -> str | None:
+        """The statement that writes `code` through a property's SET (None: no property)."""
+        access = self.scope.property_access(target)
+        if access is None:
+            return None
+        owner, first = self._accessor_owner(access)
+        arguments = f"{first}, {code}" if first else code
+        return f"{owner}.{setter_attr(access.prop.name)}({arguments})"
+
+    def _method_call(self, target: MethodCall, call: ast.Call) -> _Value:
+        """`inst.M(...)`: the method the instance's class has (an override, dispatched by
+        Python); `SUPER^.M(...)`: the base's own, called on this instance."""
+        method = method_attr(target.method.name)
+        if target.static is not None:
+            return self._user_call(
+                target.method, call, f"{class_name(target.static.name)}.{method}", "s"
+            )
+        receiver = "s" if target.receiver is None else self.expr(target.receiver).code
+        if target.receiver is not None and isinstance(
+            _type(self.scope, target.receiver), InterfaceType
+        ):  # the instance it refers to; none is a program fault, as NULL^ is
+            receiver = f"_deref({receiver})"
+        return self._user_call(target.method, call, f"{receiver}.{method}")
+
+    def _user_call(
+        self, pou: PouSymbols, call: ast.Call, callee: str, first: str | None = None
+    ) -> _Value:
+        """A call of a function (or a method: `first` the instance a static call passes)."""
         pairs = self.scope.connect_arguments(pou, call)
         assigned = {
             key(param.name): arg
             for arg, param in pairs
             if param is not None and not is_implicit(param)
         }
-        keywords: list[str] = []
+        keywords: list[str] = [first] if first is not None else []
         for param in pou.parameters:
             arg = assigned.get(key(param.name))
             if arg is not None and arg.value is not None and isinstance(param.type, OpenArrayType):
@@ -516,7 +592,7 @@ class _Emitter:
             if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
                 continue
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
-        code = f"{function_name(pou.name)}({', '.join(keywords)})"
+        code = f"{callee}({', '.join(keywords)})"
         result = pou.return_type or BOOL
         enable = self._enable(call, pou)
         if enable is not None:  # EN FALSE: the function does not run and gives its default
@@ -567,6 +643,8 @@ class _Emitter:
     def converted(self, target: Type, value_expr: ast.Expr) -> str:
         """Code for `value_expr` stored into a variable of type `target`."""
         self.scope.expect(value_expr, target)
+        if isinstance(target, InterfaceType) and isinstance(_type(self.scope, value_expr), FbType):
+            return self.reference(value_expr)  # an interface refers to the instance
         integer = integer_like(target)
         if integer is not None and _type(self.scope, value_expr) == ANY_INT:
             constant = self.scope.constant_int(value_expr)
@@ -617,7 +695,7 @@ class _Emitter:
                 return "()"
             case OpenArrayType():  # bound to an array at each call
                 return "None"
-            case RefType():
+            case RefType() | InterfaceType():
                 return "None"  # NULL
         raise AssertionError(f"no initial value for {var_type!r}")
 
@@ -694,8 +772,8 @@ class _Emitter:
 
     def _statement(self, statement: ast.Statement, depth: int) -> None:
         match statement:
-            case ast.Assign(target=target, value=value, bind=bind):
-                self.assign(target, value, depth, bind)
+            case ast.Assign(target=target, value=value, bind=bind, attempt=attempt):
+                self.assign(target, value, depth, bind, attempt)
             case ast.CallStatement(call=call):
                 self.call_statement(call, depth)
             case ast.ExprStatement(expr=expr):
@@ -720,7 +798,7 @@ class _Emitter:
 
     def return_line(self) -> str:
         pou = self.scope.pou
-        if pou.kind != "FUNCTION":
+        if pou.kind not in ("FUNCTION", "METHOD"):
             return "return"
         result = pou.by_key.get(key(pou.name))
         result_code = result.attr if result is not None and result.kind == "RETURN" else "None"
@@ -729,7 +807,13 @@ class _Emitter:
             return f"return ({result_code}, {members})"
         return f"return {result_code}"
 
-    def assign(self, target: ast.Expr, value: ast.Initializer, depth: int, bind: bool) -> None:
+    def assign(
+        self, target: ast.Expr, value: ast.Initializer, depth: int, bind: bool, attempt: bool
+    ) -> None:
+        if attempt:
+            assert isinstance(value, ast.Expr)
+            self.emit(depth, self.store(target, self.attempt(_type(self.scope, target), value)))
+            return
         if bind:  # `r REF= x`: the REFERENCE TO itself now holds REF(x)
             held = self.held_reference(target)
             assert held is not None and isinstance(value, ast.Call)
@@ -741,6 +825,23 @@ class _Emitter:
         else:
             code = self.converted(target_type, value)
         self.emit(depth, self.store(target, code))
+
+    def attempt(self, target: Type, value: ast.Expr) -> str:
+        """`t ?= x`: a reference to the instance x is or refers to where that instance is
+        a `target` (its block, a base of it, an interface it implements), else NULL. The
+        test reads the instance's class: its name, and `KIND__` (what it conforms to) of
+        a block that extends or implements anything."""
+        wanted = target.target if isinstance(target, RefType) else target
+        assert isinstance(wanted, FbType | InterfaceType)
+        source = _type(self.scope, value)
+        reference = self.reference(value) if isinstance(source, FbType) else self.expr(value).code
+        held = self.temp()
+        kind = f"_deref({held}).__class__"  # generated code has no type() nor getattr()
+        fits = (
+            f"{kind}.__name__ == {class_name(wanted.name)!r} or "
+            f"{key(wanted.name)!r} in {kind}.__dict__.get('KIND__', ())"
+        )
+        return f"({held} if (({held} := {reference}) is not None and ({fits})) else None)"
 
     def store(self, target: ast.Expr, code: str) -> str:
         """The statement that stores `code` (already converted) into `target`."""
@@ -763,6 +864,9 @@ class _Emitter:
         refers to."""
         if isinstance(target, ast.Deref):
             return f"_deref_set({self.expr(target.base).code}, {code})"
+        through_setter = self._property_set(target, code)
+        if through_setter is not None:
+            return through_setter
         held = self.held_reference(target)
         if held is not None:
             return f"_deref_set({held}, {code})"
@@ -958,6 +1062,7 @@ class _Emitter:
                         receiver is not None
                         or instance is not None
                         or self.scope.action_call(node) is not None
+                        or self.scope.method_call(node) is not None
                         or key(called) in self.scope.resolved.pous
                         or self.scope.lookup(called) is not None
                     ):
@@ -965,21 +1070,34 @@ class _Emitter:
         return True
 
     def call_statement(self, call: ast.Call, depth: int) -> None:
+        method = self.scope.method_call(call)
+        if method is not None:
+            self.emit(depth, self._method_call(method, call).code)
+            return
+        base = self.scope.super_body(call)
+        if base is not None:  # SUPER^(): the base's body on this instance
+            self.emit(depth, f"{class_name(base.base.name)}.__call__(s)")
+            return
         action = self.scope.action_call(call)
         if action is not None:
             self.emit(depth, f"{self._action_instance(action)}.{_action_method(call.name)}()")
             return
-        binding = self.scope.lookup(call.name) if call.receiver is None else None
-        called = self.scope.called_instance(call)
-        if isinstance(binding, ProgramRef):
-            callee, instance = binding.pou, f"_P.{class_name(binding.pou.name)}"
-        elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
-            callee, instance = self.scope.fb_symbols(binding.type), self.var_code(binding)
-        elif called is not None:
-            callee, instance = self.scope.fb_symbols(called[1]), self.expr(called[0]).code
-        else:
+        callee = self.scope.called_instance(call)
+        instance: str | None = None
+        if callee is None:  # `fbs[i](...)`, `s.fb(...)`: an instance given by an expression
+            called = self.scope.expression_instance(call)
+            if called is not None:
+                callee, instance = self.scope.fb_symbols(called[1]), self.expr(called[0]).code
+        if callee is None:
             self.emit(depth, self.exact(call).code)
             return
+        if instance is not None:
+            pass
+        elif call.name == "^":  # `r^(...)`: the instance r refers to
+            assert call.receiver is not None
+            instance = self.expr(call.receiver).code
+        else:  # a program, an instance, what a REFERENCE TO refers to
+            instance = self.expr(ast.NameRef(call.name, call.pos)).code
         enable = self._enable(call, callee)
         if enable is not None:
             self.emit(depth, f"if {enable}:")
@@ -1184,6 +1302,9 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
     slots += chart.slots() if chart else []
     emitter.emit(0, f"class {class_name(pou.name)}:")
     emitter.emit(1, f"__slots__ = {tuple(slots)!r}")
+    kinds = _kinds(emitter.scope.resolved, pou)
+    if len(kinds) > 1:  # what `?=` finds it conforms to (an instance of a plain block: its name)
+        emitter.emit(1, f"KIND__ = {kinds!r}")
     emitter.emit(0, "")
     emitter.emit(1, "def __init__(s):")
     if not slots:
@@ -1217,6 +1338,17 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
             emitter.emit(1, f"def {_action_method(action.name)}(s):")
             _emit_temporaries(emitter, pou)  # an action's call has temporaries of its own
             emitter.block(action.body, 2)
+    _generate_methods(emitter, pou)
+
+
+def _kinds(resolved: Resolved, pou: PouSymbols) -> tuple[str, ...]:
+    """The keys an instance of `pou` conforms to: its block, its bases, its interfaces."""
+    found = [key(pou.name), *pou.interfaces]
+    base = pou.base
+    while base is not None:
+        found.append(base)
+        base = resolved.pous[base].base
+    return tuple(sorted(set(found)))
 
 
 def _emit_temporaries(emitter: _Emitter, pou: PouSymbols) -> None:
@@ -1332,24 +1464,58 @@ def _step_variable(scope: Scope, name: str) -> Variable:
     return variable
 
 
-def _generate_function(emitter: _Emitter, pou: PouSymbols) -> None:
+def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0, name: str = "") -> None:
+    """A FUNCTION as a Python function; a method (kind METHOD, `depth` 1) as the function
+    `name` of its block's class (a property's GET and SET too), whose first parameter is
+    the instance."""
     inputs = [
         v
         for v in pou.variables
         if v.kind in ("VAR_INPUT", "VAR_IN_OUT") or isinstance(v.type, OpenArrayType)
     ]  # a variable-length output is bound to the caller's array like an in-out
-    params = ", ".join(f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs)
-    emitter.emit(0, f"def {function_name(pou.name)}({params}):")
+    params = [f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs]
+    if pou.kind == "METHOD":
+        header = f"def {name}({', '.join(['s', *params])}):"
+    else:
+        header = f"def {function_name(pou.name)}({', '.join(params)}):"
+    emitter.emit(depth, header)
     result = pou.by_key.get(key(pou.name))
     if result is not None and result.kind == "RETURN":
-        emitter.emit(1, f"{result.attr} = {emitter.initial(result.type, None)}")
+        emitter.emit(depth + 1, f"{result.attr} = {emitter.initial(result.type, None)}")
     for variable in pou.variables:
         if variable.kind in ("VAR", "VAR_TEMP", "VAR_STAT", "VAR_INST") or (
             variable.kind == "VAR_OUTPUT" and variable not in inputs
         ):
-            emitter.emit(1, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
-    emitter.block(pou.pou.body, 1)
-    emitter.emit(1, emitter.return_line())
+            initial = emitter.initial(variable.type, variable.init)
+            emitter.emit(depth + 1, f"{variable.attr} = {initial}")
+    emitter.block(pou.pou.body, depth + 1)
+    emitter.emit(depth + 1, emitter.return_line())
+
+
+def _generate_methods(emitter: _Emitter, pou: PouSymbols) -> None:
+    """The methods of a block's class: its own, and each one it inherits and does not
+    override as the declaring block's function itself (the artifact lists, and the runtime
+    makes, a block's class after the classes of the blocks it extends)."""
+    resolved = emitter.scope.resolved
+    accessors = [(method_attr(m.name), m) for _, m in sorted(pou.methods.items())]
+    for _, prop in sorted(pou.properties.items()):
+        if prop.getter is not None:
+            accessors.append((getter_attr(prop.name), prop.getter))
+        if prop.setter is not None:
+            accessors.append((setter_attr(prop.name), prop.setter))
+    for attr, method in accessors:
+        emitter.emit(0, "")
+        if method.declared_in != key(pou.name):  # the declaring class's own function
+            emitter.emit(1, f"{attr} = {class_name(resolved.pous[method.declared_in].name)}.{attr}")
+            continue
+        own = [*method.variables, *method.by_key.values()]
+        inner = _Emitter(
+            Scope(resolved, method), local=False, at=method.pou.pos, lines=emitter.lines,
+            temp_count=emitter.temp_count, st_lines=emitter.st_lines, size=emitter.size,
+            max_size=emitter.max_size, method_locals=frozenset(id(v) for v in own),
+        )  # fmt: skip
+        _generate_function(inner, method, depth=1, name=attr)
+        emitter.size, emitter.temp_count = inner.size, inner.temp_count
 
 
 def _data_class(emitter: _Emitter, name: str, fields: list[Variable]) -> str:

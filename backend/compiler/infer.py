@@ -19,7 +19,14 @@ from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
-from backend.compiler.resolve import PouSymbols, Resolved, StructInfo, Variable, visible
+from backend.compiler.resolve import (
+    PouSymbols,
+    PropertyInfo,
+    Resolved,
+    StructInfo,
+    Variable,
+    visible,
+)
 from backend.compiler.sizes import codesys_layout
 from backend.compiler.source import Pos
 from backend.compiler.types import (
@@ -43,6 +50,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    InterfaceType,
     OpenArrayType,
     RefType,
     StructType,
@@ -119,9 +127,40 @@ class SizeOf:
     """CODESYS SIZEOF(x): the size of x in bytes, a constant (W0802)."""
 
 
+@dataclass(frozen=True)
+class MethodCall:
+    """A call of a method: `inst.M()`, `M()` inside its block, `THIS^.M()` (`receiver`
+    None for the block the code runs in), or `SUPER^.M()`: the base's method itself
+    (`static`), not the one the instance overrides it with."""
+
+    method: PouSymbols
+    receiver: ast.Expr | None
+    static: PouSymbols | None = None
+
+
+@dataclass(frozen=True)
+class PropertyAccess:
+    """A property read or written: `inst.P`, `itf.P`, `P` or `THIS^.P` inside its block
+    (`receiver` None), `SUPER^.P` (`static`: the base's accessors themselves)."""
+
+    prop: PropertyInfo
+    receiver: ast.Expr | None
+    static: PouSymbols | None = None
+
+
+@dataclass(frozen=True)
+class SuperBody:
+    """`SUPER^()`: the body of the base function block, run on this instance."""
+
+    base: PouSymbols
+
+
 # What else a call in an expression may name; none of these gives a value.
-NoValue = Literal["method", "action", "instance", "program", "external", "unknown"]
-Callee = UserFunction | StandardFunction | RefOf | SizeOf | NoValue
+NoValue = Literal["method", "action", "instance", "program", "external", "unknown", "super"]
+Callee = UserFunction | StandardFunction | RefOf | SizeOf | MethodCall | NoValue
+
+# THIS and SUPER: references to the instance the code runs on, as itself or as its base
+SELF_NAMES = ("THIS", "SUPER")
 
 
 @dataclass(frozen=True)
@@ -152,10 +191,158 @@ class Scope:
     _enum_hints: dict[int, tuple[EnumValue, ast.Expr]] = field(default_factory=dict)
     # `s.fb(...)`: the member a call on a receiver names, by id() of the call (kept alongside)
     _called_members: dict[int, tuple[ast.MemberRef, ast.Call]] = field(default_factory=dict)
+    # the nodes `^` follows (THIS and SUPER need it)
+    _dereferenced: set[int] = field(default_factory=set)
+    # the nodes written (assignment targets): a property there is set, not read
+    written: set[int] = field(default_factory=set)
+
+    def dereferenced(self, expr: ast.Expr) -> bool:
+        return id(expr) in self._dereferenced
 
     # ---- names
     def variable(self, name: str) -> Variable | None:
-        return visible(self.resolved, self.pou, name)
+        found = visible(self.resolved, self.pou, name)
+        if found is None and key(name) in SELF_NAMES:
+            return self._self_reference(key(name))
+        return found
+
+    def block(self) -> PouSymbols | None:
+        """The PROGRAM or FUNCTION_BLOCK whose instance the code runs on (a method's too)."""
+        if self.pou.outer is not None:
+            return self.pou.outer
+        return self.pou if self.pou.kind in ("PROGRAM", "FUNCTION_BLOCK") else None
+
+    def _self_reference(self, name: str) -> Variable | None:
+        """THIS (a REF_TO the block) or SUPER (a REF_TO its base), as variables of kind
+        THIS and SUPER that only `^` may follow."""
+        block = self.block()
+        if block is None or (name == "SUPER" and block.base is None):
+            return None
+        target = block if name == "THIS" else self.resolved.pous[block.base or ""]
+        here = self.pou.pou.pos
+        return Variable(
+            name, name, RefType(FbType(target.name)), None, True, False, None, "s", here
+        )
+
+    def self_deref(self, expr: ast.Expr) -> str | None:
+        """ "THIS" or "SUPER" for `THIS^` and `SUPER^`, else None."""
+        if isinstance(expr, ast.Deref) and isinstance(expr.base, ast.NameRef):
+            found = self.variable(expr.base.name)
+            if found is not None and found.kind in SELF_NAMES:
+                return found.kind
+        return None
+
+    def method_call(self, call: ast.Call) -> MethodCall | None:
+        """The method `call` calls, if it calls one."""
+        receiver = call.receiver
+        if call.name == "^":
+            return None
+        if receiver is None:
+            block = self.block()
+            if block is None or self.variable(call.name) is not None:
+                return None
+            found = block.methods.get(key(call.name))
+            return MethodCall(found, None) if found is not None else None
+        if self.self_deref(receiver) == "SUPER":
+            block = self.block()
+            assert block is not None and block.base is not None
+            base = self.resolved.pous[block.base]
+            found = base.methods.get(key(call.name))
+            return MethodCall(found, receiver, base) if found is not None else None
+        receiver_type = self.type_of(receiver)
+        if isinstance(receiver_type, FbType):
+            owner = self.fb_symbols(receiver_type)
+            found = owner.methods.get(key(call.name))
+            return MethodCall(found, receiver) if found is not None else None
+        if isinstance(receiver_type, InterfaceType):
+            interface = self.resolved.interfaces[key(receiver_type.name)]
+            found = interface.methods.get(key(call.name))
+            return MethodCall(found, receiver) if found is not None else None
+        return None
+
+    def conforms(self, target: Type, source: Type) -> bool:
+        """What object orientation adds to `assignable`: an instance (or an interface
+        extending it) into an interface variable, a reference to a derived block into a
+        reference to its base."""
+        if isinstance(target, InterfaceType):
+            if isinstance(source, FbType):
+                return self.resolved.conforms(key(source.name), key(target.name))
+            if isinstance(source, InterfaceType):
+                extended = self.resolved.interfaces[key(source.name)].extends
+                return key(source.name) == key(target.name) or key(target.name) in extended
+            return False
+        if isinstance(target, RefType) and isinstance(source, RefType):
+            ends = (target.target, source.target)
+            if isinstance(ends[0], FbType) and isinstance(ends[1], FbType):
+                same_kind = (target.pointer, target.implicit) == (source.pointer, source.implicit)
+                return same_kind and self.resolved.conforms(key(ends[1].name), key(ends[0].name))
+        return False
+
+    def property_access(self, expr: ast.Expr) -> PropertyAccess | None:
+        """The property `expr` names, if it names one (a variable of the name hides it)."""
+        if isinstance(expr, ast.NameRef):
+            block = self.block()
+            if block is None or self.lookup(expr.name) is not None:
+                return None
+            found = block.properties.get(key(expr.name))
+            return PropertyAccess(found, None) if found is not None else None
+        if not isinstance(expr, ast.MemberRef) or self.system_namespace(expr.base):
+            return None
+        if self.self_deref(expr.base) == "SUPER":
+            block = self.block()
+            assert block is not None and block.base is not None
+            base = self.resolved.pous[block.base]
+            found = base.properties.get(key(expr.member))
+            return PropertyAccess(found, expr.base, base) if found is not None else None
+        base_type = self.type_of(expr.base)
+        if isinstance(base_type, FbType):
+            found = self.fb_symbols(base_type).properties.get(key(expr.member))
+        elif isinstance(base_type, InterfaceType):
+            found = self.resolved.interfaces[key(base_type.name)].properties.get(key(expr.member))
+        else:
+            return None
+        return PropertyAccess(found, expr.base) if found is not None else None
+
+    def may_call(self, method: PouSymbols) -> bool:
+        """Whether the code here may call a method (or a property's accessor): PUBLIC and
+        INTERNAL ones from anywhere (a project is one namespace); PRIVATE ones from the
+        block that declares them; PROTECTED ones from it and the blocks derived from it."""
+        if method.access in ("PUBLIC", "INTERNAL"):
+            return True
+        block = self.block()
+        while block is not None:
+            if key(block.name) == method.declared_in:
+                return True
+            if method.access == "PRIVATE" or block.base is None:
+                return False
+            block = self.resolved.pous[block.base]
+        return False
+
+    def called_instance(self, call: ast.Call) -> PouSymbols | None:
+        """The block (or program) whose body a call statement runs: a program, an
+        instance, a REFERENCE TO one (`ref(...)`), or the instance a reference refers to
+        (`r^(...)`; not SUPER^(), which runs the base's body)."""
+        if call.name == "^" and call.receiver is not None:
+            if self.self_deref(call.receiver) is not None:
+                return None
+            target = self.type_of(call.receiver)
+            return self.fb_symbols(target) if isinstance(target, FbType) else None
+        binding = self.lookup(call.name) if call.receiver is None else None
+        if isinstance(binding, ProgramRef):
+            return binding.pou
+        if isinstance(binding, Variable) and isinstance(value_type(binding.type), FbType):
+            instance = value_type(binding.type)
+            assert isinstance(instance, FbType)
+            return self.fb_symbols(instance)
+        return None
+
+    def super_body(self, call: ast.Call) -> SuperBody | None:
+        """`SUPER^()` in a derived function block."""
+        if call.name != "^" or call.receiver is None or self.self_deref(call.receiver) != "SUPER":
+            return None
+        block = self.block()
+        assert block is not None and block.base is not None
+        return SuperBody(self.resolved.pous[block.base])
 
     def lookup(self, name: str) -> Binding | None:
         found = self.variable(name)
@@ -177,7 +364,7 @@ class Scope:
         if receiver is None:
             if self.variable(call.name) is not None:
                 return None
-            owner = self.pou
+            owner = self.block() or self.pou  # a method calls its block's actions
         elif isinstance(receiver, ast.NameRef) and isinstance(
             program := self.lookup(receiver.name), ProgramRef
         ):
@@ -191,7 +378,7 @@ class Scope:
         found = [a for a in actions if key(a.name) == key(call.name)]
         return ActionCall(owner, found[0], instance) if found else None
 
-    def called_instance(self, call: ast.Call) -> tuple[ast.Expr, FbType] | None:
+    def expression_instance(self, call: ast.Call) -> tuple[ast.Expr, FbType] | None:
         """The function block instance `call` calls when an expression gives it (IEC ed. 3,
         CODESYS): `fbs[1](...)`, `p^(...)`, or `s.fb(...)` on a member that is an instance
         (and no action of the receiver)."""
@@ -279,13 +466,17 @@ class Scope:
             case ast.NameRef(name=name):
                 binding = self.enum_hint(expr) or self.lookup(name)
                 if binding is None:
-                    return None
+                    found = self.property_access(expr)
+                    return found.prop.type if found is not None else None
                 if isinstance(binding, Variable | EnumValue | NonFinite):
                     return value_type(binding.type)
                 return FbType(binding.pou.name)
             case ast.MemberRef():
                 member = self.member(expr)
-                return value_type(member.type) if member is not None else None
+                if member is None:
+                    found = self.property_access(expr)
+                    return found.prop.type if found is not None else None
+                return value_type(member.type)
             case ast.IndexRef():
                 return self._index(expr)
             case ast.BitRef(base=base, width=width):
@@ -296,6 +487,7 @@ class Scope:
             case ast.NullLiteral():
                 return NULL_TYPE
             case ast.Deref(base=base):
+                self._dereferenced.add(id(base))  # the node is kept alive by the Deref's entry
                 base_type = self.type_of(base)
                 return base_type.target if isinstance(base_type, RefType) else None
             case ast.Unary():
@@ -382,7 +574,9 @@ class Scope:
         if left_type is None or right_type is None:
             return None
         op = expr.op
-        if op in ("=", "<>") and isinstance(left_type, EnumType | StructType | RefType):
+        if op in ("=", "<>") and isinstance(
+            left_type, EnumType | StructType | RefType | InterfaceType
+        ):
             return BOOL  # whether the two compare is a rule (checks.operators)
         left, right = integer_like(left_type) or left_type, integer_like(right_type) or right_type
         if not isinstance(left, ElementaryType) or not isinstance(right, ElementaryType):
@@ -417,6 +611,11 @@ class Scope:
                 if arg.value is not None:
                     self.type_of(arg.value)
             return callee.pou.return_type or ELEMENTARY["DINT"]
+        if isinstance(callee, MethodCall):
+            for arg, _ in self.connect_arguments(callee.method, call):
+                if arg.value is not None:
+                    self.type_of(arg.value)
+            return callee.method.return_type
         if isinstance(callee, StandardFunction):
             result = self.standard_call(callee.builtin, call)
             return None if isinstance(result, Misfit) else result
@@ -450,7 +649,12 @@ class Scope:
         """What a call in an expression calls."""
         if self.action_call(call) is not None:
             return "action"
-        if self.called_instance(call) is not None:
+        method = self.method_call(call)
+        if method is not None:
+            return method
+        if call.name == "^":
+            return "super"
+        if self.expression_instance(call) is not None:
             return "instance"
         if call.receiver is not None:
             return "method"

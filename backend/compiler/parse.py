@@ -222,6 +222,9 @@ def _with_actions_blocks(items: list[Any]) -> tuple[list[Any], list[Diagnostic]]
     result: list[Any] = []
     errors: list[Diagnostic] = []
     for item in items:
+        if isinstance(item, ast.Method | ast.Property):
+            errors.extend(_attach_member(result, item))
+            continue
         if not isinstance(item, _ActionsBlock):
             result.append(item)
             continue
@@ -239,6 +242,35 @@ def _with_actions_blocks(items: list[Any]) -> tuple[list[Any], list[Diagnostic]]
         sfc = pou.sfc or ast.Sfc((), (), ())
         result[index] = replace(pou, sfc=replace(sfc, actions=sfc.actions + item.actions))
     return result, errors
+
+
+@dataclass(frozen=True)
+class _Clause:
+    """`EXTENDS A, B` or `IMPLEMENTS I1, I2` of a declaration."""
+
+    keyword: str
+    names: tuple[str, ...]
+
+
+def _attach_member(result: list[Any], member: ast.Method | ast.Property) -> list[Diagnostic]:
+    """A METHOD or PROPERTY after END_FUNCTION_BLOCK, END_PROGRAM or END_INTERFACE (the
+    text form of TwinCAT): a member of the last block or interface before it."""
+    owners = [
+        i
+        for i, item in enumerate(result)
+        if isinstance(item, ast.Interface)
+        or (isinstance(item, ast.Pou) and item.kind != "FUNCTION")
+    ]
+    if not owners:
+        kind = "method" if isinstance(member, ast.Method) else "property"
+        message = f"{kind} '{member.name}' follows no FUNCTION_BLOCK, PROGRAM or INTERFACE"
+        return [Diagnostic.at(member.pos, Code.MEMBER_OWNER, message)]
+    owner = result[owners[-1]]
+    if isinstance(member, ast.Method):
+        result[owners[-1]] = replace(owner, methods=(*owner.methods, member))
+    else:
+        result[owners[-1]] = replace(owner, properties=(*owner.properties, member))
+    return []
 
 
 class _ToAst(Transformer[Token, Any]):
@@ -674,9 +706,13 @@ class _ToAst(Transformer[Token, Any]):
         return self._block("VAR_GLOBAL", self._pos(tree), _children(tree))
 
     def _pou(self, kind: str, tree: Tree[Any]) -> ast.Pou:
-        name, *rest = _children(tree)
+        children = _children(tree)
+        modifiers = tuple(
+            str(c).upper() for c in children if isinstance(c, Token) and c.type == "OOP_MODIFIER"
+        )
+        name, *rest = [c for c in children if not (isinstance(c, Token) and c.type != "NAME")]
         return_type = None
-        if kind == "FUNCTION" and rest and not isinstance(rest[0], ast.VarBlock | tuple):
+        if kind == "FUNCTION" and rest and not isinstance(rest[0], ast.VarBlock | tuple | _Clause):
             return_type, *rest = rest
         blocks = tuple(r for r in rest if isinstance(r, ast.VarBlock))
         body = next(r for r in rest if isinstance(r, tuple))
@@ -688,7 +724,89 @@ class _ToAst(Transformer[Token, Any]):
                 tuple(e for e in elements if isinstance(e, ast.Transition)),
                 tuple(e for e in elements if isinstance(e, ast.Action)),
             )
-        return ast.Pou(kind, self._declared(name), return_type, blocks, body, self._pos(tree), sfc)
+        clauses = {c.keyword: c.names for c in rest if isinstance(c, _Clause)}
+        return ast.Pou(
+            kind, self._declared(name), return_type, blocks, body, self._pos(tree), sfc,
+            methods=tuple(r for r in rest if isinstance(r, ast.Method)),
+            properties=tuple(r for r in rest if isinstance(r, ast.Property)),
+            extends=clauses.get("EXTENDS", ()),
+            implements=clauses.get("IMPLEMENTS", ()),
+            modifiers=modifiers,
+        )  # fmt: skip
+
+    # ---- object orientation
+    def extends_clause(self, items: list[Token]) -> _Clause:
+        return _Clause("EXTENDS", tuple(str(i) for i in items))
+
+    def implements_clause(self, items: list[Token]) -> _Clause:
+        return _Clause("IMPLEMENTS", tuple(str(i) for i in items))
+
+    def oop_specifier(self, items: list[Token]) -> Token:
+        return items[0]
+
+    @staticmethod
+    def _specifiers(items: list[Any]) -> tuple[str | None, tuple[str, ...], list[Any]]:
+        """(access, modifiers, the rest) of a method's or property's children."""
+        access = [
+            str(i).upper() for i in items if isinstance(i, Token) and i.type == "ACCESS_SPECIFIER"
+        ]
+        modifiers = tuple(
+            str(i).upper() for i in items if isinstance(i, Token) and i.type == "OOP_MODIFIER"
+        )
+        rest = [
+            i
+            for i in items
+            if not (isinstance(i, Token) and i.type in ("ACCESS_SPECIFIER", "OOP_MODIFIER"))
+        ]
+        return (access[0] if access else None), modifiers, rest
+
+    def method_decl(self, items: list[Any]) -> ast.Method:
+        _keyword, *items = items
+        access, modifiers, (name, *rest) = self._specifiers(items)
+        return_type = None
+        if rest and not isinstance(rest[0], ast.VarBlock | tuple):
+            return_type, *rest = rest
+        blocks = tuple(r for r in rest if isinstance(r, ast.VarBlock))
+        body = next(r for r in rest if isinstance(r, tuple))
+        return ast.Method(
+            self._declared(name), access, modifiers, return_type, blocks, body, self._pos(name)
+        )
+
+    def property_accessor(self, items: list[Any]) -> ast.Accessor:
+        keyword, *rest = items
+        blocks = tuple(r for r in rest if isinstance(r, ast.VarBlock))
+        body = next(r for r in rest if isinstance(r, tuple))
+        return ast.Accessor(str(keyword).upper(), blocks, body, self._pos(keyword))
+
+    def property_decl(self, items: list[Any]) -> ast.Property:
+        _keyword, *items = items
+        access, modifiers, (name, type_ref, *rest) = self._specifiers(items)
+        accessors = tuple(r for r in rest if isinstance(r, ast.Accessor))
+        return ast.Property(
+            self._declared(name), access, modifiers, type_ref, accessors, self._pos(name)
+        )
+
+    def interface_decl(self, items: list[Any]) -> ast.Interface:
+        name, *rest = items
+        clauses = {c.keyword: c.names for c in rest if isinstance(c, _Clause)}
+        return ast.Interface(
+            self._declared(name),
+            clauses.get("EXTENDS", ()),
+            tuple(r for r in rest if isinstance(r, ast.Method)),
+            tuple(r for r in rest if isinstance(r, ast.Property)),
+            self._pos(name),
+        )
+
+    @v_args(tree=True)
+    def assignment_attempt(self, tree: Tree[Any]) -> ast.Assign:
+        target, _op, value = _children(tree)
+        return ast.Assign(target, value, self._pos(tree), attempt=True)
+
+    def deref_call(self, items: list[Any]) -> ast.Call:
+        """`SUPER^()`, `r^(...)`: a call named `^` on the dereferenced receiver."""
+        receiver, *args = items
+        deref = ast.Deref(receiver, receiver.pos)
+        return ast.Call("^", self._arguments(args), receiver.pos, receiver=deref)
 
     # ---- SFC
     def step_decl(self, items: list[Any]) -> ast.Step:
@@ -1032,4 +1150,7 @@ def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast
     )
     warnings = (*(_pragma_diagnostic(file, t) for t in _PRAGMAS), *transformer.warnings)
     addresses = tuple(transformer.addresses)
-    return ast.SourceUnit(file, pous, globals_, types, warnings, configurations, addresses)
+    interfaces = tuple(i for i in items if isinstance(i, ast.Interface))
+    return ast.SourceUnit(
+        file, pous, globals_, types, warnings, configurations, addresses, interfaces
+    )

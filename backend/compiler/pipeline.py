@@ -39,6 +39,7 @@ from backend.compiler.types import (
     ArrayType,
     ElementaryType,
     FbType,
+    InterfaceType,
     OpenArrayType,
     StructType,
     Type,
@@ -217,7 +218,7 @@ def _compile(
     artifact = Artifact(
         project=project,
         resource=resource,
-        pous=tuple(codes[name] for name in sorted(codes)),
+        pous=tuple(codes[name] for name in sorted(codes, key=lambda n: _run_order(resolved, n))),
         programs=program_configs,
         types=types,
         globals=globals_code,
@@ -321,6 +322,15 @@ def _from_configuration(
     return resource, programs, positions
 
 
+def _run_order(resolved: Resolved, pou_key: str) -> tuple[int, str]:
+    """Where a POU comes in the artifact, which runs its code in that order: a block after
+    the blocks it extends (its class takes their methods as they are), by name otherwise."""
+    depth, base = 0, resolved.pous[pou_key].base
+    while base is not None:
+        depth, base = depth + 1, resolved.pous[base].base
+    return depth, pou_key
+
+
 def _safe_values(
     resolved: Resolved, configured: dict[str, Any], config_file: str
 ) -> tuple[tuple[tuple[str, Any], ...], list[Diagnostic]]:
@@ -377,7 +387,9 @@ def _default_programs(units: list[ast.SourceUnit]) -> list[ProgramConfig]:
 
 
 def _fb_dependencies(resolved: Resolved, *names: str) -> list[str]:
-    """The POU keys `names` need, themselves included, sorted."""
+    """The POU keys `names` need, themselves included, sorted: the blocks of their
+    instances, the bases they extend (whose methods and body their code calls), and the
+    blocks of their methods' temporary instances."""
     seen: set[str] = set()
     stack = list(names)
     while stack:
@@ -385,7 +397,11 @@ def _fb_dependencies(resolved: Resolved, *names: str) -> list[str]:
         if current in seen:
             continue
         seen.add(current)
-        for variable in resolved.pous[current].variables:
+        pou = resolved.pous[current]
+        if pou.base is not None:
+            stack.append(pou.base)
+        routines = pou.own_routines()
+        for variable in (*pou.variables, *(v for r in routines for v in r.variables)):
             stack.extend(_fb_types_in(resolved, variable.type))
     return sorted(seen)
 
@@ -434,6 +450,11 @@ def _type_text(t: Type) -> str:
     runtime can check what it writes."""
     if isinstance(t, ElementaryType) and t.category == "string" and t.name in ("STRING", "WSTRING"):
         return f"{t.name}[{t.max_length}]"
+    if isinstance(t, InterfaceType):  # a reference to the instance it is assigned
+        return f"INTERFACE {t.name}"
+    if isinstance(t, ArrayType) and isinstance(t.element, InterfaceType):  # elements too
+        ranges = ", ".join(f"{low}..{high}" for low, high in t.dims)
+        return f"ARRAY[{ranges}] OF {_type_text(t.element)}"
     return t.name
 
 

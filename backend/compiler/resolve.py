@@ -9,7 +9,7 @@ declaration order, never in hash order.
 from __future__ import annotations
 
 import keyword
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from backend.compiler import ast
 from backend.compiler.ast import key
@@ -31,6 +31,7 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    InterfaceType,
     OpenArrayType,
     RefType,
     StructType,
@@ -64,6 +65,31 @@ class PouSymbols:
     variables: list[Variable]
     by_key: dict[str, Variable]
     return_type: Type | None = None
+    # a PROGRAM's or FUNCTION_BLOCK's methods by key, the inherited ones among them
+    methods: dict[str, PouSymbols] = field(default_factory=dict)
+    # a method (kind METHOD): the function block or program it belongs to, whose variables
+    # its body sees, and the key of the one that declares it
+    outer: PouSymbols | None = None
+    method: ast.Method | None = None
+    declared_in: str = ""
+    base: str | None = None  # the key of the function block this one EXTENDS
+    # the keys of the interfaces it implements: its own, its base's, and what they extend
+    interfaces: tuple[str, ...] = ()
+    # its properties by key, the inherited ones among them
+    properties: dict[str, PropertyInfo] = field(default_factory=dict)
+
+    def own_routines(self) -> list[PouSymbols]:
+        """The methods and property accessors this block declares itself (not inherited),
+        by name: code that runs on its instances."""
+        routines = [m for _, m in sorted(self.methods.items())]
+        for _, prop in sorted(self.properties.items()):
+            routines += [a for a in (prop.getter, prop.setter) if a is not None]
+        return [r for r in routines if r.declared_in == key(self.name)]
+
+    @property
+    def access(self) -> str:
+        """A method's access; IEC 61131-3 makes one without a specifier PROTECTED."""
+        return (self.method.access if self.method is not None else None) or "PROTECTED"
 
     @property
     def name(self) -> str:
@@ -92,6 +118,39 @@ class EnumInfo:
     values: dict[str, tuple[str, int]]  # key -> (spelling, value), in declaration order
 
 
+@dataclass(frozen=True)
+class PropertyInfo:
+    """A PROPERTY: its GET as a method without parameters whose result is the property's
+    value, its SET as a method whose one input, named like the property, is the value
+    written (either may be missing: read-only, write-only)."""
+
+    name: str
+    type: Type
+    getter: PouSymbols | None
+    setter: PouSymbols | None
+    declared_in: str
+    pos: Pos
+
+    @property
+    def access(self) -> str:
+        accessor = self.getter or self.setter
+        return accessor.access if accessor is not None else "PROTECTED"
+
+
+@dataclass
+class InterfaceInfo:
+    decl: ast.Interface
+    # its method prototypes by key, those of the interfaces it extends among them (their
+    # `declared_in` the interface's key; always PUBLIC)
+    methods: dict[str, PouSymbols] = field(default_factory=dict)
+    extends: tuple[str, ...] = ()  # the keys of every interface it extends, transitively
+    properties: dict[str, PropertyInfo] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+
 @dataclass
 class Resolved:
     pous: dict[str, PouSymbols] = field(default_factory=dict)
@@ -102,6 +161,17 @@ class Resolved:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     # `SYS.<NAME>` by key; empty when a type, POU or global of the user is named SYS
     system: dict[str, Variable] = field(default_factory=dict)
+    interfaces: dict[str, InterfaceInfo] = field(default_factory=dict)
+
+    def conforms(self, block: str, kind: str) -> bool:
+        """Whether an instance of block `block` (a key) is also a `kind` (a key): the block
+        itself, a base of it, or an interface it implements."""
+        current: str | None = block
+        while current is not None:
+            if current == kind:
+                return True
+            current = self.pous[current].base if current in self.pous else None
+        return block in self.pous and kind in self.pous[block].interfaces
 
     def sorted_pous(self) -> list[PouSymbols]:
         return [self.pous[k] for k in sorted(self.pous)]
@@ -126,7 +196,11 @@ def python_attr(name: str) -> str:
 def visible(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:
     """The variable `name` means inside `pou`: its own, else a global. A direct address
     (`%IX0.1`) means the variable located there, named or not, of the POU or the globals."""
-    found = pou.by_key.get(key(name)) or resolved.globals_by_key.get(key(name))
+    found = pou.by_key.get(key(name))
+    if found is None and pou.outer is not None:  # a method sees its block's variables
+        found = pou.outer.by_key.get(key(name))
+    if found is None:
+        found = resolved.globals_by_key.get(key(name))
     if found is None and name.startswith("%"):
         address = name.upper()
         candidates = (*pou.variables, *resolved.globals)
@@ -165,6 +239,7 @@ class _TypeResolver:
     def __init__(self, units: list[ast.SourceUnit], result: Resolved) -> None:
         self.result = result
         self.pou_kinds: dict[str, ast.Pou] = {}
+        self.interfaces: dict[str, ast.Interface] = {}
         self.decls: dict[str, ast.TypeDecl] = {}
         self.named: dict[str, Type | None] = {}
         self.in_progress: set[str] = set()
@@ -174,6 +249,8 @@ class _TypeResolver:
         for unit in units:
             for pou in unit.pous:
                 self.pou_kinds.setdefault(key(pou.name), pou)
+            for interface in unit.interfaces:
+                self.interfaces.setdefault(key(interface.name), interface)
             for decl in unit.types:
                 if key(decl.name) in self.decls:
                     first = self.decls[key(decl.name)]
@@ -254,6 +331,8 @@ class _TypeResolver:
         pou = self.pou_kinds.get(name_key)
         if pou is not None and pou.kind in ("FUNCTION_BLOCK", "PROGRAM"):
             return FbType(pou.name)
+        if name_key in self.interfaces:
+            return InterfaceType(self.interfaces[name_key].name)
         self.report(pos, Code.UNKNOWN_TYPE, f"unknown type '{name}'")
         self.named[name_key] = None
         return None
@@ -459,6 +538,11 @@ def resolve(units: list[ast.SourceUnit]) -> Resolved:
             seen[key(pou.name)] = pou
     for name in sorted(seen):
         result.pous[name] = _resolve_pou(seen[name], types, result)
+    _resolve_interfaces(units, types, result)
+    _resolve_methods(types, result)
+    _resolve_properties(types, result)
+    _inherit(result)
+    _implemented(result)
     _implicit_globals(units, result)
     user_names = (types.decls, result.pous, result.globals_by_key)
     if not any(key(NAMESPACE) in names for names in user_names):  # the user's SYS wins
@@ -588,3 +672,255 @@ def _resolve_pou(pou: ast.Pou, types: _TypeResolver, result: Resolved) -> PouSym
             symbols.variables.append(variable)
             symbols.by_key[key(step.name)] = variable
     return symbols
+
+
+def _resolve_method(
+    method: ast.Method,
+    owner: PouSymbols | None,
+    types: _TypeResolver,
+    result: Resolved,
+    declared_in: str = "",
+) -> PouSymbols:
+    """A method as a POU of kind METHOD: its parameters and locals, all temporary (Python
+    locals named `x__`, which no name of the user or of the generated code is), and its
+    result under its name."""
+    pseudo = ast.Pou(
+        "METHOD", method.name, method.return_type, method.var_blocks, method.body, method.pos
+    )
+    symbols = _resolve_pou(pseudo, types, result)
+    apart = {
+        id(v): replace(v, attr=f"{v.attr}__")
+        for v in [*symbols.variables, *symbols.by_key.values()]
+        if v.kind not in ("VAR_GLOBAL", "STEP")
+    }
+    symbols.variables = [apart.get(id(v), v) for v in symbols.variables]
+    symbols.by_key = {k: apart.get(id(v), v) for k, v in symbols.by_key.items()}
+    symbols.outer, symbols.method = owner, method
+    symbols.declared_in = key(owner.name) if owner is not None else declared_in
+    return symbols
+
+
+def _resolve_methods(types: _TypeResolver, result: Resolved) -> None:
+    """The methods each PROGRAM and FUNCTION_BLOCK declares itself."""
+    for _, pou in sorted(result.pous.items()):
+        for method in pou.pou.methods:
+            name = key(method.name)
+            clash = pou.methods[name].pou.pos if name in pou.methods else None
+            variable = pou.by_key.get(name)
+            if variable is not None and variable.kind != "RETURN":
+                clash = variable.pos
+            if clash is not None:
+                message = f"method '{method.name}': the name is already used at {clash}"
+                result.diagnostics.append(Diagnostic.at(method.pos, Code.METHOD_NAME, message))
+                continue
+            pou.methods[name] = _resolve_method(method, pou, types, result)
+
+
+def _inherit(result: Resolved) -> None:
+    """EXTENDS: a derived function block has its base's variables first (ordinary members
+    of its instances) and its base's methods, which its own replace (OVERRIDE). A base that
+    is unknown, no function block, or the block itself through its bases is refused."""
+    done: set[str] = set()
+
+    def settle(name: str, chain: tuple[str, ...]) -> None:
+        pou = result.pous[name]
+        if name in done or not pou.pou.extends:
+            done.add(name)
+            return
+        done.add(name)
+        if pou.kind != "FUNCTION_BLOCK" or len(pou.pou.extends) > 1:
+            message = "only a FUNCTION_BLOCK extends, and one function block at most"
+            result.diagnostics.append(Diagnostic.at(pou.pou.pos, Code.EXTENDS, message))
+            return
+        base_name = pou.pou.extends[0]
+        base = result.pous.get(key(base_name))
+        if base is None or base.kind != "FUNCTION_BLOCK":
+            message = f"'{pou.name}' extends '{base_name}', which is no function block"
+            result.diagnostics.append(Diagnostic.at(pou.pou.pos, Code.EXTENDS, message))
+            return
+        if key(base_name) in (*chain, name):
+            message = f"'{pou.name}' extends itself through '{base_name}'"
+            result.diagnostics.append(Diagnostic.at(pou.pou.pos, Code.CYCLIC_EXTENDS, message))
+            return
+        settle(key(base_name), (*chain, name))
+        pou.base = key(base_name)
+        inherited = [v for v in base.variables if v.kind != "STEP"]
+        for variable in inherited:
+            own = pou.by_key.get(key(variable.name))
+            if own is not None:
+                message = (
+                    f"'{own.name}' is already a variable of '{base.name}' (declared at "
+                    f"{variable.pos}); a derived block cannot declare it again"
+                )
+                result.diagnostics.append(Diagnostic.at(own.pos, Code.DUPLICATE_VARIABLE, message))
+                pou.variables.remove(own)
+        pou.variables[:0] = inherited
+        for variable in inherited:
+            pou.by_key[key(variable.name)] = variable
+        _name_clashes(pou, base, result)
+        pou.methods = {**base.methods, **pou.methods}
+        pou.properties = {**base.properties, **pou.properties}
+
+    for name in sorted(result.pous):
+        settle(name, ())
+
+
+def _name_clashes(pou: PouSymbols, base: PouSymbols, result: Resolved) -> None:
+    """A derived block's own method or property named like a variable of its base, or its
+    own variable named like a method or property of its base."""
+    members = {**base.methods, **base.properties}
+    own = {k: m.pou.pos for k, m in pou.methods.items()}
+    own.update({k: p.pos for k, p in pou.properties.items()})
+    for name in sorted(own):
+        variable = base.by_key.get(name)
+        if variable is not None and variable.kind != "RETURN":
+            message = (
+                f"'{variable.name}' is a variable of '{base.name}' (declared at {variable.pos})"
+            )
+            result.diagnostics.append(Diagnostic.at(own[name], Code.METHOD_NAME, message))
+    for variable in pou.variables:
+        name = key(variable.name)
+        if name in members and name not in base.by_key:
+            message = f"'{variable.name}' is a method or property of '{base.name}'"
+            result.diagnostics.append(Diagnostic.at(variable.pos, Code.METHOD_NAME, message))
+
+
+def _resolve_interfaces(
+    units: list[ast.SourceUnit], types: _TypeResolver, result: Resolved
+) -> None:
+    """Every INTERFACE: its method prototypes (PUBLIC), with those of the interfaces it
+    extends; an interface named like another, a type or a POU is refused."""
+    for unit in units:
+        for interface in unit.interfaces:
+            name = key(interface.name)
+            if name in result.interfaces or name in types.decls or name in types.pou_kinds:
+                message = f"'{interface.name}' is already declared"
+                result.diagnostics.append(
+                    Diagnostic.at(interface.pos, Code.DUPLICATE_TYPE, message)
+                )
+                continue
+            info = InterfaceInfo(interface)
+            for method in interface.methods:
+                public = replace(method, access="PUBLIC")
+                prototype = _resolve_method(public, None, types, result, declared_in=name)
+                if key(method.name) in info.methods:
+                    message = f"method '{method.name}' is declared twice in '{interface.name}'"
+                    result.diagnostics.append(Diagnostic.at(method.pos, Code.METHOD_NAME, message))
+                info.methods[key(method.name)] = prototype
+            for prop in interface.properties:
+                public_property = replace(prop, access="PUBLIC")
+                found = resolve_property(public_property, None, types, result, name)
+                if found is not None:
+                    info.properties[key(prop.name)] = found
+            result.interfaces[name] = info
+    done: set[str] = set()
+
+    def settle(name: str, chain: tuple[str, ...]) -> None:
+        info = result.interfaces[name]
+        if name in done:
+            return
+        done.add(name)
+        closure: list[str] = []
+        for base_name in info.decl.extends:
+            base = key(base_name)
+            if base not in result.interfaces:
+                message = f"'{info.name}' extends '{base_name}', which is no interface"
+                result.diagnostics.append(Diagnostic.at(info.decl.pos, Code.INTERFACE, message))
+                continue
+            if base in (*chain, name):
+                message = f"'{info.name}' extends itself through '{base_name}'"
+                result.diagnostics.append(
+                    Diagnostic.at(info.decl.pos, Code.CYCLIC_EXTENDS, message)
+                )
+                continue
+            settle(base, (*chain, name))
+            closure += [base, *result.interfaces[base].extends]
+            info.methods = {**result.interfaces[base].methods, **info.methods}
+            info.properties = {**result.interfaces[base].properties, **info.properties}
+        info.extends = tuple(sorted(set(closure)))
+
+    for name in sorted(result.interfaces):
+        settle(name, ())
+
+
+def _implemented(result: Resolved) -> None:
+    """The interfaces each block implements: named by IMPLEMENTS, its base's, and the ones
+    these extend (an unknown name is refused)."""
+    for name in sorted(result.pous, key=lambda n: _depth(result, n)):
+        pou = result.pous[name]
+        found: list[str] = list(result.pous[pou.base].interfaces) if pou.base else []
+        for interface in pou.pou.implements:
+            info = result.interfaces.get(key(interface))
+            if info is None or pou.kind != "FUNCTION_BLOCK":
+                message = f"'{pou.name}' implements '{interface}', which is no interface"
+                if pou.kind != "FUNCTION_BLOCK":
+                    message = "only a FUNCTION_BLOCK implements interfaces"
+                result.diagnostics.append(Diagnostic.at(pou.pou.pos, Code.INTERFACE, message))
+                continue
+            found += [key(interface), *info.extends]
+        pou.interfaces = tuple(sorted(set(found)))
+
+
+def _depth(result: Resolved, name: str) -> tuple[int, str]:
+    """How many bases a block has (bases first), then its name."""
+    depth, current = 0, result.pous[name].base
+    while current is not None and depth <= len(result.pous):
+        depth, current = depth + 1, result.pous[current].base
+    return depth, name
+
+
+def _accessor(prop: ast.Property, accessor: ast.Accessor, prop_type: ast.TypeRef) -> ast.Method:
+    """A GET or SET as the method it is: GET gives the property's value (its result named
+    like the property), SET takes it (an input named like the property)."""
+    blocks = accessor.var_blocks
+    if accessor.kind == "SET":
+        value = ast.VarDecl(prop.name, prop_type, None, None, prop.pos)
+        blocks = (ast.VarBlock("VAR_INPUT", (), (value,), accessor.pos), *blocks)
+    return_type = prop_type if accessor.kind == "GET" else None
+    return ast.Method(
+        prop.name, prop.access, prop.modifiers, return_type, blocks, accessor.body, accessor.pos
+    )
+
+
+def resolve_property(
+    prop: ast.Property,
+    owner: PouSymbols | None,
+    types: _TypeResolver,
+    result: Resolved,
+    declared_in: str,
+) -> PropertyInfo | None:
+    """A property of a block (`owner`) or an interface (`declared_in`)."""
+    prop_type = types.resolve_spec(prop.type, {})
+    if prop_type is None:
+        return None
+    accessors: dict[str, PouSymbols] = {}
+    for accessor in prop.accessors:
+        if accessor.kind in accessors:
+            message = f"property '{prop.name}' has two {accessor.kind}s"
+            result.diagnostics.append(Diagnostic.at(accessor.pos, Code.METHOD_NAME, message))
+            continue
+        method = _accessor(prop, accessor, prop.type)
+        accessors[accessor.kind] = _resolve_method(method, owner, types, result, declared_in)
+    return PropertyInfo(
+        prop.name, prop_type, accessors.get("GET"), accessors.get("SET"), declared_in, prop.pos
+    )
+
+
+def _resolve_properties(types: _TypeResolver, result: Resolved) -> None:
+    """The properties each PROGRAM and FUNCTION_BLOCK declares itself."""
+    for _, pou in sorted(result.pous.items()):
+        for prop in pou.pou.properties:
+            name = key(prop.name)
+            variable = pou.by_key.get(name)
+            clash = variable.pos if variable is not None and variable.kind != "RETURN" else None
+            if name in pou.methods:
+                clash = pou.methods[name].pou.pos
+            if name in pou.properties:
+                clash = pou.properties[name].pos
+            if clash is not None:
+                message = f"property '{prop.name}': the name is already used at {clash}"
+                result.diagnostics.append(Diagnostic.at(prop.pos, Code.METHOD_NAME, message))
+                continue
+            info = resolve_property(prop, pou, types, result, key(pou.name))
+            if info is not None:
+                pou.properties[name] = info

@@ -109,6 +109,14 @@ class FbType:
 
 
 @dataclass(frozen=True)
+class InterfaceType:
+    """A variable of an INTERFACE type: a reference to an instance of a block that
+    implements it, NULL until one is assigned."""
+
+    name: str
+
+
+@dataclass(frozen=True)
 class VariadicType:
     name: str = "..."
 
@@ -152,6 +160,7 @@ Type = (
     | FbType
     | VariadicType
     | RefType
+    | InterfaceType
 )
 
 
@@ -261,8 +270,10 @@ def assignable(target: Type, source: Type) -> bool:
         return False
     if target == source:
         return True
-    if isinstance(target, RefType) or isinstance(source, RefType):
-        return isinstance(target, RefType) and source == NULL_TYPE
+    if isinstance(target, RefType | InterfaceType) or isinstance(source, RefType):
+        # an instance into an interface, a derived block's reference into its base's:
+        # `Scope.conforms`, which knows the blocks
+        return isinstance(target, RefType | InterfaceType) and source == NULL_TYPE
     if isinstance(target, EnumType):
         return (isinstance(source, EnumType) and source.name == target.name) or source == ANY_INT
     if isinstance(source, EnumType):

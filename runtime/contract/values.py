@@ -110,12 +110,13 @@ class ValueRejected(ValueError):
     """A value that a variable of the given type cannot hold; the message says why."""
 
 
-REFERENCE_PREFIXES = ("REF_TO ", "POINTER TO ", "REFERENCE TO ")
+REFERENCE_PREFIXES = ("REF_TO ", "POINTER TO ", "REFERENCE TO ", "INTERFACE ")
 
 
 def is_reference_type(type_name: str) -> bool:
     """`REF_TO INT` and the like: a reference, which the program alone sets; at run time it
-    reads as the path of what it refers to, or None for NULL."""
+    reads as the path of what it refers to, or None for NULL. A variable of an interface
+    type (`INTERFACE IMotor`) is a reference to the instance assigned to it."""
     return type_name.upper().startswith(REFERENCE_PREFIXES)
 
 

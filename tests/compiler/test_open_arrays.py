@@ -127,7 +127,7 @@ VAR mix : ARRAY[*, 1..2] OF INT; END_VAR
 F := 0;
 END_FUNCTION
 """
-    only = "only a function's parameters and a function block's VAR_IN_OUT can"
+    only = "only a function's or method's parameters and a function block's VAR_IN_OUT can"
     assert diagnostics(source) == [
         f"t.st:2:17: error: 'm' cannot be a variable-length array (ARRAY[*] OF INT): {only}"
         " [E0704]",

@@ -9,9 +9,9 @@ from backend.compiler.checks.initializers import mismatch, takes_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
 from backend.compiler.checks.targets import is_lvalue, refuse_system_write, writable_target
 from backend.compiler.codes import Code
-from backend.compiler.infer import ProgramRef, Scope
+from backend.compiler.infer import Scope
 from backend.compiler.resolve import PouSymbols, Variable
-from backend.compiler.types import FbType, assignable
+from backend.compiler.types import assignable
 
 
 def check_call_statement(scope: Scope, call: ast.Call) -> None:
@@ -19,15 +19,11 @@ def check_call_statement(scope: Scope, call: ast.Call) -> None:
     if action is not None:
         check_action_call(scope, call, action)
         return
-    binding = scope.lookup(call.name) if call.receiver is None else None
-    called = scope.called_instance(call)
-    if isinstance(binding, ProgramRef):
-        callee = binding.pou
-    elif isinstance(binding, Variable) and isinstance(binding.type, FbType):
-        callee = scope.fb_symbols(binding.type)
-    elif called is not None:
-        callee = scope.fb_symbols(called[1])
-    else:
+    callee = scope.called_instance(call)
+    if callee is None:  # `fbs[i](...)`, `s.fb(...)`: an instance given by an expression
+        called = scope.expression_instance(call)
+        callee = scope.fb_symbols(called[1]) if called is not None else None
+    if callee is None:
         scope.type_of(call)  # a function called as a statement
         return
     pairs = scope.connect_arguments(callee, call)
@@ -75,7 +71,8 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
         return
     if arg.is_output or param.kind == "VAR_OUTPUT":
         target_type = writable_target(scope, arg.value)
-        if target_type is not None and not assignable(target_type, param.type):
+        fits = target_type is None or assignable(target_type, param.type)
+        if target_type is not None and not (fits or scope.conforms(target_type, param.type)):
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, mismatch(target_type, param.type))
         return
     if param.kind == "VAR_IN_OUT" and not is_lvalue(arg.value):
@@ -83,5 +80,5 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
     elif param.kind == "VAR_IN_OUT":
         refuse_system_write(scope, arg.value)
     value_type = scope.type_of(arg.value)
-    if value_type is not None and not takes_argument(param.type, arg.value, value_type):
+    if value_type is not None and not takes_argument(param.type, arg.value, value_type, scope):
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, mismatch(param.type, value_type))

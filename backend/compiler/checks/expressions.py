@@ -8,10 +8,15 @@ from backend.compiler.checks.access import check_bit_access, check_index
 from backend.compiler.checks.dialects import check_non_finite, check_qualified_enum
 from backend.compiler.checks.functions import check_function_call
 from backend.compiler.checks.literals import check_enum_literal, check_typed_literal
+from backend.compiler.checks.methods import (
+    check_method_call,
+    check_property_read,
+    check_self_name,
+)
 from backend.compiler.checks.names import check_member, check_name
 from backend.compiler.checks.operators import check_binary, check_unary
 from backend.compiler.checks.references import check_deref
-from backend.compiler.infer import Scope
+from backend.compiler.infer import MethodCall, Scope
 from backend.compiler.types import Type
 
 
@@ -25,8 +30,11 @@ def check_expression(scope: Scope, expr: ast.Expr, expr_type: Type | None) -> No
         case ast.NameRef():
             check_name(scope, expr, expr_type)
             check_non_finite(scope, expr)
+            check_self_name(scope, expr, scope.dereferenced(expr))
+            check_property_read(scope, expr)
         case ast.MemberRef():
             check_member(scope, expr, expr_type)
+            check_property_read(scope, expr)
         case ast.IndexRef():
             check_index(scope, expr)
         case ast.BitRef():
@@ -38,4 +46,8 @@ def check_expression(scope: Scope, expr: ast.Expr, expr_type: Type | None) -> No
         case ast.Binary():
             check_binary(scope, expr, expr_type)
         case ast.Call():
-            check_function_call(scope, expr)
+            callee = scope.callee(expr)
+            if isinstance(callee, MethodCall):
+                check_method_call(scope, expr, callee, as_value=True)
+            else:
+                check_function_call(scope, expr)

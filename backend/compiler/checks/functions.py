@@ -13,6 +13,7 @@ from backend.compiler.checks.references import check_ref
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
 from backend.compiler.infer import (
+    MethodCall,
     Misfit,
     NoValue,
     RefOf,
@@ -26,7 +27,8 @@ from backend.compiler.types import OpenArrayType, assignable
 
 # why a call in an expression gives no value, by what it calls
 NO_VALUE: dict[NoValue, tuple[Code, str]] = {
-    "method": (Code.METHODS, "methods are not supported"),
+    "method": (Code.NO_METHOD, "'{name}' is no method of what it is called on"),
+    "super": (Code.THIS_SUPER, "SUPER^() calls the base's body: call it as a statement"),
     "action": (Code.ACTION_VALUE, "action '{name}' has no value; call it as a statement"),
     "instance": (Code.INSTANCE_VALUE, "function block instance '{name}' has no value"),
     "program": (Code.PROGRAM_VALUE, "program '{name}' has no value; call it as a statement"),
@@ -43,6 +45,8 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
             check_size_of(scope, call)
         case RefOf(pointer=pointer):
             check_ref(scope, call, pointer)
+        case MethodCall():
+            pass  # checks.methods (check_method_call), which needs to know how it is used
         case StandardFunction(builtin=builtin):
             misfit = scope.standard_call(builtin, call)
             if isinstance(misfit, Misfit):
@@ -90,11 +94,11 @@ def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
         if isinstance(param.type, OpenArrayType):
             fits = param.type.binds(value_type)  # bound to the array connected
         else:
-            fits = assignable(value_type, param.type)
+            fits = assignable(value_type, param.type) or scope.conforms(value_type, param.type)
         if not fits:
             message = f"cannot store {param.type.name} output in {value_type.name}"
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, message)
         return
-    if not takes_argument(param.type, arg.value, value_type):
+    if not takes_argument(param.type, arg.value, value_type, scope):
         message = f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, message)

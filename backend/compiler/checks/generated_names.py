@@ -55,12 +55,11 @@ def _names_of_the_code(resolved: Resolved, pou: PouSymbols, locals_: list[Variab
     """The names in the scope of the POU's code (its function, or its class's `__call__`,
     with their comprehensions) once its locals are named apart."""
     apart = {id(v): replace(v, attr=f"{v.attr}__") for v in locals_}
-    probe = PouSymbols(
-        pou.pou,
-        [apart.get(id(v), v) for v in pou.variables],
-        {name: apart.get(id(v), v) for name, v in pou.by_key.items()},
-        pou.return_type,
-    )
+    probe = replace(
+        pou,
+        variables=[apart.get(id(v), v) for v in pou.variables],
+        by_key={name: apart.get(id(v), v) for name, v in pou.by_key.items()},
+    )  # its methods, base and properties as they are
     # longer names make longer code (three times at worst): the POU's own code was within
     # the limit, and this copy is only read
     source = generate_pou(resolved, probe, max_size=3 * MAX_UNIT_CODE).source

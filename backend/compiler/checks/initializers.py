@@ -88,24 +88,29 @@ def check_value(scope: Scope, target: Type, value: ast.Expr) -> None:
     value_type = scope.type_of(value)
     if value_type is None:
         return
-    if not takes(target, value, value_type):
+    if not takes(target, value, value_type, scope):
         scope.report(value.pos, Code.TYPE_MISMATCH, mismatch(target, value_type))
     elif isinstance(value, ast.IntLiteral) and value.type_name is None:
         check_range(scope, target, value)
 
 
-def takes(target: Type, value: ast.Expr, value_type: Type) -> bool:
-    """Can `value` (of `value_type`) be stored in `target`? The types must be assignable;
-    besides, the plain literals 0 and 1 are BOOL values (IEC 61131-3 boolean literals)."""
-    return assignable(target, value_type) or bool_literal(target, value)
+def takes(target: Type, value: ast.Expr, value_type: Type, scope: Scope) -> bool:
+    """Can `value` (of `value_type`) be stored in `target`? The types must be assignable
+    (or conform, for instances and interfaces); besides, the plain literals 0 and 1 are
+    BOOL values (IEC 61131-3 boolean literals)."""
+    return (
+        assignable(target, value_type)
+        or bool_literal(target, value)
+        or scope.conforms(target, value_type)
+    )
 
 
-def takes_argument(param: Type, value: ast.Expr, value_type: Type) -> bool:
+def takes_argument(param: Type, value: ast.Expr, value_type: Type, scope: Scope) -> bool:
     """Can `value` be passed for a parameter of type `param`? As stored, or bound to it
     when the parameter is a variable-length array."""
     if isinstance(param, OpenArrayType):
         return param.binds(value_type)
-    return takes(param, value, value_type)
+    return takes(param, value, value_type, scope)
 
 
 def bool_literal(target: Type, value: ast.Expr) -> bool:

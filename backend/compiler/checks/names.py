@@ -4,14 +4,15 @@ blocks (those visible from outside), system variables."""
 from __future__ import annotations
 
 from backend.compiler import ast
+from backend.compiler.ast import key
 from backend.compiler.codes import Code
-from backend.compiler.infer import Scope
+from backend.compiler.infer import SELF_NAMES, Scope
 from backend.compiler.types import FbType, StructType, Type
 from runtime.contract.system_variables import NAMESPACE
 
 
 def check_name(scope: Scope, name: ast.NameRef, name_type: Type | None) -> None:
-    if name_type is not None:
+    if name_type is not None or key(name.name) in SELF_NAMES:  # THIS, SUPER: checks.methods
         return
     if scope.system_namespace(name):
         spelled = name.name

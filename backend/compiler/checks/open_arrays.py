@@ -1,7 +1,8 @@
 """Variable-length arrays (`ARRAY[*] OF T`): only parameters that an array is bound to at
-each call may have one, the inputs, outputs and in-outs of a function and the in-outs of a
-function block (IEC 61131-3 ed. 3, 6.5.3); a block's input or output would have to keep an
-array between calls. A function's output is bound to the array the caller connects (`=>`)."""
+each call may have one, the inputs, outputs and in-outs of a function (and of a method)
+and the in-outs of a function block (IEC 61131-3 ed. 3, 6.5.3); a block's input or output
+would have to keep an array between calls. A function's output is bound to the array the
+caller connects (`=>`)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from backend.compiler.types import OpenArrayType
 
 ALLOWED = {
     "FUNCTION": ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT"),
+    "METHOD": ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT"),  # called as a function is
     "FUNCTION_BLOCK": ("VAR_IN_OUT",),
 }
 
@@ -54,5 +56,5 @@ def check_open_array_connections(
 def _refusal(variable: Variable) -> str:
     return (
         f"'{variable.name}' cannot be a variable-length array ({variable.type.name}): only "
-        "a function's parameters and a function block's VAR_IN_OUT can"
+        "a function's or method's parameters and a function block's VAR_IN_OUT can"
     )

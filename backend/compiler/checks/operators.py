@@ -12,6 +12,7 @@ from backend.compiler.types import (
     NULL_TYPE,
     ElementaryType,
     EnumType,
+    InterfaceType,
     RefType,
     StructType,
     Type,
@@ -59,13 +60,15 @@ def comparable(op: str, left_type: Type, right_type: Type) -> bool:
     """Values of the two types can be compared with `op`: enums and structures with = and <>
     when of the same type (an enum with an integer too); numbers with numbers, values of
     one category with each other, BOOL with integers."""
-    if isinstance(left_type, RefType) or isinstance(right_type, RefType):
-        # references compare with = and <> when they may refer to the same: same target,
-        # or NULL
+    if isinstance(left_type, RefType | InterfaceType) or isinstance(
+        right_type, RefType | InterfaceType
+    ):
+        # references (and interfaces, which refer to an instance) compare with = and <>
+        # when they may refer to the same: same type, or NULL
         return (
             op in ("=", "<>")
-            and isinstance(left_type, RefType)
-            and isinstance(right_type, RefType)
+            and isinstance(left_type, RefType | InterfaceType)
+            and isinstance(right_type, RefType | InterfaceType)
             and (left_type == right_type or NULL_TYPE in (left_type, right_type))
         )
     if op in ("=", "<>") and isinstance(left_type, EnumType | StructType):

@@ -122,7 +122,8 @@ def globals_read(resolved: Resolved, pou_key: str) -> list[str]:
 
 
 def _reachable(resolved: Resolved, pou_key: str) -> Iterator[PouSymbols]:
-    """A POU and every POU it may run (its FBs, the functions and programs it calls)."""
+    """A POU and every POU it may run (its FBs, the functions and programs it calls, its
+    base block and the methods of each)."""
     visited: set[str] = set()
     pending = [pou_key]
     while pending:
@@ -133,6 +134,11 @@ def _reachable(resolved: Resolved, pou_key: str) -> Iterator[PouSymbols]:
         pou = resolved.pous[current]
         yield pou
         pending.extend(sorted(_callees(resolved, pou)))
+        if pou.base is not None:  # its body and methods may run on the instance
+            pending.append(pou.base)
+        for routine in pou.own_routines():  # the inherited ones come with their base
+            yield routine
+            pending.extend(sorted(_callees(resolved, routine)))
 
 
 def _global(resolved: Resolved, pou: PouSymbols, name: str) -> Variable | None:
@@ -189,17 +195,20 @@ def _root_name(expr: ast.Expr) -> ast.NameRef | None:
 
 def _callees(resolved: Resolved, pou: PouSymbols) -> set[str]:
     """POUs this one may run: its FB instances' types, every function or program named
-    in a call, and the type of every instance a call gives by an expression (`fbs[i]()`,
-    `s.fb()`, `p^()`)."""
+    in a call (or whose method or action it calls), and the type of every instance a call
+    gives by an expression (`fbs[i]()`, `s.fb()`)."""
     found = {key(v.type.name) for v in pou.variables if isinstance(v.type, FbType)}
     scope = Scope(resolved, pou)
     for statement in _statements(pou):
         for call in _calls_in(statement):
             if key(call.name) in resolved.pous:
                 found.add(key(call.name))
-            called = scope.called_instance(call)
+            called = scope.expression_instance(call)
             if called is not None:
                 found.add(key(called[1].name))
+            receiver = call.receiver
+            if isinstance(receiver, ast.NameRef) and key(receiver.name) in resolved.pous:
+                found.add(key(receiver.name))  # `Prog.Method()`, `Prog.Action()`
     return found
 
 

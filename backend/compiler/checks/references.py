@@ -45,6 +45,8 @@ def _unreferenceable(scope: Scope, expr: ast.Expr) -> str | None:
         case ast.MemberRef(base=base):
             if scope.system_namespace(base):
                 return "a system variable"
+            if scope.property_access(expr) is not None:
+                return "a property, which is no variable"
             return _unreferenceable(scope, base)
         case ast.IndexRef(base=base):
             return _unreferenceable(scope, base)
@@ -60,10 +62,14 @@ def _lasting(scope: Scope, variable: Variable) -> str | None:
         return f"constant '{variable.name}'"
     if scope.pou.kind == "FUNCTION" and variable.kind != "VAR_GLOBAL":
         return f"'{variable.name}', a variable of a function (it is gone when the call ends)"
+    if scope.pou.kind == "METHOD" and any(v is variable for v in scope.pou.by_key.values()):
+        return f"'{variable.name}', a variable of a method (it is gone when the call ends)"
     if variable.kind == "VAR_TEMP":
         return f"'{variable.name}', a VAR_TEMP (it is gone when the call ends)"
     if variable.kind == "VAR_IN_OUT":
         return f"'{variable.name}', an in-out (its place belongs to the caller)"
+    if variable.kind in ("THIS", "SUPER"):
+        return f"{variable.name}, which is a reference already"
     if variable.kind in ("SYSTEM", "STEP"):
         return f"'{variable.name}', which the runtime keeps"
     return None

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 from backend.compiler import ast
+from backend.compiler.ast import key
 from backend.compiler.checks.calls import check_call_statement
 from backend.compiler.checks.dialects import check_expression_statement
 from backend.compiler.checks.initializers import check_initializer, mismatch
+from backend.compiler.checks.methods import check_attempt, check_method_call
 from backend.compiler.checks.references import check_binding
 from backend.compiler.checks.targets import writable_target
 from backend.compiler.codes import Code
@@ -23,6 +25,8 @@ def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> 
     match statement:
         case ast.Assign(target=target, value=value, bind=True):
             check_binding(scope, target, value)
+        case ast.Assign(target=target, value=value, attempt=True):
+            check_attempt(scope, target, value)
         case ast.Assign(target=target, value=value):
             target_type = writable_target(scope, target)
             if target_type is not None:
@@ -30,7 +34,13 @@ def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> 
             elif not isinstance(value, ast.ArrayInit | ast.StructInit):
                 scope.type_of(value)
         case ast.CallStatement(call=call):
-            check_call_statement(scope, call)
+            method = scope.method_call(call)
+            if method is not None:
+                check_method_call(scope, call, method, as_value=False)
+            elif call.name == "^" and scope.called_instance(call) is None:
+                check_super_call(scope, call)
+            else:
+                check_call_statement(scope, call)
         case ast.ExprStatement():
             check_expression_statement(scope, statement)
         case ast.If(branches=branches, orelse=orelse):
@@ -54,6 +64,26 @@ def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> 
                 scope.report(pos, Code.OUTSIDE_LOOP, f"{word} outside of a loop")
         case ast.Return():
             pass
+
+
+def check_super_call(scope: Scope, call: ast.Call) -> None:
+    """`SUPER^()`, or `x^()` of something that is no reference to a block."""
+    assert call.receiver is not None
+    if scope.super_body(call) is not None:
+        if call.args:
+            message = "SUPER^() runs the base's body: it takes no arguments"
+            scope.report(call.args[0].pos, Code.THIS_SUPER, message)
+        return
+    target = scope.type_of(call.receiver)
+    base = call.receiver.base if isinstance(call.receiver, ast.Deref) else None
+    if isinstance(base, ast.NameRef) and key(base.name) in ("SUPER", "THIS"):
+        if key(base.name) == "THIS":
+            message = "THIS^() would run the block's body from inside it: call a method"
+            scope.report(call.pos, Code.THIS_SUPER, message)
+        return  # no SUPER here: the rules on names said so
+    if target is not None:  # else the rules on `^` said what it is not
+        message = f"r^() calls the function block r refers to, not a value of type {target.name}"
+        scope.report(call.pos, Code.NOT_A_REFERENCE, message)
 
 
 def check_case(scope: Scope, case: ast.Case, loop_depth: int) -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
-from backend.compiler.infer import EnumValue, NonFinite, ProgramRef, Scope
+from backend.compiler.infer import EnumValue, NonFinite, ProgramRef, PropertyAccess, Scope
 from backend.compiler.resolve import Variable
 from backend.compiler.types import FbType, StructType, Type, value_type
 from runtime.contract.system_variables import NAMESPACE
@@ -16,6 +16,18 @@ WRITABLE_MEMBER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "MEMBER")
 
 def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
     """Type of an assignment target, reporting anything that may not be written."""
+    scope.written.add(id(target))  # a property here is set, not read
+    part = target.base if isinstance(target, ast.MemberRef | ast.IndexRef | ast.BitRef) else None
+    while part is not None:
+        if scope.property_access(part) is not None:
+            message = "a property is written whole: read it, change the copy, write it back"
+            scope.report(part.pos, Code.PROPERTY_ACCESSOR, message)
+            return scope.type_of(target)
+        part = part.base if isinstance(part, ast.MemberRef | ast.IndexRef | ast.BitRef) else None
+    found = scope.property_access(target)
+    if found is not None:
+        check_accessor(scope, target, found, "SET")
+        return scope.type_of(target)
     if isinstance(target, ast.NameRef):
         binding = scope.lookup(target.name)
         if binding is None:
@@ -58,7 +70,8 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
                     f"step flag '{root.name}.{target.member}' is read-only",
                 )
                 return value_type(member.type)
-        if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS:
+        own = scope.self_deref(target.base) is not None  # THIS^.x: the block's own
+        if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS and not own:
             scope.report(
                 target.pos,
                 Code.FB_MEMBER_WRITE,
@@ -77,6 +90,22 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
         return scope.type_of(target)
     scope.report(target.pos, Code.ASSIGN_EXPRESSION, "cannot assign to an expression")
     return None
+
+
+def check_accessor(scope: Scope, expr: ast.Expr, found: PropertyAccess, kind: str) -> None:
+    """A property read (`kind` GET) or written (SET): it has that accessor, and its access
+    specifier lets the code here call it."""
+    prop = found.prop
+    accessor = prop.getter if kind == "GET" else prop.setter
+    if accessor is None:
+        what = "read-only: it has no SET" if kind == "SET" else "write-only: it has no GET"
+        scope.report(expr.pos, Code.PROPERTY_ACCESSOR, f"property '{prop.name}' is {what}")
+        return
+    if not scope.may_call(accessor):
+        resolved = scope.resolved
+        owner = resolved.pous.get(prop.declared_in) or resolved.interfaces[prop.declared_in]
+        message = f"property '{prop.name}' of '{owner.name}' is {accessor.access}"
+        scope.report(expr.pos, Code.METHOD_ACCESS, message)
 
 
 def refuse_system_write(scope: Scope, target: ast.Expr) -> None:
