@@ -51,6 +51,7 @@ def read_plcopen(xml: Path) -> PlcProject:
     seen: dict[str, str] = {}
     declared = [(t.name, t.where) for t in project.types]
     declared += [(p.name, p.where) for p in project.pous]
+    declared += [(i.name, i.where) for i in project.interfaces]
     declared += [(m.name, m.where) for m in project.not_imported]
     for name, where in declared:
         if name.upper() in seen:
@@ -67,8 +68,10 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
     display = str(xml)
     project = read_plcopen(xml)
     files = project_files(project, xml.name)
+    interfaces = f"{_count(len(project.interfaces), 'interface')}, " if project.interfaces else ""
     summary = (
-        f"{_count(len(project.pous), 'POU')}, {_count(len(project.types), 'data type')}, "
+        f"{_count(len(project.pous), 'POU')}, {interfaces}"
+        f"{_count(len(project.types), 'data type')}, "
         f"{_count(files.global_variables, 'global variable')}, {_count(files.programs, 'program')}"
     )
     result = ImportResult(
@@ -91,8 +94,8 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
             display,
             dropped.where,
             ImportCode.PARTS_NOT_IMPORTED,
-            f"{dropped.owner} is imported without its CODESYS {dropped.what} (padt does "
-            "not read them from <addData>)",
+            f"{dropped.owner} is imported without its CODESYS {dropped.what} (a structure "
+            "extends no other in padt)",
         )
         for dropped in project.dropped
     ]

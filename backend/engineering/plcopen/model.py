@@ -44,6 +44,38 @@ class Action:
 
 
 @dataclass(frozen=True)
+class Method:
+    """A CODESYS method (in a POU's or an interface's <addData>)."""
+
+    name: str
+    access: str  # PUBLIC, PRIVATE, PROTECTED, INTERNAL: always written (see access_of)
+    modifiers: tuple[str, ...]  # ABSTRACT, FINAL
+    return_type: str  # or empty
+    sections: tuple[VarSection, ...]
+    body: str | None  # ST statements; None: a prototype (of an interface) or ABSTRACT
+    comment: str = ""
+
+
+@dataclass(frozen=True)
+class Accessor:
+    """The GET or SET of a property: its own variables and its ST body."""
+
+    sections: tuple[VarSection, ...]
+    body: str
+
+
+@dataclass(frozen=True)
+class Property:
+    name: str
+    access: str
+    modifiers: tuple[str, ...]
+    type: str
+    get: Accessor | None
+    set: Accessor | None
+    comment: str = ""
+
+
+@dataclass(frozen=True)
 class Pou:
     name: str
     kind: str  # PROGRAM, FUNCTION_BLOCK, FUNCTION
@@ -51,6 +83,22 @@ class Pou:
     sections: tuple[VarSection, ...]
     body: str  # ST statements and textual SFC
     actions: tuple[Action, ...]
+    comment: str
+    where: Where
+    extends: str = ""  # CODESYS's <Inheritance>: the base function block, or empty
+    implements: tuple[str, ...] = ()
+    methods: tuple[Method, ...] = ()
+    properties: tuple[Property, ...] = ()
+
+
+@dataclass(frozen=True)
+class Interface:
+    """A CODESYS interface (the project's <addData>): prototypes without bodies."""
+
+    name: str
+    extends: tuple[str, ...]
+    methods: tuple[Method, ...]
+    properties: tuple[Property, ...]
     comment: str
     where: Where
 
@@ -103,6 +151,7 @@ class PlcProject:
     version: str = ""
     types: list[DataType] = field(default_factory=list)
     pous: list[Pou] = field(default_factory=list)
+    interfaces: list[Interface] = field(default_factory=list)
     not_imported: list[NotImported] = field(default_factory=list)
     configurations: list[Configuration] = field(default_factory=list)
     # global variable lists outside the configuration (CODESYS puts its GVLs in <addData>)
@@ -114,8 +163,8 @@ class PlcProject:
 
 @dataclass(frozen=True)
 class Dropped:
-    """Part of an imported POU or data type that is not imported (CODESYS methods in
-    <addData>)."""
+    """Part of an imported data type that is not imported (the EXTENDS of a CODESYS
+    structure, in its <addData>)."""
 
     owner: str
     what: str

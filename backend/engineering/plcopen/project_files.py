@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from backend.engineering.plcopen.issues import ImportCode, Where
 from backend.engineering.plcopen.model import Configuration, PlcProject, Resource
-from backend.engineering.plcopen.st_text import globals_text, pou_text, types_text
+from backend.engineering.plcopen.st_text import globals_text, interface_text, pou_text, types_text
 from backend.engineering.project import PROJECT_FILE
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.parameters import PROGRAM_BY_NAME, RESOURCE_BY_NAME
@@ -38,6 +38,8 @@ def project_files(project: PlcProject, source_name: str) -> Files:
     files = Files()
     for pou in project.pous:
         files.contents[f"{pou.name}.st"] = pou_text(pou)
+    for interface in project.interfaces:
+        files.contents[f"{interface.name}.st"] = interface_text(interface)
     if project.types:
         files.contents[TYPES_FILE] = types_text(project.types)
     configuration, chosen = _chosen(project, files)

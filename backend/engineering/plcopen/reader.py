@@ -12,14 +12,18 @@ import re
 from backend.compiler.parse import parse_time_literal
 from backend.engineering.plcopen.issues import ImportCode, ImportFailed
 from backend.engineering.plcopen.model import (
+    Accessor,
     Action,
     Configuration,
     DataType,
     Dropped,
     Instance,
+    Interface,
+    Method,
     NotImported,
     PlcProject,
     Pou,
+    Property,
     Resource,
     Task,
     Variable,
@@ -58,15 +62,9 @@ ELEMENTARY = frozenset((
 GRAPHICAL = ("FBD", "LD", "IL")
 CONFIGURATION_PARTS = {"accessVars": "VAR_ACCESS", "configVars": "VAR_CONFIG"}
 NOT_TYPES = ("documentation", "addData")
-# CODESYS keeps these in the <addData> of a POU, its interface or a data type, under
-# `<data name="http://www.3s-software.com/plcopenxml/method">` and the like: a part of the
-# name -> what padt does not read there
-CODESYS_PARTS = (
-    ("method", "methods"),
-    ("property", "properties"),
-    ("inheritance", "EXTENDS"),
-    ("implement", "IMPLEMENTS"),
-)
+# CODESYS's access modifiers (attributes of <AccessModifiers>): ST keyword by attribute
+ACCESS = {a.lower(): a for a in ("PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL")}
+MODIFIERS = {m.lower(): m for m in ("ABSTRACT", "FINAL")}
 
 
 def fail(element: Element, message: str, code: ImportCode = ImportCode.STRUCTURE) -> ImportFailed:
@@ -281,35 +279,185 @@ def st_text(body: Element) -> str:
     return st_source(element)
 
 
+def _declarations(interface: Element | None) -> tuple[str, tuple[VarSection, ...]]:
+    """The result type and the variable sections of an <interface> (of a POU, a method or
+    an accessor)."""
+    sections: list[VarSection] = []
+    return_type = ""
+    for part in interface.children if interface is not None else []:
+        if part.tag == "returnType":
+            return_type = type_text(part)
+        elif part.tag in SECTIONS:
+            sections.append(var_section(part, SECTIONS[part.tag]))
+        elif part.tag not in NOT_TYPES:
+            raise _Refused(f"<{part.tag}> in its interface")
+    return return_type, tuple(sections)
+
+
 def pou(element: Element) -> Pou | NotImported:
     name = name_of(element)
     kind = POU_KINDS.get(element.attrs.get("pouType", ""))
     if kind is None:
         raise fail(element, f"POU {name}: pouType {element.attrs.get('pouType')!r} is unknown")
-    sections: list[VarSection] = []
-    return_type = ""
     interface = element.child("interface")
     try:
-        for part in interface.children if interface is not None else []:
-            if part.tag == "returnType":
-                return_type = type_text(part)
-            elif part.tag in SECTIONS:
-                sections.append(var_section(part, SECTIONS[part.tag]))
-            elif part.tag not in NOT_TYPES:
-                raise _Refused(f"<{part.tag}> in its interface")
+        return_type, sections = _declarations(interface)
         actions = _actions(element)
         transitions = _transitions(element)
         bodies = element.all("body")
         if len(bodies) > 1:
             raise fail(bodies[1], f"POU {name} has more than one <body>")
         body = _body(bodies[0], actions, transitions) if bodies else ("", ())
+        holders = _holders(element)
+        methods = tuple(_method(m) for d in _data(holders, "method") for m in d.all("Method"))
+        properties = tuple(
+            _property(p) for d in _data(holders, "property") for p in d.all("Property")
+        )
     except _Refused as refused:
         return NotImported(name, refused.reason, element.where)
+    extends, implements = _inheritance(holders)
+    if len(extends) > 1:
+        raise fail(element, f"POU {name} extends {', '.join(extends)}: a block extends one")
     text, inline_actions = body
     return Pou(
-        name, kind, return_type, tuple(sections), text, (*actions, *inline_actions),
-        _comment(element), element.where,
+        name, kind, return_type, sections, text, (*actions, *inline_actions),
+        _comment(element), element.where, "".join(extends), implements, methods, properties,
     )  # fmt: skip
+
+
+# ---- CODESYS's object orientation (in <addData>, outside the TC6 schema) ------------------
+#
+# CODESYS writes a POU's methods and properties into its <addData> (`<data name="http://
+# www.3s-software.com/plcopenxml/method"><Method name=...>`, `.../property`), its EXTENDS
+# and IMPLEMENTS into its interface's (`.../pouinheritance`: <Inheritance> with <Extends>
+# and <Implements>), the access of a method or property into the <addData> of the
+# method's interface (`.../accessmodifiers`: `<AccessModifiers Private="true"/>`, empty for
+# none), and each INTERFACE into the project's <addData> (`.../interface`: <Interface> with
+# <Methods> and <Properties>).
+
+
+def _holders(element: Element) -> list[Element]:
+    """The <addData> of an element and of its <interface>, where CODESYS writes."""
+    interface = element.child("interface")
+    found = [element.child("addData")]
+    if interface is not None:
+        found.append(interface.child("addData"))
+    return [h for h in found if h is not None]
+
+
+def _data(holders: list[Element], kind: str) -> list[Element]:
+    """The <data> of the holders that CODESYS names `.../plcopenxml/<kind>`."""
+    return [
+        data
+        for holder in holders
+        for data in holder.all("data")
+        if data.attrs.get("name", "").rstrip("/").rpartition("/")[2].lower() == kind
+    ]
+
+
+def _names(element: Element) -> tuple[str, ...]:
+    """The names in an <Extends> or <Implements> (one, or several with commas)."""
+    found = []
+    for text in element.text().split(","):
+        if not IDENTIFIER.match(text.strip()):
+            raise fail(
+                element, f"<{element.tag}> {text.strip()!r} is no IEC identifier", ImportCode.NAME
+            )
+        found.append(text.strip())
+    return tuple(found)
+
+
+def _inheritance(holders: list[Element]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """EXTENDS and IMPLEMENTS from CODESYS's <Inheritance> elements."""
+    extends: list[str] = []
+    implements: list[str] = []
+    for data in _data(holders, "pouinheritance") + _data(holders, "interfaceinheritance"):
+        for inheritance in data.all("Inheritance"):
+            for part in inheritance.children:
+                if part.tag == "Extends":
+                    extends += _names(part)
+                elif part.tag == "Implements":
+                    implements += _names(part)
+    return tuple(extends), tuple(implements)
+
+
+def _access(element: Element) -> tuple[str, tuple[str, ...]]:
+    """The access specifier and the modifiers of a method or property. CODESYS makes one
+    without an access specifier PUBLIC, IEC (and padt) PROTECTED: the import writes the
+    access CODESYS means, PUBLIC where the export names none."""
+    access = "PUBLIC"
+    modifiers: list[str] = []
+    for data in _data(_holders(element), "accessmodifiers"):
+        for marks in data.all("AccessModifiers"):
+            for attribute in sorted(a for a in marks.attrs if flag(marks, a)):
+                if attribute.lower() in ACCESS:
+                    access = ACCESS[attribute.lower()]
+                elif attribute.lower() in MODIFIERS:
+                    modifiers.append(MODIFIERS[attribute.lower()])
+    return access, tuple(sorted(set(modifiers)))
+
+
+def _method(element: Element, prototype: bool = False) -> Method:
+    """A method of a POU (with its ST body) or, `prototype`, of an interface."""
+    name = name_of(element)
+    try:
+        return_type, sections = _declarations(element.child("interface"))
+        access, modifiers = _access(element)
+        body = element.child("body")
+        if prototype or "ABSTRACT" in modifiers:
+            text = None
+        else:
+            text = st_text(body) if body is not None else ""
+    except _Refused as refused:
+        raise _Refused(f"method {name} in {refused.reason}") from None
+    return Method(name, access, modifiers, return_type, sections, text, _comment(element))
+
+
+def _property(element: Element, prototype: bool = False) -> Property:
+    """A property with its GET and SET (<GetAccessor>, <SetAccessor>, in either order)."""
+    name = name_of(element)
+    try:
+        type_st, sections = _declarations(element.child("interface"))
+        access, modifiers = _access(element)
+    except _Refused as refused:
+        raise _Refused(f"property {name} in {refused.reason}") from None
+    if not type_st or sections:
+        raise fail(element, f"property {name}: its <interface> holds its type, and only that")
+    accessors: dict[str, Accessor | None] = {}
+    for tag, word in (("GetAccessor", "GET"), ("SetAccessor", "SET")):
+        accessor = element.child(tag)
+        if accessor is None:
+            accessors[word] = None
+            continue
+        try:
+            _, own = _declarations(accessor.child("interface"))
+            body = accessor.child("body")
+            text = "" if prototype or body is None else st_text(body)
+        except _Refused as refused:
+            raise _Refused(f"property {name} {word} in {refused.reason}") from None
+        accessors[word] = Accessor(() if prototype else own, text)
+    return Property(
+        name, access, modifiers, type_st, accessors["GET"], accessors["SET"], _comment(element)
+    )
+
+
+def codesys_interface(element: Element) -> Interface:
+    """A CODESYS interface: method and property prototypes, and what it extends."""
+    name = name_of(element)
+    holders = _holders(element)
+    methods = [m for group in element.all("Methods") for m in group.all("Method")]
+    methods += [m for d in _data(holders, "method") for m in d.all("Method")]
+    properties = [p for group in element.all("Properties") for p in group.all("Property")]
+    properties += [p for d in _data(holders, "property") for p in d.all("Property")]
+    try:
+        found = (
+            tuple(_method(m, prototype=True) for m in methods),
+            tuple(_property(p, prototype=True) for p in properties),
+        )
+    except _Refused as refused:  # only an unknown part of a prototype's interface
+        raise fail(element, f"interface {name}: {refused.reason}") from None
+    extends, _ = _inheritance(holders)
+    return Interface(name, extends, *found, _comment(element), element.where)
 
 
 def _actions(element: Element) -> tuple[Action, ...]:
@@ -370,21 +518,13 @@ def _body(
 
 
 def codesys_parts(element: Element) -> list[Dropped]:
-    """What CODESYS adds to a POU or data type in <addData> that changes its meaning
-    (methods, properties, inheritance): named, since the import does not read it."""
+    """What CODESYS adds to a data type in <addData> that changes its meaning and padt has
+    no ST for (a structure's EXTENDS): named, since the import leaves it out."""
     found = []
-    interface = element.child("interface")
-    holders = [
-        element.child("addData"),
-        interface.child("addData") if interface is not None else None,
-    ]
-    for data in (d for h in holders if h is not None for d in h.all("data")):
-        kind = data.attrs.get("name", "").rstrip("/").rpartition("/")[2].lower()
-        what = next((what for part, what in CODESYS_PARTS if part in kind), None)
-        if what is not None:
-            names = [c.attrs.get("name", "") for c in data.children]
-            listed = ", ".join(n for n in names if IDENTIFIER.match(n))
-            found.append(Dropped(name_of(element), f"{what} {listed}".strip(), data.where))
+    for data in _data(_holders(element), "datatypeinheritance"):
+        bases = [e.text().strip() for i in data.all("Inheritance") for e in i.all("Extends")]
+        listed = ", ".join(n for n in bases if IDENTIFIER.match(n))
+        found.append(Dropped(name_of(element), f"EXTENDS {listed}".strip(), data.where))
     return found
 
 
@@ -458,12 +598,14 @@ def read_project(root: Element) -> PlcProject:
         read = pou(element)
         if isinstance(read, Pou):
             project.pous.append(read)
-            project.dropped += codesys_parts(element)
         else:
             project.not_imported.append(read)
     extra = root.child("addData")
     for data in extra.all("data") if extra is not None else []:
         project.globals += [var_section(g, "VAR_GLOBAL") for g in data.all("globalVars")]
+    extras = [extra] if extra is not None else []
+    for data in _data(extras, "interface"):
+        project.interfaces += [codesys_interface(i) for i in data.all("Interface")]
     instances = root.child("instances")
     holder = instances.child("configurations") if instances is not None else None
     for configuration in holder.all("configuration") if holder is not None else []:
