@@ -31,7 +31,7 @@ class ImportCode(Enum):
     DUPLICATE = "P0007", "error", "POU or data type declared twice"
     TOO_LARGE = "P0008", "error", "file larger than an import takes"
     UNREADABLE = "P0009", "error", "the file cannot be read"
-    PARTS_NOT_IMPORTED = "P0010", "error", "CODESYS methods, properties or inheritance not read"
+    PARTS_NOT_IMPORTED = "P0010", "error", "CODESYS EXTENDS of a structure not imported"
     EXTRA_RESOURCE = "P0101", "warning", "resource or configuration ignored: one per project"
     TASK = "P0102", "warning", "task setting padt cannot keep"
     INSTANCE_LEFT_OUT = "P0103", "warning", "program instance of a POU not imported"

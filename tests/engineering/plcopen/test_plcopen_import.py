@@ -257,20 +257,21 @@ def test_every_code_is_documented() -> None:
 
 
 def test_a_codesys_export_with_its_global_variable_list(tmp_path: Path) -> None:
-    """CODESYS keeps GVLs in the project's <addData> (imported) and methods in the block's
-    (not read: named in an error, the block written without them)."""
+    """CODESYS keeps GVLs in the project's <addData> (imported), methods in the block's
+    (imported, test_plcopen_oop.py) and a structure's EXTENDS in the type's (padt has no
+    ST for it: named in an error, the structure written without it)."""
     folder, code, stderr = imported(tmp_path, "codesys")
     assert code == 1
-    assert (
-        f"{FIXTURES / 'codesys.xml'}:28:11: error: FB_Belt is imported without its "
-        "CODESYS methods Reset (padt does not read them from <addData>) [P0010]"
-    ) in stderr.splitlines()
-    assert "#   FB_Belt: its CODESYS methods Reset\n" in (folder / "padt.toml").read_text()
+    assert stderr.splitlines() == [
+        f"{FIXTURES / 'codesys.xml'}:22:11: error: ST_Belt is imported without its CODESYS "
+        "EXTENDS ST_Base (a structure extends no other in padt) [P0010]"
+    ]
+    assert "#   ST_Belt: its CODESYS EXTENDS ST_Base\n" in (folder / "padt.toml").read_text()
     assert (folder / "global-variables.st").read_text() == (
         "VAR_GLOBAL\n    GVL_Start : BOOL := TRUE;\n    GVL_Count : DINT;\nEND_VAR\n"
     )
-    values = trace(folder, 3, ["GVL_Count"])  # no configuration: every PROGRAM runs
-    assert values["GVL_Count"] == [1, 2, 3]
+    values = trace(folder, 5, ["GVL_Count"])  # no configuration: every PROGRAM runs
+    assert values["GVL_Count"] == [1, 2, 3, 1, 2]  # belt.Reset() at 3
 
 
 def test_task_settings_padt_cannot_keep_are_reported(tmp_path: Path) -> None:
