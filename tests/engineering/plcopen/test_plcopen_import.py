@@ -238,8 +238,11 @@ def test_a_folder_that_is_not_empty_needs_force(tmp_path: Path) -> None:
     assert (folder / "Sequence.st").exists()
 
 
-def test_every_cut_of_a_file_is_refused_or_imported_never_a_crash(tmp_path: Path) -> None:
-    data = (FIXTURES / "plant.xml").read_bytes()
+@pytest.mark.parametrize("source", ["plant", "oop"])
+def test_every_cut_of_a_file_is_refused_or_imported_never_a_crash(
+    tmp_path: Path, source: str
+) -> None:
+    data = (FIXTURES / f"{source}.xml").read_bytes()
     for number, end in enumerate(range(0, len(data), max(1, len(data) // 60))):
         xml = tmp_path / f"cut{number}.xml"
         xml.write_bytes(data[:end])
@@ -314,6 +317,8 @@ def test_a_pou_declared_twice_is_refused(tmp_path: Path) -> None:
 PIECES = [
     *(b"<", b">", b'"', b"/>", b"</step>", b'localId="1"', b'refLocalId="9"', b"&amp;", b"\xff"),
     *(b'<step localId="77"/>', b'<connection refLocalId="3"/>', b'<transition localId="78"/>'),
+    *(b"</Method>", b"<Extends>Nope</Extends>", b'<AccessModifiers Private="true"/>'),
+    *(b"<GetAccessor><interface/></GetAccessor>", b'<Interface name="I_X">'),
 ]
 
 
@@ -321,7 +326,7 @@ PIECES = [
     max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
 @given(
-    source=st.sampled_from(["plant", "tasks", "codesys", "graphical"]),
+    source=st.sampled_from(["plant", "tasks", "codesys", "graphical", "oop", "graphical_method"]),
     edits=st.lists(
         st.tuples(st.floats(0, 1), st.integers(0, 40), st.sampled_from(PIECES)),
         min_size=1,
