@@ -41,6 +41,7 @@ def test_methods_properties_and_inheritance_are_written_as_st(tmp_path: Path) ->
     assert PUMP_PROPERTY in pump  # GET first, though CODESYS writes the SET first
     # the methods and the property before the body, as IEC orders them
     assert pump.index("END_PROPERTY") < pump.index("calls := calls + 1;")
+    assert pump.endswith("ACTION A_Reset:\ncalls := 0;\nEND_ACTION\nEND_FUNCTION_BLOCK\n")
     assert (
         (folder / "FB_FastPump.st")
         .read_text()
@@ -61,12 +62,13 @@ def test_calls_through_the_interface_dispatch_and_the_override_calls_super(
 ) -> None:
     """PLC_PRG calls Start and reads Level through an I_Device that refers to the slow
     pump in odd cycles and to the fast one (whose Start doubles the target and calls
-    SUPER^.Start) in even ones; cycle 4 writes the property through the interface."""
+    SUPER^.Start) in even ones; cycle 4 writes the property through the interface, cycle 3
+    calls the slow pump's action."""
     folder, _, _ = imported(tmp_path, "oop")
     names = [
         "PLC_PRG.device", "PLC_PRG.running", "PLC_PRG.level", "PLC_PRG.slow.speed",
         "PLC_PRG.fast.speed", "PLC_PRG.fast.boosts", "PLC_PRG.fast.calls",
-        "PLC_PRG.slow.starts", "PLC_PRG.doubled",
+        "PLC_PRG.slow.starts", "PLC_PRG.doubled", "PLC_PRG.slow.calls",
     ]  # fmt: skip
     values = trace(folder, 4, names)
     assert values["PLC_PRG.device"] == ["PLC_PRG.slow", "PLC_PRG.fast"] * 2
@@ -79,6 +81,7 @@ def test_calls_through_the_interface_dispatch_and_the_override_calls_super(
     assert values["PLC_PRG.slow.starts"] == [1, 1, 2, 2]  # the inherited variable
     assert values["PLC_PRG.fast.calls"] == [1, 2, 3, 4]  # SUPER^() runs the base's body
     assert values["PLC_PRG.doubled"] == [2, 4, 6, 8]  # a method of the PROGRAM
+    assert values["PLC_PRG.slow.calls"] == [1, 2, 1, 2]  # its action A_Reset in cycle 3
 
 
 def test_the_same_file_gives_the_same_bytes(tmp_path: Path) -> None:
