@@ -89,6 +89,6 @@ def test_a_statement_that_is_no_expression_still_asks_for_the_assignment() -> No
     # an expression may stand there now, and its operators must not hide `:=` from the hint
     found = diagnostics("PROGRAM Main\nVAR x : INT; END_VAR\nx 5;\nEND_PROGRAM\n")
     assert found == [
-        "t.st:3:3: error: syntax error: unexpected '5'; expected ';', ':=', add op, and, '^', "
-        "'.', '=', '(' [E0001]"
+        "t.st:3:3: error: syntax error: unexpected '5'; expected ';', ':=', add op, and, '?=', "
+        "'^', '.', '=' [E0001]"
     ]
