@@ -37,6 +37,8 @@ _DECLARATIONS = (
     ast.ResourceDecl,
     ast.Configuration,
 )
+# CODESYS's system interface (`INTERFACE I EXTENDS __SYSTEM.IQueryInterface`)
+_QUERY_INTERFACE = "__SYSTEM.IQUERYINTERFACE"
 # names the compiler knows without a declaration (THIS, SUPER, SYS, the keyword calls)
 _RESERVED = {"THIS", "SUPER", "SYS", "ADR", "REF", "SIZEOF"}
 
@@ -145,12 +147,10 @@ class _Qualifier:
             case ast.NamedType(name=name, pos=pos) if "." in name:
                 return replace(value, name=self._type_name(name, pos))
             case ast.Pou() | ast.Interface() if any("." in n for n in value.extends):
-                extends = tuple(self._type_name(n, value.pos) for n in value.extends)
-                value = replace(value, extends=extends)
+                value = replace(value, extends=self._interfaces(value.extends, value.pos))
         match value:
             case ast.Pou() if any("." in n for n in value.implements):
-                implements = tuple(self._type_name(n, value.pos) for n in value.implements)
-                return replace(value, implements=implements)
+                return replace(value, implements=self._interfaces(value.implements, value.pos))
             case ast.MemberRef(base=ast.NameRef(name=qualifier), member=member, pos=pos):
                 if not self._namespace(qualifier):
                     return value
@@ -170,6 +170,23 @@ class _Qualifier:
                 known = key(member) in self.names.top_level or builtins.lookup(member) is not None
                 return replace(value, name=self._name(qualifier, member, known, pos), receiver=None)
         return value
+
+    def _interfaces(self, names: tuple[str, ...], pos: Pos) -> tuple[str, ...]:
+        """The names of EXTENDS or IMPLEMENTS, without CODESYS's system interface: every
+        interface may extend `__SYSTEM.IQueryInterface` to have the operator
+        __QUERYINTERFACE, which padt does not have; it declares nothing else."""
+        kept = []
+        for name in names:
+            declared = "IQUERYINTERFACE" in self.names.top_level  # the project's own wins
+            if key(name) == _QUERY_INTERFACE and not declared:
+                message = (
+                    f"'{name}' left out: padt has no __QUERYINTERFACE, and the system "
+                    "interface declares nothing else"
+                )
+                self.notes.append(Diagnostic.at(pos, Code.QUALIFIED_NAME, message))
+                continue
+            kept.append(self._type_name(name, pos) if "." in name else name)
+        return tuple(kept)
 
     def _namespace(self, qualifier: str) -> bool:
         return key(qualifier) not in self.names.declared and elementary(qualifier) is None

@@ -190,8 +190,8 @@ Tc2_System.ADSLOGSTR(1, 'a', 'b');
 END_PROGRAM
 """
     assert diagnostics(source) == [
-        "t.st:1:11: error: 'I_Object' extends '__SYSTEM.IQueryInterface', which is no "
-        "interface [E0133]",
+        "t.st:1:11: note: '__SYSTEM.IQueryInterface' left out: padt has no __QUERYINTERFACE, "
+        "and the system interface declares nothing else [N0803]",
         "t.st:4:12: error: unknown type 'Tc2_System.T_MaxString': the project declares no "
         "type 'T_MaxString', and padt has no library 'Tc2_System' [E0107]",
         "t.st:5:6: error: 'Tc2_System.PI' is not declared: the project declares no global "
@@ -220,3 +220,28 @@ END_PROGRAM
         "t.st:6:6: error: 'GVL.x' names the global 'x', which a variable of the same name "
         "hides here; padt has no names of global lists to reach it: rename one [E0201]"
     ]
+
+
+def test_an_interface_extending_the_system_interface_works_as_one_extending_nothing(
+    tmp_path: Path,
+) -> None:
+    source = """INTERFACE I_Object EXTENDS __SYSTEM.IQueryInterface
+METHOD Id : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK FB_Object IMPLEMENTS I_Object, __SYSTEM.IQueryInterface
+VAR calls : INT; END_VAR
+METHOD PUBLIC Id : INT
+calls := calls + 1;
+Id := 40 + calls;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR o : FB_Object; itf : I_Object; id : INT; END_VAR
+itf := o;
+id := itf.Id();
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.id"] == [41, 42, 43]
+    assert codes(source) == ["N0803", "N0803"]
