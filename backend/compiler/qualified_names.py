@@ -165,7 +165,7 @@ class _Qualifier:
                     return ast.NameRef(member, pos)
                 return ast.NameRef(self._name(qualifier, member, known, pos), pos)
             case ast.Call(receiver=ast.NameRef(name=qualifier), name=member, pos=pos):
-                if not self._namespace(qualifier):
+                if "." in qualifier or not self._namespace(qualifier):  # `A.B.M()`, B unknown
                     return value
                 known = key(member) in self.names.top_level or builtins.lookup(member) is not None
                 return replace(value, name=self._name(qualifier, member, known, pos), receiver=None)

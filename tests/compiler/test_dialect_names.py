@@ -245,3 +245,11 @@ END_PROGRAM
     trace = sim_trace(tmp_path, source, 3)
     assert trace["Main.id"] == [41, 42, 43]
     assert codes(source) == ["N0803", "N0803"]
+
+
+def test_a_method_call_through_an_unknown_qualified_global_names_the_global() -> None:
+    found = diagnostics("PROGRAM Main\nGVL_TcUnit.Runner.Run();\nEND_PROGRAM\n")
+    assert found[0] == (
+        "t.st:2:1: error: 'GVL_TcUnit.Runner' is not declared: the project declares no global "
+        "'Runner', and padt has no library 'GVL_TcUnit' [E0201]"
+    )
