@@ -58,7 +58,8 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
                 return  # reported where the instance is named
             code, message = NO_VALUE[no_value]
             message = message.format(name=call.name)
-            if no_value == "unknown" and "." in call.name:  # `Tc2_System.F()`: qualified_names
+            qualified = call.instance is None and call.receiver is None and "." in call.name
+            if no_value == "unknown" and qualified:  # `Tc2_System.F()`: qualified_names
                 message += f": {unknown_qualified(call.name, 'function')}"
             scope.report(call.pos, code, message)
 
