@@ -196,6 +196,7 @@ class Code(Enum):
     EXPRESSION_STATEMENT = "W0807", "expression as a statement (CODESYS/TwinCAT)"
     NON_FINITE_CONSTANT = "W0808", "INF_REAL, NAN_REAL, INF_LREAL, NAN_LREAL (rusty)"
     PUBLIC_POU = "W0809", "PUBLIC on a POU, interface or data type (CODESYS/TwinCAT)"
+    LOCATED_PARAMETER = "W0810", "AT %I*, %Q* on an input or output of a block (TwinCAT)"
     ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
     INTERNAL_POU = "N0802", "INTERNAL outside a namespace (CODESYS/TwinCAT libraries)"
     QUALIFIED_NAME = "N0803", "name qualified by a library namespace or global list (CODESYS)"

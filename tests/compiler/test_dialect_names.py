@@ -1,6 +1,7 @@
-"""Access specifiers on POUs (PUBLIC W0809, INTERNAL N0802, what does not apply E0136) and
-names qualified by a library's namespace or a global list (N0803), as TwinCAT libraries
-write them (docs/language.md, "CODESYS and TwinCAT extensions")."""
+"""Access specifiers on POUs (PUBLIC W0809, INTERNAL N0802, what does not apply E0136),
+names qualified by a library's namespace or a global list (N0803) and partly located inputs
+and outputs of blocks (W0810), as TwinCAT libraries write them (docs/language.md, "CODESYS
+and TwinCAT extensions"); behaviour traced through `padt sim` (100 ms cycles)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ from pathlib import Path
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
+from runtime.clock import VirtualClock
+from runtime.resource import Resource
 from tests.conftest import sim_trace
 
 
@@ -253,3 +256,69 @@ def test_a_method_call_through_an_unknown_qualified_global_names_the_global() ->
         "t.st:2:1: error: 'GVL_TcUnit.Runner' is not declared: the project declares no global "
         "'Runner', and padt has no library 'GVL_TcUnit' [E0201]"
     )
+
+
+ANALOG = """FUNCTION_BLOCK FB_AnalogInput
+VAR_INPUT iRaw AT %I* : INT; fScale : REAL := 0.5; END_VAR
+VAR_OUTPUT fReal : REAL; bHigh AT %QX* : BOOL; END_VAR
+fReal := INT_TO_REAL(iRaw) * fScale;
+bHigh := iRaw > 10;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR ai : FB_AnalogInput; value : REAL; END_VAR
+ai();
+value := ai.fReal;
+END_PROGRAM
+CONFIGURATION Plant
+  RESOURCE Cpu ON PLC
+    TASK Cyclic (INTERVAL := T#100ms, PRIORITY := 1);
+    PROGRAM Main WITH Cyclic : Main;
+  END_RESOURCE
+  VAR_CONFIG
+    Cpu.Main.ai.iRaw AT %IW2 : INT;
+    Cpu.Main.ai.bHigh AT %QX0.3 : BOOL;
+  END_VAR
+END_CONFIGURATION
+"""
+
+
+def test_a_partly_located_input_or_output_of_a_block_is_linked_per_instance(
+    tmp_path: Path,
+) -> None:
+    # TwinCAT links a block's terminals this way (W0810); VAR_CONFIG completes it
+    assert diagnostics(ANALOG) == [
+        "t.st:2:11: warning: 'iRaw' AT %I* in VAR_INPUT is TwinCAT; IEC 61131-3 locates only "
+        "a VAR of a program or function block partly [W0810]",
+        "t.st:3:26: warning: 'bHigh' AT %QX* in VAR_OUTPUT is TwinCAT; IEC 61131-3 locates "
+        "only a VAR of a program or function block partly [W0810]",
+    ]
+    trace = sim_trace(tmp_path, ANALOG, 3, "Main.ai.iRaw=20@2", "Main.ai.iRaw=4@3")
+    assert trace["Main.value"] == [0.0, 10.0, 2.0]
+    assert trace["Main.ai.bHigh"] == [False, True, False]
+    result = compile_sources([SourceFile("t.st", ANALOG)])
+    assert result.artifact is not None
+    resource = Resource("Cpu", VirtualClock())
+    resource.load(result.artifact)
+    resource.start()
+    resource.io.set_inputs({"Main.ai.iRaw": 30})
+    resource.cycle()
+    assert resource.io.outputs == {"Main.ai.bHigh": True}
+
+
+def test_a_partly_located_input_of_a_function_is_still_refused() -> None:
+    source = "FUNCTION F : INT\nVAR_INPUT x AT %I* : INT; END_VAR\nF := x;\nEND_FUNCTION\n"
+    assert diagnostics(source) == [
+        "t.st:2:11: error: 'x' AT %I* is no VAR of a program or function block, so no "
+        "instance has it [E0616]"
+    ]
+
+
+def test_a_call_that_passes_a_located_input_overwrites_it_for_that_call() -> None:
+    result = compile_sources([SourceFile("t.st", ANALOG.replace("ai();", "ai(iRaw := 3);"))])
+    assert result.artifact is not None
+    resource = Resource("Cpu", VirtualClock())
+    resource.load(result.artifact)
+    resource.start()
+    resource.io.set_inputs({"Main.ai.iRaw": 30})
+    resource.cycle()
+    assert resource.io.outputs == {"Main.ai.bHigh": False}  # 3, not 30, is no more than 10
