@@ -73,6 +73,7 @@ class Code(Enum):
     INTERFACE = "E0133", "IMPLEMENTS or EXTENDS of something that is no interface"
     INTERFACE_METHOD = "E0134", "interface method not implemented as declared"
     MEMBER_OWNER = "E0135", "method or property after no block or interface"
+    SPECIFIER = "E0136", "access specifier or modifier that does not apply to a declaration"
 
     # ---- 02: names, types and expressions
     UNDECLARED = "E0201", "name not declared"
@@ -194,5 +195,9 @@ class Code(Enum):
     IMPLICIT_REFERENCE = "W0806", "REFERENCE TO and REF= (CODESYS/TwinCAT)"
     EXPRESSION_STATEMENT = "W0807", "expression as a statement (CODESYS/TwinCAT)"
     NON_FINITE_CONSTANT = "W0808", "INF_REAL, NAN_REAL, INF_LREAL, NAN_LREAL (rusty)"
+    PUBLIC_POU = "W0809", "PUBLIC on a POU, interface or data type (CODESYS/TwinCAT)"
+    LOCATED_PARAMETER = "W0810", "AT %I*, %Q* on an input or output of a block (TwinCAT)"
     ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
+    INTERNAL_POU = "N0802", "INTERNAL outside a namespace (CODESYS/TwinCAT libraries)"
+    QUALIFIED_NAME = "N0803", "name qualified by a library namespace or global list (CODESYS)"
     SIZEOF_ARGUMENT = "E0801", "SIZEOF of something without a CODESYS size"

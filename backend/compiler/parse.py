@@ -607,7 +607,11 @@ class _ToAst(Transformer[Token, Any]):
 
     # ---- declarations
     def named_type(self, items: list[Token]) -> ast.NamedType:
-        return ast.NamedType(str(items[0]), self._pos(items[0]))
+        # `Tc2_System.T_MaxString` keeps its qualifier: qualified_names resolves it
+        return ast.NamedType(".".join(str(i) for i in items), self._pos(items[0]))
+
+    def type_name(self, items: list[Token]) -> str:
+        return ".".join(str(i) for i in items)
 
     def string_type(self, items: list[Any]) -> ast.StringType:
         kw = items[0]
@@ -663,7 +667,11 @@ class _ToAst(Transformer[Token, Any]):
         return ast.TypeDecl(self._declared(name), spec, init[0] if init else None, self._pos(name))
 
     def type_block(self, items: list[Any]) -> list[ast.TypeDecl]:
-        return items
+        specifiers = [i for i in items if isinstance(i, Token)]
+        decls = [i for i in items if isinstance(i, ast.TypeDecl)]
+        if specifiers:
+            self._pou_specifiers("TYPE", decls[0].name, specifiers)
+        return decls
 
     def location(self, items: list[Token]) -> str:
         return str(items[0]).upper()
@@ -707,10 +715,9 @@ class _ToAst(Transformer[Token, Any]):
 
     def _pou(self, kind: str, tree: Tree[Any]) -> ast.Pou:
         children = _children(tree)
-        modifiers = tuple(
-            str(c).upper() for c in children if isinstance(c, Token) and c.type == "OOP_MODIFIER"
-        )
+        specifiers = [c for c in children if isinstance(c, Token) and c.type != "NAME"]
         name, *rest = [c for c in children if not (isinstance(c, Token) and c.type != "NAME")]
+        modifiers = self._pou_specifiers(kind, str(name), specifiers)
         return_type = None
         if kind == "FUNCTION" and rest and not isinstance(rest[0], ast.VarBlock | tuple | _Clause):
             return_type, *rest = rest
@@ -733,6 +740,41 @@ class _ToAst(Transformer[Token, Any]):
             implements=clauses.get("IMPLEMENTS", ()),
             modifiers=modifiers,
         )  # fmt: skip
+
+    def _pou_specifiers(self, kind: str, name: str, specifiers: list[Token]) -> tuple[str, ...]:
+        """The modifiers (ABSTRACT, FINAL) of a POU, an interface or a data type; its access
+        specifiers are CODESYS/TwinCAT (PUBLIC, W0809) or mean PUBLIC in a project that is
+        one namespace (INTERNAL, N0802); what does not apply to its kind is an error."""
+        words = [str(s).upper() for s in specifiers]
+        allowed = {"PUBLIC", "INTERNAL"} | (
+            {"ABSTRACT", "FINAL"} if kind == "FUNCTION_BLOCK" else set()
+        )
+        what = "a data type" if kind == "TYPE" else f"a {kind}"
+        accesses = {w for w in words if w in ("PUBLIC", "INTERNAL", "PRIVATE", "PROTECTED")}
+        if len(set(words)) < len(words) or len(accesses) > 1 or {"ABSTRACT", "FINAL"} <= set(words):
+            message = (
+                f"'{name}' is declared {' '.join(words)}: a specifier twice, two access "
+                "specifiers, or ABSTRACT with FINAL"
+            )
+            self.errors.append(Diagnostic.at(self._pos(specifiers[0]), Code.SPECIFIER, message))
+        for token, word in zip(specifiers, words, strict=True):
+            pos = self._pos(token)
+            if word not in allowed:
+                message = f"{word} does not apply to {what} ('{name}')"
+                self.errors.append(Diagnostic.at(pos, Code.SPECIFIER, message))
+            elif word == "PUBLIC":
+                message = (
+                    f"PUBLIC on {what} is CODESYS/TwinCAT; in IEC 61131-3 '{name}' is public "
+                    "without it"
+                )
+                self.warnings.append(Diagnostic.at(pos, Code.PUBLIC_POU, message))
+            elif word == "INTERNAL":
+                message = (
+                    f"INTERNAL: padt has no namespaces, a project is one, so '{name}' is "
+                    "visible everywhere, as if PUBLIC"
+                )
+                self.warnings.append(Diagnostic.at(pos, Code.INTERNAL_POU, message))
+        return tuple(w for w in words if w in ("ABSTRACT", "FINAL"))
 
     # ---- object orientation
     def extends_clause(self, items: list[Token]) -> _Clause:
@@ -787,7 +829,9 @@ class _ToAst(Transformer[Token, Any]):
         )
 
     def interface_decl(self, items: list[Any]) -> ast.Interface:
-        name, *rest = items
+        specifiers = [i for i in items if isinstance(i, Token) and i.type != "NAME"]
+        name, *rest = [i for i in items if not (isinstance(i, Token) and i.type != "NAME")]
+        self._pou_specifiers("INTERFACE", str(name), specifiers)
         clauses = {c.keyword: c.names for c in rest if isinstance(c, _Clause)}
         return ast.Interface(
             self._declared(name),

@@ -18,6 +18,7 @@ from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.limits import MAX_DATA_DEPTH, MAX_EXPRESSION_DEPTH
 from backend.compiler.qualified_enums import qualify_enum_values
+from backend.compiler.qualified_names import qualify_names, unknown_qualified
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
@@ -333,7 +334,8 @@ class _TypeResolver:
             return FbType(pou.name)
         if name_key in self.interfaces:
             return InterfaceType(self.interfaces[name_key].name)
-        self.report(pos, Code.UNKNOWN_TYPE, f"unknown type '{name}'")
+        why = f": {unknown_qualified(name, 'type')}" if "." in name else ""
+        self.report(pos, Code.UNKNOWN_TYPE, f"unknown type '{name}'{why}")
         self.named[name_key] = None
         return None
 
@@ -500,8 +502,10 @@ class _TypeResolver:
 
 
 def resolve(units: list[ast.SourceUnit]) -> Resolved:
+    units, notes = qualify_names(units)  # CODESYS `Tc2_Standard.TON` is `TON`
     units = qualify_enum_values(units)  # CODESYS `Color.Red` is `Color#Red`
     result = Resolved()
+    result.diagnostics.extend(notes)
     types = _TypeResolver(units, result)
     for name in sorted(types.decls):  # every declared type, used or not, is checked
         types.resolve_named(types.decls[name].name, types.decls[name].pos)

@@ -22,6 +22,7 @@ from backend.compiler.infer import (
     StandardFunction,
     UserFunction,
 )
+from backend.compiler.qualified_names import unknown_qualified
 from backend.compiler.resolve import PouSymbols, Variable
 from backend.compiler.types import OpenArrayType, assignable
 
@@ -56,7 +57,11 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
             if call.instance is not None and scope.type_of(call.instance) is None:
                 return  # reported where the instance is named
             code, message = NO_VALUE[no_value]
-            scope.report(call.pos, code, message.format(name=call.name))
+            message = message.format(name=call.name)
+            qualified = call.instance is None and call.receiver is None and "." in call.name
+            if no_value == "unknown" and qualified:  # `Tc2_System.F()`: qualified_names
+                message += f": {unknown_qualified(call.name, 'function')}"
+            scope.report(call.pos, code, message)
 
 
 def _misfit(misfit: Misfit, builtin: Builtin) -> tuple[Code, str]:

@@ -7,6 +7,7 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.infer import SELF_NAMES, Scope
+from backend.compiler.qualified_names import unknown_qualified
 from backend.compiler.types import FbType, StructType, Type
 from runtime.contract.system_variables import NAMESPACE
 
@@ -25,6 +26,9 @@ def check_name(scope: Scope, name: ast.NameRef, name_type: Type | None) -> None:
             "VAR_GLOBAL to use it here"
         )
         scope.report(name.pos, Code.DIRECT_ADDRESS, message)
+    elif "." in name.name:  # `Tc2_System.PI`: qualified_names found no 'PI'
+        message = f"'{name.name}' is not declared: {unknown_qualified(name.name, 'global')}"
+        scope.report(name.pos, Code.UNDECLARED, message)
     else:
         scope.report(name.pos, Code.UNDECLARED, f"'{name.name}' is not declared")
 

@@ -96,13 +96,25 @@ def check_configuration(
 
 def _check_declarations(resolved: Resolved, result: Configured) -> None:
     """Only variables of instances can be completed: a VAR of a program or block, or a
-    global, each with a name."""
+    global, each with a name; an input or output of one too, as in TwinCAT (W0810)."""
     for pou in resolved.sorted_pous():
         for variable in pou.variables:
             if not partly_located(variable.location):
                 continue
+            instance_io = pou.kind in ("PROGRAM", "FUNCTION_BLOCK") and variable.kind in (
+                "VAR_INPUT",
+                "VAR_OUTPUT",
+            )
             if variable.name == variable.location:
                 where = "needs a name for VAR_CONFIG to complete it"
+            elif instance_io:
+                # TwinCAT links a block's inputs and outputs to its terminals this way
+                message = (
+                    f"'{variable.name}' AT {variable.location} in {variable.kind} is TwinCAT; "
+                    "IEC 61131-3 locates only a VAR of a program or function block partly"
+                )
+                result.report(variable.pos, Code.LOCATED_PARAMETER, message)
+                continue
             elif pou.kind == "FUNCTION" or variable.kind not in ("VAR", "VAR_GLOBAL"):
                 where = "is no VAR of a program or function block, so no instance has it"
             else:
