@@ -31,6 +31,7 @@ from backend.compiler.infer import (
     RefOf,
     Scope,
     SizeOf,
+    binds_reference,
     enable_argument,
     is_external,
     is_implicit,
@@ -591,6 +592,9 @@ class _Emitter:
                 continue
             if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
                 continue
+            if binds_reference(param, arg):
+                keywords.append(f"{param.attr}={self.reference(arg.value)}")
+                continue
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
         code = f"{callee}({', '.join(keywords)})"
         result = pou.return_type or BOOL
@@ -1114,6 +1118,9 @@ class _Emitter:
             if isinstance(param.type, OpenArrayType):
                 bound = self.open_array_argument(param, arg.value)
                 self.emit(depth, f"{handle}.{param.attr} = {bound}")
+                continue
+            if binds_reference(param, arg):  # the input now refers to the variable passed
+                self.emit(depth, f"{handle}.{param.attr} = {self.reference(arg.value)}")
                 continue
             if param.kind == "VAR_IN_OUT":
                 self.emit(depth, f"{handle}.{param.attr} = {self.expr(arg.value).code}")

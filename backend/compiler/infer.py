@@ -59,6 +59,7 @@ from backend.compiler.types import (
     common_numeric,
     elementary,
     integer_like,
+    is_implicit_reference,
     value_type,
 )
 from runtime.contract.system_variables import NAMESPACE
@@ -773,6 +774,12 @@ def smallest_unsigned(value: int) -> ElementaryType:
 
 def is_implicit(param: Variable) -> bool:
     return any(param is implicit for implicit in IMPLICIT_PARAMETERS.values())
+
+
+def binds_reference(param: Variable, arg: ast.Argument) -> bool:
+    """Is `arg` the binding of a REFERENCE TO input (CODESYS: `inst(r := x)` binds r to x,
+    as `r REF= x` would, instead of copying x's value)?"""
+    return param.kind == "VAR_INPUT" and not arg.is_output and is_implicit_reference(param.type)
 
 
 def enable_argument(call: ast.Call, callee: PouSymbols) -> ast.Expr | None:

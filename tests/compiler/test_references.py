@@ -219,7 +219,7 @@ def test_an_unbound_reference_to_is_a_program_fault(tmp_path: Path) -> None:
 
 def test_misused_reference_to_is_refused() -> None:
     found = diagnostics("""FUNCTION_BLOCK Fb
-VAR_INPUT ri : REFERENCE TO INT; END_VAR
+VAR_OUTPUT ro : REFERENCE TO INT; END_VAR
 END_FUNCTION_BLOCK
 PROGRAM Main
 VAR a : INT; d : DINT; ra : REFERENCE TO INT; fb : Fb; END_VAR
@@ -229,7 +229,7 @@ fb();
 END_PROGRAM
 """)
     assert (
-        "t.st:2:11: error: 'ri': a REFERENCE TO cannot be a VAR_INPUT in padt; declare it "
+        "t.st:2:12: error: 'ro': a REFERENCE TO cannot be a VAR_OUTPUT in padt; declare it "
         "VAR_IN_OUT of the type it refers to [E0220]"
     ) in found
     assert (
@@ -239,6 +239,92 @@ END_PROGRAM
     assert (
         "t.st:7:1: error: type mismatch: REFERENCE TO INT cannot refer to a DINT [E0209]"
     ) in found
+
+
+BUMP = """FUNCTION_BLOCK Bump
+VAR_INPUT target : REFERENCE TO INT; END_VAR
+target := target + 1;
+END_FUNCTION_BLOCK
+"""
+
+
+def test_a_reference_to_input_is_bound_to_the_callers_variable(tmp_path: Path) -> None:
+    """CODESYS `VAR_INPUT r : REFERENCE TO T`: the call binds r to the variable passed (it
+    is not a copy), the instance keeps the binding until the next call binds it anew; a
+    function and a method are bound likewise."""
+    source = (
+        BUMP
+        + """FUNCTION Twice : BOOL
+VAR_INPUT out : REFERENCE TO DINT; END_VAR
+out := out * 2;
+Twice := TRUE;
+END_FUNCTION
+FUNCTION_BLOCK Holder
+VAR own : INT; END_VAR
+METHOD PUBLIC Add : INT
+VAR_INPUT r : REFERENCE TO INT; step : INT; END_VAR
+r := r + step;
+Add := r;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR x : INT := 5; y : INT; d : DINT := 3; b : Bump; ok : BOOL; h : Holder; got : INT; END_VAR
+VAR n : INT; END_VAR
+n := n + 1;
+IF n = 1 THEN b(target := x); ELSIF n = 3 THEN b(target := y); ELSE b(); END_IF;
+ok := Twice(out := d);
+got := h.Add(r := h.own, step := 10);
+END_PROGRAM
+"""
+    )
+    trace = sim_trace(tmp_path, source, 4)
+    assert trace["Main.x"] == [6, 7, 7, 7]  # bound by the first call, kept by b()
+    assert trace["Main.y"] == [0, 0, 1, 2]
+    assert trace["Main.b.target"] == ["Main.x", "Main.x", "Main.y", "Main.y"]
+    assert trace["Main.d"] == [6, 12, 24, 48]
+    assert trace["Main.h.own"] == [10, 20, 30, 40]
+    assert trace["Main.got"] == [10, 20, 30, 40]
+    found = diagnostics(source)
+    assert not [d for d in found if "error" in d or "W0301" in d]  # writing through is meant
+    assert sum("[W0806]" in d for d in found) == 3  # each REFERENCE TO declared
+
+
+def test_an_unbound_reference_to_input_is_a_program_fault(tmp_path: Path) -> None:
+    path = tmp_path / "unbound.st"
+    path.write_text(BUMP + "PROGRAM Main\nVAR b : Bump; END_VAR\nb();\nEND_PROGRAM\n")
+    run = padt("sim", str(path), "--cycles", "2")
+    assert run.returncode == 3, run.stderr
+    assert f"dereference of NULL in POU Bump ({path}:3)" in run.stderr
+
+
+def test_a_reference_to_input_needs_a_lasting_variable_of_its_type() -> None:
+    found = diagnostics(
+        BUMP
+        + """FUNCTION F : INT
+VAR_INPUT v : INT; END_VAR
+VAR b : Bump; END_VAR
+b(target := v);
+END_FUNCTION
+PROGRAM Main
+VAR x : INT; d : DINT; b : Bump; w : WORD; END_VAR
+VAR CONSTANT k : INT := 1; END_VAR
+b(target := x + 1);
+b(target := d);
+b(target := k);
+b(target := w.0);
+END_PROGRAM
+"""
+    )
+    prefix = "error: REFERENCE TO input 'target' binds to a variable, not to"
+    assert (
+        f"t.st:8:13: {prefix} 'v', a variable of a function (it is gone when the call ends) [E0220]"
+    ) in found
+    assert f"t.st:13:15: {prefix} an expression; it needs a variable [E0220]" in found
+    assert "t.st:14:13: error: type mismatch: REFERENCE TO INT cannot refer to a DINT [E0401]" in (
+        found
+    )
+    assert f"t.st:15:13: {prefix} constant 'k' [E0220]" in found
+    assert f"t.st:16:13: {prefix} a single bit [E0220]" in found
 
 
 def test_a_reference_made_in_a_global_block_reads_as_its_global_path(tmp_path: Path) -> None:

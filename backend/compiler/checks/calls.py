@@ -7,9 +7,10 @@ from backend.compiler import ast
 from backend.compiler.checks.actions import check_action_call
 from backend.compiler.checks.initializers import mismatch, takes_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
+from backend.compiler.checks.references import check_reference_argument
 from backend.compiler.checks.targets import is_lvalue, refuse_system_write, writable_target
 from backend.compiler.codes import Code
-from backend.compiler.infer import Scope
+from backend.compiler.infer import Scope, binds_reference
 from backend.compiler.resolve import PouSymbols, Variable
 from backend.compiler.types import assignable
 
@@ -68,6 +69,9 @@ def check_connection(
 
 def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Variable) -> None:
     if arg.value is None:
+        return
+    if binds_reference(param, arg):
+        check_reference_argument(scope, param, arg.value)
         return
     if arg.is_output or param.kind == "VAR_OUTPUT":
         target_type = writable_target(scope, arg.value)

@@ -9,7 +9,7 @@ from backend.compiler.checks.calls import check_connection
 from backend.compiler.checks.dialects import check_size_of
 from backend.compiler.checks.initializers import takes_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
-from backend.compiler.checks.references import check_ref
+from backend.compiler.checks.references import check_ref, check_reference_argument
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
 from backend.compiler.infer import (
@@ -21,6 +21,7 @@ from backend.compiler.infer import (
     SizeOf,
     StandardFunction,
     UserFunction,
+    binds_reference,
 )
 from backend.compiler.qualified_names import unknown_qualified
 from backend.compiler.resolve import PouSymbols, Variable
@@ -89,6 +90,9 @@ def check_user_call(scope: Scope, pou: PouSymbols, call: ast.Call) -> None:
 
 def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
     if arg.value is None:
+        return
+    if binds_reference(param, arg):
+        check_reference_argument(scope, param, arg.value)
         return
     if param.kind in ("VAR_OUTPUT", "VAR_IN_OUT") or arg.is_output:
         refuse_system_write(scope, arg.value)

@@ -109,15 +109,31 @@ def _declared_type(scope: Scope, target: ast.Expr) -> Type | None:
 
 
 def check_reference_parameter(scope: Scope, variable: Variable) -> None:
-    """A REFERENCE TO as an input, output or in-out: CODESYS binds it by the call, padt
-    passes values; an in-out does what is meant."""
-    if is_implicit_reference(variable.type) and variable.kind in (
-        "VAR_INPUT",
-        "VAR_OUTPUT",
-        "VAR_IN_OUT",
-    ):
+    """A REFERENCE TO as an output or in-out: padt passes values there; an in-out of the
+    type it refers to does what is meant. As an input the call binds it (below)."""
+    if is_implicit_reference(variable.type) and variable.kind in ("VAR_OUTPUT", "VAR_IN_OUT"):
         message = (
             f"'{variable.name}': a REFERENCE TO cannot be a {variable.kind} in padt; "
             "declare it VAR_IN_OUT of the type it refers to"
         )
         scope.report(variable.pos, Code.REFERENCE_BINDING, message)
+
+
+def check_reference_argument(scope: Scope, param: Variable, value: ast.Expr) -> None:
+    """The argument of a REFERENCE TO input: a variable REF accepts (it must outlast the
+    call, since an instance keeps the binding), of the type the input refers to."""
+    value_type = scope.type_of(value)
+    if value_type is None:
+        return
+    declared = _declared_type(scope, value)
+    if declared is None or not is_implicit_reference(declared):  # a REFERENCE TO passes on
+        problem = _unreferenceable(scope, value)
+        if problem is not None:
+            message = f"REFERENCE TO input '{param.name}' binds to a variable, not to {problem}"
+            scope.report(value.pos, Code.REFERENCE_BINDING, message)
+            return
+    assert isinstance(param.type, RefType) and param.type.target is not None
+    target = param.type.target
+    if value_type != target and not scope.conforms(param.type, RefType(value_type, implicit=True)):
+        message = f"type mismatch: {param.type.name} cannot refer to a {value_type.name}"
+        scope.report(value.pos, Code.ARGUMENT_TYPE, message)

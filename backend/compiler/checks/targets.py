@@ -8,7 +8,7 @@ from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.infer import EnumValue, NonFinite, ProgramRef, PropertyAccess, Scope
 from backend.compiler.resolve import Variable
-from backend.compiler.types import FbType, StructType, Type, value_type
+from backend.compiler.types import FbType, StructType, Type, is_implicit_reference, value_type
 from runtime.contract.system_variables import NAMESPACE
 
 WRITABLE_MEMBER_KINDS = ("VAR_INPUT", "VAR_IN_OUT", "MEMBER")
@@ -40,7 +40,11 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
             scope.report(
                 target.pos, Code.ASSIGN_CONSTANT, f"cannot assign to constant '{binding.name}'"
             )
-        elif binding.kind == "VAR_INPUT" and scope.pou.kind != "FUNCTION":
+        elif (
+            binding.kind == "VAR_INPUT"
+            and scope.pou.kind != "FUNCTION"
+            and not is_implicit_reference(binding.type)  # it writes the caller's variable
+        ):
             # CODESYS, matiec and OSCAT write inputs inside the block; it is legal but
             # a trap (the caller's value is gone for the rest of the call): warn
             scope.report(
