@@ -23,6 +23,7 @@ from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     ActionCall,
     EnumValue,
+    IsValidRef,
     MethodCall,
     Misfit,
     NonFinite,
@@ -523,6 +524,11 @@ class _Emitter:
             referenced = self.scope.referenced(call)
             assert referenced is not None
             return _Value(self.reference(referenced), _type(self.scope, call))
+        if isinstance(callee, IsValidRef):  # the REFERENCE TO holds a reference, not NULL
+            referenced = self.scope.referenced(call)
+            held = self.held_reference(referenced) if referenced is not None else None
+            assert held is not None
+            return _Value(f"({held} is not None)", BOOL)
         builtin = builtins.lookup(call.name)
         assert builtin is not None, call.name
         args = self.scope.builtin_arguments(builtin, call)
@@ -818,9 +824,9 @@ class _Emitter:
             assert isinstance(value, ast.Expr)
             self.emit(depth, self.store(target, self.attempt(_type(self.scope, target), value)))
             return
-        if bind:  # `r REF= x`: the REFERENCE TO itself now holds REF(x)
+        if bind:  # `r REF= x`: the REFERENCE TO itself now holds REF(x) (`REF= 0`: NULL)
             held = self.held_reference(target)
-            assert held is not None and isinstance(value, ast.Call)
+            assert held is not None and isinstance(value, ast.Call | ast.NullLiteral)
             self.emit(depth, f"{held} = {self.expr(value).code}")
             return
         target_type = _type(self.scope, target)

@@ -124,6 +124,11 @@ class RefOf:
 
 
 @dataclass(frozen=True)
+class IsValidRef:
+    """CODESYS __ISVALIDREF(r): whether the REFERENCE TO r is bound (W0806)."""
+
+
+@dataclass(frozen=True)
 class SizeOf:
     """CODESYS SIZEOF(x): the size of x in bytes, a constant (W0802)."""
 
@@ -158,7 +163,7 @@ class SuperBody:
 
 # What else a call in an expression may name; none of these gives a value.
 NoValue = Literal["method", "action", "instance", "program", "external", "unknown", "super"]
-Callee = UserFunction | StandardFunction | RefOf | SizeOf | MethodCall | NoValue
+Callee = UserFunction | StandardFunction | RefOf | IsValidRef | SizeOf | MethodCall | NoValue
 
 # THIS and SUPER: references to the instance the code runs on, as itself or as its base
 SELF_NAMES = ("THIS", "SUPER")
@@ -623,6 +628,11 @@ class Scope:
         if isinstance(callee, SizeOf):
             size = self.size_of(call)
             return None if size is None else smallest_unsigned(size)
+        if isinstance(callee, IsValidRef):
+            referenced = self.referenced(call)
+            if referenced is not None:
+                self.type_of(referenced)
+            return BOOL
         if isinstance(callee, RefOf):
             referenced = self.referenced(call)
             target = self.type_of(referenced) if referenced is not None else None
@@ -671,6 +681,8 @@ class Scope:
             return SizeOf()
         if key(call.name) in ("REF", "ADR"):
             return RefOf(pointer=key(call.name) == "ADR")
+        if key(call.name) == "__ISVALIDREF":
+            return IsValidRef()
         builtin = builtins.lookup(call.name)
         if builtin is not None:
             return StandardFunction(builtin)

@@ -517,9 +517,15 @@ class _ToAst(Transformer[Token, Any]):
     @v_args(tree=True)
     def ref_assignment(self, tree: Tree[Any]) -> ast.Assign:
         """CODESYS `r REF= x;`: r (a REFERENCE TO) refers to x from now on; held as the
-        assignment of REF(x) to the reference itself."""
+        assignment of REF(x) to the reference itself. `r REF= 0;` makes r refer to nothing
+        (NULL); another number is REF of a number, which the checks refuse."""
         target, _operator, referenced = _children(tree)
         pos = self._pos(tree)
+        if isinstance(referenced, Token):
+            number = ast.IntLiteral(int(referenced.replace("_", "")), self._pos(referenced))
+            if number.value == 0:
+                return ast.Assign(target, ast.NullLiteral(number.pos), pos, bind=True)
+            referenced = number
         argument = ast.Argument(None, referenced, False, referenced.pos)
         return ast.Assign(target, ast.Call("REF", (argument,), referenced.pos), pos, bind=True)
 

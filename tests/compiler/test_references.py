@@ -343,3 +343,69 @@ END_PROGRAM
     trace = sim_trace(tmp_path, source, 1)
     assert trace["keeper.mine"] == ["keeper.own"]
     assert trace["keeper.there"] == ["keeper.spot.y"]
+
+
+def test_ref_assign_zero_unbinds_and_isvalidref_tells(tmp_path: Path) -> None:
+    """CODESYS `r REF= 0;` makes a REFERENCE TO refer to nothing; `__ISVALIDREF(r)` is
+    TRUE while it is bound (the pattern of the TwinCAT command samples: a method binds or
+    unbinds the reference it is given, another uses it only when it is valid)."""
+    source = """FUNCTION_BLOCK Lamp
+VAR_OUTPUT level : INT; END_VAR
+METHOD PUBLIC SetLevel
+VAR_INPUT l : INT; END_VAR
+level := l;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Cmd
+VAR refLamp : REFERENCE TO Lamp; END_VAR
+METHOD PUBLIC Bind
+VAR_INPUT refLamp : REFERENCE TO Lamp; END_VAR
+IF __ISVALIDREF(refLamp) THEN
+  THIS^.refLamp REF= refLamp;
+ELSE
+  THIS^.refLamp REF= 0;
+END_IF
+END_METHOD
+METHOD PUBLIC Run
+IF __ISVALIDREF(THIS^.refLamp) THEN
+  THIS^.refLamp.SetLevel(THIS^.refLamp.level + 1);
+END_IF
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR lamp : Lamp; c : Cmd; n : INT; bound : BOOL; END_VAR
+n := n + 1;
+IF n = 2 THEN c.Bind(refLamp := lamp); ELSIF n = 4 THEN c.Bind(); END_IF;
+bound := __ISVALIDREF(c.refLamp);
+c.Run();
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 5)
+    assert trace["Main.bound"] == [False, True, True, False, False]
+    assert trace["Main.c.refLamp"] == ["NULL", "Main.lamp", "Main.lamp", "NULL", "NULL"]
+    assert trace["Main.lamp.level"] == [0, 1, 2, 2, 2]
+    found = diagnostics(source)
+    assert not [d for d in found if "error" in d]
+    assert (
+        "t.st:12:4: warning: __ISVALIDREF is CODESYS/TwinCAT; IEC 61131-3 writes r <> NULL "
+        "with r : REF_TO [W0806]"
+    ) in found
+    assert "t.st:15:3: warning: REF= is CODESYS/TwinCAT; IEC 61131-3 writes r := REF(x) with " in (
+        "".join(found)
+    )
+
+
+def test_ref_assign_of_a_number_and_isvalidref_of_a_value_are_refused() -> None:
+    found = diagnostics("""PROGRAM Main
+VAR x : INT; r : REFERENCE TO INT; p : REF_TO INT; ok : BOOL; END_VAR
+r REF= 5;
+ok := __ISVALIDREF(x);
+ok := __ISVALIDREF(p);
+ok := __ISVALIDREF();
+END_PROGRAM
+""")
+    assert "t.st:3:8: error: REF of an expression; it needs a variable [E0219]" in found
+    needs = "error: __ISVALIDREF needs a REFERENCE TO; compare a REF_TO or POINTER TO with NULL"
+    assert f"t.st:4:7: {needs} [E0220]" in found
+    assert f"t.st:5:7: {needs} [E0220]" in found
+    assert "t.st:6:7: error: __ISVALIDREF takes one REFERENCE TO, unnamed [E0220]" in found

@@ -9,10 +9,15 @@ from backend.compiler.checks.calls import check_connection
 from backend.compiler.checks.dialects import check_size_of
 from backend.compiler.checks.initializers import takes_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
-from backend.compiler.checks.references import check_ref, check_reference_argument
+from backend.compiler.checks.references import (
+    check_is_valid_ref,
+    check_ref,
+    check_reference_argument,
+)
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
 from backend.compiler.infer import (
+    IsValidRef,
     MethodCall,
     Misfit,
     NoValue,
@@ -47,6 +52,8 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
             check_size_of(scope, call)
         case RefOf(pointer=pointer):
             check_ref(scope, call, pointer)
+        case IsValidRef():
+            check_is_valid_ref(scope, call)
         case MethodCall():
             pass  # checks.methods (check_method_call), which needs to know how it is used
         case StandardFunction(builtin=builtin):

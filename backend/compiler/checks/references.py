@@ -27,12 +27,36 @@ def check_ref(scope: Scope, call: ast.Call, pointer: bool = False) -> None:
         return
     if scope.type_of(referenced) is None:
         return  # reported where the argument is
-    problem = _unreferenceable(scope, referenced)
+    problem = None if _holds_reference(scope, referenced) else _unreferenceable(scope, referenced)
     if problem is not None:
         scope.report(call.pos, Code.REFERENCE_TARGET, f"{name} of {problem}")
     elif pointer:
         message = "ADR is CODESYS/TwinCAT; IEC 61131-3 writes REF (no address arithmetic)"
         scope.report(call.pos, Code.POINTER, message)
+
+
+def check_is_valid_ref(scope: Scope, call: ast.Call) -> None:
+    """CODESYS __ISVALIDREF(r): r names a REFERENCE TO (W0806)."""
+    referenced = scope.referenced(call)
+    if referenced is None:
+        message = "__ISVALIDREF takes one REFERENCE TO, unnamed"
+        scope.report(call.pos, Code.REFERENCE_BINDING, message)
+        return
+    if scope.type_of(referenced) is None:
+        return  # reported where the argument is
+    if not _holds_reference(scope, referenced):
+        message = "__ISVALIDREF needs a REFERENCE TO; compare a REF_TO or POINTER TO with NULL"
+        scope.report(call.pos, Code.REFERENCE_BINDING, message)
+        return
+    message = "__ISVALIDREF is CODESYS/TwinCAT; IEC 61131-3 writes r <> NULL with r : REF_TO"
+    scope.report(call.pos, Code.IMPLICIT_REFERENCE, message)
+
+
+def _holds_reference(scope: Scope, expr: ast.Expr) -> bool:
+    """Does `expr` name a REFERENCE TO variable (whose REF is the reference it holds, bound
+    by a checked REF= or call, so it lasts)?"""
+    declared = _declared_type(scope, expr)
+    return declared is not None and is_implicit_reference(declared)
 
 
 def _unreferenceable(scope: Scope, expr: ast.Expr) -> str | None:
@@ -125,8 +149,7 @@ def check_reference_argument(scope: Scope, param: Variable, value: ast.Expr) -> 
     value_type = scope.type_of(value)
     if value_type is None:
         return
-    declared = _declared_type(scope, value)
-    if declared is None or not is_implicit_reference(declared):  # a REFERENCE TO passes on
+    if not _holds_reference(scope, value):
         problem = _unreferenceable(scope, value)
         if problem is not None:
             message = f"REFERENCE TO input '{param.name}' binds to a variable, not to {problem}"
