@@ -457,6 +457,49 @@ END_PROGRAM
     assert "Main.m.Velocity" not in t and "Main.m.clipped" not in t  # no variables
 
 
+def test_get_and_set_are_names_outside_a_property(tmp_path: Path) -> None:
+    """GET and SET begin a property's accessor only there: a method called Get assigns its
+    result (`Get := ...;` right after its VAR block), variables may be called get and set,
+    and the property beside them still has its accessors."""
+    source = """FUNCTION_BLOCK Box
+VAR v : INT; set : BOOL; END_VAR
+METHOD PUBLIC Get : INT
+VAR n : INT; END_VAR
+Get := v + 1;
+END_METHOD
+METHOD PUBLIC Put
+VAR_INPUT x : INT; END_VAR
+VAR get : INT; END_VAR
+get := x;
+v := get;
+set := TRUE;
+END_METHOD
+PROPERTY PUBLIC Value : INT
+GET
+Value := v * 10;
+END_GET
+SET // the value written
+v := Value;
+END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR b : Box; r : INT; set, get : INT; END_VAR
+set := set + 1;
+b.Put(x := set);
+r := b.Get();
+get := b.Value;
+IF set = 2 THEN b.Value := 7; END_IF;
+END_PROGRAM
+"""
+    trace = sim_trace(tmp_path, source, 3)
+    assert trace["Main.r"] == [2, 3, 4]
+    assert trace["Main.get"] == [10, 20, 30]
+    assert trace["Main.b.set"] == [True, True, True]
+    assert trace["Main.b.v"] == [1, 7, 3]
+    assert not [d for d in diagnostics(source) if "error" in d]
+
+
 def test_properties_through_interfaces_overrides_and_super(tmp_path: Path) -> None:
     source = """
 INTERFACE IGauge
