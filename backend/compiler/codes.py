@@ -85,6 +85,7 @@ class Code(Enum):
     NOT_A_REFERENCE = "E0218", "dereference of something that is no reference"
     REFERENCE_TARGET = "E0219", "reference to something that is no lasting variable"
     REFERENCE_BINDING = "E0220", "misused REFERENCE TO"
+    EXPLICIT_CONVERSION = "E0222", "conversion that needs a conversion function"
 
     # ---- 03: statements and assignments
     ASSIGN_CONSTANT = "E0301", "assignment to a constant"
@@ -115,6 +116,7 @@ class Code(Enum):
     NOT_A_FUNCTION = "E0411", "call of something that is no function"
     EXTERNAL_FUNCTION = "E0412", "external function that is not available"
     OPEN_ARRAY_UNCONNECTED = "E0413", "variable-length array parameter left unconnected"
+    IN_OUT_TYPE = "E0417", "in-out argument of another type than its parameter"
 
     # ---- 05: sequential function charts
     INITIAL_STEP = "E0501", "step chain without exactly one initial step"
@@ -179,5 +181,6 @@ class Code(Enum):
     IMPLICIT_REFERENCE = "W0806", "REFERENCE TO and REF= (CODESYS/TwinCAT)"
     EXPRESSION_STATEMENT = "W0807", "expression as a statement (CODESYS/TwinCAT)"
     NON_FINITE_CONSTANT = "W0808", "INF_REAL, NAN_REAL, INF_LREAL, NAN_LREAL (rusty)"
+    IMPLICIT_NUMERIC_CONVERSION = "W0809", "implicit conversion between numbers (CODESYS/TwinCAT)"
     ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
     SIZEOF_ARGUMENT = "E0801", "SIZEOF of something without a CODESYS size"
