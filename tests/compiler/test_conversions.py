@@ -127,12 +127,23 @@ def test_other_kind_changes_need_the_conversion_function(
 
 
 def test_a_real_literal_is_no_integer() -> None:
-    program = "PROGRAM Main\nVAR x : INT; w : WORD; END_VAR\nx := 1.5;\nw := 2.0;\nEND_PROGRAM\n"
+    program = """PROGRAM Main
+VAR x : INT; w : WORD; r : REAL; END_VAR
+x := 1.5;
+w := -2.0;
+r := 1.5 * 2;
+x := 2.5 * 3;
+END_PROGRAM
+"""
     assert diagnostics(program) == [
         "t.st:3:6: error: cannot assign a REAL literal to INT implicitly: "
         "write an integer literal or use TO_INT(...) [E0222]",
         "t.st:4:6: error: cannot assign a REAL literal to WORD implicitly: "
         "write an integer literal or use TO_WORD(...) [E0222]",
+        "t.st:5:10: warning: CODESYS and TwinCAT convert LREAL to REAL implicitly, "
+        "IEC 61131-3 does not: use LREAL_TO_REAL(...) or TO_REAL(...) [W0809]",
+        "t.st:6:10: warning: CODESYS and TwinCAT convert LREAL to INT implicitly, "
+        "IEC 61131-3 does not: use LREAL_TO_INT(...) or TO_INT(...) [W0809]",
     ]
 
 

@@ -135,18 +135,18 @@ def source_type(scope: Scope, expr: ast.Expr) -> ElementaryType | None:
 
 def _real_source(scope: Scope, expr: ast.Expr, found: ElementaryType) -> ElementaryType:
     """An untyped REAL literal with an integer is a REAL where the integer fits one exactly
-    (`i * 1.5` with `i : INT`; the compiler computes it in LREAL), with another literal it
-    is still a literal."""
+    (`i * 1.5` with `i : INT`; the compiler computes it in LREAL), with another REAL
+    literal it is still a literal."""
     match expr:
         case ast.Binary(op=op, left=left, right=right) if op in _ARITHMETIC:
             sides = [source_type(scope, left), source_type(scope, right)]
             if ANY_REAL not in sides:
                 return found
             other = sides[1] if sides[0] == ANY_REAL else sides[0]
-            if other is None:
-                return found
-            if other in (ANY_REAL, ANY_INT):
+            if other == ANY_REAL:
                 return ANY_REAL
+            if other is None or other == ANY_INT:
+                return found  # 2.5 * 3 is computed in LREAL
             if other.category == "real":
                 return other
             return REAL if implicit_conversion(REAL, other) else LREAL
