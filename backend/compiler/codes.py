@@ -181,6 +181,6 @@ class Code(Enum):
     IMPLICIT_REFERENCE = "W0806", "REFERENCE TO and REF= (CODESYS/TwinCAT)"
     EXPRESSION_STATEMENT = "W0807", "expression as a statement (CODESYS/TwinCAT)"
     NON_FINITE_CONSTANT = "W0808", "INF_REAL, NAN_REAL, INF_LREAL, NAN_LREAL (rusty)"
-    IMPLICIT_NUMERIC_CONVERSION = "W0809", "implicit conversion between numbers (CODESYS/TwinCAT)"
+    IMPLICIT_NUMERIC_CONVERSION = "W0811", "implicit conversion between numbers (CODESYS/TwinCAT)"
     ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
     SIZEOF_ARGUMENT = "E0801", "SIZEOF of something without a CODESYS size"

@@ -1,5 +1,5 @@
 """Implicit type conversions as IEC 61131-3 defines them (its table of implicit conversions):
-what converts silently, what converts with the CODESYS/TwinCAT warning W0809, what is an
+what converts silently, what converts with the CODESYS/TwinCAT warning W0811, what is an
 error (E0222, E0417, E0209), in every place a value is stored; the values the accepted
 conversions give, traced through `padt sim`; and REAL to integer rounding
 (docs/language.md, "Semantics choices")."""
@@ -56,7 +56,7 @@ def test_the_iec_implicit_conversions_are_silent_and_exact(
     assert type(trace["Main.x"][0]) is type(expected)  # an INT into a REAL gives a float
 
 
-# converted as CODESYS and TwinCAT do, with W0809: (target, source, initial value, result)
+# converted as CODESYS and TwinCAT do, with W0811: (target, source, initial value, result)
 DIALECT = [
     ("INT", "REAL", "2.5", 3),  # rounded, halves away from zero
     ("INT", "REAL", "-2.5", -3),
@@ -81,7 +81,7 @@ def test_conversions_between_numbers_warn_and_convert_as_codesys(
     program = one_assignment(target, source, value)
     assert diagnostics(program) == [
         f"t.st:3:6: warning: CODESYS and TwinCAT convert {source} to {target} implicitly, "
-        f"IEC 61131-3 does not: use {source}_TO_{target}(...) or TO_{target}(...) [W0809]"
+        f"IEC 61131-3 does not: use {source}_TO_{target}(...) or TO_{target}(...) [W0811]"
     ]
     assert sim_trace(tmp_path, program, 1)["Main.x"] == [expected]
 
@@ -141,9 +141,9 @@ END_PROGRAM
         "t.st:4:6: error: cannot assign a REAL literal to WORD implicitly: "
         "write an integer literal or use TO_WORD(...) [E0222]",
         "t.st:5:10: warning: CODESYS and TwinCAT convert LREAL to REAL implicitly, "
-        "IEC 61131-3 does not: use LREAL_TO_REAL(...) or TO_REAL(...) [W0809]",
+        "IEC 61131-3 does not: use LREAL_TO_REAL(...) or TO_REAL(...) [W0811]",
         "t.st:6:10: warning: CODESYS and TwinCAT convert LREAL to INT implicitly, "
-        "IEC 61131-3 does not: use LREAL_TO_INT(...) or TO_INT(...) [W0809]",
+        "IEC 61131-3 does not: use LREAL_TO_INT(...) or TO_INT(...) [W0811]",
     ]
 
 
@@ -185,7 +185,7 @@ END_PROGRAM
 """
     assert diagnostics(program) == [
         "t.st:10:8: warning: CODESYS and TwinCAT convert DINT to INT implicitly, "
-        "IEC 61131-3 does not: use DINT_TO_INT(...) or TO_INT(...) [W0809]"
+        "IEC 61131-3 does not: use DINT_TO_INT(...) or TO_INT(...) [W0811]"
     ]
 
 

@@ -5,7 +5,7 @@ converts it only where no value is lost (its table of implicit conversions,
 
 Between numbers (integers, bit strings, REAL) CODESYS and TwinCAT convert anything
 implicitly and Annex F and rusty's tests rely on it: padt converts too, with the
-warning W0809 naming the conversion function. Anything else is an error (E0222): a REAL
+warning W0811 naming the conversion function. Anything else is an error (E0222): a REAL
 literal into an integer, the date and time types into one another (DT into DATE keeps the
 time of day), the string types. An in-out argument is passed by reference and must have
 the parameter's type exactly (E0417)."""
