@@ -261,10 +261,11 @@ c(total := d);
 ok := Bump(total := d, text := s);
 END_PROGRAM
 """
+    needs = "error: an in-out parameter of type DINT needs a variable of that type, not"
     assert diagnostics(program) == [
-        "t.st:11:12: error: in-out parameter of type DINT needs a DINT variable, not INT [E0417]",
-        "t.st:12:12: error: in-out parameter of type DINT needs a DINT variable, not REAL [E0417]",
-        "t.st:13:21: error: in-out parameter of type DINT needs a DINT variable, not INT [E0417]",
+        f"t.st:11:12: {needs} INT [E0417]",
+        f"t.st:12:12: {needs} REAL [E0417]",
+        f"t.st:13:21: {needs} INT [E0417]",
     ]
 
 
@@ -295,3 +296,20 @@ def test_real_to_integer_rounds_to_the_nearest_halves_away_from_zero(tmp_path: P
         assert _round(float(text)) == round_half_away(float(text)) == expected
     for value in (1e300, -1e300, 2.0**63 + 2048.0, 0.5 + 2.0**-53):
         assert _round(value) == round_half_away(value) == round(value)
+
+
+def test_an_in_out_array_must_have_the_element_type() -> None:
+    program = """FUNCTION Sum : DINT
+VAR_IN_OUT values : ARRAY[1..3] OF DINT; END_VAR
+Sum := values[1] + values[2] + values[3];
+END_FUNCTION
+PROGRAM Main
+VAR a : ARRAY[0..2] OF INT; b : ARRAY[0..2] OF DINT; total : DINT; END_VAR
+total := Sum(values := a);
+total := Sum(values := b);
+END_PROGRAM
+"""
+    assert diagnostics(program) == [
+        "t.st:7:24: error: an in-out parameter of type ARRAY[1..3] OF DINT needs a variable "
+        "of that type, not ARRAY[0..2] OF INT [E0417]"
+    ]

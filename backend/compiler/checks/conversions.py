@@ -24,10 +24,10 @@ from backend.compiler.types import (
     LREAL,
     REAL,
     SINT,
+    ArrayType,
     ElementaryType,
     EnumType,
     OpenArrayType,
-    RefType,
     Type,
     common_numeric,
     implicit_conversion,
@@ -91,21 +91,23 @@ def check_in_out_type(scope: Scope, param: Type, value: ast.Expr, value_type: Ty
     scope.report(
         value.pos,
         Code.IN_OUT_TYPE,
-        f"in-out parameter of type {param.name} needs a {param.name} variable, "
+        f"an in-out parameter of type {param.name} needs a variable of that type, "
         f"not {value_type.name}",
     )
     return True
 
 
 def same_for_in_out(param: Type, argument: Type) -> bool:
-    if param == argument:
-        return True
+    """Whether an in-out of type `param` can be the variable `argument`: elementary values
+    (and arrays of them) must have the same type, strings any length. Blocks, interfaces and
+    references have rules of their own (a derived block is passed for its base)."""
     if isinstance(param, ElementaryType) and isinstance(argument, ElementaryType):
         return param.name == argument.name  # STRING[10] for STRING
     if isinstance(param, OpenArrayType):
         return param.binds(argument)
-    # references have rules of their own (checks.references)
-    return isinstance(param, RefType) or isinstance(argument, RefType)
+    if isinstance(param, ArrayType) and isinstance(argument, ArrayType):
+        return same_for_in_out(param.element, argument.element)
+    return True
 
 
 def source_type(scope: Scope, expr: ast.Expr) -> ElementaryType | None:
