@@ -172,7 +172,7 @@ END_PROGRAM
 def test_an_untyped_integer_literal_takes_the_type_it_meets() -> None:
     # The compiler computes `i + 1` in DINT (as CODESYS), IEC in INT: no narrowing here.
     program = """PROGRAM Main
-VAR i, j : INT; u : UINT; b : BOOL; d : DINT; r : REAL; END_VAR
+VAR i, j : INT; u : UINT; b : BOOL; d : DINT; r : REAL; a : ARRAY[1..4] OF INT; END_VAR
 i := i + 1;
 i := -(i * 2) + 1;
 i := LIMIT(0, i, 9);
@@ -180,11 +180,12 @@ i := MAX(j, i - 1);
 u := SEL(b, u, 0);
 i := SHL(21, 2);
 i := TRUNC(r);
+i := j + UPPER_BOUND(a, 1);
 i := i + d;
 END_PROGRAM
 """
     assert diagnostics(program) == [
-        "t.st:10:8: warning: CODESYS and TwinCAT convert DINT to INT implicitly, "
+        "t.st:11:8: warning: CODESYS and TwinCAT convert DINT to INT implicitly, "
         "IEC 61131-3 does not: use DINT_TO_INT(...) or TO_INT(...) [W0811]"
     ]
 

@@ -35,6 +35,7 @@ from backend.compiler.types import (
 )
 
 _ARITHMETIC = ("+", "-", "*", "/", "MOD", "AND", "OR", "XOR", "&")
+_ANY_INT_RESULTS = ("TRUNC", "LOWER_BOUND", "UPPER_BOUND")
 
 
 def check_conversion(scope: Scope, target: Type, value: ast.Expr, value_type: Type) -> None:
@@ -173,9 +174,9 @@ def _standard_result(
     scope: Scope, callee: StandardFunction, call: ast.Call, found: ElementaryType
 ) -> ElementaryType:
     """A generic standard function (MIN, LIMIT, SEL, ADD, ...) gives its literal arguments
-    the type of the others: typed again with each literal as the last typed integer. TRUNC
-    gives any integer type (IEC's ANY_INT), as an untyped literal does."""
-    if key(call.name) == "TRUNC":
+    the type of the others: typed again with each literal as the last typed integer. TRUNC,
+    LOWER_BOUND and UPPER_BOUND give any integer type (IEC's ANY_INT), as a literal does."""
+    if key(call.name) in _ANY_INT_RESULTS:
         return ANY_INT
     args = scope.builtin_arguments(callee.builtin, call)
     if not isinstance(args, list):
