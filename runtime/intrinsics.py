@@ -202,10 +202,16 @@ def _init(target: Any, values: dict[str, Any]) -> Any:
 
 
 def _round(value: float) -> int:
-    """REAL to integer: to the nearest, halves away from zero (as IEC PLCs do)."""
+    """REAL to integer: to the nearest, halves away from zero (as CODESYS does; see
+    docs/language.md). The fraction is taken exactly: adding 0.5 before rounding down would
+    itself round, taking 0.49999999999999994 to 1 and 2**52 + 1 to 2**52 + 2."""
     if math.isnan(value) or math.isinf(value):
         return 0
-    return math.floor(abs(value) + 0.5) * (1 if value >= 0 else -1)
+    magnitude = abs(value)
+    whole = math.floor(magnitude)
+    if magnitude - whole >= 0.5:  # exact (Sterbenz): whole <= magnitude < 2 * whole, or 0
+        whole += 1
+    return whole if value >= 0 else -whole
 
 
 def _rol(value: int, n: int, bits: int) -> int:

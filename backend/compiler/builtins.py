@@ -21,6 +21,7 @@ from backend.compiler.types import (
     REAL,
     STRING,
     TIME,
+    WSTRING,
     ArrayType,
     ElementaryType,
     EnumType,
@@ -430,7 +431,14 @@ def _expt_typing(args: list[Type]) -> Type | str:
 def _strings(args: list[Type]) -> Type | str:
     if not all(isinstance(a, ElementaryType) and a.category == "string" for a in args):
         return "expects strings"
-    return args[0] if all(a == args[0] for a in args) else STRING
+    if all(a == args[0] for a in args):
+        return args[0]
+    return WSTRING if all(a.name == WSTRING.name for a in args) else STRING
+
+
+def _string_of(args: list[Type]) -> Type:
+    """LEFT, MID, INSERT, ...: a WSTRING of a WSTRING, else a STRING."""
+    return WSTRING if args and args[0].name == WSTRING.name else STRING
 
 
 def _time_arith(name: str, op: str, result_name: str | None) -> Builtin:
@@ -520,24 +528,22 @@ _FIXED: dict[str, Builtin] = {
             )
         ),
         Builtin("LEN", ("IN",), lambda a: INT, _fn("len({0})")),
-        Builtin("LEFT", ("IN", "L"), lambda a: STRING, _fn("_left({0}, {1})"), min_args=2),
-        Builtin("RIGHT", ("IN", "L"), lambda a: STRING, _fn("_right({0}, {1})"), min_args=2),
-        Builtin("MID", ("IN", "L", "P"), lambda a: STRING, _fn("_mid({0}, {1}, {2})"), min_args=3),
+        Builtin("LEFT", ("IN", "L"), _string_of, _fn("_left({0}, {1})"), min_args=2),
+        Builtin("RIGHT", ("IN", "L"), _string_of, _fn("_right({0}, {1})"), min_args=2),
+        Builtin("MID", ("IN", "L", "P"), _string_of, _fn("_mid({0}, {1}, {2})"), min_args=3),
         Builtin("CONCAT", None, _strings, lambda c, a, r: "(" + " + ".join(c) + ")", min_args=1),
         Builtin(
             "INSERT",
             ("IN1", "IN2", "P"),
-            lambda a: STRING,
+            _string_of,
             _fn("_insert({0}, {1}, {2})"),
             min_args=3,
         ),
-        Builtin(
-            "DELETE", ("IN", "L", "P"), lambda a: STRING, _fn("_delete({0}, {1}, {2})"), min_args=3
-        ),
+        Builtin("DELETE", ("IN", "L", "P"), _string_of, _fn("_delete({0}, {1}, {2})"), min_args=3),
         Builtin(
             "REPLACE",
             ("IN1", "IN2", "L", "P"),
-            lambda a: STRING,
+            _string_of,
             _fn("_replace({0}, {1}, {2}, {3})"),
             min_args=4,
         ),

@@ -97,6 +97,7 @@ class Code(Enum):
     REFERENCE_TARGET = "E0219", "reference to something that is no lasting variable"
     REFERENCE_BINDING = "E0220", "misused REFERENCE TO"
     THIS_SUPER = "E0221", "THIS or SUPER where there is none, or SUPER without ^"
+    EXPLICIT_CONVERSION = "E0222", "conversion that needs a conversion function"
 
     # ---- 03: statements and assignments
     ASSIGN_CONSTANT = "E0301", "assignment to a constant"
@@ -131,6 +132,7 @@ class Code(Enum):
     METHOD_ACCESS = "E0414", "method its access specifier hides here"
     METHOD_VALUE = "E0415", "method without a result used as a value"
     NO_METHOD = "E0416", "call of a method the block does not have"
+    IN_OUT_TYPE = "E0417", "in-out argument of another type than its parameter"
 
     # ---- 05: sequential function charts
     INITIAL_STEP = "E0501", "step chain without exactly one initial step"
@@ -197,6 +199,7 @@ class Code(Enum):
     NON_FINITE_CONSTANT = "W0808", "INF_REAL, NAN_REAL, INF_LREAL, NAN_LREAL (rusty)"
     PUBLIC_POU = "W0809", "PUBLIC on a POU, interface or data type (CODESYS/TwinCAT)"
     LOCATED_PARAMETER = "W0810", "AT %I*, %Q* on an input or output of a block (TwinCAT)"
+    IMPLICIT_NUMERIC_CONVERSION = "W0811", "implicit conversion between numbers (CODESYS/TwinCAT)"
     ATTRIBUTE_PRAGMA = "N0801", "pragma ignored (CODESYS/TwinCAT)"
     INTERNAL_POU = "N0802", "INTERNAL outside a namespace (CODESYS/TwinCAT libraries)"
     QUALIFIED_NAME = "N0803", "name qualified by a library namespace or global list (CODESYS)"

@@ -259,11 +259,64 @@ def common_numeric(a: ElementaryType, b: ElementaryType) -> ElementaryType | Non
     return {8: INT, 16: DINT, 32: LINT}.get(unsigned.bits, LINT)
 
 
+# IEC 61131-3 ed. 3, its table of implicit conversions: what a value undergoes without a
+# conversion function, because no value is lost; closed under chaining (SINT -> INT -> DINT
+# -> LREAL). Everything else needs X_TO_Y or TO_Y.
+_WIDENS_TO: dict[str, tuple[str, ...]] = {
+    "SINT": ("INT", "REAL"),
+    "INT": ("DINT", "REAL"),
+    "DINT": ("LINT", "LREAL"),
+    "USINT": ("UINT", "INT", "REAL"),
+    "UINT": ("UDINT", "DINT", "REAL"),
+    "UDINT": ("ULINT", "LINT", "LREAL"),
+    "REAL": ("LREAL",),
+    "BOOL": ("BYTE",),
+    "BYTE": ("WORD",),
+    "WORD": ("DWORD",),
+    "DWORD": ("LWORD",),
+    "TIME": ("LTIME",),
+    "DATE": ("LDATE",),
+    "TOD": ("LTOD",),
+    "DT": ("LDT",),
+    "CHAR": ("STRING",),
+    "WCHAR": ("WSTRING",),
+}
+
+
+def _widenings(name: str) -> frozenset[str]:
+    reached: set[str] = set()
+    todo = list(_WIDENS_TO.get(name, ()))
+    while todo:
+        wider = todo.pop()
+        if wider not in reached:
+            reached.add(wider)
+            todo.extend(_WIDENS_TO.get(wider, ()))
+    return frozenset(reached)
+
+
+IMPLICIT_CONVERSIONS: dict[str, frozenset[str]] = {name: _widenings(name) for name in _WIDENS_TO}
+
+
+def implicit_conversion(target: ElementaryType, source: ElementaryType) -> bool:
+    """Does IEC 61131-3 convert a `source` value to `target` without a conversion function?
+    The same type always; an untyped integer literal into any number (its range is checked
+    apart), an untyped REAL literal into REAL or LREAL; otherwise table 11. Strings of
+    different lengths are the same type (an assignment cuts a string to its length)."""
+    if target.name == source.name:
+        return True
+    if source == ANY_INT:
+        return target.is_numeric
+    if source == ANY_REAL:
+        return target.category == "real"
+    return target.name in IMPLICIT_CONVERSIONS.get(source.name, frozenset())
+
+
 def assignable(target: Type, source: Type) -> bool:
     """Can a value of `source` be stored in `target` without an explicit conversion?
 
     Generous where real PLC compilers are (implicit numeric conversions between integer
-    widths and to REAL); the check stage warns where a value may not fit.
+    widths and to REAL); the check stage (`checks.conversions`) tells which of these IEC
+    61131-3 makes only with a conversion function (`implicit_conversion`).
     A variable-length array is no value: it is only passed on (`OpenArrayType.binds`).
     """
     if isinstance(target, OpenArrayType) or isinstance(source, OpenArrayType):

@@ -308,6 +308,8 @@ class _Writer:
         if target_type == "REAL":
             return self.real_expr(depth) if self.flip(0.7) else self.int_expr(depth)
         value = self.int_expr(depth) if self.flip(0.8) else self.real_expr(depth)
+        if value.type == "RLIT":  # a REAL literal is no integer (E0222): a REAL converts
+            value = Expr(self.pick(self.names.reals), "REAL")
         if value.literal is not None:  # a bare literal must fit (the checker says so)
             low, high = LIMITS[target_type]
             value = Expr(str(min(max(abs(value.literal), low), high)), "LIT")

@@ -5,7 +5,12 @@ from __future__ import annotations
 
 from backend.compiler import ast
 from backend.compiler.checks.actions import check_action_call
-from backend.compiler.checks.initializers import mismatch, takes_argument
+from backend.compiler.checks.conversions import (
+    check_conversion,
+    check_in_out_type,
+    check_output_conversion,
+)
+from backend.compiler.checks.initializers import bool_literal, mismatch, takes_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
 from backend.compiler.checks.references import check_reference_argument
 from backend.compiler.checks.targets import is_lvalue, refuse_system_write, writable_target
@@ -78,11 +83,19 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
         fits = target_type is None or assignable(target_type, param.type)
         if target_type is not None and not (fits or scope.conforms(target_type, param.type)):
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, mismatch(target_type, param.type))
+        elif target_type is not None:
+            check_output_conversion(scope, target_type, param.type, arg.value.pos)
         return
     if param.kind == "VAR_IN_OUT" and not is_lvalue(arg.value):
         scope.report(arg.value.pos, Code.IN_OUT_VARIABLE, f"in-out '{param.name}' needs a variable")
     elif param.kind == "VAR_IN_OUT":
         refuse_system_write(scope, arg.value)
     value_type = scope.type_of(arg.value)
-    if value_type is not None and not takes_argument(param.type, arg.value, value_type, scope):
+    if value_type is None:
+        return
+    if not takes_argument(param.type, arg.value, value_type, scope):
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, mismatch(param.type, value_type))
+    elif param.kind == "VAR_IN_OUT":
+        check_in_out_type(scope, param.type, arg.value, value_type)
+    elif not bool_literal(param.type, arg.value):
+        check_conversion(scope, param.type, arg.value, value_type)

@@ -6,8 +6,13 @@ from __future__ import annotations
 from backend.compiler import ast
 from backend.compiler.builtins import Builtin
 from backend.compiler.checks.calls import check_connection
+from backend.compiler.checks.conversions import (
+    check_conversion,
+    check_in_out_type,
+    check_output_conversion,
+)
 from backend.compiler.checks.dialects import check_size_of
-from backend.compiler.checks.initializers import takes_argument
+from backend.compiler.checks.initializers import bool_literal, takes_argument
 from backend.compiler.checks.open_arrays import check_open_array_connections
 from backend.compiler.checks.references import (
     check_is_valid_ref,
@@ -114,7 +119,13 @@ def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
         if not fits:
             message = f"cannot store {param.type.name} output in {value_type.name}"
             scope.report(arg.value.pos, Code.OUTPUT_TYPE, message)
+        else:
+            check_output_conversion(scope, value_type, param.type, arg.value.pos)
         return
     if not takes_argument(param.type, arg.value, value_type, scope):
         message = f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, message)
+    elif param.kind == "VAR_IN_OUT":
+        check_in_out_type(scope, param.type, arg.value, value_type)
+    elif not bool_literal(param.type, arg.value):
+        check_conversion(scope, param.type, arg.value, value_type)

@@ -6,6 +6,7 @@ from collections.abc import Callable
 
 from backend.compiler import ast
 from backend.compiler.ast import key
+from backend.compiler.checks.conversions import check_conversion
 from backend.compiler.codes import Code
 from backend.compiler.infer import EnumValue, NonFinite, Scope
 from backend.compiler.resolve import Variable
@@ -90,8 +91,11 @@ def check_value(scope: Scope, target: Type, value: ast.Expr) -> None:
         return
     if not takes(target, value, value_type, scope):
         scope.report(value.pos, Code.TYPE_MISMATCH, mismatch(target, value_type))
-    elif isinstance(value, ast.IntLiteral) and value.type_name is None:
+        return
+    if isinstance(value, ast.IntLiteral) and value.type_name is None:
         check_range(scope, target, value)
+    if not bool_literal(target, value):
+        check_conversion(scope, target, value, value_type)
 
 
 def takes(target: Type, value: ast.Expr, value_type: Type, scope: Scope) -> bool:
