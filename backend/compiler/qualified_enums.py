@@ -29,7 +29,7 @@ def qualify_enum_values(units: list[ast.SourceUnit]) -> list[ast.SourceUnit]:
     if not enums:
         return units
     hidden = {key(pou.name) for unit in units for pou in unit.pous}
-    hidden |= {key(d.name) for unit in units for block in _global_blocks(unit) for d in block.decls}
+    hidden |= {key(d.name) for unit in units for block in global_blocks(unit) for d in block.decls}
     enums = {name: values for name, values in enums.items() if name not in hidden}
     if not enums:
         return units
@@ -49,7 +49,8 @@ def qualify_enum_values(units: list[ast.SourceUnit]) -> list[ast.SourceUnit]:
     return result
 
 
-def _global_blocks(unit: ast.SourceUnit) -> list[ast.VarBlock]:
+def global_blocks(unit: ast.SourceUnit) -> list[ast.VarBlock]:
+    """Every VAR_GLOBAL block of a file: its own, its configurations' and their resources'."""
     blocks = list(unit.globals)
     for configuration in unit.configurations:
         blocks += configuration.globals

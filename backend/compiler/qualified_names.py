@@ -19,6 +19,7 @@ from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.qualified_enums import global_blocks
 from backend.compiler.source import Pos
 from backend.compiler.types import elementary
 
@@ -81,16 +82,9 @@ def _project_names(units: list[ast.SourceUnit]) -> _Names:
     top_level = {key(p.name) for unit in units for p in unit.pous}
     top_level |= {key(t.name) for unit in units for t in unit.types}
     top_level |= {key(i.name) for unit in units for i in unit.interfaces}
-    instances = {key(d.name) for unit in units for block in _globals(unit) for d in block.decls}
+    blocks = [block for unit in units for block in global_blocks(unit)]
+    instances = {key(d.name) for block in blocks for d in block.decls}
     return _Names(declared, top_level | instances)
-
-
-def _globals(unit: ast.SourceUnit) -> list[ast.VarBlock]:
-    blocks = list(unit.globals)
-    for configuration in unit.configurations:
-        blocks += configuration.globals
-        blocks += [b for resource in configuration.resources for b in resource.globals]
-    return blocks
 
 
 def _collect(value: Any, declared: set[str]) -> None:
