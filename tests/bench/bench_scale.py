@@ -9,6 +9,8 @@ Run with `python -m tests.bench.bench_scale`; it prints figures and asserts noth
 
 from __future__ import annotations
 
+import gc
+import sys
 import tempfile
 import threading
 import time
@@ -18,9 +20,11 @@ from pathlib import Path
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
+from runtime.collector import COLLECTOR
 from runtime.context import encode_context, save_context
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.protocol import MAX_SET_VARIABLES, ValuesReply, encode_reply
+from runtime.cycle_driver import SWITCH_INTERVAL_S
 from runtime.reload_switch import reload
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
@@ -71,7 +75,10 @@ def best_ms(work: Callable[[], object]) -> float:
 
 def longest_wait_ms(work: Callable[[], object]) -> float:
     """The longest a thread that asks for the GIL every 0.5 ms waits beyond that while
-    `work` runs: what the cycle thread would wait for the work's longest hold of it."""
+    `work` runs, at the runtime's switch interval: what the cycle thread would wait for
+    the work's longest hold of it."""
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
     done = threading.Event()
     longest = [0.0]
 
@@ -90,6 +97,7 @@ def longest_wait_ms(work: Callable[[], object]) -> float:
     finally:
         done.set()
         thread.join()
+        sys.setswitchinterval(switch)
     return longest[0] * 1000
 
 
@@ -100,8 +108,11 @@ def measure(variables: int) -> dict[str, float]:
     resource = Resource("R", VirtualClock())
     figures["load: instances (STOP)"] = best_ms(lambda: resource.load(artifact))
     resource.start()
-    for _ in range(20):  # past Python's warm-up of new code
+    for _ in range(20):  # past Python's warm-up of new code, and a full collection
         resource.cycle()
+        COLLECTOR.between_cycles()
+    gc.collect()
+    COLLECTOR.between_cycles()  # the configuration frozen, as in a runtime that has run
     figures["CPU cycle of the small program"] = best_ms(resource.cycle)
     figures["values: every variable, read (cycle thread)"] = best_ms(resource.variables.read_values)
     values = resource.variables.read_values()
