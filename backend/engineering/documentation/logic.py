@@ -3,7 +3,9 @@ long lines wrapped; an SFC chart also drawn as a diagram."""
 
 from __future__ import annotations
 
-from backend.engineering.documentation.interfaces import project_pous
+import re
+
+from backend.engineering.documentation.interfaces import project_interfaces, project_pous
 from backend.engineering.documentation.markup import Section, anchor, code, escape, heading
 from backend.engineering.documentation.sfc_chart import chart_svg
 from backend.engineering.documentation.st_highlight import listing
@@ -33,4 +35,20 @@ def logic_section(subject: Subject) -> Section:
             f'<div class="pou">{sub}<p class="facts">{facts}</p>{chart}'
             f"{listing(source.lines, source.first_line)}</div>"
         )
+    for file, interface in project_interfaces(subject):
+        sub, sub_entry = heading(2, f"INTERFACE {interface.name}", anchor("logic", interface.name))
+        headings.append(sub_entry)
+        text = subject.lines.get(file, ())
+        first, last = interface.pos.line, _end_line(text, interface.pos.line, "END_INTERFACE")
+        facts = f"{escape(subject.shown(file))}, lines {first} to {last}"
+        parts.append(
+            f'<div class="pou">{sub}<p class="facts">{facts}</p>'
+            f"{listing(text[first - 1 : last], first)}</div>"
+        )
     return Section('<section class="part">' + "".join(parts) + "</section>", tuple(headings))
+
+
+def _end_line(lines: tuple[str, ...], first: int, keyword: str) -> int:
+    """The line of `keyword` (END_INTERFACE) at or after `first`; the file's end when none."""
+    end = re.compile(rf"\b{keyword}\b", re.IGNORECASE)
+    return next((n for n in range(first, len(lines) + 1) if end.search(lines[n - 1])), len(lines))

@@ -85,6 +85,27 @@ KEYWORDS = frozenset(
         "WITH",
         "XOR",
         "PRIORITY",
+        # object orientation (edition 3) and the access specifiers; not GET and SET, which
+        # are names too (a method Get, a variable set) outside a property
+        "ABSTRACT",
+        "END_INTERFACE",
+        "END_METHOD",
+        "END_PROPERTY",
+        "EXTENDS",
+        "FINAL",
+        "IMPLEMENTS",
+        "INTERFACE",
+        "INTERNAL",
+        "METHOD",
+        "OVERRIDE",
+        "PRIVATE",
+        "PROPERTY",
+        "PROTECTED",
+        "PUBLIC",
+        "SUPER",
+        "THIS",
+        "END_GET",
+        "END_SET",
     ]
 )
 _TOKEN = re.compile(

@@ -287,3 +287,72 @@ def test_one_file_cross_reference_gives_bare_line_numbers(tmp_path: Path) -> Non
     subject = load_subject([source])
     assert {row[0]: row[2:] for row in xref_rows(subject)}["Count.n"] == ["2", "4", "4"]
     assert "All lines are lines of <code>count.st</code>." in document_html(subject)
+
+
+OOP_SOURCE = """INTERFACE I_Device
+METHOD Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+END_METHOD
+PROPERTY Level : INT
+END_PROPERTY
+END_INTERFACE
+FUNCTION_BLOCK FB_Pump IMPLEMENTS I_Device
+VAR running : BOOL; target : INT; lvl : INT; END_VAR
+METHOD PUBLIC Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+target := speed;
+Start := TRUE;
+END_METHOD
+METHOD Clamp : INT
+VAR_INPUT v : INT; END_VAR
+VAR_OUTPUT clipped : BOOL; END_VAR
+Clamp := MIN(v, 50);
+END_METHOD
+PROPERTY PUBLIC Level : INT
+GET
+  Level := lvl;
+END_GET
+END_PROPERTY
+lvl := lvl + Clamp(v := target);
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FINAL FB_FastPump EXTENDS FB_Pump
+METHOD PUBLIC OVERRIDE Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+Start := SUPER^.Start(speed := speed * 2);
+END_METHOD
+SUPER^();
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR pump : FB_FastPump; dev : I_Device; ok : BOOL; END_VAR
+dev := pump;
+ok := dev.Start(speed := 5);
+pump();
+END_PROGRAM
+"""
+
+
+def test_blocks_show_lineage_methods_and_properties_and_interfaces_their_own(
+    tmp_path: Path,
+) -> None:
+    source = tmp_path / "pumps.st"
+    source.write_text(OOP_SOURCE)
+    assert main(["docs", str(source), "-o", str(tmp_path / "out")]) == 0
+    text = "\n".join(pages(tmp_path / "out" / "pumps.pdf"))
+    interfaces = text[text.index("POU interfaces\n") : text.index("\n Logic\n")]
+    fast = interfaces[interfaces.index("FUNCTION_BLOCK FB_FastPump\n") :]
+    assert "none" not in fast.split("FUNCTION_BLOCK FB_Pump")[0]
+    assert "FINAL · extends FB_Pump" in fast.splitlines()[1]
+    assert re.search(r"Start +PUBLIC OVERRIDE +BOOL +IN speed : INT", fast)
+    pump = interfaces[interfaces.index("FUNCTION_BLOCK FB_Pump\n") :]
+    assert "implements I_Device" in pump.splitlines()[1]
+    # a method without an access specifier is PROTECTED, as the compiler reads it
+    assert re.search(r"Clamp +PROTECTED +INT +IN v : INT; OUT clipped : BOOL", pump)
+    assert re.search(r"Level +PUBLIC +INT +GET\n", pump)
+    device = interfaces[interfaces.index("INTERFACE I_Device\n") :]
+    assert re.search(r"Start +PUBLIC +BOOL +IN speed : INT", device)
+    assert re.search(r"Level +PUBLIC +INT +GET, SET \(prototype\)", device)
+    # the interface's source is listed with the POUs', and in the contents
+    logic = text[text.index("\n Logic\n") :]
+    assert re.search(r"INTERFACE I_Device\n pumps.st, lines 1 to 7\n +1 INTERFACE I_Device", logic)
+    contents = text[text.index("Contents") : text.index("POU interfaces\n")]
+    assert contents.count("INTERFACE I_Device") == 2
