@@ -218,6 +218,13 @@ def _pou_source(pou: ast.Pou, file_lines: list[str]) -> PouSource:
         for text, pos in _references(node, declared):
             mention(text, pos)
             lines_seen.append(pos.line)
+    # methods and property accessors name the instance's variables too; their own
+    # (parameters, locals, the result) live only during a call: no value to show
+    for own, body in _member_bodies(pou):
+        for text, pos in _references(body, declared):
+            if text.split(".")[0].split("[")[0].upper() not in own:
+                mention(text, pos)
+            lines_seen.append(pos.line)
     if pou.sfc is not None:
         for step in pou.sfc.steps:
             mention(f"{step.name}.X", step.pos)
@@ -232,6 +239,18 @@ def _pou_source(pou: ast.Pou, file_lines: list[str]) -> PouSource:
         lines=tuple(file_lines[pou.pos.line - 1 : last]),
         mentions={line: tuple(sorted(items, key=lambda m: m.col)) for line, items in found.items()},
     )
+
+
+def _member_bodies(pou: ast.Pou) -> Iterator[tuple[set[str], tuple[ast.Statement, ...]]]:
+    """(upper names of its own, body) of each method and property accessor of a block:
+    its parameters and locals, and its name, which is its result."""
+    for method in pou.methods:
+        own = {decl.name.upper() for block in method.var_blocks for decl in block.decls}
+        yield own | {method.name.upper()}, method.body
+    for prop in pou.properties:
+        for accessor in prop.accessors:
+            own = {decl.name.upper() for block in accessor.var_blocks for decl in block.decls}
+            yield own | {prop.name.upper()}, accessor.body
 
 
 def _end_line(pou: ast.Pou, file_lines: list[str], after: int) -> int:

@@ -209,3 +209,40 @@ def test_arrays_structs_globals_temporaries_and_steps(tmp_path: Path) -> None:
         ("Busy.T", "Chart.Busy.T"),
     ]
     assert _named(found, "Chart", "TRANSITION") == [("go", "Chart.go")]
+
+
+PUMPS = """\
+FUNCTION_BLOCK Pump
+VAR target : INT; lvl : INT; END_VAR
+METHOD PUBLIC Start : BOOL
+VAR_INPUT speed : INT; END_VAR
+target := speed;
+Start := target > 0;
+END_METHOD
+PROPERTY PUBLIC Level : INT
+GET
+  Level := lvl;
+END_GET
+END_PROPERTY
+lvl := lvl + target;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR pump : Pump; ok : BOOL; END_VAR
+ok := pump.Start(speed := 5);
+END_PROGRAM
+"""
+
+
+def test_a_method_and_a_property_name_the_instance_variables_not_their_own(
+    tmp_path: Path,
+) -> None:
+    folder = tmp_path / "pumps"
+    folder.mkdir()
+    (folder / "pumps.st").write_text(PUMPS)
+    found = find_sources(_crc(folder), {"pumps": folder})
+    assert found is not None
+    # the parameter `speed` and the result `Start` live only during a call
+    assert _named(found, "Main.pump", "target := speed") == [("target", "Main.pump.target")]
+    assert _named(found, "Main.pump", "Start := target") == [("target", "Main.pump.target")]
+    # the property's own name is its result
+    assert _named(found, "Main.pump", "Level := lvl") == [("lvl", "Main.pump.lvl")]
