@@ -126,9 +126,21 @@ def open_as(page: Page, plant: Plant, user: str) -> None:
 
 
 def choose(page: Page, label: str, option: str) -> None:
-    """Pick `option` in the viser dropdown (a Mantine select) labelled `label`."""
-    page.get_by_label(label, exact=True).first.click()
-    page.get_by_role("option", name=option, exact=True).first.click()
+    """Pick `option` in the viser dropdown (a Mantine select) labelled `label`. A list
+    opened before the screen offered the option (the Code screen's instances come once
+    the project is compiled) does not take it in: it is closed and opened again."""
+    deadline = time.monotonic() + WAIT_S
+    wanted = page.get_by_role("option", name=option, exact=True).first
+    while True:
+        page.get_by_label(label, exact=True).first.click()
+        try:
+            wanted.wait_for(timeout=2_000)
+            break
+        except PlaywrightError:
+            if time.monotonic() > deadline:
+                raise
+            page.keyboard.press("Escape")
+    wanted.click()
     wait_until(
         f"{label} shows {option}",
         lambda: page.get_by_label(label, exact=True).first.input_value() == option,
