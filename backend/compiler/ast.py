@@ -7,7 +7,9 @@ comparisons go through `key()` (upper case) everywhere.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields, is_dataclass, replace
+from typing import Any
 
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.source import Pos
@@ -557,3 +559,26 @@ def spelling(expr: Expr) -> str:
             return f"{spelling(base)}.{bit}"
         case _:
             return "..."
+
+
+def rebuilt(
+    value: Any, after: Callable[[Any], Any], enter: Callable[[Any], None] | None = None
+) -> Any:
+    """`value` (a node, a tuple of them, or a plain value) rebuilt bottom-up: each node's
+    children first, then `after(node)`, which gives the node or what replaces it; `enter`
+    sees each node before its children. A subtree nothing changed in is returned as it
+    is (the AST is immutable, so sharing it is safe)."""
+    if isinstance(value, tuple):
+        items = tuple(rebuilt(item, after, enter) for item in value)
+        return value if all(a is b for a, b in zip(items, value, strict=True)) else items
+    if not is_dataclass(value) or isinstance(value, Pos | type):
+        return value
+    if enter is not None:
+        enter(value)
+    changed = {}
+    for item in fields(value):
+        old = getattr(value, item.name)
+        new = rebuilt(old, after, enter)
+        if new is not old:
+            changed[item.name] = new
+    return after(replace(value, **changed) if changed else value)

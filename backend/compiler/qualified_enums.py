@@ -10,12 +10,11 @@ POU (its own, a global, an SFC step) or a POU, it stays a member access.
 
 from __future__ import annotations
 
-from dataclasses import fields, is_dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 from backend.compiler import ast
 from backend.compiler.ast import key
-from backend.compiler.source import Pos
 
 
 def qualify_enum_values(units: list[ast.SourceUnit]) -> list[ast.SourceUnit]:
@@ -73,21 +72,7 @@ class _Qualifier:
         self.enums = {name: values for name, values in enums.items() if name not in hidden}
 
     def node(self, value: Any) -> Any:
-        if isinstance(value, tuple):
-            items = tuple(self.node(item) for item in value)
-            return value if all(a is b for a, b in zip(items, value, strict=True)) else items
-        if not is_dataclass(value) or isinstance(value, Pos | type):
-            return value
-        literal = self._literal(value)
-        if literal is not None:
-            return literal
-        changed = {}
-        for item in fields(value):
-            old = getattr(value, item.name)
-            new = self.node(old)
-            if new is not old:
-                changed[item.name] = new
-        return replace(value, **changed) if changed else value
+        return ast.rebuilt(value, lambda node: self._literal(node) or node)
 
     def _literal(self, value: object) -> ast.EnumLiteral | None:
         if not isinstance(value, ast.MemberRef) or not isinstance(value.base, ast.NameRef):

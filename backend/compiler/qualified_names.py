@@ -115,23 +115,16 @@ class _Qualifier:
         self.locals: set[str] = set()  # the variables of the POU being rebuilt, with its methods
 
     def node(self, value: Any) -> Any:
-        if isinstance(value, tuple):
-            items = tuple(self.node(item) for item in value)
-            return value if all(a is b for a, b in zip(items, value, strict=True)) else items
-        if not is_dataclass(value) or isinstance(value, Pos | type):
-            return value
+        return ast.rebuilt(value, self._left, self._entered)
+
+    def _entered(self, value: Any) -> None:
         if isinstance(value, ast.Pou):
             self.locals = set()
             _collect(value.var_blocks, self.locals)
             _collect(value.methods, self.locals)
             _collect(value.properties, self.locals)
-        changed = {}
-        for item in fields(value):
-            old = getattr(value, item.name)
-            new = self.node(old)
-            if new is not old:
-                changed[item.name] = new
-        value = replace(value, **changed) if changed else value
+
+    def _left(self, value: Any) -> Any:
         if isinstance(value, ast.Pou):
             self.locals = set()
         return self._resolved(value)
