@@ -61,9 +61,12 @@ def _concrete(t: ElementaryType) -> ElementaryType:
 NS_PER_DAY = 86_400_000_000_000
 
 
-def wrap_code(code: str, t: ElementaryType) -> str:
-    """Bring an integer expression into the range of its type (two's complement; a time
-    of day wraps around midnight)."""
+def wrap_code(code: str, t: ElementaryType, offset: int = 0) -> str:
+    """Bring an integer expression, plus `offset`, into the range of its type (two's
+    complement; a time of day wraps around midnight). A signed wrap adds a constant
+    anyway: an offset costs nothing there (`x + 1` wraps as `(x + 32769 & 65535) - 32768`)."""
+    if offset and not (t.signed and t.is_integer and not t.is_any_literal):
+        code, offset = f"(({code}) + {offset})", 0
     if t.name in ("TOD", "LTOD"):
         return f"(({code}) % {NS_PER_DAY})"
     if t.is_any_literal or not (t.is_integer or t.category in ("time", "date")):
@@ -71,7 +74,7 @@ def wrap_code(code: str, t: ElementaryType) -> str:
     mask = (1 << t.bits) - 1
     if t.signed:
         half = 1 << (t.bits - 1)
-        return f"((({code}) + {half} & {mask}) - {half})"
+        return f"((({code}) + {half + offset} & {mask}) - {half})"
     return f"(({code}) & {mask})"
 
 

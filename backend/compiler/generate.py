@@ -162,6 +162,8 @@ class _Value:
     code: str
     type: Type
     unwrapped: bool = False  # an integer result that may lie outside its type's range
+    # an unwrapped `head + n` (n a literal): its wrap adds n to the wrap's own constant
+    constant_tail: tuple[str, int] | None = None
 
 
 @dataclass
@@ -183,6 +185,9 @@ class _Emitter:
     max_size: int = MAX_UNIT_CODE
     # FOR counters held in a Python local while their loop runs: (kind, attr) -> local
     counters: dict[tuple[str, str], str] = field(default_factory=dict)
+    # the values such a local takes when nothing but the loop can change it: an index of
+    # it needs no bounds check when they all lie within the array's
+    counter_ranges: dict[str, tuple[int, int]] = field(default_factory=dict)
     # generating a method: its own variables (by id), Python locals of its function
     method_locals: frozenset[int] = frozenset()
 
@@ -407,6 +412,9 @@ class _Emitter:
     def _checked_offset(self, index: str, low: int, high: int) -> str:
         """The list offset of an array index, checked against the bounds inline (the
         index evaluated once); `_ix` is called only to raise the fault outside them."""
+        known = self.counter_ranges.get(index)
+        if known is not None and low <= known[0] and known[1] <= high:
+            return f"{index} - {low}" if low else index
         if index.isidentifier():  # a Python local: read it twice
             value, bound = index, index
         else:
@@ -460,7 +468,10 @@ class _Emitter:
             if result.category == "real":
                 code = f"({left} {op} {right})"
                 return _Value(f"_f32{code}" if result.bits == 32 else code, result)
-            return _Value(f"({left} {op} {right})", result, integral)
+            tail = None
+            if integral and op != "*" and right.lstrip("-").isdigit():
+                tail = (left, int(right) if op == "+" else -int(right))
+            return _Value(f"({left} {op} {right})", result, integral, tail)
         left, right = self.operand(expr.left, result), self.operand(expr.right, result)
         if op == "/":
             if result.category == "real":
@@ -985,6 +996,9 @@ class _Emitter:
             and not _has_continue(loop.body)
             and self._counter_private(counter, loop.body)
         ):
+            if _plain_body(loop.body):
+                self.range_loop(loop, counter, ref, step_constant, stop_constant, depth)
+                return
             stop = self.exact(loop.stop).code  # a constant: the same at every test
             self.counted_loop(loop, counter, ref, step_constant, stop, depth)
             return
@@ -1048,6 +1062,37 @@ class _Emitter:
         self.emit(depth + 2, f"{ref} = {wrap_code(local, counter.type)}")
         self.emit(depth + 2, "break")
         self.emit(depth + 1, f"{ref} = {local}")
+
+    def range_loop(
+        self, loop: ast.For, counter: Variable, ref: str, step: int, stop: int, depth: int
+    ) -> None:
+        """A counted loop whose body holds no loop and no RETURN: while no time slice is
+        metered (no tick to call, so nothing can write the counter between passes) it is a
+        Python `for` over a range, the counter stored at the start of each pass (what a
+        fault leaves); with a constant start, an array indexed by the counter within its
+        bounds is not checked. Otherwise the counted loop (the body's code twice, not its
+        loops: nesting would multiply it)."""
+        assert isinstance(counter.type, ElementaryType)
+        local, numbers = self.temp(), self.temp()
+        self.emit(depth, "if _tick is None:")
+        self.emit(depth + 1, f"{numbers} = range({ref}, {stop + (1 if step >= 0 else -1)}, {step})")
+        self.emit(depth + 1, f"for {local} in {numbers}:")
+        self.emit(depth + 2, f"{ref} = {local}")  # what a fault in the pass leaves
+        start = self.scope.constant_int(loop.start)
+        key_ = (counter.kind, counter.attr)
+        self.counters[key_] = local
+        if start is not None:
+            self.counter_ranges[local] = (min(start, stop), max(start, stop))
+        try:
+            self.block(loop.body, depth + 2)
+        finally:
+            del self.counters[key_]
+            self.counter_ranges.pop(local, None)
+        self.emit(depth + 1, "else:")  # not left by EXIT: one step past the last pass
+        self.emit(depth + 2, f"{local} = {numbers}.start + len({numbers}) * {step}")
+        self.emit(depth + 1, f"{ref} = {wrap_code(local, counter.type)}")
+        self.emit(depth, "else:")
+        self.counted_loop(loop, counter, ref, step, str(stop), depth + 1)
 
     def _counter_private(self, counter: Variable, body: tuple[ast.Statement, ...]) -> bool:
         """Nothing but the loop itself writes the counter while the body runs: the body
@@ -1178,7 +1223,7 @@ def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> str:
     raw_int = integer_like(raw.type)
     if raw.unwrapped and target_int and raw_int and target_int.bits <= raw_int.bits:
         # wrapping to the narrower target alone gives the same bits as wrapping twice
-        return wrap_code(raw.code, target_int)
+        return _wrapped(raw, target_int)
     value = _exact(raw)
     if not isinstance(target, ElementaryType | EnumType):
         return value.code
@@ -1229,8 +1274,15 @@ def _comparison_type(scope: Scope, expr: ast.Binary) -> Type:
 
 def _exact(value: _Value) -> _Value:
     if value.unwrapped and isinstance(value.type, ElementaryType):
-        return _Value(wrap_code(value.code, value.type), value.type)
+        return _Value(_wrapped(value, value.type), value.type)
     return value
+
+
+def _wrapped(value: _Value, t: ElementaryType) -> str:
+    if value.constant_tail is not None:
+        head, n = value.constant_tail
+        return wrap_code(head, t, n)
+    return wrap_code(value.code, t)
 
 
 def _implicit(code: str, declared: Type) -> _Value:
@@ -1253,6 +1305,14 @@ def _has_continue(body: tuple[ast.Statement, ...]) -> bool:
                 if any(_has_continue(b) for _, b in branches) or _has_continue(orelse):
                     return True
     return False
+
+
+def _plain_body(body: tuple[ast.Statement, ...]) -> bool:
+    """No loop and no RETURN below: a body whose code may be generated twice, and that
+    leaves its loop only at the end of a pass or by EXIT."""
+    return not any(
+        isinstance(node, ast.For | ast.While | ast.Repeat | ast.Return) for node in _nodes(body)
+    )
 
 
 def _nodes(value: object) -> Iterator[object]:
