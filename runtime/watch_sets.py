@@ -19,6 +19,7 @@ from runtime.contract.protocol import (
     MAX_SET_VARIABLES,
     MAX_SETS_PER_SESSION,
     MAX_VALUES_PER_SECOND,
+    encode_list,
 )
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import jsonable
@@ -52,13 +53,13 @@ class WatchSnapshot:
     qualities: str  # one letter per value (protocol.QUALITY_LETTERS)
 
     def message(self) -> bytes:
-        """The encoded WatchPublication: one C call for the common case, a conversion of
-        non-finite REALs to text only when there are some."""
+        """The encoded WatchPublication: encoder calls alone for the common case, a
+        conversion of non-finite REALs to text only when there are some."""
         head = {"cycle": self.cycle, "revision": self.revision, "qualities": self.qualities}
         try:
-            values = json.dumps(self.values, allow_nan=False)
+            values = encode_list(self.values)
         except ValueError:  # a NaN or an infinity: as text, since strict JSON has none
-            values = json.dumps([jsonable(value) for value in self.values])
+            values = encode_list([jsonable(value) for value in self.values])
         return (json.dumps(head)[:-1] + ', "values": ' + values + "}").encode()
 
 

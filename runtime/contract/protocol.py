@@ -856,6 +856,19 @@ def encode_reply(reply: Any) -> bytes:
 _REPLY_BATCH = 2_000
 
 
+def encode_list(values: list[Any]) -> str:
+    """The list as JSON (no NaN: ValueError), the same text as one `json.dumps`, encoded
+    a batch of items at a time for the reason `encode_reply` gives (10,000 watched
+    values are 1.6 ms in one encoder call)."""
+    if len(values) <= _REPLY_BATCH:
+        return json.dumps(values, allow_nan=False)
+    batches = (
+        json.dumps(values[n : n + _REPLY_BATCH], allow_nan=False)[1:-1]
+        for n in range(0, len(values), _REPLY_BATCH)
+    )
+    return "[" + ", ".join(batches) + "]"
+
+
 def encode_refusal(refusal: Refusal) -> bytes:
     return json.dumps({"ok": False, "error": refusal.as_json()}).encode()
 
