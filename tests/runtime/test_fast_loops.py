@@ -1,5 +1,6 @@
 """What the faster FOR loop (a counted loop: constant end and step, the counter in a Python
-local) and the inline bounds check must keep: the counter's value after the loop, also past
+local; without a loop inside, a Python `for` over a range while no slice is metered) and
+the inline bounds check must keep: the counter's value after the loop, also past
 the end of its type; a write to the counter from outside while a sliced program is
 suspended in the loop; a body or a call that writes the counter; an index
 outside the bounds as a program fault at its ST line; the resource watchdog ending an
@@ -139,3 +140,36 @@ def test_a_loop_condition_with_a_call_of_outputs_is_evaluated_for_every_test() -
     # the end grows with every pass (evaluated at each test: the last before pass 21 saw
     # limit 23): EXIT ends it
     assert (h.value("P.passes"), h.value("P.o")) == (21, 23)
+
+
+def test_a_loop_over_a_constant_range_needs_no_bounds_check_and_exit_keeps_the_counter() -> None:
+    text = """
+    PROGRAM P
+    VAR a : ARRAY[1..5] OF INT; i, j, k : INT; n : INT; END_VAR
+    FOR i := 1 TO 5 DO a[i] := i * 2; END_FOR;
+    n := 0; FOR j := 1 TO 5 DO IF j = 3 THEN EXIT; END_IF; n := n + 1; END_FOR;
+    FOR k := 10 TO 1 BY -3 DO n := n + k; END_FOR;
+    END_PROGRAM
+    """
+    h = harness(text, [{"name": "P"}])
+    h.cycle()
+    assert h.value("P.a") == [2, 4, 6, 8, 10] and h.value("P.i") == 6
+    assert (h.value("P.j"), h.value("P.k")) == (3, -2)  # EXIT at 3; 10, 7, 4, 1, then -2
+    assert h.value("P.n") == 2 + 10 + 7 + 4 + 1
+    generated = _generated(h, "P")
+    assert "for __t" in generated and "s.a[__t" in generated  # the counter indexes unchecked
+    assert "_ix(" not in generated.split("else:")[0]
+
+
+def test_a_fault_in_a_pass_leaves_the_counter_at_that_pass() -> None:
+    text = """PROGRAM P
+VAR i, n : INT; END_VAR
+FOR i := 1 TO 5 DO
+  n := 10 / (3 - i);
+END_FOR;
+END_PROGRAM
+"""
+    h = harness(text, [{"name": "P"}])
+    h.cycle()
+    assert h.state("P") == "ERROR"
+    assert (h.value("P.i"), h.value("P.n")) == (3, 10)  # as the tree-walking oracle has it
