@@ -114,7 +114,10 @@ def _decoder(kind: Any) -> Decoder:
     origin = typing.get_origin(kind)
     if origin is typing.Annotated:
         base, *marks = typing.get_args(kind)
-        return _constrained(_decoder(base), tuple(marks))
+        checked = tuple(mark for mark in marks if isinstance(mark, Range | MaxLength | Pattern))
+        if not checked:  # JsonValue on Any: a mark of what the field holds, nothing to check
+            return _decoder(base)
+        return _constrained(_decoder(base), checked)
     if kind is JsonValue or kind is Any:
         return _json_value
     if origin in (Union, types.UnionType):
@@ -212,6 +215,8 @@ def _list(item: Decoder) -> Decoder:
     def decode_list(data: Any, where: str) -> list[Any]:
         if not isinstance(data, list):
             raise _bad(where, "a list")
+        if item is _json_value and all(type(element) in _FLAT for element in data):
+            return data  # the 10,000 values of a watch message: a test of each, no call
         return [item(element, f"{where}[{i}]") for i, element in enumerate(data)]
 
     return decode_list
