@@ -7,7 +7,9 @@ The freeze waits for the first full collection after a configuration arrives (lo
 reload, cold start): the configuration it replaces holds reference cycles (its classes
 and their namespace), which only that collection frees. Frozen before, they would never
 be freed: a leak on every reload. Instances themselves are freed by their reference
-counts, frozen or not."""
+counts, frozen or not. In STOP (after a load) that collection is made at once: no cycle
+waits for it there, while a running one would meet it later on whatever thread allocated,
+a stall of up to 70 ms seen in the first seconds of watching 10,000 values."""
 
 from __future__ import annotations
 
@@ -27,9 +29,14 @@ class CollectorFreeze:
         gc.unfreeze()
         self._waiting_since = _full_collections()
 
-    def between_cycles(self) -> None:
-        """Freeze once a full collection has run since the change (cheap otherwise)."""
-        if self._waiting_since is not None and _full_collections() > self._waiting_since:
+    def between_cycles(self, running: bool = True) -> None:
+        """Freeze once a full collection has run since the change, made here when no
+        cycle runs (cheap otherwise)."""
+        if self._waiting_since is None:
+            return
+        if not running:
+            gc.collect()
+        if _full_collections() > self._waiting_since:
             gc.freeze()
             self._waiting_since = None
 

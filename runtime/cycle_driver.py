@@ -123,7 +123,7 @@ class CycleDriver:
                 planned = self.clock.now_ns()
 
     def _after_cycle(self, cycled: bool) -> None:
-        COLLECTOR.between_cycles()
+        COLLECTOR.between_cycles(self.resource.running())
         if cycled:
             self._publish_values()
         self._publish_status()

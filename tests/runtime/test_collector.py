@@ -52,3 +52,16 @@ def test_the_configuration_is_frozen_after_a_full_collection_and_the_old_one_fre
     resource.start()
     resource.cycle()
     assert resource.variables.value("Main.n") == 2
+
+
+def test_in_stop_the_collection_is_made_at_once_and_frees_the_old_configuration() -> None:
+    resource = Resource("R", VirtualClock())
+    resource.load(compiled("n := n + 1;"))
+    old_class = weakref.ref(type(resource.programs[0].instance))
+    resource.load(compiled("n := n + 3;"))
+    COLLECTOR.between_cycles(running=False)  # what the cycle driver does in STOP
+    assert old_class() is None
+    assert COLLECTOR.frozen and not in_a_generation(resource.programs[0].instance)
+    resource.start()
+    resource.cycle()
+    assert resource.variables.value("Main.n") == 3
