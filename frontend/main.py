@@ -55,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from backend.engineering.padt_accounts import AccountsError, PadtAccounts
     from backend.engineering.project_list import projects_by_name
     from backend.engineering.resource_directory import ResourceDirectory
+    from backend.engineering.start_up_freeze import freeze_start_up
     from backend.engineering.watch_lists import WatchLists
     from frontend.app import PadtUi
     from frontend.ui_context import UiContext
@@ -80,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
     directory = ResourceDirectory(session)
     context = UiContext(directory, accounts, args.zenoh, watch_lists, projects, args.backup_dir)
     ui = PadtUi(context, host=args.host, port=args.port)
+    freeze_start_up()
     print(f"PADT UI: {ui.url}", flush=True)
     stop.sleep_until_requested()
     ui.close()

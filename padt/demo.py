@@ -120,6 +120,7 @@ def _run_with_plant(
     from backend.engineering.padt_accounts import PadtAccounts, write_accounts
     from backend.engineering.project import compile_project, load_project
     from backend.engineering.resource_directory import ResourceDirectory
+    from backend.engineering.start_up_freeze import freeze_start_up
     from backend.engineering.watch_lists import WatchLists
     from frontend.app import PadtUi
     from frontend.ui_context import UiContext
@@ -165,6 +166,7 @@ def _run_with_plant(
         backups = args.state_dir / "backups"
         context = UiContext(directory, accounts, endpoint, watch_lists, projects, backups)
         ui = PadtUi(context, host=args.host, port=args.port)
+        freeze_start_up()
         try:
             _announce(args.state_dir, resource, result.artifact.crc, admin, admin_password)
             print(f"padt demo: REST API {api.url}/docs (log in as {admin.name})", flush=True)

@@ -17,6 +17,7 @@ from backend.api.service import PadtService
 from backend.engineering.padt_accounts import AccountsError, PadtAccounts
 from backend.engineering.project_list import projects_by_name
 from backend.engineering.resource_directory import ResourceDirectory
+from backend.engineering.start_up_freeze import freeze_start_up
 
 
 class ApiServer:
@@ -90,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
         service.close()
         session.close()
         return 1
+    freeze_start_up()
     print(f"padt api: {server.url} (OpenAPI at {server.url}/docs)", flush=True)
     stop.sleep_until_requested()
     server.close()
