@@ -240,3 +240,19 @@ def test_a_large_reply_is_encoded_in_batches_to_the_same_bytes() -> None:
     encoded = p.encode_reply(reply)
     assert encoded == json.dumps({"ok": True, **encode(reply)}).encode()
     assert p.decode_reply(p.GetValues(), encoded) == reply
+
+
+def test_watch_values_plain_or_nested_within_the_limit_pass_and_deeper_ones_are_refused() -> None:
+    plain = [1, -2.5, True, "text", None] * 2_000
+    message = {"cycle": 7, "revision": 1, "values": plain, "qualities": "L" * len(plain)}
+    assert decode(p.WatchPublication, message).values == plain
+    nested: object = 1
+    for _ in range(MAX_DEPTH):
+        nested = [nested]
+    message["values"] = [*plain[:5], nested]
+    message["qualities"] = "L" * 6
+    assert decode(p.WatchPublication, message).values[5] == nested  # an array of arrays
+    message["values"] = [*plain[:5], [nested]]
+    with pytest.raises(Refusal) as refused:
+        decode(p.WatchPublication, message)
+    assert "values[5]" in refused.value.message
