@@ -7,8 +7,10 @@ import copy
 import dataclasses
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from types import CodeType
 from typing import Any
 
+from runtime.compile_worker import compile_here
 from runtime.contract.artifact import Artifact, PouCode, VarInfo
 from runtime.contract.values import array_shape
 from runtime.fault_location import SourceLocation, code_filename, locate
@@ -31,34 +33,36 @@ class CodeImage:
     """The loaded code of one configuration; instances are created from it."""
 
     def __init__(
-        self, artifact: Artifact, system: SystemView, printf: Callable[..., int] | None = None
+        self,
+        artifact: Artifact,
+        system: SystemView,
+        printf: Callable[..., int] | None = None,
+        compile_units: Callable[[list[tuple[str, str]]], list[CodeType]] = compile_here,
     ) -> None:
+        """`compile_units`: how the generated source becomes code (a reload prepared
+        while cycles run passes the compile worker's)."""
         self.artifact = artifact
         self.system = system
         self._namespace = namespace(system) if printf is None else namespace(system, printf)
         self._pous = {pou.name.upper(): pou for pou in (*artifact.types, *artifact.pous)}
-        self.units: dict[str, PouCode] = {}
         # Functions come last: their default arguments may read globals, which need the
         # classes of structs and function blocks first.
         classes = [*artifact.types, *(p for p in artifact.pous if p.kind != "FUNCTION")]
-        for unit in classes:
-            self._run(unit)
+        functions = [p for p in artifact.pous if p.kind == "FUNCTION"]
+        first = [*classes, *([artifact.globals] if artifact.globals is not None else [])]
+        self.units = {code_filename(unit): unit for unit in (*first, *functions)}
+        codes = iter(compile_units([(u.source, code_filename(u)) for u in (*first, *functions)]))
+        for _ in first:
+            exec(next(codes), self._namespace)
         self.globals: Any = None
         if artifact.globals is not None:
-            self._run(artifact.globals)
             self.globals = self._namespace[artifact.globals.class_name]()
             self._namespace["_G"] = self.globals
-        for unit in artifact.pous:
-            if unit.kind == "FUNCTION":
-                self._run(unit)
+        for _ in functions:
+            exec(next(codes), self._namespace)
         # only code that makes references (REF) reads `reference_roots`; naming them walks
         # every variable, 20 ms of a reload's pause with 100,000 of them
         self.makes_references = any("_ref(" in unit.source for unit in self.units.values())
-
-    def _run(self, unit: PouCode) -> None:
-        self.units[code_filename(unit)] = unit
-        code = compile(unit.source, code_filename(unit), "exec")
-        exec(code, self._namespace)
 
     def locate(self, exc: BaseException) -> SourceLocation | None:
         """The ST source line of a run-time error raised by generated code."""

@@ -3,10 +3,13 @@ every elementary variable bound to what it belongs to."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from types import CodeType
 from typing import Any
 
 from runtime.code_image import CodeImage, VariablePath
+from runtime.compile_worker import compile_here
 from runtime.contract.artifact import Artifact, VarInfo
 from runtime.contract.refusal import Refusal
 from runtime.intrinsics import SystemView
@@ -31,9 +34,13 @@ class Instances:
     outputs: list[BoundVariable]  # the output points (located %Q variables)
 
 
-def instantiate(artifact: Artifact, system: SystemView) -> Instances:
+def instantiate(
+    artifact: Artifact,
+    system: SystemView,
+    compile_units: Callable[[list[tuple[str, str]]], list[CodeType]] = compile_here,
+) -> Instances:
     """Fresh instances of everything: every variable at its initial value."""
-    image = CodeImage(artifact, system)
+    image = CodeImage(artifact, system, compile_units=compile_units)
     configs = sorted(artifact.programs, key=lambda p: (p.priority, p.program_id))
     # a program needs its own view of the globals when another program could change them
     # during its program cycle, or when its cycle spans several CPU cycles

@@ -8,6 +8,7 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
+from runtime.compile_worker import COMPILE_WORKER
 from runtime.configuration_store import ConfigurationStore, Staged
 from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import ProgramState, ReloadOutcome
@@ -57,7 +58,9 @@ class ReloadJob:
         """New instances, the plan, the switch-over list, and the new configuration written
         beside the stored one (off the cycle thread); never raises."""
         try:
-            self.instances = instantiate(self.artifact, self.system)
+            # compiled in the worker process: a compile holds the interpreter lock the
+            # cycle thread needs for as long as it runs
+            self.instances = instantiate(self.artifact, self.system, COMPILE_WORKER.compile)
             self.plan = plan_reload(
                 self.old_artifact,
                 self.artifact,
