@@ -23,6 +23,7 @@ import struct
 import subprocess
 import sys
 import threading
+from pathlib import Path
 from types import CodeType
 from typing import IO
 
@@ -66,6 +67,7 @@ class CompileWorker:
                 [sys.executable, "-m", "runtime.compile_worker"],
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
+                env=_child_environment(),
             )
         assert child.stdin is not None and child.stdout is not None
         _send(child.stdin, marshal.dumps(units))
@@ -86,6 +88,14 @@ class CompileWorker:
         except subprocess.TimeoutExpired:
             child.kill()
             child.wait()
+
+
+def _child_environment() -> dict[str, str]:
+    """This process's environment, with the folder this package is in first on the
+    child's path: it finds `runtime` wherever the runtime was started from."""
+    here = str(Path(__file__).resolve().parents[1])
+    path = os.environ.get("PYTHONPATH")
+    return {**os.environ, "PYTHONPATH": here if not path else f"{here}{os.pathsep}{path}"}
 
 
 def _send(pipe: IO[bytes], data: bytes) -> None:
