@@ -108,7 +108,9 @@ def load_and_start(project: Path, endpoint: str, backup_dir: Path, client: Resou
 
 
 def backups(folder: Path) -> list[Path]:
-    return sorted(folder.glob("*.zip"))
+    """Oldest first: by when written (the name has the CRC before the time, and two
+    archives of one test may share the second)."""
+    return sorted(folder.glob("*.zip"), key=lambda archive: archive.stat().st_mtime_ns)
 
 
 # ---- against a running resource
