@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from runtime.clock import RealClock
+from runtime.collector import COLLECTOR
 from runtime.configuration_store import ConfigurationStore
 from runtime.context import ContextInvalid, load_context
 from runtime.contract.artifact import ArtifactError, load_artifact
@@ -86,6 +87,9 @@ def power_up(resource: Resource, state_dir: Path) -> None:
         resource.events.record("state", "cold start: Autostart is cold", long_term=True)
     else:
         warm_start(resource, saved)
+    # the first full collection after the load made now, with no cycle running to wait
+    # for it, and the configuration frozen out of the later ones (runtime/collector.py)
+    COLLECTOR.between_cycles(running=False)
     if autostart != "off":
         resource.start()
 
