@@ -1,7 +1,8 @@
 """A resource of 100,000 variables (issue 16): how long loading it, reading all its values
 (the online test's `values`), a watch set of 20,000 of them, taking and saving its context,
-a warm start and a reload of one small POU take, beside the same for 10,000 variables
-measured in the same run. Each figure says whether it runs on the cycle thread (between
+a warm start and a reload of one small POU take (and how long its preparation, beside the
+cycles, holds the interpreter lock with the compile worker and without), beside the same
+for 10,000 variables measured in the same run. Each figure says whether it runs on the cycle thread (between
 two cycles: it delays the next one) or elsewhere.
 
 Run with `python -m tests.bench.bench_scale`; it prints figures and asserts nothing.
@@ -15,12 +16,16 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable
+from contextlib import AbstractContextManager
 from pathlib import Path
+from unittest.mock import patch
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
+from runtime import reload_switch
 from runtime.clock import VirtualClock
 from runtime.collector import COLLECTOR
+from runtime.compile_worker import COMPILE_WORKER, compile_here
 from runtime.context import encode_context, save_context
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.protocol import MAX_SET_VARIABLES, ValuesReply, encode_reply
@@ -101,6 +106,11 @@ def longest_wait_ms(work: Callable[[], object]) -> float:
     return longest[0] * 1000
 
 
+def compiled_in_this_process() -> AbstractContextManager[object]:
+    """A reload's code compiled as it was before the compile worker: in this process."""
+    return patch.object(COMPILE_WORKER, "compile", compile_here)
+
+
 def measure(variables: int) -> dict[str, float]:
     artifact, compile_s = compiled(variables)
     changed, _ = compiled(variables, step=2)
@@ -159,6 +169,13 @@ def measure(variables: int) -> dict[str, float]:
     warm()
     figures["warm start: restore (STOP)"] = warm.ms  # type: ignore[attr-defined]
     resource.start()
+
+    def prepare() -> None:  # what the runtime's worker thread does while cycles go on
+        reload_switch.begin_preview(resource, changed, {}).prepare()
+
+    figures["reload preparation: longest wait of another thread"] = longest_wait_ms(prepare)
+    with compiled_in_this_process():
+        figures["  the same, compiled in this process (before)"] = longest_wait_ms(prepare)
     outcome = reload(resource, changed, {})
     figures["reload of the small program: pause (cycle thread)"] = outcome.pause_us / 1000
     figures["context size (MB)"] = size / 1e6
