@@ -14,6 +14,7 @@ time (machines are shared and noisy).
 
 from __future__ import annotations
 
+import gc
 import statistics
 import sys
 import threading
@@ -29,6 +30,7 @@ from runtime import reload as reload_module
 from runtime import reload_switch
 from runtime.adoption import Adopted, Adoption
 from runtime.clock import RealClock
+from runtime.collector import COLLECTOR
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
 from runtime.contract.protocol import ProgramState, ReloadOutcome, ResourceState
@@ -112,6 +114,8 @@ def _running(artifact: Artifact) -> Resource:
     resource.start()
     for _ in range(WARMUP_CYCLES):
         resource.cycle()
+    gc.collect()
+    COLLECTOR.between_cycles()  # the configuration frozen, as in a runtime that has run
     return resource
 
 
