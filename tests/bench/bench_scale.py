@@ -2,8 +2,8 @@
 (the online test's `values`), a watch set of 20,000 of them, taking and saving its context,
 a warm start and a reload of one small POU take (and how long its preparation, beside the
 cycles, holds the interpreter lock with the compile worker and without), beside the same
-for 10,000 variables measured in the same run. Each figure says whether it runs on the cycle thread (between
-two cycles: it delays the next one) or elsewhere.
+for 10,000 variables measured in the same run. Each figure says whether it runs on the
+cycle thread (between two cycles: it delays the next one) or elsewhere.
 
 Run with `python -m tests.bench.bench_scale`; it prints figures and asserts nothing.
 """
