@@ -7,7 +7,7 @@ from __future__ import annotations
 import operator
 from collections.abc import Callable
 from copy import deepcopy
-from typing import Any
+from typing import Any, cast
 
 from runtime.instances import BoundVariable
 
@@ -25,12 +25,14 @@ def value_reader(
     groups: dict[tuple[int, tuple[Accessor, ...]], _Group] = {}
     for index, bound in enumerate(variables):
         attrs = bound.path.attrs
-        cut = max((n + 1 for n, a in enumerate(attrs) if isinstance(a, int)), default=0)
-        head, tail = attrs[:cut], attrs[cut:]
+        cut = len(attrs)  # after the last list index (a plain loop: most paths have none)
+        while cut and type(attrs[cut - 1]) is not int:
+            cut -= 1
+        head = attrs[:cut]
         key = (id(bound.program) if bound.program is not None else 0, head)
         group = groups.setdefault(key, (bound.program, head, [], []))
         group[2].append(index)
-        group[3].append(".".join(str(a) for a in tail))
+        group[3].append(".".join(cast(tuple[str, ...], attrs[cut:])))  # names only
     readers = [
         (owner, head, operator.attrgetter(*names) if names != [""] else None, len(indices) == 1)
         for owner, head, indices, names in groups.values()
