@@ -63,9 +63,11 @@ NS_PER_DAY = 86_400_000_000_000
 
 def wrap_code(code: str, t: ElementaryType, offset: int = 0) -> str:
     """Bring an integer expression, plus `offset`, into the range of its type (two's
-    complement; a time of day wraps around midnight). A signed wrap adds a constant
-    anyway: an offset costs nothing there (`x + 1` wraps as `(x + 32769 & 65535) - 32768`)."""
-    if offset and not (t.signed and t.is_integer and not t.is_any_literal):
+    complement; a time of day wraps around midnight). A signed wrap to 8 or 16 bits adds
+    a constant anyway: an offset costs nothing there (`x + 1` wraps as
+    `(x + 32769 & 65535) - 32768`); elsewhere it is added to the expression."""
+    masked = t.signed and t.is_integer and not t.is_any_literal and t.bits < 32
+    if offset and not masked:
         code, offset = f"(({code}) + {offset})", 0
     if t.name in ("TOD", "LTOD"):
         return f"(({code}) % {NS_PER_DAY})"
@@ -78,8 +80,6 @@ def wrap_code(code: str, t: ElementaryType, offset: int = 0) -> str:
         # slower to add and mask than testing a value that is in range almost always: a
         # DINT store 67 -> 34 ns, a LINT or TIME one 53 -> 35. Nested wraps may share the
         # name: an inner one is read before an outer one binds it
-        if offset:
-            code = f"({code}) + {offset}"
         low, high = (-half, half - 1) if t.signed else (0, mask)
         wrap = f"(__w + {half} & {mask}) - {half}" if t.signed else f"__w & {mask}"
         return f"(__w if {low} <= (__w := {code}) <= {high} else {wrap})"
