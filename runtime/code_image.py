@@ -50,16 +50,17 @@ class CodeImage:
         classes = [*artifact.types, *(p for p in artifact.pous if p.kind != "FUNCTION")]
         functions = [p for p in artifact.pous if p.kind == "FUNCTION"]
         first = [*classes, *([artifact.globals] if artifact.globals is not None else [])]
-        self.units = {code_filename(unit): unit for unit in (*first, *functions)}
-        codes = iter(compile_units([(u.source, code_filename(u)) for u in (*first, *functions)]))
-        for _ in first:
-            exec(next(codes), self._namespace)
+        units = [*first, *functions]
+        self.units = {code_filename(unit): unit for unit in units}
+        codes = compile_units([(unit.source, code_filename(unit)) for unit in units])
+        for code in codes[: len(first)]:
+            exec(code, self._namespace)
         self.globals: Any = None
         if artifact.globals is not None:
             self.globals = self._namespace[artifact.globals.class_name]()
             self._namespace["_G"] = self.globals
-        for _ in functions:
-            exec(next(codes), self._namespace)
+        for code in codes[len(first) :]:
+            exec(code, self._namespace)
         # only code that makes references (REF) reads `reference_roots`; naming them walks
         # every variable, 20 ms of a reload's pause with 100,000 of them
         self.makes_references = any("_ref(" in unit.source for unit in self.units.values())
