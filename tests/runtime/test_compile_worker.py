@@ -71,3 +71,31 @@ def test_a_reload_has_its_code_compiled_by_the_child() -> None:
     assert COMPILE_WORKER._child is not None  # started for it
     h.cycle()
     assert h.value("P.n") == 13  # the value carried, the new code running
+
+
+def test_a_reload_compiles_only_the_units_it_changed_and_keeps_the_running_code_of_the_rest(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    text = (
+        "FUNCTION_BLOCK Small\nVAR_INPUT x : DINT; END_VAR\nVAR_OUTPUT y : DINT; END_VAR\n"
+        "y := x * 2;\nEND_FUNCTION_BLOCK\n"
+        "PROGRAM P\nVAR n : DINT; s : Small; END_VAR\nn := n + 1; s(x := n);\nEND_PROGRAM\n"
+    )
+    h = harness(text, [{"name": "P"}])
+    h.cycle(3)
+    asked: list[str] = []
+
+    def compile_and_note(units: list[tuple[str, str]]) -> list[CodeType]:
+        asked.extend(filename for _, filename in units)
+        return compile_here(units)
+
+    monkeypatch.setattr(COMPILE_WORKER, "compile", compile_and_note)
+    running = h.resource.programs[0].instance
+    call_before = type(running).__call__.__code__
+    h.send(compiled(text.replace("x * 2", "x * 5"), [{"name": "P"}]))
+    assert h.cmd("reload")["ok"]
+    assert asked == ["<FUNCTION_BLOCK Small>"]  # P's generated source did not change
+    # the same code object (with CPython's warm-up in it), in a class of the new image
+    assert type(running).__call__.__code__ is call_before
+    h.cycle()
+    assert h.value("P.n") == 4 and h.value("P.s.y") == 20
