@@ -1,52 +1,97 @@
-"""Keeping the cycle collector's full collections short: the objects of the running
-configuration (instances, generated classes, their namespace) are taken out of its sight
-with `gc.freeze()`. With 10,000 variables a full collection walked them for 46 ms, on
-whatever thread happened to allocate, the cycle thread included.
+"""Keeping CPython's cycle collector off the cycles' path.
 
-The freeze waits for the first full collection after a configuration arrives (load,
-reload, cold start): the configuration it replaces holds reference cycles (its classes
-and their namespace), which only that collection frees. Frozen before, they would never
-be freed: a leak on every reload. Instances themselves are freed by their reference
-counts, frozen or not. In STOP (after a load) that collection is made at once: no cycle
-waits for it there, while a running one would meet it later on whatever thread allocated,
-a stall of up to 70 ms seen in the first seconds of watching 10,000 values."""
+A full collection walks every object in the collector's sight while holding the
+interpreter lock, on whichever thread happened to allocate, the cycle thread included.
+With 10,000 variables the runtime holds about 100,000 objects (its modules, Zenoh, the
+configuration): a walk of 12-26 ms; with 100,000 variables, 70 ms. So the runtime
+process, once up (`manage`), keeps everything frozen (`gc.freeze`: out of sight, still
+freed by its reference counts), and what a configuration brings is frozen as soon as it
+arrives (`arrived`: loaded, or prepared for a reload), a constant-time splice. Other
+processes that run a resource (tests, tools) leave the collector as it is.
+
+What freezing costs: a configuration replaced by a reload holds reference cycles (its
+generated classes and their namespace), and only a full collection over everything frees
+those once frozen, since CPython cannot unfreeze a part. Doing that after every reload
+stalled a running cycle for the whole walk (45-115 ms seen while the next reload
+prepared). So the replaced configurations' cycles wait, frozen, and are freed all at once
+(`reclaim`): at once whenever the resource is in STOP, and in RUN only after
+`RECLAIM_AFTER` arrivals (a reload brings two: prepared, then taken), which bounds what
+waits to that many sets of classes (a few kB per POU type), not to any data: instances
+are freed by their reference counts.
+
+While a reload prepares, the collector's own full collections are held back: they would
+walk the new configuration, growing on the worker thread, many times over."""
 
 from __future__ import annotations
 
 import gc
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 
-_OLDEST = 2
+RECLAIM_AFTER = 32  # arrivals whose reference cycles may wait, frozen, in RUN
+_NEVER = 1 << 30  # a threshold no count of collections reaches
 
 
-class CollectorFreeze:
-    """Process-wide, as the collector is; the cycle thread calls it."""
+class Collector:
+    """Process-wide, as the collector is; `arrived` and `held_back` may be used on a
+    reload's worker thread, the rest on the cycle thread."""
 
     def __init__(self) -> None:
-        self._waiting_since: int | None = None  # full collections when a change came
+        self.managed = False
+        self.arrivals = 0  # freezes of new configurations since the last reclaim
+        self._lock = threading.Lock()
+        self._holding = 0  # how many `held_back` blocks are running
+        self._threshold: tuple[int, int, int] | None = None
 
-    def configuration_changed(self) -> None:
-        """New objects came and old ones may be garbage: all of them back in sight."""
+    def manage(self) -> None:
+        """From now on, in this process: what start-up left collected, the rest frozen."""
+        self.managed = True
+        self.reclaim()
+
+    def release(self) -> None:
+        """Everything back in sight, the collector as CPython leaves it (tests)."""
+        self.managed = False
+        self.arrivals = 0
         gc.unfreeze()
-        self._waiting_since = _full_collections()
+
+    def arrived(self) -> None:
+        """A new configuration's objects out of sight now (before the switch-over of a
+        reload, whose collections would walk them); the one it replaces waits."""
+        if self.managed:
+            self.arrivals += 1
+            gc.freeze()
 
     def between_cycles(self, running: bool = True) -> None:
-        """Freeze once a full collection has run since the change, made here when no
-        cycle runs (cheap otherwise)."""
-        if self._waiting_since is None:
-            return
-        if not running:
-            gc.collect()
-        if _full_collections() > self._waiting_since:
-            gc.freeze()
-            self._waiting_since = None
+        """Free what replaced configurations left when no cycle waits for it (STOP), or,
+        running, once enough of them wait."""
+        if self.arrivals and (not running or self.arrivals >= RECLAIM_AFTER):
+            self.reclaim()
 
-    @property
-    def frozen(self) -> bool:
-        return self._waiting_since is None and gc.get_freeze_count() > 0
+    def reclaim(self) -> None:
+        """One full collection over everything: frees the replaced configurations'
+        reference cycles; then all is frozen again."""
+        gc.unfreeze()
+        gc.collect()
+        gc.freeze()
+        self.arrivals = 0
+
+    @contextmanager
+    def held_back(self) -> Iterator[None]:
+        """No full collection by the collector itself meanwhile (young ones go on)."""
+        with self._lock:
+            if not self._holding:
+                self._threshold = gc.get_threshold()
+                gc.set_threshold(self._threshold[0], self._threshold[1], _NEVER)
+            self._holding += 1
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._holding -= 1
+                if not self._holding and self._threshold is not None:
+                    gc.set_threshold(*self._threshold)
+                    self._threshold = None
 
 
-def _full_collections() -> int:
-    return int(gc.get_stats()[_OLDEST]["collections"])
-
-
-COLLECTOR = CollectorFreeze()
+COLLECTOR = Collector()

@@ -18,6 +18,7 @@ from runtime.contract import scram
 from runtime.contract.accounts import ANONYMOUS
 from runtime.contract.protocol import Request, decode_request, encode_refusal, encode_reply
 from runtime.contract.refusal import Refusal
+from runtime.disposal import DISPOSAL
 from runtime.online_parameters import set_parameter
 from runtime.recorder import Recordings
 from runtime.reload_switch import ReloadJob
@@ -253,5 +254,7 @@ def finish_reload(resource: Resource, job: ReloadJob) -> p.ReloadPlanReply | p.R
         if job.plan is None:
             assert job.failure is not None
             raise job.failure
-        return p.ReloadPlanReply(job.plan.info())
+        reply = p.ReloadPlanReply(job.plan.info())
+        DISPOSAL.dispose(job.let_go())  # freed between cycles, as after a reload
+        return reply
     return p.ReloadReply(reload_switch.finish(resource, job), resource.status())

@@ -47,6 +47,7 @@ from runtime.contract.protocol import (
 )
 from runtime.contract.refusal import Refusal
 from runtime.cycle_stats import CycleStats
+from runtime.disposal import DISPOSAL
 from runtime.link import ResourceLink
 from runtime.reload_switch import ReloadJob
 from runtime.resource import Resource
@@ -87,6 +88,13 @@ class CycleDriver:
         # the cycle thread must get the interpreter back promptly after its wait for the
         # next cycle, not up to 5 ms (Python's default) later while another thread has it
         sys.setswitchinterval(SWITCH_INTERVAL_S)
+        DISPOSAL.deferred = True  # what a reload replaces is freed in slices (_after_cycle)
+        try:
+            self._cycles(stop)
+        finally:
+            DISPOSAL.let_go_at_once()
+
+    def _cycles(self, stop: threading.Event) -> None:
         planned = self.clock.now_ns()
         while not stop.is_set():
             start = self.clock.now_ns()
@@ -128,6 +136,7 @@ class CycleDriver:
             self._publish_values()
         self._publish_status()
         self._finish_reload()  # between two cycles
+        DISPOSAL.step()
         self._save_if_due()
 
     @staticmethod

@@ -87,9 +87,6 @@ def power_up(resource: Resource, state_dir: Path) -> None:
         resource.events.record("state", "cold start: Autostart is cold", long_term=True)
     else:
         warm_start(resource, saved)
-    # the first full collection after the load made now, with no cycle running to wait
-    # for it, and the configuration frozen out of the later ones (runtime/collector.py)
-    COLLECTOR.between_cycles(running=False)
     if autostart != "off":
         resource.start()
 
@@ -141,6 +138,9 @@ def run(args: argparse.Namespace) -> int:
     driver = CycleDriver(resource, clock, link, save, args.context_period_ms * 1_000_000)
     log.info("resource %s: %s, Zenoh %s", args.resource, resource.state.value, args.zenoh)
     log.info("runtime priority: %s", priority)
+    # all that start-up made (the configuration, Zenoh, the I/O) out of the collector's
+    # sight before the first cycle (runtime/collector.py)
+    COLLECTOR.manage()
     try:
         driver.run(stop.event)
     finally:

@@ -52,7 +52,7 @@ class Variables:
         )
         self.bound, self._by_name = instances.bound, instances.by_name
         name_reference_roots(self.code, self.programs)
-        COLLECTOR.configuration_changed()  # frozen out of the collector's sight soon
+        COLLECTOR.arrived()  # out of the collector's sight
 
     def instances(self) -> Instances:
         """What is loaded now (a reload plans against it; the program list is a copy, as a

@@ -1,6 +1,7 @@
 """Reload benchmark, for a program with 10,000 variables: the time to compute the reload
 plan, and for each kind of change the switch-over pause inside the cycle, the longest
-cycle during a reload versus the normal cycle (a ratio), whether the budget check accepts
+cycle during a reload versus the normal cycle (a ratio; with cycles back to back, and at a
+10 ms fixed target cycle), whether the budget check accepts
 the reload at a 10 ms fixed target cycle with the default parameters, and the runtime's
 estimate next to the measured pause. The kinds of change: one small POU's code; one small
 POU gaining a variable (its instance and the program holding it are copied, the rest
@@ -14,7 +15,6 @@ time (machines are shared and noisy).
 
 from __future__ import annotations
 
-import gc
 import statistics
 import sys
 import threading
@@ -36,6 +36,7 @@ from runtime.contract.parameters import RESOURCE_BY_NAME
 from runtime.contract.protocol import ProgramState, ReloadOutcome, ResourceState
 from runtime.contract.refusal import Refusal
 from runtime.cycle_driver import SWITCH_INTERVAL_S
+from runtime.disposal import DISPOSAL, STEP_NS
 from runtime.instances import instantiate
 from runtime.intrinsics import SystemView
 from runtime.reload_plan import (
@@ -58,6 +59,8 @@ WARMUP_CYCLES = 20
 FIXED_TARGET_MS = 10  # the jitter benchmark's target cycle, for the budget check
 # the refusals a higher watchdog (or target cycle time) for the reload can overcome
 BUDGET_CODES = ("budget", "interrupted")
+CLOCK = RealClock()
+DISPOSAL_STEP_US = STEP_NS / 1000
 
 # a small function block inside the 10,000-variable program
 SMALL = """FUNCTION_BLOCK Small
@@ -114,8 +117,8 @@ def _running(artifact: Artifact) -> Resource:
     resource.start()
     for _ in range(WARMUP_CYCLES):
         resource.cycle()
-    gc.collect()
-    COLLECTOR.between_cycles()  # the configuration frozen, as in a runtime that has run
+    COLLECTOR.manage()  # as the runtime process does before its first cycle
+    DISPOSAL.deferred = True  # as the cycle driver does while it runs
     return resource
 
 
@@ -177,12 +180,22 @@ class Run:
     estimates_ns: list[int] = field(default_factory=list)  # the runtime's plan estimate
     copied: list[int] = field(default_factory=list)  # values copied (the rest adopted)
     preparing: set[int] = field(default_factory=set)  # cycles while a worker prepared
+    disposing: set[int] = field(default_factory=set)  # cycles followed by a disposal step
+    target_ns: int = 0  # a fixed target cycle: each cycle waits for its planned start
+    planned_ns: int = 0
 
     def cycle(self, resource: Resource) -> None:
-        started = time.perf_counter_ns()
+        if self.target_ns:  # what the previous period leaves, slept (after housekeeping)
+            CLOCK.sleep_until(self.planned_ns)
+        started = CLOCK.now_ns()
+        if self.target_ns:  # as the cycle driver plans, never racing to catch up
+            self.planned_ns = max(self.planned_ns + self.target_ns, started)
         self.starts_ns.append(started)
         resource.cycle()
-        self.work_ns.append(time.perf_counter_ns() - started)
+        self.work_ns.append(CLOCK.now_ns() - started)
+        if DISPOSAL.pending:
+            self.disposing.add(len(self.starts_ns) - 1)
+            DISPOSAL.step()  # as the cycle driver does after a cycle
 
 
 class Reloader:
@@ -229,20 +242,21 @@ class Reloader:
             run.cycle(self.resource)
         worker.join()
         run.cycle(self.resource)  # the cycle after which the driver finds the job prepared
-        outcome = reload_switch.finish(self.resource, job)
         assert job.plan is not None and job.prepared is not None
         run.estimates_ns.append(job.plan.estimate_ns)
         run.copied.append(job.prepared.copied)
-        return outcome
+        return reload_switch.finish(self.resource, job)
 
 
-def drive(old: Artifact, new: Artifact, reloads: int = RELOADS) -> tuple[Run, Reloader]:
+def drive(
+    old: Artifact, new: Artifact, reloads: int = RELOADS, target_ms: int = 0
+) -> tuple[Run, Reloader]:
     """Cycles back to back on a RealClock, as the driver runs a resource without a target
-    cycle time; after every CYCLES_BETWEEN cycles a reload, between two cycles as the driver
-    does it in its housekeeping."""
+    cycle time (or every `target_ms`, as in the 'fixed' mode); after every CYCLES_BETWEEN
+    cycles a reload, between two cycles as the driver does it in its housekeeping."""
     resource = _running(old)
     reloader = Reloader(resource)
-    run = Run()
+    run = Run(target_ns=target_ms * 1_000_000)
     switch_interval = sys.getswitchinterval()
     sys.setswitchinterval(SWITCH_INTERVAL_S)  # as the cycle driver runs
     try:
@@ -290,9 +304,12 @@ def report(name: str, run: Run, reloader: Reloader, baseline: Run) -> None:
     periods = [b - a for a, b in zip(run.starts_ns, run.starts_ns[1:], strict=False)]
     with_reload = [periods[i] for i in sorted(run.reload_after)]
     after = {i + 1 for i in run.reload_after}  # the first cycle on the new instances
-    special = run.reload_after.keys() | after | run.preparing
+    special = run.reload_after.keys() | after | run.preparing | run.disposing
     normal = [p for i, p in enumerate(periods) if i not in special]
     preparing = [periods[i] for i in sorted(run.preparing) if i < len(periods)]
+    disposing = [
+        periods[i] for i in sorted(run.disposing - after - run.preparing) if i < len(periods)
+    ]
     normal_period = statistics.median(normal)
     copied = f"{min(run.copied):,}-{max(run.copied):,}"
     print(f"  {name} ({max(run.carried):,} values carried, {copied} of them copied):")
@@ -314,6 +331,12 @@ def report(name: str, run: Run, reloader: Reloader, baseline: Run) -> None:
         f"    periods while preparing (a worker thread, {len(preparing)} of them): median "
         f"{statistics.median(preparing) / 1e3:8.0f} us   max {max(preparing) / 1e3:8.0f} us"
     )
+    if disposing:
+        print(
+            f"    periods while the replaced configuration is freed ({len(disposing)} of them, "
+            f"{DISPOSAL_STEP_US:.0f} us steps): median "
+            f"{statistics.median(disposing) / 1e3:8.0f} us   max {max(disposing) / 1e3:8.0f} us"
+        )
     ratios = [e / 1e3 / p for e, p in zip(run.estimates_ns, run.pauses_us, strict=True)]
     print(
         f"    estimate / measured pause:  min {min(ratios):.2f}   max {max(ratios):.2f}   "
@@ -336,7 +359,31 @@ def bench_switch_over(artifacts: dict[str, Artifact]) -> None:
         report(name, run, reloader, baseline)
 
 
-# ---- 3. the budget check with a fixed target cycle time ---------------------------------------
+# ---- 3. the periods at a fixed target cycle time ---------------------------------------------
+
+
+def bench_fixed_periods(texts: dict[str, str]) -> None:
+    """With the 'fixed' mode the switch-over and the disposal steps happen in the time the
+    cycle leaves; what a user sees is the period of the cycle containing the reload."""
+    config = ResourceConfig(name="R", target_cycle_ms=FIXED_TARGET_MS, target_cycle_mode="fixed")
+    before = _compile(texts["before"], config)
+    print(
+        f"3. periods at a {FIXED_TARGET_MS} ms fixed target cycle ({RELOADS} reloads per kind "
+        "of change, the worker preparing while the cycles go on):"
+    )
+    for name in CHANGES:
+        run, _ = drive(before, _compile(texts[name], config), target_ms=FIXED_TARGET_MS)
+        periods = [b - a for a, b in zip(run.starts_ns, run.starts_ns[1:], strict=False)]
+        median = statistics.median(periods)
+        with_reload = max(periods[i] for i in run.reload_after)
+        print(
+            f"  {name + ':':<32} longest period with a reload {with_reload / 1e6:6.2f} ms "
+            f"(ratio {with_reload / median:.2f} to the median {median / 1e6:.2f} ms); "
+            f"longest of all {max(periods) / 1e6:6.2f} ms"
+        )
+
+
+# ---- 4. the budget check with a fixed target cycle time ---------------------------------------
 
 
 def bench_budget(texts: dict[str, str]) -> None:
@@ -346,7 +393,7 @@ def bench_budget(texts: dict[str, str]) -> None:
     before = _compile(texts["before"], config)
     resource = _running(before)
     print(
-        f"3. budget check, target cycle {config.target_cycle_ms} ms '{config.target_cycle_mode}', "
+        f"4. budget check, target cycle {config.target_cycle_ms} ms '{config.target_cycle_mode}', "
         f"watchdog {config.watchdog_ms} ms, default parameters (last cycle "
         f"{resource.stats.last_ns / 1e6:.2f} ms):"
     )
@@ -383,6 +430,7 @@ def main() -> None:
     )
     _section(lambda: bench_plan(artifacts["before"], artifacts["every instance migrated"]))
     _section(lambda: bench_switch_over(artifacts))
+    _section(lambda: bench_fixed_periods(texts))
     _section(lambda: bench_budget(texts))
 
 

@@ -10,7 +10,6 @@ Run with `python -m tests.bench.bench_scale`; it prints figures and asserts noth
 
 from __future__ import annotations
 
-import gc
 import sys
 import tempfile
 import threading
@@ -118,11 +117,9 @@ def measure(variables: int) -> dict[str, float]:
     resource = Resource("R", VirtualClock())
     figures["load: instances (STOP)"] = best_ms(lambda: resource.load(artifact))
     resource.start()
-    for _ in range(20):  # past Python's warm-up of new code, and a full collection
+    for _ in range(20):  # past Python's warm-up of new code
         resource.cycle()
-        COLLECTOR.between_cycles()
-    gc.collect()
-    COLLECTOR.between_cycles()  # the configuration frozen, as in a runtime that has run
+    COLLECTOR.manage()  # as the runtime process does before its first cycle
     figures["CPU cycle of the small program"] = best_ms(resource.cycle)
     figures["values: every variable, read (cycle thread)"] = best_ms(resource.variables.read_values)
     values = resource.variables.read_values()
@@ -173,8 +170,7 @@ def measure(variables: int) -> dict[str, float]:
     def prepare() -> None:  # what the runtime's worker thread does while cycles go on
         reload_switch.begin_preview(resource, changed, {}).prepare()
 
-    gc.collect()
-    COLLECTOR.between_cycles()  # frozen again: the warm start loaded another configuration
+    COLLECTOR.between_cycles(running=False)  # the warm start loaded another configuration
     waits = [longest_wait_ms(prepare) for _ in range(ROUNDS)]
     figures["reload preparation: longest wait of another thread"] = min(waits)
     with compiled_in_this_process():

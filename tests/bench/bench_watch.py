@@ -353,7 +353,7 @@ def bench_watch_set(artifact: Artifact, count: int, seconds: float) -> None:
     log = PublicationLog()
     resource = TimedResource(RESOURCE, clock, log)
     resource.load(artifact)
-    COLLECTOR.between_cycles(running=False)  # as the runtime's cycle driver does in STOP
+    COLLECTOR.manage()  # as the runtime process does before its first cycle
     resource.start()
     selection = select([v.path for v in resource.variables.infos()], count)
     print(

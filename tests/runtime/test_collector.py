@@ -1,14 +1,20 @@
-"""The running configuration is kept out of the cycle collector's full collections
-(runtime/collector.py), and a configuration replaced by a load or reload is still freed,
-its reference cycles (classes and their namespace) included."""
+"""The collector in the runtime process (runtime/collector.py): a configuration is out of
+the collector's sight as soon as it arrives, loaded or prepared for a reload; what a
+replaced one leaves (its classes' reference cycles) is freed at once in STOP, and in RUN
+once enough arrivals wait; no full collection of the collector's own while a reload
+prepares."""
 
 from __future__ import annotations
 
 import gc
 import weakref
+from collections.abc import Iterator
+
+import pytest
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
+from runtime import collector, reload_switch
 from runtime.clock import VirtualClock
 from runtime.collector import COLLECTOR
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
@@ -27,41 +33,77 @@ def compiled(body: str) -> Artifact:
     return result.artifact
 
 
-def in_a_generation(target: object) -> bool:
+@pytest.fixture
+def managed() -> Iterator[None]:
+    """This test process as the runtime process runs: everything frozen, then as it was."""
+    COLLECTOR.manage()
+    try:
+        yield
+    finally:
+        COLLECTOR.release()
+
+
+def in_sight(target: object) -> bool:
     return any(target is o for g in range(3) for o in gc.get_objects(generation=g))
 
 
-def test_the_configuration_is_frozen_after_a_full_collection_and_the_old_one_freed() -> None:
+def test_a_loaded_configuration_is_out_of_sight_and_in_stop_the_old_one_is_freed_at_once(
+    managed: None,
+) -> None:
     resource = Resource("R", VirtualClock())
     resource.load(compiled("n := n + 1;"))
-    gc.collect()  # the first full collection after the load
-    COLLECTOR.between_cycles()
-    program = resource.programs[0].instance
-    assert COLLECTOR.frozen and not in_a_generation(program)
-
-    old_class = weakref.ref(type(program))
-    del program
-    resource.load(compiled("n := n + 2;"))  # another configuration in STOP
-    assert not COLLECTOR.frozen  # waits for a full collection to free the old one first
-    COLLECTOR.between_cycles()
-    assert not COLLECTOR.frozen
-    gc.collect()
-    COLLECTOR.between_cycles()
-    assert old_class() is None  # the replaced configuration's classes are gone
-    assert COLLECTOR.frozen and not in_a_generation(resource.programs[0].instance)
-    resource.start()
-    resource.cycle()
-    assert resource.variables.value("Main.n") == 2
-
-
-def test_in_stop_the_collection_is_made_at_once_and_frees_the_old_configuration() -> None:
-    resource = Resource("R", VirtualClock())
-    resource.load(compiled("n := n + 1;"))
+    assert not in_sight(resource.programs[0].instance)
     old_class = weakref.ref(type(resource.programs[0].instance))
-    resource.load(compiled("n := n + 3;"))
+    resource.load(compiled("n := n + 3;"))  # another configuration, in STOP
     COLLECTOR.between_cycles(running=False)  # what the cycle driver does in STOP
-    assert old_class() is None
-    assert COLLECTOR.frozen and not in_a_generation(resource.programs[0].instance)
+    assert old_class() is None  # its classes' reference cycles freed
+    assert COLLECTOR.arrivals == 0 and not in_sight(resource.programs[0].instance)
     resource.start()
     resource.cycle()
     assert resource.variables.value("Main.n") == 3
+
+
+def test_running_a_reload_s_instances_are_frozen_before_the_switch_over_and_the_old_ones_wait(
+    managed: None, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(collector, "RECLAIM_AFTER", 4)
+    resource = Resource("R", VirtualClock())
+    resource.load(compiled("n := n + 1;"))
+    resource.start()
+    resource.cycle()
+    COLLECTOR.between_cycles(running=False)  # the load's arrival reclaimed, as in STOP
+    old_class = weakref.ref(type(resource.programs[0].instance))
+
+    job = reload_switch.begin(resource, compiled("n := n + 2; t(IN := TRUE);"), {})
+    job.prepare()
+    assert job.instances is not None and not in_sight(job.instances.programs[0].instance)
+    reload_switch.finish(resource, job)
+    del job
+    assert COLLECTOR.arrivals == 2  # prepared, then taken
+    COLLECTOR.between_cycles(running=True)
+    gc.collect()  # a full collection of the collector's own does not see them either
+    assert old_class() is not None  # the replaced classes wait, frozen, while running
+
+    reload_switch.reload(resource, compiled("n := n + 5;"), {})  # two arrivals more
+    COLLECTOR.between_cycles(running=True)  # RECLAIM_AFTER reached: all freed
+    assert old_class() is None and COLLECTOR.arrivals == 0
+    resource.cycle()
+    assert resource.variables.value("Main.n") == 1 + 5  # carried over both reloads
+
+
+def test_the_collector_holds_back_its_full_collections_while_a_reload_prepares() -> None:
+    before = gc.get_threshold()
+    with COLLECTOR.held_back():
+        with COLLECTOR.held_back():  # two reloads' workers at once: the last restores
+            assert gc.get_threshold()[:2] == before[:2]
+            assert gc.get_threshold()[2] > 1_000_000
+        assert gc.get_threshold()[2] > 1_000_000
+    assert gc.get_threshold() == before
+
+
+def test_outside_the_runtime_process_the_collector_is_left_alone() -> None:
+    frozen = gc.get_freeze_count()
+    resource = Resource("R", VirtualClock())
+    resource.load(compiled("n := n + 1;"))
+    assert gc.get_freeze_count() == frozen and COLLECTOR.arrivals == 0
+    assert in_sight(resource.programs[0].instance)
