@@ -17,17 +17,22 @@ class CycleStats:
     min_ns: int = 0
     max_ns: int = 0
     total_ns: int = 0
+    mean_ns: int = 0  # kept with the total: read by every cycle (CYCLE_TIME_MEAN)
     overruns: int = 0  # periods longer than the target cycle time and its tolerance
     jitter_max_ns: int = 0  # largest deviation of a period from the target cycle time
     last_period_ns: int = 0  # start to start
     watch_deferred: int = 0  # watch sets that waited a cycle for the communication slice
 
     def record(self, duration_ns: int) -> None:
+        # every CPU cycle: comparisons, not min() and max() calls (a fifth of its cost)
         self.count += 1
         self.last_ns = duration_ns
-        self.min_ns = duration_ns if self.count == 1 else min(self.min_ns, duration_ns)
-        self.max_ns = max(self.max_ns, duration_ns)
+        if duration_ns < self.min_ns or self.count == 1:
+            self.min_ns = duration_ns
+        if duration_ns > self.max_ns:
+            self.max_ns = duration_ns
         self.total_ns += duration_ns
+        self.mean_ns = self.total_ns // self.count
 
     def record_period(self, period_ns: int, target_ns: int) -> None:
         """The time from one cycle's start to the next's. Its deviation from the target is
@@ -38,10 +43,6 @@ class CycleStats:
             self.jitter_max_ns = max(self.jitter_max_ns, abs(period_ns - target_ns))
             if period_ns > target_ns + max(MIN_TOLERANCE_NS, target_ns // 4):
                 self.overruns += 1
-
-    @property
-    def mean_ns(self) -> int:
-        return self.total_ns // self.count if self.count else 0
 
     def info(self) -> CycleStatistics:
         return CycleStatistics(
