@@ -79,6 +79,7 @@ class CycleDriver:
         self._last_status: Status | None = None
         self._last_status_ns = 0
         self._reload: tuple[zenoh.Query, ReloadJob, threading.Thread] | None = None
+        self._unplanned: set[str] = set()  # watch sets not sent: their plan was not made
         # reads files for the commands that need them (LATER_HANDLERS), off the cycle
         self._files = ThreadPoolExecutor(1, thread_name_prefix="padt-files")
         # events before the driver started (power-up: warm or cold start) go out too
@@ -134,6 +135,8 @@ class CycleDriver:
         COLLECTOR.between_cycles(self.resource.running())
         if cycled:
             self._publish_values()
+        elif self._unplanned:  # in STOP: what a command left waiting for its reading plan
+            self._publish_values(at_once=True, only=self._unplanned)
         self._publish_status()
         self._finish_reload()  # between two cycles
         DISPOSAL.step()
@@ -242,11 +245,13 @@ class CycleDriver:
         del query
         self._publish_after_command()
 
-    def _publish_values(self, at_once: bool = False) -> None:
+    def _publish_values(self, at_once: bool = False, only: set[str] | None = None) -> None:
         """The watch sets whose period has passed (all of them after a command, which may
-        have stepped, stopped or written), read within the communication time slice: the
-        sets that do not fit wait for the next cycle, and are counted. Sets whose session
-        ended, or whose client holds no liveliness token for them, are dropped first."""
+        have stepped, stopped or written; `only` those named), read within the
+        communication time slice: the sets that do not fit wait for the next cycle, and
+        are counted. A set whose reading plan is still being made (on the files thread)
+        waits for it. Sets whose session ended, or whose client holds no liveliness token
+        for them, are dropped first."""
         resource, now = self.resource, self.clock.now_ns()
         watches, access, watchers = resource.online.watches, resource.access, self.link.watchers
         watches.drop_where(
@@ -259,10 +264,16 @@ class CycleDriver:
         bad = resource.field_io.bad if resource.field_io is not None else frozenset()
         budget_end = now + resource.params.com_slice_ms * 1_000_000
         due = watches.due(now, all_of_them=at_once)
+        if only is not None:
+            due = [s for s in due if s.watch_id in only]
+        self._unplanned = set()
         for number, watch_set in enumerate(due):
             if number > 0 and self.clock.now_ns() >= budget_end:
                 resource.stats.watch_deferred += len(due) - number
                 return
+            if not resource.online.planned(watch_set, self._files.submit):
+                self._unplanned.add(watch_set.watch_id)  # sent once its plan is made
+                continue
             snapshot = resource.online.snapshot(
                 watch_set, resource.cycle_count, running, forces, bad
             )

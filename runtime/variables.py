@@ -50,7 +50,11 @@ class Variables:
             instances.programs,
             instances.globals,
         )
-        self.bound, self._by_name = instances.bound, instances.by_name
+        # `bound` last: a reading plan made on another thread (online_values.py) takes it
+        # first, and counts as current only while it is the same, so the lookups it made
+        # after it cannot be those of the configuration before
+        self._by_name = instances.by_name
+        self.bound = instances.bound
         name_reference_roots(self.code, self.programs)
         COLLECTOR.arrived()  # out of the collector's sight
 
