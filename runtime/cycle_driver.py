@@ -51,6 +51,7 @@ from runtime.disposal import DISPOSAL
 from runtime.link import ResourceLink
 from runtime.reload_switch import ReloadJob
 from runtime.resource import Resource
+from runtime.runtime_priority import CycleScheduling
 
 log = logging.getLogger(__name__)
 
@@ -69,8 +70,10 @@ class CycleDriver:
         link: ResourceLink,
         save_context: Callable[[], None] | None = None,
         context_period_ns: int = 1_000_000_000,
+        cycle_priority: int = 0,
     ) -> None:
         self.resource = resource
+        self._scheduling = CycleScheduling(cycle_priority)
         self.clock = clock
         self.link = link
         self._save_context = save_context
@@ -89,6 +92,8 @@ class CycleDriver:
         # the cycle thread must get the interpreter back promptly after its wait for the
         # next cycle, not up to 5 ms (Python's default) later while another thread has it
         sys.setswitchinterval(SWITCH_INTERVAL_S)
+        if self._scheduling.priority:
+            log.info("cycle thread: %s", self._scheduling.begin())
         DISPOSAL.deferred = True  # what a reload replaces is freed in slices (_after_cycle)
         try:
             self._cycles(stop)
@@ -104,7 +109,11 @@ class CycleDriver:
             try:
                 if field_io is not None:
                     field_io.before_cycle()
-                self.resource.cycle()
+                self._scheduling.real_time()
+                try:
+                    self.resource.cycle()
+                finally:
+                    self._scheduling.ordinary()
                 if field_io is not None:
                     field_io.after_cycle()
             except Exception as exc:  # a defect of the runtime itself, never of a program
@@ -170,8 +179,12 @@ class CycleDriver:
         while not stop.is_set():
             remaining = deadline_ns - self.clock.now_ns()
             try:
-                if remaining > 0 and wait:
-                    query = self.link.inbox.get(timeout=min(remaining / 1e9, 0.2))
+                if remaining > 0 and wait:  # woken by a command, or for the next cycle
+                    self._scheduling.real_time()
+                    try:
+                        query = self.link.inbox.get(timeout=min(remaining / 1e9, 0.2))
+                    finally:
+                        self._scheduling.ordinary()
                 else:
                     query = self.link.inbox.get_nowait()
             except queue.Empty:

@@ -27,7 +27,13 @@ from runtime.event_log import EventLog
 from runtime.identity import Identity
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
-from runtime.runtime_priority import DEFAULT_NICE, NICE_RANGE, raise_priority
+from runtime.runtime_priority import (
+    CYCLE_PRIORITY_RANGE,
+    DEFAULT_CYCLE_PRIORITY,
+    DEFAULT_NICE,
+    NICE_RANGE,
+    raise_priority,
+)
 
 log = logging.getLogger("padt.runtime")
 
@@ -56,6 +62,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help=f"priority of the runtime as a nice value, -20 (highest) to 19 (default "
         f"{DEFAULT_NICE}; below 0 needs CAP_SYS_NICE, else it runs at normal priority)",
+    )
+    parser.add_argument(
+        "--rt-priority",
+        type=int,
+        default=DEFAULT_CYCLE_PRIORITY,
+        choices=CYCLE_PRIORITY_RANGE,
+        metavar="N",
+        help=f"real-time priority (SCHED_FIFO) of the cycle thread, 1 to 99 (default "
+        f"{DEFAULT_CYCLE_PRIORITY}; needs CAP_SYS_NICE, else it keeps its nice value; 0: off)",
     )
     parser.add_argument(
         "--modbus-port",
@@ -135,7 +150,9 @@ def run(args: argparse.Namespace) -> int:
 
     recordings = Recordings(recordings_path(args.state_dir))
     resource.recordings = recordings
-    driver = CycleDriver(resource, clock, link, save, args.context_period_ms * 1_000_000)
+    driver = CycleDriver(
+        resource, clock, link, save, args.context_period_ms * 1_000_000, args.rt_priority
+    )
     log.info("resource %s: %s, Zenoh %s", args.resource, resource.state.value, args.zenoh)
     log.info("runtime priority: %s", priority)
     # all that start-up made (the configuration, Zenoh, the I/O) out of the collector's

@@ -61,7 +61,7 @@ from runtime.force_table import ForceTable
 from runtime.link import ResourceLink
 from runtime.online_values import OnlineValues
 from runtime.resource import Resource
-from runtime.runtime_priority import DEFAULT_NICE, raise_priority
+from runtime.runtime_priority import DEFAULT_CYCLE_PRIORITY, DEFAULT_NICE, raise_priority
 from runtime.variables import Variables
 from runtime.watch_sets import WatchSet, WatchSnapshot
 from tests.bench.bench_runtime import (
@@ -79,7 +79,9 @@ REPO = Path(__file__).resolve().parents[2]
 RESOURCE = "R"  # the name bench_runtime's configuration gives the resource
 DEFAULT_SECONDS = 20.0
 PERIOD_MS = 100  # 10 Hz
-SETS = (10_000, 100)  # the issue's watch set, then a small one for comparison
+# the issue's watch set, with the cycle thread as `padt runtime` runs it (real-time) and,
+# as the baseline, at the runtime's nice value alone; then a small set for comparison
+SETS = ((10_000, DEFAULT_CYCLE_PRIORITY), (10_000, 0), (100, DEFAULT_CYCLE_PRIORITY))
 SETTLE_S = 2.0  # after the window, for the last messages to arrive
 START_TIMEOUT_S = 60.0  # client start-up (imports, connecting) and first publications
 DUMPS_ROUNDS = 10
@@ -193,7 +195,9 @@ def select(paths: Sequence[str], count: int) -> list[str]:
 
 
 @contextmanager
-def serving(resource: TimedResource, clock: Clock, log: PublicationLog) -> Iterator[str]:
+def serving(
+    resource: TimedResource, clock: Clock, log: PublicationLog, cycle_priority: int
+) -> Iterator[str]:
     """A Zenoh router on loopback, the runtime's session and link, and the real cycle
     driver on its own thread; yields the endpoint for the client."""
     endpoint = f"tcp/127.0.0.1:{_free_port()}"
@@ -204,7 +208,7 @@ def serving(resource: TimedResource, clock: Clock, log: PublicationLog) -> Itera
             link = TimedLink(session, resource, log)
             try:
                 stop = threading.Event()
-                driver = CycleDriver(resource, clock, link)
+                driver = CycleDriver(resource, clock, link, cycle_priority=cycle_priority)
                 thread = threading.Thread(target=driver.run, args=(stop,), name="padt-cycle")
                 thread.start()
                 try:
@@ -348,7 +352,7 @@ def _wait_for_publications(
         time.sleep(0.01)
 
 
-def bench_watch_set(artifact: Artifact, count: int, seconds: float) -> None:
+def bench_watch_set(artifact: Artifact, count: int, seconds: float, cycle_priority: int) -> None:
     clock = RealClock()
     log = PublicationLog()
     resource = TimedResource(RESOURCE, clock, log)
@@ -358,9 +362,10 @@ def bench_watch_set(artifact: Artifact, count: int, seconds: float) -> None:
     selection = select([v.path for v in resource.variables.infos()], count)
     print(
         f"watch set of {len(selection):,} variables every {PERIOD_MS} ms, {seconds:g} s; "
-        f"target cycle {TARGET_MS} ms 'fixed', real CycleDriver, client in a separate process:"
+        f"target cycle {TARGET_MS} ms 'fixed', real CycleDriver, client in a separate process; "
+        f"cycle thread: {_scheduling(cycle_priority)}:"
     )
-    with serving(resource, clock, log) as endpoint:
+    with serving(resource, clock, log, cycle_priority) as endpoint:
         client = ClientProcess(endpoint, count, PERIOD_MS)
         try:
             hello = client.receive(START_TIMEOUT_S)
@@ -532,6 +537,12 @@ def watch_seconds(seconds: float | None = None) -> float:
     return float(os.environ.get(SECONDS_ENV, DEFAULT_SECONDS))
 
 
+def _scheduling(cycle_priority: int) -> str:
+    if not cycle_priority:
+        return "the runtime's nice value (baseline)"
+    return f"SCHED_FIFO {cycle_priority} (as `padt runtime` runs it, where allowed)"
+
+
 def main(seconds: float | None = None) -> None:
     length = watch_seconds(seconds)
     # the runtime's priority, as `padt runtime` takes it before its threads start
@@ -543,9 +554,9 @@ def main(seconds: float | None = None) -> None:
         f"compiled in {time.perf_counter() - started:.1f} s; the runtime at {priority}, "
         "the client at normal priority"
     )
-    for count in SETS:
+    for count, cycle_priority in SETS:
         try:
-            bench_watch_set(artifact, count, length)
+            bench_watch_set(artifact, count, length, cycle_priority)
         except Exception:  # report and go on: the other set still says something
             print(f"  FAILED for {count:,} variables:")
             traceback.print_exc(file=sys.stdout)

@@ -1,5 +1,5 @@
 """The runtime asks for a higher priority than the PADT and browsers beside it, for every
-thread it has."""
+thread it has, and for its cycle thread the real-time class."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import os
 import threading
 from pathlib import Path
 
-from runtime.runtime_priority import DEFAULT_NICE, raise_priority
+from runtime.contract.protocol import GetValues
+from runtime.runtime_priority import DEFAULT_NICE, CycleScheduling, raise_priority
 from tests.conftest import free_port
 from tests.support.runtime_process import running_resource, write_demo_artifact
 
@@ -38,3 +39,49 @@ def test_every_thread_of_a_runtime_has_the_higher_priority_when_it_may(tmp_path:
         nice = {os.getpriority(os.PRIO_PROCESS, int(task.name)) for task in threads.iterdir()}
     may = os.geteuid() == 0  # CI runs as root; elsewhere CAP_SYS_NICE is rare
     assert nice == {DEFAULT_NICE if may else 0}  # the cycle, Zenoh's threads, the savers
+
+
+def test_the_real_time_class_is_the_calling_threads_own_while_it_asks_for_it() -> None:
+    said: list[str] = []
+    policies: list[int] = []
+
+    def cycle_thread() -> None:
+        scheduling = CycleScheduling(3)
+        said.append(scheduling.begin())
+        policies.append(os.sched_getscheduler(0))
+        scheduling.real_time()  # waiting for a cycle, and running it
+        policies.append(os.sched_getscheduler(0) & ~os.SCHED_RESET_ON_FORK)
+        started: list[int] = []
+        starter = threading.Thread(target=lambda: started.append(os.sched_getscheduler(0)))
+        starter.start()  # a thread it starts meanwhile is not real-time
+        starter.join()
+        scheduling.ordinary()  # keeping house
+        policies.extend([*started, os.sched_getscheduler(0)])
+
+    worker = threading.Thread(target=cycle_thread)
+    worker.start()
+    worker.join()
+    if os.geteuid() == 0:  # CI runs as root
+        assert said == ["SCHED_FIFO priority 3 while it waits for a cycle and runs it"]
+        assert policies == [os.SCHED_OTHER, os.SCHED_FIFO, os.SCHED_OTHER, os.SCHED_OTHER]
+    else:
+        assert said[0].startswith("normal scheduling: real-time priority 3 was refused")
+        assert set(policies) == {os.SCHED_OTHER}
+    assert os.sched_getscheduler(0) == os.SCHED_OTHER  # this thread's is not touched
+    assert CycleScheduling(0).begin() == "normal scheduling (real-time priority 0)"
+
+
+def test_no_thread_but_the_cycle_thread_of_a_runtime_runs_in_the_real_time_class(
+    tmp_path: Path,
+) -> None:
+    write_demo_artifact(tmp_path)
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with running_resource("Tank1", tmp_path, endpoint) as (process, client):
+        client.wait_until_answering()
+        client.ask(GetValues())  # answered on the files thread, started by the cycle thread
+        tasks = [int(task.name) for task in Path(f"/proc/{process.pid}/task").iterdir()]
+        policies = {t: os.sched_getscheduler(t) & ~os.SCHED_RESET_ON_FORK for t in tasks}
+    # the cycle runs on the process's main thread, real-time while it waits for a cycle
+    # (most of the time); the threads it started, and the others, are ordinary
+    others = {p for t, p in policies.items() if t != process.pid}
+    assert others == {os.SCHED_OTHER}
