@@ -16,6 +16,7 @@ DEFAULT_NICE = -10
 NICE_RANGE = range(-20, 20)
 DEFAULT_CYCLE_PRIORITY = 10  # SCHED_FIFO, 1 (lowest) to 99; 0: the thread keeps its nice
 CYCLE_PRIORITY_RANGE = range(0, 100)
+_REAL_TIME = os.SCHED_FIFO | os.SCHED_RESET_ON_FORK
 
 
 def raise_priority(nice: int) -> str:
@@ -46,25 +47,32 @@ class CycleScheduling:
         self._real_time = False
 
     def begin(self) -> str:
-        """The first switch to real time, made on the cycle thread; what came of it, for
-        the log. Refused (no CAP_SYS_NICE), the thread stays ordinary."""
+        """Whether the real-time class may be had, tried once on the cycle thread; what
+        came of it, for the log. Refused (no CAP_SYS_NICE), the thread stays ordinary."""
         if self.priority == 0:
             return "normal scheduling (real-time priority 0)"
         try:
-            self.real_time()
+            os.sched_setscheduler(0, _REAL_TIME, os.sched_param(self.priority))
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
         except OSError as exc:
             priority, self.priority = self.priority, 0
             return f"normal scheduling: real-time priority {priority} was refused ({exc.strerror})"
-        self.ordinary()
         return f"SCHED_FIFO priority {self.priority} while it waits for a cycle and runs it"
 
     def real_time(self) -> None:
         if self.priority and not self._real_time:
-            policy = os.SCHED_FIFO | os.SCHED_RESET_ON_FORK
-            os.sched_setscheduler(0, policy, os.sched_param(self.priority))
-            self._real_time = True
+            self._real_time = self._set(_REAL_TIME, self.priority)
 
     def ordinary(self) -> None:
         if self._real_time:
-            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))  # the nice value stays
-            self._real_time = False
+            self._real_time = not self._set(os.SCHED_OTHER, 0)  # the nice value stays
+
+    def _set(self, policy: int, priority: int) -> bool:
+        """Never raises: a class taken away later (a container's real-time budget, say)
+        leaves the thread ordinary from then on."""
+        try:
+            os.sched_setscheduler(0, policy, os.sched_param(priority))
+        except OSError:
+            self.priority = 0
+            return False
+        return True

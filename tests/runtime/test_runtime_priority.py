@@ -7,6 +7,8 @@ import os
 import threading
 from pathlib import Path
 
+import pytest
+
 from runtime.contract.protocol import GetValues
 from runtime.runtime_priority import DEFAULT_NICE, CycleScheduling, raise_priority
 from tests.conftest import free_port
@@ -85,3 +87,18 @@ def test_no_thread_but_the_cycle_thread_of_a_runtime_runs_in_the_real_time_class
     # (most of the time); the threads it started, and the others, are ordinary
     others = {p for t, p in policies.items() if t != process.pid}
     assert others == {os.SCHED_OTHER}
+
+
+def test_a_real_time_class_taken_away_later_leaves_the_cycle_thread_ordinary(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    scheduling = CycleScheduling(3)
+    scheduling.begin()
+
+    def refused(*args: object) -> None:
+        raise PermissionError(1, "Operation not permitted")
+
+    monkeypatch.setattr(os, "sched_setscheduler", refused)
+    scheduling.real_time()  # never raises into the cycle loop
+    scheduling.ordinary()
+    assert scheduling.priority == 0
