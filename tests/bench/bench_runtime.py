@@ -31,6 +31,7 @@ from runtime.contract.wire import encode
 from runtime.cycle_driver import CycleDriver
 from runtime.link import ResourceLink
 from runtime.resource import Resource
+from runtime.runtime_priority import DEFAULT_CYCLE_PRIORITY
 from tests.bench.baseline import compare
 from tests.bench.bench_language import thousand_statements
 
@@ -229,7 +230,7 @@ def driven(resource: Resource, clock: Clock) -> Iterator[str]:
             link = ResourceLink(session, resource.name, resource.identity)
             try:
                 stop = threading.Event()
-                driver = CycleDriver(resource, clock, link)
+                driver = CycleDriver(resource, clock, link, cycle_priority=DEFAULT_CYCLE_PRIORITY)
                 thread = threading.Thread(target=driver.run, args=(stop,), name="padt-cycle")
                 thread.start()
                 try:
