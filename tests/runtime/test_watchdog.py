@@ -16,6 +16,7 @@ from runtime.contract.artifact import ResourceConfig
 from runtime.contract.protocol import ResourceState
 from runtime.contract.refusal import Refusal
 from runtime.resource import Resource
+from runtime.watchdog import Watchdog
 from tests.support.resource_harness import harness
 from tests.support.runtime_process import running_resource, store_artifact
 
@@ -113,3 +114,18 @@ def test_endless_recursion_is_a_program_error_and_the_resource_runs_on() -> None
     assert h.state() == "RUN" and h.value("Tick.n") == 2
     error = next(p for p in h.resource.status().programs if p.name == "Recurse").error
     assert str(error).startswith("calls nested too deep (recursion) in POU Deeper (test.st:4)")
+
+
+FOREIGN = 1  # a thread id no thread has: raising into it does nothing
+
+
+def test_a_deadline_is_claimed_by_the_disarm_in_time_or_by_the_watchdog_never_both() -> None:
+    watchdog = Watchdog()
+    watchdog.arm(10_000_000_000)
+    assert watchdog.disarm() is False  # in time: claimed without the lock
+    watchdog._deadlines[FOREIGN] = time.monotonic_ns() - 1  # a thread that overran
+    watchdog._deadlines[FOREIGN + 1] = time.monotonic_ns() + 10_000_000_000  # one in time
+    with watchdog._lock:
+        watchdog._fire_expired()
+    assert watchdog._fired == {FOREIGN}  # fired once, its deadline claimed
+    assert list(watchdog._deadlines) == [FOREIGN + 1]
