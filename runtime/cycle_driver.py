@@ -102,6 +102,7 @@ class CycleDriver:
 
     def _cycles(self, stop: threading.Event) -> None:
         planned = self.clock.now_ns()
+        paced = False  # the cycle was waited for (a fixed target): real-time through it
         while not stop.is_set():
             start = self.clock.now_ns()
             cycle_before = self.resource.cycle_count
@@ -109,7 +110,8 @@ class CycleDriver:
             try:
                 if field_io is not None:
                     field_io.before_cycle()
-                self._scheduling.real_time()
+                if paced:  # two system calls (4 us): only where a wait came before
+                    self._scheduling.real_time()
                 try:
                     self.resource.cycle()
                 finally:
@@ -125,12 +127,13 @@ class CycleDriver:
             running = self.resource.running()
             com_slice = params.com_slice_ms * 1_000_000
             target = params.target_cycle_ms * 1_000_000
-            if running and target and params.target_cycle_mode.startswith("fixed"):
+            paced = bool(running and target and params.target_cycle_mode.startswith("fixed"))
+            if paced:
                 planned += target
                 if planned < start:  # an overrun: start afresh instead of racing to catch up
                     planned = start + target
                 # the time up to the next cycle is free for communication
-                self._housekeeping(planned, stop, wait=True)
+                self._housekeeping(planned, stop, wait=True, paced=True)
                 self.clock.sleep_until(planned)
             elif running:  # only what is waiting, for at most the com slice
                 self._housekeeping(self.clock.now_ns() + com_slice, stop)
@@ -174,13 +177,17 @@ class CycleDriver:
             self._save_context()
             self._last_context_ns = now
 
-    def _housekeeping(self, deadline_ns: int, stop: threading.Event, wait: bool = False) -> None:
-        """Answer commands until the deadline; without `wait`, only those already queued."""
+    def _housekeeping(
+        self, deadline_ns: int, stop: threading.Event, wait: bool = False, paced: bool = False
+    ) -> None:
+        """Answer commands until the deadline; without `wait`, only those already queued.
+        `paced`: the deadline is the next cycle's, waited for in the real-time class."""
         while not stop.is_set():
             remaining = deadline_ns - self.clock.now_ns()
             try:
                 if remaining > 0 and wait:  # woken by a command, or for the next cycle
-                    self._scheduling.real_time()
+                    if paced:
+                        self._scheduling.real_time()
                     try:
                         query = self.link.inbox.get(timeout=min(remaining / 1e9, 0.2))
                     finally:

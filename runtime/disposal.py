@@ -9,9 +9,8 @@ to the switch interval each time.
 
 So the cycle driver takes it apart itself, with a small budget after every cycle
 (`step`): a list or dict only the disposal holds loses its items a slice at a time.
-Anything somebody else still holds is only
-let go of; it is freed where its last holder drops it. Without a driver (tests, tools)
-everything is let go of at once."""
+Anything somebody else still holds is only let go of; it is freed where its last holder
+drops it. Without a driver (tests, tools) everything is let go of at once."""
 
 from __future__ import annotations
 
@@ -69,8 +68,8 @@ class Disposal:
 
 def _slice_off(items: list[object] | dict[object, object], stack: list[object]) -> None:
     """Frees a slice of the container's items; the container goes back on the stack while
-    items remain (it is still only ours). The items of a large container are freed but
-    for large containers; those of a small one are taken apart too."""
+    items remain (it is still only ours). Of a large container's items only the large
+    containers are kept to be taken apart in turn; of a small one's, all that hold others."""
     large = len(items) > SMALL
     if isinstance(items, dict):
         chunk = [items.popitem()[1] for _ in range(min(SLICE, len(items)))]

@@ -1,9 +1,9 @@
 """Reload benchmark, for a program with 10,000 variables: the time to compute the reload
 plan, and for each kind of change the switch-over pause inside the cycle, the longest
 cycle during a reload versus the normal cycle (a ratio; with cycles back to back, and at a
-10 ms fixed target cycle), whether the budget check accepts
-the reload at a 10 ms fixed target cycle with the default parameters, and the runtime's
-estimate next to the measured pause. The kinds of change: one small POU's code; one small
+10 ms fixed target cycle), whether the budget check accepts the reload at a 10 ms fixed
+target cycle with the default parameters, and the runtime's estimate next to the measured
+pause. The kinds of change: one small POU's code; one small
 POU gaining a variable (its instance and the program holding it are copied, the rest
 adopted); every instance migrated (every type gains a variable: every value copied). The
 baseline of the same run: the same switch-over with every value copied (what the runtime

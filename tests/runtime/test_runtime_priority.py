@@ -64,7 +64,7 @@ def test_the_real_time_class_is_the_calling_threads_own_while_it_asks_for_it() -
     worker.start()
     worker.join()
     if os.geteuid() == 0:  # CI runs as root
-        assert said == ["SCHED_FIFO priority 3 while it waits for a cycle and runs it"]
+        assert said == ["SCHED_FIFO priority 3 for cycles at a fixed target"]
         assert policies == [os.SCHED_OTHER, os.SCHED_FIFO, os.SCHED_OTHER, os.SCHED_OTHER]
     else:
         assert said[0].startswith("normal scheduling: real-time priority 3 was refused")
@@ -83,8 +83,8 @@ def test_no_thread_but_the_cycle_thread_of_a_runtime_runs_in_the_real_time_class
         client.ask(GetValues())  # answered on the files thread, started by the cycle thread
         tasks = [int(task.name) for task in Path(f"/proc/{process.pid}/task").iterdir()]
         policies = {t: os.sched_getscheduler(t) & ~os.SCHED_RESET_ON_FORK for t in tasks}
-    # the cycle runs on the process's main thread, real-time while it waits for a cycle
-    # (most of the time); the threads it started, and the others, are ordinary
+    # the cycle runs on the process's main thread, real-time while it waits for a cycle at
+    # a fixed target; the threads it started, and the others, are ordinary
     others = {p for t, p in policies.items() if t != process.pid}
     assert others == {os.SCHED_OTHER}
 
