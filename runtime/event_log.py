@@ -131,7 +131,9 @@ def _fsync_dir(directory: Path) -> None:
 
 class EventLog:
     """Short-term ring and long-term log of one resource. Any thread may call any method:
-    one lock guards both buffers, and a long-term record() holds it through the fsync."""
+    one lock guards both buffers. The long-term log in memory is the truth; the file
+    catches up with it, at once in record() or, with write_behind, on a thread of its own
+    so that no caller waits for the disk (the cycle thread records events too)."""
 
     def __init__(
         self,
@@ -141,6 +143,7 @@ class EventLog:
         long_path: Path | None = None,
         long_capacity: int = 10_000,
         keep_ns: int = 3 * DAY_NS,
+        write_behind: bool = False,
     ) -> None:
         if short_capacity < 1 or long_capacity < 1 or keep_ns < 0:
             raise ValueError("capacities must be at least 1 and keep_ns not negative")
@@ -159,10 +162,27 @@ class EventLog:
         self._marker_open = False
         self._uncounted = 0
         self._rejected = 0
+        # the file's side: lines are counted from the first ever kept (dropped ones too),
+        # the file holds those before _on_file, unless it is stale and must be rewritten
+        # whole (after old entries were dropped, or a write failed)
+        self._file_lock = threading.Lock()  # one writer of the file at a time
+        self._kept = 0
+        self._dropped = 0
+        self._on_file = 0
+        self._stale = False
+        self._wake = threading.Event()
+        self._closing = False
+        self._writer: threading.Thread | None = None
         notes = self._load(long_path) if long_path is not None else []
         now = wall_ns()
         for message, details in notes:
             self._add(now, "error", message, None, details)
+        if write_behind and self._path is not None:
+            # started here, by whoever makes the log: never by the first recorder
+            self._writer = threading.Thread(
+                target=self._write_on, name="padt-event-log", daemon=True
+            )
+            self._writer.start()
 
     def record(
         self,
@@ -180,9 +200,59 @@ class EventLog:
         clean: dict[str, Any] = json.loads(canonical(details))
         with self._lock:
             now = self._wall_ns()
-            if long_term:
-                return self._add_long_term(now, kind, message, user, clean)
-            return self._add(now, kind, message, user, clean)
+            if not long_term:
+                return self._add(now, kind, message, user, clean)
+            event = self._add_long_term(now, kind, message, user, clean)
+        if self._writer is not None:
+            self._wake.set()
+        else:
+            self.flush()
+        return event
+
+    def flush(self) -> None:
+        """Bring the file up to the long-term log in memory, here and now: append the
+        lines it lacks, or rewrite it whole after old entries were dropped or a write
+        failed. A failed write is logged as a short-term "error" event and tried again
+        with the next entry. Only writers of the file wait for the disk, never a reader
+        or a recorder: the lock is not held while writing."""
+        with self._file_lock:
+            with self._lock:
+                path, stale, kept = self._path, self._stale, self._kept
+                if path is None or (not stale and self._on_file == kept):
+                    return
+                lines = self._lines[:] if stale else self._lines[self._on_file - self._dropped :]
+                self._stale = False
+            try:
+                if stale:
+                    self._rewrite(path, lines)
+                else:
+                    self._append(path, lines)
+            except OSError as exc:
+                with self._lock:
+                    self._stale = True
+                    first = max(self._on_file - self._dropped, 0)
+                    missing = [e.seq for e in self._events[first:] if e is not None]
+                    message = f"The long-term event log could not be written: {exc}"
+                    self._add(self._wall_ns(), "error", message, None, {"seqs": missing})
+                return
+            with self._lock:
+                self._on_file = kept
+
+    def close(self) -> None:
+        """Stop the writing thread after it wrote everything recorded so far; entries
+        recorded after this are written at once."""
+        writer, self._writer = self._writer, None
+        self._closing = True
+        self._wake.set()
+        if writer is not None:
+            writer.join()
+        self.flush()
+
+    def _write_on(self) -> None:
+        while not self._closing:
+            self._wake.wait()
+            self._wake.clear()
+            self.flush()
 
     def recent(self, after_seq: int = 0, limit: int | None = None) -> list[Event]:
         """Short-term events with seq > after_seq, oldest first, at most limit of them
@@ -259,9 +329,9 @@ class EventLog:
             new.append(self._add(now, "rejected", message_, None, {"rejected": uncounted}))
         event = self._add(now, kind, message, user, details)
         new.append(event)
-        if self._write(now, drop, new):
-            self._marker_open = False
-            self._uncounted = 0
+        self._keep(drop, new)
+        self._marker_open = False
+        self._uncounted = 0
         return event
 
     def _room(self, now: int, incoming: int) -> int | None:
@@ -288,39 +358,29 @@ class EventLog:
         )
         marker = self._add(now, "rejected", message, None, {"rejected": 1})
         # the marker may take the log one over its capacity: it must not be lost
-        if self._write(now, 0, [marker]):
-            self._marker_open = True
-            self._uncounted = 0
+        self._keep(0, [marker])
+        self._marker_open = True
+        self._uncounted = 0
 
-    def _write(self, now: int, drop: int, events: list[Event]) -> bool:
-        """Drop the oldest `drop` entries and append `events`, in the file first."""
-        lines: list[bytes] = []
-        head = self._head
+    def _keep(self, drop: int, events: list[Event]) -> None:
+        """Drop the oldest `drop` entries and chain `events` on, in memory; flush() writes."""
         for event in events:
-            line = entry_line(event, head)
-            lines.append(line)
-            head = line_digest(line)
-        if self._path is not None:
-            try:
-                if drop:
-                    self._rewrite(self._path, self._lines[drop:] + lines)
-                else:
-                    self._append(self._path, lines)
-            except OSError as exc:
-                message = f"The long-term event log could not be written: {exc}"
-                self._add(now, "error", message, None, {"seqs": [e.seq for e in events]})
-                return False
+            line = entry_line(event, self._head)
+            self._lines.append(line)
+            self._events.append(event)
+            self._head = line_digest(line)
         del self._lines[:drop]
         del self._events[:drop]
-        self._lines.extend(lines)
-        self._events.extend(events)
-        self._head = head
-        return True
+        self._kept += len(events)
+        self._dropped += drop
+        self._stale = self._stale or drop > 0
 
-    def _append(self, path: Path, lines: list[bytes]) -> None:
+    @staticmethod
+    def _append(path: Path, lines: list[bytes]) -> None:
         created = not path.exists()
         fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o600)
         try:
+            whole = os.fstat(fd).st_size
             data = memoryview(b"".join(line + b"\n" for line in lines))
             while data:
                 data = data[os.write(fd, data) :]
@@ -328,7 +388,7 @@ class EventLog:
         except OSError:
             # a partial line would run into the next entry: cut back to the last whole line
             with contextlib.suppress(OSError):
-                os.ftruncate(fd, sum(len(line) + 1 for line in self._lines))
+                os.ftruncate(fd, whole)
             raise
         finally:
             os.close(fd)
@@ -391,6 +451,7 @@ class EventLog:
             )
             notes.append((message, {"line": number}))
         self._lines = lines
+        self._kept = self._on_file = len(lines)
         self._events = [_event_or_none(line) for line in lines]
         self._head = line_digest(lines[-1]) if lines else GENESIS
         self._seq = max((e.seq for e in self._events if e is not None), default=0)

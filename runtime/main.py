@@ -116,7 +116,8 @@ def run(args: argparse.Namespace) -> int:
     # so that none of them holds the GIL the cycle waits for while it waits for a CPU
     priority = raise_priority(args.nice)
     clock = RealClock()
-    events = EventLog(clock.wall_ns, long_path=events_path(args.state_dir))
+    # written behind: the cycle thread records events and must not wait for an fsync
+    events = EventLog(clock.wall_ns, long_path=events_path(args.state_dir), write_behind=True)
     identity = Identity.kept_in(identity_path(args.state_dir))
     resource = Resource(args.resource, clock, events, identity)
     power_up(resource, args.state_dir)
@@ -167,4 +168,5 @@ def run(args: argparse.Namespace) -> int:
         saver.close()
         link.close()
         session.close()
+        events.close()  # the last entries on disk before the process ends
     return 0

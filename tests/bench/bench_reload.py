@@ -17,12 +17,14 @@ from __future__ import annotations
 
 import statistics
 import sys
+import tempfile
 import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
@@ -37,6 +39,7 @@ from runtime.contract.protocol import ProgramState, ReloadOutcome, ResourceState
 from runtime.contract.refusal import Refusal
 from runtime.cycle_driver import SWITCH_INTERVAL_S
 from runtime.disposal import DISPOSAL, STEP_NS
+from runtime.event_log import EventLog
 from runtime.instances import instantiate
 from runtime.intrinsics import SystemView
 from runtime.reload_plan import (
@@ -111,8 +114,19 @@ def _compile(text: str, config: ResourceConfig) -> Artifact:
     return result.artifact
 
 
+_FOLDER = tempfile.TemporaryDirectory(prefix="padt-bench-reload-")  # removed at exit
+
+
+def _event_log(clock: RealClock) -> EventLog:
+    """A long-term event log on disk, written behind, as `padt runtime` keeps it: each
+    reload records its outcome there from the cycle thread."""
+    path = Path(tempfile.mkdtemp(dir=_FOLDER.name)) / "events.jsonl"
+    return EventLog(clock.wall_ns, long_path=path, write_behind=True)
+
+
 def _running(artifact: Artifact) -> Resource:
-    resource = Resource("R", RealClock())
+    clock = RealClock()
+    resource = Resource("R", clock, _event_log(clock))
     resource.load(artifact)
     resource.start()
     for _ in range(WARMUP_CYCLES):

@@ -352,7 +352,7 @@ def test_keep_ns_and_capacity_one(tmp_path: Path) -> None:
     assert verify_chain(path).ok
 
 
-def test_a_failed_write_is_logged_not_raised(tmp_path: Path) -> None:
+def test_a_failed_write_is_logged_not_raised_and_the_file_catches_up(tmp_path: Path) -> None:
     path = tmp_path / "events.jsonl"
     log = EventLog(FakeClock(), long_path=path)
     fill(log, 1)
@@ -362,7 +362,45 @@ def test_a_failed_write_is_logged_not_raised(tmp_path: Path) -> None:
     note = log.recent()[-1]
     assert note.kind == "error" and "could not be written" in note.message
     assert note.details == {"seqs": [event.seq]}
-    assert seqs(log.long_term()) == [1]
+    assert seqs(log.long_term()) == [1, 2]  # kept in memory, not lost
+    path.rmdir()
+    log.record("login", "carl logged in.", user="carl", long_term=True)
+    # the next entry rewrote the file whole: nothing missing, the chain unbroken
+    assert [json.loads(line)["seq"] for line in lines_of(path)] == [1, 2, 4]
+    assert verify_chain(path) == ChainReport(True, 3)
+
+
+def test_written_behind_no_recorder_waits_for_the_disk(tmp_path: Path) -> None:
+    path = tmp_path / "events.jsonl"
+    log = EventLog(FakeClock(), long_path=path, write_behind=True)
+    with log._file_lock:  # the disk is busy: the writer cannot get on
+        fill(log, 3)
+        assert seqs(log.long_term()) == [1, 2, 3]  # at once, in memory
+        assert log.long_term_after(1, 1)[0][0].seq == 2
+        assert not path.exists() or len(lines_of(path)) < 3
+    log.close()  # everything recorded is written before it returns
+    assert verify_chain(path) == ChainReport(True, 3)
+    again = EventLog(FakeClock(), long_path=path)
+    assert seqs(again.long_term()) == [1, 2, 3] and again.head == log.head
+
+
+def test_written_behind_drops_and_failures_end_in_one_whole_file(tmp_path: Path) -> None:
+    path = tmp_path / "events.jsonl"
+    clock = FakeClock()
+    log = EventLog(clock, long_path=path, long_capacity=3, keep_ns=0, write_behind=True)
+    fill(log, 2)
+    log.flush()
+    path.unlink()
+    path.mkdir()
+    clock.now_ns += 1
+    fill(log, 3)  # drops the oldest while the file cannot be written
+    log.flush()
+    assert any("could not be written" in e.message for e in log.recent())
+    path.rmdir()
+    log.close()
+    assert [json.loads(line)["seq"] for line in lines_of(path)] == seqs(log.long_term())
+    assert len(lines_of(path)) == 3
+    assert verify_chain(path).ok
 
 
 def test_stale_temporary_files_are_removed_on_load(tmp_path: Path) -> None:
