@@ -19,8 +19,12 @@ prepared). So the replaced configurations' cycles wait, frozen, and are freed al
 waits to that many sets of classes (a few kB per POU type), not to any data: instances
 are freed by their reference counts.
 
-While a reload prepares, the collector's own full collections are held back: they would
-walk the new configuration, growing on the worker thread, many times over."""
+While a reload prepares (`held_back`), the collector makes no collection at all, young
+ones included, and what was made meanwhile is frozen when the preparation ends: that is
+the new configuration's arrival. Full collections would walk the new configuration,
+growing on the worker thread, many times over; and the plan's lists and maps of every
+variable are young when they are made: with 100,000 variables, one young collection
+walking three of them took 8 ms, the next one 10 ms, each a stall of the cycle thread."""
 
 from __future__ import annotations
 
@@ -30,12 +34,12 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 RECLAIM_AFTER = 32  # arrivals whose reference cycles may wait, frozen, in RUN
-_NEVER = 1 << 30  # a threshold no count of collections reaches
 
 
 class Collector:
     """Process-wide, as the collector is; `arrived` and `held_back` may be used on a
-    reload's worker thread, the rest on the cycle thread."""
+    reload's worker thread (two at once: the last to end freezes), the rest on the cycle
+    thread."""
 
     def __init__(self) -> None:
         self.managed = False
@@ -78,11 +82,15 @@ class Collector:
 
     @contextmanager
     def held_back(self) -> Iterator[None]:
-        """No full collection by the collector itself meanwhile (young ones go on)."""
+        """A reload's preparation: no collection meanwhile, in the whole process; at the
+        end, what it made (and what the cycles made meanwhile) frozen, one arrival."""
+        if not self.managed:
+            yield
+            return
         with self._lock:
             if not self._holding:
                 self._threshold = gc.get_threshold()
-                gc.set_threshold(self._threshold[0], self._threshold[1], _NEVER)
+                gc.set_threshold(0)  # CPython: no automatic collection
             self._holding += 1
         try:
             yield
@@ -90,6 +98,9 @@ class Collector:
             with self._lock:
                 self._holding -= 1
                 if not self._holding and self._threshold is not None:
+                    # the young objects' count starts again at 0 with the freeze: the next
+                    # young collection walks only what is made from now on
+                    self.arrived()
                     gc.set_threshold(*self._threshold)
                     self._threshold = None
 

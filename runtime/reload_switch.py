@@ -70,7 +70,8 @@ class ReloadJob:
 
     def prepare(self) -> None:
         """New instances, the plan, the switch-over list, and the new configuration written
-        beside the stored one (off the cycle thread); never raises."""
+        beside the stored one (off the cycle thread); never raises. No collection runs
+        meanwhile, and what the switch-over takes is frozen before it (runtime/collector.py)."""
         with COLLECTOR.held_back():
             self._prepare()
 
@@ -100,7 +101,6 @@ class ReloadJob:
                 self.plan = replace(
                     self.plan, estimate_ns=self.prepared.estimate_ns, changes=changes
                 )
-                COLLECTOR.arrived()  # what the switch-over takes, frozen beforehand
                 if self.store is not None and not self.preview:
                     self.staged = self.store.stage(self.artifact)
         except Refusal as refused:  # the disk
