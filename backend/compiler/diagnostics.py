@@ -6,10 +6,20 @@ code (from `codes`) comes last so that matchers written for the form without it 
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 from backend.compiler.codes import Code, Severity
 from backend.compiler.source import Pos
+
+QUOTE_MAX = 120  # characters of a name quoted in a message, beyond which it is cut
+_LONG_QUOTE = re.compile(rf"'([^'\n]{{{QUOTE_MAX + 1},}})'")
+
+
+def clipped(message: str) -> str:
+    """The message with every quoted name longer than QUOTE_MAX cut to its start and its
+    end: a name of 5,000 parts made a diagnostic of 58 KB, in a terminal or the browser."""
+    return _LONG_QUOTE.sub(lambda m: f"'{m.group(1)[:80]}[...]{m.group(1)[-30:]}'", message)
 
 
 @dataclass(frozen=True, order=True)
@@ -24,7 +34,7 @@ class Diagnostic:
     @classmethod
     def at(cls, pos: Pos, code: Code, message: str) -> Diagnostic:
         """A diagnostic of `code` at `pos`, with the severity of the code."""
-        return cls(pos.file, pos.line, pos.col, code.severity, message, code.id)
+        return cls(pos.file, pos.line, pos.col, code.severity, clipped(message), code.id)
 
     def __str__(self) -> str:
         return f"{self.file}:{self.line}:{self.col}: {self.severity}: {self.message} [{self.code}]"

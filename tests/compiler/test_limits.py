@@ -423,3 +423,14 @@ def test_a_padt_toml_nested_too_deep_is_a_project_error(tmp_path: Path) -> None:
         load_project([tmp_path])
     run = padt("compile", str(tmp_path))
     assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
+
+
+def test_a_very_long_name_is_quoted_cut_in_its_diagnostic() -> None:
+    """A name of 5,000 parts made a diagnostic of 58 KB; it is quoted by its start and end."""
+    name = ".".join(f"N{i}" for i in range(5_000))
+    source = SourceFile("p.st", program("x := 1;", f"x : DINT; y : {name};"))
+    result = pipeline.compile_sources([source])
+    (diagnostic,) = result.diagnostics
+    assert str(diagnostic).startswith("p.st:2:") and len(str(diagnostic)) < 500
+    assert "'N0.N1.N2." in diagnostic.message and ".N4998.N4999'" in diagnostic.message
+    assert "[...]" in diagnostic.message
