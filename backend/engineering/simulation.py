@@ -98,10 +98,21 @@ def parse_setting(text: str) -> Setting:
 
 
 def trace_names(options: list[str] | None) -> tuple[str, ...] | None:
-    """`--trace A,B --trace C` -> ("A", "B", "C")."""
+    """`--trace A,B --trace C` -> ("A", "B", "C"); a comma between brackets belongs to
+    the name (`--trace m[1,0],n`)."""
     if options is None:
         return None
-    return tuple(name.strip() for option in options for name in option.split(",") if name.strip())
+    return tuple(name.strip() for option in options for name in _names(option) if name.strip())
+
+
+def _names(option: str) -> list[str]:
+    names, start, depth = [], 0, 0
+    for index, char in enumerate(option):
+        depth += {"[": 1, "]": -1}.get(char, 0)
+        if char == "," and depth <= 0:
+            names.append(option[start:index])
+            start, depth = index + 1, 0
+    return [*names, option[start:]]
 
 
 # ---- run-time values -> JSON

@@ -340,3 +340,25 @@ def test_sim_runs_time_slices_on_virtual_time(tmp_path: Path) -> None:
     assert column(records, "Watcher.seen") == [0, 0, 0, 1, 1, 1, 2]
     again = padt("sim", str(tmp_path), "--cycles", "7", "--trace", "Worker.k,done,Watcher.seen")
     assert again.stdout == result.stdout  # reproducible to the byte
+
+
+GRID = """
+TYPE Cell : STRUCT x : INT; END_STRUCT; END_TYPE
+PROGRAM M
+VAR g : ARRAY[0..1, 0..1] OF Cell; n : INT; END_VAR
+n := n + 1;
+g[1, 0].x := n * 10;
+END_PROGRAM
+"""
+
+
+def test_an_element_of_a_two_dimensional_array_is_traced_by_its_name(tmp_path: Path) -> None:
+    """The comma between the brackets is the name's, not a separator of names."""
+    result = padt(
+        "sim", write(tmp_path, GRID), "--cycles", "2", "--trace", "M.g[1,0].x,M.n"
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert [line["values"] for line in lines(result.stdout)] == [
+        {"M.g[1,0].x": 10, "M.n": 1},
+        {"M.g[1,0].x": 20, "M.n": 2},
+    ]
