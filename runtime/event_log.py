@@ -212,9 +212,10 @@ class EventLog:
     def flush(self) -> None:
         """Bring the file up to the long-term log in memory, here and now: append the
         lines it lacks, or rewrite it whole after old entries were dropped or a write
-        failed. A failed write is logged as a short-term "error" event and tried again
-        with the next entry. Only writers of the file wait for the disk, never a reader
-        or a recorder: the lock is not held while writing."""
+        failed. A failed write (the disk, or a defect: the writing thread must not end)
+        is logged as a short-term "error" event and tried again with the next entry.
+        Only writers of the file wait for the disk, never a reader or a recorder: the
+        lock is not held while writing."""
         with self._file_lock:
             with self._lock:
                 path, stale, kept = self._path, self._stale, self._kept
@@ -227,12 +228,13 @@ class EventLog:
                     self._rewrite(path, lines)
                 else:
                     self._append(path, lines)
-            except OSError as exc:
+            except Exception as exc:
                 with self._lock:
                     self._stale = True
                     first = max(self._on_file - self._dropped, 0)
                     missing = [e.seq for e in self._events[first:] if e is not None]
-                    message = f"The long-term event log could not be written: {exc}"
+                    why = f"{type(exc).__name__}: {exc}"
+                    message = f"The long-term event log could not be written: {why}"
                     self._add(self._wall_ns(), "error", message, None, {"seqs": missing})
                 return
             with self._lock:

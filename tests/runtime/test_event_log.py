@@ -384,6 +384,25 @@ def test_written_behind_no_recorder_waits_for_the_disk(tmp_path: Path) -> None:
     assert seqs(again.long_term()) == [1, 2, 3] and again.head == log.head
 
 
+def test_a_defect_in_the_writer_is_logged_and_the_next_entry_tries_again(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "events.jsonl"
+    log = EventLog(FakeClock(), long_path=path, write_behind=True)
+
+    def broken(path: Path, lines: list[bytes]) -> None:
+        raise ValueError("a defect")
+
+    monkeypatch.setattr(log, "_append", broken)
+    fill(log, 1)
+    log.flush()  # what the writer thread does; it meets the same defect
+    assert any("ValueError: a defect" in e.message for e in log.recent())
+    monkeypatch.undo()
+    fill(log, 1)
+    log.close()
+    assert verify_chain(path) == ChainReport(True, 2)
+
+
 def test_written_behind_drops_and_failures_end_in_one_whole_file(tmp_path: Path) -> None:
     path = tmp_path / "events.jsonl"
     clock = FakeClock()
