@@ -6,6 +6,7 @@ from tests.bench import (
     bench_compiler,
     bench_context,
     bench_documentation,
+    bench_event_log,
     bench_hostile,
     bench_jitter_loaded,
     bench_language,
@@ -27,6 +28,7 @@ def main() -> None:
     bench_context.main()
     bench_runtime.main()
     bench_reload.main()
+    bench_event_log.main()
     bench_scale.main()
     bench_watch.main()
     bench_recording.main()
