@@ -54,9 +54,18 @@ class JsonValue:
     checked here; the receiver checks it against the variable's type."""
 
 
+_PLAIN = frozenset({int, str, bool, type(None)})  # exactly these types: not an enum's
+
+
 def encode(message: Any) -> Any:
     """A message (dataclass, enum, list, dict, scalar) as plain JSON data; non-finite
     REALs as text, as strict JSON has no NaN."""
+    # values first, cheaply: a reply of 100,000 of them took 62 ms here without this
+    kind = type(message)
+    if kind in _PLAIN:
+        return message
+    if kind is float:
+        return message if math.isfinite(message) else repr(message)
     if dataclasses.is_dataclass(message) and not isinstance(message, type):
         return {f.name: encode(getattr(message, f.name)) for f in _fields(type(message))}
     if isinstance(message, enum.Enum):
