@@ -166,7 +166,6 @@ class EventLog:
         # the file holds those before _on_file, unless it is stale and must be rewritten
         # whole (after old entries were dropped, or a write failed)
         self._file_lock = threading.Lock()  # one writer of the file at a time
-        self._kept = 0
         self._dropped = 0
         self._on_file = 0
         self._stale = False
@@ -218,7 +217,7 @@ class EventLog:
         lock is not held while writing."""
         with self._file_lock:
             with self._lock:
-                path, stale, kept = self._path, self._stale, self._kept
+                path, stale, kept = self._path, self._stale, self._dropped + len(self._lines)
                 if path is None or (not stale and self._on_file == kept):
                     return
                 lines = self._lines[:] if stale else self._lines[self._on_file - self._dropped :]
@@ -373,7 +372,6 @@ class EventLog:
             self._head = line_digest(line)
         del self._lines[:drop]
         del self._events[:drop]
-        self._kept += len(events)
         self._dropped += drop
         self._stale = self._stale or drop > 0
 
@@ -453,7 +451,7 @@ class EventLog:
             )
             notes.append((message, {"line": number}))
         self._lines = lines
-        self._kept = self._on_file = len(lines)
+        self._on_file = len(lines)
         self._events = [_event_or_none(line) for line in lines]
         self._head = line_digest(lines[-1]) if lines else GENESIS
         self._seq = max((e.seq for e in self._events if e is not None), default=0)
