@@ -19,7 +19,12 @@ _LONG_QUOTE = re.compile(rf"'([^'\n]{{{QUOTE_MAX + 1},}})'")
 def clipped(message: str) -> str:
     """The message with every quoted name longer than QUOTE_MAX cut to its start and its
     end: a name of 5,000 parts made a diagnostic of 58 KB, in a terminal or the browser."""
-    return _LONG_QUOTE.sub(lambda m: f"'{m.group(1)[:80]}[...]{m.group(1)[-30:]}'", message)
+    return _LONG_QUOTE.sub(lambda m: f"'{shortened(m.group(1))}'", message)
+
+
+def shortened(text: str) -> str:
+    """`text` as a message shows it: over QUOTE_MAX characters, its start and its end."""
+    return text if len(text) <= QUOTE_MAX else f"{text[:80]}[...]{text[-30:]}"
 
 
 @dataclass(frozen=True, order=True)

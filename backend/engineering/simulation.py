@@ -15,6 +15,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
+from backend.compiler.diagnostics import clipped, shortened
 from backend.engineering.literals import LiteralError, parse_literal
 from runtime.clock import VirtualClock
 from runtime.contract.artifact import Artifact
@@ -35,7 +36,12 @@ NS_PER_MS = 1_000_000
 
 
 class SimulationError(ValueError):
-    """Options that cannot be run (unknown name, bad value); found before the first cycle."""
+    """Options that cannot be run (unknown name, bad value); found before the first cycle.
+    What the user typed is cut when it is long (`shortened`, and `clipped` for names that
+    messages quote)."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(clipped(message))
 
 
 @dataclass(frozen=True)
@@ -90,10 +96,10 @@ def parse_setting(text: str) -> Setting:
     """`NAME=VALUE[@CYCLE]`; an `@` inside a quoted string is part of the value."""
     match = _SETTING.fullmatch(text)
     if match is None or not match["value"].strip():
-        raise SimulationError(f"--set {text}: expected NAME=VALUE or NAME=VALUE@CYCLE")
+        raise SimulationError(f"--set {shortened(text)}: expected NAME=VALUE or NAME=VALUE@CYCLE")
     cycle = int(match["cycle"]) if match["cycle"] is not None else 1
     if cycle < 1:
-        raise SimulationError(f"--set {text}: cycles count from 1")
+        raise SimulationError(f"--set {shortened(text)}: cycles count from 1")
     return Setting(match["name"].strip(), match["value"].strip(), cycle)
 
 
@@ -181,7 +187,7 @@ def prepare(artifact: Artifact, plan: Plan) -> Simulation:
     for setting in plan.settings:
         if setting.cycle > plan.cycles:
             raise SimulationError(
-                f"--set {setting.name}: cycle {setting.cycle} is after the last cycle "
+                f"--set {shortened(setting.name)}: cycle {setting.cycle} is after the last cycle "
                 f"({plan.cycles})"
             )
         path, value = _checked_write(resource, setting)
@@ -210,14 +216,14 @@ def _checked_write(resource: Resource, setting: Setting) -> tuple[str, Any]:
     try:
         path = resource.variables.lookup(setting.name).path
     except Refusal as exc:
-        raise SimulationError(f"--set {setting.name}: {exc.message}") from None
+        raise SimulationError(f"--set {shortened(setting.name)}: {exc.message}") from None
     if path.constant:
-        raise SimulationError(f"--set {setting.name}: '{path.path}' is a constant")
+        raise SimulationError(f"--set {shortened(setting.name)}: '{path.path}' is a constant")
     try:
         value = parse_literal(setting.literal, path.type)
         representation(path.type, value)  # refuse now what Resource.simulate would refuse later
     except (LiteralError, ValueRejected) as exc:
-        raise SimulationError(f"--set {setting.name}: {exc}") from None
+        raise SimulationError(f"--set {shortened(setting.name)}: {exc}") from None
     return path.path, value
 
 

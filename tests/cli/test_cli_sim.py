@@ -180,6 +180,16 @@ def test_unknown_names_exit_2_before_running(tmp_path: Path) -> None:
     assert "Blink.nope" in written.stderr
 
 
+def test_a_long_name_is_cut_in_the_message(tmp_path: Path) -> None:
+    path = write(tmp_path, TIMER)
+    name = "Blink." + "x" * 50_000
+    for option in (("--trace", name), ("--set", f"{name}=TRUE"), ("--set", name)):
+        result = padt("sim", path, *option)
+        assert result.returncode == 2 and result.stdout == "", option[0]
+        assert "Blink.xxx" in result.stderr and "[...]" in result.stderr
+        assert len(result.stderr) < 1_000
+
+
 def test_bad_values_exit_2(tmp_path: Path) -> None:
     path = write(tmp_path, GLOBALS)
     for setting, message in (
