@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from types import CodeType
 from typing import Any
 
+from runtime.code_warmup import unspecialized, warm_up
 from runtime.compile_worker import compile_here
 from runtime.contract.artifact import Artifact, PouCode, VarInfo
 from runtime.contract.values import array_shape
@@ -32,14 +33,19 @@ class VariablePath:
 def reusing(
     previous: CodeImage, compile_units: Callable[[list[tuple[str, str]]], list[CodeType]]
 ) -> Callable[[list[tuple[str, str]]], list[CodeType]]:
-    """`compile_units` for the units a reload changed; the others take the code objects of
-    the running image. Beyond the compile saved, CPython keeps its warm-up of a code object
-    in the object: new code ran its first seven cycles at about half speed."""
+    """`compile_units` for the units a reload changed; the others take copies of the code
+    objects of the running image, never run and warmed up (`runtime/code_warmup.py`): the
+    compile saved, and none of the old code's specializations, which were made for the
+    classes the reload replaces."""
 
     def compile_changed(units: list[tuple[str, str]]) -> list[CodeType]:
-        fresh = [unit for unit in units if previous.code_of(*unit) is None]
-        compiled = iter(compile_units(fresh) if fresh else [])
-        return [previous.code_of(*unit) or next(compiled) for unit in units]
+        kept = [previous.code_of(*unit) for unit in units]
+        changed = [unit for unit, code in zip(units, kept, strict=True) if code is None]
+        compiled = iter(compile_units(changed) if changed else [])
+        copies = [unspecialized(code) for code in kept if code is not None]
+        warm_up(copies)
+        copied = iter(copies)
+        return [next(compiled) if code is None else next(copied) for code in kept]
 
     return compile_changed
 

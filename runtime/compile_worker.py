@@ -27,13 +27,17 @@ from pathlib import Path
 from types import CodeType
 from typing import IO
 
+from runtime.code_warmup import warm_up
+
 _LENGTH = struct.Struct("<Q")
 _CHILD_NICE = 10  # below the runtime's raised priority and below normal programs
 
 
 def compile_here(units: list[tuple[str, str]]) -> list[CodeType]:
-    """(source, file name) pairs compiled in this process, in order."""
-    return [compile(source, filename, "exec") for source, filename in units]
+    """(source, file name) pairs compiled in this process, in order, and warmed up."""
+    codes = [compile(source, filename, "exec") for source, filename in units]
+    warm_up(codes)
+    return codes
 
 
 class CompileWorker:
@@ -44,7 +48,8 @@ class CompileWorker:
         self._child: subprocess.Popen[bytes] | None = None
 
     def compile(self, units: list[tuple[str, str]]) -> list[CodeType]:
-        """(source, file name) pairs compiled by the child, in order; here on any failure."""
+        """(source, file name) pairs compiled by the child, in order, and warmed up here;
+        compiled here on any failure."""
         with self._lock:
             try:
                 codes = self._in_child(units)
@@ -54,6 +59,7 @@ class CompileWorker:
         compiled = [code for code in codes or () if code is not None]
         if len(compiled) != len(units):
             return compile_here(units)  # raises what a unit that does not compile raises
+        warm_up(compiled)
         return compiled
 
     def close(self) -> None:

@@ -5,9 +5,13 @@ cycle during a reload versus the normal cycle (a ratio; with cycles back to back
 target cycle with the default parameters, and the runtime's estimate next to the measured
 pause. The kinds of change: one small POU's code; one small
 POU gaining a variable (its instance and the program holding it are copied, the rest
-adopted); every instance migrated (every type gains a variable: every value copied). The
-baseline of the same run: the same switch-over with every value copied (what the runtime
-did before it adopted objects, with today's grouped copying) and the median cycle.
+adopted); the large program's code (every instance adopted, the code the cycle runs new);
+every instance migrated (every type gains a variable: every value copied). The baselines
+of the same run: the same switch-over with every value copied (what the runtime did before
+it adopted objects, with today's grouped copying), the same without warming up the new
+code (runtime/code_warmup.py), and the median cycle. Last, the cycles after a reload
+of one small POU in a program of 1,000 straight-line statements, whose code the reload
+kept: copied and warmed up, against the running code kept as it was.
 
 Run with `python -m tests.bench.bench_reload`. It prints figures and asserts nothing about
 time (machines are shared and noisy).
@@ -28,10 +32,10 @@ from pathlib import Path
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
+from runtime import code_image, code_warmup, reload_switch
 from runtime import reload as reload_module
-from runtime import reload_switch
 from runtime.adoption import Adopted, Adoption
-from runtime.clock import RealClock
+from runtime.clock import RealClock, VirtualClock
 from runtime.collector import COLLECTOR
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
@@ -53,6 +57,7 @@ from runtime.reload_plan import (
     plan_reload,
 )
 from runtime.resource import Resource
+from tests.bench.bench_language import thousand_statements
 from tests.bench.bench_runtime import mean_and_best_ms, ten_thousand_paths
 
 PLAN_ROUNDS = 5
@@ -84,6 +89,8 @@ CHANGES: dict[str, tuple[tuple[str, str], ...]] = {
         ("y := x * 2;", "y := x * 3;"),
         ("VAR_OUTPUT y : DINT; END_VAR", "VAR_OUTPUT y : DINT; END_VAR VAR z : DINT; END_VAR"),
     ),
+    # the program itself: the code a cycle spends its time in is new (and all instances kept)
+    "the large program's code": (("points[i].name := 'p';", "points[i].name := 'q';"),),
     "every instance migrated": (
         ("name : STRING[16]; END_STRUCT", "name : STRING[16]; z : DINT; END_STRUCT"),
         ("VAR_GLOBAL points", "VAR_GLOBAL added : DINT; points"),
@@ -310,12 +317,34 @@ def copying_everything() -> Iterator[None]:
         setattr(reload_module, "plan_adoption", adopt)  # noqa: B010
 
 
+@contextmanager
+def without_warm_up() -> Iterator[None]:
+    """The baseline of the first periods on new code: no warm-up when it is compiled, so
+    CPython 3.11 quickens it only at its eighth call."""
+    calls = code_warmup.CALLS_BEFORE_QUICKENING
+    code_warmup.CALLS_BEFORE_QUICKENING = 0
+    try:
+        yield
+    finally:
+        code_warmup.CALLS_BEFORE_QUICKENING = calls
+
+
+def _periods(run: Run) -> list[int]:
+    return [b - a for a, b in zip(run.starts_ns, run.starts_ns[1:], strict=False)]
+
+
+def _first_periods(run: Run) -> list[int]:
+    """The period of each first cycle on new instances and code."""
+    periods = _periods(run)
+    return [periods[i + 1] for i in sorted(run.reload_after) if i + 1 < len(periods)]
+
+
 def _us(values: list[float]) -> str:
     return f"median {statistics.median(values):8.0f} us   max {max(values):8.0f} us"
 
 
-def report(name: str, run: Run, reloader: Reloader, baseline: Run) -> None:
-    periods = [b - a for a, b in zip(run.starts_ns, run.starts_ns[1:], strict=False)]
+def report(name: str, run: Run, reloader: Reloader, baseline: Run, cold: Run) -> None:
+    periods = _periods(run)
     with_reload = [periods[i] for i in sorted(run.reload_after)]
     after = {i + 1 for i in run.reload_after}  # the first cycle on the new instances
     special = run.reload_after.keys() | after | run.preparing | run.disposing
@@ -336,10 +365,13 @@ def report(name: str, run: Run, reloader: Reloader, baseline: Run) -> None:
         f"    longest period with a reload {max(with_reload) / 1e3:8.0f} us   vs median period "
         f"{normal_period / 1e3:8.0f} us   (ratio {max(with_reload) / normal_period:.2f})"
     )
-    first = [periods[i] for i in sorted(after) if i < len(periods)]
+    # medians: the baseline has fewer reloads, and a longest of more is longer by chance
+    first = statistics.median(_first_periods(run))
+    first_cold = statistics.median(_first_periods(cold))
     print(
-        f"    first period on the new code {max(first) / 1e3:8.0f} us   (ratio "
-        f"{max(first) / normal_period:.2f}, longest)"
+        f"    first period on the new code {first / 1e3:8.0f} us   (ratio "
+        f"{first / normal_period:.2f}, median)   vs without the warm-up "
+        f"{first_cold / 1e3:6.0f} us   (ratio {first_cold / normal_period:.2f})"
     )
     print(
         f"    periods while preparing (a worker thread, {len(preparing)} of them): median "
@@ -363,14 +395,17 @@ def report(name: str, run: Run, reloader: Reloader, baseline: Run) -> None:
 def bench_switch_over(artifacts: dict[str, Artifact]) -> None:
     print(
         f"2. switch-over (RealClock, cycles back to back, {RELOADS} reloads alternating "
-        "before/after per kind of change; baseline: the same reloads copying every value):"
+        "before/after per kind of change; baselines: the same reloads copying every value, "
+        "and without the warm-up of new code):"
     )
     before = artifacts["before"]
     for name in CHANGES:
         run, reloader = drive(before, artifacts[name])
         with copying_everything():
             baseline, _ = drive(before, artifacts[name], reloads=2)
-        report(name, run, reloader, baseline)
+        with without_warm_up():
+            cold, _ = drive(before, artifacts[name], reloads=2)
+        report(name, run, reloader, baseline, cold)
 
 
 # ---- 3. the periods at a fixed target cycle time ---------------------------------------------
@@ -424,6 +459,78 @@ def bench_budget(texts: dict[str, str]) -> None:
 # ---- entry point -------------------------------------------------------------------------------
 
 
+# ---- 5. the cycles after a reload, on code the reload kept -----------------------------------
+
+AFTER_CYCLES = 120  # past the 50-90 cycles that instructions specialized for old classes miss
+
+
+def straight_line_versions() -> tuple[Artifact, Artifact]:
+    """The 1,000-statement program without its FOR loops (a loop specializes its body anew
+    within one cycle) and with a Small instance; the second version changes Small only."""
+    lines = thousand_statements().splitlines()
+    text = "\n".join(line for line in lines if not line.startswith("FOR ")) + "\n"
+    text = _edited(text, (("  k : INT;", "  k : INT;\n  small : Small;"),))
+    text = _edited(text, (("END_PROGRAM", "small(x := 7);\nEND_PROGRAM"),))
+    config = ResourceConfig(name="R")
+    changed = _edited(SMALL, CHANGES["one small POU's code"])
+    return _compile(SMALL + text, config), _compile(changed + text, config)
+
+
+def _cycles_after_reload(before: Artifact, after: Artifact) -> list[float]:
+    clock = VirtualClock()
+    resource = Resource("R", clock)
+    resource.load(before)
+    resource.start()
+    for _ in range(AFTER_CYCLES):
+        resource.cycle()
+        clock.advance(10_000_000)
+    reload_switch.reload(resource, after, {})
+    times = []
+    for _ in range(AFTER_CYCLES):
+        started = time.perf_counter_ns()
+        resource.cycle()
+        times.append((time.perf_counter_ns() - started) / 1e3)
+        clock.advance(10_000_000)
+    return times
+
+
+@contextmanager
+def code_kept_as_it_ran() -> Iterator[None]:
+    """The baseline: a reload keeps the running code objects themselves, specialized for
+    the classes it replaces, and warms up nothing."""
+    names = ("unspecialized", "warm_up")
+    kept = {name: getattr(code_image, name) for name in names}
+    setattr(code_image, "unspecialized", lambda code: code)  # noqa: B010 (for a while)
+    setattr(code_image, "warm_up", lambda codes: None)  # noqa: B010
+    try:
+        yield
+    finally:
+        for name, value in kept.items():
+            setattr(code_image, name, value)
+
+
+def bench_cycles_after_reload() -> None:
+    before, after = straight_line_versions()
+    now = _cycles_after_reload(before, after)
+    with code_kept_as_it_ran():
+        then = _cycles_after_reload(before, after)
+    print(
+        f"5. the {AFTER_CYCLES} cycles after a reload that changed only Small, in a program of "
+        "1,000 straight-line statements (virtual clock; baseline: the running code kept as "
+        "it was):"
+    )
+    for label, times in (("copied and warmed up", now), ("baseline", then)):
+        print(
+            f"  {label:<21} first {times[0]:6.0f} us   median of cycles 2-{AFTER_CYCLES // 2} "
+            f"{statistics.median(times[1 : AFTER_CYCLES // 2]):6.0f} us   of the last "
+            f"{AFTER_CYCLES // 2} {statistics.median(times[AFTER_CYCLES // 2 :]):6.0f} us"
+        )
+    ratio = statistics.median(then[1 : AFTER_CYCLES // 2]) / statistics.median(
+        now[1 : AFTER_CYCLES // 2]
+    )
+    print(f"  -> cycles 2-{AFTER_CYCLES // 2}: baseline / now {ratio:.2f}")
+
+
 def _section(work: Callable[[], None]) -> None:
     """A section that fails (a defect of the runtime) is reported, and the others run."""
     try:
@@ -446,6 +553,7 @@ def main() -> None:
     _section(lambda: bench_switch_over(artifacts))
     _section(lambda: bench_fixed_periods(texts))
     _section(lambda: bench_budget(texts))
+    _section(bench_cycles_after_reload)
 
 
 if __name__ == "__main__":
