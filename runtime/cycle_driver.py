@@ -151,8 +151,16 @@ class CycleDriver:
             self._publish_values(at_once=True, only=self._unplanned)
         self._publish_status()
         self._finish_reload()  # between two cycles
+        self._follow_field_io()
         DISPOSAL.step()
         self._save_if_due()
+
+    def _follow_field_io(self) -> None:
+        """After what may have changed the configuration (a reload, a command), in the
+        ordinary class: a Modbus thread it starts gets the runtime's nice value, where one
+        started from the real-time class would get the default (SCHED_RESET_ON_FORK)."""
+        if self.resource.field_io is not None:
+            self.resource.field_io.follow_configuration()
 
     @staticmethod
     def _safely(work: Callable[[], None]) -> None:
@@ -188,16 +196,16 @@ class CycleDriver:
                 if remaining > 0 and wait:  # woken by a command, or for the next cycle
                     if paced:
                         self._scheduling.real_time()
-                    try:
-                        query = self.link.inbox.get(timeout=min(remaining / 1e9, 0.2))
-                    finally:
-                        self._scheduling.ordinary()
+                    query = self.link.inbox.get(timeout=min(remaining / 1e9, 0.2))
                 else:
                     query = self.link.inbox.get_nowait()
             except queue.Empty:
+                # woken for the next cycle: real-time on into it, or the hand-over to the
+                # ordinary class gave other threads the CPU just when the cycle was due
                 if remaining <= 0 or not wait:
                     return
                 continue
+            self._scheduling.ordinary()  # a command is answered in the ordinary class
             reply = self._answer(query)
             if reply is not None:
                 self.link.reply(query, reply)
@@ -208,6 +216,7 @@ class CycleDriver:
                 return
 
     def _publish_after_command(self) -> None:
+        self._follow_field_io()
         self._publish_values(at_once=True)
         self._publish_status()
 

@@ -68,7 +68,7 @@ class FieldIo:
 
     # ---- the cycle thread
     def before_cycle(self) -> None:
-        self._follow_configuration()
+        self.follow_configuration()
         if self.server is not None:
             self._take_writes(self.server.store)
             self._report_server()
@@ -112,7 +112,11 @@ class FieldIo:
             except Refusal:  # a value its type cannot hold (the server checked the range)
                 continue
 
-    def _follow_configuration(self) -> None:
+    def follow_configuration(self) -> None:
+        """Serve and poll as the loaded configuration says. The first time it serves or
+        polls, this starts the Modbus thread, which takes the calling thread's scheduling:
+        the cycle driver calls it in the ordinary class after what may have changed the
+        configuration, so that `before_cycle` (its cycle real-time) finds nothing to do."""
         artifact = self._loaded()
         if artifact is not self._artifact:
             self._artifact = artifact

@@ -35,8 +35,10 @@ class CycleScheduling:
     waits for its next cycle at a fixed target and runs it: a thread that wakes for its
     cycle then takes a CPU from any other at once, where at a nice value it waited for one
     by more than 1 ms in 1% of the cycles (10,000 watched values, a client decoding them on
-    the other CPU). Cycles run back to back have no wait to be late from and stay ordinary:
-    a switch and back costs two system calls, 4 us.
+    the other CPU). Woken for its cycle it stays real-time into it: a hand-over to the
+    ordinary class just then let other busy threads have the CPU first. Cycles run back to
+    back have no wait to be late from and stay ordinary: a switch and back costs two system
+    calls, 4 us.
 
     Ordinary (SCHED_OTHER at its nice value) while it answers commands and keeps house:
     Linux gives a new thread or process its creator's class, and a reload's worker, the

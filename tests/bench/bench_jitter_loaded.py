@@ -3,7 +3,10 @@
 
 - a client process watches 200 of its variables at 10 Hz (an engineer's online screen),
 - a Modbus TCP client process reads the 100 served holding registers every 100 ms (an HMI),
-- a recording of 100 variables writes every CPU cycle to a zstd MCAP file.
+- a recording of 100 variables writes every CPU cycle to a zstd MCAP file;
+
+and on its own, with other programs keeping every CPU busy (a busy loop per CPU, at the
+normal priority).
 
 Beside it, the same resource with none of the three, measured in the same run: the
 baseline. Run with `python -m tests.bench.bench_jitter_loaded [--seconds S]` (30 s per run
@@ -83,6 +86,9 @@ def hmi_client(port: int) -> None:
 
 
 LOADS = ("watch", "hmi", "recording")
+# on its own, not in "everything on": other programs keeping every CPU of the machine busy
+BUSY = "cpu"
+BUSY_LOOP = "while True: pass"
 
 
 def _periods(seconds: float, loads: frozenset[str]) -> tuple[list[int], list[str]]:
@@ -102,7 +108,11 @@ def _periods(seconds: float, loads: frozenset[str]) -> tuple[list[int], list[str
             recorded = select(paths, RECORDED)
             resource.recordings.start(resource, RecordStart(variables=recorded))
         watcher = hmi = None
+        busy = []
         try:
+            if BUSY in loads:  # at the normal priority, the runtime's cycle thread real-time
+                loop = [sys.executable, "-c", BUSY_LOOP]
+                busy = [subprocess.Popen(loop) for _ in range(os.cpu_count() or 1)]
             with driven(resource, clock) as endpoint:
                 if "watch" in loads:
                     watcher = ClientProcess(endpoint, WATCHED, PERIOD_MS)
@@ -122,6 +132,9 @@ def _periods(seconds: float, loads: frozenset[str]) -> tuple[list[int], list[str
                         f"watch: {len(arrivals)} messages of {WATCHED} values ({complete} complete)"
                     )
         finally:
+            for process in busy:
+                process.kill()
+                process.wait()
             if watcher is not None:
                 watcher.close()
             field_io.close()
@@ -154,9 +167,11 @@ def main(seconds: float | None = None) -> None:
         f"real CycleDriver with a Zenoh link, {seconds:g} s per run; loads: watch = {WATCHED} "
         f"values watched at 10 Hz by a client process, hmi = {REGISTERS} holding registers "
         f"read at 10 Hz by a Modbus client process, recording = {RECORDED} variables "
-        "recorded every cycle:"
+        f"recorded every cycle; on its own: {BUSY} = a busy loop per CPU in processes at the "
+        "normal priority:"
     )
     runs = [frozenset[str]()] + [frozenset({load}) for load in LOADS] + [frozenset(LOADS)]
+    runs.append(frozenset({BUSY}))
     p99: dict[frozenset[str], float] = {}
     for loads in runs:
         periods, said = _periods(seconds, loads)
