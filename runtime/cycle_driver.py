@@ -98,6 +98,7 @@ class CycleDriver:
         try:
             self._cycles(stop)
         finally:
+            self._scheduling.ordinary()  # stopped while waiting for a cycle: shut down ordinary
             DISPOSAL.let_go_at_once()
 
     def _cycles(self, stop: threading.Event) -> None:
