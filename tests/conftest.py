@@ -1,16 +1,18 @@
-"""Shared test helpers: free loopback ports and the `padt` command in a subprocess."""
+"""Shared test helpers: free loopback ports (`tests/support/ports.py`) and the `padt`
+command in a subprocess."""
 
 from __future__ import annotations
 
 import json
 import os
-import socket
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 from hypothesis import settings
+
+from tests.support.ports import free_port as free_port  # tests import it from here
 
 # CI must judge the submission, not the luck of the draw: there the property tests replay
 # the same examples every run; on a developer's machine they keep exploring.
@@ -19,22 +21,6 @@ if os.environ.get("CI") == "true":
     settings.load_profile("ci")
 
 REPO = Path(__file__).resolve().parent.parent
-
-
-_HANDED_OUT: set[int] = set()
-
-
-def free_port() -> int:
-    """A loopback port free now, and never one this process handed out before: the port
-    is closed again here, so two calls in a row (a demo's UI and Zenoh ports) could
-    otherwise get the same one."""
-    while True:
-        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-            sock.bind(("127.0.0.1", 0))
-            port: int = sock.getsockname()[1]
-        if port not in _HANDED_OUT:
-            _HANDED_OUT.add(port)
-            return port
 
 
 def padt(

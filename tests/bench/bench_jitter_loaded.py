@@ -38,11 +38,11 @@ from tests.bench.bench_runtime import (
     LoggedResource,
     Spread,
     _config,
-    _free_port,
     _ms,
     driven,
 )
 from tests.bench.bench_watch import START_TIMEOUT_S, ClientProcess, select
+from tests.support.ports import free_port
 
 REGISTERS = 100  # served holding registers, %MW0..%MW99
 WATCHED = 200
@@ -98,7 +98,7 @@ def _periods(seconds: float, loads: frozenset[str]) -> tuple[list[int], list[str
     resource = LoggedResource("R", clock)
     resource.load(_artifact())
     resource.start()
-    port = _free_port()
+    port = free_port()
     field_io = _field_io(resource, port)
     said: list[str] = []
     with tempfile.TemporaryDirectory(prefix="padt-bench-jitter-") as folder:

@@ -40,9 +40,9 @@ from tests.bench.bench_runtime import (
     Spread,
     _config,
     _drive,
-    _free_port,
     _ms,
 )
+from tests.support.ports import free_port
 
 REGISTERS = 1_000
 READ_COUNT = 100  # registers per request of the client
@@ -116,7 +116,7 @@ def bench_exchange(cycles: int = 5_000) -> None:
     clock = RealClock()
     for kind, label in (("M", "served (%MW, holding registers)"), ("I", "delivered (%IW)")):
         resource = Resource("R", clock)
-        resource.load(_artifact(kind, _free_port()))
+        resource.load(_artifact(kind, free_port()))
         resource.start()
         field_io = _field_io(resource)
         field_io.before_cycle()  # starts the server or the poller (off the cycle thread)
@@ -160,7 +160,7 @@ def _run(seconds: float, traffic: bool) -> tuple[list[int], int, int]:
     resource = LoggedResource("R", clock)
     resource.load(_artifact("M"))
     resource.start()
-    port = _free_port()
+    port = free_port()
     field_io = _field_io(resource, port)
     client = None
     if traffic:

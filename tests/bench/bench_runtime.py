@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import socket
 import statistics
 import threading
 import time
@@ -34,6 +33,7 @@ from runtime.resource import Resource
 from runtime.runtime_priority import DEFAULT_CYCLE_PRIORITY
 from tests.bench.baseline import compare
 from tests.bench.bench_language import thousand_statements
+from tests.support.ports import free_port
 
 TARGET_MS = 10
 TARGET_NS = TARGET_MS * 1_000_000
@@ -210,19 +210,12 @@ class LoggedResource(Resource):
         self.log.program_ns.append(self.scheduler.used_ns)
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        port: int = sock.getsockname()[1]
-        return port
-
-
 @contextmanager
 def driven(resource: Resource, clock: Clock) -> Iterator[str]:
     """The real cycle loop with its Zenoh link (a router in this process, on loopback), on
     a thread of its own as `padt runtime` runs it, until the block ends; yields the
     router's endpoint for clients."""
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
     router = open_router(endpoint)
     try:
         session = open_client(endpoint)

@@ -71,9 +71,9 @@ from tests.bench.bench_runtime import (
     TOLERANCE_NS,
     Spread,
     _compile,
-    _free_port,
     ten_thousand_paths,
 )
+from tests.support.ports import free_port
 
 REPO = Path(__file__).resolve().parents[2]
 RESOURCE = "R"  # the name bench_runtime's configuration gives the resource
@@ -200,7 +200,7 @@ def serving(
 ) -> Iterator[str]:
     """A Zenoh router on loopback, the runtime's session and link, and the real cycle
     driver on its own thread; yields the endpoint for the client."""
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
     router = open_router(endpoint)
     try:
         session = open_client(endpoint)
