@@ -12,8 +12,10 @@ import math
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
+from operator import attrgetter
 from typing import Any
 
+from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.contract.values import format_time, to_real32
 
 
@@ -110,6 +112,11 @@ def _deref_set(reference: Reference | None, value: Any) -> None:
     if reference is None:
         raise NullDereference()
     reference.set(value)
+
+
+EMERGENCY_STOPS = tuple(v.name for v in SYSTEM_VARIABLES if v.name.startswith("EMERGENCY_STOP"))
+# the Emergency Stop switches of a SystemView in one C call: read after every program run
+emergency_switches = attrgetter(*EMERGENCY_STOPS)
 
 
 @dataclass

@@ -17,7 +17,6 @@ needs no locks.
 from __future__ import annotations
 
 import logging
-from operator import attrgetter
 from typing import TYPE_CHECKING, Any, Protocol
 
 from runtime.clock import Clock
@@ -26,7 +25,6 @@ from runtime.contract.accounts import AccessControl, Challenge, Proven
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.protocol import ProgramState, ProgramStatus, ResourceState, Status
 from runtime.contract.refusal import Refusal
-from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.cycle_stats import CycleStats
 from runtime.event_log import EventLog
 from runtime.event_recorder import EventRecorder
@@ -34,7 +32,7 @@ from runtime.force_table import GLOBAL
 from runtime.forcing import Forcing
 from runtime.identity import Identity
 from runtime.instances import Instances, instantiate, instantiated
-from runtime.intrinsics import SystemView
+from runtime.intrinsics import EMERGENCY_STOPS, SystemView
 from runtime.login_audit import LoginAudit
 from runtime.online_values import OnlineValues
 from runtime.process_image import ProcessImage
@@ -48,8 +46,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-EMERGENCY_STOPS = tuple(v.name for v in SYSTEM_VARIABLES if v.name.startswith("EMERGENCY_STOP"))
-_emergency_stops = attrgetter(*EMERGENCY_STOPS)
 _RUNNING = (ResourceState.RUN, ResourceState.RUN_UP_STOP)
 
 
@@ -291,8 +287,8 @@ class Resource:
                 program.state = ProgramState.STOP
 
     def emergency_stopped(self) -> bool:
-        if True not in _emergency_stops(self.system):  # the usual case: one C call
-            return False
+        """ERROR STOP for the first Emergency Stop switch that is on (the scheduler asks
+        only when one is: `emergency_switches`)."""
         for number, name in enumerate(EMERGENCY_STOPS, 1):
             if getattr(self.system, name) and self.state != ResourceState.ERROR_STOP:
                 self.error_stop(f"Emergency Stop {number} set")
@@ -363,7 +359,7 @@ class Resource:
         exact replay runs just this, its inputs taken from a recording). False when the
         resource halted."""
         finished: list[UserProgram] = []
-        if not self.scheduler.guarded(self.scheduler.run, begin, finished):
+        if not self.scheduler.run(begin, finished):
             return False
         self.variables.publish(finished)
         if self.system.FORCE_DEACTIVATION or self.forcing.deactivated:  # ON, or just OFF

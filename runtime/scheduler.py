@@ -14,13 +14,17 @@ from runtime.clock import Clock
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.protocol import ProgramState
 from runtime.event_recorder import EventRecorder
-from runtime.intrinsics import ProgramFault, SystemView
+from runtime.intrinsics import ProgramFault, SystemView, emergency_switches
 from runtime.slicing import SliceMeter
 from runtime.user_program import UserProgram
 from runtime.variables import Variables
 from runtime.watchdog import Watchdog, WatchdogExpired, process_watchdog
 
 log = logging.getLogger("runtime.resource")
+
+# read every CPU cycle for every program: a member of an enum class costs a lookup that a
+# module constant does not (in CPython 3.11 as long as an empty program's whole call)
+_RUN = ProgramState.RUN
 
 
 class SchedulerHost(Protocol):
@@ -38,12 +42,14 @@ class SchedulerHost(Protocol):
     def error_stop(self, cause: str) -> None: ...
 
     def emergency_stopped(self) -> bool:
-        """True when an Emergency Stop system variable has just put it in ERROR STOP."""
+        """Asked when an Emergency Stop switch is on (`emergency_switches`): True when it
+        has just put the resource in ERROR STOP."""
         ...
 
 
 class Halted(BaseException):
-    """Ends the CPU cycle at once (Emergency Stop); caught by nothing but `guarded`."""
+    """Ends the CPU cycle at once (Emergency Stop); caught by nothing but `run` and
+    `guarded`."""
 
 
 class Scheduler:
@@ -60,25 +66,46 @@ class Scheduler:
     def watchdog_ns(self) -> int:
         return self._host.params.watchdog_ms * 1_000_000
 
-    def run(self, begin: int, finished: list[UserProgram]) -> None:
+    def run(self, begin: int, finished: list[UserProgram]) -> bool:
+        """The programs of a CPU cycle under the resource watchdog, as `guarded` runs other
+        work: written out for the CPU cycle, since a call through `guarded` with its
+        arguments passed on costs a twentieth of an empty CPU cycle. False when the
+        resource halted."""
+        watchdog = self.watchdog
+        try:
+            watchdog.arm(self._host.params.watchdog_ms * 1_000_000)
+            try:
+                self._by_priority(begin, finished)
+            finally:
+                fired = watchdog.disarm()
+            if fired:  # it fired just as the work ended: too long all the same
+                raise WatchdogExpired()
+            return True
+        except Halted:  # an Emergency Stop: already in ERROR STOP
+            return False
+        except WatchdogExpired as exc:
+            self._watchdog_expired(exc)
+            return False
+
+    def _by_priority(self, begin: int, finished: list[UserProgram]) -> None:
         """Programs by priority, each in its slice; multitasking modes 2 and 3 decide what
         happens with the time a program leaves unused."""
         mode = self._host.params.multitasking_mode
         self.used_ns = 0
         unused_ns = 0
         for program in list(self._variables.programs):
-            if program.state != ProgramState.RUN:
+            if program.state is not _RUN:
                 continue
-            budget = program.config.max_duration_us * 1000 or None
-            if budget is None and program.run is None:
+            if program.run is None and not program.config.max_duration_us:
                 self._run_whole(program, begin, finished)
                 continue
+            budget = program.config.max_duration_us * 1000 or None
             if program.run is None:  # a new program cycle
                 program.begin_cycle(self._delta(program, begin), self._variables.globals)
             used, done = self._slice(program, budget)
             if done:
                 finished.append(program)
-            elif program.state == ProgramState.RUN:
+            elif program.state is _RUN:
                 self._check_program_watchdog(program)
             if budget is not None:
                 unused_ns += max(0, budget - used)
@@ -88,7 +115,7 @@ class Scheduler:
             for program in list(self._variables.programs):
                 if unused_ns <= 0:
                     break
-                if program.state == ProgramState.RUN and program.in_progress:
+                if program.state is _RUN and program.in_progress:
                     used, done = self._slice(program, unused_ns, extra=True)
                     unused_ns -= used
                     if done:
@@ -104,9 +131,9 @@ class Scheduler:
             self._slice(program, None)
 
     def guarded(self, work: Callable[..., None], *args: Any) -> bool:
-        """Work under the resource watchdog: a CPU cycle longer than the watchdog time (an
-        endless loop, say) ends in ERROR STOP, and the runtime still answers. False when
-        the resource halted."""
+        """Work under the resource watchdog (single steps; `run` for a CPU cycle): work
+        longer than the watchdog time (an endless loop, say) ends in ERROR STOP, and the
+        runtime still answers. False when the resource halted."""
         watchdog = self.watchdog
         try:
             watchdog.arm(self._host.params.watchdog_ms * 1_000_000)
@@ -120,17 +147,21 @@ class Scheduler:
         except Halted:  # an Emergency Stop: already in ERROR STOP
             return False
         except WatchdogExpired as exc:
-            running = [p.name for p in self._variables.programs if p.in_progress]
-            cause = f"watchdog: the cycle took longer than {self.watchdog_ns // 1_000_000} ms"
-            if running:
-                cause += f" (in program {running[-1]})"
-            # where the cycle was when the watchdog struck: the endless loop, as a rule
-            code = self._variables.code
-            where = code.locate(exc) if code is not None else None
-            if where is not None:
-                cause += f" in {where}"
-            self._host.error_stop(cause)
+            self._watchdog_expired(exc)
             return False
+
+    def _watchdog_expired(self, exc: WatchdogExpired) -> None:
+        """ERROR STOP, saying where the cycle was when the watchdog struck."""
+        running = [p.name for p in self._variables.programs if p.in_progress]
+        cause = f"watchdog: the cycle took longer than {self.watchdog_ns // 1_000_000} ms"
+        if running:
+            cause += f" (in program {running[-1]})"
+        # the endless loop, as a rule
+        code = self._variables.code
+        where = code.locate(exc) if code is not None else None
+        if where is not None:
+            cause += f" in {where}"
+        self._host.error_stop(cause)
 
     def _slice(
         self, program: UserProgram, budget_ns: int | None, extra: bool = False
@@ -151,7 +182,7 @@ class Scheduler:
             self._program_fault(program, exc)
         used = meter.used_ns()
         self.used_ns += used
-        if self._host.emergency_stopped():
+        if True in emergency_switches(self._host.system) and self._host.emergency_stopped():
             raise Halted()
         return used, done
 
@@ -172,7 +203,7 @@ class Scheduler:
             self._program_fault(program, exc)
         if not self.meter.virtual:  # on a virtual clock, only metered passes count
             self.used_ns += perf_counter_ns() - started
-        if self._host.emergency_stopped():
+        if True in emergency_switches(self._host.system) and self._host.emergency_stopped():
             raise Halted()
 
     def _check_program_watchdog(self, program: UserProgram) -> None:

@@ -96,17 +96,20 @@ class UserProgram:
         """Run the program cycle on until it ends (True) or its slice is used (False)."""
         assert self.run is not None
         self.cpu_cycles += 1
-        if isinstance(self.run, ProgramRun):
-            finished = self.run.resume()
-        else:
+        run = self.run
+        if run is _DIRECT:  # the usual case: a test of identity, not an isinstance() call
             self.instance()
-            finished = True
-        if finished:
-            self.stats.count += 1
-            self.stats.last_cpu_cycles = self.cpu_cycles
-            self.stats.max_cpu_cycles = max(self.stats.max_cpu_cycles, self.cpu_cycles)
-            self.run = None
-        return finished
+        else:
+            assert isinstance(run, ProgramRun)
+            if not run.resume():
+                return False
+        stats = self.stats
+        stats.count += 1
+        stats.last_cpu_cycles = self.cpu_cycles
+        if self.cpu_cycles > stats.max_cpu_cycles:  # a comparison, not a max() call
+            stats.max_cpu_cycles = self.cpu_cycles
+        self.run = None
+        return True
 
     def publish(self, master: Any) -> None:
         """The end of a program cycle: what it wrote to globals becomes visible."""

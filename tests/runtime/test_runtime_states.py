@@ -152,6 +152,24 @@ def test_error_stop_needs_init_and_init_cold_starts() -> None:
     assert h.value("P.n") == 1  # cold: from the initial values
 
 
+def test_an_emergency_stop_set_within_a_time_slice_stops_the_resource_too() -> None:
+    # a program with a time slice runs by another path than one without
+    text = """
+    PROGRAM P
+    VAR n, i : INT; END_VAR
+    n := n + 1;
+    FOR i := 1 TO 3 DO END_FOR;
+    IF n = 2 THEN SYS.EMERGENCY_STOP_4 := TRUE; END_IF;
+    END_PROGRAM
+    """
+    h = harness(text, [{"name": "P", "max_duration_us": 1_000}])
+    h.cycle()
+    assert h.state() == "RUN"
+    h.cycle()
+    assert h.state() == "ERROR STOP"
+    assert "Emergency Stop 4" in str(h.resource.status().error)
+
+
 def test_coldstart_and_start_cycle_flags_are_true_in_the_first_cycle_only() -> None:
     text = """
     PROGRAM P
