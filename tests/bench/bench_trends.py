@@ -7,7 +7,6 @@ Trends tab in front at 30 s, and at 10 min over a full history. Prints; asserts 
 
 from __future__ import annotations
 
-import os
 import tempfile
 import time
 from pathlib import Path
@@ -18,7 +17,7 @@ from playwright.sync_api import Page
 from frontend import trend_plot
 from frontend.screens.trends import LIVE_POINTS, REDRAWS
 from frontend.trend_history import CAPACITY, TrendHistory
-from tests.bench.bench_ui import PASSWORD, _cpu_s, _descendants, _plant
+from tests.bench.bench_ui import PASSWORD, _browser_pids, _cpu_s, _plant
 from tests.support.browser import chromium
 from tests.ui.browser_steps import choose, log_in, log_in_to_resource, state, wait_until
 
@@ -104,29 +103,29 @@ def _chart(page: Page) -> None:
     )
 
 
-def _cpu(label: str) -> None:
-    chromium_pids = [pid for pid in _descendants(os.getpid()) if pid != os.getpid()]
-    own, browsers = time.process_time(), _cpu_s(chromium_pids)
+def _cpu(label: str, runtime_pid: int) -> None:
+    browser_pids = _browser_pids(runtime_pid)
+    own, browsers = time.process_time(), _cpu_s(browser_pids)
     time.sleep(MEASURE_S)
     own = (time.process_time() - own) / MEASURE_S
-    browsers = (_cpu_s(chromium_pids) - browsers) / MEASURE_S
-    print(f"  {label}: UI server {own:.0%} of a core, Chromium {browsers:.0%}")
+    browsers = (_cpu_s(browser_pids) - browsers) / MEASURE_S
+    print(f"  {label}: UI server {own:.0%} of a core, browser {browsers:.0%}")
 
 
 def _with_browser() -> None:
     print(f"trends in Chromium, {CHARTED} variables of a 1,000-variable runtime (50 ms cycle):")
-    with tempfile.TemporaryDirectory() as folder, _plant(Path(folder)) as (_, ui):
+    with tempfile.TemporaryDirectory() as folder, _plant(Path(folder)) as (_, ui, runtime):
         paths = [f"Main.v{i:04d}" for i in range(CHARTED)]
         ui.context.watch_lists.put("admin", "Trend16", tuple(paths))
         with chromium() as browser:
             page = browser.new_context(viewport={"width": 1920, "height": 1080}).new_page()
             _open(page, ui.url)
-            _cpu("nothing charted, the Resources tab in front")
+            _cpu("nothing charted, the Resources tab in front", runtime)
             _chart(page)
             page.get_by_role("tab", name="Resources").click()
-            _cpu("charted, another tab in front (the history collects)")
+            _cpu("charted, another tab in front (the history collects)", runtime)
             page.get_by_role("tab", name="Trends").click()
-            _cpu("Trends in front, window 30 s")
+            _cpu("Trends in front, window 30 s", runtime)
             session = next(iter(ui.browsers.values()))
             with session._drawing:  # the refresher's lock: no sample comes meanwhile
                 assert session.workspace is not None
@@ -135,7 +134,7 @@ def _with_browser() -> None:
                 full.columns = dict(zip(trends.paths, full.columns.values(), strict=True))
                 trends.history = full
             page.get_by_role("button", name="10 min").click()
-            _cpu("Trends in front, window 10 min over 11 minutes of history")
+            _cpu("Trends in front, window 10 min over 11 minutes of history", runtime)
 
 
 def main() -> None:
