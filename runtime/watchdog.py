@@ -1,27 +1,31 @@
 """The resource watchdog: a CPU cycle that runs longer than the watchdog time ends in
 ERROR STOP, even when a program never returns (`WHILE TRUE DO END_WHILE;`).
 
-One watchdog thread per process polls the armed deadlines every millisecond on the real
+One watchdog thread per process sleeps until the earliest armed deadline, on the real
 monotonic clock (also in simulation: an endless loop must end there too). When a deadline
 passes, it raises `WatchdogExpired` in the thread that armed it; CPython delivers such an
 asynchronous exception at the next bytecode boundary, and generated code is plain Python
 bytecode. Arming and disarming are a few assignments, with no system call and, as long as
 the watchdog has not struck, no lock: a deadline is claimed with one atomic `dict.pop`,
 by the thread that disarms it in time or by the watchdog that fires it, never by both
-(the lock cost a fifth of an empty CPU cycle). After a second with nothing armed the
-thread sleeps until the next arming.
+(the lock cost a fifth of an empty CPU cycle).
+
+While cycles run, the thread wakes about once per watchdog time: at a deadline that has
+passed the cycle has long disarmed it and armed a later one. It used to look every
+millisecond; each look takes the interpreter lock, and on a machine kept busy by other
+programs the operating system now and then took the CPU from the thread while it held
+the lock. The real-time cycle thread then waited for the lock: with ten browsers on the
+2-core development machine, a cycle started 8 ms late.
 """
 
 from __future__ import annotations
 
 import ctypes
 import threading
-import time
 from threading import get_ident
 from time import monotonic_ns
 
-POLL_S = 0.001
-IDLE_AFTER_NS = 1_000_000_000
+FIRST_BUDGET_NS = 1_000_000_000  # how long the thread sleeps before anything was armed
 
 
 class WatchdogExpired(BaseException):
@@ -38,12 +42,15 @@ def _raise_in(thread_id: int, exception: type[BaseException] | None) -> None:
 class Watchdog:
     def __init__(self) -> None:
         # a plain lock (a C object: `with` costs no Python call) for the armed deadlines,
-        # and an event that wakes the thread from its idle sleep
+        # and an event that wakes the thread for a deadline earlier than it sleeps to
         self._lock = threading.Lock()
         self._wake = threading.Event()
         self._deadlines: dict[int, int] = {}  # thread id -> monotonic ns
         self._fired: set[int] = set()
-        self._idle = False  # the thread sleeps until `arm` wakes it
+        self._next_look_ns = 0  # when the thread looks next (0 while it looks)
+        # the last budget armed: nothing armed, the thread sleeps that long, since an
+        # arming meanwhile has its deadline no earlier than that (with the same budget)
+        self._budget_ns = FIRST_BUDGET_NS
         self._thread = threading.Thread(target=self._watch, name="padt-watchdog", daemon=True)
         self._thread.start()
 
@@ -51,8 +58,10 @@ class Watchdog:
         """The calling thread must disarm within `budget_ns`, or WatchdogExpired."""
         # no lock: one dict store is atomic, and `_fired` never holds this thread here
         # (`disarm` took it out), so the watching thread sees the old deadline or the new
-        self._deadlines[get_ident()] = monotonic_ns() + budget_ns
-        if self._idle:
+        deadline = monotonic_ns() + budget_ns
+        self._deadlines[get_ident()] = deadline
+        self._budget_ns = budget_ns
+        if deadline < self._next_look_ns:  # a shorter budget than the thread sleeps for
             self._wake.set()
 
     def disarm(self) -> bool:
@@ -69,24 +78,20 @@ class Watchdog:
             return True
 
     def _watch(self) -> None:
-        last_armed_ns = monotonic_ns()
         while True:
-            if self._deadlines:
-                last_armed_ns = monotonic_ns()
-            elif monotonic_ns() - last_armed_ns >= IDLE_AFTER_NS:
-                # idle: `arm` stores its deadline before it reads `_idle`, and this thread
-                # sets `_idle` before it looks at the deadlines again, so one of the two
-                # sees the other and no arming is missed
-                self._wake.clear()
-                self._idle = True
-                if not self._deadlines:
-                    self._wake.wait()
-                self._idle = False
-                last_armed_ns = monotonic_ns()
-                continue
-            time.sleep(POLL_S)
+            # `arm` stores its deadline before it reads `_next_look_ns`, and this thread
+            # sets `_next_look_ns` before it reads the deadlines again: one of the two
+            # sees the other, and no deadline is slept through
+            self._next_look_ns = 0
+            self._wake.clear()
             with self._lock:
                 self._fire_expired()
+            now = monotonic_ns()
+            next_look = min(self._deadlines.values(), default=now + self._budget_ns)
+            self._next_look_ns = next_look
+            if min(self._deadlines.values(), default=next_look) < next_look:
+                continue
+            self._wake.wait(max(0, next_look - now) / 1e9)
 
     def _fire_expired(self) -> None:
         now = monotonic_ns()

@@ -4,6 +4,7 @@ cycle in ERROR STOP, the runtime keeps answering, and INIT leads back to STOP.""
 from __future__ import annotations
 
 import json
+import threading
 import time
 from pathlib import Path
 
@@ -16,7 +17,7 @@ from runtime.contract.artifact import ResourceConfig
 from runtime.contract.protocol import ResourceState
 from runtime.contract.refusal import Refusal
 from runtime.resource import Resource
-from runtime.watchdog import Watchdog
+from runtime.watchdog import FIRST_BUDGET_NS, Watchdog, WatchdogExpired
 from tests.support.resource_harness import harness
 from tests.support.runtime_process import running_resource, store_artifact
 
@@ -129,3 +130,42 @@ def test_a_deadline_is_claimed_by_the_disarm_in_time_or_by_the_watchdog_never_bo
         watchdog._fire_expired()
     assert watchdog._fired == {FOREIGN}  # fired once, its deadline claimed
     assert list(watchdog._deadlines) == [FOREIGN + 1]
+
+
+def _wakeups(thread: threading.Thread) -> int:
+    status = Path(f"/proc/self/task/{thread.native_id}/status").read_text()
+    counts = [line.split()[1] for line in status.splitlines() if "ctxt_switches" in line]
+    return sum(int(count) for count in counts)
+
+
+def test_the_watching_thread_sleeps_until_the_deadline() -> None:
+    # it looked every millisecond once, taking the interpreter lock each time: 300 looks
+    watchdog = Watchdog()
+    watchdog.arm(10_000_000_000)
+    before = _wakeups(watchdog._thread)
+    time.sleep(0.3)
+    woken = _wakeups(watchdog._thread) - before
+    watchdog.disarm()
+    assert woken <= 3
+
+
+def test_a_shorter_budget_wakes_the_watchdog_sleeping_to_a_longer_one() -> None:
+    watchdog = Watchdog()
+    watchdog.arm(10_000_000_000)  # this thread: the watching thread sleeps to its deadline
+    time.sleep(FIRST_BUDGET_NS / 1e9 + 0.1)  # once it looked after its first sleep
+    ended: list[str] = []
+
+    def spin() -> None:
+        watchdog.arm(50_000_000)
+        try:
+            while True:
+                pass
+        except WatchdogExpired:
+            watchdog.disarm()
+            ended.append("expired")
+
+    spinner = threading.Thread(target=spin)
+    spinner.start()
+    spinner.join(timeout=5)  # long before the 10 s: only waking for the 50 ms ends it
+    watchdog.disarm()
+    assert ended == ["expired"]
