@@ -16,6 +16,7 @@ from runtime.contract.artifact import Artifact, PouCode, VarInfo
 from runtime.contract.values import array_shape
 from runtime.fault_location import SourceLocation, code_filename, locate
 from runtime.intrinsics import SystemView, namespace
+from runtime.native.tier import NativeReport, NativeTier
 
 # An attribute name, or an offset into the flat list that holds an array.
 Accessor = str | int
@@ -59,9 +60,11 @@ class CodeImage:
         system: SystemView,
         printf: Callable[..., int] | None = None,
         compile_units: Callable[[list[tuple[str, str]]], list[CodeType]] = compile_here,
+        native: NativeTier | None = None,
     ) -> None:
         """`compile_units`: how the generated source becomes code (a reload prepared
-        while cycles run passes the compile worker's)."""
+        while cycles run passes the compile worker's); `native`: the tier that binds C
+        bodies to the classes, where it can."""
         self.artifact = artifact
         self.system = system
         self._namespace = namespace(system) if printf is None else namespace(system, printf)
@@ -77,6 +80,10 @@ class CodeImage:
         self._codes = dict(zip(self.units, codes, strict=True))
         for code in codes[: len(first)]:
             exec(code, self._namespace)
+        self.native: NativeReport | None = None
+        if native is not None:
+            globals_class = artifact.globals.class_name if artifact.globals is not None else None
+            self.native = native.apply(first, globals_class, self._namespace)
         self.globals: Any = None
         if artifact.globals is not None:
             self.globals = self._namespace[artifact.globals.class_name]()

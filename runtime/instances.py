@@ -13,6 +13,7 @@ from runtime.compile_worker import compile_here
 from runtime.contract.artifact import Artifact, VarInfo
 from runtime.contract.refusal import Refusal
 from runtime.intrinsics import SystemView
+from runtime.native.tier import NativeTier
 from runtime.user_program import UserProgram
 
 
@@ -38,9 +39,10 @@ def instantiate(
     artifact: Artifact,
     system: SystemView,
     compile_units: Callable[[list[tuple[str, str]]], list[CodeType]] = compile_here,
+    native: NativeTier | None = None,
 ) -> Instances:
     """Fresh instances of everything: every variable at its initial value."""
-    image = CodeImage(artifact, system, compile_units=compile_units)
+    image = CodeImage(artifact, system, compile_units=compile_units, native=native)
     configs = sorted(artifact.programs, key=lambda p: (p.priority, p.program_id))
     # a program needs its own view of the globals when another program could change them
     # during its program cycle, or when its cycle spans several CPU cycles
@@ -121,11 +123,13 @@ def output_points(bound: list[BoundVariable]) -> list[BoundVariable]:
     return [b for b in bound if b.path.location and b.path.location.upper().startswith("%Q")]
 
 
-def instantiated(artifact: Artifact, system: SystemView) -> Instances:
+def instantiated(
+    artifact: Artifact, system: SystemView, native: NativeTier | None = None
+) -> Instances:
     """`instantiate`, with a configuration whose code fails while it is set up refused as
     `bad_configuration` (the resource keeps what it runs)."""
     try:
-        return instantiate(artifact, system)
+        return instantiate(artifact, system, native=native)
     except Exception as exc:  # generated code of an artifact that is not sound
         raise Refusal(
             "bad_configuration", f"the configuration cannot be set up: {type(exc).__name__}: {exc}"

@@ -18,6 +18,7 @@ from runtime.contract.refusal import Refusal
 from runtime.disposal import DISPOSAL
 from runtime.instances import Instances, instantiate
 from runtime.intrinsics import SystemView
+from runtime.native.tier import NativeTier
 from runtime.reload import (
     SwitchOver,
     SwitchOverTooLong,
@@ -56,6 +57,7 @@ class ReloadJob:
         self.expected_crc: str | None = None  # the configuration the user previewed against
         self.store: ConfigurationStore | None = None  # where a reload that happens is kept
         self.staged: Staged | None = None
+        self.native: NativeTier | None = None  # the resource's native tier, if it has one
 
     def let_go(self) -> list[object]:
         """What is left once the job is done, taken out of it: the replaced configuration
@@ -81,7 +83,9 @@ class ReloadJob:
             # interpreter lock the cycle thread needs for as long as it runs), the others
             # the running code
             compile_units = reusing(self.old.image, COMPILE_WORKER.compile)
-            self.instances = instantiate(self.artifact, self.system, compile_units)
+            self.instances = instantiate(
+                self.artifact, self.system, compile_units, native=self.native
+            )
             self.plan = plan_reload(
                 self.old_artifact,
                 self.artifact,
@@ -183,7 +187,9 @@ def _job(resource: Resource, artifact: Artifact, renames: dict[str, str]) -> Rel
     assert resource.artifact is not None
     old = resource.variables.instances()
     live = live_state(resource.artifact, old)
-    return ReloadJob(artifact, renames, old, resource.artifact, resource.system, live)
+    job = ReloadJob(artifact, renames, old, resource.artifact, resource.system, live)
+    job.native = resource.native
+    return job
 
 
 def _check(resource: Resource) -> None:

@@ -34,6 +34,7 @@ from runtime.identity import Identity
 from runtime.instances import Instances, instantiate, instantiated
 from runtime.intrinsics import EMERGENCY_STOPS, SystemView
 from runtime.login_audit import LoginAudit
+from runtime.native.tier import NativeTier
 from runtime.online_values import OnlineValues
 from runtime.process_image import ProcessImage
 from runtime.scheduler import Scheduler
@@ -108,6 +109,8 @@ class Resource:
         self.field_io: FieldIo | None = None  # Modbus TCP, in a runtime process
         # the recordings (runtime/recorder.py), in a runtime process with a state folder
         self.recordings: CycleRecorder | None = None
+        # the native tier (runtime/native/), when the runtime was started with it
+        self.native: NativeTier | None = None
 
     @property
     def programs(self) -> list[UserProgram]:
@@ -182,7 +185,7 @@ class Resource:
             if self.artifact is not None and not self.params.load_allowed:
                 raise Refusal("not_allowed", "Load Allowed is OFF")
             # everything that can fail before anything changes: the code, then the disk
-            instances = instantiated(artifact, self.system)
+            instances = instantiated(artifact, self.system, self.native)
             staged = self.store.stage(artifact) if self.store is not None else None
         except Refusal as refused:
             self.refused("load", refused.message, artifact.crc)
@@ -216,7 +219,7 @@ class Resource:
     def instantiate(self) -> None:
         """Fresh instances of everything: every variable at its initial value."""
         assert self.artifact is not None
-        self.variables.adopt(instantiate(self.artifact, self.system))
+        self.variables.adopt(instantiate(self.artifact, self.system, native=self.native))
 
     # ---- states
     def init(self) -> None:

@@ -95,6 +95,14 @@ _INT_RANGES: dict[str, tuple[int, int]] = {
                     (-(1 << 63), (1 << 63) - 1)),
 }  # fmt: skip
 _REALS = ("REAL", "LREAL")
+
+
+def int_range(type_name: str) -> tuple[int, int] | None:
+    """The values an integer type (also TIME and the dates, as nanoseconds) holds; None for
+    any other type."""
+    return _INT_RANGES.get(type_name.upper())
+
+
 _STRINGS = ("STRING", "WSTRING", "CHAR", "WCHAR")
 TIME_TYPES = ("TIME", "LTIME")
 

@@ -1,0 +1,144 @@
+"""What the translator knows of a value: its kind, and for integers the range it lies in.
+
+The ranges come from the declared types (the contract keeps every stored value in the range
+of its type) and from the arithmetic between them, so the translator can prove that C's
+64-bit (or 128-bit) integers compute exactly what Python's unbounded ones do.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from runtime.contract.artifact import PouCode
+from runtime.contract.values import array_shape, base_type, int_range
+
+INT64_MIN, INT64_MAX = -(1 << 63), (1 << 63) - 1
+INT128_MIN, INT128_MAX = -(1 << 127), (1 << 127) - 1
+
+
+@dataclass(frozen=True)
+class Int:
+    lo: int
+    hi: int
+
+    @property
+    def ctype(self) -> str:
+        return "int64_t" if self.fits64 else "padt_i128"
+
+    @property
+    def fits64(self) -> bool:
+        return self.lo >= INT64_MIN and self.hi <= INT64_MAX
+
+    @property
+    def fits128(self) -> bool:
+        return self.lo >= INT128_MIN and self.hi <= INT128_MAX
+
+    def within(self, other: Int) -> bool:
+        return other.lo <= self.lo and self.hi <= other.hi
+
+
+FULL64 = Int(INT64_MIN, INT64_MAX)
+
+
+@dataclass(frozen=True)
+class Bool:
+    pass
+
+
+@dataclass(frozen=True)
+class Instance:
+    """An object of a generated class (function block, structure, program, the globals)."""
+
+    cls: str
+
+
+@dataclass(frozen=True)
+class Array:
+    """A flat list, as generated code holds an ARRAY; `element` None: not translated."""
+
+    element: Kind | None
+    length: int
+
+
+@dataclass(frozen=True)
+class Hook:
+    """A name of the namespace that holds None or something to call (`_tick`)."""
+
+
+@dataclass(frozen=True)
+class System:
+    """`_SYS`, the system values of the running program."""
+
+
+@dataclass(frozen=True)
+class Range:
+    """A `range(start, stop, step)` held in a local, with a constant step."""
+
+    start: Int
+    stop: Int
+    step: int
+
+
+Kind = Int | Bool | Instance | Array | Hook | System | Range
+
+# the attributes of `_SYS` (runtime.intrinsics.SystemView): BOOL flags, the rest integers of
+# at most 64 bits (TIME, UDINT, DWORD, DT)
+SYSTEM_BOOLS = frozenset(
+    {
+        "COLDSTART", "WARMSTART", "START_CYCLE", "FORCE_DEACTIVATION", "RELOAD_DEACTIVATION",
+        "READ_ONLY_IN_RUN", "EMERGENCY_STOP_1", "EMERGENCY_STOP_2", "EMERGENCY_STOP_3",
+        "EMERGENCY_STOP_4",
+    }
+)  # fmt: skip
+SYSTEM_INTS = frozenset(
+    {
+        "now_ns", "CYCLE_TIME_LAST", "CYCLE_TIME_MIN", "CYCLE_TIME_MAX", "CYCLE_TIME_MEAN",
+        "WATCHDOG_TIME", "SYSTEM_TICK", "FORCE_TIME_REMAINING", "CONFIGURATION_CRC",
+        "DATE_AND_TIME",
+    }
+)  # fmt: skip
+
+
+def join(a: Kind, b: Kind) -> Kind | None:
+    """The kind of a local that takes both; None when no one C type holds both."""
+    if isinstance(a, Int) and isinstance(b, Int):
+        return Int(min(a.lo, b.lo), max(a.hi, b.hi))
+    return a if a == b else None
+
+
+@dataclass(frozen=True)
+class ClassInfo:
+    name: str  # the class in the namespace
+    members: dict[str, Kind | None]  # attribute -> kind (None: a type not translated)
+
+
+def class_table(units: list[PouCode]) -> dict[str, ClassInfo]:
+    """Every generated class of an artifact with the kinds of its declared variables."""
+    by_type = {unit.name.upper(): unit.class_name for unit in units if unit.kind != "FUNCTION"}
+    table: dict[str, ClassInfo] = {}
+    for unit in units:
+        if unit.kind == "FUNCTION":
+            continue
+        members = {v.attr: kind_of_type(v.type, by_type) for v in unit.variables}
+        table[unit.class_name] = ClassInfo(unit.class_name, members)
+    return table
+
+
+def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
+    """The kind of a variable of a declared type; None for what the tier leaves to Python
+    (REAL, strings, references, enumerations)."""
+    name, _ = base_type(type_name)
+    if name == "BOOL":
+        return Bool()
+    limits = int_range(name)
+    if limits is not None:
+        return Int(*limits) if Int(*limits).fits64 else None
+    if type_name.upper() in classes:
+        return Instance(classes[type_name.upper()])
+    shape = array_shape(type_name)
+    if shape is not None:
+        length = 1
+        for low, high in shape.dims:
+            length *= max(0, high - low + 1)
+        return Array(kind_of_type(shape.element, classes), length)
+    return None

@@ -1,0 +1,399 @@
+/* What every C unit of the native tier includes (runtime/native/translate.py writes the
+ * units). The units work on the runtime's own objects: a variable is the slot of a
+ * generated class, read and written at its offset, so that every service of the runtime
+ * (online values, forcing, reload, context) sees the same data as with the Python tier.
+ *
+ * Every helper that can fail sets a Python exception and returns -1 (or NULL); the unit
+ * then adds its place in the generated code to the traceback, so that a fault names the
+ * same ST line as in the Python tier.
+ */
+#ifndef PADT_NATIVE_H
+#define PADT_NATIVE_H
+
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <structmember.h>
+#include <stdint.h>
+
+#define PADT_LIKELY(x) __builtin_expect(!!(x), 1)
+#define PADT_UNLIKELY(x) __builtin_expect(!!(x), 0)
+#define PADT_SLOT(o, off) (*(PyObject **)((char *)(o) + (off)))
+
+typedef __int128 padt_i128;
+
+/* Loop passes between two looks at the interpreter's pending requests (padt_breathe). */
+#define PADT_BREATH 4096
+
+/* ---- state one module copy binds (padt_bind_common) ---------------------------------- */
+
+/* Borrowed: each bound class holds the namespace (runtime/native/tier.py), and a body
+ * runs only on an instance of its class; the classes are in the namespace. */
+static PyObject *padt_ns;           /* the resource's namespace of generated code */
+static PyObject *padt_breathe_fn;   /* a Python function of no code: see padt_breathe */
+static PyObject *padt_str_call;     /* "__call__" */
+
+/* A call site of `x.__call__()`: the type it last met, by version tag (no reference is
+ * held, and a tag is never given to two types), and that type's native body. */
+typedef struct {
+    unsigned int tag;
+    PyCFunction fn;
+} padt_site;
+
+static int
+padt_bind_common(PyObject *ns, PyObject *breathe)
+{
+    if (!PyDict_Check(ns) || !PyCallable_Check(breathe)) {
+        PyErr_SetString(PyExc_TypeError, "bind(namespace, breathe)");
+        return -1;
+    }
+    padt_ns = ns;
+    Py_XSETREF(padt_breathe_fn, Py_NewRef(breathe));
+    if (padt_str_call == NULL && (padt_str_call = PyUnicode_InternFromString("__call__")) == NULL)
+        return -1;
+    return 0;
+}
+
+/* The offset of slot `name` of `type` (a __slots__ member), or -1 with an exception. */
+static Py_ssize_t
+padt_offset(PyObject *type, const char *name)
+{
+    if (!PyType_Check(type)) {
+        PyErr_Format(PyExc_TypeError, "native code: %R is no class", type);
+        return -1;
+    }
+    PyObject *key = PyUnicode_InternFromString(name);
+    if (key == NULL)
+        return -1;
+    PyObject *descr = _PyType_Lookup((PyTypeObject *)type, key);
+    Py_DECREF(key);
+    if (descr == NULL || !Py_IS_TYPE(descr, &PyMemberDescr_Type)
+        || ((PyMemberDescrObject *)descr)->d_member->type != T_OBJECT_EX) {
+        PyErr_Format(PyExc_TypeError, "native code: %R has no slot %s", type, name);
+        return -1;
+    }
+    return ((PyMemberDescrObject *)descr)->d_member->offset;
+}
+
+/* A class of the namespace by name, borrowed (the namespace keeps it). */
+static PyObject *
+padt_class(const char *name)
+{
+    PyObject *found = PyDict_GetItemString(padt_ns, name);
+    if (found == NULL || !PyType_Check(found)) {
+        PyErr_Format(PyExc_TypeError, "native code: no class %s", name);
+        return NULL;
+    }
+    return found;
+}
+
+/* ---- values ---------------------------------------------------------------------------
+ *
+ * The contract (runtime/contract/values.py) keeps every stored value in the range of its
+ * type, and the translator's proofs rest on it, as the generated Python's wrapping does.
+ * What a read checks is what memory safety needs: the slot holds an object of the right
+ * type. Anything else jumps to the body's `padt_bad`, a fault at that line.
+ */
+
+#if PY_VERSION_HEX >= 0x030C0000
+#define PADT_SMALL(o) PyUnstable_Long_IsCompact((PyLongObject *)(o))
+#define PADT_SMALL_VALUE(o) ((int64_t)PyUnstable_Long_CompactValue((PyLongObject *)(o)))
+#else
+/* one 30-bit digit (or none): the value is the sign times that digit */
+#define PADT_SMALL(o) ((size_t)(Py_SIZE(o) + 1) <= 2)
+#define PADT_SMALL_VALUE(o) (Py_SIZE(o) * (int64_t)((PyLongObject *)(o))->ob_digit[0])
+#endif
+
+/* An integer of a type whose values fit one digit (SINT, INT, UINT, BYTE, WORD...). */
+#define PADT_GET_SMALL(o, out)                                                            \
+    do {                                                                                  \
+        PyObject *padt_o_ = (o);                                                          \
+        if (PADT_UNLIKELY(padt_o_ == NULL || !Py_IS_TYPE(padt_o_, &PyLong_Type)          \
+                          || !PADT_SMALL(padt_o_)))                                       \
+            goto padt_bad;                                                                \
+        (out) = PADT_SMALL_VALUE(padt_o_);                                                \
+    } while (0)
+
+/* An integer of at most 64 bits (DINT, LINT, TIME, UDINT...). */
+#define PADT_GET_INT(o, out)                                                              \
+    do {                                                                                  \
+        PyObject *padt_o_ = (o);                                                          \
+        if (PADT_UNLIKELY(padt_o_ == NULL || !Py_IS_TYPE(padt_o_, &PyLong_Type)))         \
+            goto padt_bad;                                                                \
+        if (PADT_LIKELY(PADT_SMALL(padt_o_)))                                             \
+            (out) = PADT_SMALL_VALUE(padt_o_);                                            \
+        else if (padt_int_slow(padt_o_, &(out)) < 0)                                      \
+            goto padt_bad;                                                                \
+    } while (0)
+
+#define PADT_GET_BOOL(o, out)                                                             \
+    do {                                                                                  \
+        PyObject *padt_o_ = (o);                                                          \
+        if (padt_o_ == Py_True)                                                           \
+            (out) = 1;                                                                    \
+        else if (PADT_LIKELY(padt_o_ == Py_False))                                        \
+            (out) = 0;                                                                    \
+        else                                                                              \
+            goto padt_bad;                                                                \
+    } while (0)
+
+/* An instance of a generated class (or of one that extends it). */
+#define PADT_CHECK_INSTANCE(o, type)                                                      \
+    do {                                                                                  \
+        if (PADT_UNLIKELY((o) == NULL || !PyObject_TypeCheck((o), (PyTypeObject *)(type)))) \
+            goto padt_bad;                                                                \
+    } while (0)
+
+#define PADT_CHECK_LIST(o)                                                                \
+    do {                                                                                  \
+        if (PADT_UNLIKELY((o) == NULL || !PyList_CheckExact(o)))                          \
+            goto padt_bad;                                                                \
+    } while (0)
+
+static int
+padt_int_slow(PyObject *o, int64_t *out)
+{
+    int overflow = 0;
+    long long v = PyLong_AsLongLongAndOverflow(o, &overflow);
+    if (overflow || (v == -1 && PyErr_Occurred())) {
+        PyErr_Clear();
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+/* The fault of a read that found a value of another type. */
+static void
+padt_bad_read(void)
+{
+    if (!PyErr_Occurred())
+        PyErr_SetString(PyExc_TypeError,
+                        "native code: a variable holds a value of another type than declared");
+}
+
+/* An offset into a list as Python reads `l[i]`: a negative index counts from the end. */
+static inline int
+padt_index(PyObject *list, int64_t i, Py_ssize_t *out)
+{
+    Py_ssize_t n = PyList_GET_SIZE(list);
+    if (i < 0)
+        i += n;
+    if (PADT_LIKELY(i >= 0 && i < n)) {
+        *out = (Py_ssize_t)i;
+        return 0;
+    }
+    PyErr_SetString(PyExc_IndexError, "list index out of range");
+    return -1;
+}
+
+static PyObject *
+padt_box128(padt_i128 v)
+{
+    if (v >= INT64_MIN && v <= INT64_MAX)
+        return PyLong_FromLongLong((long long)v);
+    return _PyLong_FromByteArray((const unsigned char *)&v, sizeof v, 1, 1);
+}
+
+static int
+padt_put(PyObject **place, PyObject *value)
+{
+    if (value == NULL)
+        return -1;
+    PyObject *old = *place;
+    *place = value;
+    Py_XDECREF(old);
+    return 0;
+}
+
+/* Store an integer. An int object that only this place holds (a reference count of one)
+ * takes the new value in place when both have one digit: no allocation, no freeing, and
+ * nothing else can tell, since nothing else refers to it (the interpreter lock is held).
+ * The shared small ints (-5..256) are never changed. */
+static inline int
+padt_set_int(PyObject **place, int64_t v)
+{
+#if PY_VERSION_HEX < 0x030C0000
+    PyObject *old = *place;
+    if (PADT_LIKELY(old != NULL && Py_REFCNT(old) == 1 && Py_IS_TYPE(old, &PyLong_Type)
+                    && (Py_SIZE(old) == 1 || Py_SIZE(old) == -1)
+                    && (v > 256 || v < -5) && v < (1 << 30) && v > -(1 << 30))) {
+        Py_SET_SIZE(old, v < 0 ? -1 : 1);
+        ((PyLongObject *)old)->ob_digit[0] = (digit)(v < 0 ? -v : v);
+        return 0;
+    }
+#endif
+    return padt_put(place, PyLong_FromLongLong((long long)v));
+}
+
+static inline int
+padt_set_int128(PyObject **place, padt_i128 v)
+{
+    if (v >= INT64_MIN && v <= INT64_MAX)
+        return padt_set_int(place, (int64_t)v);
+    return padt_put(place, padt_box128(v));
+}
+
+static inline void
+padt_set_bool(PyObject **place, int v)
+{
+    PyObject *value = v ? Py_True : Py_False;
+    PyObject *old = *place;
+    Py_INCREF(value);
+    *place = value;
+    Py_XDECREF(old);
+}
+
+#define PADT_PLACE(o, off) ((PyObject **)((char *)(o) + (off)))
+#define PADT_ITEM_PLACE(list, i) (&PyList_GET_ITEM((list), (i)))
+
+/* A 128-bit intermediate that a local of 64 bits must take. */
+static inline int
+padt_narrow(padt_i128 v, int64_t *out)
+{
+    if (PADT_LIKELY(v >= INT64_MIN && v <= INT64_MAX)) {
+        *out = (int64_t)v;
+        return 0;
+    }
+    PyErr_SetString(PyExc_OverflowError, "native code: an integer beyond 64 bits");
+    return -1;
+}
+
+/* A value proven nowhere to fit the variable it is stored into: the contract keeps it in
+ * range, and a value outside is a fault rather than a silent difference. */
+static inline int
+padt_in_range(padt_i128 v, padt_i128 lo, padt_i128 hi, const char *what)
+{
+    if (PADT_LIKELY(lo <= v && v <= hi))
+        return 0;
+    PyErr_Format(PyExc_OverflowError, "native code: a value outside the range of %s", what);
+    return -1;
+}
+
+/* ---- names of the namespace ----------------------------------------------------------- */
+
+/* A name of the namespace (`_tick`, `_G`), borrowed; None when absent. */
+static inline PyObject *
+padt_global(PyObject *key)
+{
+    PyObject *found = PyDict_GetItemWithError(padt_ns, key);
+    if (found == NULL && !PyErr_Occurred())
+        return Py_None;
+    return found;
+}
+
+/* A helper of the namespace (`_ix`, `_idiv`) called to raise its own error, so that the
+ * fault is the one the Python tier raises. */
+static int
+padt_raise_through(const char *helper, int n, int64_t a, int64_t b, int64_t c)
+{
+    PyObject *fn = PyDict_GetItemString(padt_ns, helper);
+    if (fn == NULL) {
+        PyErr_Format(PyExc_SystemError, "native code: no %s", helper);
+        return -1;
+    }
+    PyObject *result = n == 2 ? PyObject_CallFunction(fn, "LL", (long long)a, (long long)b)
+                              : PyObject_CallFunction(fn, "LLL", (long long)a, (long long)b,
+                                                      (long long)c);
+    if (result == NULL)
+        return -1;
+    Py_DECREF(result);
+    PyErr_Format(PyExc_SystemError, "native code: %s did not raise", helper);
+    return -1;
+}
+
+/* IEC division of integers: toward zero; by zero, the Python helper's fault. */
+static inline int
+padt_idiv(int64_t a, int64_t b, int64_t *out)
+{
+    if (PADT_UNLIKELY(b == 0))
+        return padt_raise_through("_idiv", 2, a, b, 0);
+    if (PADT_UNLIKELY(b == -1)) /* INT64_MIN / -1 */
+        *out = (int64_t)(0 - (uint64_t)a);
+    else
+        *out = a / b;
+    return 0;
+}
+
+static inline int
+padt_imod(int64_t a, int64_t b, int64_t *out)
+{
+    if (PADT_UNLIKELY(b == 0))
+        return padt_raise_through("_imod", 2, a, b, 0);
+    *out = b == -1 ? 0 : a % b;
+    return 0;
+}
+
+/* ---- calls and loops ------------------------------------------------------------------ */
+
+static PyObject *
+padt_call_slow(PyObject *o, padt_site *site)
+{
+    PyTypeObject *type = Py_TYPE(o);
+    PyObject *method = _PyType_Lookup(type, padt_str_call);
+    if (method != NULL && Py_IS_TYPE(method, &PyMethodDescr_Type)
+        && ((PyMethodDescrObject *)method)->d_method->ml_flags == METH_NOARGS
+        && (type->tp_flags & Py_TPFLAGS_VALID_VERSION_TAG) && type->tp_version_tag != 0) {
+        site->tag = type->tp_version_tag;
+        site->fn = ((PyMethodDescrObject *)method)->d_method->ml_meth;
+        return site->fn(o, NULL);
+    }
+    return PyObject_CallMethodNoArgs(o, padt_str_call);
+}
+
+/* `o.__call__()`: straight into a native body, else through Python. */
+static inline int
+padt_call(PyObject *o, padt_site *site)
+{
+    PyObject *result = PADT_LIKELY(Py_TYPE(o)->tp_version_tag == site->tag && site->tag != 0)
+                           ? site->fn(o, NULL)
+                           : padt_call_slow(o, site);
+    if (result == NULL)
+        return -1;
+    Py_DECREF(result);
+    return 0;
+}
+
+/* Calling a Python function of no code makes the interpreter look at its pending
+ * requests, as it does at the back edge of a loop in Python: another thread's turn for
+ * the interpreter lock, and the watchdog's asynchronous exception, raised here. */
+static int
+padt_breathe(void)
+{
+    PyObject *result = PyObject_CallNoArgs(padt_breathe_fn);
+    if (result == NULL)
+        return -1;
+    Py_DECREF(result);
+    return 0;
+}
+
+static int
+padt_call_any(PyObject *callable)
+{
+    PyObject *result = PyObject_CallNoArgs(callable);
+    if (result == NULL)
+        return -1;
+    Py_DECREF(result);
+    return 0;
+}
+
+/* ---- binding a body to its class ------------------------------------------------------ */
+
+/* The body as the class's `__call__`: a method descriptor, which checks that it is
+ * called on an instance of the class, in a dict the binding sets on the class. */
+static int
+padt_add_method(PyObject *bodies, const char *class_name, PyMethodDef *def)
+{
+    PyObject *type = padt_class(class_name);
+    if (type == NULL)
+        return -1;
+    PyObject *descr = PyDescr_NewMethod((PyTypeObject *)type, def);
+    if (descr == NULL)
+        return -1;
+    PyObject *key = Py_BuildValue("(ss)", class_name, def->ml_name);
+    int failed = key == NULL || PyDict_SetItem(bodies, key, descr) < 0;
+    Py_XDECREF(key);
+    Py_DECREF(descr);
+    return failed ? -1 : 0;
+}
+
+#endif /* PADT_NATIVE_H */
