@@ -16,7 +16,7 @@ from runtime.contract.artifact import Artifact, PouCode, VarInfo
 from runtime.contract.values import array_shape
 from runtime.fault_location import SourceLocation, code_filename, locate
 from runtime.intrinsics import SystemView, namespace
-from runtime.native.tier import NativeReport, NativeTier
+from runtime.native.tier import NativeJob, NativeReport, NativeTier
 
 # An attribute name, or an offset into the flat list that holds an array.
 Accessor = str | int
@@ -80,10 +80,13 @@ class CodeImage:
         self._codes = dict(zip(self.units, codes, strict=True))
         for code in codes[: len(first)]:
             exec(code, self._namespace)
+        # the native bodies are made on a thread of their own, while this image runs as
+        # Python; `tier_up` puts them in place
         self.native: NativeReport | None = None
+        self.native_job: NativeJob | None = None
         if native is not None:
             globals_class = artifact.globals.class_name if artifact.globals is not None else None
-            self.native = native.apply(first, globals_class, self._namespace)
+            self.native_job = native.start(first, globals_class, self._namespace)
         self.globals: Any = None
         if artifact.globals is not None:
             self.globals = self._namespace[artifact.globals.class_name]()
@@ -93,6 +96,16 @@ class CodeImage:
         # only code that makes references (REF) reads `reference_roots`; naming them walks
         # every variable, 20 ms of a reload's pause with 100,000 of them
         self.makes_references = any("_ref(" in unit.source for unit in self.units.values())
+
+    def tier_up(self, wait: bool = False) -> NativeReport | None:
+        """Put the native bodies in place once they are ready (`wait`: until they are); the
+        report when this call installed them, else None. Called between two cycles."""
+        job = self.native_job
+        if job is None or not (job.wait() if wait else job.ready):
+            return None
+        self.native_job = None
+        self.native = job.install()
+        return self.native
 
     def code_of(self, source: str, filename: str) -> CodeType | None:
         """The compiled code of a unit of this image with exactly this source."""

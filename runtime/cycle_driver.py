@@ -152,6 +152,7 @@ class CycleDriver:
             self._publish_values(at_once=True, only=self._unplanned)
         self._publish_status()
         self._finish_reload()  # between two cycles
+        self.resource.tier_up()
         self._follow_field_io()
         DISPOSAL.step()
         self._save_if_due()

@@ -20,11 +20,13 @@ from runtime.contract.state_folder import (
     context_path,
     events_path,
     identity_path,
+    native_path,
     recordings_path,
 )
 from runtime.contract.stop_request import StopRequest
 from runtime.event_log import EventLog
 from runtime.identity import Identity
+from runtime.native.tier import NativeTier
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
 from runtime.runtime_priority import (
@@ -79,6 +81,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="PORT",
         help="port of the served Modbus TCP image instead of the configured one (0: any free)",
     )
+    parser.add_argument(
+        "--native-code",
+        action="store_true",
+        help="run the bodies of programs and function blocks as C compiled on this machine "
+        "where they translate (needs a C compiler and Python's headers; the resource runs "
+        "them as Python until they are built; docs/native-code.md)",
+    )
 
 
 def power_up(resource: Resource, state_dir: Path) -> None:
@@ -120,6 +129,12 @@ def run(args: argparse.Namespace) -> int:
     events = EventLog(clock.wall_ns, long_path=events_path(args.state_dir), write_behind=True)
     identity = Identity.kept_in(identity_path(args.state_dir))
     resource = Resource(args.resource, clock, events, identity)
+    if args.native_code:
+        resource.native = NativeTier(native_path(args.state_dir))
+        if not resource.native.available:
+            message = "native code: no C compiler or no Python.h here; the bodies run as Python"
+            log.warning(message)
+            resource.events.record("native", message, long_term=True)
     power_up(resource, args.state_dir)
     resource.store = ConfigurationStore(args.state_dir)
 

@@ -86,6 +86,8 @@ class ReloadJob:
             self.instances = instantiate(
                 self.artifact, self.system, compile_units, native=self.native
             )
+            # native from the first cycle on: the classes are not running yet
+            self.instances.image.tier_up(wait=True)
             self.plan = plan_reload(
                 self.old_artifact,
                 self.artifact,

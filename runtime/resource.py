@@ -216,6 +216,19 @@ class Resource:
         self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
         self.system.WATCHDOG_TIME = self.scheduler.watchdog_ns
 
+    def tier_up(self, wait: bool = False) -> None:
+        """The native bodies of the running code in place once they are made (between two
+        cycles; `wait`: until they are), with an event that says what runs as C."""
+        code = self.variables.code
+        report = code.tier_up(wait) if code is not None else None
+        if report is not None:
+            self.recorder.record(
+                "native",
+                report.summary(),
+                native=list(report.bodies),
+                python=[f"{pou}: {reason}" for pou, reason in report.left],
+            )
+
     def instantiate(self) -> None:
         """Fresh instances of everything: every variable at its initial value."""
         assert self.artifact is not None

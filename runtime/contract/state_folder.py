@@ -28,6 +28,11 @@ def identity_path(state_dir: Path) -> Path:
     return state_dir / "identity.key"
 
 
+def native_path(state_dir: Path) -> Path:
+    """The compiled modules of the native tier (docs/native-code.md), a cache."""
+    return state_dir / "native"
+
+
 def recordings_path(state_dir: Path) -> Path:
     """The MCAP files of the resource's recordings (docs/recording.md)."""
     return state_dir / "recordings"

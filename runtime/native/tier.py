@@ -39,13 +39,20 @@ def _breathe() -> None:
 class NativeReport:
     """What runs as C after a binding, and why the rest does not."""
 
-    bodies: tuple[str, ...]  # "POU_TON.__call__"
-    left: tuple[tuple[str, str], ...]  # (body, reason) run as Python
-    failed: tuple[str, ...] = ()  # units whose C did not build or bind
+    bodies: tuple[str, ...]  # the POUs (programs, function blocks) whose bodies run as C
+    left: tuple[tuple[str, str], ...]  # (POU, reason): bodies that run as Python
+    failed: tuple[str, ...] = ()  # what did not build or bind, with the compiler's words
 
     def summary(self) -> str:
         total = len(self.bodies) + len(self.left)
-        return f"native code: {len(self.bodies)} of {total} bodies"
+        text = f"native code in place: {len(self.bodies)} of {total} POU bodies run as C"
+        if self.left:
+            pou, reason = self.left[0]
+            more = f" and {len(self.left) - 1} more" if len(self.left) > 1 else ""
+            text += f"; as Python: {pou} ({reason}){more}"
+        if self.failed:
+            text += f"; not built: {self.failed[0][:300]}"
+        return text
 
 
 @dataclass
@@ -58,7 +65,7 @@ class _Copies:
 
 class NativeTier:
     """Translates, builds and binds; shared by every image of a resource (thread-safe:
-    a reload prepares on another thread)."""
+    jobs run on threads of their own)."""
 
     def __init__(self, cache: Path, toolchain: Toolchain | None = None) -> None:
         self.cache = cache
@@ -72,16 +79,25 @@ class NativeTier:
     def available(self) -> bool:
         return self.toolchain is not None
 
-    def apply(
+    def start(
         self, units: list[PouCode], globals_class: str | None, namespace: dict[str, Any]
-    ) -> NativeReport:
-        """Bind native bodies to the classes of `namespace` (made from `units`)."""
+    ) -> NativeJob:
+        """The native bodies of the classes of `namespace` (made from `units`), prepared on
+        a thread of their own; `NativeJob.install` puts them in place."""
+        return NativeJob(self, units, globals_class, namespace)
+
+    def prepare(
+        self, units: list[PouCode], globals_class: str | None, namespace: dict[str, Any]
+    ) -> tuple[list[tuple[type, str, Any]], NativeReport]:
+        """Translate, build and bind (the C statics; no class changes yet): the bodies to
+        install and the report."""
         if self.toolchain is None:
-            return NativeReport((), (), ("no C compiler or Python headers on this machine",))
+            return [], NativeReport((), (), ("no C compiler or Python headers on this machine",))
         classes = class_table(units)
         shape = repr(
             sorted((name, sorted(info.members.items(), key=str)) for name, info in classes.items())
         )
+        found: list[tuple[type, str, Any]] = []
         bodies: list[str] = []
         left: list[tuple[str, str]] = []
         failed: list[str] = []
@@ -89,19 +105,17 @@ class NativeTier:
             if unit.kind not in ("PROGRAM", "FUNCTION_BLOCK"):
                 continue
             translated = self._translated(unit, classes, globals_class, shape)
-            left.extend(translated.left)
+            left.extend((unit.name, reason) for _, reason in translated.left)
             if not translated.source:
                 continue
             try:
-                self._bind(translated, namespace)
+                found.extend(self._bind(translated, namespace))
             except (BuildError, OSError, ImportError, TypeError, ValueError) as exc:
                 failed.append(f"{unit.name}: {exc}")
-                left.extend(
-                    (body, "its C module did not build or bind") for body in translated.bodies
-                )
+                left.append((unit.name, "its C module did not build or bind"))
                 continue
-            bodies.extend(translated.bodies)
-        return NativeReport(tuple(sorted(bodies)), tuple(sorted(left)), tuple(failed))
+            bodies.append(unit.name)
+        return found, NativeReport(tuple(sorted(bodies)), tuple(sorted(left)), tuple(failed))
 
     def _translated(
         self, unit: PouCode, classes: Any, globals_class: str | None, shape: str
@@ -115,7 +129,9 @@ class NativeTier:
                 self._translations[key] = known
         return known
 
-    def _bind(self, translated: Translated, namespace: dict[str, Any]) -> None:
+    def _bind(
+        self, translated: Translated, namespace: dict[str, Any]
+    ) -> list[tuple[type, str, Any]]:
         assert self.toolchain is not None
         shared = build(translated.module, translated.source, self.cache, self.toolchain)
         module = self._copy(translated.module, shared)
@@ -126,9 +142,8 @@ class NativeTier:
             raise
         bound = {namespace[cls] for cls, _ in found}
         for kind in bound:
+            # the C statics borrow the namespace: a class it was bound to keeps it alive
             setattr(kind, NAMESPACE_ATTR, namespace)
-        for (cls, method), body in found.items():
-            setattr(namespace[cls], method, body)
         # the copy is free again once every class it was bound to is gone
         remaining = [len(bound)]
 
@@ -139,6 +154,7 @@ class NativeTier:
 
         for kind in bound:
             weakref.finalize(kind, gone)
+        return [(namespace[cls], method, body) for (cls, method), body in sorted(found.items())]
 
     def _copy(self, name: str, shared: Path) -> ModuleType:
         with self._lock:
@@ -163,3 +179,60 @@ class NativeTier:
     def _release(self, name: str, module: ModuleType) -> None:
         with self._lock:
             self._copies[name].free.append(module)
+
+
+class NativeJob:
+    """The native bodies of one image, prepared on a thread of its own while the image
+    runs as Python; the thread that runs the image installs them (between two cycles)."""
+
+    def __init__(
+        self,
+        tier: NativeTier,
+        units: list[PouCode],
+        globals_class: str | None,
+        namespace: dict[str, Any],
+    ) -> None:
+        self._done = threading.Event()
+        self._found: list[tuple[type, str, Any]] = []
+        self.report: NativeReport | None = None
+        self.installed = False
+        self._thread = threading.Thread(
+            target=self._run,
+            args=(tier, units, globals_class, namespace),
+            name="padt-native",
+            daemon=True,
+        )
+        self._thread.start()
+
+    def _run(
+        self,
+        tier: NativeTier,
+        units: list[PouCode],
+        globals_class: str | None,
+        namespace: dict[str, Any],
+    ) -> None:
+        try:
+            self._found, self.report = tier.prepare(units, globals_class, namespace)
+        except Exception as exc:  # a defect of the tier: the image stays Python
+            self.report = NativeReport(
+                (), (), (f"the native tier failed: {type(exc).__name__}: {exc}",)
+            )
+        finally:
+            self._done.set()
+
+    @property
+    def ready(self) -> bool:
+        return self._done.is_set()
+
+    def wait(self, timeout: float | None = None) -> bool:
+        return self._done.wait(timeout)
+
+    def install(self) -> NativeReport:
+        """The prepared bodies in place of the Python ones (once; only when ready)."""
+        assert self.ready and self.report is not None
+        if not self.installed:
+            self.installed = True
+            for kind, method, body in self._found:
+                setattr(kind, method, body)
+            self._found = []
+        return self.report

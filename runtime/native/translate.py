@@ -471,11 +471,11 @@ class _Body:
     def range_kind(self, call: ast.Call) -> Range:
         if call.keywords or len(call.args) != 3:
             _refuse("a range without start, stop and step", call)
-        step = call.args[2]
-        if not isinstance(step, ast.Constant) or type(step.value) is not int or step.value == 0:
+        step = _constant_int(call.args[2])
+        if not step:
             _refuse("a range with a step that is not a constant", call)
         start, stop = (self.expr_kind_int(arg) for arg in call.args[:2])
-        return Range(start, stop, step.value)
+        return Range(start, stop, step)
 
     def expr_kind_int(self, node: ast.expr) -> Int:
         with self.captured():  # only the kind: the values are computed by range_bounds

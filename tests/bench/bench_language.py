@@ -69,7 +69,7 @@ def bench_pipeline(sources: list[SourceFile]) -> None:
 ARRAY_LENGTH = 16
 
 
-def thousand_statements(seed: int = 61131) -> str:
+def thousand_statements(seed: int = 61131, count: int = 1000) -> str:
     """INT arithmetic that wraps, BOOL logic, IF, FOR over an array and 48 TON calls,
     shuffled into one PROGRAM of 1,000 statements (a FOR or an IF counts as one); the same
     text for a seed. The mix of the program that issue 16 measured against matiec's C and
@@ -95,7 +95,7 @@ def thousand_statements(seed: int = 61131) -> str:
             f"IF {a()} > {a()} THEN {a()} := {a()} + {rng.randrange(1, 100)}; "
             f"ELSE {b()} := NOT {b()}; END_IF;"
         )
-    while len(statements) < 1000:
+    while len(statements) < count:
         if rng.random() < 0.65:
             op1, op2 = rng.choice("+-*"), rng.choice("+-")
             constant = rng.randrange(1, 500)

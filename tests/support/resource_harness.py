@@ -22,6 +22,7 @@ from runtime.contract.artifact import (
     crc32_hex,
 )
 from runtime.contract.protocol import pieces
+from runtime.native.tier import NativeTier
 from runtime.resource import Resource
 
 # what tests mostly want: single step, forcing and writes allowed
@@ -156,14 +157,17 @@ def harness(
     start: bool = True,
     safe_values: dict[str, Any] | None = None,
     users: list[UserAccount] | None = None,
+    native: NativeTier | None = None,
     **resource: Any,
 ) -> Harness:
     """A resource with `compiled(text, programs, safe_values, users, **resource)` loaded
-    (and started)."""
+    (and started); with `native`, its native bodies in place."""
     artifact = compiled(text, programs, safe_values, users, **resource)
     clock = VirtualClock()
     res = Resource("R", clock)
+    res.native = native
     res.load(artifact)
+    res.tier_up(wait=True)
     h = Harness(res, clock, (artifact.resource.target_cycle_ms or 10) * 1_000_000)
     if start:  # as at power-up with Autostart (no client, so no login needed)
         h.resource.start()

@@ -1,0 +1,245 @@
+"""The native tier in a running resource: the same values as the Python tier after every
+cycle, the same faults at the same ST lines, the watchdog, time slices, reloads, and a
+variable of a wrong type caught instead of crashing the process. Real C compiles (gcc),
+real resources on virtual clocks."""
+
+from __future__ import annotations
+
+import gc
+import time
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from runtime import reload_switch
+from runtime.contract.artifact import ProgramConfig, ResourceConfig
+from runtime.contract.protocol import ResourceState
+from runtime.native.tier import NativeTier
+from tests.bench.bench_language import thousand_statements
+from tests.support.native_runs import compiled, program_error, running, side_by_side
+from tests.support.resource_harness import compiled as harness_artifact
+from tests.support.resource_harness import harness
+
+CONSTRUCTS = """
+VAR_GLOBAL gCount : DINT; gFlag : BOOL; gWords : ARRAY[0..3] OF WORD; END_VAR
+FUNCTION_BLOCK Counter
+VAR_INPUT up : BOOL; END_VAR
+VAR_OUTPUT n : UINT; END_VAR
+VAR edge : R_TRIG; c : CTU; fall : F_TRIG; pulse : TP; off : TOF; END_VAR
+edge(CLK := up);
+fall(CLK := up);
+IF edge.Q THEN n := n + 1; END_IF;
+c(CU := up, PV := 3, R := fall.Q AND n > 5);
+pulse(IN := up, PT := T#250ms);
+off(IN := up, PT := T#150ms);
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR
+  i, j, k : INT; d : DINT := -7; u : UINT; w : WORD := 16#0F0F; b : BOOL; t : TIME;
+  l : LINT := 9000000000; si : SINT; by : BYTE;
+  arr : ARRAY[0..9] OF DINT; grid : ARRAY[1..3, 1..4] OF INT; cnt : Counter;
+  cnts : ARRAY[1..2] OF Counter; delay : TON; n : INT;
+END_VAR
+n := n + 1;
+CASE n MOD 7 OF
+  1: j := 2;
+  2..4, 6: j := j * 3 - 1;
+ELSE j := -j;
+END_CASE;
+i := 0;
+WHILE i < 10 DO i := i + 1; IF i = n MOD 9 THEN EXIT; END_IF; END_WHILE;
+REPEAT j := j - 1; UNTIL j < 0 END_REPEAT;
+FOR k := 10 TO 1 BY -3 DO arr[k MOD 10] := arr[k MOD 10] + k * d; END_FOR;
+FOR k := 1 TO 4 DO
+  IF k = 2 THEN CONTINUE; END_IF;
+  grid[1 + n MOD 3, k] := grid[1 + n MOD 3, k] + k * n;
+END_FOR;
+d := d / 3 + d MOD 7 - 1000 * n;
+u := u - 1;
+w := (w XOR 16#FF00) OR SHL(w, 2) AND SHR(w, 1);
+si := si + 100;
+by := by + 77;
+l := l * 3 + d;
+gCount := gCount + n;
+gFlag := NOT gFlag;
+gWords[n MOD 4] := w;
+cnt(up := gFlag);
+cnts[1 + n MOD 2](up := n MOD 3 = 0);
+delay(IN := n MOD 10 < 6, PT := T#300ms);
+t := t + T#10ms - delay.ET;
+b := i > j AND j <> 0 OR cnt.n > 2 XOR delay.Q;
+END_PROGRAM
+"""
+
+
+def test_the_constructs_of_control_code_run_as_c_with_the_python_values(
+    native_tier: NativeTier,
+) -> None:
+    pair = side_by_side(CONSTRUCTS, native_tier)
+    assert set(pair.report.bodies) >= {"Main", "Counter", "TON", "TP", "TOF", "CTU", "R_TRIG"}
+    pair.cycle_and_compare(40)
+
+
+def test_the_generated_benchmark_program_runs_as_c_with_the_python_values(
+    native_tier: NativeTier,
+) -> None:
+    pair = side_by_side(thousand_statements(count=200), native_tier)
+    assert pair.report.bodies == ("Bench", "TON") and not pair.report.left
+    pair.cycle_and_compare(30)
+
+
+def test_a_fault_stops_both_tiers_in_the_same_cycle_at_the_same_st_line(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+PROGRAM Main
+VAR n : INT; arr : ARRAY[1..5] OF INT; q : DINT; END_VAR
+n := n + 1;
+q := 100 / (4 - n);
+arr[n] := n;
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(3)  # n = 4 in the fourth cycle: division by zero
+    assert not program_error(pair.native)
+    pair.cycle_and_compare(1)
+    assert "division by zero in POU Main (prog.st:5)" in program_error(pair.native)
+
+    index = text.replace("q := 100 / (4 - n);", "")
+    pair = side_by_side(index, native_tier)
+    pair.cycle_and_compare(6)  # arr[6]: out of bounds in the sixth cycle
+    assert "in POU Main (prog.st:6)" in program_error(pair.native)
+
+
+def test_the_watchdog_ends_an_endless_loop_of_native_code(native_tier: NativeTier) -> None:
+    text = """
+PROGRAM Main
+VAR n : DINT; END_VAR
+WHILE TRUE DO n := n + 1; END_WHILE;
+END_PROGRAM
+"""
+    config = ResourceConfig(name="R", watchdog_ms=200, safety_time_ms=400)
+    result = compile_sources([SourceFile("prog.st", text)], resource=config)
+    assert result.artifact is not None
+    resource = running(result.artifact, native_tier)
+    report = resource.variables.code.native if resource.variables.code else None
+    assert report is not None and report.bodies == ("Main",)
+    started = time.monotonic()
+    resource.cycle()
+    assert time.monotonic() - started < 30
+    assert resource.state == ResourceState.ERROR_STOP
+    assert "watchdog" in (resource.error or "").lower()
+
+
+def test_a_sliced_program_suspends_and_resumes_inside_native_code(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+PROGRAM Slow
+VAR i, k : DINT; total : DINT; rounds : INT; END_VAR
+FOR i := 1 TO 300 DO
+  FOR k := 1 TO 3 DO total := total + i * k; END_FOR;
+END_FOR;
+rounds := rounds + 1;
+END_PROGRAM
+"""
+    programs = [
+        ProgramConfig(name="Slow", pou="Slow", program_id=1, max_duration_us=500, max_cycles=10)
+    ]
+    pair = side_by_side(text, native_tier, programs)
+    assert pair.report.bodies == ("Slow",)
+    pair.cycle_and_compare(40)
+    assert 0 < pair.native.variables.values()["Slow.rounds"] < 40  # it did span cycles
+
+
+def test_a_variable_that_holds_a_wrong_type_is_a_fault_not_a_crash(
+    native_tier: NativeTier,
+) -> None:
+    text = "PROGRAM Main\nVAR n : INT; m : INT; END_VAR\nm := n + 1;\nEND_PROGRAM\n"
+    resource = running(compiled(text), native_tier)
+    resource.programs[0].instance.n = "not an INT"  # what no checked writer would store
+    resource.cycle()
+    error = program_error(resource)
+    assert "another type" in error and "prog.st:3" in error
+
+
+PLANT = """
+VAR_GLOBAL total : DINT; flags : ARRAY[0..3] OF BOOL; END_VAR
+FUNCTION_BLOCK Counter
+VAR_INPUT go : BOOL; END_VAR
+VAR count : INT; delay : TON; edge : R_TRIG; END_VAR
+delay(IN := go, PT := T#1s);
+edge(CLK := count > 2);
+IF go THEN count := count + 1; END_IF;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Small
+VAR_INPUT x : INT; END_VAR
+VAR_OUTPUT y : INT; END_VAR
+y := x * 2;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR c : Counter; cs : ARRAY[1..2] OF Counter; s : Small; n : INT; END_VAR
+n := n + 1;
+c(go := TRUE); cs[2](go := n > 1); s(x := n);
+total := total + s.y;
+flags[n MOD 4] := n > 2;
+END_PROGRAM
+"""
+ONE_POU = PLANT.replace("y := x * 2;", "y := x * 3;")
+EVERYTHING = ONE_POU.replace("count : INT;", "count : INT; extra : INT;").replace(
+    "n : INT; END_VAR\nn :=", "n : INT; added : INT := 7; END_VAR\nn :="
+)
+
+
+def test_a_reload_carries_every_value_and_runs_as_c_from_its_first_cycle(
+    native_tier: NativeTier,
+) -> None:
+    for text in (ONE_POU, EVERYTHING):
+        python, native = harness(PLANT), harness(PLANT, native=native_tier)
+        python.cycle(6)
+        native.cycle(6)
+        for h in (python, native):
+            job = reload_switch.begin(h.resource, harness_artifact(text), {})
+            job.prepare()
+            assert job.failure is None, job.failure
+            reload_switch.finish(h.resource, job)
+        code = native.resource.variables.code
+        assert code is not None and code.native is not None
+        assert set(code.native.bodies) == {"Main", "Counter", "Small", "TON", "R_TRIG"}
+        assert native.resource.variables.values() == python.resource.variables.values()
+        for _ in range(5):
+            assert native.cycle() == python.cycle()
+        assert native.value("Main.s.y") == 3 * native.value("Main.n")
+
+
+def test_the_bodies_of_a_load_come_in_between_two_cycles_with_an_event(
+    fresh_tier: NativeTier,
+) -> None:
+    resource = running(compiled(PLANT), None)  # started as Python
+    resource.native = fresh_tier
+    resource.stop()
+    resource.cold_start()  # a new image: its native bodies are made on a thread
+    resource.start()
+    deadline = time.monotonic() + 120
+    while resource.variables.code and resource.variables.code.native is None:
+        assert time.monotonic() < deadline
+        resource.cycle()
+        resource.tier_up()
+        time.sleep(0.01)
+    events = [e for e in resource.events.recent() if e.kind == "native"]
+    assert events and "5 of 5 POU bodies run as C" in events[-1].message
+
+
+def test_module_copies_are_bound_again_once_their_classes_are_gone(
+    fresh_tier: NativeTier,
+) -> None:
+    resource = running(compiled(PLANT), fresh_tier)
+    for _ in range(6):
+        resource.stop()
+        resource.cold_start()
+        resource.tier_up(wait=True)
+        resource.start()
+        resource.cycle()
+        gc.collect()
+    loaded = [copies.loaded for copies in fresh_tier._copies.values()]
+    assert loaded and max(loaded) <= 3  # not one per cold start
