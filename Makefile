@@ -15,6 +15,7 @@ test: $(VENV)/.stamp-dev
 	bash scripts/install-mbpoll.sh
 	bash scripts/install-document-tools.sh
 	bash scripts/install-mcap-reader.sh
+	bash scripts/install-c-compiler.sh $(BIN)/python
 	$(MAKE) lint typecheck pytest
 
 lint: $(VENV)/.stamp-dev

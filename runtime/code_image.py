@@ -84,7 +84,7 @@ class CodeImage:
         # Python; `tier_up` puts them in place
         self.native: NativeReport | None = None
         self.native_job: NativeJob | None = None
-        if native is not None:
+        if native is not None and native.available:
             globals_class = artifact.globals.class_name if artifact.globals is not None else None
             self.native_job = native.start(first, globals_class, self._namespace)
         self.globals: Any = None

@@ -1,5 +1,5 @@
 """Language benchmarks: parse and compile speed on OSCAT, the cycle time of a 1,000-statement
-program beside a baseline's.
+program beside a baseline's, on the Python tier and on the native tier.
 
 Run with `python -m tests.bench.bench_language`. It prints figures and asserts nothing
 about time (machines are shared and noisy).
@@ -8,14 +8,17 @@ about time (machines are shared and noisy).
 from __future__ import annotations
 
 import random
+import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 from backend.compiler.diagnostics import CompileError
 from backend.compiler.parse import parse_source
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
-from tests.bench.baseline import compare
+from tests.bench.baseline import REPO as CODE_BASE
+from tests.bench.baseline import Compared, compare, probe
 
 REPO = Path(__file__).resolve().parents[2]
 OSCAT = REPO.parent / "shared" / "corpus" / "oscat" / "st"
@@ -142,6 +145,27 @@ def bench_cycles(cycles: int = 2_000, check_cycles: int = 100) -> None:
             f"today's is {before_us / now_us:.2f}x faster; "
             f"the same values after {check_cycles} cycles: {same}"
         )
+    bench_native(request, compared)
+
+
+def bench_native(request: dict[str, Any], python: Compared, rounds: int = 3) -> None:
+    """The same program on the native tier (runtime/native/): its first round compiles
+    into a fresh cache, the others find it there."""
+    with tempfile.TemporaryDirectory(prefix="padt-bench-native-") as cache:
+        replies = [probe(CODE_BASE, {**request, "native_cache": cache}) for _ in range(rounds)]
+    best = min(replies, key=lambda reply: float(reply["program_us"]))
+    native_us, python_us = best["program_us"], python.now["program_us"]
+    same = best["values"] == python.now["values"]
+    line = (
+        f"  native tier ({', '.join(best['native_bodies'])} as C): {native_us:,.1f} us per "
+        f"cycle: {python_us / native_us:.1f}x faster than today's Python"
+    )
+    if python.before is not None:
+        line += f", {python.before['program_us'] / native_us:.1f}x faster than the baseline"
+    print(
+        f"{line}; built in {replies[0]['native_build_s']:.1f} s (from the cache "
+        f"{replies[-1]['native_build_s']:.2f} s); the same values: {same}"
+    )
 
 
 ARRAY_LOOP = """\
