@@ -20,6 +20,10 @@ INT128_MIN, INT128_MAX = -(1 << 127), (1 << 127) - 1
 class Int:
     lo: int
     hi: int
+    # a REAL taken to an integer: beyond +-2**126 the C value is a stand-in of that size,
+    # equal to the true one modulo 2**64 (what a wrap to at most 64 bits keeps), so such a
+    # value may only be added, multiplied, masked or compared with 64-bit values
+    stand_in: bool = False
 
     @property
     def ctype(self) -> str:
@@ -38,11 +42,18 @@ class Int:
 
 
 FULL64 = Int(INT64_MIN, INT64_MAX)
+STAND_IN_FROM = 1 << 126
+FROM_REAL = Int(-STAND_IN_FROM - (1 << 64), STAND_IN_FROM + (1 << 64), stand_in=True)
 
 
 @dataclass(frozen=True)
 class Bool:
     pass
+
+
+@dataclass(frozen=True)
+class Float:
+    """REAL or LREAL: a C double (a REAL is rounded to 32 bits where the code says so)."""
 
 
 @dataclass(frozen=True)
@@ -79,7 +90,10 @@ class Range:
     step: int
 
 
-Kind = Int | Bool | Instance | Array | Hook | System | Range
+Kind = Int | Bool | Float | Instance | Array | Hook | System | Range
+
+# integers a double holds exactly: Python converts and compares beyond them exactly, C not
+EXACT_IN_DOUBLE = Int(-(1 << 53), 1 << 53)
 
 # the attributes of `_SYS` (runtime.intrinsics.SystemView): BOOL flags, the rest integers of
 # at most 64 bits (TIME, UDINT, DWORD, DT)
@@ -102,7 +116,7 @@ SYSTEM_INTS = frozenset(
 def join(a: Kind, b: Kind) -> Kind | None:
     """The kind of a local that takes both; None when no one C type holds both."""
     if isinstance(a, Int) and isinstance(b, Int):
-        return Int(min(a.lo, b.lo), max(a.hi, b.hi))
+        return Int(min(a.lo, b.lo), max(a.hi, b.hi), a.stand_in or b.stand_in)
     return a if a == b else None
 
 
@@ -130,6 +144,8 @@ def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
     name, _ = base_type(type_name)
     if name == "BOOL":
         return Bool()
+    if name in ("REAL", "LREAL"):
+        return Float()
     limits = int_range(name)
     if limits is not None:
         return Int(*limits) if Int(*limits).fits64 else None

@@ -13,6 +13,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <structmember.h>
+#include <math.h>
 #include <stdint.h>
 
 #define PADT_LIKELY(x) __builtin_expect(!!(x), 1)
@@ -136,6 +137,14 @@ padt_class(const char *name)
             goto padt_bad;                                                                \
     } while (0)
 
+#define PADT_GET_FLOAT(o, out)                                                            \
+    do {                                                                                  \
+        PyObject *padt_o_ = (o);                                                          \
+        if (PADT_UNLIKELY(padt_o_ == NULL || !PyFloat_CheckExact(padt_o_)))               \
+            goto padt_bad;                                                                \
+        (out) = PyFloat_AS_DOUBLE(padt_o_);                                               \
+    } while (0)
+
 /* An instance of a generated class (or of one that extends it). */
 #define PADT_CHECK_INSTANCE(o, type)                                                      \
     do {                                                                                  \
@@ -231,6 +240,78 @@ padt_set_int128(PyObject **place, padt_i128 v)
     if (v >= INT64_MIN && v <= INT64_MAX)
         return padt_set_int(place, (int64_t)v);
     return padt_put(place, padt_box128(v));
+}
+
+/* Store a REAL: in place into a float object only this place holds, as padt_set_int. */
+static inline int
+padt_set_float(PyObject **place, double v)
+{
+    PyObject *old = *place;
+    if (PADT_LIKELY(old != NULL && Py_REFCNT(old) == 1 && PyFloat_CheckExact(old))) {
+        ((PyFloatObject *)old)->ob_fval = v;
+        return 0;
+    }
+    return padt_put(place, PyFloat_FromDouble(v));
+}
+
+/* runtime.intrinsics._fdiv: IEC division of REALs, by zero an infinity or NaN, no fault */
+static inline double
+padt_fdiv(double a, double b)
+{
+    if (PADT_UNLIKELY(b == 0.0)) {
+        if (a == 0.0 || isnan(a))
+            return __builtin_nan("");
+        return copysign(__builtin_inf(), a) * copysign(1.0, b);
+    }
+    return a / b;
+}
+
+/* A REAL taken to an integer (runtime/native/kinds.py, Int.stand_in): exact below 2**126;
+ * beyond, a stand-in of that size that equals the true value modulo 2**64 (fmod is exact),
+ * which is all a wrap to at most 64 bits keeps of it. */
+#define PADT_TWO_126 85070591730234615865843651857942052864.0
+#define PADT_TWO_64 18446744073709551616.0
+
+static inline padt_i128
+padt_whole(double whole) /* a non-negative integral double */
+{
+    if (PADT_LIKELY(whole < PADT_TWO_126))
+        return (padt_i128)whole;
+    return ((padt_i128)1 << 126) + (padt_i128)(uint64_t)fmod(whole, PADT_TWO_64);
+}
+
+/* runtime.intrinsics._round: to the nearest, halves away from zero; NaN and infinities 0 */
+static inline int
+padt_round(double x, padt_i128 *out)
+{
+    if (!isfinite(x)) {
+        *out = 0;
+        return 0;
+    }
+    double magnitude = fabs(x);
+    double whole = floor(magnitude);
+    if (magnitude - whole >= 0.5) /* exact, as in the helper */
+        whole += 1.0;
+    *out = x >= 0 ? padt_whole(whole) : -padt_whole(whole);
+    return 0;
+}
+
+/* int(x) of a REAL: toward zero; NaN and infinities raise what Python's int() raises */
+static inline int
+padt_trunc(double x, padt_i128 *out)
+{
+    if (PADT_UNLIKELY(!isfinite(x))) {
+        PyObject *number = PyFloat_FromDouble(x);
+        PyObject *whole = number != NULL ? PyNumber_Long(number) : NULL;
+        Py_XDECREF(number);
+        Py_XDECREF(whole);
+        if (whole != NULL)
+            PyErr_SetString(PyExc_SystemError, "native code: int() of a non-finite REAL");
+        return -1;
+    }
+    double whole = floor(fabs(x));
+    *out = x >= 0 ? padt_whole(whole) : -padt_whole(whole);
+    return 0;
 }
 
 static inline void

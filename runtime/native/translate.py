@@ -15,6 +15,7 @@ import ast
 import contextlib
 import hashlib
 import itertools
+import math
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
@@ -23,14 +24,18 @@ from typing import NoReturn
 from runtime.contract.artifact import PouCode
 from runtime.fault_location import code_filename
 from runtime.native.kinds import (
+    EXACT_IN_DOUBLE,
+    FROM_REAL,
     FULL64,
     INT64_MAX,
     INT64_MIN,
+    STAND_IN_FROM,
     SYSTEM_BOOLS,
     SYSTEM_INTS,
     Array,
     Bool,
     ClassInfo,
+    Float,
     Hook,
     Instance,
     Int,
@@ -298,7 +303,12 @@ class _Body:
         if isinstance(declared, Bool) and isinstance(value.kind, Bool):
             self.line(f"padt_set_bool({place}, {value.c});")
             return
+        if isinstance(declared, Float) and isinstance(value.kind, Float):
+            self.check(f"padt_set_float({place}, {value.c})")
+            return
         if isinstance(declared, Int) and isinstance(value.kind, Int):
+            if value.kind.stand_in:
+                _refuse("a REAL's integer stored without a wrap", node)
             if not value.kind.within(declared):
                 # not proven in range: the contract says it is; a value outside is a fault
                 self.check(
@@ -321,6 +331,8 @@ class _Body:
             self.line(f"{local}_start = {start.c}; {local}_stop = {stop.c};")
             return
         value = self.expr(value_node)
+        if isinstance(value.kind, Int) and value.kind.stand_in:
+            _refuse("a REAL's integer kept in a local", node)
         self.note_assigned(name, value.kind, node)
         local_kind = self.local_kind(name)
         local = self.local_ref(name, node)
@@ -329,7 +341,7 @@ class _Body:
                 self.line(f"{local} = {value.c};")
             else:
                 self.check(f"padt_narrow({value.c}, &{local})")
-        elif isinstance(local_kind, Bool) and isinstance(value.kind, Bool):
+        elif isinstance(local_kind, Bool | Float) and value.kind == local_kind:
             self.line(f"{local} = {value.c};")
         elif isinstance(local_kind, Instance | Hook) and value.kind == local_kind:
             self.line(f"Py_XSETREF({local}, Py_NewRef({value.c}));")
@@ -358,6 +370,8 @@ class _Body:
                 self.frame[c] = f"{kind.ctype} {c};"
             elif isinstance(kind, Bool):
                 self.frame[c] = f"int {c};"
+            elif isinstance(kind, Float):
+                self.frame[c] = f"double {c};"
             elif isinstance(kind, Instance | Hook):
                 self.frame[c] = f"PyObject *{c};"
                 self.frame_objects.append(c)
@@ -505,6 +519,8 @@ class _Body:
             return value.c
         if isinstance(value.kind, Int):
             return f"({value.c}) != 0"
+        if isinstance(value.kind, Float):
+            return f"({value.c}) != 0.0"  # NaN is true, as in Python
         _refuse(f"a {_kind_name(value.kind)} as a condition", node)
 
     @contextlib.contextmanager
@@ -518,7 +534,7 @@ class _Body:
         name, lo, hi = found
         current = self.named.get(name)
         if current is not None and isinstance(current.kind, Int):
-            narrowed = Int(max(lo, current.kind.lo), min(hi, current.kind.hi))
+            narrowed = _narrowed(current.kind, lo, hi)
             self.named[name] = V(narrowed, current.c)
             try:
                 yield
@@ -528,7 +544,7 @@ class _Body:
         kind = self.narrowed.get(name) or self.local_kinds.get(name)
         if isinstance(kind, Int):
             saved = self.narrowed.get(name)
-            self.narrowed[name] = Int(max(lo, kind.lo), min(hi, kind.hi))
+            self.narrowed[name] = _narrowed(kind, lo, hi)
             try:
                 yield
             finally:
@@ -561,9 +577,9 @@ class _Body:
             return self.if_expr(node)
         if isinstance(node, ast.NamedExpr):
             value = self.expr(node.value)
-            if not isinstance(value.kind, Int | Bool):
+            if not isinstance(value.kind, Int | Bool | Float):
                 _refuse("a := of something else than a number", node)
-            held = self.temp(value.kind.ctype if isinstance(value.kind, Int) else "int")
+            held = self.temp(_ctype(value.kind))
             self.line(f"{held} = {value.c};")
             self.named[node.target.id] = V(value.kind, held)
             return V(value.kind, held)
@@ -604,7 +620,7 @@ class _Body:
         info = self.module.classes.get(owner.cls)
         kind = info.members.get(attr) if info is not None else None
         if kind is None:
-            _refuse(f"{owner.cls}.{attr}, of a kind the tier leaves to Python", node)
+            _refuse(f"the variable {attr}, of a type the tier leaves to Python", node)
         return kind
 
     def attribute(self, node: ast.Attribute) -> V:
@@ -642,6 +658,10 @@ class _Body:
             held = self.temp("int")
             self.line(f"PADT_GET_BOOL({obj}, {held});")
             return V(kind, held)
+        if isinstance(kind, Float):
+            held = self.temp("double")
+            self.line(f"PADT_GET_FLOAT({obj}, {held});")
+            return V(kind, held)
         held = self.temp("PyObject *", "NULL")
         self.objects.remove(held)  # borrowed from the slot, which keeps it during the statement
         self.line(f"{held} = {obj};")
@@ -674,9 +694,22 @@ class _Body:
             symbol = {ast.BitAnd: "&", ast.BitOr: "|", ast.BitXor: "^"}.get(type(op))
             if symbol is not None:
                 return V(Bool(), f"({left.c} {symbol} {right.c})")
+        if isinstance(left.kind, Float) or isinstance(right.kind, Float):
+            symbol = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*"}.get(type(op))
+            if symbol is None:
+                _refuse(f"the operator {type(op).__name__} on a REAL", node)
+            a, b = _as_float(left, node), _as_float(right, node)
+            return V(Float(), f"({a.c} {symbol} {b.c})")
         a, b = _as_int(left, node), _as_int(right, node)
         assert isinstance(a.kind, Int) and isinstance(b.kind, Int)
         result = _result_range(op, a.kind, b.kind, node)
+        if a.kind.stand_in or b.kind.stand_in:
+            if isinstance(op, ast.RShift):
+                _refuse("a shift right of a REAL's integer", node)
+            masked = isinstance(op, ast.BitAnd) and result.lo >= 0 and result.hi < 1 << 64
+            # a ring operation modulo 2**64 keeps the stand-in's congruence; a mask of at
+            # most 64 bits takes it off: what is left is exact
+            result = replace(result, stand_in=not masked)
         if not result.fits128:
             _refuse("an integer beyond 128 bits", node)
         # computed in the widest C type among the operands and the result, then narrowed to
@@ -710,13 +743,23 @@ class _Body:
                 return V(Bool(), f"(!{value.c})")
             if isinstance(value.kind, Int):
                 return V(Bool(), f"({value.c} == 0)")
+            if isinstance(value.kind, Float):
+                return V(Bool(), f"({value.c} == 0.0)")
             _refuse(f"not of a {_kind_name(value.kind)}", node)
+        if isinstance(value.kind, Float):
+            if isinstance(node.op, ast.USub):
+                return V(Float(), f"(-{value.c})")
+            if isinstance(node.op, ast.UAdd):
+                return value
+            _refuse("~ of a REAL", node)
         number = _as_int(value, node)
         assert isinstance(number.kind, Int)
         lo, hi = number.kind.lo, number.kind.hi
         if isinstance(node.op, ast.UAdd):
             return number
-        result = Int(-hi, -lo) if isinstance(node.op, ast.USub) else Int(-hi - 1, -lo - 1)
+        negated = isinstance(node.op, ast.USub)
+        result = Int(-hi, -lo) if negated else Int(-hi - 1, -lo - 1)
+        result = replace(result, stand_in=number.kind.stand_in)
         if not result.fits128:
             _refuse("an integer beyond 128 bits", node)
         wide = "padt_i128" if "padt_i128" in (number.kind.ctype, result.ctype) else "int64_t"
@@ -733,11 +776,11 @@ class _Body:
         op, right_node = pairs[0]
         right = self.comparable(self.expr(right_node), node)
         if len(pairs) == 1:
-            return V(Bool(), f"({left.c} {_relation(op, node)} {right.c})")
+            return V(Bool(), _comparison(left, op, right, node))
         # `a < b < c`: b is evaluated once, c only while the comparisons before hold
         right = self.held(right)
         flag = self.temp("int")
-        self.line(f"{flag} = ({left.c} {_relation(op, node)} {right.c});")
+        self.line(f"{flag} = {_comparison(left, op, right, node)};")
         self.compare_rest(flag, right, pairs[1:], node)
         return V(Bool(), flag)
 
@@ -758,13 +801,13 @@ class _Body:
                 right = self.comparable(self.expr(right_node), node)
                 if n < len(rest) - 1:
                     right = self.held(right)
-                self.line(f"{flag} = ({left.c} {_relation(op, node)} {right.c});")
+                self.line(f"{flag} = {_comparison(left, op, right, node)};")
             self.out.extend(lines)
             self.line("}")
             left = right
 
     def comparable(self, value: V, node: ast.AST) -> V:
-        if isinstance(value.kind, Int | Bool):
+        if isinstance(value.kind, Int | Bool | Float):
             return value
         _refuse(f"a comparison of a {_kind_name(value.kind)}", node)
 
@@ -805,7 +848,9 @@ class _Body:
         if isinstance(body.kind, Bool) and isinstance(orelse.kind, Bool):
             kind: Kind = Bool()
         elif isinstance(body.kind, Int) and isinstance(orelse.kind, Int):
-            kind = Int(min(body.kind.lo, orelse.kind.lo), max(body.kind.hi, orelse.kind.hi))
+            kind = join(body.kind, orelse.kind) or body.kind
+        elif isinstance(body.kind, Float) and isinstance(orelse.kind, Float):
+            kind = Float()
         else:
             _refuse("a conditional expression of two kinds", node)
         ctype = _ctype(kind)
@@ -850,6 +895,34 @@ class _Body:
             if not result.fits64:  # INT64_MIN / -1 wraps in C, Python's is beyond 64 bits
                 _refuse("a division of the smallest 64-bit integer", node)
             return V(result, held)
+        if name in ("_f32", "float") and len(node.args) == 1:
+            value = self.expr(node.args[0])
+            number = _as_float(value, node)
+            if name == "float":
+                return number
+            # REAL: rounded to 32 bits (an integer, as Python converts it: to a double first)
+            return V(Float(), f"((double)(float){number.c})")
+        if name in ("_round", "int") and len(node.args) == 1:
+            value = self.expr(node.args[0])
+            if isinstance(value.kind, Float):
+                held = self.temp("padt_i128")
+                helper = "padt_round" if name == "_round" else "padt_trunc"
+                self.check(f"{helper}({value.c}, &{held})")
+                return V(FROM_REAL, held)
+        if name == "_fdiv" and len(node.args) == 2:
+            a, b = (_as_float(self.expr(arg), node) for arg in node.args)
+            return V(Float(), f"padt_fdiv({a.c}, {b.c})")
+        if name == "abs" and len(node.args) == 1:
+            value = self.expr(node.args[0])
+            if isinstance(value.kind, Float):
+                return V(Float(), f"fabs({value.c})")
+        if name in ("min", "max") and len(node.args) == 2:
+            a, b = (self.expr(arg) for arg in node.args)
+            if isinstance(a.kind, Float) and isinstance(b.kind, Float):
+                a, b = self.held(a), self.held(b)
+                # Python keeps the first unless the second is smaller (larger): NaN as it does
+                relation = "<" if name == "min" else ">"
+                return V(Float(), f"({b.c} {relation} {a.c} ? {b.c} : {a.c})")
         if name == "len" and len(node.args) == 1:
             target = self.expr(node.args[0])
             if isinstance(target.kind, Range):
@@ -899,6 +972,8 @@ def _constant(node: ast.Constant) -> V:
         if not kind.fits128:
             _refuse("an integer constant beyond 128 bits", node)
         return V(kind, c_int(value))
+    if isinstance(value, float) and math.isfinite(value):
+        return V(Float(), f"({value.hex()})")  # exact: C99 reads hexadecimal doubles
     _refuse(f"a constant {type(value).__name__}", node)
 
 
@@ -931,6 +1006,16 @@ def _bounds_test(test: ast.expr) -> tuple[str, int, int] | None:
     low += isinstance(first, ast.Lt)
     high -= isinstance(second, ast.Lt)
     return middle.id, low, high
+
+
+def _plain64(kind: Kind) -> bool:
+    return isinstance(kind, Int) and kind.fits64 and not kind.stand_in
+
+
+def _narrowed(kind: Int, lo: int, hi: int) -> Int:
+    """`kind` known to lie in lo..hi: exact there when that is short of the stand-ins."""
+    exact = lo > -STAND_IN_FROM and hi < STAND_IN_FROM
+    return Int(max(lo, kind.lo), min(hi, kind.hi), kind.stand_in and not exact)
 
 
 def _as_int(value: V, node: ast.AST) -> V:
@@ -977,6 +1062,24 @@ def _result_range(op: ast.operator, a: Int, b: Int, node: ast.AST) -> Int:
     _refuse(f"the operator {type(op).__name__}", node)
 
 
+def _comparison(left: V, op: ast.cmpop, right: V, node: ast.AST) -> str:
+    for one, other in ((left, right), (right, left)):
+        # a stand-in is beyond 2**126 where the true value is: on the same side of any
+        # 64-bit value, but not of another stand-in
+        if (
+            isinstance(one.kind, Int)
+            and one.kind.stand_in
+            and not (isinstance(other.kind, Bool) or _plain64(other.kind))
+        ):
+            _refuse("a REAL's integer compared with more than 64 bits", node)
+    floats = isinstance(left.kind, Float) or isinstance(right.kind, Float)
+    for side in (left, right):
+        if floats and isinstance(side.kind, Int) and not side.kind.within(EXACT_IN_DOUBLE):
+            # Python compares an integer with a REAL exactly; C would round it first
+            _refuse("an integer beyond 2**53 compared with a REAL", node)
+    return f"({left.c} {_relation(op, node)} {right.c})"
+
+
 def _relation(op: ast.cmpop, node: ast.AST) -> str:
     symbol = _RELATIONS.get(type(op))
     if symbol is None:
@@ -985,7 +1088,19 @@ def _relation(op: ast.cmpop, node: ast.AST) -> str:
 
 
 def _ctype(kind: Kind) -> str:
-    return kind.ctype if isinstance(kind, Int) else "int"
+    if isinstance(kind, Int):
+        return kind.ctype
+    return "double" if isinstance(kind, Float) else "int"
+
+
+def _as_float(value: V, node: ast.AST) -> V:
+    """A number as Python turns it into a float: an integer is converted (exactly as C
+    does within 64 bits: to the nearest double, ties to even)."""
+    if isinstance(value.kind, Float):
+        return value
+    if isinstance(value.kind, Bool) or (isinstance(value.kind, Int) and value.kind.fits64):
+        return V(Float(), f"((double){value.c})")
+    _refuse(f"a {_kind_name(value.kind)} in REAL arithmetic", node)
 
 
 def _kind_name(kind: Kind | None) -> str:

@@ -1,0 +1,106 @@
+"""What the translator takes and what it leaves to Python, and why: one example of each
+construct it knows, one of each it refuses (no C compiler needed: translation only)."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from runtime.native.kinds import class_table
+from runtime.native.translate import c_int, translate_unit
+from tests.support.native_runs import compiled
+
+
+def translated(body: str, declarations: str = "") -> tuple[bool, str]:
+    """Whether PROGRAM Main's body translates, and the reason when it does not."""
+    text = (
+        "PROGRAM Main\nVAR i, j : INT; d : DINT; l : LINT; u : UINT; b, c : BOOL; r : REAL; "
+        f"x : LREAL; s : STRING; t : TIME; a : ARRAY[1..4] OF INT; tn : TON; {declarations}"
+        f"END_VAR\n{body}\nEND_PROGRAM\n"
+    )
+    artifact = compiled(text)
+    units = [*artifact.types, *artifact.pous]
+    main = next(unit for unit in units if unit.name == "Main")
+    result = translate_unit(main, class_table(units), None)
+    return bool(result.bodies), result.left[0][1] if result.left else ""
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        "i := i + j * 3 - 7;",
+        "d := d / 3 + d MOD 7;",
+        "l := l * l + d;",  # 128-bit intermediates, wrapped to 64 bits
+        "u := SHL(u, 3) OR SHR(u, 2) XOR 16#F0F0;",
+        "b := (i > j) AND NOT c OR i = 3;",
+        "IF i > 3 THEN j := 1; ELSIF i < 0 THEN j := 2; ELSE j := 3; END_IF;",
+        "CASE i OF 1: j := 2; 2..4, 7: j := 3; ELSE j := 0; END_CASE;",
+        "FOR i := 10 TO 1 BY -2 DO a[1 + i MOD 4] := i; END_FOR;",
+        "WHILE i < 10 DO i := i + 1; IF i = 5 THEN EXIT; END_IF; END_WHILE;",
+        "REPEAT i := i - 1; UNTIL i < 0 END_REPEAT;",
+        "tn(IN := b, PT := T#1s); c := tn.Q; t := tn.ET + T#5ms;",
+        "r := r * 2.5 - INT_TO_REAL(i); x := x / 3.0 + ABS(x); b := r < 1.0;",
+        "i := REAL_TO_INT(r); d := TRUNC(x);",
+        "RETURN;",
+    ],
+)
+def test_bodies_of_these_constructs_are_translated(body: str) -> None:
+    ok, reason = translated(body)
+    assert ok, reason
+
+
+@pytest.mark.parametrize(
+    ("body", "reason"),
+    [
+        ("s := CONCAT(s, 'x');", "the variable s, of a type the tier leaves to Python"),
+        ("x := SQRT(x);", "a call of _safe_math"),
+        ("x := EXPT(x, 2.0);", "a call of _pow"),
+        ("i := MAX(i, j);", "a call of max"),  # integer MIN/MAX: not yet
+    ],
+)
+def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> None:
+    ok, why = translated(body)
+    assert not ok and reason in why
+
+
+def test_a_function_call_stays_python() -> None:
+    text = (
+        "FUNCTION Twice : INT\nVAR_INPUT v : INT; END_VAR\nTwice := v * 2;\nEND_FUNCTION\n"
+        "PROGRAM Main\nVAR i : INT; END_VAR\ni := Twice(i);\nEND_PROGRAM\n"
+    )
+    artifact = compiled(text)
+    units = [*artifact.types, *artifact.pous]
+    main = next(unit for unit in units if unit.name == "Main")
+    result = translate_unit(main, class_table(units), None)
+    assert not result.bodies and "a call of FN_TWICE" in result.left[0][1]
+
+
+def test_the_same_unit_gives_the_same_c_and_module_name() -> None:
+    text = "PROGRAM Main\nVAR i : INT; END_VAR\ni := i + 1;\nEND_PROGRAM\n"
+    first, second = compiled(text), compiled(text)
+    results = []
+    for artifact in (first, second):
+        units = [*artifact.types, *artifact.pous]
+        results.append(translate_unit(units[-1], class_table(units), None))
+    assert results[0].source == results[1].source and results[0].module == results[1].module
+
+
+def _read_c_int(text: str) -> int:
+    """What a C compiler makes of `c_int`'s forms."""
+    halves = re.fullmatch(
+        r"\(\(padt_i128\)\(\(\(unsigned __int128\)(\d+)ULL << 64\) \| (\d+)ULL\)\)", text
+    )
+    if halves is not None:
+        bits = int(halves.group(1)) << 64 | int(halves.group(2))
+        return bits - (1 << 128) if bits >> 127 else bits
+    if text == "(-9223372036854775807LL - 1)":
+        return -(2**63)
+    return int(text.removesuffix("LL"))
+
+
+@pytest.mark.parametrize(
+    "value", [0, 7, -7, 2**31, -(2**63), 2**63 - 1, 2**63, 2**64 - 1, -(2**64), 2**100]
+)
+def test_integer_constants_are_written_exactly(value: int) -> None:
+    assert _read_c_int(c_int(value)) == value
