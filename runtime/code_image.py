@@ -85,8 +85,7 @@ class CodeImage:
         self.native: NativeReport | None = None
         self.native_job: NativeJob | None = None
         if native is not None and native.available:
-            globals_class = artifact.globals.class_name if artifact.globals is not None else None
-            self.native_job = native.start(first, globals_class, self._namespace)
+            self.native_job = native.start(artifact, self._namespace)
         self.globals: Any = None
         if artifact.globals is not None:
             self.globals = self._namespace[artifact.globals.class_name]()

@@ -73,7 +73,7 @@ class CompileWorker:
                 [sys.executable, "-m", "runtime.compile_worker"],
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
-                env=_child_environment(),
+                env=child_environment(),
             )
         assert child.stdin is not None and child.stdout is not None
         _send(child.stdin, marshal.dumps(units))
@@ -96,7 +96,7 @@ class CompileWorker:
             child.wait()
 
 
-def _child_environment() -> dict[str, str]:
+def child_environment() -> dict[str, str]:
     """This process's environment, with the folder this package is in first on the
     child's path: it finds `runtime` wherever the runtime was started from."""
     here = str(Path(__file__).resolve().parents[1])

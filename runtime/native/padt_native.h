@@ -395,6 +395,16 @@ padt_idiv(int64_t a, int64_t b, int64_t *out)
     return 0;
 }
 
+/* The same, where the quotient may be 2**63 (the smallest 64-bit integer by -1). */
+static inline int
+padt_idiv128(int64_t a, int64_t b, padt_i128 *out)
+{
+    if (PADT_UNLIKELY(b == 0))
+        return padt_raise_through("_idiv", 2, a, b, 0);
+    *out = (padt_i128)a / b;
+    return 0;
+}
+
 static inline int
 padt_imod(int64_t a, int64_t b, int64_t *out)
 {

@@ -13,7 +13,10 @@ from __future__ import annotations
 import atexit
 import importlib.machinery
 import importlib.util
+import json
 import shutil
+import subprocess
+import sys
 import tempfile
 import threading
 import weakref
@@ -22,12 +25,12 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from runtime.contract.artifact import PouCode
-from runtime.native.build import BuildError, Toolchain, build, find_toolchain
-from runtime.native.kinds import class_table
-from runtime.native.translate import Translated, translate_unit
+from runtime.compile_worker import child_environment
+from runtime.contract.artifact import Artifact
+from runtime.native.build import Toolchain, find_toolchain
 
 NAMESPACE_ATTR = "_native_namespace"  # a bound class holds its namespace through it
+WORKER_TIMEOUT_S = 1800  # a very large project compiles for minutes; never for ever
 
 
 def _breathe() -> None:
@@ -72,73 +75,69 @@ class NativeTier:
         self.toolchain = toolchain or find_toolchain()
         self._lock = threading.Lock()
         self._copies: dict[str, _Copies] = {}
-        self._translations: dict[tuple[str, str], Translated] = {}
         self._scratch: Path | None = None
 
     @property
     def available(self) -> bool:
         return self.toolchain is not None
 
-    def start(
-        self, units: list[PouCode], globals_class: str | None, namespace: dict[str, Any]
-    ) -> NativeJob:
-        """The native bodies of the classes of `namespace` (made from `units`), prepared on
-        a thread of their own; `NativeJob.install` puts them in place."""
-        return NativeJob(self, units, globals_class, namespace)
+    def start(self, artifact: Artifact, namespace: dict[str, Any]) -> NativeJob:
+        """The native bodies of the classes of `namespace` (made from `artifact`),
+        prepared on a thread of their own; `NativeJob.install` puts them in place."""
+        return NativeJob(self, artifact, namespace)
 
     def prepare(
-        self, units: list[PouCode], globals_class: str | None, namespace: dict[str, Any]
+        self, artifact: Artifact, namespace: dict[str, Any]
     ) -> tuple[list[tuple[type, str, Any]], NativeReport]:
-        """Translate, build and bind (the C statics; no class changes yet): the bodies to
-        install and the report."""
-        if self.toolchain is None:
-            return [], NativeReport((), (), ("no C compiler or Python headers on this machine",))
-        classes = class_table(units)
-        shape = repr(
-            sorted((name, sorted(info.members.items(), key=str)) for name, info in classes.items())
-        )
+        """Translated and built by the worker process, then loaded and bound here (the C
+        statics; no class changes yet): the bodies to install, and the report."""
+        try:
+            done = subprocess.run(
+                [sys.executable, "-m", "runtime.native.worker", str(self.cache)],
+                input=artifact.to_json().encode(),
+                capture_output=True,
+                env=child_environment(),
+                timeout=WORKER_TIMEOUT_S,
+                check=False,
+            )
+            answer = json.loads(done.stdout) if done.returncode == 0 else None
+        except (OSError, ValueError, subprocess.TimeoutExpired) as exc:
+            return [], NativeReport((), (), (f"the native worker did not run: {exc}",))
+        if not isinstance(answer, dict) or "units" not in answer:
+            why = answer.get("error") if isinstance(answer, dict) else None
+            why = why or done.stderr.decode(errors="replace").strip()[-500:]
+            return [], NativeReport((), (), (f"the native worker failed: {why}",))
         found: list[tuple[type, str, Any]] = []
         bodies: list[str] = []
         left: list[tuple[str, str]] = []
         failed: list[str] = []
-        for unit in units:
-            if unit.kind not in ("PROGRAM", "FUNCTION_BLOCK"):
-                continue
-            translated = self._translated(unit, classes, globals_class, shape)
-            left.extend((unit.name, reason) for _, reason in translated.left)
-            if not translated.source:
+        for unit in answer["units"]:
+            pou = str(unit["pou"])
+            left.extend((pou, str(reason)) for reason in unit["left"])
+            if "failed" in unit:
+                failed.append(f"{pou}: {unit['failed']}")
+                left.append((pou, "its C module did not build"))
+            if "module" not in unit:
                 continue
             try:
-                found.extend(self._bind(translated, namespace))
-            except (BuildError, OSError, ImportError, TypeError, ValueError) as exc:
-                failed.append(f"{unit.name}: {exc}")
-                left.append((unit.name, "its C module did not build or bind"))
+                found.extend(self._bind(str(unit["module"]), Path(unit["path"]), namespace))
+            except (OSError, ImportError, TypeError, ValueError) as exc:
+                failed.append(f"{pou}: {exc}")
+                left.append((pou, "its C module did not bind"))
                 continue
-            bodies.append(unit.name)
+            bodies.append(pou)
         return found, NativeReport(tuple(sorted(bodies)), tuple(sorted(left)), tuple(failed))
 
-    def _translated(
-        self, unit: PouCode, classes: Any, globals_class: str | None, shape: str
-    ) -> Translated:
-        key = (unit.source, f"{globals_class}|{shape}")
-        with self._lock:
-            known = self._translations.get(key)
-        if known is None:
-            known = translate_unit(unit, classes, globals_class)
-            with self._lock:
-                self._translations[key] = known
-        return known
-
     def _bind(
-        self, translated: Translated, namespace: dict[str, Any]
+        self, name: str, shared: Path, namespace: dict[str, Any]
     ) -> list[tuple[type, str, Any]]:
-        assert self.toolchain is not None
-        shared = build(translated.module, translated.source, self.cache, self.toolchain)
-        module = self._copy(translated.module, shared)
+        if not shared.resolve().is_relative_to(self.cache.resolve()):
+            raise ValueError(f"{shared} is not in the cache")
+        module = self._copy(name, shared)
         try:
             found: dict[tuple[str, str], Any] = module.bind(namespace, _breathe)
         except BaseException:
-            self._release(translated.module, module)
+            self._release(name, module)
             raise
         bound = {namespace[cls] for cls, _ in found}
         for kind in bound:
@@ -150,7 +149,7 @@ class NativeTier:
         def gone() -> None:
             remaining[0] -= 1
             if remaining[0] == 0:
-                self._release(translated.module, module)
+                self._release(name, module)
 
         for kind in bound:
             weakref.finalize(kind, gone)
@@ -185,34 +184,22 @@ class NativeJob:
     """The native bodies of one image, prepared on a thread of its own while the image
     runs as Python; the thread that runs the image installs them (between two cycles)."""
 
-    def __init__(
-        self,
-        tier: NativeTier,
-        units: list[PouCode],
-        globals_class: str | None,
-        namespace: dict[str, Any],
-    ) -> None:
+    def __init__(self, tier: NativeTier, artifact: Artifact, namespace: dict[str, Any]) -> None:
         self._done = threading.Event()
         self._found: list[tuple[type, str, Any]] = []
         self.report: NativeReport | None = None
         self.installed = False
         self._thread = threading.Thread(
             target=self._run,
-            args=(tier, units, globals_class, namespace),
+            args=(tier, artifact, namespace),
             name="padt-native",
             daemon=True,
         )
         self._thread.start()
 
-    def _run(
-        self,
-        tier: NativeTier,
-        units: list[PouCode],
-        globals_class: str | None,
-        namespace: dict[str, Any],
-    ) -> None:
+    def _run(self, tier: NativeTier, artifact: Artifact, namespace: dict[str, Any]) -> None:
         try:
-            self._found, self.report = tier.prepare(units, globals_class, namespace)
+            self._found, self.report = tier.prepare(artifact, namespace)
         except Exception as exc:  # a defect of the tier: the image stays Python
             self.report = NativeReport(
                 (), (), (f"the native tier failed: {type(exc).__name__}: {exc}",)

@@ -886,14 +886,13 @@ class _Body:
         if name in ("_idiv", "_imod") and len(node.args) == 2:
             a, b = (self.int_value(arg) for arg in node.args)
             assert isinstance(a.kind, Int) and isinstance(b.kind, Int)
-            held = self.temp("int64_t")
-            self.check(f"padt{name}({a.c}, {b.c}, &{held})")
             top = max(abs(a.kind.lo), abs(a.kind.hi))
-            if name == "_imod":
-                top = min(top, max(abs(b.kind.lo), abs(b.kind.hi)))
-            result = Int(-top, top)
-            if not result.fits64:  # INT64_MIN / -1 wraps in C, Python's is beyond 64 bits
-                _refuse("a division of the smallest 64-bit integer", node)
+            if name == "_imod":  # smaller than the divisor
+                top = min(top, max(0, max(abs(b.kind.lo), abs(b.kind.hi)) - 1))
+            result = Int(-top, top)  # the smallest 64-bit integer / -1: 2**63, in 128 bits
+            held = self.temp(result.ctype)
+            helper = f"padt{name}" if result.fits64 else "padt_idiv128"
+            self.check(f"{helper}({a.c}, {b.c}, &{held})")
             return V(result, held)
         if name in ("_f32", "float") and len(node.args) == 1:
             value = self.expr(node.args[0])

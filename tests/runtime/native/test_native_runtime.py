@@ -243,3 +243,19 @@ def test_module_copies_are_bound_again_once_their_classes_are_gone(
         gc.collect()
     loaded = [copies.loaded for copies in fresh_tier._copies.values()]
     assert loaded and max(loaded) <= 3  # not one per cold start
+
+
+def test_integer_division_at_the_limits_of_64_bits(native_tier: NativeTier) -> None:
+    text = """
+PROGRAM Main
+VAR a : LINT := -9223372036854775807; b : LINT := -1; q, r : LINT; n : INT; END_VAR
+n := n + 1;
+a := a - 1;  (* the smallest LINT in the second cycle *)
+q := a / b;  (* 2**63 in Python, wrapped back to the smallest *)
+r := a MOD b + a MOD 7;
+b := b - n;
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(4)
