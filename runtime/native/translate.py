@@ -915,18 +915,43 @@ class _Body:
             value = self.expr(node.args[0])
             if isinstance(value.kind, Float):
                 return V(Float(), f"fabs({value.c})")
-        if name in ("min", "max") and len(node.args) == 2:
-            a, b = (self.expr(arg) for arg in node.args)
-            if isinstance(a.kind, Float) and isinstance(b.kind, Float):
-                a, b = self.held(a), self.held(b)
-                # Python keeps the first unless the second is smaller (larger): NaN as it does
-                relation = "<" if name == "min" else ">"
-                return V(Float(), f"({b.c} {relation} {a.c} ? {b.c} : {a.c})")
+            if isinstance(value.kind, Int) and not value.kind.stand_in:
+                return self.absolute(self.held(value))
+        if name in ("min", "max") and len(node.args) >= 2:
+            return self.extreme(name, node)
         if name == "len" and len(node.args) == 1:
             target = self.expr(node.args[0])
             if isinstance(target.kind, Range):
                 return self.range_length(target)
         _refuse(f"a call of {ast.unparse(node.func)}", node)
+
+    def absolute(self, value: V) -> V:
+        kind = value.kind
+        assert isinstance(kind, Int)
+        top = max(abs(kind.lo), abs(kind.hi))
+        result = Int(0 if kind.lo <= 0 <= kind.hi else min(abs(kind.lo), abs(kind.hi)), top)
+        wide = "padt_i128" if "padt_i128" in (kind.ctype, result.ctype) else "int64_t"
+        x = value.c if kind.ctype == wide else f"(({wide}){value.c})"
+        return V(result, f"(({result.ctype})({x} < 0 ? -{x} : {x}))")
+
+    def extreme(self, name: str, node: ast.Call) -> V:
+        """min() and max() of REALs or of integers, as Python takes them: the first
+        argument, replaced by each later one that is smaller (larger); NaN as it does."""
+        values = [self.held(self.expr(arg)) for arg in node.args]
+        relation = "<" if name == "min" else ">"
+        if all(isinstance(v.kind, Float) for v in values):
+            kind: Kind = Float()
+        elif all(_plain64(v.kind) for v in values):
+            bounds = [v.kind for v in values if isinstance(v.kind, Int)]
+            pick = min if name == "min" else max
+            kind = Int(pick(k.lo for k in bounds), pick(k.hi for k in bounds))
+        else:
+            _refuse(f"{name}() of mixed or wide values", node)
+        held = self.temp(_ctype(kind))
+        self.line(f"{held} = {values[0].c};")
+        for value in values[1:]:
+            self.line(f"if ({value.c} {relation} {held}) {held} = {value.c};")
+        return V(kind, held)
 
     def range_length(self, target: V) -> V:
         kind = target.kind

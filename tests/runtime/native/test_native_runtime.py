@@ -67,6 +67,7 @@ cnts[1 + n MOD 2](up := n MOD 3 = 0);
 delay(IN := n MOD 10 < 6, PT := T#300ms);
 t := t + T#10ms - delay.ET;
 b := i > j AND j <> 0 OR cnt.n > 2 XOR delay.Q;
+k := MAX(i, j, -3) - MIN(si, ABS(j)) + ABS(si);
 END_PROGRAM
 """
 

@@ -42,6 +42,7 @@ def translated(body: str, declarations: str = "") -> tuple[bool, str]:
         "tn(IN := b, PT := T#1s); c := tn.Q; t := tn.ET + T#5ms;",
         "r := r * 2.5 - INT_TO_REAL(i); x := x / 3.0 + ABS(x); b := r < 1.0;",
         "i := REAL_TO_INT(r); d := TRUNC(x);",
+        "i := MAX(i, j, 3) - MIN(i, ABS(j)); r := MIN(r, 2.0, REAL#-1.5); d := ABS(d);",
         "RETURN;",
     ],
 )
@@ -56,7 +57,7 @@ def test_bodies_of_these_constructs_are_translated(body: str) -> None:
         ("s := CONCAT(s, 'x');", "the variable s, of a type the tier leaves to Python"),
         ("x := SQRT(x);", "a call of _safe_math"),
         ("x := EXPT(x, 2.0);", "a call of _pow"),
-        ("i := MAX(i, j);", "a call of max"),  # integer MIN/MAX: not yet
+        ("x := LN(x);", "a call of _safe_math"),
     ],
 )
 def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> None:
