@@ -400,9 +400,10 @@ class Resource:
 
     def _update_system(self, begin: int) -> None:
         system, stats, first = self.system, self.stats, self._first_cycle
-        system.START_CYCLE = first
-        system.COLDSTART = first and self.start_kind == "cold"
-        system.WARMSTART = first and self.start_kind == "warm"
+        if first or system.START_CYCLE:  # set in a start's first cycle, cleared in its second
+            system.START_CYCLE = first
+            system.COLDSTART = first and self.start_kind == "cold"
+            system.WARMSTART = first and self.start_kind == "warm"
         system.CYCLE_TIME_LAST = stats.last_ns
         system.CYCLE_TIME_MIN = stats.min_ns
         system.CYCLE_TIME_MAX = stats.max_ns

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from time import perf_counter_ns
 from typing import Any, Protocol
 
 from runtime.clock import Clock
@@ -60,7 +59,9 @@ class Scheduler:
         self._recorder, self._clock = recorder, clock
         self.watchdog: Watchdog = process_watchdog()
         self.meter = SliceMeter(virtual=clock.virtual)
-        self.used_ns = 0  # program execution time in the current CPU cycle
+        # the time the metered slices of the current CPU cycle used: what a virtual clock
+        # counts as the cycle's duration, and what the multitasking modes budget with
+        self.used_ns = 0
 
     @property
     def watchdog_ns(self) -> int:
@@ -93,7 +94,9 @@ class Scheduler:
         mode = self._host.params.multitasking_mode
         self.used_ns = 0
         unused_ns = 0
-        for program in list(self._variables.programs):
+        # no copy of the list: a program run never changes it (a restart replaces a program
+        # between cycles, and in place)
+        for program in self._variables.programs:
             if program.state is not _RUN:
                 continue
             if program.run is None and not program.config.max_duration_us:
@@ -188,21 +191,18 @@ class Scheduler:
 
     def _run_whole(self, program: UserProgram, begin: int, finished: list[UserProgram]) -> None:
         """The usual case, kept short: a program without a time slice runs its whole
-        program cycle in one call, its loop passes not metered; what `_slice` does for a
-        slice that has no limit."""
+        program cycle in one call, its loop passes not metered and its time not taken (the
+        cycle's duration covers it); what `_slice` does for a slice that has no limit."""
         code, system = self._variables.code, self._host.system
         assert code is not None
         program.begin_cycle(self._delta(program, begin), self._variables.globals)
         system.now_ns = program.cycle_time_ns
         code.use(program.view, None)
-        started = perf_counter_ns()
         try:
             program.resume()
             finished.append(program)
         except (Exception, RecursionError) as exc:
             self._program_fault(program, exc)
-        if not self.meter.virtual:  # on a virtual clock, only metered passes count
-            self.used_ns += perf_counter_ns() - started
         if True in emergency_switches(self._host.system) and self._host.emergency_stopped():
             raise Halted()
 
