@@ -462,6 +462,8 @@ def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
     generated = generate_pou(resolved, pou)
     if pou.kind == "FUNCTION":
         code = _unit_code(pou.name, pou.kind, function_name(pou.name), generated.source, [])
+        if pou.return_type is not None:
+            code = replace(code, returns=_type_text(pou.return_type))
     else:
         # a variable-length in-out is the caller's array, shown where the caller has it
         stored = [

@@ -65,6 +65,9 @@ class PouCode:
     file: str = ""  # the ST source file of a POU
     st_lines: tuple[int, ...] = ()  # per line of `source`: its line in `file` (0: none)
     chart: ChartInfo | None = None
+    # a FUNCTION's result type as `VarInfo.type` names types ("" without one): what a
+    # caller in the native tier unboxes its result as
+    returns: str = ""
 
 
 @dataclass(frozen=True)
@@ -171,6 +174,9 @@ class Artifact:
         for name in _OPTIONAL_FIELDS:
             if not data[name]:
                 del data[name]
+        for unit in (*data["pous"], *data["types"], data["globals"]):
+            if unit is not None and not unit["returns"]:  # a CRC as before the field was
+                del unit["returns"]
         return canonical_json(data)
 
     def with_crc(self) -> Artifact:

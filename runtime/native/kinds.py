@@ -7,6 +7,7 @@ of its type) and from the arithmetic between them, so the translator can prove t
 
 from __future__ import annotations
 
+import ast
 from dataclasses import dataclass
 
 from runtime.contract.artifact import PouCode
@@ -158,3 +159,33 @@ def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
             length *= max(0, high - low + 1)
         return Array(kind_of_type(shape.element, classes), length)
     return None
+
+
+@dataclass(frozen=True)
+class FunctionInfo:
+    """A FUNCTION as a caller sees it: the name it has in the namespace, and what its call
+    gives: `result` None for no result, or one the tier leaves to Python; `outputs` when
+    the call gives a tuple (the result with VAR_OUTPUT and VAR_IN_OUT values)."""
+
+    name: str
+    result: Kind | None
+    outputs: bool
+
+
+def function_table(units: list[PouCode]) -> dict[str, FunctionInfo]:
+    """Every FUNCTION of an artifact, by its name in the namespace. Whether a call gives a
+    tuple is read off the generated code's `return` statements (the artifact names the
+    result type, not the outputs)."""
+    table: dict[str, FunctionInfo] = {}
+    for unit in units:
+        if unit.kind != "FUNCTION" or not isinstance(unit.returns, str):
+            continue
+        try:
+            tree = ast.parse(unit.source)
+        except (SyntaxError, ValueError, RecursionError):
+            continue  # a caller then leaves the call to Python: the name is not known
+        returned = [node.value for node in ast.walk(tree) if isinstance(node, ast.Return)]
+        outputs = any(isinstance(value, ast.Tuple) for value in returned)
+        result = kind_of_type(unit.returns, {}) if unit.returns else None
+        table[unit.class_name] = FunctionInfo(unit.class_name, result, outputs)
+    return table

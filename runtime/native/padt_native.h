@@ -457,6 +457,19 @@ padt_breathe(void)
     return 0;
 }
 
+/* A FUNCTION of the namespace, called as generated Python calls it (`nargs` positional
+ * values, then the keywords `kwnames` names): its result, or NULL with the error set. */
+static PyObject *
+padt_call_function(PyObject *key, PyObject *const *args, size_t nargs, PyObject *kwnames)
+{
+    PyObject *function = padt_global(key);
+    if (function == NULL)
+        return NULL;
+    return PyObject_Vectorcall(function, args, nargs, kwnames);
+}
+
+#define PADT_BOOL_OBJECT(v) Py_NewRef((v) ? Py_True : Py_False)
+
 static int
 padt_call_any(PyObject *callable)
 {

@@ -36,6 +36,7 @@ from runtime.native.kinds import (
     Bool,
     ClassInfo,
     Float,
+    FunctionInfo,
     Hook,
     Instance,
     Int,
@@ -124,6 +125,8 @@ class _Module:
     keys: dict[str, str] = field(default_factory=dict)  # interned strings
     sites: int = 0
     globals_class: str | None = None
+    functions: dict[str, FunctionInfo] = field(default_factory=dict)
+    kwnames: dict[tuple[str, ...], str] = field(default_factory=dict)  # -> C static tuple
 
     def type_ref(self, cls: str) -> str:
         return self.types.setdefault(cls, f"T{len(self.types)}")
@@ -134,6 +137,12 @@ class _Module:
 
     def key(self, text: str) -> str:
         return self.keys.setdefault(text, f"K{len(self.keys)}")
+
+    def names(self, keywords: tuple[str, ...]) -> str:
+        """The tuple of keyword names of a vectorcall."""
+        for keyword in keywords:
+            self.key(keyword)
+        return self.kwnames.setdefault(keywords, f"KW{len(self.kwnames)}")
 
     def site(self) -> str:
         self.sites += 1
@@ -146,6 +155,7 @@ class _Module:
             for (cls, attr), ref in self.offsets.items()
         ]
         lines += [f"static PyObject *{ref}; /* {text!r} */" for text, ref in self.keys.items()]
+        lines += [f"static PyObject *{ref}; /* {names!r} */" for names, ref in self.kwnames.items()]
         lines += [f"static padt_site S{n};" for n in range(self.sites)]
         return lines
 
@@ -163,6 +173,12 @@ class _Module:
             lines.append(
                 f"    if ({ref} == NULL && ({ref} = PyUnicode_InternFromString({c_string(text)}))"
                 " == NULL) return NULL;"
+            )
+        for names, ref in self.kwnames.items():
+            keys = ", ".join(self.keys[name] for name in names)
+            lines.append(
+                f"    if ({ref} == NULL && ({ref} = PyTuple_Pack({len(names)}, {keys})) == NULL)"
+                " return NULL;"
             )
         lines += [f"    memset(&S{n}, 0, sizeof S{n});" for n in range(self.sites)]
         return lines
@@ -382,6 +398,9 @@ class _Body:
         return f"f->{c}"
 
     def call_statement(self, call: ast.expr) -> None:
+        if isinstance(call, ast.Call) and _called_name(call) in self.module.functions:
+            self.function_call(call)  # its result, if any, dropped at the chunk's end
+            return
         if not isinstance(call, ast.Call) or call.keywords:
             _refuse("an expression statement that is no call", call)
         func = call.func
@@ -868,6 +887,12 @@ class _Body:
 
     def call_value(self, node: ast.Call) -> V:
         name = _called_name(node)
+        if name in self.module.functions:
+            info, returned = self.function_call(node)
+            if not isinstance(info.result, Int | Bool | Float):
+                why = "a FUNCTION whose result the tier leaves to Python"
+                _refuse(f"a call of {name}, {why}", node)
+            return self.unboxed(returned, info.result, f"the result of {name}", node)
         if node.keywords:
             _refuse(f"a call of {ast.unparse(node.func)} with keywords", node)
         if name == "_ix" and len(node.args) == 3:
@@ -924,6 +949,44 @@ class _Body:
             if isinstance(target.kind, Range):
                 return self.range_length(target)
         _refuse(f"a call of {ast.unparse(node.func)}", node)
+
+    def function_call(self, node: ast.Call) -> tuple[FunctionInfo, str]:
+        """A FUNCTION of the artifact called as Python calls it, with the values boxed;
+        the result in a temporary that owns it."""
+        name = _called_name(node)
+        assert name is not None
+        info = self.module.functions[name]
+        if info.outputs:
+            _refuse(f"a call of {name}, a FUNCTION with VAR_OUTPUT or VAR_IN_OUT", node)
+        if any(keyword.arg is None for keyword in node.keywords):
+            _refuse(f"a call of {name} with ** arguments", node)
+        values = [*node.args, *(keyword.value for keyword in node.keywords)]
+        boxed: list[str] = []
+        for value_node in values:
+            value = self.expr(value_node)
+            kind = value.kind
+            if isinstance(kind, Int) and kind.fits64 and not kind.stand_in:
+                box = f"PyLong_FromLongLong({value.c})"
+            elif isinstance(kind, Bool):
+                box = f"PADT_BOOL_OBJECT({value.c})"
+            elif isinstance(kind, Float):
+                box = f"PyFloat_FromDouble({value.c})"
+            else:
+                _refuse(f"an argument of {name} that holds a {_kind_name(kind)}", value_node)
+            held = self.temp("PyObject *", "NULL")
+            self.line(f"Py_XSETREF({held}, {box});")
+            self.line(f"if (PADT_UNLIKELY({held} == NULL)) goto padt_error;")
+            boxed.append(held)
+        keywords = tuple(str(keyword.arg) for keyword in node.keywords)
+        names = self.module.names(keywords) if keywords else "NULL"
+        args = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
+        result = self.temp("PyObject *", "NULL")
+        self.line(
+            f"Py_XSETREF({result}, padt_call_function({self.module.key(name)}, {args}, "
+            f"{len(node.args)}, {names}));"
+        )
+        self.line(f"if (PADT_UNLIKELY({result} == NULL)) goto padt_error;")
+        return info, result
 
     def absolute(self, value: V) -> V:
         kind = value.kind
@@ -1312,12 +1375,18 @@ def _function_name(class_name: str) -> str:
 
 
 def translate_unit(
-    unit: PouCode, classes: dict[str, ClassInfo], globals_class: str | None
+    unit: PouCode,
+    classes: dict[str, ClassInfo],
+    globals_class: str | None,
+    functions: dict[str, FunctionInfo] | None = None,
 ) -> Translated:
-    """The C module of one unit: every `__call__` of its classes that can be translated."""
-    module = _Module(classes, code_filename(unit), globals_class=globals_class)
+    """The C module of one unit: every `__call__` of its classes that can be translated
+    (calling the FUNCTIONs of `functions` as Python code)."""
+    module = _Module(
+        classes, code_filename(unit), globals_class=globals_class, functions=functions or {}
+    )
     tree = ast.parse(unit.source)
-    functions: list[tuple[str, str]] = []  # (class name, C text)
+    bodies: list[tuple[str, str]] = []  # (class name, C text)
     left: list[tuple[str, str]] = []
     for node in tree.body:
         if not isinstance(node, ast.ClassDef):
@@ -1331,21 +1400,21 @@ def translate_unit(
                 left.append((body_name, "a class the artifact does not describe"))
                 continue
             try:
-                functions.append((node.name, _translate_body(module, info, item)))
+                bodies.append((node.name, _translate_body(module, info, item)))
             except NotTranslated as reason:
                 left.append((body_name, str(reason)))
             except RecursionError:
                 left.append((body_name, "an expression nested too deep"))
-    if not functions:
+    if not bodies:
         return Translated(unit.name, "", "", (), tuple(left))
-    source = _module_text(module, functions)
+    source = _module_text(module, bodies)
     digest = hashlib.sha256(source.encode()).hexdigest()[:24]
     name = f"padt_{digest}"
     return Translated(
         unit.name,
         name,
         source.replace(NAME_PLACEHOLDER, name),
-        tuple(f"{cls}.__call__" for cls, _ in functions),
+        tuple(f"{cls}.__call__" for cls, _ in bodies),
         tuple(left),
     )
 

@@ -23,7 +23,7 @@ from typing import Any
 
 from runtime.contract.artifact import Artifact, PouCode, load_artifact
 from runtime.native.build import BuildError, build, find_toolchain
-from runtime.native.kinds import class_table
+from runtime.native.kinds import class_table, function_table
 from runtime.native.translate import translate_unit
 
 WORKER_NICE = 10  # background work: below the runtime and below normal programs
@@ -50,9 +50,13 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
         return {"error": "no C compiler or no Python.h on this machine"}
     units = translatable_units(artifact)
     classes = class_table(units)
+    functions = function_table(list(artifact.pous))
     globals_class = artifact.globals.class_name if artifact.globals is not None else None
     shape = repr(
-        sorted((name, sorted(info.members.items(), key=str)) for name, info in classes.items())
+        (
+            sorted((name, sorted(info.members.items(), key=str)) for name, info in classes.items()),
+            sorted(functions.items()),
+        )
     )
     fingerprint = _translator_fingerprint()
     index = cache / toolchain.fingerprint / "index"
@@ -70,7 +74,7 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
             with contextlib.suppress(OSError, ValueError):
                 answer = json.loads(known.read_text())
         if answer is None or (answer.get("module") and not Path(answer["path"]).is_file()):
-            translated = translate_unit(unit, classes, globals_class)
+            translated = translate_unit(unit, classes, globals_class, functions)
             answer = {"pou": unit.name, "left": [reason for _, reason in translated.left]}
             if translated.source:
                 try:

@@ -85,7 +85,7 @@ def _states(resource: Resource) -> list[object]:
 
 
 def program_error(resource: Resource) -> str:
-    return " ".join(p.error or "" for p in resource.programs)
+    return " ".join(p.error for p in resource.programs if p.error)
 
 
 def side_by_side(text: str, tier: NativeTier, programs: list[ProgramConfig] | None = None) -> Pair:

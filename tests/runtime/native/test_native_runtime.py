@@ -260,3 +260,62 @@ END_PROGRAM
     pair = side_by_side(text, native_tier)
     assert pair.report.bodies == ("Main",)
     pair.cycle_and_compare(4)
+
+
+FUNCTIONS = """
+FUNCTION Scale : INT
+VAR_INPUT a : INT; b : INT; END_VAR
+VAR t : DINT; END_VAR
+t := a * b;
+Scale := DINT_TO_INT(t / (b - 7));
+END_FUNCTION
+FUNCTION Above : BOOL
+VAR_INPUT x : REAL; limit : REAL := 2.5; END_VAR
+Above := x > limit;
+END_FUNCTION
+FUNCTION Half : LREAL
+VAR_INPUT x : LREAL; on : BOOL; END_VAR
+IF on THEN Half := x / 2.0; ELSE Half := x; END_IF;
+END_FUNCTION
+FUNCTION Ticks : TIME
+Ticks := T#5s;
+END_FUNCTION
+FUNCTION Note
+VAR_INPUT a : INT; END_VAR
+END_FUNCTION
+FUNCTION Split : BOOL
+VAR_INPUT a : INT; END_VAR
+VAR_OUTPUT q : INT; END_VAR
+q := a * 2;
+Split := a > 0;
+END_FUNCTION
+PROGRAM Main
+VAR n, x : INT; b, up : BOOL; r : REAL; l : LREAL; t : TIME; END_VAR
+n := n + 1;
+x := Scale(x + 1, n) + 2;
+x := Scale(a := x, b := 2) - Scale(b := n, a := 3);
+r := r + 0.75;
+up := Above(r) AND NOT Above(x := r, limit := 4.0);
+l := Half(l + 3.0, up);
+t := Ticks() + T#1s;
+Note(a := x);
+END_PROGRAM
+PROGRAM Outputs
+VAR q : INT; b : BOOL; END_VAR
+b := Split(a := 3, q => q);
+END_PROGRAM
+"""
+
+
+def test_function_calls_run_from_c_and_faults_in_them_name_the_function_line(
+    native_tier: NativeTier,
+) -> None:
+    programs = [ProgramConfig(name="Main", pou="Main", program_id=1),
+                ProgramConfig(name="Outputs", pou="Outputs", program_id=2)]  # fmt: skip
+    pair = side_by_side(FUNCTIONS, native_tier, programs)
+    assert pair.report.bodies == ("Main",)
+    assert "a FUNCTION with VAR_OUTPUT or VAR_IN_OUT" in dict(pair.report.left)["Outputs"]
+    pair.cycle_and_compare(6)  # n = 7 in the seventh cycle: Scale divides by zero
+    assert not program_error(pair.native)
+    pair.cycle_and_compare(1)
+    assert "division by zero in POU Scale (prog.st:6)" in program_error(pair.native)

@@ -7,22 +7,38 @@ import re
 
 import pytest
 
-from runtime.native.kinds import class_table
+from runtime.native.kinds import class_table, function_table
 from runtime.native.translate import c_int, translate_unit
 from tests.support.native_runs import compiled
+
+FUNCTIONS = """
+FUNCTION Twice : INT
+VAR_INPUT v : INT; END_VAR
+Twice := v * 2;
+END_FUNCTION
+FUNCTION Named : STRING
+VAR_INPUT v : INT; END_VAR
+Named := 'n';
+END_FUNCTION
+FUNCTION Split : BOOL
+VAR_INPUT v : INT; END_VAR
+VAR_OUTPUT q : INT; END_VAR
+q := v;
+END_FUNCTION
+"""
 
 
 def translated(body: str, declarations: str = "") -> tuple[bool, str]:
     """Whether PROGRAM Main's body translates, and the reason when it does not."""
     text = (
-        "PROGRAM Main\nVAR i, j : INT; d : DINT; l : LINT; u : UINT; b, c : BOOL; r : REAL; "
-        f"x : LREAL; s : STRING; t : TIME; a : ARRAY[1..4] OF INT; tn : TON; {declarations}"
-        f"END_VAR\n{body}\nEND_PROGRAM\n"
+        f"{FUNCTIONS}PROGRAM Main\nVAR i, j : INT; d : DINT; l : LINT; u : UINT; b, c : BOOL; "
+        "r : REAL; x : LREAL; s : STRING; t : TIME; a : ARRAY[1..4] OF INT; tn : TON; "
+        f"{declarations}END_VAR\n{body}\nEND_PROGRAM\n"
     )
     artifact = compiled(text)
     units = [*artifact.types, *artifact.pous]
     main = next(unit for unit in units if unit.name == "Main")
-    result = translate_unit(main, class_table(units), None)
+    result = translate_unit(main, class_table(units), None, function_table(units))
     return bool(result.bodies), result.left[0][1] if result.left else ""
 
 
@@ -43,6 +59,7 @@ def translated(body: str, declarations: str = "") -> tuple[bool, str]:
         "r := r * 2.5 - INT_TO_REAL(i); x := x / 3.0 + ABS(x); b := r < 1.0;",
         "i := REAL_TO_INT(r); d := TRUNC(x);",
         "i := MAX(i, j, 3) - MIN(i, ABS(j)); r := MIN(r, 2.0, REAL#-1.5); d := ABS(d);",
+        "i := Twice(i + 1) - Twice(v := j);",
         "RETURN;",
     ],
 )
@@ -58,6 +75,8 @@ def test_bodies_of_these_constructs_are_translated(body: str) -> None:
         ("x := SQRT(x);", "a call of _safe_math"),
         ("x := EXPT(x, 2.0);", "a call of _pow"),
         ("x := LN(x);", "a call of _safe_math"),
+        ("b := Named(i) = 'n';", "a FUNCTION whose result the tier leaves to Python"),
+        ("b := Split(v := i, q => j);", "a FUNCTION with VAR_OUTPUT or VAR_IN_OUT"),
     ],
 )
 def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> None:
@@ -65,16 +84,14 @@ def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> No
     assert not ok and reason in why
 
 
-def test_a_function_call_stays_python() -> None:
-    text = (
-        "FUNCTION Twice : INT\nVAR_INPUT v : INT; END_VAR\nTwice := v * 2;\nEND_FUNCTION\n"
-        "PROGRAM Main\nVAR i : INT; END_VAR\ni := Twice(i);\nEND_PROGRAM\n"
-    )
-    artifact = compiled(text)
-    units = [*artifact.types, *artifact.pous]
-    main = next(unit for unit in units if unit.name == "Main")
-    result = translate_unit(main, class_table(units), None)
-    assert not result.bodies and "a call of FN_TWICE" in result.left[0][1]
+def test_the_artifact_names_a_function_result_and_the_tier_reads_outputs_off_the_code() -> None:
+    units = [*compiled(FUNCTIONS + "PROGRAM Main\nEND_PROGRAM\n").pous]
+    assert {unit.name: unit.returns for unit in units} == {
+        "Twice": "INT", "Named": "STRING[80]", "Split": "BOOL", "Main": ""
+    }  # fmt: skip
+    table = function_table(units)
+    assert not table["FN_TWICE"].outputs and table["FN_SPLIT"].outputs
+    assert table["FN_NAMED"].result is None  # a string: read by Python only
 
 
 def test_the_same_unit_gives_the_same_c_and_module_name() -> None:
