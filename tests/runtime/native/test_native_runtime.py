@@ -152,6 +152,19 @@ END_PROGRAM
     pair.cycle_and_compare(40)
     assert 0 < pair.native.variables.values()["Slow.rounds"] < 40  # it did span cycles
 
+    # the inner loop in a FUNCTION (Python, called from C): suspended inside it
+    called = text.replace(
+        "FOR k := 1 TO 3 DO total := total + i * k; END_FOR;", "total := total + Sum3(i);"
+    )
+    function = (
+        "FUNCTION Sum3 : DINT\nVAR_INPUT i : DINT; END_VAR\nVAR k : DINT; END_VAR\n"
+        "FOR k := 1 TO 3 DO Sum3 := Sum3 + i * k; END_FOR;\nEND_FUNCTION\n"
+    )
+    pair = side_by_side(function + called, native_tier, programs)
+    assert pair.report.bodies == ("Slow",)
+    pair.cycle_and_compare(40)
+    assert 0 < pair.native.variables.values()["Slow.rounds"] < 40
+
 
 def test_a_variable_that_holds_a_wrong_type_is_a_fault_not_a_crash(
     native_tier: NativeTier,
