@@ -47,8 +47,11 @@ class ProcessImage:
 
     def write_outputs(self, safe: bool) -> None:
         """The output image (located %Q variables) as the I/O sends it to the field."""
+        outputs = self._variables.outputs
+        if not outputs and not self.outputs:  # none: the empty image stays (it is never changed)
+            return
         image: dict[str, Any] = {}
-        for bound in self._variables.outputs:
+        for bound in outputs:
             if safe:
                 configured = self._safe_values.get(bound.path.path.upper())
                 image[bound.path.path] = (
