@@ -1,5 +1,6 @@
 """Language benchmarks: parse and compile speed on OSCAT, the cycle time of a 1,000-statement
-program beside a baseline's, on the Python tier and on the native tier.
+program beside a baseline's, on the Python tier and on the native tier, and how much of
+OSCAT the native tier translates.
 
 Run with `python -m tests.bench.bench_language`. It prints figures and asserts nothing
 about time (machines are shared and noisy).
@@ -17,6 +18,9 @@ from backend.compiler.diagnostics import CompileError
 from backend.compiler.parse import parse_source
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
+from runtime.native.kinds import class_table, function_table
+from runtime.native.translate import translate_unit
+from runtime.native.worker import translatable_units
 from tests.bench.baseline import REPO as CODE_BASE
 from tests.bench.baseline import Compared, compare, probe
 
@@ -168,6 +172,37 @@ def bench_native(request: dict[str, Any], python: Compared, rounds: int = 3) -> 
     )
 
 
+def bench_native_coverage(sources: list[SourceFile]) -> None:
+    """The program and function block bodies of OSCAT, file by file, that the native tier
+    translates (translation only: the C compiler's time is `bench_native`'s), and the
+    most common reasons for the rest."""
+    translated = total = 0
+    reasons: dict[str, int] = {}
+    started = time.perf_counter()
+    for source in sources:
+        artifact = compile_sources([source], programs=[]).artifact
+        if artifact is None:
+            continue
+        units = translatable_units(artifact)
+        classes, functions = class_table(units), function_table(list(artifact.pous))
+        globals_class = artifact.globals.class_name if artifact.globals is not None else None
+        for unit in units:
+            if unit.kind not in ("PROGRAM", "FUNCTION_BLOCK"):
+                continue
+            result = translate_unit(unit, classes, globals_class, functions)
+            translated += len(result.bodies)
+            total += len(result.bodies) + len(result.left)
+            for _, reason in result.left:
+                cause = reason.split(" (generated line")[0]
+                reasons[cause] = reasons.get(cause, 0) + 1
+    common = sorted(reasons.items(), key=lambda item: (-item[1], item[0]))[:3]
+    print(
+        f"native tier on OSCAT: {translated} of {total} program and function block bodies "
+        f"translate ({time.perf_counter() - started:.1f} s); the rest mostly: "
+        + "; ".join(f"{cause} ({count})" for cause, count in common)
+    )
+
+
 ARRAY_LOOP = """\
 PROGRAM Loop
 VAR arr : ARRAY[1..1000] OF INT; i : INT; END_VAR
@@ -199,6 +234,7 @@ def main() -> None:
     if sources is not None:
         bench_parse(sources)
         bench_pipeline(sources)
+        bench_native_coverage(sources)
     bench_cycles()
     bench_array_loop()
 
