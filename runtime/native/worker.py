@@ -18,13 +18,14 @@ import hashlib
 import json
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from runtime.contract.artifact import Artifact, PouCode, load_artifact
 from runtime.native.build import BuildError, build, find_toolchain
-from runtime.native.kinds import class_table, function_table
-from runtime.native.translate import translate_unit
+from runtime.native.kinds import ClassInfo, FunctionInfo, class_table, function_table
+from runtime.native.translate import Translated, translate_unit
 
 WORKER_NICE = 10  # background work: below the runtime and below normal programs
 _SOURCES = ("translate.py", "kinds.py", "padt_native.h", "build.py")
@@ -34,6 +35,35 @@ def translatable_units(artifact: Artifact) -> list[PouCode]:
     """What the native tier looks at: the generated classes (not the FUNCTIONs)."""
     units = [*artifact.types, *(p for p in artifact.pous if p.kind != "FUNCTION")]
     return [*units, *([artifact.globals] if artifact.globals is not None else [])]
+
+
+@dataclass(frozen=True)
+class ArtifactTranslation:
+    """What translating the bodies of one artifact needs beside each unit's own source: the
+    classes the bodies read and the FUNCTIONs they call."""
+
+    units: list[PouCode]  # the programs and function blocks, whose bodies are translated
+    classes: dict[str, ClassInfo]
+    functions: dict[str, FunctionInfo]
+    globals_class: str | None
+
+    @classmethod
+    def of(cls, artifact: Artifact) -> ArtifactTranslation:
+        units = translatable_units(artifact)
+        return cls(
+            [unit for unit in units if unit.kind in ("PROGRAM", "FUNCTION_BLOCK")],
+            class_table(units),
+            function_table(list(artifact.pous)),
+            artifact.globals.class_name if artifact.globals is not None else None,
+        )
+
+    def shape(self) -> str:
+        """All of it a translation depends on but the unit's source (a cache key's part)."""
+        members = [(name, sorted(c.members.items(), key=str)) for name, c in self.classes.items()]
+        return repr((self.globals_class, sorted(members), sorted(self.functions.items())))
+
+    def translate(self, unit: PouCode) -> Translated:
+        return translate_unit(unit, self.classes, self.globals_class, self.functions)
 
 
 def _translator_fingerprint() -> str:
@@ -48,33 +78,21 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
     toolchain = find_toolchain()
     if toolchain is None:
         return {"error": "no C compiler or no Python.h on this machine"}
-    units = translatable_units(artifact)
-    classes = class_table(units)
-    functions = function_table(list(artifact.pous))
-    globals_class = artifact.globals.class_name if artifact.globals is not None else None
-    shape = repr(
-        (
-            sorted((name, sorted(info.members.items(), key=str)) for name, info in classes.items()),
-            sorted(functions.items()),
-        )
-    )
+    translation = ArtifactTranslation.of(artifact)
+    shape = translation.shape()
     fingerprint = _translator_fingerprint()
     index = cache / toolchain.fingerprint / "index"
     index.mkdir(parents=True, exist_ok=True)
     answers = []
-    for unit in units:
-        if unit.kind not in ("PROGRAM", "FUNCTION_BLOCK"):
-            continue
-        key = hashlib.sha256(
-            "\n".join((fingerprint, f"{globals_class}", shape, unit.source)).encode()
-        ).hexdigest()[:32]
+    for unit in translation.units:
+        key = hashlib.sha256("\n".join((fingerprint, shape, unit.source)).encode()).hexdigest()[:32]
         known = index / f"{key}.json"
         answer: dict[str, Any] | None = None
         if known.is_file():
             with contextlib.suppress(OSError, ValueError):
                 answer = json.loads(known.read_text())
         if answer is None or (answer.get("module") and not Path(answer["path"]).is_file()):
-            translated = translate_unit(unit, classes, globals_class, functions)
+            translated = translation.translate(unit)
             answer = {"pou": unit.name, "left": [reason for _, reason in translated.left]}
             if translated.source:
                 try:

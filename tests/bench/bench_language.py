@@ -18,9 +18,7 @@ from backend.compiler.diagnostics import CompileError
 from backend.compiler.parse import parse_source
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
-from runtime.native.kinds import class_table, function_table
-from runtime.native.translate import translate_unit
-from runtime.native.worker import translatable_units
+from runtime.native.worker import ArtifactTranslation
 from tests.bench.baseline import REPO as CODE_BASE
 from tests.bench.baseline import Compared, compare, probe
 
@@ -183,13 +181,9 @@ def bench_native_coverage(sources: list[SourceFile]) -> None:
         artifact = compile_sources([source], programs=[]).artifact
         if artifact is None:
             continue
-        units = translatable_units(artifact)
-        classes, functions = class_table(units), function_table(list(artifact.pous))
-        globals_class = artifact.globals.class_name if artifact.globals is not None else None
-        for unit in units:
-            if unit.kind not in ("PROGRAM", "FUNCTION_BLOCK"):
-                continue
-            result = translate_unit(unit, classes, globals_class, functions)
+        translation = ArtifactTranslation.of(artifact)
+        for unit in translation.units:
+            result = translation.translate(unit)
             translated += len(result.bodies)
             total += len(result.bodies) + len(result.left)
             for _, reason in result.left:
