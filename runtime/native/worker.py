@@ -4,8 +4,8 @@ program) and the C compiler. The runtime sends the artifact, waits for the answe
 the lock released, and only loads and binds what the child built.
 
 A translation is kept beside the compiled modules, by the hash of what it depends on (the
-unit's source, the classes it reads, the translator itself), so a unit built before is
-neither translated nor compiled again.
+unit's source, the classes it reads, the FUNCTIONs it calls, the translator itself), so a
+unit built before is neither translated nor compiled again.
 
 Run as `python -m runtime.native.worker CACHE`: a request (JSON) on stdin, the answer on
 stdout.
