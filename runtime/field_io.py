@@ -235,7 +235,7 @@ class FieldIo:
             delivery = poller.delivery
             for point in poller.device.points:
                 if point.is_input:
-                    value = delivery.values.get(point.variable, point.safe_value)
+                    value = delivery.values.get(point.variable, point.input_safe_value)
                     quality = "good" if delivery.good else "bad"
                 else:
                     value = poller.sent.get(point.variable)

@@ -89,7 +89,7 @@ class DevicePoller:
         self._reads = blocks(inputs)
         # outputs go in blocks of strictly adjacent points: a gap would overwrite the device
         self._writes = blocks([p for p in device.points if not p.is_input], gap=0)
-        self._safe = {p.variable: p.safe_value for p in inputs}
+        self._safe = {p.variable: p.input_safe_value for p in inputs}
         # until the device first answers, its inputs hold their safe values, marked bad
         self.delivery = Delivery(1, dict(self._safe), False)
         self.state = "connecting"

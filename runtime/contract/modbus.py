@@ -23,6 +23,8 @@ import struct
 from dataclasses import dataclass
 from typing import Any
 
+from runtime.contract.values import ValueRejected, representation
+
 # the four tables of the Modbus data model
 COIL = "coil"
 DISCRETE_INPUT = "discrete_input"
@@ -68,6 +70,14 @@ class Point:
     def count(self) -> int:
         """Bits or registers the point takes."""
         return 2 if self.type in THIRTY_TWO_BITS else 1
+
+    @property
+    def input_safe_value(self) -> bool | int | float:
+        """The safe value as the variable holds it: a REAL's `0` as `0.0`, which the native
+        tier's type checks need. (The artifact keeps the value as written, under its CRC;
+        `modbus_config` checked that it suits the type.)"""
+        value: bool | int | float = representation(self.type, self.safe_value)
+        return value
 
     @property
     def is_input(self) -> bool:
@@ -184,7 +194,18 @@ def modbus_config(data: dict[str, Any]) -> ModbusConfig:
         port=data["port"],
         served=tuple(Point(**p) for p in data["served"]),
         devices=tuple(
-            Device(**{**d, "points": tuple(Point(**p) for p in d["points"])})
+            Device(**{**d, "points": tuple(_device_point(p) for p in d["points"])})
             for d in data["devices"]
         ),
     )
+
+
+def _device_point(data: dict[str, Any]) -> Point:
+    point = Point(**data)
+    if not point.is_input:  # an output's safe value is the resource's (`safe_values`)
+        return point
+    try:
+        point.input_safe_value  # noqa: B018 (checked here, so that a poller never raises)
+    except ValueRejected as exc:
+        raise TypeError(f"the safe value of Modbus point '{point.variable}': {exc}") from None
+    return point

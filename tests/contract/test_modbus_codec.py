@@ -6,7 +6,7 @@ import struct
 
 import pytest
 
-from runtime.contract.modbus import Point, decode, encode, served_place
+from runtime.contract.modbus import Point, decode, encode, modbus_config, served_place
 
 
 def _point(type_name: str, byte_order: str = "big", word_order: str = "big") -> Point:
@@ -44,3 +44,24 @@ def test_openplc_map() -> None:
     assert served_place("%MW3", "INT") == ("holding_register", 1027)
     assert served_place("%MD1", "REAL") == ("holding_register", 2050)
     assert served_place("%QW0", "REAL") is None and served_place("%IX0.0", "INT") is None
+
+
+def _device(*points: dict[str, object]) -> dict[str, object]:
+    device = {"name": "rack", "host": "127.0.0.1", "port": 502, "unit_id": 1}
+    device |= {"period_ms": 50, "timeout_ms": 300, "points": list(points)}
+    return {"serve": False, "host": "127.0.0.1", "port": 502, "served": [], "devices": [device]}
+
+
+def test_an_input_holds_its_safe_value_in_its_variables_type() -> None:
+    real = {"variable": "flow", "location": "%ID1", "type": "REAL", "area": "input_register"}
+    config = modbus_config(_device(real | {"address": 2, "safe_value": 0}))
+    safe = config.devices[0].points[0].input_safe_value
+    assert safe == 0.0 and isinstance(safe, float)
+
+
+def test_the_decoder_refuses_an_input_safe_value_its_type_cannot_hold() -> None:
+    bit = {"variable": "ready", "location": "%IX0.0", "type": "BOOL", "area": "discrete_input"}
+    with pytest.raises(TypeError, match=r"safe value of Modbus point 'ready'.*BOOL"):
+        modbus_config(_device(bit | {"address": 3, "safe_value": 0}))
+    pump = {"variable": "pump", "location": "%QX0.0", "type": "BOOL", "area": "coil"}
+    assert modbus_config(_device(pump | {"address": 5}))  # an output's is the resource's

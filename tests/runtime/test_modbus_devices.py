@@ -20,7 +20,14 @@ import pytest
 
 from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
-from runtime.contract.protocol import DeviceStatus, GetEvents, GetIo, GetStatus, GetValues
+from runtime.contract.protocol import (
+    DeviceStatus,
+    GetEvents,
+    GetIo,
+    GetStatus,
+    GetValues,
+    ResourceState,
+)
 from tests.conftest import REPO, free_port
 from tests.runtime.test_modbus_server import wait_for
 from tests.support.modbus_device import modbus_client, reachable
@@ -156,6 +163,28 @@ def device(client: ResourceClient) -> DeviceStatus:
 
 def events(client: ResourceClient) -> list[str]:
     return [e.message for e in client.ask(GetEvents(limit=1000)).events if e.kind == "io"]
+
+
+def test_a_device_not_reached_gives_safe_values_of_the_variables_types(
+    polling: tuple[ResourceClient, int],
+) -> None:
+    """Before its device first answers, a REAL input without a configured safe value holds
+    0.0, not the integer 0: the program's bodies run as C (the runtime's default), which
+    checks the type of every value they read, and keep running."""
+    client, _ = polling  # nothing listens on the device's port
+
+    def native_in_place() -> bool:
+        found = client.ask(GetEvents(limit=1000)).events
+        return any(e.kind == "native" and "in place" in e.message for e in found)
+
+    wait_for(native_in_place, 60)
+    before = client.ask(GetStatus()).status.cycle
+    wait_for(lambda: client.ask(GetStatus()).status.cycle > before + 20)
+    status = client.ask(GetStatus()).status
+    assert status.state == ResourceState.RUN, status.error
+    now = values(client)
+    assert now["flow"] == 0.0 and isinstance(now["flow"], float)
+    assert now["reference"] == 0.0 and now["ready"] is False and now["level"] == -1
 
 
 def test_polling_every_table_and_encoding(polling: tuple[ResourceClient, int]) -> None:
