@@ -83,10 +83,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--native-code",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=True,
         help="run the bodies of programs and function blocks as C compiled on this machine "
-        "where they translate (needs a C compiler and Python's headers; the resource runs "
-        "them as Python until they are built; docs/native-code.md)",
+        "where they translate (the default; needs a C compiler and Python's headers, else "
+        "and until they are built they run as Python; --no-native-code: all as Python; "
+        "docs/native-code.md)",
     )
 
 

@@ -1,6 +1,8 @@
 """C modules of the native tier compiled into shared objects, kept in a cache folder by the
 hash of their source (the module name is that hash), so that a unit is compiled once per
-machine: at the next load, reload or cold start it is taken from the cache.
+machine: at the next load, reload or cold start it is taken from the cache. The cache is
+bounded: each use marks an entry, and the entries used longest ago go once it holds more than
+`CACHE_LIMIT_BYTES` (a controller's disk is not for a history of online changes).
 
 The compiler runs as a child process: waiting for it releases the interpreter lock, so a
 reload prepared while cycles run does not hold up the cycle thread.
@@ -8,6 +10,7 @@ reload prepared while cycles run does not hold up the cycle thread.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import shutil
@@ -25,6 +28,7 @@ SUFFIX = ".so"
 # -ffp-contract=off: a*b+c stays two roundings, as in Python (never a fused multiply-add)
 FLAGS = ("-O1", "-shared", "-fPIC", "-fwrapv", "-fno-strict-aliasing", "-ffp-contract=off", "-w")
 COMPILE_TIMEOUT_S = 300
+CACHE_LIMIT_BYTES = 128 * 2**20  # a thousand units of the size of the benchmark program's
 
 
 class BuildError(Exception):
@@ -62,6 +66,7 @@ def build(module: str, source: str, cache: Path, toolchain: Toolchain) -> Path:
     folder = cache / toolchain.fingerprint
     target = folder / f"{module}{SUFFIX}"
     if target.is_file():
+        mark_used(target)
         return target
     folder.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=folder, prefix="build-") as scratch:
@@ -89,3 +94,33 @@ def build(module: str, source: str, cache: Path, toolchain: Toolchain) -> Path:
             raise BuildError(f"{module}: {done.stderr.strip()[-2000:]}")
         os.replace(output, target)  # atomic: another process may build the same module
     return target
+
+
+def mark_used(path: Path) -> None:
+    """A cache entry just used: the last to go when the cache is pruned."""
+    with contextlib.suppress(OSError):  # gone meanwhile: it is made again when next needed
+        os.utime(path)
+
+
+def prune(cache: Path, limit: int = CACHE_LIMIT_BYTES) -> int:
+    """The files of the cache used longest ago removed until it holds at most `limit` bytes;
+    the number removed. A loaded module is a copy elsewhere, so nothing running depends on
+    the cache; an entry removed is made again when needed. Builds in progress are left."""
+    entries: list[tuple[float, int, Path]] = []
+    for path in cache.glob("*/**/*"):
+        if any(part.startswith("build-") for part in path.relative_to(cache).parts):
+            continue
+        with contextlib.suppress(OSError):
+            stat = path.lstat()
+            if path.is_file():
+                entries.append((stat.st_mtime, stat.st_size, path))
+    total = sum(size for _, size, _ in entries)
+    removed = 0
+    for _, size, path in sorted(entries, key=lambda entry: (entry[0], str(entry[2]))):
+        if total <= limit:
+            break
+        with contextlib.suppress(OSError):
+            path.unlink()
+            removed += 1
+        total -= size
+    return removed

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from runtime.contract.artifact import Artifact, PouCode, load_artifact
-from runtime.native.build import BuildError, build, find_toolchain
+from runtime.native.build import BuildError, build, find_toolchain, mark_used, prune
 from runtime.native.kinds import ClassInfo, FunctionInfo, class_table, function_table
 from runtime.native.translate import Translated, translate_unit
 
@@ -72,6 +72,24 @@ def _translator_fingerprint() -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def _known(entry: Path) -> dict[str, Any] | None:
+    """A unit's answer from the index when it is there whole (its module built), both marked
+    used for the cache's pruning."""
+    try:
+        answer = json.loads(entry.read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(answer, dict):
+        return None
+    if answer.get("module"):
+        module = Path(str(answer.get("path")))
+        if not module.is_file():
+            return None
+        mark_used(module)
+    mark_used(entry)
+    return answer
+
+
 def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
     """Per program and function block: the POU, its module (name and built shared object)
     when a body translated, the bodies left to Python with the reasons, a build failure."""
@@ -87,11 +105,8 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
     for unit in translation.units:
         key = hashlib.sha256("\n".join((fingerprint, shape, unit.source)).encode()).hexdigest()[:32]
         known = index / f"{key}.json"
-        answer: dict[str, Any] | None = None
-        if known.is_file():
-            with contextlib.suppress(OSError, ValueError):
-                answer = json.loads(known.read_text())
-        if answer is None or (answer.get("module") and not Path(answer["path"]).is_file()):
+        answer = _known(known)
+        if answer is None:
             translated = translation.translate(unit)
             answer = {"pou": unit.name, "left": [reason for _, reason in translated.left]}
             if translated.source:
@@ -104,6 +119,7 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
             if "failed" not in answer:
                 known.write_text(json.dumps(answer))
         answers.append(answer)
+    prune(cache)
     return {"units": answers}
 
 
