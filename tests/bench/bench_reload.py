@@ -9,7 +9,8 @@ adopted); the large program's code (every instance adopted, the code the cycle r
 every instance migrated (every type gains a variable: every value copied). The baselines
 of the same run: the same switch-over with every value copied (what the runtime did before
 it adopted objects, with today's grouped copying), the same without warming up the new
-code (runtime/code_warmup.py), and the median cycle. Last, the cycles after a reload
+code (runtime/code_warmup.py), and the median cycle; then the same back to back with the
+bodies as C, the runtime's default (runtime/native/). Last, the cycles after a reload
 of one small POU in a program of 1,000 straight-line statements, whose code the reload
 kept: copied and warmed up, against the running code kept as it was.
 
@@ -46,6 +47,7 @@ from runtime.disposal import DISPOSAL, STEP_NS
 from runtime.event_log import EventLog
 from runtime.instances import instantiate
 from runtime.intrinsics import SystemView
+from runtime.native.tier import NativeTier
 from runtime.reload_plan import (
     CONVERTED,
     DELETED,
@@ -122,6 +124,7 @@ def _compile(text: str, config: ResourceConfig) -> Artifact:
 
 
 _FOLDER = tempfile.TemporaryDirectory(prefix="padt-bench-reload-")  # removed at exit
+NATIVE = NativeTier(Path(_FOLDER.name) / "native")  # the compiled bodies, built once
 
 
 def _event_log(clock: RealClock) -> EventLog:
@@ -131,10 +134,13 @@ def _event_log(clock: RealClock) -> EventLog:
     return EventLog(clock.wall_ns, long_path=path, write_behind=True)
 
 
-def _running(artifact: Artifact) -> Resource:
+def _running(artifact: Artifact, native: NativeTier | None = None) -> Resource:
+    """The resource as `padt runtime` runs it; with `native`, its bodies as C in place."""
     clock = RealClock()
     resource = Resource("R", clock, _event_log(clock))
+    resource.native = native
     resource.load(artifact)
+    resource.tier_up(wait=True)
     resource.start()
     for _ in range(WARMUP_CYCLES):
         resource.cycle()
@@ -270,12 +276,17 @@ class Reloader:
 
 
 def drive(
-    old: Artifact, new: Artifact, reloads: int = RELOADS, target_ms: int = 0
+    old: Artifact,
+    new: Artifact,
+    reloads: int = RELOADS,
+    target_ms: int = 0,
+    native: NativeTier | None = None,
 ) -> tuple[Run, Reloader]:
     """Cycles back to back on a RealClock, as the driver runs a resource without a target
     cycle time (or every `target_ms`, as in the 'fixed' mode); after every CYCLES_BETWEEN
-    cycles a reload, between two cycles as the driver does it in its housekeeping."""
-    resource = _running(old)
+    cycles a reload, between two cycles as the driver does it in its housekeeping. With
+    `native`, the bodies run as C, and each reload prepares the new ones."""
+    resource = _running(old, native)
     reloader = Reloader(resource)
     run = Run(target_ns=target_ms * 1_000_000)
     switch_interval = sys.getswitchinterval()
@@ -406,6 +417,36 @@ def bench_switch_over(artifacts: dict[str, Artifact]) -> None:
         with without_warm_up():
             cold, _ = drive(before, artifacts[name], reloads=2)
         report(name, run, reloader, baseline, cold)
+
+
+def bench_switch_over_native(artifacts: dict[str, Artifact]) -> None:
+    """Section 2 with the bodies as C, the runtime's default: the new code runs as C from
+    its first cycle, so CPython's first-call specializing of new code does not come in."""
+    if not NATIVE.available:
+        print("2b. with native code: no C compiler or no Python.h here, skipped")
+        return
+    before = artifacts["before"]
+    started = time.perf_counter()
+    report = _running(before, NATIVE).variables.code
+    assert report is not None and report.native is not None
+    print(
+        f"2b. the same with native code, the runtime's default ({report.native.summary()}; "
+        f"built in {time.perf_counter() - started:.1f} s, then from the cache):"
+    )
+    for name in CHANGES:
+        run, _ = drive(before, artifacts[name], native=NATIVE)
+        periods = _periods(run)
+        with_reload = max(periods[i] for i in run.reload_after)
+        special = run.reload_after.keys() | run.preparing | run.disposing
+        special |= {i + 1 for i in run.reload_after}
+        normal = statistics.median(p for i, p in enumerate(periods) if i not in special)
+        first = statistics.median(_first_periods(run))
+        print(
+            f"  {name + ':':<32} pause median {statistics.median(run.pauses_us):5.0f} us; "
+            f"longest period with a reload {with_reload / 1e3:5.0f} us (ratio "
+            f"{with_reload / normal:.2f} to the median {normal / 1e3:.0f} us); first period "
+            f"on the new code ratio {first / normal:.2f}"
+        )
 
 
 # ---- 3. the periods at a fixed target cycle time ---------------------------------------------
@@ -551,6 +592,7 @@ def main() -> None:
     )
     _section(lambda: bench_plan(artifacts["before"], artifacts["every instance migrated"]))
     _section(lambda: bench_switch_over(artifacts))
+    _section(lambda: bench_switch_over_native(artifacts))
     _section(lambda: bench_fixed_periods(texts))
     _section(lambda: bench_budget(texts))
     _section(bench_cycles_after_reload)
