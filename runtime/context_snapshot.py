@@ -406,8 +406,8 @@ class _Restorer:
         if fields.keys() != plan.slot_set or not set(map(type, values)) <= _VALUES:
             return False
         saved = list(map(fields.__getitem__, plan.slots))
-        if not set(map(type, saved)) <= _VALUES:
-            return False  # NaN or infinity tags, containers, or a mismatch to report
+        if list(map(type, saved)) != list(map(type, values)):
+            return False  # NaN or infinity tags, containers, a REAL saved as 1, or a mismatch
         self.writes.extend(zip(repeat(target), plan.slots, saved, strict=False))
         return True
 
@@ -416,7 +416,8 @@ class _Restorer:
             node = node.nodes()
         if type(node) is not list or len(node) != len(target):
             raise ContextMismatch(f"expected an array of {len(target)}, found {_kind_name(node)}")
-        if set(map(type, target)) <= _VALUES and set(map(type, node)) <= _VALUES:
+        kinds = list(map(type, target))
+        if set(kinds) <= _VALUES and list(map(type, node)) == kinds:
             self.writes.append((target, None, node.copy()))  # an array of elementary values
             return
         items: list[Any] = []
@@ -436,7 +437,7 @@ class _Restorer:
         if kind in _VALUES or is_ieee:
             if not self._is_value(current):
                 raise ContextMismatch(f"expected {self._describe(current)}, found a value")
-            return _nonfinite_value(node[_IEEE]) if is_ieee else node
+            return _as_kind_of(current, _nonfinite_value(node[_IEEE]) if is_ieee else node)
         if kind is dict and len(node) == 1 and _ALIAS in node:
             return self._alias(current, node[_ALIAS])
         if (
@@ -475,6 +476,26 @@ class _Restorer:
         if _Restorer._is_value(current):
             return "a value"
         return f"an instance of {type(current).__name__}"
+
+
+def _as_kind_of(current: Any, value: Any) -> Any:
+    """`value` as the kind of value its slot holds: generated code relies on it, and the
+    native tier checks it on every read (a REAL that held the integer 0 stopped a program).
+    A whole number saved for a REAL comes back as a float; any other change of kind is a
+    mismatch. (A slot holding None, a NULL reference, takes what was saved.)"""
+    have, got = type(current), type(value)
+    if have is got or current is None:
+        return value
+    if have is float and got is int:
+        try:
+            return float(value)
+        except OverflowError:
+            pass
+    kind = "TRUE or FALSE" if have is bool else f"a {_KIND_NAMES.get(have, have.__name__)}"
+    raise ContextMismatch(f"expected {kind}, found {_clip(value)}")
+
+
+_KIND_NAMES = {int: "whole number", float: "number", str: "string"}
 
 
 def _nonfinite_value(bits: Any) -> float:

@@ -364,6 +364,15 @@ MISMATCHES: list[tuple[Any, str]] = [
     (lambda t: fields(t).update(r={"ieee": "zz"}), "r: malformed NaN or infinity 'zz'"),
     (lambda t: fields(t).update(r={"what": 1}), "r: malformed node {'what': 1}"),
     (lambda t: fields(t).update(r=(1, 2)), "r: malformed node (1, 2)"),
+    (lambda t: fields(t).update(i="7"), "i: expected a whole number, found '7'"),
+    (lambda t: fields(t).update(i=True), "i: expected a whole number, found True"),
+    (lambda t: fields(t).update(i=7.0), "i: expected a whole number, found 7.0"),
+    (
+        lambda t: fields(t).update(r=10**400),
+        "r: expected a number, found " + str(10**400)[:57] + "...",
+    ),
+    (lambda t: fields(t, "pts", 1).update(y=None), "pts[1].y: expected a number, found None"),
+    (lambda t: fields(t, "t").update(Q=0), "t.Q: expected TRUE or FALSE, found 0"),
 ]
 
 
@@ -385,6 +394,25 @@ def test_every_mismatch_names_where_and_writes_nothing(change: Any, message: str
         restore(target, tree)
     assert str(error.value) == message
     assert snapshot(target) == untouched
+
+
+def test_a_whole_number_saved_for_a_real_comes_back_as_a_float() -> None:
+    """What generated code, and the native tier on every read, rely on: a REAL holds a
+    float (a context saved while a Modbus input fed a REAL the integer 0 held `0`)."""
+    artifact = compiled(
+        """
+        TYPE PT : STRUCT x, y : REAL; END_STRUCT; END_TYPE
+        PROGRAM P VAR r : REAL; pts : ARRAY[1..2] OF PT; rs : ARRAY[1..3] OF LREAL; END_VAR
+        END_PROGRAM
+        """
+    )
+    tree = snapshot(Running(artifact, "P").program)
+    fields(tree).update(r=3, rs=[1, 2.5, -4])
+    fields(tree, "pts", 1).update(y=0)
+    target = Running(artifact, "P").program
+    restore(target, tree)
+    assert (target.r, target.rs, target.pts[1].y) == (3.0, [1.0, 2.5, -4.0], 0.0)
+    assert {type(target.r), *map(type, target.rs), type(target.pts[1].y)} == {float}
 
 
 def test_restore_of_missing_globals() -> None:
@@ -475,7 +503,8 @@ values = st.one_of(
 @given(st.lists(values, max_size=8))
 def test_any_elementary_value_survives_bit_for_bit(items: list[Any]) -> None:
     source, target = Loose(), Loose()
-    source.items, target.items = items, [0] * len(items)
+    # a slot holds the kind of value it always held (a restore checks it)
+    source.items, target.items = items, [None if v is None else type(v)() for v in items]
     tree = json.loads(encode_context(Context("S", 0, {}, {}, snapshot(source))).split(b"\n")[1])
     restore(target, tree["globals"])
     assert len(target.items) == len(items)
