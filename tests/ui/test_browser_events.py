@@ -45,6 +45,8 @@ def test_events_arrive_live_are_filtered_and_the_chain_is_verified(demo: Demo) -
         open_demo_as_admin(page, demo)
         open_tab(page, "Events")
         wait_until("admin's login is listed", lambda: ("login", "admin") in rows(page))
+        # the runtime's word on its native code (what runs as C; or why nothing does)
+        wait_until("the native code is listed", lambda: "native" in dict(rows(page)))
         assert "stop" not in [kind for kind, _ in rows(page)]
 
         # an action in another tab: its event appears here without asking, with the user
