@@ -9,7 +9,8 @@ and on its own, with other programs keeping every CPU busy (a busy loop per CPU,
 normal priority).
 
 Beside it, the same resource with none of the three, measured in the same run: the
-baseline. Run with `python -m tests.bench.bench_jitter_loaded [--seconds S]` (30 s per run
+baseline. Last, everything on again with the bodies as C (runtime/native/), the runtime's
+default. Run with `python -m tests.bench.bench_jitter_loaded [--seconds S]` (30 s per run
 unless `--seconds` or `PADT_BENCH_SECONDS` says otherwise); it prints figures and asserts
 nothing (machines are shared and noisy).
 """
@@ -30,6 +31,7 @@ from backend.compiler.source import SourceFile
 from runtime.clock import RealClock
 from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import RecordStart
+from runtime.native.tier import NativeTier
 from runtime.recorder import Recordings
 from tests.bench.bench_language import thousand_statements
 from tests.bench.bench_modbus import _field_io
@@ -91,12 +93,16 @@ BUSY = "cpu"
 BUSY_LOOP = "while True: pass"
 
 
-def _periods(seconds: float, loads: frozenset[str]) -> tuple[list[int], list[str]]:
-    """The periods of the resource running `seconds` with `loads` on; and what the loads
-    did."""
+def _periods(
+    seconds: float, loads: frozenset[str], native: NativeTier | None = None
+) -> tuple[list[int], list[str]]:
+    """The periods of the resource running `seconds` with `loads` on (with `native`, its
+    bodies as C); and what the loads did."""
     clock = RealClock()
     resource = LoggedResource("R", clock)
+    resource.native = native
     resource.load(_artifact())
+    resource.tier_up(wait=True)
     resource.start()
     port = free_port()
     field_io = _field_io(resource, port)
@@ -184,6 +190,15 @@ def main(seconds: float | None = None) -> None:
     if frozenset() in p99 and frozenset(LOADS) in p99:
         ratio = p99[frozenset(LOADS)] / max(1.0, p99[frozenset()])
         print(f"  -> jitter p99 everything on / nothing on: {ratio:.2f}")
+    with tempfile.TemporaryDirectory(prefix="padt-bench-native-") as cache:
+        native = NativeTier(Path(cache))
+        if not native.available:
+            print("  everything on, native code: no C compiler or no Python.h here, skipped")
+            return
+        periods, said = _periods(seconds, frozenset(LOADS), native)
+        _report(" + ".join(sorted(LOADS)) + ", bodies as C (the runtime's default)", periods)
+        for line in said:
+            print(f"    {line}")
 
 
 if __name__ == "__main__":
