@@ -8,6 +8,7 @@ BIN    := $(VENV)/bin
 
 demo: $(VENV)/.stamp-run
 	bash scripts/install-document-tools.sh  # the Documentation screen renders PDF
+	bash scripts/install-c-compiler.sh $(BIN)/python  # the runtime runs program bodies as C
 	$(BIN)/padt demo
 
 test: $(VENV)/.stamp-dev

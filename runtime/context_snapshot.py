@@ -478,6 +478,9 @@ class _Restorer:
         return f"an instance of {type(current).__name__}"
 
 
+_KIND_NAMES = {int: "whole number", float: "number", str: "string"}
+
+
 def _as_kind_of(current: Any, value: Any) -> Any:
     """`value` as the kind of value its slot holds: generated code relies on it, and the
     native tier checks it on every read (a REAL that held the integer 0 stopped a program).
@@ -493,9 +496,6 @@ def _as_kind_of(current: Any, value: Any) -> Any:
             pass
     kind = "TRUE or FALSE" if have is bool else f"a {_KIND_NAMES.get(have, have.__name__)}"
     raise ContextMismatch(f"expected {kind}, found {_clip(value)}")
-
-
-_KIND_NAMES = {int: "whole number", float: "number", str: "string"}
 
 
 def _nonfinite_value(bits: Any) -> float:

@@ -192,7 +192,7 @@ def modbus_config(data: dict[str, Any]) -> ModbusConfig:
         serve=data["serve"],
         host=data["host"],
         port=data["port"],
-        served=tuple(Point(**p) for p in data["served"]),
+        served=tuple(_point(p) for p in data["served"]),
         devices=tuple(
             Device(**{**d, "points": tuple(_device_point(p) for p in d["points"])})
             for d in data["devices"]
@@ -200,8 +200,19 @@ def modbus_config(data: dict[str, Any]) -> ModbusConfig:
     )
 
 
-def _device_point(data: dict[str, Any]) -> Point:
+_TEXT_FIELDS = ("variable", "location", "type", "area", "byte_order", "word_order")
+
+
+def _point(data: dict[str, Any]) -> Point:
     point = Point(**data)
+    wrong = [name for name in _TEXT_FIELDS if not isinstance(getattr(point, name), str)]
+    if wrong or type(point.address) is not int:
+        raise TypeError(f"the {(wrong or ['address'])[0]} of a Modbus point is of the wrong type")
+    return point
+
+
+def _device_point(data: dict[str, Any]) -> Point:
+    point = _point(data)
     if not point.is_input:  # an output's safe value is the resource's (`safe_values`)
         return point
     try:

@@ -20,6 +20,7 @@ import sysconfig
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from stat import S_ISREG
 
 HEADER = Path(__file__).with_name("padt_native.h")
 SUFFIX = ".so"
@@ -107,13 +108,15 @@ def prune(cache: Path, limit: int = CACHE_LIMIT_BYTES) -> int:
     the number removed. A loaded module is a copy elsewhere, so nothing running depends on
     the cache; an entry removed is made again when needed. Builds in progress are left."""
     entries: list[tuple[float, int, Path]] = []
-    for path in cache.glob("*/**/*"):
-        if any(part.startswith("build-") for part in path.relative_to(cache).parts):
-            continue
-        with contextlib.suppress(OSError):
-            stat = path.lstat()
-            if path.is_file():
-                entries.append((stat.st_mtime, stat.st_size, path))
+    # links are not followed: nothing outside the cache is ever removed
+    for folder, subfolders, files in os.walk(cache):
+        subfolders[:] = [name for name in subfolders if not name.startswith("build-")]
+        for name in files:
+            path = Path(folder, name)
+            with contextlib.suppress(OSError):
+                stat = path.lstat()
+                if S_ISREG(stat.st_mode):
+                    entries.append((stat.st_mtime, stat.st_size, path))
     total = sum(size for _, size, _ in entries)
     removed = 0
     for _, size, path in sorted(entries, key=lambda entry: (entry[0], str(entry[2]))):

@@ -65,3 +65,21 @@ def test_the_decoder_refuses_an_input_safe_value_its_type_cannot_hold() -> None:
         modbus_config(_device(bit | {"address": 3, "safe_value": 0}))
     pump = {"variable": "pump", "location": "%QX0.0", "type": "BOOL", "area": "coil"}
     assert modbus_config(_device(pump | {"address": 5}))  # an output's is the resource's
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("type", None), ("location", 5), ("variable", ["v"]), ("address", "0"), ("address", True)],
+)
+def test_the_decoder_refuses_a_point_whose_fields_are_of_the_wrong_type(
+    field: str, value: object
+) -> None:
+    """A CRC is no signature: a crafted artifact is refused (an ArtifactError for the
+    load), never an AttributeError out of the decoder."""
+    point: dict[str, object] = {"variable": "v", "location": "%IW0", "type": "INT"}
+    point |= {"area": "input_register", "address": 0, field: value}
+    with pytest.raises(TypeError, match=f"the {field} of a Modbus point"):
+        modbus_config(_device(point))
+    served = {**_device(), "served": [point]}
+    with pytest.raises(TypeError, match=f"the {field} of a Modbus point"):
+        modbus_config(served)

@@ -55,3 +55,15 @@ def test_a_use_marks_an_entry_so_that_it_stays(tmp_path: Path, native_tier: Nati
     size_of_old = sum(p.stat().st_size for p in files_of_old)
     prune(cache, limit=size_of_old)
     assert _files(cache) == files_of_old and Path(first["path"]).is_file()
+
+
+def test_pruning_never_follows_a_link_out_of_the_cache(tmp_path: Path) -> None:
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+    (outside / "keep.so").write_bytes(b"x" * 100)
+    cache = tmp_path / "native" / "abc"
+    cache.mkdir(parents=True)
+    (cache / "old.so").write_bytes(b"y" * 100)
+    (cache / "link").symlink_to(outside)
+    assert prune(tmp_path / "native", limit=0) == 1
+    assert (outside / "keep.so").is_file() and not (cache / "old.so").exists()
