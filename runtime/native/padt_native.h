@@ -28,10 +28,11 @@ typedef __int128 padt_i128;
 /* ---- state one module copy binds (padt_bind_common) ---------------------------------- */
 
 /* Borrowed: each bound class holds the namespace (runtime/native/tier.py), and a body
- * runs only on an instance of its class; the classes are in the namespace. */
+ * runs as C only on an instance of its class; the classes are in the namespace. */
 static PyObject *padt_ns;           /* the resource's namespace of generated code */
 static PyObject *padt_breathe_fn;   /* a Python function of no code: see padt_breathe */
 static PyObject *padt_str_call;     /* "__call__" */
+static PyObject *padt_str_python_body; /* PYTHON_BODY_ATTR of runtime/native/tier.py */
 
 /* A call site of `x.__call__()`: the type it last met, by version tag (no reference is
  * held, and a tag is never given to two types), and that type's native body. */
@@ -50,6 +51,9 @@ padt_bind_common(PyObject *ns, PyObject *breathe)
     padt_ns = ns;
     Py_XSETREF(padt_breathe_fn, Py_NewRef(breathe));
     if (padt_str_call == NULL && (padt_str_call = PyUnicode_InternFromString("__call__")) == NULL)
+        return -1;
+    if (padt_str_python_body == NULL
+        && (padt_str_python_body = PyUnicode_InternFromString("python__call")) == NULL)
         return -1;
     return 0;
 }
@@ -482,15 +486,35 @@ padt_call_any(PyObject *callable)
 
 /* ---- binding a body to its class ------------------------------------------------------ */
 
-/* The body as the class's `__call__`: a method descriptor, which checks that it is
- * called on an instance of the class, in a dict the binding sets on the class. */
+/* A body called on an object that is not an instance of its class: a derived block's
+ * SUPER^() runs its base's body on its own instance, whose class has slots of its own
+ * (generated classes do not inherit). The C body knows the slots of its class only; the
+ * Python body, which the tier keeps on the class, reads them by name. */
+static PyObject *
+padt_python_body(PyObject *type, PyObject *o)
+{
+    PyObject *body = _PyType_Lookup((PyTypeObject *)type, padt_str_python_body);
+    if (body == NULL) {
+        PyErr_Format(PyExc_TypeError, "native code: %R has no Python body for %R", type,
+                     Py_TYPE(o));
+        return NULL;
+    }
+    Py_INCREF(body);
+    PyObject *result = PyObject_CallOneArg(body, o);
+    Py_DECREF(body);
+    return result;
+}
+
+/* The body as the class's `__call__`, in a dict the binding sets on the class: a method
+ * descriptor of `object`, so that it takes any instance (Python code calls
+ * `POU_BASE.__call__(s)` with the derived block's `s`); the function it wraps checks the
+ * class itself (translate.py) and hands any other instance to padt_python_body. */
 static int
 padt_add_method(PyObject *bodies, const char *class_name, PyMethodDef *def)
 {
-    PyObject *type = padt_class(class_name);
-    if (type == NULL)
+    if (padt_class(class_name) == NULL)
         return -1;
-    PyObject *descr = PyDescr_NewMethod((PyTypeObject *)type, def);
+    PyObject *descr = PyDescr_NewMethod(&PyBaseObject_Type, def);
     if (descr == NULL)
         return -1;
     PyObject *key = Py_BuildValue("(ss)", class_name, def->ml_name);

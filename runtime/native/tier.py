@@ -30,6 +30,9 @@ from runtime.contract.artifact import Artifact
 from runtime.native.build import Toolchain, find_toolchain
 
 NAMESPACE_ATTR = "_native_namespace"  # a bound class holds its namespace through it
+# a bound class keeps its Python body under this name (no ST name has `__`), for a derived
+# block's SUPER^(), which runs it on an instance of another class (padt_native.h)
+PYTHON_BODY_ATTR = "python__call"
 WORKER_TIMEOUT_S = 1800  # a very large project compiles for minutes; never for ever
 
 
@@ -220,6 +223,8 @@ class NativeJob:
         if not self.installed:
             self.installed = True
             for kind, method, body in self._found:
+                if method == "__call__" and PYTHON_BODY_ATTR not in kind.__dict__:
+                    setattr(kind, PYTHON_BODY_ATTR, kind.__dict__[method])
                 setattr(kind, method, body)
             self._found = []
         return self.report

@@ -1420,6 +1420,7 @@ def translate_unit(
 
 
 def _module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
+    types = [module.type_ref(cls) for cls, _ in functions]
     lines = [
         f"/* native code of {module.filename}: written by runtime/native/translate.py */",
         '#include "padt_native.h"',
@@ -1430,10 +1431,20 @@ def _module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
     for _, text in functions:
         lines += [text, ""]
     for n, (cls, _) in enumerate(functions):
-        lines.append(
-            f"static PyMethodDef M{n} = "
-            f'{{"__call__", (PyCFunction){_function_name(cls)}, METH_NOARGS, NULL}};'
-        )
+        # the C body on an instance of its class only (its slots' offsets): the Python body
+        # on any other, a derived block's in its SUPER^() (padt_native.h, padt_python_body)
+        lines += [
+            "static PyObject *",
+            f"W{n}(PyObject *s, PyObject *ignored)",
+            "{",
+            f"    if (PADT_LIKELY(PyObject_TypeCheck(s, (PyTypeObject *){types[n]})))",
+            f"        return {_function_name(cls)}(s, ignored);",
+            f"    return padt_python_body({types[n]}, s);",
+            "}",
+            "",
+            f'static PyMethodDef M{n} = {{"__call__", (PyCFunction)W{n}, METH_NOARGS, NULL}};',
+            "",
+        ]
     lines += [
         "",
         "static PyObject *",

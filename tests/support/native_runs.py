@@ -50,6 +50,8 @@ def same(a: object, b: object) -> bool:
         return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
     if isinstance(a, list) and isinstance(b, list):
         return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, str):  # a reference is its place's path; its objects are one resource's
+        return str(a) == str(b)
     return a == b
 
 

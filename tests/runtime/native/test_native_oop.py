@@ -1,0 +1,154 @@
+"""Object orientation on the native tier (the runtime's default) and on the Python tier
+(`padt sim`): SUPER^() of a base's body, SUPER^.method(), THIS^, three generations,
+overrides called from a base's body, properties of a base, interfaces and references to a
+base: every variable identical after every cycle, no fault, and the values the language
+gives. Real C compiles, real resources on virtual clocks."""
+
+from __future__ import annotations
+
+from runtime.native.tier import NativeTier
+from tests.support.native_runs import Pair, program_error, side_by_side
+
+
+def run_alike(text: str, tier: NativeTier, cycles: int) -> Pair:
+    pair = side_by_side(text, tier)
+    pair.cycle_and_compare(cycles)
+    assert not program_error(pair.python), program_error(pair.python)
+    assert not program_error(pair.native), program_error(pair.native)
+    return pair
+
+
+def values(pair: Pair) -> dict[str, object]:
+    return pair.native.variables.values()
+
+
+CHAIN = """
+FUNCTION_BLOCK Base
+VAR_INPUT step : INT := 1; END_VAR
+VAR_OUTPUT n, codes : INT; END_VAR
+VAR edge : R_TRIG; up : BOOL; END_VAR
+METHOD PUBLIC Code : INT
+Code := 1;
+END_METHOD
+METHOD PUBLIC Count
+codes := codes + THIS^.Code();   (* the instance's own Code: an override from the base *)
+END_METHOD
+up := NOT up;
+edge(CLK := up);
+IF edge.Q THEN n := n + step; END_IF;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Mid EXTENDS Base
+VAR m : INT; END_VAR
+METHOD PUBLIC OVERRIDE Code : INT
+Code := 10 + SUPER^.Code();
+END_METHOD
+SUPER^();
+m := m + n;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Top EXTENDS Mid
+VAR t : INT; END_VAR
+METHOD PUBLIC OVERRIDE Code : INT
+Code := 100 + SUPER^.Code();
+END_METHOD
+t := t + 1;
+SUPER^();
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR b : Base; m : Mid; t : Top; END_VAR
+b(step := 1);
+m(step := 2);
+t(step := 3);
+b.Count(); m.Count(); t.Count();
+END_PROGRAM
+"""
+
+
+def test_a_base_body_called_with_super_runs_on_both_tiers(native_tier: NativeTier) -> None:
+    pair = run_alike(CHAIN, native_tier, 4)
+    assert "Base" in pair.report.bodies  # as C: called as the others' SUPER^()
+    found = values(pair)
+    # the edge every other cycle: n grows by the step in cycles 1 and 3
+    assert [found["Main.b.n"], found["Main.m.n"], found["Main.t.n"]] == [2, 4, 6]
+    assert found["Main.m.m"] == 2 + 2 + 4 + 4  # after each SUPER^(): n of that cycle
+    assert found["Main.t.m"] == 3 + 3 + 6 + 6 and found["Main.t.t"] == 4
+    # the base's Count calls THIS^.Code(): Base 1, Mid 11, Top 111, each cycle
+    assert [found["Main.b.codes"], found["Main.m.codes"], found["Main.t.codes"]] == [4, 44, 444]
+
+
+def test_a_block_extending_a_standard_block_runs_its_timer_on_both_tiers(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+FUNCTION_BLOCK HalfTon EXTENDS TON
+VAR_OUTPUT half : BOOL; END_VAR
+SUPER^();
+half := ET >= PT / 2;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR t : HalfTon; END_VAR
+t(IN := TRUE, PT := T#400ms);
+END_PROGRAM
+"""
+    pair = run_alike(text, native_tier, 6)
+    assert "TON" in pair.report.bodies
+    assert values(pair)["Main.t.Q"] is True and values(pair)["Main.t.half"] is True
+
+
+def test_properties_interfaces_and_references_to_a_base_run_on_both_tiers(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+INTERFACE IGauge
+PROPERTY Value : INT
+GET END_GET
+END_PROPERTY
+METHOD Run : INT
+VAR_INPUT k : INT; END_VAR
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Tank IMPLEMENTS IGauge
+VAR fill, calls : INT; END_VAR
+PROPERTY PUBLIC Value : INT
+GET Value := fill; END_GET
+SET fill := Value; END_SET
+END_PROPERTY
+METHOD PUBLIC Run : INT
+VAR_INPUT k : INT; END_VAR
+fill := fill + k;
+Run := fill;
+END_METHOD
+calls := calls + 1;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK BigTank EXTENDS Tank
+PROPERTY PUBLIC Value : INT
+GET Value := 1000 + SUPER^.Value; END_GET
+SET SUPER^.Value := Value * 2; END_SET
+END_PROPERTY
+METHOD PUBLIC OVERRIDE Run : INT
+VAR_INPUT k : INT; END_VAR
+Run := SUPER^.Run(k * 100);
+END_METHOD
+SUPER^();
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR
+  t : Tank; b : BigTank; g : IGauge; r : REF_TO Tank;
+  k, x, y, z : INT;
+END_VAR
+k := k + 1;
+IF k MOD 2 = 1 THEN g := t; r := REF(b); ELSE g := b; r := REF(t); END_IF;
+t(); b();
+x := g.Value;
+y := g.Run(1);
+r^();
+r^.Value := 7;
+z := r^.Run(2);
+END_PROGRAM
+"""
+    pair = run_alike(text, native_tier, 4)
+    found = values(pair)
+    # cycle 4: g is b, r refers to t; each block's body ran 4 times, and twice through r^()
+    assert found["Main.b.calls"] == 4 + 2 and found["Main.t.calls"] == 4 + 2
+    assert found["Main.x"] == 1000 + 214  # BigTank's GET over its base's
+    assert found["Main.y"] == found["Main.b.fill"] == 214 + 100  # its Run: SUPER^.Run(100)
+    assert found["Main.z"] == 7 + 2  # Tank's SET, then its Run
