@@ -66,12 +66,20 @@ def _events(resource: Resource, command: p.GetEvents) -> p.EventsReply:
 
 def _watch(resource: Resource, command: p.Watch, request: Request) -> p.WatchReply:
     """A watch set belongs to the session that makes it (none when access is open)."""
-    owner = None if resource.access.open else request.token
+    owner = _watcher(resource, request)
+    session = resource.access.sessions.get(owner) if owner is not None else None
+    account = (session.user, session.level) if session is not None else None
     online, now = resource.online, resource.clock.now_ns()
     paths, revision = online.watch(
-        command.id, command.variables, command.period_ms, command.append, owner, now
+        command.id, command.variables, command.period_ms, command.append, owner, now, account
     )
     return p.WatchReply(command.id, paths, revision)
+
+
+def _watcher(resource: Resource, request: Request) -> str | None:
+    """Whose watch sets a request acts on: its session's, each session seeing and
+    stopping its own only (all are everybody's when access is open)."""
+    return None if resource.access.open or not isinstance(request.token, str) else request.token
 
 
 def _logout(resource: Resource, command: p.Logout, request: Request) -> p.Done:
@@ -120,8 +128,6 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.GetParameters: lambda r, c: p.ParametersReply(r.params, [x.config for x in r.programs]),
     p.GetForcing: lambda r, c: p.ForcingReply(r.forcing.state()),
     p.GetEvents: _events,
-    p.Unwatch: lambda r, c: p.UnwatchReply(r.online.watches.drop(c.id)),
-    p.GetWatches: lambda r, c: p.WatchesReply(r.online.watches.ids()),
     p.Start: _then_status(lambda r, c: r.start()),
     p.Stop: _then_status(lambda r, c: r.stop()),
     p.ResetStats: _then_status(lambda r, c: r.reset_stats()),
@@ -178,6 +184,8 @@ SESSION_HANDLERS: dict[type[p.Command[Any]], Callable[[Resource, Any, Request], 
     p.Login: _login,
     p.Logout: _logout,
     p.Watch: _watch,
+    p.Unwatch: lambda r, c, q: p.UnwatchReply(r.online.watches.drop(c.id, _watcher(r, q))),
+    p.GetWatches: lambda r, c, q: p.WatchesReply(r.online.watches.ids(_watcher(r, q))),
 }
 
 

@@ -50,8 +50,10 @@ class OnlineValues:
         append: bool,
         owner: str | None,
         now_ns: int,
+        account: tuple[str, str] | None = None,
     ) -> tuple[list[str], int]:
-        """Register what a client views, for the session `owner`; returns the canonical
+        """Register what a client views, for the session `owner` (of `account`: its user
+        and level, for their quotas); returns the canonical
         paths (all names must exist: a typo gets an error, not a silently empty field) and
         the set's revision. `append` adds to a set (a large set arrives in several
         requests)."""
@@ -61,7 +63,10 @@ class OnlineValues:
             paths = existing.paths + paths
         revision = existing.revision + 1 if existing is not None else 1
         period = period_ms * 1_000_000
-        self.watches.set(WatchSet(watch_id, paths, period, owner, now_ns, revision=revision))
+        user, level = account if account is not None else (None, None)
+        self.watches.set(
+            WatchSet(watch_id, paths, period, owner, user, level, now_ns, revision=revision)
+        )
         return list(paths), revision
 
     def snapshot(
@@ -131,7 +136,7 @@ class OnlineValues:
         if plan is None:
             variables = self._variables
             bound_of = variables.bound  # first (see Variables.adopt)
-            if len(self._plans) > 2 * len(self.watches.ids()) + 8:  # sets that are gone
+            if len(self._plans) > 2 * len(self.watches) + 8:  # sets that are gone
                 self._plans = {k: v for k, v in self._plans.items() if self.watches.get(k)}
             found = [variables.find(path) for path in watch_set.paths]
             present = [bound for bound in found if bound is not None]

@@ -5,7 +5,9 @@ has passed, the runtime sends the set's values (those of that cycle) in one mess
 with its quality. A set belongs to the session that made it and ends with it; the client
 also holds a liveliness token for each of its sets, and when the client goes away Zenoh
 withdraws the token and the runtime drops the set. Quotas per session (protocol.py) keep
-what one client can ask for inside what the cycle can afford.
+what one client can ask for inside what the cycle can afford; quotas per account and a
+share per level keep one account, or all the readers together, from taking the sets the
+others need (docs/protocol.md#quotas). A session sees and stops its own sets only.
 """
 
 from __future__ import annotations
@@ -25,6 +27,10 @@ from runtime.contract.refusal import Refusal
 from runtime.contract.values import jsonable
 
 MAX_SETS = 64  # on one resource, of all sessions
+MAX_SETS_PER_ACCOUNT = 16  # of all the sessions of one account
+# the sets of all sessions of a level and the levels below it: the rest is kept for the
+# levels above (an operator can watch however many sets the readers hold)
+LEVEL_SHARES = {"read": 32, "operator": 48, "read-write": 56, "administrator": MAX_SETS}
 
 
 @dataclass
@@ -33,6 +39,8 @@ class WatchSet:
     paths: tuple[str, ...]  # canonical variable paths, in the client's order
     period_ns: int
     owner: str | None = None  # the session token that made it; None when access is open
+    account: str | None = None  # the user of that session, and its level
+    level: str | None = None
     registered_ns: int = 0
     next_due_ns: int = 0  # clock time after which it is sent again
     revision: int = 1  # counts the changes of the set
@@ -72,8 +80,8 @@ class WatchSets:
         existing = self._sets.get(watch_set.watch_id)
         if existing is not None and existing.owner != watch_set.owner:
             raise Refusal("forbidden", f"watch set {watch_set.watch_id} is another session's")
-        if existing is None and len(self._sets) >= MAX_SETS:
-            raise Refusal("too_many", "too many watch sets on this resource")
+        if existing is None:
+            self._within_shares(watch_set)
         others = [s for s in self.owned_by(watch_set.owner) if s.watch_id != watch_set.watch_id]
         if len(others) >= MAX_SETS_PER_SESSION:
             raise Refusal("quota", f"a session may watch at most {MAX_SETS_PER_SESSION} sets")
@@ -88,18 +96,52 @@ class WatchSets:
             )
         self._sets[watch_set.watch_id] = watch_set
 
+    def _within_shares(self, new: WatchSet) -> None:
+        """A new set within the resource's limit, its account's and its level's share."""
+        if len(self._sets) >= MAX_SETS:
+            raise Refusal("too_many", "too many watch sets on this resource")
+        if new.account is not None:
+            of_account = sum(1 for s in self._sets.values() if s.account == new.account)
+            if of_account >= MAX_SETS_PER_ACCOUNT:
+                raise Refusal(
+                    "quota",
+                    f"the sessions of {new.account} may watch at most {MAX_SETS_PER_ACCOUNT} "
+                    "sets together",
+                )
+        if new.level in LEVEL_SHARES:
+            below = tuple(LEVEL_SHARES)[: tuple(LEVEL_SHARES).index(new.level) + 1]
+            held = sum(1 for s in self._sets.values() if s.level in below)
+            if held >= LEVEL_SHARES[new.level]:
+                raise Refusal(
+                    "too_many",
+                    f"the sessions of level {new.level} and below hold "
+                    f"{LEVEL_SHARES[new.level]} watch sets, their share of this resource's "
+                    f"{MAX_SETS}; the rest is kept for higher levels",
+                )
+
     def owned_by(self, owner: str | None) -> list[WatchSet]:
         return [s for _, s in sorted(self._sets.items()) if s.owner == owner]
 
-    def drop(self, watch_id: str) -> bool:
-        return self._sets.pop(watch_id, None) is not None
+    def drop(self, watch_id: str, owner: str | None) -> bool:
+        """Stop a set of the session `owner`; another session's is refused."""
+        watch_set = self._sets.get(watch_id)
+        if watch_set is None:
+            return False
+        if watch_set.owner != owner:
+            raise Refusal("forbidden", f"watch set {watch_id} is another session's")
+        del self._sets[watch_id]
+        return True
 
     def drop_where(self, gone: Callable[[WatchSet], bool]) -> None:
         for watch_id in [i for i, s in sorted(self._sets.items()) if gone(s)]:
             del self._sets[watch_id]
 
-    def ids(self) -> list[str]:
-        return sorted(self._sets)
+    def ids(self, owner: str | None) -> list[str]:
+        """The ids of the sets of the session `owner`."""
+        return [s.watch_id for s in self.owned_by(owner)]
+
+    def __len__(self) -> int:
+        return len(self._sets)
 
     def get(self, watch_id: str) -> WatchSet | None:
         return self._sets.get(watch_id)
