@@ -12,7 +12,7 @@ import time
 
 import viser
 
-from frontend import viser_wakeup
+from frontend import viser_lockdown, viser_wakeup
 from frontend.browser_session import BrowserSession
 from frontend.ui_context import UiContext
 
@@ -28,7 +28,7 @@ class PadtUi:
         self._lock = threading.Lock()
         viser_wakeup.install()
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
-        self.server.gui.configure_theme(show_logo=False, control_width="large")
+        viser_lockdown.lock_down(self.server)
         self.server.on_client_connect(self._connect)
         self.server.on_client_disconnect(self._disconnect)
         self._stop = threading.Event()

@@ -10,6 +10,7 @@ from collections.abc import Callable
 import viser
 
 from backend.engineering.resource_client import ResourceClient, ResourceLogin, ResourceUnreachable
+from frontend import viser_lockdown
 from frontend.resource_feed import ResourceFeed
 from frontend.screens import login
 from frontend.ui_context import UiContext
@@ -40,6 +41,7 @@ class BrowserSession:
         self._feeds: dict[str, ResourceFeed] = {}
         self._form: login.LoginForm | None = None
         self.workspace: Workspace | None = None
+        client.gui.add_html(viser_lockdown.PAGE_HTML)  # for as long as the page lives
         self.show_login("")
 
     # ---- the PADT login

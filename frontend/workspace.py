@@ -23,7 +23,6 @@ from frontend.screens import (
     events,
     forcing,
     io,
-    login,
     online_test,
     parameters,
     reload,
@@ -33,6 +32,7 @@ from frontend.screens import (
     value_edit,
 )
 from frontend.ui_context import UiContext
+from frontend.viser_lockdown import PASSWORD_LABEL
 from runtime.contract import protocol as p
 
 
@@ -82,8 +82,7 @@ class Workspace:
         keep(self.resource)
         with gui.add_folder("Login to the resource") as folder:
             self.resource_user = gui.add_text("User", session.user)
-            self.resource_password = gui.add_text("Password", "")
-            gui.add_html(login.masked(self.resource_password))
+            self.resource_password = gui.add_text(PASSWORD_LABEL, "")
             button = gui.add_button("Log in to resource", color="blue")
             self.resource_login = gui.add_html("")
         button.on_click(lambda _: self._log_in_to_resource())

@@ -1,5 +1,5 @@
-"""The login: all an anonymous browser sees. The password field shows discs, not the
-password (viser has no password input: a text input masked by CSS)."""
+"""The login: all an anonymous browser sees. Its password field is a password input
+(`frontend/viser_lockdown.py` makes every field labelled Password one)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import viser
+
+from frontend.viser_lockdown import PASSWORD_LABEL
 
 LEFT_PX, TOP_PX, WIDTH_PX = 360, 120, 400
 
@@ -24,13 +26,6 @@ class LoginForm:
             handle.remove()
 
 
-def masked(handle: viser.GuiTextHandle) -> str:
-    """CSS that shows a text input as a password field (discs). viser labels an input with
-    `<label for=UUID>`; the UUID is not public API (viser is pinned below 1.2)."""
-    label = f'label[for="{handle._impl.uuid}"]'
-    return f"<style>div:has(> div > p > {label}) input {{ -webkit-text-security: disc; }}</style>"
-
-
 def build(gui: viser.GuiApi, message: str, submit: Callable[[str, str], None]) -> LoginForm:
     gui.main_panel.float(x=LEFT_PX, y=TOP_PX, width=WIDTH_PX)  # a login card, not a sidebar
     title = gui.add_html(
@@ -38,8 +33,7 @@ def build(gui: viser.GuiApi, message: str, submit: Callable[[str, str], None]) -
         "Log in with your PADT account.</div>"
     )
     user = gui.add_text("User", "")
-    password = gui.add_text("Password", "")
-    style = gui.add_html(masked(password))
+    password = gui.add_text(PASSWORD_LABEL, "")
     button = gui.add_button("Log in", color="blue")
     shown = gui.add_html(note(message))
 
@@ -47,7 +41,7 @@ def build(gui: viser.GuiApi, message: str, submit: Callable[[str, str], None]) -
         submit(user.value.strip(), password.value)
 
     button.on_click(clicked)
-    return LoginForm(user, password, shown, (title, user, password, style, button, shown))
+    return LoginForm(user, password, shown, (title, user, password, button, shown))
 
 
 def note(message: str, error: bool = False) -> str:

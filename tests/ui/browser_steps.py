@@ -14,6 +14,7 @@ from playwright.sync_api import Error as PlaywrightError
 from playwright.sync_api import Locator, Page
 
 from backend.engineering.resource_client import ResourceClient
+from frontend.app import PadtUi
 
 WAIT_S = 20
 PASSWORD = "correct-horse-7"  # of every account of the `plant` fixture
@@ -30,6 +31,7 @@ class Demo:
 class Plant:
     url: str
     client: ResourceClient
+    ui: PadtUi  # the UI server, in the test's process
 
 
 def shoot(page: Page, name: str) -> None:

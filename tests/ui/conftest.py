@@ -103,6 +103,6 @@ def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
         context = UiContext(directory, accounts, zenoh_endpoint, lists, projects, tmp_path / "bak")
         ui = PadtUi(context, port=free_port())
         try:
-            yield Plant(ui.url, client)
+            yield Plant(ui.url, client, ui)
         finally:
             ui.close()
