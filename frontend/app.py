@@ -12,6 +12,7 @@ import time
 
 import viser
 
+from backend.engineering.client_address import NO_PROXIES, TrustedProxies, client_address
 from frontend import viser_lockdown, viser_wakeup
 from frontend.browser_session import BrowserSession
 from frontend.ui_context import UiContext
@@ -22,8 +23,15 @@ log = logging.getLogger("padt.ui")
 
 
 class PadtUi:
-    def __init__(self, context: UiContext, host: str = "127.0.0.1", port: int = 8080) -> None:
+    def __init__(
+        self,
+        context: UiContext,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        trusted: TrustedProxies = NO_PROXIES,
+    ) -> None:
         self.context = context
+        self._trusted = trusted  # the proxies whose X-Forwarded-For names the browser
         self.browsers: dict[int, BrowserSession] = {}
         self._lock = threading.Lock()
         viser_wakeup.install()
@@ -54,11 +62,16 @@ class PadtUi:
 
     def _address(self, client_id: int) -> str:
         """The browser's address: failed logins lock a name for it only. viser does not
-        publish it; its websocket connection knows it (viser is pinned below 1.2)."""
+        publish it; its websocket connection knows it (viser is pinned below 1.2), and
+        behind a trusted proxy the handshake's X-Forwarded-For says whom the proxy saw."""
         connections = getattr(self.server._websock_server, "_live_connections", {})
         connection = connections.get(client_id)
         address = getattr(connection, "remote_address", None)
-        return str(address[0]) if address else f"browser {client_id}"
+        if not address:
+            return f"browser {client_id}"
+        request = getattr(connection, "request", None)
+        forwarded = request.headers.get_all("X-Forwarded-For") if request is not None else []
+        return client_address(str(address[0]), forwarded, self._trusted)
 
     def _refresh_loop(self) -> None:
         last_tick = 0.0

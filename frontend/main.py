@@ -9,6 +9,7 @@ import sys
 import time
 from pathlib import Path
 
+from backend.engineering.client_address import add_trusted_proxy_option
 from backend.engineering.project_list import named_folder
 from runtime.contract.session_options import add_zenoh_options
 
@@ -48,10 +49,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
     parser.add_argument("--port", type=int, default=8080, help="HTTP port (next free if busy)")
+    add_trusted_proxy_option(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     # imported here: `padt` must start fast for commands that never open a UI
+    from backend.engineering.client_address import TrustedProxies
     from backend.engineering.padt_accounts import AccountsError, PadtAccounts
     from backend.engineering.project_list import projects_by_name
     from backend.engineering.resource_directory import ResourceDirectory
@@ -80,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
     session = open_client(args.zenoh, args.zenoh_config)
     directory = ResourceDirectory(session)
     context = UiContext(directory, accounts, args.zenoh, watch_lists, projects, args.backup_dir)
-    ui = PadtUi(context, host=args.host, port=args.port)
+    trusted = TrustedProxies(tuple(args.trusted_proxy))
+    ui = PadtUi(context, host=args.host, port=args.port, trusted=trusted)
     freeze_start_up()
     print(f"PADT UI: {ui.url}", flush=True)
     stop.sleep_until_requested()

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from backend.engineering.client_address import TrustedProxies, add_trusted_proxy_option
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from runtime.contract.private_files import write_private
@@ -41,6 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=5020,
         help="Modbus TCP port of the resource's served image on 127.0.0.1 (0: any free one)",
     )
+    add_trusted_proxy_option(parser)
 
 
 def _die_with_parent() -> None:
@@ -157,15 +159,16 @@ def _run_with_plant(
         projects = {"demo": folder}
         directory = ResourceDirectory(session)
         service = PadtService(directory, accounts, projects, args.state_dir / "backups")
+        trusted = TrustedProxies(tuple(args.trusted_proxy))
         try:
-            api = ApiServer(service, args.host, args.api_port)
+            api = ApiServer(service, args.host, args.api_port, trusted)
         except OSError:  # busy: like the UI, take another port rather than fail
-            api = ApiServer(service, args.host, 0)
+            api = ApiServer(service, args.host, 0, trusted)
         watch_lists = WatchLists(args.state_dir / "watch-lists.json")
         # the UI knows the same project as the API: the demo's copy in the state folder
         backups = args.state_dir / "backups"
         context = UiContext(directory, accounts, endpoint, watch_lists, projects, backups)
-        ui = PadtUi(context, host=args.host, port=args.port)
+        ui = PadtUi(context, host=args.host, port=args.port, trusted=trusted)
         freeze_start_up()
         try:
             _announce(args.state_dir, resource, result.artifact.crc, admin, admin_password)

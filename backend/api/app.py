@@ -9,6 +9,7 @@ from backend.api import auth, live, projects, resources
 from backend.api.body_limit import BodyLimit
 from backend.api.errors import install_error_handlers
 from backend.api.service import PadtService
+from backend.engineering.client_address import NO_PROXIES, TrustedProxies
 
 API_VERSION = "1"
 DESCRIPTION = """The PADT's operations over HTTP: projects (compile, check-twice, CRCs),
@@ -20,10 +21,12 @@ reload, parameters, forcing, values, events, statistics) and live values (WebSoc
 The reference is docs/rest-api.md."""
 
 
-def create_app(service: PadtService) -> FastAPI:
+def create_app(service: PadtService, trusted: TrustedProxies = NO_PROXIES) -> FastAPI:
+    """`trusted`: the proxies whose X-Forwarded-For names the caller (for the login lock)."""
     # Swagger UI and ReDoc from the package's own files: /docs works without internet
     app = FastAPIOffline(title="PADT REST API", version=API_VERSION, description=DESCRIPTION)
     app.state.service = service
+    app.state.trusted_proxies = trusted
     install_error_handlers(app)
     app.add_middleware(BodyLimit)
     for router in (auth.router, projects.router, resources.router, live.router):

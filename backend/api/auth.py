@@ -17,6 +17,7 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from pydantic import BaseModel, Field
 
 from backend.api.service import Caller, PadtService
+from backend.engineering.client_address import TrustedProxies, client_address
 from backend.engineering.padt_accounts import AccountsError
 from backend.engineering.padt_levels import PADT_LEVELS
 from runtime.contract.accounts import NAME, SESSION_NS
@@ -78,7 +79,7 @@ router = APIRouter(prefix="/api", tags=["session and accounts"])
 @router.post("/login", summary="Log in to the PADT")
 def login(credentials: Credentials, service: Service, request: Request) -> SessionInfo:
     # failed logins lock the name for the address they come from, not for everyone
-    address = request.client.host if request.client is not None else "unknown"
+    address = _caller_address(request)
     try:
         token, session = service.accounts.login(credentials.user, credentials.password, address)
     except Refusal as denied:
@@ -89,6 +90,12 @@ def login(credentials: Credentials, service: Service, request: Request) -> Sessi
     return SessionInfo(
         token=token, user=session.user, level=session.level, expires_in_s=SESSION_NS // 10**9
     )
+
+
+def _caller_address(request: Request) -> str:
+    trusted: TrustedProxies = request.app.state.trusted_proxies
+    peer = request.client.host if request.client is not None else "unknown"
+    return client_address(peer, request.headers.getlist("x-forwarded-for"), trusted)
 
 
 @router.post("/logout", status_code=204, summary="End this session")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from backend.engineering.client_address import add_trusted_proxy_option
 from backend.engineering.padt_levels import PADT_LEVELS
 from backend.engineering.project_list import named_folder
 from runtime.contract.session_options import add_zenoh_options
@@ -34,6 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_zenoh_options(parser, "Zenoh router the resources are connected to")
     parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
     parser.add_argument("--port", type=int, default=8000, help="HTTP port")
+    add_trusted_proxy_option(parser)
 
 
 def add_user_arguments(parser: argparse.ArgumentParser) -> None:

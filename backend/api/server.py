@@ -14,6 +14,7 @@ import uvicorn
 
 from backend.api.app import create_app
 from backend.api.service import PadtService
+from backend.engineering.client_address import NO_PROXIES, TrustedProxies
 from backend.engineering.padt_accounts import AccountsError, PadtAccounts
 from backend.engineering.project_list import projects_by_name
 from backend.engineering.resource_directory import ResourceDirectory
@@ -24,11 +25,24 @@ class ApiServer:
     """Uvicorn on a thread, on a socket bound before it starts (so port 0 works and the
     URL is known at once)."""
 
-    def __init__(self, service: PadtService, host: str = "127.0.0.1", port: int = 0) -> None:
+    def __init__(
+        self,
+        service: PadtService,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        trusted: TrustedProxies = NO_PROXIES,
+    ) -> None:
         self._socket = _listening_socket(host, port)
         bound_host, bound_port = self._socket.getsockname()[:2]
         self.url = f"http://{bound_host}:{bound_port}"
-        config = uvicorn.Config(create_app(service), log_level="warning", ws="websockets-sansio")
+        # proxy_headers off: uvicorn would take X-Forwarded-For from any local caller as
+        # the client's address; the app reads it from the proxies it was told to trust
+        config = uvicorn.Config(
+            create_app(service, trusted),
+            log_level="warning",
+            ws="websockets-sansio",
+            proxy_headers=False,
+        )
         self._server = uvicorn.Server(config)
         self._thread = threading.Thread(
             target=self._server.run, kwargs={"sockets": [self._socket]}, daemon=True
@@ -85,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     directory = ResourceDirectory(session)
     service = PadtService(directory, accounts, projects, args.backup_dir)
     try:
-        server = ApiServer(service, args.host, args.port)
+        server = ApiServer(service, args.host, args.port, TrustedProxies(tuple(args.trusted_proxy)))
     except OSError as exc:
         print(f"padt api: cannot serve on {args.host}:{args.port}: {exc}", file=sys.stderr)
         service.close()
