@@ -41,7 +41,6 @@ from runtime.contract.protocol import (
     ReloadPreview,
     Request,
     Status,
-    decode_request,
     encode_refusal,
     encode_reply,
 )
@@ -50,6 +49,7 @@ from runtime.cycle_stats import CycleStats
 from runtime.disposal import DISPOSAL
 from runtime.link import ResourceLink
 from runtime.reload_switch import ReloadJob
+from runtime.request_intake import Received
 from runtime.resource import Resource
 from runtime.runtime_priority import CycleScheduling
 
@@ -198,20 +198,21 @@ class CycleDriver:
                 if remaining > 0 and wait:  # woken by a command, or for the next cycle
                     if paced:
                         self._scheduling.real_time()
-                    query = self.link.inbox.get(timeout=min(remaining / 1e9, 0.2))
+                    received = self.link.intake.inbox.get(timeout=min(remaining / 1e9, 0.2))
                 else:
-                    query = self.link.inbox.get_nowait()
+                    received = self.link.intake.inbox.get_nowait()
             except queue.Empty:
                 # woken for the next cycle: real-time on into it, or the hand-over to the
                 # ordinary class gave other threads the CPU just when the cycle was due
                 if remaining <= 0 or not wait:
                     return
                 continue
+            self.link.intake.done()
             self._scheduling.ordinary()  # a command is answered in the ordinary class
-            reply = self._answer(query)
+            reply = self._answer(received)
             if reply is not None:
-                self.link.reply(query, reply)
-            del query  # a Zenoh query is finalised when its last reference goes
+                self.link.reply(received.query, reply)
+            del received  # a Zenoh query is finalised when its last reference goes
             # a command may have stepped, stopped or written: show its outcome at once
             self._safely(self._publish_after_command)
             if self.clock.now_ns() >= deadline_ns:
@@ -222,12 +223,13 @@ class CycleDriver:
         self._publish_values(at_once=True)
         self._publish_status()
 
-    def _answer(self, query: zenoh.Query) -> bytes | None:
-        """The reply to a query, decoded once and checked whole before anything else; None
-        when it is a reload that answers later."""
+    def _answer(self, received: Received) -> bytes | None:
+        """The reply to a request (decoded and checked whole by the link's intake, off this
+        thread); None when it is a reload that answers later."""
+        query, request = received.query, received.decoded
+        if isinstance(request, Exception):  # what the decoder met: a defect of the runtime
+            return encode_refusal(internal_failure(self.resource, request))
         try:
-            link = self.link
-            request = decode_request(link.payload(query), link.source(query), link.mac(query))
             if isinstance(request.command, Reload | ReloadPreview):
                 self._start_reload(query, request)
                 return None

@@ -1,9 +1,10 @@
 """The runtime's side of Zenoh: command queryable, status publisher, watch-set values,
 liveliness.
 
-Zenoh calls back on its own threads; the callbacks only queue a query or note a watcher
-coming or going, and the cycle driver handles them in the housekeeping part of the cycle
-(so commands never race the cycle).
+Zenoh calls back on its own threads; the callbacks only hand a query to the request intake
+(`request_intake.py`: refused by size at once, decoded on a thread of its own) or note a
+watcher coming or going, and the cycle driver answers the decoded requests in the
+housekeeping part of the cycle (so commands never race the cycle).
 
 Everything the resource publishes is encoded, signed and put by one publisher thread: the
 status and the events must reach every subscriber (Zenoh then blocks while a subscriber is
@@ -12,8 +13,8 @@ slow, as a busy PADT with ten browsers was), and the cycle must never wait for t
 
 from __future__ import annotations
 
+import itertools
 import json
-import queue
 import threading
 from collections import deque
 
@@ -29,17 +30,20 @@ from runtime.contract.keyspace import (
     watch_key,
     watchers_key_expr,
 )
-from runtime.contract.protocol import Event, Status
+from runtime.contract.protocol import Event, Request, Status, decode_request
+from runtime.contract.signatures import stamp_bytes, stamped
 from runtime.contract.wire import encode
 from runtime.identity import Identity
+from runtime.request_intake import RequestIntake
 from runtime.watch_sets import WatchSnapshot
 
 
 class ResourceLink:
     def __init__(self, session: zenoh.Session, resource: str, identity: Identity) -> None:
         self._identity = identity  # every publication is signed with its key
-        self.inbox: queue.Queue[zenoh.Query] = queue.Queue()
-        self._queryable = session.declare_queryable(command_key(resource), self.inbox.put)
+        self._numbers = itertools.count(1)  # and stamped: its boot, and its number in it
+        self.intake = RequestIntake(self._decode)
+        self._queryable = session.declare_queryable(command_key(resource), self.intake.receive)
         self._status = session.declare_publisher(
             status_key(resource), congestion_control=zenoh.CongestionControl.BLOCK
         )
@@ -120,13 +124,23 @@ class ResourceLink:
                 self._session.put(
                     watch_key(self._resource, watch_id),
                     payload,
-                    attachment=self._identity.sign(payload),
+                    attachment=self._signed(payload),
                     congestion_control=zenoh.CongestionControl.DROP,
                 )
 
     def _put(self, publisher: zenoh.Publisher, message: object) -> None:
         payload = json.dumps(message).encode()
-        publisher.put(payload, attachment=self._identity.sign(payload))
+        publisher.put(payload, attachment=self._signed(payload))
+
+    def _signed(self, payload: bytes) -> bytes:
+        """The attachment of a publication (runtime/contract/signatures.py): its stamp and
+        the signature of stamp and payload. Only the publisher thread numbers them."""
+        stamp = stamp_bytes(self._identity.boot, next(self._numbers))
+        return stamp + self._identity.sign(stamped(stamp, payload))
+
+    def _decode(self, query: zenoh.Query) -> Request:
+        """On the intake's thread: the request checked whole (Refusal otherwise)."""
+        return decode_request(self.payload(query), self.source(query), self.mac(query))
 
     @staticmethod
     def payload(query: zenoh.Query) -> bytes:
@@ -156,5 +170,6 @@ class ResourceLink:
         self._token.undeclare()
         self._watchers.undeclare()
         self._queryable.undeclare()
+        self.intake.close()
         self._status.undeclare()
         self._events.undeclare()
