@@ -15,6 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from runtime.contract.keyspace import resource_argument
 from runtime.contract.session_options import RouterUnreachable, add_zenoh_options
 
 
@@ -301,7 +302,11 @@ def _parameter(text: str) -> tuple[str, bool | int | str]:
 def _resource_options(parser: argparse.ArgumentParser) -> None:
     """What every command that talks to a running resource needs."""
     parser.add_argument(
-        "--resource", required=True, metavar="NAME", help="name of the running resource"
+        "--resource",
+        required=True,
+        type=resource_argument,
+        metavar="NAME",
+        help="name of the running resource",
     )
     add_zenoh_options(parser, "Zenoh router the resource is connected to")
     parser.add_argument(

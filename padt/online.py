@@ -17,7 +17,6 @@ from contextlib import contextmanager
 
 from backend.engineering.project import ProjectError
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
-from runtime.contract.keyspace import valid_resource_name
 from runtime.contract.refusal import Refusal
 
 
@@ -70,9 +69,6 @@ def _log_in(client: ResourceClient, user: str) -> None:
 
 def run(name: str, args: argparse.Namespace, body: Callable[[], int]) -> int:
     """Run a command body; refusals and failures become one line on stderr."""
-    if not valid_resource_name(args.resource):
-        print(f"padt {name}: invalid resource name '{args.resource}'", file=sys.stderr)
-        return 2
     try:
         return body()
     except Refusal as refused:

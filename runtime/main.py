@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-import sys
 from pathlib import Path
 
 from runtime.clock import RealClock
@@ -12,7 +11,7 @@ from runtime.collector import COLLECTOR
 from runtime.configuration_store import ConfigurationStore
 from runtime.context import ContextInvalid, load_context
 from runtime.contract.artifact import ArtifactError, load_artifact
-from runtime.contract.keyspace import valid_resource_name
+from runtime.contract.keyspace import resource_argument
 from runtime.contract.refusal import Refusal
 from runtime.contract.session_options import add_zenoh_options
 from runtime.contract.state_folder import (
@@ -41,7 +40,12 @@ log = logging.getLogger("padt.runtime")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--resource", required=True, help="name of the resource to run")
+    parser.add_argument(
+        "--resource",
+        required=True,
+        type=resource_argument,
+        help="name of the resource to run (a plain identifier: it is part of its Zenoh keys)",
+    )
     parser.add_argument(
         "--state-dir",
         required=True,
@@ -120,9 +124,6 @@ def power_up(resource: Resource, state_dir: Path) -> None:
 def run(args: argparse.Namespace) -> int:
     stop = StopRequest()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s runtime %(message)s")
-    if not valid_resource_name(args.resource):
-        print(f"padt runtime: invalid resource name '{args.resource}'", file=sys.stderr)
-        return 2
     # first: the threads started from here on (Zenoh's, the I/O's, the savers) inherit it,
     # so that none of them holds the GIL the cycle waits for while it waits for a CPU
     priority = raise_priority(args.nice)

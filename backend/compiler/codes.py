@@ -170,6 +170,7 @@ class Code(Enum):
     VAR_CONFIG_PATH = "E0617", "VAR_CONFIG for no partly located variable"
     VAR_CONFIG_ADDRESS = "E0618", "VAR_CONFIG entry that does not fit its variable"
     ACCESS_PATH = "E0619", "access path to no variable of its type"
+    RESOURCE_NAME = "E0620", "resource name that is no plain identifier"
     EXTRA_RESOURCE = "W0601", "resource ignored"
     PROGRAM_ARGUMENTS = "W0602", "program arguments in a configuration ignored"
 

@@ -35,6 +35,7 @@ from backend.compiler.limits import MAX_PROJECT_CODE, MiB
 from backend.compiler.parse import TokenBudget, parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import Pos, ProjectSize, SourceFile, stdlib_sources
+from backend.compiler.toml_lines import line_of
 from backend.compiler.types import (
     ArrayType,
     ElementaryType,
@@ -57,6 +58,7 @@ from runtime.contract.artifact import (
     canonical_json,
     crc32_hex,
 )
+from runtime.contract.keyspace import resource_name_problem
 from runtime.contract.values import ValueRejected, representation
 
 
@@ -189,8 +191,11 @@ def _compile(
     diagnostics.extend(check(resolved))
     configured = _from_configuration(units, diagnostics)
     positions: dict[str, Pos] = {}
+    named_at = Pos(config_file, line_of(settings.lines, "resource.name"), 1)
     if resource is None:
+        named_at = _configured_resource_at(units) or named_at
         resource = configured[0] if configured else ResourceConfig(name="Resource1")
+    diagnostics.extend(_check_resource_name(resource.name, named_at))
     if programs is None:
         programs = configured[1] if configured else _default_programs(units)
         positions = configured[2] if configured else {}
@@ -270,6 +275,19 @@ def _generate(
         "GLOBALS", "GLOBALS", "GLOBALS", generate_globals(resolved, any_pou), resolved.globals
     )
     return codes, types, counted(globals_code, declared_at(resolved.globals, any_pou))
+
+
+def _configured_resource_at(units: list[ast.SourceUnit]) -> Pos | None:
+    """Where the RESOURCE that names the resource is declared, if a CONFIGURATION does."""
+    resources = [r for unit in units for c in unit.configurations for r in c.resources]
+    return resources[0].pos if resources else None
+
+
+def _check_resource_name(name: str, where: Pos) -> list[Diagnostic]:
+    """The resource's name is part of its Zenoh keys: a wildcard (`*`, `**`, `$*`) or a
+    `/` there would make keys that reach other resources."""
+    problem = resource_name_problem(name)
+    return [] if problem is None else [Diagnostic.at(where, Code.RESOURCE_NAME, problem)]
 
 
 def _from_configuration(

@@ -21,6 +21,7 @@ from typing import Annotated, Any, ClassVar, Generic, Literal, TypeVar
 
 from runtime.contract.accounts import ANONYMOUS, NAME_PATTERN, Level
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
+from runtime.contract.keyspace import WATCH_ID_PATTERN, WATCH_ID_RULE
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import (
     MAX_DEPTH,
@@ -87,7 +88,7 @@ VariableName = Annotated[str, MaxLength(MAX_PATH)]
 ProgramName = Annotated[str, MaxLength(MAX_NAME)]
 Milliseconds = Annotated[int, Range(1, MAX_MS)]
 Crc = Annotated[str, Pattern(r"[0-9A-Fa-f]{8}", "8 hex digits")]
-WatchId = Annotated[str, Pattern(r"[A-Za-z0-9_-]{1,64}", "1 to 64 of A-Z a-z 0-9 _ -")]
+WatchId = Annotated[str, Pattern(WATCH_ID_PATTERN, WATCH_ID_RULE)]  # a chunk of its keys
 AccountName = Annotated[str, Pattern(NAME_PATTERN, "1 to 32 of A-Z a-z 0-9 _ -")]
 Value = Annotated[Any, JsonValue()]  # a variable's value; checked against its type later
 
