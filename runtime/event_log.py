@@ -15,7 +15,7 @@ import os
 import tempfile
 import threading
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -144,9 +144,15 @@ class EventLog:
         long_capacity: int = 10_000,
         keep_ns: int = 3 * DAY_NS,
         write_behind: bool = False,
+        shares: Mapping[str, int] | None = None,
     ) -> None:
         if short_capacity < 1 or long_capacity < 1 or keep_ns < 0:
             raise ValueError("capacities must be at least 1 and keep_ns not negative")
+        # kinds of which the long-term log keeps at most so many entries younger than
+        # keep_ns, so that they never crowd out the others (a flood of logins, say)
+        self._shares = dict(shares or {})
+        self._share_times: dict[str, deque[int]] = {kind: deque() for kind in self._shares}
+        self._beyond_share: dict[str, int] = {}
         self._wall_ns = wall_ns
         self._path = long_path
         self._long_capacity = long_capacity
@@ -173,6 +179,9 @@ class EventLog:
         self._closing = False
         self._writer: threading.Thread | None = None
         notes = self._load(long_path) if long_path is not None else []
+        for event in self._events:
+            if event is not None and event.kind in self._share_times:
+                self._share_times[event.kind].append(event.time_ns)
         now = wall_ns()
         for message, details in notes:
             self._add(now, "error", message, None, details)
@@ -314,6 +323,16 @@ class EventLog:
     def _add_long_term(
         self, now: int, kind: str, message: str, user: str | None, details: dict[str, Any]
     ) -> Event:
+        times = self._share_times.get(kind)
+        if times is not None:
+            while times and now - times[0] > self._keep_ns:
+                times.popleft()
+            if len(times) >= self._shares[kind]:  # beyond its share: short-term only
+                self._beyond_share[kind] = self._beyond_share.get(kind, 0) + 1
+                return self._add(now, kind, message, user, details)
+            held = self._beyond_share.pop(kind, 0)
+            if held:
+                details = {**details, "short_term_only": held}
         uncounted = self._uncounted if self._marker_open else 0
         drop = self._room(now, 2 if uncounted else 1)
         if drop is None:
@@ -333,6 +352,8 @@ class EventLog:
         self._keep(drop, new)
         self._marker_open = False
         self._uncounted = 0
+        if times is not None:
+            times.append(now)
         return event
 
     def _room(self, now: int, incoming: int) -> int | None:

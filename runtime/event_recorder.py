@@ -8,6 +8,10 @@ from typing import Any
 from runtime.contract.values import jsonable
 from runtime.event_log import EventLog
 
+# of the long-term log's 10,000 places, the most that logins take within its 3 days (the
+# rest is kept for the user actions and configuration changes; docs/event-log.md)
+LONG_TERM_SHARES = {"login": 2_500}
+
 
 class EventRecorder:
     def __init__(self, log: EventLog) -> None:

@@ -24,6 +24,7 @@ from runtime.contract.state_folder import (
 )
 from runtime.contract.stop_request import StopRequest
 from runtime.event_log import EventLog
+from runtime.event_recorder import LONG_TERM_SHARES
 from runtime.identity import Identity
 from runtime.native.tier import NativeTier
 from runtime.resource import Resource
@@ -129,7 +130,12 @@ def run(args: argparse.Namespace) -> int:
     priority = raise_priority(args.nice)
     clock = RealClock()
     # written behind: the cycle thread records events and must not wait for an fsync
-    events = EventLog(clock.wall_ns, long_path=events_path(args.state_dir), write_behind=True)
+    events = EventLog(
+        clock.wall_ns,
+        long_path=events_path(args.state_dir),
+        write_behind=True,
+        shares=LONG_TERM_SHARES,
+    )
     identity = Identity.kept_in(identity_path(args.state_dir))
     resource = Resource(args.resource, clock, events, identity)
     if args.native_code:

@@ -27,6 +27,7 @@ from runtime.contract.protocol import ProgramState, ProgramStatus, ResourceState
 from runtime.contract.refusal import Refusal
 from runtime.cycle_stats import CycleStats
 from runtime.event_log import EventLog
+from runtime.event_recorder import LONG_TERM_SHARES as SHARES
 from runtime.event_recorder import EventRecorder
 from runtime.force_table import GLOBAL
 from runtime.forcing import Forcing
@@ -80,7 +81,7 @@ class Resource:
     ) -> None:
         self.name = name
         self.clock = clock
-        self.events = events if events is not None else EventLog(clock.wall_ns)
+        self.events = events if events is not None else EventLog(clock.wall_ns, shares=SHARES)
         self.recorder = EventRecorder(self.events)
         self.state = ResourceState.STOP_INVALID
         self.error: str | None = None  # why the resource is in ERROR STOP
@@ -130,6 +131,9 @@ class Resource:
     def begin_login(self, name: str, client_nonce: str, source: str) -> Challenge:
         """The challenge of a login (runtime/contract/scram.py)."""
         try:
+            known = any(account.name == name for account in self.access.users)
+            if known and not self.login_audit.may_begin(name, self.clock.now_ns()):
+                raise Refusal("busy", f"too many logins of '{name}' at once: try again shortly")
             return self.access.begin(name, client_nonce, source)
         except Refusal as denied:
             self._login_refused(name, source, denied)
@@ -147,7 +151,11 @@ class Resource:
         if earlier:
             message = f"login of '{name}' refused{_more(earlier)}"
             self.recorder.record("login", message, name, long_term=False, source=source)
-        self.recorder.record("login", f"{name} logged in ({proven.session.level})", name)
+        logins = self.login_audit.logged_in(name, self.clock.now_ns())
+        if logins is not None:
+            message = f"{name} logged in ({proven.session.level}){_logins(logins)}"
+            counted = {"logins": logins} if logins else {}
+            self.recorder.record("login", message, name, None, **counted)
         return proven
 
     def _login_refused(self, name: str, source: str, denied: Refusal) -> None:
@@ -465,3 +473,7 @@ class Resource:
 
 def _more(count: int) -> str:
     return f" ({count} more refused since the last report)" if count else ""
+
+
+def _logins(count: int) -> str:
+    return f" ({count} more logins of this account since the last report)" if count else ""

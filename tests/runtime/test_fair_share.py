@@ -142,3 +142,18 @@ def test_a_login_flood_does_not_displace_the_operators_actions(
         logins = [e for e in entries if e.kind == "login"]
         assert len(logins) < 10, "every login took a place in the long-term log"
         assert "r1" in {e.user for e in logins}  # logins are there all the same
+
+
+def test_logins_take_a_share_of_the_long_term_log_only(tmp_path: Path) -> None:
+    """The rule itself on a small log: logins beyond their share stay short-term, and
+    the next one kept counts them."""
+    log = EventLog(time.time_ns, long_path=tmp_path / "events.jsonl", shares={"login": 3})
+    for number in range(5):
+        log.record("login", f"login {number}", user="r1", long_term=True)
+    log.record("stats", "cycle statistics reset", user="op", long_term=True)
+    kept = [e.message for e in log.long_term()]
+    assert kept == ["login 0", "login 1", "login 2", "cycle statistics reset"]
+    assert [e.message for e in log.recent()][3:5] == ["login 3", "login 4"]
+    again = EventLog(time.time_ns, long_path=tmp_path / "events.jsonl", shares={"login": 3})
+    again.record("login", "login 5", user="r1", long_term=True)  # the share holds a restart
+    assert len(again.long_term()) == 4
