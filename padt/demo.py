@@ -149,7 +149,9 @@ def _run_with_plant(
     command = [sys.executable, "-m", "padt.cli", "runtime", "--resource", resource]
     command += ["--state-dir", str(args.state_dir), "--zenoh", endpoint]
     command += ["--modbus-port", str(args.modbus_port)]
-    runtime = subprocess.Popen(command, preexec_fn=_die_with_parent)
+    # in a process group of its own: a Ctrl-C at the terminal reaches the demo alone, which
+    # ends the runtime in order (the runtime ends its own workers)
+    runtime = subprocess.Popen(command, preexec_fn=_die_with_parent, process_group=0)
     session = open_client(endpoint)
     try:
         # the REST API and the UI know the demo's administrator as its Security Administrator

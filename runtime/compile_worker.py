@@ -74,6 +74,9 @@ class CompileWorker:
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
                 env=child_environment(),
+                # a group of its own: a Ctrl-C at a terminal (SIGINT to the foreground
+                # group) reaches the runtime alone, which ends this child
+                process_group=0,
             )
         assert child.stdin is not None and child.stdout is not None
         _send(child.stdin, marshal.dumps(units))

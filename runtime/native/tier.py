@@ -100,6 +100,7 @@ class NativeTier:
                 input=artifact.to_json().encode(),
                 capture_output=True,
                 env=child_environment(),
+                process_group=0,  # a Ctrl-C at the terminal is the runtime's to handle
                 timeout=WORKER_TIMEOUT_S,
                 check=False,
             )
