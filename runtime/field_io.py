@@ -28,6 +28,7 @@ from runtime.event_recorder import EventRecorder
 from runtime.instances import BoundVariable
 from runtime.modbus_client import DevicePoller
 from runtime.modbus_loop import ModbusLoop
+from runtime.modbus_meter import REQUESTS_PER_SECOND, RequestMeter
 from runtime.modbus_server import ImageServer, ImageStore, ServedImage
 from runtime.process_image import ProcessImage
 from runtime.variables import Variables
@@ -44,13 +45,17 @@ class FieldIo:
         recorder: EventRecorder,
         running: Callable[[], bool],
         port: int | None = None,
+        requests_per_second: int = REQUESTS_PER_SECOND,
     ) -> None:
         """The resource's parts it works with: the loaded configuration (`artifact`), its
         variables, process image and event recorder, and whether it runs; `port` overrides
-        the configured port of the served image (0: any free one)."""
+        the configured port of the served image (0: any free one); the served image answers
+        at most `requests_per_second` (all clients together)."""
         self._loaded, self._variables, self._io = artifact, variables, io
         self._recorder, self._running_now = recorder, running
         self._port = port
+        self._requests_per_second = requests_per_second
+        self._floods = 0  # the floods of requests the meter held back, reported
         self._loop: ModbusLoop | None = None
         self._artifact: Artifact | None = None
         self.config = ModbusConfig()
@@ -72,6 +77,8 @@ class FieldIo:
         if self.server is not None:
             self._take_writes(self.server.store)
             self._report_server()
+            if self.server.meter.floods != self._floods:
+                self._report_flood(self.server.meter)
         io = self._io
         bad: set[str] = set()
         for poller in self.pollers:
@@ -137,12 +144,14 @@ class FieldIo:
         thread (the cycle does not wait for either)."""
         self.config, self.server, self.pollers = config, None, []
         self._seen, self._server_reported, self.bad = {}, False, frozenset()
+        self._floods = 0
         self._bound_of = None
         if config.serve:
             port = self._port if self._port is not None else config.port
             # outputs first, then the others: each group is read with one call per cycle
             points = sorted(config.served, key=lambda p: not _is_output(p))
-            self.server = ImageServer(ImageStore(tuple(points)), config.host, port)
+            meter = RequestMeter(self._requests_per_second)
+            self.server = ImageServer(ImageStore(tuple(points)), config.host, port, meter)
         outputs = lambda: self._io.outputs  # noqa: E731  # replaced, never changed
         self.pollers = [DevicePoller(device, outputs) for device in config.devices]
         if self._loop is None and (self.server is not None or self.pollers):
@@ -178,6 +187,16 @@ class FieldIo:
             recorder.record(
                 "io", f"Modbus server listening on {server.host}:{server.port}", long_term=False
             )
+
+    def _report_flood(self, meter: RequestMeter) -> None:
+        """Once per flood (requests past the meter's rate after a quiet spell)."""
+        self._floods = meter.floods
+        self._recorder.record(
+            "io",
+            f"Modbus server: requests come faster than {meter.rate} a second; they are "
+            "answered at that rate",
+            long_term=False,
+        )
 
     def _report_device(self, poller: DevicePoller, state: str, before: str) -> None:
         device, recorder = poller.device, self._recorder

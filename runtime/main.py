@@ -26,6 +26,7 @@ from runtime.contract.stop_request import StopRequest
 from runtime.event_log import EventLog
 from runtime.event_recorder import LONG_TERM_SHARES
 from runtime.identity import Identity
+from runtime.modbus_meter import REQUESTS_PER_SECOND
 from runtime.native.tier import NativeTier
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
@@ -85,6 +86,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="PORT",
         help="port of the served Modbus TCP image instead of the configured one (0: any free)",
+    )
+    parser.add_argument(
+        "--modbus-rate",
+        type=int,
+        default=REQUESTS_PER_SECOND,
+        choices=range(1, 1_000_001),
+        metavar="N",
+        help=f"Modbus requests the served image answers per second, all clients together "
+        f"(default {REQUESTS_PER_SECOND}); a flood is answered no faster",
     )
     parser.add_argument(
         "--native-code",
@@ -170,6 +180,7 @@ def run(args: argparse.Namespace) -> int:
         resource.recorder,
         resource.running,
         args.modbus_port,
+        args.modbus_rate,
     )
     from runtime.recorder import Recordings
 

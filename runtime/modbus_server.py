@@ -7,6 +7,7 @@ pymodbus decodes the frames; malformed ones and unknown function codes get its e
 responses. Everything else is decided here: a table is as long as its highest mapped
 address (unmapped addresses below it read 0); reading beyond it, or writing anything but a
 configured writable point, is ILLEGAL ADDRESS; nothing of a refused request is written.
+No more requests are read than the meter allows (`modbus_meter.py`), all clients together.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from typing import Any
 
 from pymodbus.constants import ExcCodes
 from pymodbus.server import ModbusTcpServer
+from pymodbus.server.requesthandler import ServerRequestHandler
 from pymodbus.simulator import SimData, SimDevice
 
 from runtime.contract.modbus import (
@@ -31,6 +33,7 @@ from runtime.contract.modbus import (
     decode,
     encode,
 )
+from runtime.modbus_meter import RequestMeter
 
 # function codes by table (pymodbus maps 22 and 23 to holding registers too)
 _AREA_OF_CODE = {1: COIL, 5: COIL, 15: COIL, 2: DISCRETE_INPUT, 4: INPUT_REGISTER}
@@ -150,11 +153,37 @@ class ImageStore:
         self.image = image
 
 
+class _MeteredHandler(ServerRequestHandler):
+    """A connection of the server: every request it receives takes a token of the meter."""
+
+    meter: RequestMeter
+
+    def callback_data(self, data: bytes, addr: tuple[Any, ...] | None = None) -> int:
+        used: int = super().callback_data(data, addr)
+        if used:
+            self.meter.take(self.loop, self.transport)
+        return used
+
+
+class _MeteredServer(ModbusTcpServer):
+    meter: RequestMeter
+
+    def callback_new_connection(self) -> ServerRequestHandler:
+        handler = _MeteredHandler(  # type: ignore[no-untyped-call]  # pymodbus' own __init__
+            self, self.trace_packet, self.trace_pdu, self.trace_connect
+        )
+        handler.meter = self.meter
+        return handler
+
+
 class ImageServer:
     """The pymodbus TCP server over an `ImageStore`, on the Modbus event loop."""
 
-    def __init__(self, store: ImageStore, host: str, port: int) -> None:
+    def __init__(
+        self, store: ImageStore, host: str, port: int, meter: RequestMeter | None = None
+    ) -> None:
         self.store = store
+        self.meter = meter or RequestMeter()
         self.host = host
         self.wanted_port = port
         self.port = 0  # where it listens (port 0 asks for any free one)
@@ -185,9 +214,10 @@ class ImageServer:
     async def start(self) -> None:
         # pymodbus wants a device to build its own store from; it answers from ours
         placeholder = SimDevice(id=0, simdata=[SimData(0)])
-        server = ModbusTcpServer(
+        server = _MeteredServer(
             placeholder, address=(self.host, self.wanted_port), trace_packet=self._trace
         )
+        server.meter = self.meter
         server.context = self.store  # type: ignore[assignment]  # same protocol, our data
         try:
             await server.serve_forever(background=True)

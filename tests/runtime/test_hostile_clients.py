@@ -5,6 +5,9 @@ rate and answers its status."""
 from __future__ import annotations
 
 import json
+import socket
+import struct
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -25,6 +28,7 @@ from runtime.contract.protocol import GetEvents, GetStatus, Status, WatchValues
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import encode
 from tests.conftest import padt
+from tests.support.ports import free_port
 from tests.support.runtime_process import client_session, running_resource, store_artifact
 
 RESOURCE = "Target"
@@ -43,11 +47,11 @@ END_PROGRAM
 
 @contextmanager
 def target(
-    tmp_path: Path, endpoint: str, modbus_port: int | None = None
+    tmp_path: Path, endpoint: str, modbus_port: int | None = None, *options: str
 ) -> Iterator[ResourceClient]:
     """A running resource with a reader and an administrator, and a client logged in as
     the reader (`RUNTIMES[id(client)]` is the runtime process); with `modbus_port`, it
-    serves its image (one holding register, 1024) there."""
+    serves its image (one holding register, 1024) there; `options` of `padt runtime`."""
     config = ResourceConfig(RESOURCE, target_cycle_ms=TARGET_MS, autostart="cold")
     users = [
         UserAccount("reader", "read", hash_password(PASSWORD)),
@@ -63,7 +67,7 @@ def target(
     )
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
     store_artifact(tmp_path, result.artifact)
-    with running_resource(RESOURCE, tmp_path, endpoint) as (process, client):
+    with running_resource(RESOURCE, tmp_path, endpoint, *options) as (process, client):
         client.login("reader", PASSWORD)
         RUNTIMES[id(client)] = process.pid
         yield client
@@ -288,6 +292,39 @@ def test_oversize_requests_are_refused_unread(tmp_path: Path, zenoh_endpoint: st
             error = raw(rogue, payload, attachment)["error"]
             assert error["code"] == "too_large", error
             assert "refused unread" in error["message"], error
+        still_healthy(client)
+
+
+def test_a_modbus_flood_is_answered_no_faster_than_the_servers_rate(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    """Requests back to back on several connections: every one answered, no faster than
+    the served image's rate, and the event log says that someone floods it."""
+    port, rate, connections, each = free_port(), 20, 3, 20
+    read = struct.pack(">HHHBBHH", 7, 0, 6, 1, 3, 1024, 1)  # holding register 1024
+    with target(tmp_path, zenoh_endpoint, port, "--modbus-rate", str(rate)) as client:
+        deadline = time.monotonic() + 30
+        while not (client.command("status")["status"]["io"]["server"] or {}).get("listening"):
+            assert time.monotonic() < deadline, "the Modbus server never listened"
+            time.sleep(0.1)
+        answers: list[bytes] = []
+
+        def flood() -> None:
+            with socket.create_connection(("127.0.0.1", port), timeout=30) as sock:
+                for _ in range(each):
+                    sock.sendall(read)
+                    answers.append(sock.recv(256))
+
+        threads = [threading.Thread(target=flood) for _ in range(connections)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        assert len(answers) == connections * each
+        assert all(answer[:2] == read[:2] and answer[7] == 3 for answer in answers)
+        events = [e.message for e in client.ask(GetEvents(limit=1000)).events]
+        flooded = f"requests come faster than {rate} a second"
+        assert sum(flooded in message for message in events) == 1, events
         still_healthy(client)
 
 
