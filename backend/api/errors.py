@@ -23,6 +23,7 @@ log = logging.getLogger("padt.api")
 # configuration does not allow it now
 HTTP_STATUS = {
     "unauthenticated": 401,
+    "resource_login_required": 401,  # the API session is fine; the resource's is missing
     "login_failed": 401,
     "forbidden": 403,
     "locked": 429,

@@ -45,11 +45,15 @@ def _subscription(message: Any) -> tuple[str, list[str], int]:
 
 def _start_watch(service: PadtService, resource: str, message: Any, deliver: Any) -> WatchHandle:
     token, variables, period = _subscription(message)
-    client = service.client(service.caller(token, "read-only"), resource)
+    caller = service.caller(token, "read-only")
+    client = service.client(caller, resource)
     try:
         return client.watch(variables, deliver, period)
     except Refusal as refused:
-        raise Refusal("watch_refused", f"{refused.code}: {refused.message}") from None
+        why = service.resource_refusal(caller, resource, refused)
+        if why.code == "resource_login_required":
+            raise why from None
+        raise Refusal("watch_refused", f"{why.code}: {why.message}") from None
     except ResourceUnreachable as exc:
         raise Refusal("unreachable", str(exc)) from None
 

@@ -177,12 +177,22 @@ class PadtService:
         except ResourceUnreachable as exc:
             raise Refusal("unreachable", str(exc)) from None
         except Refusal as refusal:
-            if refusal.code == "unauthenticated":
-                self.accounts.set_resource_login(caller.token, resource, None)
-                refusal.message += (
-                    f" (log in to the resource: POST /api/resources/{resource}/login)"
-                )
-            raise
+            raise self.resource_refusal(caller, resource, refusal) from None
+
+    def resource_refusal(self, caller: Caller, resource: str, refusal: Refusal) -> Refusal:
+        """A resource's refusal as the caller should read it. `unauthenticated` means that
+        the caller has no login to the resource yet (`resource_login_required`: its API
+        session is fine), or that the resource no longer knows the one it had."""
+        if refusal.code != "unauthenticated":
+            return refusal
+        login = f"POST /api/resources/{resource}/login"
+        if self.accounts.resource_login(caller.token, resource) is None:
+            return Refusal(
+                "resource_login_required", f"log in to resource {resource} first: {login}"
+            )
+        self.accounts.set_resource_login(caller.token, resource, None)
+        refusal.message += f" (the resource no longer knows this login; log in again: {login})"
+        return refusal
 
 
 @contextmanager

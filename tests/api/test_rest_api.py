@@ -227,7 +227,9 @@ def test_the_same_commands_sent_directly_over_zenoh_get_the_same_refusals(site: 
 def test_operate_a_resource_through_the_api(site: Plant) -> None:
     op = site.session("builder", "op")
     engineer = site.session("builder", "engineer")
-    assert error(site.call("GET", f"{R}/status", site.token("builder")), 401, "unauthenticated")
+    assert error(
+        site.call("GET", f"{R}/status", site.token("builder")), 401, "resource_login_required"
+    )
     assert site.call("POST", f"{R}/stop", op).json()["status"]["state"].startswith("STOP")
     assert site.call("POST", f"{R}/start", op).json()["status"]["state"] == "RUN"
     programs = site.call("GET", f"{R}/programs", op).json()
