@@ -13,6 +13,7 @@ from typing import Any
 from runtime.code_warmup import unspecialized, warm_up
 from runtime.compile_worker import compile_here
 from runtime.contract.artifact import Artifact, PouCode, VarInfo
+from runtime.contract.generated_code import check_artifact_names
 from runtime.contract.values import array_shape
 from runtime.fault_location import SourceLocation, code_filename, locate
 from runtime.intrinsics import SystemView, namespace
@@ -65,6 +66,7 @@ class CodeImage:
         """`compile_units`: how the generated source becomes code (a reload prepared
         while cycles run passes the compile worker's); `native`: the tier that binds C
         bodies to the classes, where it can."""
+        check_artifact_names(artifact)  # the sources: where they are compiled
         self.artifact = artifact
         self.system = system
         self._namespace = namespace(system) if printf is None else namespace(system, printf)

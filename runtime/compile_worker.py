@@ -9,7 +9,8 @@ for the pipe releases the lock, and loading them takes about 1/25 of the compile
 The child is started on first use and kept; it ends when the runtime closes the pipe
 (also when the runtime dies). It runs at a lower priority than the runtime: preparing a
 reload is background work. Should it fail in any way, the code is compiled here as
-before, which also raises the error a broken unit deserves.
+before, which also raises the error a broken unit deserves. Both sides compile only what
+`runtime.contract.generated_code` finds to be generated code.
 
 Run as `python -m runtime.compile_worker` it is that child.
 """
@@ -28,14 +29,16 @@ from types import CodeType
 from typing import IO
 
 from runtime.code_warmup import warm_up
+from runtime.contract.generated_code import compile_unit
 
 _LENGTH = struct.Struct("<Q")
 _CHILD_NICE = 10  # below the runtime's raised priority and below normal programs
 
 
 def compile_here(units: list[tuple[str, str]]) -> list[CodeType]:
-    """(source, file name) pairs compiled in this process, in order, and warmed up."""
-    codes = [compile(source, filename, "exec") for source, filename in units]
+    """(source, file name) pairs checked and compiled in this process, in order, and warmed
+    up; GeneratedCodeError for a unit that is not generated code."""
+    codes = [compile_unit(source, filename) for source, filename in units]
     warm_up(codes)
     return codes
 
@@ -124,8 +127,9 @@ def _receive(pipe: IO[bytes]) -> bytes:
 
 
 def _serve(requests: IO[bytes], answers: IO[bytes]) -> None:
-    """Compile every request until the pipe closes; a unit that does not compile is
-    answered with None (its error is raised where it is compiled again)."""
+    """Check and compile every request until the pipe closes; a unit that is not generated
+    code or does not compile is answered with None (its error is raised where it is
+    compiled again)."""
     while True:
         try:
             units = marshal.loads(_receive(requests))
@@ -134,8 +138,8 @@ def _serve(requests: IO[bytes], answers: IO[bytes]) -> None:
         codes: list[CodeType | None] = []
         for source, filename in units:
             try:
-                codes.append(compile(source, filename, "exec"))
-            except (SyntaxError, ValueError, RecursionError, MemoryError):
+                codes.append(compile_unit(source, filename))
+            except (SyntaxError, ValueError, RecursionError, MemoryError):  # ArtifactError too
                 codes.append(None)
         _send(answers, marshal.dumps(codes))
 

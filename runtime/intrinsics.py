@@ -15,8 +15,11 @@ from dataclasses import dataclass
 from operator import attrgetter
 from typing import Any
 
+from runtime.contract.generated_code import BUILTINS, INTRINSICS, is_data_attr
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.contract.values import format_time, to_real32
+
+GENERATED_MODULE = "padt_generated"  # `__name__` of generated code: its classes' module
 
 
 class ProgramFault(Exception):
@@ -44,15 +47,22 @@ class Reference(str):
     at every use, so that an assignment that replaces a structure or array below the root
     leaves the reference good. As a string it is the path of that place, which is what
     every reader outside the program (OLT, recordings, `padt sim`) shows; two references
-    are equal when they refer to the same place."""
+    are equal when they refer to the same place.
+
+    A reference cannot be changed once made (generated code could otherwise write any
+    step into one, `r.steps = ...`, and have `get` follow it)."""
 
     root: Any
     steps: tuple[str | int, ...]
 
     def __new__(cls, text: str, root: Any, steps: tuple[str | int, ...]) -> Reference:
         made = super().__new__(cls, text)
-        made.root, made.steps = root, steps
+        object.__setattr__(made, "root", root)
+        object.__setattr__(made, "steps", steps)
         return made
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError("a reference cannot be changed")
 
     def get(self) -> Any:
         value = self.root
@@ -95,11 +105,24 @@ def reference_maker(roots: dict[int, str]) -> Callable[..., Reference]:
     is."""
 
     def make(root: Any, steps: tuple[str | int, ...], label: str, whole: bool = False) -> Reference:
+        check_reference(root, steps)
         prefix = "" if whole else roots.get(id(root), "")
         # an empty label: the root itself (THIS, a reference to the instance)
         return Reference(f"{prefix}.{label}" if prefix and label else prefix or label, root, steps)
 
     return make
+
+
+def check_reference(root: Any, steps: tuple[str | int, ...]) -> None:
+    """What a reference may be made of: a root that generated code made (an instance of a
+    generated class, a list), and steps that are list offsets or variable names. The
+    source check lets offsets be computed; this makes sure none of them computes to a
+    name such as `__globals__`, nor lets `_deref_set` change a class or a module."""
+    if not isinstance(root, list) and type(root).__module__ != GENERATED_MODULE:
+        raise ProgramFault(f"a reference into a {type(root).__name__}")
+    for step in steps:
+        if type(step) is not int and not (type(step) is str and is_data_attr(step)):
+            raise ProgramFault(f"a reference through {step!r}")
 
 
 def _deref(reference: Reference | None) -> Any:
@@ -508,23 +531,19 @@ class Namespace:
 
 
 def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -> dict[str, Any]:
-    """A fresh global namespace for one resource's generated code."""
+    """A fresh global namespace for one resource's generated code: the names of
+    `runtime.contract.generated_code` (INTRINSICS, BUILTINS), which the source check
+    holds generated code to."""
     reference_roots: dict[int, str] = {}  # filled by `Instances`: the paths of instances
-    return {
+    names = {
         # only what generated classes need: user code cannot reach open(), import, ...
         "__builtins__": {
             "__build_class__": builtins.__build_class__,
-            "float": float,
-            "int": int,
-            "abs": abs,
-            "len": len,
-            "max": max,
-            "min": min,
-            "range": range,
-            "str": str,
+            **{name: getattr(builtins, name) for name in sorted(BUILTINS)},
         },
-        "__name__": "padt_generated",
+        "__name__": GENERATED_MODULE,
         "_SYS": system,
+        "_G": None,  # the globals, once the code image has made them
         # loop passes are not metered (None), or a SliceMeter's tick while a sliced program runs
         "_tick": None,
         "_idiv": _idiv,
@@ -573,3 +592,5 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         "_step_time": _step_time,
         "_step_enter": _step_enter,
     }
+    assert names.keys() - {"__builtins__", "__name__"} == INTRINSICS, "see generated_code.py"
+    return names

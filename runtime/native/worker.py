@@ -7,6 +7,9 @@ A translation is kept beside the compiled modules, by the hash of what it depend
 unit's source, the classes it reads, the FUNCTIONs it calls, the translator itself), so a
 unit built before is neither translated nor compiled again.
 
+Nothing is translated of an artifact with a unit that is not generated code
+(`runtime.contract.generated_code`): a name or a source of its choosing must not become C.
+
 Run as `python -m runtime.native.worker CACHE`: a request (JSON) on stdin, the answer on
 stdout.
 """
@@ -23,6 +26,12 @@ from pathlib import Path
 from typing import Any
 
 from runtime.contract.artifact import Artifact, PouCode, load_artifact
+from runtime.contract.generated_code import (
+    GeneratedCodeError,
+    check_artifact_names,
+    check_source,
+)
+from runtime.fault_location import code_filename
 from runtime.native.build import BuildError, build, find_toolchain, mark_used, prune
 from runtime.native.kinds import ClassInfo, FunctionInfo, class_table, function_table
 from runtime.native.translate import Translated, translate_unit
@@ -49,6 +58,12 @@ class ArtifactTranslation:
 
     @classmethod
     def of(cls, artifact: Artifact) -> ArtifactTranslation:
+        """GeneratedCodeError for an artifact with any unit that is not generated code:
+        names and sources are checked before any of them is read or put into C."""
+        check_artifact_names(artifact)
+        globals_unit = [artifact.globals] if artifact.globals is not None else []
+        for unit in [*artifact.types, *artifact.pous, *globals_unit]:
+            check_source(unit.source, code_filename(unit))
         units = translatable_units(artifact)
         return cls(
             [unit for unit in units if unit.kind in ("PROGRAM", "FUNCTION_BLOCK")],
@@ -96,7 +111,10 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
     toolchain = find_toolchain()
     if toolchain is None:
         return {"error": "no C compiler or no Python.h on this machine"}
-    translation = ArtifactTranslation.of(artifact)
+    try:
+        translation = ArtifactTranslation.of(artifact)
+    except GeneratedCodeError as exc:
+        return {"error": str(exc)}
     shape = translation.shape()
     fingerprint = _translator_fingerprint()
     index = cache / toolchain.fingerprint / "index"

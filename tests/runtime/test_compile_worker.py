@@ -11,12 +11,19 @@ from types import CodeType
 import pytest
 
 from runtime.compile_worker import COMPILE_WORKER, CompileWorker, compile_here
+from runtime.contract.generated_code import GeneratedCodeError
 from tests.support.resource_harness import compiled, harness
 
 UNITS = [
-    ("def twice(x):\n    return 2 * x\n", "<pou TWICE>"),
-    ("class POU_P:\n    def __call__(s):\n        return twice(21)\n", "<pou P>"),
+    ("def FN_TWICE(x=0):\n    return 2 * x\n", "<pou TWICE>"),
+    (
+        "class POU_P:\n    __slots__ = ()\n    def __call__(s):\n        return FN_TWICE(x=21)\n",
+        "<pou P>",
+    ),
 ]
+ESCAPE = (
+    "class POU_E:\n    __slots__ = ()\n    def __call__(s):\n        return _idiv.__globals__\n"
+)
 
 
 def _run(codes: list[CodeType]) -> object:
@@ -39,10 +46,19 @@ def test_the_child_compiles_what_compiling_here_gives() -> None:
 def test_a_unit_that_does_not_compile_raises_its_error_naming_its_unit() -> None:
     worker = CompileWorker()
     try:
-        with pytest.raises(SyntaxError) as raised:
+        with pytest.raises(GeneratedCodeError, match="pou BROKEN, line 1"):
             worker.compile([*UNITS, ("x = (", "<pou BROKEN>")])
-        assert raised.value.filename == "<pou BROKEN>"
         assert _run(worker.compile(UNITS)) == 42  # and it goes on serving
+    finally:
+        worker.close()
+
+
+def test_the_child_compiles_no_code_the_compiler_would_not_generate() -> None:
+    worker = CompileWorker()
+    try:
+        assert worker._in_child([*UNITS, (ESCAPE, "<pou E>")])[2] is None
+        with pytest.raises(GeneratedCodeError, match="pou E, line 4: the attribute '__glo"):
+            worker.compile([*UNITS, (ESCAPE, "<pou E>")])
     finally:
         worker.close()
 

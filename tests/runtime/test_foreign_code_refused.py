@@ -1,0 +1,119 @@
+"""An artifact whose generated code reaches outside the restricted namespace, its CRC redone
+(as an attacker who read the code would): a real runtime process refuses it from a transfer
+and load, and from a reload, with the reason, runs on, and nothing of it ran; `padt replay`
+of a recording that carries it refuses it too.
+
+Before, `_idiv.__globals__['builtins'].__import__(...)` appended to a POU ran when the
+configuration was set up: on the controller host for a download, and in `padt replay`,
+which then said "identical"."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+from backend.engineering.download import download
+from backend.engineering.reload import ReloadOptions, reload
+from backend.engineering.resource_client import ResourceClient
+from runtime.contract import protocol as p
+from runtime.contract.artifact import Artifact, load_artifact
+from runtime.contract.refusal import Refusal
+from tests.conftest import REPO
+from tests.runtime.test_hostile_clients import PASSWORD, RESOURCE, still_healthy, target
+from tests.runtime.test_recording import PLANT, compiled, finished, recordings_of, run, started
+
+
+def escaping(artifact: Artifact, written: Path, where: str = "body") -> Artifact:
+    """`artifact` with a line that writes `written` through the globals of an intrinsic in
+    its first POU, the CRC redone: in the body of its `__call__`, or appended to the unit
+    (`where="end"`, as the hostile run had it)."""
+    escape = (
+        "_idiv.__globals__['builtins'].__import__('pathlib')"
+        f".Path({str(written)!r}).write_text('ran')"
+    )
+    pou = artifact.pous[0]
+    if where == "end":
+        source = pou.source + escape + "\n"
+    else:
+        call = "    def __call__(s):\n"
+        assert call in pou.source
+        source = pou.source.replace(call, call + "        " + escape + "\n")
+    hostile = replace(pou, source=source)
+    return replace(artifact, pous=(hostile, *artifact.pous[1:])).with_crc()
+
+
+REASON = "a call of the attribute 'write_text' is not allowed"
+
+
+def test_a_runtime_refuses_foreign_code_by_load_and_by_reload_and_runs_on(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    written = tmp_path / "escaped"
+    with target(tmp_path, zenoh_endpoint) as client:
+        admin = ResourceClient(client.session, RESOURCE)
+        admin.login("admin", PASSWORD)
+        genuine = load_artifact((tmp_path / "config" / "artifact.json").read_bytes())
+        hostile = escaping(genuine, written)
+        try:
+            reload(admin, escaping(genuine, written, "end"), ReloadOptions({}))
+            raise AssertionError("a reload took code the compiler does not generate")
+        except Refusal as refused:
+            assert "a second top-level statement is not allowed" in refused.message
+        try:
+            reload(admin, hostile, ReloadOptions({}))
+            raise AssertionError("a reload took code the compiler does not generate")
+        except Refusal as refused:
+            assert REASON in refused.message, refused.message
+        still_healthy(client)
+        assert admin.command("stop")["ok"]
+        try:
+            download(admin, hostile)
+            raise AssertionError("a load took code the compiler does not generate")
+        except Refusal as refused:
+            assert refused.code == "bad_configuration"
+            assert "generated code of PROGRAM Main, line " in refused.message, refused.message
+            assert REASON in refused.message, refused.message
+        status = admin.command("status")["status"]
+        assert status["state"] == "STOP/VALID CONFIGURATION" and status["crc"] == genuine.crc
+        assert admin.command("start")["ok"]
+        still_healthy(client)
+    assert not written.exists()
+
+
+def test_padt_replay_refuses_a_recording_whose_configuration_escapes(tmp_path: Path) -> None:
+    written = tmp_path / "escaped"
+    genuine = compiled()
+    resource = started(tmp_path, genuine)
+    level = [500]
+    run(resource, 5, level)
+    # the recorder attaches `resource.artifact`: the escaping one, as a hostile file has it
+    # (appended to the unit: it runs when the configuration is set up)
+    resource.artifact = escaping(genuine, written, "end")
+    recordings_of(resource).start(
+        resource, p.RecordStart(["Control.*"], all_inputs=True, id="evil")
+    )
+    run(resource, 20, level)
+    recordings_of(resource).stop(resource, "evil")
+    finished(resource)
+    project = tmp_path / "project"
+    project.mkdir()
+    (project / "plant.st").write_text(PLANT)
+    (project / "padt.toml").write_text(
+        '[project]\nname = "Plant"\n\n[resource]\nname = "Plant"\ntarget_cycle_ms = 10\n'
+        "safety_operation = false\nglobal_forcing_allowed = true\n\n"
+        '[[resource.program]]\nname = "Control"\npou = "Control"\nid = 1\n\n'
+        '[[resource.program]]\nname = "Other"\npou = "Other"\nid = 2\n'
+    )
+    command = [
+        sys.executable, "-m", "padt.cli", "replay",
+        str(tmp_path / "recordings" / "evil-1.mcap"), str(project),
+    ]  # fmt: skip
+    done = subprocess.run(command, cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert done.returncode != 0, done.stdout
+    assert "identical" not in done.stdout
+    assert "generated code of PROGRAM Control, line " in done.stderr, done.stderr
+    assert "a second top-level statement is not allowed" in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr
+    assert not written.exists()
