@@ -4,6 +4,7 @@ rate and answers its status."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import socket
 import struct
@@ -226,15 +227,11 @@ def test_a_resource_impostor_gets_no_proof_that_logs_in(
             try:
                 victim.login("admin", PASSWORD)
                 raise AssertionError("the impostor was taken for the resource")
-            except Refusal as refused:
-                assert refused.code == "impostor"
+            except Refusal as refused:  # its challenge is not signed by the resource
+                assert refused.code in ("impostor", "bad_reply")
         finally:
             queryable.undeclare()
-        # the proof the impostor got is for its own challenge: worthless at the resource
-        (proof,) = proofs
-        answer = raw(rogue, proof.replace(b'"Twin"', b'"Target"'))
-        error = answer["error"]
-        assert isinstance(error, dict) and error["code"] == "login_failed"
+        assert proofs == [], "a proof went to the impostor"
         still_healthy(client)
 
 
@@ -331,6 +328,10 @@ def test_a_modbus_flood_is_answered_no_faster_than_the_servers_rate(
 def test_memory_stays_flat_under_ten_thousand_hostile_messages(
     tmp_path: Path, zenoh_endpoint: str
 ) -> None:
+    """A leak grows the runtime with every batch of messages; what grows once (Zenoh's
+    receive buffers for the first large messages, the allocator's arenas of threads that
+    first meet load: 20 MB on a loaded machine, at any point of the run) shows in one batch
+    only. So the measure is the median growth per batch, not the growth over the run."""
     attacks = [
         b"[" * 900,
         json.dumps({"cmd": "watch", "id": "w", "variables": ["Main.counter"] * 5000}).encode(),
@@ -340,19 +341,18 @@ def test_memory_stays_flat_under_ten_thousand_hostile_messages(
         ).encode(),
         b'{"cmd": "status"}',
     ]
+    batches, batch = 6, 2000
     with target(tmp_path, zenoh_endpoint) as client, client_session(zenoh_endpoint) as rogue:
         runtime_pid = RUNTIMES[id(client)]
-        # a few rounds first: the first large messages make Zenoh's receive buffers grow
-        # once (about 20 MB, within the first ten), which is no leak; what counts is what
-        # 10,000 more add
-        for attack in attacks * 20:
-            raw(rogue, attack)
-        before = rss_kib(runtime_pid)
-        for number in range(10_000):
+        sizes = [rss_kib(runtime_pid)]
+        for number in range(batches * batch):
             raw(rogue, attacks[number % len(attacks)])
-        after = rss_kib(runtime_pid)
+            if number % batch == batch - 1:
+                sizes.append(rss_kib(runtime_pid))
         still_healthy(client)
-    assert after <= 1.2 * before, (before, after)
+    growth = sorted(after - before for before, after in itertools.pairwise(sizes))
+    # a leak of 500 bytes a message would be 1,000 KiB in every batch
+    assert growth[len(growth) // 2] < 1000, sizes
 
 
 def test_a_watch_set_that_grows_without_end_is_refused(tmp_path: Path, zenoh_endpoint: str) -> None:
