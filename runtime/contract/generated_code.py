@@ -31,7 +31,9 @@ from __future__ import annotations
 
 import ast
 import functools
+import hashlib
 import re
+import threading
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from types import CodeType
@@ -161,10 +163,14 @@ def compile_unit(source: str, filename: str) -> CodeType:
     return compile(source, filename, "exec", dont_inherit=True)
 
 
-def check_source(source: str, unit: str) -> ast.Module:
-    """The syntax tree of a unit's source when it is code the compiler generates, else
+def check_source(source: str, unit: str) -> None:
+    """Nothing when a unit's source is code the compiler generates, else
     GeneratedCodeError naming `unit` (its file name, `<PROGRAM Main>`), the line and what
-    is not allowed."""
+    is not allowed. A source that passed is not checked again (a cold start, a reload
+    preview and the reload compile the same units)."""
+    digest = hashlib.sha256(source.encode("utf-8", "surrogatepass")).digest()
+    if digest in _PASSED:
+        return
     try:
         tree = ast.parse(source, unit)
     except SyntaxError as exc:
@@ -175,7 +181,16 @@ def check_source(source: str, unit: str) -> ast.Module:
         _Checker(unit).module(tree)
     except RecursionError:
         raise GeneratedCodeError(f"{_unit(unit)}: expressions nested too deep") from None
-    return tree
+    with _PASSED_LOCK:
+        _PASSED[digest] = None
+        while len(_PASSED) > MAX_PASSED:
+            del _PASSED[next(iter(_PASSED))]
+
+
+# the digests of the sources that passed, oldest first
+MAX_PASSED = 4096
+_PASSED: dict[bytes, None] = {}
+_PASSED_LOCK = threading.Lock()
 
 
 def _unit(filename: str) -> str:
