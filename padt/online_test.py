@@ -1,6 +1,7 @@
 """`padt values`, `write`, `force` and `events`: online test from a terminal or a CI job
 (docs/cli.md). Values are read and written as ST literals of the variable's type; `--json`
-gives the protocol's own JSON, one object (or, with `--follow`, one line per message)."""
+gives the protocol's own JSON, one object (or, with `--follow`, one line per message), with
+each value's literal beside it as the REST API gives them."""
 
 from __future__ import annotations
 
@@ -10,7 +11,12 @@ import queue
 from datetime import UTC, datetime
 from typing import Any
 
-from backend.engineering.literals import LiteralError, parse_literal
+from backend.engineering.literals import (
+    LiteralError,
+    literals_of,
+    parse_literal,
+    watch_values_shown,
+)
 from backend.engineering.resource_client import ResourceClient
 from padt.online import Failed, resource_client, run, table
 from runtime.contract import protocol as p
@@ -55,7 +61,8 @@ def values(args: argparse.Namespace) -> int:
         wanted = {n.upper() for n in names}
         shown = {k: v for k, v in reply.values.items() if not wanted or k.upper() in wanted}
         if args.json:
-            _print_json({"cycle": reply.cycle, "values": shown}, follow=False)
+            literals = literals_of(shown, {path: types[path.upper()] for path in shown})
+            _print_json({"cycle": reply.cycle, "values": shown, "literals": literals}, False)
         else:
             rows = [
                 [k, types[k.upper()], format_value(v, types[k.upper()])] for k, v in shown.items()
@@ -79,7 +86,8 @@ def _follow_values(
             except queue.Empty:
                 continue
             if args.json:
-                _print_json(message, follow=True)
+                path_types = {path: types[path.upper()] for path in message.values}
+                _print_json(watch_values_shown(message, path_types), follow=True)
                 continue
             shown = " ".join(
                 f"{path}={format_value(entry.value, types[path.upper()])}"

@@ -3,7 +3,7 @@
 The client's first message is `{"token", "variables", "period_ms"}` (a browser cannot set
 headers on a WebSocket, so the API token comes in the message). The reply is
 `{"variables": [...]}` with the canonical paths, then one message per period as the
-resource sends it: `{"cycle", "values": {path: {"value", "quality"}}}`. A client that
+resource sends it: `{"cycle", "values": {path: {"value", "literal", "quality"}}}`. A client that
 reads slowly gets the newest message, not a backlog. The watch set ends with the
 WebSocket; when the resource goes away the server sends an `unreachable` error and
 closes."""
@@ -19,10 +19,10 @@ from starlette.concurrency import run_in_threadpool
 
 from backend.api.errors import error_body
 from backend.api.service import PadtService
+from backend.engineering.literals import watch_values_shown
 from backend.engineering.resource_client import ResourceUnreachable, WatchHandle
-from runtime.contract.protocol import WatchValues
+from runtime.contract.protocol import GetVariables
 from runtime.contract.refusal import Refusal
-from runtime.contract.wire import encode
 
 router = APIRouter()
 ONLINE_CHECK_S = 1.0
@@ -48,7 +48,11 @@ def _start_watch(service: PadtService, resource: str, message: Any, deliver: Any
     caller = service.caller(token, "read-only")
     client = service.client(caller, resource)
     try:
-        return client.watch(variables, deliver, period)
+        # the types: each value goes out with the literal of its type beside it
+        types = {v.path: v.type for v in client.ask(GetVariables()).variables}
+        return client.watch(
+            variables, lambda message: deliver(watch_values_shown(message, types)), period
+        )
     except Refusal as refused:
         why = service.resource_refusal(caller, resource, refused)
         if why.code == "resource_login_required":
@@ -70,8 +74,8 @@ async def live(websocket: WebSocket, resource: str) -> None:
             newest.get_nowait()  # the reader is behind: it gets this one instead
         newest.put_nowait(message)
 
-    def deliver(message: WatchValues) -> None:  # on a Zenoh thread
-        loop.call_soon_threadsafe(put_newest, encode(message))
+    def deliver(message: dict[str, Any]) -> None:  # on a Zenoh thread
+        loop.call_soon_threadsafe(put_newest, message)
 
     try:
         first = json.loads(await websocket.receive_text())

@@ -14,10 +14,11 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Query, Response
 from fastapi import Path as PathParameter
 from fastapi.responses import StreamingResponse
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, model_validator
 
 from backend.api.auth import Credentials, ReadOnly, ReadWrite, Service
 from backend.engineering import recordings
+from backend.engineering.literals import LiteralError, literals_of, parse_literal
 from backend.engineering.recordings import RecordingSpec, TriggerError
 from backend.engineering.reload import ReloadOptions, rename_map
 from runtime.contract import protocol as p
@@ -30,10 +31,12 @@ from runtime.contract.protocol import (
     MAX_RECORDED,
 )
 from runtime.contract.refusal import Refusal
+from runtime.contract.values import format_value
 from runtime.contract.wire import encode
 
 router = APIRouter(prefix="/api/resources", tags=["resources"])
 JsonValue = bool | int | float | str | list[Any]  # a variable's value as `values` shows it
+MAX_LITERAL = 1 << 16  # characters of a value's literal: no command carries more
 
 
 class ProjectChoice(BaseModel):
@@ -62,7 +65,21 @@ class ParameterValue(BaseModel):
 
 
 class ValueRequest(BaseModel):
-    value: JsonValue
+    value: JsonValue | None = Field(
+        default=None, description="the value in the run-time representation (TIME in ns)"
+    )
+    literal: str | None = Field(
+        default=None,
+        max_length=MAX_LITERAL,
+        description="or the value as an ST literal of the variable's type: T#1s500ms, "
+        "D#2024-01-15, TOD#12:30:00, TRUE, 'text'",
+    )
+
+    @model_validator(mode="after")
+    def _value_or_literal(self) -> ValueRequest:
+        if (self.value is None) == (self.literal is None):
+            raise ValueError("give the value as `value` or as `literal`, one of them")
+        return self
 
 
 class ForceRequest(ValueRequest):
@@ -233,26 +250,61 @@ def variables(resource: str, caller: ReadOnly, service: Service) -> Any:
     return encode(service.ask(caller, resource, p.GetVariables()).variables)
 
 
+def _types(service: Service, caller: ReadOnly, resource: str) -> dict[str, str]:
+    """Every variable's type by its path."""
+    return {v.path: v.type for v in service.ask(caller, resource, p.GetVariables()).variables}
+
+
+def _run_time_value(
+    service: Service, caller: ReadWrite, resource: str, variable: str, body: ValueRequest
+) -> Any:
+    """The value of a write or a force: as given, or read from its literal with the
+    variable's type (ST names are case-insensitive)."""
+    if body.literal is None:
+        return body.value
+    types = {path.upper(): kind for path, kind in _types(service, caller, resource).items()}
+    kind = types.get(variable.upper())
+    if kind is None:
+        message = f"resource {resource} has no variable '{variable[:MAX_PATH]}'"
+        raise Refusal("unknown_variable", message)
+    try:
+        return parse_literal(body.literal, kind)
+    except LiteralError as exc:
+        raise Refusal("bad_value", f"{variable[:MAX_PATH]}: {exc}") from None
+
+
 @router.get("/{resource}/values", summary="Every value now (for chosen ones, use /live)")
 def values(resource: str, caller: ReadOnly, service: Service) -> Any:
-    return encode(service.ask(caller, resource, p.GetValues()))
+    reply = service.ask(caller, resource, p.GetValues())
+    literals = literals_of(reply.values, _types(service, caller, resource))
+    return {**encode(reply), "literals": literals}
 
 
 @router.get("/{resource}/io", summary="Modbus TCP: server, devices, every point and its value")
 def io(resource: str, caller: ReadOnly, service: Service) -> Any:
-    return encode(service.ask(caller, resource, p.GetIo()))
+    reply = service.ask(caller, resource, p.GetIo())
+    shown = encode(reply)
+    for point, given in zip(shown["points"], reply.points, strict=True):
+        point["literal"] = format_value(given.value, given.type)
+    return shown
 
 
 @router.put("/{resource}/values/{variable}", summary="Write a value once (not forcing)")
 def write(
     resource: str, variable: str, body: ValueRequest, caller: ReadWrite, service: Service
 ) -> Any:
-    return encode(service.ask(caller, resource, p.Write(variable, body.value)))
+    value = _run_time_value(service, caller, resource, variable, body)
+    return encode(service.ask(caller, resource, p.Write(variable, value)))
 
 
 @router.get("/{resource}/forcing", summary="Force levels, switches and forced values")
 def forcing(resource: str, caller: ReadOnly, service: Service) -> Any:
-    return encode(service.ask(caller, resource, p.GetForcing()).forcing)
+    state = service.ask(caller, resource, p.GetForcing()).forcing
+    shown = encode(state)
+    types = _types(service, caller, resource)
+    for entry, given in zip(shown["entries"], state.entries, strict=True):
+        entry["literal"] = format_value(given.value, types.get(given.variable, ""))
+    return shown
 
 
 @router.post("/{resource}/forcing/start", summary="Start forcing (global, or one program)")
@@ -270,7 +322,8 @@ def stop_forcing(resource: str, body: ForcingLevel, caller: ReadWrite, service: 
 def force(
     resource: str, variable: str, body: ForceRequest, caller: ReadWrite, service: Service
 ) -> Any:
-    return encode(service.ask(caller, resource, p.Force(variable, body.value, body.switch)))
+    value = _run_time_value(service, caller, resource, variable, body)
+    return encode(service.ask(caller, resource, p.Force(variable, value, body.switch)))
 
 
 @router.delete("/{resource}/forces/{variable}", summary="Remove a force value")

@@ -1,11 +1,14 @@
 """ST literals typed by a person (`TRUE`, `-3.5`, `16#FF`, `T#20ms`, `'text'`) as values of
 a variable's type in the run-time representation: what `padt sim --set`, `padt write` and
-`padt force set` take. The compiler's own literal rules decide, so a value means here what
-it means in a program."""
+`padt force set` take, and the REST API's `literal` of a write or a force. The compiler's
+own literal rules decide, so a value means here what it means in a program. The other way,
+values as literals (`literals_of`), is what `padt values --json` and the REST API give
+beside the run-time values."""
 
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from typing import Any
 
 from backend.compiler.parse import (
@@ -15,7 +18,9 @@ from backend.compiler.parse import (
     parse_int_literal,
     parse_time_literal,
 )
-from runtime.contract.values import TIME_TYPES, base_type, is_reference_type
+from runtime.contract.protocol import WatchValues
+from runtime.contract.values import TIME_TYPES, base_type, format_value, is_reference_type
+from runtime.contract.wire import encode
 
 
 class LiteralError(ValueError):
@@ -60,6 +65,21 @@ def parse_literal(text: str, type_name: str) -> Any:
             hint = f"; text is written in quotes: '{text}' (in a shell: \"'{text}'\")"
         raise LiteralError(f"{text} is not an ST literal of type {type_name}{hint}")
     return value
+
+
+def literals_of(values: Mapping[str, Any], types: Mapping[str, str]) -> dict[str, str]:
+    """Each value of `values` (by path) as the ST literal of its variable's type (`types`
+    by path, as `get_variables` lists them): `T#1s500ms`, `D#2024-01-15`, `TRUE`."""
+    return {path: format_value(value, types.get(path, "")) for path, value in values.items()}
+
+
+def watch_values_shown(message: WatchValues, types: Mapping[str, str]) -> dict[str, Any]:
+    """A watch set's message as JSON, each entry with its `literal` beside `value` and
+    `quality` (the REST API's live WebSocket, `padt values --follow --json`)."""
+    shown: dict[str, Any] = encode(message)
+    for path, entry in shown["values"].items():
+        entry["literal"] = format_value(message.values[path].value, types.get(path, ""))
+    return shown
 
 
 def _literal_value(literal: str, target: str) -> Any:

@@ -12,6 +12,7 @@ import math
 import re
 import struct
 from dataclasses import dataclass
+from datetime import datetime, timedelta
 from typing import Any
 
 
@@ -71,6 +72,33 @@ def format_time(ns: int, prefix: str = "T#") -> str:
         if count:
             parts.append(f"{count}{unit}")
     return f"{prefix}{sign}{''.join(parts)}"
+
+
+# the prefixes ST writes the dates with (TIME_TO_STRING and friends print the same)
+_DATE_PREFIXES = {
+    "DATE": "D#", "LDATE": "LDATE#", "TOD": "TOD#", "LTOD": "LTOD#", "DT": "DT#", "LDT": "LDT#",
+}  # fmt: skip
+_EPOCH = datetime(1970, 1, 1)
+
+
+def format_date(ns: int, type_name: str) -> str:
+    """A DATE, TOD or DT (or an L form) held as nanoseconds since 1970 (TOD: since
+    midnight) as its literal: `D#2024-01-15`, `TOD#12:30:05.5`, `DT#2024-01-15-12:30:05`.
+    A count no calendar date holds (before year 1, after 9999) stays a number."""
+    seconds, fraction = divmod(ns, 1_000_000_000)
+    try:
+        moment = _EPOCH + timedelta(seconds=seconds)
+    except OverflowError:
+        return str(ns)
+    day = f"{moment.year:04d}-{moment.month:02d}-{moment.day:02d}"
+    clock = f"{moment.hour:02d}:{moment.minute:02d}:{moment.second:02d}"
+    clock += f".{fraction:09d}".rstrip("0") if fraction else ""
+    kind = type_name.upper()
+    if kind in ("DATE", "LDATE"):
+        return f"{_DATE_PREFIXES[kind]}{day}"
+    if kind in ("TOD", "LTOD"):
+        return f"{_DATE_PREFIXES[kind]}{clock}"
+    return f"{_DATE_PREFIXES[kind]}{day}-{clock}"
 
 
 def jsonable(value: Any) -> Any:
@@ -175,12 +203,21 @@ def representation(type_name: str, value: Any) -> Any:
 
 
 def format_value(value: Any, type_name: str) -> str:
+    """A run-time value as the ST literal of its type (TRUE, T#1s500ms, D#2024-01-15,
+    'text'; an array as `[1, 2]` of its elements' literals): what the CLI, the API and the
+    UI show."""
     if is_reference_type(type_name):
         return "NULL" if value is None else str(value)
     if isinstance(value, bool):
         return "TRUE" if value else "FALSE"
+    if isinstance(value, list):
+        shape = array_shape(type_name)
+        element = shape.element if shape is not None else type_name
+        return "[" + ", ".join(format_value(item, element) for item in value) + "]"
     if type_name in ("TIME", "LTIME") and isinstance(value, int):
         return format_time(value, "LTIME#" if type_name == "LTIME" else "T#")
+    if type_name.upper() in _DATE_PREFIXES and isinstance(value, int):
+        return format_date(value, type_name)
     if type_name in _REALS and value in ("inf", "-inf", "nan"):
         return str(value)  # a non-finite REAL as JSON carries it (`jsonable`): no string
     if isinstance(value, str):

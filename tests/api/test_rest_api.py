@@ -321,7 +321,8 @@ def test_live_values_arrive_over_a_websocket_with_their_quality(site: Plant) -> 
             messages = [json.loads(ws.recv(timeout=10)) for _ in range(5)]
             cycles = [m["cycle"] for m in messages]
             assert cycles == sorted(cycles) and len(set(cycles)) == 5
-            assert messages[-1]["values"]["P.flag"] == {"value": False, "quality": "forced"}
+            forced = {"value": False, "literal": "FALSE", "quality": "forced"}
+            assert messages[-1]["values"]["P.flag"] == forced
             assert messages[-1]["values"]["P.n"]["quality"] == "live"
             watches = site.zenoh_client.command("watches", token=None)
             assert watches.get("error", {}).get("code") == "unauthenticated"

@@ -110,9 +110,9 @@ def padt_accounts_file(path: Path) -> Path:
 
 
 @contextmanager
-def plant(base: Path) -> Iterator[Plant]:
+def plant(base: Path, extra: str = "") -> Iterator[Plant]:
     projects = base / "projects"
-    write_project(projects / "plant")
+    write_project(projects / "plant", extra=extra)  # `extra`: more variables of P
     write_project(projects / "plant_v2", extra="m : INT := 7;")
     state_dir = base / "state"
     artifact = compile_project(load_project([projects / "plant"])).artifact
