@@ -293,6 +293,7 @@ class CycleDriver:
                 or (s.watch_id not in watchers and now - s.registered_ns > WATCHER_GRACE_NS)
             )
         )
+        self.link.follow_watchers(watches.every_id())
         running, forces = resource.running(), resource.forcing.table
         bad = resource.field_io.bad if resource.field_io is not None else frozenset()
         budget_end = now + resource.params.com_slice_ms * 1_000_000

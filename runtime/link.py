@@ -13,10 +13,12 @@ slow, as a busy PADT with ten browsers was), and the cycle must never wait for t
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
 import threading
 from collections import deque
+from collections.abc import KeysView
 
 import zenoh
 
@@ -26,9 +28,8 @@ from runtime.contract.keyspace import (
     command_key,
     events_key,
     status_key,
-    watch_id_of,
     watch_key,
-    watchers_key_expr,
+    watcher_key,
 )
 from runtime.contract.protocol import Event, Request, Status, decode_request
 from runtime.contract.signatures import stamp_bytes, stamped
@@ -65,16 +66,31 @@ class ResourceLink:
         )
         self._publisher.start()
         # the watch sets whose client holds its liveliness token (Zenoh's threads add and
-        # remove ids; the cycle thread only asks)
+        # remove ids; the cycle thread only asks). Only the tokens of the sets the resource
+        # has are followed, each by a subscriber of its own (`follow_watchers`): tokens of
+        # made-up ids (anyone may declare them, no login needed) never reach this process
         self.watchers: set[str] = set()
-        self._watchers = session.liveliness().declare_subscriber(
-            watchers_key_expr(resource), self._on_watcher, history=True
-        )
+        self._followed: dict[str, zenoh.Subscriber[None]] = {}
         self._token = session.liveliness().declare_token(alive_key(resource))
 
-    def _on_watcher(self, sample: zenoh.Sample) -> None:
-        watch_id = watch_id_of(str(sample.key_expr))
-        if sample.kind == zenoh.SampleKind.PUT:
+    def follow_watchers(self, ids: KeysView[str]) -> None:
+        """Follow the liveliness tokens of the sets `ids` (the resource's, on the cycle
+        thread), and no others; Zenoh is told only when the sets changed."""
+        if ids == self._followed.keys():
+            return
+        liveliness = self._session.liveliness()
+        for watch_id in self._followed.keys() - ids:
+            self._followed.pop(watch_id).undeclare()
+            self.watchers.discard(watch_id)
+        for watch_id in ids - self._followed.keys():
+            self._followed[watch_id] = liveliness.declare_subscriber(
+                watcher_key(self._resource, watch_id),
+                functools.partial(self._on_watcher, watch_id),
+                history=True,
+            )
+
+    def _on_watcher(self, watch_id: str, sample: zenoh.Sample) -> None:
+        if sample.kind == zenoh.SampleKind.PUT and watch_id in self._followed:
             self.watchers.add(watch_id)
         else:
             self.watchers.discard(watch_id)
@@ -168,7 +184,8 @@ class ResourceLink:
             self._pending_lock.notify()
         self._publisher.join()
         self._token.undeclare()
-        self._watchers.undeclare()
+        for subscriber in self._followed.values():
+            subscriber.undeclare()
         self._queryable.undeclare()
         self.intake.close()
         self._status.undeclare()

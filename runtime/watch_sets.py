@@ -13,7 +13,7 @@ others need (docs/protocol.md#quotas). A session sees and stops its own sets onl
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, KeysView
 from dataclasses import dataclass
 from typing import Any
 
@@ -142,6 +142,10 @@ class WatchSets:
 
     def __len__(self) -> int:
         return len(self._sets)
+
+    def every_id(self) -> KeysView[str]:
+        """The ids of every session's sets (a live view, for the link to follow)."""
+        return self._sets.keys()
 
     def get(self, watch_id: str) -> WatchSet | None:
         return self._sets.get(watch_id)

@@ -86,11 +86,6 @@ def watchers_key_expr(resource: str) -> str:
     return _key(resource, "watchers/*")
 
 
-def watch_id_of(key: str) -> str:
-    """The watch set id at the end of a watcher or watch key."""
-    return key.rsplit("/", 1)[-1]
-
-
 def events_key(resource: str) -> str:
     return _key(resource, "events")
 

@@ -24,7 +24,7 @@ from backend.engineering.download import download
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount, load_artifact
-from runtime.contract.keyspace import command_key, status_key
+from runtime.contract.keyspace import command_key, status_key, watcher_key
 from runtime.contract.protocol import GetEvents, GetStatus, Status, WatchValues
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import encode
@@ -322,6 +322,37 @@ def test_a_modbus_flood_is_answered_no_faster_than_the_servers_rate(
         events = [e.message for e in client.ask(GetEvents(limit=1000)).events]
         flooded = f"requests come faster than {rate} a second"
         assert sum(flooded in message for message in events) == 1, events
+        still_healthy(client)
+
+
+def test_liveliness_tokens_of_made_up_watch_sets_change_nothing(
+    tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    """3,000 tokens on `watchers/*` (anyone may declare them): the resource follows only
+    the tokens of the sets it has, so they make no set, keep none alive and drop none."""
+    with target(tmp_path, zenoh_endpoint) as client, client_session(zenoh_endpoint) as rogue:
+        arrived: list[WatchValues] = []
+        watch = client.watch(["Main.counter"], arrived.append, period_ms=50)
+        liveliness = rogue.liveliness()
+        tokens = [liveliness.declare_token(watcher_key(RESOURCE, f"rogue{n}")) for n in range(3000)]
+        # a set registered by a bare request: kept alive by its own token only
+        bare = client.session.liveliness().declare_token(watcher_key(RESOURCE, "bare"))
+        assert client.command("watch", id="bare", variables=["Main.counter"])["ok"]
+        still_healthy(client)
+        assert sorted(client.command("watches")["watches"]) == sorted(["bare", watch.watch_id])
+        for token in tokens:
+            token.undeclare()
+        bare.undeclare()
+        deadline = time.monotonic() + 10
+        while "bare" in client.command("watches")["watches"]:
+            assert time.monotonic() < deadline, "a set outlived its client's token"
+            time.sleep(0.1)
+        arrived.clear()
+        while not arrived:
+            assert time.monotonic() < deadline + 10, "the genuine set no longer sends"
+            time.sleep(0.05)
+        assert client.command("watches")["watches"] == [watch.watch_id]
+        watch.close()
         still_healthy(client)
 
 
