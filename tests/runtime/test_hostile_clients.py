@@ -11,7 +11,7 @@ import struct
 import threading
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -25,7 +25,13 @@ from backend.engineering.resource_client import ResourceClient
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount, load_artifact
 from runtime.contract.keyspace import command_key, status_key, watcher_key
-from runtime.contract.protocol import GetEvents, GetStatus, Status, WatchValues
+from runtime.contract.protocol import (
+    MAX_SETS_PER_SESSION,
+    GetEvents,
+    GetStatus,
+    Status,
+    WatchValues,
+)
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import encode
 from tests.conftest import padt
@@ -354,6 +360,32 @@ def test_liveliness_tokens_of_made_up_watch_sets_change_nothing(
         assert client.command("watches")["watches"] == [watch.watch_id]
         watch.close()
         still_healthy(client)
+
+
+def test_readers_at_their_watch_quota_are_all_served(tmp_path: Path, zenoh_endpoint: str) -> None:
+    """8 reader logins, each asking for sets of 100 values until the resource says no: what
+    is refused is refused with its reason, and every set it took sends its values."""
+    with target(tmp_path, zenoh_endpoint) as client, ExitStack() as readers:
+        arrivals: list[list[WatchValues]] = []
+        refusals: set[str] = set()
+        for _ in range(8):
+            reader = ResourceClient(readers.enter_context(client_session(zenoh_endpoint)), RESOURCE)
+            reader.login("reader", PASSWORD)
+            for _ in range(MAX_SETS_PER_SESSION + 1):
+                arrived: list[WatchValues] = []
+                try:
+                    watch = reader.watch(["Main.counter"] * 100, arrived.append, period_ms=100)
+                except Refusal as refused:
+                    refusals.add(refused.code)
+                    break
+                readers.callback(watch.close)
+                arrivals.append(arrived)
+        assert arrivals and refusals and refusals <= {"quota", "too_many"}, refusals
+        still_healthy(client)
+        deadline = time.monotonic() + 30
+        while not all(arrivals):
+            assert time.monotonic() < deadline, "a set the resource took sends nothing"
+            time.sleep(0.1)
 
 
 def test_memory_stays_flat_under_ten_thousand_hostile_messages(
