@@ -17,7 +17,7 @@ import pytest
 
 from backend.api.server import ApiServer
 from backend.api.service import PadtService
-from backend.engineering.client_address import TrustedProxies, trusted_proxy
+from backend.engineering.client_address import TrustedProxies, client_address, trusted_proxy
 from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.resource_directory import ResourceDirectory
 from runtime.contract.session import open_client
@@ -117,3 +117,16 @@ def test_padt_api_takes_trusted_proxies_and_refuses_a_wrong_one() -> None:
     )
     assert wrong.returncode == 2
     assert "'proxy.example' is no IP address or network" in wrong.stderr
+
+
+def test_the_chain_is_read_from_the_right_through_trusted_proxies_only() -> None:
+    trusted = TrustedProxies((trusted_proxy("10.0.0.0/8"), trusted_proxy("::1")))
+    chain = ["203.0.113.9, 198.51.100.7", "10.1.1.1"]  # two header lines count as one list
+    assert client_address("10.0.0.2", chain, trusted) == "198.51.100.7"
+    assert client_address("::1", ["10.2.2.2, 10.3.3.3"], trusted) == "10.2.2.2"  # all trusted
+    assert client_address("::ffff:10.0.0.2", ["192.0.2.1"], trusted) == "192.0.2.1"
+    assert client_address("192.0.2.50", ["10.0.0.2"], trusted) == "192.0.2.50"  # not a proxy
+    assert client_address("10.0.0.2", ["not-an-address, 10.0.0.3"], trusted) == "not-an-address"
+    assert client_address("10.0.0.2", [], trusted) == "10.0.0.2"
+    assert len(client_address("10.0.0.2", ["x" * 5000], trusted)) == 64
+    assert client_address("10.0.0.2", ["192.0.2.1"], TrustedProxies()) == "10.0.0.2"
