@@ -467,7 +467,7 @@ class _Restorer:
     @staticmethod
     def _is_value(current: Any) -> bool:
         kind = type(current)
-        return kind in _PLAIN or kind is float
+        return kind in _PLAIN or kind is float or kind is Reference
 
     @staticmethod
     def _describe(current: Any) -> str:
@@ -485,10 +485,13 @@ def _as_kind_of(current: Any, value: Any) -> Any:
     """`value` as the kind of value its slot holds: generated code relies on it, and the
     native tier checks it on every read (a REAL that held the integer 0 stopped a program).
     A whole number saved for a REAL comes back as a float; any other change of kind is a
-    mismatch. (A slot holding None, a NULL reference, takes what was saved.)"""
+    mismatch. (A slot holding None, a NULL reference, takes what was saved; a reference is
+    saved as NULL and keeps the initial value it was declared with, `:= REF(x)`.)"""
     have, got = type(current), type(value)
     if have is got or current is None:
         return value
+    if have is Reference and value is None:
+        return current
     if have is float and got is int:
         try:
             return float(value)

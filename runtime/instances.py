@@ -12,7 +12,8 @@ from runtime.code_image import CodeImage, VariablePath
 from runtime.compile_worker import compile_here
 from runtime.contract.artifact import Artifact, VarInfo
 from runtime.contract.refusal import Refusal
-from runtime.intrinsics import SystemView
+from runtime.contract.values import is_reference_type
+from runtime.intrinsics import Reference, SystemView
 from runtime.native.tier import NativeTier
 from runtime.user_program import UserProgram
 
@@ -100,6 +101,8 @@ def _name_members(
     for var in members:
         inner = image.members(var.type)
         if not inner:
+            if prefix and is_reference_type(var.type):
+                _name_initial_reference(instance, var, members, prefix)
             continue  # elementary, or an array: not walked
         held = getattr(instance, var.attr, None)
         if held is None or id(held) in roots:
@@ -107,6 +110,20 @@ def _name_members(
         path = f"{prefix}.{var.name}" if prefix else var.name
         roots[id(held)] = path
         _name_members(image, roots, held, inner, path)
+
+
+def _name_initial_reference(
+    instance: Any, var: VarInfo, members: tuple[VarInfo, ...], prefix: str
+) -> None:
+    """A reference made with its instance (an initial value `REF(x)`, x a variable of
+    that instance) was made before the instance had a name, and reads as `x`: it takes
+    the whole path, `Main.fb.x`."""
+    held = getattr(instance, var.attr, None)
+    if type(held) is not Reference or held.root is not instance or len(held.steps) != 1:
+        return
+    target = next((m for m in members if m.attr == held.steps[0]), None)
+    if target is not None and str(held) == target.name:
+        setattr(instance, var.attr, Reference(f"{prefix}.{target.name}", instance, held.steps))
 
 
 def index(bound: list[BoundVariable]) -> dict[str, BoundVariable]:

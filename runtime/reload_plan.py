@@ -163,7 +163,10 @@ def _changes(
         how = conversion(source.type, path.type)
         if _holds_references(path.type):
             # what it refers to is an object of the configuration being replaced
-            reason = "a reference does not carry over a reload: it starts again as NULL"
+            reason = (
+                "a reference does not carry over a reload: it starts again at its initial "
+                "value (NULL unless declared := REF(x))"
+            )
             changes.append(
                 VariableChange(path.path, INITIALISED, source.type, path.type, renamed, reason)
             )

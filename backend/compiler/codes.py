@@ -113,6 +113,7 @@ class Code(Enum):
     CASE_LABEL_TWICE = "E0311", "CASE label used twice"
     FOR_COUNTER_TYPE = "E0312", "FOR counter not an integer"
     PROPERTY_ACCESSOR = "E0313", "property read without GET or written without SET"
+    CUT_INSTANCE = "E0314", "extended block's instance written whole through in-out or reference"
     INPUT_ASSIGNMENT = "W0301", "assignment to an input inside its block"
 
     # ---- 04: calls

@@ -8,9 +8,10 @@ of its type) and from the arithmetic between them, so the translator can prove t
 from __future__ import annotations
 
 import ast
+import re
 from dataclasses import dataclass
 
-from runtime.contract.artifact import PouCode
+from runtime.contract.artifact import PouCode, VarInfo
 from runtime.contract.values import array_shape, base_type, int_range
 
 INT64_MIN, INT64_MAX = -(1 << 63), (1 << 63) - 1
@@ -130,13 +131,43 @@ class ClassInfo:
 def class_table(units: list[PouCode]) -> dict[str, ClassInfo]:
     """Every generated class of an artifact with the kinds of its declared variables."""
     by_type = {unit.name.upper(): unit.class_name for unit in units if unit.kind != "FUNCTION"}
+    extended = _extended_blocks(units)
     table: dict[str, ClassInfo] = {}
     for unit in units:
         if unit.kind == "FUNCTION":
             continue
-        members = {v.attr: kind_of_type(v.type, by_type) for v in unit.variables}
+        members = {v.attr: _member_kind(v, by_type, extended) for v in unit.variables}
         table[unit.class_name] = ClassInfo(unit.class_name, members)
     return table
+
+
+def _member_kind(variable: VarInfo, classes: dict[str, str], extended: set[str]) -> Kind | None:
+    kind = kind_of_type(variable.type, classes)
+    if variable.kind == "VAR_IN_OUT" and variable.type.upper() in extended:
+        # the instance connected may be of a block derived from the declared one, whose
+        # class has slots of its own: left to Python, which reads them by name
+        return None
+    return kind
+
+
+_KINDS_LINE = re.compile(r"^    KIND__ = (\(.*\))$", re.MULTILINE)
+
+
+def _extended_blocks(units: list[PouCode]) -> set[str]:
+    """The blocks (by upper-case name) that another block extends: what an instance
+    conforms to is in its class's `KIND__` (backend/compiler/generate.py)."""
+    found: set[str] = set()
+    for unit in units:
+        line = _KINDS_LINE.search(unit.source) if unit.kind == "FUNCTION_BLOCK" else None
+        if line is None:
+            continue
+        try:
+            kinds = ast.literal_eval(line.group(1))
+        except (SyntaxError, ValueError):
+            continue
+        if isinstance(kinds, tuple):
+            found.update(str(k) for k in kinds if str(k) != unit.name.upper())
+    return found
 
 
 def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:

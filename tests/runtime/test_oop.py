@@ -173,7 +173,7 @@ def test_an_array_of_interfaces_holds_references_that_a_reload_begins_as_null() 
     h.send(compiled(changed))
     changes = {c["path"]: c for c in h.ok("reload_preview")["plan"]["changes"]}
     assert changes["Main.all"]["action"] == "initialised"
-    assert "starts again as NULL" in changes["Main.all"]["reason"]
+    assert "starts again at its initial value" in changes["Main.all"]["reason"]
     h.send(compiled(changed))
     assert h.cmd("reload")["ok"]
     assert h.value("Main.all") == [None, None]

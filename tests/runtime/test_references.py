@@ -66,7 +66,8 @@ def test_a_reload_begins_references_as_null_and_its_plan_says_so() -> None:
     for path in ("Main.r", "Main.follow.source"):
         assert changes[path]["action"] == "initialised"
         assert changes[path]["reason"] == (
-            "a reference does not carry over a reload: it starts again as NULL"
+            "a reference does not carry over a reload: it starts again at its initial "
+            "value (NULL unless declared := REF(x))"
         )
     assert changes["Main.level"]["action"] == "kept"
     h.send(compiled(changed))
@@ -102,3 +103,57 @@ def test_a_recording_declares_a_reference_as_a_path_or_null() -> None:
     main = schema["properties"]["values"]["properties"]["Main"]["properties"]
     assert main["r"] == {"type": ["string", "null"], "description": "REF_TO INT"}
     assert main["p"]["type"] == ["string", "null"]
+
+
+INITIAL = """
+VAR_GLOBAL g : INT := 5; gr : REF_TO INT := REF(g); END_VAR
+FUNCTION_BLOCK Counter
+VAR mine : REF_TO INT := REF(n); none : REF_TO INT := NULL; n : INT; END_VAR
+mine^ := mine^ + 1;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR level : INT := 3; r : REF_TO INT := REF(level); c : Counter; seen : INT; END_VAR
+r^ := r^ + 1;
+c();
+seen := gr^ + c.n;
+IF c.none = NULL THEN seen := seen + 100; END_IF;
+END_PROGRAM
+"""
+
+
+def test_a_reference_declared_with_an_initial_value_starts_there_again_at_reload_and_warm_start(
+    tmp_path: Path,
+) -> None:
+    h = harness(INITIAL)
+    h.cycle(2)
+    values = h.ok("values")["values"]
+    assert values["Main.r"] == "Main.level" and values["Main.level"] == 5
+    assert values["Main.c.mine"] == "Main.c.n" and values["Main.c.none"] is None
+    assert values["gr"] == "g" and values["Main.seen"] == 5 + 2 + 100
+
+    changed = INITIAL.replace("r^ := r^ + 1;", "r^ := r^ + 10;")
+    h.send(compiled(changed))
+    changes = {c["path"]: c for c in h.ok("reload_preview")["plan"]["changes"]}
+    assert changes["Main.r"]["action"] == "initialised"
+    h.send(compiled(changed))
+    assert h.cmd("reload")["ok"]
+    h.cycle()
+    values = h.ok("values")["values"]
+    assert values["Main.r"] == "Main.level" and values["Main.level"] == 15  # the new instance's
+    assert values["Main.c.mine"] == "Main.c.n" and values["Main.c.n"] == 3
+
+    context = take_context(h.resource)
+    assert context is not None
+    save_context(tmp_path / "context.json", context)
+    artifact = compiled(changed)
+    again = Resource("R", h.clock)
+    again.load(artifact)
+    saved = load_context(tmp_path / "context.json", artifact.crc)
+    assert not isinstance(saved, ContextInvalid), saved
+    warm_start(again, saved)
+    assert again.status().start == "warm"
+    assert again.variables.value("Main.r") == "Main.level"
+    assert again.variables.value("Main.c.mine") == "Main.c.n"
+    again.start()
+    again.cycle()
+    assert again.variables.value("Main.level") == 25 and again.variables.value("Main.c.n") == 4

@@ -10,7 +10,12 @@ from backend.compiler.checks.conversions import (
     check_in_out_type,
     check_output_conversion,
 )
-from backend.compiler.checks.initializers import bool_literal, mismatch, takes_argument
+from backend.compiler.checks.initializers import (
+    bool_literal,
+    mismatch,
+    takes_argument,
+    takes_in_out,
+)
 from backend.compiler.checks.open_arrays import check_open_array_connections
 from backend.compiler.checks.references import check_reference_argument
 from backend.compiler.checks.targets import is_lvalue, refuse_system_write, writable_target
@@ -93,7 +98,8 @@ def check_fb_argument(scope: Scope, fb: PouSymbols, arg: ast.Argument, param: Va
     value_type = scope.type_of(arg.value)
     if value_type is None:
         return
-    if not takes_argument(param.type, arg.value, value_type, scope):
+    takes_it = takes_in_out if param.kind == "VAR_IN_OUT" else takes_argument
+    if not takes_it(param.type, arg.value, value_type, scope):
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, mismatch(param.type, value_type))
     elif param.kind == "VAR_IN_OUT":
         check_in_out_type(scope, param.type, arg.value, value_type)

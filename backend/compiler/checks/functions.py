@@ -12,7 +12,7 @@ from backend.compiler.checks.conversions import (
     check_output_conversion,
 )
 from backend.compiler.checks.dialects import check_size_of
-from backend.compiler.checks.initializers import bool_literal, takes_argument
+from backend.compiler.checks.initializers import bool_literal, takes_argument, takes_in_out
 from backend.compiler.checks.open_arrays import check_open_array_connections
 from backend.compiler.checks.references import (
     check_is_valid_ref,
@@ -122,7 +122,8 @@ def check_argument(scope: Scope, arg: ast.Argument, param: Variable) -> None:
         else:
             check_output_conversion(scope, value_type, param.type, arg.value.pos)
         return
-    if not takes_argument(param.type, arg.value, value_type, scope):
+    takes_it = takes_in_out if param.kind == "VAR_IN_OUT" else takes_argument
+    if not takes_it(param.type, arg.value, value_type, scope):
         message = f"type mismatch: cannot pass {value_type.name} as {param.type.name}"
         scope.report(arg.value.pos, Code.ARGUMENT_TYPE, message)
     elif param.kind == "VAR_IN_OUT":

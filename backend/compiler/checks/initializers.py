@@ -16,7 +16,9 @@ from backend.compiler.types import (
     ElementaryType,
     EnumType,
     FbType,
+    InterfaceType,
     OpenArrayType,
+    RefType,
     StructType,
     Type,
     assignable,
@@ -117,6 +119,19 @@ def takes_argument(param: Type, value: ast.Expr, value_type: Type, scope: Scope)
     return takes(param, value, value_type, scope)
 
 
+def takes_in_out(param: Type, value: ast.Expr, value_type: Type, scope: Scope) -> bool:
+    """Can `value` be an in-out of type `param`? As an argument, or an instance of a block
+    derived from the parameter's: the in-out is that instance itself (edition 3, CODESYS),
+    whose methods run as its own block has them. An in-out reference or interface is the
+    caller's variable, which the callee may set: of the same type only (a REF_TO Base would
+    let it store a base instance where the caller holds a REF_TO Derived)."""
+    if isinstance(param, FbType) and isinstance(value_type, FbType):
+        return scope.resolved.conforms(key(value_type.name), key(param.name))
+    if isinstance(param, RefType | InterfaceType):
+        return param == value_type
+    return takes_argument(param, value, value_type, scope)
+
+
 def bool_literal(target: Type, value: ast.Expr) -> bool:
     return (
         target == BOOL
@@ -167,7 +182,12 @@ def check_constant_initializer(scope: Scope, variable: Variable, order: dict[int
         return order.get(id(binding), -1) < place
 
     for expr in _values(variable.init):
-        if not is_constant(scope, expr, set_before):
+        if isinstance(expr, ast.NullLiteral):
+            continue
+        referenced = _referenced(expr)
+        if referenced is not None:
+            check_initial_reference(scope, variable, expr, referenced)
+        elif not is_constant(scope, expr, set_before):
             scope.report(
                 expr.pos,
                 Code.NOT_CONSTANT_INITIAL,
@@ -211,3 +231,32 @@ def is_constant(scope: Scope, expr: ast.Expr, set_before: Callable[[Variable], b
                 arg.value is not None and is_constant(scope, arg.value, set_before) for arg in args
             )
     return False
+
+
+def _referenced(expr: ast.Expr) -> ast.NameRef | None:
+    """x of an initial value `REF(x)`."""
+    match expr:
+        case ast.Call(name=name, args=[ast.Argument(name=None, value=ast.NameRef() as target)]):
+            return target if key(name) == "REF" else None
+    return None
+
+
+def check_initial_reference(
+    scope: Scope, variable: Variable, expr: ast.Expr, target: ast.NameRef
+) -> None:
+    """REF(x) as an initial value: x a variable of the instance being set up (made with it,
+    and followed anew at each use, so the order of the declarations does not matter), or,
+    for a global, another global. A POU's reference to a global is set in its body: a
+    program reads the globals through a view of its own, which a reload may replace
+    (docs/language.md, References). What REF refuses anywhere (E0219: a VAR_TEMP, an
+    in-out, a constant) is reported by its own check."""
+    binding = scope.lookup(target.name)
+    if not isinstance(binding, Variable):
+        return  # reported by REF's own check
+    if binding.kind == "VAR_GLOBAL" and variable.kind != "VAR_GLOBAL":
+        scope.report(
+            expr.pos,
+            Code.NOT_CONSTANT_INITIAL,
+            f"initial value of '{variable.name}': a POU's reference can start as a reference "
+            f"to a variable of its own instance only; set it to REF({target.name}) in the body",
+        )

@@ -52,6 +52,8 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
                 Code.INPUT_ASSIGNMENT,
                 f"assignment to input '{binding.name}' inside its block",
             )
+        if binding.kind == "VAR_IN_OUT":
+            refuse_cut_instance(scope, target, binding.type)
         return value_type(binding.type)
     if isinstance(target, ast.MemberRef) and scope.system_namespace(target.base):
         refuse_system_write(scope, target)  # SYS.COLDSTART: only the runtime writes it
@@ -91,9 +93,27 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
             writable_target(scope, target.base)
         return scope.type_of(target)
     if isinstance(target, ast.Deref):  # `r^ := v` writes what r refers to
-        return scope.type_of(target)
+        written = scope.type_of(target)
+        refuse_cut_instance(scope, target, written)
+        return written
     scope.report(target.pos, Code.ASSIGN_EXPRESSION, "cannot assign to an expression")
     return None
+
+
+def refuse_cut_instance(scope: Scope, target: ast.Expr, written: Type | None) -> None:
+    """A whole instance written through an in-out or a reference (E0314): when another
+    block extends its block, the place may hold an instance of the derived block, which the
+    copy of a base instance would replace by a smaller one."""
+    if not isinstance(written, FbType):
+        return
+    block = key(written.name)
+    if any(pou.base == block for pou in scope.resolved.pous.values()):
+        scope.report(
+            target.pos,
+            Code.CUT_INSTANCE,
+            f"'{written.name}' is extended: written whole through an in-out or a reference, "
+            "it could replace an instance of a derived block; assign its members",
+        )
 
 
 def check_accessor(scope: Scope, expr: ast.Expr, found: PropertyAccess, kind: str) -> None:

@@ -1,0 +1,37 @@
+"""Declarations of edition 3 and CODESYS on the native tier (the runtime's default) and
+the Python tier (`padt sim`), side by side: references that start as NULL or as REF(x) of
+their own instance, and FB_INIT, run once when an instance is made. Every variable
+identical after every cycle, no fault, and the values the language gives."""
+
+from __future__ import annotations
+
+from runtime.native.tier import NativeTier
+from tests.runtime.native.test_native_oop import run_alike, values
+
+INITIAL_REFERENCES = """
+VAR_GLOBAL g : INT := 5; gr : REF_TO INT := REF(g); END_VAR
+FUNCTION_BLOCK Counter
+VAR mine : REF_TO INT := REF(n); none : REF_TO INT := NULL; n : INT; END_VAR
+mine^ := mine^ + 1;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR
+  level : INT := 3; r : REF_TO INT := REF(level); c : Counter; cs : ARRAY[1..2] OF Counter;
+  seen : INT;
+END_VAR
+r^ := r^ + 1;
+c(); cs[2]();
+seen := gr^ + c.n + cs[2].n;
+IF c.none = NULL THEN seen := seen + 100; END_IF;
+END_PROGRAM
+"""
+
+
+def test_references_start_as_null_or_as_ref_of_their_own_instance_on_both_tiers(
+    native_tier: NativeTier,
+) -> None:
+    pair = run_alike(INITIAL_REFERENCES, native_tier, 3)
+    found = values(pair)
+    assert found["Main.r"] == "Main.level" and found["Main.level"] == 6
+    assert found["Main.c.mine"] == "Main.c.n" and found["Main.c.none"] is None
+    assert found["gr"] == "g" and found["Main.seen"] == 5 + 3 + 3 + 100
