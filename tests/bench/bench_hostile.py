@@ -234,6 +234,7 @@ def _floods(folder: Path, port: int) -> None:
         pid = RUNTIMES[id(client)]
         admin = ResourceClient(client.session, RESOURCE)
         admin.login("admin", PASSWORD)
+        _window(admin, "settling", _quiet)  # the native tier builds the program's C first
         quiet = _window(admin, "quiet", _quiet)
         _print(quiet, quiet)
         before = rss_kib(pid)
