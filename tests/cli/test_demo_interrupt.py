@@ -17,7 +17,10 @@ from pathlib import Path
 
 import httpx
 
-from tests.conftest import REPO, free_port
+from backend.engineering.project import compile_project, load_project
+from backend.engineering.resource_client import ResourceClient
+from tests.conftest import REPO, free_port, padt
+from tests.support.runtime_process import client_session, router, store_artifact
 
 API_LINE = re.compile(r"padt demo: REST API (http://\S+)/docs")
 PASSWORD_LINE = re.compile(r"administrator 'admin', password (\S+)")
@@ -116,3 +119,69 @@ def _alive(pid: int) -> bool:
     except OSError:
         return False
     return state != "Z"  # a zombie has ended; its parent has not collected it yet
+
+
+PROJECT = """PROGRAM Main
+VAR n : DINT; step : DINT := {step}; END_VAR
+n := n + step;
+END_PROGRAM
+"""
+
+
+def _write_project(folder: Path, step: int) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "padt.toml").write_text(
+        '[project]\nname = "p"\n\n[resource]\nname = "Cell"\ntarget_cycle_ms = 20\n'
+        'autostart = "cold"\nsafety_operation = false\n\n'
+        '[[resource.program]]\nname = "Main"\nid = 1\n'
+    )
+    (folder / "main.st").write_text(PROJECT.format(step=step))
+    return folder
+
+
+def test_ctrl_c_ends_a_runtime_and_its_compile_worker_without_a_traceback(tmp_path: Path) -> None:
+    """`padt runtime` at a terminal: the SIGINT goes to the runtime and, were it in the
+    same group, to the compile worker a reload started."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    project = _write_project(tmp_path / "project", 1)
+    state = tmp_path / "state"
+    artifact = compile_project(load_project([project])).artifact
+    assert artifact is not None
+    store_artifact(state, artifact)
+    with router(endpoint), client_session(endpoint) as session:
+        command = [sys.executable, "-m", "padt.cli", "runtime", "--resource", "Cell"]
+        command += ["--state-dir", str(state), "--zenoh", endpoint]
+        runtime = subprocess.Popen(
+            command,
+            cwd=REPO,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            start_new_session=True,
+        )
+        lines: list[str] = []
+        reader = threading.Thread(target=lambda: lines.extend(runtime.stdout or ()), daemon=True)
+        reader.start()
+        try:
+            ResourceClient(session, "Cell").wait_until_answering(60)
+            _write_project(project, 2)
+            reloaded = padt(
+                "reload", str(project), "--resource", "Cell", "--zenoh", endpoint, "--yes",
+                "--backup-dir", str(tmp_path / "backups"),
+            )  # fmt: skip
+            assert reloaded.returncode == 0, reloaded.stdout + reloaded.stderr
+            children = _descendants(runtime.pid)
+            assert children, "the reload started no compile worker"
+            os.killpg(runtime.pid, signal.SIGINT)  # Ctrl-C
+            assert runtime.wait(timeout=60) == 0, "".join(lines)
+            reader.join(timeout=30)
+        finally:
+            if runtime.poll() is None:
+                os.killpg(runtime.pid, signal.SIGKILL)
+                runtime.wait()
+    output = "".join(lines)
+    assert "Traceback" not in output and "KeyboardInterrupt" not in output, output
+    deadline = time.monotonic() + 30
+    while any(_alive(pid) for pid in children):
+        assert time.monotonic() < deadline, "the compile worker outlived the runtime"
+        time.sleep(0.2)
