@@ -11,6 +11,7 @@ from runtime.clock import Clock
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.protocol import ForceInfo, ForcingState
 from runtime.contract.refusal import Refusal
+from runtime.contract.values import format_value
 from runtime.event_recorder import EventRecorder
 from runtime.force_table import GLOBAL, ForceEntry, ForceTable
 from runtime.intrinsics import SystemView
@@ -59,7 +60,8 @@ class Forcing:
             self._variables.store(bound, stored)
         self._recorder.record(
             "force",
-            f"{bound.path.path} forced to {stored!r} (switch {'ON' if switch else 'OFF'})",
+            f"{bound.path.path} forced to {format_value(stored, bound.path.type)} "
+            f"(switch {'ON' if switch else 'OFF'})",
             variable=bound.path.path,
             old=old,
             new=stored,

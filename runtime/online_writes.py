@@ -6,6 +6,7 @@ safety operation, since no real plant is behind it)."""
 from __future__ import annotations
 
 from runtime.contract.refusal import Refusal
+from runtime.contract.values import format_value
 from runtime.resource import Resource
 
 
@@ -18,9 +19,11 @@ def write(resource: Resource, name: str, value: object) -> None:
     stored = variables.checked(bound, value)
     old = variables.read(bound)
     variables.store(bound, stored)
+    kind = bound.path.type
     resource.recorder.record(
         "write",
-        f"{bound.path.path} written: {old!r} -> {stored!r}",
+        # as people write values (T#1s500ms, TRUE); the details keep the run-time values
+        f"{bound.path.path} written: {format_value(old, kind)} -> {format_value(stored, kind)}",
         variable=bound.path.path,
         old=old,
         new=stored,

@@ -75,6 +75,10 @@ def test_writes_and_forces_take_literals(site: Plant) -> None:
         assert entry["literal"] == "D#2025-02-03"
     finally:
         site.call("DELETE", f"{R}/forces/P.day", token).raise_for_status()
+    # the event log says it as people write it too
+    messages = [e["message"] for e in site.call("GET", f"{R}/events", token).json()]
+    assert "P.delay written: T#1s500ms -> T#2s250ms" in messages, messages
+    assert "P.day forced to D#2025-02-03 (switch ON)" in messages, messages
 
 
 def test_live_values_come_with_their_literals(site: Plant) -> None:
