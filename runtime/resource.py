@@ -100,6 +100,8 @@ class Resource:
         self.access = AccessControl((), clock.now_ns, realm=name)  # the loaded accounts
         self.login_audit = LoginAudit()
         self.incoming = IncomingArtifact()  # a configuration arriving for load or reload
+        # until the first configuration, in a runtime process: its only account is `setup`
+        self.setup: SetupSecret | None = None
         self.start_kind: str | None = "cold"  # what the next first cycle is: cold | warm
         self.last_start = ""  # how the resource last started: cold | warm | continued
         self._first_cycle = False  # the next CPU cycle is the first after a start
@@ -129,6 +131,12 @@ class Resource:
         return self.state in _RUNNING
 
     def begin_login(self, name: str, client_nonce: str, source: str) -> Challenge:
+    def commission(self, setup: SetupSecret) -> None:
+        """No configuration yet: nobody but the holder of the setup secret, logged in as
+        `setup`, may act (runtime/commissioning.py)."""
+        self.setup = setup
+        self.access.replace_users((setup.account(),))
+
         """The challenge of a login (runtime/contract/scram.py)."""
         try:
             known = any(account.name == name for account in self.access.users)
@@ -221,6 +229,10 @@ class Resource:
         self.artifact, self.params = artifact, artifact.resource
         self.io.configure(artifact)
         self.access.replace_users(artifact.users)  # sessions of removed accounts end
+        if self.setup is not None:  # the first configuration: the setup account and its
+            self.setup.spend()  # session end, whatever accounts the configuration brings
+            self.setup = None
+            self.access.replace_users(())
         self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
         self.system.WATCHDOG_TIME = self.scheduler.watchdog_ns
 
@@ -452,7 +464,7 @@ class Resource:
             cycle_ms=self.cycle_ns / 1e6,
             stats=self.stats.info(),
             forcing=self.forcing.table.started_levels() != [],
-            access="open" if self.access.open else "users",
+            access="setup" if self.setup else "open" if self.access.open else "users",
             start=self.start_kind if self.state == ResourceState.STOP_VALID else self.last_start,
             programs=[
                 ProgramStatus(
