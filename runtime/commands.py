@@ -13,7 +13,6 @@ from collections.abc import Callable
 from typing import Any
 
 from runtime import online_writes, program_control, reload_switch
-from runtime.commissioning import not_commissioned
 from runtime.contract import protocol as p
 from runtime.contract import scram
 from runtime.contract.accounts import ANONYMOUS
@@ -46,8 +45,15 @@ def _ms_to_ns(ms: int | None) -> int | None:
 
 
 def _login_begin(resource: Resource, command: p.LoginBegin, request: Request) -> p.LoginChallenge:
-    challenge = resource.begin_login(command.user, command.nonce, request.source)
-    return p.LoginChallenge(challenge.nonce, challenge.salt, challenge.n, challenge.r, challenge.p)
+    """The challenge, signed with the resource's key: a client derives nothing from its
+    password for a challenge that is not the resource's."""
+    c = resource.begin_login(command.user, command.nonce, request.source)
+    auth = scram.auth_message(
+        resource.name, command.user, command.nonce, c.nonce, scram.unb64(c.salt), c.n, c.r, c.p
+    )
+    identity = resource.identity
+    signature = scram.b64(identity.sign(scram.challenge_message(auth)))
+    return p.LoginChallenge(c.nonce, c.salt, c.n, c.r, c.p, identity.public_key, signature)
 
 
 def _login(resource: Resource, command: p.Login, request: Request) -> p.LoginReply:
@@ -235,22 +241,9 @@ def authorize(resource: Resource, request: Request) -> None:
     every request, whoever sends it); sets who acts, for the events."""
     resource.recorder.acting_user = None
     needed = request.command.level()
-    if needed is None:  # login and logout
+    if needed is None:  # the login's two steps
         return
-    if (
-        resource.setup is not None
-        and request.token is None
-        and isinstance(request.command, p.GetStatus)
-    ):
-        return  # a runtime waiting for its first configuration says so to anyone
-    try:
-        session = resource.access.check(
-            request.token, needed, request.signed, request.mac, request.seq
-        )
-    except Refusal as refused:
-        if resource.setup is None:
-            raise
-        raise not_commissioned(refused) from None
+    session = resource.access.check(request.token, needed, request.signed, request.mac, request.seq)
     resource.recorder.acting_user = session.user if session is not None else None
 
 

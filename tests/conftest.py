@@ -7,6 +7,7 @@ import json
 import os
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -54,3 +55,26 @@ def sim_trace(tmp_path: Path, source: str, cycles: int, *sets: str) -> dict[str,
 @pytest.fixture
 def zenoh_endpoint() -> str:
     return f"tcp/127.0.0.1:{free_port()}"
+
+
+@pytest.fixture(autouse=True, scope="module")
+def known_resources_of_the_module(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """What a module's fixtures pin goes to a file of the module, never to the user's home
+    (`known_resources` below gives each test a file of its own)."""
+    with pytest.MonkeyPatch.context() as patch:
+        path = tmp_path_factory.mktemp("known") / "known_resources"
+        patch.setenv("PADT_KNOWN_RESOURCES", str(path))
+        yield
+
+
+@pytest.fixture(autouse=True)
+def known_resources(
+    known_resources_of_the_module: None,
+    tmp_path_factory: pytest.TempPathFactory,
+    monkeypatch: pytest.MonkeyPatch,
+) -> Path:
+    """Each test pins the resources' keys in a file of its own (their runtimes make fresh
+    keys; a pin kept from another test, or in the user's home, would refuse them)."""
+    path = tmp_path_factory.mktemp("known") / "known_resources"
+    monkeypatch.setenv("PADT_KNOWN_RESOURCES", str(path))
+    return path

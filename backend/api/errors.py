@@ -43,6 +43,10 @@ HTTP_STATUS = {
     "project": 422,
     "accounts": 422,
     "unreachable": 504,
+    # the resource's side did not answer as the resource: another party, or a lie
+    "impostor": 502,
+    "bad_challenge": 502,
+    "bad_reply": 502,
     "internal": 500,
 }
 

@@ -136,8 +136,12 @@ class PadtService:
     def log_out(self, caller: Caller, resource: str) -> None:
         login = self.accounts.resource_login(caller.token, resource)
         if login is not None and self.directory.is_online(resource):
-            with self._refusals(caller, resource):
-                self.client(caller, resource).ask(Logout())
+            try:
+                with self._refusals(caller, resource):
+                    self.client(caller, resource).ask(Logout())
+            except Refusal as refused:
+                if refused.code != "unauthenticated":  # a session already gone: logged out
+                    raise
         self.accounts.set_resource_login(caller.token, resource, None)
 
     def load(self, caller: Caller, resource: str, project: str) -> Downloaded:

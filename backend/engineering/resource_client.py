@@ -9,6 +9,7 @@ import contextlib
 import itertools
 import json
 import logging
+import queue
 import secrets
 import time
 from collections.abc import Callable, Iterator
@@ -17,6 +18,7 @@ from typing import Any, TypeVar
 
 import zenoh
 
+from backend.engineering.known_resources import KnownResources
 from runtime.contract import scram, signatures
 from runtime.contract.keyspace import (
     alive_key,
@@ -34,6 +36,8 @@ from runtime.contract.protocol import (
     GetStatus,
     Login,
     LoginBegin,
+    LoginChallenge,
+    Logout,
     Status,
     Unwatch,
     Watch,
@@ -48,9 +52,10 @@ from runtime.contract.protocol import (
 from runtime.contract.refusal import Refusal
 
 COMMAND_TIMEOUT_S = 5.0
+# how long a client waits, after the first answer, for another one: a second answerer on a
+# resource's command key is another party (the resource's own query is done at once)
+SECOND_ANSWER_S = 0.5
 WATCH_BATCH = 1000  # variable names per watch request (paths are short; 64 KiB is the limit)
-# the most work a login challenge may ask of this process (our resources ask for 2**14, 8, 1)
-MAX_SCRYPT_N, MAX_SCRYPT_R, MAX_SCRYPT_P = 2**17, 16, 4
 R = TypeVar("R")
 P = TypeVar("P")
 log = logging.getLogger("padt.client")
@@ -96,9 +101,13 @@ class ResourceLogin:
 
 
 class ResourceClient:
-    def __init__(self, session: zenoh.Session, resource: str) -> None:
+    def __init__(
+        self, session: zenoh.Session, resource: str, known: KnownResources | None = None
+    ) -> None:
         self.session = session
         self.resource = resource
+        # the resources' keys, pinned at their first login (known_resources.py)
+        self.known = known if known is not None else KnownResources()
         self._subscribers: list[zenoh.Subscriber[None]] = []
         self.logged_in: ResourceLogin | None = None  # after `login`: signs every request
         # a publication key known from elsewhere (the API learns it from its users' logins)
@@ -116,7 +125,7 @@ class ResourceClient:
             command.NAME,
             lambda seq: encode_request(command, self._token(), seq),
             timeout_s,
-            relogin=not isinstance(command, LoginBegin | Login),
+            relogin=not isinstance(command, LoginBegin | Login | Logout),
         )
         return decode_reply(command, reply)
 
@@ -131,37 +140,64 @@ class ResourceClient:
             return json.dumps({"cmd": cmd, **session, **args}).encode()
 
         reply: dict[str, Any] = json.loads(
-            self._exchange(cmd, payload, timeout_s, relogin=not cmd.startswith("login"))
+            self._exchange(cmd, payload, timeout_s, relogin=not cmd.startswith("log"))
         )
         return reply
 
     def login(self, user: str, password: str) -> ResourceLogin:
         """Log in by challenge and response: the password never leaves this process, and
-        the resource must prove that it holds the user's verifier (Refusal `impostor`
-        otherwise). Raises the resource's Refusal when it refuses."""
+        nothing derived from it leaves before the challenge proves to be the resource's
+        (signed with the key it is known by, `known_resources.py`, for this login's nonce,
+        at a cost no weaker than our own verifiers'). The resource must then prove that it
+        holds the user's verifier. Refusal `impostor` or `bad_challenge` otherwise, or the
+        resource's own."""
         client_nonce = scram.new_nonce()
         challenge = self._plain(LoginBegin(user, client_nonce))
-        if (
-            not challenge.nonce.startswith(client_nonce)
-            or challenge.n > MAX_SCRYPT_N
-            or challenge.r > MAX_SCRYPT_R
-            or challenge.p > MAX_SCRYPT_P
-        ):
-            raise Refusal("impostor", f"a login challenge not from resource {self.resource}")
-        exchange = scram.ClientExchange.answer(
-            self.resource, user, password, client_nonce, challenge.nonce,
-            scram.unb64(challenge.salt), challenge.n, challenge.r, challenge.p,
-        )  # fmt: skip
+        auth = self._checked(challenge, user, client_nonce)
+        try:
+            salted = scram.salted_password(
+                password, scram.unb64(challenge.salt), challenge.n, challenge.r, challenge.p
+            )
+        except (ValueError, MemoryError) as exc:  # a cost this machine cannot pay
+            raise Refusal(
+                "bad_challenge", f"the login challenge of {self.resource}: {exc}"
+            ) from None
+        exchange = scram.ClientExchange(salted, auth)
         reply = self._plain(Login(user, challenge.nonce, exchange.proof))
-        if not exchange.server_proven(reply.server_signature, reply.publication_key):
+        if reply.publication_key != challenge.publication_key or not exchange.server_proven(
+            reply.server_signature, reply.publication_key
+        ):
             raise Refusal(
                 "impostor",
                 f"the answer to the login does not prove that it comes from {self.resource}",
             )
+        self.known.remember(self.resource, reply.publication_key)
         self.logged_in = ResourceLogin(
             reply.token, exchange.session_key, reply.publication_key, reply.user, reply.level
         )
         return self.logged_in
+
+    def _checked(self, challenge: LoginChallenge, user: str, client_nonce: str) -> bytes:
+        """The AuthMessage of a challenge that is the resource's, for this login, at a cost
+        this client pays; Refusal otherwise, before anything is derived from a password."""
+        if not challenge.nonce.startswith(client_nonce):
+            raise Refusal("impostor", f"a login challenge not from resource {self.resource}")
+        self.known.check(self.resource, challenge.publication_key)
+        salt = scram.unb64(challenge.salt)
+        auth = scram.auth_message(
+            self.resource, user, client_nonce, challenge.nonce, salt,
+            challenge.n, challenge.r, challenge.p,
+        )  # fmt: skip
+        signature = scram.unb64(challenge.signature)
+        key = challenge.publication_key
+        if not signatures.verifies(key, scram.challenge_message(auth), signature):
+            raise Refusal(
+                "impostor", f"the login challenge is not signed by resource {self.resource}"
+            )
+        problem = scram.cost_problem(challenge.n, challenge.r, challenge.p)
+        if problem is not None:
+            raise Refusal("bad_challenge", f"the login challenge of {self.resource}: {problem}")
+        return auth
 
     def use_credentials(self, user: str, password: str) -> None:
         """Log in whenever the resource asks for it (at the first command, after a runtime
@@ -213,21 +249,34 @@ class ResourceClient:
         return self._send(name, payload, timeout_s)
 
     def _send(self, name: str, payload: Callable[[int | None], bytes], timeout_s: float) -> bytes:
+        """The one answer to a request. Asked of every queryable on the command key (a
+        queryable declared `complete` would otherwise take every query from the resource):
+        a second answer is another party's, and refused as `impostor`."""
         login = self.logged_in
         request = payload(login.next_seq() if login is not None else None)
         mac = scram.request_mac(login.key, request) if login is not None else None
         self._sent += 1
-        replies = self.session.get(
+        arrived: queue.Queue[zenoh.Reply | None] = queue.Queue()
+        self.session.get(
             command_key(self.resource),
+            zenoh.handlers.Callback(arrived.put, lambda: arrived.put(None)),
+            target=zenoh.QueryTarget.ALL,
+            consolidation=zenoh.ConsolidationMode.NONE,
             payload=request,
             attachment=mac,
             timeout=timeout_s,
             source_info=zenoh.SourceInfo(self.session.id, self._sent),
         )
-        for reply in replies:
-            if reply.ok is not None:
-                return bytes(reply.ok.payload.to_bytes())
-        raise ResourceUnreachable(f"resource '{self.resource}' did not answer '{name}'")
+        answers = _answers(arrived, time.monotonic() + timeout_s + 1)
+        if len(answers) > 1:
+            raise Refusal(
+                "impostor",
+                f"another party answers on {self.resource}'s command key "
+                f"({len(answers)} answers to '{name}')",
+            )
+        if not answers:
+            raise ResourceUnreachable(f"resource '{self.resource}' did not answer '{name}'")
+        return answers[0]
 
     # ---- publications
     def on_status(self, callback: Callable[[Status], None]) -> None:
@@ -313,10 +362,18 @@ class ResourceClient:
     def _declare(
         self, key_expr: str, kind: type[P], callback: Callable[[P], None]
     ) -> zenoh.Subscriber[None]:
+        """A subscription that hands on what the resource signed, each message once and
+        in order: one that is not newer than the last taken (a replay) is dropped."""
+        freshness = signatures.Freshness()
+
         def handler(sample: zenoh.Sample) -> None:
             payload = sample.payload.to_bytes()
-            if not self._authentic(payload, sample.attachment):
+            stamp = self._authentic(payload, sample.attachment)
+            if stamp is None:
                 log.warning("%s on %s dropped: not signed by the resource", kind.__name__, key_expr)
+                return
+            if stamp and not freshness.newer(key_expr, stamp):
+                log.warning("%s on %s dropped: sent again (a replay)", kind.__name__, key_expr)
                 return
             try:
                 message = decode_publication(kind, payload)
@@ -327,19 +384,39 @@ class ResourceClient:
 
         return self.session.declare_subscriber(key_expr, handler)
 
-    def _authentic(self, payload: bytes, attachment: zenoh.ZBytes | None) -> bool:
-        """A client that logs in (or knows the resource's key) takes only what the
-        resource signed; one without any (a resource without accounts) takes what comes."""
+    def _authentic(
+        self, payload: bytes, attachment: zenoh.ZBytes | None
+    ) -> signatures.Stamp | tuple[()] | None:
+        """The stamp of a publication the resource signed, for a client that logs in (or
+        knows the resource's key); () for what comes to one without any (a resource
+        without accounts: it takes what comes); None for what it does not take."""
         key = self.logged_in.publication_key if self.logged_in is not None else self.trusted_key
         if key is None:
-            return self._credentials is None
-        signature = attachment.to_bytes() if attachment is not None else None
-        return signatures.verifies(key, payload, signature)
+            return () if self._credentials is None else None
+        signed = attachment.to_bytes() if attachment is not None else None
+        return signatures.verified_stamp(key, payload, signed)
 
     def close(self) -> None:
         for subscriber in self._subscribers:
             subscriber.undeclare()
         self._subscribers.clear()
+
+
+def _answers(arrived: queue.Queue[zenoh.Reply | None], deadline: float) -> list[bytes]:
+    """The answers to a query until it is done (None), or until SECOND_ANSWER_S after the
+    first one: a party that holds the query without answering delays no answer long."""
+    answers: list[bytes] = []
+    while (left := deadline - time.monotonic()) > 0:
+        try:
+            reply = arrived.get(timeout=left)
+        except queue.Empty:
+            break
+        if reply is None:
+            break
+        if reply.ok is not None:
+            answers.append(bytes(reply.ok.payload.to_bytes()))
+            deadline = min(deadline, time.monotonic() + SECOND_ANSWER_S)
+    return answers
 
 
 def _unauthenticated(reply: bytes) -> bool:

@@ -4,8 +4,9 @@ only while it is online, so a request for an unknown name is a quick 404 instead
 command that times out.
 
 A status counts only when the resource signed it with the key a login to it proved
-(`trust`); until someone logged in to a resource, its status is unknown here rather than
-possibly forged."""
+(`trust`), and when it is newer than the last one taken (a status put again later is
+not the resource's now); until someone logged in to a resource, its status is unknown
+here rather than possibly forged."""
 
 from __future__ import annotations
 
@@ -27,6 +28,7 @@ class ResourceDirectory:
         self._online: set[str] = set()
         self._status: dict[str, Status] = {}
         self._keys: dict[str, str] = {}  # resource -> the publication key a login proved
+        self._freshness = signatures.Freshness()  # the newest status stamp of each resource
         self._alive = session.liveliness().declare_subscriber(
             any_resource(alive_key), self._on_alive, history=True
         )
@@ -43,11 +45,14 @@ class ResourceDirectory:
 
     def _on_status(self, sample: zenoh.Sample) -> None:
         name, payload = resource_of(str(sample.key_expr)), sample.payload.to_bytes()
-        signature = sample.attachment.to_bytes() if sample.attachment is not None else None
+        signed = sample.attachment.to_bytes() if sample.attachment is not None else None
         with self._lock:
             key = self._keys.get(name)
-        if key is None or not signatures.verifies(key, payload, signature):
+        stamp = signatures.verified_stamp(key, payload, signed) if key is not None else None
+        if stamp is None:
             return  # not known to be the resource's own
+        if not self._freshness.newer(name, stamp):
+            return  # one it published before (a replay): not its status now
         try:
             status = decode_publication(Status, payload)
         except Refusal:

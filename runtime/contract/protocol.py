@@ -169,7 +169,7 @@ class Status:
     cycle_ms: float
     stats: CycleStatistics
     forcing: bool
-    access: str  # "open" (no accounts), "users", or "setup" (no configuration yet)
+    access: str  # "open" (no accounts) or "users"
     start: str | None  # how it starts next (cold, warm) or last started (continued)
     programs: list[ProgramStatus]
     io: IoStatus | None = None  # Modbus TCP; None: the configuration uses none
@@ -449,6 +449,9 @@ class LoginChallenge:
     n: int  # scrypt cost parameters of the verifier
     r: int
     p: int
+    publication_key: str  # base64 Ed25519 public key of the resource
+    # base64: that key's signature of scram.challenge_message (the client's nonce in it)
+    signature: str
 
 
 @dataclass(frozen=True)
@@ -469,7 +472,7 @@ COMMANDS: dict[str, type[Command[Any]]] = {}  # by wire name
 class Command(Generic[R]):
     """A command; its dataclass fields are its arguments. A subclass gives its wire name and
     the level it needs: `class Start(Command[StatusReply], name="start", level="operator")`;
-    its reply type is the type argument. Level None: no session needed (login, logout)."""
+    its reply type is the type argument. Level None: no session needed (the login)."""
 
     NAME: ClassVar[str]
     LEVEL: ClassVar[Level | None]
@@ -509,8 +512,9 @@ class Login(Command[LoginReply], name="login", level=None):
 
 
 @dataclass(frozen=True)
-class Logout(Command[Done], name="logout", level=None):
-    """Ends the session of the request's token."""
+class Logout(Command[Done], name="logout", level="read"):
+    """Ends the session of the request's token: a request of that session like any other
+    (its MAC and sequence number), so that a token seen on the bus ends nothing."""
 
 
 @dataclass(frozen=True)
@@ -782,7 +786,7 @@ class RecordDelete(Command[RecordingsReply], name="record_delete", level="operat
 
 # ---- requests and replies on the wire
 
-# the level each command needs (login and logout need none)
+# the level each command needs (the login's two steps need none)
 COMMAND_LEVELS: dict[str, Level] = {
     name: kind.LEVEL for name, kind in COMMANDS.items() if kind.LEVEL is not None
 }

@@ -10,7 +10,11 @@ artifact or an accounts file holds of a password:
     ServerKey      = HMAC(SaltedPassword, "Server Key")
 
 The exchange: the client sends its user name and a nonce (`login_begin`); the resource
-answers with the salt, the cost parameters and the nonce extended by its own part. The
+answers with the salt, the cost parameters and the nonce extended by its own part, signed
+with its Ed25519 key (`challenge_message`). The client derives nothing from the password
+before it has checked that signature against the key it knows for the resource, and that
+the cost is no weaker than what `padt passwd` makes (`cost_problem`): a party that answers
+in the resource's place with a cheap challenge would get a proof it could crack. The
 client proves that it knows ClientKey (`login`: ClientProof = ClientKey XOR
 HMAC(StoredKey, AuthMessage)); the resource proves that it holds the verifier
 (ServerSignature = HMAC(ServerKey, AuthMessage | publication key)). Neither message helps
@@ -33,7 +37,9 @@ from runtime.contract.refusal import Refusal
 # scrypt cost: about 50 ms per derivation here; the client pays it, the resource never does
 SCRYPT_N, SCRYPT_R, SCRYPT_P = 2**14, 8, 1
 NONCE_BYTES = 18  # 24 characters of base64
-MAX_SCRYPT_N = 2**20  # a challenge asking for more work than this is not one of ours
+# the most a challenge may ask of a client: scrypt holds 128 * r * N bytes (64 MiB here)
+MAX_SCRYPT_N, MAX_SCRYPT_R, MAX_SCRYPT_P = 2**17, 16, 4
+MAX_SCRYPT_MEMORY = 64 * 2**20
 
 
 @dataclass(frozen=True)
@@ -57,8 +63,32 @@ def unb64(text: str) -> bytes:
         raise Refusal("bad_request", "not base64") from None
 
 
+def cost_problem(n: int, r: int, p: int) -> str | None:
+    """Why a client does not derive a key at this cost (None: it does): weaker than the
+    verifiers `padt passwd` makes, which would make a captured proof cheap to crack, more
+    than a client gives, or no scrypt cost at all."""
+    asked = f"scrypt N={n}, r={r}, p={p}"
+    if n < 2 or n & (n - 1):
+        return f"{asked}: N is not a power of 2"
+    if n < SCRYPT_N or r < SCRYPT_R or p < SCRYPT_P:
+        return f"{asked} is weaker than N={SCRYPT_N}, r={SCRYPT_R}, p={SCRYPT_P}"
+    if n > MAX_SCRYPT_N or r > MAX_SCRYPT_R or p > MAX_SCRYPT_P or 128 * r * n > MAX_SCRYPT_MEMORY:
+        return (
+            f"{asked} asks for more than a client gives (N <= {MAX_SCRYPT_N}, r <= "
+            f"{MAX_SCRYPT_R}, p <= {MAX_SCRYPT_P}, {MAX_SCRYPT_MEMORY >> 20} MiB)"
+        )
+    return None
+
+
+def _memory(n: int, r: int, p: int) -> int:
+    """What scrypt holds (OpenSSL's count: 128 r (N + 2) + 128 r p bytes)."""
+    return 128 * r * (n + 2 + p)
+
+
 def salted_password(password: str, salt: bytes, n: int, r: int, p: int) -> bytes:
-    return hashlib.scrypt(password.encode(), salt=salt, n=n, r=r, p=p, dklen=32)
+    # the memory the cost needs, said: hashlib's default (32 MiB) refuses N=2**15, r=8
+    maxmem = _memory(n, r, p) + 2**20
+    return hashlib.scrypt(password.encode(), salt=salt, n=n, r=r, p=p, maxmem=maxmem, dklen=32)
 
 
 def _hmac(key: bytes, message: bytes) -> bytes:
@@ -120,6 +150,12 @@ def auth_message(
     resource is worth nothing at another."""
     fields = (realm, user, client_nonce, nonce, b64(salt), n, r, p)
     return "|".join(str(field) for field in fields).encode()
+
+
+def challenge_message(auth: bytes) -> bytes:
+    """What the resource signs of its challenge: the AuthMessage, which holds the client's
+    own nonce, so that a signed challenge cannot be replayed to another login."""
+    return b"padt login challenge|" + auth
 
 
 def client_proof(key: bytes, auth: bytes) -> bytes:

@@ -101,7 +101,8 @@ def test_the_levels_are_those_of_the_spec() -> None:
     assert p.COMMAND_LEVELS["status"] == "read"
     assert p.COMMAND_LEVELS["force"] == "operator"
     assert p.COMMAND_LEVELS["reload"] == "read-write"
-    assert "login" not in p.COMMAND_LEVELS and "logout" not in p.COMMAND_LEVELS
+    assert "login_begin" not in p.COMMAND_LEVELS and "login" not in p.COMMAND_LEVELS
+    assert p.COMMAND_LEVELS["logout"] == "read"  # a request of the session: signed
     assert p.SetParameter("allow_online_settings", True).level() == "administrator"
     assert p.SetParameter("watchdog_ms", 100).level() == "read-write"
 
