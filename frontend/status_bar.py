@@ -33,6 +33,8 @@ def render(
             items.append(("Forcing", '<b data-testid="forcing" style="color:#c92a2a">ACTIVE</b>'))
         if status.access == "open":
             items.append(("Access", '<b style="color:#e67700">open (no accounts)</b>'))
+        elif status.access == "setup":  # no configuration: the first download commissions it
+            items.append(("Access", '<b style="color:#e67700">setup secret (no configuration)</b>'))
     rows = "".join(
         f'<tr><td style="padding:1px 6px;color:#868e96">{name}</td>'
         f'<td style="padding:1px 6px">{value}</td></tr>'

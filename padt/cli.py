@@ -487,6 +487,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     load.add_argument("paths", nargs="+", type=Path, metavar="PATH")
     _resource_options(load)
+    load.add_argument(
+        "--setup-secret-file",
+        type=Path,
+        metavar="FILE",
+        help="the first download to a runtime without a configuration: log in as 'setup' "
+        "with the setup secret in FILE (the runtime's state folder has it, setup-secret; "
+        "or from PADT_SETUP_SECRET)",
+    )
     _backup_option(load)
     load.set_defaults(func=_lazy("padt.configuration", "load"))
 

@@ -17,7 +17,11 @@ from contextlib import contextmanager
 
 from backend.engineering.project import ProjectError
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
+from runtime.contract.protocol import GetStatus
 from runtime.contract.refusal import Refusal
+from runtime.contract.setup_secret import SETUP_USER, SetupSecretError, read_secret
+
+_SECRET_ENV = "PADT_SETUP_SECRET"
 
 
 class Failed(Exception):
@@ -42,6 +46,8 @@ def resource_client(args: argparse.Namespace) -> Iterator[ResourceClient]:
         client = ResourceClient(session, args.resource)
         if args.user is not None:
             _log_in(client, args.user)
+        elif _commissioning(args) and _waits_for_setup(client):
+            _log_in(client, SETUP_USER, _setup_secret(args))
         yield client
     except ResourceUnreachable as exc:
         raise Failed(
@@ -52,10 +58,38 @@ def resource_client(args: argparse.Namespace) -> Iterator[ResourceClient]:
         session.close()
 
 
-def _log_in(client: ResourceClient, user: str) -> None:
-    """Log in as `user`: the password from PADT_PASSWORD, else asked for (never an
-    option, so that it stays out of shell histories and process lists)."""
-    password = os.environ.get("PADT_PASSWORD")
+def _commissioning(args: argparse.Namespace) -> bool:
+    """Whether the command may commission a runtime (`padt load` with a setup secret)."""
+    if not hasattr(args, "setup_secret_file"):
+        return False
+    return args.setup_secret_file is not None or bool(os.environ.get(_SECRET_ENV))
+
+
+def _waits_for_setup(client: ResourceClient) -> bool:
+    """Whether the resource has no configuration yet: only then is the secret of use (a
+    later load with the same command line logs in as usual, or not at all)."""
+    try:
+        return client.ask(GetStatus()).status.access == "setup"
+    except Refusal:
+        return False
+
+
+def _setup_secret(args: argparse.Namespace) -> str:
+    """The setup secret: from --setup-secret-file, else PADT_SETUP_SECRET (never the
+    secret itself as an option, where process lists and shell histories would keep it)."""
+    if args.setup_secret_file is None:
+        return os.environ[_SECRET_ENV]
+    try:
+        return read_secret(args.setup_secret_file)
+    except SetupSecretError as exc:
+        raise Failed(str(exc), 2) from None
+
+
+def _log_in(client: ResourceClient, user: str, password: str | None = None) -> None:
+    """Log in as `user`: the password given, else from PADT_PASSWORD, else asked for
+    (never an option, so that it stays out of shell histories and process lists)."""
+    if password is None:
+        password = os.environ.get("PADT_PASSWORD")
     if password is None:
         password = getpass.getpass(f"password of {user}: ")
     try:

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from runtime import online_writes, program_control, reload_switch
+from runtime.commissioning import not_commissioned
 from runtime.contract import protocol as p
 from runtime.contract import scram
 from runtime.contract.accounts import ANONYMOUS
@@ -243,7 +244,20 @@ def authorize(resource: Resource, request: Request) -> None:
     needed = request.command.level()
     if needed is None:  # the login's two steps
         return
-    session = resource.access.check(request.token, needed, request.signed, request.mac, request.seq)
+    if (
+        resource.setup is not None
+        and request.token is None
+        and isinstance(request.command, p.GetStatus)
+    ):
+        return  # a runtime waiting for its first configuration says so to anyone
+    try:
+        session = resource.access.check(
+            request.token, needed, request.signed, request.mac, request.seq
+        )
+    except Refusal as refused:
+        if resource.setup is None:
+            raise
+        raise not_commissioned(refused) from None
     resource.recorder.acting_user = session.user if session is not None else None
 
 

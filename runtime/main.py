@@ -4,16 +4,19 @@ from __future__ import annotations
 
 import argparse
 import logging
+import sys
 from pathlib import Path
 
 from runtime.clock import RealClock
 from runtime.collector import COLLECTOR
+from runtime.commissioning import setup_secret
 from runtime.configuration_store import ConfigurationStore
 from runtime.context import ContextInvalid, load_context
 from runtime.contract.artifact import ArtifactError, load_artifact
 from runtime.contract.keyspace import resource_argument
 from runtime.contract.refusal import Refusal
 from runtime.contract.session_options import add_zenoh_options
+from runtime.contract.setup_secret import SetupSecretError
 from runtime.contract.state_folder import (
     artifact_path,
     context_path,
@@ -42,6 +45,15 @@ log = logging.getLogger("padt.runtime")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--setup-secret-file",
+        type=Path,
+        metavar="FILE",
+        help="while there is no configuration, the first download must log in as 'setup' "
+        "with the secret in FILE (16 to 32 of A-Z a-z 0-9 _ -); without it the runtime "
+        "makes one at its first start, shows it once and keeps it in the state folder "
+        "(setup-secret, owner-only) until a configuration is loaded",
+    )
     parser.add_argument(
         "--resource",
         required=True,
@@ -107,6 +119,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def commission(resource: Resource, state_dir: Path, given: Path | None) -> None:
+    """No configuration after power-up: the first download needs the setup secret, shown
+    here once when it is new (runtime/commissioning.py). Raises SetupSecretError."""
+    setup = setup_secret(state_dir, given)
+    resource.commission(setup)
+    if setup.made:
+        log.warning(
+            "no configuration yet: the first download needs the setup secret %s (shown only "
+            "now; kept in %s, owner-only, until a configuration is loaded)",
+            setup.text,
+            setup.path,
+        )
+    else:
+        log.info(
+            "no configuration yet: the first download needs the setup secret of %s", setup.path
+        )
+
+
 def power_up(resource: Resource, state_dir: Path) -> None:
     """What a controller does when it comes up: load the stored configuration, take the
     saved context when it is valid (warm) or not (cold), then Autostart decides."""
@@ -155,6 +185,12 @@ def run(args: argparse.Namespace) -> int:
             log.warning(message)
             resource.events.record("native", message, long_term=True)
     power_up(resource, args.state_dir)
+    if resource.artifact is None:
+        try:
+            commission(resource, args.state_dir, args.setup_secret_file)
+        except SetupSecretError as exc:
+            print(f"padt runtime: {exc}", file=sys.stderr)
+            return 2
     resource.store = ConfigurationStore(args.state_dir)
 
     from runtime.context_saver import ContextSaver

@@ -1,9 +1,9 @@
 """How many Modbus requests the served image answers per second, whoever sends them.
 
 pymodbus decodes and answers each frame in Python, on the Modbus thread: about 70 us of
-the interpreter lock each here, which the cycle thread then waits for. A flood of 14,000
-requests a second kept that lock busy and stretched the periods of a 20 ms cycle to 45-55
-ms. The meter is a token bucket over every connection of the server: past its rate, the
+the interpreter lock each here, which the cycle thread then waits for. A flood of 5,000 to
+14,000 requests a second kept that lock busy and stretched the periods of a 20 ms cycle
+to 25-55 ms. The meter is a token bucket over every connection of the server: past its rate, the
 connection that asked is not read (its requests wait in its socket, and TCP slows the
 sender) until the bucket has a token for it. Nothing is refused or lost: a flood is just
 answered no faster than the rate, and an HMI polling beside it waits its turn.

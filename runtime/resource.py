@@ -20,6 +20,7 @@ import logging
 from typing import TYPE_CHECKING, Any, Protocol
 
 from runtime.clock import Clock
+from runtime.commissioning import SetupSecret
 from runtime.configuration_store import ConfigurationStore
 from runtime.contract.accounts import AccessControl, Challenge, Proven
 from runtime.contract.artifact import Artifact, ResourceConfig
@@ -99,6 +100,8 @@ class Resource:
         self.identity = identity if identity is not None else Identity.fresh()
         self.access = AccessControl((), clock.now_ns, realm=name)  # the loaded accounts
         self.login_audit = LoginAudit()
+        # until the first configuration, in a runtime process: its only account is `setup`
+        self.setup: SetupSecret | None = None
         self.incoming = IncomingArtifact()  # a configuration arriving for load or reload
         self.start_kind: str | None = "cold"  # what the next first cycle is: cold | warm
         self.last_start = ""  # how the resource last started: cold | warm | continued
@@ -127,6 +130,12 @@ class Resource:
 
     def running(self) -> bool:
         return self.state in _RUNNING
+
+    def commission(self, setup: SetupSecret) -> None:
+        """No configuration yet: nobody but the holder of the setup secret, logged in as
+        `setup`, may act (runtime/commissioning.py)."""
+        self.setup = setup
+        self.access.replace_users((setup.account(),))
 
     def begin_login(self, name: str, client_nonce: str, source: str) -> Challenge:
         """The challenge of a login (runtime/contract/scram.py)."""
@@ -220,6 +229,10 @@ class Resource:
         self.variables.access = {a.name.upper(): a for a in artifact.access_paths}
         self.artifact, self.params = artifact, artifact.resource
         self.io.configure(artifact)
+        if self.setup is not None:  # the first configuration: the setup account and its
+            self.setup.spend()  # session end, whatever accounts the configuration brings
+            self.setup = None
+            self.access.replace_users(())
         self.access.replace_users(artifact.users)  # sessions of removed accounts end
         self.system.CONFIGURATION_CRC = int(artifact.crc, 16)
         self.system.WATCHDOG_TIME = self.scheduler.watchdog_ns
@@ -452,7 +465,7 @@ class Resource:
             cycle_ms=self.cycle_ns / 1e6,
             stats=self.stats.info(),
             forcing=self.forcing.table.started_levels() != [],
-            access="open" if self.access.open else "users",
+            access="setup" if self.setup else "open" if self.access.open else "users",
             start=self.start_kind if self.state == ResourceState.STOP_VALID else self.last_start,
             programs=[
                 ProgramStatus(

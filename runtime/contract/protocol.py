@@ -169,7 +169,7 @@ class Status:
     cycle_ms: float
     stats: CycleStatistics
     forcing: bool
-    access: str  # "open" (no accounts) or "users"
+    access: str  # "open" (no accounts), "users", or "setup" (no configuration yet)
     start: str | None  # how it starts next (cold, warm) or last started (continued)
     programs: list[ProgramStatus]
     io: IoStatus | None = None  # Modbus TCP; None: the configuration uses none

@@ -36,3 +36,9 @@ def native_path(state_dir: Path) -> Path:
 def recordings_path(state_dir: Path) -> Path:
     """The MCAP files of the resource's recordings (docs/recording.md)."""
     return state_dir / "recordings"
+
+
+def setup_secret_path(state_dir: Path) -> Path:
+    """The setup secret of a runtime without a configuration (owner-only; gone once the
+    first configuration is loaded): what the first download proves it knows."""
+    return state_dir / "setup-secret"

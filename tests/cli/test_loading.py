@@ -25,7 +25,13 @@ from runtime.contract.artifact import crc32_hex, load_artifact
 from runtime.contract.protocol import MAX_REQUEST_BYTES, pieces
 from runtime.contract.refusal import Refusal
 from tests.conftest import padt
-from tests.support.runtime_process import client_session, router, running_resource
+from tests.support.runtime_process import (
+    KNOWN_SETUP_SECRET,
+    client_session,
+    know_setup_secret,
+    router,
+    running_resource,
+)
 
 RESOURCE = "LoadRes"
 STOPPED = "STOP/VALID CONFIGURATION"
@@ -65,6 +71,14 @@ END_VAR
 counter := counter + 1;
 END_PROGRAM
 """
+
+
+@pytest.fixture(autouse=True)
+def commissioning(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The runtimes here start without a configuration: the first `padt load` of each
+    logs in with the setup secret (PADT_SETUP_SECRET), one the tests know."""
+    know_setup_secret(tmp_path / "state")
+    monkeypatch.setenv("PADT_SETUP_SECRET", KNOWN_SETUP_SECRET)
 
 
 def write_project(folder: Path, source: str = COUNTER_ST, extra: str = "") -> Path:
@@ -440,7 +454,7 @@ def test_a_configuration_that_cannot_be_kept_is_refused_before_anything_changes(
     tmp_path: Path, zenoh_endpoint: str
 ) -> None:
     state = tmp_path / "state"
-    (state / "config").parent.mkdir(parents=True)
+    (state / "config").parent.mkdir(parents=True, exist_ok=True)
     (state / "config").write_text("not a folder")  # nothing can be stored below it
     project = write_project(tmp_path / "project")
     with running_resource(RESOURCE, state, zenoh_endpoint) as (_, client):

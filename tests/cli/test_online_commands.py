@@ -19,7 +19,7 @@ from backend.engineering.resource_client import ResourceClient
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from tests.conftest import REPO, padt
-from tests.support.runtime_process import running_resource
+from tests.support.runtime_process import running_resource, setup_env
 
 RESOURCE = "Cell"
 PASSWORDS = {"admin": "Admin-1", "engineer": "Engineer-2", "viewer": "Viewer-3"}
@@ -76,9 +76,11 @@ def as_user(user: str, command: str, endpoint: str, *args: str) -> subprocess.Co
 def loaded_cell(tmp_path: Path, endpoint: str) -> Iterator[ResourceClient]:
     project = write_project(tmp_path / "project")
     with running_resource(RESOURCE, tmp_path / "state", endpoint) as (_, client):
-        # a resource with nothing loaded has no accounts yet: the first load needs no login
+        # a resource with nothing loaded has no accounts yet: the first load logs in with
+        # the setup secret the runtime made
         online = ["--resource", RESOURCE, "--zenoh", endpoint]
-        loaded = padt("load", str(project), *online, "--backup-dir", str(tmp_path / "backups"))
+        backups = ["--backup-dir", str(tmp_path / "backups")]
+        loaded = padt("load", str(project), *online, *backups, env=setup_env(tmp_path / "state"))
         assert loaded.returncode == 0, loaded.stderr
         started = as_user("engineer", "start", endpoint)
         assert started.returncode == 0, started.stderr

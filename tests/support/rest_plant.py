@@ -110,14 +110,16 @@ def padt_accounts_file(path: Path) -> Path:
 
 
 @contextmanager
-def plant(base: Path, extra: str = "") -> Iterator[Plant]:
+def plant(base: Path, fresh: bool = False, extra: str = "") -> Iterator[Plant]:
+    """`fresh`: the runtime starts without a configuration (else with project `plant`)."""
     projects = base / "projects"
     write_project(projects / "plant", extra=extra)  # `extra`: more variables of P
     write_project(projects / "plant_v2", extra="m : INT := 7;")
     state_dir = base / "state"
     artifact = compile_project(load_project([projects / "plant"])).artifact
     assert artifact is not None
-    store_artifact(state_dir, artifact)
+    if not fresh:
+        store_artifact(state_dir, artifact)
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     accounts_file = padt_accounts_file(base / "padt-accounts.json")
     with ExitStack() as stack:

@@ -15,8 +15,10 @@ import zenoh
 from backend.engineering.project import compile_project, demo_project_path, load_project
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.artifact import Artifact
+from runtime.contract.private_files import write_private
 from runtime.contract.session import open_client, open_router
-from runtime.contract.state_folder import artifact_path
+from runtime.contract.setup_secret import SETUP_USER, read_secret
+from runtime.contract.state_folder import artifact_path, setup_secret_path
 from tests.conftest import REPO
 
 
@@ -32,6 +34,36 @@ def write_demo_artifact(state_dir: Path) -> str:
     assert result.artifact is not None
     store_artifact(state_dir, result.artifact)
     return result.artifact.crc
+
+
+def setup_secret(state_dir: Path) -> str:
+    """The setup secret a runtime without a configuration made in its state folder (there
+    once the runtime answers)."""
+    return read_secret(setup_secret_path(state_dir))
+
+
+# a setup secret known to the tests that commission many runtimes with `padt load`
+KNOWN_SETUP_SECRET = "Known-to-the-tests-0123456789"
+
+
+def know_setup_secret(state_dir: Path) -> None:
+    """Give the runtime of `state_dir` KNOWN_SETUP_SECRET as its setup secret: one it finds
+    in its state folder at its start, as if an earlier start had made it."""
+    write_private(setup_secret_path(state_dir), KNOWN_SETUP_SECRET.encode("ascii"))
+
+
+def setup_env(state_dir: Path) -> dict[str, str]:
+    """The environment in which `padt load` commissions the runtime of `state_dir` while it
+    has no configuration (PADT_SETUP_SECRET; none once the secret is spent)."""
+    path = setup_secret_path(state_dir)
+    return {"PADT_SETUP_SECRET": read_secret(path)} if path.exists() else {}
+
+
+def commissioning(client: ResourceClient, state_dir: Path) -> ResourceClient:
+    """`client` logged in as the setup account of a runtime without a configuration, for
+    its first download (runtime/commissioning.py)."""
+    client.login(SETUP_USER, setup_secret(state_dir))
+    return client
 
 
 def wait_until_answering(client: ResourceClient, timeout_s: float = 30) -> None:
