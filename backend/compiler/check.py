@@ -17,6 +17,7 @@ from backend.compiler.checks.initializers import (
     check_initializer,
     declaration_order,
 )
+from backend.compiler.checks.locations import check_location_area
 from backend.compiler.checks.methods import (
     check_abstract_instance,
     check_block_declaration,
@@ -41,6 +42,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         global_scope = Scope(resolved, PouSymbols(any_pou.pou, [], {}), check_expression)
         order = declaration_order(resolved.globals)
         for variable in resolved.globals:
+            check_location_area(global_scope, variable)
             check_abstract_instance(global_scope, variable)
             check_initializer(global_scope, variable.type, variable.init)
             check_constant_initializer(global_scope, variable, order)
@@ -61,6 +63,7 @@ def check(resolved: Resolved) -> list[Diagnostic]:
             if id(variable) in inherited:
                 continue  # checked with the block that declares it
             if variable.kind != "VAR_GLOBAL":
+                check_location_area(scope, variable)
                 check_abstract_instance(scope, variable)
                 check_initializer(scope, variable.type, variable.init)
                 check_constant_initializer(scope, variable, order)
@@ -102,6 +105,7 @@ def _check_method(resolved: Resolved, method: PouSymbols) -> list[Diagnostic]:
             )
             scope.report(variable.pos, Code.METHOD_STATIC, message)
         if variable.kind != "VAR_GLOBAL":
+            check_location_area(scope, variable)
             check_abstract_instance(scope, variable)
             check_initializer(scope, variable.type, variable.init)
             check_constant_initializer(scope, variable, order)

@@ -74,6 +74,7 @@ class Code(Enum):
     INTERFACE_METHOD = "E0134", "interface method not implemented as declared"
     MEMBER_OWNER = "E0135", "method or property after no block or interface"
     SPECIFIER = "E0136", "access specifier or modifier that does not apply to a declaration"
+    LOCATION_AREA = "E0137", "location without an area (I, Q or M)"
 
     # ---- 02: names, types and expressions
     UNDECLARED = "E0201", "name not declared"
@@ -189,6 +190,9 @@ class Code(Enum):
     DATA_SIZE = "E0712", "too much data"
     CODE_SIZE = "E0713", "generated code too large"
     METHOD_STATIC = "E0714", "static variables of a method (VAR_INST, VAR_STAT)"
+    IMPLICIT_METHOD = "E0715", "FB_INIT, FB_REINIT or FB_EXIT, which CODESYS calls by itself"
+    STRUCT_LOCATION = "E0716", "location of a structure member"
+    PROGRAM_SCOPE_BLOCK = "E0717", "VAR_GLOBAL or VAR_ACCESS inside a PROGRAM"
 
     # ---- 08: extensions of other dialects, accepted with a warning
     QUALIFIED_ENUM = "W0801", "qualified enumeration value E.Value (CODESYS/TwinCAT)"

@@ -662,7 +662,16 @@ class _ToAst(Transformer[Token, Any]):
         return ast.StructSpec(members, self._pos(tree))
 
     def struct_member(self, items: list[Any]) -> list[ast.VarDecl]:
-        return self.var_decl(items)
+        declared = self.var_decl(items)
+        if declared[0].location is not None:
+            # a relative location lays the member out in the structure's memory; padt's
+            # structures are no memory image
+            message = (
+                f"'{declared[0].name}' AT {declared[0].location}: padt does not lay "
+                "structure members out at locations; declare the member without AT"
+            )
+            self.errors.append(Diagnostic.at(declared[0].pos, Code.STRUCT_LOCATION, message))
+        return declared
 
     def subrange_spec(self, items: list[Any]) -> ast.SubrangeSpec:
         base, low, high = items
@@ -910,6 +919,22 @@ class _ToAst(Transformer[Token, Any]):
     @v_args(tree=True)
     def program_decl(self, tree: Tree[Any]) -> ast.Pou:
         return self._pou("PROGRAM", tree)
+
+    @v_args(tree=True)
+    def program_global_block(self, tree: Tree[Any]) -> None:
+        message = (
+            "VAR_GLOBAL inside a PROGRAM (globals of its scope, edition 2): padt declares "
+            "globals outside the POUs or in the CONFIGURATION; move them there"
+        )
+        self.errors.append(Diagnostic.at(self._pos(tree), Code.PROGRAM_SCOPE_BLOCK, message))
+
+    @v_args(tree=True)
+    def program_access_block(self, tree: Tree[Any]) -> None:
+        message = (
+            "VAR_ACCESS inside a PROGRAM (edition 2): padt declares access paths in the "
+            "CONFIGURATION (`VAR_ACCESS name : Resource.Program.var : TYPE; END_VAR`)"
+        )
+        self.errors.append(Diagnostic.at(self._pos(tree), Code.PROGRAM_SCOPE_BLOCK, message))
 
     @v_args(tree=True)
     def function_block_decl(self, tree: Tree[Any]) -> ast.Pou:

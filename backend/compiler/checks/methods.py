@@ -75,6 +75,14 @@ def _signature(method: PouSymbols) -> tuple[object, ...]:
     )
 
 
+# the methods CODESYS calls without a call in the code, by key, with when it calls them
+IMPLICIT_METHODS = {
+    "FB_INIT": "when an instance is made, before the first cycle",
+    "FB_REINIT": "after an instance is copied by an online change",
+    "FB_EXIT": "before an instance is removed",
+}
+
+
 def check_block_declaration(scope: Scope, pou: PouSymbols) -> None:
     """The methods a block declares, against its kind and its base's methods."""
     abstract_block = "ABSTRACT" in pou.pou.modifiers
@@ -94,6 +102,14 @@ def check_block_declaration(scope: Scope, pou: PouSymbols) -> None:
                 scope.report(pou.pou.pos, Code.ABSTRACT_METHOD, message)
             continue
         assert method.method is not None
+        if name in IMPLICIT_METHODS:
+            message = (
+                f"'{method.name}' is a method CODESYS calls by itself ({IMPLICIT_METHODS[name]}); "
+                "padt runs code only in a cycle, under the watchdog, and calls no method by "
+                "itself: give the variables initial values, or call a method of another name "
+                "from the body when SYS.START_CYCLE is TRUE"
+            )
+            scope.report(method.pou.pos, Code.IMPLICIT_METHOD, message)
         if "ABSTRACT" in modifiers and (method.method.body or not abstract_block):
             message = (
                 f"ABSTRACT method '{method.name}' has no body, and only an ABSTRACT block "
