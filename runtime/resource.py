@@ -50,6 +50,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 _RUNNING = (ResourceState.RUN, ResourceState.RUN_UP_STOP)
+MAX_SESSIONS_PER_ACCOUNT = 64  # the oldest of an account's sessions end beyond it
 
 
 class CycleRecorder(Protocol):
@@ -165,7 +166,16 @@ class Resource:
             message = f"{name} logged in ({proven.session.level}){_logins(logins)}"
             counted = {"logins": logins} if logins else {}
             self.recorder.record("login", message, name, None, **counted)
+        self._bound_sessions(name)
         return proven
+
+    def _bound_sessions(self, name: str) -> None:
+        """At most MAX_SESSIONS_PER_ACCOUNT sessions of one account: its oldest end, so
+        that a flood of logins holds no memory for the 8 hours a session lasts."""
+        sessions = self.access.sessions
+        tokens = [token for token, session in sessions.items() if session.user == name]
+        for token in tokens[:-MAX_SESSIONS_PER_ACCOUNT]:
+            del sessions[token]
 
     def _login_refused(self, name: str, source: str, denied: Refusal) -> None:
         earlier = self.login_audit.failed(name, source, self.clock.now_ns())
