@@ -1,10 +1,11 @@
 """Logins in the event log without letting them crowd it (spec section 13).
 
-Failed logins go to the short-term log only, the first of each name and source in an
-interval as an event of its own, the others of that interval counted and reported with the
-next event of that name and source (or its next successful login). A flood of failures
-therefore costs one event per name, source and interval, and never a place in the
-long-term log, which keeps the user actions.
+Failed logins go to the short-term log only, the first of each name in an interval as an
+event of its own, the others of that interval counted and reported with the next event of
+that name (or its next successful login), with the sources the requests claimed (Zenoh
+session ids: a sender names its own, so they tell who claimed to be whom, not who was).
+A flood of failures therefore costs one event per name and interval, however many sources
+it claims, and never a place in the long-term log, which keeps the user actions.
 
 Successful logins are events of both logs, the first of an account in an interval only;
 the others of that interval are counted and reported with its next one (by account alone:
@@ -17,10 +18,11 @@ holds the resource.
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 INTERVAL_NS = 10 * 10**9
-MAX_TRACKED = 10_000  # (name, source) pairs; the oldest are reported and forgotten
+MAX_TRACKED = 10_000  # names; the oldest are forgotten
+MAX_SOURCES = 16  # claimed sources listed with an event (the others are counted)
 SUCCESS_INTERVAL_NS = 60 * 10**9  # one event per account and interval for its logins
 LOGIN_BURST = 30  # logins of one account at once, then one per LOGIN_EVERY_NS
 LOGIN_EVERY_NS = 500_000_000
@@ -30,6 +32,20 @@ LOGIN_EVERY_NS = 500_000_000
 class _Window:
     started_ns: int
     unreported: int = 0
+    sources: list[str] = field(default_factory=list)  # claimed since the last report
+
+    def claimed(self, source: str) -> None:
+        if source not in self.sources and len(self.sources) < MAX_SOURCES:
+            self.sources.append(source)
+
+
+@dataclass(frozen=True)
+class Failures:
+    """What an event of failed logins reports: the failures counted before it, and the
+    sources they and it claimed."""
+
+    earlier: int
+    sources: list[str]
 
 
 @dataclass
@@ -40,7 +56,7 @@ class _Allowance:
 
 class LoginAudit:
     def __init__(self) -> None:
-        self._windows: OrderedDict[tuple[str, str], _Window] = OrderedDict()
+        self._windows: OrderedDict[str, _Window] = OrderedDict()  # failures by name
         # by account (only the configuration's accounts: their number is bounded)
         self._successes: dict[str, _Window] = {}
         self._allowances: dict[str, _Allowance] = {}
@@ -67,21 +83,26 @@ class LoginAudit:
         self._successes[account] = _Window(now_ns)
         return window.unreported if window is not None else 0
 
-    def failed(self, name: str, source: str, now_ns: int) -> int | None:
+    def failed(self, name: str, source: str, now_ns: int) -> Failures | None:
         """A failed login: None when it is only counted; otherwise it is to be an event,
-        which also reports the failures counted before it (their number)."""
-        key = (name, source)
-        window = self._windows.get(key)
+        which also reports the failures counted before it and the sources claimed."""
+        window = self._windows.get(name)
         if window is not None and now_ns - window.started_ns < INTERVAL_NS:
             window.unreported += 1
+            window.claimed(source)
             return None
-        self._windows[key] = _Window(now_ns)
-        self._windows.move_to_end(key)
+        self._windows[name] = _Window(now_ns)
+        self._windows.move_to_end(name)
         while len(self._windows) > MAX_TRACKED:
             self._windows.popitem(last=False)
-        return window.unreported if window is not None else 0
+        if window is None:
+            return Failures(0, [source])
+        window.claimed(source)
+        return Failures(window.unreported, window.sources)
 
-    def succeeded(self, name: str, source: str) -> int:
+    def succeeded(self, name: str) -> Failures:
         """A successful login ends the counting: the failures not yet reported."""
-        window = self._windows.pop((name, source), None)
-        return window.unreported if window is not None else 0
+        window = self._windows.pop(name, None)
+        if window is None:
+            return Failures(0, [])
+        return Failures(window.unreported, window.sources)

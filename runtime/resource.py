@@ -151,16 +151,18 @@ class Resource:
 
     def finish_login(self, name: str, nonce: str, proof: bytes, source: str) -> Proven:
         """A session for a proof that holds. Failed logins are short-term events,
-        aggregated per name, source and interval (`login_audit.py`)."""
+        aggregated per name and interval with the sources they claimed (`login_audit.py`)."""
         try:
             proven = self.access.finish(name, nonce, proof, self.identity.public_key, source)
         except Refusal as denied:
             self._login_refused(name, source, denied)
             raise
-        earlier = self.login_audit.succeeded(name, source)
-        if earlier:
-            message = f"login of '{name}' refused{_more(earlier)}"
-            self.recorder.record("login", message, name, long_term=False, source=source)
+        earlier = self.login_audit.succeeded(name)
+        if earlier.earlier:
+            message = f"login of '{name}' refused{_more(earlier.earlier)}"
+            self.recorder.record(
+                "login", message, name, long_term=False, source=source, sources=earlier.sources
+            )
         logins = self.login_audit.logged_in(name, self.clock.now_ns())
         if logins is not None:
             message = f"{name} logged in ({proven.session.level}){_logins(logins)}"
@@ -178,10 +180,13 @@ class Resource:
             del sessions[token]
 
     def _login_refused(self, name: str, source: str, denied: Refusal) -> None:
-        earlier = self.login_audit.failed(name, source, self.clock.now_ns())
-        if earlier is not None:
-            message = f"login of '{name}' refused: {denied.message}{_more(earlier)}"
-            self.recorder.record("login", message, name, long_term=False, source=source)
+        failures = self.login_audit.failed(name, source, self.clock.now_ns())
+        if failures is not None:
+            message = f"login of '{name}' refused: {denied.message}{_more(failures.earlier)}"
+            # the sources are what the requests claimed (login_audit.py)
+            self.recorder.record(
+                "login", message, name, long_term=False, source=source, sources=failures.sources
+            )
 
     def reset_stats(self) -> None:
         self.stats = CycleStats()

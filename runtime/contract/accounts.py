@@ -29,14 +29,35 @@ LEVELS: tuple[Level, ...] = ("read", "operator", "read-write", "administrator")
 NAME_PATTERN = r"[A-Za-z0-9_-]{1,32}"
 NAME = re.compile(f"^{NAME_PATTERN}$")
 SESSION_NS = 8 * 3600 * 10**9
-FAILURES_BEFORE_LOCK = 5
-FIRST_LOCK_NS = 1 * 10**9  # then doubled with every further failure, up to LAST_LOCK_NS
-LAST_LOCK_NS = 60 * 10**9
 MAX_FAILURE_RECORDS = 10_000  # (name, source) pairs remembered; the oldest are forgotten
 CHALLENGE_NS = 30 * 10**9  # how long a login challenge may wait for its answer
 MAX_CHALLENGES = 1000
 REPLAY_WINDOW = 64  # a request's sequence number may come this far out of order
 ANONYMOUS = "anonymous"  # the source of a request that names none
+ANY_SOURCE = "*"  # the failures of a name on the bus, whatever source the requests named
+
+
+@dataclass(frozen=True)
+class LockPolicy:
+    """When failed logins lock a name, and for how long: `free` failures lock nothing,
+    each further one locks for `first_ns`, doubled every time up to `last_ns`; failures
+    are forgotten `forgotten_ns` after the last one (None: only at a successful login)."""
+
+    free: int
+    first_ns: int
+    last_ns: int
+    forgotten_ns: int | None
+
+
+# the PADT's own login over HTTP: the caller's address is the TCP peer's, which the caller
+# cannot choose, so a name locks for that address only
+ADDRESS_LOCK = LockPolicy(4, 10**9, 60 * 10**9, None)
+# the bus: the source a request names is the sender's claim (Zenoh's source_info), so it
+# can neither be the key of a lock (a rogue would lock out the client it names) nor let a
+# guesser escape one (by naming a new source for each guess). A name is throttled for
+# every source alike; a success does not clear it (a guesser would get `free` guesses
+# more with every login of the real user), time does.
+NAME_THROTTLE = LockPolicy(10, 10**9, 30 * 10**9, 15 * 60 * 10**9)
 
 
 def account_problems(
@@ -116,16 +137,18 @@ class _Pending:
 
 @dataclass
 class _Failures:
+    next_lock_ns: int
     count: int = 0
     locked_until_ns: int = 0
-    next_lock_ns: int = FIRST_LOCK_NS
+    last_ns: int = 0
 
 
 @dataclass
 class AccessControl:
-    """Accounts, sessions and failed logins. Repeated failures lock a name for the source
-    they come from only, with a lock that doubles with every further failure: a caller
-    elsewhere cannot lock anyone out."""
+    """Accounts, sessions and failed logins. Repeated failures of the password login lock
+    a name for the address they come from only (`ADDRESS_LOCK`); failures of the login on
+    the bus throttle the name for all, as their source is only claimed (`NAME_THROTTLE`).
+    Either lock doubles with every further failure, up to a cap."""
 
     users: tuple[UserAccount, ...]
     now_ns: Callable[[], int]
@@ -133,6 +156,8 @@ class AccessControl:
     realm: str = ""  # the resource whose accounts these are: part of every login proof
     sessions: dict[str, Session] = field(default_factory=dict)
     failures: OrderedDict[tuple[str, str], _Failures] = field(default_factory=OrderedDict)
+    # the bus failures of the accounts, apart: made-up names cannot push them out
+    account_failures: dict[str, _Failures] = field(default_factory=dict)
     _pending: OrderedDict[str, _Pending] = field(default_factory=OrderedDict)
     _secret: bytes = field(default_factory=lambda: secrets.token_bytes(32))
 
@@ -145,17 +170,20 @@ class AccessControl:
         """A token for a valid name and password; Refusal otherwise (the same answer
         for an unknown name and a wrong password), and for a while after repeated
         failures from the same source."""
-        self._not_locked(name, source)
+        key = (name, source)
+        self._not_locked(name, self._failures(key))
         account = self._account(name)
         if account is None or not verify_password(password, account.password_hash):
-            raise self._failed(name, source)
-        return self._open_session(name, source, account, None)
+            raise self._failed(name, key, ADDRESS_LOCK)
+        self.failures.pop(key, None)
+        return self._open_session(account, None)
 
     # ---- login by challenge and response (the resource's accounts, over the bus)
     def begin(self, name: str, client_nonce: str, source: str = ANONYMOUS) -> Challenge:
         """The challenge for a login: an unknown name gets one that looks the same (its
-        salt derived from a secret of this process), so that it cannot be told apart."""
-        self._not_locked(name, source)
+        salt derived from a secret of this process), so that it cannot be told apart.
+        `source` is what the request claims: not used for the throttle."""
+        self._not_locked(name, self._bus_failures(name))
         account = self._account(name)
         verifier = (
             scram.parse_verifier(account.password_hash) if account is not None else None
@@ -173,19 +201,19 @@ class AccessControl:
         self, name: str, nonce: str, proof: bytes, publication_key: str, source: str = ANONYMOUS
     ) -> Proven:
         """A session for a proof that holds; Refusal `login_failed` otherwise."""
-        self._not_locked(name, source)
+        self._not_locked(name, self._bus_failures(name))
         pending = self._pending.pop(nonce, None)
         if pending is None or pending.user != name or pending.expires_ns <= self.now_ns():
-            raise self._failed(name, source)
+            raise self._failed(name, (name, ANY_SOURCE), NAME_THROTTLE)
         verifier = pending.verifier
         auth = scram.auth_message(
             self.realm, name, pending.client_nonce, nonce, verifier.salt, verifier.n,
             verifier.r, verifier.p,
         )  # fmt: skip
         if pending.account is None or not scram.proof_holds(proof, verifier, auth):
-            raise self._failed(name, source)
+            raise self._failed(name, (name, ANY_SOURCE), NAME_THROTTLE)
         key = scram.session_key(verifier.stored_key, auth)
-        token, session = self._open_session(name, source, pending.account, key)
+        token, session = self._open_session(pending.account, key)
         signature = scram.server_signature(verifier.server_key, auth, publication_key)
         return Proven(token, session, scram.b64(signature))
 
@@ -247,31 +275,43 @@ class AccessControl:
     def _account(self, name: str) -> UserAccount | None:
         return next((u for u in self.users if u.name == name), None)
 
-    def _open_session(
-        self, name: str, source: str, account: UserAccount, key: bytes | None
-    ) -> tuple[str, Session]:
-        self.failures.pop((name, source), None)
+    def _open_session(self, account: UserAccount, key: bytes | None) -> tuple[str, Session]:
         token = scram.new_nonce() + scram.new_nonce()
         session = Session(account.name, account.level, self.now_ns() + SESSION_NS, key)
         self.sessions[token] = session
         return token, session
 
-    def _not_locked(self, name: str, source: str) -> None:
-        failures = self.failures.get((name, source))
+    def _failures(self, key: tuple[str, str]) -> _Failures | None:
+        return self.failures.get(key)
+
+    def _bus_failures(self, name: str) -> _Failures | None:
+        if self._account(name) is not None:
+            return self.account_failures.get(name)
+        return self.failures.get((name, ANY_SOURCE))
+
+    def _not_locked(self, name: str, failures: _Failures | None) -> None:
         now = self.now_ns()
         if failures is not None and failures.locked_until_ns > now:
-            wait_s = (failures.locked_until_ns - now) / 1e9
-            raise Refusal("locked", f"too many failed logins for '{name}': wait {wait_s:.0f} s")
+            wait_s = max(1, round((failures.locked_until_ns - now) / 1e9))
+            raise Refusal("locked", f"too many failed logins for '{name}': wait {wait_s} s")
 
-    def _failed(self, name: str, source: str) -> Refusal:
-        key = (name, source)
-        failures = self.failures.get(key)
+    def _failed(self, name: str, key: tuple[str, str], policy: LockPolicy) -> Refusal:
+        now = self.now_ns()
+        failures = self._bus_failures(name) if key[1] == ANY_SOURCE else self._failures(key)
+        forgotten = policy.forgotten_ns
+        if failures is not None and forgotten is not None and now - failures.last_ns > forgotten:
+            failures.count, failures.next_lock_ns = 0, policy.first_ns
         if failures is None:
-            failures = self.failures[key] = _Failures()
-            while len(self.failures) > MAX_FAILURE_RECORDS:
-                self.failures.popitem(last=False)
+            failures = _Failures(policy.first_ns)
+            if key[1] == ANY_SOURCE and self._account(name) is not None:
+                self.account_failures[name] = failures
+            else:
+                self.failures[key] = failures
+                while len(self.failures) > MAX_FAILURE_RECORDS:
+                    self.failures.popitem(last=False)
         failures.count += 1
-        if failures.count >= FAILURES_BEFORE_LOCK:
-            failures.locked_until_ns = self.now_ns() + failures.next_lock_ns
-            failures.next_lock_ns = min(2 * failures.next_lock_ns, LAST_LOCK_NS)
+        failures.last_ns = now
+        if failures.count > policy.free:
+            failures.locked_until_ns = now + failures.next_lock_ns
+            failures.next_lock_ns = min(2 * failures.next_lock_ns, policy.last_ns)
         return Refusal("login_failed", "unknown user or wrong password")

@@ -73,17 +73,20 @@ def test_sessions_expire_and_logout_ends_them() -> None:
 
 def test_failed_logins_are_events_and_lock_the_name_for_a_while() -> None:
     h = harness(TEXT, users=users())
-    for _ in range(5):
+    for _ in range(11):  # ten lock nothing; the eleventh locks the name for 1 s
         assert h.failed_login("op", "Guess-0") == "login_failed"
     assert h.failed_login("op", PASSWORDS["op"]) == "locked"
-    h.clock.advance(61 * 10**9)
+    h.clock.advance(2 * 10**9)
+    assert h.failed_login("op", "Guess-0") == "login_failed"  # now for 2 s
+    assert h.failed_login("op", PASSWORDS["op"]) == "locked"
+    h.clock.advance(3 * 10**9)
     token = login(h, "op")
     events = h.ok("events", token=token)["events"]
     refused = [e for e in events if e["kind"] == "login" and "refused" in e["message"]]
-    # all six refusals are accounted for, in two events: the first, and the count of the
-    # others reported with the next login of that name (failed logins are aggregated)
+    # all fourteen refusals are accounted for, in two events: the first, and the count of
+    # the others reported with the next login of that name (failed logins are aggregated)
     assert len(refused) == 2
-    assert "5 more refused" in refused[1]["message"]
+    assert "13 more refused" in refused[1]["message"]
     assert "Guess-0" not in json.dumps(events)  # no password in any event
 
 
