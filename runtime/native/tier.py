@@ -29,9 +29,12 @@ from runtime.compile_worker import child_environment
 from runtime.contract.artifact import Artifact
 from runtime.native.build import Toolchain, find_toolchain
 
-NAMESPACE_ATTR = "_native_namespace"  # a bound class holds its namespace through it
-# a bound class keeps its Python body under this name (no ST name has `__`), for a derived
-# block's SUPER^(), which runs it on an instance of another class (padt_native.h)
+# Attributes the tier sets on a bound class. Their names have `__`, which no ST name has
+# (E0004): a variable of the block is a slot of the same class, which a class attribute of
+# its name would replace.
+NAMESPACE_ATTR = "native__namespace"  # a bound class holds its namespace through it
+# the Python body, for a derived block's SUPER^(), which runs it on an instance of another
+# class (padt_native.h)
 PYTHON_BODY_ATTR = "python__call"
 WORKER_TIMEOUT_S = 1800  # a very large project compiles for minutes; never for ever
 

@@ -35,3 +35,23 @@ def test_references_start_as_null_or_as_ref_of_their_own_instance_on_both_tiers(
     assert found["Main.r"] == "Main.level" and found["Main.level"] == 6
     assert found["Main.c.mine"] == "Main.c.n" and found["Main.c.none"] is None
     assert found["gr"] == "g" and found["Main.seen"] == 5 + 3 + 3 + 100
+
+
+def test_a_variable_named_like_the_tiers_own_attributes_stays_a_variable(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+FUNCTION_BLOCK F
+VAR_OUTPUT _native_namespace, python_call : INT; END_VAR
+_native_namespace := _native_namespace + 1;
+python_call := _native_namespace * 2;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR f : F; x : INT; END_VAR
+f();
+x := f._native_namespace + f.python_call;
+END_PROGRAM
+"""
+    pair = run_alike(text, native_tier, 3)
+    assert "F" in pair.report.bodies
+    assert values(pair)["Main.x"] == 3 + 6
