@@ -4,8 +4,8 @@ program) and the C compiler. The runtime sends the artifact, waits for the answe
 the lock released, and only loads and binds what the child built.
 
 A translation is kept beside the compiled modules, by the hash of what it depends on (the
-unit's source, the classes it reads, the FUNCTIONs it calls, the translator itself), so a
-unit built before is neither translated nor compiled again.
+unit's name and source, the classes it reads, the FUNCTIONs it calls, the translator
+itself), so a unit built before is neither translated nor compiled again.
 
 Nothing is translated of an artifact with a unit that is not generated code
 (`runtime.contract.generated_code`): a name or a source of its choosing must not become C.
@@ -121,7 +121,10 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
     index.mkdir(parents=True, exist_ok=True)
     answers = []
     for unit in translation.units:
-        key = hashlib.sha256("\n".join((fingerprint, shape, unit.source)).encode()).hexdigest()[:32]
+        # the unit's name too: it is in the C text (a module built before names were
+        # checked could otherwise serve another unit of the same source)
+        named = (fingerprint, shape, code_filename(unit), unit.source)
+        key = hashlib.sha256("\n".join(named).encode()).hexdigest()[:32]
         known = index / f"{key}.json"
         answer = _known(known)
         if answer is None:

@@ -8,7 +8,11 @@ into its text as it was."""
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -16,6 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from backend.compiler import builtins as compiler_builtins
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
+from runtime.compile_worker import child_environment
 from runtime.contract.artifact import Artifact, PouCode, VarInfo
 from runtime.contract.generated_code import (
     BUILTINS,
@@ -268,6 +273,29 @@ def test_a_unit_named_otherwise_than_the_compiler_names_it_is_refused(
         check_artifact_names(bad)
     with pytest.raises(GeneratedCodeError):
         ArtifactTranslation.of(bad)  # nothing of it is translated to C
+
+
+def test_the_native_worker_builds_nothing_of_an_artifact_with_a_name_of_its_own(
+    tmp_path: Path,
+) -> None:
+    """The worker process, fed as the runtime feeds it: a POU name that would close the
+    comment it is written into and add C of its own is refused, nothing is compiled."""
+    artifact = _artifact(FB)
+    fb = artifact.pou("Fb")
+    named = replace(fb, name=C_INJECTION)
+    bad = replace(artifact, pous=(named, *(p for p in artifact.pous if p is not fb))).with_crc()
+    done = subprocess.run(
+        [sys.executable, "-m", "runtime.native.worker", str(tmp_path / "cache")],
+        input=bad.to_json().encode(),
+        capture_output=True,
+        env=child_environment(),
+        timeout=300,
+        check=False,
+    )
+    answer = json.loads(done.stdout)
+    assert "is not an identifier" in answer.get("error", ""), answer
+    assert not [p for p in tmp_path.rglob("*") if p.suffix in (".c", ".so")]
+    assert not (tmp_path / "x").exists()
 
 
 def test_no_text_of_a_source_reaches_the_c_of_the_native_tier_unchecked() -> None:
