@@ -1,7 +1,8 @@
 """An artifact whose generated code reaches outside the restricted namespace, its CRC redone
 (as an attacker who read the code would): a real runtime process refuses it from a transfer
-and load, and from a reload, with the reason, runs on, and nothing of it ran; `padt replay`
-of a recording that carries it refuses it too.
+and load, and from a reload, with the reason, runs on, and nothing of it ran; so it does an
+artifact whose POU name is C for its native tier; `padt replay` of a recording that carries
+such code refuses it too.
 
 Before, `_idiv.__globals__['builtins'].__import__(...)` appended to a POU ran when the
 configuration was set up: on the controller host for a download, and in `padt replay`,
@@ -75,6 +76,13 @@ def test_a_runtime_refuses_foreign_code_by_load_and_by_reload_and_runs_on(
             assert refused.code == "bad_configuration"
             assert "generated code of PROGRAM Main, line " in refused.message, refused.message
             assert REASON in refused.message, refused.message
+        # a POU name that would close the comment of the native tier's C and add its own
+        named = replace(genuine.pous[0], name=f'M */ system("touch {written}"); /*')
+        try:
+            download(admin, replace(genuine, pous=(named, *genuine.pous[1:])).with_crc())
+            raise AssertionError("a load took a unit named otherwise than the compiler names")
+        except Refusal as refused:
+            assert "is not an identifier" in refused.message, refused.message
         status = admin.command("status")["status"]
         assert status["state"] == "STOP/VALID CONFIGURATION" and status["crc"] == genuine.crc
         assert admin.command("start")["ok"]
