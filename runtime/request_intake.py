@@ -80,7 +80,10 @@ class RequestIntake:
             query = self._received.get()
             if query is _STOP:
                 return
-            self._take(query)
+            try:
+                self._take(query)
+            except Exception:  # a defect here must not end the intake: nothing would answer
+                log.exception("internal error while taking a request")
             del query  # a Zenoh query is finalised when its last reference goes
 
     def _take(self, query: zenoh.Query) -> None:
