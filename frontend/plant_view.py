@@ -1,5 +1,5 @@
 """The viewport's drawing: the selected resource as a block, its user programs as blocks in
-the colours of their states (green RUN, blue RUN_FREEZE, grey STOP, red ERROR), so that the
+the colours of their states (green RUN, blue RUN (frozen), grey STOP, red ERROR), so that the
 state of every program is seen at a glance beside the work area.
 
 The drawing is flat (the XY plane, seen from +Z) and framed to fill the canvas, which is
@@ -13,6 +13,7 @@ import threading
 
 import viser
 
+from frontend.state_rules import state_words
 from runtime.contract import protocol as p
 
 COLORS = {
@@ -28,6 +29,9 @@ RESOURCE_SIZE = (2.4, 1.0)
 PROGRAM_SIZE = (1.2, 0.7)
 RESOURCE_Y = 1.2
 MARGIN = 0.8  # world units around the drawing
+LABEL_HEIGHT = 0.16  # a label's font, in world units, at most
+LABEL_INSET = 0.08  # from its block's edges
+CHAR_WIDTH = 0.7  # a character's width (with the label's padding) per unit of font height
 
 
 class PlantView:
@@ -72,9 +76,7 @@ class PlantView:
             dimensions=(*RESOURCE_SIZE, 0.1),
             position=(0.0, RESOURCE_Y, 0.0),
         )
-        scene.add_label(
-            "/resource/label", f"{resource}: {state}", position=_label_at(RESOURCE_SIZE)
-        )
+        _label(scene, "/resource/label", f"{resource}\n{state_words(state)}", RESOURCE_SIZE)
         self._nodes.append(block)  # removing it removes its label
         first = -(len(programs) - 1) * SPACING / 2
         for number, program in enumerate(programs):
@@ -84,8 +86,8 @@ class PlantView:
                 dimensions=(*PROGRAM_SIZE, 0.1),
                 position=(first + number * SPACING, 0.0, 0.0),
             )
-            text = f"{program.name}\n{program.state}"
-            scene.add_label(f"/programs/{number}/label", text, position=_label_at(PROGRAM_SIZE))
+            text = f"{program.name}\n{state_words(program.state)}"
+            _label(scene, f"/programs/{number}/label", text, PROGRAM_SIZE)
             self._nodes.append(box)
         self._width = max(RESOURCE_SIZE[0], len(programs) * SPACING)
 
@@ -118,6 +120,17 @@ class PlantView:
         camera.position = (center[0], center[1], distance)
 
 
+def _label(scene: viser.SceneApi, name: str, text: str, size: tuple[float, float]) -> None:
+    """A block's label, sized in the drawing's units so that it stays inside its block
+    whatever the canvas' size (a label sized in pixels ran out of a block drawn small):
+    a long name gets a smaller font."""
+    longest = max(len(line) for line in text.splitlines())
+    height = min(LABEL_HEIGHT, (size[0] - 2 * LABEL_INSET) / (longest * CHAR_WIDTH))
+    scene.add_label(
+        name, text, position=_label_at(size), font_size_mode="scene", font_scene_height=height
+    )
+
+
 def _label_at(size: tuple[float, float]) -> tuple[float, float, float]:
     """A label hangs down and right from its anchor: anchor it inside the top left corner."""
-    return (-size[0] / 2 + 0.08, size[1] / 2 - 0.08, 0.1)
+    return (-size[0] / 2 + LABEL_INSET, size[1] / 2 - LABEL_INSET, 0.1)

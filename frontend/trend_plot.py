@@ -29,7 +29,12 @@ COLOURS = (
     "#1971c2", "#e8590c", "#2f9e44", "#c2255c", "#7048e8", "#0c8599", "#f08c00", "#5c940d",
     "#862e9c", "#d6336c", "#1098ad", "#74b816", "#495057", "#a61e4d", "#364fc7", "#c92a2a",
 )  # fmt: skip
-BOOL_RANGE = (-0.1, 3.5)  # BOOLs as 0/1 steps in the lower third, under the numbers
+# BOOLs are 0/1 steps in a lane of their own at the bottom of the chart, the lowest
+# BOOL_LANE of its height, which the numbers' ranges leave free: 0 at 4 % of the height,
+# 1 at 21 %. Without numbers they have the chart to themselves.
+BOOL_LANE = 0.25
+BOOL_RANGE = (-0.25, 5.6)
+BOOL_ALONE_RANGE = (-0.1, 1.1)
 _MS_PER_NS = 1e-6
 
 
@@ -123,18 +128,24 @@ def options(charted: Sequence[Trace], y_ranges: Sequence[tuple[float, float]]) -
                 "points": {"show": False},
             }
         )
+    lane = any(trace.is_bool for trace in charted) and bool(numbers)
     axes: list[dict[str, Any]] = [{"values": _TIME_AXIS, "space": 70}]
-    scales: dict[str, Any] = {"x": {"time": True}, "b": {"range": list(BOOL_RANGE)}}
+    scales: dict[str, Any] = {
+        "x": {"time": True},
+        "b": {"range": list(BOOL_RANGE if lane else BOOL_ALONE_RANGE)},
+    }
     if each:
         for k, (trace, y_range) in enumerate(zip(numbers, y_ranges, strict=True)):
-            scales[f"y{k}"] = {"range": list(y_range)}
+            scales[f"y{k}"] = {"range": list(_above_lane(y_range) if lane else y_range)}
             if k < MAX_AXES:
                 colour = {"stroke": trace.colour, "ticks": {"stroke": trace.colour}}
-                axes.append({"scale": f"y{k}", "size": 56, "grid": {"show": k == 0}, **colour})
+                axis = {"scale": f"y{k}", "size": 56, "grid": {"show": k == 0}, **colour}
+                axes.append({**axis, "splits": _ticks(y_range)} if lane else axis)
     else:
-        scales["y"] = {"range": list(y_ranges[0])}
+        scales["y"] = {"range": list(_above_lane(y_ranges[0]) if lane else y_ranges[0])}
         if numbers:
-            axes.append({"scale": "y", "size": 60})
+            axis = {"scale": "y", "size": 60}
+            axes.append({**axis, "splits": _ticks(y_ranges[0])} if lane else axis)
     if any(trace.is_bool for trace in charted):
         axes.append(
             {
@@ -155,6 +166,19 @@ def options(charted: Sequence[Trace], y_ranges: Sequence[tuple[float, float]]) -
         "cursor": {"drag": {"x": True, "y": False}, "focus": {"prox": 16}},
         "focus": {"alpha": 0.4},
     }
+
+
+def _above_lane(y_range: tuple[float, float]) -> tuple[float, float]:
+    """A numbers' range stretched down so that its values stay above the BOOLs' lane."""
+    low, high = y_range
+    return (_tidy(low - (high - low) * BOOL_LANE / (1 - BOOL_LANE)), high)
+
+
+def _ticks(y_range: tuple[float, float]) -> tuple[float, ...]:
+    """The numbers' ticks on round values of their own range: none in the BOOLs' lane."""
+    low, high = y_range
+    step = _round_step((high - low) / 5)
+    return tuple(_tidy(k * step) for k in range(math.ceil(low / step), math.floor(high / step) + 1))
 
 
 def y_range(columns: Sequence[Floats], shown: tuple[float, float] | None) -> tuple[float, float]:

@@ -173,8 +173,7 @@ class Workspace:
         confirm(
             client,
             f"{label}: {resource}",
-            f"{what[0].upper()}{what[1:]}. Resource {resource} runs configuration "
-            f"{self._crc(resource)}.",
+            self._naming_crc(resource, f"{what[0].upper()}{what[1:]}."),
             lambda: self._send(f"{label} {resource}", resource, command),
         )
 
@@ -200,7 +199,7 @@ class Workspace:
             confirm(
                 self.session.client,
                 f"{label}: {resource}",
-                f"{question[0].upper()}{question[1:]}.",
+                self._naming_crc(resource, f"{question[0].upper()}{question[1:]}."),
                 lambda: attempt(self.session.client, f"{label} ({resource})", send),
             )
 
@@ -230,7 +229,7 @@ class Workspace:
             if attempt(client, f"{label} ({resource})", send) and note:
                 client.add_notification(label, note, color="yellow", auto_close_seconds=12)
 
-        confirm(client, f"{label}: {resource}", question, yes)
+        confirm(client, f"{label}: {resource}", self._naming_crc(resource, question), yes)
 
     def _change(
         self,
@@ -250,6 +249,11 @@ class Workspace:
             then()
 
         confirm(self.session.client, f"{title}: {resource}", question, send)
+
+    def _naming_crc(self, resource: str, question: str) -> str:
+        """A confirmation names the configuration it changes: the user sees what runs
+        before changing it (docs/browser-ui.md)."""
+        return f"{question} Resource {resource} runs configuration {self._crc(resource)}."
 
     def _send(self, what: str, resource: str, command: p.Command[p.StatusReply]) -> None:
         attempt(self.session.client, what, lambda: self.session.client_of(resource).ask(command))

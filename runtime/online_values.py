@@ -15,7 +15,7 @@ from runtime.value_reader import value_reader
 from runtime.variables import Variables
 from runtime.watch_sets import WatchSet, WatchSets, WatchSnapshot
 
-_RUNNING = (ProgramState.RUN, ProgramState.RUN_FREEZE)
+_RUNNING = (ProgramState.RUN,)  # a frozen program changes its values only when stepped: stale
 _LIVE, _FORCED, _STALE, _DELETED, _BAD = (
     LETTER_OF_QUALITY[q]
     for q in (Quality.LIVE, Quality.FORCED, Quality.STALE, Quality.DELETED, Quality.BAD)

@@ -83,3 +83,8 @@ def step_program(resource: Resource, name: str, interval_ns: int | None = None) 
     resource.variables.publish([program])
     resource.forcing.apply()
     resource.io.write_outputs(safe=False)
+    resource.recorder.record(
+        "program",
+        f"program {program.name} stepped one cycle (program cycle {program.stats.count})",
+        program=program.name,
+    )

@@ -433,6 +433,9 @@ class Resource:
         self.scheduler.guarded(run_all)
         self.variables.publish(runnable)
         self.cycle_count += 1
+        self.recorder.record(
+            "state", f"resource stepped one cycle in STOP (cycle {self.cycle_count})"
+        )
 
     def _update_system(self, begin: int) -> None:
         system, stats, first = self.system, self.stats, self._first_cycle

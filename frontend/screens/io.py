@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import viser
 
+from backend.engineering.reload import counted
 from backend.engineering.resource_client import ResourceClient
 from frontend.command_reading import CommandReading
 from runtime.contract import protocol as p
@@ -133,8 +134,9 @@ def render_server(io: p.IoStatus | None) -> str:
         )
     return (
         f'<p data-testid="io-server"><b>Modbus TCP server</b> listening on '
-        f"<code>{where}</code> · {server.requests} requests · "
-        f"{server.exceptions} exception responses · {server.writes} writes taken</p>"
+        f"<code>{where}</code> · {counted(server.requests, 'request')} · "
+        f"{counted(server.exceptions, 'exception response')} · "
+        f"{counted(server.writes, 'write')} taken</p>"
     )
 
 
@@ -180,7 +182,7 @@ def render_points(points: list[p.IoPoint], error: str) -> str:
             f'<td style="{_CELL}">{html.escape(point.area.replace("_", " "))} '
             f"{point.address}</td>"
             f'<td style="{_CELL};{_GREY}">{html.escape(point.type)}</td>'
-            f'<td style="{_CELL}">{"yes" if point.writable else ""}</td>'
+            f'<td style="{_CELL}" data-writable>{_writable(point)}</td>'
             f'<td style="{_CELL};text-align:right;font-family:monospace;{style}" '
             f'data-point="{html.escape(point.variable)}" data-quality="{point.quality}" '
             f'title="{_QUALITY_WORDS.get(point.quality, "")}">{html.escape(value)}</td></tr>'
@@ -189,6 +191,14 @@ def render_points(points: list[p.IoPoint], error: str) -> str:
     count = _note(f"the first {MAX_ROWS} of {len(points)} points shown") if more > 0 else ""
     head = ["Source", "Variable", "Location", "Modbus", "Type", "Writable", "Value"]
     return count + _table(head, rows, "io-points") + legend()
+
+
+def _writable(point: p.IoPoint) -> str:
+    """Whether a Modbus client may write a served point; a remote device's points are
+    the resource's own to read and write there."""
+    if point.source != "server":
+        return f'<span style="{_GREY}">no (device)</span>'
+    return "yes" if point.writable else "no"
 
 
 def legend() -> str:

@@ -173,6 +173,7 @@ class ParametersScreen:
     crc: str = ""
     shown: dict[str, str] = field(default_factory=dict)  # what each html handle holds
     prefilled: tuple[str, str] = ("", "")  # (parameter, value) put into the field
+    names: dict[str, str] = field(default_factory=dict)  # picker's option -> parameter
 
 
 def editable_names(programs: list[ProgramConfig]) -> tuple[str, ...]:
@@ -184,13 +185,28 @@ def editable_names(programs: list[ProgramConfig]) -> tuple[str, ...]:
     return (*online, *others, *in_programs)
 
 
+def option(name: str) -> str:
+    """How the picker offers a parameter: its name as docs/parameters.md gives it, with its
+    unit and key ("Watchdog Time, ms (watchdog_ms)"; "TankControl / Priority (priority)")."""
+    program, _, key = name.rpartition(" / ")
+    where = f"{program} / " if program else ""
+    measured = f", {unit(key)}" if unit(key) else ""
+    return f"{where}{LABELS[key]}{measured} ({key})"
+
+
+def chosen(screen: ParametersScreen) -> str:
+    """The parameter picked (`watchdog_ms`, `TankControl / priority`)."""
+    return screen.names.get(screen.parameter.value, screen.parameter.value)
+
+
 def build(gui: viser.GuiApi, change: Change) -> ParametersScreen:
     """`change(title, question, command, then)` asks `question`, sends `command` to the
     selected resource and calls `then()` after the answer, whatever it was."""
     header = gui.add_html("")
     # the editor above the tables: the tables are long, the editor is what one works with
     with gui.add_folder("Change a parameter online"):
-        parameter = gui.add_dropdown("Parameter", editable_names([]))
+        names = editable_names([])  # the programs' are offered once read
+        parameter = gui.add_dropdown("Parameter", tuple(map(option, names)))
         info = gui.add_html("")
         text = gui.add_text("New value", "")
         choice = gui.add_dropdown("New setting", ("-",), visible=False)
@@ -201,8 +217,29 @@ def build(gui: viser.GuiApi, change: Change) -> ParametersScreen:
     screen = ParametersScreen(
         header, table, parameter, info, text, choice, error, set_button, reason
     )
+    screen.names = {option(name): name for name in names}
     set_button.on_click(lambda _: _clicked(screen, change))
+    text.on_update(lambda _: _check_typed(screen))  # as the user types
+    choice.on_update(lambda _: _check_typed(screen))
     return screen
+
+
+def _check_typed(screen: ParametersScreen) -> None:
+    """Say what is wrong with the value in the field as it is typed (what the field was
+    filled with is the value now: nothing to say)."""
+    name, resource = chosen(screen), screen.resource
+    spec = RESOURCE_BY_NAME.get(name)
+    reply, _ = screen.source.current(resource) if resource is not None else (None, "")
+    if spec is None or reply is None:
+        return
+    typed = _typed(screen, spec)
+    wrong = ""
+    if screen.prefilled != (name, typed):
+        try:
+            check_change(name, typed, reply.resource, reply.programs)
+        except ParameterError as refused:
+            wrong = str(refused)
+    _show(screen, "error", _error_note(wrong) if wrong else "")
 
 
 def _typed(screen: ParametersScreen, spec: ParameterSpec) -> str:
@@ -210,7 +247,7 @@ def _typed(screen: ParametersScreen, spec: ParameterSpec) -> str:
 
 
 def _clicked(screen: ParametersScreen, change: Change) -> None:
-    name = screen.parameter.value
+    name = chosen(screen)
     resource = screen.resource
     reply, _ = screen.source.current(resource) if resource is not None else (None, "")
     spec = RESOURCE_BY_NAME.get(name)
@@ -274,9 +311,11 @@ def refresh(
             screen.rendered = reply
             _show(screen, "table", render(reply) if reply is not None else "")
     names = editable_names(reply.programs if reply is not None else [])
-    if tuple(screen.parameter.options) != names:
-        screen.parameter.options = names
-    name = screen.parameter.value
+    options = tuple(map(option, names))
+    if tuple(screen.parameter.options) != options:
+        screen.names = dict(zip(options, names, strict=True))
+        screen.parameter.options = options
+    name = chosen(screen)
     spec = RESOURCE_BY_NAME.get(name)
     _editor(screen, name, spec, reply)
     _show(screen, "info", render_info(name, reply))

@@ -13,6 +13,7 @@ from typing import Any
 import viser
 
 from frontend.permissions import Allowed
+from frontend.state_rules import disabled_note, program_allows, resource_allows, state_words
 from runtime.contract import protocol as p
 
 COMMANDS: tuple[tuple[str, type[p.Command[p.StatusReply]], str], ...] = (
@@ -80,29 +81,40 @@ def refresh(
     if page != screen.shown:
         screen.table.content = page
         screen.shown = page
-    reasons: list[str] = []
+    status = dict(online).get(selected) if selected is not None else None
+    programs = tuple(x.name for x in status.programs) if status is not None else ()
+    programs = programs or ("-",)  # a dropdown needs an option (no configuration: no program)
+    if tuple(screen.program.options) != programs:
+        screen.program.options = programs
+    chosen = _program(status, screen.program.value)
+    reasons: list[str] = []  # the levels' first, then each button's state's
+    by_state: list[str] = []
     for command, button in [*screen.buttons.items(), *screen.program_buttons.items()]:
         verdict = allowed(command) if selected is not None else Allowed(False, "no resource")
-        button.disabled = not verdict.ok
-        button.hint = verdict.reason or None
         if verdict.reason and verdict.reason not in reasons:
             reasons.append(verdict.reason)
-    # a tooltip alone is missed: say beside the buttons why they are greyed out
-    note = _disabled_note(reasons)
+        if verdict.ok and status is not None:  # what the state allows
+            verdict = (
+                resource_allows(command, status)
+                if command in screen.buttons
+                else program_allows(command, status, chosen)
+                if chosen is not None
+                else Allowed(False, "choose a program")
+            )
+            if verdict.reason:
+                by_state.append(f"{button.label}: {verdict.reason}")
+        button.disabled = not verdict.ok
+        button.hint = verdict.reason or None
+    # a tooltip alone is missed (viser shows none on a disabled button): say it beside them
+    note = disabled_note("commands-disabled", reasons + by_state)
     if note != screen.shown_reason:
         screen.reason.content = note
         screen.shown_reason = note
-    status = dict(online).get(selected) if selected is not None else None
-    programs = tuple(x.name for x in status.programs) if status is not None else ("-",)
-    if tuple(screen.program.options) != programs:
-        screen.program.options = programs
 
 
-def _disabled_note(reasons: list[str]) -> str:
-    if not reasons:
-        return ""
-    text = "; ".join(html.escape(reason) for reason in reasons)
-    return f'<div data-testid="commands-disabled" style="color:#868e96">Disabled: {text}</div>'
+def _program(status: p.Status | None, name: str) -> p.ProgramStatus | None:
+    programs = status.programs if status is not None else ()
+    return next((x for x in programs if x.name == name), None)
 
 
 def render(online: list[tuple[str, p.Status | None]], selected: str | None) -> str:
@@ -133,7 +145,7 @@ def _row(name: str, status: p.Status | None, selected: bool) -> str:
     color = STATE_COLORS.get(status.state, "#e67700")
     cells += [
         f'<td style="{_CELL};color:{color};font-weight:600" data-state="{html.escape(name)}">'
-        f"{html.escape(status.state)}</td>",
+        f"{html.escape(state_words(status.state))}</td>",
         f'<td style="{_CELL};font-family:monospace">{html.escape(status.crc or "-")}</td>',
         f'<td style="{_CELL};text-align:right">{status.cycle}</td>',
         *(
@@ -147,14 +159,14 @@ def _row(name: str, status: p.Status | None, selected: bool) -> str:
             )
         ),
         f'<td style="{_CELL};text-align:right">{stats.overruns}</td>',
-        f'<td style="{_CELL}">{_programs(status)}</td>',
+        f'<td style="{_CELL};white-space:normal;min-width:9em">{_programs(status)}</td>',
     ]
     return f"<tr>{''.join(cells)}</tr>"
 
 
 def _programs(status: p.Status) -> str:
-    return ", ".join(
+    return "<br>".join(  # one a line: the table stays within the work area
         f'<span data-program="{html.escape(x.name)}">{html.escape(x.name)}: '
-        f"{html.escape(x.state)}</span>"
+        f"{html.escape(state_words(x.state))}</span>"
         for x in status.programs
     )

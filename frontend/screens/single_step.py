@@ -12,6 +12,7 @@ from typing import Any
 import viser
 
 from frontend.permissions import Allowed
+from frontend.state_rules import disabled_note, program_allows, resource_allows, state_words
 from runtime.contract import protocol as p
 
 MAX_STEPS = 1000
@@ -84,7 +85,8 @@ def refresh(
     status: p.Status | None,
     allowed: Callable[[type[p.Command[Any]]], Allowed],
 ) -> None:
-    programs = tuple(x.name for x in status.programs) if status is not None else ("-",)
+    programs = tuple(x.name for x in status.programs) if status is not None else ()
+    programs = programs or ("-",)  # a dropdown needs an option (no configuration: no program)
     if tuple(screen.program.options) != programs:
         screen.program.options = programs
     chosen = (
@@ -93,23 +95,27 @@ def refresh(
         else None
     )
     page = render(status, chosen)
-    reasons: list[str] = []
+    reasons: list[str] = []  # the levels' first, then each button's state's
+    by_state: list[str] = []
     for kind, buttons in screen.buttons.items():
         verdict = allowed(kind) if status is not None else Allowed(False, "no resource")
-        frozen = chosen is not None and chosen.state == "RUN_FREEZE"
-        if verdict.ok and kind is p.StepProgram and chosen is not None and not frozen:
-            verdict = Allowed(False, f"freeze {chosen.name} first to step it")
-        if verdict.ok and kind is p.Step and status is not None and status.state == "RUN":
-            verdict = Allowed(False, "the whole resource steps only in STOP")
+        if verdict.reason and verdict.reason not in reasons:
+            reasons.append(verdict.reason)
+        if verdict.ok and status is not None:
+            verdict = (
+                resource_allows(kind, status)
+                if kind is p.Step
+                else program_allows(kind, status, chosen)
+                if chosen is not None
+                else Allowed(False, "choose a program")
+            )
+            if verdict.reason:
+                labels = ", ".join(button.label for button in buttons)
+                by_state.append(f"{labels}: {verdict.reason}")
         for button in buttons:
             button.disabled = not verdict.ok
             button.hint = verdict.reason or None
-        if verdict.reason and verdict.reason not in reasons:
-            reasons.append(verdict.reason)
-    note = ""
-    if reasons:
-        text = "; ".join(html.escape(x) for x in reasons)
-        note = f'<div data-testid="step-disabled" style="color:#868e96">Disabled: {text}</div>'
+    note = disabled_note("step-disabled", reasons + by_state)
     if page != screen.shown:
         screen.info.content = page
         screen.shown = page
@@ -121,10 +127,10 @@ def refresh(
 def render(status: p.Status | None, chosen: p.ProgramStatus | None) -> str:
     if status is None:
         return "<p>Select a resource you are logged in to.</p>"
-    rows = [("Resource", f"{status.state}, cycle {status.cycle}")]
+    rows = [("Resource", f"{state_words(status.state)}, cycle {status.cycle}")]
     if chosen is not None:
         rows += [
-            ("Program state", chosen.state),
+            ("Program state", state_words(chosen.state)),
             ("Program cycles", str(chosen.cycles)),
         ]
     cells = "".join(

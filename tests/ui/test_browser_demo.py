@@ -102,7 +102,7 @@ def test_log_in_stop_step_start_freeze_and_log_out(demo: Demo) -> None:
         assert "freeze TankControl first" in text_of(page, '[data-testid="step-disabled"]')
         page.get_by_role("button", name="Freeze", exact=True).click()
         confirm(page, "TankControl")
-        wait_for_text(page, '[data-step="Program state"]', "RUN_FREEZE")
+        wait_for_text(page, '[data-step="Program state"]', "RUN (frozen)")
         program_cycles = int(text_of(page, '[data-step="Program cycles"]'))
         page.get_by_role("button", name="Step", exact=True).click()
         wait_for_text(page, '[data-step="Program cycles"]', str(program_cycles + 1))

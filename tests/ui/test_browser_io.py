@@ -4,6 +4,8 @@ and every mapped point with its value; in STOP the served pump command is its sa
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from playwright.sync_api import Page
 
@@ -26,7 +28,9 @@ pytestmark = pytest.mark.browser
 
 def requests(page: Page) -> int:
     server = text_of(page, '[data-testid="io-server"]')
-    return int(server.split(" requests")[0].rsplit("·", 1)[1])
+    found = re.search(r"(\d+) requests? ·", server)
+    assert found is not None, server
+    return int(found.group(1))
 
 
 def point(page: Page, variable: str) -> tuple[str, str]:

@@ -50,13 +50,21 @@ def test_change_a_watchdog_online_refuse_a_bad_value_and_explain_the_disabled(
         shoot(page, "parameters-1400x900")
 
         # out of range, and in range but more than half the safety time: refused here
+        # the picker names the parameter as the docs do, with its unit and key
+        assert page.get_by_label("Parameter", exact=True).first.input_value() == (
+            "Watchdog Time, ms (watchdog_ms)"
+        )
+        # said as typed, before Set; Set sends nothing
         for bad, why in (("5", "must be from 6 to 7500"), ("400", "more than half the safety")):
             field(page, "New value").fill(bad)
-            page.get_by_role("button", name="Set parameter").click()
             wait_until(f"the error for {bad}", lambda: why in text_of(page, ERROR))  # noqa: B023
+            page.get_by_role("button", name="Set parameter").click()
             assert page.get_by_role("dialog").count() == 0
         field(page, "New value").fill("ten")
-        page.get_by_role("button", name="Set parameter").click()
+        wait_until("a type error", lambda: "whole number" in text_of(page, ERROR))
+        field(page, "New value").fill("250 ms")  # corrected: the error goes as typed
+        wait_until("no error", lambda: page.locator(ERROR).count() == 0)
+        field(page, "New value").fill("ten")
         wait_until("a type error", lambda: "whole number" in text_of(page, ERROR))
         shoot(page, "parameters-bad-value")
         assert text_of(page, WATCHDOG) == "200 ms"
@@ -75,11 +83,11 @@ def test_change_a_watchdog_online_refuse_a_bad_value_and_explain_the_disabled(
         assert page.locator(ERROR).count() == 0 or text_of(page, ERROR) == ""
 
         # a parameter that changes only with a download: disabled, and why
-        choose(page, "Parameter", "safety_time_ms")
+        choose(page, "Parameter", "Safety Time, ms (safety_time_ms)")
         wait_until("Set is disabled", lambda: not button_enabled(page, "Set parameter"))
         reason = text_of(page, '[data-testid="parameter-disabled"]')
         assert "Safety Time changes only with a download" in reason
-        choose(page, "Parameter", "TankControl / priority")
+        choose(page, "Parameter", "TankControl / Priority (priority)")
         wait_until(
             "the program parameter's reason",
             lambda: "program parameters" in text_of(page, '[data-testid="parameter-disabled"]'),

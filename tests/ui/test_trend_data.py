@@ -6,6 +6,7 @@ while a signal moves inside it."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from frontend import trend_plot
 from frontend.trend_history import CAPACITY, TrendHistory
@@ -71,10 +72,16 @@ def test_each_number_on_an_axis_of_its_own_or_all_on_one() -> None:
     charted = trend_plot.traces([("a", "INT"), ("b", "REAL"), ("c", "BOOL")])
     one = trend_plot.options(charted, [(0.0, 10.0)])
     assert [s.get("scale") for s in one["series"][1:]] == ["y", "y", "b"]
-    assert one["scales"]["y"] == {"range": [0.0, 10.0]}
+    # the BOOLs' lane at the bottom: the numbers' range reaches down below it, their
+    # ticks stay in their own range
+    low, high = one["scales"]["y"]["range"]
+    assert high == 10.0 and (0.0 - low) / (high - low) == pytest.approx(trend_plot.BOOL_LANE)
+    assert one["axes"][1]["splits"] == (0.0, 2.0, 4.0, 6.0, 8.0, 10.0)
+    alone = trend_plot.options(charted[:2], [(0.0, 10.0)])  # no BOOL: no lane
+    assert alone["scales"]["y"] == {"range": [0.0, 10.0]}
     each = trend_plot.options(charted, [(0.0, 10.0), (-1.0, 1.0)])
     assert [s.get("scale") for s in each["series"][1:]] == ["y0", "y1", "b"]
-    assert each["scales"]["y1"] == {"range": [-1.0, 1.0]}
+    assert each["scales"]["y1"]["range"][1] == 1.0
     # an axis each, in the variable's colour, and the BOOLs' on the right
     assert [a.get("scale") for a in each["axes"]] == [None, "y0", "y1", "b"]
     assert each["axes"][2]["stroke"] == charted[1].colour
