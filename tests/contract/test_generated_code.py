@@ -111,6 +111,7 @@ ESCAPES = [
     ("s.text = f'{s}'", "an f-string"),
     ("s.n = max(*s.text)", "a starred argument"),
     ("s.n = max(s.n, key=_copy)", "max() with keywords"),
+    ("s.n = _copy(s.fb, memo=s)", "_copy() with keywords"),
     ("s.n = FN_X(**s.fb)", "a ** argument"),
     ("s.n = {'a': 1}", "a dict"),
     ("s.n = {s.n}", "a set"),
