@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 from backend.engineering.client_address import TrustedProxies, add_trusted_proxy_option
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
+from runtime.contract.outside_json import read_json_file
 from runtime.contract.private_files import write_private
 
 if TYPE_CHECKING:
@@ -60,7 +61,10 @@ def demo_administrator(state_dir: Path) -> tuple[UserAccount, str | None]:
     returned (to be shown once) and kept nowhere; later starts read back only its hash."""
     path = admin_file(state_dir)
     if path.exists():
-        return UserAccount(**json.loads(path.read_text())), None
+        try:
+            return UserAccount(**read_json_file(path, 64 * 1024)), None
+        except (ValueError, TypeError) as exc:  # JsonRefused, or not an account's fields
+            raise SystemExit(f"padt demo: {path} is not the demo's administrator: {exc}") from None
     password = secrets.token_urlsafe(18)
     account = UserAccount("admin", "administrator", hash_password(password))
     write_private(path, json.dumps(dataclasses.asdict(account)).encode("utf-8"))

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from runtime.context_snapshot import Records
+from runtime.contract.outside_json import JsonRefused, read_json
 
 CONTEXT_FORMAT = "padt-context"
 CONTEXT_VERSION = 1
@@ -125,8 +126,8 @@ def decode_context(data: bytes, signature: str) -> Context | ContextInvalid:
             return ContextInvalid("truncated: no complete header line")
         return ContextInvalid("not a padt context: no header line")
     try:
-        header = json.loads(data[:newline])
-    except ValueError:
+        header = read_json(data[:newline], "the header", _HEADER_MAX)
+    except JsonRefused:
         return ContextInvalid("not a padt context: the header is not JSON")
     if not isinstance(header, dict) or header.get("format") != CONTEXT_FORMAT:
         found = header.get("format") if isinstance(header, dict) else None
@@ -145,9 +146,9 @@ def decode_context(data: bytes, signature: str) -> Context | ContextInvalid:
     if hashlib.sha256(body).hexdigest() != digest:
         return ContextInvalid("checksum mismatch: the body's SHA-256 differs from the header's")
     try:
-        fields = json.loads(body)
-    except (ValueError, RecursionError):
-        return ContextInvalid("malformed body: not JSON")
+        fields = read_json(body, "the body", len(body))  # its size is the header's, checked
+    except JsonRefused as exc:
+        return ContextInvalid(f"malformed body: {exc}")
     problem = _body_problem(fields)
     if problem is not None:
         return ContextInvalid(f"malformed body: {problem}")

@@ -11,7 +11,6 @@ closes."""
 from __future__ import annotations
 
 import asyncio
-import json
 from typing import Any
 
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
@@ -21,12 +20,15 @@ from backend.api.errors import error_body
 from backend.api.service import PadtService
 from backend.engineering.literals import watch_values_shown
 from backend.engineering.resource_client import ResourceUnreachable, WatchHandle
+from runtime.contract.outside_json import JsonRefused, read_json
 from runtime.contract.protocol import GetVariables
 from runtime.contract.refusal import Refusal
+from runtime.contract.wire import MAX_DEPTH
 
 router = APIRouter()
 ONLINE_CHECK_S = 1.0
 POLICY_VIOLATION = 1008  # WebSocket close code: authentication failed or request refused
+MAX_FIRST_MESSAGE = 1 << 20  # a token and the names of the variables to watch
 
 
 def _subscription(message: Any) -> tuple[str, list[str], int]:
@@ -41,6 +43,19 @@ def _subscription(message: Any) -> tuple[str, list[str], int]:
     if not isinstance(period, int) or isinstance(period, bool):
         raise Refusal("bad_request", '"period_ms" is an integer')
     return token, variables, period
+
+
+def _first_message(received: Any) -> Any:
+    """The first message's JSON, read within the limits of outside JSON."""
+    if received.get("type") == "websocket.disconnect":
+        raise WebSocketDisconnect(received.get("code", 1000))
+    text = received.get("text")
+    if not isinstance(text, str):
+        raise Refusal("bad_request", "the first message is JSON text, not binary")
+    try:
+        return read_json(text, "the first message", MAX_FIRST_MESSAGE, MAX_DEPTH)
+    except JsonRefused as exc:
+        raise Refusal("bad_request", str(exc)) from None
 
 
 def _start_watch(service: PadtService, resource: str, message: Any, deliver: Any) -> WatchHandle:
@@ -78,10 +93,9 @@ async def live(websocket: WebSocket, resource: str) -> None:
         loop.call_soon_threadsafe(put_newest, message)
 
     try:
-        first = json.loads(await websocket.receive_text())
+        first = _first_message(await websocket.receive())
         watch = await run_in_threadpool(_start_watch, service, resource, first, deliver)
-    except (ValueError, Refusal) as exc:
-        error = exc if isinstance(exc, Refusal) else Refusal("bad_request", "not JSON")
+    except Refusal as error:
         await websocket.send_json(error_body(error))
         await websocket.close(POLICY_VIOLATION)
         return
@@ -102,7 +116,7 @@ async def _forward(
     service: PadtService,
     resource: str,
 ) -> None:
-    closed = asyncio.ensure_future(websocket.receive_text())  # tells when the client goes
+    closed = asyncio.ensure_future(websocket.receive())  # tells when the client goes
     try:
         while True:
             getting = asyncio.ensure_future(newest.get())
@@ -111,8 +125,10 @@ async def _forward(
             )
             if closed in done:
                 getting.cancel()
-                closed.result()  # raises WebSocketDisconnect when the client closed
-                closed = asyncio.ensure_future(websocket.receive_text())  # ignore chatter
+                said = closed.result()
+                if said["type"] == "websocket.disconnect":
+                    raise WebSocketDisconnect(said.get("code", 1000))
+                closed = asyncio.ensure_future(websocket.receive())  # chatter, text or not
                 continue
             if getting in done:
                 await websocket.send_json(getting.result())

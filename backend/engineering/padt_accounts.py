@@ -19,11 +19,13 @@ from backend.engineering.padt_levels import ADMINISTRATOR, PADT_LEVELS
 from backend.engineering.resource_client import ResourceLogin
 from runtime.contract.accounts import AccessControl, Session, account_problems, hash_password
 from runtime.contract.artifact import UserAccount
+from runtime.contract.outside_json import MIB, read_json_file
 from runtime.contract.private_files import write_private
 from runtime.contract.refusal import Refusal
 
 FORMAT = "padt-accounts"
 VERSION = 1
+MAX_FILE_BYTES = MIB  # thousands of accounts
 
 
 class AccountsError(ValueError):
@@ -35,7 +37,7 @@ def read_accounts(path: Path) -> tuple[UserAccount, ...]:
     if not path.exists():
         return ()
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = read_json_file(path, MAX_FILE_BYTES)
         if data.get("format") != FORMAT or data.get("version") != VERSION:
             raise AccountsError(f"{path}: not a {FORMAT} file of version {VERSION}")
         accounts = tuple(UserAccount(**entry) for entry in data["accounts"])

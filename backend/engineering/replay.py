@@ -21,7 +21,12 @@ from runtime.clock import VirtualClock
 from runtime.context_snapshot import ContextMismatch, restore
 from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
 from runtime.contract.protocol import ProgramState, ResourceState
-from runtime.contract.recording import CycleInputs, Recording, read_recording
+from runtime.contract.recording import (
+    CycleInputs,
+    Recording,
+    RecordingUnreadable,
+    read_recording,
+)
 from runtime.contract.refusal import Refusal
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.reload_switch import reload
@@ -71,6 +76,8 @@ def read_parts(path: Path) -> Recording:
         more = read_recording(part)
         if more.header.recording != first.header.recording:
             break
+        if more.header.variables != first.header.variables:  # its rows are of other columns
+            raise RecordingUnreadable(f"{part} lists other variables than {path}")
         first.cycles += more.cycles
         first.times_ns += more.times_ns
         first.rows += more.rows
@@ -102,7 +109,7 @@ def replay(recording: Recording, artifact: Artifact) -> ReplayResult:
         raise ReplayError(f"the recorded configuration is damaged: {exc}") from None
     try:
         resource = _started(_unsliced(recorded), recording)
-    except (KeyError, TypeError, ValueError) as exc:
+    except (KeyError, TypeError, ValueError, ArithmeticError) as exc:
         raise ReplayError(f"the recording's start state is damaged ({exc!r})") from None
     reloaded = artifact.crc != recorded.crc
     if reloaded:
@@ -127,7 +134,7 @@ def replay(recording: Recording, artifact: Artifact) -> ReplayResult:
             )
         try:
             _replay_cycle(resource, clock, item)
-        except (IndexError, KeyError, TypeError, ValueError) as exc:
+        except (IndexError, KeyError, TypeError, ValueError, ArithmeticError, Refusal) as exc:
             raise ReplayError(f"the inputs of cycle {cycle} are damaged ({exc!r})") from None
         for path, value in zip(names, row, strict=True):
             where = bound[path]
@@ -155,7 +162,10 @@ def _started(artifact: Artifact, recording: Recording) -> Resource:
     first = recording.inputs[0].begin_ns if recording.inputs else 0
     clock = VirtualClock(start_ns=first, epoch_ns=0)
     resource = Resource(recording.header.resource, clock)
-    resource.load(artifact)
+    try:
+        resource.load(artifact)
+    except Refusal as refusal:  # its code, checked before it runs, is not what padt generates
+        raise ReplayError(f"the recorded configuration does not load: {refusal}") from None
     context = start.context
     try:
         if context["globals"] is not None:

@@ -28,6 +28,7 @@ from runtime.contract.keyspace import (
     watch_key,
     watcher_key,
 )
+from runtime.contract.outside_json import MIB, JsonRefused, read_json
 from runtime.contract.protocol import (
     MAX_WATCHED,
     QUALITY_LETTERS,
@@ -52,6 +53,7 @@ from runtime.contract.protocol import (
 from runtime.contract.refusal import Refusal
 
 COMMAND_TIMEOUT_S = 5.0
+MAX_REPLY_BYTES = 256 * MIB  # a reply read as plain JSON (`command`): 100,000 values fit
 # how long a client waits, after the first answer, for another one: a second answerer on a
 # resource's command key is another party (the resource's own query is done at once)
 SECOND_ANSWER_S = 0.5
@@ -139,10 +141,12 @@ class ResourceClient:
             session = {"token": self._token(), "seq": seq} if self.logged_in else {}
             return json.dumps({"cmd": cmd, **session, **args}).encode()
 
-        reply: dict[str, Any] = json.loads(
-            self._exchange(cmd, payload, timeout_s, relogin=not cmd.startswith("log"))
-        )
-        return reply
+        reply = self._exchange(cmd, payload, timeout_s, relogin=not cmd.startswith("log"))
+        try:
+            data: dict[str, Any] = read_json(reply, "the reply", MAX_REPLY_BYTES)
+        except JsonRefused as exc:
+            raise Refusal("bad_reply", str(exc)) from None
+        return data
 
     def login(self, user: str, password: str) -> ResourceLogin:
         """Log in by challenge and response: the password never leaves this process, and
@@ -423,7 +427,7 @@ def _unauthenticated(reply: bytes) -> bool:
     if b"unauthenticated" not in reply:  # most replies, some of them large: not parsed twice
         return False
     try:
-        data = json.loads(reply)
-    except ValueError:
+        data = read_json(reply, "the reply", MAX_REPLY_BYTES)
+    except JsonRefused:
         return False
     return isinstance(data, dict) and data.get("error", {}).get("code") == "unauthenticated"

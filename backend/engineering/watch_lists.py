@@ -10,12 +10,14 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 
+from runtime.contract.outside_json import MIB, read_json_file
 from runtime.contract.private_files import write_private
 
 MAX_LISTS = 50  # per user
 MAX_VARIABLES = 20_000  # per list: what one watch set may hold
 MAX_LIST_NAME = 64
 MAX_PATH = 256
+MAX_FILE_BYTES = 256 * MIB  # the file read back: room for the lists of several users
 
 
 class WatchListError(ValueError):
@@ -100,7 +102,7 @@ def _read(path: Path) -> dict[str, dict[str, tuple[str, ...]]]:
     if not path.exists():
         return {}
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = read_json_file(path, MAX_FILE_BYTES)
         return {
             str(user): {str(name): tuple(str(p) for p in paths) for name, paths in lists.items()}
             for user, lists in data.items()

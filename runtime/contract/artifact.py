@@ -15,9 +15,11 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from runtime.contract.modbus import ModbusConfig, modbus_config
+from runtime.contract.outside_json import MIB, JsonRefused, read_json
 
 FORMAT = "padt-artifact"
 VERSION = 4  # 3: Modbus TCP (`modbus`); 4: `_tick` is None while no slice is metered
+MAX_ARTIFACT_BYTES = 64 * MIB  # as protocol.MAX_ARTIFACT: a larger one could never be loaded
 
 
 class ArtifactError(ValueError):
@@ -216,9 +218,9 @@ def _program_config(data: dict[str, Any]) -> ProgramConfig:
 def load_artifact(text: str | bytes) -> Artifact:
     """Parse and verify an artifact; raises ArtifactError on anything wrong."""
     try:
-        data = json.loads(text)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise ArtifactError(f"artifact is not valid JSON: {exc}") from None
+        data = read_json(text, "the artifact", MAX_ARTIFACT_BYTES)
+    except JsonRefused as exc:
+        raise ArtifactError(str(exc)) from None
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise ArtifactError("not a padt artifact")
     if data.get("version") != VERSION:
@@ -238,7 +240,7 @@ def load_artifact(text: str | bytes) -> Artifact:
             access_paths=tuple(AccessPath(**entry) for entry in data.get("access_paths", ())),
             crc=data["crc"],
         )
-    except (KeyError, TypeError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:  # ValueError: unpacking
         raise ArtifactError(f"artifact is incomplete: {exc}") from None
     expected = crc32_hex(artifact.body_json())
     if artifact.crc != expected:
