@@ -109,6 +109,12 @@ def c_string(text: str) -> str:
     return '"' + "".join(out) + '"'
 
 
+def c_comment(text: str) -> str:
+    """A C comment of `text`, which cannot end it early (names are checked before they get
+    here, runtime/contract/generated_code.py; this holds whatever a name holds)."""
+    return "/* " + text.replace("*/", "* /") + " */"
+
+
 def _identifier(text: str) -> str:
     return "".join(ch if ch.isalnum() else "_" for ch in text if ch.isascii())
 
@@ -149,13 +155,18 @@ class _Module:
         return f"S{self.sites - 1}"
 
     def statics(self) -> list[str]:
-        lines = [f"static PyObject *{ref}; /* {cls} */" for cls, ref in self.types.items()]
+        lines = [f"static PyObject *{ref}; {c_comment(cls)}" for cls, ref in self.types.items()]
         lines += [
-            f"static Py_ssize_t {ref}; /* {cls}.{attr} */"
+            f"static Py_ssize_t {ref}; {c_comment(f'{cls}.{attr}')}"
             for (cls, attr), ref in self.offsets.items()
         ]
-        lines += [f"static PyObject *{ref}; /* {text!r} */" for text, ref in self.keys.items()]
-        lines += [f"static PyObject *{ref}; /* {names!r} */" for names, ref in self.kwnames.items()]
+        lines += [
+            f"static PyObject *{ref}; {c_comment(repr(text))}" for text, ref in self.keys.items()
+        ]
+        lines += [
+            f"static PyObject *{ref}; {c_comment(repr(names))}"
+            for names, ref in self.kwnames.items()
+        ]
         lines += [f"static padt_site S{n};" for n in range(self.sites)]
         return lines
 
@@ -1422,7 +1433,7 @@ def translate_unit(
 def _module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
     types = [module.type_ref(cls) for cls, _ in functions]
     lines = [
-        f"/* native code of {module.filename}: written by runtime/native/translate.py */",
+        c_comment(f"native code of {module.filename}: written by runtime/native/translate.py"),
         '#include "padt_native.h"',
         "",
         *module.statics(),

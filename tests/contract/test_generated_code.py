@@ -299,6 +299,18 @@ def test_the_native_worker_builds_nothing_of_an_artifact_with_a_name_of_its_own(
     assert not (tmp_path / "x").exists()
 
 
+def test_a_name_that_reached_the_translator_stays_in_its_comment() -> None:
+    """Behind the check, the translator's comments hold any name (the unit's name goes
+    into the C source's first comment)."""
+    artifact = _artifact(FB)
+    translation = ArtifactTranslation.of(artifact)
+    fb = artifact.pou("Fb")
+    source = translation.translate(replace(fb, name=C_INJECTION)).source
+    first = source.splitlines()[0]
+    assert first.startswith("/* native code of <FUNCTION_BLOCK X * / __attribute__")
+    assert first.endswith("runtime/native/translate.py */") and first.count("*/") == 1
+
+
 def test_no_text_of_a_source_reaches_the_c_of_the_native_tier_unchecked() -> None:
     """A string constant with C in it stays Python (the tier translates no strings); a
     source that does not pass is not translated at all."""
