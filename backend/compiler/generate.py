@@ -612,6 +612,12 @@ class _Emitter:
             if binds_reference(param, arg):
                 keywords.append(f"{param.attr}={self.reference(arg.value)}")
                 continue
+            if param.kind == "VAR_IN_OUT" and isinstance(param.type, FbType):
+                # the instance itself, as a block's call passes it: a copy stored back would
+                # leave whatever else refers to the instance (another block's in-out) on
+                # the old one
+                keywords.append(f"{param.attr}={self.expr(arg.value).code}")
+                continue
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
         code = f"{callee}({', '.join(keywords)})"
         result = pou.return_type or BOOL

@@ -236,3 +236,41 @@ END_PROGRAM
     pair = run_alike(text, native_tier, 3)
     assert "Pump" in pair.report.bodies
     assert values(pair)["Main.t.fill"] == 3
+
+
+def test_a_function_in_out_is_the_instance_itself_not_a_copy(native_tier: NativeTier) -> None:
+    text = """
+FUNCTION_BLOCK Animal
+VAR_INPUT sound : INT; END_VAR
+METHOD PUBLIC Speak : INT
+Speak := sound;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Dog EXTENDS Animal
+METHOD PUBLIC OVERRIDE Speak : INT
+Speak := 1000 + sound;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION Louder : INT
+VAR_IN_OUT a : Animal; END_VAR
+a.sound := a.sound + 1;
+Louder := a.Speak();
+END_FUNCTION
+FUNCTION_BLOCK Vet
+VAR_IN_OUT patient : Animal; END_VAR
+VAR_OUTPUT heard : INT; END_VAR
+METHOD PUBLIC Listen
+heard := patient.Speak();
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR d : Dog; v : Vet; x : INT; END_VAR
+v(patient := d);
+x := Louder(d);      (* d itself: the vet's patient hears it in this cycle *)
+v.Listen();
+END_PROGRAM
+"""
+    pair = run_alike(text, native_tier, 3)
+    found = values(pair)
+    assert found["Main.x"] == 1003 and found["Main.v.heard"] == 1003
+    assert found["Main.d.sound"] == found["Main.v.patient.sound"] == 3
