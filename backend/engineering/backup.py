@@ -23,7 +23,9 @@ from datetime import UTC, datetime
 from pathlib import Path, PurePosixPath
 from typing import Any
 
+from backend.engineering.archive_reader import ArchiveRefused, read_archive
 from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
+from runtime.contract.outside_json import MIB, JsonRefused, read_json
 from runtime.contract.private_files import write_private
 
 DEFAULT_BACKUP_DIR = Path("padt-backups")
@@ -33,6 +35,7 @@ SOURCES_PREFIX = "project/"  # project files keep their relative paths below thi
 FORMAT = "padt-backup"
 VERSION = 1
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)  # the earliest time a zip can hold: no clock in the bytes
+MAX_MANIFEST_BYTES = 16 * MIB  # a digest per project file
 _UNSAFE = re.compile(r"[^A-Za-z0-9_-]+")
 
 
@@ -177,27 +180,20 @@ def write_backup(
 def restore_backup(zip_path: Path) -> tuple[str, dict[str, str]]:
     """The artifact text and the project files (relative path -> text) of a backup, after
     proving them: the artifact's own CRC, the manifest's configuration CRC and every
-    file's SHA-256 must match. Raises BackupError otherwise."""
+    file's SHA-256 must match. The archive is read within `archive_reader`'s limits and
+    the manifest within those of outside JSON. Raises BackupError otherwise."""
     try:
-        with zipfile.ZipFile(zip_path) as archive:
-            names = set(archive.namelist())
-            for required in (ARTIFACT_ENTRY, MANIFEST_ENTRY):
-                if required not in names:
-                    raise BackupError(f"{zip_path}: no {required}")
-            artifact_text = archive.read(ARTIFACT_ENTRY).decode("ascii")
-            recorded = json.loads(archive.read(MANIFEST_ENTRY))
-            raw = {
-                name.removeprefix(SOURCES_PREFIX): archive.read(name)
-                for name in sorted(names)
-                if name.startswith(SOURCES_PREFIX)
-            }
-    except BackupError:
-        raise
-    except (OSError, zipfile.BadZipFile, UnicodeDecodeError, ValueError) as exc:
+        entries = read_archive(zip_path)
+    except (OSError, ArchiveRefused) as exc:
         raise BackupError(f"{zip_path}: not a readable backup: {exc}") from None
+    for required in (ARTIFACT_ENTRY, MANIFEST_ENTRY):
+        if required not in entries:
+            raise BackupError(f"{zip_path}: no {required}")
     try:
+        recorded = read_json(entries[MANIFEST_ENTRY], MANIFEST_ENTRY, MAX_MANIFEST_BYTES)
+        artifact_text = entries[ARTIFACT_ENTRY].decode("ascii")
         artifact = load_artifact(artifact_text)
-    except ArtifactError as exc:
+    except (JsonRefused, UnicodeDecodeError, ArtifactError) as exc:
         raise BackupError(f"{zip_path}: {exc}") from None
     if not isinstance(recorded, dict) or recorded.get("format") != FORMAT:
         raise BackupError(f"{zip_path}: the manifest is not a {FORMAT} manifest")
@@ -207,7 +203,15 @@ def restore_backup(zip_path: Path) -> tuple[str, dict[str, str]]:
         raise BackupError(
             f"{zip_path}: the manifest names CRC {manifest_crc}, the artifact is {artifact.crc}"
         )
+    raw = {
+        name.removeprefix(SOURCES_PREFIX): data
+        for name, data in sorted(entries.items())
+        if name.startswith(SOURCES_PREFIX)
+    }
     digests = {name: hashlib.sha256(data).hexdigest() for name, data in raw.items()}
     if digests != recorded.get("files"):
         raise BackupError(f"{zip_path}: the project files do not match the manifest")
-    return artifact_text, {name: data.decode("utf-8") for name, data in raw.items()}
+    try:
+        return artifact_text, {name: data.decode("utf-8") for name, data in raw.items()}
+    except UnicodeDecodeError as exc:
+        raise BackupError(f"{zip_path}: a project file is not UTF-8 text ({exc})") from None

@@ -21,14 +21,17 @@ from __future__ import annotations
 import json
 import struct
 from collections.abc import Iterator
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, BinaryIO
 
-from mcap.exceptions import McapError
-from mcap.records import Attachment, Channel, Message, Metadata
-from mcap.stream_reader import StreamReader
+import lz4.frame  # type: ignore[import-untyped]
+import zstandard
+from mcap.exceptions import McapError, RecordLengthLimitExceeded
+from mcap.records import Attachment, Channel, Chunk, Message, Metadata
+from mcap.stream_reader import StreamReader, breakup_chunk
 
+from runtime.contract.outside_json import MIB, JsonRefused, read_json
 from runtime.contract.values import is_reference_type
 
 FORMAT = "padt-recording"
@@ -39,6 +42,10 @@ VALUES_SCHEMA = "padt.CycleValues"
 INPUTS_SCHEMA = "padt.CycleInputs"
 ARTIFACT_ATTACHMENT = "artifact.json"
 START_ATTACHMENT = "start.json"
+# What a file read back may hold (docs/recording.md, "Limits"): the recorder writes chunks
+# of 512 KiB; anything past these is refused before it is read or unpacked.
+MAX_RECORD_BYTES = 256 * MIB  # one record as stored: an attachment, a compressed chunk
+MAX_CHUNK_BYTES = 64 * MIB  # one chunk unpacked
 
 
 def values_topic(resource: str) -> str:
@@ -83,8 +90,11 @@ class RecordingHeader:
                 resource=data["resource"],
                 project=data["project"],
                 crc=data["crc"],
-                variables=[(str(p), str(t)) for p, t in json.loads(data["variables"])],
-                all_inputs=bool(json.loads(data["all_inputs"])),
+                variables=[
+                    (str(p), str(t))
+                    for p, t in read_json(data["variables"], "the header's variables", 64 * MIB)
+                ],
+                all_inputs=bool(read_json(data["all_inputs"], "the header's all_inputs", 16)),
                 started_ns=int(data["started_ns"]),
                 recording=data["recording"],
                 part=int(data["part"]),
@@ -266,6 +276,8 @@ def read_recording(source: Path | BinaryIO) -> Recording:
                 pending.append(record)
             else:
                 _take(recording, record, channels)
+    except RecordLengthLimitExceeded as exc:  # a cut file ends in EOF, never in this
+        raise RecordingUnreadable(f"a record larger than the limit ({exc})") from None
     # a cut inside a record's fixed fields ends in struct.error (not a ValueError)
     except (McapError, EOFError, ValueError, KeyError, TypeError, OSError, struct.error) as exc:
         if isinstance(exc, RecordingUnreadable):
@@ -280,23 +292,79 @@ def read_recording(source: Path | BinaryIO) -> Recording:
 
 
 def _records(source: BinaryIO) -> Iterator[Any]:
-    yield from StreamReader(source, record_size_limit=1 << 30).records
+    # chunks are unpacked here, not by mcap: it unpacks a zstd chunk to the size its frame
+    # claims and an lz4 chunk to whatever it holds, a gigabyte from a few kilobytes
+    reader = StreamReader(source, emit_chunks=True, record_size_limit=MAX_RECORD_BYTES)
+    for record in reader.records:
+        if isinstance(record, Chunk):
+            yield from breakup_chunk(replace(record, compression="", data=_unpacked(record)))
+        else:
+            yield record
+
+
+def _unpacked(chunk: Chunk) -> bytes:
+    """A chunk's records, unpacked to the size it declares and never one byte further;
+    RecordingUnreadable when it declares too much or holds more or less than it says."""
+    declared = chunk.uncompressed_size
+    if declared > MAX_CHUNK_BYTES:
+        raise RecordingUnreadable(
+            f"a chunk declares {declared:,} bytes unpacked, more than the limit of "
+            f"{MAX_CHUNK_BYTES:,}"
+        )
+    try:
+        if chunk.compression == "":
+            data = chunk.data
+        elif chunk.compression == "zstd":
+            with zstandard.ZstdDecompressor().stream_reader(
+                chunk.data, read_across_frames=True
+            ) as unpacking:
+                data = unpacking.read(declared + 1)
+        elif chunk.compression == "lz4":
+            data = lz4.frame.LZ4FrameDecompressor().decompress(chunk.data, max_length=declared + 1)
+        else:
+            raise RecordingUnreadable(f"a chunk compressed with unknown {chunk.compression!r}")
+    except (zstandard.ZstdError, RuntimeError) as exc:  # lz4 raises RuntimeError
+        raise RecordingUnreadable(f"a chunk does not unpack ({exc})") from None
+    if len(data) != declared:
+        more = "more" if len(data) > declared else "less"
+        raise RecordingUnreadable(
+            f"a chunk unpacks to {more} than the {declared:,} bytes it declares"
+        )
+    return data
 
 
 def _take(recording: Recording, record: Any, channels: dict[int, str]) -> None:
     if isinstance(record, Message):
         kind = channels.get(record.channel_id)
-        data = json.loads(record.data)
+        if kind not in ("values", "inputs"):
+            return
+        where = f"the {kind} message of log time {record.log_time}"
+        data = _outside(record.data, where)
         if kind == "values":
-            recording.cycles.append(int(data["cycle"]))
+            cycle, nested = int(data["cycle"]), data["values"]
+            row = []
+            for path, _ in recording.header.variables:
+                try:
+                    row.append(pick(nested, path))
+                except (KeyError, TypeError):
+                    raise RecordingUnreadable(f"{where} has no value of {path}") from None
+            # all three or none: a row for every cycle, whatever comes next
+            recording.cycles.append(cycle)
             recording.times_ns.append(record.log_time)
-            nested = data["values"]
-            recording.rows.append([pick(nested, p) for p, _ in recording.header.variables])
-        elif kind == "inputs":
+            recording.rows.append(row)
+        else:
             recording.inputs.append(CycleInputs.from_json(data))
     elif isinstance(record, Attachment):
         if record.name == ARTIFACT_ATTACHMENT:
             recording.artifact = record.data.decode("utf-8")
         elif record.name == START_ATTACHMENT:
-            data = json.loads(record.data)
-            recording.start = StartState(**data)
+            recording.start = StartState(**_outside(record.data, START_ATTACHMENT))
+
+
+def _outside(data: bytes, where: str) -> Any:
+    """A message or attachment of the file, within the limits of outside JSON: refused as
+    a whole (not read as a file cut short, which ends in a broken record, not in this)."""
+    try:
+        return read_json(data, where, MAX_CHUNK_BYTES)
+    except JsonRefused as exc:
+        raise RecordingUnreadable(str(exc)) from None

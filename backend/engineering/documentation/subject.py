@@ -17,6 +17,7 @@ from pathlib import Path
 from backend.compiler import ast
 from backend.compiler.cross_reference import VariableUses, cross_reference_of
 from backend.compiler.pipeline import parse_project
+from backend.engineering.archive_reader import ArchiveRefused, unpack
 from backend.engineering.backup import BackupError, restore_backup
 from backend.engineering.project import (
     Project,
@@ -110,12 +111,11 @@ def _from_backup(zip_path: Path) -> Subject:
         raise DocumentError(str(exc)) from None
     with tempfile.TemporaryDirectory(prefix="padt-docs-") as folder:
         root = Path(folder)
-        for name, text in files.items():
-            target = root / name
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_text(text, encoding="utf-8")
         try:
+            unpack({name: text.encode("utf-8") for name, text in files.items()}, root)
             project = load_project([root])
+        except ArchiveRefused as exc:  # restore_backup checked the names: a second guard
+            raise DocumentError(f"{zip_path}: {exc}") from None
         except ProjectError as exc:
             raise DocumentError(f"{zip_path}: {exc}".replace(folder, "")) from None
     loaded = load_artifact(artifact_text)  # restore_backup proved it loads
