@@ -419,6 +419,7 @@ _MATH = {
     name: f"_math.{name.lower()}"
     for name in ("SQRT", "LN", "EXP", "SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN")
 }
+_MATH["LN"] = "_math.log"  # the natural logarithm: math has no `ln`
 _MATH["LOG"] = "_math.log10"
 
 

@@ -65,10 +65,9 @@ OBJECT_INTRINSICS = frozenset(
 INTRINSICS = CALLED_INTRINSICS | OBJECT_INTRINSICS
 # the builtins generated code calls (the whole of its `__builtins__` but `__build_class__`)
 BUILTINS = frozenset({"float", "int", "abs", "len", "max", "min", "range", "str"})
-# the functions of `math` the compiler passes to `_safe_math` (SQRT, LOG, EXP, ...); LN
-# is written `_math.ln`, which `math` does not have (a fault when it runs, not a way out)
+# the functions of `math` the compiler passes to `_safe_math` (SQRT, LN, LOG, EXP, ...)
 MATH_FUNCTIONS = frozenset(
-    {"sqrt", "ln", "log", "log10", "exp", "sin", "cos", "tan", "asin", "acos", "atan"}
+    {"sqrt", "log", "log10", "exp", "sin", "cos", "tan", "asin", "acos", "atan"}
 )
 # the attributes of `_SYS`: one per system variable, and the running program's time
 SYSTEM_ATTRS = frozenset({v.name for v in SYSTEM_VARIABLES} | {"now_ns"})
