@@ -123,6 +123,7 @@ def _run_with_plant(
 ) -> int:
     from backend.api.server import ApiServer
     from backend.api.service import PadtService
+    from backend.engineering.known_resources import KnownResources
     from backend.engineering.padt_accounts import PadtAccounts, write_accounts
     from backend.engineering.project import compile_project, load_project
     from backend.engineering.resource_directory import ResourceDirectory
@@ -163,7 +164,9 @@ def _run_with_plant(
         write_accounts(accounts_file, (dataclasses.replace(admin, level="security-administrator"),))
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
         projects = {"demo": folder}
-        directory = ResourceDirectory(session)
+        # the demo's resource keeps its key in the state folder: so do its UI and API
+        known = KnownResources(args.state_dir / "known_resources")
+        directory = ResourceDirectory(session, known)
         service = PadtService(directory, accounts, projects, args.state_dir / "backups")
         trusted = TrustedProxies(tuple(args.trusted_proxy))
         try:

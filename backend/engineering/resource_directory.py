@@ -14,6 +14,7 @@ import threading
 
 import zenoh
 
+from backend.engineering.known_resources import KnownResources
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract import signatures
 from runtime.contract.keyspace import alive_key, any_resource, resource_of, status_key
@@ -22,8 +23,9 @@ from runtime.contract.refusal import Refusal
 
 
 class ResourceDirectory:
-    def __init__(self, session: zenoh.Session) -> None:
+    def __init__(self, session: zenoh.Session, known: KnownResources | None = None) -> None:
         self._session = session
+        self._known = known  # where its clients pin the resources' keys (None: the user's)
         self._lock = threading.Lock()
         self._online: set[str] = set()
         self._status: dict[str, Status] = {}
@@ -75,7 +77,7 @@ class ResourceDirectory:
         """A client of an online resource; Refusal `unknown_resource` for any other."""
         if not self.is_online(name):
             raise Refusal("unknown_resource", f"no resource '{name}' is online")
-        client = ResourceClient(self._session, name)
+        client = ResourceClient(self._session, name, self._known)
         with self._lock:
             client.trusted_key = self._keys.get(name)
         return client

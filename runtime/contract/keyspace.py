@@ -1,11 +1,11 @@
-"""The Zenoh key space, version 1 (documented in docs/architecture.md).
+"""The Zenoh key space, version 2 (documented in docs/architecture.md).
 
-padt/v1/res/<resource>/cmd      queryable: JSON command in, JSON reply out
-padt/v1/res/<resource>/status   published on change and every second
-padt/v1/res/<resource>/alive    liveliness token while the runtime process lives
-padt/v1/res/<resource>/events   every event of the event log, in order (reliable)
-padt/v1/res/<resource>/watch/<id>     the values of watch set <id>, once per its period
-padt/v1/res/<resource>/watchers/<id>  liveliness token of the client that owns watch set <id>
+padt/v2/res/<resource>/cmd      queryable: JSON command in, JSON reply out
+padt/v2/res/<resource>/status   published on change and every second
+padt/v2/res/<resource>/alive    liveliness token while the runtime process lives
+padt/v2/res/<resource>/events   every event of the event log, in order (reliable)
+padt/v2/res/<resource>/watch/<id>     the values of watch set <id>, once per its period
+padt/v2/res/<resource>/watchers/<id>  liveliness token of the client that owns watch set <id>
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from collections.abc import Callable
 
 from runtime.contract.refusal import Refusal
 
-ROOT = "padt/v1"
+ROOT = "padt/v2"  # 2: signed login challenges, signed logout, stamped publications
 # A name in a key is one plain chunk: no `/` (a level), `*`, `**` or `$*` (wildcards),
 # which would make a key expression that reaches other resources' keys
 RESOURCE_NAME_RULE = "a letter or _, then up to 63 letters, digits, _ or -"

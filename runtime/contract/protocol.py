@@ -1,4 +1,4 @@
-"""The bus protocol of a resource, version 1: every command it answers and every message it
+"""The bus protocol of a resource, version 2: every command it answers and every message it
 publishes, one typed dataclass each (docs/protocol.md is the reference for people).
 
 A command class names its wire name, the access level it needs and its reply type; its

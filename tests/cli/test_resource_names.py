@@ -1,4 +1,4 @@
-"""A resource's name is part of its Zenoh keys (`padt/v1/res/<name>/cmd`): names such as
+"""A resource's name is part of its Zenoh keys (`padt/v2/res/<name>/cmd`): names such as
 `*`, `Lk1/**` and `$*` would make key expressions that reach every resource. They are
 refused where a name enters: the compiler (E0620 at the line that names it), the runtime
 (it does not start), every client (before it asks anything), and the key space itself."""
@@ -72,7 +72,7 @@ def test_clients_refuse_it_before_asking_anything(zenoh_endpoint: str) -> None:
             asked.append(str(query.key_expr))
 
     with router(zenoh_endpoint), client_session(zenoh_endpoint) as session:
-        queryable = session.declare_queryable("padt/v1/**", listen)
+        queryable = session.declare_queryable("padt/v2/**", listen)
         try:
             for name in ["*", "Lk1/**", "$*"]:
                 for command in (["status"], ["stop"], ["values"], ["events"]):
@@ -84,7 +84,7 @@ def test_clients_refuse_it_before_asking_anything(zenoh_endpoint: str) -> None:
             padt("status", "--resource", "Tank1", "--zenoh", zenoh_endpoint, timeout=120)
         finally:
             queryable.undeclare()
-    assert asked == ["padt/v1/res/Tank1/cmd"] * len(asked) and asked
+    assert asked == ["padt/v2/res/Tank1/cmd"] * len(asked) and asked
 
 
 @pytest.mark.parametrize("name", WILD_NAMES)
@@ -99,5 +99,5 @@ def test_no_key_of_the_key_space_is_made_for_such_a_name(name: str) -> None:
             make(name, "ab12")
         with pytest.raises(Refusal):
             make("Tank1", name or "*")  # a watch set id is one plain chunk as well
-    assert keyspace.any_resource(keyspace.alive_key) == "padt/v1/res/*/alive"
-    assert keyspace.watchers_key_expr("Tank1") == "padt/v1/res/Tank1/watchers/*"
+    assert keyspace.any_resource(keyspace.alive_key) == "padt/v2/res/*/alive"
+    assert keyspace.watchers_key_expr("Tank1") == "padt/v2/res/Tank1/watchers/*"

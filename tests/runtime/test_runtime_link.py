@@ -143,7 +143,7 @@ def test_two_resources_on_one_router(tmp_path: Path, zenoh_endpoint: str) -> Non
         assert right.command("status")["status"]["state"] == "RUN"
         found = {
             str(reply.ok.key_expr).split("/")[3]
-            for reply in session.liveliness().get("padt/v1/res/*/alive", timeout=5)
+            for reply in session.liveliness().get("padt/v2/res/*/alive", timeout=5)
             if reply.ok is not None
         }
         assert found == {"Left", "Right"}
