@@ -115,7 +115,7 @@ def replay(recording: Recording, artifact: Artifact) -> ReplayResult:
     if reloaded:
         try:
             reload(resource, _unsliced(artifact), {})
-        except Refusal as refusal:
+        except (Refusal, ArtifactError) as refusal:
             raise ReplayError(f"the project cannot replace the recorded one: {refusal}") from None
     names = [path for path, _ in header.variables]
     bound = {path: resource.variables.find(path) for path in names}
@@ -164,7 +164,7 @@ def _started(artifact: Artifact, recording: Recording) -> Resource:
     resource = Resource(recording.header.resource, clock)
     try:
         resource.load(artifact)
-    except Refusal as refusal:  # its code, checked before it runs, is not what padt generates
+    except (Refusal, ArtifactError) as refusal:  # its code is checked before it runs
         raise ReplayError(f"the recorded configuration does not load: {refusal}") from None
     context = start.context
     try:

@@ -12,6 +12,7 @@ from pathlib import Path
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import read_source
 from runtime.code_image import CodeImage
+from runtime.contract.artifact import ArtifactError
 from runtime.intrinsics import ProgramFault, SystemView
 
 
@@ -29,7 +30,11 @@ def run_entry(path: Path, entry: str = "main") -> int:
     if target is None or target.kind not in ("FUNCTION", "PROGRAM"):
         print(f"{path}: no FUNCTION or PROGRAM '{entry}'", file=sys.stderr)
         return 1
-    image = CodeImage(artifact, SystemView())
+    try:
+        image = CodeImage(artifact, SystemView())
+    except ArtifactError as exc:  # the check of generated code before it is compiled
+        print(f"{path}: the compiled code does not load: {exc}", file=sys.stderr)
+        return 2
     for pou in artifact.pous:  # programs are callable from ST by name: `prog();`
         if pou.kind == "PROGRAM":
             image.register_program(pou.name, image.new_instance(pou.name))

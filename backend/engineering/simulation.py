@@ -18,7 +18,7 @@ from typing import Any
 from backend.compiler.diagnostics import clipped, shortened
 from backend.engineering.literals import LiteralError, parse_literal
 from runtime.clock import VirtualClock
-from runtime.contract.artifact import Artifact
+from runtime.contract.artifact import Artifact, ArtifactError
 from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import (
@@ -180,7 +180,10 @@ def prepare(artifact: Artifact, plan: Plan) -> Simulation:
         raise SimulationError("--cycle-ms must be at least 1")
     clock = VirtualClock()
     resource = Resource(artifact.resource.name, clock)
-    resource.load(artifact)
+    try:
+        resource.load(artifact)
+    except (Refusal, ArtifactError) as exc:  # the check of generated code before it runs
+        raise SimulationError(f"the compiled configuration does not load: {exc}") from None
     types = {v.path: v.type for v in resource.variables.infos()}
     traced = list(types) if plan.trace is None else _select(resource, types, plan.trace)
     simulation = Simulation(resource, clock, plan.cycles, cycle_ms * NS_PER_MS, traced, types)
