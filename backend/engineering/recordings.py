@@ -219,9 +219,17 @@ def download_chunks(client: ResourceClient, file_name: str) -> tuple[int, Iterat
     return size, pieces()
 
 
-def download(client: ResourceClient, file_name: str) -> bytes:
-    """A recording file (a name from `list_recordings`), whole, as far as it is written."""
-    _size, pieces = download_chunks(client, file_name)
+def download(client: ResourceClient, file_name: str, max_bytes: int | None = None) -> bytes:
+    """A recording file (a name from `list_recordings`), whole, as far as it is written;
+    refused `too_large`, after its first piece, when the resource says it holds more than
+    `max_bytes` (what the list said is no promise: the caller keeps all of it in memory)."""
+    size, pieces = download_chunks(client, file_name)
+    if max_bytes is not None and size > max_bytes:
+        raise Refusal(
+            "too_large",
+            f"resource {client.resource} says {file_name} has {size:,} bytes, "
+            f"more than the {max_bytes:,} taken here",
+        )
     return b"".join(pieces)
 
 

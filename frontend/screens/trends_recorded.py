@@ -209,7 +209,8 @@ def _open(screen: RecordedTab, client: ResourceClient, chosen: p.RecordingInfo) 
             f"{_size(chosen)} is too much to chart here: download it and open it in Foxglove"
         )
     parts = [
-        read_recording(io.BytesIO(recordings.download(client, f.name))) for f in _files(chosen)
+        read_recording(io.BytesIO(recordings.download(client, f.name, MAX_OPEN_BYTES)))
+        for f in _files(chosen)
     ]
     times = np.array([t for part in parts for t in part.times_ns], dtype=np.float64) / 1e9
     screen.opened = Opened(chosen, parts, times)

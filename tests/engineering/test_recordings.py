@@ -219,3 +219,13 @@ def test_a_reply_that_is_not_the_part_asked_for_ends_the_download(
         recordings.download(liar.client, "x-1.mcap")
     assert refused.value.code == "bad_reply"
     assert says in refused.value.message and "x-1.mcap" in refused.value.message
+
+
+def test_a_file_said_to_be_larger_than_the_caller_takes_is_refused_at_once(liar: Liar) -> None:
+    liar.lie = "terabyte"
+    liar.asked.clear()
+    with pytest.raises(Refusal) as refused:
+        recordings.download(liar.client, "x-1.mcap", max_bytes=len(FILE))
+    assert refused.value.code == "too_large"
+    assert f"{1 << 40:,} bytes" in refused.value.message and "x-1.mcap" in refused.value.message
+    assert liar.asked == ["record_read"]  # nothing fetched past the first piece

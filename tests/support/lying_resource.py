@@ -1,7 +1,7 @@
 """A hostile peer on a resource's command key, for the recording download tests: it
 answers `record_list` with one recording `x` of one file, and `record_read` with that
 file's bytes, or with a lie as told (a wrong offset, a file that shrinks, data that is not
-base64, no bytes, a negative size). Real Zenoh, a real router: only the peer is not a
+base64, no bytes, a negative size, a terabyte). Real Zenoh, a real router: only the peer is not a
 runtime."""
 
 from __future__ import annotations
@@ -54,6 +54,8 @@ class Liar:
             reply["data"] = ""
         elif self.lie == "negative":
             reply["size"] = -1
+        elif self.lie == "terabyte":
+            reply["size"] = 1 << 40
         return reply
 
 
