@@ -69,6 +69,22 @@ def test_other_crafted_names_are_refused(
     assert "crafted.zip" in run.stderr and list(entries)[-1] in run.stderr, run.stderr
 
 
+def test_a_link_entry_is_refused(plain_backup: Path, tmp_path: Path) -> None:
+    link = {"project/lib.st": b"/etc/passwd"}
+    crafted = hostile.rewritten(plain_backup, tmp_path / "link.zip", link, mode=0o120777)
+    run = padt("docs", str(crafted), "-o", str(tmp_path / "out"))
+    assert run.returncode == 2, run.stderr
+    assert "'project/lib.st': a link" in run.stderr, run.stderr
+
+
+def test_ten_thousand_and_one_entries_are_refused(plain_backup: Path, tmp_path: Path) -> None:
+    many = {f"project/f{n}.st": b"" for n in range(10_001)}
+    crafted = hostile.rewritten(plain_backup, tmp_path / "many.zip", many)
+    run = padt("docs", str(crafted), "-o", str(tmp_path / "out"))
+    assert run.returncode == 2, run.stderr
+    assert "more than 10,000" in run.stderr, run.stderr
+
+
 @pytest.mark.parametrize("declared", [None, 1000], ids=["honest", "lying"])
 def test_a_gigabyte_zip_bomb_is_refused_without_reading_it(
     declared: int | None, plain_backup: Path, tmp_path: Path

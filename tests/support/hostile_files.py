@@ -205,10 +205,14 @@ def backup(folder: Path, project_folder: Path) -> Path:
 
 
 def rewritten(
-    original: Path, target: Path, extra: dict[str, bytes], manifest: bytes | None = None
+    original: Path,
+    target: Path,
+    extra: dict[str, bytes],
+    manifest: bytes | None = None,
+    mode: int = 0o100644,
 ) -> Path:
-    """The backup with `extra` entries (names as given, unchecked) and the manifest's
-    digests redone for them, or the manifest replaced by `manifest`."""
+    """The backup with `extra` entries (names as given, unchecked, of Unix `mode`) and the
+    manifest's digests redone for them, or the manifest replaced by `manifest`."""
     with zipfile.ZipFile(original) as archive:
         entries = {name: archive.read(name) for name in archive.namelist()}
     recorded = json.loads(entries["MANIFEST.json"])
@@ -218,7 +222,9 @@ def rewritten(
     entries["MANIFEST.json"] = manifest if manifest is not None else json.dumps(recorded).encode()
     with zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as archive:
         for name, data in entries.items():
-            archive.writestr(zipfile.ZipInfo(name), data, compress_type=zipfile.ZIP_DEFLATED)
+            info = zipfile.ZipInfo(name)
+            info.external_attr = (mode if name in extra else 0o100644) << 16
+            archive.writestr(info, data, compress_type=zipfile.ZIP_DEFLATED)
     return target
 
 
