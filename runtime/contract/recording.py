@@ -318,7 +318,11 @@ def _unpacked(chunk: Chunk) -> bytes:
             with zstandard.ZstdDecompressor().stream_reader(
                 chunk.data, read_across_frames=True
             ) as unpacking:
-                data = unpacking.read(declared + 1)
+                pieces, wanted = [], declared + 1  # read() may stop at a frame's end
+                while wanted > 0 and (piece := unpacking.read(wanted)):
+                    pieces.append(piece)
+                    wanted -= len(piece)
+                data = b"".join(pieces)
         elif chunk.compression == "lz4":
             data = lz4.frame.LZ4FrameDecompressor().decompress(chunk.data, max_length=declared + 1)
         else:
