@@ -182,12 +182,11 @@ def test_a_complete_queryable_in_the_resources_place_is_reported(
                 client.ask(GetStatus())
             assert refused.value.code == "impostor"
             assert f"another party answers on {RESOURCE}'s command key" in refused.value.message
-            started = time.monotonic()
             online = ["--resource", RESOURCE, "--zenoh", zenoh_endpoint, "--user", "admin"]
+            # reported, not waited for: padt's own timeout would end a hang in a failure
             shown = padt("status", *online, env={"PADT_PASSWORD": PASSWORD})
             assert shown.returncode == 1, shown.stderr
             assert "another party answers" in shown.stderr and "Traceback" not in shown.stderr
-            assert time.monotonic() - started < 60
         # a rogue that takes every query and answers none silences nobody either
         with rogue(session, RESOURCE, lambda request: None, complete=True) as got:
             deadline = time.monotonic() + 10
