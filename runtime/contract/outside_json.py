@@ -28,18 +28,22 @@ class JsonRefused(ValueError):
     """JSON from outside that is not read: not JSON, too large or nested too deep."""
 
 
-def read_json(text: str | bytes, what: str, max_bytes: int, max_depth: int = FILE_DEPTH) -> Any:
+def read_json(
+    text: str | bytes, what: str, max_bytes: int, max_depth: int | None = FILE_DEPTH
+) -> Any:
     """`text` parsed, when it is at most `max_bytes` long and nested at most `max_depth`
-    deep; JsonRefused naming `what` (a file, an entry, a message) otherwise."""
+    deep; JsonRefused naming `what` (a file, an entry, a message) otherwise. `max_depth`
+    None: the caller checks the depth of what it takes (`wire.decode` does, value by value:
+    a walk of the whole of a 100,000-value reply would cost it tens of milliseconds)."""
     if len(text) > max_bytes:
         raise JsonRefused(f"{what} is larger than {max_bytes:,} bytes")
     try:
         data = json.loads(text)
     except RecursionError:
-        raise JsonRefused(f"{what} is nested deeper than {max_depth}") from None
+        raise JsonRefused(f"{what} is nested far too deep") from None
     except ValueError as exc:  # UnicodeDecodeError too
         raise JsonRefused(f"{what} is not valid JSON ({exc})") from None
-    if depth(data, max_depth) > max_depth:
+    if max_depth is not None and depth(data, max_depth) > max_depth:
         raise JsonRefused(f"{what} is nested deeper than {max_depth}")
     return data
 

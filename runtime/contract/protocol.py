@@ -22,6 +22,7 @@ from typing import Annotated, Any, ClassVar, Generic, Literal, TypeVar
 from runtime.contract.accounts import ANONYMOUS, NAME_PATTERN, Level
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 from runtime.contract.keyspace import WATCH_ID_PATTERN, WATCH_ID_RULE
+from runtime.contract.outside_json import JsonRefused, read_json
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import (
     MAX_DEPTH,
@@ -30,7 +31,6 @@ from runtime.contract.wire import (
     Pattern,
     Range,
     decode,
-    depth,
     encode,
 )
 
@@ -812,11 +812,9 @@ def decode_request(payload: bytes, source: str = ANONYMOUS, mac: bytes | None = 
     if len(payload) > MAX_REQUEST_BYTES:
         raise Refusal("too_large", f"request larger than {MAX_REQUEST_BYTES} bytes")
     try:
-        data = json.loads(payload)
-    except (ValueError, RecursionError):
-        raise Refusal("bad_request", "request is not valid JSON (or nested far too deep)") from None
-    if depth(data) > MAX_DEPTH:
-        raise Refusal("bad_request", f"request nested deeper than {MAX_DEPTH}")
+        data = read_json(payload, "the request", MAX_REQUEST_BYTES, MAX_DEPTH)
+    except JsonRefused as exc:
+        raise Refusal("bad_request", str(exc)) from None
     if not isinstance(data, dict) or not isinstance(data.get("cmd"), str):
         raise Refusal("bad_request", 'request must be an object with a "cmd" text')
     name = data.pop("cmd")
@@ -886,9 +884,9 @@ def decode_reply(command: Command[R], payload: bytes) -> R:
     """A resource's reply to `command`, checked: the reply, or its refusal raised. A reply
     that is not what the protocol says is refused as `bad_reply`."""
     try:
-        data = json.loads(payload)
-    except (ValueError, RecursionError):
-        raise Refusal("bad_reply", "the reply is not valid JSON") from None
+        data = read_json(payload, "the reply", len(payload), max_depth=None)  # decode checks
+    except JsonRefused as exc:
+        raise Refusal("bad_reply", str(exc)) from None
     if not isinstance(data, dict) or not isinstance(data.get("ok"), bool):
         raise Refusal("bad_reply", 'a reply is an object with "ok"')
     ok = data.pop("ok")
@@ -907,9 +905,9 @@ def decode_reply(command: Command[R], payload: bytes) -> R:
 def decode_publication(kind: type[R], payload: bytes) -> R:
     """A publication (Status, Event, WatchValues) checked; Refusal `bad_reply` otherwise."""
     try:
-        return decode(kind, json.loads(payload))
-    except (ValueError, RecursionError):
-        raise Refusal("bad_reply", f"a {kind.__name__} that is not valid JSON") from None
+        return decode(kind, read_json(payload, f"a {kind.__name__}", len(payload), max_depth=None))
+    except JsonRefused as exc:
+        raise Refusal("bad_reply", str(exc)) from None
     except Refusal as wrong:
         raise Refusal("bad_reply", f"{kind.__name__}: {wrong.message}") from None
 
