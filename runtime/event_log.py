@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from runtime.contract.event_chain import GENESIS, canonical, entry_line, line_digest
+from runtime.contract.outside_json import JsonRefused, read_json
 from runtime.contract.protocol import Event
 
 DAY_NS = 86_400 * 10**9
@@ -38,9 +39,9 @@ class ChainReport:
 
 def parse_entry(line: bytes) -> tuple[Event, str]:
     """One long-term line as event and `prev`; ValueError says what is wrong with it."""
-    try:
-        obj = json.loads(line.decode("utf-8"))
-    except ValueError as exc:  # UnicodeDecodeError and JSONDecodeError both are
+    try:  # the file may have been changed by anyone with the disk: outside JSON
+        obj = read_json(line, "the line", len(line))
+    except JsonRefused as exc:
         raise ValueError("not valid JSON") from exc
     if not isinstance(obj, dict) or sorted(obj) != list(ENTRY_FIELDS):
         raise ValueError(f"not an entry (its fields must be {', '.join(ENTRY_FIELDS)})")
@@ -483,8 +484,8 @@ class EventLog:
 
 def _is_json(line: bytes) -> bool:
     try:
-        json.loads(line.decode("utf-8"))
-    except ValueError:
+        read_json(line, "the line", len(line))
+    except JsonRefused:
         return False
     return True
 

@@ -457,3 +457,19 @@ def test_bad_arguments() -> None:
         EventLog(FakeClock(), short_capacity=0)
     with pytest.raises(ValueError):
         EventLog(FakeClock(), long_capacity=0)
+
+
+def test_a_line_nested_far_too_deep_is_reported_not_raised(tmp_path: Path) -> None:
+    """The file may have been changed by anyone with the disk: a line of 100,000 `[`
+    in the middle is a broken chain, and a last one a torn line, never a RecursionError."""
+    path = chained_file(tmp_path, 3)
+    lines = lines_of(path)
+    deep = b"[" * 100_000
+    path.write_bytes(b"\n".join([lines[0], deep, *lines[1:]]) + b"\n")
+    report = verify_chain(path)
+    assert (report.ok, report.line) == (False, 2)
+    assert report.problem == "line 2: not valid JSON"
+    path.write_bytes(b"\n".join(lines) + b"\n" + deep + b"\n")
+    log = EventLog(FakeClock(), long_path=path)
+    assert "incomplete line 4" in log.recent()[0].message
+    assert len(log.long_term()) == 3
