@@ -19,9 +19,11 @@ from viser.infra import ClientId
 log = logging.getLogger("padt.ui")
 
 PASSWORD_LABEL = "Password"  # every field so labelled is a password input
+SETTINGS_BUTTON = "Save Canvas"  # a button of viser's settings: its stack is hidden
 
-# The header buttons of viser's panels: Share (hidden by the theme as well) and the
-# settings popover. The work area's Parameters tab uses the same icon, but is a tab.
+# The header buttons of viser's panels: Share (hidden by the theme as well) and the one
+# that unfolds the settings. The work area's Parameters tab uses the same icon, but is a
+# tab.
 _STYLE = (
     "<style>"
     "[data-dock-header] button:has(svg.tabler-icon-share),"
@@ -30,18 +32,26 @@ _STYLE = (
     "</style>"
 )
 
-# Installed once per page: every input labelled "Password", now and whenever viser draws
-# one (the login card, the resource login, the login again after logging out), becomes
-# type=password. React sets no type on viser's text inputs, so it keeps the one set here;
-# a field drawn anew is a new element, which the observer sees.
+# Installed once per page, and run again whenever viser draws something: every input
+# labelled "Password" (the login card, the resource login, the login again after logging
+# out) becomes type=password; React sets no type on viser's text inputs, so it keeps the
+# one set here, and a field drawn anew is a new element (and every field is looked at
+# again when one takes the focus, before anything is typed). viser's settings (Save Canvas,
+# Dev Settings, the scene tree) are one stack in the panel, folded away but in the page
+# and unfolded for a moment when the panel moves: it is hidden for good.
 _SCRIPT = (
-    "if(!window.__padtPasswords){window.__padtPasswords=1;"
-    "var mask=function(){document.querySelectorAll('label').forEach(function(l){"
+    "if(!window.__padtPage){window.__padtPage=1;"
+    "var fix=function(){document.querySelectorAll('label').forEach(function(l){"
     f"if(l.textContent!=='{PASSWORD_LABEL}')return;"
     "var row=l.parentElement&&l.parentElement.parentElement&&l.parentElement.parentElement"
     ".parentElement;var input=row&&row.querySelector('input');"
-    "if(input&&input.type!=='password')input.type='password'})};"
-    "mask();new MutationObserver(mask).observe(document.body,{childList:true,subtree:true})}"
+    "if(input&&input.type!=='password')input.type='password'});"
+    "document.querySelectorAll('button').forEach(function(b){"
+    f"if(b.textContent!=='{SETTINGS_BUTTON}')return;"
+    "var stack=b.closest('.mantine-Stack-root');"
+    "if(stack&&stack.style.display!=='none')stack.style.display='none'})};"
+    "fix();new MutationObserver(fix).observe(document.body,{childList:true,subtree:true});"
+    "document.addEventListener('focusin',fix,true)}"
 )
 
 # hidden: it takes no room at the top of the panel (a hidden image loads all the same)

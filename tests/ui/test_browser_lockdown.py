@@ -62,8 +62,18 @@ def _visible(page: Page, selector: str) -> int:
 
 
 def _no_viser_controls(page: Page) -> None:
-    for icon in ("share", "adjustments"):  # Share and the settings popover's button
+    for icon in ("share", "adjustments"):  # Share and the button unfolding the settings
         assert _visible(page, f"button:has(svg.tabler-icon-{icon})") == 0, icon
+    # the settings are folded away, and hidden for good (a fold opens when the panel moves)
+    wait_until(
+        "viser's settings are hidden",
+        lambda: (
+            page.locator("text=Save Canvas").first.evaluate(
+                "b => getComputedStyle(b.closest('.mantine-Stack-root')).display"
+            )
+            == "none"
+        ),
+    )
     for words in ("Save Canvas", "Dev Settings", "Scene tree", "Share"):
         assert _visible(page, f"text={words}") == 0, words
 
