@@ -184,7 +184,9 @@ def restore_backup(zip_path: Path) -> tuple[str, dict[str, str]]:
     the manifest within those of outside JSON. Raises BackupError otherwise."""
     try:
         entries = read_archive(zip_path)
-    except (OSError, ArchiveRefused) as exc:
+    except ArchiveRefused as exc:  # names the archive itself
+        raise BackupError(f"not a readable backup: {exc}") from None
+    except OSError as exc:
         raise BackupError(f"{zip_path}: not a readable backup: {exc}") from None
     for required in (ARTIFACT_ENTRY, MANIFEST_ENTRY):
         if required not in entries:
