@@ -296,6 +296,7 @@ _STYLE = (
     ".olt .t{color:#868e96}.olt .v{text-align:right;font-family:monospace;"
     "overflow-wrap:anywhere}.olt tr:has(td.v){cursor:pointer}"
     ".olt tr:has(td.v):hover td{background:#f1f3f5}"
+    ".olt td:last-child,.olt th:last-child{padding-right:16px}"  # clear of the scrollbar
     + "".join(f".olt .{key}{{{style}}}" for key, style in _QUALITY_STYLES.items())
     + "</style>"
 )
