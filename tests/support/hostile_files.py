@@ -8,7 +8,9 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import math
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -309,29 +311,53 @@ class Run:
     max_rss_mb: float  # the child's own peak resident memory
 
 
+# Runs its arguments as a child and writes that child's peak memory (KiB) to the file named
+# first. A child started by the test process itself would not do: Linux starts a child's
+# peak at the peak of the process it was forked from, and a test process that has run the
+# suite holds hundreds of MB; this launcher holds a few.
+_MEASURING_LAUNCHER = """
+import os, subprocess, sys
+child = subprocess.Popen(sys.argv[2:])
+_pid, status, usage = os.wait4(child.pid, 0)
+with open(sys.argv[1], "w") as report:
+    report.write(str(usage.ru_maxrss))
+sys.exit(os.waitstatus_to_exitcode(status))
+"""
+
+
+def padt_command(*args: str) -> list[str]:
+    return [sys.executable, "-m", "padt.cli", *args]
+
+
 def padt_measured(*args: str, env: dict[str, str] | None = None, timeout: float = 600) -> Run:
-    """`padt ARGS` in a child process whose own peak memory is measured: os.wait4 gives
-    the rusage of that one child, not the largest of every child the test process had."""
-    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+    """`padt ARGS` in a child process whose own peak memory is measured (through
+    `_MEASURING_LAUNCHER`, so that it is that child's alone)."""
+    with (
+        tempfile.TemporaryFile() as out,
+        tempfile.TemporaryFile() as err,
+        tempfile.NamedTemporaryFile("r") as peak,
+    ):
         process = subprocess.Popen(
-            [sys.executable, "-m", "padt.cli", *args],
+            [sys.executable, "-c", _MEASURING_LAUNCHER, peak.name, *padt_command(*args)],
             cwd=REPO,
             env={**os.environ, **(env or {})},
             stdout=out,
             stderr=err,
+            start_new_session=True,  # a timeout ends the launcher and padt alike
         )
-        killer = threading.Timer(timeout, process.kill)
+        killer = threading.Timer(timeout, os.killpg, (process.pid, signal.SIGKILL))
         killer.start()
         try:
-            _pid, status, usage = os.wait4(process.pid, 0)
+            _pid, status, _usage = os.wait4(process.pid, 0)
         finally:
             killer.cancel()
         process.returncode = os.waitstatus_to_exitcode(status)
+        peak_kib = peak.read()
         out.seek(0)
         err.seek(0)
         return Run(
             process.returncode,
             out.read().decode(errors="replace"),
             err.read().decode(errors="replace"),
-            usage.ru_maxrss / 1024,  # KiB on Linux
+            int(peak_kib) / 1024 if peak_kib else math.inf,  # KiB on Linux
         )
