@@ -78,12 +78,13 @@ def watch_key(resource: str, watch_set: str) -> str:
     return _key(resource, f"watch/{watch_id(watch_set)}")
 
 
+def watches_key_expr(resource: str) -> str:
+    """The values of every watch set of a resource (a third party listening in)."""
+    return _key(resource, "watch/*")
+
+
 def watcher_key(resource: str, watch_set: str) -> str:
     return _key(resource, f"watchers/{watch_id(watch_set)}")
-
-
-def watchers_key_expr(resource: str) -> str:
-    return _key(resource, "watchers/*")
 
 
 def events_key(resource: str) -> str:

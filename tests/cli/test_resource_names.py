@@ -90,7 +90,7 @@ def test_clients_refuse_it_before_asking_anything(zenoh_endpoint: str) -> None:
 @pytest.mark.parametrize("name", WILD_NAMES)
 def test_no_key_of_the_key_space_is_made_for_such_a_name(name: str) -> None:
     keys = [keyspace.command_key, keyspace.status_key, keyspace.events_key, keyspace.alive_key]
-    for key_for in [*keys, keyspace.watchers_key_expr]:
+    for key_for in [*keys, keyspace.watches_key_expr]:
         with pytest.raises(Refusal) as refused:
             key_for(name)
         assert refused.value.code == "bad_name"
@@ -100,4 +100,4 @@ def test_no_key_of_the_key_space_is_made_for_such_a_name(name: str) -> None:
         with pytest.raises(Refusal):
             make("Tank1", name or "*")  # a watch set id is one plain chunk as well
     assert keyspace.any_resource(keyspace.alive_key) == "padt/v2/res/*/alive"
-    assert keyspace.watchers_key_expr("Tank1") == "padt/v2/res/Tank1/watchers/*"
+    assert keyspace.watches_key_expr("Tank1") == "padt/v2/res/Tank1/watch/*"

@@ -11,7 +11,7 @@ import pytest
 import zenoh
 from playwright.sync_api import Page
 
-from runtime.contract.keyspace import watch_key
+from runtime.contract.keyspace import watches_key_expr
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
     PASSWORD,
@@ -36,7 +36,7 @@ class WireWatch:
     def __init__(self, session: zenoh.Session, resource: str) -> None:
         self.lock = threading.Lock()
         self.sizes: list[int] = []
-        self.subscriber = session.declare_subscriber(watch_key(resource, "*"), self._take)
+        self.subscriber = session.declare_subscriber(watches_key_expr(resource), self._take)
 
     def _take(self, sample: zenoh.Sample) -> None:
         message = json.loads(sample.payload.to_bytes())

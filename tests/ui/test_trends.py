@@ -105,13 +105,15 @@ def test_variables_chosen_are_charted_live_with_their_values(demo: Demo) -> None
         assert "live" in text_of(page, '[data-testid="trend-status"]')
 
         # the cursor: the legend shows the values under it
-        area = page.locator(".u-over").first.bounding_box()
-        assert area is not None
 
         def legend_shows_the_newest_sample() -> bool:
             # the legend follows the cursor on the next frame, and a live update in between
             # may redraw it: hover again until it has caught up, as a user's hand would
-            # (the time and the value read from one text: a redraw may come between two reads)
+            # (the time and the value read from one text: a redraw may come between two reads;
+            # the chart's area is found anew each time: a redraw may replace it)
+            area = page.locator(".u-over").first.bounding_box()
+            if area is None:
+                return False
             page.mouse.move(area["x"] + area["width"] - 3, area["y"] + area["height"] / 2)
             legend = text_of(page, ".u-legend")
             return bool(
