@@ -109,6 +109,8 @@ def replay(recording: Recording, artifact: Artifact) -> ReplayResult:
         raise ReplayError(f"the recorded configuration is damaged: {exc}") from None
     try:
         resource = _started(_unsliced(recorded), recording)
+    except ReplayError:
+        raise  # says what is wrong already
     except (KeyError, TypeError, ValueError, ArithmeticError) as exc:
         raise ReplayError(f"the recording's start state is damaged ({exc!r})") from None
     reloaded = artifact.crc != recorded.crc

@@ -123,5 +123,7 @@ def test_padt_replay_refuses_a_recording_whose_configuration_escapes(tmp_path: P
     assert "identical" not in done.stdout
     assert "generated code of PROGRAM Control, line " in done.stderr, done.stderr
     assert "a second top-level statement is not allowed" in done.stderr, done.stderr
+    assert "the recorded configuration does not load" in done.stderr
+    assert "start state is damaged" not in done.stderr  # said once, as what it is
     assert "Traceback" not in done.stderr
     assert not written.exists()
