@@ -1,0 +1,381 @@
+"""The text of a source as the language services read it around a cursor: its tokens (the
+identifiers with their places, the comments kept apart) and the blocks they stand in
+(POUs, methods, properties, var blocks, types), found from the keywords alone.
+
+Both work on any text, also one that does not parse while it is being typed: completion,
+hover and navigation find the POU or method a cursor is in from here, then look the names
+up in the last analysis that resolved."""
+
+from __future__ import annotations
+
+import re
+from bisect import bisect_right
+from dataclasses import dataclass
+from functools import lru_cache
+
+from backend.compiler.limits import MAX_COMMENT_NESTING
+
+# words of the language that are never a name (upper case)
+KEYWORDS = frozenset(
+    {
+        "ABSTRACT",
+        "ACTION",
+        "AND",
+        "ARRAY",
+        "AT",
+        "BY",
+        "CASE",
+        "CONFIGURATION",
+        "CONSTANT",
+        "CONTINUE",
+        "DO",
+        "ELSE",
+        "ELSIF",
+        "END_ACTION",
+        "END_CASE",
+        "END_CONFIGURATION",
+        "END_FOR",
+        "END_FUNCTION",
+        "END_FUNCTION_BLOCK",
+        "END_GET",
+        "END_IF",
+        "END_INTERFACE",
+        "END_METHOD",
+        "END_PROGRAM",
+        "END_PROPERTY",
+        "END_REPEAT",
+        "END_RESOURCE",
+        "END_SET",
+        "END_STEP",
+        "END_STRUCT",
+        "END_TRANSITION",
+        "END_TYPE",
+        "END_VAR",
+        "END_WHILE",
+        "EXIT",
+        "EXTENDS",
+        "F_EDGE",
+        "FALSE",
+        "FINAL",
+        "FOR",
+        "FROM",
+        "FUNCTION",
+        "FUNCTION_BLOCK",
+        "IF",
+        "IMPLEMENTS",
+        "INITIAL_STEP",
+        "INTERFACE",
+        "INTERNAL",
+        "METHOD",
+        "MOD",
+        "NOT",
+        "NON_RETAIN",
+        "NULL",
+        "OF",
+        "ON",
+        "OR",
+        "OVERRIDE",
+        "POINTER",
+        "PRIVATE",
+        "PROGRAM",
+        "PROPERTY",
+        "PROTECTED",
+        "PUBLIC",
+        "READ_ONLY",
+        "READ_WRITE",
+        "REF",
+        "REFERENCE",
+        "REF_TO",
+        "REPEAT",
+        "RESOURCE",
+        "RETAIN",
+        "RETURN",
+        "R_EDGE",
+        "STEP",
+        "STRUCT",
+        "TASK",
+        "THEN",
+        "TO",
+        "TRANSITION",
+        "TRUE",
+        "TYPE",
+        "UNTIL",
+        "VAR",
+        "VAR_ACCESS",
+        "VAR_CONFIG",
+        "VAR_EXTERNAL",
+        "VAR_GLOBAL",
+        "VAR_INPUT",
+        "VAR_IN_OUT",
+        "VAR_OUTPUT",
+        "VAR_TEMP",
+        "WHILE",
+        "WITH",
+        "XOR",
+    }
+)
+# what may stand between a block's keyword and its name
+MODIFIERS = frozenset(
+    {
+        "PUBLIC",
+        "PRIVATE",
+        "PROTECTED",
+        "INTERNAL",
+        "ABSTRACT",
+        "FINAL",
+        "OVERRIDE",
+        "CONSTANT",
+        "RETAIN",
+        "NON_RETAIN",
+    }
+)
+VAR_KINDS = frozenset(
+    {
+        "VAR",
+        "VAR_INPUT",
+        "VAR_OUTPUT",
+        "VAR_IN_OUT",
+        "VAR_TEMP",
+        "VAR_EXTERNAL",
+        "VAR_GLOBAL",
+        "VAR_CONFIG",
+        "VAR_ACCESS",
+    }
+)
+# a block keyword and the keyword that ends it
+_NAMED_BLOCKS = {
+    "PROGRAM": "END_PROGRAM",
+    "FUNCTION_BLOCK": "END_FUNCTION_BLOCK",
+    "FUNCTION": "END_FUNCTION",
+    "INTERFACE": "END_INTERFACE",
+    "METHOD": "END_METHOD",
+    "PROPERTY": "END_PROPERTY",
+    "CONFIGURATION": "END_CONFIGURATION",
+    "RESOURCE": "END_RESOURCE",
+}
+_PLAIN_BLOCKS = {"TYPE": "END_TYPE", "STRUCT": "END_STRUCT", "GET": "END_GET", "SET": "END_SET"}
+_ENDS = {end: kind for kind, end in (*_NAMED_BLOCKS.items(), *_PLAIN_BLOCKS.items())} | {
+    "END_VAR": "VAR"
+}
+
+_DATE_PREFIX = (
+    "DATE_AND_TIME|LDATE_AND_TIME|TIME_OF_DAY|LTIME_OF_DAY|DT|LDT|DATE|LDATE|TOD|LTOD|D|LD"
+)
+_TOKEN = re.compile(
+    r"(?P<ws>\s+)"
+    r"|(?P<comment>//[^\n]*|/\*.*?(?:\*/|\Z))"
+    r"|(?P<pragma>\{[^}]*\}?)"
+    r"|(?P<string>'(?:[^'$\n]|\$.)*+'?|\"(?:[^\"$\n]|\$.)*+\"?)"
+    rf"|(?P<literal>(?i:(?:LTIME|LT|TIME|T)#[-+]?[\w.]*|(?:{_DATE_PREFIX})#[\w.:-]*))"
+    r"|(?P<number>\d[\d_]*(?:#[0-9A-Fa-f_]+|\.\d[\d_]*(?:[eE][-+]?\d+)?|[eE][-+]?\d+)?)"
+    r"|(?P<address>%[A-Za-z]*[\d.]*)"
+    r"|(?P<ident>[A-Za-z_]\w*)"
+    r"|(?P<punct>:=|=>|<=|>=|<>|\*\*|\.\.|\?=|\S)",
+    re.DOTALL,
+)
+
+
+@dataclass(frozen=True)
+class Token:
+    kind: str  # ident, number, literal, string, address, punct
+    text: str
+    line: int  # 1-based
+    col: int  # 1-based, in characters
+    offset: int  # in the text
+    end: int  # offset after it
+
+    @property
+    def end_col(self) -> int:
+        """The column after it (tokens other than comments stay on one line)."""
+        return self.col + self.end - self.offset
+
+    @property
+    def upper(self) -> str:
+        return self.text.upper()
+
+    def is_name(self) -> bool:
+        """An identifier that is no keyword."""
+        return self.kind == "ident" and self.upper not in KEYWORDS
+
+
+@dataclass(frozen=True)
+class Comment:
+    text: str  # without its delimiters, stripped
+    line: int
+    end_line: int
+
+
+@dataclass(frozen=True)
+class Span:
+    """A block of the text: a POU, method, property or accessor, var block, type or struct."""
+
+    kind: str  # PROGRAM, FUNCTION_BLOCK, ..., METHOD, PROPERTY, GET, SET, TYPE, STRUCT, VAR...
+    name: str  # "" where the block has none (accessors, var blocks, TYPE)
+    start: tuple[int, int]  # line, column of its keyword
+    end: tuple[int, int]  # line, column after its END_ keyword (the text's end if unclosed)
+    name_token: int  # index of its name's token; -1 if none
+    parent: int  # index of the span it stands in; -1 at the top
+
+    def holds(self, line: int, col: int) -> bool:
+        return self.start <= (line, col) < self.end
+
+
+@dataclass(frozen=True)
+class Lexed:
+    tokens: tuple[Token, ...]  # without comments and pragmas
+    comments: tuple[Comment, ...]
+    spans: tuple[Span, ...]  # in the order their keywords stand
+    line_starts: tuple[int, ...]
+
+    def offset(self, line: int, col: int) -> int:
+        return self.line_starts[min(max(line, 1), len(self.line_starts)) - 1] + col - 1
+
+    def index_at(self, line: int, col: int) -> int:
+        """The index of the first token that starts at or after line:col."""
+        target = (line, col)
+        low, high = 0, len(self.tokens)
+        while low < high:
+            mid = (low + high) // 2
+            token = self.tokens[mid]
+            if (token.line, token.col) < target:
+                low = mid + 1
+            else:
+                high = mid
+        return low
+
+    def name_at(self, line: int, col: int) -> int:
+        """The index of the name token under line:col or just before it (a cursor at the
+        end of a word), or -1."""
+        index = self.index_at(line, col)
+        for candidate in (index, index - 1):
+            if 0 <= candidate < len(self.tokens):
+                token = self.tokens[candidate]
+                if token.line == line and token.col <= col <= token.end_col and token.is_name():
+                    return candidate
+        return -1
+
+    def innermost(self, line: int, col: int, kinds: frozenset[str] | None = None) -> list[Span]:
+        """The spans holding line:col, outermost first (only those of `kinds`, if given)."""
+        return [
+            span
+            for span in self.spans
+            if span.holds(line, col) and (kinds is None or span.kind in kinds)
+        ]
+
+
+@lru_cache(maxsize=512)
+def lex(text: str) -> Lexed:
+    """The tokens, comments and blocks of `text` (cached: the services ask of the same text
+    again and again while a cursor moves)."""
+    line_starts = [0, *(m.end() for m in re.finditer("\n", text))]
+    tokens: list[Token] = []
+    comments: list[Comment] = []
+    pos = 0
+    while pos < len(text):
+        if text.startswith("(*", pos):
+            end = _comment_end(text, pos)
+            comments.append(_comment(text, pos, end, line_starts, text[pos + 2 : end - 2]))
+            pos = end
+            continue
+        match = _TOKEN.match(text, pos)
+        if match is None:  # cannot happen: the last alternative takes any character
+            break
+        kind = match.lastgroup or "punct"
+        if kind == "comment":
+            body = match.group()[2:]
+            body = body[:-2] if match.group().startswith("/*") and body.endswith("*/") else body
+            comments.append(_comment(text, pos, match.end(), line_starts, body))
+        elif kind not in ("ws", "pragma"):
+            line = bisect_right(line_starts, pos)
+            col = pos - line_starts[line - 1] + 1
+            tokens.append(Token(kind, match.group(), line, col, pos, match.end()))
+        pos = match.end()
+    return Lexed(
+        tuple(tokens), tuple(comments), _spans(tokens, len(text), line_starts), tuple(line_starts)
+    )
+
+
+def _comment_end(text: str, start: int) -> int:
+    """The offset after the `*)` that closes the comment at `start` (nested up to the
+    compiler's limit), or the text's end."""
+    depth, pos = 0, start
+    while pos < len(text):
+        if text.startswith("(*", pos) and depth <= MAX_COMMENT_NESTING:
+            depth, pos = depth + 1, pos + 2
+        elif text.startswith("*)", pos):
+            depth, pos = depth - 1, pos + 2
+            if depth == 0:
+                return pos
+        else:
+            pos += 1
+    return len(text)
+
+
+def _comment(text: str, start: int, end: int, line_starts: list[int], body: str) -> Comment:
+    line = bisect_right(line_starts, start)
+    end_line = bisect_right(line_starts, max(start, end - 1))
+    return Comment(body.strip(), line, end_line)
+
+
+def _spans(tokens: list[Token], length: int, line_starts: list[int]) -> tuple[Span, ...]:
+    last_line = len(line_starts)
+    text_end = (last_line, length - line_starts[-1] + 1)
+    opened: list[tuple[int, str, str, Token, int]] = []  # span index, kind, name, keyword, name
+    spans: list[Span | None] = []
+    starts: dict[int, tuple[str, str, Token, int, int]] = {}
+
+    def close(index: int, end: tuple[int, int]) -> None:
+        kind, name, keyword, name_index, parent = starts[index]
+        spans[index] = Span(kind, name, (keyword.line, keyword.col), end, name_index, parent)
+
+    for i, token in enumerate(tokens):
+        if token.kind != "ident":
+            continue
+        word = token.upper
+        top = opened[-1][1] if opened else ""
+        if word in _ENDS:
+            wanted = _ENDS[word]
+            match = [n for n, entry in enumerate(opened) if _closes(wanted, entry[1])]
+            if match:
+                end = (token.line, token.end_col)
+                while len(opened) > match[-1]:
+                    close(opened.pop()[0], end)
+            continue
+        opens = word in _NAMED_BLOCKS or word in ("TYPE", "STRUCT") or word in VAR_KINDS
+        opens = opens or (word in ("GET", "SET") and top == "PROPERTY")
+        # `PROGRAM inst WITH task : Main;` in a RESOURCE declares an instance, not a POU
+        if word == "PROGRAM" and any(entry[1] in ("RESOURCE", "CONFIGURATION") for entry in opened):
+            opens = False
+        if word == "STRUCT" and top != "TYPE":
+            opens = False
+        if not opens:
+            continue
+        name, name_index = "", -1
+        if word in _NAMED_BLOCKS:
+            name_index = _name_after(tokens, i)
+            name = tokens[name_index].text if name_index >= 0 else ""
+        elif word == "STRUCT" and i >= 2 and tokens[i - 1].text == ":":
+            name_index = i - 2
+            name = tokens[name_index].text
+        parent = opened[-1][0] if opened else -1
+        starts[len(spans)] = (word, name, token, name_index, parent)
+        opened.append((len(spans), word, name, token, name_index))
+        spans.append(None)
+    while opened:
+        close(opened.pop()[0], text_end)
+    return tuple(span for span in spans if span is not None)
+
+
+def _closes(wanted: str, kind: str) -> bool:
+    return kind == wanted or (wanted == "VAR" and kind in VAR_KINDS)
+
+
+def _name_after(tokens: list[Token], index: int) -> int:
+    """The index of the name after a block keyword, past its modifiers; -1 if none."""
+    for i in range(index + 1, min(index + 6, len(tokens))):
+        token = tokens[i]
+        if token.kind != "ident":
+            return -1
+        if token.upper not in MODIFIERS:
+            return i
+    return -1
