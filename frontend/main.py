@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 
 from backend.engineering.client_address import add_trusted_proxy_option
-from backend.engineering.project_list import named_folder
+from backend.engineering.project_list import add_shelf_options, named_folder
 from runtime.contract.session_options import add_zenoh_options
 
 DEFAULT_BACKUP_DIR = Path("padt-backups")  # as backend.engineering.backup's, without loading it
@@ -40,6 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="[NAME=]DIR",
         help="a project for the Reload and Code screens, named NAME or by its folder (repeatable)",
     )
+    add_shelf_options(parser)
     parser.add_argument(
         "--backup-dir",
         type=Path,
@@ -57,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
     from backend.engineering.client_address import TrustedProxies
     from backend.engineering.padt_accounts import AccountsError, PadtAccounts
     from backend.engineering.project_list import projects_by_name
+    from backend.engineering.project_shelf import shelf_of
     from backend.engineering.resource_directory import ResourceDirectory
     from backend.engineering.start_up_freeze import freeze_start_up
     from backend.engineering.watch_lists import WatchLists
@@ -68,9 +70,9 @@ def run(args: argparse.Namespace) -> int:
     stop = StopRequest()
     try:
         accounts = PadtAccounts(args.accounts, time.monotonic_ns)
-        projects = projects_by_name(args.project)
+        projects = shelf_of(projects_by_name(args.project), args.projects_dir, args.audit_log)
         watch_lists = WatchLists(args.watch_lists)
-    except (AccountsError, ValueError) as exc:  # WatchListError is a ValueError
+    except (AccountsError, ValueError, OSError) as exc:  # WatchListError is a ValueError
         print(f"padt ui: {exc}", file=sys.stderr)
         return 2
     if accounts.empty:

@@ -1,7 +1,7 @@
 """What every browser of one UI server shares: the resources on the bus, the PADT accounts
 the users log in with, the router's address (shown in the status bar), the users' watch
-lists, the projects the PADT knows (by name, each a folder) and where the backups of what
-was loaded go."""
+lists, the projects the PADT knows (by name, each a folder: a `ProjectShelf`, which also holds
+the audit log of their changes) and where the backups of what was loaded go."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from pathlib import Path
 
 from backend.engineering.backup import DEFAULT_BACKUP_DIR
 from backend.engineering.padt_accounts import PadtAccounts
+from backend.engineering.project_shelf import ProjectShelf
 from backend.engineering.resource_directory import ResourceDirectory
 from backend.engineering.watch_lists import WatchLists
 
@@ -23,3 +24,15 @@ class UiContext:
     watch_lists: WatchLists
     projects: Mapping[str, Path] = field(default_factory=dict)  # name -> project folder
     backup_dir: Path = DEFAULT_BACKUP_DIR
+
+    def __post_init__(self) -> None:
+        # a plain mapping (tests, tools) is a shelf with no folder for new projects and no
+        # audit log: its projects can be read, not changed
+        if not isinstance(self.projects, ProjectShelf):
+            object.__setattr__(self, "projects", ProjectShelf(self.projects))
+
+    @property
+    def shelf(self) -> ProjectShelf:
+        """The projects as the project services take them."""
+        assert isinstance(self.projects, ProjectShelf)  # made so by __post_init__
+        return self.projects

@@ -126,6 +126,7 @@ def _run_with_plant(
     from backend.engineering.known_resources import KnownResources
     from backend.engineering.padt_accounts import PadtAccounts, write_accounts
     from backend.engineering.project import compile_project, load_project
+    from backend.engineering.project_shelf import shelf_of
     from backend.engineering.resource_directory import ResourceDirectory
     from backend.engineering.start_up_freeze import freeze_start_up
     from backend.engineering.watch_lists import WatchLists
@@ -163,7 +164,10 @@ def _run_with_plant(
         accounts_file = args.state_dir / "padt-accounts.json"
         write_accounts(accounts_file, (dataclasses.replace(admin, level="security-administrator"),))
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
-        projects = {"demo": folder}
+        # the demo's project, and a folder for the projects its users make from templates
+        projects = shelf_of(
+            {"demo": folder}, args.state_dir / "projects", args.state_dir / "padt-audit.jsonl"
+        )
         # the demo's resource keeps its key in the state folder: so do its UI and API
         known = KnownResources(args.state_dir / "known_resources")
         directory = ResourceDirectory(session, known)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from backend.engineering.client_address import add_trusted_proxy_option
 from backend.engineering.padt_levels import PADT_LEVELS
-from backend.engineering.project_list import named_folder
+from backend.engineering.project_list import add_shelf_options, named_folder
 from runtime.contract.session_options import add_zenoh_options
 
 DEFAULT_ACCOUNTS = Path("padt-accounts.json")
@@ -29,6 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="[NAME=]DIR",
         help="a project folder to serve, named NAME or by its folder (repeatable)",
     )
+    add_shelf_options(parser)
     parser.add_argument(
         "--backup-dir", type=Path, default=Path("padt-backups"), help="where backups go"
     )

@@ -17,6 +17,7 @@ from backend.api.service import PadtService
 from backend.engineering.client_address import NO_PROXIES, TrustedProxies
 from backend.engineering.padt_accounts import AccountsError, PadtAccounts
 from backend.engineering.project_list import projects_by_name
+from backend.engineering.project_shelf import shelf_of
 from backend.engineering.resource_directory import ResourceDirectory
 from backend.engineering.start_up_freeze import freeze_start_up
 
@@ -84,8 +85,8 @@ def run(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     try:
         accounts = PadtAccounts(args.accounts, time.monotonic_ns)
-        projects = projects_by_name(args.project)
-    except (AccountsError, ValueError) as exc:
+        projects = shelf_of(projects_by_name(args.project), args.projects_dir, args.audit_log)
+    except (AccountsError, ValueError, OSError) as exc:
         print(f"padt api: {exc}", file=sys.stderr)
         return 2
     if accounts.empty:

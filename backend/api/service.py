@@ -6,7 +6,7 @@ adds only who the caller is and which PES session it holds for each resource."""
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +23,7 @@ from backend.engineering.documentation.export import (
 from backend.engineering.download import Downloaded, download_checked
 from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.project import ProjectError, compile_project, load_project
+from backend.engineering.project_shelf import ProjectShelf
 from backend.engineering.reload import (
     Reloaded,
     ReloadOptions,
@@ -56,11 +57,13 @@ class PadtService:
         self,
         directory: ResourceDirectory,
         accounts: PadtAccounts,
-        projects: dict[str, Path],
+        projects: Mapping[str, Path],
         backup_dir: Path,
     ) -> None:
         self.accounts = accounts
-        self.projects = dict(sorted(projects.items()))
+        # a plain mapping is a shelf with no folder for new projects and no audit log
+        self.shelf = projects if isinstance(projects, ProjectShelf) else ProjectShelf(projects)
+        self.projects: Mapping[str, Path] = self.shelf
         self.backup_dir = backup_dir
         self.directory = directory
 
@@ -76,9 +79,7 @@ class PadtService:
     # ---- projects
 
     def project_path(self, name: str) -> Path:
-        if name not in self.projects:
-            raise Refusal("unknown_project", f"there is no project '{name}'")
-        return self.projects[name]
+        return self.shelf.folder(name)
 
     def compile(self, name: str) -> dict[str, Any]:
         with _project_errors():

@@ -1,8 +1,10 @@
-"""The projects a PADT knows (`padt api --project`, `padt ui --project`): by name, each a
-folder. Apart from project.py so that the command line's parser loads no compiler."""
+"""The projects a PADT knows (`padt api --project`, `padt ui --project`, `--projects-dir`):
+by name, each a folder. Apart from project.py so that the command line's parser loads no
+compiler."""
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 
@@ -28,3 +30,21 @@ def projects_by_name(entries: list[tuple[str, Path]]) -> dict[str, Path]:
             raise ValueError(f"{folder}: not a project folder")
         projects[name] = folder
     return projects
+
+
+def add_shelf_options(parser: argparse.ArgumentParser) -> None:
+    """`--projects-dir` and `--audit-log` of `padt ui` and `padt api`."""
+    parser.add_argument(
+        "--projects-dir",
+        type=Path,
+        metavar="DIR",
+        help="a folder of projects: each sub-folder is a project, and new projects are made "
+        "there from templates (without it, no new projects)",
+    )
+    parser.add_argument(
+        "--audit-log",
+        type=Path,
+        default=Path("padt-audit.jsonl"),
+        metavar="FILE",
+        help="the PADT's audit log of every change to a project file (default ./padt-audit.jsonl)",
+    )

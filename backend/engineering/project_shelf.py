@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import shutil
 import threading
+import time
 import unicodedata
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
@@ -194,3 +195,9 @@ def _copy_template(source: Path, target: Path, name: str, resource: str | None) 
         if isinstance(res, dict):
             res["name"] = resource
     (target / PROJECT_FILE).write_text(tomlkit.dumps(document), encoding="utf-8")
+
+
+def shelf_of(given: Mapping[str, Path], projects_dir: Path | None, audit_log: Path) -> ProjectShelf:
+    """The shelf of `padt ui`, `padt api` and `padt demo`: the projects given, those in
+    `projects_dir`, and the audit log at `audit_log` (wall-clock time)."""
+    return ProjectShelf(given, projects_dir, PadtAuditLog(audit_log, time.time_ns))
