@@ -606,6 +606,12 @@ _FIXED: dict[str, Builtin] = {
 }
 
 
+def names() -> list[str]:
+    """The standard functions of a fixed name, sorted (the conversions `<T>_TO_<T>` and
+    their kin follow patterns `lookup` knows)."""
+    return sorted(name for name in _FIXED if not name.startswith("_"))
+
+
 def lookup(name: str) -> Builtin | None:
     upper = name.upper()
     found = _FIXED.get(upper)

@@ -370,6 +370,14 @@ def _declared_in_type(place: _Place, index: int) -> Symbol | None:
     return None
 
 
+def base_before(analysis: Analysis, file: str, lexed: Lexed, dot: int) -> Type | Symbol | None:
+    """What the expression before the `.` that is token `dot` is, as the base of a member
+    (see `members`), or None when that is not known."""
+    token = lexed.tokens[dot]
+    place = _Place(analysis, file, lexed, scope_at(analysis, lexed, token.line, token.col))
+    return _expression_base(place, dot - 1, 0)
+
+
 def _expression_base(place: _Place, index: int, depth: int) -> Type | Symbol | None:
     """What the expression that ends with token `index` is, as the base of a member:
     its type, or an enum type or `SYS` (whose members are named after a dot)."""

@@ -203,6 +203,8 @@ class Comment:
     text: str  # without its delimiters, stripped
     line: int
     end_line: int
+    offset: int  # in the text
+    end: int  # offset after it
 
 
 @dataclass(frozen=True)
@@ -222,6 +224,7 @@ class Span:
 
 @dataclass(frozen=True)
 class Lexed:
+    text: str
     tokens: tuple[Token, ...]  # without comments and pragmas
     comments: tuple[Comment, ...]
     spans: tuple[Span, ...]  # in the order their keywords stand
@@ -291,8 +294,64 @@ def lex(text: str) -> Lexed:
             tokens.append(Token(kind, match.group(), line, col, pos, match.end()))
         pos = match.end()
     return Lexed(
-        tuple(tokens), tuple(comments), _spans(tokens, len(text), line_starts), tuple(line_starts)
+        text,
+        tuple(tokens),
+        tuple(comments),
+        _spans(tokens, len(text), line_starts),
+        tuple(line_starts),
     )
+
+
+def declarations(lexed: Lexed, span: int) -> list[tuple[int, str]]:
+    """The declarations `a, b : T ...;` directly in span `span` (a var block, a STRUCT, a
+    TYPE): each name's token index and the text of its type (`ARRAY[1..3] OF INT`)."""
+    block = lexed.spans[span]
+    first = lexed.index_at(*block.start) + 1
+    last = min(lexed.index_at(*block.end), len(lexed.tokens))
+    nested = [s for s in lexed.spans if s.parent == span]
+    found: list[tuple[int, str]] = []
+    names: list[int] = []
+    expect_name = True
+    index = first
+    while index < last:
+        token = lexed.tokens[index]
+        inner = next((s for s in nested if (token.line, token.col) == s.start), None)
+        if inner is not None:  # a STRUCT in a TYPE: its members are its own
+            index = lexed.index_at(*inner.end)
+            continue
+        if token.text == ";":
+            names, expect_name = [], True
+        elif expect_name and token.is_name():
+            names.append(index)
+            expect_name = False
+        elif token.text == "," and names:
+            expect_name = True
+        elif token.text == ":" and names:
+            found += [(name, _type_text(lexed, index + 1, last)) for name in names]
+            names = []
+        else:
+            expect_name = False
+        index += 1
+    return found
+
+
+def _type_text(lexed: Lexed, first: int, last: int) -> str:
+    """The text from token `first` to the `:=` or `;` that ends a declaration's type."""
+    depth = 0
+    end = first
+    while end < last:
+        text = lexed.tokens[end].text
+        if text in ("(", "["):
+            depth += 1
+        elif text in (")", "]"):
+            depth -= 1
+        elif depth <= 0 and text in (";", ":="):
+            break
+        end += 1
+    if end == first:
+        return ""
+    words = lexed.text[lexed.tokens[first].offset : lexed.tokens[end - 1].end].split()
+    return " ".join(words)
 
 
 def _comment_end(text: str, start: int) -> int:
@@ -314,7 +373,7 @@ def _comment_end(text: str, start: int) -> int:
 def _comment(text: str, start: int, end: int, line_starts: list[int], body: str) -> Comment:
     line = bisect_right(line_starts, start)
     end_line = bisect_right(line_starts, max(start, end - 1))
-    return Comment(body.strip(), line, end_line)
+    return Comment(body.strip(), line, end_line, start, end)
 
 
 def _spans(tokens: list[Token], length: int, line_starts: list[int]) -> tuple[Span, ...]:

@@ -1,0 +1,200 @@
+"""Hover: what the name under the cursor is, as an engineer wants it at a glance: its
+declaration (type, block, initial value), where it is declared, and the comment written
+with it; a POU's or method's interface; a standard function's parameters. The live value
+when online is the adapters' to add."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+from backend.compiler import builtins
+from backend.compiler.ast import key
+from backend.compiler.language.analysis import Analysis
+from backend.compiler.language.position import Location, Range, Symbol, symbol_at
+from backend.compiler.language.tokens import Lexed, lex
+from backend.compiler.resolve import PouSymbols
+from backend.compiler.source import Pos, stdlib_sources
+
+_MAX_COMMENT = 2000  # characters of a declaration's comment shown
+
+
+@dataclass(frozen=True)
+class Hover:
+    range: Range  # the identifier hovered
+    kind: str  # the symbol's kind (position.Symbol.kind)
+    signature: str  # the declaration as ST reads it, one or more lines
+    declared: Location | None  # None for the standard functions
+    owner: str  # the POU, structure or enum it belongs to; "" at the top
+    comment: str  # the comment on or above the declaration's line; "" if none
+
+    @property
+    def markdown(self) -> str:
+        parts = [f"```st\n{self.signature}\n```"]
+        if self.comment:
+            parts.append(self.comment)
+        if self.declared is not None:
+            place = f"{self.declared.file}:{self.declared.range.line}"
+            parts.append(
+                f"Declared in {self.owner} ({place})" if self.owner else f"Declared at {place}"
+            )
+        return "\n\n".join(parts)
+
+
+def hover(analysis: Analysis, file: str, line: int, col: int) -> Hover | None:
+    located = symbol_at(analysis, file, line, col)
+    if located is None:
+        return None
+    symbol = located.symbol
+    declared = None
+    comment = ""
+    if symbol.declared is not None:
+        pos = symbol.declared
+        end = pos.col + len(symbol.name)
+        declared = Location(pos.file, Range(pos.line, pos.col, pos.line, end))
+        comment = declaration_comment(_text(analysis, pos.file), pos)
+    return Hover(
+        located.range, symbol.kind, signature(analysis, symbol), declared, symbol.owner, comment
+    )
+
+
+def signature(analysis: Analysis, symbol: Symbol) -> str:
+    """The declaration of `symbol` as ST reads it."""
+    type_name = symbol.type.name if symbol.type is not None else ""
+    match symbol.kind:
+        case "variable":
+            variable = symbol.variable
+            located = f" AT {variable.location}" if variable and variable.location else ""
+            head = f"{symbol.detail} {symbol.name}{located} : {type_name}"
+            initial = _initial_value(analysis, symbol.declared)
+            return f"{head} := {initial}" if initial else head
+        case "pou" | "method":
+            block = symbol.block
+            name = f"{symbol.owner}.{symbol.name}" if symbol.owner else symbol.name
+            head = f"{symbol.detail} {name}" + (f" : {type_name}" if type_name else "")
+            return "\n".join([head, *interface_lines(block)]) if block else head
+        case "property":
+            return f"PROPERTY {symbol.owner}.{symbol.name} : {type_name}"
+        case "type":
+            return _type_signature(analysis, symbol)
+        case "enum_value":
+            info = analysis.resolved.enums.get(key(symbol.owner))
+            value = info.values[key(symbol.name)][1] if info else ""
+            return f"{symbol.owner}#{symbol.name} (= {value})"
+        case "interface":
+            return f"INTERFACE {symbol.name}"
+        case "standard_function":
+            return standard_signature(symbol.name)
+        case _:
+            return f"{symbol.name} : {symbol.detail}"
+
+
+def interface_lines(block: PouSymbols) -> list[str]:
+    """A POU's or method's parameters, one per line: `  VAR_INPUT IN : BOOL`."""
+    return [f"  {v.kind} {v.name} : {v.type.name}" for v in block.parameters]
+
+
+def standard_signature(name: str) -> str:
+    """`LIMIT(MN, IN, MX)`; a function of any number of inputs `MAX(IN1, IN2, ...)`."""
+    found = builtins.lookup(name)
+    if found is None:
+        return name
+    params = ", ".join(found.params) if found.params is not None else "IN1, IN2, ..."
+    return f"{found.name}({params}) (standard function)"
+
+
+def declaration_comment(text: str | None, pos: Pos) -> str:
+    """The comment written on a declaration's line after it, else the one that ends on
+    the line above it (a line of its own)."""
+    if text is None:
+        return ""
+    lexed = lex(text)
+    same_line = [c.text for c in lexed.comments if c.line == pos.line]
+    if same_line:
+        return _clip(" ".join(same_line))
+    above = [c for c in lexed.comments if c.end_line == pos.line - 1]
+    if above and not _code_on(lexed, pos.line - 1, above[-1].line):
+        return _clip(above[-1].text)
+    return ""
+
+
+def _code_on(lexed: Lexed, line: int, first_line: int) -> bool:
+    """Whether a token of code stands on lines first_line..line (a comment after code
+    belongs to that code, not to the next line)."""
+    index = lexed.index_at(first_line, 1)
+    return index < len(lexed.tokens) and lexed.tokens[index].line <= line
+
+
+def _clip(comment: str) -> str:
+    comment = "\n".join(line.strip() for line in comment.splitlines())
+    return comment if len(comment) <= _MAX_COMMENT else comment[:_MAX_COMMENT] + " ..."
+
+
+def _initial_value(analysis: Analysis, pos: Pos | None) -> str:
+    """The text after `:=` of the declaration at `pos`, up to its `;`."""
+    if pos is None:
+        return ""
+    text = _text(analysis, pos.file)
+    if text is None:
+        return ""
+    lexed = lex(text)
+    start = lexed.index_at(pos.line, pos.col)
+    depth = 0
+    begin = -1
+    for index in range(start, min(start + 400, len(lexed.tokens))):
+        token = lexed.tokens[index]
+        if token.text in ("(", "["):
+            depth += 1
+        elif token.text in (")", "]"):
+            depth -= 1
+        elif token.text == ":=" and depth == 0 and begin < 0:
+            begin = index + 1
+        elif token.text in (";", "END_VAR", "END_STRUCT") and depth <= 0:
+            if begin < 0 or begin >= index:
+                return ""
+            first, last = lexed.tokens[begin], lexed.tokens[index - 1]
+            return " ".join(text[first.offset : last.end].split())
+    return ""
+
+
+def _type_signature(analysis: Analysis, symbol: Symbol) -> str:
+    resolved = analysis.resolved
+    if key(symbol.name) in resolved.structs:
+        info = resolved.structs[key(symbol.name)]
+        fields = [f"  {m.name} : {m.type.name};" for m in info.members]
+        return "\n".join([f"TYPE {symbol.name} : STRUCT", *fields, "END_STRUCT"])
+    if key(symbol.name) in resolved.enums:
+        values = resolved.enums[key(symbol.name)].values.values()
+        listed = ", ".join(f"{name} := {value}" for name, value in values)
+        return f"TYPE {symbol.name} : ({listed})"
+    declared = _declared_text(analysis, symbol.declared)
+    return f"TYPE {symbol.name} : {declared}" if declared else f"TYPE {symbol.name}"
+
+
+def _declared_text(analysis: Analysis, pos: Pos | None) -> str:
+    """The text after the `:` of the type declaration at `pos`, up to its `;`."""
+    if pos is None:
+        return ""
+    text = _text(analysis, pos.file)
+    if text is None:
+        return ""
+    lexed = lex(text)
+    start = lexed.index_at(pos.line, pos.col)
+    tokens = lexed.tokens[start : start + 200]
+    colon = next((i for i, t in enumerate(tokens) if t.text == ":"), -1)
+    end = next((i for i, t in enumerate(tokens) if t.text == ";"), -1)
+    if colon < 0 or end <= colon + 1:
+        return ""
+    return " ".join(text[tokens[colon + 1].offset : tokens[end - 1].end].split())
+
+
+def _text(analysis: Analysis, file: str) -> str | None:
+    """A file's text: the project's as the editor has it, or the standard library's."""
+    if file in analysis.texts:
+        return analysis.texts[file]
+    return _standard_texts().get(file)
+
+
+@cache
+def _standard_texts() -> dict[str, str]:
+    return {source.name: source.text for source in stdlib_sources()}
