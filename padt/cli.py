@@ -546,6 +546,14 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="MS",
         help="a longer target cycle time for the switch-over cycle only",
     )
+    reload.add_argument(
+        "--keep-online",
+        action="append",
+        default=[],
+        metavar="PARAM",
+        help="set PARAM's online value again right after the reload, which resets it to the "
+        "project's (the preview lists them); repeatable",
+    )
     _backup_option(reload)
     reload.set_defaults(func=_lazy("padt.configuration", "reload"))
 

@@ -10,26 +10,30 @@ from pathlib import Path
 
 from backend.engineering.compile_gate import CheckedCompile, compile_checked
 from backend.engineering.download import Kept, download_checked
+from backend.engineering.online_change import (
+    OnlineChangePreview,
+    chosen_resets,
+    online_change,
+    parameter_words,
+    preview_online_change,
+)
 from backend.engineering.reload import (
     ReloadOptions,
     counted,
     needs_confirmation,
-    preview_reload,
-    reload_checked,
     rename_map,
+    rename_pair,
 )
 from padt.online import Failed, resource_client, run, table
-from runtime.contract.protocol import ReloadPlanInfo
 from runtime.contract.refusal import Refusal
 
 
 def parse_rename(text: str) -> tuple[str, str]:
     """`OLD=NEW` as the user writes it -> (NEW, OLD) as the runtime's rename map has it."""
-    old, sep, new = text.partition("=")
-    old, new = old.strip(), new.strip()
-    if not sep or not old or not new or "=" in new:
-        raise argparse.ArgumentTypeError(f"'{text}' is not OLD=NEW")
-    return new, old
+    try:
+        return rename_pair(text)
+    except Refusal as refused:
+        raise argparse.ArgumentTypeError(refused.message) from None
 
 
 def _compile(paths: list[Path]) -> CheckedCompile:
@@ -67,9 +71,12 @@ def load(args: argparse.Namespace) -> int:
     return run("load", args, body)
 
 
-def plan_lines(plan: ReloadPlanInfo) -> list[str]:
-    """The reload preview: every value that is not simply kept, the hazards, the summary.
-    Kept values are only counted: they are most of a plan, and nothing happens to them."""
+def plan_lines(preview: OnlineChangePreview) -> list[str]:
+    """The reload preview: every value that is not simply kept, the hazards, the summary,
+    the online parameter settings it resets, why it cannot be made online, and the source
+    diff since the running configuration. Kept values are only counted: they are most of a
+    plan, and nothing happens to them."""
+    plan = preview.plan
     lines = [f"reload preview: configuration CRC {plan.old_crc} -> {plan.new_crc}"]
     for what, names in (
         ("added", plan.programs.added),
@@ -100,8 +107,23 @@ def plan_lines(plan: ReloadPlanInfo) -> list[str]:
         )
     )
     lines.append(f"estimated switch-over: {plan.estimate_us:.0f} us")
+    for reset in preview.resets:
+        keep = f" (--keep-online {reset.name} keeps it)" if not reset.keepable else ""
+        lines.append(f"parameter reset: {parameter_words(reset)}{keep}")
     if plan.refusals:
         lines.append("reload not possible: needs STOP and download: " + "; ".join(plan.refusals))
+        lines += [f"  {why}" for why in preview.why_not]
+    if not preview.running_from:
+        lines.append("source diff: the running configuration's sources are not known here")
+    else:
+        lines.append(f"source diff against {preview.running_from}:")
+        for diff in preview.diff:
+            lines.append(f"--- {diff.name} ({diff.change})")
+            lines += diff.lines
+            if diff.cut:
+                lines.append(f"... {diff.cut} more lines")
+        if not preview.diff:
+            lines.append("  no file differs")
     return lines
 
 
@@ -113,8 +135,10 @@ def reload(args: argparse.Namespace) -> int:
             raise Failed(f"--rename: {refused.message}", 2) from None
         checked = _compile(args.paths)
         with resource_client(args) as client:
-            plan = preview_reload(client, checked.artifact, renames)
-            print("\n".join(plan_lines(plan)))
+            project = checked.project.name
+            preview = preview_online_change(client, checked, project, renames, args.backup_dir, {})
+            plan = preview.plan
+            print("\n".join(plan_lines(preview)))
             if args.preview:
                 return 0
             if plan.refusals:
@@ -132,16 +156,23 @@ def reload(args: argparse.Namespace) -> int:
             ):
                 if value is not None:
                     extra += [flag, str(value)]
+            extra += [word for name in args.keep_online for word in ("--keep-online", name)]
             options = ReloadOptions(renames, plan.old_crc, args.watchdog_ms, args.target_cycle_ms)
             how = _command_line(args, "reload", *extra, "--yes")
-            done = reload_checked(client, checked, options, args.backup_dir, how)
+            keep = chosen_resets(client, checked, args.keep_online)
+            changed = online_change(client, checked, options, keep, args.backup_dir, how)
+        done = changed.reloaded
         outcome = done.reply.reload
         print(
             f"reload done: configuration CRC {outcome.old_crc} -> {outcome.new_crc}, "
             f"pause {outcome.pause_us:.0f} us, {counted(outcome.carried, 'value')} carried over"
         )
+        for kept in changed.kept:
+            print(f"kept online: {kept}")
         print(f"resource {args.resource}: {done.reply.status.state}")
         _report_backup(done.backup, "reload")
+        if changed.not_kept:
+            raise Failed("reload done, online values not set again: " + "; ".join(changed.not_kept))
         return 0
 
     return run("reload", args, body)

@@ -8,6 +8,7 @@ Each request goes to the resource as a command with the caller's PES session (fr
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -20,7 +21,7 @@ from backend.api.auth import Credentials, ReadOnly, ReadWrite, Service
 from backend.engineering import recordings
 from backend.engineering.literals import LiteralError, literals_of, parse_literal
 from backend.engineering.recordings import RecordingSpec, TriggerError
-from backend.engineering.reload import ReloadOptions, rename_map
+from backend.engineering.reload import ReloadOptions, needs_confirmation, rename_map
 from runtime.contract import protocol as p
 from runtime.contract.protocol import (
     MAX_EVENTS,
@@ -58,6 +59,12 @@ class ReloadRequest(ReloadPreviewRequest):
     )
     watchdog_ms: int | None = Field(default=None, gt=0, le=MAX_MS)
     target_cycle_ms: int | None = Field(default=None, gt=0, le=MAX_MS)
+    keep_online: list[Annotated[str, Field(max_length=64)]] = Field(
+        default_factory=list,
+        max_length=32,
+        description="parameters of the preview's `parameter_resets` whose online value is "
+        "set again right after the reload",
+    )
 
 
 class ParameterValue(BaseModel):
@@ -181,8 +188,15 @@ def _backup(path: Path | None, error: str | None) -> dict[str, Any]:
 def preview_reload(
     resource: str, body: ReloadPreviewRequest, caller: ReadWrite, service: Service
 ) -> Any:
-    plan, risks = service.preview_reload(caller, resource, body.project, _renames(body.renames))
-    return {"plan": encode(plan), "risks": risks}
+    preview = service.preview_reload(caller, resource, body.project, _renames(body.renames))
+    return {
+        "plan": encode(preview.plan),
+        "risks": needs_confirmation(preview.plan),
+        "why_not_online": list(preview.why_not),
+        "parameter_resets": [dataclasses.asdict(reset) for reset in preview.resets],
+        "source_diff": [dataclasses.asdict(diff) for diff in preview.diff],
+        "running_sources": preview.running_from or None,
+    }
 
 
 @router.post("/{resource}/reload", summary="Reload (online change) after a preview")
@@ -190,11 +204,14 @@ def reload(resource: str, body: ReloadRequest, caller: ReadWrite, service: Servi
     options = ReloadOptions(
         _renames(body.renames), body.expected_crc.upper(), body.watchdog_ms, body.target_cycle_ms
     )
-    done = service.reload(caller, resource, body.project, options)
+    changed = service.reload(caller, resource, body.project, options, body.keep_online)
+    done = changed.reloaded
     return {
         "reload": encode(done.reply.reload),
         "status": encode(done.reply.status),
         **_backup(done.backup.path, done.backup.error),
+        "kept_online": list(changed.kept),
+        "not_kept_online": list(changed.not_kept),
     }
 
 

@@ -21,23 +21,24 @@ from backend.engineering.documentation.export import (
     version_path,
 )
 from backend.engineering.download import Downloaded, download_checked
+from backend.engineering.online_change import (
+    OnlineChanged,
+    OnlineChangePreview,
+    chosen_resets,
+    online_change,
+    preview_online_change,
+)
 from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.project import ProjectError, compile_project, load_project
 from backend.engineering.project_shelf import ProjectShelf
-from backend.engineering.reload import (
-    Reloaded,
-    ReloadOptions,
-    needs_confirmation,
-    preview_reload,
-    reload_checked,
-)
+from backend.engineering.reload import ReloadOptions
 from backend.engineering.resource_client import (
     ResourceClient,
     ResourceLogin,
     ResourceUnreachable,
 )
 from backend.engineering.resource_directory import ResourceDirectory
-from runtime.contract.protocol import Command, Logout, ReloadPlanInfo
+from runtime.contract.protocol import Command, Logout
 from runtime.contract.refusal import Refusal
 
 R = TypeVar("R")
@@ -154,23 +155,31 @@ class PadtService:
 
     def preview_reload(
         self, caller: Caller, resource: str, project: str, renames: dict[str, str]
-    ) -> tuple[ReloadPlanInfo, list[str]]:
-        """The plan, and what in it needs the user's confirmation."""
+    ) -> OnlineChangePreview:
+        """The plan with the source diff, the parameter resets and why not online."""
         path = self.project_path(project)
         with self._refusals(caller, resource):
             checked = compile_checked([path])
-            plan = preview_reload(self.client(caller, resource), checked.artifact, renames)
-        return plan, needs_confirmation(plan)
+            client = self.client(caller, resource)
+            return preview_online_change(
+                client, checked, project, renames, self.backup_dir, self.projects
+            )
 
     def reload(
-        self, caller: Caller, resource: str, project: str, options: ReloadOptions
-    ) -> Reloaded:
+        self,
+        caller: Caller,
+        resource: str,
+        project: str,
+        options: ReloadOptions,
+        keep_online: list[str],
+    ) -> OnlineChanged:
         path = self.project_path(project)
         with self._refusals(caller, resource):
             checked = compile_checked([path])
             how = f"REST API: reload of project {project} by {caller.user}"
             client = self.client(caller, resource)
-            return reload_checked(client, checked, options, self.backup_dir, how)
+            keep = chosen_resets(client, checked, keep_online)
+            return online_change(client, checked, options, keep, self.backup_dir, how)
 
     @contextmanager
     def _refusals(self, caller: Caller, resource: str) -> Iterator[None]:

@@ -22,6 +22,8 @@ class CheckedCompile:
     artifact: Artifact
     diagnostics: tuple[str, ...]  # warnings of the in-process compile
     config_text: str | None  # the project's padt.toml as read for this compile, if any
+    # the configuration CRCs of the two check compiles (equal, and equal to the artifact's)
+    check_crcs: tuple[str, str]
 
 
 def compile_failed(message: str, diagnostics: Sequence[str]) -> Refusal:
@@ -59,4 +61,5 @@ def compile_checked(paths: Sequence[Path]) -> CheckedCompile:
             f"this compile gives configuration CRC {result.artifact.crc}, the two check "
             f"compiles gave {agreed} (was a source changed meanwhile?)",
         )
-    return CheckedCompile(project, result.artifact, diagnostics, config_text)
+    crcs = (agreed or "", check.second.configuration or "")
+    return CheckedCompile(project, result.artifact, diagnostics, config_text, crcs)

@@ -16,11 +16,12 @@ from typing import TypeVar
 from backend.engineering.backup import BackupError, BackupInfo, write_backup
 from backend.engineering.compile_gate import CheckedCompile
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
-from runtime.contract.artifact import Artifact, crc32_hex
+from runtime.contract.artifact import Artifact, ResourceConfig, crc32_hex
 from runtime.contract.protocol import (
     MAX_CHUNK,
     Command,
     Load,
+    ResourceState,
     Status,
     TransferBegin,
     TransferChunk,
@@ -42,6 +43,24 @@ class Kept:
 
     path: Path | None
     error: str | None = None
+
+
+@dataclass(frozen=True)
+class DownloadPlan:
+    """What a download would do, asked before it is sent: the resource, the configuration
+    it runs now and the one compiled twice, and in words what follows or why it cannot."""
+
+    resource: str
+    project: str
+    running_crc: str | None  # None: the resource has no configuration yet
+    new_crc: str
+    check_crcs: tuple[str, str]  # of the two check compiles
+    effects: tuple[str, ...]  # what the download does, in words
+    refusals: tuple[str, ...]  # why it cannot be done now, in words
+
+    @property
+    def possible(self) -> bool:
+        return not self.refusals
 
 
 @dataclass(frozen=True)
@@ -83,6 +102,46 @@ def download(client: ResourceClient, artifact: Artifact) -> Status:
         )
     send_artifact(client, artifact)
     return taking(client, Load()).status
+
+
+def plan_download(
+    checked: CheckedCompile,
+    status: Status,
+    parameters: ResourceConfig | None,
+    level_refusal: str | None = None,
+) -> DownloadPlan:
+    """The download of `checked` into the resource whose status is `status`, in words: the
+    preconditions the resource checks again (STOP, Load Allowed, the project's resource),
+    the caller's level on it (`level_refusal`: why the caller may not, if so), and what
+    follows: every value from its initial value, the programs stopped until started."""
+    refusals = [level_refusal] if level_refusal else []
+    wanted = checked.artifact.resource.name
+    if wanted != status.resource:
+        refusals.append(f"the project is for resource {wanted}, not {status.resource}")
+    if status.state == ResourceState.ERROR_STOP:
+        refusals.append("the resource is in ERROR STOP: reset it (INIT) first")
+    elif status.state not in (ResourceState.STOP_VALID, ResourceState.STOP_INVALID):
+        refusals.append(
+            f"the resource is in {status.state}: a download replaces the whole "
+            "configuration and needs it in STOP (stop it first, or make an online change)"
+        )
+    if status.crc is not None and parameters is not None and not parameters.load_allowed:
+        refusals.append("Load Allowed of the running configuration is OFF")
+    effects = (
+        f"configuration {status.crc or '(none)'} is replaced by {checked.artifact.crc}",
+        "every variable starts from its initial value (cold start); forcing ends",
+        "the resource stays in STOP until it is started",
+        "the PADT keeps a backup of what was loaded",
+    )
+    return DownloadPlan(
+        status.resource,
+        checked.project.name,
+        status.crc,
+        checked.artifact.crc,
+        checked.check_crcs,
+        effects,
+        tuple(refusals),
+    )
 
 
 def keep_backup(

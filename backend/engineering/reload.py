@@ -4,6 +4,7 @@ program is in the middle of its cycle), and the backup of what was loaded."""
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -16,6 +17,7 @@ from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import Reload, ReloadPlanInfo, ReloadPreview, ReloadReply
 from runtime.contract.refusal import Refusal
 
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)*")
 BUSY_PAUSE_S = 0.05  # a program mid-cycle finishes it within a few CPU cycles
 
 
@@ -44,6 +46,38 @@ def rename_map(pairs: Iterable[tuple[str, str]]) -> dict[str, str]:
     return renames
 
 
+def rename_pair(text: str) -> tuple[str, str]:
+    """`OLD=NEW`, as the user writes a rename everywhere (`padt reload --rename`, the
+    browser's rename map) -> (NEW, OLD) as the runtime's rename map has it."""
+    old, sep, new = text.partition("=")
+    old, new = old.strip(), new.strip()
+    if not sep or "=" in new or not _NAME.fullmatch(old) or not _NAME.fullmatch(new):
+        raise Refusal("bad_request", f"'{text.strip()[:80]}' is not OLD=NEW")
+    if old.upper() == new.upper():
+        raise Refusal("bad_request", f"{old} is renamed to itself")
+    return new, old
+
+
+def parse_renames(text: str) -> tuple[dict[str, str], list[str]]:
+    """One `OLD=NEW` a line (blank lines and `#` comments skipped) -> the rename map NEW ->
+    OLD, and what is wrong with each line that is not such a pair."""
+    pairs: list[tuple[str, str]] = []
+    errors: list[str] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        if not line.strip() or line.strip().startswith("#"):
+            continue
+        try:
+            pairs.append(rename_pair(line))
+        except Refusal as refused:
+            errors.append(f"line {number}: {refused.message}")
+    try:
+        renames = rename_map(pairs)
+    except Refusal as refused:
+        errors.append(refused.message)
+        renames = {}
+    return renames, errors
+
+
 def preview_reload(
     client: ResourceClient, artifact: Artifact, renames: Mapping[str, str]
 ) -> ReloadPlanInfo:
@@ -52,13 +86,42 @@ def preview_reload(
     return taking(client, ReloadPreview(dict(renames))).plan
 
 
+@dataclass(frozen=True)
+class Risk:
+    """Something a reload would lose or risk, which the user accepts before it."""
+
+    label: str  # of its checkbox
+    title: str
+    detail: str
+
+
+def risks(plan: ReloadPlanInfo) -> list[Risk]:
+    """What a reload would lose or risk, one by one: values that start from their initial
+    value, values that are lost, and each hazard the plan names; empty when every value
+    is kept, converted or new."""
+    found: list[Risk] = []
+    for action, what in (
+        ("initialised", "start from their initial value"),
+        ("deleted", "are lost"),
+    ):
+        names = [change.path for change in plan.changes if change.action == action]
+        if names:
+            title = counted(len(names), "value") + f" {action}"
+            found.append(Risk(f"Accept: {title}", title, f"These {what}: {', '.join(names)}"))
+    for number, hazard in enumerate(plan.hazards, start=1):
+        found.append(
+            Risk(
+                f"Accept hazard {number}: {hazard.kind}",
+                f"Hazard {number}: {hazard.kind} in {hazard.instance}",
+                hazard.message,
+            )
+        )
+    return found
+
+
 def needs_confirmation(plan: ReloadPlanInfo) -> list[str]:
-    """What a reload would lose or risk; empty when every value is kept, converted or new."""
-    found = [
-        counted(plan.summary[action], "value") + f" {action}"
-        for action in ("initialised", "deleted")
-        if plan.summary.get(action)
-    ]
+    """The risks of `risks` counted: what `padt reload` and the REST API say needs --yes."""
+    found = [risk.title for risk in risks(plan) if not risk.title.startswith("Hazard ")]
     if plan.hazards:
         found.append(counted(len(plan.hazards), "hazard"))
     return found

@@ -289,6 +289,12 @@ def test_compile_check_twice_load_preview_and_reload(site: Plant, tmp_path: Path
     assert plan["old_crc"] == first
     added = [c for c in plan["changes"] if c["action"] == "new"]
     assert [c["path"] for c in added] == ["P.m"]
+    # with what changed in the sources since the loaded configuration (its backup)
+    shown = preview.json()
+    assert shown["why_not_online"] == [] and shown["parameter_resets"] == []
+    assert shown["running_sources"].startswith("backup Plant_")
+    changed = [line for diff in shown["source_diff"] for line in diff["lines"]]
+    assert any(line.startswith("+") and "m" in line for line in changed), shown["source_diff"]
     stale = {"project": "plant_v2", "expected_crc": "0BADC0DE"}
     assert error(site.call("POST", f"{R}/reload", builder, json=stale), 409, "changed")
     confirmed = {"project": "plant_v2", "expected_crc": plan["old_crc"]}
