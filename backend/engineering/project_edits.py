@@ -209,7 +209,7 @@ def _check_name(name: str) -> None:
 @cache
 def _standard_pous() -> frozenset[str]:
     """The function blocks and functions of the standard library (TON, CTU, ...)."""
-    names = set()
+    names: set[str] = set()
     for source in stdlib_sources():
         unit = parse_source(source.name, source.text)
         names.update(p.name.upper() for p in unit.pous)
