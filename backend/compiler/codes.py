@@ -36,6 +36,7 @@ class Code(Enum):
     INVALID_LITERAL = "E0003", "literal without a value"
     IDENTIFIER = "E0004", "identifier with two underscores in a row or one at its end"
     PRAGMA_SKIPPED = "W0001", "pragma skipped"
+    UNPARSED_FILE = "N0001", "a file that did not parse, before the errors it may cause"
 
     # ---- 01: declarations
     DUPLICATE_TYPE = "E0101", "type declared twice"

@@ -10,6 +10,8 @@ import datetime
 import fractions
 import functools
 import re
+import threading
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from importlib import resources
 from typing import Any
@@ -79,8 +81,10 @@ def nested_comment(depth: int) -> str:
 
 
 # Pragmas seen by the lexer during the current parse (the parser is built once, so its
-# callback needs a module-level list; parse_source resets and reads it).
+# callback needs a module-level list; a parse resets and reads it, holding _LEXING, since
+# the language services parse from several threads).
 _PRAGMAS: list[Token] = []
+_LEXING = threading.Lock()
 
 
 def parse_time_literal(text: str) -> tuple[int, bool]:
@@ -276,17 +280,18 @@ def _attach_member(result: list[Any], member: ast.Method | ast.Property) -> list
 class _ToAst(Transformer[Token, Any]):
     """Bottom-up conversion of the lark tree into AST nodes."""
 
-    def __init__(self, file: str) -> None:
+    def __init__(self, file: str, line_offset: int = 0) -> None:
         super().__init__()
         self.file = file
+        self.line_offset = line_offset  # lines of the file before the text parsed
         self.errors: list[Diagnostic] = []
         self.addresses: list[tuple[str, Pos]] = []
         self.warnings: list[Diagnostic] = []  # the dialect extensions met (W08xx)
 
     def _pos(self, item: Any) -> Pos:
         if isinstance(item, Token):
-            return Pos(self.file, item.line or 0, item.column or 0)
-        return Pos(self.file, item.meta.line, item.meta.column)
+            return Pos(self.file, (item.line or 0) + self.line_offset, item.column or 0)
+        return Pos(self.file, item.meta.line + self.line_offset, item.meta.column)
 
     def _declared(self, name: Token) -> str:
         """A name being declared. IEC 61131-3 forbids two underscores in a row and one at
@@ -712,7 +717,7 @@ class _ToAst(Transformer[Token, Any]):
     def unnamed_located(self, meta: Any, items: list[Any]) -> list[ast.VarDecl]:
         """`AT %IX1.1 : BOOL;`: the variable is named by its address."""
         location, type_ref, *init = items
-        pos = Pos(self.file, meta.line, meta.column)
+        pos = Pos(self.file, meta.line + self.line_offset, meta.column)
         return [ast.VarDecl(location, type_ref, init[0] if init else None, location, pos)]
 
     def _block(self, kind: str, pos: Pos, items: list[Any]) -> ast.VarBlock:
@@ -955,7 +960,8 @@ class _ToAst(Transformer[Token, Any]):
     @v_args(meta=True)
     def program_config(self, meta: Any, items: list[Any]) -> ast.ProgramInstanceDecl:
         # its arguments are ignored (W0602): the addresses they name declare nothing
-        span = ((meta.line, meta.column), (meta.end_line, meta.end_column))
+        offset = self.line_offset
+        span = ((meta.line + offset, meta.column), (meta.end_line + offset, meta.end_column))
         self.addresses = [
             (address, pos)
             for address, pos in self.addresses
@@ -1152,7 +1158,7 @@ def _branch_indices(kind: str, children: list[Tree[Token]]) -> list[int]:
     return indices
 
 
-def _nesting_problem(file: str, tree: Tree[Token]) -> Diagnostic | None:
+def _nesting_problem(file: str, tree: Tree[Token], line_offset: int = 0) -> Diagnostic | None:
     """The first place, in source order, where statements, an expression or array types
     nest too deep, without recursion."""
     pending: list[tuple[Tree[Token], _Nesting]] = [(tree, _Nesting())]
@@ -1167,7 +1173,8 @@ def _nesting_problem(file: str, tree: Tree[Token]) -> Diagnostic | None:
         found = _too_deep(kind, at)
         if found is not None:
             meta = node.meta
-            where = Pos(file, 1, 1) if meta.empty else Pos(file, meta.line, meta.column)
+            line, col = (1, 1) if meta.empty else (meta.line, meta.column)
+            where = Pos(file, line + line_offset, col)
             return Diagnostic.at(where, *found)
         children = [child for child in node.children if isinstance(child, Tree)]
         if kind not in _BLOCKS:
@@ -1182,37 +1189,95 @@ def _nesting_problem(file: str, tree: Tree[Token]) -> Diagnostic | None:
     return None
 
 
-def _pragma_diagnostic(file: str, token: Token) -> Diagnostic:
+def _pragma_diagnostic(file: str, pragma: tuple[int, int, str], line_offset: int) -> Diagnostic:
     """A skipped `{{ C code }}` block changes what runs: a warning; a `{...}` pragma of
     CODESYS or TwinCAT (`{attribute 'hide'}`, `{warning '...'}`) only a note."""
-    where = Pos(file, token.line or 1, token.column or 1)
-    if str(token).startswith("{{"):
+    line, col, text = pragma
+    where = Pos(file, line + line_offset, col)
+    if text.startswith("{{"):
         return Diagnostic.at(where, Code.PRAGMA_SKIPPED, "pragma skipped")
-    words = str(token)[1:-1].split()
+    words = text[1:-1].split()
     name = words[0] if words else ""
     message = f"pragma '{name[:40]}' ignored: CODESYS/TwinCAT, not IEC 61131-3"
     return Diagnostic.at(where, Code.ATTRIBUTE_PRAGMA, message)
 
 
-def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast.SourceUnit:
-    """Parse one ST file, taking its tokens from the project's `budget`. Raises
-    `CompileError` with a `file:line:col` diagnostic."""
-    _PRAGMAS.clear()
-    tree = _tree(file, text, budget or TokenBudget())
-    too_deep = _nesting_problem(file, tree)
+@dataclass(frozen=True)
+class SyntaxTree:
+    """A text's parse tree, or the syntax error that stopped it (of no file yet, its line
+    counted from the text's start), with the tokens read and the pragmas skipped on the
+    way. It depends on the text alone, so one may serve every file that has the text."""
+
+    tree: Tree[Token] | None
+    error: Diagnostic | None
+    tokens: int
+    pragmas: tuple[tuple[int, int, str], ...]  # line, column, text
+
+
+def syntax_tree(text: str, budget: TokenBudget | None = None) -> SyntaxTree:
+    """The parse tree of `text`, taking its tokens from `budget`."""
+    budget = budget or TokenBudget()
+    before = budget.left
+    with _LEXING:
+        _PRAGMAS.clear()
+        try:
+            tree: Tree[Token] | None = _tree("", text, budget)
+            error = None
+        except CompileError as exc:
+            tree, error = None, exc.diagnostics[0]
+        pragmas = tuple((t.line or 1, t.column or 1, str(t)) for t in _PRAGMAS)
+    return SyntaxTree(tree, error, before - budget.left, pragmas)
+
+
+def placed(diagnostic: Diagnostic, file: str, line_offset: int) -> Diagnostic:
+    """A diagnostic of a text put where that text is: in `file`, after `line_offset` lines."""
+    return replace(diagnostic, file=file, line=diagnostic.line + line_offset)
+
+
+@dataclass(frozen=True)
+class Piece:
+    """A file's text, or a part of it that holds whole declarations, turned into AST items:
+    before ACTIONS blocks and members declared after their owner are put with it (which
+    needs the whole file). `stopped`: the problem that left no items, with its stage
+    (1: nesting too deep, 2: a literal without a value), since a whole file reports the
+    first problem of the earliest stage."""
+
+    items: tuple[Any, ...]
+    errors: tuple[Diagnostic, ...]
+    warnings: tuple[Diagnostic, ...]
+    addresses: tuple[tuple[str, Pos], ...]
+    stopped: tuple[int, Diagnostic] | None = None
+
+
+def piece_of(file: str, parsed: SyntaxTree, line_offset: int = 0) -> Piece:
+    """The AST items of a text that parsed, placed in `file` after `line_offset` lines."""
+    assert parsed.tree is not None, "a text with a syntax error has no items"
+    too_deep = _nesting_problem(file, parsed.tree, line_offset)
     if too_deep is not None:
-        raise CompileError([too_deep])
-    transformer = _ToAst(file)
+        return Piece((), (), (), (), (1, too_deep))
+    transformer = _ToAst(file, line_offset)
     try:
-        items = transformer.transform(tree)
+        items = transformer.transform(parsed.tree)
     except VisitError as exc:  # a literal that parses but has no value (16#_, D#2024-13-01)
         where = transformer._pos(exc.obj)
         problem = str(exc.orig_exc) or type(exc.orig_exc).__name__
         message = f"invalid literal: {problem}"
-        raise CompileError([Diagnostic.at(where, Code.INVALID_LITERAL, message)]) from None
-    items, misplaced = _with_actions_blocks(items)
-    if transformer.errors or misplaced:
-        raise CompileError(transformer.errors + misplaced)
+        return Piece((), (), (), (), (2, Diagnostic.at(where, Code.INVALID_LITERAL, message)))
+    pragmas = (_pragma_diagnostic(file, p, line_offset) for p in parsed.pragmas)
+    warnings = (*pragmas, *transformer.warnings)
+    return Piece(tuple(items), tuple(transformer.errors), warnings, tuple(transformer.addresses))
+
+
+def unit_of(file: str, pieces: Sequence[Piece]) -> ast.SourceUnit:
+    """A file's unit from the pieces of its text, in order, each of which parsed. Raises
+    `CompileError` as `parse_source` does."""
+    stopped = sorted(p.stopped for p in pieces if p.stopped is not None)
+    if stopped:
+        raise CompileError([stopped[0][1]])
+    items, misplaced = _with_actions_blocks([i for p in pieces for i in p.items])
+    errors = [e for p in pieces for e in p.errors]
+    if errors or misplaced:
+        raise CompileError(errors + misplaced)
     pous = tuple(i for i in items if isinstance(i, ast.Pou))
     globals_ = tuple(i for i in items if isinstance(i, ast.VarBlock))
     types = tuple(t for i in items if isinstance(i, list) for t in i)
@@ -1223,9 +1288,18 @@ def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast
         for c in configurations
         for block in (*c.globals, *(b for r in c.resources for b in r.globals))
     )
-    warnings = (*(_pragma_diagnostic(file, t) for t in _PRAGMAS), *transformer.warnings)
-    addresses = tuple(transformer.addresses)
+    warnings = tuple(w for p in pieces for w in p.warnings)
+    addresses = tuple(a for p in pieces for a in p.addresses)
     interfaces = tuple(i for i in items if isinstance(i, ast.Interface))
     return ast.SourceUnit(
         file, pous, globals_, types, warnings, configurations, addresses, interfaces
     )
+
+
+def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast.SourceUnit:
+    """Parse one ST file, taking its tokens from the project's `budget`. Raises
+    `CompileError` with a `file:line:col` diagnostic."""
+    parsed = syntax_tree(text, budget)
+    if parsed.error is not None:
+        raise CompileError([placed(parsed.error, file, 0)])
+    return unit_of(file, [piece_of(file, parsed)])

@@ -6,6 +6,7 @@ artifact only when there is no error.
 
 from __future__ import annotations
 
+import functools
 import sys
 from dataclasses import dataclass, replace
 from typing import Any
@@ -125,13 +126,25 @@ def parse_project(sources: list[SourceFile]) -> Parsed:
     (a user POU of the same name replaces the standard one); with the diagnostics of the
     user's files and the keys of the user's POUs."""
     units, diagnostics = parse_all(sources)
+    return with_standard_library(units), diagnostics, {key(p.name) for u in units for p in u.pous}
+
+
+def with_standard_library(units: list[ast.SourceUnit]) -> list[ast.SourceUnit]:
+    """The user's units, then the standard library's without the POUs the user replaces."""
     user_pous = {key(p.name) for unit in units for p in unit.pous}
-    stdlib_units, stdlib_diagnostics = parse_all(stdlib_sources())
-    assert not stdlib_diagnostics, stdlib_diagnostics
-    for unit in stdlib_units:
+    result = list(units)
+    for unit in _standard_library():
         kept = tuple(p for p in unit.pous if key(p.name) not in user_pous)
-        units.append(replace(unit, pous=kept))
-    return units, diagnostics, user_pous
+        result.append(replace(unit, pous=kept))
+    return result
+
+
+@functools.cache
+def _standard_library() -> tuple[ast.SourceUnit, ...]:
+    """The standard library parsed, once per process (its AST is immutable)."""
+    units, diagnostics = parse_all(stdlib_sources())
+    assert not diagnostics, diagnostics
+    return tuple(units)
 
 
 def compile_sources(
@@ -162,6 +175,29 @@ def compile_sources(
         cause = "stack" if isinstance(exc, RecursionError) else "memory"
         message = f"the compiler ran out of {cause} on this project"
         return CompileResult((Diagnostic.at(where, Code.PROJECT_SIZE, message),), None)
+
+
+def in_reading_order(diagnostics: list[Diagnostic], unparsed: set[str]) -> list[Diagnostic]:
+    """The cause before its consequences: first what is wrong in the files that did not
+    parse (all they declare is missing, which may make errors elsewhere: a program whose
+    POU is not found, a Modbus point without its global), each with a note that says so
+    when errors follow in other files; then the rest, each file's by place."""
+    causes = [d for d in diagnostics if d.file in unparsed]
+    rest = [d for d in diagnostics if d.file not in unparsed]
+    if any(d.severity == "error" for d in rest):
+        for file in sorted(unparsed):
+            first = min(
+                (d for d in causes if d.file == file and d.severity == "error"), default=None
+            )
+            if first is not None:
+                message = (
+                    f"{file} did not parse, so nothing it declares is known: "
+                    "errors in other files may follow from that"
+                )
+                causes.append(
+                    Diagnostic.at(Pos(file, first.line, first.col), Code.UNPARSED_FILE, message)
+                )
+    return sorted(causes) + sorted(rest)
 
 
 @dataclass(frozen=True)
@@ -210,7 +246,8 @@ def _compile(
     )
     diagnostics.extend(modbus_diagnostics)
     diagnostics.extend(_check_users(users, config_file))
-    diagnostics.sort()
+    unparsed = {source.name for source in sources} - {unit.file for unit in units}
+    diagnostics = in_reading_order(diagnostics, unparsed)
     if any(d.severity == "error" for d in diagnostics):
         return CompileResult(tuple(diagnostics), None)
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from backend.compiler import ast
 from backend.compiler.check import check
 from backend.compiler.diagnostics import Diagnostic
-from backend.compiler.pipeline import parse_project
+from backend.compiler.pipeline import Parsed, in_reading_order, parse_project
 from backend.compiler.resolve import Resolved, resolve
 from backend.compiler.source import SourceFile
 
@@ -21,13 +21,25 @@ class Analysis:
     units: tuple[ast.SourceUnit, ...]  # the user's units, then the standard library's
     resolved: Resolved
     user_pous: frozenset[str]  # the keys of the user's POUs
-    diagnostics: tuple[Diagnostic, ...]  # of every file, sorted by place
+    # of every file, the cause before its consequences: the files that did not parse
+    # first, then each file's by place (`pipeline.in_reading_order`)
+    diagnostics: tuple[Diagnostic, ...]
+
+    def diagnostics_of(self, file: str) -> list[Diagnostic]:
+        """The diagnostics of one file, by place."""
+        return sorted(d for d in self.diagnostics if d.file == file)
 
 
 def analyse(texts: Mapping[str, str]) -> Analysis:
     """The whole project analysed from scratch."""
-    sources = [SourceFile(name, texts[name]) for name in sorted(texts)]
-    units, diagnostics, user_pous = parse_project(sources)
+    return analysed(texts, parse_project([SourceFile(name, texts[name]) for name in sorted(texts)]))
+
+
+def analysed(texts: Mapping[str, str], parsed: Parsed) -> Analysis:
+    """The analysis of `texts` from their parse, `parse_project(texts)` or its equal."""
+    units, diagnostics, user_pous = parsed
     resolved = resolve(units)
     found = [*diagnostics, *resolved.diagnostics, *check(resolved)]
-    return Analysis(dict(texts), tuple(units), resolved, frozenset(user_pous), tuple(sorted(found)))
+    unparsed = set(texts) - {unit.file for unit in units}
+    ordered = in_reading_order(found, unparsed)
+    return Analysis(dict(texts), tuple(units), resolved, frozenset(user_pous), tuple(ordered))
