@@ -1,39 +1,33 @@
-"""The workspace of a logged-in browser, using the whole window: on the left the navigation
-(who is logged in, the resource to work on, the login to it, the status bar); on the right
-the work area with a tab per screen; in between, the viewport draws the selected resource
-and its programs in the colours of their states."""
+"""The workspace of a logged-in browser, laid out as an IDE: on the left the navigation
+(who is logged in, the project and its tree, the resource to work on, the login to it, the
+status bar); on the right the work panel with a tab per screen, collapsible and resizable;
+in between, the viewport draws the selected resource and its programs in the colours of
+their states. The screens are the ones `frontend/screens/__init__.py` lists; the workspace
+is what `frontend/screen_registry.py` calls `Work`: the actions every screen asks of it."""
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
 import viser
 
+from backend.engineering.project_access import Editor
+from backend.engineering.project_shelf import ProjectShelf
 from backend.engineering.resource_client import ResourceClient, ResourceLogin
-from frontend import page_clicks, plant_view, status_bar
+from frontend import page_clicks, plant_view, project_tree_view, screens, status_bar
 from frontend.confirm import attempt, confirm
 from frontend.forcing_feed import ForcingFeed, Target
 from frontend.gui_value import set_value
 from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
-from frontend.screens import (
-    code,
-    documentation,
-    events,
-    forcing,
-    io,
-    online_test,
-    parameters,
-    reload,
-    resources,
-    single_step,
-    trends,
-    value_edit,
-)
+from frontend.screen_registry import Now, Screen
+from frontend.screens import forcing
 from frontend.ui_context import UiContext
 from frontend.viser_lockdown import PASSWORD_LABEL
 from runtime.contract import protocol as p
+
+S = TypeVar("S", bound=Screen)
 
 
 class WorkspaceSession(Protocol):
@@ -55,16 +49,19 @@ class WorkspaceSession(Protocol):
 
 
 NAVIGATION_WIDTH = 300
-WORK_WIDTH = 780
-TRENDS_WIDTH = 1100  # a chart wants width: the drawing gives way while Trends is in front
+WORK_WIDTH = 780  # the work panel where the window is wide enough
+CANVAS_LEFT = 400  # what the work panel leaves between itself and the navigation, at least
+ASSUMED_WINDOW = 1920  # until the page said its width
 NONE = "(none online)"
+NO_PROJECT = "(no project)"
 
 
 class Workspace:
     def __init__(self, session: WorkspaceSession) -> None:
         self.session = session
-        client = session.client
-        gui = client.gui
+        self.client = client = session.client
+        self.context, self.user, self.level = session.context, session.user, session.level
+        self.gui = gui = client.gui
         gui.main_panel.dock_left()
         gui.main_panel.set_width(NAVIGATION_WIDTH)
         self._handles: list[Any] = []
@@ -78,6 +75,18 @@ class Workspace:
         logout = gui.add_button("Log out")
         logout.on_click(lambda _: session.log_out())
         keep(logout)
+        projects = self.context.projects  # a shelf knows the projects made since it started
+        self.shelf = projects if isinstance(projects, ProjectShelf) else ProjectShelf(projects)
+        names = tuple(self.shelf) or (NO_PROJECT,)
+        with gui.add_folder("Project") as project_folder:
+            self.project = gui.add_dropdown("Project", names)
+            self.tree = gui.add_html("")
+        keep(project_folder)
+        self.project.on_update(lambda _: self._open_project())
+        self.tree_reader: project_tree_view.TreeReader | None = None
+        self.tree_shown: tuple[int, project_tree_view.Entry | None] = (-1, None)
+        self.tree_entry: project_tree_view.Entry | None = None
+        self._open_project()
         self.resource = gui.add_dropdown("Resource", (NONE,))
         keep(self.resource)
         with gui.add_folder("Login to the resource") as folder:
@@ -90,63 +99,64 @@ class Workspace:
         with gui.add_folder("Status") as status_folder:
             self.status = gui.add_html("")
         keep(status_folder)
-        self.screens: list[str] = []  # the tabs' names, in their order
-        self.shown = "Resources"  # the tab group opens on its first tab
+        self.window_width = ASSUMED_WINDOW
         self.page_clicks = page_clicks.build(gui, self._clicked)
         self.panel = gui.add_panel()
-        with self._tab("Resources", viser.Icon.SERVER):
-            self.resources = resources.build(gui, self._confirm, self.selected)
-        with self._tab("Online test", viser.Icon.TABLE):
-            self.online_test = online_test.build(gui, session.user, session.context.watch_lists)
-            self.value_edit = value_edit.build(gui, self._send_all)
-        with self._tab("Single step", viser.Icon.PLAYER_TRACK_NEXT):
-            self.single_step = single_step.build(gui, self._act)
-        with self._tab("Forcing", viser.Icon.LOCK):
-            self.forcing = forcing.build(gui, self._send_all)
-        with self._tab("Parameters", viser.Icon.ADJUSTMENTS):
-            self.parameters = parameters.build(gui, self._change)
-        with self._tab("Events", viser.Icon.LIST_DETAILS):
-            self.events = events.build(gui)
-        with self._tab("Reload", viser.Icon.REFRESH):
-            self.reload = reload.build(gui, self._reload_hooks())
-        with self._tab("Code", viser.Icon.CODE):
-            self.code = code.build(gui)
-        with self._tab("I/O", viser.Icon.PLUG_CONNECTED):
-            self.io = io.build(gui)
-        with self._tab("Documentation", viser.Icon.FILE_TEXT):
-            context = session.context
-            self.documentation = documentation.build(
-                gui, client, context.projects, context.backup_dir, session.level
-            )
-        with self._tab("Trends", viser.Icon.CHART_LINE):
-            self.trends = trends.build(gui, client, session.user, session.context.watch_lists)
+        self.screens: list[Screen] = []  # the tabs, in their order
+        for kind in screens.SCREENS:  # the one list
+            with self.panel.add_tab(kind.name, kind.icon):
+                self.screens.append(kind(self))
+        self.shown = self.screens[0]  # the tab group opens on its first tab
         self.panel.dock_right()
-        self.panel.set_width(WORK_WIDTH)
+        self.panel.set_width(self._work_width())
         self.drawing = plant_view.PlantView(client)
 
-    def _tab(self, name: str, icon: viser.IconName) -> viser.GuiTabHandle:
-        self.screens.append(name)
-        return self.panel.add_tab(name, icon)
+    def screen(self, kind: type[S]) -> S | None:
+        """The screen of that kind in this workspace (a screen that reads another's)."""
+        return next((s for s in self.screens if isinstance(s, kind)), None)
+
+    def _work_width(self) -> int:
+        """The work panel's width: as wide as the shown screen wants, but leaving the
+        navigation and the canvas their room in this window (viser scales both docked
+        panels down when they exceed it, and clips what they hold)."""
+        wanted = self.shown.width or WORK_WIDTH
+        room = self.window_width - NAVIGATION_WIDTH - CANVAS_LEFT
+        return max(360, min(wanted, room))
 
     def _clicked(self, click: page_clicks.Click) -> None:
-        if click.kind == "tab" and click.name in self.screens:
-            if (click.name == "Trends") != (self.shown == "Trends"):
-                self.panel.set_width(TRENDS_WIDTH if click.name == "Trends" else WORK_WIDTH)
-            self.shown = click.name
-            self.session.news()  # drawn at once, not at the next tick
-        elif click.kind == "variable":  # checked as typed text by the value editor
-            value_edit.choose(self.value_edit, click.name)
+        if click.kind == "tab":
+            chosen = next((s for s in self.screens if s.name == click.name), None)
+            if chosen is not None:
+                before = self._work_width()
+                self.shown = chosen
+                if self._work_width() != before:
+                    self.panel.set_width(self._work_width())
+                self.session.news()  # drawn at once, not at the next tick
+        elif click.kind == "window":
+            width, _, height = click.name.partition("x")
+            if width.isdigit() and height.isdigit() and 0 < int(width) < 100_000:
+                self.window_width = int(width)
+                self.panel.set_width(self._work_width())
+        elif click.kind == "tree":
+            entry = project_tree_view.entry_of(click.name)
+            if entry is not None:
+                self.tree_entry = entry
+                self.session.news()
+        else:
+            for screen in self.screens:
+                screen.clicked(click)
 
-    def _reload_hooks(self) -> reload.ReloadHooks:
-        session = self.session
-        return reload.ReloadHooks(
-            session.client,
-            session.context.projects,
-            session.context.backup_dir,
-            session.user,
-            self.selected,
-            session.client_of,
-        )
+    def _open_project(self) -> None:
+        if self.tree_reader is not None:
+            self.tree_reader.close()
+            self.tree_reader = None
+        name = self.project.value
+        if name in self.shelf:
+            editor = Editor(self.user, self.level)
+            self.tree_reader = project_tree_view.TreeReader(self.shelf, name, editor)
+        self.tree_entry = None
+        self.tree_shown = (-1, None)
+        self.tree.content = project_tree_view.render(None, None) if self.tree_reader else ""
 
     def selected(self) -> str | None:
         value = self.resource.value
@@ -165,7 +175,7 @@ class Workspace:
             lambda: self.session.log_in_to(resource, user, password),
         )
 
-    def _confirm(self, label: str, command: p.Command[p.StatusReply], what: str) -> None:
+    def confirm(self, label: str, command: p.Command[p.StatusReply], what: str) -> None:
         resource = self.selected()
         if resource is None:
             return
@@ -177,7 +187,7 @@ class Workspace:
             lambda: self._send(f"{label} {resource}", resource, command),
         )
 
-    def _act(
+    def act(
         self,
         label: str,
         make: Callable[[], p.Command[p.StatusReply]],
@@ -203,7 +213,7 @@ class Workspace:
                 lambda: attempt(self.session.client, f"{label} ({resource})", send),
             )
 
-    def _send_all(
+    def send_all(
         self,
         label: str,
         commands: Sequence[p.Command[p.StatusReply]],
@@ -231,7 +241,7 @@ class Workspace:
 
         confirm(client, f"{label}: {resource}", self._naming_crc(resource, question), yes)
 
-    def _change(
+    def change(
         self,
         title: str,
         question: str,
@@ -255,6 +265,9 @@ class Workspace:
         before changing it (docs/browser-ui.md)."""
         return f"{question} Resource {resource} runs configuration {self._crc(resource)}."
 
+    def client_of(self, resource: str) -> ResourceClient:
+        return self.session.client_of(resource)
+
     def _send(self, what: str, resource: str, command: p.Command[p.StatusReply]) -> None:
         attempt(self.session.client, what, lambda: self.session.client_of(resource).ask(command))
 
@@ -269,7 +282,7 @@ class Workspace:
         with latest.lock:
             return latest.status
 
-    def _allowed(self, command: type[p.Command[Any]] | p.Command[Any]) -> Allowed:
+    def allowed(self, command: type[p.Command[Any]] | p.Command[Any]) -> Allowed:
         resource = self.selected()
         status = self._status(resource)
         open_access = status is not None and status.access == "open"
@@ -281,82 +294,37 @@ class Workspace:
         note = _session_note(self.session.time_left_ns())
         if self.session_note.content != note:
             self.session_note.content = note
-        online = self.session.context.directory.online()
+        self._refresh_tree()
+        online = self.context.directory.online()
         names = tuple(name for name, _ in online) or (NONE,)
         if tuple(self.resource.options) != names:
             self.resource.options = names
         resource = self.selected()
         status = self._status(resource)
-        directory = dict(online)
-        if resource is not None and status is not None:
-            directory[resource] = status  # what this browser's login verified
         self.status.content = status_bar.render(
-            self.session.context.router, self.session.user, self.session.level, resource, status
+            self.context.router, self.user, self.level, resource, status
         )
         login_there = self.session.resource_login(resource) if resource is not None else None
         self.resource_login.content = _login_note(resource, login_there)
         feed = self.session.feed_of(resource) if resource is not None else None
         self._follow_forcing(resource, status, login_there)  # its banner is on every tab
-        token = login_there.token if login_there is not None else None
-        # always: its live counts tell the Parameters screen what others changed
-        events.refresh(self.events, resource, token, self.session.client_of)
-        trends.collect(self.trends, resource, feed)  # its history goes on in any tab
-        self._refresh_shown(resource, status, feed, token, directory)
+        snapshot = self.forcing_feed.snapshot()
+        now = Now(resource, status, feed, login_there, list(online), snapshot)
+        for screen in self.screens:
+            screen.follow(now)
+        self.shown.refresh(now)  # the others wait until they are opened
         if feed is not None:  # only what some screen shows is watched, seen or not: a
             # tab opened shows its values at once
-            feed.show(
-                online_test.wanted(self.online_test)
-                + value_edit.wanted(self.value_edit)
-                + forcing.wanted(self.forcing_feed.snapshot())
-                + code.wanted(self.code)
-                + trends.wanted(self.trends)
-            )
+            feed.show([path for screen in self.screens for path in screen.watches()])
         self.drawing.show(resource, status)
 
-    def _refresh_shown(
-        self,
-        resource: str | None,
-        status: p.Status | None,
-        feed: ResourceFeed | None,
-        token: str | None,
-        directory: dict[str, p.Status | None],
-    ) -> None:
-        """Redraw the screen in view; the others wait until they are opened (ten browsers
-        drawing every screen ten times a second cost most of two cores)."""
-        shown = self.shown
-        if shown == "Resources":
-            resources.refresh(self.resources, list(directory.items()), resource, self._allowed)
-        elif shown == "Online test":
-            online_test.refresh(self.online_test, feed)
-            snapshot = self.forcing_feed.snapshot()
-            value_edit.refresh(self.value_edit, status, snapshot, feed, self._allowed)
-        elif shown == "Single step":
-            single_step.refresh(self.single_step, status, self._allowed)
-        elif shown == "Forcing":
-            snapshot = self.forcing_feed.snapshot()
-            forcing.refresh(self.forcing, status, snapshot, feed, self._allowed)
-        elif shown == "Parameters":
-            changed = events.live_count(self.events, resource, "parameter")
-            parameters.refresh(
-                self.parameters,
-                resource,
-                status,
-                token,
-                self.session.client_of,
-                self._allowed,
-                changed,
-            )
-        elif shown == "Reload":
-            reload.refresh(self.reload, resource, status, self._allowed)
-        elif shown == "Code":
-            code.refresh(self.code, feed, self.session.context.projects)
-        elif shown == "I/O":
-            io.refresh(self.io, resource, status, token, self.session.client_of)
-        elif shown == "Documentation":
-            documentation.refresh(self.documentation, resource, status)
-        elif shown == "Trends":
-            client_of = self.session.client_of
-            trends.refresh(self.trends, resource, feed, token, client_of, self._allowed)
+    def _refresh_tree(self) -> None:
+        if self.tree_reader is None:
+            return
+        version, tree = self.tree_reader.latest()
+        if (version, self.tree_entry) != self.tree_shown and tree is not None:
+            self.tree.content = project_tree_view.render(tree, self.tree_entry)
+            self.tree_shown = (version, self.tree_entry)
 
     def _follow_forcing(
         self, resource: str | None, status: p.Status | None, login_there: ResourceLogin | None
@@ -371,6 +339,8 @@ class Workspace:
 
     def remove(self) -> None:
         self.forcing_feed.close()
+        if self.tree_reader is not None:
+            self.tree_reader.close()
         for handle in self._handles:
             handle.remove()
         self.page_clicks.remove()

@@ -27,6 +27,7 @@ from backend.engineering.sources import (
     line_variables,
 )
 from frontend.resource_feed import ResourceFeed
+from frontend.screen_registry import Now, Screen, Work
 from runtime.contract.artifact import VarInfo
 from runtime.contract.values import array_shape, format_for_display
 
@@ -343,3 +344,18 @@ def render_interface(
         "source here (it is built into the runtime): its interface only."
     )
     return f'<p data-testid="code-message">{note}</p><table style="font-size:0.9em">{rows}</table>'
+
+
+class Code(Screen):
+    name = "Code"
+    icon = viser.Icon.CODE
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui)
+
+    def refresh(self, now: Now) -> None:
+        refresh(self.screen, now.feed, self.work.context.projects)
+
+    def watches(self) -> list[str]:
+        return wanted(self.screen)

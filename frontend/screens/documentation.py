@@ -25,6 +25,7 @@ from backend.engineering.documentation.export import (
 )
 from backend.engineering.padt_levels import PADT_LEVELS
 from frontend.gui_value import set_value
+from frontend.screen_registry import Now, Screen, Work
 from runtime.contract import protocol as p
 
 RUNNING = "the configuration the resource runs"
@@ -170,3 +171,16 @@ def _path_of(screen: DocumentationScreen, subject: str, running: tuple[str, str]
 def _say(screen: DocumentationScreen, text: str, color: str) -> None:
     style = f' style="color:{color}"' if color else ""
     screen.note.content = f'<div data-testid="docs-note"{style}>{html.escape(text)}</div>'
+
+
+class Documentation(Screen):
+    name = "Documentation"
+    icon = viser.Icon.FILE_TEXT
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        context = work.context
+        self.screen = build(work.gui, work.client, context.projects, context.backup_dir, work.level)
+
+    def refresh(self, now: Now) -> None:
+        refresh(self.screen, now.resource, now.status)

@@ -22,6 +22,7 @@ import viser
 
 from backend.engineering.event_chain import ChainState, check_chain
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
+from frontend.screen_registry import Now, Screen, Work
 from runtime.contract import protocol as p
 from runtime.contract.refusal import Refusal
 
@@ -429,3 +430,16 @@ def _update(screen: EventsScreen, key: tuple[object, ...], chain: str, table: st
         screen.chain.content = chain
         screen.shown_chain = chain
     screen.table.content = table
+
+
+class Events(Screen):
+    name = "Events"
+    icon = viser.Icon.LIST_DETAILS
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui)
+
+    def follow(self, now: Now) -> None:
+        # always: its live counts tell the Parameters screen what others changed
+        refresh(self.screen, now.resource, now.token, self.work.client_of)

@@ -18,6 +18,7 @@ from backend.engineering.literals import LiteralError, parse_literal
 from frontend.forcing_feed import ForcingSnapshot
 from frontend.permissions import Allowed
 from frontend.resource_feed import ResourceFeed, latest_values
+from frontend.screen_registry import Now, Screen, Work
 from runtime.contract import protocol as p
 from runtime.contract.values import format_for_display
 
@@ -462,3 +463,18 @@ def wanted(snapshot: ForcingSnapshot | None) -> list[str]:
     """The forced variables, whose live values the Force values table shows."""
     state = snapshot.state if snapshot is not None else None
     return [entry.variable for entry in state.entries] if state is not None else []
+
+
+class Forcing(Screen):
+    name = "Forcing"
+    icon = viser.Icon.LOCK
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui, work.send_all)
+
+    def refresh(self, now: Now) -> None:
+        refresh(self.screen, now.status, now.forcing, now.feed, self.work.allowed)
+
+    def watches(self) -> list[str]:
+        return wanted(self.work.forcing_feed.snapshot())

@@ -19,6 +19,7 @@ import viser
 from backend.engineering.reload import counted
 from backend.engineering.resource_client import ResourceClient
 from frontend.command_reading import CommandReading
+from frontend.screen_registry import Now, Screen, Work
 from runtime.contract import protocol as p
 from runtime.contract.values import format_for_display
 
@@ -207,3 +208,15 @@ def legend() -> str:
         for q in ("good", "bad", "safe")
     )
     return f'<div style="{_GREY};font-size:0.85em;padding:4px 0">{items}</div>'
+
+
+class Io(Screen):
+    name = "I/O"
+    icon = viser.Icon.PLUG_CONNECTED
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui)
+
+    def refresh(self, now: Now) -> None:
+        refresh(self.screen, now.resource, now.status, now.token, self.work.client_of)

@@ -23,7 +23,10 @@ from backend.engineering.watch_lists import (
     without_variable,
 )
 from frontend.gui_value import set_value
+from frontend.page_clicks import Click
 from frontend.resource_feed import ResourceFeed
+from frontend.screen_registry import Now, Screen, Work
+from frontend.screens import value_edit
 from runtime.contract.values import format_for_display
 
 ALL = "All variables"
@@ -387,3 +390,26 @@ def _set_options(dropdown: viser.GuiDropdownHandle[str], options: list[str]) -> 
     wanted = tuple(options)
     if tuple(dropdown.options) != wanted:
         dropdown.options = wanted
+
+
+class OnlineTest(Screen):
+    """The Online test with, below its table, the editor of one value (`value_edit`)."""
+
+    name = "Online test"
+    icon = viser.Icon.TABLE
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui, work.user, work.context.watch_lists)
+        self.value_edit = value_edit.build(work.gui, work.send_all)
+
+    def refresh(self, now: Now) -> None:
+        refresh(self.screen, now.feed)
+        value_edit.refresh(self.value_edit, now.status, now.forcing, now.feed, self.work.allowed)
+
+    def watches(self) -> list[str]:
+        return wanted(self.screen) + value_edit.wanted(self.value_edit)
+
+    def clicked(self, click: Click) -> None:
+        if click.kind == "variable":  # checked as typed text by the value editor
+            value_edit.choose(self.value_edit, click.name)

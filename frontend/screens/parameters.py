@@ -20,6 +20,8 @@ import viser
 from backend.engineering.resource_client import ResourceClient
 from frontend.command_reading import CommandReading
 from frontend.permissions import Allowed
+from frontend.screen_registry import Now, Screen, Work
+from frontend.screens import events
 from runtime.contract import protocol as p
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 from runtime.contract.parameters import (
@@ -458,3 +460,25 @@ def _table(title: str, prefix: str, specs: tuple[ParameterSpec, ...], config: An
         f'border-collapse:collapse;width:100%;table-layout:fixed">{_COLUMNS}<tr>{head}</tr>'
         f"{''.join(rows)}</table>"
     )
+
+
+class Parameters(Screen):
+    name = "Parameters"
+    icon = viser.Icon.ADJUSTMENTS
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui, work.change)
+
+    def refresh(self, now: Now) -> None:
+        log = self.work.screen(events.Events)  # a parameter event: changed by someone else
+        changed = events.live_count(log.screen, now.resource, "parameter") if log else 0
+        refresh(
+            self.screen,
+            now.resource,
+            now.status,
+            now.token,
+            self.work.client_of,
+            self.work.allowed,
+            changed,
+        )

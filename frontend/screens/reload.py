@@ -34,8 +34,10 @@ from backend.engineering.reload import (
     rename_map,
 )
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
+from frontend import screen_registry
 from frontend.confirm import attempt, confirm
 from frontend.permissions import Allowed
+from frontend.screen_registry import Now, Screen
 from runtime.contract import protocol as p
 from runtime.contract.refusal import Refusal
 
@@ -831,3 +833,24 @@ def _note(testid: str, text: str) -> str:
     if not text:
         return ""
     return f'<div data-testid="{testid}" style="{_MUTED}">{html.escape(text)}</div>'
+
+
+class Reload(Screen):
+    name = "Reload"
+    icon = viser.Icon.REFRESH
+
+    def __init__(self, work: screen_registry.Work) -> None:
+        super().__init__(work)
+        context = work.context
+        hooks = ReloadHooks(
+            work.client,
+            context.projects,
+            context.backup_dir,
+            work.user,
+            work.selected,
+            work.client_of,
+        )
+        self.screen = build(work.gui, hooks)
+
+    def refresh(self, now: Now) -> None:
+        refresh(self.screen, now.resource, now.status, self.work.allowed)

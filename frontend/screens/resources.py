@@ -13,6 +13,7 @@ from typing import Any
 import viser
 
 from frontend.permissions import Allowed
+from frontend.screen_registry import Now, Screen, Work
 from frontend.state_rules import disabled_note, program_allows, resource_allows, state_words
 from runtime.contract import protocol as p
 
@@ -170,3 +171,18 @@ def _programs(status: p.Status) -> str:
         f"{html.escape(state_words(x.state))}</span>"
         for x in status.programs
     )
+
+
+class Resources(Screen):
+    name = "Resources"
+    icon = viser.Icon.SERVER
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui, work.confirm, work.selected)
+
+    def refresh(self, now: Now) -> None:
+        directory = dict(now.directory)
+        if now.resource is not None and now.status is not None:
+            directory[now.resource] = now.status  # what this browser's login verified
+        refresh(self.screen, list(directory.items()), now.resource, self.work.allowed)

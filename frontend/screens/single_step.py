@@ -12,6 +12,7 @@ from typing import Any
 import viser
 
 from frontend.permissions import Allowed
+from frontend.screen_registry import Now, Screen, Work
 from frontend.state_rules import disabled_note, program_allows, resource_allows, state_words
 from runtime.contract import protocol as p
 
@@ -139,3 +140,15 @@ def render(status: p.Status | None, chosen: p.ProgramStatus | None) -> str:
         for name, value in rows
     )
     return f'<table style="font-size:0.9em">{cells}</table>'
+
+
+class SingleStep(Screen):
+    name = "Single step"
+    icon = viser.Icon.PLAYER_TRACK_NEXT
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui, work.act)
+
+    def refresh(self, now: Now) -> None:
+        refresh(self.screen, now.status, self.work.allowed)

@@ -29,6 +29,7 @@ from frontend.command_reading import CommandReading
 from frontend.confirm import attempt
 from frontend.permissions import Allowed
 from frontend.resource_feed import ResourceFeed
+from frontend.screen_registry import Now, Screen, Work
 from frontend.screens import trends_recorded
 from frontend.screens.trends_recorded import ACTIVE, Target
 from frontend.trend_chart import TrendChart
@@ -476,3 +477,23 @@ def _set_options(dropdown: viser.GuiDropdownHandle[str], options: list[str]) -> 
     wanted = tuple(options)
     if tuple(dropdown.options) != wanted:
         dropdown.options = wanted
+
+
+class Trends(Screen):
+    name = "Trends"
+    icon = viser.Icon.CHART_LINE
+    width = 1100  # a chart wants width: the drawing gives way while Trends is in front
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui, work.client, work.user, work.context.watch_lists)
+
+    def follow(self, now: Now) -> None:
+        collect(self.screen, now.resource, now.feed)  # its history goes on in any tab
+
+    def refresh(self, now: Now) -> None:
+        client_of = self.work.client_of
+        refresh(self.screen, now.resource, now.feed, now.token, client_of, self.work.allowed)
+
+    def watches(self) -> list[str]:
+        return wanted(self.screen)

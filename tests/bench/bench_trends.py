@@ -15,7 +15,7 @@ import numpy as np
 from playwright.sync_api import Page
 
 from frontend import trend_plot
-from frontend.screens.trends import LIVE_POINTS, REDRAWS
+from frontend.screens.trends import LIVE_POINTS, REDRAWS, Trends
 from frontend.trend_history import CAPACITY, TrendHistory
 from tests.bench.bench_ui import PASSWORD, _browser_pids, _cpu_s, _plant
 from tests.support.browser import chromium
@@ -129,7 +129,9 @@ def _with_browser() -> None:
             session = next(iter(ui.browsers.values()))
             with session._drawing:  # the refresher's lock: no sample comes meanwhile
                 assert session.workspace is not None
-                trends = session.workspace.trends
+                screen = session.workspace.screen(Trends)
+                assert screen is not None
+                trends = screen.screen
                 full, _ = _full_history(trends.clock())
                 full.columns = dict(zip(trends.paths, full.columns.values(), strict=True))
                 trends.history = full

@@ -8,6 +8,8 @@ from frontend.page_clicks import MAX_NAME, Click, read
 def test_a_tab_and_a_row_are_read() -> None:
     assert read("tab|Online test|1") == Click("tab", "Online test")
     assert read("variable|TankControl.level|17") == Click("variable", "TankControl.level")
+    assert read("tree|program:TankControl|2") == Click("tree", "program:TankControl")
+    assert read("window|1400x900|3") == Click("window", "1400x900")
 
 
 def test_anything_else_is_ignored() -> None:
