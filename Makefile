@@ -9,6 +9,7 @@ BIN    := $(VENV)/bin
 demo: $(VENV)/.stamp-run
 	bash scripts/install-document-tools.sh  # the Documentation screen renders PDF
 	bash scripts/install-c-compiler.sh $(BIN)/python  # the runtime runs program bodies as C
+	bash scripts/install-codemirror.sh  # the browser's code editor
 	$(BIN)/padt demo
 
 test: $(VENV)/.stamp-dev
@@ -16,6 +17,7 @@ test: $(VENV)/.stamp-dev
 	bash scripts/install-mbpoll.sh
 	bash scripts/install-document-tools.sh
 	bash scripts/install-mcap-reader.sh
+	bash scripts/install-codemirror.sh
 	bash scripts/install-c-compiler.sh $(BIN)/python
 	$(MAKE) lint typecheck pytest
 

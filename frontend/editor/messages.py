@@ -1,0 +1,246 @@
+"""What the editor's page script tells the server, read as hostile text: one typed
+dataclass per message, each field checked, anything else refused with the reason.
+
+The page writes every message not yet acknowledged into a hidden text input at once,
+as `{"s": [[seq, message], ...]}` (viser sends an input's value at most every 50 ms and
+drops the values in between); the server takes the messages past the last sequence
+number it handled and acknowledges the newest."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from runtime.contract.outside_json import JsonRefused, read_json
+
+INPUT_LABEL = "Editor message"  # the hidden input's label; the page script finds it by it
+# what one batch may carry: a whole file pasted (the services refuse a text larger than a
+# file may be, 4 MiB), and the rest
+MAX_TEXT = 8 << 20
+MAX_BATCH_CHARS = MAX_TEXT + (1 << 20)
+MAX_BATCH = 2000  # messages waiting in the page
+MAX_CHANGES = 10_000  # changes in one message (a replace-all in a large file)
+MAX_PATH = 512
+MAX_NAME = 200
+MAX_LINE = 10_000_000
+BUTTONS = ("compile", "download", "online_change")
+QUESTIONS = ("complete", "hover", "definition", "references")
+
+
+class BadMessage(ValueError):
+    """A message from the page that is not one: the reason."""
+
+
+@dataclass(frozen=True)
+class Open:
+    file: str
+
+
+@dataclass(frozen=True)
+class Close:
+    file: str
+
+
+@dataclass(frozen=True)
+class TextChange:
+    """Replace from (line, column) to (line, column) of the text before the message with
+    `insert`; lines 1-based, columns 0-based in UTF-16 code units (the browser's)."""
+
+    from_line: int
+    from_col: int
+    to_line: int
+    to_col: int
+    insert: str
+
+
+@dataclass(frozen=True)
+class Change:
+    file: str
+    version: int  # the document's version after these changes
+    changes: tuple[TextChange, ...]  # ascending, not overlapping, in the text before
+
+
+@dataclass(frozen=True)
+class Question:
+    """A question about a place: complete, hover, definition, references. `col` is 1-based
+    in UTF-16 code units of the line."""
+
+    kind: str
+    id: int
+    file: str
+    version: int
+    line: int
+    col: int
+
+
+@dataclass(frozen=True)
+class Rename:
+    file: str
+    version: int
+    line: int
+    col: int
+    name: str
+
+
+@dataclass(frozen=True)
+class Save:
+    file: str
+    version: int
+
+
+@dataclass(frozen=True)
+class Button:
+    name: str  # one of BUTTONS
+
+
+@dataclass(frozen=True)
+class DiskChoice:
+    file: str
+    keep_mine: bool  # False: reload from disk
+
+
+@dataclass(frozen=True)
+class View:
+    file: str
+    first: int  # the lines in view
+    last: int
+
+
+Message = Open | Close | Change | Question | Rename | Save | Button | DiskChoice | View
+
+
+@dataclass(frozen=True)
+class Batch:
+    messages: tuple[tuple[int, Message], ...]  # (sequence number, message), ascending
+    refused: tuple[tuple[int, str], ...]  # (sequence number, reason) of what was not read
+
+
+def read_batch(text: str) -> Batch:
+    """The page's messages; BadMessage when the batch itself is not one."""
+    try:
+        data = read_json(text, "an editor message", MAX_BATCH_CHARS, max_depth=6)
+    except JsonRefused as exc:
+        raise BadMessage(str(exc)) from None
+    if not isinstance(data, dict) or set(data) != {"s"} or not isinstance(data["s"], list):
+        raise BadMessage('a batch is {"s": [[seq, message], ...]}')
+    entries = data["s"]
+    if len(entries) > MAX_BATCH:
+        raise BadMessage(f"more than {MAX_BATCH} messages at once")
+    messages: list[tuple[int, Message]] = []
+    refused: list[tuple[int, str]] = []
+    last = 0
+    for entry in entries:
+        if not (isinstance(entry, list) and len(entry) == 2 and _is_int(entry[0], 1, 2**53)):
+            raise BadMessage("an entry is [seq, message] with seq a positive integer")
+        seq = entry[0]
+        if seq <= last:
+            raise BadMessage("sequence numbers ascend")
+        last = seq
+        try:
+            messages.append((seq, read_message(entry[1])))
+        except BadMessage as exc:
+            refused.append((seq, str(exc)))
+    return Batch(tuple(messages), tuple(refused))
+
+
+def read_message(data: Any) -> Message:
+    if not isinstance(data, dict) or not isinstance(data.get("k"), str):
+        raise BadMessage('a message is an object with a kind "k"')
+    kind = data["k"]
+    if kind == "open":
+        _keys(data, "k", "file")
+        return Open(_path(data["file"]))
+    if kind == "close":
+        _keys(data, "k", "file")
+        return Close(_path(data["file"]))
+    if kind == "change":
+        _keys(data, "k", "file", "version", "changes")
+        changes = data["changes"]
+        if not isinstance(changes, list) or len(changes) > MAX_CHANGES:
+            raise BadMessage(f"changes are a list of at most {MAX_CHANGES}")
+        return Change(
+            _path(data["file"]),
+            _int(data["version"], "version", 1, 2**53),
+            tuple(_text_change(c) for c in changes),
+        )
+    if kind in QUESTIONS:
+        _keys(data, "k", "id", "file", "version", "line", "col")
+        return Question(
+            kind,
+            _int(data["id"], "id", 1, 2**53),
+            _path(data["file"]),
+            _int(data["version"], "version", 0, 2**53),
+            _int(data["line"], "line", 1, MAX_LINE),
+            _int(data["col"], "col", 1, MAX_LINE),
+        )
+    if kind == "rename":
+        _keys(data, "k", "file", "version", "line", "col", "name")
+        name = data["name"]
+        if not isinstance(name, str) or not 0 < len(name) <= MAX_NAME:
+            raise BadMessage(f"a new name has 1 to {MAX_NAME} characters")
+        return Rename(
+            _path(data["file"]),
+            _int(data["version"], "version", 0, 2**53),
+            _int(data["line"], "line", 1, MAX_LINE),
+            _int(data["col"], "col", 1, MAX_LINE),
+            name,
+        )
+    if kind == "save":
+        _keys(data, "k", "file", "version")
+        return Save(_path(data["file"]), _int(data["version"], "version", 0, 2**53))
+    if kind == "button":
+        _keys(data, "k", "name")
+        if data["name"] not in BUTTONS:
+            raise BadMessage(f"a button is one of {', '.join(BUTTONS)}")
+        return Button(data["name"])
+    if kind == "disk":
+        _keys(data, "k", "file", "choice")
+        if data["choice"] not in ("reload", "keep"):
+            raise BadMessage("a choice is reload or keep")
+        return DiskChoice(_path(data["file"]), data["choice"] == "keep")
+    if kind == "view":
+        _keys(data, "k", "file", "first", "last")
+        first = _int(data["first"], "first", 1, MAX_LINE)
+        last = _int(data["last"], "last", first, MAX_LINE)
+        return View(_path(data["file"]), first, last)
+    raise BadMessage(f"no message of kind '{kind[:40]}'")
+
+
+def _text_change(data: Any) -> TextChange:
+    if not (isinstance(data, list) and len(data) == 5 and isinstance(data[4], str)):
+        raise BadMessage("a change is [from line, from col, to line, to col, text]")
+    if len(data[4]) > MAX_TEXT:
+        raise BadMessage("a change inserts more text than a file may hold")
+    from_line = _int(data[0], "a change's line", 1, MAX_LINE)
+    to_line = _int(data[2], "a change's line", from_line, MAX_LINE)
+    return TextChange(
+        from_line,
+        _int(data[1], "a change's column", 0, MAX_LINE),
+        to_line,
+        _int(data[3], "a change's column", 0, MAX_LINE),
+        data[4],
+    )
+
+
+def _keys(data: dict[str, Any], *keys: str) -> None:
+    if set(data) != set(keys):
+        raise BadMessage(f"a {data['k']} message has exactly {', '.join(keys)}")
+
+
+def _is_int(value: Any, low: int, high: int) -> bool:
+    return type(value) is int and low <= value <= high
+
+
+def _int(value: Any, what: str, low: int, high: int) -> int:
+    if not _is_int(value, low, high):
+        raise BadMessage(f"{what} is an integer from {low} to {high}")
+    assert isinstance(value, int)
+    return value
+
+
+def _path(value: Any) -> str:
+    """A file's name as the page has it; what it names is checked by the project's files
+    service when it is read or saved."""
+    if not isinstance(value, str) or not 0 < len(value) <= MAX_PATH:
+        raise BadMessage(f"a file's name has 1 to {MAX_PATH} characters")
+    return value
