@@ -23,11 +23,12 @@ from backend.compiler.language.hover import (
 from backend.compiler.language.position import (
     Symbol,
     base_before,
+    declared_in_text,
     members,
     scope_at,
     variable_symbol,
 )
-from backend.compiler.language.tokens import KEYWORDS, VAR_KINDS, Lexed, declarations, lex
+from backend.compiler.language.tokens import KEYWORDS, VAR_KINDS, Lexed, lex
 from backend.compiler.resolve import PouSymbols, Variable
 from backend.compiler.types import FbType
 
@@ -235,9 +236,10 @@ def _general_items(
         own.add(key(variable.name))
         comment = declaration_comment(text, variable.pos) if variable.pos.file == file else ""
         found += _variable_items(analysis, variable, _RANK["local"], comment)
-    for name, type_text in _declared_in_text(lexed, line, col):
-        if key(name) not in own:  # declared while the file does not parse yet
-            item = CompletionItem(name, "variable", type_text, name, False)
+    for declared, kind, type_text in declared_in_text(lexed, line, col):
+        if declared.upper not in own:  # declared while the file does not parse yet
+            detail = f"{kind} : {type_text}"
+            item = CompletionItem(declared.text, "variable", detail, declared.text, False)
             found.append(_Ranked(_RANK["local"], item))
     for variable in resolved.globals:
         if key(variable.name) not in own:
@@ -354,20 +356,3 @@ def _call_snippet(name: str, parameters: list[Variable]) -> tuple[str, bool]:
     inputs = [p.name for p in parameters if p.kind in ("VAR_INPUT", "VAR_IN_OUT")]
     body = ", ".join(f"{p} := ${{{n}}}" for n, p in enumerate(inputs, 1))
     return f"{name}({body})", True
-
-
-def _declared_in_text(lexed: Lexed, line: int, col: int) -> list[tuple[str, str]]:
-    """The names the var blocks of the POU (or method) at line:col declare in the text as
-    it is now, with the text of their type."""
-    spans = lexed.innermost(
-        line, col, frozenset({"PROGRAM", "FUNCTION_BLOCK", "FUNCTION", "METHOD"})
-    )
-    if not spans:
-        return []
-    holder = lexed.spans.index(spans[-1])
-    return [
-        (lexed.tokens[name].text, type_text)
-        for index, span in enumerate(lexed.spans)
-        if span.kind in VAR_KINDS and span.parent == holder
-        for name, type_text in declarations(lexed, index)
-    ]

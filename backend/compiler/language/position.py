@@ -15,7 +15,7 @@ from typing import NamedTuple
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.language.analysis import Analysis
-from backend.compiler.language.tokens import Lexed, Token, lex
+from backend.compiler.language.tokens import VAR_KINDS, Lexed, Token, declarations, lex
 from backend.compiler.resolve import (
     PARAMETER_KINDS,
     PouSymbols,
@@ -33,6 +33,7 @@ from backend.compiler.types import (
     RefType,
     StructType,
     Type,
+    elementary,
     value_type,
 )
 from runtime.contract.system_variables import NAMESPACE
@@ -41,6 +42,7 @@ STANDARD_FILE_PREFIX = "stdlib/"
 _MAX_CHAIN = 64  # members followed in one dotted chain (hostile text may hold thousands)
 _SCOPES = frozenset({"PROGRAM", "FUNCTION_BLOCK", "FUNCTION", "INTERFACE", "METHOD", "PROPERTY"})
 _ACCESSORS = frozenset({"GET", "SET"})
+_DECLARING = frozenset({"PROGRAM", "FUNCTION_BLOCK", "FUNCTION", "METHOD"})
 _POU_KINDS = ("PROGRAM", "FUNCTION_BLOCK", "FUNCTION")
 # a member of a function block seen from outside its instances
 _HIDDEN_MEMBERS = ("VAR_TEMP", "VAR_GLOBAL", "RETURN")
@@ -174,7 +176,11 @@ def _token_symbol(place: _Place, index: int, depth: int) -> Symbol | None:
             return _parameter(place, call, token.text, depth)
         if call is None and _in_parentheses(place.lexed, index):
             return None  # a structure's member in an initial value `(x := 1)`
-    return lookup(place.analysis, place.scope, token.text)
+    if place.scope is None:  # a POU the analysis does not know (yet): its text declares
+        here = _declared_here(place, token)
+        if here is not None:
+            return here
+    return lookup(place.analysis, place.scope, token.text) or _declared_here(place, token)
 
 
 def lookup(analysis: Analysis, scope: PouSymbols | None, name: str) -> Symbol | None:
@@ -217,6 +223,62 @@ def lookup(analysis: Analysis, scope: PouSymbols | None, name: str) -> Symbol | 
     standard = builtins.lookup(name)
     if standard is not None and not name.startswith("_"):
         return Symbol("standard_function", standard.name, None, "", "FUNCTION")
+    return None
+
+
+def declared_in_text(place_lexed: Lexed, line: int, col: int) -> list[tuple[Token, str, str]]:
+    """The variables the POU (or method) at line:col declares in its text as it is now:
+    each name's token, its block (VAR_INPUT...) and the text of its type. What the last
+    analysis cannot know of a POU that does not parse while it is typed."""
+    lexed = place_lexed
+    holders = lexed.innermost(line, col, _DECLARING)
+    if not holders:
+        return []
+    holder = lexed.spans.index(holders[-1])
+    return [
+        (lexed.tokens[name], span.kind, type_text)
+        for index, span in enumerate(lexed.spans)
+        if span.kind in VAR_KINDS and span.parent == holder
+        for name, type_text in declarations(lexed, index)
+    ]
+
+
+def type_from_text(analysis: Analysis, text: str) -> Type | None:
+    """The type a declaration's type text names (`TON`, `ARRAY[1..3] OF Point`,
+    `REF_TO Motor`), as far as its members matter."""
+    words = text.replace("[", " [ ").split()
+    if not words:
+        return None
+    upper = [w.upper() for w in words]
+    if upper[0] == "ARRAY" and "OF" in upper:
+        element = type_from_text(analysis, " ".join(words[upper.index("OF") + 1 :]))
+        return ArrayType(element, ()) if element is not None else None
+    if upper[0] in ("REF_TO", "POINTER", "REFERENCE"):
+        rest = words[2:] if upper[0] != "REF_TO" else words[1:]
+        target = type_from_text(analysis, " ".join(rest))
+        return RefType(target, implicit=upper[0] == "REFERENCE") if target is not None else None
+    resolved = analysis.resolved
+    name = upper[0]
+    if name in resolved.pous and resolved.pous[name].kind == "FUNCTION_BLOCK":
+        return FbType(resolved.pous[name].name)
+    if name in resolved.structs:
+        return StructType(resolved.structs[name].name)
+    if name in resolved.enums:
+        return resolved.enums[name].type
+    if name in resolved.interfaces:
+        return InterfaceType(resolved.interfaces[name].name)
+    return elementary(name.split("[")[0])
+
+
+def _declared_here(place: _Place, token: Token) -> Symbol | None:
+    """A variable of the POU around `token` that only its current text declares."""
+    for name, block, type_text in declared_in_text(place.lexed, token.line, token.col):
+        if name.upper == token.upper:
+            holders = place.lexed.innermost(token.line, token.col, _DECLARING)
+            owner = holders[-1].name if holders else ""
+            declared = Pos(place.file, name.line, name.col)
+            found = type_from_text(place.analysis, type_text)
+            return Symbol("variable", name.text, declared, owner, block, found)
     return None
 
 

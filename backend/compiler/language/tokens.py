@@ -15,10 +15,10 @@ from functools import lru_cache
 
 from backend.compiler.limits import MAX_COMMENT_NESTING
 
-# words of the language that are never a name (upper case)
+# words of the language that are never a name (upper case); the modifiers (PUBLIC, FINAL...)
+# and the words of a configuration (TASK, WITH...) may be names elsewhere (OSCAT's OVERRIDE)
 KEYWORDS = frozenset(
     {
-        "ABSTRACT",
         "ACTION",
         "AND",
         "ARRAY",
@@ -56,35 +56,22 @@ KEYWORDS = frozenset(
         "EXTENDS",
         "F_EDGE",
         "FALSE",
-        "FINAL",
         "FOR",
-        "FROM",
         "FUNCTION",
         "FUNCTION_BLOCK",
         "IF",
         "IMPLEMENTS",
         "INITIAL_STEP",
         "INTERFACE",
-        "INTERNAL",
         "METHOD",
         "MOD",
         "NOT",
         "NON_RETAIN",
         "NULL",
         "OF",
-        "ON",
         "OR",
-        "OVERRIDE",
-        "POINTER",
-        "PRIVATE",
         "PROGRAM",
         "PROPERTY",
-        "PROTECTED",
-        "PUBLIC",
-        "READ_ONLY",
-        "READ_WRITE",
-        "REF",
-        "REFERENCE",
         "REF_TO",
         "REPEAT",
         "RESOURCE",
@@ -93,7 +80,6 @@ KEYWORDS = frozenset(
         "R_EDGE",
         "STEP",
         "STRUCT",
-        "TASK",
         "THEN",
         "TO",
         "TRANSITION",
@@ -110,23 +96,7 @@ KEYWORDS = frozenset(
         "VAR_OUTPUT",
         "VAR_TEMP",
         "WHILE",
-        "WITH",
         "XOR",
-    }
-)
-# what may stand between a block's keyword and its name
-MODIFIERS = frozenset(
-    {
-        "PUBLIC",
-        "PRIVATE",
-        "PROTECTED",
-        "INTERNAL",
-        "ABSTRACT",
-        "FINAL",
-        "OVERRIDE",
-        "CONSTANT",
-        "RETAIN",
-        "NON_RETAIN",
     }
 )
 VAR_KINDS = frozenset(
@@ -355,8 +325,9 @@ def _type_text(lexed: Lexed, first: int, last: int) -> str:
 
 
 def _comment_end(text: str, start: int) -> int:
-    """The offset after the `*)` that closes the comment at `start` (nested up to the
-    compiler's limit), or the text's end."""
+    """The offset after the `*)` that closes the comment at `start`: comments nest (up to
+    the compiler's limit); one whose nesting never closes ends at its first `*)`, as the
+    compiler reads it, or at the text's end."""
     depth, pos = 0, start
     while pos < len(text):
         if text.startswith("(*", pos) and depth <= MAX_COMMENT_NESTING:
@@ -367,7 +338,8 @@ def _comment_end(text: str, start: int) -> int:
                 return pos
         else:
             pos += 1
-    return len(text)
+    first = text.find("*)", start + 2)
+    return first + 2 if first >= 0 else len(text)
 
 
 def _comment(text: str, start: int, end: int, line_starts: list[int], body: str) -> Comment:
@@ -430,11 +402,15 @@ def _closes(wanted: str, kind: str) -> bool:
 
 
 def _name_after(tokens: list[Token], index: int) -> int:
-    """The index of the name after a block keyword, past its modifiers; -1 if none."""
-    for i in range(index + 1, min(index + 6, len(tokens))):
+    """The index of the name after a block keyword: the last word on the keyword's line
+    before anything else (`METHOD PUBLIC FINAL Name : T`, `FUNCTION_BLOCK OVERRIDE`);
+    -1 if none."""
+    found = -1
+    for i in range(index + 1, min(index + 8, len(tokens))):
         token = tokens[i]
-        if token.kind != "ident":
-            return -1
-        if token.upper not in MODIFIERS:
-            return i
-    return -1
+        if token.kind != "ident" or token.line != tokens[index].line:
+            break
+        if token.upper in KEYWORDS:
+            break
+        found = i
+    return found
