@@ -13,9 +13,15 @@ from typing import Any, Protocol, TypeVar
 import viser
 
 from backend.engineering.project_access import Editor
-from backend.engineering.project_shelf import ProjectShelf
 from backend.engineering.resource_client import ResourceClient, ResourceLogin
-from frontend import page_clicks, plant_view, project_tree_view, screens, status_bar
+from frontend import (
+    page_clicks,
+    plant_view,
+    project_edit_panel,
+    project_tree_view,
+    screens,
+    status_bar,
+)
 from frontend.confirm import attempt, confirm
 from frontend.forcing_feed import ForcingFeed, Target
 from frontend.gui_value import set_value
@@ -75,12 +81,20 @@ class Workspace:
         logout = gui.add_button("Log out")
         logout.on_click(lambda _: session.log_out())
         keep(logout)
-        projects = self.context.projects  # a shelf knows the projects made since it started
-        self.shelf = projects if isinstance(projects, ProjectShelf) else ProjectShelf(projects)
+        self.shelf = self.context.shelf
         names = tuple(self.shelf) or (NO_PROJECT,)
         with gui.add_folder("Project") as project_folder:
             self.project = gui.add_dropdown("Project", names)
             self.tree = gui.add_html("")
+            self.edit_target = project_edit_panel.EditTarget(
+                client,
+                self.shelf,
+                Editor(self.user, self.level),
+                self._project_name,
+                lambda: self.tree_entry,
+                self._edited,
+            )
+            self.edits = project_edit_panel.build(gui, self.edit_target)
         keep(project_folder)
         self.project.on_update(lambda _: self._open_project())
         self.tree_reader: project_tree_view.TreeReader | None = None
@@ -157,6 +171,16 @@ class Workspace:
         self.tree_entry = None
         self.tree_shown = (-1, None)
         self.tree.content = project_tree_view.render(None, None) if self.tree_reader else ""
+
+    def _project_name(self) -> str | None:
+        name = self.project.value
+        return name if name in self.shelf else None
+
+    def _edited(self, path: str | None) -> None:
+        """After an add, rename or delete from the tree: the tree at once."""
+        if self.tree_reader is not None:
+            self.tree_reader.read_again()
+        self.session.news()
 
     def selected(self) -> str | None:
         value = self.resource.value
@@ -295,6 +319,7 @@ class Workspace:
         if self.session_note.content != note:
             self.session_note.content = note
         self._refresh_tree()
+        project_edit_panel.refresh(self.edits, self.edit_target)
         online = self.context.directory.online()
         names = tuple(name for name, _ in online) or (NONE,)
         if tuple(self.resource.options) != names:

@@ -42,6 +42,8 @@ HTTP_STATUS = {
     "compile": 422,
     "project": 422,
     "accounts": 422,
+    "path": 400,  # a project file's path: outside the project, or no file it edits
+    "settings": 422,  # padt.toml's settings with problems (listed in `problems`)
     "unreachable": 504,
     # the resource's side did not answer as the resource: another party, or a lie
     "impostor": 502,

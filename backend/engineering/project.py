@@ -71,11 +71,16 @@ def load_project(paths: list[Path]) -> Project:
     return Project(name, "", None, None, sources)
 
 
-def _load_folder(folder: Path) -> Project:
+def project_sources(folder: Path) -> list[SourceFile]:
+    """The .st files of a project folder, named by their path in it."""
     # a folder with more files than a project may have is refused by the compiler: its
     # walk stops one file after the limit
     st_files = sorted(itertools.islice(folder.rglob("*.st"), MAX_PROJECT_FILES + 1))
-    sources = read_sources([(p, str(p.relative_to(folder))) for p in st_files])
+    return read_sources([(p, str(p.relative_to(folder))) for p in st_files])
+
+
+def _load_folder(folder: Path) -> Project:
+    sources = project_sources(folder)
     config_path = folder / PROJECT_FILE
     if not config_path.exists():
         return Project(folder.name, "", None, None, sources)
@@ -83,12 +88,21 @@ def _load_folder(folder: Path) -> Project:
         raise ProjectError(f"{config_path}: larger than {MAX_FILE_BYTES // MiB} MiB")
     try:
         text = config_path.read_text(encoding="utf-8")
-        data = tomllib.loads(text)
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError as exc:
         raise ProjectError(f"{config_path}: {exc}") from None
+    return configured_project(text, sources, str(config_path))
+
+
+def configured_project(text: str, sources: list[SourceFile], where: str) -> Project:
+    """The project that the text of its padt.toml configures over `sources`; `where`
+    names the file in the messages."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ProjectError(f"{where}: {exc}") from None
     except RecursionError:  # tomllib recurses into nested arrays and tables
-        raise ProjectError(f"{config_path}: values nested too deep") from None
-    project = _project_from_toml(data, sources, str(config_path))
+        raise ProjectError(f"{where}: values nested too deep") from None
+    project = _project_from_toml(data, sources, where)
     return replace(project, config_lines=key_lines(text))
 
 

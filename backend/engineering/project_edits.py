@@ -189,6 +189,17 @@ def delete_declaration(shelf: ProjectShelf, project: str, name: str, editor: Edi
     return delete_file(shelf, project, found.file, current.hash, editor)
 
 
+def name_problem(shelf: ProjectShelf, project: str, name: str, editor: Editor) -> str | None:
+    """Why `name` cannot name a new declaration of the project, said as one types it (the
+    same checks as an add or a rename makes); None when it can."""
+    try:
+        _check_name(name)
+        _free(shelf, project, name, None, editor)
+    except Refusal as refused:
+        return refused.message
+    return None
+
+
 def _check_name(name: str) -> None:
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise Refusal(

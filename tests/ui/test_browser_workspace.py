@@ -1,7 +1,10 @@
-"""The workspace as an IDE (issue 31, item 3): a screen listed in one place appears as a
-tab and is drawn; the project tree shows the project's POUs, resource, program instances,
-Modbus devices and accounts; at 1400x900 nothing of the navigation or the work panel is
-cut off by the window, and no browser, logged in or not, sees viser's Share or settings."""
+"""The workspace as an IDE (issue 31, items 3 and 5): a screen listed in one place appears
+as a tab and is drawn; the project tree shows the project's POUs, resource, program
+instances, Modbus devices and accounts; a FUNCTION_BLOCK added from the tree is a file on
+disk and an entry of the tree, renamed and deleted there, a program the resource runs is
+not deleted, and a read-only user cannot change anything; at 1400x900 and 1920x1080
+nothing of the navigation or the work panel is cut off by the window, and no browser,
+logged in or not, sees viser's Share or settings."""
 
 from __future__ import annotations
 
@@ -10,12 +13,24 @@ from pathlib import Path
 
 import pytest
 import viser
-from playwright.sync_api import Page
+from playwright.sync_api import Locator, Page
 
 from frontend import screens
 from frontend.screen_registry import Now, Screen, Work
 from tests.support.browser import chromium
-from tests.ui.browser_steps import Plant, open_as, text_of, wait_for_text, wait_until
+from tests.ui.browser_steps import (
+    Demo,
+    Plant,
+    button_enabled,
+    choose,
+    confirm,
+    field,
+    log_in,
+    open_as,
+    text_of,
+    wait_for_text,
+    wait_until,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -152,3 +167,80 @@ def _no_viser_controls(page: Page) -> None:
         assert page.locator(f"text={words} >> visible=true").count() == 0, words
     # viser's logo (its header's image) is not drawn either
     assert page.locator("img[src*='viser'] >> visible=true").count() == 0
+
+
+def _entry(page: Page, name: str) -> Locator:
+    return page.locator(f'[data-tree^="file:{name}@"]')
+
+
+def test_add_rename_and_delete_from_the_tree(demo: Demo, tmp_path: Path) -> None:
+    folder = tmp_path / "project"  # where `padt demo --state-dir` keeps its project
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(demo.url)
+        page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+        log_in(page, "admin", demo.password)
+        wait_until("the tree is read", lambda: "TankControl" in _tree(page))
+        page.get_by_text("Add to the project", exact=True).click()
+        choose(page, "Kind", "FUNCTION_BLOCK")
+        # a name is checked as it is typed
+        field(page, "New name").fill("TON")
+        wait_until(
+            "a standard block's name is refused",
+            lambda: "standard" in text_of(page, '[data-testid="new-name-problem"]'),
+        )
+        assert not button_enabled(page, "Add")
+        field(page, "New name").fill("Valve")
+        wait_until("the name is taken", lambda: button_enabled(page, "Add"))
+        page.get_by_role("button", name="Add", exact=True).click()
+        wait_until("the file is made", lambda: (folder / "Valve.st").is_file())
+        assert "FUNCTION_BLOCK Valve" in (folder / "Valve.st").read_text(encoding="utf-8")
+        wait_until("the tree lists it", lambda: _entry(page, "Valve").count() == 1)
+        assert "Valve" in text_of(page, '[data-testid="tree-pous-function_block"]')
+
+        _entry(page, "Valve").click()
+        wait_for_text(page, '[data-testid="edit-selected"]', "Selected: Valve (Valve.st:1)")
+        field(page, "Rename to").fill("TankValve")
+        wait_until("the new name is taken", lambda: button_enabled(page, "Rename"))
+        page.get_by_role("button", name="Rename", exact=True).click()
+        wait_until("the file is renamed", lambda: (folder / "TankValve.st").is_file())
+        assert not (folder / "Valve.st").exists()
+        assert "FUNCTION_BLOCK TankValve" in (folder / "TankValve.st").read_text(encoding="utf-8")
+        wait_until("the tree follows", lambda: _entry(page, "TankValve").count() == 1)
+        assert _entry(page, "Valve").count() == 0
+
+        # a program the resource runs is not deleted
+        _entry(page, "TankControl").click()
+        wait_until(
+            "TankControl is selected",
+            lambda: "TankControl" in text_of(page, '[data-testid="edit-selected"]'),
+        )
+        page.get_by_role("button", name="Delete", exact=True).click()
+        confirm(page, "TankControl")
+        wait_until(
+            "the deletion is refused, saying why",
+            lambda: "program instance" in text_of(page, '[data-testid="delete-problem"]'),
+        )
+        assert (folder / "tank.st").is_file()
+        # the one deleted goes from disk and tree
+        _entry(page, "TankValve").click()
+        wait_until(
+            "TankValve is selected",
+            lambda: "TankValve" in text_of(page, '[data-testid="edit-selected"]'),
+        )
+        page.get_by_role("button", name="Delete", exact=True).click()
+        confirm(page, "TankValve.st")
+        wait_until("its file is gone", lambda: not (folder / "TankValve.st").exists())
+        wait_until("and its entry", lambda: _entry(page, "TankValve").count() == 0)
+
+
+def test_a_read_only_user_sees_the_tree_but_cannot_change_it(plant: Plant) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_as(page, plant, "guest")
+        wait_until("the tree is read", lambda: "TankControl" in _tree(page))
+        page.get_by_text("Add to the project", exact=True).click()
+        assert "read-only" in text_of(page, '[data-testid="edit-level"]')
+        assert field(page, "New name").is_disabled()
+        for button in ("Add", "Rename", "Delete"):
+            assert not button_enabled(page, button), button
