@@ -140,12 +140,8 @@ class ProjectShelf(Mapping[str, Path]):
         if chosen is None:
             known = ", ".join(t.name for t in templates())
             raise Refusal("bad_value", f"there is no template '{template}' (there are: {known})")
-        if resource is not None and not _resource_name_ok(resource):
-            raise Refusal(
-                "bad_value",
-                f"'{resource}' cannot name a resource: a letter or _, then letters, digits, "
-                "_ or - (at most 64)",
-            )
+        if resource is not None and resource_name_problem(resource) is not None:
+            raise Refusal("bad_value", str(resource_name_problem(resource)))
         if self.new_dir is None:
             raise Refusal("forbidden", "this PADT has no folder for new projects (--projects-dir)")
         with self.lock:
@@ -172,11 +168,17 @@ def _holds_a_project(folder: Path) -> bool:
     return (folder / PROJECT_FILE).is_file() or any(folder.glob("*.st"))
 
 
-def _resource_name_ok(name: str) -> bool:
-    return (
+def resource_name_problem(name: str) -> str | None:
+    """Why `name` cannot name a resource (a plain key chunk of Zenoh), or None."""
+    if (
         0 < len(name) <= 64
         and (name[0].isascii() and (name[0].isalpha() or name[0] == "_"))
         and all(c in RESOURCE_NAME_CHARS for c in name)
+    ):
+        return None
+    return (
+        f"'{name[:64]}' cannot name a resource: a letter or _, then letters, digits, _ or - "
+        "(at most 64)"
     )
 
 
