@@ -257,6 +257,27 @@ def _whole(text: str) -> int:
     return 0 if text.strip() == "0" else _positive(text)
 
 
+def _tcp_address(text: str) -> tuple[str, int]:
+    """HOST:PORT, or PORT alone on 127.0.0.1."""
+    host, _, port = text.rpartition(":")
+    try:
+        number = int(port)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not HOST:PORT or PORT") from None
+    if not 0 < number < 65536:
+        raise argparse.ArgumentTypeError(f"{number} is no TCP port")
+    return host.strip("[]") or "127.0.0.1", number
+
+
+def _lsp(args: argparse.Namespace) -> int:
+    if args.project is not None and not args.project.is_dir():
+        print(f"padt lsp: {args.project} is no folder", file=sys.stderr)
+        return 2
+    from padt.lsp_server import serve
+
+    return serve(args.project, args.tcp)
+
+
 def _runtime(args: argparse.Namespace) -> int:
     from runtime.main import run
 
@@ -466,6 +487,29 @@ def build_parser() -> argparse.ArgumentParser:
     from frontend.main import add_arguments as ui_arguments
     from padt.demo import add_arguments as demo_arguments
     from runtime.main import add_arguments as runtime_arguments
+
+    lsp = sub.add_parser(
+        "lsp",
+        help="a Language Server (LSP) for editors: diagnostics, completion, navigation",
+        description="Serve the language services of a project to one LSP client (VS Code, "
+        "Neovim, ...) on stdin/stdout, or on a TCP port: diagnostics as the compiler gives "
+        "them, completion, hover, definition, references, rename and the outline. "
+        "docs/editors.md shows how to set up an editor.",
+    )
+    lsp.add_argument(
+        "project",
+        nargs="?",
+        type=Path,
+        metavar="PROJECT_DIR",
+        help="the project folder (padt.toml and .st files); default the client's workspace",
+    )
+    lsp.add_argument(
+        "--tcp",
+        type=_tcp_address,
+        metavar="[HOST:]PORT",
+        help="listen on a TCP port for one client instead of stdio (host 127.0.0.1 unless given)",
+    )
+    lsp.set_defaults(func=_lsp)
 
     runtime = sub.add_parser("runtime", help="run one resource (the PES) as this process")
     runtime_arguments(runtime)

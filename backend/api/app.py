@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import FastAPI
 from fastapi_offline import FastAPIOffline
 
-from backend.api import auth, live, projects, resources
+from backend.api import auth, language, live, projects, resources
 from backend.api.body_limit import BodyLimit
 from backend.api.errors import install_error_handlers
 from backend.api.service import PadtService
@@ -29,6 +29,6 @@ def create_app(service: PadtService, trusted: TrustedProxies = NO_PROXIES) -> Fa
     app.state.trusted_proxies = trusted
     install_error_handlers(app)
     app.add_middleware(BodyLimit)
-    for router in (auth.router, projects.router, resources.router, live.router):
+    for router in (auth.router, projects.router, language.router, resources.router, live.router):
         app.include_router(router)
     return app

@@ -1,0 +1,264 @@
+"""The compiler's language services on a project folder, for an editor that has some of
+its files open: `padt lsp`, the REST API and the browser's editor each hold a
+`ProjectLanguage` and only translate to their own wire.
+
+The project is the folder's `.st` files as the compiler finds them (`project_sources`)
+and its `padt.toml`; a document open in the editor stands for its file until it is
+closed. Files are named as diagnostics name them: their path in the folder, with "/"."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import replace
+from pathlib import Path, PurePosixPath
+
+from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.language.analysis import Analysis
+from backend.compiler.language.completion import CompletionItem, complete
+from backend.compiler.language.hover import Hover, hover
+from backend.compiler.language.language_project import LanguageProject
+from backend.compiler.language.navigation import definition, references
+from backend.compiler.language.outline import Symbol as OutlineSymbol
+from backend.compiler.language.outline import outline
+from backend.compiler.language.position import Location, Range, symbol_at
+from backend.compiler.language.rename import RenameResult, rename
+from backend.compiler.language.tokens import lex
+from backend.compiler.limits import MAX_FILE_BYTES, MiB
+from backend.compiler.pipeline import Parsed
+from backend.compiler.source import source_bytes
+from backend.engineering.project import (
+    PROJECT_FILE,
+    ProjectError,
+    compile_project,
+    configured_project,
+    project_sources,
+)
+
+# what the services answer, for the adapters' annotations (they do not import the compiler)
+__all__ = [
+    "CompletionItem",
+    "Diagnostic",
+    "Hover",
+    "LanguageError",
+    "Location",
+    "OutlineSymbol",
+    "ProjectLanguage",
+    "Range",
+    "RenameResult",
+]
+
+
+class LanguageError(ValueError):
+    """A request the services cannot answer: a file that is not the project's, a text too
+    large; the message says which."""
+
+
+class ProjectLanguage:
+    """One editor's view of one project: the files on disk, the documents it has open over
+    them, and the analysis of both. Thread-safe: the UI asks from several threads."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder.resolve()
+        self._lock = threading.RLock()
+        self._disk = {source.name: source.text for source in project_sources(self.folder)}
+        self._open: dict[str, str] = {}
+        self._project = LanguageProject(self._disk)
+        self._parsed: Analysis | None = None  # the last analysis in which every file parsed
+
+    # ---- files and documents
+
+    def file_name(self, path: Path) -> str | None:
+        """The name of a file of this folder (an .st file or padt.toml), None for anything
+        outside it or of another kind."""
+        try:
+            relative = path.resolve().relative_to(self.folder)
+        except ValueError:
+            return None
+        name = relative.as_posix()
+        return name if name == PROJECT_FILE or name.endswith(".st") else None
+
+    def checked_name(self, name: str) -> str:
+        """`name` as a client sent it, if it names a file of the project."""
+        parts = PurePosixPath(name).parts
+        if not name or name.startswith("/") or ".." in parts or "\\" in name:
+            raise LanguageError(f"'{name}' is no file of the project")
+        with self._lock:
+            if name == PROJECT_FILE or name in self._disk or name in self._open:
+                return name
+        raise LanguageError(f"the project has no file '{name}'")
+
+    def open(self, name: str, text: str) -> None:
+        """The editor's text of a file, from now on instead of the file's."""
+        if source_bytes(text) > MAX_FILE_BYTES:
+            raise LanguageError(f"{name}: the text is larger than {MAX_FILE_BYTES // MiB} MiB")
+        with self._lock:
+            self._open[name] = text
+            if name != PROJECT_FILE:
+                self._project.set_text(name, text)
+
+    def close(self, name: str) -> None:
+        """The editor closed the document: the file on disk counts again."""
+        with self._lock:
+            if self._open.pop(name, None) is None or name == PROJECT_FILE:
+                return
+            if name in self._disk:
+                self._project.set_text(name, self._disk[name])
+            else:
+                self._project.remove(name)
+
+    def reread(self) -> None:
+        """The files on disk changed (saved, added, deleted by another tool)."""
+        disk = {source.name: source.text for source in project_sources(self.folder)}
+        with self._lock:
+            for name in sorted(set(self._disk) - set(disk) - set(self._open)):
+                self._project.remove(name)
+            for name, text in sorted(disk.items()):
+                if name not in self._open:
+                    self._project.set_text(name, text)
+            self._disk = disk
+
+    def text(self, name: str) -> str:
+        """A file's text as the services read it."""
+        with self._lock:
+            if name in self._open:
+                return self._open[name]
+            if name == PROJECT_FILE:
+                try:
+                    return self._configuration_on_disk()
+                except ProjectError:
+                    return ""
+            return self._disk.get(name, "")
+
+    @contextmanager
+    def with_text(self, name: str, text: str | None) -> Iterator[None]:
+        """For one request (the REST API's): `name` with `text`, if given, then as before."""
+        with self._lock:
+            before = self._open.get(name)
+            if text is not None:
+                self.open(name, text)
+            try:
+                yield
+            finally:
+                if before is None:
+                    self.close(name)
+                else:
+                    self.open(name, before)
+
+    # ---- the analysis
+
+    def analysis(self) -> Analysis:
+        """The analysis of the texts as the editor has them (re-analysed incrementally
+        after a change)."""
+        analysis = self._project.analysis()
+        if {unit.file for unit in analysis.units} >= set(analysis.texts):
+            with self._lock:
+                self._parsed = analysis
+        return analysis
+
+    def readable(self, name: str) -> Analysis:
+        """The analysis to read names from at a place of `name`: while the file does not
+        parse (a line half typed), the symbols of the last analysis in which every file
+        did, over the texts as they are now; the services find the place in the text."""
+        analysis = self.analysis()
+        with self._lock:
+            good = self._parsed
+        if good is None or any(unit.file == name for unit in analysis.units):
+            return analysis
+        return replace(good, texts=analysis.texts)
+
+    def diagnostics(self, name: str) -> list[Diagnostic]:
+        """The diagnostics of one file, in order of position: of an .st file the language
+        services', of padt.toml the compiler's on the configuration."""
+        if name == PROJECT_FILE:
+            return self._configuration_diagnostics()
+        return self._project.diagnostics(name)
+
+    def all_diagnostics(self) -> dict[str, list[Diagnostic]]:
+        """The diagnostics of every file of the project, each file's in order of position."""
+        analysis = self.analysis()
+        with self._lock:
+            found: dict[str, list[Diagnostic]] = {name: [] for name in {*self._disk, *self._open}}
+        found.pop(PROJECT_FILE, None)
+        for name in found:
+            found[name] = analysis.diagnostics_of(name)
+        if (self.folder / PROJECT_FILE).is_file() or PROJECT_FILE in self._open:
+            found[PROJECT_FILE] = self._configuration_diagnostics()
+        return dict(sorted(found.items()))
+
+    def diagnostic_range(self, diagnostic: Diagnostic) -> tuple[int, int, int, int]:
+        """Where an editor underlines a diagnostic: the token it points at, else the one
+        character (line, col, end line, end col; the end exclusive)."""
+        line, col = diagnostic.line, diagnostic.col
+        end_col = col + 1
+        if diagnostic.file != PROJECT_FILE:
+            lexed = lex(self.text(diagnostic.file))
+            index = lexed.index_at(line, col)
+            token = lexed.tokens[index] if index < len(lexed.tokens) else None
+            if token is not None and (token.line, token.col) == (line, col):
+                end_col = token.end_col
+        return line, col, line, end_col
+
+    def _configuration_diagnostics(self) -> list[Diagnostic]:
+        with self._lock:
+            text = self._open.get(PROJECT_FILE)
+            if text is None and not (self.folder / PROJECT_FILE).is_file():
+                return []
+            analysis = self.analysis()
+        try:
+            if text is None:
+                text = self._configuration_on_disk()
+            project = configured_project(text, [], PROJECT_FILE)
+        except ProjectError as exc:
+            # what `padt compile` says before it compiles (no code: it is not the compiler's)
+            return [Diagnostic(PROJECT_FILE, 1, 1, "error", str(exc), "")]
+        parsed: Parsed = (list(analysis.units), [], set(analysis.user_pous))
+        result = compile_project(project, PROJECT_FILE, parsed)
+        return sorted(d for d in result.diagnostics if d.file == PROJECT_FILE)
+
+    def _configuration_on_disk(self) -> str:
+        path = self.folder / PROJECT_FILE
+        try:
+            if path.stat().st_size > MAX_FILE_BYTES:
+                raise ProjectError(f"{PROJECT_FILE}: larger than {MAX_FILE_BYTES // MiB} MiB")
+            return path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ProjectError(f"{PROJECT_FILE}: {exc}") from None
+
+    # ---- the services at a place of a file: lines and columns from 1, in characters
+
+    def complete(self, name: str, line: int, col: int) -> list[CompletionItem]:
+        """What may be written at the place, most relevant first."""
+        name = self.checked_name(name)
+        return complete(self.readable(name), name, line, col)
+
+    def hover(self, name: str, line: int, col: int) -> Hover | None:
+        """What the name at the place is: its declaration, type and comment."""
+        name = self.checked_name(name)
+        return hover(self.readable(name), name, line, col)
+
+    def definition(self, name: str, line: int, col: int) -> Location | None:
+        """Where the symbol at the place is declared."""
+        name = self.checked_name(name)
+        return definition(self.readable(name), name, line, col)
+
+    def references(self, name: str, line: int, col: int) -> list[Location]:
+        """Every place that names the symbol at the place, its declaration among them."""
+        name = self.checked_name(name)
+        return references(self.readable(name), name, line, col)
+
+    def renamed_at(self, name: str, line: int, col: int) -> Range | None:
+        """The name a rename at the place would change, None where there is none."""
+        name = self.checked_name(name)
+        located = symbol_at(self.readable(name), name, line, col)
+        return None if located is None else located.range
+
+    def rename(self, name: str, line: int, col: int, new_name: str) -> RenameResult:
+        """The edits per file that rename the symbol at the place, checked by the compiler
+        on the texts as they are (nothing is written); or why it cannot be renamed."""
+        return rename(self.analysis(), self.checked_name(name), line, col, new_name)
+
+    def outline(self, name: str) -> list[OutlineSymbol]:
+        """What the file declares, nested, in the order it stands."""
+        return outline(self.analysis(), self.checked_name(name))
