@@ -478,6 +478,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     import_.set_defaults(func=_import)
 
+    from padt.new_project import add_arguments as new_arguments
+
+    new = sub.add_parser(
+        "new",
+        help="a new project folder from a template (empty, tank, sequence)",
+        epilog="exit codes: 0 made, 2 not made (the name, the folder or the template)",
+    )
+    new_arguments(new)
+    new.set_defaults(func=_lazy("padt.new_project", "run"))
+
     check = sub.add_parser(
         "check-twice", help="compile in two processes with different hash seeds; compare CRCs"
     )

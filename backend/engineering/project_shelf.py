@@ -133,35 +133,45 @@ class ProjectShelf(Mapping[str, Path]):
         projects, or a level below read-write."""
         require(editor, WRITE)
         audit = self.audit_log()
-        problem = project_name_problem(name)
-        if problem is not None:
-            raise Refusal("bad_value", problem)
-        chosen = next((t for t in templates() if t.name == template), None)
-        if chosen is None:
-            known = ", ".join(t.name for t in templates())
-            raise Refusal("bad_value", f"there is no template '{template}' (there are: {known})")
-        if resource is not None and resource_name_problem(resource) is not None:
-            raise Refusal("bad_value", str(resource_name_problem(resource)))
         if self.new_dir is None:
             raise Refusal("forbidden", "this PADT has no folder for new projects (--projects-dir)")
         with self.lock:
             self.refresh()
-            taken = {n.casefold() for n in self._projects}
-            target = self.new_dir / name
-            if name.casefold() in taken or os.path.lexists(target):
+            if name.casefold() in {n.casefold() for n in self._projects}:
                 raise Refusal("exists", f"there is a project '{name}' already")
-            staging = self.new_dir / f".new-{name}"
-            shutil.rmtree(staging, ignore_errors=True)
-            try:
-                _copy_template(chosen.folder, staging, name, resource)
-                os.rename(staging, target)
-            except OSError as exc:
-                shutil.rmtree(staging, ignore_errors=True)
-                raise Refusal("project", f"project '{name}' could not be made: {exc}") from None
-            self._given.pop(name, None)
+            target = make_project(self.new_dir, name, template, resource)
             self.refresh()
         audit.record(editor.user, name, "new-project", f"template:{template}", "", "")
         return target
+
+
+def make_project(parent: Path, name: str, template: str, resource: str | None = None) -> Path:
+    """The new project folder `parent/name` from `template`, its [project] name set to
+    `name` (and its resource's name to `resource` when given), made whole or not at all.
+    Refused with the reason: a name that is no folder name, a folder that exists, an
+    unknown template, a resource name that is no key of Zenoh."""
+    problem = project_name_problem(name)
+    if problem is not None:
+        raise Refusal("bad_value", problem)
+    chosen = next((t for t in templates() if t.name == template), None)
+    if chosen is None:
+        known = ", ".join(t.name for t in templates())
+        raise Refusal("bad_value", f"there is no template '{template}' (there are: {known})")
+    if resource is not None and resource_name_problem(resource) is not None:
+        raise Refusal("bad_value", str(resource_name_problem(resource)))
+    target = parent / name
+    if os.path.lexists(target):
+        raise Refusal("exists", f"there is a project '{name}' already")
+    staging = parent / f".new-{name}"
+    shutil.rmtree(staging, ignore_errors=True)
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        _copy_template(chosen.folder, staging, name, resource)
+        os.rename(staging, target)
+    except OSError as exc:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise Refusal("project", f"project '{name}' could not be made: {exc}") from None
+    return target
 
 
 def _holds_a_project(folder: Path) -> bool:
