@@ -199,6 +199,7 @@ class Lexed:
     comments: tuple[Comment, ...]
     spans: tuple[Span, ...]  # in the order their keywords stand
     line_starts: tuple[int, ...]
+    pragmas: tuple[tuple[int, int], ...]  # first and last line of each `{...}`
 
     def offset(self, line: int, col: int) -> int:
         return self.line_starts[min(max(line, 1), len(self.line_starts)) - 1] + col - 1
@@ -243,6 +244,7 @@ def lex(text: str) -> Lexed:
     line_starts = [0, *(m.end() for m in re.finditer("\n", text))]
     tokens: list[Token] = []
     comments: list[Comment] = []
+    pragmas: list[tuple[int, int]] = []
     pos = 0
     while pos < len(text):
         if text.startswith("(*", pos):
@@ -254,7 +256,11 @@ def lex(text: str) -> Lexed:
         if match is None:  # cannot happen: the last alternative takes any character
             break
         kind = match.lastgroup or "punct"
-        if kind == "comment":
+        if kind == "pragma":
+            pragmas.append(
+                (bisect_right(line_starts, pos), bisect_right(line_starts, match.end() - 1))
+            )
+        elif kind == "comment":
             body = match.group()[2:]
             body = body[:-2] if match.group().startswith("/*") and body.endswith("*/") else body
             comments.append(_comment(text, pos, match.end(), line_starts, body))
@@ -269,6 +275,7 @@ def lex(text: str) -> Lexed:
         tuple(comments),
         _spans(tokens, len(text), line_starts),
         tuple(line_starts),
+        tuple(pragmas),
     )
 
 
