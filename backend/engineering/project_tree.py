@@ -15,8 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from backend.compiler.diagnostics import CompileError
-from backend.compiler.parse import parse_source
+from backend.compiler.language.parse_cache import parse_file
 from backend.engineering.project import PROJECT_FILE
 from backend.engineering.project_access import READ, Editor, require
 from backend.engineering.project_files import FileText, ProjectFile, folder_files, folder_text
@@ -111,11 +110,13 @@ _OUTLINES = _Outlines()
 
 
 def file_outline(file: FileText) -> FileOutline:
-    """The declarations of one .st file, from its parse."""
-    try:
-        unit = parse_source(file.path, file.text)
-    except CompileError as exc:
-        first = min(exc.diagnostics, key=lambda d: (d.line, d.col))
+    """The declarations of one .st file, from its parse: the language services' parses,
+    shared with every editor session (a file the editor has open is parsed already, and
+    after a keystroke only the declaration it changed is parsed again)."""
+    parsed = parse_file(file.path, file.text)
+    unit = parsed.unit
+    if unit is None:
+        first = min(parsed.diagnostics, key=lambda d: (d.line, d.col))
         return FileOutline(file.path, file.hash, (), str(first))
     items = [
         TreeItem(

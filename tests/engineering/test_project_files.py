@@ -8,13 +8,14 @@ from __future__ import annotations
 import json
 import os
 import stat
+import threading
 from pathlib import Path
 
 import pytest
 
 from backend.compiler.limits import MAX_FILE_BYTES
 from backend.engineering.padt_audit_log import PadtAuditLog
-from backend.engineering.project_access import Editor
+from backend.engineering.project_access import WRITE, Editor
 from backend.engineering.project_files import (
     changed_on_disk,
     content_hash,
@@ -27,6 +28,7 @@ from backend.engineering.project_files import (
 from backend.engineering.project_shelf import ProjectShelf
 from backend.engineering.project_tree import project_tree
 from runtime.contract.refusal import Refusal
+from tests.support.corpus_paths import corpus_dir
 
 ANNA = Editor("anna", "read-write")
 BERT = Editor("bert", "read-write")
@@ -235,3 +237,36 @@ def test_the_tree_lists_pous_types_globals_resource_modbus_and_accounts(
     assert [(a.name, a.level) for a in tree.accounts] == [("op", "operator")]
     assert "scrypt" not in repr(tree)
     assert len(tree.problems) == 1 and tree.problems[0].startswith("broken.st:2:")
+
+
+def test_saves_racing_from_one_base_one_wins_the_others_conflict(shelf: ProjectShelf) -> None:
+    opened = read_file(shelf, "plant", "tank.st", ANNA)
+    outcomes: list[str] = []
+
+    def save(n: int) -> None:
+        try:
+            save_file(
+                shelf, "plant", "tank.st", f"(* {n} *)\n", opened.hash, Editor(f"u{n}", WRITE)
+            )
+            outcomes.append("saved")
+        except Refusal as refused:
+            outcomes.append(refused.code)
+
+    threads = [threading.Thread(target=save, args=(n,)) for n in range(8)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=60)
+    assert sorted(outcomes) == ["conflict"] * 7 + ["saved"]
+    saves = [e for e in shelf.audit_log().entries() if e.action == "save"]
+    assert len(saves) == 1 and saves[0].old_hash == opened.hash
+
+
+def test_the_oscat_project_opens_in_the_tree() -> None:
+    folder = corpus_dir("oscat") / "st"
+    tree = project_tree(ProjectShelf({"oscat": folder}), "oscat", READER)
+    kinds = {
+        kind: sum(p.kind == kind for p in tree.pous) for kind in ("FUNCTION", "FUNCTION_BLOCK")
+    }
+    assert kinds["FUNCTION"] > 300 and kinds["FUNCTION_BLOCK"] > 300
+    assert len(tree.types) > 30 and tree.problems == ()
