@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import shutil
+import subprocess
 import sys
 from collections.abc import AsyncIterator, Callable, Sequence
 from pathlib import Path
@@ -17,6 +18,8 @@ from pygls.exceptions import JsonRpcException
 from pytest_lsp import ClientServerConfig, LanguageClient, client_capabilities
 
 from backend.engineering.project import demo_project_path
+from tests.conftest import free_port
+from tests.support.corpus_paths import corpus_dir
 
 TIMEOUT_S = 120.0  # a loaded machine analyses slowly; the loops below end when it is there
 
@@ -29,18 +32,23 @@ async def until(condition: Callable[[], object], what: str) -> None:
         await asyncio.sleep(0.05)
 
 
-async def start(folder: Path, *, root: Path | None = None) -> LanguageClient:
-    command = [sys.executable, "-m", "padt.cli", "lsp"]
-    command += [] if root is not None else [str(folder)]
+async def start(folder: Path, *, given: bool = True) -> LanguageClient:
+    """`padt lsp` on stdio, for the project given on its command line or else as the
+    editor's workspace folder."""
+    command = [sys.executable, "-m", "padt.cli", "lsp", *([str(folder)] if given else [])]
     client = await ClientServerConfig(command).start()
     assert isinstance(client, LanguageClient)
+    await initialize(client, folder)
+    return client
+
+
+async def initialize(client: LanguageClient, folder: Path) -> None:
     await client.initialize_session(
         types.InitializeParams(
             capabilities=client_capabilities("visual-studio-code"),
-            root_uri=(root or folder).as_uri(),
+            workspace_folders=[types.WorkspaceFolder(folder.as_uri(), folder.name)],
         )
     )
-    return client
 
 
 VALVE = """FUNCTION_BLOCK Valve
@@ -271,3 +279,101 @@ async def test_rename_across_files_and_a_refused_one(client: LanguageClient, dem
         await client.text_document_rename_async(
             types.RenameParams(text_document=document, position=at, new_name="IF")
         )
+
+
+@pytest.mark.asyncio
+async def test_the_workspace_folder_is_the_project_and_padt_toml_gets_its_own_diagnostics(
+    demo: Path,
+) -> None:
+    client = await start(demo, given=False)
+    try:
+        config = demo / "padt.toml"
+        text = config.read_text().replace('pou = "TankControl"', 'pou = "TankControll"')
+        uri = open_document(client, config, text)
+        await until(lambda: diagnostics(client, uri), "a diagnostic of padt.toml")
+        [found] = diagnostics(client, uri)
+        assert found.code == "E0601" and "no PROGRAM 'TankControll'" in found.message
+        # a file outside the project is not analysed, and a request on it is refused
+        outside = demo.parent / "elsewhere.st"
+        outside.write_text("PROGRAM X\nVAR a : INT; END_VAR\na := TRUE;\nEND_PROGRAM\n")
+        other = open_document(client, outside)
+        with pytest.raises(JsonRpcException, match="no file of the project"):
+            await client.text_document_hover_async(
+                types.HoverParams(types.TextDocumentIdentifier(other), types.Position(2, 0))
+            )
+        assert other not in client.diagnostics
+    finally:
+        await client.shutdown_session()
+        await client.stop()  # type: ignore[no-untyped-call]
+
+
+@pytest.mark.asyncio
+async def test_over_tcp(demo: Path) -> None:
+    port = free_port()
+    command = [sys.executable, "-m", "padt.cli", "lsp", "--tcp", str(port), str(demo)]
+    server = subprocess.Popen(command)
+    client = LanguageClient()
+    try:
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + TIMEOUT_S
+        while True:
+            try:
+                await client.start_tcp("127.0.0.1", port)
+                break
+            except OSError:
+                assert server.poll() is None and loop.time() < deadline, "no TCP server"
+                await asyncio.sleep(0.1)
+        await initialize(client, demo)
+        tank = demo / "tank.st"
+        uri = open_document(client, tank)
+        at = place(tank, "  level := tankLevel", "tankLevel")
+        found = await client.text_document_definition_async(
+            types.DefinitionParams(types.TextDocumentIdentifier(uri), at)
+        )
+        assert isinstance(found, types.Location) and found.uri == uri
+        await client.shutdown_session()
+        assert server.wait(timeout=TIMEOUT_S) == 0
+    finally:
+        if server.poll() is None:
+            server.kill()
+            server.wait()
+        await client.stop()  # type: ignore[no-untyped-call]
+
+
+@pytest.mark.asyncio
+async def test_an_oscat_file_of_4888_lines(tmp_path: Path) -> None:
+    source = corpus_dir("oscat") / "st" / "BUILDING_1.0.st"
+    folder = tmp_path / "oscat"
+    folder.mkdir()
+    building = Path(shutil.copy(source, folder / source.name))
+    client = await start(folder)
+    try:
+        uri = open_document(client, building)
+        await until(lambda: diagnostics(client, uri), "the diagnostics of BUILDING")
+        severities = {d.severity for d in diagnostics(client, uri)}
+        assert types.DiagnosticSeverity.Error not in severities  # it compiles, with warnings
+
+        # in BLIND_SHADE, below the call of its TOF instance: `sun_delay.`
+        call = place(building, "  sun_delay(IN := sun, PT := shade_delay);", "sun_delay")
+        end = types.Position(call.line, len("  sun_delay(IN := sun, PT := shade_delay);"))
+        change(client, uri, 2, end, "\n  sun_delay.")
+        dot = types.Position(call.line + 1, len("  sun_delay."))
+        labels = {item.label for item in await complete(client, uri, dot)}
+        assert {"IN", "PT", "Q", "ET"} <= labels
+
+        # errors typed there: underlined on their line (an earlier state of the text, with
+        # the line half typed, may be published before)
+        change(client, uri, 3, dot, "Q := 5;")
+
+        def errors() -> list[int]:
+            found = diagnostics(client, uri)
+            return [
+                d.range.start.line for d in found if d.severity == types.DiagnosticSeverity.Error
+            ]
+
+        await until(lambda: set(errors()) == {dot.line}, "the errors typed, alone")
+        codes = {d.code for d in diagnostics(client, uri) if d.range.start.line == dot.line}
+        assert codes == {"E0305", "E0209"}  # Q is the TOF's output, and BOOL
+    finally:
+        await client.shutdown_session()
+        await client.stop()  # type: ignore[no-untyped-call]
