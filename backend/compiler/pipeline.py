@@ -235,6 +235,11 @@ def _compile(
     if programs is None:
         programs = configured[1] if configured else _default_programs(units)
         positions = configured[2] if configured else {}
+    else:  # padt.toml's [[resource.program]] tables, each at its line
+        positions = {
+            p.name: Pos(config_file, line_of(settings.lines, f"resource.program.{i}"), 1)
+            for i, p in reversed(list(enumerate(programs)))  # a name given twice: the first
+        }
     diagnostics.extend(check_programs(resolved, resource, programs, config_file, positions))
     configurations = [c for unit in units for c in unit.configurations]
     instance_io = check_configuration(resolved, configurations, resource.name, programs)

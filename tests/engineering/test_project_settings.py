@@ -122,7 +122,8 @@ def test_what_only_the_compiler_knows_comes_with_its_code_and_field(shelf: Proje
     assert "noSuchVariable" in problems[0].message
     draft.devices.pop()
     draft.programs[0].pou = "NoSuchProgram"
-    assert [p.code for p in settings_problems(shelf, "tank", draft, ANNA)] == ["E0601"]
+    problems = settings_problems(shelf, "tank", draft, ANNA)
+    assert [(p.field, p.code) for p in problems] == [("resource.program.0", "E0601")]
 
 
 def test_a_draft_with_an_error_is_never_written(shelf: ProjectShelf) -> None:
