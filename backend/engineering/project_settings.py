@@ -13,6 +13,7 @@ error is never written; a write is whole or not at all (project_files).
 from __future__ import annotations
 
 import copy
+import re
 import tomllib
 from dataclasses import dataclass, field
 from typing import Any
@@ -41,6 +42,7 @@ from runtime.contract.parameters import (
 from runtime.contract.refusal import Refusal
 
 PROJECT_KEYS = ("name", "version", "author", "date")
+IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
 
 
 @dataclass
@@ -207,11 +209,30 @@ def write_settings(
 
 def settings_text(text: str, draft: Settings) -> str:
     """`text` (padt.toml) with the draft's settings: only the values that differ are
-    written; comments, order and every other table stay."""
+    written; comments, order and every other table stay. Refused (`project`) for a
+    padt.toml that does not parse or whose form the settings cannot keep (an inline table
+    where they write tables: edit it as text)."""
     try:
         document = tomlkit.parse(text)
     except tomlkit.exceptions.ParseError as exc:
         raise Refusal("project", f"padt.toml cannot be read: {exc}") from None
+    try:
+        written = _with_settings(document, draft)
+        tomllib.loads(written)  # what tomlkit wrote into an inline table may not be TOML
+        return written
+    except (
+        tomlkit.exceptions.TOMLKitError,
+        tomllib.TOMLDecodeError,
+        TypeError,
+        ValueError,
+        AttributeError,
+    ) as exc:
+        raise Refusal(
+            "project", f"padt.toml has a form these settings cannot keep ({exc}): edit it as text"
+        ) from None
+
+
+def _with_settings(document: Any, draft: Settings) -> str:
     meta = _child(document, "project")
     _merge(meta, {k: v for k, v in draft.project.items() if v != ""}, PROJECT_KEYS)
     res = _child(document, "resource")
@@ -273,13 +294,18 @@ def _field_problems(draft: Settings) -> list[Problem]:
     seen: dict[str, int] = {}
     for index, program in enumerate(draft.programs):
         where = f"resource.program.{index}"
-        if not program.name:
-            problems.append(Problem(f"{where}.name", "a program instance needs a name"))
+        if not IDENTIFIER.fullmatch(program.name):
+            problems.append(
+                Problem(
+                    f"{where}.name",
+                    "an instance's name is a name of ST: a letter or _, then letters, digits or _",
+                )
+            )
         elif program.name.casefold() in seen:
             problems.append(Problem(f"{where}.name", f"a second instance named {program.name}"))
         seen[program.name.casefold()] = index
-        if not program.pou:
-            problems.append(Problem(f"{where}.pou", "which PROGRAM does it run?"))
+        if not IDENTIFIER.fullmatch(program.pou):
+            problems.append(Problem(f"{where}.pou", "the name of the PROGRAM it runs"))
         try:
             PROGRAM_BY_NAME["program_id"].check(program.id)
         except ParameterError as exc:

@@ -151,3 +151,24 @@ def test_read_only_may_read_settings_not_write_them(shelf: ProjectShelf) -> None
     with pytest.raises(Refusal, match="needs read-write"):
         write_settings(shelf, "tank", read.settings, read.hash, READER)
     assert read_file(shelf, "tank", "padt.toml", READER).hash == read.hash
+
+
+def test_hostile_drafts_and_forms_are_refused_with_a_reason(shelf: ProjectShelf) -> None:
+    draft = read_settings(shelf, "tank", ANNA).settings
+    draft.programs[0].name = 'x"\n[evil]'
+    draft.programs[0].parameters["program_id"] = 3
+    draft.parameters["no_such_setting"] = 1
+    fields = [p.field for p in settings_problems(shelf, "tank", draft, ANNA)]
+    assert fields == [
+        "resource.no_such_setting",
+        "resource.program.0.name",
+        "resource.program.0.program_id",
+    ]
+    inline = 'resource = { name = "R", program = [{ name = "P", pou = "P", id = 1 }] }\n'
+    (shelf.folder("tank") / "padt.toml").write_text(inline)
+    read = read_settings(shelf, "tank", ANNA)
+    read.settings.programs.append(ProgramSettings("Q", "P", 2))
+    with pytest.raises(Refusal, match="edit it as text") as refused:
+        write_settings(shelf, "tank", read.settings, read.hash, ANNA)
+    assert refused.value.code == "project"
+    assert config(shelf) == inline
