@@ -36,6 +36,14 @@ from backend.compiler.types import BOOL
 
 
 def check(resolved: Resolved) -> list[Diagnostic]:
+    diagnostics = check_declarations(resolved)
+    for pou in resolved.sorted_pous():
+        diagnostics.extend(check_pou(resolved, pou))
+    return diagnostics
+
+
+def check_declarations(resolved: Resolved) -> list[Diagnostic]:
+    """The rules on the project's data, globals, structures and interfaces."""
     diagnostics = check_data(resolved)
     if resolved.pous:
         any_pou = resolved.sorted_pous()[0]
@@ -53,35 +61,37 @@ def check(resolved: Resolved) -> list[Diagnostic]:
         for interface_key in sorted(resolved.interfaces):
             check_interface(global_scope, interface_key)
         diagnostics.extend(global_scope.diagnostics)
-    for pou in resolved.sorted_pous():
-        if is_external(pou):
-            continue
-        scope = Scope(resolved, pou, check_expression)
-        order = declaration_order(pou.variables)
-        inherited = _inherited(resolved, pou)
-        for variable in pou.variables:
-            if id(variable) in inherited:
-                continue  # checked with the block that declares it
-            if variable.kind != "VAR_GLOBAL":
-                check_location_area(scope, variable)
-                check_abstract_instance(scope, variable)
-                check_initializer(scope, variable.type, variable.init)
-                check_constant_initializer(scope, variable, order)
-            check_reference_parameter(scope, variable)
-            if variable.edge is not None and (
-                variable.kind != "VAR_INPUT" or variable.type != BOOL
-            ):
-                scope.report(variable.pos, Code.EDGE_INPUT, f"{variable.edge} needs a BOOL input")
-        check_open_array_variables(scope)
-        check_block(scope, pou.pou.body, loop_depth=0)
-        if pou.pou.sfc is not None:
-            check_sfc(scope, pou.pou.sfc)
-            check_action_names(scope, pou.pou.sfc)
-        check_block_declaration(scope, pou)
-        check_implementations(scope, pou)
-        diagnostics.extend(scope.diagnostics)
-        for routine in pou.own_routines():
-            diagnostics.extend(_check_method(resolved, routine))
+    return diagnostics
+
+
+def check_pou(resolved: Resolved, pou: PouSymbols) -> list[Diagnostic]:
+    """The rules on one POU: its variables, its body and its methods."""
+    if is_external(pou):
+        return []
+    scope = Scope(resolved, pou, check_expression)
+    order = declaration_order(pou.variables)
+    inherited = _inherited(resolved, pou)
+    for variable in pou.variables:
+        if id(variable) in inherited:
+            continue  # checked with the block that declares it
+        if variable.kind != "VAR_GLOBAL":
+            check_location_area(scope, variable)
+            check_abstract_instance(scope, variable)
+            check_initializer(scope, variable.type, variable.init)
+            check_constant_initializer(scope, variable, order)
+        check_reference_parameter(scope, variable)
+        if variable.edge is not None and (variable.kind != "VAR_INPUT" or variable.type != BOOL):
+            scope.report(variable.pos, Code.EDGE_INPUT, f"{variable.edge} needs a BOOL input")
+    check_open_array_variables(scope)
+    check_block(scope, pou.pou.body, loop_depth=0)
+    if pou.pou.sfc is not None:
+        check_sfc(scope, pou.pou.sfc)
+        check_action_names(scope, pou.pou.sfc)
+    check_block_declaration(scope, pou)
+    check_implementations(scope, pou)
+    diagnostics = list(scope.diagnostics)
+    for routine in pou.own_routines():
+        diagnostics.extend(_check_method(resolved, routine))
     return diagnostics
 
 

@@ -17,7 +17,19 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 
 
-def qualify_enum_values(units: list[ast.SourceUnit]) -> list[ast.SourceUnit]:
+class EnumMemo:
+    """The work of `qualify_enum_values` on each top-level declaration, kept by identity
+    for the next run on the same project, while its enumerations stay as they were (see
+    `qualified_names.QualifyMemo`)."""
+
+    def __init__(self) -> None:
+        self.enums: dict[str, set[str]] = {}
+        self.rebuilt: dict[int, tuple[Any, Any]] = {}
+
+
+def qualify_enum_values(
+    units: list[ast.SourceUnit], memo: EnumMemo | None = None
+) -> list[ast.SourceUnit]:
     """The units with every CODESYS qualified enumeration value made an `EnumLiteral`."""
     enums = {
         key(decl.name): {key(name) for name, _, _ in decl.spec.values}
@@ -32,20 +44,25 @@ def qualify_enum_values(units: list[ast.SourceUnit]) -> list[ast.SourceUnit]:
     enums = {name: values for name, values in enums.items() if name not in hidden}
     if not enums:
         return units
-    result = []
-    for unit in units:
-        pous = tuple(_Qualifier(enums, _own_names(pou)).node(pou) for pou in unit.pous)
-        rest = _Qualifier(enums, set())
-        result.append(
-            replace(
-                unit,
-                pous=pous,
-                globals=rest.node(unit.globals),
-                types=rest.node(unit.types),
-                configurations=rest.node(unit.configurations),
-            )
+    memo = memo or EnumMemo()
+    kept = memo.rebuilt if enums == memo.enums else {}
+    memo.enums, memo.rebuilt = enums, {}
+
+    def qualified(item: Any, hidden: set[str]) -> Any:
+        found = kept.get(id(item)) or (item, _Qualifier(enums, hidden).node(item))
+        memo.rebuilt[id(item)] = found
+        return found[1]
+
+    return [
+        replace(
+            unit,
+            pous=tuple(qualified(pou, _own_names(pou)) for pou in unit.pous),
+            globals=tuple(qualified(block, set()) for block in unit.globals),
+            types=tuple(qualified(decl, set()) for decl in unit.types),
+            configurations=tuple(qualified(c, set()) for c in unit.configurations),
         )
-    return result
+        for unit in units
+    ]
 
 
 def global_blocks(unit: ast.SourceUnit) -> list[ast.VarBlock]:

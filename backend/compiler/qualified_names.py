@@ -57,28 +57,70 @@ class _Names:
     top_level: set[str]
 
 
-def qualify_names(units: list[ast.SourceUnit]) -> tuple[list[ast.SourceUnit], list[Diagnostic]]:
+# the declarations of a unit
+_PARTS = ("pous", "globals", "types", "configurations", "interfaces")
+
+
+class QualifyMemo:
+    """The work of `qualify_names` on each top-level declaration, kept by identity for the
+    next run: the language services run it after each keystroke on a project whose
+    declarations are, but for the one typed in, the objects they were (the AST is
+    immutable). Only the last run's declarations are kept."""
+
+    def __init__(self) -> None:
+        self.declared: dict[int, tuple[Any, frozenset[str]]] = {}
+        self.names: _Names | None = None
+        self.rebuilt: dict[int, tuple[Any, Any, tuple[Diagnostic, ...]]] = {}
+
+
+def qualify_names(
+    units: list[ast.SourceUnit], memo: QualifyMemo | None = None
+) -> tuple[list[ast.SourceUnit], list[Diagnostic]]:
     """The units with every qualified name resolved where it can be, and the notes."""
-    names = _project_names(units)
-    qualifier = _Qualifier(names)
+    memo = memo or QualifyMemo()
+    names = _project_names(units, memo)
+    if names != memo.names:
+        memo.names, memo.rebuilt = names, {}
+    kept = memo.rebuilt
+    memo.rebuilt = {}
+    notes: list[Diagnostic] = []
+
+    def qualified(item: Any) -> Any:
+        found = kept.get(id(item))
+        if found is None:
+            qualifier = _Qualifier(names)
+            found = (item, qualifier.node(item), tuple(qualifier.notes))
+        memo.rebuilt[id(item)] = found
+        notes.extend(found[2])
+        return found[1]
+
     result = [
         replace(
             unit,
-            pous=qualifier.node(unit.pous),
-            globals=qualifier.node(unit.globals),
-            types=qualifier.node(unit.types),
-            configurations=qualifier.node(unit.configurations),
-            interfaces=qualifier.node(unit.interfaces),
+            pous=tuple(qualified(pou) for pou in unit.pous),
+            globals=tuple(qualified(block) for block in unit.globals),
+            types=tuple(qualified(decl) for decl in unit.types),
+            configurations=tuple(qualified(c) for c in unit.configurations),
+            interfaces=tuple(qualified(i) for i in unit.interfaces),
         )
         for unit in units
     ]
-    return result, qualifier.notes
+    return result, notes
 
 
-def _project_names(units: list[ast.SourceUnit]) -> _Names:
+def _project_names(units: list[ast.SourceUnit], memo: QualifyMemo) -> _Names:
     declared: set[str] = set(_RESERVED)
+    seen: dict[int, tuple[Any, frozenset[str]]] = {}
     for unit in units:
-        _collect(unit, declared)
+        for item in (i for part in _PARTS for i in getattr(unit, part)):
+            found = memo.declared.get(id(item))
+            if found is None:
+                names: set[str] = set()
+                _collect(item, names)
+                found = (item, frozenset(names))
+            seen[id(item)] = found
+            declared |= found[1]
+    memo.declared = seen
     top_level = {key(p.name) for unit in units for p in unit.pous}
     top_level |= {key(t.name) for unit in units for t in unit.types}
     top_level |= {key(i.name) for unit in units for i in unit.interfaces}

@@ -17,8 +17,8 @@ from backend.compiler.codes import Code
 from backend.compiler.constants import Guarded, fold_int
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.limits import MAX_DATA_DEPTH, MAX_EXPRESSION_DEPTH
-from backend.compiler.qualified_enums import qualify_enum_values
-from backend.compiler.qualified_names import qualify_names, unknown_qualified
+from backend.compiler.qualified_enums import EnumMemo, qualify_enum_values
+from backend.compiler.qualified_names import QualifyMemo, qualify_names, unknown_qualified
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     BOOL,
@@ -501,9 +501,19 @@ class _TypeResolver:
         return StructType(name)
 
 
-def resolve(units: list[ast.SourceUnit]) -> Resolved:
-    units, notes = qualify_names(units)  # CODESYS `Tc2_Standard.TON` is `TON`
-    units = qualify_enum_values(units)  # CODESYS `Color.Red` is `Color#Red`
+@dataclass
+class ResolveMemo:
+    """What the last run of `resolve` on the same project qualified, for the next one (the
+    language services resolve after each keystroke)."""
+
+    names: QualifyMemo = field(default_factory=QualifyMemo)
+    enum_values: EnumMemo = field(default_factory=EnumMemo)
+
+
+def resolve(units: list[ast.SourceUnit], memo: ResolveMemo | None = None) -> Resolved:
+    memo = memo or ResolveMemo()
+    units, notes = qualify_names(units, memo.names)  # CODESYS `Tc2_Standard.TON` is `TON`
+    units = qualify_enum_values(units, memo.enum_values)  # CODESYS `Color.Red` is `Color#Red`
     result = Resolved()
     result.diagnostics.extend(notes)
     types = _TypeResolver(units, result)

@@ -10,6 +10,7 @@ from tests.bench import (
     bench_hostile,
     bench_jitter_loaded,
     bench_language,
+    bench_language_services,
     bench_modbus,
     bench_recording,
     bench_reload,
@@ -25,6 +26,7 @@ from tests.bench import (
 def main() -> None:
     bench_compiler.main()
     bench_language.main()
+    bench_language_services.main()
     bench_context.main()
     bench_runtime.main()
     bench_reload.main()

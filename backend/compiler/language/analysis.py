@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from backend.compiler import ast
 from backend.compiler.check import check
 from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.language.reuse import Reuse
 from backend.compiler.pipeline import Parsed, in_reading_order, parse_project
 from backend.compiler.resolve import Resolved, resolve
 from backend.compiler.source import SourceFile
@@ -35,11 +36,17 @@ def analyse(texts: Mapping[str, str]) -> Analysis:
     return analysed(texts, parse_project([SourceFile(name, texts[name]) for name in sorted(texts)]))
 
 
-def analysed(texts: Mapping[str, str], parsed: Parsed) -> Analysis:
-    """The analysis of `texts` from their parse, `parse_project(texts)` or its equal."""
+def analysed(texts: Mapping[str, str], parsed: Parsed, reuse: Reuse | None = None) -> Analysis:
+    """The analysis of `texts` from their parse, `parse_project(texts)` or its equal;
+    with `reuse`, of what the last analysis of the same project found."""
     units, diagnostics, user_pous = parsed
-    resolved = resolve(units)
-    found = [*diagnostics, *resolved.diagnostics, *check(resolved)]
+    if reuse is None:
+        resolved = resolve(units)
+        checked = check(resolved)
+    else:
+        resolved = resolve(units, reuse.resolve)
+        checked = reuse.check(units, resolved)
+    found = [*diagnostics, *resolved.diagnostics, *checked]
     unparsed = set(texts) - {unit.file for unit in units}
     ordered = in_reading_order(found, unparsed)
     return Analysis(dict(texts), tuple(units), resolved, frozenset(user_pous), tuple(ordered))

@@ -1,8 +1,9 @@
 """A project as the language services hold it while one edits: the text of each file, as
 on disk or as an editor has it, and the analysis of those texts, kept up to date.
 
-A change re-parses only the declarations it touched (`parse_cache`), then resolves and
-checks the project anew: the diagnostics are those of `analyse` on the same texts."""
+A change re-parses only the declarations it touched (`parse_cache`), then resolves the
+project anew, each declaration's qualified names and each unchanged POU's check taken from
+the last analysis (`reuse`): the diagnostics are those of `analyse` on the same texts."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from collections.abc import Mapping
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.language.analysis import Analysis, analysed
 from backend.compiler.language.parse_cache import FileParse, parse_file, parse_texts
+from backend.compiler.language.reuse import Reuse
 
 
 class LanguageProject:
@@ -23,6 +25,7 @@ class LanguageProject:
         self._texts = dict(texts)
         self._parsed: dict[str, tuple[str, FileParse]] = {}  # file -> (its text, its parse)
         self._analysis: Analysis | None = None
+        self._reuse = Reuse()
 
     def texts(self) -> dict[str, str]:
         with self._lock:
@@ -50,7 +53,9 @@ class LanguageProject:
                     if known is None or known[0] != text:
                         self._parsed[file] = (text, parse_file(file, text))
                 parses = {file: parse for file, (_, parse) in self._parsed.items()}
-                self._analysis = analysed(self._texts, parse_texts(self._texts, parses))
+                self._analysis = analysed(
+                    self._texts, parse_texts(self._texts, parses), self._reuse
+                )
             return self._analysis
 
     def diagnostics(self, file: str) -> list[Diagnostic]:
