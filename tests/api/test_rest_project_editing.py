@@ -5,6 +5,10 @@ look and not change; hostile paths are refused with a reason."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from contextlib import ExitStack
@@ -22,7 +26,7 @@ from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.project_shelf import shelf_of
 from backend.engineering.resource_directory import ResourceDirectory
 from runtime.contract.session import open_client
-from tests.conftest import free_port
+from tests.conftest import REPO, free_port
 from tests.support.rest_plant import PADT_PASSWORDS, padt_accounts_file
 from tests.support.runtime_process import router
 
@@ -179,3 +183,37 @@ def test_settings_checked_and_written(api: Api) -> None:
 def test_an_unknown_project_is_404(api: Api) -> None:
     reply = api.call("GET", f"/api/projects/{quote('nope')}/tree", "reader")
     assert reply.status_code == 404 and error(reply)["code"] == "unknown_project"
+
+
+def test_padt_api_makes_new_projects_in_its_projects_dir_and_audits_them(tmp_path: Path) -> None:
+    accounts = padt_accounts_file(tmp_path / "accounts.json")
+    port, endpoint = free_port(), f"tcp/127.0.0.1:{free_port()}"
+    (tmp_path / "shelf" / "by_hand").mkdir(parents=True)
+    (tmp_path / "shelf" / "by_hand" / "a.st").write_text("PROGRAM A END_PROGRAM\n")
+    command = [sys.executable, "-m", "padt.cli", "api", "--accounts", str(accounts)]
+    command += ["--port", str(port), "--zenoh", endpoint]
+    command += ["--projects-dir", str(tmp_path / "shelf"), "--audit-log", str(tmp_path / "a.log")]
+    with (
+        router(endpoint),
+        subprocess.Popen(
+            command, cwd=REPO, stdout=subprocess.PIPE, text=True, env=dict(os.environ)
+        ) as process,
+    ):
+        try:
+            assert process.stdout is not None
+            assert f"http://127.0.0.1:{port}" in process.stdout.readline()
+            url = f"http://127.0.0.1:{port}"
+            login = {"user": "builder", "password": PADT_PASSWORDS["builder"]}
+            token = httpx.post(f"{url}/api/login", json=login).json()["token"]
+            headers = {"Authorization": f"Bearer {token}"}
+            body = {"name": "line", "template": "empty", "resource": "Line1"}
+            made = httpx.post(f"{url}/api/projects", json=body, headers=headers)
+            assert made.status_code == 201, made.text
+            listed = httpx.get(f"{url}/api/projects", headers=headers).json()
+            assert listed == [{"name": "by_hand"}, {"name": "line"}]
+        finally:
+            process.terminate()
+            assert process.wait(timeout=15) == 0
+    assert (tmp_path / "shelf" / "line" / "Main.st").is_file()
+    [entry] = [json.loads(line) for line in (tmp_path / "a.log").read_text().splitlines()]
+    assert (entry["user"], entry["project"], entry["action"]) == ("builder", "line", "new-project")
