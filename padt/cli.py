@@ -503,7 +503,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="a Language Server (LSP) for editors: diagnostics, completion, navigation",
         description="Serve the language services of a project to one LSP client (VS Code, "
         "Neovim, ...) on stdin/stdout, or on a TCP port: diagnostics as the compiler gives "
-        "them, completion, hover, definition, references, rename and the outline. "
+        "them, completion, hover, definition, references, rename, outline and formatting. "
         "docs/editors.md shows how to set up an editor.",
     )
     lsp.add_argument(

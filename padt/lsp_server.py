@@ -104,11 +104,16 @@ class PadtLanguageServer(LanguageServer):
     def lines(self, name: str) -> Lines:
         return Lines.of(self.language().text(name))
 
-    def place(self, uri: str, position: types.Position) -> tuple[str, int, int]:
-        """The file, line and column (from 1, in characters) of an LSP place."""
+    def file(self, uri: str) -> str:
+        """The project's name of a document a request is about."""
         name = self.name_of(uri)
         if name is None:
             raise JsonRpcException(f"{uri} is no file of the project", code=_REQUEST_FAILED)
+        return name
+
+    def place(self, uri: str, position: types.Position) -> tuple[str, int, int]:
+        """The file, line and column (from 1, in characters) of an LSP place."""
+        name = self.file(uri)
         return name, *self.lines(name).place(position, self.encoding)
 
     def snippet_support(self) -> bool:
@@ -136,6 +141,9 @@ class PadtLanguageServer(LanguageServer):
             return await asyncio.to_thread(call)
         except LanguageError as exc:
             raise JsonRpcException(str(exc), code=_REQUEST_FAILED) from None
+        except Exception as exc:  # a fault of ours: said, logged, and the server goes on
+            log.exception("padt lsp: a request failed")
+            raise JsonRpcException(f"padt lsp failed: {exc!r}", code=_REQUEST_FAILED) from None
 
     # ---- diagnostics, published after each change once typing pauses
 
@@ -151,7 +159,11 @@ class PadtLanguageServer(LanguageServer):
                 await asyncio.sleep(DEBOUNCE_S)
                 if generation != self.generation:
                     continue  # still typing
-                found = await asyncio.to_thread(self._diagnostics)
+                try:
+                    found = await asyncio.to_thread(self._diagnostics)
+                except Exception:  # a fault of ours: logged; the next change tries again
+                    log.exception("padt lsp: the diagnostics failed")
+                    return
                 if generation == self.generation:  # else the texts changed meanwhile
                     self._publish(found)
                     return
@@ -211,8 +223,7 @@ def make_server(folder: Path | None) -> PadtLanguageServer:
         name = ls.name_of(params.text_document.uri)
         if name is None:
             return
-        ls.versions[name] = params.text_document.version
-        _set_text(ls, name, params.text_document.text)
+        _set_text(ls, name, params.text_document.text, params.text_document.version)
 
     @server.feature(types.TEXT_DOCUMENT_DID_CHANGE)
     def did_change(ls: PadtLanguageServer, params: types.DidChangeTextDocumentParams) -> None:
@@ -222,8 +233,7 @@ def make_server(folder: Path | None) -> PadtLanguageServer:
         text = ls.language().text(name)
         for change in params.content_changes:
             text = edited(text, change, ls.encoding)
-        ls.versions[name] = params.text_document.version
-        _set_text(ls, name, text)
+        _set_text(ls, name, text, params.text_document.version)
 
     @server.feature(types.TEXT_DOCUMENT_DID_CLOSE)
     def did_close(ls: PadtLanguageServer, params: types.DidCloseTextDocumentParams) -> None:
@@ -301,6 +311,16 @@ def make_server(folder: Path | None) -> PadtLanguageServer:
             ]
         return types.WorkspaceEdit(changes=changes)
 
+    @server.feature(types.TEXT_DOCUMENT_FORMATTING)
+    async def formatting(
+        ls: PadtLanguageServer, params: types.DocumentFormattingParams
+    ) -> list[types.TextEdit]:
+        name = ls.file(params.text_document.uri)
+        found = await ls.answer(lambda: ls.language().formatted(name))
+        if found.refusal:
+            raise JsonRpcException(found.refusal, code=_REQUEST_FAILED)
+        return _line_edits(ls.lines(name), found.text, ls.encoding)
+
     @server.feature(types.TEXT_DOCUMENT_DEFINITION)
     async def definition(
         ls: PadtLanguageServer, params: types.DefinitionParams
@@ -355,12 +375,32 @@ def _document_symbol(symbol: OutlineSymbol, lines: Lines, encoding: str) -> type
     )
 
 
-def _set_text(ls: PadtLanguageServer, name: str, text: str) -> None:
+def _line_edits(before: Lines, after: str, encoding: str) -> list[types.TextEdit]:
+    """The edits from one text to another, a line each where they differ (formatting keeps
+    the lines; should their number differ, the whole text at once)."""
+    new = Lines.of(after)
+    count = len(before.starts)
+    if len(new.starts) != count:
+        end = before.position(count, len(before.line(count - 1)) + 1, encoding)
+        return [types.TextEdit(types.Range(types.Position(0, 0), end), after)]
+    return [
+        types.TextEdit(
+            before.range(n + 1, 1, n + 1, len(before.line(n)) + 1, encoding), new.line(n)
+        )
+        for n in range(count)
+        if before.line(n) != new.line(n)
+    ]
+
+
+def _set_text(ls: PadtLanguageServer, name: str, text: str, version: int) -> None:
     try:
         ls.language().open(name, text)
-    except LanguageError as exc:
+    except LanguageError as exc:  # the document is left as the file is, until opened again
+        ls.versions.pop(name, None)
+        ls.language().close(name)
         ls.window_show_message(types.ShowMessageParams(types.MessageType.Error, str(exc)))
         return
+    ls.versions[name] = version
     ls.changed()
 
 

@@ -17,6 +17,7 @@ from pathlib import Path, PurePosixPath
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.language.analysis import Analysis
 from backend.compiler.language.completion import CompletionItem, complete
+from backend.compiler.language.formatting import Formatted, format_file
 from backend.compiler.language.hover import Hover, hover
 from backend.compiler.language.language_project import LanguageProject
 from backend.compiler.language.navigation import definition, references
@@ -40,6 +41,7 @@ from backend.engineering.project import (
 __all__ = [
     "CompletionItem",
     "Diagnostic",
+    "Formatted",
     "Hover",
     "LanguageError",
     "Location",
@@ -258,6 +260,10 @@ class ProjectLanguage:
         """The edits per file that rename the symbol at the place, checked by the compiler
         on the texts as they are (nothing is written); or why it cannot be renamed."""
         return rename(self.analysis(), self.checked_name(name), line, col, new_name)
+
+    def formatted(self, name: str) -> Formatted:
+        """The file's text indented by its blocks, keywords in upper case; or why not."""
+        return format_file(self.analysis(), self.checked_name(name))
 
     def outline(self, name: str) -> list[OutlineSymbol]:
         """What the file declares, nested, in the order it stands."""

@@ -377,3 +377,37 @@ async def test_an_oscat_file_of_4888_lines(tmp_path: Path) -> None:
     finally:
         await client.shutdown_session()
         await client.stop()  # type: ignore[no-untyped-call]
+
+
+@pytest.mark.asyncio
+async def test_formatting_indents_and_upper_cases_keywords(
+    client: LanguageClient, demo: Path
+) -> None:
+    valve = demo / "valve.st"
+    messy = VALVE.replace("  command", "command").replace(
+        "END_VAR\nVAR_OUTPUT", "end_var\nVAR_OUTPUT"
+    )
+    uri = open_document(client, valve, messy)
+    edits = await client.text_document_formatting_async(
+        types.DocumentFormattingParams(
+            text_document=types.TextDocumentIdentifier(uri),
+            options=types.FormattingOptions(tab_size=2, insert_spaces=True),
+        )
+    )
+    assert edits is not None
+    assert sorted((e.range.start.line, e.new_text) for e in edits) == [
+        (2, "  command : BOOL;  (* open the valve *)"),
+        (3, "END_VAR"),
+    ]
+    broken = types.DidChangeTextDocumentParams(
+        types.VersionedTextDocumentIdentifier(uri=uri, version=2),
+        [types.TextDocumentContentChangeWholeDocument(text="FUNCTION_BLOCK Valve\nVAR_INPUT")],
+    )
+    client.text_document_did_change(broken)
+    with pytest.raises(JsonRpcException, match="does not parse"):
+        await client.text_document_formatting_async(
+            types.DocumentFormattingParams(
+                text_document=types.TextDocumentIdentifier(uri),
+                options=types.FormattingOptions(tab_size=2, insert_spaces=True),
+            )
+        )
