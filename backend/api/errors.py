@@ -44,6 +44,7 @@ HTTP_STATUS = {
     "accounts": 422,
     "path": 400,  # a project file's path: outside the project, or no file it edits
     "settings": 422,  # padt.toml's settings with problems (listed in `problems`)
+    "audit": 503,  # the audit log cannot be written: the change was not made
     "unreachable": 504,
     # the resource's side did not answer as the resource: another party, or a lie
     "impostor": 502,

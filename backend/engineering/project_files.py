@@ -19,10 +19,12 @@ import itertools
 import os
 import stat
 import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
 from backend.compiler.limits import MAX_FILE_BYTES, MAX_PROJECT_BYTES, MAX_PROJECT_FILES, MiB
+from backend.engineering.padt_audit_log import PadtAuditLog
 from backend.engineering.project import PROJECT_FILE
 from backend.engineering.project_access import READ, WRITE, Editor, require
 from backend.engineering.project_shelf import ProjectShelf
@@ -181,9 +183,17 @@ def save_file(
                 current_hash=current_hash,
             )
         _check_project_size(shelf.folder(project), target, len(data))
-        _write_atomic(target, data)
         saved = Saved(name, content_hash(data), current_hash)
-        audit.record(editor.user, project, action, name, saved.old_hash, saved.hash)
+        try:
+            staged = _staged(target, data)
+        except OSError as exc:
+            raise Refusal("project", f"{name} could not be saved: {exc.strerror}") from None
+        try:
+            with _audited(audit, editor, project, action, name, saved.old_hash, saved.hash):
+                os.replace(staged, target)
+        finally:
+            with contextlib.suppress(OSError):
+                os.unlink(staged)  # still there when the audit or the rename failed
     return saved
 
 
@@ -206,8 +216,8 @@ def delete_file(
                 f"{name} was changed since it was opened; it was not deleted",
                 current_hash=content_hash(current),
             )
-        target.unlink()
-        audit.record(editor.user, project, "delete", name, base_hash, "")
+        with _audited(audit, editor, project, "delete", name, base_hash, ""):
+            target.unlink()
     return Saved(name, "", base_hash)
 
 
@@ -228,10 +238,10 @@ def rename_file(
             raise Refusal("not_found", f"project {project} has no file '{name}'")
         if os.path.lexists(new_target) and new_target.resolve() != target.resolve():
             raise Refusal("exists", f"{new_name} exists already")
-        new_target.parent.mkdir(parents=True, exist_ok=True)
-        os.replace(target, new_target)
         digest = content_hash(current)
-        audit.record(editor.user, project, "rename", name, digest, digest, new_name)
+        with _audited(audit, editor, project, "rename", name, digest, digest, new_name):
+            new_target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(target, new_target)
     return Saved(new_name, digest, digest)
 
 
@@ -286,16 +296,16 @@ def _check_project_size(folder: Path, target: Path, size: int) -> None:
         )
 
 
-def _write_atomic(target: Path, data: bytes) -> None:
-    """The whole new content or the old one, never half: a temporary file beside the
-    target, synced, renamed over it. A new file gets the mode the user's umask gives."""
+def _staged(target: Path, data: bytes) -> Path:
+    """`data` in a new file beside `target`, synced, for `os.replace` onto it: a save is the
+    whole new content or the old one, never half. The file keeps its mode; a new one is
+    0644 as an editor makes it (the umask is not read: setting it to read it would race
+    other threads)."""
     target.parent.mkdir(parents=True, exist_ok=True)
     try:
         mode = stat.S_IMODE(target.stat().st_mode)
     except FileNotFoundError:
-        umask = os.umask(0)
-        os.umask(umask)
-        mode = 0o666 & ~umask
+        mode = 0o644
     handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
     try:
         with os.fdopen(handle, "wb") as file:
@@ -303,8 +313,26 @@ def _write_atomic(target: Path, data: bytes) -> None:
             file.flush()
             os.fsync(file.fileno())
         os.chmod(temporary, mode)
-        os.replace(temporary, target)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(temporary)
         raise
+    return Path(temporary)
+
+
+@contextlib.contextmanager
+def _audited(
+    audit: PadtAuditLog, editor: Editor, project: str, action: str, *what: str
+) -> Iterator[None]:
+    """The change in the `with` block, recorded first: a change the audit log cannot take
+    is not made (refused, `audit`), and one that then fails is said as failed."""
+    try:
+        audit.record(editor.user, project, action, *what)
+    except OSError as exc:
+        raise Refusal(
+            "audit", f"the audit log cannot be written ({exc.strerror}): nothing was changed"
+        ) from None
+    try:
+        yield
+    except OSError as exc:
+        raise Refusal("project", f"{what[0]} could not be changed: {exc.strerror}") from None

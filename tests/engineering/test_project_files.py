@@ -270,3 +270,21 @@ def test_the_oscat_project_opens_in_the_tree() -> None:
     }
     assert kinds["FUNCTION"] > 300 and kinds["FUNCTION_BLOCK"] > 300
     assert len(tree.types) > 30 and tree.problems == ()
+
+
+def test_a_change_the_audit_log_cannot_take_is_not_made(tmp_path: Path) -> None:
+    blocked = tmp_path / "audit-is-a-folder"
+    blocked.mkdir()
+    shelf = ProjectShelf({}, tmp_path / "projects", PadtAuditLog(blocked, Clock()))
+    folder = tmp_path / "projects" / "p"
+    folder.mkdir(parents=True)
+    (folder / "main.st").write_text("PROGRAM Main END_PROGRAM\n")
+    shelf.refresh()
+    opened = read_file(shelf, "p", "main.st", ANNA)
+    with pytest.raises(Refusal, match="audit log cannot be written") as unaudited:
+        save_file(shelf, "p", "main.st", "(* unaudited *)\n", opened.hash, ANNA)
+    assert unaudited.value.code == "audit"
+    with refused("audit"):
+        delete_file(shelf, "p", "main.st", opened.hash, ANNA)
+    assert (folder / "main.st").read_text() == "PROGRAM Main END_PROGRAM\n"
+    assert sorted(p.name for p in folder.iterdir()) == ["main.st"]  # no temporary left
