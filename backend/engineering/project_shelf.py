@@ -140,8 +140,14 @@ class ProjectShelf(Mapping[str, Path]):
             if name.casefold() in {n.casefold() for n in self._projects}:
                 raise Refusal("exists", f"there is a project '{name}' already")
             target = make_project(self.new_dir, name, template, resource)
+            try:
+                audit.record(editor.user, name, "new-project", f"template:{template}", "", "")
+            except OSError as exc:  # a project the log does not know of is not left behind
+                shutil.rmtree(target, ignore_errors=True)
+                raise Refusal(
+                    "audit", f"the audit log cannot be written ({exc.strerror}): no project made"
+                ) from None
             self.refresh()
-        audit.record(editor.user, name, "new-project", f"template:{template}", "", "")
         return target
 
 

@@ -109,3 +109,13 @@ def test_projects_given_and_found_in_the_folder_are_listed(
     with pytest.raises(Refusal) as unknown:
         both.folder("nope")
     assert unknown.value.code == "unknown_project"
+
+
+def test_a_project_the_audit_log_cannot_record_is_not_made(tmp_path: Path) -> None:
+    blocked = tmp_path / "audit-is-a-folder"
+    blocked.mkdir()
+    shelf = ProjectShelf({}, tmp_path / "projects", PadtAuditLog(blocked, time.time_ns))
+    with pytest.raises(Refusal, match="no project made") as refused:
+        shelf.new_project("line", "empty", ANNA)
+    assert refused.value.code == "audit"
+    assert list(shelf) == [] and not list((tmp_path / "projects").iterdir())
