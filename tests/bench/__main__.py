@@ -12,6 +12,7 @@ from tests.bench import (
     bench_language,
     bench_language_services,
     bench_modbus,
+    bench_projects,
     bench_recording,
     bench_reload,
     bench_rest,
@@ -27,6 +28,7 @@ def main() -> None:
     bench_compiler.main()
     bench_language.main()
     bench_language_services.main()
+    bench_projects.main()
     bench_context.main()
     bench_runtime.main()
     bench_reload.main()
