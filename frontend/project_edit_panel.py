@@ -11,8 +11,7 @@ from dataclasses import dataclass
 
 import viser
 
-from backend.engineering.padt_levels import PADT_LEVELS
-from backend.engineering.project_access import WRITE, Editor
+from backend.engineering.project_access import Editor
 from backend.engineering.project_edits import (
     add_declaration,
     delete_declaration,
@@ -22,6 +21,7 @@ from backend.engineering.project_edits import (
 from backend.engineering.project_shelf import ProjectShelf
 from frontend.confirm import confirm
 from frontend.gui_value import set_value
+from frontend.permissions import PADT_ACTORS
 from frontend.project_tree_view import Entry
 from runtime.contract.refusal import Refusal
 
@@ -64,12 +64,8 @@ class EditPanel:
     shown_once: bool = False
 
 
-def may_change(level: str) -> bool:
-    return level in PADT_LEVELS and PADT_LEVELS.index(level) >= PADT_LEVELS.index(WRITE)
-
-
 def build(gui: viser.GuiApi, target: EditTarget) -> EditPanel:
-    writes = may_change(target.editor.level)
+    writes = target.editor.level in PADT_ACTORS
     with gui.add_folder("Add to the project", expand_by_default=False):
         kind = gui.add_dropdown("Kind", tuple(KIND_WORDS.values()), disabled=not writes)
         name = gui.add_text("New name", "", disabled=not writes)
@@ -107,7 +103,7 @@ def refresh(panel: EditPanel, target: EditTarget) -> None:
             f'<div data-testid="edit-selected">Selected: <b>{html.escape(declaration.name)}'
             f"</b> ({html.escape(declaration.file)}:{declaration.line})</div>"
         )
-    writes = may_change(target.editor.level) and declaration is not None
+    writes = target.editor.level in PADT_ACTORS and declaration is not None
     panel.rename_to.disabled = not writes
     panel.delete.disabled = not writes
     set_value(panel.rename_to, "")

@@ -84,19 +84,19 @@ class Workspace:
         self.shelf = self.context.shelf
         names = tuple(self.shelf) or (NO_PROJECT,)
         with gui.add_folder("Project") as project_folder:
-            self.project = gui.add_dropdown("Project", names)
+            self.project_choice = gui.add_dropdown("Project", names)
             self.tree = gui.add_html("")
             self.edit_target = project_edit_panel.EditTarget(
                 client,
                 self.shelf,
                 Editor(self.user, self.level),
-                self._project_name,
+                self.project,
                 lambda: self.tree_entry,
                 self._edited,
             )
             self.edits = project_edit_panel.build(gui, self.edit_target)
         keep(project_folder)
-        self.project.on_update(lambda _: self._open_project())
+        self.project_choice.on_update(lambda _: self._open_project())
         self.tree_reader: project_tree_view.TreeReader | None = None
         self.tree_shown: tuple[int, project_tree_view.Entry | None] = (-1, None)
         self.tree_entry: project_tree_view.Entry | None = None
@@ -114,13 +114,14 @@ class Workspace:
             self.status = gui.add_html("")
         keep(status_folder)
         self.window_width = ASSUMED_WINDOW
-        self.page_clicks = page_clicks.build(gui, self._clicked)
         self.panel = gui.add_panel()
         self.screens: list[Screen] = []  # the tabs, in their order
         for kind in screens.SCREENS:  # the one list
             with self.panel.add_tab(kind.name, kind.icon):
                 self.screens.append(kind(self))
         self.shown = self.screens[0]  # the tab group opens on its first tab
+        # once the screens are there: the page says the window's size as it starts
+        self.page_clicks = page_clicks.build(gui, self._clicked)
         self.panel.dock_right()
         self.panel.set_width(self._work_width())
         self.drawing = plant_view.PlantView(client)
@@ -164,7 +165,7 @@ class Workspace:
         if self.tree_reader is not None:
             self.tree_reader.close()
             self.tree_reader = None
-        name = self.project.value
+        name = self.project_choice.value
         if name in self.shelf:
             editor = Editor(self.user, self.level)
             self.tree_reader = project_tree_view.TreeReader(self.shelf, name, editor)
@@ -172,8 +173,8 @@ class Workspace:
         self.tree_shown = (-1, None)
         self.tree.content = project_tree_view.render(None, None) if self.tree_reader else ""
 
-    def _project_name(self) -> str | None:
-        name = self.project.value
+    def project(self) -> str | None:
+        name = self.project_choice.value
         return name if name in self.shelf else None
 
     def _edited(self, path: str | None) -> None:

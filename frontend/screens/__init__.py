@@ -13,6 +13,7 @@ from frontend.screens.online_test import OnlineTest
 from frontend.screens.parameters import Parameters
 from frontend.screens.reload import Reload
 from frontend.screens.resources import Resources
+from frontend.screens.settings import SettingsScreen
 from frontend.screens.single_step import SingleStep
 from frontend.screens.trends import Trends
 
@@ -28,4 +29,5 @@ SCREENS: tuple[type[Screen], ...] = (
     Io,
     Documentation,
     Trends,
+    SettingsScreen,
 )

@@ -244,3 +244,66 @@ def test_a_read_only_user_sees_the_tree_but_cannot_change_it(plant: Plant) -> No
         assert field(page, "New name").is_disabled()
         for button in ("Add", "Rename", "Delete"):
             assert not button_enabled(page, button), button
+
+
+def _settings_problems(page: Page) -> str:
+    found = page.locator('[data-testid="settings-problems"]')
+    return found.first.inner_text() if found.count() else ""
+
+
+def test_settings_are_checked_as_typed_and_saved_with_comments_kept(
+    demo: Demo, tmp_path: Path
+) -> None:
+    config = tmp_path / "project" / "padt.toml"
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(demo.url)
+        page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+        log_in(page, "admin", demo.password)
+        wait_until("the tree is read", lambda: "TankControl" in _tree(page))
+        page.get_by_role("tab", name="Settings").click()
+        wait_until(
+            "the settings are read",
+            lambda: "padt.toml of project demo" in text_of(page, '[data-testid="settings-header"]'),
+        )
+        assert field(page, "Resource name").input_value() == "Tank1"
+        assert field(page, "Target Cycle Time").input_value() == "100"
+        field(page, "Watchdog Time").fill("3")
+        wait_until(
+            "a watchdog below its range is refused beside the field and in the list",
+            lambda: "watchdog_ms must be from 6" in _settings_problems(page),
+        )
+        assert not button_enabled(page, "Save padt.toml")
+        shoot_settings(page)
+        field(page, "Watchdog Time").fill("300")
+        wait_until("the draft is right", lambda: button_enabled(page, "Save padt.toml"))
+        assert _settings_problems(page) == ""
+        page.get_by_role("button", name="Save padt.toml").click()
+        wait_until(
+            "it is saved", lambda: "Saved" in text_of(page, '[data-testid="settings-saved"]')
+        )
+        text = config.read_text(encoding="utf-8")
+        assert "watchdog_ms = 300" in text
+        assert "# The demo project" in text  # comments kept
+        assert "target_cycle_ms = 100" in text
+
+
+def shoot_settings(page: Page) -> None:
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / "settings-1400x900.png"))
+
+
+def test_a_read_only_user_sees_the_settings_greyed_out(plant: Plant) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_as(page, plant, "guest")
+        wait_until("the tree is read", lambda: "TankControl" in _tree(page))
+        page.get_by_role("tab", name="Settings").click()
+        wait_until(
+            "the settings are read",
+            lambda: "you may look only" in text_of(page, '[data-testid="settings-header"]'),
+        )
+        assert field(page, "Resource name").input_value() == "Tank1"
+        assert field(page, "Resource name").is_disabled()
+        assert field(page, "Watchdog Time").is_disabled()
+        assert not button_enabled(page, "Save padt.toml")
