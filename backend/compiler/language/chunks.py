@@ -41,6 +41,9 @@ _TOKENS = re.compile(
             r'"(?:[^"$]|\$.)*+"',
             r"[0-9][A-Za-z0-9_#.]*",
             r"([A-Za-z_][A-Za-z0-9_]*)",
+            # a comment, pragma or string that is not closed: the lexer stops there with a
+            # syntax error, so the rest of the text is cut no more (nor read again)
+            r"(\(\*|/\*|\{|'|\")",
         )
     ),
     re.DOTALL,
@@ -61,6 +64,8 @@ def chunks(text: str) -> list[Chunk]:
     position = 0
     while (match := _TOKENS.search(text, position)) is not None:
         position = match.end()
+        if match.group(2) is not None:
+            break
         word = match.group(1)
         if word is None:
             continue

@@ -48,15 +48,17 @@ class LanguageProject:
         """The analysis of the texts as they are now."""
         with self._lock:
             if self._analysis is None:
-                for file, text in self._texts.items():
-                    known = self._parsed.get(file)
-                    if known is None or known[0] != text:
-                        self._parsed[file] = (text, parse_file(file, text))
-                parses = {file: parse for file, (_, parse) in self._parsed.items()}
-                self._analysis = analysed(
-                    self._texts, parse_texts(self._texts, parses), self._reuse
-                )
+                parsed = parse_texts(self._texts, self._parse)
+                self._analysis = analysed(self._texts, parsed, self._reuse)
             return self._analysis
+
+    def _parse(self, file: str, text: str) -> FileParse:
+        """The file's parse, kept while its text stays."""
+        known = self._parsed.get(file)
+        if known is None or known[0] != text:
+            known = (text, parse_file(file, text))
+            self._parsed[file] = known
+        return known[1]
 
     def diagnostics(self, file: str) -> list[Diagnostic]:
         """The diagnostics of one file, by place."""

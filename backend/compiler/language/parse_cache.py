@@ -105,16 +105,18 @@ def _piece_maker(file: str, tree: SyntaxTree, line_offset: int) -> Callable[[], 
     return lambda: piece_of(file, tree, line_offset)
 
 
-def parse_texts(texts: Mapping[str, str], parsed: Mapping[str, FileParse]) -> Parsed:
-    """What `parse_project` gives for the files `texts` (in order of name), from the
-    files' parses `parsed`. Where the project is too large the limits cut in as in
-    `parse_project`: it is then parsed as that does."""
+def parse_texts(texts: Mapping[str, str], parse: Callable[[str, str], FileParse]) -> Parsed:
+    """What `parse_project` gives for the files `texts` (in order of name), each file
+    parsed by `parse(name, text)` (`parse_file`, or a memo of it). Where the project is too
+    large the limits cut in as in `parse_project`: it is then parsed as that does."""
     names = sorted(texts)
     size = ProjectSize()
-    too_large = any(size.add(texts[name]) is not None for name in names)
-    if too_large or sum(parsed[name].tokens for name in names) > MAX_PROJECT_TOKENS:
+    if any(size.add(texts[name]) is not None for name in names):
         return parse_project([SourceFile(name, texts[name]) for name in names])
-    units = [unit for name in names if (unit := parsed[name].unit) is not None]
-    diagnostics = [d for name in names for d in parsed[name].diagnostics]
-    user_pous = {key(p.name) for unit in units for p in unit.pous}
+    parsed = [parse(name, texts[name]) for name in names]
+    if sum(p.tokens for p in parsed) > MAX_PROJECT_TOKENS:
+        return parse_project([SourceFile(name, texts[name]) for name in names])
+    units = [p.unit for p in parsed if p.unit is not None]
+    diagnostics = [d for p in parsed for d in p.diagnostics]
+    user_pous = {key(pou.name) for unit in units for pou in unit.pous}
     return with_standard_library(units), diagnostics, user_pous

@@ -17,6 +17,7 @@ from backend.compiler.language.analysis import analyse
 from backend.compiler.language.chunks import chunks
 from backend.compiler.language.language_project import LanguageProject
 from backend.compiler.language.parse_cache import parse_file
+from backend.compiler.limits import MAX_FILE_BYTES
 from backend.compiler.parse import parse_source
 from backend.engineering.project import demo_project_path
 from tests.support.corpus_paths import corpus_dir
@@ -202,3 +203,28 @@ def test_a_file_removed_is_gone_from_the_analysis(tmp_path: Path) -> None:
     project.remove("broken.st")
     assert project.diagnostics("broken.st") == []
     assert "broken.st" not in project.analysis().texts
+
+
+@pytest.mark.parametrize(
+    "hostile",
+    [
+        "(*" * 100_000,  # comments never closed: the cut reads the text once
+        "PROGRAM P\n" + "{" * 100_000,
+        "PROGRAM P\nVAR s : STRING := '" + "$'" * 100_000,
+        "FUNCTION_BLOCK B\n" * 20_000,  # declarations never ended
+        "PROGRAM P\n" + "x := 1;\n" * 10 + "\x00\udcff" + "END_PROGRAM\n",
+    ],
+    ids=["comments", "pragmas", "string", "unended", "bytes"],
+)
+def test_hostile_texts_get_the_diagnostics_of_a_full_analysis(hostile: str) -> None:
+    project = LanguageProject({"hostile.st": hostile})
+    assert project.analysis().diagnostics == analyse({"hostile.st": hostile}).diagnostics
+    assert project.diagnostics("hostile.st")
+
+
+def test_a_file_beyond_the_size_limit_is_refused_as_the_compiler_refuses_it() -> None:
+    huge = "PROGRAM P\n" + "(* filler *)\n" * (MAX_FILE_BYTES // 13 + 1) + "END_PROGRAM\n"
+    project = LanguageProject({"huge.st": huge, **demo_texts()})
+    expected = analyse({"huge.st": huge, **demo_texts()}).diagnostics
+    assert project.analysis().diagnostics == expected
+    assert [d.code for d in project.diagnostics("huge.st")] == ["E0707"]
