@@ -150,7 +150,7 @@ def test_nothing_is_cut_off_and_no_viser_controls(plant: Plant, size: tuple[int,
         wait_until("the tree is read", lambda: "POUs" in _tree(page))
         wait_for_text(page, '[data-testid="resource-state"]', "RUN", timeout_s=30)
         _no_viser_controls(page)
-        for tab in ("Resources", "Online test", "Reload", "Trends"):
+        for tab in ("Resources", "Online test", "Online change", "Trends"):
             page.get_by_role("tab", name=tab).click()
             page.wait_for_timeout(600)  # the panel's width follows the tab
             if tab in ("Resources", "Trends"):

@@ -1,0 +1,228 @@
+"""Download and online change in the browser, as an engineer does them through `padt
+demo`: a download refused while the resource runs, then, in STOP, confirmed naming the
+resource and both CRCs, and started from the same dialog; a target cycle time changed
+online; the code changed; the online change dialog shows the source diff, every value's
+fate and the online parameter value the change resets; confirmed, the values are kept;
+a typing error, and a user whose level does not allow it."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from playwright.sync_api import Locator, Page
+
+from tests.support.browser import chromium
+from tests.ui.browser_steps import (
+    PASSWORD,
+    Demo,
+    Plant,
+    button_enabled,
+    choose,
+    confirm,
+    edit_value,
+    field,
+    log_in_to_resource,
+    open_as,
+    open_demo_as_admin,
+    open_tab,
+    shoot_both,
+    state,
+    text_of,
+    value,
+    wait_for_text,
+    wait_until,
+)
+
+pytestmark = pytest.mark.browser
+DIALOG_S = 90  # two compiles in two processes and a transfer, on a machine that may be busy
+TAB = "Online change"
+
+
+def edit(path: Path, old: str, new: str) -> None:
+    """What the engineer does in an editor."""
+    text = path.read_text(encoding="utf-8")
+    assert old in text, old
+    path.write_text(text.replace(old, new), encoding="utf-8")
+
+
+def dialog_showing(page: Page, selector: str) -> Locator:
+    """The open dialog, once `selector` is in it (it fills when the compile is done)."""
+    dialog = page.get_by_role("dialog")
+    wait_until(
+        f"the dialog shows {selector}",
+        lambda: dialog.locator(selector).count() > 0,
+        timeout_s=DIALOG_S,
+    )
+    return dialog
+
+
+def screen_button(page: Page, name: str) -> Locator:
+    """A button of the work area's screens (the editor's toolbar has its own)."""
+    return page.locator("#root").get_by_role("button", name=name, exact=True).first
+
+
+def close(dialog: Locator) -> None:
+    dialog.get_by_role("button", name="Close", exact=True).click()
+    dialog.wait_for(state="detached")
+
+
+def write(page: Page, variable: str, literal: str, said: str) -> None:
+    """Write a value once from the Online test, confirmed."""
+    open_tab(page, "Online test")
+    edit_value(page, variable, literal)
+    wait_until("Write is enabled", lambda: button_enabled(page, "Write"))
+    page.get_by_role("button", name="Write", exact=True).click()
+    confirm(page, said)
+    wait_until(f"{variable} is {literal}", lambda: value(page, variable) == literal)
+
+
+def test_download_in_stop_start_then_an_online_change_keeps_the_values(
+    demo: Demo, tmp_path: Path
+) -> None:
+    source = tmp_path / "project" / "tank.st"  # the demo's project in its state folder
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_demo_as_admin(page, demo)
+        running_crc = text_of(page, '[data-testid="resource-crc"]')
+        open_tab(page, TAB)
+
+        # while the resource runs, a download is refused, and the dialog says why
+        screen_button(page, "Download").click()
+        dialog = dialog_showing(page, '[data-testid="download-refused"]')
+        assert "the resource is in RUN" in dialog.inner_text()
+        assert "needs it in STOP" in dialog.inner_text()
+        assert dialog.get_by_role("button", name="Download", exact=True).count() == 0
+        close(dialog)
+
+        # a new setting in the code, then STOP and a download
+        edit(
+            source,
+            "  alarmLow : BOOL;",
+            "  alarmLevel : INT := 100;     (* alarmLow below this *)\n  alarmLow : BOOL;",
+        )
+        edit(source, "alarmLow := level < 100;", "alarmLow := level < alarmLevel;")
+        open_tab(page, "Resources")
+        page.get_by_role("button", name="Stop", exact=True).click()
+        confirm(page, "Tank1")
+        wait_until("Tank1 is in STOP", lambda: state(page) == "STOP/VALID CONFIGURATION")
+        open_tab(page, TAB)
+        screen_button(page, "Download").click()
+        dialog = dialog_showing(page, '[data-testid="download-effects"]')
+        assert text_of(page, '[data-testid="download-resource"]') == "Tank1"
+        assert text_of(page, '[data-testid="download-running-crc"]') == running_crc
+        new_crc = text_of(page, '[data-testid="download-new-crc"]')
+        assert re.fullmatch(r"[0-9A-F]{8}", new_crc) and new_crc != running_crc
+        assert f"{new_crc} and {new_crc}, in two processes" in dialog.inner_text()
+        assert "every variable starts from its initial value" in dialog.inner_text()
+        shoot_both(page, "download-dialog")
+        dialog.get_by_role("button", name="Download", exact=True).click()
+        wait_for_text(page, '[data-testid="download-crc"]', new_crc, timeout_s=DIALOG_S)
+        assert text_of(page, '[data-testid="download-state"]') == "STOP/VALID CONFIGURATION"
+        backup = text_of(page, '[data-testid="download-backup"]')
+        assert Path(backup).is_file() and new_crc in backup
+        shoot_both(page, "download-done")
+        dialog.get_by_role("button", name="Start Tank1", exact=True).click()
+        dialog.wait_for(state="detached")
+        wait_until("Tank1 runs", lambda: state(page) == "RUN", timeout_s=30)
+        assert text_of(page, '[data-testid="resource-crc"]') == new_crc
+
+        # the engineer speeds the cycle up online
+        open_tab(page, "Parameters")
+        choose(page, "Parameter", "Target Cycle Time, ms (target_cycle_ms)")
+        field(page, "New value").fill("50")
+        page.get_by_role("button", name="Set parameter").click()
+        confirm(page, "50 ms")
+        wait_for_text(page, '[data-param="resource.target_cycle_ms"]', "50 ms")
+
+        # a typing error: the dialog says where, with the compiler's code
+        edit(source, "level := tankLevel;", "level := tankLvel;")
+        open_tab(page, TAB)
+        screen_button(page, TAB).click()
+        dialog = dialog_showing(page, '[data-testid="dialog-refused"]')
+        assert "Online change refused (compile)" in dialog.inner_text()
+        diagnostic = dialog.locator('[data-testid="diagnostic"]').first.inner_text()
+        assert "tank.st:21:12" in diagnostic and "E0201" in diagnostic, diagnostic
+        close(dialog)
+
+        # corrected, and changed: a narrower counter, another limit
+        edit(source, "level := tankLvel;", "level := tankLevel;")
+        edit(source, "pumpStarts : DINT;", "pumpStarts : INT;")
+        edit(source, "alarmLevel : INT := 100;", "alarmLevel : INT := 120;")
+        # a value the running program holds that a fresh start would put back to 300
+        write(page, "TankControl.lowLevel", "350", "TankControl.lowLevel (INT) once: 300 → 350")
+        open_tab(page, TAB)
+        screen_button(page, TAB).click()
+        dialog = dialog_showing(page, '[data-fate="TankControl.level"]')
+        assert text_of(page, '[data-testid="crc-running"]') == new_crc
+        diff = dialog.locator('[data-testid="source-diff"]').inner_text()
+        assert "tank.st (changed)" in diff
+        assert "-  pumpStarts : DINT;" in diff and "+  pumpStarts : INT;" in diff
+        assert "+  alarmLevel : INT := 120;" in diff
+        assert "against backup " in text_of(page, '[data-testid="source-origin"]')
+        fates = {
+            path: text_of(page, f'[data-fate="{path}"]')
+            for path in ("TankControl.level", "TankControl.pumpStarts", "TankControl.alarmLevel")
+        }
+        assert fates == {
+            "TankControl.level": "kept",
+            "TankControl.pumpStarts": "initialised",
+            "TankControl.alarmLevel": "kept",
+        }
+        reset = text_of(page, '[data-testid="parameter-reset"]')
+        assert reset == ("target_cycle_ms: 50 online, 100 in the project; the reload sets 100"), (
+            reset
+        )
+        change = dialog.get_by_role("button", name=TAB, exact=True)
+        assert not change.is_enabled()
+        assert "1 of 1 not ticked" in text_of(page, '[data-testid="online-change-disabled"]')
+        dialog.get_by_label("Keep target_cycle_ms 50", exact=True).check()
+        dialog.get_by_label("Accept: 1 value initialised", exact=True).check()
+        wait_until("Online change is enabled", change.is_enabled)
+        shoot_both(page, "online-change-dialog")
+        change.click()
+        wait_until(
+            "the online change is done",
+            lambda: page.locator('[data-testid="reload-result"]').count() > 0,
+            timeout_s=DIALOG_S,
+        )
+        outcome = text_of(page, '[data-testid="reload-result"]')
+        assert "Kept online" in outcome and "target_cycle_ms 50" in outcome, outcome
+        changed_crc = text_of(page, '[data-testid="reload-new-crc"]')
+        shoot_both(page, "online-change-done")
+        close(dialog)
+        wait_for_text(page, '[data-testid="resource-crc"]', changed_crc)
+
+        # the values went on from where they were
+        open_tab(page, "Online test")
+        assert value(page, "TankControl.lowLevel") == "350"
+        assert value(page, "TankControl.alarmLevel") == "100"  # kept: not the new initial
+        open_tab(page, "Parameters")
+        wait_for_text(page, '[data-param="resource.target_cycle_ms"]', "50 ms")
+
+
+def test_a_read_user_sees_download_and_online_change_disabled_with_the_reason(
+    plant: Plant,
+) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_as(page, plant, "viewer")
+        # the project tree fills the left panel as it is read: the login's controls move
+        wait_until(
+            "the project tree is read",
+            lambda: "Accounts" in text_of(page, '[data-testid="project-tree"]'),
+        )
+        log_in_to_resource(page, "viewer", PASSWORD)
+        wait_for_text(page, '[data-testid="resource-state"]', "RUN", timeout_s=30)
+        open_tab(page, TAB)
+        reason = "needs read-write at the resource; viewer is read"
+        wait_until(
+            "the screen says why",
+            lambda: reason in text_of(page, '[data-testid="deploy-disabled"]'),
+        )
+        said = text_of(page, '[data-testid="deploy-disabled"]')
+        assert f"Download: {reason}" in said and f"Online change: {reason}" in said
+        assert screen_button(page, "Compile").is_enabled()
+        assert not screen_button(page, "Download").is_enabled()
+        assert not screen_button(page, TAB).is_enabled()
