@@ -198,11 +198,20 @@ class PadtEditor {
     this.message = el("div", { "data-testid": "editor-message", style: "padding:24px;color:#495057" }, "Open a file of a project from the tree.");
     this.host.append(this.message);
     const splitter = el("div", { style: "height:5px;cursor:row-resize;background:#e9ecef;flex:none" });
-    this.bottomTabs = el("div", { style: "display:flex;border-bottom:1px solid #dee2e6;background:#f8f9fa" });
+    this.bottomTabs = el("div", { style: "display:flex;min-width:0" });
+    this.status = el("div", { "data-testid": "editor-status", style: "flex:1;min-width:0;text-align:right;padding:4px 8px;color:#495057;overflow:hidden;text-overflow:ellipsis;white-space:nowrap" });
+    const bottomBar = el("div", { style: "display:flex;align-items:center;border-bottom:1px solid #dee2e6;background:#f8f9fa" }, this.bottomTabs, this.status);
     this.bottomBody = el("div", { "data-testid": "editor-bottom", style: "overflow:auto;flex:1;font:12.5px ui-monospace,monospace" });
-    this.bottom = el("div", { style: "height:170px;display:flex;flex-direction:column;flex:none" }, this.bottomTabs, this.bottomBody);
+    this.bottom = el("div", { style: "height:170px;display:flex;flex-direction:column;flex:none" }, bottomBar, this.bottomBody);
     root.append(toolbar, tabRow, this.note, this.host, splitter, this.bottom);
     splitter.addEventListener("mousedown", (e) => this.resizeBottom(e));
+    // Ctrl+S anywhere in the editor's area (a button of the toolbar may have the focus)
+    root.addEventListener("keydown", (e) => {
+      if ((e.ctrlKey || e.metaKey) && e.key === "s") {
+        e.preventDefault();
+        this.save();
+      }
+    });
     document.body.append(root);
     this.root = root;
     this.view = new EditorView({ state: this.newState("", true), parent: document.createElement("div") });
@@ -315,7 +324,6 @@ class PadtEditor {
         liveField,
         this.readonlyCompartment.of([EditorState.readOnly.of(readonly), EditorView.editable.of(!readonly)]),
         keymap.of([
-          { key: "Mod-s", run: () => (editor.save(), true), preventDefault: true },
           { key: "F12", run: (v) => (editor.definition(v.state.selection.main.head), true) },
           { key: "Shift-F12", run: (v) => (editor.findReferences(v.state.selection.main.head), true) },
           { key: "Alt-ArrowLeft", run: () => (editor.goBack(), true) },
@@ -484,6 +492,7 @@ class PadtEditor {
   resolveDisk(doc, choice) {
     this.flushChanges(doc);
     this.send({ k: "disk", file: doc.file, choice });
+    this.view.focus();
   }
 
   save() {
@@ -604,10 +613,10 @@ class PadtEditor {
   }
 
   flash(text) {
-    this.note.replaceChildren(text);
-    this.note.style.display = "block";
+    // beside the bottom panel's tabs, where it hides nothing the user must answer
+    this.status.textContent = text;
     clearTimeout(this.flashTimer);
-    this.flashTimer = setTimeout(() => this.drawNote(), 4000);
+    this.flashTimer = setTimeout(() => { this.status.textContent = ""; }, 8000);
   }
 
   // ---- the bottom panel

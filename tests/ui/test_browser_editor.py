@@ -1,0 +1,201 @@
+"""The code editor in the centre of the workspace as an engineer uses it, through
+`padt demo` and headless Chromium: a file opened from the project tree; an error typed is
+underlined and listed in the problems panel, whose row leads to it; completion offers the
+variables and the members of a function block and inserts one; hover tells a variable's
+declaration; F12 goes to it and Alt+Left comes back; Shift+F12 lists the references;
+Ctrl+S saves the file on disk; a file changed on disk while open is offered, not
+overwritten; a second browser's save of the same file is a conflict; a read-only user
+opens but cannot save."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from playwright.sync_api import Page
+
+from tests.support.browser import chromium
+from tests.ui.browser_steps import PASSWORD, Demo, Plant, log_in, shoot_both, wait_until
+
+pytestmark = pytest.mark.browser
+
+TANK = "tank.st"
+
+
+def open_in_editor(page: Page, url: str, user: str, password: str) -> None:
+    """Log in and open TankControl from the project tree."""
+    page.goto(url)
+    page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+    log_in(page, user, password)
+    page.locator('[data-tree^="file:TankControl@"]').first.click(timeout=30_000)
+    page.locator("#padt-editor .cm-content").wait_for(timeout=30_000)
+    wait_until("TankControl is in view", lambda: "PROGRAM TankControl" in editor_text(page))
+
+
+def dismiss_notifications(page: Page) -> None:
+    """Close viser's notifications (its note on software WebGL sits over the toolbar)."""
+    page.evaluate(
+        "document.querySelectorAll('.mantine-Notification-closeButton').forEach(b => b.click())"
+    )
+
+
+def editor_text(page: Page) -> str:
+    text: str = page.evaluate("window.padtEditor.view.state.doc.toString()")
+    return text
+
+
+def put_cursor(page: Page, line: int, col: int) -> None:
+    """The cursor at line:col (col past the end: the line's end), as a click there does."""
+    page.evaluate(f"window.padtEditor.select({TANK!r}, {line}, {col})")
+
+
+def cursor_line(page: Page) -> int:
+    line: int = page.evaluate(
+        "(() => { const s = window.padtEditor.view.state;"
+        " return s.doc.lineAt(s.selection.main.head).number; })()"
+    )
+    return line
+
+
+def line_of(page: Page, number: int) -> str:
+    line: str = page.evaluate(f"window.padtEditor.view.state.doc.line({number}).text")
+    return line
+
+
+def problems(page: Page) -> str:
+    return page.locator('[data-testid="problems-list"]').inner_text()
+
+
+def test_an_error_typed_is_underlined_listed_and_found_again(demo: Demo) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_in_editor(page, demo.url, "admin", demo.password)
+        assert "No problems." in problems(page)
+        assert line_of(page, 20).strip() == "level := tankLevel;"
+        put_cursor(page, 20, 100)
+        page.keyboard.press("Backspace")  # the `;`
+        page.keyboard.type(" + lvl;")  # a name nothing declares
+        page.locator("#padt-editor .cm-lintRange-error").first.wait_for(timeout=10_000)
+        wait_until("the problem is listed", lambda: "tank.st:20:" in problems(page))
+        row = page.locator('[data-testid="problems-list"] tr', has_text="tank.st:20:")
+        assert "lvl" in row.inner_text()
+        dismiss_notifications(page)
+        shoot_both(page, "editor-diagnostics")
+        put_cursor(page, 1, 1)
+        row.click()
+        wait_until("the cursor is at the problem", lambda: cursor_line(page) == 20)
+        # fixed with completion: the variable offered, chosen with Enter
+        page.keyboard.press("End")
+        for _ in range(4):
+            page.keyboard.press("Backspace")  # `lvl;`
+        page.keyboard.type("tankLe")
+        menu = page.locator(".cm-tooltip-autocomplete")
+        menu.wait_for(timeout=10_000)
+        wait_until("tankLevel is offered", lambda: "tankLevel" in menu.inner_text())
+        page.keyboard.press("Enter")
+        page.keyboard.type(";")
+        assert line_of(page, 20).strip() == "level := tankLevel + tankLevel;"
+        wait_until("no problem any more", lambda: "No problems." in problems(page))
+        assert page.locator("#padt-editor .cm-lintRange-error").count() == 0
+
+
+def test_completion_offers_the_members_of_a_function_block(demo: Demo) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_in_editor(page, demo.url, "admin", demo.password)
+        put_cursor(page, 20, 100)
+        page.keyboard.press("Enter")
+        page.keyboard.type("  pumpStarts := refillDelay.")
+        menu = page.locator(".cm-tooltip-autocomplete")
+        menu.wait_for(timeout=10_000)
+        wait_until("TON's members are offered", lambda: "ET" in menu.inner_text())
+        offered = menu.inner_text()
+        for member in ("IN", "PT", "Q", "ET"):
+            assert member in offered
+        dismiss_notifications(page)
+        shoot_both(page, "editor-completion")
+        page.keyboard.type("E")
+        page.keyboard.press("Enter")
+        assert line_of(page, 21).strip() == "pumpStarts := refillDelay.ET"
+
+
+def test_hover_definition_back_and_references(demo: Demo) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_in_editor(page, demo.url, "admin", demo.password)
+        assert line_of(page, 22).startswith("IF level >= highLevel")
+        place = page.evaluate(
+            "(() => { const v = window.padtEditor.view;"
+            " return v.coordsAtPos(v.state.doc.line(22).from + 5); })()"
+        )
+        page.mouse.move(place["left"] + 2, place["top"] + 4)
+        hover = page.locator('[data-testid="editor-hover"]')
+        hover.wait_for(timeout=10_000)
+        said = hover.inner_text()
+        assert "level : INT := 500" in said
+        assert "the tank level" in said  # the declaration's comment
+        put_cursor(page, 22, 6)
+        page.keyboard.press("F12")
+        wait_until("at the declaration", lambda: cursor_line(page) == 8)
+        page.keyboard.press("Alt+ArrowLeft")
+        wait_until("back where it was", lambda: cursor_line(page) == 22)
+        page.keyboard.press("Shift+F12")
+        listed = page.locator('[data-testid="references-list"]')
+        listed.wait_for(timeout=10_000)
+        wait_until("the references are listed", lambda: "tank.st:8:" in listed.inner_text())
+        rows = listed.inner_text()
+        for line in (8, 20, 22, 25, 30):
+            assert f"tank.st:{line}:" in rows
+
+
+def test_save_then_a_change_on_disk_is_offered_and_a_second_browser_conflicts(
+    demo: Demo, tmp_path: Path
+) -> None:
+    on_disk = tmp_path / "project" / TANK
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_in_editor(page, demo.url, "admin", demo.password)
+        other = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_in_editor(other, demo.url, "admin", demo.password)
+        # the first browser saves: the file on disk changes
+        put_cursor(page, 16, 100)
+        page.keyboard.type("  (* saved from the browser *)")
+        page.keyboard.press("Control+s")
+        wait_until("the file is saved", lambda: "saved from the browser" in on_disk.read_text())
+        # the second browser had the old text: its save is refused, and offered
+        put_cursor(other, 16, 100)
+        other.keyboard.type("  (* the second browser *)")
+        other.keyboard.press("Control+s")
+        note = other.locator('[data-testid="editor-note"]')
+        wait_until("the conflict is offered", lambda: "changed on disk" in note.inner_text())
+        assert "second browser" not in on_disk.read_text()
+        # another tool writes the file: the first browser is told, its text kept
+        on_disk.write_text(on_disk.read_text().replace("saved from the browser", "by vim"))
+        mine = page.locator('[data-testid="editor-note"]')
+        wait_until("the change on disk is offered", lambda: "changed on disk" in mine.inner_text())
+        assert "saved from the browser" in editor_text(page)
+        dismiss_notifications(page)
+        page.locator('#padt-editor [data-action="reload"]').click()
+        wait_until("the disk's text is loaded", lambda: "by vim" in editor_text(page))
+        # the second browser keeps its own and saves knowingly
+        dismiss_notifications(other)
+        other.locator('#padt-editor [data-action="keep"]').click()
+        wait_until(
+            "the offer is gone",
+            lambda: not other.locator('[data-testid="editor-note"]').is_visible(),
+        )
+        other.keyboard.press("Control+s")
+        wait_until("the second save is done", lambda: "second browser" in on_disk.read_text())
+
+
+def test_a_read_only_user_opens_but_cannot_save(plant: Plant) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_in_editor(page, plant.url, "guest", PASSWORD)
+        note = page.locator('[data-testid="editor-note"]')
+        wait_until("the reason is shown", lambda: "read-only" in note.inner_text())
+        assert page.locator('#padt-editor [data-action="save"]').is_disabled()
+        before = editor_text(page)
+        put_cursor(page, 20, 100)
+        page.keyboard.type("xyz")
+        assert editor_text(page) == before  # nothing typed goes in
