@@ -218,6 +218,7 @@ def test_the_tree_lists_pous_types_globals_resource_modbus_and_accounts(
         )
     tree = project_tree(shelf, "plant", READER)
     assert [(p.kind, p.name, p.file) for p in tree.pous] == [
+        ("PROGRAM", "Broken", "broken.st"),  # listed while it does not parse
         ("PROGRAM", "TankControl", "tank.st"),
         ("FUNCTION_BLOCK", "Pump", "scale.st"),
         ("FUNCTION", "Scale", "scale.st"),
@@ -236,7 +237,9 @@ def test_the_tree_lists_pous_types_globals_resource_modbus_and_accounts(
     assert [(d.name, d.port, d.points) for d in tree.modbus] == [("plant", 5021, 3)]
     assert [(a.name, a.level) for a in tree.accounts] == [("op", "operator")]
     assert "scrypt" not in repr(tree)
-    assert len(tree.problems) == 1 and tree.problems[0].startswith("broken.st:2:")
+    assert tree.problems == ()
+    (folder / "padt.toml").write_text("[resource\n")
+    assert project_tree(shelf, "plant", READER).problems[0].startswith("padt.toml: ")
 
 
 def test_saves_racing_from_one_base_one_wins_the_others_conflict(shelf: ProjectShelf) -> None:
