@@ -24,14 +24,18 @@ class Reuse:
         # by identity (each entry keeps its node alive, so that no other node has its id)
         self._bodiless: dict[int, tuple[ast.Pou, ast.Pou]] = {}
         self._checked: dict[int, tuple[ast.Pou, tuple[Diagnostic, ...]]] = {}
+        self._declared: tuple[Diagnostic, ...] = ()  # of `check_declarations`
 
     def check(self, units: list[ast.SourceUnit], resolved: Resolved) -> list[Diagnostic]:
         """`check(resolved)`, the POUs whose check cannot have changed taken as they were:
         a POU of the very same AST in a project of the same declarations."""
         declarations = self._declarations_of(units)
-        kept = self._checked if declarations == self._declarations else {}
+        same = declarations == self._declarations
+        kept = self._checked if same else {}
         self._declarations, self._checked = declarations, {}
-        diagnostics = check_declarations(resolved)
+        if not same:  # the rules on data and globals see the declarations alone
+            self._declared = tuple(check_declarations(resolved))
+        diagnostics = list(self._declared)
         for pou in resolved.sorted_pous():
             found = kept.get(id(pou.pou))
             if found is None:
