@@ -31,7 +31,7 @@ from padt.lsp_positions import UTF16, Lines, edited
 log = logging.getLogger("padt.lsp")
 
 # after the last keystroke, so that diagnostics follow typing without analysing every key
-DEBOUNCE_S = 0.15
+DEBOUNCE_S = 0.1
 SEVERITY = {
     "error": types.DiagnosticSeverity.Error,
     "warning": types.DiagnosticSeverity.Warning,
@@ -175,6 +175,8 @@ class PadtLanguageServer(LanguageServer):
         return {name: self._lsp_diagnostics(name, items) for name, items in found.items()}
 
     def _lsp_diagnostics(self, name: str, items: list[Diagnostic]) -> list[types.Diagnostic]:
+        if not items:
+            return []
         lines = self.lines(name)
         return [
             types.Diagnostic(

@@ -8,10 +8,12 @@ closed. Files are named as diagnostics name them: their path in the folder, with
 
 from __future__ import annotations
 
+import re
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import replace
+from functools import lru_cache
 from pathlib import Path, PurePosixPath
 
 from backend.compiler.diagnostics import Diagnostic
@@ -191,14 +193,16 @@ class ProjectLanguage:
 
     def diagnostic_range(self, diagnostic: Diagnostic) -> tuple[int, int, int, int]:
         """Where an editor underlines a diagnostic: the token it points at, else the one
-        character (line, col, end line, end col; the end exclusive)."""
+        character (line, col, end line, end col; the end exclusive). Only its line is
+        read: after each keystroke, lexing a file of thousands of lines again would cost
+        more than the diagnostics themselves."""
         line, col = diagnostic.line, diagnostic.col
         end_col = col + 1
         if diagnostic.file != PROJECT_FILE:
-            lexed = lex(self.text(diagnostic.file))
-            index = lexed.index_at(line, col)
+            lexed = lex(_line(self.text(diagnostic.file), line))
+            index = lexed.index_at(1, col)
             token = lexed.tokens[index] if index < len(lexed.tokens) else None
-            if token is not None and (token.line, token.col) == (line, col):
+            if token is not None and token.col == col:
                 end_col = token.end_col
         return line, col, line, end_col
 
@@ -268,3 +272,18 @@ class ProjectLanguage:
     def outline(self, name: str) -> list[OutlineSymbol]:
         """What the file declares, nested, in the order it stands."""
         return outline(self.analysis(), self.checked_name(name))
+
+
+def _line(text: str, line: int) -> str:
+    """Line `line` (from 1) of `text`, without its end; "" past the text."""
+    starts = _line_starts(text)
+    if not 0 < line <= len(starts):
+        return ""
+    end = starts[line] - 1 if line < len(starts) else len(text)
+    return text[starts[line - 1] : end]
+
+
+@lru_cache(maxsize=8)
+def _line_starts(text: str) -> tuple[int, ...]:
+    """Where each line of `text` starts (the diagnostics of one text ask many times)."""
+    return (0, *(match.end() for match in re.finditer("\n", text)))

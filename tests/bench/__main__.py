@@ -11,6 +11,7 @@ from tests.bench import (
     bench_jitter_loaded,
     bench_language,
     bench_language_services,
+    bench_lsp,
     bench_modbus,
     bench_projects,
     bench_recording,
@@ -28,6 +29,7 @@ def main() -> None:
     bench_compiler.main()
     bench_language.main()
     bench_language_services.main()
+    bench_lsp.main()
     bench_projects.main()
     bench_context.main()
     bench_runtime.main()
