@@ -104,8 +104,9 @@ def bench_keystrokes(label: str, file: str, text: str) -> None:
 
 
 def bench_completion(label: str, file: str, text: str) -> None:
-    """~50 completion requests, each on a line just typed into a statement of the file
-    (`delay.` or the start of a name, as an editor asks while one types): the wait for the
+    """~50 completion requests, each on a line just typed before a statement of the file:
+    the first two letters of the name the statement assigns, nothing yet (everything in
+    scope is offered), or `delay.` where the file has timers called so: the wait for the
     list, over the analysis of the text as typed (which the diagnostics made already)."""
     project = LanguageProject({file: text})
     project.analysis()
@@ -116,7 +117,9 @@ def bench_completion(label: str, file: str, text: str) -> None:
     offered = 0
     for n in range(KEYSTROKES):
         row = rng.choice(statements)
-        typed_line = "delay." if n % 2 else "ou"
+        assigned = lines[row].split(":=")[0].strip()
+        variants = (assigned[:2], "", "delay." if "delay" in text else assigned[:1])
+        typed_line = variants[n % 3]
         typed = "".join([*lines[:row], typed_line + "\n", *lines[row:]])
         project.set_text(file, typed)
         analysis = project.analysis()

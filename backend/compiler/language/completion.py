@@ -28,7 +28,7 @@ from backend.compiler.language.position import (
     scope_at,
     variable_symbol,
 )
-from backend.compiler.language.tokens import KEYWORDS, VAR_KINDS, Lexed, lex
+from backend.compiler.language.tokens import KEYWORDS, VAR_KINDS, Lexed, piece_at
 from backend.compiler.resolve import PouSymbols, Variable
 from backend.compiler.types import FbType
 
@@ -110,18 +110,21 @@ def complete(analysis: Analysis, file: str, line: int, col: int) -> list[Complet
     text = analysis.texts.get(file)
     if text is None:
         return []
-    lexed = lex(text)
+    # only the declaration being typed in is read: a keystroke relexes no more
+    lexed, lines_before = piece_at(text, line)
+    line -= lines_before
+    piece = lexed.text
     offset = lexed.offset(line, col)
-    if offset < 0 or offset > len(text) or _in_comment_or_string(lexed, line, col, offset):
+    if not 0 <= offset <= len(piece) or col < 1 or _in_comment_or_string(lexed, line, col, offset):
         return []
     start = offset
-    while start > 0 and (text[start - 1].isalnum() or text[start - 1] == "_"):
+    while start > 0 and (piece[start - 1].isalnum() or piece[start - 1] == "_"):
         start -= 1
-    prefix = text[start:offset]
+    prefix = piece[start:offset]
     before = lexed.index_at(line, col - len(prefix)) - 1
     previous = lexed.tokens[before].text if before >= 0 else ""
     if previous == ".":
-        base = base_before(analysis, file, lexed, before)
+        base = base_before(analysis, file, lexed, before, lines_before)
         found = (
             [_member_item(m) for m in members(analysis, base) if _seen_from_outside(m)]
             if base is not None
@@ -132,7 +135,7 @@ def complete(analysis: Analysis, file: str, line: int, col: int) -> list[Complet
     elif previous == ":" and lexed.innermost(line, col, VAR_KINDS | {"STRUCT"}):
         found = _type_items(analysis)
     else:
-        found = _general_items(analysis, file, lexed, line, col)
+        found = _general_items(analysis, file, lexed, line, col)  # lines of the piece
     return _ordered(found, prefix)
 
 

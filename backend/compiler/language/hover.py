@@ -12,7 +12,7 @@ from backend.compiler import builtins
 from backend.compiler.ast import key
 from backend.compiler.language.analysis import Analysis
 from backend.compiler.language.position import Location, Range, Symbol, symbol_at
-from backend.compiler.language.tokens import Lexed, lex
+from backend.compiler.language.tokens import Lexed, piece_at
 from backend.compiler.resolve import PouSymbols
 from backend.compiler.source import Pos, stdlib_sources
 
@@ -108,12 +108,15 @@ def declaration_comment(text: str | None, pos: Pos) -> str:
     the line above it (a line of its own)."""
     if text is None:
         return ""
-    lexed = lex(text)
-    same_line = [c.text for c in lexed.comments if c.line == pos.line]
+    lexed, before = piece_at(text, pos.line)
+    same_line = [c.text for c in lexed.comments if c.line + before == pos.line]
     if same_line:
         return _clip(" ".join(same_line))
-    above = [c for c in lexed.comments if c.end_line == pos.line - 1]
-    if above and not _code_on(lexed, pos.line - 1, above[-1].line):
+    # the line above may end the declaration before (a POU's comment stands before it)
+    lexed, before = piece_at(text, pos.line - 1) if pos.line > 1 else (lexed, before)
+    line = pos.line - 1 - before
+    above = [c for c in lexed.comments if c.end_line == line]
+    if above and not _code_on(lexed, line, above[-1].line):
         return _clip(above[-1].text)
     return ""
 
@@ -137,8 +140,8 @@ def _initial_value(analysis: Analysis, pos: Pos | None) -> str:
     text = _text(analysis, pos.file)
     if text is None:
         return ""
-    lexed = lex(text)
-    start = lexed.index_at(pos.line, pos.col)
+    lexed, before = piece_at(text, pos.line)
+    start = lexed.index_at(pos.line - before, pos.col)
     depth = 0
     begin = -1
     for index in range(start, min(start + 400, len(lexed.tokens))):
@@ -153,7 +156,7 @@ def _initial_value(analysis: Analysis, pos: Pos | None) -> str:
             if begin < 0 or begin >= index:
                 return ""
             first, last = lexed.tokens[begin], lexed.tokens[index - 1]
-            return " ".join(text[first.offset : last.end].split())
+            return " ".join(lexed.text[first.offset : last.end].split())
     return ""
 
 
@@ -178,14 +181,14 @@ def _declared_text(analysis: Analysis, pos: Pos | None) -> str:
     text = _text(analysis, pos.file)
     if text is None:
         return ""
-    lexed = lex(text)
-    start = lexed.index_at(pos.line, pos.col)
+    lexed, before = piece_at(text, pos.line)
+    start = lexed.index_at(pos.line - before, pos.col)
     tokens = lexed.tokens[start : start + 200]
     colon = next((i for i, t in enumerate(tokens) if t.text == ":"), -1)
     end = next((i for i, t in enumerate(tokens) if t.text == ";"), -1)
     if colon < 0 or end <= colon + 1:
         return ""
-    return " ".join(text[tokens[colon + 1].offset : tokens[end - 1].end].split())
+    return " ".join(lexed.text[tokens[colon + 1].offset : tokens[end - 1].end].split())
 
 
 def _text(analysis: Analysis, file: str) -> str | None:

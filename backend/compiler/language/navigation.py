@@ -14,7 +14,7 @@ from backend.compiler.language.position import (
     token_range,
     token_symbol,
 )
-from backend.compiler.language.tokens import lex
+from backend.compiler.language.tokens import pieces
 
 
 def definition(analysis: Analysis, file: str, line: int, col: int) -> Location | None:
@@ -55,11 +55,11 @@ def uses(analysis: Analysis, symbol: Symbol) -> list[Location]:
     identity = symbol.identity
     found = []
     for name in sorted(analysis.texts):
-        lexed = lex(analysis.texts[name])
-        for index, token in enumerate(lexed.tokens):
-            if token.kind != "ident" or token.upper != wanted:
-                continue
-            named = token_symbol(analysis, name, lexed, index)
-            if named is not None and named.identity == identity:
-                found.append(Location(name, token_range(token)))
+        for lexed, before in pieces(analysis.texts[name]):
+            for index, token in enumerate(lexed.tokens):
+                if token.kind != "ident" or token.upper != wanted:
+                    continue
+                named = token_symbol(analysis, name, lexed, index, before)
+                if named is not None and named.identity == identity:
+                    found.append(Location(name, token_range(token, before)))
     return found

@@ -15,7 +15,7 @@ from typing import NamedTuple
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.language.analysis import Analysis
-from backend.compiler.language.tokens import VAR_KINDS, Lexed, Token, declarations, lex
+from backend.compiler.language.tokens import VAR_KINDS, Lexed, Token, declarations, piece_at
 from backend.compiler.resolve import (
     PARAMETER_KINDS,
     PouSymbols,
@@ -96,18 +96,20 @@ def symbol_at(analysis: Analysis, file: str, line: int, col: int) -> Located | N
     text = analysis.texts.get(file)
     if text is None:
         return None
-    lexed = lex(text)
-    index = lexed.name_at(line, col)
+    lexed, before = piece_at(text, line)
+    index = lexed.name_at(line - before, col)
     if index < 0:
         return None
-    symbol = token_symbol(analysis, file, lexed, index)
+    symbol = token_symbol(analysis, file, lexed, index, before)
     if symbol is None:
         return None
-    return Located(symbol, token_range(lexed.tokens[index]))
+    return Located(symbol, token_range(lexed.tokens[index], before))
 
 
-def token_range(token: Token) -> Range:
-    return Range(token.line, token.col, token.line, token.end_col)
+def token_range(token: Token, line_offset: int = 0) -> Range:
+    """The range of a token of a text lexed from line `line_offset` + 1 of its file."""
+    line = token.line + line_offset
+    return Range(line, token.col, line, token.end_col)
 
 
 def scope_at(analysis: Analysis, lexed: Lexed, line: int, col: int) -> PouSymbols | None:
@@ -145,16 +147,19 @@ class _Place:
     file: str
     lexed: Lexed
     scope: PouSymbols | None
+    line_offset: int  # the lines of the file before the lexed text
 
 
-def token_symbol(analysis: Analysis, file: str, lexed: Lexed, index: int) -> Symbol | None:
+def token_symbol(
+    analysis: Analysis, file: str, lexed: Lexed, index: int, line_offset: int = 0
+) -> Symbol | None:
     """The symbol the name token `index` of `file` means, or None (an unknown name, a
     keyword, a literal)."""
     token = lexed.tokens[index]
     if not token.is_name():
         return None
-    place = _Place(analysis, file, lexed, scope_at(analysis, lexed, token.line, token.col))
-    return _token_symbol(place, index, 0)
+    scope = scope_at(analysis, lexed, token.line, token.col)
+    return _token_symbol(_Place(analysis, file, lexed, scope, line_offset), index, 0)
 
 
 def _token_symbol(place: _Place, index: int, depth: int) -> Symbol | None:
@@ -276,7 +281,7 @@ def _declared_here(place: _Place, token: Token) -> Symbol | None:
         if name.upper == token.upper:
             holders = place.lexed.innermost(token.line, token.col, _DECLARING)
             owner = holders[-1].name if holders else ""
-            declared = Pos(place.file, name.line, name.col)
+            declared = Pos(place.file, name.line + place.line_offset, name.col)
             found = type_from_text(place.analysis, type_text)
             return Symbol("variable", name.text, declared, owner, block, found)
     return None
@@ -362,11 +367,11 @@ def name_pos(analysis: Analysis, pos: Pos, name: str) -> Pos:
     text = analysis.texts.get(pos.file)
     if text is None:
         return pos
-    lexed = lex(text)
-    start = lexed.index_at(pos.line, pos.col)
+    lexed, before = piece_at(text, pos.line)
+    start = lexed.index_at(pos.line - before, pos.col)
     for token in lexed.tokens[start : start + 8]:
-        if token.kind == "ident" and key(token.text) == key(name):
-            return Pos(pos.file, token.line, token.col)
+        if token.kind == "ident" and token.upper == key(name):
+            return Pos(pos.file, token.line + before, token.col)
     return pos
 
 
@@ -432,12 +437,14 @@ def _declared_in_type(place: _Place, index: int) -> Symbol | None:
     return None
 
 
-def base_before(analysis: Analysis, file: str, lexed: Lexed, dot: int) -> Type | Symbol | None:
+def base_before(
+    analysis: Analysis, file: str, lexed: Lexed, dot: int, line_offset: int = 0
+) -> Type | Symbol | None:
     """What the expression before the `.` that is token `dot` is, as the base of a member
     (see `members`), or None when that is not known."""
     token = lexed.tokens[dot]
-    place = _Place(analysis, file, lexed, scope_at(analysis, lexed, token.line, token.col))
-    return _expression_base(place, dot - 1, 0)
+    scope = scope_at(analysis, lexed, token.line, token.col)
+    return _expression_base(_Place(analysis, file, lexed, scope, line_offset), dot - 1, 0)
 
 
 def _expression_base(place: _Place, index: int, depth: int) -> Type | Symbol | None:

@@ -25,7 +25,7 @@ from backend.compiler.language.position import (
     scope_at,
     symbol_at,
 )
-from backend.compiler.language.tokens import KEYWORDS, lex
+from backend.compiler.language.tokens import KEYWORDS, piece_at
 from backend.compiler.types import FbType, StructType
 
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -120,11 +120,11 @@ def _clash(analysis: Analysis, symbol: Symbol, places: list[Location], new_name:
     if symbol.kind == "variable" and symbol.detail == "MEMBER":
         return ""  # a structure's member is named only after a dot
     for place in places:
-        lexed = lex(analysis.texts[place.file])
-        index = lexed.index_at(place.range.line, place.range.col)
+        lexed, before = piece_at(analysis.texts[place.file], place.range.line)
+        index = lexed.index_at(place.range.line - before, place.range.col)
         if index > 0 and lexed.tokens[index - 1].text in (".", "#"):
             continue  # named through an instance: checked against the owner's members
-        scope = scope_at(analysis, lexed, place.range.line, place.range.col)
+        scope = scope_at(analysis, lexed, place.range.line - before, place.range.col)
         found = lookup(analysis, scope, new_name)
         if found is not None and found.identity != symbol.identity:
             where = scope.name if scope is not None else place.file

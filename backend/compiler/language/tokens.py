@@ -12,8 +12,11 @@ import re
 from bisect import bisect_right
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import NamedTuple
 
+from backend.compiler.language.chunks import Chunk, chunks
 from backend.compiler.limits import MAX_COMMENT_NESTING
+from backend.compiler.parse import nested_comment
 
 # words of the language that are never a name (upper case); the modifiers (PUBLIC, FINAL...)
 # and the words of a configuration (TASK, WITH...) may be names elsewhere (OSCAT's OVERRIDE)
@@ -131,9 +134,12 @@ _ENDS = {end: kind for kind, end in (*_NAMED_BLOCKS.items(), *_PLAIN_BLOCKS.item
 _DATE_PREFIX = (
     "DATE_AND_TIME|LDATE_AND_TIME|TIME_OF_DAY|LTIME_OF_DAY|DT|LDT|DATE|LDATE|TOD|LTOD|D|LD"
 )
+# a comment nests as the compiler reads it (up to its limit); one whose nesting never closes
+# ends at its first `*)`; one never closed runs to the end
 _TOKEN = re.compile(
     r"(?P<ws>\s+)"
-    r"|(?P<comment>//[^\n]*|/\*.*?(?:\*/|\Z))"
+    rf"|(?P<comment>{nested_comment(MAX_COMMENT_NESTING)}|\(\*.*?(?:\*\)|\Z)"
+    r"|//[^\n]*|/\*.*?(?:\*/|\Z))"
     r"|(?P<pragma>\{[^}]*\}?)"
     r"|(?P<string>'(?:[^'$\n]|\$.)*+'?|\"(?:[^\"$\n]|\$.)*+\"?)"
     rf"|(?P<literal>(?i:(?:LTIME|LT|TIME|T)#[-+]?[\w.]*|(?:{_DATE_PREFIX})#[\w.:-]*))"
@@ -145,23 +151,19 @@ _TOKEN = re.compile(
 )
 
 
-@dataclass(frozen=True)
-class Token:
+class Token(NamedTuple):
     kind: str  # ident, number, literal, string, address, punct
     text: str
     line: int  # 1-based
     col: int  # 1-based, in characters
     offset: int  # in the text
     end: int  # offset after it
+    upper: str  # the text in upper case (ST's names ignore case)
 
     @property
     def end_col(self) -> int:
         """The column after it (tokens other than comments stay on one line)."""
         return self.col + self.end - self.offset
-
-    @property
-    def upper(self) -> str:
-        return self.text.upper()
 
     def is_name(self) -> bool:
         """An identifier that is no keyword."""
@@ -237,7 +239,7 @@ class Lexed:
         ]
 
 
-@lru_cache(maxsize=512)
+@lru_cache(maxsize=4096)  # a piece of each declaration of a large project
 def lex(text: str) -> Lexed:
     """The tokens, comments and blocks of `text` (cached: the services ask of the same text
     again and again while a cursor moves)."""
@@ -245,30 +247,24 @@ def lex(text: str) -> Lexed:
     tokens: list[Token] = []
     comments: list[Comment] = []
     pragmas: list[tuple[int, int]] = []
-    pos = 0
-    while pos < len(text):
-        if text.startswith("(*", pos):
-            end = _comment_end(text, pos)
-            comments.append(_comment(text, pos, end, line_starts, text[pos + 2 : end - 2]))
-            pos = end
-            continue
-        match = _TOKEN.match(text, pos)
-        if match is None:  # cannot happen: the last alternative takes any character
-            break
+    line, line_start = 1, 0
+    for match in _TOKEN.finditer(text):
         kind = match.lastgroup or "punct"
-        if kind == "pragma":
-            pragmas.append(
-                (bisect_right(line_starts, pos), bisect_right(line_starts, match.end() - 1))
-            )
-        elif kind == "comment":
-            body = match.group()[2:]
-            body = body[:-2] if match.group().startswith("/*") and body.endswith("*/") else body
-            comments.append(_comment(text, pos, match.end(), line_starts, body))
-        elif kind not in ("ws", "pragma"):
-            line = bisect_right(line_starts, pos)
-            col = pos - line_starts[line - 1] + 1
-            tokens.append(Token(kind, match.group(), line, col, pos, match.end()))
-        pos = match.end()
+        start, end = match.span()
+        if kind == "ws" or kind == "comment" or kind == "pragma":
+            first_line = line
+            breaks = text.count("\n", start, end)
+            if breaks:
+                line += breaks
+                line_start = text.rfind("\n", start, end) + 1
+            if kind == "comment":
+                comments.append(_comment(match.group(), first_line, line, start, end))
+            elif kind == "pragma":
+                pragmas.append((first_line, line))
+            continue
+        word = match.group()
+        upper = word.upper() if kind == "ident" else word
+        tokens.append(Token(kind, word, line, start - line_start + 1, start, end, upper))
     return Lexed(
         text,
         tuple(tokens),
@@ -277,6 +273,27 @@ def lex(text: str) -> Lexed:
         tuple(line_starts),
         tuple(pragmas),
     )
+
+
+def pieces(text: str) -> list[tuple[Lexed, int]]:
+    """The text lexed declaration by declaration (a POU with its methods, a TYPE, a global
+    list: `chunks`), each with the lines of the text before it. A keystroke changes one
+    declaration: only that one is lexed again, however long the file."""
+    return [(lex(chunk.text), chunk.line_offset) for chunk in _chunks(text)]
+
+
+def piece_at(text: str, line: int) -> tuple[Lexed, int]:
+    """The lexed declaration that holds `line` of the text, and the lines before it (its
+    lines are the text's minus that; its columns are the text's)."""
+    found = _chunks(text)
+    offsets = [chunk.line_offset for chunk in found]
+    chunk = found[max(bisect_right(offsets, line - 1) - 1, 0)]
+    return lex(chunk.text), chunk.line_offset
+
+
+@lru_cache(maxsize=64)
+def _chunks(text: str) -> tuple[Chunk, ...]:
+    return tuple(chunks(text)) or (Chunk(0, text),)
 
 
 def declarations(lexed: Lexed, span: int) -> list[tuple[int, str]]:
@@ -331,27 +348,12 @@ def _type_text(lexed: Lexed, first: int, last: int) -> str:
     return " ".join(words)
 
 
-def _comment_end(text: str, start: int) -> int:
-    """The offset after the `*)` that closes the comment at `start`: comments nest (up to
-    the compiler's limit); one whose nesting never closes ends at its first `*)`, as the
-    compiler reads it, or at the text's end."""
-    depth, pos = 0, start
-    while pos < len(text):
-        if text.startswith("(*", pos) and depth <= MAX_COMMENT_NESTING:
-            depth, pos = depth + 1, pos + 2
-        elif text.startswith("*)", pos):
-            depth, pos = depth - 1, pos + 2
-            if depth == 0:
-                return pos
-        else:
-            pos += 1
-    first = text.find("*)", start + 2)
-    return first + 2 if first >= 0 else len(text)
-
-
-def _comment(text: str, start: int, end: int, line_starts: list[int], body: str) -> Comment:
-    line = bisect_right(line_starts, start)
-    end_line = bisect_right(line_starts, max(start, end - 1))
+def _comment(raw: str, line: int, end_line: int, start: int, end: int) -> Comment:
+    """A comment from its text with its delimiters."""
+    if raw.startswith("//"):
+        body = raw[2:]
+    else:
+        body = raw[2:-2] if raw.endswith(("*)", "*/")) and len(raw) >= 4 else raw[2:]
     return Comment(body.strip(), line, end_line, start, end)
 
 
