@@ -51,7 +51,7 @@ async def _measure(label: str, folder: Path, file: str) -> None:
     client = LanguageClient("bench", "1")
     published = _Published()
 
-    @client.feature(types.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)
+    @client.feature(types.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)  # type: ignore[untyped-decorator]
     def _arrived(params: types.PublishDiagnosticsParams) -> None:
         if params.uri.endswith(file) and params.version is not None:
             published.arrived[params.version] = time.perf_counter()
@@ -99,7 +99,7 @@ async def _measure(label: str, folder: Path, file: str) -> None:
         completions.append((time.perf_counter() - sent) * 1e3)
     await client.shutdown_async(None)
     client.exit(None)
-    await client.stop()
+    await client.stop()  # type: ignore[no-untyped-call]
     print(
         f"padt lsp, {label} ({len(lines):,} lines): diagnostics of a keystroke's version "
         f"p50 {statistics.median(waits):.0f} ms, p95 {_percentile(waits, 0.95):.0f} ms "
