@@ -246,25 +246,58 @@ def test_reload_preview_confirm_and_perform(tmp_path: Path, zenoh_endpoint: str)
         assert "program Main: STOP" in held.stdout
         counter, old_crc = values(client)["Main.counter"], status(client)["crc"]
 
+        # a target cycle changed online, which a reload puts back to the project's 20
+        faster = padt(*online("params", zenoh_endpoint, "--set", "target_cycle_ms=10"))
+        assert faster.returncode == 0, faster.stderr
         write_project(project, CHANGED_ST)
-        preview = padt(*online("reload", zenoh_endpoint, str(project), "--preview"))
+        preview = padt(
+            *online(
+                "reload", zenoh_endpoint, str(project), "--preview", "--backup-dir", str(backup_dir)
+            )
+        )
         assert preview.returncode == 0, preview.stderr
         lines = preview.stdout.splitlines()
         assert any(line.split()[:3] == ["Main.counter", "converted", "INT"] for line in lines)
         assert any(line.split()[:2] == ["Main.extra", "new"] for line in lines)
         assert "summary: 0 kept, 1 converted, 0 initialised, 1 new, 0 deleted" in lines
+        assert (
+            "parameter reset: target_cycle_ms: 10 online, 20 in the project; the reload sets 20 "
+            "(--keep-online target_cycle_ms keeps it)"
+        ) in lines
+        # what changed since the download, against the backup of what was loaded
+        assert f"source diff against backup {backups(backup_dir)[0].name}:" in lines
+        at = lines.index("--- main.st (changed)")
+        assert lines[at + 1 :] == [
+            "@@ -1,6 +1,7 @@",
+            " PROGRAM Main",
+            " VAR",
+            "-  counter : INT := 0;",
+            "+  counter : DINT := 0;",
+            "+  extra : INT := 7;",
+            " END_VAR",
+            " counter := counter + 1;",
+            " END_PROGRAM",
+        ]
         assert status(client)["crc"] == old_crc
         assert not backups(backup_dir)[1:]  # a preview loads nothing
 
         done = padt(
             *online(
-                "reload", zenoh_endpoint, str(project), "--yes", "--backup-dir", str(backup_dir)
+                "reload",
+                zenoh_endpoint,
+                str(project),
+                "--yes",
+                "--keep-online",
+                "target_cycle_ms",
+                "--backup-dir",
+                str(backup_dir),
             )
         )
         assert done.returncode == 0, done.stderr
         new_crc = status(client)["crc"]
         assert new_crc != old_crc
         assert f"reload done: configuration CRC {old_crc} -> {new_crc}" in done.stdout
+        assert "kept online: target_cycle_ms 10" in done.stdout.splitlines()
         now = values(client)
         assert now["Main.counter"] == counter and now["Main.extra"] == 7
         archive = backups(backup_dir)[-1]
