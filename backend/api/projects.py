@@ -14,6 +14,7 @@ from pydantic import BaseModel, Field
 
 from backend.api.auth import ReadOnly, ReadWrite, Service
 from backend.api.service import Caller
+from backend.engineering.padt_audit_log import AuditEntry
 from backend.engineering.project_access import Editor
 from backend.engineering.project_edits import (
     add_declaration,
@@ -27,6 +28,7 @@ from backend.engineering.project_files import (
     Saved,
     changed_on_disk,
     delete_file,
+    history,
     list_files,
     read_file,
     save_file,
@@ -182,6 +184,17 @@ def changed(
     service: Service,
 ) -> DiskState:
     return changed_on_disk(service.shelf, project, path, known_hash, editor(caller))
+
+
+@router.get("/{project}/history", summary="Who changed which file: the audit log's entries")
+def file_history(
+    project: str,
+    caller: ReadOnly,
+    service: Service,
+    file: Annotated[str | None, Query(max_length=512)] = None,
+    limit: Annotated[int, Query(ge=1, le=10_000)] = 200,
+) -> list[AuditEntry]:
+    return history(service.shelf, project, editor(caller), file, limit)
 
 
 @router.post(

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
 from backend.compiler.limits import MAX_FILE_BYTES, MAX_PROJECT_BYTES, MAX_PROJECT_FILES, MiB
-from backend.engineering.padt_audit_log import PadtAuditLog
+from backend.engineering.padt_audit_log import AuditEntry, PadtAuditLog
 from backend.engineering.project import PROJECT_FILE
 from backend.engineering.project_access import READ, WRITE, Editor, require
 from backend.engineering.project_shelf import ProjectShelf
@@ -243,6 +243,23 @@ def rename_file(
             new_target.parent.mkdir(parents=True, exist_ok=True)
             os.replace(target, new_target)
     return Saved(new_name, digest, digest)
+
+
+def history(
+    shelf: ProjectShelf, project: str, editor: Editor, file: str | None = None, limit: int = 200
+) -> list[AuditEntry]:
+    """The audit log's entries of a project (of one file, under its old or new name),
+    newest first: who changed what, as an engineer reads a file's history."""
+    require(editor, READ)
+    shelf.folder(project)  # an unknown project is refused, not an empty history
+    if shelf.audit is None:
+        return []  # a PADT without an audit log changes nothing
+    entries = [
+        e
+        for e in shelf.audit.entries()
+        if e.project == project and (file is None or file in (e.file, e.new_file))
+    ]
+    return entries[::-1][: max(0, limit)]
 
 
 def _read_bytes(name: str, target: Path) -> bytes | None:

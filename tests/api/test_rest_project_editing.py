@@ -150,6 +150,11 @@ def test_declarations_added_renamed_and_deleted(api: Api) -> None:
     assert [p["name"] for p in tree["pous"]] == ["Main"]
     actions = [line for line in api.audit.read_text().splitlines() if '"decl"' in line]
     assert len(actions) == 5  # new project, create, save + rename, delete
+    drive = api.call("GET", "/api/projects/decl/history", "reader", params={"file": "Drive.st"})
+    assert [(e["user"], e["action"]) for e in drive.json()] == [
+        ("builder", "delete"),
+        ("builder", "rename"),
+    ]
 
 
 def test_settings_checked_and_written(api: Api) -> None:

@@ -20,6 +20,7 @@ from backend.engineering.project_files import (
     changed_on_disk,
     content_hash,
     delete_file,
+    history,
     list_files,
     read_file,
     rename_file,
@@ -187,6 +188,13 @@ def test_every_change_is_in_the_audit_log_with_who_what_and_both_hashes(
     times = [e["time_ns"] for e in entries]
     assert times == sorted(times) and len(set(times)) == len(times)
     assert shelf.audit_log().entries()[-1].action == "delete"
+    extra = history(shelf, "plant", READER, "extra.st")
+    assert [(e.action, e.file, e.new_file) for e in extra] == [
+        ("delete", "extra.st", ""),
+        ("rename", "sub/extra.st", "extra.st"),
+    ]
+    assert len(history(shelf, "plant", READER)) == 5
+    assert history(shelf, "plant", READER, limit=1)[0].action == "delete"
 
 
 def test_a_save_replaces_the_file_whole_and_keeps_its_mode(shelf: ProjectShelf) -> None:
