@@ -22,6 +22,8 @@ from runtime.contract.outside_json import read_json_file
 from runtime.contract.private_files import write_private
 
 if TYPE_CHECKING:
+    from backend.engineering.project import Project
+    from runtime.contract.artifact import Artifact
     from runtime.contract.stop_request import StopRequest
 
 _PR_SET_PDEATHSIG = 1
@@ -114,6 +116,19 @@ def run(args: argparse.Namespace) -> int:
         plant.close()
 
 
+def _keep_demo_backup(state_dir: Path, folder: Path, project: Project, artifact: Artifact) -> None:
+    from backend.engineering.backup import BackupError, BackupInfo, write_backup
+    from backend.engineering.project import PROJECT_FILE
+
+    sources = {source.name: source.text for source in project.sources}
+    config = (folder / PROJECT_FILE).read_text(encoding="utf-8")
+    info = BackupInfo(project.name, project.version, artifact.resource.name, "load", "padt demo")
+    try:
+        write_backup(state_dir / "backups", info, artifact.to_json(), sources, config)
+    except BackupError as exc:  # the demo runs all the same; only the record is missing
+        print(f"padt demo: no backup of the loaded configuration: {exc}", file=sys.stderr)
+
+
 def _run_with_plant(
     args: argparse.Namespace,
     stop: StopRequest,
@@ -136,7 +151,8 @@ def _run_with_plant(
     from runtime.contract.state_folder import artifact_path
 
     folder = demo_project_with_accounts(args.state_dir, [admin], plant_port)
-    result = compile_project(load_project([folder]))
+    project = load_project([folder])
+    result = compile_project(project)
     if result.artifact is None:  # the embedded project always compiles; guard all the same
         for diagnostic in result.diagnostics:
             print(diagnostic, file=sys.stderr)
@@ -144,6 +160,8 @@ def _run_with_plant(
     resource = result.artifact.resource.name
     # where the runtime finds it at power-up; it holds the verifiers: owner-only
     write_private(artifact_path(args.state_dir), result.artifact.to_json().encode("ascii"))
+    # and its backup, as after a download: an online change shows what changed since
+    _keep_demo_backup(args.state_dir, folder, project, result.artifact)
 
     endpoint = f"tcp/127.0.0.1:{args.zenoh_port}"
     try:
@@ -164,9 +182,14 @@ def _run_with_plant(
         accounts_file = args.state_dir / "padt-accounts.json"
         write_accounts(accounts_file, (dataclasses.replace(admin, level="security-administrator"),))
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
-        # the demo's project, and a folder for the projects its users make from templates
+        # the demo's project, and a folder for the projects its users make from templates;
+        # the tank template is the demo's copy, so that a project made from it keeps the
+        # demo's accounts and its plant's port, and loads into Tank1 as the demo does
         projects = shelf_of(
-            {"demo": folder}, args.state_dir / "projects", args.state_dir / "padt-audit.jsonl"
+            {"demo": folder},
+            args.state_dir / "projects",
+            args.state_dir / "padt-audit.jsonl",
+            {"tank": folder},
         )
         # the demo's resource keeps its key in the state folder: so do its UI and API
         known = KnownResources(args.state_dir / "known_resources")

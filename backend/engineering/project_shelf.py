@@ -72,6 +72,7 @@ class ProjectShelf(Mapping[str, Path]):
         given: Mapping[str, Path] | None = None,
         new_dir: Path | None = None,
         audit: PadtAuditLog | None = None,
+        template_folders: Mapping[str, Path] | None = None,
     ) -> None:
         """`given`: projects by name (`--project`); `new_dir`: the folder for new projects,
         listed now (each sub-folder holding padt.toml or .st files is a project named after
@@ -79,6 +80,7 @@ class ProjectShelf(Mapping[str, Path]):
         projects can be read but not changed: every change must be audited)."""
         self.new_dir = new_dir
         self.audit = audit
+        self.template_folders = dict(template_folders or {})
         self.lock = threading.RLock()  # a file's base-hash check and its replacement: one step
         self._given = dict(given or {})
         self._projects: dict[str, Path] = {}
@@ -139,7 +141,9 @@ class ProjectShelf(Mapping[str, Path]):
             self.refresh()
             if name.casefold() in {n.casefold() for n in self._projects}:
                 raise Refusal("exists", f"there is a project '{name}' already")
-            target = make_project(self.new_dir, name, template, resource)
+            target = make_project(
+                self.new_dir, name, template, resource, self.template_folders.get(template)
+            )
             try:
                 audit.record(editor.user, name, "new-project", f"template:{template}", "", "")
             except OSError as exc:  # a project the log does not know of is not left behind
@@ -151,11 +155,19 @@ class ProjectShelf(Mapping[str, Path]):
         return target
 
 
-def make_project(parent: Path, name: str, template: str, resource: str | None = None) -> Path:
+def make_project(
+    parent: Path,
+    name: str,
+    template: str,
+    resource: str | None = None,
+    folder: Path | None = None,
+) -> Path:
     """The new project folder `parent/name` from `template`, its [project] name set to
     `name` (and its resource's name to `resource` when given), made whole or not at all.
     Refused with the reason: a name that is no folder name, a folder that exists, an
-    unknown template, a resource name that is no key of Zenoh."""
+    unknown template, a resource name that is no key of Zenoh. `folder`: where this PADT
+    keeps the template's files, when not with the others (the demo's tank: its running
+    copy, with its accounts and its plant's port)."""
     problem = project_name_problem(name)
     if problem is not None:
         raise Refusal("bad_value", problem)
@@ -172,7 +184,7 @@ def make_project(parent: Path, name: str, template: str, resource: str | None = 
     shutil.rmtree(staging, ignore_errors=True)
     try:
         parent.mkdir(parents=True, exist_ok=True)
-        _copy_template(chosen.folder, staging, name, resource)
+        _copy_template(folder or chosen.folder, staging, name, resource)
         os.rename(staging, target)
     except OSError as exc:
         shutil.rmtree(staging, ignore_errors=True)
@@ -215,7 +227,14 @@ def _copy_template(source: Path, target: Path, name: str, resource: str | None) 
     (target / PROJECT_FILE).write_text(tomlkit.dumps(document), encoding="utf-8")
 
 
-def shelf_of(given: Mapping[str, Path], projects_dir: Path | None, audit_log: Path) -> ProjectShelf:
+def shelf_of(
+    given: Mapping[str, Path],
+    projects_dir: Path | None,
+    audit_log: Path,
+    template_folders: Mapping[str, Path] | None = None,
+) -> ProjectShelf:
     """The shelf of `padt ui`, `padt api` and `padt demo`: the projects given, those in
     `projects_dir`, and the audit log at `audit_log` (wall-clock time)."""
-    return ProjectShelf(given, projects_dir, PadtAuditLog(audit_log, time.time_ns))
+    return ProjectShelf(
+        given, projects_dir, PadtAuditLog(audit_log, time.time_ns), template_folders
+    )

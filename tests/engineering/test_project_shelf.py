@@ -119,3 +119,21 @@ def test_a_project_the_audit_log_cannot_record_is_not_made(tmp_path: Path) -> No
         shelf.new_project("line", "empty", ANNA)
     assert refused.value.code == "audit"
     assert list(shelf) == [] and not list((tmp_path / "projects").iterdir())
+
+
+def test_a_padt_may_keep_a_template_elsewhere(tmp_path: Path) -> None:
+    own = tmp_path / "demo-copy"
+    own.mkdir()
+    (own / "tank.st").write_text("PROGRAM TankControl END_PROGRAM\n")
+    (own / "padt.toml").write_text(
+        '[project]\nname = "Demo tank"\n\n[resource]\nname = "Tank1"\n\n'
+        '[[resource.user]]\nname = "admin"\nlevel = "administrator"\npassword_hash = "h"\n'
+    )
+    shelf = ProjectShelf(
+        {}, tmp_path / "projects", PadtAuditLog(tmp_path / "a.jsonl", time.time_ns), {"tank": own}
+    )
+    folder = shelf.new_project("mine", "tank", ANNA)
+    config = tomllib.loads((folder / "padt.toml").read_text())
+    assert config["project"]["name"] == "mine"
+    assert config["resource"]["user"][0]["name"] == "admin"
+    assert (folder / "tank.st").read_text() == "PROGRAM TankControl END_PROGRAM\n"
