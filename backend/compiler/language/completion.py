@@ -140,11 +140,14 @@ def complete(analysis: Analysis, file: str, line: int, col: int) -> list[Complet
 
 
 def _in_comment_or_string(lexed: Lexed, line: int, col: int, offset: int) -> bool:
-    if any(c.offset < offset < c.end for c in lexed.comments):
+    if any(comment.holds(offset) for comment in lexed.comments):
         return True
     index = lexed.index_at(line, col) - 1
     token = lexed.tokens[index] if index >= 0 else None
-    return token is not None and token.kind == "string" and token.offset < offset < token.end
+    if token is None or token.kind != "string":
+        return False
+    unclosed = len(token.text) < 2 or token.text[-1] != token.text[0]
+    return token.offset < offset < token.end or (offset == token.end and unclosed)
 
 
 def _ordered(found: list[_Ranked], prefix: str) -> list[CompletionItem]:

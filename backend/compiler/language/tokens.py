@@ -177,6 +177,11 @@ class Comment:
     end_line: int
     offset: int  # in the text
     end: int  # offset after it
+    closed: bool  # by `*)` or `*/`; a `//` comment, or one never closed, goes on at its end
+
+    def holds(self, offset: int) -> bool:
+        """Whether a cursor at `offset` is in the comment (what it types is comment)."""
+        return self.offset < offset < self.end or (offset == self.end and not self.closed)
 
 
 @dataclass(frozen=True)
@@ -350,11 +355,9 @@ def _type_text(lexed: Lexed, first: int, last: int) -> str:
 
 def _comment(raw: str, line: int, end_line: int, start: int, end: int) -> Comment:
     """A comment from its text with its delimiters."""
-    if raw.startswith("//"):
-        body = raw[2:]
-    else:
-        body = raw[2:-2] if raw.endswith(("*)", "*/")) and len(raw) >= 4 else raw[2:]
-    return Comment(body.strip(), line, end_line, start, end)
+    closed = not raw.startswith("//") and len(raw) >= 4 and raw.endswith(("*)", "*/"))
+    body = raw[2:-2] if closed else raw[2:]
+    return Comment(body.strip(), line, end_line, start, end, closed)
 
 
 def _spans(tokens: list[Token], length: int, line_starts: list[int]) -> tuple[Span, ...]:

@@ -357,3 +357,84 @@ def test_outline_nests_methods_and_struct_members() -> None:
         ("method", "Reset"),
     ]
     assert [c.name for c in motor.children[-1].children] == ["hard"]
+
+
+# ---- object orientation, qualified names ----------------------------------------------------
+
+OOP = """\
+TYPE Color : (Red, Green, Blue); END_TYPE
+INTERFACE IRunnable
+METHOD Run : BOOL
+VAR_INPUT fast : BOOL; END_VAR
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Base IMPLEMENTS IRunnable
+VAR level : INT; END_VAR
+METHOD PUBLIC Run : BOOL
+VAR_INPUT fast : BOOL; END_VAR
+THIS^.level := 1;
+Run := fast;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Derived EXTENDS Base
+VAR shade : Color := Color.Green; END_VAR
+SUPER^.Run(fast := FALSE);
+level := level + 1;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR d : Derived; r : IRunnable; ok : BOOL; END_VAR
+d();
+r := d;
+ok := r.Run(fast := TRUE);
+ok := d.Run(fast := FALSE);
+END_PROGRAM
+"""
+
+
+def test_names_through_this_super_an_interface_and_an_inherited_variable() -> None:
+    analysis = analyse({"oop.st": OOP})
+    assert not [d for d in analysis.diagnostics if d.severity == "error"]
+    level = at(OOP, "level : INT")
+    found = references(analysis, "oop.st", *level)
+    lines = [place.range.line for place in found]
+    # declared in Base, written through THIS^ in Base's method, used in Derived (inherited)
+    assert lines == [
+        level[0],
+        at(OOP, "THIS^")[0],
+        at(OOP, "level := level")[0],
+        at(OOP, "level := level")[0],
+    ]
+    run_through_interface = definition(analysis, "oop.st", *at(OOP, "r.Run", offset=2))
+    assert run_through_interface is not None and run_through_interface.range.line == 3
+    run_of_base = definition(analysis, "oop.st", *at(OOP, "SUPER^.Run", offset=7))
+    assert run_of_base is not None and run_of_base.range.line == at(OOP, "METHOD PUBLIC Run")[0]
+    green = definition(analysis, "oop.st", *at(OOP, "Color.Green", offset=6))
+    assert green is not None and (green.range.line, text_at(analysis, green)) == (1, "Green")
+    members = labels(analysis, "oop.st", *at(OOP, "d.Run", offset=2))
+    assert "Run" in members and "level" not in members  # Base's own VAR stays inside
+
+
+# ---- hostile requests -------------------------------------------------------------------------
+
+
+def test_requests_anywhere_and_with_any_name_get_an_answer_not_a_traceback() -> None:
+    broken = "PROGRAM P\nVAR x : INT; END_VAR\n(* never closed\nx := 'never closed\n" + "a." * 5000
+    deep = "PROGRAM Q\nVAR y : INT; END_VAR\ny := " + "(" * 5000 + "\nEND_PROGRAM\n"
+    analysis = analyse({"tank.st": TANK, "broken.st": broken, "deep.st": deep})
+    places = [(0, 0), (-5, -5), (1, 10**9), (10**9, 1), (3, 3), (5, 9999), (3, 10**6)]
+    for file in ("tank.st", "broken.st", "deep.st", "absent.st", "../tank.st"):
+        for line, col in places:
+            assert hover(analysis, file, line, col) is None or file == "tank.st"
+            definition(analysis, file, line, col)
+            references(analysis, file, line, col)
+            complete(analysis, file, line, col)
+            assert not rename(analysis, file, line, col, "y").files or file == "tank.st"
+        outline(analysis, file)
+    chain_end = broken.count("\n") + 1, len("a." * 5000) + 1
+    assert complete(analysis, "broken.st", *chain_end) == []  # all in the unclosed comment
+    in_string = "PROGRAM S\nVAR s : STRING; END_VAR\ns := 'TO\nEND_PROGRAM\n"
+    assert complete(analyse({"s.st": in_string}), "s.st", 3, 9) == []
+    level = at(TANK, "level :")
+    for name in ("x" * 1_000_000, "a\x00b", "", " level", "lével"):
+        refused = rename(analysis, "tank.st", *level, name)
+        assert not refused.ok and len(refused.refusal) < 300
