@@ -181,5 +181,26 @@ def apply_edits(text: str, edits: tuple[Edit, ...]) -> str:
 
 
 def rename(language: ProjectLanguage, message: Rename, line_text: str) -> RenameEdits | str:
-    """The edits of a rename, or why it is refused."""
-    return "Rename is not available yet."
+    """The edits of a rename checked by the compiler, or why it is refused."""
+    try:
+        col = python_col(line_text, message.col - 1) + 1
+    except BadChange:
+        return "There is no name to rename here."
+    result = language.rename(message.file, message.line, col, message.name)
+    if result.refusal:
+        return f"Not renamed: {result.refusal}."
+    per_file = []
+    for changed in result.files:
+        lines = language.text(changed.file).split("\n")
+        edits = []
+        for edit in changed.edits:
+            where = edit.range
+            start = utf16_col(_at(lines, where.line), where.col - 1) + 1
+            end = utf16_col(_at(lines, where.end_line), where.end_col - 1) + 1
+            edits.append((where.line, start, where.end_line, end, edit.new_text))
+        per_file.append((changed.file, tuple(edits)))
+    return RenameEdits(name_at(line_text, col), message.name, tuple(per_file))
+
+
+def _at(lines: list[str], number: int) -> str:
+    return lines[number - 1] if 1 <= number <= len(lines) else ""

@@ -310,6 +310,10 @@ class EditorArea:
         document = self.documents.get(message.file)
         if document is None or self.language is None or self.project is None:
             return
+        readonly, reason = self._read_only()
+        if readonly:
+            self._notice(reason)
+            return
         language, project = self.language, self.project
         line_text = document.line(message.line)
 
@@ -319,7 +323,10 @@ class EditorArea:
                 self._notice(result)
                 return
             with self._lock:
-                self._apply_rename(project, result)
+                try:
+                    self._apply_rename(project, result)
+                except Refusal as refused:
+                    self._notice(f"The rename stopped: {refused.message}")
 
         self._work.submit("rename", job)
 
@@ -333,10 +340,13 @@ class EditorArea:
                 page_push.send(
                     self.client, f"edits:{file}", {"k": "edits", "file": file, "changes": changes}
                 )
-            else:
-                read = project_files.read_file(self.shelf, project, file, self.editor)
-                text = answers.apply_edits(read.text, changes)
-                project_files.save_file(self.shelf, project, file, text, read.hash, self.editor)
+            elif self.language is not None:
+                # the edits were made for the text the services read: saved on that base,
+                # so a file changed on disk since is a conflict, not a wrong edit
+                before = self.language.text(file)
+                base = project_files.content_hash(before.encode("utf-8"))
+                text = answers.apply_edits(before, changes)
+                project_files.save_file(self.shelf, project, file, text, base, self.editor)
             done += len(changes)
         if self.language is not None:
             self.language.reread()

@@ -199,3 +199,43 @@ def test_a_read_only_user_opens_but_cannot_save(plant: Plant) -> None:
         put_cursor(page, 20, 100)
         page.keyboard.type("xyz")
         assert editor_text(page) == before  # nothing typed goes in
+
+
+HELPER = """FUNCTION_BLOCK Counter
+VAR_INPUT
+  step : DINT;
+END_VAR
+VAR_OUTPUT
+  total : DINT;
+END_VAR
+total := total + step;
+END_FUNCTION_BLOCK
+"""
+
+
+def test_rename_across_the_open_file_and_a_file_on_disk(demo: Demo, tmp_path: Path) -> None:
+    helper = tmp_path / "project" / "helper.st"
+    helper.write_text(HELPER)
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_in_editor(page, demo.url, "admin", demo.password)
+        put_cursor(page, 16, 100)
+        page.keyboard.press("Enter")
+        page.keyboard.type("starts : Counter;")
+        page.keyboard.press("Escape")  # the completion list, if any
+        assert line_of(page, 17).strip() == "starts : Counter;"
+        put_cursor(page, 17, 14)
+        page.keyboard.press("F2")
+        box = page.locator('[data-testid="rename-input"]')
+        box.wait_for(timeout=10_000)
+        assert box.input_value() == "Counter"
+        box.fill("PumpCounter")
+        box.press("Enter")
+        status = page.locator('[data-testid="editor-status"]')
+        wait_until("the rename is reported", lambda: "Renamed Counter" in status.inner_text())
+        assert "2 edits in 2 files" in status.inner_text()
+        assert line_of(page, 17).strip() == "starts : PumpCounter;"
+        assert helper.read_text().startswith("FUNCTION_BLOCK PumpCounter\n")
+        # the open file's edit is the user's, to save or undo
+        page.keyboard.press("Control+z")
+        wait_until("undone", lambda: line_of(page, 17).strip() == "starts : Counter;")

@@ -600,15 +600,16 @@ class PadtEditor {
     box.focus();
     box.select();
     box.addEventListener("keydown", (e) => {
-      if (e.key === "Escape") {
-        this.drawNote();
-        this.view.focus();
-      } else if (e.key === "Enter") {
+      if (e.key !== "Escape" && e.key !== "Enter") return;
+      // not passed on: the editor, focused again, would take the Enter as a line break
+      e.preventDefault();
+      e.stopPropagation();
+      if (e.key === "Enter") {
         this.flushChanges(doc);
         this.send({ k: "rename", file: doc.file, version: doc.version, ...this.where(pos), name: box.value.trim() });
-        this.drawNote();
-        this.view.focus();
       }
+      this.drawNote();
+      setTimeout(() => this.view.focus(), 0);
     });
   }
 
