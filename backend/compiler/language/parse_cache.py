@@ -25,10 +25,11 @@ from backend.compiler.parse import Piece, SyntaxTree, piece_of, placed, syntax_t
 from backend.compiler.pipeline import Parsed, parse_project, with_standard_library
 from backend.compiler.source import ProjectSize, SourceFile
 
-# characters of text whose parses each level keeps: all of OSCAT is 0.5 M; a tree takes
-# some 60 times its text in memory
-TREE_CACHE_CHARS = 4_000_000
-PIECE_CACHE_CHARS = 4_000_000
+# characters of text whose parses each level keeps: the parses of all of OSCAT (0.45 M
+# characters, 0.33 M in distinct chunks) take 38 MB, trees and ASTs together, so each
+# level at its bound takes some 80 MB
+TREE_CACHE_CHARS = 2_000_000
+PIECE_CACHE_CHARS = 2_000_000
 
 K = TypeVar("K", bound=Hashable)
 V = TypeVar("V")

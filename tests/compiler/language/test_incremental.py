@@ -4,6 +4,7 @@ diagnostics of a `LanguageProject` are those of `analyse` on the same texts."""
 
 from __future__ import annotations
 
+import functools
 import random
 import re
 import threading
@@ -13,6 +14,7 @@ import pytest
 
 from backend.compiler.ast import SourceUnit
 from backend.compiler.diagnostics import CompileError, Diagnostic
+from backend.compiler.language import parse_cache
 from backend.compiler.language.analysis import analyse
 from backend.compiler.language.chunks import chunks
 from backend.compiler.language.language_project import LanguageProject
@@ -228,3 +230,17 @@ def test_a_file_beyond_the_size_limit_is_refused_as_the_compiler_refuses_it() ->
     expected = analyse({"huge.st": huge, **demo_texts()}).diagnostics
     assert project.analysis().diagnostics == expected
     assert [d.code for d in project.diagnostics("huge.st")] == ["E0707"]
+
+
+def test_the_shared_parses_are_bounded_least_recently_used_first_out() -> None:
+    cache: parse_cache._SizedCache[str, str] = parse_cache._SizedCache(10)
+    made: list[str] = []
+
+    def make(text: str) -> str:
+        made.append(text)
+        return text.upper()
+
+    for text in ("aaaa", "bbbb", "aaaa", "cccc", "aaaa", "bbbb"):
+        assert cache.get(text, len(text), functools.partial(make, text)) == text.upper()
+    # "bbbb" was the least recently used when "cccc" came, so it was made again
+    assert made == ["aaaa", "bbbb", "cccc", "bbbb"]
