@@ -145,6 +145,24 @@ class PadtLanguageServer(LanguageServer):
             log.exception("padt lsp: a request failed")
             raise JsonRpcException(f"padt lsp failed: {exc!r}", code=_REQUEST_FAILED) from None
 
+    async def watch_files(self) -> None:
+        """Ask the client to tell of .st files and padt.toml changed, made or deleted by
+        other tools (a client that cannot is told nothing; saves still count)."""
+        workspace = self.client_capabilities.workspace
+        watched = workspace and workspace.did_change_watched_files
+        if not (watched and watched.dynamic_registration):
+            return
+        options = types.DidChangeWatchedFilesRegistrationOptions(
+            [types.FileSystemWatcher(pattern) for pattern in ("**/*.st", "**/padt.toml")]
+        )
+        registration = types.Registration(
+            "padt-files", types.WORKSPACE_DID_CHANGE_WATCHED_FILES, options
+        )
+        try:
+            await self.client_register_capability_async(types.RegistrationParams([registration]))
+        except Exception as exc:  # the client's refusal: the files are read again on saves
+            log.warning("padt lsp: the client does not watch files: %s", exc)
+
     # ---- diagnostics, published after each change once typing pauses
 
     def changed(self) -> None:
@@ -217,8 +235,9 @@ def make_server(folder: Path | None) -> PadtLanguageServer:
         log.info("padt lsp: project %s", ls.project.folder)
 
     @server.feature(types.INITIALIZED)
-    def initialized(ls: PadtLanguageServer, params: types.InitializedParams) -> None:
+    async def initialized(ls: PadtLanguageServer, params: types.InitializedParams) -> None:
         ls.changed()  # the project's diagnostics before anything is opened
+        await ls.watch_files()
 
     @server.feature(types.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: PadtLanguageServer, params: types.DidOpenTextDocumentParams) -> None:

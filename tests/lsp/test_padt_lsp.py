@@ -15,7 +15,12 @@ import pytest
 import pytest_asyncio
 from lsprotocol import types
 from pygls.exceptions import JsonRpcException
-from pytest_lsp import ClientServerConfig, LanguageClient, client_capabilities
+from pytest_lsp import (
+    ClientServerConfig,
+    LanguageClient,
+    client_capabilities,
+    make_test_lsp_client,
+)
 
 from backend.engineering.project import demo_project_path
 from tests.conftest import free_port
@@ -32,11 +37,27 @@ async def until(condition: Callable[[], object], what: str) -> None:
         await asyncio.sleep(0.05)
 
 
+# what each client was asked to watch (client/registerCapability), by the client's id
+WATCHED: dict[int, list[types.Registration]] = {}
+
+
+def watching_client() -> LanguageClient:
+    """pytest-lsp's client, answering the server's request to watch files as VS Code does."""
+    client = make_test_lsp_client()
+    WATCHED[id(client)] = []
+
+    @client.feature(types.CLIENT_REGISTER_CAPABILITY)  # type: ignore[untyped-decorator]
+    def registered(params: types.RegistrationParams) -> None:
+        WATCHED[id(client)].extend(params.registrations)
+
+    return client
+
+
 async def start(folder: Path, *, given: bool = True) -> LanguageClient:
     """`padt lsp` on stdio, for the project given on its command line or else as the
     editor's workspace folder."""
     command = [sys.executable, "-m", "padt.cli", "lsp", *([str(folder)] if given else [])]
-    client = await ClientServerConfig(command).start()
+    client = await ClientServerConfig(command, client_factory=watching_client).start()
     assert isinstance(client, LanguageClient)
     await initialize(client, folder)
     return client
@@ -312,7 +333,7 @@ async def test_over_tcp(demo: Path) -> None:
     port = free_port()
     command = [sys.executable, "-m", "padt.cli", "lsp", "--tcp", str(port), str(demo)]
     server = subprocess.Popen(command)
-    client = LanguageClient()
+    client = watching_client()
     try:
         loop = asyncio.get_running_loop()
         deadline = loop.time() + TIMEOUT_S
@@ -411,3 +432,31 @@ async def test_formatting_indents_and_upper_cases_keywords(
                 options=types.FormattingOptions(tab_size=2, insert_spaces=True),
             )
         )
+
+
+@pytest.mark.asyncio
+async def test_a_file_made_by_another_tool_joins_the_project(demo: Path) -> None:
+    client = await start(demo)
+    watched = WATCHED[id(client)]
+    try:
+        await until(lambda: watched, "a request to watch the project's files")
+        [registration] = watched
+        assert registration.method == types.WORKSPACE_DID_CHANGE_WATCHED_FILES
+        tank = demo / "tank.st"
+        text = tank.read_text().replace("  inlet : Valve;", "  inlet : Valve;\n  feed : Feeder;")
+        uri = open_document(client, tank, text)
+        await until(lambda: diagnostics(client, uri), "the unknown type's diagnostic")
+        assert "Feeder" in diagnostics(client, uri)[0].message
+        feeder = demo / "feeder.st"
+        feeder.write_text(
+            "FUNCTION_BLOCK Feeder\nVAR_INPUT on : BOOL; END_VAR\nEND_FUNCTION_BLOCK\n"
+        )
+        client.workspace_did_change_watched_files(
+            types.DidChangeWatchedFilesParams(
+                [types.FileEvent(feeder.as_uri(), types.FileChangeType.Created)]
+            )
+        )
+        await until(lambda: not diagnostics(client, uri), "tank.st clean with Feeder known")
+    finally:
+        await client.shutdown_session()
+        await client.stop()  # type: ignore[no-untyped-call]
