@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import NamedTuple
 
-from backend.compiler.language.chunks import Chunk, chunks
+from backend.compiler.language.cuts import cut
 from backend.compiler.limits import MAX_COMMENT_NESTING
 from backend.compiler.parse import nested_comment
 
@@ -284,21 +284,16 @@ def pieces(text: str) -> list[tuple[Lexed, int]]:
     """The text lexed declaration by declaration (a POU with its methods, a TYPE, a global
     list: `chunks`), each with the lines of the text before it. A keystroke changes one
     declaration: only that one is lexed again, however long the file."""
-    return [(lex(chunk.text), chunk.line_offset) for chunk in _chunks(text)]
+    return [(lex(chunk.text), chunk.line_offset) for chunk in cut(text)]
 
 
 def piece_at(text: str, line: int) -> tuple[Lexed, int]:
     """The lexed declaration that holds `line` of the text, and the lines before it (its
     lines are the text's minus that; its columns are the text's)."""
-    found = _chunks(text)
+    found = cut(text)
     offsets = [chunk.line_offset for chunk in found]
     chunk = found[max(bisect_right(offsets, line - 1) - 1, 0)]
     return lex(chunk.text), chunk.line_offset
-
-
-@lru_cache(maxsize=64)
-def _chunks(text: str) -> tuple[Chunk, ...]:
-    return tuple(chunks(text)) or (Chunk(0, text),)
 
 
 def declarations(lexed: Lexed, span: int) -> list[tuple[int, str]]:
