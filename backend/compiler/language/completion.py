@@ -23,6 +23,7 @@ from backend.compiler.language.hover import (
 from backend.compiler.language.position import (
     Symbol,
     base_before,
+    call_around,
     declared_in_text,
     members,
     scope_at,
@@ -67,6 +68,7 @@ SNIPPETS = (
 
 # how high a kind of item ranks (lower first) among those that match the prefix alike
 _RANK = {
+    "parameter": -1,
     "local": 0,
     "member": 0,
     "enum_value": 1,
@@ -136,6 +138,9 @@ def complete(analysis: Analysis, file: str, line: int, col: int) -> list[Complet
         found = _type_items(analysis)
     else:
         found = _general_items(analysis, file, lexed, line, col)  # lines of the piece
+        if previous in ("(", ","):  # an argument begins: the callee's parameters first
+            callee = call_around(analysis, file, lexed, before + 1, lines_before)
+            found += _parameter_items(callee) if callee is not None else []
     return _ordered(found, prefix)
 
 
@@ -178,6 +183,18 @@ def _member_item(symbol: Symbol) -> _Ranked:
 def _seen_from_outside(symbol: Symbol) -> bool:
     """A member an engineer names through an instance: not a function block's own VAR."""
     return symbol.kind != "variable" or symbol.detail in _OUTSIDE
+
+
+def _parameter_items(callee: PouSymbols) -> list[_Ranked]:
+    """`IN := ` for each input and in-out, `Q => ` for each output of what is called."""
+    found = []
+    for number, parameter in enumerate(callee.parameters):  # in the order declared
+        arrow = "=>" if parameter.kind == "VAR_OUTPUT" else ":="
+        detail = f"{parameter.kind} : {parameter.type.name}"
+        insert = f"{parameter.name} {arrow} "
+        item = CompletionItem(f"{parameter.name} {arrow}", "variable", detail, insert, False)
+        found.append(_Ranked(_RANK["parameter"] - len(callee.parameters) + number, item))
+    return found
 
 
 def _enum_items(analysis: Analysis, type_name: str) -> list[_Ranked]:

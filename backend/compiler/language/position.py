@@ -503,27 +503,44 @@ def _expression_base(place: _Place, index: int, depth: int) -> Type | Symbol | N
 
 def _parameter(place: _Place, call: int, name: str, depth: int) -> Symbol | None:
     """The parameter `name` of what the call whose `(` is token `call` calls."""
-    tokens = place.lexed.tokens
-    if call < 1:
-        return None
-    callee: PouSymbols | None = None
-    if tokens[call - 1].is_name():
-        called = _token_symbol(place, call - 1, depth + 1)
-        if called is not None and called.block is not None:
-            callee = called.block
-        elif called is not None and isinstance(called.type, FbType):
-            callee = place.analysis.resolved.pous.get(key(called.type.name))
-    else:
-        base = _expression_base(place, call - 1, depth + 1)
-        if isinstance(base, FbType):
-            callee = place.analysis.resolved.pous.get(key(base.name))
-    if callee is None:
-        return None
-    found = callee.by_key.get(key(name))
-    if found is None or found.kind not in PARAMETER_KINDS:
+    callee = _callee(place, call, depth)
+    found = callee.by_key.get(key(name)) if callee is not None else None
+    if callee is None or found is None or found.kind not in PARAMETER_KINDS:
         return None
     owner = callee.name if callee.outer is None else f"{callee.outer.name}.{callee.name}"
     return variable_symbol(found, owner)
+
+
+def call_around(
+    analysis: Analysis, file: str, lexed: Lexed, index: int, line_offset: int = 0
+) -> PouSymbols | None:
+    """The function, function block or method whose argument list token `index` (or the
+    end of the text) stands in, if that is known."""
+    call = _open_call(lexed, index)
+    if call is None:
+        return None
+    token = lexed.tokens[call]
+    scope = scope_at(analysis, lexed, token.line, token.col)
+    return _callee(_Place(analysis, file, lexed, scope, line_offset), call, 0)
+
+
+def _callee(place: _Place, call: int, depth: int) -> PouSymbols | None:
+    """What the call whose `(` is token `call` calls: a POU, a method, the block of an
+    instance."""
+    tokens = place.lexed.tokens
+    if call < 1:
+        return None
+    if tokens[call - 1].is_name():
+        called = _token_symbol(place, call - 1, depth + 1)
+        if called is not None and called.block is not None:
+            return called.block
+        if called is not None and isinstance(called.type, FbType):
+            return place.analysis.resolved.pous.get(key(called.type.name))
+        return None
+    base = _expression_base(place, call - 1, depth + 1)
+    if isinstance(base, FbType):
+        return place.analysis.resolved.pous.get(key(base.name))
+    return None
 
 
 def _open_parenthesis(lexed: Lexed, index: int) -> int:

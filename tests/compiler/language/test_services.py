@@ -287,6 +287,21 @@ def test_completion_offers_standard_fbs_and_instance_calls_as_snippets() -> None
     assert found[-1].kind == "keyword"
 
 
+def test_completion_in_a_call_offers_the_parameters_first_in_their_order() -> None:
+    analysis = analyse({"tank.st": TANK})
+    line, col = at(TANK, "refillDelay(IN", offset=12)
+    found = complete(analysis, "tank.st", line, col)
+    assert [(i.label, i.insert_text) for i in found[:4]] == [
+        ("IN :=", "IN := "),
+        ("PT :=", "PT := "),
+        ("Q =>", "Q => "),
+        ("ET =>", "ET => "),
+    ]
+    assert found[4].label == "alarmLow"  # then what may be passed
+    line, col = at(MAIN, "pump.Reset(hard", offset=11)
+    assert labels(two_files(), "main.st", line, col)[0] == "hard :="
+
+
 def test_completion_after_a_colon_in_a_var_block_offers_types() -> None:
     types = "TYPE Color : (Red, Green); END_TYPE\n"
     text = "PROGRAM P\nVAR\n  c : \nEND_VAR\nEND_PROGRAM\n"
