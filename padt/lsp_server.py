@@ -13,6 +13,7 @@ import logging
 import re
 import sys
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import TypeVar
 
@@ -71,13 +72,19 @@ R = TypeVar("R")
 
 
 class PadtLanguageServer(LanguageServer):
-    """The server and what it holds for its one client: the project, the versions of the
-    documents the client has open, and what it was last told of diagnostics."""
+    """The server and what it holds for its one client: the project, the documents the
+    client has open as the client has them, and what it was last told of diagnostics.
+
+    Every call of the services runs on one worker thread, in the order the client's
+    messages came: a change is taken before the requests after it, and the event loop
+    never waits for an analysis (the services hold a lock while they analyse)."""
 
     def __init__(self, folder: Path | None) -> None:
         super().__init__("padt", _version())
         self.given_folder = folder
         self.project: ProjectLanguage | None = None
+        self.worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="padt-lsp")
+        self.documents: dict[str, str] = {}  # open document -> its text
         self.versions: dict[str, int] = {}  # open document -> its version
         self.published: set[str] = set()  # files last published with diagnostics
         self.generation = 0  # counts changes, so that only the newest state is published
@@ -101,8 +108,13 @@ class PadtLanguageServer(LanguageServer):
     def uri_of(self, name: str) -> str:
         return str(from_fs_path(str(self.language().folder / name)))
 
+    def text(self, name: str) -> str:
+        """A file's text as the client has it (an open document), else as the services."""
+        found = self.documents.get(name)
+        return self.language().text(name) if found is None else found
+
     def lines(self, name: str) -> Lines:
-        return Lines.of(self.language().text(name))
+        return Lines.of(self.text(name))
 
     def file(self, uri: str) -> str:
         """The project's name of a document a request is about."""
@@ -138,7 +150,7 @@ class PadtLanguageServer(LanguageServer):
         takes a while; notifications keep arriving meanwhile); a request the service
         refuses is a failed request with its reason."""
         try:
-            return await asyncio.to_thread(call)
+            return await asyncio.get_running_loop().run_in_executor(self.worker, call)
         except LanguageError as exc:
             raise JsonRpcException(str(exc), code=_REQUEST_FAILED) from None
         except Exception as exc:  # a fault of ours: said, logged, and the server goes on
@@ -163,6 +175,38 @@ class PadtLanguageServer(LanguageServer):
         except Exception as exc:  # the client's refusal: the files are read again on saves
             log.warning("padt lsp: the client does not watch files: %s", exc)
 
+    def take(self, name: str, text: str, version: int) -> None:
+        """An open document's text, handed to the services in turn."""
+        self.documents[name] = text
+        self.versions[name] = version
+        loop = asyncio.get_running_loop()
+
+        def hand_over() -> None:
+            try:
+                self.language().open(name, text)
+            except LanguageError as exc:  # left as the file is on disk, until opened again
+                loop.call_soon_threadsafe(self.refused, name, str(exc))
+
+        self.in_turn(hand_over)
+
+    def refused(self, name: str, reason: str) -> None:
+        self.documents.pop(name, None)
+        self.versions.pop(name, None)
+        self.in_turn(lambda: self.language().close(name))
+        self.window_show_message(types.ShowMessageParams(types.MessageType.Error, reason))
+
+    def in_turn(self, call: Callable[[], object]) -> None:
+        """A change for the services, after the calls before it; then the diagnostics."""
+
+        def logged() -> None:
+            try:
+                call()
+            except Exception:  # a fault of ours: logged, and the server goes on
+                log.exception("padt lsp: a change failed")
+
+        self.worker.submit(logged)
+        self.changed()
+
     # ---- diagnostics, published after each change once typing pauses
 
     def changed(self) -> None:
@@ -178,7 +222,8 @@ class PadtLanguageServer(LanguageServer):
                 if generation != self.generation:
                     continue  # still typing
                 try:
-                    found = await asyncio.to_thread(self._diagnostics)
+                    loop = asyncio.get_running_loop()
+                    found = await loop.run_in_executor(self.worker, self._diagnostics)
                 except Exception:  # a fault of ours: logged; the next change tries again
                     log.exception("padt lsp: the diagnostics failed")
                     return
@@ -195,7 +240,7 @@ class PadtLanguageServer(LanguageServer):
     def _lsp_diagnostics(self, name: str, items: list[Diagnostic]) -> list[types.Diagnostic]:
         if not items:
             return []
-        lines = self.lines(name)
+        lines = Lines.of(self.language().text(name))  # the text analysed
         return [
             types.Diagnostic(
                 range=lines.range(*self.language().diagnostic_range(d), self.encoding),
@@ -242,37 +287,34 @@ def make_server(folder: Path | None) -> PadtLanguageServer:
     @server.feature(types.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: PadtLanguageServer, params: types.DidOpenTextDocumentParams) -> None:
         name = ls.name_of(params.text_document.uri)
-        if name is None:
-            return
-        _set_text(ls, name, params.text_document.text, params.text_document.version)
+        if name is not None:
+            ls.take(name, params.text_document.text, params.text_document.version)
 
     @server.feature(types.TEXT_DOCUMENT_DID_CHANGE)
     def did_change(ls: PadtLanguageServer, params: types.DidChangeTextDocumentParams) -> None:
         name = ls.name_of(params.text_document.uri)
-        if name is None or name not in ls.versions:
+        if name is None or name not in ls.documents:
             return
-        text = ls.language().text(name)
+        text = ls.documents[name]
         for change in params.content_changes:
             text = edited(text, change, ls.encoding)
-        _set_text(ls, name, text, params.text_document.version)
+        ls.take(name, text, params.text_document.version)
 
     @server.feature(types.TEXT_DOCUMENT_DID_CLOSE)
     def did_close(ls: PadtLanguageServer, params: types.DidCloseTextDocumentParams) -> None:
         name = ls.name_of(params.text_document.uri)
-        if name is None or ls.versions.pop(name, None) is None:
+        if name is None or ls.documents.pop(name, None) is None:
             return
-        ls.language().close(name)
-        ls.changed()
+        ls.versions.pop(name, None)
+        ls.in_turn(lambda: ls.language().close(name))
 
     @server.feature(types.TEXT_DOCUMENT_DID_SAVE)
     def did_save(ls: PadtLanguageServer, params: types.DidSaveTextDocumentParams) -> None:
-        ls.language().reread()
-        ls.changed()
+        ls.in_turn(ls.language().reread)
 
     @server.feature(types.WORKSPACE_DID_CHANGE_WATCHED_FILES)
     def files_changed(ls: PadtLanguageServer, params: types.DidChangeWatchedFilesParams) -> None:
-        ls.language().reread()  # another tool changed, added or deleted files
-        ls.changed()
+        ls.in_turn(ls.language().reread)  # another tool changed, added or deleted files
 
     @server.feature(
         types.TEXT_DOCUMENT_COMPLETION, types.CompletionOptions(trigger_characters=[".", "#"])
@@ -411,18 +453,6 @@ def _line_edits(before: Lines, after: str, encoding: str) -> list[types.TextEdit
         for n in range(count)
         if before.line(n) != new.line(n)
     ]
-
-
-def _set_text(ls: PadtLanguageServer, name: str, text: str, version: int) -> None:
-    try:
-        ls.language().open(name, text)
-    except LanguageError as exc:  # the document is left as the file is, until opened again
-        ls.versions.pop(name, None)
-        ls.language().close(name)
-        ls.window_show_message(types.ShowMessageParams(types.MessageType.Error, str(exc)))
-        return
-    ls.versions[name] = version
-    ls.changed()
 
 
 def _workspace_folder(params: types.InitializeParams) -> Path:
