@@ -19,7 +19,7 @@ from typing import Generic, TypeVar
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.diagnostics import CompileError, Diagnostic
-from backend.compiler.language.chunks import chunks
+from backend.compiler.language.cuts import cut
 from backend.compiler.limits import MAX_PROJECT_TOKENS
 from backend.compiler.parse import Piece, SyntaxTree, piece_of, placed, syntax_tree, unit_of
 from backend.compiler.pipeline import Parsed, parse_project, with_standard_library
@@ -77,7 +77,7 @@ class FileParse:
 
 def parse_file(file: str, text: str) -> FileParse:
     """`parse_source(file, text)` from the cached parses of the text's chunks."""
-    parts = chunks(text)
+    parts = cut(text)  # after a keystroke, cut again only in the declaration it changed
     trees = [_TREES.get(chunk.text, len(chunk.text), _tree_maker(chunk.text)) for chunk in parts]
     tokens = sum(tree.tokens for tree in trees)
     for chunk, tree in zip(parts, trees, strict=True):
