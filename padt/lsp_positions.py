@@ -56,7 +56,7 @@ class Lines:
         the middle of a character's units the character after it."""
         if position.line >= len(self.starts):
             return len(self.text)
-        line = self.line(max(position.line, 0))
+        line = self.line(position.line)  # lsprotocol refuses a negative one
         counted = 0
         for index, char in enumerate(line):
             if counted >= position.character:
@@ -67,7 +67,7 @@ class Lines:
     def place(self, position: types.Position, encoding: str) -> tuple[int, int]:
         """The services' (line, col), both from 1, of an LSP position."""
         offset = self.offset(position, encoding)
-        line = min(max(position.line, 0), len(self.starts) - 1)
+        line = min(position.line, len(self.starts) - 1)
         return line + 1, offset - self.starts[line] + 1
 
     def position(self, line: int, col: int, encoding: str) -> types.Position:
