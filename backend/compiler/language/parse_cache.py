@@ -1,11 +1,11 @@
 """Parses kept for the process: every editor session and `padt lsp` client shares them,
 so a second session on the same project parses nothing, and a keystroke re-parses only
-the declaration it changed (see `chunks`).
+the declaration it changed (see `chunks` and `cuts`).
 
 Two levels, each bounded by the size of the texts it holds (least recently used first
 out): the parse tree of a chunk's text (of no file, at no line), and the AST items of a
 chunk placed in a file at a line, made from that tree; a line typed above a chunk only
-places its tree anew, which costs a tenth of its parse. The result is the same as
+places its tree anew, which costs about a quarter of its parse. The result is the same as
 `parse_source` on the whole file: `tests/compiler/language/test_incremental.py` compares."""
 
 from __future__ import annotations
