@@ -15,6 +15,7 @@ from backend.compiler.language.position import Location, Range, Symbol, symbol_a
 from backend.compiler.language.tokens import Lexed, piece_at
 from backend.compiler.resolve import PouSymbols
 from backend.compiler.source import Pos, stdlib_sources
+from backend.compiler.types import ElementaryType
 
 _MAX_COMMENT = 2000  # characters of a declaration's comment shown
 
@@ -162,6 +163,8 @@ def _initial_value(analysis: Analysis, pos: Pos | None) -> str:
 
 def _type_signature(analysis: Analysis, symbol: Symbol) -> str:
     resolved = analysis.resolved
+    if isinstance(symbol.type, ElementaryType) and symbol.detail == "elementary":
+        return _elementary(symbol.type)
     if key(symbol.name) in resolved.structs:
         info = resolved.structs[key(symbol.name)]
         fields = [f"  {m.name} : {m.type.name};" for m in info.members]
@@ -172,6 +175,27 @@ def _type_signature(analysis: Analysis, symbol: Symbol) -> str:
         return f"TYPE {symbol.name} : ({listed})"
     declared = _declared_text(analysis, symbol.declared)
     return f"TYPE {symbol.name} : {declared}" if declared else f"TYPE {symbol.name}"
+
+
+def _elementary(basic: ElementaryType) -> str:
+    """`INT: 16-bit signed integer, -32768..32767`."""
+    if basic.is_integer:
+        kind = (
+            "bit string"
+            if basic.category == "bits"
+            else "signed integer"
+            if basic.signed
+            else "unsigned integer"
+        )
+        return f"{basic.name}: {basic.bits}-bit {kind}, {basic.min}..{basic.max}"
+    described = {
+        "bool": "TRUE or FALSE",
+        "real": f"{basic.bits}-bit floating point",
+        "time": "a duration (T#1h2m3s4ms)",
+        "date": "a date, time of day or both",
+        "string": f"characters, at most {basic.max_length} unless [n] says how many",
+    }
+    return f"{basic.name}: {described.get(basic.category, basic.category)}"
 
 
 def _declared_text(analysis: Analysis, pos: Pos | None) -> str:

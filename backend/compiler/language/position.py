@@ -228,6 +228,9 @@ def lookup(analysis: Analysis, scope: PouSymbols | None, name: str) -> Symbol | 
     standard = builtins.lookup(name)
     if standard is not None and not name.startswith("_"):
         return Symbol("standard_function", standard.name, None, "", "FUNCTION")
+    basic = elementary(name)
+    if basic is not None:
+        return Symbol("type", basic.name, None, "", "elementary", basic)
     return None
 
 

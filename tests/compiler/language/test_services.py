@@ -124,6 +124,14 @@ def test_hover_on_a_pou_shows_its_interface_and_on_a_standard_function_its_param
     assert standard.declared is None
 
 
+def test_hover_on_an_elementary_type_shows_its_range() -> None:
+    analysis = analyse({"tank.st": TANK})
+    shown = hover(analysis, "tank.st", *at(TANK, "INT := 500"))
+    assert shown is not None and shown.signature == "INT: 16-bit signed integer, -32768..32767"
+    assert shown.declared is None
+    assert not rename(analysis, "tank.st", *at(TANK, "INT := 500"), "Int16").ok
+
+
 def test_no_hover_on_a_keyword_a_literal_or_a_comment() -> None:
     analysis = analyse({"tank.st": TANK})
     assert hover(analysis, "tank.st", *at(TANK, "END_IF")) is None
