@@ -49,6 +49,16 @@ def test_diagnostics_of_the_saved_file_and_of_the_text_being_typed(site: Plant) 
     assert ask(site, "diagnostics", {"file": "plant.st"}) == {"diagnostics": []}
 
 
+def test_padt_toml_as_the_client_has_it(site: Plant) -> None:
+    saved = (site.projects / "plant" / "padt.toml").read_text()
+    assert ask(site, "diagnostics", {"file": "padt.toml"}) == {"diagnostics": []}
+    typed = saved.replace('pou = "P"', 'pou = "Q"')
+    [found] = ask(site, "diagnostics", {"file": "padt.toml", "text": typed})["diagnostics"]
+    assert found["code"] == "E0601" and "no PROGRAM 'Q'" in found["message"]
+    [unread] = ask(site, "diagnostics", {"file": "padt.toml", "text": "[resource"})["diagnostics"]
+    assert unread["severity"] == "error" and "padt.toml" in unread["message"]
+
+
 def test_completion_hover_definition_references_and_outline(site: Plant) -> None:
     typed = TEXT.replace("flag := n > 10;", "flag := n > lim")
     place = at("flag :=", "flag")

@@ -374,8 +374,32 @@ async def test_an_oscat_file_of_4888_lines(tmp_path: Path) -> None:
         severities = {d.severity for d in diagnostics(client, uri)}
         assert types.DiagnosticSeverity.Error not in severities  # it compiles, with warnings
 
-        # in BLIND_SHADE, below the call of its TOF instance: `sun_delay.`
+        # BLIND_SHADE's TOF instance, where it is called: what it is, where it is declared,
+        # where it is named and its rename (the same name in BLIND_SHADE_S is another one)
         call = place(building, "  sun_delay(IN := sun, PT := shade_delay);", "sun_delay")
+        document = types.TextDocumentIdentifier(uri)
+        hovered = await client.text_document_hover_async(types.HoverParams(document, call))
+        assert hovered is not None and isinstance(hovered.contents, types.MarkupContent)
+        assert "sun_delay : TOF" in hovered.contents.value
+        declared = await client.text_document_definition_async(
+            types.DefinitionParams(document, call)
+        )
+        assert isinstance(declared, types.Location)
+        assert declared.range.start == place(building, "    sun_delay : TOF;", "sun_delay")
+        named = await client.text_document_references_async(
+            types.ReferenceParams(
+                context=types.ReferenceContext(True), text_document=document, position=call
+            )
+        )
+        lines = [found.range.start.line for found in named or []]
+        assert lines == [declared.range.start.line, call.line, call.line + 2]
+        renamed = await client.text_document_rename_async(
+            types.RenameParams(text_document=document, position=call, new_name="shadeDelay")
+        )
+        assert renamed is not None and renamed.changes is not None
+        assert [edit.range.start.line for edit in renamed.changes[uri]] == lines
+
+        # below the call: `sun_delay.`, its members
         end = types.Position(call.line, len("  sun_delay(IN := sun, PT := shade_delay);"))
         change(client, uri, 2, end, "\n  sun_delay.")
         dot = types.Position(call.line + 1, len("  sun_delay."))
