@@ -127,8 +127,9 @@ def complete(analysis: Analysis, file: str, line: int, col: int) -> list[Complet
     previous = lexed.tokens[before].text if before >= 0 else ""
     if previous == ".":
         base = base_before(analysis, file, lexed, before, lines_before)
+        inside = _through_self(lexed, before)  # THIS^. sees the block's own variables
         found = (
-            [_member_item(m) for m in members(analysis, base) if _seen_from_outside(m)]
+            [_member_item(m) for m in members(analysis, base) if inside or _seen_from_outside(m)]
             if base is not None
             else []
         )
@@ -178,6 +179,13 @@ def _member_item(symbol: Symbol) -> _Ranked:
     kind = symbol.kind if symbol.kind in ("property", "enum_value") else "member"
     detail = f"{symbol.detail} : {type_name}" if symbol.kind == "variable" else type_name
     return _Ranked(_RANK["member"], CompletionItem(symbol.name, kind, detail, symbol.name, False))
+
+
+def _through_self(lexed: Lexed, dot: int) -> bool:
+    """Whether the `.` at token `dot` follows `THIS^` or `SUPER^`."""
+    if dot < 2 or lexed.tokens[dot - 1].text != "^":
+        return False
+    return lexed.tokens[dot - 2].upper in ("THIS", "SUPER")
 
 
 def _seen_from_outside(symbol: Symbol) -> bool:

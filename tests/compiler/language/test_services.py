@@ -435,6 +435,8 @@ def test_names_through_this_super_an_interface_and_an_inherited_variable() -> No
     assert green is not None and (green.range.line, text_at(analysis, green)) == (1, "Green")
     members = labels(analysis, "oop.st", *at(OOP, "d.Run", offset=2))
     assert "Run" in members and "level" not in members  # Base's own VAR stays inside
+    this = labels(analysis, "oop.st", *at(OOP, "THIS^.level", offset=6))
+    assert this == ["level", "Run"]  # inside the block its own variables too
 
 
 # ---- hostile requests -------------------------------------------------------------------------
