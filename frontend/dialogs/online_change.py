@@ -56,7 +56,8 @@ FATE_COLORS = {
     "lost": RED,
 }
 _CELL = "padding:2px 8px;border-bottom:1px solid #e9ecef"
-_SCROLL = "max-height:260px;overflow:auto;border:1px solid #e9ecef;margin:2px 0 8px 0"
+# each of the diff and the table at most a fifth of the window: the confirmation stays near
+_SCROLL = "max-height:22vh;overflow:auto;border:1px solid #e9ecef;margin:2px 0 8px 0"
 _HEADING = "margin:10px 0 2px 0;font-weight:600"
 
 
