@@ -102,6 +102,11 @@ def _symbol_problem(symbol: Symbol) -> str:
         return f"'{symbol.name}' is a name of the language; it cannot change"
     if symbol.kind == "variable" and symbol.detail == "SYSTEM":
         return f"'{symbol.name}' is a system variable; its name cannot change"
+    if symbol.kind == "pou" and symbol.detail == "PROGRAM":
+        return (
+            f"'{symbol.name}' is a PROGRAM, which padt.toml's program instances name: rename it "
+            "in the project tree, which renames them too"
+        )
     return ""
 
 

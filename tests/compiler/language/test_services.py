@@ -237,6 +237,8 @@ def test_rename_refuses_with_a_reason() -> None:
     assert "not an identifier" in refusals["a__b"]
     standard = rename(analysis, "main.st", *at(MAIN, "TON"), "Timer")
     assert "standard library" in standard.refusal
+    program = rename(analysis, "main.st", *at(MAIN, "Main"), "Plant")
+    assert "PROGRAM, which padt.toml's program instances name" in program.refusal
     nothing = rename(analysis, "main.st", *at(MAIN, "END_VAR"), "y")
     assert not nothing.ok and not nothing.files
 
