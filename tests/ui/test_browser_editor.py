@@ -15,7 +15,15 @@ import pytest
 from playwright.sync_api import Page
 
 from tests.support.browser import chromium
-from tests.ui.browser_steps import PASSWORD, Demo, Plant, log_in, shoot_both, wait_until
+from tests.ui.browser_steps import (
+    PASSWORD,
+    Demo,
+    Plant,
+    log_in,
+    log_in_to_resource,
+    shoot_both,
+    wait_until,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -239,3 +247,56 @@ def test_rename_across_the_open_file_and_a_file_on_disk(demo: Demo, tmp_path: Pa
         # the open file's edit is the user's, to save or undo
         page.keyboard.press("Control+z")
         wait_until("undone", lambda: line_of(page, 17).strip() == "starts : Counter;")
+
+
+def live_values(page: Page) -> dict[int, str]:
+    """The values beside each line in view: line number -> what is shown."""
+    shown: dict[str, str] = page.evaluate(
+        "(() => { const v = window.padtEditor.view; const out = {};"
+        " document.querySelectorAll('#padt-editor .padt-live').forEach(e => {"
+        " out[v.state.doc.lineAt(v.posAtDOM(e)).number] = e.textContent; }); return out; })()"
+    )
+    return {int(line): text for line, text in shown.items()}
+
+
+def hover_over(page: Page, line: int, col: int) -> str:
+    place = page.evaluate(
+        "(() => { const v = window.padtEditor.view;"
+        f" return v.coordsAtPos(v.state.doc.line({line}).from + {col - 1}); }})()"
+    )
+    for step in range(2):  # as a hand moves: more than one event
+        page.mouse.move(place["left"] + 2 + step, place["top"] + 4)
+    hover = page.locator('[data-testid="editor-hover"]')
+    hover.wait_for(timeout=10_000)
+    return hover.inner_text()
+
+
+def test_live_values_beside_the_lines_of_the_running_source(demo: Demo) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1920, "height": 1080})
+        page.goto(demo.url)
+        page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+        log_in(page, "admin", demo.password)
+        log_in_to_resource(page, "admin", demo.password)
+        page.locator('[data-tree^="file:TankControl@"]').first.click(timeout=30_000)
+        page.locator("#padt-editor .cm-content").wait_for(timeout=30_000)
+        wait_until("values beside the lines", lambda: 20 in live_values(page))
+        shown = live_values(page)
+        assert shown[20].startswith("level = ") and "tankLevel = " in shown[20]
+        assert shown[13] == "restartDelay = T#2s"
+        assert "refillDelay.IN = " in shown[25] and "restartDelay = T#2s" in shown[25]
+        assert 2 not in shown and 33 not in shown  # a comment, after END_PROGRAM: nothing
+        dismiss_notifications(page)
+        shoot_both(page, "editor-live-values")
+        # hover tells the value now as well
+        said = hover_over(page, 22, 5)
+        assert "level : INT := 500" in said and "value now: " in said
+        # the level moves with the plant: the values beside the lines follow it
+        first = live_values(page)[20]
+        wait_until("the level moves", lambda: live_values(page).get(20, first) != first)
+        # an edit that moves the lines: they are no longer the running source, no values
+        put_cursor(page, 18, 1)
+        page.keyboard.press("Enter")
+        wait_until("no values for an edited POU", lambda: not live_values(page))
+        page.keyboard.press("Control+z")
+        wait_until("values again once undone", lambda: 20 in live_values(page))

@@ -66,10 +66,16 @@ class LiveWidget extends WidgetType {
   }
   toDOM() {
     const span = document.createElement("span");
+    this.updateDOM(span);
+    return span;
+  }
+  // a new value changes the text in place: the line is not drawn anew, so a hover over it
+  // (which keeps the element under the mouse) survives the values' updates
+  updateDOM(span) {
     span.className = "padt-live" + (this.quality === "live" ? "" : " padt-live-stale");
     span.dataset.quality = this.quality;
     span.textContent = this.text;
-    return span;
+    return true;
   }
   ignoreEvent() {
     return true;
