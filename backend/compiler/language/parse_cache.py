@@ -51,11 +51,13 @@ class _SizedCache(Generic[K, V]):
                 self._entries.move_to_end(entry_key)
                 return found[0]
         value = make()  # outside the lock: two threads may make the same value, both right
+        if size > self._capacity:
+            return value  # kept by nobody once used: one text must not take all the room
         with self._lock:
             if entry_key not in self._entries:
                 self._entries[entry_key] = (value, size)
                 self._size += size
-            while self._size > self._capacity and len(self._entries) > 1:
+            while self._size > self._capacity:
                 _, (_, dropped) = self._entries.popitem(last=False)
                 self._size -= dropped
         return value

@@ -244,3 +244,9 @@ def test_the_shared_parses_are_bounded_least_recently_used_first_out() -> None:
         assert cache.get(text, len(text), functools.partial(make, text)) == text.upper()
     # "bbbb" was the least recently used when "cccc" came, so it was made again
     assert made == ["aaaa", "bbbb", "cccc", "bbbb"]
+    # a text larger than the whole cache is parsed, and kept by nobody
+    for _ in range(2):
+        assert cache.get("x" * 11, 11, functools.partial(make, "x" * 11)) == "X" * 11
+    assert made[-2:] == ["x" * 11] * 2
+    assert cache.get("bbbb", 4, functools.partial(make, "bbbb")) == "BBBB"
+    assert made[-1] == "x" * 11
