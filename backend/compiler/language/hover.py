@@ -11,7 +11,13 @@ from functools import cache
 from backend.compiler import builtins
 from backend.compiler.ast import key
 from backend.compiler.language.analysis import Analysis
-from backend.compiler.language.position import Location, Range, Symbol, symbol_at
+from backend.compiler.language.position import (
+    Location,
+    Range,
+    Symbol,
+    current_declaration,
+    symbol_at,
+)
 from backend.compiler.language.tokens import Lexed, piece_at
 from backend.compiler.resolve import PouSymbols
 from backend.compiler.source import Pos, stdlib_sources
@@ -49,8 +55,8 @@ def hover(analysis: Analysis, file: str, line: int, col: int) -> Hover | None:
     symbol = located.symbol
     declared = None
     comment = ""
-    if symbol.declared is not None:
-        pos = symbol.declared
+    pos = current_declaration(analysis, symbol)
+    if pos is not None:
         end = pos.col + len(symbol.name)
         declared = Location(pos.file, Range(pos.line, pos.col, pos.line, end))
         comment = declaration_comment(_text(analysis, pos.file), pos)
@@ -67,7 +73,7 @@ def signature(analysis: Analysis, symbol: Symbol) -> str:
             variable = symbol.variable
             located = f" AT {variable.location}" if variable and variable.location else ""
             head = f"{symbol.detail} {symbol.name}{located} : {type_name}"
-            initial = _initial_value(analysis, symbol.declared)
+            initial = _initial_value(analysis, current_declaration(analysis, symbol))
             return f"{head} := {initial}" if initial else head
         case "pou" | "method":
             block = symbol.block
@@ -173,7 +179,7 @@ def _type_signature(analysis: Analysis, symbol: Symbol) -> str:
         values = resolved.enums[key(symbol.name)].values.values()
         listed = ", ".join(f"{name} := {value}" for name, value in values)
         return f"TYPE {symbol.name} : ({listed})"
-    declared = _declared_text(analysis, symbol.declared)
+    declared = _declared_text(analysis, current_declaration(analysis, symbol))
     return f"TYPE {symbol.name} : {declared}" if declared else f"TYPE {symbol.name}"
 
 

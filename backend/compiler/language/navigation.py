@@ -10,6 +10,7 @@ from backend.compiler.language.position import (
     Location,
     Range,
     Symbol,
+    current_declaration,
     symbol_at,
     token_range,
     token_symbol,
@@ -23,13 +24,16 @@ def definition(analysis: Analysis, file: str, line: int, col: int) -> Location |
     located = symbol_at(analysis, file, line, col)
     if located is None:
         return None
-    return declaration(located.symbol)
+    return declaration(analysis, located.symbol)
 
 
-def declaration(symbol: Symbol) -> Location | None:
-    """The name in the symbol's declaration, if the project holds it."""
-    pos = symbol.declared
-    if pos is None or symbol.standard:
+def declaration(analysis: Analysis, symbol: Symbol) -> Location | None:
+    """The name in the symbol's declaration, if the project holds it, where it stands in
+    the text now."""
+    if symbol.standard:
+        return None
+    pos = current_declaration(analysis, symbol)
+    if pos is None:
         return None
     return Location(pos.file, Range(pos.line, pos.col, pos.line, pos.col + len(symbol.name)))
 
@@ -44,7 +48,7 @@ def references(
         return []
     found = uses(analysis, located.symbol)
     if not include_declaration:
-        declared = declaration(located.symbol)
+        declared = declaration(analysis, located.symbol)
         found = [location for location in found if location != declared]
     return found
 

@@ -15,7 +15,14 @@ from typing import NamedTuple
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.language.analysis import Analysis
-from backend.compiler.language.tokens import VAR_KINDS, Lexed, Token, declarations, piece_at
+from backend.compiler.language.tokens import (
+    VAR_KINDS,
+    Lexed,
+    Token,
+    declarations,
+    piece_at,
+    pieces,
+)
 from backend.compiler.resolve import (
     PARAMETER_KINDS,
     PouSymbols,
@@ -43,6 +50,8 @@ _MAX_CHAIN = 64  # members followed in one dotted chain (hostile text may hold t
 _SCOPES = frozenset({"PROGRAM", "FUNCTION_BLOCK", "FUNCTION", "INTERFACE", "METHOD", "PROPERTY"})
 _ACCESSORS = frozenset({"GET", "SET"})
 _DECLARING = frozenset({"PROGRAM", "FUNCTION_BLOCK", "FUNCTION", "METHOD"})
+# the keywords a declared name follows (past its modifiers, which `_declares` does not see)
+_NAMING_KEYWORDS = _DECLARING | {"PROPERTY", "INTERFACE", "TYPE"}
 _POU_KINDS = ("PROGRAM", "FUNCTION_BLOCK", "FUNCTION")
 # a member of a function block seen from outside its instances
 _HIDDEN_MEMBERS = ("VAR_TEMP", "VAR_GLOBAL", "RETURN")
@@ -376,6 +385,49 @@ def name_pos(analysis: Analysis, pos: Pos, name: str) -> Pos:
         if token.kind == "ident" and token.upper == key(name):
             return Pos(pos.file, token.line + before, token.col)
     return pos
+
+
+def current_declaration(analysis: Analysis, symbol: Symbol) -> Pos | None:
+    """Where the symbol's declaration stands in the text as it is now. The analysis may
+    be older than the text (the last one that resolved, while a line is typed): when the
+    name is no longer at its place, the declaration of that name nearest to it."""
+    pos = symbol.declared
+    text = analysis.texts.get(pos.file) if pos is not None else None
+    if pos is None or text is None:
+        return pos
+    lexed, before = piece_at(text, pos.line)
+    index = lexed.index_at(pos.line - before, pos.col)
+    token = lexed.tokens[index] if index < len(lexed.tokens) else None
+    wanted = key(symbol.name)
+    if token is not None and (token.line + before, token.col, token.upper) == (
+        pos.line,
+        pos.col,
+        wanted,
+    ):
+        return pos
+    candidates = [
+        (abs(found.line + offset - pos.line), found.line + offset, found.col)
+        for piece, offset in pieces(text)
+        for number, found in enumerate(piece.tokens)
+        if found.upper == wanted and _declares(piece, number)
+    ]
+    if not candidates:
+        return pos
+    _, line, col = min(candidates)
+    return Pos(pos.file, line, col)
+
+
+def _declares(lexed: Lexed, index: int) -> bool:
+    """Whether the name token `index` is declared there: `name :`, `name,` at a statement's
+    start, or the name after PROGRAM, METHOD, TYPE...."""
+    tokens = lexed.tokens
+    after = tokens[index + 1].text if index + 1 < len(tokens) else ""
+    before = tokens[index - 1] if index > 0 else None
+    if before is not None and before.upper in _NAMING_KEYWORDS:
+        return True
+    return after in (":", ",") and (
+        before is None or before.text in (";", ",") or before.upper in VAR_KINDS
+    )
 
 
 def _block(scope: PouSymbols | None) -> PouSymbols | None:

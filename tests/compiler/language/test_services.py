@@ -5,6 +5,8 @@ that does not parse while it is being typed."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from backend.compiler.language.analysis import Analysis, analyse
 from backend.compiler.language.completion import complete
 from backend.compiler.language.hover import hover
@@ -343,6 +345,24 @@ def test_completion_knows_a_variable_declared_in_text_that_does_not_parse() -> N
     assert "P" not in analysis.user_pous  # the program does not parse
     assert labels(analysis, "p.st", 6, 8) == ["ramp", "Reset", "run", "speed"]
     assert "count" in labels(analysis, "p.st", 6, 1)
+
+
+def test_definition_and_hover_follow_the_text_typed_since_the_last_analysis() -> None:
+    # while a line is half typed the services read names from the last analysis that
+    # resolved (as backend/engineering/language_service does), over the text as it is
+    good = analyse({"tank.st": TANK})
+    lines = TANK.splitlines()
+    at_body = at(TANK, "alarmPlant := tankLevel")[0]
+    lines[7:7] = ["  spare1 : INT;", "  spare2 : INT;"]  # two declarations above `level`
+    lines.insert(at_body + 1, "IF level >")  # and a line that does not parse
+    typed = "\n".join(lines) + "\n"
+    analysis = replace(good, texts={"tank.st": typed})
+    line, col = at(typed, "level >= highLevel")
+    found = definition(analysis, "tank.st", line, col)
+    assert found is not None and found.range.line == at(typed, "level : INT")[0]
+    shown = hover(analysis, "tank.st", line, col)
+    assert shown is not None and shown.signature == "VAR level : INT := 500"
+    assert shown.comment == "the tank level: the plant's last good measurement"
 
 
 def test_no_completion_inside_a_comment_or_a_string() -> None:
