@@ -69,7 +69,9 @@ class ProjectLanguage:
         self._disk = {source.name: source.text for source in project_sources(self.folder)}
         self._open: dict[str, str] = {}
         self._project = LanguageProject(self._disk)
-        self._parsed: Analysis | None = None  # the last analysis in which every file parsed
+        # the last analysis in which every open document parsed (a file broken on disk and
+        # not open does not keep it old)
+        self._parsed: Analysis | None = None
 
     # ---- files and documents
 
@@ -156,15 +158,17 @@ class ProjectLanguage:
         """The analysis of the texts as the editor has them (re-analysed incrementally
         after a change)."""
         analysis = self._project.analysis()
-        if {unit.file for unit in analysis.units} >= set(analysis.texts):
-            with self._lock:
+        parsed = {unit.file for unit in analysis.units}
+        with self._lock:
+            if parsed >= set(self._open) - {PROJECT_FILE}:
                 self._parsed = analysis
         return analysis
 
     def readable(self, name: str) -> Analysis:
         """The analysis to read names from at a place of `name`: while the file does not
-        parse (a line half typed), the symbols of the last analysis in which every file
-        did, over the texts as they are now; the services find the place in the text."""
+        parse (a line half typed), the symbols of the last analysis in which every open
+        document did, over the texts as they are now; the services find the place in the
+        text."""
         analysis = self.analysis()
         with self._lock:
             good = self._parsed

@@ -458,6 +458,13 @@ async def test_formatting_indents_and_upper_cases_keywords(
         )
 
 
+FEEDER = """FUNCTION_BLOCK Feeder
+VAR_INPUT on : BOOL; END_VAR
+END_FUNCTION_BLOCK
+VAR_GLOBAL feederSpeed : INT; END_VAR
+"""
+
+
 @pytest.mark.asyncio
 async def test_a_file_made_by_another_tool_joins_the_project(demo: Path) -> None:
     client = await start(demo)
@@ -471,16 +478,33 @@ async def test_a_file_made_by_another_tool_joins_the_project(demo: Path) -> None
         uri = open_document(client, tank, text)
         await until(lambda: diagnostics(client, uri), "the unknown type's diagnostic")
         assert "Feeder" in diagnostics(client, uri)[0].message
-        feeder = demo / "feeder.st"
-        feeder.write_text(
-            "FUNCTION_BLOCK Feeder\nVAR_INPUT on : BOOL; END_VAR\nEND_FUNCTION_BLOCK\n"
-        )
-        client.workspace_did_change_watched_files(
-            types.DidChangeWatchedFilesParams(
-                [types.FileEvent(feeder.as_uri(), types.FileChangeType.Created)]
+        # another tool saves a draft that does not parse, then the function block
+        for name, source in (
+            ("draft.st", "PROGRAM Draft\nx :=\n"),
+            ("feeder.st", FEEDER),
+        ):
+            (demo / name).write_text(source)
+            client.workspace_did_change_watched_files(
+                types.DidChangeWatchedFilesParams(
+                    [types.FileEvent((demo / name).as_uri(), types.FileChangeType.Created)]
+                )
             )
-        )
         await until(lambda: not diagnostics(client, uri), "tank.st clean with Feeder known")
+        assert diagnostics(client, (demo / "draft.st").as_uri())  # its syntax error
+
+        # `feed.` typed: the line does not parse, the draft never did; Feeder's input
+        end = place(tank, WIDE, ";")
+        line = text.splitlines()[end.line]
+        at = types.Position(end.line, len(line.encode("utf-16-le")) // 2)
+        change(client, uri, 2, at, "\nfeed.")
+        labels = [
+            item.label for item in await complete(client, uri, types.Position(at.line + 1, 5))
+        ]
+        assert labels == ["on"]
+        # and a global of the new file, in the scope of the POU whose line is half typed
+        change(client, uri, 3, types.Position(at.line + 1, 5), "on;\nfeederS")
+        items = await complete(client, uri, types.Position(at.line + 2, 7))
+        assert items and items[0].label == "feederSpeed"
     finally:
         await client.shutdown_session()
         await client.stop()  # type: ignore[no-untyped-call]
