@@ -12,6 +12,7 @@ from collections import OrderedDict
 from backend.compiler.language.chunks import Chunk, chunks
 
 _KEPT = 64  # texts whose cuts are kept
+_KEPT_SIZE = 16 * 1024 * 1024  # and their characters at most, together
 _COMPARED = 4  # the latest of them a new text is compared with
 
 
@@ -21,6 +22,7 @@ class _Cuts:
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self._recent: OrderedDict[str, tuple[Chunk, ...]] = OrderedDict()
+        self._size = 0  # the characters of the texts kept
 
     def of(self, text: str) -> tuple[Chunk, ...]:
         with self._lock:
@@ -37,9 +39,12 @@ class _Cuts:
         if result is None:
             result = tuple(chunks(text)) or (Chunk(0, text),)
         with self._lock:
-            self._recent[text] = result
-            while len(self._recent) > _KEPT:
-                self._recent.popitem(last=False)
+            if text not in self._recent:
+                self._recent[text] = result
+                self._size += len(text)
+            while len(self._recent) > _KEPT or (self._size > _KEPT_SIZE and self._recent):
+                dropped, _ = self._recent.popitem(last=False)
+                self._size -= len(dropped)
         return result
 
 

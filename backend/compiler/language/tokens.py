@@ -9,9 +9,10 @@ up in the last analysis that resolved."""
 from __future__ import annotations
 
 import re
+import threading
 from bisect import bisect_right
+from collections import OrderedDict
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import NamedTuple
 
 from backend.compiler.language.cuts import cut
@@ -244,10 +245,49 @@ class Lexed:
         ]
 
 
-@lru_cache(maxsize=4096)  # a piece of each declaration of a large project
+class _Kept:
+    """The texts lexed lately, least recently used first out, some 8 MB of text at most
+    (a piece of each declaration of a large project and its versions while one types;
+    the tokens take some ten times their text)."""
+
+    def __init__(self, limit: int) -> None:
+        self._lock = threading.Lock()
+        self._limit = limit
+        self._size = 0
+        self._kept: OrderedDict[str, Lexed] = OrderedDict()
+
+    def get(self, text: str) -> Lexed | None:
+        with self._lock:
+            found = self._kept.get(text)
+            if found is not None:
+                self._kept.move_to_end(text)
+            return found
+
+    def put(self, text: str, lexed: Lexed) -> None:
+        with self._lock:
+            if text in self._kept or len(text) > self._limit:
+                return
+            self._kept[text] = lexed
+            self._size += len(text)
+            while self._size > self._limit:
+                dropped, _ = self._kept.popitem(last=False)
+                self._size -= len(dropped)
+
+
+_KEPT = _Kept(8 * 1024 * 1024)
+
+
 def lex(text: str) -> Lexed:
-    """The tokens, comments and blocks of `text` (cached: the services ask of the same text
+    """The tokens, comments and blocks of `text` (kept: the services ask of the same text
     again and again while a cursor moves)."""
+    found = _KEPT.get(text)
+    if found is None:
+        found = _lexed(text)
+        _KEPT.put(text, found)
+    return found
+
+
+def _lexed(text: str) -> Lexed:
     line_starts = [0, *(m.end() for m in re.finditer("\n", text))]
     tokens: list[Token] = []
     comments: list[Comment] = []
