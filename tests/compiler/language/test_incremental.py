@@ -131,11 +131,15 @@ def test_random_edits_of_the_demo_give_the_diagnostics_of_a_full_analysis() -> N
     texts = demo_texts()
     texts["more.st"] = (
         "FUNCTION Scale : INT\nVAR_INPUT a : INT; END_VAR\nScale := a * 2;\nEND_FUNCTION\n"
+        "TYPE Point : STRUCT x : INT; y : BOOL; END_STRUCT; END_TYPE\n"
+        "VAR_GLOBAL origin : Point; END_VAR\n"
         "FUNCTION_BLOCK Extra\nVAR_INPUT a : INT; END_VAR\nVAR b : BOOL; END_VAR\n"
-        "b := Scale(a) > 3;\nEND_FUNCTION_BLOCK\n"
+        "VAR_OUTPUT p : Point; END_VAR\nb := Scale(a) > 3;\nEND_FUNCTION_BLOCK\n"
     )
+    # a chain of declarations: User reads a member of a type through Extra and a global
     texts["uses.st"] = (
-        "PROGRAM User\nVAR e : Extra; n : INT; END_VAR\ne(a := n);\nn := Scale(n);\nEND_PROGRAM\n"
+        "PROGRAM User\nVAR e : Extra; n : INT; END_VAR\ne(a := n);\nn := Scale(n);\n"
+        "n := e.p.x + origin.x;\ne.b := e.p.y;\nEND_PROGRAM\n"
     )
     # CODESYS's qualified names and enumeration values, which resolve rewrites
     texts["codesys.st"] = (
@@ -144,6 +148,40 @@ def test_random_edits_of_the_demo_give_the_diagnostics_of_a_full_analysis() -> N
         "c := Color.Red;\nt(IN := c = Color.Green, PT := T#1s);\nEND_PROGRAM\n"
     )
     assert_edits_keep_diagnostics_exact(texts, edits=60, seed=31)
+
+
+CHAIN = {
+    "types.st": "TYPE Point : STRUCT x : INT; y : BOOL; END_STRUCT; END_TYPE\n"
+    "TYPE Mode : (Off, Auto); END_TYPE\n",
+    "globals.st": "VAR_GLOBAL origin : Point; END_VAR\n",
+    "block.st": "FUNCTION_BLOCK Extra\nVAR_OUTPUT p : Point; END_VAR\np.x := 1;\n"
+    "END_FUNCTION_BLOCK\n",
+    "user.st": "PROGRAM User\nVAR e : Extra; n : INT; b : BOOL; END_VAR\ne();\n"
+    "n := e.p.x + origin.x;\nb := e.p.y;\nb := Auto <> Off;\nEND_PROGRAM\n",
+}
+
+
+@pytest.mark.parametrize(
+    ("file", "old", "new"),
+    [
+        ("types.st", "x : INT", "x : BOOL"),  # a member, used through a block and a global
+        ("types.st", "y : BOOL", "z : BOOL"),
+        ("types.st", "(Off, Auto)", "(Off, Manual)"),  # a value, used without its type
+        ("globals.st", "origin : Point", "origin : INT"),
+        ("block.st", "p : Point", "p : INT"),
+        ("block.st", "FUNCTION_BLOCK Extra", "FUNCTION_BLOCK Other"),
+    ],
+)
+def test_a_declaration_changed_checks_again_what_uses_it(file: str, old: str, new: str) -> None:
+    project = LanguageProject(CHAIN)
+    assert project.analysis().diagnostics == analyse(CHAIN).diagnostics == ()
+    changed = {**CHAIN, file: CHAIN[file].replace(old, new)}
+    project.set_text(file, changed[file])
+    expected = analyse(changed).diagnostics
+    assert [d for d in expected if d.file == "user.st"], "the edit makes an error in user.st"
+    assert project.analysis().diagnostics == expected
+    project.set_text(file, CHAIN[file])
+    assert project.analysis().diagnostics == ()
 
 
 @pytest.mark.parametrize(
