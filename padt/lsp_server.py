@@ -384,6 +384,27 @@ def make_server(folder: Path | None) -> PadtLanguageServer:
             raise JsonRpcException(found.refusal, code=_REQUEST_FAILED)
         return _line_edits(ls.lines(name), found.text, ls.encoding)
 
+    @server.feature(types.WORKSPACE_SYMBOL)
+    async def project_symbols(
+        ls: PadtLanguageServer, params: types.WorkspaceSymbolParams
+    ) -> list[types.SymbolInformation]:
+        found = await ls.answer(lambda: ls.language().project_symbols(params.query))
+        lines: dict[str, Lines] = {}
+        return [
+            types.SymbolInformation(
+                name=symbol.name,
+                kind=SYMBOL_KINDS.get(symbol.kind, types.SymbolKind.Variable),
+                location=types.Location(
+                    ls.uri_of(name),
+                    lines.setdefault(name, ls.lines(name)).range(
+                        *symbol.selection_range, ls.encoding
+                    ),
+                ),
+                container_name=symbol.detail or None,
+            )
+            for name, symbol in found
+        ]
+
     @server.feature(types.TEXT_DOCUMENT_DEFINITION)
     async def definition(
         ls: PadtLanguageServer, params: types.DefinitionParams

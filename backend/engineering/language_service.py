@@ -53,6 +53,14 @@ __all__ = [
     "RenameResult",
 ]
 
+# what a search of the project's symbols finds inside a symbol of each kind
+_NAMED_INSIDE = {
+    "function_block": frozenset({"method", "property"}),
+    "program": frozenset({"method", "property"}),
+    "interface": frozenset({"method", "property"}),
+    "global_list": frozenset({"variable"}),
+}
+
 
 class LanguageError(ValueError):
     """A request the services cannot answer: a file that is not the project's, a text too
@@ -272,6 +280,20 @@ class ProjectLanguage:
     def formatted(self, name: str) -> Formatted:
         """The file's text indented by its blocks, keywords in upper case; or why not."""
         return format_file(self.analysis(), self.checked_name(name))
+
+    def project_symbols(self, query: str) -> list[tuple[str, OutlineSymbol]]:
+        """The POUs, their methods and properties, the types and the globals of every file
+        whose name holds `query` (any case), with their files, by name."""
+        wanted = query.casefold()
+        analysis = self.analysis()
+        found = []
+        for name in sorted(analysis.texts):
+            for symbol in outline(analysis, name):
+                inner = [c for c in symbol.children if c.kind in _NAMED_INSIDE.get(symbol.kind, ())]
+                for each in (symbol, *inner):
+                    if each.kind != "global_list" and wanted in each.name.casefold():
+                        found.append((name, each))
+        return sorted(found, key=lambda item: (item[1].name.casefold(), item[0]))
 
     def outline(self, name: str) -> list[OutlineSymbol]:
         """What the file declares, nested, in the order it stands."""

@@ -508,3 +508,23 @@ async def test_a_file_made_by_another_tool_joins_the_project(demo: Path) -> None
     finally:
         await client.shutdown_session()
         await client.stop()  # type: ignore[no-untyped-call]
+
+
+@pytest.mark.asyncio
+async def test_symbols_of_the_whole_project(client: LanguageClient, demo: Path) -> None:
+    found = await client.workspace_symbol_async(types.WorkspaceSymbolParams(query="v"))
+    assert found is not None
+    named = [(s.name, s.location.uri.rsplit("/", 1)[1]) for s in found]
+    # the globals, POUs and types whose names hold it; no local variable (level)
+    assert named == [("tankLevel", "tank.st"), ("Valve", "valve.st")]
+    [valve] = [s for s in found if s.name == "Valve"]
+    assert valve.kind == types.SymbolKind.Class and isinstance(valve.location, types.Location)
+    assert valve.location.range.start == types.Position(0, len("FUNCTION_BLOCK "))
+    everything = await client.workspace_symbol_async(types.WorkspaceSymbolParams(query=""))
+    assert [s.name for s in everything or []] == [
+        "pumpCommand",
+        "pumpRunning",
+        "TankControl",
+        "tankLevel",
+        "Valve",
+    ]
