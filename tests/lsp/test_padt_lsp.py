@@ -63,8 +63,8 @@ async def start(folder: Path, *, given: bool = True) -> LanguageClient:
     return client
 
 
-async def initialize(client: LanguageClient, folder: Path) -> None:
-    await client.initialize_session(
+async def initialize(client: LanguageClient, folder: Path) -> types.InitializeResult:
+    return await client.initialize_session(
         types.InitializeParams(
             capabilities=client_capabilities("visual-studio-code"),
             workspace_folders=[types.WorkspaceFolder(folder.as_uri(), folder.name)],
@@ -323,6 +323,35 @@ async def test_the_workspace_folder_is_the_project_and_padt_toml_gets_its_own_di
                 types.HoverParams(types.TextDocumentIdentifier(other), types.Position(2, 0))
             )
         assert other not in client.diagnostics
+    finally:
+        await client.shutdown_session()
+        await client.stop()  # type: ignore[no-untyped-call]
+
+
+@pytest.mark.asyncio
+async def test_what_the_server_offers(demo: Path) -> None:
+    client = await ClientServerConfig(
+        [sys.executable, "-m", "padt.cli", "lsp", str(demo)], client_factory=watching_client
+    ).start()
+    assert isinstance(client, LanguageClient)
+    try:
+        offered = (await initialize(client, demo)).capabilities
+        sync = offered.text_document_sync
+        assert isinstance(sync, types.TextDocumentSyncOptions)
+        assert sync.change == types.TextDocumentSyncKind.Incremental and sync.open_close
+        assert offered.position_encoding == types.PositionEncodingKind.Utf16
+        assert offered.completion_provider is not None
+        assert list(offered.completion_provider.trigger_characters or ()) == [".", "#"]
+        assert offered.rename_provider == types.RenameOptions(prepare_provider=True)
+        for provider in (
+            offered.hover_provider,
+            offered.definition_provider,
+            offered.references_provider,
+            offered.document_symbol_provider,
+            offered.workspace_symbol_provider,
+            offered.document_formatting_provider,
+        ):
+            assert provider
     finally:
         await client.shutdown_session()
         await client.stop()  # type: ignore[no-untyped-call]
