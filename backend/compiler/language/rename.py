@@ -13,8 +13,9 @@ from dataclasses import dataclass
 from backend.compiler import builtins
 from backend.compiler.ast import key
 from backend.compiler.diagnostics import Diagnostic
-from backend.compiler.language.analysis import Analysis, analyse
+from backend.compiler.language.analysis import Analysis
 from backend.compiler.language.completion import ELEMENTARY_TYPES
+from backend.compiler.language.language_project import LanguageProject
 from backend.compiler.language.navigation import uses
 from backend.compiler.language.position import (
     Location,
@@ -172,7 +173,7 @@ def _checked(
     for edits in files:
         texts[edits.file] = apply(texts[edits.file], edits.edits)
     before = Counter(_error(d.code, d.message, symbol.name, new_name) for d in _errors(analysis))
-    after = analyse(texts)
+    after = LanguageProject(texts).analysis()  # the declarations not renamed parse from cache
     for diagnostic in _errors(after):
         problem = _error(diagnostic.code, diagnostic.message, "", "")
         if before[problem] > 0:
