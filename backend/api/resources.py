@@ -167,6 +167,12 @@ _resource_action(p.ColdStart, "Make the next start a cold start")
 _resource_action(p.Step, "In STOP: one CPU cycle of every program")
 
 
+@router.post("/{resource}/load/preview", summary="What a download would do, or why not now")
+def preview_load(resource: str, body: ProjectChoice, caller: ReadWrite, service: Service) -> Any:
+    plan = service.preview_load(caller, resource, body.project)
+    return {**dataclasses.asdict(plan), "possible": plan.possible}
+
+
 @router.post("/{resource}/load", summary="Download a project (in STOP; a cold start follows)")
 def load(resource: str, body: ProjectChoice, caller: ReadWrite, service: Service) -> Any:
     done = service.load(caller, resource, body.project)

@@ -20,7 +20,12 @@ from backend.engineering.documentation.export import (
     document,
     version_path,
 )
-from backend.engineering.download import Downloaded, download_checked
+from backend.engineering.download import (
+    Downloaded,
+    DownloadPlan,
+    download_checked,
+    plan_download,
+)
 from backend.engineering.online_change import (
     OnlineChanged,
     OnlineChangePreview,
@@ -38,7 +43,7 @@ from backend.engineering.resource_client import (
     ResourceUnreachable,
 )
 from backend.engineering.resource_directory import ResourceDirectory
-from runtime.contract.protocol import Command, Logout
+from runtime.contract.protocol import Command, GetParameters, GetStatus, Logout
 from runtime.contract.refusal import Refusal
 
 R = TypeVar("R")
@@ -152,6 +157,17 @@ class PadtService:
             checked = compile_checked([path])
             how = f"REST API: load of project {project} by {caller.user}"
             return download_checked(self.client(caller, resource), checked, self.backup_dir, how)
+
+    def preview_load(self, caller: Caller, resource: str, project: str) -> DownloadPlan:
+        """What a download would do, or why it cannot be done now (the level on the
+        resource is the resource's to check)."""
+        path = self.project_path(project)
+        with self._refusals(caller, resource):
+            checked = compile_checked([path])
+            client = self.client(caller, resource)
+            status = client.ask(GetStatus()).status
+            parameters = client.ask(GetParameters()).resource if status.crc else None
+            return plan_download(checked, status, parameters)
 
     def preview_reload(
         self, caller: Caller, resource: str, project: str, renames: dict[str, str]

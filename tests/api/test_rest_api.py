@@ -273,10 +273,16 @@ def test_compile_check_twice_load_preview_and_reload(site: Plant, tmp_path: Path
     twice = site.call("POST", "/api/projects/plant/check-twice", builder).json()
     assert twice["ok"] and twice["mismatches"] == []
     first = twice["runs"][0]["configuration"]
-    # a load needs STOP
+    # a load needs STOP: its preview says so, in words, and the load is refused
+    plan = site.call("POST", f"{R}/load/preview", builder, json={"project": "plant"}).json()
+    assert not plan["possible"] and "needs it in STOP" in plan["refusals"][0], plan
+    assert plan["new_crc"] == first and plan["check_crcs"] == [first, first]
     refused = site.call("POST", f"{R}/load", builder, json={"project": "plant"})
     assert "STOP" in error(refused, 409, "state")
     site.call("POST", f"{R}/stop", builder).raise_for_status()
+    plan = site.call("POST", f"{R}/load/preview", builder, json={"project": "plant"}).json()
+    assert plan["possible"] and plan["refusals"] == [], plan
+    assert any("initial value" in effect for effect in plan["effects"])
     loaded = site.call("POST", f"{R}/load", builder, json={"project": "plant"})
     assert loaded.status_code == 200, loaded.text
     assert loaded.json()["status"]["crc"] == first
