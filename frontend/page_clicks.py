@@ -16,14 +16,18 @@ from dataclasses import dataclass
 import viser
 
 LABEL = "Page click"
-KINDS = ("tab", "variable", "tree", "window")
+KINDS = ("tab", "variable", "tree", "window", "layout", "drawing")
 MAX_NAME = 1000  # longer than any tab name, variable path or tree entry
 
 # Installed once per page (a later workspace after logging in again finds the new input by
 # its label at each click). React takes a value only through the input's native setter
 # followed by an input event; a counter makes a second click on the same row a change.
 # "|" separates: tab names, variable paths and tree entries have none. The window's size
-# is said when the page starts and after each resize has settled.
+# is said when the page starts (once the hidden input is there) and after each resize has
+# settled; the panels' widths and whether they are folded after the user dragged an edge
+# or folded a panel (not when the server moved them), as "<left>x<folded>x<right>x<folded>"
+# (a folded panel's width 0: the width it had is kept). Whether the editor's toolbar shows
+# the plant drawing is said after each press of its toggle ("on" or "off").
 _SCRIPT = (
     "var find=function(){var l=Array.from(document.querySelectorAll('label')).find("
     f"function(x){{return x.textContent==='{LABEL}'}});"
@@ -37,6 +41,9 @@ _SCRIPT = (
     "var tr=at.closest('table.olt tr');var cell=tr&&tr.querySelector('td[data-var]');"
     "if(cell)said='variable|'+cell.dataset.var}"
     "if(!said){var entry=at.closest('[data-tree]');if(entry)said='tree|'+entry.dataset.tree}"
+    "if(!said&&at.closest('[data-action=drawing],[data-action=editor]')){"
+    "setTimeout(function(){var e=window.padtEditor;"
+    "tell('drawing|'+(e&&e.showDrawing?'on':'off'))},0)}"
     "tell(said)},true);"
     "var wait=null;window.addEventListener('resize',function(){clearTimeout(wait);"
     "wait=setTimeout(window.__padtSized,300)});"
@@ -44,15 +51,26 @@ _SCRIPT = (
     "var input=box.querySelector('input');"
     "n+=1;Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value').set.call("
     "input,said+'|'+n);input.dispatchEvent(new Event('input',{bubbles:true}))};"
-    "window.__padtSized=function(){tell('window|'+window.innerWidth+'x'+window.innerHeight)}}"
-    "setTimeout(window.__padtSized,200);"
+    "window.__padtSized=function(tries){if(!find()&&(tries||0)<50){"
+    "setTimeout(function(){window.__padtSized((tries||0)+1)},100);return}"
+    "tell('window|'+window.innerWidth+'x'+window.innerHeight)};"
+    "var grab=null;document.addEventListener('pointerdown',function(e){"
+    "var t=e.target.closest?e.target:e.target.parentElement;grab=t.closest("
+    "'[data-dock-region-resize],[data-dock-region-collapse],[data-dock-minimize-all]')},true);"
+    "var side=function(s){var r=document.querySelector('[data-dock-region='+s+']');"
+    "if(!r)return '0x0';if(r.querySelector('[data-dock-rail-root]'))return '0x1';"
+    "var c=r.querySelector('[data-dock-column]')||r;"
+    "return Math.round(c.getBoundingClientRect().width)+'x0'};"
+    "document.addEventListener('pointerup',function(){if(!grab)return;grab=null;"
+    "setTimeout(function(){tell('layout|'+side('left')+'x'+side('right'))},400)},true)}"
+    "window.__padtSized(0);"
 )
 
 
 @dataclass(frozen=True)
 class Click:
     kind: str  # one of KINDS
-    name: str  # the tab's label, the variable's path, the tree entry, "<width>x<height>"
+    name: str  # the tab's label, the variable's path, the tree entry, a size or a layout
 
 
 def read(text: str) -> Click | None:

@@ -1,7 +1,8 @@
 """What every browser of one UI server shares: the resources on the bus, the PADT accounts
 the users log in with, the router's address (shown in the status bar), the users' watch
 lists, the projects the PADT knows (by name, each a folder: a `ProjectShelf`, which also holds
-the audit log of their changes) and where the backups of what was loaded go."""
+the audit log of their changes), where the backups of what was loaded go, and the users'
+workspace layouts (kept beside the watch lists unless given)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from backend.engineering.backup import DEFAULT_BACKUP_DIR
 from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.project_shelf import ProjectShelf
 from backend.engineering.resource_directory import ResourceDirectory
+from backend.engineering.user_layouts import UserLayouts
 from backend.engineering.watch_lists import WatchLists
 
 
@@ -24,12 +26,21 @@ class UiContext:
     watch_lists: WatchLists
     projects: Mapping[str, Path] = field(default_factory=dict)  # name -> project folder
     backup_dir: Path = DEFAULT_BACKUP_DIR
+    layouts: UserLayouts | None = None
 
     def __post_init__(self) -> None:
+        if self.layouts is None:
+            where = self.watch_lists.path.with_name("layouts.json")
+            object.__setattr__(self, "layouts", UserLayouts(where))
         # a plain mapping (tests, tools) is a shelf with no folder for new projects and no
         # audit log: its projects can be read, not changed
         if not isinstance(self.projects, ProjectShelf):
             object.__setattr__(self, "projects", ProjectShelf(self.projects))
+
+    @property
+    def user_layouts(self) -> UserLayouts:
+        assert self.layouts is not None  # made so by __post_init__
+        return self.layouts
 
     @property
     def shelf(self) -> ProjectShelf:

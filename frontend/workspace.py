@@ -7,15 +7,19 @@ is what `frontend/screen_registry.py` calls `Work`: the actions every screen ask
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import Any, Protocol, TypeVar
 
 import viser
 
 from backend.engineering.project_access import Editor
 from backend.engineering.resource_client import ResourceClient, ResourceLogin
+from backend.engineering.user_layouts import MAX_OPEN_FILES, Layout, LayoutError
 from frontend import (
     page_clicks,
+    panel_layout,
     plant_view,
     project_edit_panel,
     project_tree_view,
@@ -23,6 +27,10 @@ from frontend import (
     status_bar,
 )
 from frontend.confirm import attempt, confirm
+from frontend.dialogs.deployment import deployment_of, start_compile
+from frontend.dialogs.download import ask_download
+from frontend.dialogs.online_change import ask_online_change
+from frontend.editor.editor_area import EditorArea, EditorHooks
 from frontend.forcing_feed import ForcingFeed, Target
 from frontend.gui_value import set_value
 from frontend.permissions import Allowed, allowed
@@ -70,6 +78,7 @@ class Workspace:
         self.gui = gui = client.gui
         gui.main_panel.dock_left()
         gui.main_panel.set_width(NAVIGATION_WIDTH)
+        self.layout = self.context.user_layouts.of(self.user)  # as the user left it
         self._handles: list[Any] = []
         keep = self._handles.append
         self.forcing_feed = ForcingFeed()
@@ -124,7 +133,15 @@ class Workspace:
         self.page_clicks = page_clicks.build(gui, self._clicked)
         self.panel.dock_right()
         self.panel.set_width(self._work_width())
+        panel_layout.put_back(gui, self.panel, self.layout)
         self.drawing = plant_view.PlantView(client)
+        self.drawing_wanted = False  # the drawing costs the page: only when asked for
+        self.editor_area = EditorArea(
+            client, self.shelf, Editor(self.user, self.level), _hooks(self)
+        )
+        if self.layout.project in self.shelf:  # the files the user left open
+            for path in self.layout.open_files:
+                self.editor_area.open_file(self.layout.project, path)
 
     def screen(self, kind: type[S]) -> S | None:
         """The screen of that kind in this workspace (a screen that reads another's)."""
@@ -134,8 +151,9 @@ class Workspace:
         """The work panel's width: as wide as the shown screen wants, but leaving the
         navigation and the canvas their room in this window (viser scales both docked
         panels down when they exceed it, and clips what they hold)."""
-        wanted = self.shown.width or WORK_WIDTH
-        room = self.window_width - NAVIGATION_WIDTH - CANVAS_LEFT
+        wanted = self.shown.width or self.layout.work_width or WORK_WIDTH
+        navigation = self.layout.navigation_width or NAVIGATION_WIDTH
+        room = self.window_width - navigation - CANVAS_LEFT
         return max(360, min(wanted, room))
 
     def _clicked(self, click: page_clicks.Click) -> None:
@@ -152,14 +170,30 @@ class Workspace:
             if width.isdigit() and height.isdigit() and 0 < int(width) < 100_000:
                 self.window_width = int(width)
                 self.panel.set_width(self._work_width())
+        elif click.kind == "drawing":
+            self.drawing_wanted = click.name == "on"
+            self.session.news()
+        elif click.kind == "layout":
+            seen = panel_layout.read(click.name)
+            if seen is not None:
+                self._keep(panel_layout.kept(self.layout, seen))
         elif click.kind == "tree":
             entry = project_tree_view.entry_of(click.name)
             if entry is not None:
                 self.tree_entry = entry
+                if entry.kind == "file":
+                    self.editor_area.open_file(self.project_choice.value, entry.file, entry.line)
                 self.session.news()
         else:
             for screen in self.screens:
                 screen.clicked(click)
+
+    def _keep(self, layout: Layout) -> None:
+        """The user's layout, kept for their next login (one the store refuses is used
+        in this browser only)."""
+        self.layout = layout
+        with contextlib.suppress(LayoutError):
+            self.context.user_layouts.put(self.user, layout)
 
     def _open_project(self) -> None:
         if self.tree_reader is not None:
@@ -178,9 +212,13 @@ class Workspace:
         return name if name in self.shelf else None
 
     def _edited(self, path: str | None) -> None:
-        """After an add, rename or delete from the tree: the tree at once."""
+        """After an add, rename or delete from the tree: the tree at once, the new file in
+        the editor."""
         if self.tree_reader is not None:
             self.tree_reader.read_again()
+        project = self.project()
+        if path is not None and project is not None:
+            self.editor_area.open_file(project, path, 1)
         self.session.news()
 
     def selected(self) -> str | None:
@@ -339,10 +377,15 @@ class Workspace:
         for screen in self.screens:
             screen.follow(now)
         self.shown.refresh(now)  # the others wait until they are opened
+        self.editor_area.refresh(feed)
         if feed is not None:  # only what some screen shows is watched, seen or not: a
             # tab opened shows its values at once
-            feed.show([path for screen in self.screens for path in screen.watches()])
-        self.drawing.show(resource, status)
+            paths = [path for screen in self.screens for path in screen.watches()]
+            feed.show(paths + self.editor_area.wanted())
+        if self.drawing_wanted:
+            self.drawing.show(resource, status)
+        else:
+            self.drawing.show(None, None)  # nothing drawn behind the editor
 
     def _refresh_tree(self) -> None:
         if self.tree_reader is None:
@@ -369,9 +412,25 @@ class Workspace:
             self.tree_reader.close()
         for handle in self._handles:
             handle.remove()
+        open_files = tuple(self.editor_area.documents)[:MAX_OPEN_FILES]
+        self._keep(
+            replace(self.layout, project=self.editor_area.project or "", open_files=open_files)
+        )
         self.page_clicks.remove()
         self.panel.remove()
         self.drawing.remove()
+        self.editor_area.remove()
+
+
+def _hooks(work: Workspace) -> EditorHooks:
+    """The editor's Compile, Download and Online change: the dialogs the Online change
+    screen opens too."""
+    deployment = deployment_of(work)
+    return EditorHooks(
+        lambda project: start_compile(deployment, project),
+        lambda project: ask_download(deployment, project),
+        lambda project: ask_online_change(deployment, project),
+    )
 
 
 def _header(user: str, level: str) -> str:

@@ -19,6 +19,7 @@ from frontend import screens
 from frontend.screen_registry import Now, Screen, Work
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
+    PASSWORD,
     Demo,
     Plant,
     button_enabled,
@@ -307,3 +308,29 @@ def test_a_read_only_user_sees_the_settings_greyed_out(plant: Plant) -> None:
         assert field(page, "Resource name").is_disabled()
         assert field(page, "Watchdog Time").is_disabled()
         assert not button_enabled(page, "Save padt.toml")
+
+
+def _folded(page: Page, side: str) -> bool:
+    return page.locator(f"[data-dock-region={side}] [data-dock-rail-root]").count() > 0
+
+
+def test_the_layout_is_kept_after_logging_in_again(plant: Plant) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1920, "height": 1080})
+        open_as(page, plant, "admin")
+        wait_until("the tree is read", lambda: "TankControl" in _tree(page))
+        # the work panel folded away
+        page.locator("[data-dock-region-collapse=right]").click()
+        wait_until("the work panel is folded", lambda: _folded(page, "right"))
+        page.wait_for_timeout(1500)  # the page reports the layout a moment after
+        page.get_by_role("button", name="Log out").click()
+        page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+        log_in(page, "admin", PASSWORD)
+        wait_until("the tree is read again", lambda: "TankControl" in _tree(page))
+        wait_until("the work panel is folded again", lambda: _folded(page, "right"))
+    # another browser of the same user finds it so too
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1920, "height": 1080})
+        open_as(page, plant, "admin")
+        wait_until("the tree is read", lambda: "TankControl" in _tree(page))
+        wait_until("folded there too", lambda: _folded(page, "right"))
