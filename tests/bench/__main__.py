@@ -22,6 +22,7 @@ from tests.bench import (
     bench_trends,
     bench_ui,
     bench_watch,
+    bench_workspace,
 )
 
 
@@ -45,6 +46,7 @@ def main() -> None:
     bench_ui.main()
     bench_documentation.main()
     bench_trends.main()
+    bench_workspace.main()
 
 
 if __name__ == "__main__":
