@@ -26,7 +26,11 @@ from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.language.completion import CompletionItem
 from backend.compiler.language.outline import Symbol as OutlineSymbol
 from backend.compiler.language.position import Location
-from backend.engineering.language_service import LanguageError, ProjectLanguage
+from backend.engineering.language_service import (
+    LanguageError,
+    ProjectLanguage,
+    ProjectUnreadable,
+)
 from padt.lsp_positions import UTF16, Lines, edited
 
 log = logging.getLogger("padt.lsp")
@@ -276,7 +280,10 @@ def make_server(folder: Path | None) -> PadtLanguageServer:
 
     @server.feature(types.INITIALIZE)
     def initialize(ls: PadtLanguageServer, params: types.InitializeParams) -> None:
-        ls.project = ProjectLanguage(ls.given_folder or _workspace_folder(params))
+        try:
+            ls.project = ProjectLanguage(ls.given_folder or _workspace_folder(params))
+        except ProjectUnreadable as exc:
+            raise JsonRpcException(str(exc), code=_REQUEST_FAILED) from None
         log.info("padt lsp: project %s", ls.project.folder)
 
     @server.feature(types.INITIALIZED)

@@ -17,6 +17,7 @@ from backend.engineering.language_service import (
     Location,
     OutlineSymbol,
     ProjectLanguage,
+    ProjectUnreadable,
 )
 from runtime.contract.refusal import Refusal
 
@@ -48,7 +49,10 @@ def _ask(
     service: Service, project: str, request: FileText, ask: Callable[[ProjectLanguage, str], T]
 ) -> T:
     """A service's answer on the project served, its file with the request's text."""
-    language = ProjectLanguage(service.project_path(project))
+    try:
+        language = ProjectLanguage(service.project_path(project))
+    except ProjectUnreadable as exc:
+        raise Refusal("project", str(exc)) from None
     try:
         name = language.checked_name(request.file)
         with language.with_text(name, request.text):

@@ -49,6 +49,7 @@ __all__ = [
     "Location",
     "OutlineSymbol",
     "ProjectLanguage",
+    "ProjectUnreadable",
     "Range",
     "RenameResult",
 ]
@@ -67,6 +68,10 @@ class LanguageError(ValueError):
     large; the message says which."""
 
 
+class ProjectUnreadable(OSError):
+    """The project's folder or one of its files cannot be read; the message says why."""
+
+
 class ProjectLanguage:
     """One editor's view of one project: the files on disk, the documents it has open over
     them, and the analysis of both. Thread-safe: the UI asks from several threads."""
@@ -74,7 +79,7 @@ class ProjectLanguage:
     def __init__(self, folder: Path) -> None:
         self.folder = folder.resolve()
         self._lock = threading.RLock()
-        self._disk = {source.name: source.text for source in project_sources(self.folder)}
+        self._disk = _files_of(self.folder)
         self._open: dict[str, str] = {}
         self._project = LanguageProject(self._disk)
         # the last analysis in which every open document parsed (a file broken on disk and
@@ -124,7 +129,7 @@ class ProjectLanguage:
 
     def reread(self) -> None:
         """The files on disk changed (saved, added, deleted by another tool)."""
-        disk = {source.name: source.text for source in project_sources(self.folder)}
+        disk = _files_of(self.folder)
         with self._lock:
             for name in sorted(set(self._disk) - set(disk) - set(self._open)):
                 self._project.remove(name)
@@ -298,6 +303,14 @@ class ProjectLanguage:
     def outline(self, name: str) -> list[OutlineSymbol]:
         """What the file declares, nested, in the order it stands."""
         return outline(self.analysis(), self.checked_name(name))
+
+
+def _files_of(folder: Path) -> dict[str, str]:
+    """The .st files of the project folder by name, as the compiler reads them."""
+    try:
+        return {source.name: source.text for source in project_sources(folder)}
+    except OSError as exc:
+        raise ProjectUnreadable(f"the project cannot be read: {exc}") from None
 
 
 def _line(text: str, line: int) -> str:

@@ -115,6 +115,15 @@ def test_refusals(site: Plant) -> None:
     error(site.call("POST", ROUTE + "hover", reader, json=bad), 400, "bad_request")
     huge = {"file": "plant.st", "line": 10**12, "col": 10**12}
     error(site.call("POST", ROUTE + "hover", reader, json=huge), 400, "bad_request")
+    # a folder named like a source file: the project cannot be read, said so
+    odd = site.projects / "plant_v2" / "folder.st"
+    odd.mkdir()
+    try:
+        route = "/api/projects/plant_v2/language/outline"
+        reply = site.call("POST", route, reader, json={"file": "plant.st"})
+        assert "the project cannot be read" in error(reply, 422, "project")
+    finally:
+        odd.rmdir()
     far = {"file": "plant.st", "line": 9_999_999, "col": 9_999_999}
     assert ask(site, "hover", far) == {"hover": None}
     assert ask(site, "completion", far) == {"items": []}
