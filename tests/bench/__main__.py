@@ -6,6 +6,7 @@ from tests.bench import (
     bench_compiler,
     bench_context,
     bench_documentation,
+    bench_editor,
     bench_event_log,
     bench_hostile,
     bench_jitter_loaded,
@@ -44,6 +45,7 @@ def main() -> None:
     bench_rest.main()
     bench_hostile.main()
     bench_ui.main()
+    bench_editor.main()
     bench_documentation.main()
     bench_trends.main()
     bench_workspace.main()

@@ -253,7 +253,7 @@ def live_values(page: Page) -> dict[int, str]:
     """The values beside each line in view: line number -> what is shown."""
     shown: dict[str, str] = page.evaluate(
         "(() => { const v = window.padtEditor.view; const out = {};"
-        " document.querySelectorAll('#padt-editor .padt-live').forEach(e => {"
+        " window.padtEditor.shadow.querySelectorAll('.padt-live').forEach(e => {"
         " out[v.state.doc.lineAt(v.posAtDOM(e)).number] = e.textContent; }); return out; })()"
     )
     return {int(line): text for line, text in shown.items()}
@@ -280,7 +280,10 @@ def test_live_values_beside_the_lines_of_the_running_source(demo: Demo) -> None:
         log_in_to_resource(page, "admin", demo.password)
         page.locator('[data-tree^="file:TankControl@"]').first.click(timeout=30_000)
         page.locator("#padt-editor .cm-content").wait_for(timeout=30_000)
-        wait_until("values beside the lines", lambda: 20 in live_values(page))
+        wait_until(
+            "values beside the lines",
+            lambda: live_values(page).get(13) == "restartDelay = T#2s",  # "..." until it comes
+        )
         shown = live_values(page)
         assert shown[20].startswith("level = ") and "tankLevel = " in shown[20]
         assert shown[13] == "restartDelay = T#2s"

@@ -155,11 +155,13 @@ class PadtEditor {
   }
 
   input() {
+    if (this.box && this.box.isConnected) return this.box; // found again when viser redraws
     const label = Array.from(document.querySelectorAll("label")).find((x) => x.textContent === INPUT_LABEL);
     if (!label) return null;
     const row = label.parentElement.parentElement.parentElement;
     if (row.style.display !== "none") row.style.display = "none";
-    return row.querySelector("input");
+    this.box = row.querySelector("input");
+    return this.box;
   }
 
   ask(message) {
@@ -175,10 +177,15 @@ class PadtEditor {
 
   // ---- the page
   build() {
-    const root = el("div", {
+    // The editor lives in a shadow root: the page's observers of every change below
+    // document.body (viser's, ours) then do not run at each keystroke.
+    const host = el("div", {
       id: "padt-editor",
-      style: `position:fixed;z-index:${Z_INDEX};display:none;flex-direction:column;background:#fff;border-left:1px solid #dee2e6;border-right:1px solid #dee2e6;font:13px system-ui,sans-serif;color:#212529`,
+      style: `position:fixed;z-index:${Z_INDEX};display:none;background:#fff;border-left:1px solid #dee2e6;border-right:1px solid #dee2e6`,
     });
+    this.shadow = host.attachShadow({ mode: "open" });
+    const root = el("div", { style: "display:flex;flex-direction:column;height:100%;font:13px system-ui,sans-serif;color:#212529" });
+    this.shadow.append(root);
     this.tabs = el("div", { "data-testid": "editor-tabs", style: "display:flex;overflow-x:auto;flex:1;min-width:0" });
     const button = (name, label, title) => {
       const b = el("button", { style: BUTTON, title, "data-action": name, onclick: () => this.action(name) }, label);
@@ -218,9 +225,9 @@ class PadtEditor {
         this.save();
       }
     });
-    document.body.append(root);
-    this.root = root;
-    this.view = new EditorView({ state: this.newState("", true), parent: document.createElement("div") });
+    document.body.append(host);
+    this.root = host;
+    this.view = new EditorView({ state: this.newState("", true), parent: document.createElement("div"), root: this.shadow });
     this.view.dom.style.height = "100%";
     this.drawBottom();
     this.follow();
@@ -247,6 +254,7 @@ class PadtEditor {
     };
     place();
     window.addEventListener("resize", place);
+    setInterval(() => this.show(this.visible), 1000); // a canvas drawn anew is hidden too
     // the canvas is drawn late and anew when the page's layout changes
     new MutationObserver(() => {
       if (!this.observed || !document.body.contains(this.observed)) place();
@@ -255,8 +263,13 @@ class PadtEditor {
   }
 
   show(on) {
-    this.root.style.display = on && !this.showDrawing ? "flex" : "none";
+    const editing = on && !this.showDrawing;
+    this.root.style.display = editing ? "block" : "none";
     this.visible = on;
+    // the canvas under the editor is not composited while hidden by it: in a browser that
+    // draws without a GPU that was a third of a core while one types
+    const canvas = document.querySelector("canvas[data-engine]");
+    if (canvas) canvas.style.visibility = editing ? "hidden" : "";
   }
 
   toggleDrawing() {
@@ -513,7 +526,11 @@ class PadtEditor {
     if (!doc) return;
     const { from, to } = this.view.viewport;
     const d = this.view.state.doc;
-    this.send({ k: "view", file: doc.file, first: d.lineAt(from).number, last: d.lineAt(to).number });
+    const view = { k: "view", file: doc.file, first: d.lineAt(from).number, last: d.lineAt(to).number };
+    const key = JSON.stringify(view);
+    if (key === this.viewSent) return; // typing on a line moves nothing into view
+    this.viewSent = key;
+    this.send(view);
   }
 
   // ---- the language services
