@@ -50,6 +50,7 @@ const theme = EditorView.theme({
     color: "#1864ab", fontSize: "12px",
   },
   ".padt-live-stale": { color: "#868e96", background: "#f1f3f5" },
+  ".padt-live-forced": { color: "#c92a2a", background: "#fff5f5" },
   ".cm-tooltip-hover": { maxWidth: "640px", padding: "4px 8px", whiteSpace: "pre-wrap" },
 });
 
@@ -72,7 +73,7 @@ class LiveWidget extends WidgetType {
   // a new value changes the text in place: the line is not drawn anew, so a hover over it
   // (which keeps the element under the mouse) survives the values' updates
   updateDOM(span) {
-    span.className = "padt-live" + (this.quality === "live" ? "" : " padt-live-stale");
+    span.className = `padt-live padt-live-${this.quality === "forced" ? "forced" : this.quality === "live" ? "live" : "stale"}`;
     span.dataset.quality = this.quality;
     span.textContent = this.text;
     return true;
