@@ -271,3 +271,30 @@ def test_a_read_only_user_sees_download_and_online_change_disabled_with_the_reas
         assert screen_button(page, "Compile").is_enabled()  # compiling changes nothing
         assert not screen_button(page, "Download").is_enabled()
         assert not screen_button(page, TAB).is_enabled()
+
+
+def test_the_editor_toolbar_opens_the_same_dialogs(demo: Demo) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_demo(page, demo)
+        page.locator('[data-tree^="file:TankControl@"]').first.click(timeout=30_000)
+        page.locator("#padt-editor .cm-content").wait_for(timeout=30_000)
+        page.evaluate(
+            "document.querySelectorAll('.mantine-Notification-closeButton').forEach(b => b.click())"
+        )
+
+        # Download while Tank1 runs: the dialog says why not
+        page.locator('#padt-editor [data-action="download"]').click()
+        dialog = dialog_showing(page, '[data-testid="download-refused"]')
+        assert "needs it in STOP" in dialog.inner_text()
+        close(dialog)
+
+        # Online change of the project as it is: nothing differs from what was loaded
+        page.locator('#padt-editor [data-action="online_change"]').click()
+        dialog = dialog_showing(page, '[data-testid="source-diff-none"]')
+        assert text_of(page, '[data-testid="change-resource"]') == "Tank1"
+        assert text_of(page, '[data-testid="crc-running"]') == text_of(
+            page, '[data-testid="crc-new"]'
+        )
+        dialog.get_by_role("button", name="Cancel", exact=True).click()
+        dialog.wait_for(state="detached")
