@@ -38,9 +38,12 @@ class _ChannelScript(_messages.RunJavascriptMessage):
 
 
 def run(client: viser.ClientHandle, channel: str, source: str) -> None:
+    connection = client._websock_connection  # viser is pinned below 1.2
+    if connection.get_message_buffer().done:
+        return  # the page is gone (a worker's answer may come after it)
     message = _ChannelScript(source=source)
     message.channel = channel
-    client._websock_connection.queue_message(message)  # viser is pinned below 1.2
+    connection.queue_message(message)
 
 
 def script_json(data: Any) -> str:

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import Page
 
+from frontend.editor import page_push
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
     PASSWORD,
@@ -303,3 +304,17 @@ def test_live_values_beside_the_lines_of_the_running_source(demo: Demo) -> None:
         wait_until("no values for an edited POU", lambda: not live_values(page))
         page.keyboard.press("Control+z")
         wait_until("values again once undone", lambda: 20 in live_values(page))
+
+
+def test_without_the_editors_code_the_centre_says_how_to_get_it(
+    plant: Plant, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.setattr(page_push, "BUNDLE", tmp_path / "missing.js")
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(plant.url)
+        page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+        log_in(page, "viewer", PASSWORD)
+        said = page.locator("#padt-editor-missing")
+        said.wait_for(timeout=30_000)
+        assert "scripts/install-codemirror.sh" in said.inner_text()
