@@ -64,7 +64,7 @@ class WorkspaceSession(Protocol):
 
 NAVIGATION_WIDTH = 300
 WORK_WIDTH = 780  # the work panel where the window is wide enough
-CANVAS_LEFT = 400  # what the work panel leaves between itself and the navigation, at least
+CANVAS_LEFT = 540  # left to the editor between the panels, at least: some 60 columns of code
 ASSUMED_WINDOW = 1920  # until the page said its width
 NONE = "(none online)"
 NO_PROJECT = "(no project)"
