@@ -33,6 +33,7 @@ pytest: $(VENV)/.stamp-dev
 	$(BIN)/pytest -m "not slow" --durations=15
 
 bench: $(VENV)/.stamp-run
+	bash scripts/install-codemirror.sh  # the editor's bench types into it
 	$(BIN)/python -m tests.bench
 
 $(VENV)/.stamp-run: pyproject.toml
