@@ -9,9 +9,7 @@ of scrolling), and only the variables of the lines in view are wanted (`wanted`)
 from __future__ import annotations
 
 import html
-import logging
-import threading
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,51 +24,15 @@ from backend.engineering.sources import (
     instances,
     line_variables,
 )
+from frontend.editor.live_lines import SourceLookup, value_text
 from frontend.resource_feed import ResourceFeed
 from frontend.screen_registry import Now, Screen, Work
 from runtime.contract.artifact import VarInfo
-from runtime.contract.values import array_shape, format_for_display
 
 PAGE_LINES = 40
 NO_INSTANCE = "-"
 PREVIOUS, NEXT = "Previous page", "Next page"
 QUALITY_COLORS = {"forced": "#c92a2a", "stale": "#868e96"}  # as the Online test
-log = logging.getLogger("padt.ui")
-
-
-class SourceLookup:
-    """The sources of the configuration the resource runs, looked up again (compiling the
-    projects, off the refresher's thread) whenever its CRC changes."""
-
-    def __init__(
-        self, find: Callable[[str, Mapping[str, Path]], ConfigurationSources | None]
-    ) -> None:
-        self._find = find
-        self._lock = threading.Lock()
-        self.crc = ""
-        self.done = False
-        self.result: ConfigurationSources | None = None
-
-    def ask(self, crc: str, projects: Mapping[str, Path]) -> None:
-        with self._lock:
-            if crc == self.crc:
-                return
-            self.crc, self.done, self.result = crc, False, None
-        threading.Thread(target=self._look, args=(crc, dict(projects)), daemon=True).start()
-
-    def _look(self, crc: str, projects: Mapping[str, Path]) -> None:
-        try:
-            found = self._find(crc, projects)
-        except Exception:  # a project the compiler chokes on is not the running one
-            log.exception("looking for the source of configuration %s failed", crc)
-            found = None
-        with self._lock:
-            if crc == self.crc:  # not overtaken by another configuration meanwhile
-                self.result, self.done = found, True
-
-    def answer(self) -> tuple[bool, ConfigurationSources | None]:
-        with self._lock:
-            return self.done, self.result
 
 
 @dataclass
@@ -294,7 +256,7 @@ def _chip(
 ) -> str:
     """`level = 512`, the value coloured by its quality."""
     how = quality.get(shown.path, "live")
-    text = _value_text(shown, values, types)
+    text = value_text(shown, values, types)
     color = QUALITY_COLORS.get(how, "inherit")
     if text is None:  # not (yet) delivered
         text, color, how = "...", _MUTED, "none"
@@ -304,21 +266,6 @@ def _chip(
         f'</span> <b data-code-var="{name}" data-quality="{html.escape(how)}" '
         f'style="color:{color}">{html.escape(text)}</b></span>'
     )
-
-
-def _value_text(shown: Shown, values: dict[str, Any], types: dict[str, str]) -> str | None:
-    if shown.path not in values:
-        return None
-    value, type_name = values[shown.path], types.get(shown.path, "")
-    if shown.element is None:
-        return format_for_display(value, type_name)
-    shape = array_shape(type_name)  # an element of an array of values: one variable
-    if shape is None or not isinstance(value, list):
-        return None
-    indices = shape.indices()
-    if shown.element not in indices or len(value) != len(indices):
-        return None
-    return format_for_display(value[indices.index(shown.element)], shape.element)
 
 
 def render_interface(

@@ -15,6 +15,7 @@ import viser
 
 from backend.engineering.project import compile_project, demo_project_path, load_project
 from backend.engineering.sources import ConfigurationSources, Shown, find_sources
+from frontend.editor.live_lines import SourceLookup
 from frontend.resource_feed import Latest, ResourceFeed
 from frontend.screens import code
 from tests.conftest import free_port
@@ -119,7 +120,7 @@ def test_an_instance_of_a_block_without_st_source_shows_its_interface(
     without_ton = {name: pou for name, pou in demo_sources.pous.items() if name != "TON"}
     known = dataclasses.replace(demo_sources, pous=without_ton)
     screen = code.build(gui)
-    screen.lookup = code.SourceLookup(lambda crc, projects: known)
+    screen.lookup = SourceLookup(lambda crc, projects: known)
     feed = _feed(demo_sources.crc)
     _refreshed(screen, feed, {})
     screen.instance.value = "TankControl.refillDelay"  # type: ignore[misc]
