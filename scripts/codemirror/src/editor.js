@@ -26,7 +26,7 @@ import { structuredText, stFolding } from "./st_language.js";
 const INPUT_LABEL = "Editor message";
 const DEBOUNCE_MS = 150;
 const ANSWER_TIMEOUT_MS = 5000;
-const Z_INDEX = 150; // above the canvas, below viser's modals (200+), menus and notifications
+const Z_INDEX = 90; // above the canvas, below viser's modals (100: a confirmation must not be under the editor), menus and notifications
 
 const highlight = HighlightStyle.define([
   { tag: tags.keyword, color: "#7048e8", fontWeight: "600" },
