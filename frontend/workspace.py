@@ -18,6 +18,7 @@ from backend.engineering.project_access import Editor
 from backend.engineering.resource_client import ResourceClient, ResourceLogin
 from backend.engineering.user_layouts import MAX_OPEN_FILES, Layout, LayoutError
 from frontend import (
+    new_project_panel,
     page_clicks,
     panel_layout,
     plant_view,
@@ -104,6 +105,8 @@ class Workspace:
                 self._edited,
             )
             self.edits = project_edit_panel.build(gui, self.edit_target)
+            maker = new_project_panel.Maker(self.shelf, Editor(self.user, self.level), self._made)
+            new_project_panel.build(gui, maker)
         keep(project_folder)
         self.project_choice.on_update(lambda _: self._open_project())
         self.tree_reader: project_tree_view.TreeReader | None = None
@@ -206,6 +209,11 @@ class Workspace:
         self.tree_entry = None
         self.tree_shown = (-1, None)
         self.tree.content = project_tree_view.render(None, None) if self.tree_reader else ""
+
+    def _made(self, name: str) -> None:
+        """A project made from a template: chosen, so that its tree is read and shown."""
+        self.project_choice.options = tuple(self.shelf)
+        set_value(self.project_choice, name)  # opens it (the chooser's update)
 
     def project(self) -> str | None:
         name = self.project_choice.value
