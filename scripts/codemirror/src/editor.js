@@ -8,10 +8,10 @@
 //  - from the server: `window.padtEditor.receive(message)` run by viser's RunJavascript.
 // Edits go as changes (never the whole text per keystroke) with a version per document; the
 // server answers diagnostics for the newest version only.
-import { EditorState, EditorSelection, ChangeSet, Compartment, StateEffect, StateField, RangeSetBuilder } from "@codemirror/state";
+import { EditorState, EditorSelection, Compartment, StateEffect, StateField, RangeSetBuilder } from "@codemirror/state";
 import {
   EditorView, keymap, lineNumbers, highlightActiveLine, highlightActiveLineGutter,
-  drawSelection, highlightSpecialChars, hoverTooltip, Decoration, WidgetType, ViewPlugin,
+  drawSelection, highlightSpecialChars, hoverTooltip, Decoration, WidgetType,
 } from "@codemirror/view";
 import { defaultKeymap, history, historyKeymap, indentWithTab } from "@codemirror/commands";
 import {
@@ -290,7 +290,6 @@ class PadtEditor {
     }
     const b = this.backButton;
     b.style.display = this.showDrawing && this.visible ? "block" : "none";
-    const r = this.root.getBoundingClientRect();
     b.style.left = `${parseFloat(this.root.style.left) + 8}px`;
     b.style.top = `${parseFloat(this.root.style.top) + 8}px`;
     return this.drawingToggle;
