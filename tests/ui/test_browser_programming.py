@@ -5,7 +5,8 @@ its code and place, fixed by picking from the completion list; go to definition 
 FB's file and back; a rename of the FB's output across both files, saved; Download to
 Tank1 in STOP naming the resource and both CRCs; Start; live values beside the lines; a
 constant changed; the online change dialog with the source diff and every value's fate;
-confirmed, the counter goes on from its value.
+confirmed, the counter goes on from its value. And the New project control's refusals: a
+name that is no folder's name, a PADT that keeps no audit log, a Read-only user.
 
 The rest of the must-show is tested once, elsewhere:
 - an anonymous browser sees no Share or Dev Settings control:
@@ -34,10 +35,12 @@ from playwright.sync_api import Page
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
     Demo,
+    Plant,
     button_enabled,
     choose,
     confirm,
     field,
+    open_as,
     open_tab,
     state,
     text_of,
@@ -331,3 +334,32 @@ def test_a_new_user_programs_downloads_and_changes_online(demo: Demo, tmp_path: 
         wait_until("values beside the changed source", lambda: counted(page, used) >= 0, 60)
         assert counted(page, used) >= before > 0
         assert broken == [], broken
+
+
+def test_new_project_refused_with_the_reason_and_greyed_out_for_read_only(plant: Plant) -> None:
+    """The `plant` fixture's PADT keeps no audit log: nothing may be made, and it says so."""
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_as(page, plant, "admin")
+        page.get_by_text("New project", exact=True).click()
+        field(page, "Project name").fill("../escape")
+        wait_until(
+            "a name that is no folder's name is refused as typed",
+            lambda: "must not" in text_of(page, '[data-testid="new-project-problem"]'),
+        )
+        assert not button_enabled(page, "Make project")
+        field(page, "Project name").fill("Plant2")
+        wait_until("Make project is enabled", lambda: button_enabled(page, "Make project"))
+        page.get_by_role("button", name="Make project", exact=True).click()
+        wait_until(
+            "the service's refusal is shown",
+            lambda: "audit log" in text_of(page, '[data-testid="new-project-problem"]'),
+        )
+        assert "Plant2" not in page.get_by_label("Project", exact=True).first.input_value()
+
+        guest = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_as(guest, plant, "guest")
+        guest.get_by_text("New project", exact=True).click()
+        assert "read-only" in text_of(guest, '[data-testid="new-project-problem"]')
+        assert field(guest, "Project name").is_disabled()
+        assert not button_enabled(guest, "Make project")
