@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 from backend.compiler import ast
 from backend.compiler.ast import key
+from backend.compiler.checks.sfc import bool_actions, step_times
 from backend.compiler.infer import Scope
 from backend.compiler.pipeline import parse_project
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
@@ -131,6 +132,10 @@ def _walk_pou(table: _Table, pou: PouSymbols) -> None:
                 table.add(pou.name, variable, DECLARED, step.pos)
         for transition in sfc.transitions:
             walker.expr(transition.condition, write=False)
+        for duration in step_times(sfc):
+            walker.expr(duration, write=False)
+        for target in bool_actions(sfc):
+            walker.expr(target, write=True)
         for action in sfc.actions:
             walker.statements(action.body)
     walker.statements(pou.pou.body)

@@ -90,3 +90,24 @@ END_PROGRAM
     assert found["P.accs"] == {READ: [], WRITTEN: [7]}
     assert found["P.k"] == {READ: [7], WRITTEN: []}
     assert found["P.sum"] == {READ: [7], WRITTEN: [7]}
+
+
+def test_a_charts_bool_actions_are_written_and_its_step_times_read() -> None:
+    source = """\
+VAR_GLOBAL inlet : BOOL; hold : TIME; END_VAR
+PROGRAM B
+VAR_EXTERNAL inlet : BOOL; hold : TIME; END_VAR
+VAR lamp : BOOL; END_VAR
+INITIAL_STEP S:
+  inlet(N); lamp(L, hold);
+END_STEP
+END_PROGRAM
+"""
+    table = cross_reference([SourceFile("b.st", source)])
+    found = {
+        v.qualified: {how: [u.pos.line for u in v.where(how)] for how in (READ, WRITTEN)}
+        for v in table
+    }
+    assert found["inlet"] == {READ: [], WRITTEN: [6]}
+    assert found["B.lamp"] == {READ: [], WRITTEN: [6]}
+    assert found["hold"] == {READ: [6], WRITTEN: []}

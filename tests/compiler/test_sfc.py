@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from tests.compiler.test_checks import diagnostics
 from tests.conftest import sim_trace
 
 QUALIFIERS = """
@@ -91,3 +92,46 @@ def test_divergence_convergence_and_priority(tmp_path: Path) -> None:
     assert t["D.S0.X"] == flags("F F T T")
     # both transitions from C0 are TRUE; only the one with priority 1 fires
     assert t["D.C2.X"] == flags("T T T T") and t["D.C1.X"] == flags("F F F F")
+
+
+def test_a_steps_action_sets_a_global_beside_another_program(tmp_path: Path) -> None:
+    # with two programs each runs on its own view of the globals: what a step's action
+    # sets must be published like an assignment (the template's vessel, split in two)
+    source = """
+    VAR_GLOBAL inlet, outlet : BOOL; level : INT; END_VAR
+    PROGRAM Batch
+    VAR_EXTERNAL inlet : BOOL; level : INT; END_VAR
+    VAR go : BOOL; END_VAR
+    INITIAL_STEP Idle: END_STEP
+    TRANSITION FROM Idle TO Fill := go; END_TRANSITION
+    STEP Fill: inlet(N); outlet(R); END_STEP
+    TRANSITION FROM Fill TO Drain := level >= 2; END_TRANSITION
+    STEP Drain: outlet(S); END_STEP
+    END_PROGRAM
+    PROGRAM Vessel
+    VAR_EXTERNAL inlet, outlet : BOOL; level : INT; END_VAR
+    IF inlet THEN level := level + 1; END_IF;
+    IF outlet THEN level := level - 1; END_IF;
+    END_PROGRAM
+    """
+    t = trace(tmp_path, source, 8, "Batch.go=TRUE@1")
+    assert t["Batch.Fill.X"] == flags("T T T T F F F F")
+    assert t["inlet"] == flags("F T T T T F F F")  # from the cycle after Fill is entered
+    assert t["outlet"] == flags("F F F F F T T T")
+    assert t["level"] == [0, 0, 1, 2, 3, 4, 3, 2]  # Vessel sees each a cycle later
+
+
+def test_a_global_set_by_steps_of_two_programs_has_two_writers() -> None:
+    source = """VAR_GLOBAL lamp : BOOL; END_VAR
+PROGRAM A
+INITIAL_STEP S: lamp(N); END_STEP
+END_PROGRAM
+PROGRAM B
+VAR_EXTERNAL lamp : BOOL; END_VAR
+INITIAL_STEP S: lamp(S); END_STEP
+END_PROGRAM
+"""
+    assert (
+        "t.st:3:17: error: global 'lamp' is written by the user programs A, B; "
+        "global data must have one writer [E0606]"
+    ) in diagnostics(source)

@@ -13,6 +13,7 @@ from collections.abc import Iterator, Sequence
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.checks.data import resource_data
+from backend.compiler.checks.sfc import bool_actions, step_times
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import Scope
@@ -112,6 +113,7 @@ def globals_read(resolved: Resolved, pou_key: str) -> list[str]:
         names = [n for s in _statements(pou) for n in _expressions_in(s)]
         if pou.pou.sfc is not None:
             names.extend(n for t in pou.pou.sfc.transitions for n in _nodes(t.condition))
+            names.extend(n for d in step_times(pou.pou.sfc) for n in _nodes(d))
         names.extend(ast.NameRef(name, p) for name, p in _for_variables(pou))
         for node in names:
             if isinstance(node, ast.NameRef | ast.Call):  # a call may name a global FB
@@ -173,6 +175,8 @@ def _statements(pou: PouSymbols) -> Iterator[ast.Statement]:
 
 
 def _write_targets(pou: PouSymbols) -> Iterator[ast.Expr]:
+    if pou.pou.sfc is not None:
+        yield from bool_actions(pou.pou.sfc)
     for statement in _statements(pou):
         match statement:
             case ast.Assign(target=target):

@@ -3,6 +3,8 @@ and their times."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.checks.statements import check_block, check_condition
@@ -34,6 +36,25 @@ def sfc_networks(sfc: ast.Sfc) -> list[list[ast.Step]]:
     for step in sfc.steps:
         networks.setdefault(root(key(step.name)), []).append(step)
     return list(networks.values())
+
+
+def bool_actions(sfc: ast.Sfc) -> Iterator[ast.NameRef]:
+    """The BOOL variables named as a step's action (no ACTION has the name), where named:
+    the chart writes each in every cycle (it follows its action's Q), a global too."""
+    actions = {key(action.name) for action in sfc.actions}
+    for step in sfc.steps:
+        for association in step.associations:
+            if key(association.action) not in actions:
+                yield ast.NameRef(association.action, association.pos)
+
+
+def step_times(sfc: ast.Sfc) -> Iterator[ast.Expr]:
+    """The times of the timed qualifiers (L, D, SD, DS, SL): the chart reads each in every
+    cycle."""
+    for step in sfc.steps:
+        for association in step.associations:
+            if association.duration is not None:
+                yield association.duration
 
 
 def check_sfc(scope: Scope, sfc: ast.Sfc) -> None:
