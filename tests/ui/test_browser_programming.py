@@ -19,8 +19,8 @@ The rest of the must-show is tested once, elsewhere:
   one file get a conflict: tests/ui/test_browser_editor.py::
   test_save_then_a_change_on_disk_is_offered_and_a_second_browser_conflicts.
 
-Screenshots (`story-*`, 1400x900 and 1920x1080) go to /work/notes/31/shots or
-$PADT_SHOTS."""
+Screenshots (`story-*`, 1400x900 and 1920x1080) go to $PADT_SHOTS or, where the
+issue's notes are, /work/notes/31/shots."""
 
 from __future__ import annotations
 
@@ -58,7 +58,9 @@ from tests.ui.test_browser_online_change import DIALOG_S, close, dialog_showing,
 
 pytestmark = pytest.mark.browser
 
-SHOTS = Path(os.environ.get("PADT_SHOTS", "/work/notes/31/shots"))
+NOTES = Path("/work/notes/31")  # the issue's notes, where a person looks at the screenshots
+SHOTS = Path(os.environ["PADT_SHOTS"]) if "PADT_SHOTS" in os.environ else NOTES / "shots"
+PUMP_S = 180  # the demo's pump rests some 20 s (800 to 300 l at 30 l/s, then 2 s); slow machines
 PROJECT = "Pumps"
 FB = "PumpCounter.st"
 TANK = "tank.st"
@@ -77,8 +79,11 @@ END_FUNCTION_BLOCK
 
 
 def shoot(page: Page, name: str) -> None:
-    """The page at 1400x900 and at 1920x1080, without viser's notifications over it."""
-    SHOTS.mkdir(parents=True, exist_ok=True)
+    """The page at 1400x900 and at 1920x1080, without viser's notifications over it (none
+    where there is no folder for them: CI)."""
+    if not SHOTS.parent.is_dir():
+        return
+    SHOTS.mkdir(exist_ok=True)
     for width, height in ((1400, 900), (1920, 1080)):
         page.set_viewport_size({"width": width, "height": height})
         dismiss_notifications(page)  # closed as a user does: React's nodes stay React's
@@ -169,6 +174,7 @@ def test_a_new_user_programs_downloads_and_changes_online(demo: Demo, tmp_path: 
         )
         tree = '[data-testid="project-tree"]'
         wait_until("its tree is shown", lambda: "TankControl" in text_of(page, tree))
+        shoot(page, "workspace-new-project")
 
         # 2. a FUNCTION_BLOCK added from the tree, its body typed in the editor
         page.get_by_text("Add to the project", exact=True).click()
@@ -290,13 +296,14 @@ def test_a_new_user_programs_downloads_and_changes_online(demo: Demo, tmp_path: 
         assert text_of(page, '[data-testid="resource-crc"]') == new_crc
 
         # live values beside the lines of the editor
-        wait_until("the counter counts", lambda: counted(page, used) > 0, timeout_s=60)
+        # (the pump may rest while the plant drains the tank: the counter waits for it)
+        wait_until("the counter counts", lambda: counted(page, used) > 0, timeout_s=PUMP_S)
         assert "counter.runCount = " in live_values(page)[used]
-        shoot(page, "live-values")
+        shoot(page, "workspace-live-values")
 
         # 7. a constant changed, online; the counter read before: the changed source has
         # no values beside its lines until it runs
-        wait_until("the counter has counted a while", lambda: counted(page, used) >= 20, 60)
+        wait_until("the counter has counted a while", lambda: counted(page, used) >= 20, PUMP_S)
         before = counted(page, used)
         limit = line_with(page, "alarmLow := level < 100;")
         go(page, TANK, limit, len("alarmLow := level < 100") + 1)
