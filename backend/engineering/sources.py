@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from backend.compiler import ast
+from backend.compiler.checks.sfc import bool_actions
 from backend.compiler.pipeline import parse_all
 from backend.compiler.source import Pos, SourceFile, stdlib_sources
 from backend.engineering.project import ProjectError, compile_project, load_project
@@ -230,6 +231,9 @@ def _pou_source(pou: ast.Pou, file_lines: list[str]) -> PouSource:
             mention(f"{step.name}.X", step.pos)
             mention(f"{step.name}.T", step.pos)
             lines_seen.append(step.pos.line)
+        for action in bool_actions(pou.sfc):  # what the step sets: its action's Q
+            mention(action.name, action.pos)
+            lines_seen.append(action.pos.line)
     last = _end_line(pou, file_lines, max(lines_seen))
     return PouSource(
         name=pou.name,

@@ -133,6 +133,7 @@ PLANT = """\
 TYPE Point : STRUCT x : INT; y : INT; END_STRUCT; END_TYPE
 VAR_GLOBAL
   gTotal : DINT;
+  gHorn : BOOL;
 END_VAR
 FUNCTION_BLOCK Valve
 VAR_INPUT open : BOOL; END_VAR
@@ -158,9 +159,10 @@ valves[i - 2](open := TRUE);  (* i is 4 after the loop *)
 gTotal := gTotal + BOOL_TO_DINT(valves[1].opened);
 END_PROGRAM
 PROGRAM Chart
-VAR go : BOOL; END_VAR
+VAR_EXTERNAL gHorn : BOOL; END_VAR
+VAR go, lamp : BOOL; END_VAR
 INITIAL_STEP Idle: END_STEP
-STEP Busy: END_STEP
+STEP Busy: lamp(N); gHorn(P); END_STEP
 TRANSITION FROM Idle TO Busy := go; END_TRANSITION
 END_PROGRAM
 """
@@ -203,10 +205,12 @@ def test_arrays_structs_globals_temporaries_and_steps(tmp_path: Path) -> None:
         ("opened", "Line.valves[2].opened"),
         ("open", "Line.valves[2].open"),
     ]
-    # an SFC step shows its flag and its time
+    # an SFC step shows its flag and its time, and the BOOL variables it sets as actions
     assert _named(found, "Chart", "STEP Busy") == [
         ("Busy.X", "Chart.Busy.X"),
         ("Busy.T", "Chart.Busy.T"),
+        ("lamp", "Chart.lamp"),
+        ("gHorn", "gHorn"),
     ]
     assert _named(found, "Chart", "TRANSITION") == [("go", "Chart.go")]
 
