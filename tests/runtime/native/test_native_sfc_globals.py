@@ -61,7 +61,7 @@ def history(resource: Resource, names: list[str], cycles: int) -> dict[str, list
     seen: dict[str, list[object]] = {name: [] for name in names}
     for _ in range(cycles):
         advance(resource)
-        values = resource.variables.values()
+        values = {**resource.variables.values(), "image valve": resource.io.outputs.get("valve")}
         for name in names:
             seen[name].append(values[name])
     return seen
@@ -70,11 +70,12 @@ def history(resource: Resource, names: list[str], cycles: int) -> dict[str, list
 def test_a_steps_actions_on_globals_set_them_on_both_tiers(native_tier: NativeTier) -> None:
     pair = side_by_side(GLOBALS + CHART + OPERATOR, native_tier, PROGRAMS)
     names = ["Q.Run.X", "Q.qN", "Q.qL", "eN", "eS", "eL", "eD", "eP", "eSD", "eDS", "eSL"]
-    names += ["eP0", "eP1", "gN", "gS", "valve"]
+    names += ["eP0", "eP1", "gN", "gS", "valve", "image valve"]
     python = history(pair.python, names, 8)
     assert python["Q.Run.X"] == flags("F T T T T F F F")
     assert python["Q.qN"] == python["eN"] == flags("F F T T T T F F")
     assert python["gN"] == python["valve"] == flags("F F T T T T F F")
+    assert python["image valve"] == python["valve"]  # what the field gets, %QX0.0
     assert python["eS"] == python["gS"] == flags("F F T T T T F F")  # stored until R in Idle
     assert python["Q.qL"] == python["eL"] == flags("F F T T F F F F")  # 200 ms, not 1 s
     assert python["eD"] == flags("F F F F T T F F")
