@@ -39,17 +39,28 @@ class NewProjectPanel:
 
 def build(gui: viser.GuiApi, maker: Maker) -> NewProjectPanel:
     writes = maker.editor.level in PADT_ACTORS
-    titles = tuple(t.title for t in templates())
+    names = tuple(t.name for t in templates())
     with gui.add_folder("New project", expand_by_default=False):
         name = gui.add_text("Project name", "", disabled=not writes)
-        template = gui.add_dropdown("Template", titles, disabled=not writes)
+        template = gui.add_dropdown("Template", names, disabled=not writes)
+        about = gui.add_html(_about(template.value))  # the whole title: the field is narrow
         note = gui.add_html(_note(_why_not(maker) if not writes else None))
         make = gui.add_button("Make project", color="blue", disabled=True)
     panel = NewProjectPanel(name, template, note, make)
+    template.on_update(lambda _: _tell(about, template.value))
     if writes:
         name.on_update(lambda _: _check(panel, maker))
         make.on_click(lambda _: _make(panel, maker))
     return panel
+
+
+def _tell(about: viser.GuiHtmlHandle, template: str) -> None:
+    about.content = _about(template)
+
+
+def _about(template: str) -> str:
+    title = next((t.title for t in templates() if t.name == template), "")
+    return f'<div data-testid="template-about" style="{_NOTE}">{html.escape(title)}</div>'
 
 
 def _why_not(maker: Maker) -> str:
@@ -72,7 +83,7 @@ def _check(panel: NewProjectPanel, maker: Maker) -> None:
 
 def _make(panel: NewProjectPanel, maker: Maker) -> None:
     name = panel.name.value
-    chosen = next((t.name for t in templates() if t.title == panel.template.value), "")
+    chosen = panel.template.value
     try:  # the shelf checks everything again: the page may send anything
         maker.shelf.new_project(name, chosen, maker.editor)
     except Refusal as refused:

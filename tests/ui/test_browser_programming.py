@@ -164,7 +164,11 @@ def test_a_new_user_programs_downloads_and_changes_online(demo: Demo, tmp_path: 
         )
         assert not button_enabled(page, "Make project")
         field(page, "Project name").fill(PROJECT)
-        choose(page, "Template", "The demo tank: a level kept between two marks, Modbus I/O")
+        choose(page, "Template", "tank")
+        wait_until(
+            "the template is told",
+            lambda: "The demo tank" in text_of(page, '[data-testid="template-about"]'),
+        )
         wait_until("Make project is enabled", lambda: button_enabled(page, "Make project"))
         page.get_by_role("button", name="Make project", exact=True).click()
         wait_until("the project is made", lambda: (folder / "padt.toml").is_file())
