@@ -15,6 +15,7 @@ from typing import Any, Protocol, TypeVar
 import viser
 
 from backend.engineering.project_access import Editor
+from backend.engineering.project_tree import ProjectTree
 from backend.engineering.resource_client import ResourceClient, ResourceLogin
 from backend.engineering.user_layouts import MAX_OPEN_FILES, Layout, LayoutError
 from frontend import (
@@ -81,6 +82,21 @@ class Workspace:
         gui.main_panel.set_width(NAVIGATION_WIDTH)
         self.layout = self.context.user_layouts.of(self.user)  # as the user left it
         self._handles: list[Any] = []
+        self.shelf = self.context.shelf
+        # Every attribute a callback reads is set before the first widget that can call
+        # back exists: viser calls from its own thread, as soon as a browser acts.
+        self.tree_reader: project_tree_view.TreeReader | None = None
+        self.tree_shown: tuple[int, project_tree_view.Entry | None] = (-1, None)
+        self.tree_entry: project_tree_view.Entry | None = None
+        self.window_width = ASSUMED_WINDOW
+        self.drawing_wanted = False  # the drawing costs the page: only when asked for
+        # the first PROGRAM is opened once the tree is read, unless the user left files open
+        self.first_program_wanted = not (
+            self.layout.open_files and self.layout.project in self.shelf
+        )
+        self.editor_area = EditorArea(
+            client, self.shelf, Editor(self.user, self.level), _hooks(self)
+        )
         keep = self._handles.append
         self.forcing_feed = ForcingFeed()
         self.forcing_banner = forcing.build_banner(gui)  # on top, seen from every tab
@@ -91,7 +107,6 @@ class Workspace:
         logout = gui.add_button("Log out")
         logout.on_click(lambda _: session.log_out())
         keep(logout)
-        self.shelf = self.context.shelf
         names = tuple(self.shelf) or (NO_PROJECT,)
         with gui.add_folder("Project") as project_folder:
             self.project_choice = gui.add_dropdown("Project", names)
@@ -109,9 +124,6 @@ class Workspace:
             new_project_panel.build(gui, maker)
         keep(project_folder)
         self.project_choice.on_update(lambda _: self._open_project())
-        self.tree_reader: project_tree_view.TreeReader | None = None
-        self.tree_shown: tuple[int, project_tree_view.Entry | None] = (-1, None)
-        self.tree_entry: project_tree_view.Entry | None = None
         self._open_project()
         self.resource = gui.add_dropdown("Resource", (NONE,))
         keep(self.resource)
@@ -125,26 +137,21 @@ class Workspace:
         with gui.add_folder("Status") as status_folder:
             self.status = gui.add_html("")
         keep(status_folder)
-        self.window_width = ASSUMED_WINDOW
         self.panel = gui.add_panel()
         self.screens: list[Screen] = []  # the tabs, in their order
         for kind in screens.SCREENS:  # the one list
             with self.panel.add_tab(kind.name, kind.icon):
                 self.screens.append(kind(self))
         self.shown = self.screens[0]  # the tab group opens on its first tab
-        # once the screens are there: the page says the window's size as it starts
-        self.page_clicks = page_clicks.build(gui, self._clicked)
         self.panel.dock_right()
         self.panel.set_width(self._work_width())
         panel_layout.put_back(gui, self.panel, self.layout)
         self.drawing = plant_view.PlantView(client)
-        self.drawing_wanted = False  # the drawing costs the page: only when asked for
-        self.editor_area = EditorArea(
-            client, self.shelf, Editor(self.user, self.level), _hooks(self)
-        )
         if self.layout.project in self.shelf:  # the files the user left open
             for path in self.layout.open_files:
                 self.editor_area.open_file(self.layout.project, path)
+        # last: the page then reports the window's size, and clicks, to a whole workspace
+        self.page_clicks = page_clicks.build(gui, self._clicked)
 
     def screen(self, kind: type[S]) -> S | None:
         """The screen of that kind in this workspace (a screen that reads another's)."""
@@ -402,6 +409,12 @@ class Workspace:
         if (version, self.tree_entry) != self.tree_shown and tree is not None:
             self.tree.content = project_tree_view.render(tree, self.tree_entry)
             self.tree_shown = (version, self.tree_entry)
+        if self.first_program_wanted and isinstance(tree, ProjectTree):
+            self.first_program_wanted = False  # once: a file closed stays closed
+            first = next((i for i in tree.pous if i.kind == "PROGRAM"), None)
+            project = self.project()
+            if first is not None and project is not None and not self.editor_area.documents:
+                self.editor_area.open_file(project, first.file, first.line)
 
     def _follow_forcing(
         self, resource: str | None, status: p.Status | None, login_there: ResourceLogin | None

@@ -465,7 +465,7 @@ def _missing_script(message: str) -> str:
     return (
         "var d=document.getElementById('padt-editor-missing');if(!d){d=document.createElement"
         "('div');d.id='padt-editor-missing';d.style.cssText='position:fixed;left:50%;top:40%;"
-        "transform:translate(-50%,-50%);z-index:150;background:#fff9db;border:1px solid "
+        "transform:translate(-50%,-50%);z-index:90;background:#fff9db;border:1px solid "
         "#ffe066;padding:16px 20px;border-radius:6px;font:14px system-ui,sans-serif;max-width:"
         "520px';document.body.append(d)}"
         f"d.textContent={page_push.script_json(message)};"
