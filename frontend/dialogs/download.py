@@ -63,7 +63,7 @@ def ask_download(deployment: Deployment, project: str) -> None:
         verdict = deployment.allowed(p.Load)
         plan = plan_download(checked, status, parameters, None if verdict.ok else verdict.reason)
         found["checked"] = checked
-        body.content = WIDE_MODAL + plan_html(plan)
+        body.content = WIDE_MODAL + plan_html(plan, project)
         progress.visible = False
         download.visible = plan.possible
         if not plan.possible:
@@ -122,12 +122,14 @@ def ask_download(deployment: Deployment, project: str) -> None:
     in_background("padt-download-plan", prepare)
 
 
-def plan_html(plan: DownloadPlan) -> str:
-    """What the download would do, in words, or why it cannot be done now."""
+def plan_html(plan: DownloadPlan, project: str) -> str:
+    """What the download would do, in words, or why it cannot be done now. The project is
+    named as the tree and the Online change dialog name it (its name on the shelf), not
+    by the name in its padt.toml."""
     first, second = plan.check_crcs
     rows = [
         ("Resource", f'<b data-testid="download-resource">{html.escape(plan.resource)}</b>'),
-        ("Project", html.escape(plan.project)),
+        ("Project", f'<span data-testid="download-project">{html.escape(project)}</span>'),
         (
             "Configuration",
             f'running <code data-testid="download-running-crc">'

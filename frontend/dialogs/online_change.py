@@ -56,6 +56,7 @@ FATE_COLORS = {
     "lost": RED,
 }
 _CELL = "padding:2px 8px;border-bottom:1px solid #e9ecef"
+KEEP, ACCEPT = "Keep", "Accept"  # the checkboxes' labels, short: the words are above them
 # each of the diff and the table at most a fifth of the window: the confirmation stays near
 _SCROLL = "max-height:22vh;overflow:auto;border:1px solid #e9ecef;margin:2px 0 8px 0"
 _HEADING = "margin:10px 0 2px 0;font-weight:600"
@@ -136,9 +137,10 @@ def ask_online_change(
             close.label = "Close"
             return
         with choices:
+            # the words in a row of their own: a checkbox's label column is narrow
             for reset in preview.resets:
-                label = f"Keep {reset.name} {_value(reset.online)}"
-                box = gui.add_checkbox(label, False, disabled=bool(reset.keepable))
+                gui.add_html(keep_html(reset))
+                box = gui.add_checkbox(KEEP, False, disabled=bool(reset.keepable))
                 keeps[reset.name] = box
             for risk in preview.risks:
                 gui.add_html(
@@ -146,7 +148,7 @@ def ask_online_change(
                     f'{html.escape(risk.title)}</b><br><span style="font-size:0.9em">'
                     f"{html.escape(risk.detail)}</span></div>"
                 )
-                check = gui.add_checkbox(risk.label, False)
+                check = gui.add_checkbox(ACCEPT, False, hint=risk.label)
                 check.on_update(lambda _: verdict_now())
                 risk_checks.append(check)
             if not preview.risks:
@@ -304,6 +306,15 @@ def resets_html(resets: tuple[ParameterReset, ...]) -> str:
         f'<div style="{MUTED};font-size:0.85em">Tick "Keep" below to set the online value '
         "again right after the switch-over.</div>"
     )
+
+
+def keep_html(reset: ParameterReset) -> str:
+    """The line above a reset's "Keep" checkbox: what ticking it keeps, or why it cannot."""
+    words = (
+        f"Keep {html.escape(reset.name)} at its online value "
+        f"<b>{html.escape(_value(reset.online))}</b> after the switch-over"
+    )
+    return f'<div data-testid="keep" style="margin:4px 0 0 0">{words}{_why_not_kept(reset)}</div>'
 
 
 def _why_not_kept(reset: ParameterReset) -> str:

@@ -159,6 +159,7 @@ def test_download_in_stop_start_then_an_online_change_keeps_the_values(
         screen_button(page, "Download").click()
         dialog = dialog_showing(page, '[data-testid="download-effects"]')
         assert text_of(page, '[data-testid="download-resource"]') == "Tank1"
+        assert text_of(page, '[data-testid="download-project"]') == "demo"  # as in the tree
         assert text_of(page, '[data-testid="download-running-crc"]') == running_crc
         new_crc = text_of(page, '[data-testid="download-new-crc"]')
         assert re.fullmatch(r"[0-9A-F]{8}", new_crc) and new_crc != running_crc
@@ -225,8 +226,13 @@ def test_download_in_stop_start_then_an_online_change_keeps_the_values(
         change = dialog.get_by_role("button", name=TAB, exact=True)
         assert not change.is_enabled()
         assert "1 of 1 not ticked" in text_of(page, '[data-testid="online-change-disabled"]')
-        dialog.get_by_label("Keep target_cycle_ms 50", exact=True).check()
-        dialog.get_by_label("Accept: 1 value initialised", exact=True).check()
+        keep = text_of(page, '[data-testid="keep"]')
+        assert keep == "Keep target_cycle_ms at its online value 50 after the switch-over", keep
+        for label in ("Keep", "Accept"):  # one line each, not squeezed into a narrow column
+            box = dialog.locator(f"label:text-is('{label}')").first.bounding_box()
+            assert box is not None and box["height"] < 26, (label, box)
+        dialog.get_by_label("Keep", exact=True).check()
+        dialog.get_by_label("Accept", exact=True).check()
         wait_until("Online change is enabled", change.is_enabled)
         scroll_dialog(page, "top")
         shoot_both(page, "online-change-dialog")
