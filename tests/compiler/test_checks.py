@@ -169,6 +169,20 @@ def test_a_global_has_one_writer() -> None:
     ) in diagnostics(source)
 
 
+def test_a_global_passed_to_an_in_out_is_written() -> None:
+    source = (
+        "VAR_GLOBAL shared : INT; END_VAR\n"
+        "FUNCTION Inc : INT\nVAR_IN_OUT x : INT; END_VAR\nx := x + 1;\nEND_FUNCTION\n"
+        "PROGRAM A\nVAR y : INT; END_VAR\ny := Inc(shared);\nEND_PROGRAM\n"
+        "PROGRAM B\nVAR y : INT; END_VAR\ny := shared + 1;\nEND_PROGRAM\n"
+        "PROGRAM C\nVAR y : INT; END_VAR\ny := Inc(x := shared);\nEND_PROGRAM\n"
+    )
+    assert diagnostics(source) == [
+        "t.st:8:10: error: global 'shared' is written by the user programs A, C; "
+        "global data must have one writer [E0606]"
+    ]
+
+
 def test_program_ids_unique_and_at_most_32() -> None:
     source = "PROGRAM P\nEND_PROGRAM\n"
     same_id = [ProgramConfig("a", "P", 1), ProgramConfig("b", "P", 1)]

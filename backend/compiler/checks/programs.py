@@ -97,7 +97,7 @@ def globals_written(resolved: Resolved, pou_key: str) -> dict[str, Pos]:
     """The globals (by key) a POU writes, itself or through the POUs it calls."""
     written: dict[str, Pos] = {}
     for pou in _reachable(resolved, pou_key):
-        for target in _write_targets(pou):
+        for target in _write_targets(resolved, pou):
             root = _root_name(target)
             variable = _global(resolved, pou, root.name) if root is not None else None
             if root is not None and variable is not None:
@@ -174,10 +174,13 @@ def _statements(pou: PouSymbols) -> Iterator[ast.Statement]:
                 stack.extend(body)
 
 
-def _write_targets(pou: PouSymbols) -> Iterator[ast.Expr]:
+def _write_targets(resolved: Resolved, pou: PouSymbols) -> Iterator[ast.Expr]:
     if pou.pou.sfc is not None:
         yield from bool_actions(pou.pou.sfc)
+    scope = Scope(resolved, pou)
     for statement in _statements(pou):
+        for call in _calls_in(statement):  # a call in an expression too: `y := f(g)`
+            yield from _in_out_arguments(resolved, scope, call)
         match statement:
             case ast.Assign(target=target):
                 yield target
@@ -189,6 +192,36 @@ def _write_targets(pou: PouSymbols) -> Iterator[ast.Expr]:
                         yield arg.value
                 # calling an FB instance changes it
                 yield call.instance or call.receiver or ast.NameRef(call.name, call.pos)
+
+
+def _in_out_arguments(resolved: Resolved, scope: Scope, call: ast.Call) -> Iterator[ast.Expr]:
+    """What a call of an FB instance or a function binds to its VAR_IN_OUT parameters, by
+    name or by position: the callee may write it."""
+    called = scope.expression_instance(call)
+    if called is not None:  # `fbs[1](...)`, `s.fb(...)`
+        callee = resolved.pous.get(key(called[1].name))
+    elif call.receiver is None and call.instance is None:
+        variable = scope.variable(call.name)
+        if variable is None:  # a function
+            callee = resolved.pous.get(key(call.name))
+        elif isinstance(variable.type, FbType):
+            callee = resolved.pous.get(key(variable.type.name))
+        else:
+            callee = None
+    else:  # a method or an action: not followed here
+        callee = None
+    if callee is None:
+        return
+    parameters = callee.parameters
+    for index, arg in enumerate(call.args):
+        if arg.value is None or arg.is_output:
+            continue
+        if arg.name is not None:
+            parameter = callee.by_key.get(key(arg.name))
+        else:  # positional arguments come first, in the order of the parameters
+            parameter = parameters[index] if index < len(parameters) else None
+        if parameter is not None and parameter.kind == "VAR_IN_OUT":
+            yield arg.value
 
 
 def _root_name(expr: ast.Expr) -> ast.NameRef | None:

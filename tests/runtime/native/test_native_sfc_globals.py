@@ -144,3 +144,38 @@ def test_a_blocks_chart_sets_a_global_another_program_reads(native_tier: NativeT
         "seen": [0, 0, 1, 2],  # Counter sees inlet a cycle later
     }
     assert history(pair.native, ["Batch.filler.Fill.X", "inlet", "seen"], 4) == python
+
+
+IN_OUTS = """
+VAR_GLOBAL total, count, other : INT; END_VAR
+FUNCTION_BLOCK Bump
+VAR_IN_OUT x : INT; END_VAR
+x := x + 1;
+END_FUNCTION_BLOCK
+FUNCTION Add : INT
+VAR_IN_OUT acc : INT; END_VAR
+VAR_INPUT n : INT; END_VAR
+acc := acc + n;
+Add := acc;
+END_FUNCTION
+PROGRAM A
+VAR bumper : Bump; y : INT; END_VAR
+bumper(x := total);
+y := Add(count, 2);
+END_PROGRAM
+PROGRAM B
+VAR_EXTERNAL other : INT; END_VAR
+other := other + 1;
+END_PROGRAM
+"""
+
+
+def test_a_global_bound_to_an_in_out_is_written_beside_another_program(
+    native_tier: NativeTier,
+) -> None:
+    """The same write set: what a call binds to an in-out (named or by position) is written."""
+    programs = [ProgramConfig("A", "A", 1), ProgramConfig("B", "B", 2, 1)]
+    pair = side_by_side(IN_OUTS, native_tier, programs)
+    python = history(pair.python, ["total", "count", "other"], 3)
+    assert python == {"total": [1, 2, 3], "count": [2, 4, 6], "other": [1, 2, 3]}
+    assert history(pair.native, ["total", "count", "other"], 3) == python
