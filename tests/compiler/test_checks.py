@@ -183,6 +183,16 @@ def test_a_global_passed_to_an_in_out_is_written() -> None:
     ]
 
 
+def test_an_instance_named_like_a_program_does_not_call_it() -> None:
+    source = (
+        "VAR_GLOBAL shared : INT; END_VAR\n"
+        "FUNCTION_BLOCK Tick\nVAR n : INT; END_VAR\nn := n + 1;\nEND_FUNCTION_BLOCK\n"
+        "PROGRAM A\nVAR b : Tick; END_VAR\nb();\nEND_PROGRAM\n"
+        "PROGRAM B\nshared := shared + 1;\nEND_PROGRAM\n"
+    )
+    assert diagnostics(source) == []
+
+
 def test_program_ids_unique_and_at_most_32() -> None:
     source = "PROGRAM P\nEND_PROGRAM\n"
     same_id = [ProgramConfig("a", "P", 1), ProgramConfig("b", "P", 1)]

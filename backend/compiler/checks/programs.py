@@ -238,7 +238,8 @@ def _callees(resolved: Resolved, pou: PouSymbols) -> set[str]:
     scope = Scope(resolved, pou)
     for statement in _statements(pou):
         for call in _calls_in(statement):
-            if key(call.name) in resolved.pous:
+            # `b()` of an instance named like a POU `B` calls the instance, not `B`
+            if key(call.name) in resolved.pous and not _names_variable(scope, call):
                 found.add(key(call.name))
             called = scope.expression_instance(call)
             if called is not None:
@@ -247,6 +248,10 @@ def _callees(resolved: Resolved, pou: PouSymbols) -> set[str]:
             if isinstance(receiver, ast.NameRef) and key(receiver.name) in resolved.pous:
                 found.add(key(receiver.name))  # `Prog.Method()`, `Prog.Action()`
     return found
+
+
+def _names_variable(scope: Scope, call: ast.Call) -> bool:
+    return call.receiver is None and call.instance is None and scope.variable(call.name) is not None
 
 
 def _expressions_in(statement: ast.Statement) -> Iterator[ast.Initializer]:

@@ -2,7 +2,8 @@
 it (VAR_EXTERNAL, the global named directly, a located output), with every qualifier, when
 each program runs on its own view of the globals (more than one program, or a sliced one:
 runtime/instances.py). A step's time (L, D, SD, DS, SL) read from a global another program
-writes is the value that program wrote (docs/language.md, SFC)."""
+writes is the value that program wrote (docs/language.md, SFC). The same set of the globals a
+program writes holds those it passes to an in-out."""
 
 from __future__ import annotations
 
