@@ -65,8 +65,14 @@ class WorkspaceSession(Protocol):
 
 
 NAVIGATION_WIDTH = 300
+NAVIGATION_NARROW = 260  # in a window narrower than WIDE_WINDOW: the editor needs it more
+WIDE_WINDOW = 1600
 WORK_WIDTH = 780  # the work panel where the window is wide enough
-CANVAS_LEFT = 540  # left to the editor between the panels, at least: some 60 columns of code
+# The editor is the main work: by default it keeps some 80 columns of code (at 1400 px the
+# work panel then gets ~440 px); a screen that wants room (Trends) or the width the user
+# dragged the panel to may take it down to some 60 columns.
+EDITOR_WIDTH = 700
+EDITOR_LEAST = 540
 ASSUMED_WINDOW = 1920  # until the page said its width
 NONE = "(none online)"
 NO_PROJECT = "(no project)"
@@ -78,9 +84,10 @@ class Workspace:
         self.client = client = session.client
         self.context, self.user, self.level = session.context, session.user, session.level
         self.gui = gui = client.gui
-        gui.main_panel.dock_left()
-        gui.main_panel.set_width(NAVIGATION_WIDTH)
         self.layout = self.context.user_layouts.of(self.user)  # as the user left it
+        self.window_width = ASSUMED_WINDOW
+        gui.main_panel.dock_left()
+        gui.main_panel.set_width(self._navigation_width())
         self._handles: list[Any] = []
         self.shelf = self.context.shelf
         # Every attribute a callback reads is set before the first widget that can call
@@ -88,7 +95,6 @@ class Workspace:
         self.tree_reader: project_tree_view.TreeReader | None = None
         self.tree_shown: tuple[int, project_tree_view.Entry | None] = (-1, None)
         self.tree_entry: project_tree_view.Entry | None = None
-        self.window_width = ASSUMED_WINDOW
         self.drawing_wanted = False  # the drawing costs the page: only when asked for
         # the first PROGRAM is opened once the tree is read, unless the user left files open
         self.first_program_wanted = not (
@@ -157,14 +163,20 @@ class Workspace:
         """The screen of that kind in this workspace (a screen that reads another's)."""
         return next((s for s in self.screens if isinstance(s, kind)), None)
 
+    def _navigation_width(self) -> int:
+        """As the user dragged it, else narrower in a narrow window."""
+        if self.layout.navigation_width is not None:
+            return self.layout.navigation_width
+        return NAVIGATION_WIDTH if self.window_width >= WIDE_WINDOW else NAVIGATION_NARROW
+
     def _work_width(self) -> int:
-        """The work panel's width: as wide as the shown screen wants, but leaving the
-        navigation and the canvas their room in this window (viser scales both docked
-        panels down when they exceed it, and clips what they hold)."""
-        wanted = self.shown.width or self.layout.work_width or WORK_WIDTH
-        navigation = self.layout.navigation_width or NAVIGATION_WIDTH
-        room = self.window_width - navigation - CANVAS_LEFT
-        return max(360, min(wanted, room))
+        """The work panel's width: as wide as the shown screen or the user wants, but
+        leaving the navigation and the editor their room in this window (viser scales both
+        docked panels down when they exceed it, and clips what they hold)."""
+        asked = self.shown.width or self.layout.work_width
+        editor = EDITOR_LEAST if asked else EDITOR_WIDTH
+        room = self.window_width - self._navigation_width() - editor
+        return max(360, min(asked or WORK_WIDTH, room))
 
     def _clicked(self, click: page_clicks.Click) -> None:
         if click.kind == "tab":
@@ -179,6 +191,7 @@ class Workspace:
             width, _, height = click.name.partition("x")
             if width.isdigit() and height.isdigit() and 0 < int(width) < 100_000:
                 self.window_width = int(width)
+                self.gui.main_panel.set_width(self._navigation_width())
                 self.panel.set_width(self._work_width())
         elif click.kind == "drawing":
             self.drawing_wanted = click.name == "on"
