@@ -17,6 +17,9 @@ from backend.engineering.resource_client import ResourceClient
 from frontend.app import PadtUi
 
 WAIT_S = 20
+# a page coming up, or the workspace after a login: on a loaded machine (two cores shared
+# with the resource and the UI, WebGL in software) the browser may be busy for long
+START_S = 60
 PASSWORD = "correct-horse-7"  # of every account of the `plant` fixture
 
 
@@ -52,9 +55,17 @@ def text_of(page: Page, selector: str) -> str:
 
 
 def wait_until(what: str, check: Callable[[], bool], timeout_s: float = WAIT_S) -> None:
+    """Until `check()` holds; an element not there yet (Playwright's timeout inside the
+    check) is "not yet" too, until the deadline."""
     deadline = time.monotonic() + timeout_s
-    while not check():
-        assert time.monotonic() < deadline, f"never: {what}"
+    while True:
+        try:
+            if check():
+                return
+            last = ""
+        except PlaywrightError as error:
+            last = f" ({error.message.splitlines()[0]})"
+        assert time.monotonic() < deadline, f"never: {what}{last}"
         time.sleep(0.1)
 
 
@@ -63,32 +74,34 @@ def wait_for_text(page: Page, selector: str, wanted: str, timeout_s: float = WAI
 
 
 def log_in(page: Page, user: str, password: str) -> None:
-    field(page, "User").fill(user)
-    field(page, "Password").fill(password)
-    page.get_by_role("button", name="Log in", exact=True).click()
+    button = page.get_by_role("button", name="Log in", exact=True)
+    button.wait_for(timeout=START_S * 1000)
+    field(page, "User").fill(user, timeout=START_S * 1000)
+    field(page, "Password").fill(password, timeout=START_S * 1000)
+    button.click(timeout=START_S * 1000)
 
 
 def log_in_to_resource(page: Page, user: str, password: str) -> None:
     try:
-        page.get_by_role("button", name="Log in to resource").wait_for(timeout=WAIT_S * 1000)
+        page.get_by_role("button", name="Log in to resource").wait_for(timeout=START_S * 1000)
     except PlaywrightError:  # seen rarely under load: say what the page showed instead
         raise AssertionError(f"no workspace; the page shows: {page.inner_text('body')}") from None
-    field(page, "User").fill(user)
-    field(page, "Password").fill(password)
-    page.get_by_role("button", name="Log in to resource").click()
+    field(page, "User").fill(user, timeout=START_S * 1000)
+    field(page, "Password").fill(password, timeout=START_S * 1000)
+    page.get_by_role("button", name="Log in to resource").click(timeout=START_S * 1000)
     wait_until(
         "the resource login is shown",
         lambda: text_of(page, '[data-testid="resource-login"]').startswith("logged in"),
+        timeout_s=START_S,
     )
 
 
 def open_demo_as_admin(page: Page, demo: Demo) -> None:
     """Open the demo, log in to the PADT and to its resource Tank1 as its administrator."""
     page.goto(demo.url)
-    page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
     log_in(page, "admin", demo.password)
     log_in_to_resource(page, "admin", demo.password)
-    wait_until("Tank1 runs", lambda: state(page) == "RUN", timeout_s=30)
+    wait_until("Tank1 runs", lambda: state(page) == "RUN", timeout_s=START_S)
 
 
 def confirm(page: Page, names: str) -> None:
@@ -122,9 +135,8 @@ def button_enabled(page: Page, name: str) -> bool:
 
 def open_as(page: Page, plant: Plant, user: str) -> None:
     page.goto(plant.url)
-    page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
     log_in(page, user, PASSWORD)
-    wait_for_text(page, '[data-testid="user"]', user)
+    wait_for_text(page, '[data-testid="user"]', user, timeout_s=START_S)
 
 
 def choose(page: Page, label: str, option: str) -> None:
