@@ -23,12 +23,20 @@ from runtime.contract.refusal import Refusal
 MUTED = "color:#868e96"
 RED = "#c92a2a"
 GREEN = "#2b8a3e"
-# a dialog wide enough for a source diff and the table of every value (viser's modal is
-# narrow), and above the code editor's layer (viser puts modals at z-index 100 + n, the
-# editor sits at 150); only while the dialog is open, as the style is part of its content
+# A dialog wide enough for a source diff and the table of every value (viser's modal is
+# narrow), above the code editor's layer (viser puts modals at z-index 100 + n) and within
+# the window: its first part (the plan, the diff, the table) gives way and scrolls inside
+# itself, so that the choices and the buttons under it are always in view. Only while the
+# dialog is open, as the style is part of its content (the body is the modal's first
+# element, its container a column of viser's, three levels below the modal's body).
+_COLUMN = "display:flex!important;flex-direction:column;min-height:0"
 WIDE_MODAL = (
     "<style>.mantine-Modal-content{flex:0 0 min(1080px,94vw)!important;"
-    "max-width:94vw!important}"
+    f"max-width:94vw!important;{_COLUMN}}}"
+    f".mantine-Modal-body,.mantine-Modal-body>div,.mantine-Modal-body>div>div{{{_COLUMN};"
+    "flex:1 1 auto}"
+    ".mantine-Modal-body>div>div>*{flex:0 0 auto}"
+    ".mantine-Modal-body>div>div>:first-child{flex:0 1 auto;min-height:4em;overflow-y:auto}"
     ".mantine-Modal-overlay,.mantine-Modal-inner{z-index:300!important}</style>"
 )
 

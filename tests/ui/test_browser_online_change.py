@@ -86,18 +86,39 @@ def screen_button(page: Page, name: str) -> Locator:
 
 
 def scroll_dialog(page: Page, to: str) -> None:
-    """Scroll the open dialog to its "top" or "bottom", for a screenshot of that part; and
-    no notification over it (headless Chromium's software WebGL is announced in one)."""
+    """Scroll what scrolls inside the open dialog (its plan, the diff, the table) to its
+    "top" or "bottom", for a screenshot of that part."""
     page.evaluate(
         """to => {
-          const dialog = document.querySelector('[role=dialog]');
-          const boxes = [...dialog.querySelectorAll('[class*=Modal]')];
-          for (let e = dialog; e; e = e.parentElement) boxes.push(e);
-          for (const e of boxes) e.scrollTop = to === 'top' ? 0 : e.scrollHeight;
-          document.querySelectorAll('.mantine-Notification-root').forEach(n => n.remove());
+          for (const e of document.querySelector('[role=dialog]').querySelectorAll('*'))
+            if (e.scrollHeight > e.clientHeight) e.scrollTop = to === 'top' ? 0 : e.scrollHeight;
         }""",
         to,
     )
+
+
+def fits_the_window(page: Page, dialog: Locator, buttons: tuple[str, ...]) -> None:
+    """The dialog within the window, not scrolled as a whole, and each of `buttons` in
+    view and on top where it is drawn: the user reaches it without scrolling anything."""
+    whole = page.evaluate(
+        """() => {
+          const c = document.querySelector('.mantine-Modal-content');
+          const r = c.getBoundingClientRect();
+          return [r.top, r.bottom, c.scrollHeight - c.clientHeight, window.innerHeight];
+        }"""
+    )
+    top, bottom, overflow, height = whole
+    assert top >= 0 and bottom <= height and overflow <= 1, whole
+    for name in buttons:
+        button = dialog.get_by_role("button", name=name, exact=True)
+        box = button.bounding_box()
+        assert box is not None and box["y"] >= 0, (name, box)
+        assert box["y"] + box["height"] <= height, (name, box)
+        assert button.evaluate(
+            """b => { const r = b.getBoundingClientRect();
+              const x = r.x + r.width / 2, y = r.y + r.height / 2;
+              return b.contains(document.elementFromPoint(x, y)) }"""
+        ), name
 
 
 def close(dialog: Locator) -> None:
@@ -165,6 +186,7 @@ def test_download_in_stop_start_then_an_online_change_keeps_the_values(
         assert re.fullmatch(r"[0-9A-F]{8}", new_crc) and new_crc != running_crc
         assert f"{new_crc} and {new_crc}, in two processes" in dialog.inner_text()
         assert "every variable starts from its initial value" in dialog.inner_text()
+        fits_the_window(page, dialog, ("Download", "Cancel"))
         shoot_both(page, "download-dialog")
         dialog.get_by_role("button", name="Download", exact=True).click()
         wait_for_text(page, '[data-testid="download-crc"]', new_crc, timeout_s=DIALOG_S)
@@ -234,6 +256,9 @@ def test_download_in_stop_start_then_an_online_change_keeps_the_values(
         dialog.get_by_label("Keep", exact=True).check()
         dialog.get_by_label("Accept", exact=True).check()
         wait_until("Online change is enabled", change.is_enabled)
+        fits_the_window(page, dialog, (TAB, "Cancel"))
+        for long_part in ('[data-testid="source-diff"]', '[data-testid="reload-plan"]'):
+            assert dialog.locator(long_part).is_visible(), long_part
         scroll_dialog(page, "top")
         shoot_both(page, "online-change-dialog")
         scroll_dialog(page, "bottom")
