@@ -38,7 +38,7 @@ from frontend.gui_value import set_value
 from frontend.permissions import Allowed, allowed
 from frontend.resource_feed import ResourceFeed
 from frontend.screen_registry import Now, Screen
-from frontend.screens import forcing
+from frontend.screens import events, forcing
 from frontend.ui_context import UiContext
 from frontend.viser_lockdown import PASSWORD_LABEL
 from runtime.contract import protocol as p
@@ -64,6 +64,7 @@ class WorkspaceSession(Protocol):
     def feed_of(self, resource: str) -> ResourceFeed: ...
 
 
+EVENTS = 20  # the newest events below the editor (the Events screen has them all)
 NAVIGATION_WIDTH = 300
 NAVIGATION_NARROW = 260  # in a window narrower than WIDE_WINDOW: the editor needs it more
 WIDE_WINDOW = 1600
@@ -149,6 +150,7 @@ class Workspace:
             with self.panel.add_tab(kind.name, kind.icon):
                 self.screens.append(kind(self))
         self.shown = self.screens[0]  # the tab group opens on its first tab
+        self.events = self.screen(events.Events)  # its log is below the editor too
         self.panel.dock_right()
         self.panel.set_width(self._work_width())
         panel_layout.put_back(gui, self.panel, self.layout)
@@ -406,6 +408,8 @@ class Workspace:
             screen.follow(now)
         self.shown.refresh(now)  # the others wait until they are opened
         self.editor_area.refresh(feed)
+        if self.events is not None:
+            self.editor_area.show_events(events.newest(self.events.screen, resource, EVENTS))
         if feed is not None:  # only what some screen shows is watched, seen or not: a
             # tab opened shows its values at once
             paths = [path for screen in self.screens for path in screen.watches()]

@@ -92,6 +92,7 @@ class EditorArea:
         self._work = LatestWork("padt-editor")
         self._polled = 0.0
         self.live = LiveLines()
+        self._events: list[dict[str, object]] = []  # as the page was sent them last
         self.box = client.gui.add_text(INPUT_LABEL, "")
         self.box.on_update(lambda _: self._heard(self.box.value))
         self.missing = page_push.install(client)
@@ -124,6 +125,12 @@ class EditorArea:
         if shown is not None:
             file, items = shown
             page_push.send(self.client, "live", {"k": "live", "file": file, "items": items})
+
+    def show_events(self, rows: list[dict[str, object]]) -> None:
+        """The selected resource's newest events in the bottom panel (sent when changed)."""
+        if rows != self._events:
+            self._events = rows
+            page_push.send(self.client, "events", {"k": "events", "items": rows})
 
     def wanted(self) -> list[str]:
         """The variables the live values beside the lines need."""

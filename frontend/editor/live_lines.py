@@ -154,7 +154,7 @@ class LiveLines:
             self._layout = _Layout(key, _lines(sources, document, self.first, self.last, types))
         items = []
         for number, shown in sorted(self._layout.lines.items()):
-            parts, worst = [], "live"
+            parts, each, worst = [], [], "live"
             for s in shown:
                 text = value_text(s, values, types)
                 how = quality.get(s.path, "live") if text is not None else "stale"
@@ -162,8 +162,10 @@ class LiveLines:
                     worst = "forced" if "forced" in (how, worst) else how
                 shown_text = text if text is not None else "..."
                 parts.append(f"{s.label} = {shown_text}")
+                each.append([s.label, shown_text, how])  # the bottom panel's Live values
                 self._values[s.label.upper()] = shown_text
-            items.append({"line": number, "text": "  ".join(parts), "quality": worst})
+            line = {"line": number, "text": "  ".join(parts), "quality": worst, "values": each}
+            items.append(line)
         return items
 
 

@@ -401,6 +401,29 @@ def refresh(
     _update(screen, key, render_chain(chain, loaded), _range_errors(errors) + table)
 
 
+def newest(screen: EventsScreen, resource: str | None, count: int) -> list[dict[str, object]]:
+    """The newest events of the resource's short-term log as this screen read them, newest
+    first, as rows for the editor's bottom panel (plain values: the page escapes them);
+    none before the log is read."""
+    feeds = [feed for (name, _), feed in screen.feeds.items() if name == resource]
+    if not feeds:
+        return []
+    events, _, loaded, _, _ = feeds[0].snapshot(long_term=False)
+    if not loaded:
+        return []
+    return [
+        {
+            "seq": event.seq,
+            "time": local_time(event.time_ns),
+            "kind": event.kind,
+            "color": KIND_COLORS.get(event.kind, "#212529"),
+            "user": event.user or "-",
+            "message": event.message,
+        }
+        for event in reversed(events[-count:])
+    ]
+
+
 def _range_errors(errors: list[str]) -> str:
     """A range field that is no moment is said in red; it filters nothing meanwhile."""
     lines = "".join(f"<div>{html.escape(error)}</div>" for error in errors)

@@ -39,10 +39,14 @@ def open_in_editor(page: Page, url: str, user: str, password: str) -> None:
     page.locator('[data-tree^="file:TankControl@"]').first.click(timeout=30_000)
     page.locator("#padt-editor .cm-content").wait_for(timeout=30_000)
     wait_until("TankControl is in view", lambda: "PROGRAM TankControl" in editor_text(page))
+    # the workspace opened it already at login: the click's effect is the cursor moved to
+    # its declaration (a cursor placed before that would be moved)
+    declared = editor_text(page).split("\n").index("PROGRAM TankControl") + 1
+    wait_until("the cursor is at TankControl", lambda: cursor_line(page) == declared)
 
 
 def dismiss_notifications(page: Page) -> None:
-    """Close viser's notifications (its note on software WebGL sits over the toolbar)."""
+    """Close viser's notifications (a note on the left may stand where a click goes)."""
     page.evaluate(
         "document.querySelectorAll('.mantine-Notification-closeButton').forEach(b => b.click())"
     )
@@ -295,6 +299,12 @@ def test_live_values_beside_the_lines_of_the_running_source(demo: Demo) -> None:
         assert shown[13] == "restartDelay = T#2s"
         assert "refillDelay.IN = " in shown[25] and "restartDelay = T#2s" in shown[25]
         assert 2 not in shown and 33 not in shown  # a comment, after END_PROGRAM: nothing
+        # the bottom panel lists them too, one row a variable
+        page.locator('#padt-editor [data-bottom="live"]').click()
+        row = page.locator('#padt-editor [data-live="restartDelay"]')
+        wait_until("restartDelay is listed", lambda: row.inner_text() == "restartDelay\tT#2s")
+        level = page.locator('#padt-editor [data-live="tankLevel"]')
+        wait_until("tankLevel is listed", lambda: level.inner_text().startswith("tankLevel\t"))
         dismiss_notifications(page)
         shoot_both(page, "editor-live-values")
         # hover tells the value now as well
@@ -302,7 +312,9 @@ def test_live_values_beside_the_lines_of_the_running_source(demo: Demo) -> None:
         assert "level : INT := 500" in said and "value now: " in said
         # the level moves with the plant: the values beside the lines follow it
         first = live_values(page)[20]
-        wait_until("the level moves", lambda: live_values(page).get(20, first) != first)
+        wait_until(
+            "the level moves", lambda: live_values(page).get(20, first) != first, timeout_s=60
+        )
         # an edit that moves the lines: they are no longer the running source, no values
         put_cursor(page, 18, 1)
         page.keyboard.press("Enter")

@@ -3,7 +3,8 @@
 open in the centre without a click; no note of viser's about software WebGL covers the
 editor's toolbar; the inputs through which the page talks to the server are never seen;
 a confirmation and a dropdown's list opened while a file is open are above the editor and
-answer a click where they are drawn."""
+answer a click where they are drawn; the stop confirmed is the newest event below the
+editor."""
 
 from __future__ import annotations
 
@@ -89,6 +90,11 @@ def test_the_first_program_is_open_and_nothing_covers_it(
         assert on_top(dialog.get_by_role("button", name="OK")) == "it"
         confirm(page, "Tank1")
         wait_until("Tank1 is in STOP", lambda: state(page).startswith("STOP"), timeout_s=30)
+        # below the editor, the resource's newest events: the stop among them, by admin
+        page.locator('#padt-editor [data-bottom="events"]').click()
+        stop = page.locator('#padt-editor [data-testid="events-list"] tr[data-kind="stop"]')
+        wait_until("the stop is listed", lambda: stop.count() == 1)
+        assert "admin" in stop.inner_text()
 
         # a dropdown's list (drawn in a layer of its own) above the editor
         page.get_by_label("Resource", exact=True).first.click()

@@ -1,6 +1,6 @@
 // The PADT's code editor in the browser: CodeMirror 6 laid over the centre of viser's page
-// (the area of its 3D canvas), with a toolbar above and a panel of problems and references
-// below. It speaks to the server (frontend/editor/) in two directions:
+// (the area of its 3D canvas), with a toolbar above and a panel of problems, references,
+// live values and events below. It speaks to the server (frontend/editor/) in two directions:
 //  - to the server: messages queued with a sequence number and written, all the unanswered
 //    ones at once, into a hidden viser text input ("Editor message"); viser sends an input's
 //    value at most every 50 ms and drops the values in between, so a message stays in the
@@ -132,6 +132,8 @@ class PadtEditor {
     this.problems = [];
     this.references = [];
     this.bottomTab = "problems";
+    this.liveItems = []; // the lines in view with their variables' values, when online
+    this.events = []; // the selected resource's newest events, newest first
     this.showDrawing = false;
     this.readonlyCompartment = new Compartment();
     this.build();
@@ -648,6 +650,8 @@ class PadtEditor {
     const tabs = [
       ["problems", `Problems (${this.problems.length})`],
       ["references", this.referencesOf ? `References to ${this.referencesOf} (${this.references.length})` : "References"],
+      ["live", "Live values"],
+      ["events", "Events"],
     ];
     this.bottomTabs.replaceChildren(
       ...tabs.map(([key, label]) =>
@@ -657,6 +661,10 @@ class PadtEditor {
         }, label)
       )
     );
+    if (this.bottomTab === "live" || this.bottomTab === "events") {
+      this.bottomBody.replaceChildren(this.bottomTab === "live" ? this.liveTable() : this.eventTable());
+      return;
+    }
     const rows = this.bottomTab === "problems" ? this.problems : this.references;
     const table = el("table", { style: "border-collapse:collapse;width:100%", "data-testid": `${this.bottomTab}-list` });
     for (const r of rows) {
@@ -677,6 +685,48 @@ class PadtEditor {
       table.append(el("tr", {}, el("td", { style: "padding:6px 8px;color:#868e96" }, empty)));
     }
     this.bottomBody.replaceChildren(table);
+  }
+
+  // each variable of the lines in view once, in the order of the lines, with its value
+  liveTable() {
+    const table = el("table", { style: "border-collapse:collapse;width:100%", "data-testid": "live-list" });
+    const seen = new Set();
+    for (const item of this.liveItems) {
+      for (const [name, text, how] of item.values || []) {
+        if (seen.has(name)) continue;
+        seen.add(name);
+        const color = how === "forced" ? "#c92a2a" : how === "live" ? "#212529" : "#868e96";
+        table.append(el("tr", {
+          style: "cursor:pointer;border-bottom:1px solid #f1f3f5", "data-live": name,
+          onclick: () => this.select(this.current, item.line, 1),
+        },
+        el("td", { style: "padding:2px 8px;white-space:nowrap;font-family:monospace" }, name),
+        el("td", { style: `padding:2px 8px;width:100%;font-family:monospace;color:${color}` }, text)));
+      }
+    }
+    if (!seen.size) {
+      const empty = "Online, when the file is what the selected resource runs: the values of the variables in the lines in view.";
+      table.append(el("tr", {}, el("td", { style: "padding:6px 8px;color:#868e96" }, empty)));
+    }
+    return table;
+  }
+
+  eventTable() {
+    const table = el("table", { style: "border-collapse:collapse;width:100%", "data-testid": "events-list" });
+    const cell = "padding:2px 8px;white-space:nowrap";
+    for (const e of this.events) {
+      table.append(el("tr", { style: "border-bottom:1px solid #f1f3f5", "data-seq": String(e.seq), "data-kind": e.kind },
+        el("td", { style: `${cell};color:#868e96;text-align:right` }, String(e.seq)),
+        el("td", { style: `${cell};font-family:monospace` }, e.time),
+        el("td", { style: `${cell};color:${e.color};font-weight:600` }, e.kind),
+        el("td", { style: cell }, e.user),
+        el("td", { style: "padding:2px 8px;width:100%" }, e.message)));
+    }
+    if (!this.events.length) {
+      const empty = "The selected resource's newest events, once logged in to it (all of them: the Events screen).";
+      table.append(el("tr", {}, el("td", { style: "padding:6px 8px;color:#868e96" }, empty)));
+    }
+    return table;
   }
 
   applyDiagnostics(doc) {
@@ -805,6 +855,13 @@ class PadtEditor {
     const doc = this.docs.get(m.file);
     if (!doc || doc.file !== this.current) return;
     this.view.dispatch({ effects: setLive.of(liveDecorations(this.view.state.doc, m.items)) });
+    this.liveItems = m.items;
+    if (this.bottomTab === "live") this.drawBottom();
+  }
+
+  on_events(m) {
+    this.events = m.items;
+    if (this.bottomTab === "events") this.drawBottom();
   }
 
   on_notice(m) {
