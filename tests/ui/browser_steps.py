@@ -86,14 +86,23 @@ def log_in_to_resource(page: Page, user: str, password: str) -> None:
         page.get_by_role("button", name="Log in to resource").wait_for(timeout=START_S * 1000)
     except PlaywrightError:  # seen rarely under load: say what the page showed instead
         raise AssertionError(f"no workspace; the page shows: {page.inner_text('body')}") from None
-    field(page, "User").fill(user, timeout=START_S * 1000)
-    field(page, "Password").fill(password, timeout=START_S * 1000)
-    page.get_by_role("button", name="Log in to resource").click(timeout=START_S * 1000)
-    wait_until(
-        "the resource login is shown",
-        lambda: text_of(page, '[data-testid="resource-login"]').startswith("logged in"),
-        timeout_s=START_S,
-    )
+    # viser sends a field's value at most every 50 ms: a click right after typing may reach
+    # the server before the password does (then refused, the field emptied): typed again
+    deadline = time.monotonic() + START_S
+    while True:
+        field(page, "User").fill(user, timeout=START_S * 1000)
+        field(page, "Password").fill(password, timeout=START_S * 1000)
+        page.get_by_role("button", name="Log in to resource").click(timeout=START_S * 1000)
+        try:
+            wait_until("the resource login is shown", lambda: _logged_in(page), timeout_s=15)
+            return
+        except AssertionError:
+            if time.monotonic() > deadline:
+                raise
+
+
+def _logged_in(page: Page) -> bool:
+    return text_of(page, '[data-testid="resource-login"]').startswith("logged in")
 
 
 def open_demo_as_admin(page: Page, demo: Demo) -> None:
