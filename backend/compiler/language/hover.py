@@ -142,13 +142,10 @@ def _clip(comment: str) -> str:
 
 def _initial_value(analysis: Analysis, pos: Pos | None) -> str:
     """The text after `:=` of the declaration at `pos`, up to its `;`."""
-    if pos is None:
+    found = _lexed_at(analysis, pos)
+    if found is None:
         return ""
-    text = _text(analysis, pos.file)
-    if text is None:
-        return ""
-    lexed, before = piece_at(text, pos.line)
-    start = lexed.index_at(pos.line - before, pos.col)
+    lexed, start = found
     depth = 0
     begin = -1
     for index in range(start, min(start + 400, len(lexed.tokens))):
@@ -206,19 +203,27 @@ def _elementary(basic: ElementaryType) -> str:
 
 def _declared_text(analysis: Analysis, pos: Pos | None) -> str:
     """The text after the `:` of the type declaration at `pos`, up to its `;`."""
-    if pos is None:
+    found = _lexed_at(analysis, pos)
+    if found is None:
         return ""
-    text = _text(analysis, pos.file)
-    if text is None:
-        return ""
-    lexed, before = piece_at(text, pos.line)
-    start = lexed.index_at(pos.line - before, pos.col)
+    lexed, start = found
     tokens = lexed.tokens[start : start + 200]
     colon = next((i for i, t in enumerate(tokens) if t.text == ":"), -1)
     end = next((i for i, t in enumerate(tokens) if t.text == ";"), -1)
     if colon < 0 or end <= colon + 1:
         return ""
     return " ".join(lexed.text[tokens[colon + 1].offset : tokens[end - 1].end].split())
+
+
+def _lexed_at(analysis: Analysis, pos: Pos | None) -> tuple[Lexed, int] | None:
+    """The lexed piece of the file around `pos` and the index of the token at `pos`."""
+    if pos is None:
+        return None
+    text = _text(analysis, pos.file)
+    if text is None:
+        return None
+    lexed, before = piece_at(text, pos.line)
+    return lexed, lexed.index_at(pos.line - before, pos.col)
 
 
 def _text(analysis: Analysis, file: str) -> str | None:
