@@ -170,5 +170,15 @@ def latest_values(
     """The feed's latest values, types and qualities, read together (empty without one)."""
     if feed is None:
         return {}, {}, {}
-    with feed.latest.lock:
-        return feed.latest.values, feed.latest.types, feed.latest.quality
+    _, values, types, quality = latest_reading(feed)
+    return values, types, quality
+
+
+def latest_reading(
+    feed: ResourceFeed,
+) -> tuple[Status | None, dict[str, Any], dict[str, str], dict[str, str]]:
+    """The feed's last status with its values, types and qualities, read together (the
+    values belong to the configuration the status names)."""
+    latest = feed.latest
+    with latest.lock:
+        return latest.status, latest.values, latest.types, latest.quality

@@ -22,7 +22,7 @@ from backend.engineering.sources import (
     line_variables,
 )
 from frontend.editor.document import Document
-from frontend.resource_feed import ResourceFeed
+from frontend.resource_feed import ResourceFeed, latest_reading
 from runtime.contract.values import array_shape, format_for_display
 
 log = logging.getLogger("padt.ui")
@@ -133,14 +133,7 @@ class LiveLines:
         projects: Mapping[str, Path],
         document: Document,
     ) -> list[dict[str, Any]]:
-        latest = feed.latest
-        with latest.lock:
-            status, values, types, quality = (
-                latest.status,
-                latest.values,
-                latest.types,
-                latest.quality,
-            )
+        status, values, types, quality = latest_reading(feed)
         if status is None or not status.crc or not types:
             self._layout = _Layout((), {})
             return []

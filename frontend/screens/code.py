@@ -25,7 +25,7 @@ from backend.engineering.sources import (
     line_variables,
 )
 from frontend.editor.live_lines import SourceLookup, value_text
-from frontend.resource_feed import ResourceFeed
+from frontend.resource_feed import ResourceFeed, latest_reading
 from frontend.screen_registry import Now, Screen, Work
 from runtime.contract.artifact import VarInfo
 
@@ -105,14 +105,7 @@ def _page(
     if feed is None:
         _offer(screen, ())
         return _message("Select a resource you are logged in to."), []
-    latest = feed.latest
-    with latest.lock:
-        status, values, types, quality = (
-            latest.status,
-            latest.values,
-            latest.types,
-            latest.quality,
-        )
+    status, values, types, quality = latest_reading(feed)
     if status is None or not status.crc:
         _offer(screen, ())
         return _message("Waiting for the resource's configuration."), []
