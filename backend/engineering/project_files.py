@@ -18,7 +18,6 @@ import hashlib
 import itertools
 import os
 import stat
-import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
@@ -28,6 +27,7 @@ from backend.engineering.padt_audit_log import AuditEntry, PadtAuditLog
 from backend.engineering.project import PROJECT_FILE
 from backend.engineering.project_access import READ, WRITE, Editor, require
 from backend.engineering.project_shelf import ProjectShelf
+from runtime.contract.private_files import staged_private
 from runtime.contract.refusal import Refusal
 
 MAX_PATH_CHARS = 512
@@ -318,23 +318,18 @@ def _staged(target: Path, data: bytes) -> Path:
     whole new content or the old one, never half. The file keeps its mode; a new one is
     0644 as an editor makes it (the umask is not read: setting it to read it would race
     other threads)."""
-    target.parent.mkdir(parents=True, exist_ok=True)
     try:
         mode = stat.S_IMODE(target.stat().st_mode)
     except FileNotFoundError:
         mode = 0o644
-    handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
+    temporary = staged_private(target, data)  # owner-only until its mode is set
     try:
-        with os.fdopen(handle, "wb") as file:
-            file.write(data)
-            file.flush()
-            os.fsync(file.fileno())
         os.chmod(temporary, mode)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(temporary)
         raise
-    return Path(temporary)
+    return temporary
 
 
 @contextlib.contextmanager
