@@ -31,7 +31,7 @@ from backend.compiler.checks.statements import check_block
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import Scope, is_external
-from backend.compiler.resolve import PouSymbols, Resolved
+from backend.compiler.resolve import PouSymbols, Resolved, Variable
 from backend.compiler.types import BOOL
 
 
@@ -74,12 +74,7 @@ def check_pou(resolved: Resolved, pou: PouSymbols) -> list[Diagnostic]:
     for variable in pou.variables:
         if id(variable) in inherited:
             continue  # checked with the block that declares it
-        if variable.kind != "VAR_GLOBAL":
-            check_location_area(scope, variable)
-            check_abstract_instance(scope, variable)
-            check_initializer(scope, variable.type, variable.init)
-            check_constant_initializer(scope, variable, order)
-        check_reference_parameter(scope, variable)
+        _check_variable(scope, variable, order)
         if variable.edge is not None and (variable.kind != "VAR_INPUT" or variable.type != BOOL):
             scope.report(variable.pos, Code.EDGE_INPUT, f"{variable.edge} needs a BOOL input")
     check_open_array_variables(scope)
@@ -93,6 +88,17 @@ def check_pou(resolved: Resolved, pou: PouSymbols) -> list[Diagnostic]:
     for routine in pou.own_routines():
         diagnostics.extend(_check_method(resolved, routine))
     return diagnostics
+
+
+def _check_variable(scope: Scope, variable: Variable, order: dict[int, int]) -> None:
+    """What a block's and a method's variables both need: where it is, what it is an
+    instance of, its initial value, and what a reference parameter may be."""
+    if variable.kind != "VAR_GLOBAL":
+        check_location_area(scope, variable)
+        check_abstract_instance(scope, variable)
+        check_initializer(scope, variable.type, variable.init)
+        check_constant_initializer(scope, variable, order)
+    check_reference_parameter(scope, variable)
 
 
 def _inherited(resolved: Resolved, pou: PouSymbols) -> set[int]:
@@ -114,12 +120,7 @@ def _check_method(resolved: Resolved, method: PouSymbols) -> list[Diagnostic]:
                 "variables are temporary); declare it a VAR of the block"
             )
             scope.report(variable.pos, Code.METHOD_STATIC, message)
-        if variable.kind != "VAR_GLOBAL":
-            check_location_area(scope, variable)
-            check_abstract_instance(scope, variable)
-            check_initializer(scope, variable.type, variable.init)
-            check_constant_initializer(scope, variable, order)
-        check_reference_parameter(scope, variable)
+        _check_variable(scope, variable, order)
     check_open_array_variables(scope)
     check_block(scope, method.pou.body, loop_depth=0)
     return scope.diagnostics
