@@ -15,6 +15,7 @@ from __future__ import annotations
 import copy
 import re
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -37,12 +38,15 @@ from runtime.contract.parameters import (
     PROGRAM_BY_NAME,
     RESOURCE_BY_NAME,
     ParameterError,
+    ParameterSpec,
     resource_consistency,
 )
 from runtime.contract.refusal import Refusal
 
 PROJECT_KEYS = ("name", "version", "author", "date")
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
+# a program instance's parameters; its program_id is the instance's `id`, not one of them
+_PROGRAM_PARAMETERS = {name: spec for name, spec in PROGRAM_BY_NAME.items() if name != "program_id"}
 
 
 @dataclass
@@ -273,20 +277,29 @@ def _with_settings(document: Any, draft: Settings) -> str:
     return tomlkit.dumps(document)
 
 
+def _parameter_problems(
+    where: str, values: Mapping[str, Any], specs: Mapping[str, ParameterSpec]
+) -> list[Problem]:
+    """Each value that is no parameter of `specs` or out of its range, at `where.name`."""
+    problems = []
+    for name, value in values.items():
+        spec = specs.get(name)
+        if spec is None:
+            problems.append(Problem(f"{where}.{name}", f"unknown parameter '{name}'"))
+            continue
+        try:
+            spec.check(value)
+        except ParameterError as exc:
+            problems.append(Problem(f"{where}.{name}", str(exc)))
+    return problems
+
+
 def _field_problems(draft: Settings) -> list[Problem]:
     problems = []
     name_problem = resource_name_problem(draft.resource)
     if name_problem is not None:
         problems.append(Problem("resource.name", name_problem))
-    for name, value in draft.parameters.items():
-        spec = RESOURCE_BY_NAME.get(name)
-        if spec is None:
-            problems.append(Problem(f"resource.{name}", f"unknown parameter '{name}'"))
-            continue
-        try:
-            spec.check(value)
-        except ParameterError as exc:
-            problems.append(Problem(f"resource.{name}", str(exc)))
+    problems += _parameter_problems("resource", draft.parameters, RESOURCE_BY_NAME)
     if not problems:
         # with the defaults of the parameters not set, as the resource will have them
         values = ResourceConfig(name=draft.resource, **draft.parameters).__dict__
@@ -310,15 +323,7 @@ def _field_problems(draft: Settings) -> list[Problem]:
             PROGRAM_BY_NAME["program_id"].check(program.id)
         except ParameterError as exc:
             problems.append(Problem(f"{where}.id", str(exc).replace("program_id", "id")))
-        for name, value in program.parameters.items():
-            spec = PROGRAM_BY_NAME.get(name)
-            if spec is None or name == "program_id":
-                problems.append(Problem(f"{where}.{name}", f"unknown parameter '{name}'"))
-                continue
-            try:
-                spec.check(value)
-            except ParameterError as exc:
-                problems.append(Problem(f"{where}.{name}", str(exc)))
+        problems += _parameter_problems(where, program.parameters, _PROGRAM_PARAMETERS)
     ids = [p.id for p in draft.programs]
     for index, program in enumerate(draft.programs):
         if ids.count(program.id) > 1 and ids.index(program.id) != index:
