@@ -4,7 +4,9 @@ dataclass per message, each field checked, anything else refused with the reason
 The page writes every message not yet acknowledged into a hidden text input at once,
 as `{"s": [[seq, message], ...]}` (viser sends an input's value at most every 50 ms and
 drops the values in between); the server takes the messages past the last sequence
-number it handled and acknowledges the newest."""
+number it handled and acknowledges the newest. The page writes the queue again while it is
+not acknowledged, counting its writes in "w" so that the same queue is a new value for the
+input (an input that keeps its value sends nothing)."""
 
 from __future__ import annotations
 
@@ -121,8 +123,13 @@ def read_batch(text: str) -> Batch:
         data = read_json(text, "an editor message", MAX_BATCH_CHARS, max_depth=6)
     except JsonRefused as exc:
         raise BadMessage(str(exc)) from None
-    if not isinstance(data, dict) or set(data) != {"s"} or not isinstance(data["s"], list):
-        raise BadMessage('a batch is {"s": [[seq, message], ...]}')
+    if (
+        not isinstance(data, dict)
+        or not {"s"} <= set(data) <= {"s", "w"}
+        or not isinstance(data["s"], list)
+        or ("w" in data and not _is_int(data["w"], 1, 2**53))
+    ):
+        raise BadMessage('a batch is {"s": [[seq, message], ...], "w": writes}')
     entries = data["s"]
     if len(entries) > MAX_BATCH:
         raise BadMessage(f"more than {MAX_BATCH} messages at once")

@@ -232,7 +232,11 @@ def test_a_reference_made_at_run_time_keeps_to_variables_of_generated_objects() 
 
 
 def _artifact(source: str) -> Artifact:
-    result = compile_sources([SourceFile("t.st", source)])
+    return _compiled([SourceFile("t.st", source)])
+
+
+def _compiled(sources: list[SourceFile]) -> Artifact:
+    result = compile_sources(sources)
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
     return result.artifact
 
@@ -346,8 +350,15 @@ def test_every_unit_of_the_demo_the_language_tests_and_the_feature_samples_passe
         p for p in REPO.rglob("*.st") if ".venv" not in p.parts and "node_modules" not in p.parts
     )
     assert len(files) >= 10
+    # a project's files (a folder with its padt.toml) compile together: one may declare the
+    # globals another names (the SFC template does)
+    projects = sorted({p.parent for p in files if (p.parent / "padt.toml").is_file()})
+    for folder in projects:
+        together = [SourceFile(p.name, p.read_text()) for p in files if p.parent == folder]
+        _check_all(_compiled(together))
     for path in files:
-        _check_all(_artifact(path.read_text()))
+        if path.parent not in projects:
+            _check_all(_artifact(path.read_text()))
     samples = [
         KITCHEN_SINK.format(names=""),
         DRIVES + "PROGRAM Main\nVAR s : Servo; END_VAR\ns(speed := 1); s.Run();\nEND_PROGRAM\n",

@@ -39,6 +39,15 @@ def test_messages_are_read_into_their_types() -> None:
     ]
 
 
+def test_the_same_queue_written_again_is_read_once_more_by_its_write_count() -> None:
+    # the page writes its unacknowledged queue again, counting the writes, so that viser
+    # sends it even where an earlier write of the same queue was dropped
+    message = {"k": "save", "file": "tank.st", "version": 1}
+    first = read_batch(json.dumps({"s": [[1, message]], "w": 1}))
+    again = read_batch(json.dumps({"s": [[1, message]], "w": 2}))
+    assert first.messages == again.messages == ((1, Save("tank.st", 1)),)
+
+
 @pytest.mark.parametrize(
     "message",
     [
@@ -64,7 +73,18 @@ def test_a_message_that_is_not_one_is_refused_with_a_reason(message: object) -> 
 
 @pytest.mark.parametrize(
     "text",
-    ["", "{", "[]", '{"s": 1}', '{"s": [[0, {}]]}', '{"s": [[2, {}], [1, {}]]}', "[" * 100_000],
+    [
+        "",
+        "{",
+        "[]",
+        '{"s": 1}',
+        '{"s": [[0, {}]]}',
+        '{"s": [[2, {}], [1, {}]]}',
+        "[" * 100_000,
+        '{"s": [], "w": 0}',
+        '{"s": [], "w": "1"}',
+        '{"s": [], "w": 1, "x": 1}',
+    ],
 )
 def test_a_batch_that_is_not_one_is_refused(text: str) -> None:
     with pytest.raises(BadMessage):

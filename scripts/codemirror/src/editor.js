@@ -26,6 +26,7 @@ import { structuredText, stFolding } from "./st_language.js";
 const INPUT_LABEL = "Editor message";
 const DEBOUNCE_MS = 150;
 const ANSWER_TIMEOUT_MS = 5000;
+const RESEND_MS = 500; // an unacknowledged queue is written again after this
 const Z_INDEX = 90; // above the canvas, below viser's modals (100: a confirmation must not be under the editor), menus and notifications
 
 const highlight = HighlightStyle.define([
@@ -124,6 +125,8 @@ class PadtEditor {
   constructor() {
     this.seq = 0;
     this.outbox = []; // [seq, message], until the server acknowledges seq
+    this.writes = 0;
+    this.resend = null;
     this.docs = new Map(); // file -> {file, label, state, version, base, pending, readonly, reason, diagnostics}
     this.current = null;
     this.waiting = new Map(); // request id -> resolve
@@ -152,9 +155,18 @@ class PadtEditor {
       setTimeout(() => this.flushOutbox(), 200);
       return;
     }
-    const value = JSON.stringify({ s: this.outbox });
+    this.writes += 1; // the same queue written again is still a change of the input's value
+    const value = JSON.stringify({ s: this.outbox, w: this.writes });
     Object.getOwnPropertyDescriptor(HTMLInputElement.prototype, "value").set.call(input, value);
     input.dispatchEvent(new Event("input", { bubbles: true }));
+    // viser's input may drop the last value (its throttle is cancelled when the input is
+    // drawn anew): written again until the server acknowledges it
+    if (!this.resend) {
+      this.resend = setTimeout(() => {
+        this.resend = null;
+        if (this.outbox.length) this.flushOutbox();
+      }, RESEND_MS);
+    }
   }
 
   input() {
