@@ -67,10 +67,16 @@ def chart(page: Page) -> dict[str, Any]:
 
 
 def close_notifications(page: Page) -> None:
-    """Close the toasts in the top left corner (software WebGL, commands done)."""
+    """Close the toasts in the top left corner (commands done). One may close by itself
+    between being found and being clicked (the page closes viser's WebGL note as it comes),
+    so they are clicked in the page, never waited for one by one."""
     buttons = page.locator(".mantine-Notification-closeButton")
-    while buttons.count():
-        buttons.first.click()
+    for _ in range(20):  # a new toast may come while the others fade
+        if not buttons.count():
+            return
+        page.evaluate(
+            "document.querySelectorAll('.mantine-Notification-closeButton').forEach(b => b.click())"
+        )
         page.wait_for_timeout(300)  # their fade
 
 
