@@ -203,7 +203,19 @@ def test_download_in_stop_start_then_an_online_change_keeps_the_values(
         open_tab(page, "Parameters")
         choose(page, "Parameter", "Target Cycle Time, ms (target_cycle_ms)")
         field(page, "New value").fill("50")
-        page.get_by_role("button", name="Set parameter").click()
+        # viser sends a field's value at most every 50 ms: a click that reaches the server
+        # before the value asks nothing, so Set is pressed again until its dialog comes
+        set_button = page.get_by_role("button", name="Set parameter")
+
+        def asked() -> bool:
+            if page.get_by_role("dialog").count():
+                return True
+            if button_enabled(page, "Set parameter"):
+                set_button.click()
+            page.wait_for_timeout(1_000)
+            return page.get_by_role("dialog").count() > 0
+
+        wait_until("the parameter's confirmation", asked, timeout_s=60)
         confirm(page, "50 ms")
         wait_for_text(page, '[data-param="resource.target_cycle_ms"]', "50 ms")
 
