@@ -1,27 +1,24 @@
 """rusty's lit tests: every runnable file through `padt exec`, its output matched against its
-`// CHECK:` lines; the expect-error files must be refused. Known failures are listed, each
-with its reason, in tests/compiler/corpus/rusty_known_failures.tsv."""
+`// CHECK:` lines; the expect-error files must be refused. Each command is a process of its
+own, forked from one that imported the command line once (tests/support/forked_cli.py).
+Known failures are listed, each with its reason, in
+tests/compiler/corpus/rusty_known_failures.tsv."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from tests.conftest import REPO
 from tests.support.corpus_paths import corpus_dir, known_failures
 from tests.support.filecheck import match_output, parse_checks
+from tests.support.forked_cli import Finished, run_commands
 
 TIMEOUT_S = 30
 REQUIRED_PASS_RATE = 0.90
 
 
-def run_file(path: Path) -> tuple[bool, str]:
-    command = [sys.executable, "-m", "padt.cli", "exec", str(path)]
-    try:
-        run = subprocess.run(command, capture_output=True, cwd=REPO, timeout=TIMEOUT_S)
-    except subprocess.TimeoutExpired:
+def ran(path: Path, run: Finished) -> tuple[bool, str]:
+    """`padt exec FILE`: whether it printed what the file's CHECK lines want."""
+    if run.returncode is None:
         return False, f"no result within {TIMEOUT_S} s"
     stderr = run.stderr.decode("utf-8", "replace")
     if "Traceback" in stderr:
@@ -34,12 +31,14 @@ def run_file(path: Path) -> tuple[bool, str]:
     return result.ok, result.message
 
 
-def refused(path: Path) -> tuple[bool, str]:
-    command = [sys.executable, "-m", "padt.cli", "compile", str(path)]
-    run = subprocess.run(command, capture_output=True, text=True, cwd=REPO, timeout=TIMEOUT_S)
-    if "Traceback" in run.stderr:
+def refused(run: Finished) -> tuple[bool, str]:
+    """`padt compile FILE` of an expect-error file: whether it was refused with an error."""
+    stdout, stderr = (s.decode("utf-8", "replace") for s in (run.stdout, run.stderr))
+    if run.returncode is None:
+        return False, f"no result within {TIMEOUT_S} s"
+    if "Traceback" in stderr:
         return False, "traceback"
-    return run.returncode == 1 and ": error: " in run.stdout, run.stdout[-300:]
+    return run.returncode == 1 and ": error: " in stdout, stdout[-300:]
 
 
 def test_rusty_lit_corpus() -> None:
@@ -47,9 +46,12 @@ def test_rusty_lit_corpus() -> None:
     files = sorted(root.rglob("*.st"))
     runnable = [f for f in files if "expect-error" not in f.parts]
     must_fail = [f for f in files if "expect-error" in f.parts]
-    with ThreadPoolExecutor(max_workers=4) as pool:
-        results = dict(zip(runnable, pool.map(run_file, runnable), strict=True))
-        results.update(zip(must_fail, pool.map(refused, must_fail), strict=True))
+    commands = [["exec", str(f)] for f in runnable] + [["compile", str(f)] for f in must_fail]
+    runs = run_commands(commands, TIMEOUT_S)
+    results = {f: ran(f, run) for f, run in zip(runnable, runs[: len(runnable)], strict=True)}
+    results.update(
+        (f, refused(run)) for f, run in zip(must_fail, runs[len(runnable) :], strict=True)
+    )
     known = known_failures("rusty_known_failures.tsv")
     failing = {str(p.relative_to(root)): why for p, (ok, why) in results.items() if not ok}
 
