@@ -19,6 +19,7 @@ from runtime.contract import protocol as p
 COLORS = {
     "RUN": (47, 158, 68),
     "RUN_FREEZE": (34, 139, 230),
+    "BKPT": (250, 176, 5),  # stopped at a breakpoint
     "STOP": (134, 142, 150),
     "ERROR": (224, 49, 49),
 }

@@ -86,6 +86,8 @@ class CodeImage:
         # Python; `tier_up` puts them in place
         self.native: NativeReport | None = None
         self.native_job: NativeJob | None = None
+        self._installed: NativeJob | None = None  # the job whose C bodies are in place
+        self.python_only = False
         if native is not None and native.available:
             self.native_job = native.start(artifact, self._namespace)
         self.globals: Any = None
@@ -106,7 +108,18 @@ class CodeImage:
             return None
         self.native_job = None
         self.native = job.install()
+        self._installed = job
+        if self.python_only:
+            job.bodies(native=False)
         return self.native
+
+    def run_as_python(self, python: bool) -> None:
+        """Every body as Python (while debugging: runtime/debugging), or back to C where
+        the native tier put C. Called between two cycles."""
+        if python != self.python_only:
+            self.python_only = python
+            if self._installed is not None:
+                self._installed.bodies(native=not python)
 
     def code_of(self, source: str, filename: str) -> CodeType | None:
         """The compiled code of a unit of this image with exactly this source."""

@@ -118,6 +118,19 @@ def _reload(resource: Resource, command: p.Reload | p.ReloadPreview) -> Any:
     return finish_reload(resource, job)
 
 
+def _debug(action: Callable[[Resource, Any], None], heard: bool = True) -> Handler:
+    """A debugging command: the debugger acts, the reply is its state; a read-write one
+    tells the debugger its client is still there."""
+
+    def run(resource: Resource, command: Any) -> p.DebugReply:
+        if heard:
+            resource.debugger.heard(resource)
+        action(resource, command)
+        return p.DebugReply(resource.debugger.state(resource.clock.now_ns()))
+
+    return run
+
+
 def _recordings(resource: Resource) -> Recordings:
     recordings = resource.recordings
     if not isinstance(recordings, Recordings):
@@ -163,6 +176,17 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.RecordStart: lambda r, c: p.RecordingReply(_recordings(r).start(r, c)),
     p.RecordStop: lambda r, c: p.RecordingReply(_recordings(r).stop(r, c.id)),
     p.RecordDelete: lambda r, c: p.RecordingsReply(_recordings(r).delete(c.id)),
+    p.DebugGet: lambda r, c: _debug(lambda r, c: None, heard=c.keep)(r, c),
+    p.DebugSet: _debug(lambda r, c: r.debugger.set_file(r, c.file, c.breakpoints)),
+    p.DebugClear: _debug(lambda r, c: r.debugger.clear(r)),
+    p.DebugContinue: _debug(lambda r, c: r.debugger.continue_(r, c.program)),
+    p.DebugStep: _debug(lambda r, c: r.debugger.step(r, c.program, c.kind)),
+    p.DebugRunTo: _debug(lambda r, c: r.debugger.run_to(r, c.program, c.file, c.line)),
+    p.DebugOptions: _debug(lambda r, c: r.debugger.set_timeout(r, c.timeout_s)),
+    p.DebugStack: lambda r, c: p.StackReply(r.debugger.frames(c.program)),
+    p.DebugVariables: lambda r, c: p.DebugVariablesReply(
+        r.debugger.variables(c.program, c.frame, c.path)
+    ),
 }
 
 

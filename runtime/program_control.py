@@ -26,9 +26,11 @@ def start_program(resource: Resource, name: str) -> None:
 
 def stop_program(resource: Resource, name: str) -> None:
     program = resource.variables.program(name)
-    if program.state not in (ProgramState.RUN, ProgramState.RUN_FREEZE):
+    if program.state not in (ProgramState.RUN, ProgramState.RUN_FREEZE, ProgramState.BKPT):
         return
     resource.refuse_read_only("program stop")
+    if program.state is ProgramState.BKPT:  # it leaves its breakpoint for STOP
+        resource.debugger.forget(resource, "the program stopped")
     program.abandon()
     program.state = ProgramState.STOP
     resource.forcing.end_program(program.name)

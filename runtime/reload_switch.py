@@ -204,6 +204,7 @@ def _check(resource: Resource) -> None:
     if resource.system.RELOAD_DEACTIVATION:
         raise Refusal("reload_deactivated", "Reload Deactivation is ON")
     resource.refuse_read_only("reload")
+    resource.debugger.refuse_reload()
 
 
 def _switch(resource: Resource, job: ReloadJob) -> ReloadOutcome:

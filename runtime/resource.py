@@ -27,6 +27,7 @@ from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.protocol import ProgramState, ProgramStatus, ResourceState, Status
 from runtime.contract.refusal import Refusal
 from runtime.cycle_stats import CycleStats
+from runtime.debugging.debugger import Debugger
 from runtime.event_log import EventLog
 from runtime.event_recorder import LONG_TERM_SHARES as SHARES
 from runtime.event_recorder import EventRecorder
@@ -97,6 +98,7 @@ class Resource:
         self.forcing = Forcing(self, self.variables, self.recorder, clock)
         self.online = OnlineValues(self.variables)
         self.scheduler = Scheduler(self, self.variables, self.recorder, clock)
+        self.debugger = Debugger()  # breakpoints, BKPT, steps (runtime/debugging)
         # the key its publications are signed with (made fresh when none is given)
         self.identity = identity if identity is not None else Identity.fresh()
         self.access = AccessControl((), clock.now_ns, realm=name)  # the loaded accounts
@@ -240,7 +242,9 @@ class Resource:
     def take(self, artifact: Artifact, instances: Instances) -> None:
         """A new configuration (download or reload) with its instances: parameters, safe
         values, accounts and the system variables that describe it follow it."""
+        self.debugger.forget(self)
         self.variables.adopt(instances)
+        self.debugger.rearm(self)  # the breakpoints by file and line, in the new code
         self.variables.access = {a.name.upper(): a for a in artifact.access_paths}
         self.artifact, self.params = artifact, artifact.resource
         self.io.configure(artifact)
@@ -268,7 +272,9 @@ class Resource:
     def instantiate(self) -> None:
         """Fresh instances of everything: every variable at its initial value."""
         assert self.artifact is not None
+        self.debugger.forget(self)
         self.variables.adopt(instantiate(self.artifact, self.system, native=self.native))
+        self.debugger.rearm(self)
 
     # ---- states
     def init(self) -> None:
@@ -333,9 +339,10 @@ class Resource:
         log.error("resource %s: ERROR STOP, %s", self.name, cause)
 
     def _halt_programs(self) -> None:
+        self.debugger.forget(self)  # a program in BKPT stops with the others
         for program in self.programs:
             program.abandon()
-            if program.state in (ProgramState.RUN, ProgramState.RUN_FREEZE):
+            if program.state in (ProgramState.RUN, ProgramState.RUN_FREEZE, ProgramState.BKPT):
                 program.state = ProgramState.STOP
 
     def emergency_stopped(self) -> bool:
@@ -386,6 +393,8 @@ class Resource:
         if self.forcing.table.levels:  # forcing started: time limits, values in force
             self._react_to_force_timeouts(begin)
             self.forcing.apply()
+        if self.debugger.active:  # a silent debugging client: the program continues
+            self.debugger.watch(self, begin)
         tapped = self.variables.tap is not None  # stores from outside, for a recording
         before = self.variables.tapped() if tapped else []
         if recording:
@@ -495,6 +504,7 @@ class Resource:
                     cycles=p.stats.count,
                     cpu_cycles_max=p.stats.max_cpu_cycles,
                     error=p.error,
+                    paused_at=self.debugger.where(p),
                 )
                 for p in self.programs
             ],

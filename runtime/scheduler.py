@@ -99,7 +99,7 @@ class Scheduler:
         for program in self._variables.programs:
             if program.state is not _RUN:
                 continue
-            if program.run is None and not program.config.max_duration_us:
+            if program.run is None and program.whole:
                 self._run_whole(program, begin, finished)
                 continue
             budget = program.config.max_duration_us * 1000 or None
@@ -125,12 +125,13 @@ class Scheduler:
                         finished.append(program)
 
     def run_to_end(self, program: UserProgram, step_ns: int | None = None) -> None:
-        """A whole program cycle at once (single step): no slice limit."""
+        """A whole program cycle at once (single step, a debugging step): no slice limit."""
         if not program.in_progress:
             program.begin_cycle(
                 step_ns if step_ns is not None else self._host.cycle_ns, self._variables.globals
             )
-        while program.in_progress and program.state not in (ProgramState.ERROR,):
+        # until it ends, fails or stops at a breakpoint
+        while program.in_progress and program.state not in (ProgramState.ERROR, ProgramState.BKPT):
             self._slice(program, None)
 
     def guarded(self, work: Callable[..., None], *args: Any) -> bool:

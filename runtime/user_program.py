@@ -4,6 +4,7 @@ progress (which may span several CPU cycles when it has a time slice)."""
 from __future__ import annotations
 
 import copy
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -67,6 +68,11 @@ class UserProgram:
         self.run: ProgramRun | _Direct | None = None  # a program cycle in progress
         self.cpu_cycles = 0  # CPU cycles the program cycle in progress has had so far
         self.cycle_time_ns = 0  # program time during the program cycle in progress
+        # while a breakpoint may stop it: makes its program cycle's run (runtime/debugging)
+        self._debug_run: Callable[[Any], ProgramRun] | None = None
+        # a plain call does the whole program cycle: no time slice, no debugging (read by
+        # the scheduler every CPU cycle, so kept as one attribute)
+        self.whole = not self.sliced
 
     @property
     def name(self) -> str:
@@ -75,6 +81,15 @@ class UserProgram:
     @property
     def sliced(self) -> bool:
         return self.config.max_duration_us > 0
+
+    @property
+    def debug_run(self) -> Callable[[Any], ProgramRun] | None:
+        return self._debug_run
+
+    @debug_run.setter
+    def debug_run(self, make: Callable[[Any], ProgramRun] | None) -> None:
+        self._debug_run = make
+        self.whole = make is None and not self.sliced
 
     @property
     def in_progress(self) -> bool:
@@ -89,7 +104,10 @@ class UserProgram:
         if self.view is not master:
             copy_globals(master, self.view, self.config.reads)
         # only a program that may be suspended needs a stack of its own
-        self.run = ProgramRun(self.instance) if self.config.max_duration_us > 0 else _DIRECT
+        if self._debug_run is not None:
+            self.run = self._debug_run(self.instance)
+        else:
+            self.run = ProgramRun(self.instance) if self.config.max_duration_us > 0 else _DIRECT
         self.cpu_cycles = 0
 
     def resume(self) -> bool:

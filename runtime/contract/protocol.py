@@ -68,6 +68,7 @@ class ResourceState(StrEnum):
 class ProgramState(StrEnum):
     RUN = "RUN"
     RUN_FREEZE = "RUN_FREEZE"  # single step
+    BKPT = "BKPT"  # stopped at a breakpoint or a debugging step (docs/debugging.md)
     STOP = "STOP"
     ERROR = "ERROR"
 
@@ -119,6 +120,7 @@ class ProgramStatus:
     cycles: int
     cpu_cycles_max: int  # most CPU cycles one program cycle spanned
     error: str | None
+    paused_at: str | None = None  # in BKPT: where, "tank.st:25 (POU TankControl)"
 
 
 @dataclass(frozen=True)
@@ -782,6 +784,167 @@ class RecordDelete(Command[RecordingsReply], name="record_delete", level="operat
     """Delete a recording that has ended, with its files."""
 
     id: RecordingId
+
+
+# ---- debugging in the code (docs/debugging.md)
+
+MAX_BREAKPOINTS = 256  # in one file
+MAX_EXPRESSION = 512  # characters of a condition or a logged expression
+MAX_LOGGED = 16  # expressions one logpoint records
+MIN_DEBUG_TIMEOUT_S, MAX_DEBUG_TIMEOUT_S = 5, 3600
+SourceFile = Annotated[str, MaxLength(MAX_PATH)]  # as the artifact names it: "tank.st"
+SourceLine = Annotated[int, Range(1, 10_000_000)]
+Expression = Annotated[str, MaxLength(MAX_EXPRESSION)]
+DebugStepKind = Literal["over", "into", "out", "cycle"]
+
+
+@dataclass(frozen=True)
+class BreakpointSpec:
+    """A breakpoint (or, with `log`, a logpoint) at a line of one file."""
+
+    line: SourceLine
+    program: ProgramName | None = None  # only while this program runs
+    instance: VariableName | None = None  # only in this FB instance ("Main.valve1")
+    condition: Expression | None = None  # an ST boolean expression, checked at the line
+    hit_count: Annotated[int, Range(1, 1_000_000_000)] | None = None  # stop from this hit on
+    log: Annotated[list[Expression], MaxLength(MAX_LOGGED)] | None = None  # never stops
+
+
+@dataclass(frozen=True)
+class ArmedBreakpoint:
+    id: int
+    file: str
+    requested: int  # the line asked for
+    line: int  # the statement it stands at: the first at or after `requested`; 0 if none
+    verified: bool  # False: not armed, `message` says why
+    message: str | None
+    spec: BreakpointSpec
+    hits: int
+
+
+@dataclass(frozen=True)
+class DebugPause:
+    """Where a program in BKPT stands: before the statement at `file:line`, or (line 0) at
+    the end of its program cycle."""
+
+    program: str
+    pou: str
+    file: str
+    line: int
+    reason: str  # "breakpoint", "step", "run to", "cycle end"
+    breakpoint: int | None  # the id of the breakpoint that was hit
+
+
+@dataclass(frozen=True)
+class DebugState:
+    breakpoints: list[ArmedBreakpoint]
+    paused: DebugPause | None
+    timeout_s: int  # the paused program continues after this long without a debug command
+    silent_s: float  # how long no debug command came
+
+
+@dataclass(frozen=True)
+class DebugReply:
+    debug: DebugState
+
+
+@dataclass(frozen=True)
+class DebugFrame:
+    """One frame of the call stack of a program in BKPT, innermost first."""
+
+    index: int
+    name: str  # "TankControl", "Counter.Bump", "Twice"
+    kind: str  # "program", "function block", "method", "function", "action"
+    instance: str | None  # the path of the instance whose code runs ("Main.a")
+    pou: str
+    file: str
+    line: int
+
+
+@dataclass(frozen=True)
+class StackReply:
+    frames: list[DebugFrame]
+
+
+@dataclass(frozen=True)
+class DebugVariable:
+    name: str
+    type: str  # the IEC type where the artifact knows it
+    value: Value  # a plain value; null for a structure, an array or an instance
+    path: str | None  # the variable's path for `write` and `force` (null: a local)
+    children: bool  # members or elements: ask `debug_variables` for them
+
+
+@dataclass(frozen=True)
+class DebugVariablesReply:
+    variables: list[DebugVariable]
+
+
+@dataclass(frozen=True)
+class DebugGet(Command[DebugReply], name="debug", level="read"):
+    """The breakpoints and where a program stands; `keep` (read-write) tells the resource
+    the debugging client is still there."""
+
+    keep: bool = False
+
+    def level(self) -> Level | None:
+        return "read-write" if self.keep else self.LEVEL
+
+
+@dataclass(frozen=True)
+class DebugSet(Command[DebugReply], name="debug_set", level="read-write"):
+    """The breakpoints and logpoints of one file, in place of those it had."""
+
+    file: SourceFile
+    breakpoints: Annotated[list[BreakpointSpec], MaxLength(MAX_BREAKPOINTS)]
+
+
+@dataclass(frozen=True)
+class DebugClear(Command[DebugReply], name="debug_clear", level="read-write"):
+    """Every breakpoint and logpoint gone; a program in BKPT continues."""
+
+
+@dataclass(frozen=True)
+class DebugContinue(Command[DebugReply], name="debug_continue", level="read-write"):
+    program: ProgramName
+
+
+@dataclass(frozen=True)
+class DebugStep(Command[DebugReply], name="debug_step", level="read-write"):
+    """One statement (over calls, into them, out of the current one), or to the end of the
+    program cycle (`cycle`)."""
+
+    program: ProgramName
+    kind: DebugStepKind = "over"
+
+
+@dataclass(frozen=True)
+class DebugRunTo(Command[DebugReply], name="debug_run_to", level="read-write"):
+    """Continue until the statement at `file:line` (the cursor)."""
+
+    program: ProgramName
+    file: SourceFile
+    line: SourceLine
+
+
+@dataclass(frozen=True)
+class DebugStack(Command[StackReply], name="debug_stack", level="read"):
+    program: ProgramName
+
+
+@dataclass(frozen=True)
+class DebugVariables(Command[DebugVariablesReply], name="debug_variables", level="read"):
+    """The variables of a frame of a program in BKPT; `path`, a variable of the frame that
+    has children ("a", "a.sub", "arr[2]"): its members or elements instead."""
+
+    program: ProgramName
+    frame: Annotated[int, Range(0, 10_000)] = 0
+    path: Annotated[str, MaxLength(MAX_PATH)] = ""
+
+
+@dataclass(frozen=True)
+class DebugOptions(Command[DebugReply], name="debug_options", level="read-write"):
+    timeout_s: Annotated[int, Range(MIN_DEBUG_TIMEOUT_S, MAX_DEBUG_TIMEOUT_S)]
 
 
 # ---- requests and replies on the wire

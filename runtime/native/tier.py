@@ -196,6 +196,8 @@ class NativeJob:
         self._found: list[tuple[type, str, Any]] = []
         self.report: NativeReport | None = None
         self.installed = False
+        # (class, method, Python body, C body) of every installed body
+        self.swaps: list[tuple[type, str, Any, Any]] = []
         self._thread = threading.Thread(
             target=self._run,
             args=(tier, artifact, namespace),
@@ -227,8 +229,17 @@ class NativeJob:
         if not self.installed:
             self.installed = True
             for kind, method, body in self._found:
+                python = kind.__dict__[method]
                 if method == "__call__" and PYTHON_BODY_ATTR not in kind.__dict__:
-                    setattr(kind, PYTHON_BODY_ATTR, kind.__dict__[method])
+                    setattr(kind, PYTHON_BODY_ATTR, python)
+                self.swaps.append((kind, method, python, body))
                 setattr(kind, method, body)
             self._found = []
         return self.report
+
+    def bodies(self, native: bool) -> None:
+        """The installed bodies as C (`native`) or as the Python they replaced: a debugged
+        resource runs as Python, whose lines can be traced (runtime/debugging). Values live
+        in the instances, not in the code, so they are the same on either side."""
+        for kind, method, python, body in self.swaps:
+            setattr(kind, method, body if native else python)

@@ -67,6 +67,21 @@ SAMPLES: dict[str, p.Command[Any]] = {
     "record_list": p.RecordList(),
     "record_read": p.RecordRead("trace-1-1.mcap", offset=4096, length=1024),
     "record_delete": p.RecordDelete("trace-1"),
+    "debug": p.DebugGet(keep=True),
+    "debug_set": p.DebugSet(
+        "tank.st",
+        [
+            p.BreakpointSpec(25, program="TankControl", condition="level > 900", hit_count=2),
+            p.BreakpointSpec(30, instance="TankControl.refillDelay", log=["level", "pump"]),
+        ],
+    ),
+    "debug_clear": p.DebugClear(),
+    "debug_continue": p.DebugContinue("TankControl"),
+    "debug_step": p.DebugStep("TankControl", "into"),
+    "debug_run_to": p.DebugRunTo("TankControl", "tank.st", 31),
+    "debug_stack": p.DebugStack("TankControl"),
+    "debug_variables": p.DebugVariables("TankControl", 1, "refillDelay"),
+    "debug_options": p.DebugOptions(30),
 }
 
 
