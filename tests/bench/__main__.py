@@ -5,6 +5,7 @@ from __future__ import annotations
 from tests.bench import (
     bench_compiler,
     bench_context,
+    bench_debugging,
     bench_documentation,
     bench_editor,
     bench_event_log,
@@ -36,6 +37,7 @@ def main() -> None:
     bench_context.main()
     bench_runtime.main()
     bench_reload.main()
+    bench_debugging.main()
     bench_event_log.main()
     bench_scale.main()
     bench_watch.main()
