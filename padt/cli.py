@@ -521,6 +521,23 @@ def build_parser() -> argparse.ArgumentParser:
     )
     lsp.set_defaults(func=_lsp)
 
+    dap = sub.add_parser(
+        "dap",
+        help="a Debug Adapter (DAP) for VS Code: breakpoints and steps in a running resource",
+        description="Serve the Debug Adapter Protocol to one client at a time on stdin/stdout, "
+        "or on a TCP port of 127.0.0.1 (VS Code's debugServer): the client attaches to a running "
+        "resource (its launch configuration names the resource, the Zenoh router, the user and "
+        "the project folder; the password comes from PADT_PASSWORD) and sets breakpoints and "
+        "logpoints, steps, shows the stack and the variables. docs/debugging.md shows the setup.",
+    )
+    dap.add_argument(
+        "--port",
+        type=int,
+        metavar="N",
+        help="listen on 127.0.0.1:N for clients, one after the other, instead of stdio",
+    )
+    dap.set_defaults(func=_lazy("padt.dap_server", "run"))
+
     runtime = sub.add_parser("runtime", help="run one resource (the PES) as this process")
     runtime_arguments(runtime)
     runtime.set_defaults(func=_runtime)
