@@ -630,6 +630,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     _online_test_commands(sub)
     _recording_commands(sub)
+    _debug_commands(sub)
 
     passwd = sub.add_parser(
         "passwd",
@@ -813,6 +814,94 @@ def _recording_commands(sub: Any) -> None:
         help="with --download: where it goes (the next parts beside it: FILE-2.mcap, ...)",
     )
     kept.set_defaults(func=_lazy("padt.recording", "kept_recordings"))
+
+
+def _debug_commands(sub: Any) -> None:
+    """debug set / list / clear / continue / step / run-to / stack / vars / wait / timeout
+    (docs/debugging.md)."""
+    debug = sub.add_parser(
+        "debug",
+        help="breakpoints, logpoints and stepping in a running resource's ST code",
+        description="Debugging in the code (docs/debugging.md). FILE is a path relative to "
+        "the current folder or to --project (default: the current folder when it holds "
+        "padt.toml), or the file's name in the project as the artifact has it (tank.st).",
+    )
+    verbs = debug.add_subparsers(dest="verb", required=True, metavar="VERB")
+    parsers = {}
+    for verb, does in (
+        ("set", "add a breakpoint (or with --log a logpoint) at FILE:LINE"),
+        ("list", "the breakpoints, their hits, and the program in BKPT"),
+        ("clear", "clear every breakpoint, a file's, or those at FILE:LINE"),
+        ("continue", "let the program in BKPT run on"),
+        ("step", "one statement (over, into, out) or to the end of the program cycle"),
+        ("run-to", "let the program in BKPT run until FILE:LINE"),
+        ("stack", "the call stack of the program in BKPT, innermost first"),
+        ("vars", "the variables of a frame of the program in BKPT"),
+        ("wait", "wait until a program stands in BKPT and print where"),
+        ("timeout", "after how long without a debug command a program in BKPT continues"),
+    ):
+        parsers[verb] = verbs.add_parser(verb, help=does, description=does)
+    for verb in ("continue", "step", "run-to", "stack", "vars"):
+        parsers[verb].add_argument("program", metavar="PROGRAM", help="the program in BKPT")
+    set_ = parsers["set"]
+    set_.add_argument("location", metavar="FILE:LINE", help="a statement at or after LINE")
+    set_.add_argument("--program", metavar="P", help="only while program P runs")
+    set_.add_argument("--instance", metavar="PATH", help="only in this FB instance (Main.valve1)")
+    set_.add_argument("--condition", metavar="EXPR", help="only when this ST condition holds")
+    set_.add_argument("--hit-count", type=_positive, metavar="N", help="stop from hit N on")
+    set_.add_argument(
+        "--log",
+        action="extend",
+        nargs="+",
+        metavar="EXPR",
+        help="a logpoint: record these ST expressions as an event at each hit; never stops",
+    )
+    parsers["clear"].add_argument("location", nargs="?", metavar="FILE[:LINE]")
+    kind = parsers["step"].add_mutually_exclusive_group()
+    for name, does in (
+        ("over", "to the next statement, over calls (the default)"),
+        ("into", "into the call of this statement"),
+        ("out", "out of the current POU to its caller"),
+        ("cycle", "to the end of the program cycle"),
+    ):
+        kind.add_argument(f"--{name}", dest="kind", action="store_const", const=name, help=does)
+    parsers["step"].set_defaults(kind="over")
+    parsers["run-to"].add_argument("location", metavar="FILE:LINE", help="the cursor")
+    vars_ = parsers["vars"]
+    vars_.add_argument(
+        "path", nargs="?", default="", metavar="PATH", help="a member's children: a, a.sub, arr[2]"
+    )
+    vars_.add_argument(
+        "--frame", type=_whole, default=0, metavar="N", help="frame N of the stack (0 innermost)"
+    )
+    parsers["wait"].add_argument(
+        "--timeout", type=_positive, metavar="S", help="give up after S seconds (exit code 1)"
+    )
+    parsers["timeout"].add_argument(
+        "seconds", type=_debug_timeout, metavar="SECONDS", help="5 to 3600 (default 120)"
+    )
+    functions = {"set": "set_", "list": "list_", "continue": "continue_", "run-to": "run_to"}
+    functions["vars"] = "vars_"
+    for verb, parser in parsers.items():
+        _resource_options(parser)
+        if verb in ("set", "clear", "run-to"):
+            parser.add_argument(
+                "--project", type=Path, metavar="DIR", help="the project FILE is relative to"
+            )
+        parser.add_argument("--json", action="store_true", help="print one JSON object")
+        function = functions.get(verb, verb)
+        parser.set_defaults(func=_lazy("padt.debugging", function))
+
+
+def _debug_timeout(text: str) -> int:
+    from runtime.contract.protocol import MAX_DEBUG_TIMEOUT_S, MIN_DEBUG_TIMEOUT_S
+
+    seconds = _whole(text)
+    if not MIN_DEBUG_TIMEOUT_S <= seconds <= MAX_DEBUG_TIMEOUT_S:
+        raise argparse.ArgumentTypeError(
+            f"the timeout is {MIN_DEBUG_TIMEOUT_S} to {MAX_DEBUG_TIMEOUT_S} seconds"
+        )
+    return seconds
 
 
 def _api(args: argparse.Namespace) -> int:
