@@ -163,6 +163,9 @@ class DapServer:
             self.out.refuse(request["seq"], command, f"refused ({refused.code}): {refused.message}")
         except ResourceUnreachable as exc:
             self.out.refuse(request["seq"], command, f"the resource did not answer: {exc}")
+        except Exception as exc:  # a defect of ours: the session goes on, the log says where
+            log.exception("padt dap: %s failed", command)
+            self.out.refuse(request["seq"], command, f"padt dap failed: {exc!r}")
         else:
             self.out.respond(request, body)
             for then in self._after:

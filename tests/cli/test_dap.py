@@ -507,3 +507,31 @@ def connected(port: int) -> socket.socket:
         except ConnectionRefusedError:
             assert time.monotonic() < deadline, f"padt dap does not listen on {port}"
             time.sleep(0.1)
+
+
+def test_the_client_is_told_when_the_resource_goes_away(
+    tmp_path: Path, dap: Callable[..., DapClient]
+) -> None:
+    project = tmp_path / "project"
+    project.mkdir()
+    (project / "padt.toml").write_text(PADT_TOML.replace('"Bench"', '"Gone"'))
+    (project / "prog.st").write_text(SOURCE)
+    result = compile_project(load_project([project]))
+    assert result.artifact is not None, result.diagnostics
+    store_artifact(tmp_path / "state", result.artifact)
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with running_resource("Gone", tmp_path / "state", endpoint, "--no-native-code") as (
+        process,
+        _,
+    ):
+        client = dap()
+        client.ask("initialize", adapterID="padt")
+        client.ask("attach", resource="Gone", zenoh=endpoint, project=str(project))
+        client.event("initialized")
+        process.terminate()  # the runtime stops: its liveliness token goes
+        process.wait(WAIT_S)
+        gone = client.event("output", lambda body: body["category"] == "important")
+        assert gone["output"] == "resource Gone is gone\n"
+        client.event("terminated")
+        client.ask("disconnect")  # its breakpoints cannot be cleared: it still ends
+        assert client.process is not None and client.process.wait(WAIT_S) == 0
