@@ -407,7 +407,7 @@ class Workspace:
         for screen in self.screens:
             screen.follow(now)
         self.shown.refresh(now)  # the others wait until they are opened
-        self.editor_area.refresh(feed)
+        self.editor_area.refresh(feed, self.allowed(p.DebugStep))
         if self.events is not None:
             self.editor_area.show_events(events.newest(self.events.screen, resource, EVENTS))
         if feed is not None:  # only what some screen shows is watched, seen or not: a

@@ -6,7 +6,8 @@ For the workspace (its Python API):
 
     area = EditorArea(client, shelf, Editor(user, level), hooks)
     area.open_file(project, path)   # a tab in the editor, in front
-    area.refresh(feed)              # at each UI tick: files changed on disk, live values
+    area.refresh(feed, allowed)     # at each UI tick: files changed on disk, live values,
+                                    # the debug state (`allowed`: may the user debug)
     area.wanted()                   # the variables the live values need watched
     area.remove()                   # the workspace goes
 
@@ -38,15 +39,18 @@ from backend.engineering.padt_levels import PADT_LEVELS
 from backend.engineering.project_access import WRITE, Editor
 from backend.engineering.project_shelf import ProjectShelf
 from frontend.editor import answers, page_push
+from frontend.editor.debugging import EditorDebugging, Target
 from frontend.editor.document import BadChange, Document, utf16_col
 from frontend.editor.latest_work import LatestWork
 from frontend.editor.live_lines import LiveLines
 from frontend.editor.messages import (
     INPUT_LABEL,
     BadMessage,
+    Breakpoints,
     Button,
     Change,
     Close,
+    DebugAction,
     DiskChoice,
     Message,
     Open,
@@ -56,6 +60,7 @@ from frontend.editor.messages import (
     View,
     read_batch,
 )
+from frontend.permissions import Allowed
 from frontend.resource_feed import ResourceFeed
 from runtime.contract.refusal import Refusal
 
@@ -96,6 +101,9 @@ class EditorArea:
         self.box = client.gui.add_text(INPUT_LABEL, "")
         self.box.on_update(lambda _: self._heard(self.box.value))
         self.missing = page_push.install(client)
+        self.debugging = EditorDebugging(
+            lambda message: page_push.send(client, "debug", message), self._notice
+        )
         self._show(True)
 
     # ---- the workspace's calls
@@ -113,18 +121,47 @@ class EditorArea:
             except (Refusal, LanguageError) as exc:
                 self._notice(f"{path} cannot be opened: {_reason(exc)}")
 
-    def refresh(self, feed: ResourceFeed | None) -> None:
+    def refresh(self, feed: ResourceFeed | None, debug: Allowed) -> None:
         """At each tick of the UI: the open files compared with the disk now and then; the
-        live values of the lines in view."""
+        live values of the lines in view; what the Debug panel shows (`debug`: whether the
+        user may debug the feed's resource, else why not)."""
         now = time.monotonic()
         if now - self._polled >= DISK_POLL_S:
             self._polled = now
             self._work.submit("disk", self._check_disk)
         with self._lock:
             shown = self.live.refresh(feed, self.project, self.shelf, self.documents)
+            target = self._debug_target(feed, debug)
         if shown is not None:
             file, items = shown
             page_push.send(self.client, "live", {"k": "live", "file": file, "items": items})
+        self.debugging.follow(target)
+
+    def _debug_target(self, feed: ResourceFeed | None, debug: Allowed) -> Target | None:
+        """The feed's resource, and why the open project cannot be debugged there (its
+        breakpoints name the files of the configuration the resource runs)."""
+        if feed is None:
+            return None
+        resource = feed.client.resource
+        with feed.latest.lock:
+            status = feed.latest.status
+        runs = ""
+        if status is None or not status.crc:
+            runs = f"{resource} runs no configuration."
+        elif self.project is None:
+            runs = "Open a file of the project the resource runs."
+        else:
+            self.live.lookup.ask(status.crc, self.shelf)
+            done, sources = self.live.lookup.answer()
+            if not done:
+                runs = f"Looking for the project {resource} runs..."
+            elif sources is None:
+                runs = (
+                    f"{resource} runs configuration {status.crc}: no project here compiles to it."
+                )
+            elif sources.project != self.project:
+                runs = f"{resource} runs project {sources.project}, not {self.project}."
+        return Target(resource, feed.client, debug, runs, status)
 
     def show_events(self, rows: list[dict[str, object]]) -> None:
         """The selected resource's newest events in the bottom panel (sent when changed)."""
@@ -143,6 +180,7 @@ class EditorArea:
 
     def remove(self) -> None:
         self._work.stop()
+        self.debugging.close()
         self._show(False)
         self.box.remove()
 
@@ -187,6 +225,10 @@ class EditorArea:
                 self.live.view(message.file, message.first, message.last)
             elif isinstance(message, Button):
                 self._button(message.name)
+            elif isinstance(message, Breakpoints):
+                self.debugging.set_breakpoints(message.file, message.items)
+            elif isinstance(message, DebugAction):
+                self.debugging.act(message)
         except (Refusal, LanguageError) as exc:
             self._notice(_reason(exc))
 

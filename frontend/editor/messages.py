@@ -27,6 +27,21 @@ MAX_NAME = 200
 MAX_LINE = 10_000_000
 BUTTONS = ("compile", "download", "online_change")
 QUESTIONS = ("complete", "hover", "definition", "references")
+# the Debug panel's controls: on the program in BKPT, the frame and variables it shows
+DEBUG_ACTIONS = (
+    "continue",
+    "over",
+    "into",
+    "out",
+    "cycle",
+    "run_to",
+    "frame",
+    "expand",
+    "collapse",
+)
+MAX_BREAKPOINTS = 256  # in one file (as the resource takes them)
+MAX_EXPRESSION = 512  # characters of a condition or a logged expression
+MAX_LOGGED = 16  # expressions one logpoint records
 
 
 class BadMessage(ValueError):
@@ -108,7 +123,50 @@ class View:
     last: int
 
 
-Message = Open | Close | Change | Question | Rename | Save | Button | DiskChoice | View
+@dataclass(frozen=True)
+class BreakpointItem:
+    """A breakpoint as the gutter sets it: a line, and optionally a condition, a hit count
+    or (a logpoint) the expressions to record."""
+
+    line: int
+    condition: str | None = None
+    hit_count: int | None = None
+    log: tuple[str, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Breakpoints:
+    """Every breakpoint of a file, in place of those it had."""
+
+    file: str
+    items: tuple[BreakpointItem, ...]
+
+
+@dataclass(frozen=True)
+class DebugAction:
+    """A control of the Debug panel: a step, continue, run to `file:line`, a frame chosen
+    (`frame`), a variable's members shown or hidden (`path`, relative to the frame)."""
+
+    action: str  # one of DEBUG_ACTIONS
+    frame: int = 0
+    path: str = ""
+    file: str = ""
+    line: int = 0
+
+
+Message = (
+    Open
+    | Close
+    | Change
+    | Question
+    | Rename
+    | Save
+    | Button
+    | DiskChoice
+    | View
+    | Breakpoints
+    | DebugAction
+)
 
 
 @dataclass(frozen=True)
@@ -210,6 +268,14 @@ def read_message(data: Any) -> Message:
         first = _int(data["first"], "first", 1, MAX_LINE)
         last = _int(data["last"], "last", first, MAX_LINE)
         return View(_path(data["file"]), first, last)
+    if kind == "breakpoints":
+        _keys(data, "k", "file", "items")
+        items = data["items"]
+        if not isinstance(items, list) or len(items) > MAX_BREAKPOINTS:
+            raise BadMessage(f"breakpoints are a list of at most {MAX_BREAKPOINTS}")
+        return Breakpoints(_path(data["file"]), tuple(_breakpoint(i) for i in items))
+    if kind == "debug":
+        return _debug_action(data)
     raise BadMessage(f"no message of kind '{kind[:40]}'")
 
 
@@ -227,6 +293,53 @@ def _text_change(data: Any) -> TextChange:
         _int(data[3], "a change's column", 0, MAX_LINE),
         data[4],
     )
+
+
+def _breakpoint(data: Any) -> BreakpointItem:
+    if not isinstance(data, dict) or "line" not in data:
+        raise BadMessage("a breakpoint is an object with a line")
+    if not set(data) <= {"line", "condition", "hit_count", "log"}:
+        raise BadMessage("a breakpoint has a line, a condition, a hit count and a log only")
+    condition = data.get("condition")
+    if condition is not None:
+        condition = _expression(condition, "a condition")
+    hit_count = data.get("hit_count")
+    if hit_count is not None:
+        hit_count = _int(hit_count, "a hit count", 1, 1_000_000_000)
+    log = data.get("log")
+    if log is not None:
+        if not isinstance(log, list) or not 0 < len(log) <= MAX_LOGGED:
+            raise BadMessage(f"a logpoint records 1 to {MAX_LOGGED} expressions")
+        log = tuple(_expression(x, "a logged expression") for x in log)
+    return BreakpointItem(_int(data["line"], "a line", 1, MAX_LINE), condition, hit_count, log)
+
+
+def _expression(value: Any, what: str) -> str:
+    if not isinstance(value, str) or not 0 < len(value.strip()) <= MAX_EXPRESSION:
+        raise BadMessage(f"{what} has 1 to {MAX_EXPRESSION} characters")
+    return value.strip()
+
+
+def _debug_action(data: dict[str, Any]) -> DebugAction:
+    action = data.get("action")
+    if action not in DEBUG_ACTIONS:
+        raise BadMessage(f"a debug action is one of {', '.join(DEBUG_ACTIONS)}")
+    if action == "run_to":
+        _keys(data, "k", "action", "file", "line")
+        return DebugAction(
+            action, file=_path(data["file"]), line=_int(data["line"], "line", 1, MAX_LINE)
+        )
+    if action == "frame":
+        _keys(data, "k", "action", "frame")
+        return DebugAction(action, frame=_int(data["frame"], "a frame", 0, 10_000))
+    if action in ("expand", "collapse"):
+        _keys(data, "k", "action", "path")
+        path = data["path"]
+        if not isinstance(path, str) or not 0 < len(path) <= MAX_PATH:
+            raise BadMessage(f"a variable's path has 1 to {MAX_PATH} characters")
+        return DebugAction(action, path=path)
+    _keys(data, "k", "action")
+    return DebugAction(action)
 
 
 def _keys(data: dict[str, Any], *keys: str) -> None:

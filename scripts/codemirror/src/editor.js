@@ -22,6 +22,8 @@ import { autocompletion, completionKeymap, closeBrackets, closeBracketsKeymap, s
 import { setDiagnostics, lintGutter } from "@codemirror/lint";
 import { tags } from "@lezer/highlight";
 import { structuredText, stFolding } from "./st_language.js";
+import { el, BUTTON, TAB } from "./dom.js";
+import { debugGutter, litField, DebugPanel } from "./debugging.js";
 
 const INPUT_LABEL = "Editor message";
 const DEBOUNCE_MS = 150;
@@ -53,6 +55,19 @@ const theme = EditorView.theme({
   ".padt-live-stale": { color: "#868e96", background: "#f1f3f5" },
   ".padt-live-forced": { color: "#c92a2a", background: "#fff5f5" },
   ".cm-tooltip-hover": { maxWidth: "640px", padding: "4px 8px", whiteSpace: "pre-wrap" },
+  ".padt-debug-gutter": { cursor: "pointer" },
+  ".padt-debug-gutter .cm-gutterElement": { display: "flex", alignItems: "center", gap: "2px", padding: "0 2px" },
+  ".padt-bp": { flex: "none", width: "10px", height: "10px", borderRadius: "50%", background: "#e03131", boxSizing: "border-box" },
+  ".padt-bp-log": { borderRadius: "2px", transform: "rotate(45deg) scale(0.85)" },
+  ".padt-bp-cond": { boxShadow: "inset 0 0 0 2px #ffd8a8" },
+  ".padt-bp-unverified": { background: "transparent", border: "2px solid #adb5bd" },
+  ".padt-bp-pending": { opacity: "0.5" },
+  ".padt-bp-none": { flex: "none", width: "10px" },
+  // the arrow where the program stands: a triangle drawn by its borders (no font needed)
+  ".padt-arrow": { flex: "none", width: "0", height: "0", borderTop: "6px solid transparent", borderBottom: "6px solid transparent", borderLeft: "9px solid #e8590c" },
+  ".padt-arrow-frame": { borderLeftColor: "#1971c2" },
+  ".padt-paused-line": { backgroundColor: "#ffec99 !important" },
+  ".padt-frame-line": { backgroundColor: "#d0ebff !important" },
 });
 
 // ---- the live values at the end of lines
@@ -107,20 +122,6 @@ function liveDecorations(doc, items) {
 
 // ---- the page around the editor
 
-function el(tag, attrs, ...children) {
-  const node = document.createElement(tag);
-  for (const [k, v] of Object.entries(attrs || {})) {
-    if (k === "style") node.style.cssText = v;
-    else if (k.startsWith("on")) node.addEventListener(k.slice(2), v);
-    else node.setAttribute(k, v);
-  }
-  for (const c of children) node.append(c);
-  return node;
-}
-
-const BUTTON = "font:13px system-ui,sans-serif;padding:2px 9px;white-space:nowrap;border:1px solid #ced4da;border-radius:4px;background:#fff;cursor:pointer;";
-const TAB = "font:13px system-ui,sans-serif;padding:4px 10px;border:none;border-bottom:2px solid transparent;background:none;cursor:pointer;white-space:nowrap;";
-
 class PadtEditor {
   constructor() {
     this.seq = 0;
@@ -139,6 +140,7 @@ class PadtEditor {
     this.events = []; // the selected resource's newest events, newest first
     this.showDrawing = false;
     this.readonlyCompartment = new Compartment();
+    this.debug = new DebugPanel(this);
     this.build();
   }
 
@@ -240,6 +242,7 @@ class PadtEditor {
         this.save();
       }
     });
+    document.addEventListener("keydown", (e) => this.debug.key(e), true);
     document.body.append(host);
     this.root = host;
     this.view = new EditorView({ state: this.newState("", true), parent: document.createElement("div"), root: this.shadow });
@@ -336,6 +339,8 @@ class PadtEditor {
     return EditorState.create({
       doc: text,
       extensions: [
+        debugGutter(editor),
+        litField,
         lineNumbers(),
         highlightActiveLineGutter(),
         highlightSpecialChars(),
@@ -435,6 +440,7 @@ class PadtEditor {
       this.current = file;
       this.view.setState(doc.state);
       this.applyDiagnostics(doc);
+      this.debug.apply();
       this.sendView();
     }
     if (!this.view.dom.parentElement || this.view.dom.parentElement !== this.host) {
@@ -664,6 +670,7 @@ class PadtEditor {
       ["references", this.referencesOf ? `References to ${this.referencesOf} (${this.references.length})` : "References"],
       ["live", "Live values"],
       ["events", "Events"],
+      ["debug", this.debug.tabLabel()],
     ];
     this.bottomTabs.replaceChildren(
       ...tabs.map(([key, label]) =>
@@ -673,6 +680,10 @@ class PadtEditor {
         }, label)
       )
     );
+    if (this.bottomTab === "debug") {
+      this.bottomBody.replaceChildren(this.debug.draw());
+      return;
+    }
     if (this.bottomTab === "live" || this.bottomTab === "events") {
       this.bottomBody.replaceChildren(this.bottomTab === "live" ? this.liveTable() : this.eventTable());
       return;
@@ -878,6 +889,10 @@ class PadtEditor {
 
   on_notice(m) {
     this.flash(m.text);
+  }
+
+  on_debug(m) {
+    this.debug.receive(m);
   }
 }
 
