@@ -221,7 +221,11 @@ class DapServer:
                 client.use_credentials(user, password)
             self._know_programs(client.ask(p.GetStatus()).status)
             debug = DebugSession(client)
-            debug.start()
+            try:
+                debug.start()
+            except BaseException:
+                debug.close()  # its threads run from the start on, refused or not
+                raise
         except BaseException:
             session.close()
             raise
@@ -258,8 +262,8 @@ class DapServer:
                 problems.append(None)
             except DapError as exc:
                 problems.append(str(exc))
-        armed = [b for b in attached.debug.set_breakpoints(name, specs).breakpoints]
-        armed = [b for b in armed if b.file == name]
+        state = attached.debug.set_breakpoints(name, specs)
+        armed = [b for b in state.breakpoints if b.file == name]  # in the order of `specs`
         answers, taken = [], iter(armed)
         for problem in problems:
             if problem is not None:

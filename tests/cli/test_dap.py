@@ -384,6 +384,13 @@ def test_a_conditional_breakpoint_stops_one_program_and_shows_its_stack_and_vari
         },
     )
     assert not refused["success"] and "a local of a function" in refused["message"]
+    # another client (here the test's) lets it run on: the debugger is told, then of the
+    # next stop
+    bench.client.ask(p.DebugContinue("Main"))
+    assert client.event("continued") == {"threadId": 1, "allThreadsContinued": False}
+    stop, frames = stopped_at(client)  # in Twice again, called by a in the next cycle
+    assert stop["reason"] == "breakpoint"
+    assert [(f["name"], f["line"]) for f in frames][:2] == [("Twice", 10), ("Counter (Main.a)", 18)]
     runs_on_after_disconnect(client, bench)
 
 
