@@ -1476,10 +1476,14 @@ class _Chart:
     def emit_cycle(self, emitter: _Emitter, depth: int) -> None:
         scope = emitter.scope
         emitter.emit(depth, "now = _SYS.now_ns")
+        outer = emitter.st_line
         for step in self.sfc.steps:
             ref = emitter.var_code(_step_variable(scope, step.name))
             emitter.emit(depth, f"if {ref}.X:")
+            # the line of the STEP: a debugger's breakpoint there stops while it is active
+            emitter.st_line = step.pos.line
             emitter.emit(depth + 1, f"{ref}.T = _step_time({ref}, now)")
+            emitter.st_line = outer
         declared = {key(action.name) for action in self.sfc.actions}
         for action in self.action_order:
             inputs: dict[str, list[str]] = {}
@@ -1521,7 +1525,10 @@ class _Chart:
             blockers = [fired[i][0] for i in earlier]
             condition = emitter.exact(transition.condition).code
             terms = sources + [f"not {b}" for b in blockers] + [condition]
+            # the line of the TRANSITION: a breakpoint there stops as it is evaluated
+            outer, emitter.st_line = emitter.st_line, transition.pos.line
             emitter.emit(depth, f"{flag} = {' and '.join(terms)}")
+            emitter.st_line = outer
             for step in steps:
                 leaving.setdefault(step, []).append(len(fired))
             fired.append((flag, transition))

@@ -302,3 +302,49 @@ def test_a_stop_ends_the_break_and_a_reload_waits_for_continue() -> None:
     resource.start()
     cycles(resource, 1)  # the breakpoint stays armed for the next start
     assert paused(resource) == p.DebugPause("Main", "Main", FILE, 28, "breakpoint", 1)
+
+
+CHART = """\
+PROGRAM Chart
+VAR go : BOOL; n : INT; END_VAR
+INITIAL_STEP Idle :
+END_STEP
+
+STEP Busy :
+  Work(N);
+END_STEP
+
+TRANSITION FROM Idle TO Busy := go;
+END_TRANSITION
+
+TRANSITION FROM Busy TO Idle := n >= 3;
+END_TRANSITION
+
+ACTION Work :
+  n := n + 1;
+END_ACTION
+END_PROGRAM
+"""
+
+
+def test_breakpoints_at_a_step_and_a_transition_of_a_chart(tier: NativeTier | None) -> None:
+    config = ResourceConfig(name="R", watchdog_ms=5_000, safety_operation=False)
+    programs = [ProgramConfig(name="Chart", pou="Chart", program_id=1)]
+    result = compile_sources([SourceFile(FILE, CHART)], resource=config, programs=programs)
+    assert result.artifact is not None, result.diagnostics
+    resource = running(result.artifact, tier)
+    state = debug_set(resource, p.BreakpointSpec(6))  # STEP Busy: stops while it is active
+    assert state.breakpoints[0].verified
+    cycles(resource, 3)
+    assert paused(resource) is None  # Busy is not active: `go` is FALSE
+    online_writes.write(resource, "Chart.go", True)
+    cycles(resource, 2)  # the transition fires; in the next cycle Busy is active
+    where = paused(resource)
+    assert where is not None and (where.pou, where.line) == ("Chart", 6)
+    ask(resource, p.DebugClear())
+    debug_set(resource, p.BreakpointSpec(13))  # TRANSITION FROM Busy TO Idle
+    cycles(resource, 1)
+    where = paused(resource)
+    assert where is not None and where.line == 13
+    shown = {v.name: v.value for v in ask(resource, p.DebugVariables("Chart", 0)).variables}
+    assert shown["go"] is True and shown["n"] >= 1
