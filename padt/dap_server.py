@@ -48,7 +48,7 @@ CAPABILITIES = {
 }
 # DAP's reasons for a stop, by the resource's
 STOP_REASONS = {"breakpoint": "breakpoint", "step": "step", "run to": "goto", "cycle end": "step"}
-_HIT = re.compile(r"\s*(>=|>|==|=)?\s*(\d{1,10})\s*")
+_HIT = re.compile(r"\s*(>=|>)?\s*(\d{1,10})\s*")
 _LOGGED = re.compile(r"\{([^{}]*)\}")
 MAX_EXPRESSION_PATH = 512
 

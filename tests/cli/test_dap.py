@@ -479,10 +479,17 @@ def test_a_malformed_message_gets_an_error_response_and_the_adapter_goes_on(
     mixed = client.ask(
         "setBreakpoints",
         source={"path": bench.source},
-        breakpoints=[{"line": 33, "hitCondition": "every 3rd"}, {"line": 33, "condition": "i >"}],
+        breakpoints=[
+            {"line": 33, "hitCondition": "== 3"},
+            {"line": 33, "condition": "i >"},
+            {"line": 33, "hitCondition": "> 4"},
+        ],
     )["breakpoints"]
     assert "write N or >= N" in mixed[0]["message"]
     assert (mixed[1]["verified"], mixed[1]["message"]) == (False, "'i >': more expected")
+    assert mixed[2]["verified"]
+    armed = bench.client.ask(p.DebugGet()).debug.breakpoints
+    assert [b.spec.hit_count for b in armed] == [None, 5]  # "> 4": from the fifth pass on
     runs_on_after_disconnect(client, bench)
 
 
