@@ -67,7 +67,15 @@ def status_lines(status: p.Status) -> list[str]:
     lines.append(f"start: {status.start or '-'}, forcing: {'on' if status.forcing else 'off'}")
     if status.programs:
         rows = [
-            [x.name, str(x.id), str(x.priority), x.state, str(x.cycles), x.crc, x.error or ""]
+            [
+                x.name,
+                str(x.id),
+                str(x.priority),
+                x.state if x.paused_at is None else f"{x.state} at {x.paused_at}",
+                str(x.cycles),
+                x.crc,
+                x.error or "",
+            ]
             for x in status.programs
         ]
         lines += table(["program", "id", "priority", "state", "cycles", "crc", "error"], rows)
