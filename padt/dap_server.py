@@ -12,9 +12,11 @@ shows the launch configuration."""
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import re
+import signal
 import socket
 import sys
 import threading
@@ -665,22 +667,36 @@ def _shown(variable: p.DebugVariable) -> str:
 
 def run(args: Any) -> int:
     """`padt dap [--port N]`: one client on stdin/stdout, or clients one after the other
-    on 127.0.0.1:N."""
+    on 127.0.0.1:N. SIGTERM ends it as Ctrl-C does: a client's breakpoints cleared first."""
     logging.basicConfig(stream=sys.stderr, level=logging.INFO, format="%(message)s")
+    signal.signal(signal.SIGTERM, _interrupt)
     if args.port is None:
         # the protocol's own copy of stdout; whatever else writes to stdout (a library's
         # print) goes to stderr instead of corrupting the protocol
         protocol = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
         os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
         writer = MessageWriter(protocol)
-        DapServer(writer).serve(sys.stdin.buffer)
+        with contextlib.suppress(KeyboardInterrupt):
+            DapServer(writer).serve(sys.stdin.buffer)
         writer.close()
         return 0
+    if not 0 <= args.port <= 65535:
+        log.error("padt dap: --port %d is no TCP port", args.port)
+        return 2
     return _serve_tcp(args.port)
 
 
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
 def _serve_tcp(port: int) -> int:
-    with socket.create_server(("127.0.0.1", port)) as server:
+    try:
+        server = socket.create_server(("127.0.0.1", port))
+    except OSError as exc:
+        log.error("padt dap: cannot listen on 127.0.0.1:%d: %s", port, exc.strerror or exc)
+        return 1
+    with server:
         log.info("padt dap: listening on 127.0.0.1:%d", server.getsockname()[1])
         try:
             while True:
@@ -694,7 +710,12 @@ def _serve_tcp(port: int) -> int:
 
 
 def _serve_connection(connection: socket.socket) -> None:
-    with connection.makefile("rb") as reading, connection.makefile("wb") as writing:
-        writer = MessageWriter(writing)
+    reading, writing = connection.makefile("rb"), connection.makefile("wb")
+    writer = MessageWriter(writing)
+    try:
         DapServer(writer).serve(reading)
+    finally:
         writer.close()
+        with contextlib.suppress(OSError):  # a client gone leaves the last bytes unsent
+            writing.close()
+        reading.close()

@@ -391,7 +391,13 @@ def test_a_conditional_breakpoint_stops_one_program_and_shows_its_stack_and_vari
     stop, frames = stopped_at(client)  # in Twice again, called by a in the next cycle
     assert stop["reason"] == "breakpoint"
     assert [(f["name"], f["line"]) for f in frames][:2] == [("Twice", 10), ("Counter (Main.a)", 18)]
-    runs_on_after_disconnect(client, bench)
+    # the debugger ends the adapter without a word (as VS Code does when it gives up on
+    # it): the program must not stay stopped
+    assert client.process is not None
+    client.process.terminate()
+    assert client.process.wait(WAIT_S) == 0
+    wait_for(lambda: bench.program("Main").state == p.ProgramState.RUN, "Main runs again")
+    assert bench.client.ask(p.DebugGet()).debug.breakpoints == []
 
 
 def test_steps_into_a_method_through_an_interface_and_out_and_a_logpoint_logs(
@@ -509,7 +515,7 @@ def test_on_a_tcp_port_clients_come_one_after_the_other_and_a_viewer_may_not_deb
                 client.ask("disconnect")
     finally:
         process.terminate()
-        process.wait(WAIT_S)
+    assert process.wait(WAIT_S) == 0
 
 
 def connected(port: int) -> socket.socket:
