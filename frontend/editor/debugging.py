@@ -130,6 +130,9 @@ class EditorDebugging:
                     self._expanded = {x for x in self._expanded if not _within(x, action.path)}
             self._work.submit("look", self._look)
             return
+        if action.action == "timeout":
+            self._work.submit("timeout", lambda: self._set_timeout(action.seconds))
+            return
         self._actions += 1  # each press its own job: none replaces another
         self._work.submit(f"act:{self._actions}", lambda: self._command(action))
 
@@ -156,6 +159,11 @@ class EditorDebugging:
         else:
             kind: p.DebugStepKind = action.action  # type: ignore[assignment]  # a step: checked
             self._asking(f"Step {kind} in {program}", lambda: session.step(program, kind))
+
+    def _set_timeout(self, seconds: int) -> None:
+        session = self._session(changing=True)
+        if session is not None:
+            self._asking("The debug timeout", lambda: session.set_timeout(seconds))
 
     def _session(self, changing: bool) -> DebugSession | None:
         """The session with the resource debugged now; one that changes something is

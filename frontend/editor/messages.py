@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from runtime.contract.outside_json import JsonRefused, read_json
+from runtime.contract.protocol import MAX_DEBUG_TIMEOUT_S, MIN_DEBUG_TIMEOUT_S
 
 INPUT_LABEL = "Editor message"  # the hidden input's label; the page script finds it by it
 # what one batch may carry: a whole file pasted (the services refuse a text larger than a
@@ -38,6 +39,7 @@ DEBUG_ACTIONS = (
     "frame",
     "expand",
     "collapse",
+    "timeout",
 )
 MAX_BREAKPOINTS = 256  # in one file (as the resource takes them)
 MAX_EXPRESSION = 512  # characters of a condition or a logged expression
@@ -145,13 +147,15 @@ class Breakpoints:
 @dataclass(frozen=True)
 class DebugAction:
     """A control of the Debug panel: a step, continue, run to `file:line`, a frame chosen
-    (`frame`), a variable's members shown or hidden (`path`, relative to the frame)."""
+    (`frame`), a variable's members shown or hidden (`path`, relative to the frame), the
+    resource's debug timeout (`seconds`)."""
 
     action: str  # one of DEBUG_ACTIONS
     frame: int = 0
     path: str = ""
     file: str = ""
     line: int = 0
+    seconds: int = 0
 
 
 Message = (
@@ -338,6 +342,10 @@ def _debug_action(data: dict[str, Any]) -> DebugAction:
         if not isinstance(path, str) or not 0 < len(path) <= MAX_PATH:
             raise BadMessage(f"a variable's path has 1 to {MAX_PATH} characters")
         return DebugAction(action, path=path)
+    if action == "timeout":
+        _keys(data, "k", "action", "seconds")
+        low, high = MIN_DEBUG_TIMEOUT_S, MAX_DEBUG_TIMEOUT_S
+        return DebugAction(action, seconds=_int(data["seconds"], "a timeout in seconds", low, high))
     _keys(data, "k", "action")
     return DebugAction(action)
 

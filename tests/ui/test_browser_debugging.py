@@ -64,14 +64,15 @@ def line_text(page: Page, number: int) -> str:
     return text
 
 
-def click_gutter(page: Page, line: int) -> None:
+def click_gutter(page: Page, line: int, button: str = "left") -> None:
     """A click in the debug gutter, level with the line's number."""
     number = page.locator(f"#padt-editor .cm-lineNumbers .cm-gutterElement:text-is('{line}')")
     number.first.scroll_into_view_if_needed()
     row = number.first.bounding_box()
     gutter = page.locator("#padt-editor .padt-debug-gutter").first.bounding_box()
     assert row is not None and gutter is not None
-    page.mouse.click(gutter["x"] + gutter["width"] / 2, row["y"] + row["height"] / 2)
+    x, y = gutter["x"] + gutter["width"] / 2, row["y"] + row["height"] / 2
+    page.mouse.click(x, y, button="right" if button == "right" else "left")
 
 
 def program_state(page: Page) -> str:
@@ -122,6 +123,10 @@ def test_a_gutter_breakpoint_stops_the_program_and_the_panel_steps_it(demo: Demo
         dismiss_notifications(page)
         shoot_both(page, "debugging-bkpt")
 
+        page.locator('[data-testid="debug-variables"] [data-var-path="refillDelay"]').click()
+        member = '[data-testid="debug-variables"] [data-value="refillDelay.Q"]'
+        wait_until("the TON's members show", lambda: text_of(page, member) in ("TRUE", "FALSE"))
+
         page.locator('#padt-editor [data-debug="over"]').click()
         wait_until("Step over goes to the next statement", lambda: paused_line(page) == LINE + 1)
         wait_until("the lit line follows", lambda: lit_text(page) == line_text(page, LINE + 1))
@@ -141,6 +146,24 @@ def test_a_gutter_breakpoint_stops_the_program_and_the_panel_steps_it(demo: Demo
         assert "No program is in BKPT" in text_of(page, '[data-testid="debug-reason"]')
         dismiss_notifications(page)
         shoot_both(page, "debugging-run")
+
+        timeout = page.locator('[data-testid="debug-timeout"]')
+        timeout.fill("300")
+        timeout.press("Enter")
+        wait_until("the debug timeout is set", lambda: debug_state(page, "timeout_s") == 300)
+
+        # a condition that does not parse: the breakpoint is not armed, and says why
+        click_gutter(page, 22, button="right")
+        form = page.locator('[data-testid="breakpoint-form"]')
+        form.locator('[data-bp-field="condition"]').fill("level >")
+        form.locator('[data-bp-field="condition"]').press("Enter")
+        hollow = page.locator('#padt-editor [data-bp-line="22"][data-bp="unverified"]')
+        wait_until("an unverified breakpoint", lambda: hollow.count() == 1, timeout_s=STOP_S)
+        assert hollow.get_attribute("title"), "its tooltip says why"
+        assert "TankControl: RUN" in program_state(page)
+        click_gutter(page, 22, button="right")
+        page.locator('[data-testid="breakpoint-form"] [data-bp-action="remove"]').click()
+        wait_until("no breakpoint left", lambda: debug_state(page, "breakpoints") == [])
 
 
 def test_a_user_who_may_only_read_sets_no_breakpoint(plant: Plant) -> None:

@@ -37,6 +37,8 @@ def test_breakpoints_and_controls_are_read_into_their_types() -> None:
     )
     expand = {"k": "debug", "action": "expand", "path": "refillDelay"}
     assert read_message(expand) == DebugAction("expand", path="refillDelay")
+    timeout = {"k": "debug", "action": "timeout", "seconds": 300}
+    assert read_message(timeout) == DebugAction("timeout", seconds=300)
 
 
 @pytest.mark.parametrize(
@@ -59,6 +61,7 @@ def test_breakpoints_and_controls_are_read_into_their_types() -> None:
         ({"k": "debug", "action": "frame", "frame": -1}, "a frame"),
         ({"k": "debug", "action": "expand", "path": ""}, "a variable's path"),
         ({"k": "debug", "action": "run_to", "file": "tank.st", "line": True}, "line"),
+        ({"k": "debug", "action": "timeout", "seconds": 4}, "5 to 3600"),
     ],
 )
 def test_a_bad_breakpoint_or_control_is_refused_with_the_reason(

@@ -357,12 +357,35 @@ export class DebugPanel {
     });
     const why = this.blocked("continue");
     const reason = el("span", { "data-testid": "debug-reason", style: "color:#868e96" }, why);
-    const bar = el("div", { style: "display:flex;flex-wrap:wrap;gap:4px 6px;align-items:center;padding:2px 8px 4px" }, ...buttons, reason);
+    const bar = el("div", { style: "display:flex;flex-wrap:wrap;gap:4px 6px;align-items:center;padding:2px 8px 4px" }, ...buttons, reason, this.timeoutControl());
     const left = el("div", { style: "flex:2;min-width:180px;overflow:auto;border-right:1px solid #dee2e6" }, this.stackTable(), this.breakpointTable());
     const right = el("div", { style: "flex:3;min-width:200px;overflow:auto" }, this.variableTable());
     const columns = el("div", { style: "display:flex;flex:1;min-height:0;border-top:1px solid #dee2e6" }, left, right);
     root.append(where, bar, columns);
     return root;
+  }
+
+  // how long a program stays in BKPT once no debugger speaks to the resource (a page gone)
+  timeoutControl() {
+    const m = this.state;
+    if (!m.on || !m.timeout_s) return "";
+    const box = el("input", {
+      type: "number", min: "5", max: "3600", value: String(m.timeout_s), "data-testid": "debug-timeout",
+      style: "width:64px;font:12.5px system-ui,sans-serif;padding:1px 4px",
+      title: "If this page goes, the resource lets the program continue and clears the breakpoints after this many seconds",
+    });
+    const set = () => {
+      const seconds = Number(box.value);
+      if (!Number.isInteger(seconds) || seconds < 5 || seconds > 3600) return this.editor.flash("A debug timeout is 5 to 3600 s.");
+      if (this.refusal()) return this.editor.flash(this.refusal());
+      this.editor.send({ k: "debug", action: "timeout", seconds });
+    };
+    box.addEventListener("keydown", (e) => {
+      if (e.key === "Enter") set();
+    });
+    box.addEventListener("change", set);
+    box.disabled = !m.allowed;
+    return el("span", { style: "margin-left:auto;color:#495057;white-space:nowrap" }, "Continues by itself after ", box, " s without a debugger");
   }
 
   whereText() {
@@ -375,8 +398,7 @@ export class DebugPanel {
       return `${m.resource}: no program in BKPT${others}. Click in the gutter left of a line number for a breakpoint; right-click it for a condition, a hit count or a logpoint.`;
     }
     const at = p.line > 0 ? `${p.file}:${p.line} (${p.pou})` : `the end of its program cycle (${p.pou})`;
-    const timeout = m.timeout_s ? ` · continues by itself ${m.timeout_s} s after the last debug command if this page goes` : "";
-    return `${p.program} in BKPT at ${at}, ${p.reason}${timeout}`;
+    return `${p.program} in BKPT at ${at}, ${p.reason}`;
   }
 
   stackTable() {
@@ -391,7 +413,7 @@ export class DebugPanel {
         onclick: () => this.chooseFrame(f),
       }, el("td", { style: CELL }, `${f.name}`), el("td", { style: `${CELL};color:#1864ab;width:100%` }, f.line ? `${f.file}:${f.line}` : f.file)));
     }
-    if (!(m.frames || []).length) table.append(el("tr", {}, el("td", { style: `${CELL};color:#868e96` }, "At a break: the program, the blocks, methods and functions it is in.")));
+    if (!(m.frames || []).length) table.append(el("tr", {}, el("td", { colspan: "2", style: `${CELL};color:#868e96;white-space:normal` }, "At a break: the program, the blocks, methods and functions it is in.")));
     return table;
   }
 
@@ -438,7 +460,7 @@ export class DebugPanel {
       }
       table.append(row);
     }
-    if (!(m.variables || []).length) table.append(el("tr", {}, el("td", { colspan: "3", style: `${CELL};color:#868e96;font-family:system-ui,sans-serif` }, "At a break: the variables of the chosen frame (click a block, a structure or an array to open it).")));
+    if (!(m.variables || []).length) table.append(el("tr", {}, el("td", { colspan: "3", style: `${CELL};color:#868e96;font-family:system-ui,sans-serif;white-space:normal` }, "At a break: the variables of the chosen frame (click a block, a structure or an array to open it).")));
     return table;
   }
 }
