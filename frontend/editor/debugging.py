@@ -68,6 +68,8 @@ class EditorDebugging:
         self._started: set[str] = set()
         self._target: Target | None = None
         self._seen = _Seen()
+        self._changed = 0  # counts the changes of `_seen`: the page's message is made anew
+        self._made: tuple[tuple[object, ...], dict[str, Any]] | None = None
         self._expanded: set[str] = set()  # frame-relative paths shown open
         self._status_key: tuple[object, ...] = ()
         self._looked = 0.0
@@ -82,6 +84,7 @@ class EditorDebugging:
             self._target = target
             if target is None or before is None or before.resource != target.resource:
                 self._seen, self._expanded, self._shown_pause = _Seen(), set(), None
+                self._changed += 1
             key = _status_key(target)
             now = time.monotonic()
             armed = self._seen.state is not None and bool(self._seen.state.breakpoints)
@@ -120,6 +123,7 @@ class EditorDebugging:
         if action.action == "frame":
             with self._lock:
                 self._seen.frame, self._expanded = action.frame, set()
+                self._changed += 1
             self._work.submit("look", self._look)
             return
         if action.action in ("expand", "collapse"):
@@ -199,6 +203,7 @@ class EditorDebugging:
             return
         with self._lock:
             self._seen.state = state
+            self._changed += 1
         self._look()
 
     def _look(self) -> None:
@@ -228,18 +233,30 @@ class EditorDebugging:
                         continue
         except Refusal as refused:
             with self._lock:
-                self._seen.error = refused.message
+                self._seen.error, self._changed = f"refused: {refused.message}", self._changed + 1
             return
         except ResourceUnreachable as exc:
             with self._lock:
-                self._seen.error = str(exc)
+                self._seen.error, self._changed = f"no answer: {exc}", self._changed + 1
             return
         with self._lock:
             self._seen = seen
+            self._changed += 1
             self._shown_pause = _pause_key(state.paused) if state.paused is not None else None
 
     # ---- to the page
     def _message(self) -> dict[str, Any]:
+        """The page's message, made anew only when something in it may have changed (the
+        refresher asks ten times a second)."""
+        target = self._target
+        key: tuple[object, ...] = (self._changed,)
+        if target is not None:
+            key += (target.resource, target.runs, target.allowed, tuple(_in_bkpt(target.status)))
+        if self._made is None or self._made[0] != key:
+            self._made = (key, self._make())
+        return self._made[1]
+
+    def _make(self) -> dict[str, Any]:
         target, seen = self._target, self._seen
         if target is None:
             return {"k": "debug", "on": False, "why": "Select a resource to debug."}

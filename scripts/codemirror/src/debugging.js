@@ -391,7 +391,7 @@ export class DebugPanel {
   whereText() {
     const m = this.state;
     if (!m.on) return m.why || "Not online.";
-    if (m.error) return `The resource did not answer: ${m.error}`;
+    if (m.error) return `${m.resource}: the debug state was ${m.error}`;
     const p = m.paused;
     if (!p) {
       const others = (m.in_bkpt || []).length ? ` (${m.in_bkpt.join(", ")} in BKPT)` : "";
