@@ -20,7 +20,7 @@ import signal
 import socket
 import sys
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -52,6 +52,8 @@ CAPABILITIES = {
 STOP_REASONS = {"breakpoint": "breakpoint", "step": "step", "run to": "goto", "cycle end": "step"}
 _HIT = re.compile(r"\s*(>=|>)?\s*(\d{1,10})\s*")
 _LOGGED = re.compile(r"\{([^{}]*)\}")
+_ROOT = re.compile(r"[^.\[]+")  # a path's first name: a program's or a global's
+_STEP = re.compile(r"\.?[^.\[]+|\[[^\]]*\]")  # one member or element further
 MAX_EXPRESSION_PATH = 512
 
 
@@ -67,6 +69,16 @@ class VariableRef:
     program: str
     frame: int
     path: str
+
+
+@dataclass(frozen=True)
+class GlobalsRef:
+    """The resource's global variables ("" ), or the members or elements of one."""
+
+    path: str
+
+
+Ref = VariableRef | GlobalsRef
 
 
 class Attached:
@@ -101,7 +113,7 @@ class DapServer:
         self._threads: dict[str, int] = {}  # program name (upper case) -> its id
         self._names: dict[int, str] = {}  # program id -> its name
         self._frames: dict[int, tuple[str, int]] = {}  # frame id -> program, index
-        self._refs: dict[int, VariableRef] = {}
+        self._refs: dict[int, Ref] = {}
         self._next_ref = 1
         self._wake = threading.Event()  # a status showed a told stop may have ended
         self._closed = False
@@ -357,28 +369,37 @@ class DapServer:
 
     def _scopes(self, args: dict[str, Any]) -> dict[str, Any]:
         program, index = self._frame(args)
-        reference = self._reference(VariableRef(program, index, ""))
         return {
             "scopes": [
                 {
                     "name": "Locals",
                     "presentationHint": "locals",
-                    "variablesReference": reference,
+                    "variablesReference": self._reference(VariableRef(program, index, "")),
                     "expensive": False,
-                }
+                },
+                {
+                    "name": "Globals",
+                    "variablesReference": self._reference(GlobalsRef("")),
+                    "expensive": False,
+                },
             ]
         }
 
     def _variables(self, args: dict[str, Any]) -> dict[str, Any]:
         ref = self._ref(args, "variablesReference")
-        found = self._attached().debug.variables(ref.program, ref.frame, ref.path)
-        return {"variables": [self._variable(ref, v) for v in found]}
+        return {"variables": [self._variable(ref, v) for v in self._listed(ref)]}
+
+    def _listed(self, ref: Ref) -> list[p.DebugVariable]:
+        attached = self._attached()
+        if isinstance(ref, GlobalsRef):
+            return global_variables(attached.client, set(self._threads), ref.path)
+        return attached.debug.variables(ref.program, ref.frame, ref.path)
 
     def _set_variable(self, args: dict[str, Any]) -> dict[str, Any]:
         attached = self._attached()
         ref = self._ref(args, "variablesReference")
         name, text = _text(args, "name"), _text(args, "value")
-        variable = _named(attached.debug.variables(ref.program, ref.frame, ref.path), name)
+        variable = _named(self._listed(ref), name)
         if variable.children:
             raise DapError(f"{name} is a {variable.type or 'structure'}: set its members")
         if variable.path is None:
@@ -391,12 +412,12 @@ class DapServer:
         except LiteralError as exc:
             raise DapError(f"{name}: {exc}") from None
         attached.client.ask(p.Write(variable.path, value))
-        now = _named(attached.debug.variables(ref.program, ref.frame, ref.path), name)
+        now = _named(self._listed(ref), name)
         return {"value": _shown(now), "type": now.type}
 
     def _evaluate(self, args: dict[str, Any]) -> dict[str, Any]:
-        """A name of the frame, or a member or element of one ("a.total", "arr[2]"): what
-        a hover or a watch asks; no expressions are computed."""
+        """A name of the frame or a global, or a member or element of one ("a.total",
+        "arr[2]"): what a hover or a watch asks; no expressions are computed."""
         expression = _text(args, "expression").strip()
         if "frameId" not in args:
             raise DapError("only the variables of a stopped program's frames can be shown")
@@ -408,16 +429,19 @@ class DapServer:
             parent, name = expression[:cut], expression[cut:]
         else:
             parent, _, name = expression.rpartition(".")
-        ref = VariableRef(program, index, parent)
-        try:
-            found = self._attached().debug.variables(program, index, parent)
-            variable = _named(found, name)
-        except (DapError, Refusal):
-            raise DapError(f"no variable '{expression}' in this frame") from None
-        shown = self._variable(ref, variable)
+        shown: dict[str, Any] | None = None
+        for ref in (VariableRef(program, index, parent), GlobalsRef(parent)):
+            try:
+                variable = _named(self._listed(ref), name)
+            except (DapError, Refusal):
+                continue
+            shown = self._variable(ref, variable)
+            break
+        if shown is None:
+            raise DapError(f"no variable '{expression}' in this frame or the globals")
         return {
             "result": shown["value"],
-            "type": variable.type,
+            "type": shown["type"],
             "variablesReference": shown["variablesReference"],
         }
 
@@ -562,7 +586,7 @@ class DapServer:
             raise DapError("that frame is gone: the program ran on")
         return found
 
-    def _reference(self, ref: VariableRef) -> int:
+    def _reference(self, ref: Ref) -> int:
         with self._lock:
             for known, value in self._refs.items():
                 if value == ref:
@@ -571,7 +595,7 @@ class DapServer:
             self._refs[self._next_ref] = ref
             return self._next_ref
 
-    def _ref(self, args: dict[str, Any], name: str) -> VariableRef:
+    def _ref(self, args: dict[str, Any], name: str) -> Ref:
         found = self._refs.get(_integer(args, name))
         if found is None:
             raise DapError("those variables are gone: the program ran on")
@@ -583,15 +607,18 @@ class DapServer:
             self._frames.clear()
             self._refs.clear()
 
-    def _variable(self, ref: VariableRef, variable: p.DebugVariable) -> dict[str, Any]:
+    def _variable(self, ref: Ref, variable: p.DebugVariable) -> dict[str, Any]:
         path = _below(ref.path, variable.name)
-        children = self._reference(VariableRef(ref.program, ref.frame, path))
+        below: Ref = GlobalsRef(path)
+        if isinstance(ref, VariableRef):
+            below = VariableRef(ref.program, ref.frame, path)
+        children = self._reference(below) if variable.children else 0
         return {
             "name": variable.name,
             "value": _shown(variable),
             "type": variable.type,
             "evaluateName": path,
-            "variablesReference": children if variable.children else 0,
+            "variablesReference": children,
         }
 
     def _dap_line(self, line: int) -> int:
@@ -654,6 +681,45 @@ def _below(parent: str, name: str) -> str:
     if not parent:
         return name
     return f"{parent}{name}" if name.startswith("[") else f"{parent}.{name}"
+
+
+def global_variables(
+    client: ResourceClient, programs: set[str], below: str
+) -> list[p.DebugVariable]:
+    """The resource's global variables (`below` ""), or the members or elements of the
+    global structure or array `below`, as the frames' variables are listed: from the
+    resource's list of variables, those of no program (`programs`, upper case)."""
+    types = {
+        v.path: v.type
+        for v in client.ask(p.GetVariables()).variables
+        if _root(v.path).upper() not in programs
+    }
+    values = client.ask(p.GetValues()).values
+    shown = []
+    for child in _children(types, below):
+        leaf = child in types
+        name = child[len(below) :].lstrip(".") if below else child
+        value = values.get(child) if leaf else None
+        shown.append(p.DebugVariable(name, types.get(child, ""), value, child, not leaf))
+    return shown
+
+
+def _root(path: str) -> str:
+    found = _ROOT.match(path)
+    return path if found is None else found.group(0)
+
+
+def _children(paths: Iterable[str], below: str) -> list[str]:
+    """The paths one step below `below` ("" : the roots), in the order of `paths`: a
+    member ("g.x") or an element ("arr[2]")."""
+    found: dict[str, None] = {}
+    for path in paths:
+        if below and not path.startswith((below + ".", below + "[")):
+            continue
+        step = _STEP.match(path, len(below))
+        if step is not None:
+            found.setdefault(path[: step.end()], None)
+    return list(found)
 
 
 def _shown(variable: p.DebugVariable) -> str:

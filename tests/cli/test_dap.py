@@ -99,6 +99,20 @@ ticks := ticks + 1;
 END_PROGRAM
 """
 
+GLOBALS = """\
+TYPE Point :
+STRUCT
+  x : INT;
+  y : INT;
+END_STRUCT
+END_TYPE
+
+VAR_GLOBAL
+  limit : INT := 7;
+  spot : Point;
+END_VAR
+"""
+
 
 class Bench:
     def __init__(self, project: Path, endpoint: str, client: ResourceClient) -> None:
@@ -120,6 +134,7 @@ def bench(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Bench]:
     )
     (folder / "padt.toml").write_text(PADT_TOML + accounts)
     (folder / "prog.st").write_text(SOURCE)
+    (folder / "globals.st").write_text(GLOBALS)
     result = compile_project(load_project([folder]))
     assert result.artifact is not None, result.diagnostics
     state = folder.parent / "state"
@@ -283,7 +298,7 @@ def variables(client: DapClient, reference: int) -> dict[str, dict[str, Any]]:
 
 def locals_of(client: DapClient, frame_id: int) -> dict[str, dict[str, Any]]:
     scopes = client.ask("scopes", frameId=frame_id)["scopes"]
-    assert [s["name"] for s in scopes] == ["Locals"]
+    assert [s["name"] for s in scopes] == ["Locals", "Globals"]
     return variables(client, scopes[0]["variablesReference"])
 
 
@@ -356,6 +371,18 @@ def test_a_conditional_breakpoint_stops_one_program_and_shows_its_stack_and_vari
         "setVariable", arguments={"variablesReference": a_members, "name": "step", "value": "x"}
     )
     assert not wrong["success"] and "not an ST literal of type INT" in wrong["message"]
+    # the resource's globals beside each frame's locals
+    scopes = client.ask("scopes", frameId=frames[0]["id"])["scopes"]
+    shared = variables(client, scopes[1]["variablesReference"])
+    assert sorted(shared) == ["limit", "spot"] and shared["limit"]["value"] == "7"
+    spot = variables(client, shared["spot"]["variablesReference"])
+    assert {name: v["value"] for name, v in spot.items()} == {"x": "0", "y": "0"}
+    assert spot["x"]["evaluateName"] == "spot.x"
+    changed = client.ask(
+        "setVariable", variablesReference=scopes[1]["variablesReference"], name="limit", value="9"
+    )
+    assert changed["value"] == "9"
+    assert client.ask("evaluate", expression="limit", frameId=frames[0]["id"])["result"] == "9"
     paused = client.request("pause", arguments={"threadId": 1})
     assert not paused["success"] and "not supported" in paused["message"]
 
