@@ -353,6 +353,24 @@ def test_a_silent_client_lets_the_program_continue(cell: Cell) -> None:
         cell.ok("debug", "timeout", "120")
 
 
+def test_an_online_change_waits_and_a_stop_ends_the_break(cell: Cell, tmp_path: Path) -> None:
+    changed = write_project(tmp_path / "changed")
+    (changed / "main.st").write_text(MAIN_ST.replace("ticks + 1", "ticks + 2"))
+    cell.ok("debug", "set", "main.st:3")
+    cell.ok("debug", "wait", "--timeout", "60")
+    backups = ["--backup-dir", str(tmp_path / "backups")]
+    reload = cell.padt("reload", str(changed), "--yes", *backups)
+    assert reload.returncode == 1, reload.stdout + reload.stderr
+    assert "refused (state): program Main stands at a breakpoint" in reload.stderr
+    # a stop: Main leaves BKPT for STOP; its breakpoint stays armed for the next start
+    assert cell.ok("stop", "--program", "Main").strip() == "program Main: STOP"
+    state = cell.json("debug", "list")
+    assert state["paused"] is None and [b["line"] for b in state["breakpoints"]] == [3]
+    cell.ok("start", "--program", "Main")
+    stopped = cell.ok("debug", "wait", "--timeout", "60")
+    assert stopped.startswith("Main stopped at main.st:3 in Main, breakpoint")
+
+
 def test_refused_in_safety_operation(cell: Cell, tmp_path: Path) -> None:
     """Last: the cell is loaded with safety operation on."""
     safe = write_project(tmp_path / "safe", safety=True)
