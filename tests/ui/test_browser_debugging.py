@@ -2,7 +2,9 @@
 the gutter beside a statement of TankControl arms a breakpoint there; when the program
 stops at it, the line is lit with an arrow, the Debug panel says which program is in BKPT
 and where, its call stack and its variables with their values (`level`); Step over (the
-button, then F10) moves the lit line to the next statement; with the breakpoint removed,
+button, then F10) moves the lit line to the next statement; Run to cursor, Step into a
+block's call (the caller's frame chosen: its line and variables), Step out; with the
+breakpoint removed,
 Continue runs on: the lit line goes and the program is back in RUN. A user who may only
 read at the resource sets no breakpoint and finds the steps disabled, with the reason."""
 
@@ -132,6 +134,31 @@ def test_a_gutter_breakpoint_stops_the_program_and_the_panel_steps_it(demo: Demo
         wait_until("the lit line follows", lambda: lit_text(page) == line_text(page, LINE + 1))
         page.keyboard.press("F10")  # IF NOT alarmPlant THEN: into its branch, or past it
         wait_until("F10 steps over too", lambda: paused_line(page) in (LINE + 2, LINE + 4))
+
+        page.evaluate("window.padtEditor.select('tank.st', 25, 3)")
+        page.locator('#padt-editor [data-debug="run_to"]').click()
+        wait_until("Run to cursor", lambda: paused_line(page) == 25)
+        # into the TON's body (the standard library's ST), then the caller's frame chosen
+        page.locator('#padt-editor [data-debug="into"]').click()
+        stack = '[data-testid="debug-stack"]'
+        wait_until(
+            "a frame of the TON on top", lambda: "TON" in text_of(page, f'{stack} [data-frame="0"]')
+        )
+        wait_until(
+            "TankControl below", lambda: "tank.st:25" in text_of(page, f'{stack} [data-frame="1"]')
+        )
+        page.locator(f'{stack} [data-frame="1"]').click()
+        frame_line = page.locator('#padt-editor .cm-line[data-lit="frame"]')
+        wait_until(
+            "its line is lit",
+            lambda: frame_line.count() == 1 and "refillDelay(IN" in frame_line.inner_text(),
+        )
+        wait_until("its variables listed", lambda: page.locator(level).count() == 1)
+        page.locator('#padt-editor [data-debug="out"]').click()
+        wait_until("Step out: back in TankControl", lambda: paused_line(page) == 26)
+        wait_until(
+            "one frame again", lambda: page.locator(f'{stack} [data-frame="1"]').count() == 0
+        )
 
         click_gutter(page, LINE)  # the breakpoint off: Continue would stop there again
         wait_until(

@@ -159,7 +159,7 @@ export class DebugPanel {
       // the panel comes to the front, tall enough for the stack and some variables
       ed.bottomTab = "debug";
       if (ed.bottom.getBoundingClientRect().height < 240) ed.bottom.style.height = "240px";
-      if (p.line > 0) ed.select(p.file, p.line);
+      if (p.line > 0) this.show(p.file, p.line, p.pou);
     }
     this.apply();
     ed.drawBottom();
@@ -419,7 +419,14 @@ export class DebugPanel {
 
   chooseFrame(f) {
     this.editor.send({ k: "debug", action: "frame", frame: f.index });
-    if (f.file && f.line > 0) this.editor.select(f.file, f.line);
+    if (f.file && f.line > 0) this.show(f.file, f.line, f.pou);
+  }
+
+  // a place in the editor; the standard library's blocks (TON, ...) are compiled with the
+  // project but are no file of it (the compiler names them "stdlib/...")
+  show(file, line, pou) {
+    if (file.startsWith("stdlib/")) this.editor.flash(`${pou} is of the standard library (${file}:${line}): not a file of the project.`);
+    else this.editor.select(file, line);
   }
 
   breakpointTable() {
