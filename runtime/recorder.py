@@ -1,6 +1,7 @@
 """Recordings of a resource (spec section 15, docs/recording.md): chosen variables every CPU
 cycle, or from a trigger with cycles before it, into MCAP files in the state folder; with
-all inputs, everything the programs take from outside, for an exact replay.
+all inputs, everything the programs take from outside, for an exact replay; and every
+logpoint hit the debugger logs while they write, on a topic of its own.
 
 The cycle thread only copies values into a queue (`TraceWriter.offer`); a writer thread per
 recording encodes, compresses and writes, between the cycles. A full queue drops the
@@ -33,6 +34,7 @@ from runtime.contract.recording import (
     METADATA,
     START_ATTACHMENT,
     CycleInputs,
+    LoggedHit,
     RecordingHeader,
     RecordingUnreadable,
     StartState,
@@ -41,7 +43,7 @@ from runtime.contract.recording import (
 from runtime.contract.refusal import Refusal
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.instances import BoundVariable
-from runtime.trace_writer import CycleGate, Inputs, TraceWriter, Values
+from runtime.trace_writer import CycleGate, Inputs, Logged, TraceWriter, Values
 from runtime.value_reader import value_reader
 
 if TYPE_CHECKING:
@@ -96,6 +98,8 @@ class Recording:
     ended: str | None = None
     system: dict[str, Any] = field(default_factory=dict)
     programs: dict[str, Any] = field(default_factory=dict)
+    logged: int = 0  # logpoint messages queued
+    logs_dropped: int = 0  # logpoint messages lost to a full queue since the last queued
 
     def info(self) -> p.RecordingInfo:
         error = self.writer.error or self.ended
@@ -294,6 +298,19 @@ class Recordings:
         if any(r.all_inputs for r in self._running.values()):
             self._found = (_system(resource), _programs(resource))
 
+    def logged(self, hit: LoggedHit) -> None:
+        """A logpoint hit the debugger logged (inside a program, on the cycle thread):
+        into every recording that writes (not one waiting for its trigger)."""
+        for recording in self._running.values():
+            if recording.state != "recording":
+                continue
+            time_ns = recording.started_ns + (hit.clock_ns - recording.clock_at_start)
+            if recording.writer.offer(Logged(time_ns, hit, recording.logs_dropped)):
+                recording.logged += 1
+                recording.logs_dropped = 0
+            else:
+                recording.logs_dropped += 1
+
     def idle(self, resource: Resource) -> None:
         """The resource does not run: a replay cannot cross that, so the recordings of all
         inputs end (recordings of values wait for cycles to come)."""
@@ -389,8 +406,11 @@ class Recordings:
         self._ended[recording.id] = recording
         if recording.all_inputs and not any(r.all_inputs for r in self._running.values()):
             resource.variables.tap = None
+        logs = f", {recording.logged} logpoint messages" if recording.logged else ""
+        if recording.logs_dropped:
+            logs += f" ({recording.logs_dropped} more dropped at the end: the writer was behind)"
         resource.recorder.record(
-            "recording", f"recording {recording.id} {why} after {recording.cycles} cycles"
+            "recording", f"recording {recording.id} {why} after {recording.cycles} cycles{logs}"
         )
 
     # ---- files

@@ -25,6 +25,7 @@ from runtime.configuration_store import ConfigurationStore
 from runtime.contract.accounts import AccessControl, Challenge, Proven
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.protocol import ProgramState, ProgramStatus, ResourceState, Status
+from runtime.contract.recording import LoggedHit
 from runtime.contract.refusal import Refusal
 from runtime.cycle_stats import CycleStats
 from runtime.debugging.debugger import Debugger
@@ -72,6 +73,9 @@ class CycleRecorder(Protocol):
         before: list[tuple[str, Any]],
         after: list[tuple[str, Any]],
     ) -> None: ...
+
+    def logged(self, hit: LoggedHit) -> None:
+        """A logpoint hit the debugger logged, inside a program."""
 
 
 class Resource:

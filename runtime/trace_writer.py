@@ -27,10 +27,14 @@ from mcap.writer import CompressionType, Writer
 from runtime.contract.recording import (
     INPUTS_JSON_SCHEMA,
     INPUTS_SCHEMA,
+    LOG_JSON_SCHEMA,
+    LOG_SCHEMA,
     VALUES_SCHEMA,
     CycleInputs,
+    LoggedHit,
     RecordingHeader,
     inputs_topic,
+    log_topic,
     nest,
     values_schema,
     values_topic,
@@ -89,7 +93,17 @@ class Inputs:
         self.time_ns, self.inputs = time_ns, inputs
 
 
-Item = Values | Inputs
+class Logged:
+    """A logpoint hit (`LoggedHit`) at its calendar time, with the recording's logpoint
+    messages dropped before it."""
+
+    __slots__ = ("dropped", "hit", "time_ns")
+
+    def __init__(self, time_ns: int, hit: LoggedHit, dropped: int) -> None:
+        self.time_ns, self.hit, self.dropped = time_ns, hit, dropped
+
+
+Item = Values | Inputs | Logged
 
 
 class TraceWriter:
@@ -123,15 +137,17 @@ class TraceWriter:
         )
         self._stream: BinaryIO | None = None
         self._mcap: Writer | None = None
-        self._channels = (0, 0)
+        self._channels = (0, 0, 0)  # values, inputs, log
         self._file_began_ns = 0
         self._thread.start()
 
     # ---- the cycle thread
     def offer(self, item: Item) -> bool:
-        """Queue an item; False (and counted) when the writer is that far behind."""
+        """Queue an item; False when the writer is that far behind (a cycle's values are
+        counted as a dropped cycle; the caller counts the rest)."""
         if len(self._queue) >= self._limit or self.error is not None:
-            self.dropped += 1
+            if isinstance(item, Values):
+                self.dropped += 1
             return False
         self._queue.append(item)  # deque.append is atomic: no lock for the cycle
         return True
@@ -192,6 +208,12 @@ class TraceWriter:
                 self._channels[0], item.time_ns, message, item.time_ns, item.cycle
             )
             self.written += 1
+        elif isinstance(item, Logged):
+            hit = item.hit
+            message = _json(hit.message(item.time_ns, item.dropped))
+            self._mcap.add_message(
+                self._channels[2], item.time_ns, message, item.time_ns, hit.cycle
+            )
         else:
             self._mcap.add_message(
                 self._channels[1],
@@ -224,10 +246,13 @@ class TraceWriter:
         if header.all_inputs:
             schema = mcap.register_schema(INPUTS_SCHEMA, "jsonschema", _json(INPUTS_JSON_SCHEMA))
             inputs = mcap.register_channel(inputs_topic(header.resource), "json", schema)
+        # in every file, so that a viewer finds the topic: empty while no logpoint logs
+        schema = mcap.register_schema(LOG_SCHEMA, "jsonschema", _json(LOG_JSON_SCHEMA))
+        logged = mcap.register_channel(log_topic(header.resource), "json", schema)
         if header.part == 1:
             for name, data in sorted(self._attachments.items()):
                 mcap.add_attachment(time_ns, time_ns, name, "application/json", data)
-        self._mcap, self._channels = mcap, (values, inputs)
+        self._mcap, self._channels = mcap, (values, inputs, logged)
 
     def _finish_file(self) -> None:
         if self._mcap is not None:

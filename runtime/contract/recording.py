@@ -13,6 +13,8 @@ What is in a file:
   what the programs took from outside (`CycleInputs`), and the attachments
   `artifact.json` (the configuration that ran) and `start.json` (its state when the
   recording began: `StartState`).
+- channel `/<resource>/log` (schema `padt.LogpointHit`): every logpoint hit the debugger
+  logged while the recording wrote (`LoggedHit`), one message each; empty when none was.
 The log time of a message is the start of its CPU cycle in calendar time (Unix ns).
 """
 
@@ -40,6 +42,7 @@ PROFILE = ""  # no well-known profile: JSON-schema channels with JSON messages
 METADATA = "padt.recording"
 VALUES_SCHEMA = "padt.CycleValues"
 INPUTS_SCHEMA = "padt.CycleInputs"
+LOG_SCHEMA = "padt.LogpointHit"
 ARTIFACT_ATTACHMENT = "artifact.json"
 START_ATTACHMENT = "start.json"
 # What a file read back may hold (docs/recording.md, "Limits"): the recorder writes chunks
@@ -54,6 +57,10 @@ def values_topic(resource: str) -> str:
 
 def inputs_topic(resource: str) -> str:
     return f"/{resource}/inputs"
+
+
+def log_topic(resource: str) -> str:
+    return f"/{resource}/log"
 
 
 @dataclass(frozen=True)
@@ -228,6 +235,65 @@ INPUTS_JSON_SCHEMA: dict[str, Any] = {
 }
 
 
+@dataclass(frozen=True)
+class LoggedHit:
+    """A logpoint hit that the debugger logged (one within the logpoint's rate), as it
+    hands it to the recordings running; each writes it as a message on `/<resource>/log`
+    (`message`)."""
+
+    logpoint: int  # its id (`ArmedBreakpoint.id`)
+    program: str
+    file: str
+    line: int
+    values: dict[str, str]  # expression -> its value as text, as the "log" event shows it
+    errors: dict[str, str]  # expression -> why it has no value here
+    unlogged: int  # hits of this logpoint over its rate since the one logged before
+    cycle: int  # the CPU cycle it ran in, numbered as the values messages number it
+    clock_ns: int  # the resource clock at the hit
+
+    def message(self, time_ns: int, dropped: int) -> dict[str, Any]:
+        """The message of a recording: `time_ns` the hit in its calendar time (the
+        message's log time), `dropped` this recording's logpoint messages lost to a full
+        queue since the one before."""
+        return {
+            "cycle": self.cycle,
+            "time_ns": time_ns,
+            "logpoint": self.logpoint,
+            "program": self.program,
+            "file": self.file,
+            "line": self.line,
+            "values": self.values,
+            "errors": self.errors,
+            "unlogged": self.unlogged,
+            "dropped": dropped,
+        }
+
+
+LOG_JSON_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "properties": {
+        "cycle": {"type": "integer"},
+        "time_ns": {"type": "integer", "description": "the hit, Unix ns (the log time)"},
+        "logpoint": {"type": "integer", "description": "the logpoint's id"},
+        "program": {"type": "string"},
+        "file": {"type": "string"},
+        "line": {"type": "integer"},
+        "values": {
+            "type": "object",
+            "additionalProperties": {"type": "string"},
+            "description": "expression -> its value as text",
+        },
+        "errors": {
+            "type": "object",
+            "additionalProperties": {"type": "string"},
+            "description": "expression -> why it has no value",
+        },
+        "unlogged": {"type": "integer", "description": "hits over the rate since the last"},
+        "dropped": {"type": "integer", "description": "messages lost to a full queue"},
+    },
+}
+
+
 class RecordingUnreadable(ValueError):
     """Not a recording of ours, or damaged before its first whole chunk."""
 
@@ -341,7 +407,7 @@ def _take(recording: Recording, record: Any, channels: dict[int, str]) -> None:
     if isinstance(record, Message):
         kind = channels.get(record.channel_id)
         if kind not in ("values", "inputs"):
-            return
+            return  # the logpoints' messages: not needed for trends or a replay
         where = f"the {kind} message of log time {record.log_time}"
         data = _outside(record.data, where)
         if kind == "values":

@@ -19,6 +19,7 @@ from runtime.contract.protocol import (
     DebugVariable,
     ProgramState,
 )
+from runtime.contract.recording import LoggedHit
 from runtime.contract.refusal import Refusal
 from runtime.debugging import frames as stack
 from runtime.debugging.breakpoints import Breakpoint, Resolution, resolve
@@ -49,7 +50,22 @@ class Resource(Protocol):
     def programs(self) -> list[UserProgram]: ...
 
     @property
+    def cycle_count(self) -> int: ...
+
+    @property
+    def recordings(self) -> Recordings | None: ...
+
+    @property
     def cycle_ns(self) -> int: ...
+
+
+class Recordings(Protocol):
+    """Where logpoint hits go besides the event log (runtime/recorder.py)."""
+
+    @property
+    def active(self) -> bool: ...
+
+    def logged(self, hit: LoggedHit) -> None: ...
 
 
 DEFAULT_TIMEOUT_S = 120
@@ -373,16 +389,21 @@ class Debugger:
     def _log(
         self, resource: Resource, point: Breakpoint, scope: FrameScope, program: UserProgram
     ) -> None:
-        if not point.may_log(resource.clock.now_ns()):
+        now_ns = resource.clock.now_ns()
+        if not point.may_log(now_ns):
             return
-        shown = []
+        shown: list[str] = []
+        values: dict[str, str] = {}
+        errors: dict[str, str] = {}
         for text, node in point.logged:
             try:
-                shown.append(f"{text} = {evaluate(node, scope)!r}")
+                values[text] = repr(evaluate(node, scope))
+                shown.append(f"{text} = {values[text]}")
             except Refusal as refused:
+                errors[text] = refused.message
                 shown.append(f"{text}: {refused.message}")
-        more = f" ({point.unlogged} more hits not logged)" if point.unlogged else ""
-        point.unlogged = 0
+        unlogged, point.unlogged = point.unlogged, 0
+        more = f" ({unlogged} more hits not logged)" if unlogged else ""
         resource.recorder.record(
             "log",
             f"{point.file}:{point.line} in {program.name}: {', '.join(shown)}{more}",
@@ -392,6 +413,20 @@ class Debugger:
             file=point.file,
             line=point.line,
         )
+        recordings = resource.recordings
+        if recordings is not None and recordings.active:  # and into the recordings running
+            hit = LoggedHit(
+                point.id,
+                program.name,
+                point.file,
+                point.line,
+                values,
+                errors,
+                unlogged,
+                cycle=resource.cycle_count + 1,  # the cycle under way: counted when it ends
+                clock_ns=now_ns,
+            )
+            recordings.logged(hit)
 
     def _stop(
         self,

@@ -1,6 +1,7 @@
 """Recordings of a real runtime process, opened by an MCAP reader nobody here wrote (the
 TypeScript `@mcap/core` under node, tests/support/mcap_reader.cjs): every message, channel,
-schema, the header metadata and the attachments it finds are those our reader finds. And a
+schema, the header metadata and the attachments it finds are those our reader finds (a
+logpoint's messages those the mcap package's reader finds). And a
 runtime killed (SIGKILL) in the middle of a recording, or a file cut at any byte, leaves a
 file both read up to its last whole chunk."""
 
@@ -17,6 +18,8 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from mcap.reader import make_reader
+
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.engineering.resource_client import ResourceClient
@@ -26,12 +29,14 @@ from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.recording import (
     ARTIFACT_ATTACHMENT,
     INPUTS_SCHEMA,
+    LOG_SCHEMA,
     METADATA,
     START_ATTACHMENT,
     VALUES_SCHEMA,
     Recording,
     RecordingHeader,
     inputs_topic,
+    log_topic,
     pick,
     read_recording,
     values_topic,
@@ -70,6 +75,9 @@ high := t.Q;
 held := t.ET;
 END_PROGRAM
 """
+
+
+LOGGED_LINE = PLANT.splitlines().index("history[n MOD 4] := level;") + 1
 
 
 def compiled(source: str, program: str) -> Artifact:
@@ -142,9 +150,11 @@ def same_in_node(path: Path) -> tuple[Recording, dict[str, Any]]:
     assert sorted((s["name"], s["encoding"]) for s in theirs["schemas"]) == [
         (INPUTS_SCHEMA, "jsonschema"),
         (VALUES_SCHEMA, "jsonschema"),
+        (LOG_SCHEMA, "jsonschema"),
     ]
     assert sorted((c["topic"], c["message_encoding"], c["schema"]) for c in theirs["channels"]) == [
         (inputs_topic("Plant"), "json", INPUTS_SCHEMA),
+        (log_topic("Plant"), "json", LOG_SCHEMA),
         (values_topic("Plant"), "json", VALUES_SCHEMA),
     ]
     [values_schema] = [s["data"] for s in theirs["schemas"] if s["name"] == VALUES_SCHEMA]
@@ -160,8 +170,9 @@ def same_in_node(path: Path) -> tuple[Recording, dict[str, Any]]:
     values = theirs["messages"][values_topic("Plant")]
     inputs = theirs["messages"][inputs_topic("Plant")]
     assert values["count"] == len(ours.rows) and inputs["count"] == len(ours.inputs)
+    logged = logpoint_messages(path)
     statistics = theirs["statistics"]
-    assert int(statistics["message_count"]) == len(ours.rows) + len(ours.inputs)
+    assert int(statistics["message_count"]) == len(ours.rows) + len(ours.inputs) + len(logged)
     assert [m["data"]["cycle"] for m in values["all"]] == ours.cycles
     assert [int(m["log_time"]) for m in values["all"]] == ours.times_ns
     assert values["first"]["cycle"] == ours.cycles[0]
@@ -174,7 +185,22 @@ def same_in_node(path: Path) -> tuple[Recording, dict[str, Any]]:
     assert [m["data"]["after"] for m in inputs["all"]] == [
         [list(pair) for pair in i.after] for i in ours.inputs
     ]
+    # the logpoint's messages: the same, at the same log times (their time_ns is the log
+    # time, a number past JavaScript's exact integers)
+    log = theirs["messages"].get(log_topic("Plant"), {"count": 0, "all": []})
+    assert log["count"] == len(logged)
+    assert [m["log_time"] for m in log["all"]] == [str(t) for t, _ in logged]
+    assert [{**m["data"], "time_ns": 0} for m in log["all"]] == [
+        {**m, "time_ns": 0} for _, m in logged
+    ]
     return ours, theirs
+
+
+def logpoint_messages(path: Path) -> list[tuple[int, dict[str, Any]]]:
+    """(log time, message) on the log topic, by the mcap package's reader."""
+    with path.open("rb") as stream:
+        messages = make_reader(stream).iter_messages(topics=[log_topic("Plant")])
+        return [(m.log_time, json.loads(m.data)) for _, _, m in messages]
 
 
 def test_a_recording_with_all_inputs_reads_the_same_in_node(
@@ -188,6 +214,8 @@ def test_a_recording_with_all_inputs_reads_the_same_in_node(
         every = ["Control.*", "level", "alarms", "mode"]
         started = client.ask(p.RecordStart(every, all_inputs=True, rotate_s=1, id="io"))
         assert started.recording.state == "recording" and started.recording.all_inputs
+        logpoint = p.BreakpointSpec(LOGGED_LINE, log=["n", "level", "r.scaled"])
+        assert client.ask(p.DebugSet("plant.st", [logpoint])).debug.breakpoints[0].verified
         # what the programs take from outside: writes, a forced input, forcing ended
         for level in (250, 680, 720, 400):
             time.sleep(0.3)
@@ -197,6 +225,7 @@ def test_a_recording_with_all_inputs_reads_the_same_in_node(
         time.sleep(0.4)
         assert client.command("stop_forcing")["ok"]
         time.sleep(0.5)
+        client.ask(p.DebugClear())
         client.ask(p.RecordStop("io"))
         wait_for("the file finished", lambda: info_of(client, "io").state == "done")
         stopped = info_of(client, "io")
@@ -227,6 +256,14 @@ def test_a_recording_with_all_inputs_reads_the_same_in_node(
         json.dumps(asdict(first.start))
     )
     assert all(not later["attachments"] for _, later in parts[1:])
+
+    # the logpoint's hits, in the files of the time they ran in, with the values it logged
+    logged = [m for path in paths for _, m in logpoint_messages(path)]
+    assert len(logged) >= 20  # its burst at least
+    assert {m["line"] for m in logged} == {LOGGED_LINE}
+    assert all(
+        m["errors"] == {} and list(m["values"]) == ["n", "level", "r.scaled"] for m in logged
+    )
 
     # the run did what the plant did: the writes and the forced level are in the inputs
     inputs = [i for recording in ours for i in recording.inputs]
