@@ -19,6 +19,7 @@ from typing import Any
 from backend.engineering.debug_session import DebugSession, source_name
 from padt.online import Failed, resource_client, run, table
 from runtime.contract import protocol as p
+from runtime.contract.refusal import Refusal
 from runtime.contract.values import format_value
 from runtime.contract.wire import encode
 
@@ -163,6 +164,18 @@ def _verb(name: str, args: argparse.Namespace, act: Callable[[DebugSession], int
     return run(f"debug {name}", args, body)
 
 
+def _still_here(session: DebugSession) -> p.DebugState:
+    """The state, read as a keep-alive where the user's level allows it: a person reading
+    the stack and the variables at a terminal is still debugging (the resource's timeout
+    for a silent client counts from the last debug command that needs read-write)."""
+    try:
+        return session.state(keep=True)
+    except Refusal as refused:
+        if refused.code != "forbidden":
+            raise
+        return session.state()
+
+
 def _stood(session: DebugSession, state: p.DebugState, as_json: bool) -> int:
     """After a command that lets a program run: where it stands now, if it does."""
     if as_json:
@@ -209,7 +222,7 @@ def set_(args: argparse.Namespace) -> int:
 
 def list_(args: argparse.Namespace) -> int:
     def act(session: DebugSession) -> int:
-        state = session.state()
+        state = _still_here(session)
         if args.json:
             _json(encode(state))
         else:
@@ -285,6 +298,7 @@ def run_to(args: argparse.Namespace) -> int:
 
 def stack(args: argparse.Namespace) -> int:
     def act(session: DebugSession) -> int:
+        _still_here(session)
         frames = session.stack(args.program)
         if args.json:
             _json({"frames": encode(frames)})
@@ -297,6 +311,7 @@ def stack(args: argparse.Namespace) -> int:
 
 def vars_(args: argparse.Namespace) -> int:
     def act(session: DebugSession) -> int:
+        _still_here(session)
         variables = session.variables(args.program, args.frame, args.path)
         if args.json:
             _json({"variables": encode(variables)})
@@ -309,11 +324,11 @@ def vars_(args: argparse.Namespace) -> int:
 
 def wait(args: argparse.Namespace) -> int:
     """Until a program stands in BKPT (at once if one does); the session is kept alive
-    meanwhile, so the resource's silent-client timeout does not run out."""
+    meanwhile (read-write), so the resource's silent-client timeout does not run out."""
 
     def act(session: DebugSession) -> int:
-        session.start()
         try:
+            session.start()
             pause = _next_pause(session, args.timeout)
             if pause is None:
                 raise Failed(f"no program entered BKPT within {args.timeout} s")
