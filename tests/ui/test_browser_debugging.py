@@ -183,10 +183,13 @@ def test_a_gutter_breakpoint_stops_the_program_and_the_panel_steps_it(demo: Demo
         click_gutter(page, 22, button="right")
         form = page.locator('[data-testid="breakpoint-form"]')
         form.locator('[data-bp-field="condition"]').fill("level >")
+        shoot_both(page, "debugging-form")
         form.locator('[data-bp-field="condition"]').press("Enter")
         hollow = page.locator('#padt-editor [data-bp-line="22"][data-bp="unverified"]')
         wait_until("an unverified breakpoint", lambda: hollow.count() == 1, timeout_s=STOP_S)
         assert hollow.get_attribute("title"), "its tooltip says why"
+        hollow.hover()
+        shoot_both(page, "debugging-unverified")
         assert "TankControl: RUN" in program_state(page)
         click_gutter(page, 22, button="right")
         page.locator('[data-testid="breakpoint-form"] [data-bp-action="remove"]').click()

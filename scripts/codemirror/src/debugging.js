@@ -262,7 +262,7 @@ export class DebugPanel {
     });
     const condition = box("condition", at && at.condition, "220px", "ST condition, e.g. level > 700");
     const hits = box("hit_count", at && at.hit_count, "70px", "hit no.");
-    const logged = box("log", at && at.log ? at.log.join(", ") : "", "220px", "a logpoint: expressions, by commas");
+    const logged = box("log", at && at.log ? at.log.join(", ") : "", "220px", "a logpoint: x, y");
     const done = () => {
       ed.drawNote();
       setTimeout(() => ed.view.focus(), 0);

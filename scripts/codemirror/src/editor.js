@@ -60,7 +60,7 @@ const theme = EditorView.theme({
   ".padt-bp": { flex: "none", width: "10px", height: "10px", borderRadius: "50%", background: "#e03131", boxSizing: "border-box" },
   ".padt-bp-log": { borderRadius: "2px", transform: "rotate(45deg) scale(0.85)" },
   ".padt-bp-cond": { boxShadow: "inset 0 0 0 2px #ffd8a8" },
-  ".padt-bp-unverified": { background: "transparent", border: "2px solid #adb5bd" },
+  ".padt-bp-unverified": { background: "transparent", border: "2px solid #adb5bd", boxShadow: "none" },
   ".padt-bp-pending": { opacity: "0.5" },
   ".padt-bp-none": { flex: "none", width: "10px" },
   // the arrow where the program stands: a triangle drawn by its borders (no font needed)
