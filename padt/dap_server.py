@@ -73,7 +73,7 @@ class VariableRef:
 
 @dataclass(frozen=True)
 class GlobalsRef:
-    """The resource's global variables ("" ), or the members or elements of one."""
+    """The resource's global variables (path ""), or the members or elements of one."""
 
     path: str
 
@@ -88,13 +88,12 @@ class Attached:
     def __init__(self, client: ResourceClient, debug: DebugSession, project: Path) -> None:
         self.client, self.debug, self.project = client, debug, project
 
-    def close(self, clear: bool) -> None:
-        """`clear`: every breakpoint gone first, so that no program stays in BKPT."""
-        if clear:
-            try:
-                self.debug.clear_all()
-            except (Refusal, ResourceUnreachable) as exc:
-                log.warning("padt dap: breakpoints not cleared: %s", exc)
+    def close(self) -> None:
+        """Every breakpoint gone first, so that no program stays in BKPT."""
+        try:
+            self.debug.clear_all()
+        except (Refusal, ResourceUnreachable) as exc:
+            log.warning("padt dap: breakpoints not cleared: %s", exc)
         self.debug.close()  # its threads end before the session they ask through
         self.client.close()
         self.client.session.close()
@@ -192,7 +191,7 @@ class DapServer:
             attached, self.attached = self.attached, None
         self._wake.set()
         if attached is not None:
-            attached.close(clear=True)
+            attached.close()
 
     # ---- requests
 

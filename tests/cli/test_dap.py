@@ -449,6 +449,15 @@ def test_steps_into_a_method_through_an_interface_and_out_and_a_logpoint_logs(
     client.ask("stepOut", threadId=1)
     stop, frames = stopped_at(client)
     assert [(f["name"], f["line"]) for f in frames] == [("Main", 32)]  # the FOR is next
+    # out of the program itself: to the end of its cycle, where its variables still show
+    client.ask("stepOut", threadId=1)
+    stop, frames = stopped_at(client)
+    assert stop["reason"] == "step" and "end of its program cycle" in stop["description"]
+    assert [(f["name"], f["line"]) for f in frames] == [("Main (end of the program cycle)", 0)]
+    assert locals_of(client, frames[0]["id"])["i"]["value"] == "4"  # the FOR ran out
+    client.ask("next", threadId=1)  # the first statement of the next cycle
+    stop, frames = stopped_at(client)
+    assert [(f["name"], f["line"]) for f in frames] == [("Main", 28)]
 
     # a hit count: from the second pass on (the FOR's i = 2)
     client.ask("setBreakpoints", source=source, breakpoints=[{"line": 33, "hitCondition": "2"}])
