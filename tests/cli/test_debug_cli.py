@@ -241,9 +241,11 @@ def test_step_into_a_method_through_an_interface_and_out(cell: Cell) -> None:
 
 def test_a_breakpoint_in_a_function_and_the_end_of_the_cycle(cell: Cell) -> None:
     cell.ok("debug", "set", "lib/counter.st:11", "--program", "Main")  # Twice := tmp;
-    stopped = cell.ok("debug", "wait", "--timeout", "60").strip()
-    assert stopped.startswith("Main stopped at lib/counter.st:11 in Twice, breakpoint")
-    frames = cell.json("debug", "stack", "Main")["frames"]
+    stopped = cell.json("debug", "wait", "--timeout", "60")
+    where = stopped["paused"]
+    assert (where["program"], where["file"], where["line"]) == ("Main", "lib/counter.st", 11)
+    assert stopped["frames"] == cell.json("debug", "stack", "Main")["frames"]
+    frames = stopped["frames"]
     assert [(f["kind"], f["name"]) for f in frames] == [
         ("function", "Twice"),
         ("function block", "Counter"),
