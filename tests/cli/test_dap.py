@@ -248,12 +248,13 @@ def padt_dap(*options: str, password: str) -> subprocess.Popen[bytes]:
 
 
 @pytest.fixture
-def dap() -> Iterator[Callable[..., DapClient]]:
-    """`padt dap` on stdio for a user: its client, the process ended afterwards."""
+def dap() -> Iterator[Callable[[], DapClient]]:
+    """`padt dap` on stdio with the engineer's password: its client, the process ended
+    afterwards."""
     started: list[subprocess.Popen[bytes]] = []
 
-    def start(user: str = "engineer") -> DapClient:
-        process = padt_dap(password=PASSWORDS[user])
+    def start() -> DapClient:
+        process = padt_dap(password=PASSWORDS["engineer"])
         started.append(process)
         assert process.stdout is not None and process.stdin is not None
         return DapClient(process.stdout, process.stdin, process)
@@ -319,7 +320,7 @@ def runs_on_after_disconnect(client: DapClient, bench: Bench) -> None:
 
 
 def test_a_conditional_breakpoint_stops_one_program_and_shows_its_stack_and_variables(
-    bench: Bench, dap: Callable[..., DapClient]
+    bench: Bench, dap: Callable[[], DapClient]
 ) -> None:
     client = dap()
     capabilities = attached(client, bench)["capabilities"]
@@ -428,7 +429,7 @@ def test_a_conditional_breakpoint_stops_one_program_and_shows_its_stack_and_vari
 
 
 def test_steps_into_a_method_through_an_interface_and_out_and_a_logpoint_logs(
-    bench: Bench, dap: Callable[..., DapClient]
+    bench: Bench, dap: Callable[[], DapClient]
 ) -> None:
     client = dap()
     attached(client, bench)
@@ -479,7 +480,7 @@ def test_steps_into_a_method_through_an_interface_and_out_and_a_logpoint_logs(
 
 
 def test_a_malformed_message_gets_an_error_response_and_the_adapter_goes_on(
-    bench: Bench, dap: Callable[..., DapClient]
+    bench: Bench, dap: Callable[[], DapClient]
 ) -> None:
     client = dap()
 
@@ -566,7 +567,7 @@ def connected(port: int) -> socket.socket:
 
 
 def test_the_client_is_told_when_the_resource_goes_away(
-    tmp_path: Path, dap: Callable[..., DapClient]
+    tmp_path: Path, dap: Callable[[], DapClient]
 ) -> None:
     project = tmp_path / "project"
     project.mkdir()
