@@ -7,7 +7,6 @@ builds is turned into typed AST dataclasses right away so that no later stage se
 from __future__ import annotations
 
 import datetime
-import fractions
 import functools
 import re
 import threading
@@ -40,17 +39,7 @@ from backend.compiler.limits import (
     MAX_STRING_LITERAL,
 )
 from backend.compiler.source import Pos
-
-_UNIT_NS = {
-    "D": 86_400_000_000_000,
-    "H": 3_600_000_000_000,
-    "M": 60_000_000_000,
-    "S": 1_000_000_000,
-    "MS": 1_000_000,
-    "US": 1_000,
-    "NS": 1,
-}
-_TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(D|H|MS|M|S|US|NS)", re.IGNORECASE)
+from runtime.contract.values import parse_time_literal
 
 
 @functools.cache
@@ -85,19 +74,6 @@ def nested_comment(depth: int) -> str:
 # the language services parse from several threads).
 _PRAGMAS: list[Token] = []
 _LEXING = threading.Lock()
-
-
-def parse_time_literal(text: str) -> tuple[int, bool]:
-    """`T#1h2m3.5s` -> (nanoseconds, is_LTIME)."""
-    prefix, _, body = text.partition("#")
-    negative = body.startswith("-")
-    body = body.lstrip("-")
-    total = 0
-    for number, unit in _TIME_PART.findall(body):
-        # exact decimal arithmetic: LT#123456789.123456789s must keep its last nanosecond
-        value = fractions.Fraction(number.replace("_", ""))
-        total += round(value * _UNIT_NS[unit.upper()])
-    return (-total if negative else total), prefix.upper() in ("LT", "LTIME")
 
 
 _EPOCH = datetime.datetime(1970, 1, 1)

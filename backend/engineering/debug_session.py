@@ -44,13 +44,15 @@ class DebugSession:
     # ---- life
 
     def start(self) -> p.DebugState:
-        """Follow the resource's status and keep the session alive; the state now."""
+        """Follow the resource's status and keep the session alive; the state now. A
+        refusal (a user below read-write) leaves nothing running."""
+        state = self.state(keep=True)
         self.client.on_status(self._status)
         for work, name in ((self._keep_alive, "padt-debug"), (self._tell, "padt-debug-stops")):
             thread = threading.Thread(target=work, name=name, daemon=True)
             thread.start()
             self._threads.append(thread)
-        return self.state(keep=True)
+        return state
 
     def close(self) -> None:
         """Stop the keep-alive; the breakpoints stay until `clear_all` or the resource's

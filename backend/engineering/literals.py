@@ -16,10 +16,15 @@ from backend.compiler.parse import (
     decode_string_literal,
     parse_date_literal,
     parse_int_literal,
-    parse_time_literal,
 )
 from runtime.contract.protocol import WatchValues
-from runtime.contract.values import TIME_TYPES, base_type, format_value, is_reference_type
+from runtime.contract.values import (
+    TIME_TYPES,
+    base_type,
+    format_value,
+    is_reference_type,
+    parse_time_literal,
+)
 from runtime.contract.wire import encode
 
 

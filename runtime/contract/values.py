@@ -7,6 +7,7 @@ people (IEC literals: TRUE, T#1s500ms, not Python reprs).
 
 from __future__ import annotations
 
+import fractions
 import itertools
 import math
 import re
@@ -58,6 +59,24 @@ _TIME_UNITS = (
     ("d", 86_400_000_000_000), ("h", 3_600_000_000_000), ("m", 60_000_000_000),
     ("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000), ("ns", 1),
 )  # fmt: skip
+
+
+_UNIT_NS = {unit.upper(): size for unit, size in _TIME_UNITS}
+_TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(D|H|MS|M|S|US|NS)", re.IGNORECASE)
+
+
+def parse_time_literal(text: str) -> tuple[int, bool]:
+    """`T#1h2m3.5s` -> (nanoseconds, is_LTIME): what the compiler and a debugger's
+    conditions read a duration literal as."""
+    prefix, _, body = text.partition("#")
+    negative = body.startswith("-")
+    body = body.lstrip("-")
+    total = 0
+    for number, unit in _TIME_PART.findall(body):
+        # exact decimal arithmetic: LT#123456789.123456789s must keep its last nanosecond
+        value = fractions.Fraction(number.replace("_", ""))
+        total += round(value * _UNIT_NS[unit.upper()])
+    return (-total if negative else total), prefix.upper() in ("LT", "LTIME")
 
 
 def format_time(ns: int, prefix: str = "T#") -> str:

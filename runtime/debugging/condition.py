@@ -15,15 +15,18 @@ from dataclasses import dataclass
 from typing import Any
 
 from runtime.contract.refusal import Refusal
+from runtime.contract.values import format_value, parse_time_literal
 from runtime.debugging.scope import Names, Typed, element
 
 _TOKEN = re.compile(
     r"\s*(?:(?P<real>\d[\d_]*\.\d[\d_]*(?:[eE][+-]?\d+)?|\d[\d_]*[eE][+-]?\d+)"
     r"|(?P<int>(?:2#[01_]+|8#[0-7_]+|16#[0-9A-Fa-f_]+|\d[\d_]*))"
+    r"|(?P<time>(?:LTIME|TIME|LT|T)#-?[0-9][0-9_.A-Za-z]*)"
     r"|(?P<string>'(?:[^'$]|\$.)*')"
     r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
     r"|(?P<op><=|>=|<>|[-+*/=<>()\[\].,&]))"
 )
+_TIME_PREFIXES = {"T", "TIME", "LT", "LTIME"}
 _WORDS = {"AND", "OR", "XOR", "NOT", "MOD", "TRUE", "FALSE"}
 _LEVELS: tuple[tuple[str, ...], ...] = (
     ("OR",),
@@ -37,7 +40,7 @@ _LEVELS: tuple[tuple[str, ...], ...] = (
 
 @dataclass(frozen=True)
 class Node:
-    op: str  # "const", "var", "member", "index", "not", "neg", or a binary operator
+    op: str  # "const", "time", "var", "member", "index", "not", "neg", or a binary operator
     args: tuple[Any, ...]
 
 
@@ -113,6 +116,8 @@ class _Parser:
             return node
         if upper in ("TRUE", "FALSE"):
             return Node("const", (upper == "TRUE",))
+        if "#" in token and token.split("#")[0].upper() in _TIME_PREFIXES:
+            return Node("time", (parse_time_literal(token)[0],))
         if token[0].isdigit():
             return Node("const", (_number(token),))
         if token.startswith("'"):
@@ -178,6 +183,18 @@ def locate(path: str, names: Names) -> Typed:
     return found
 
 
+def literal_of(node: Node, scope: Names) -> str:
+    """The value of an expression as an ST literal (TRUE, T#1s500ms, 'text'): a variable's
+    by its type, anything else by its Python type."""
+    try:
+        found = _evaluate(node, scope)
+    except (ArithmeticError, TypeError, ValueError) as exc:
+        raise Refusal("bad_value", f"cannot evaluate: {exc}") from None
+    if isinstance(found, Typed):
+        return format_value(found.value, found.type)
+    return format_value(found, "LREAL" if isinstance(found, float) else "")
+
+
 def _plain(value: Any) -> Any:
     return value.value if isinstance(value, Typed) else value
 
@@ -186,6 +203,8 @@ def _evaluate(node: Node, scope: Names) -> Any:
     op, args = node.op, node.args
     if op == "const":
         return args[0]
+    if op == "time":  # typed, so that it is shown as the literal it is
+        return Typed(args[0], "TIME", None)
     if op == "var":
         return scope.lookup(args[0])
     if op == "member":

@@ -23,7 +23,7 @@ from runtime.contract.recording import LoggedHit
 from runtime.contract.refusal import Refusal
 from runtime.debugging import frames as stack
 from runtime.debugging.breakpoints import Breakpoint, Resolution, resolve
-from runtime.debugging.condition import evaluate, locate
+from runtime.debugging.condition import evaluate, literal_of, locate
 from runtime.debugging.scope import FrameScope, Typed, VariableTable
 from runtime.debugging.statements import StatementMap
 from runtime.debugging.tracer import DebugRun, ProgramTracer
@@ -397,7 +397,7 @@ class Debugger:
         errors: dict[str, str] = {}
         for text, node in point.logged:
             try:
-                values[text] = repr(evaluate(node, scope))
+                values[text] = literal_of(node, scope)
                 shown.append(f"{text} = {values[text]}")
             except Refusal as refused:
                 errors[text] = refused.message

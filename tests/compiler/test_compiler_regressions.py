@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from backend.compiler.parse import parse_time_literal
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.engineering.project import compile_project, load_project
 from runtime.clock import VirtualClock
+from runtime.contract.values import parse_time_literal
 from runtime.resource import Resource
 
 

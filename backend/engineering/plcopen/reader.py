@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import re
 
-from backend.compiler.parse import parse_time_literal
 from backend.engineering.plcopen.issues import ImportCode, ImportFailed
 from backend.engineering.plcopen.model import (
     Accessor,
@@ -31,6 +30,7 @@ from backend.engineering.plcopen.model import (
 )
 from backend.engineering.plcopen.sfc import SfcProblem, sfc_text
 from backend.engineering.plcopen.xml_tree import Element, st_source
+from runtime.contract.values import parse_time_literal
 
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 ADDRESS = re.compile(r"%[IQM][XBWDL]?([0-9]+(\.[0-9]+)*|\*)\Z", re.IGNORECASE)

@@ -255,6 +255,19 @@ def test_a_logpoint_records_without_stopping_and_is_rate_bounded() -> None:
     assert any("more hits not logged" in message for message in logged)
 
 
+def test_conditions_read_time_literals_and_logpoints_show_st_literals() -> None:
+    resource = running(artifact(), None)
+    debug_set(
+        resource,
+        p.BreakpointSpec(33, condition="T#1s500ms > T#1s AND i >= 2"),
+        p.BreakpointSpec(28, log=["n > 5", "T#2s", "3.5", "a.total"]),
+    )
+    cycles(resource, 1)
+    assert paused(resource) == p.DebugPause("Main", "Main", FILE, 33, "breakpoint", 1)
+    logged = [e.message for e in resource.events.recent(0, 1000) if e.kind == "log"]
+    assert logged == [f"{FILE}:28 in Main: n > 5 = FALSE, T#2s = T#2s, 3.5 = 3.5, a.total = 0"]
+
+
 def test_a_silent_client_lets_the_program_continue() -> None:
     resource = running(artifact(), None)
     ask(resource, p.DebugOptions(5))
