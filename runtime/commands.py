@@ -182,7 +182,7 @@ HANDLERS: dict[type[p.Command[Any]], Handler] = {
     p.DebugContinue: _debug(lambda r, c: r.debugger.continue_(r, c.program)),
     p.DebugStep: _debug(lambda r, c: r.debugger.step(r, c.program, c.kind)),
     p.DebugRunTo: _debug(lambda r, c: r.debugger.run_to(r, c.program, c.file, c.line)),
-    p.DebugOptions: _debug(lambda r, c: r.debugger.set_timeout(r, c.timeout_s)),
+    p.DebugOptions: _debug(lambda r, c: r.debugger.set_timeout(r, c.silent_s)),
     p.DebugStack: lambda r, c: p.StackReply(r.debugger.frames(c.program)),
     p.DebugVariables: lambda r, c: p.DebugVariablesReply(
         r.debugger.variables(c.program, c.frame, c.path)

@@ -944,7 +944,10 @@ class DebugVariables(Command[DebugVariablesReply], name="debug_variables", level
 
 @dataclass(frozen=True)
 class DebugOptions(Command[DebugReply], name="debug_options", level="read-write"):
-    timeout_s: Annotated[int, Range(MIN_DEBUG_TIMEOUT_S, MAX_DEBUG_TIMEOUT_S)]
+    """How long a debugging client may stay silent before the program continues by itself
+    (not `timeout_s`: clients take that name for how long they wait for a reply)."""
+
+    silent_s: Annotated[int, Range(MIN_DEBUG_TIMEOUT_S, MAX_DEBUG_TIMEOUT_S)]
 
 
 # ---- requests and replies on the wire

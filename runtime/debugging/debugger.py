@@ -24,9 +24,10 @@ from runtime.contract.refusal import Refusal
 from runtime.debugging import frames as stack
 from runtime.debugging.breakpoints import Breakpoint, Resolution, resolve
 from runtime.debugging.condition import evaluate, literal_of, locate
+from runtime.debugging.entry_points import TracedEntries
 from runtime.debugging.scope import FrameScope, Typed, VariableTable
 from runtime.debugging.statements import StatementMap
-from runtime.debugging.tracer import DebugRun, ProgramTracer
+from runtime.debugging.tracer import DebugRun, ProgramTracer, TraceState
 from runtime.event_recorder import EventRecorder
 from runtime.forcing import Forcing
 from runtime.process_image import ProcessImage
@@ -94,6 +95,7 @@ class Pause:
 
 @dataclass(frozen=True)
 class Stepping:
+    program: UserProgram  # the program that steps (others run through)
     kind: str  # "over", "into", "out", "cycle", "to"
     depth: int  # frames of generated code on the stack where the step began
     target: tuple[frozenset[str], int] | None = None  # "to": the code files and ST line
@@ -146,6 +148,8 @@ class Debugger:
         self._at: dict[tuple[str, int], list[Breakpoint]] = {}  # by (code file, ST line)
         self._files: set[str] = set()  # code files with an armed breakpoint
         self._resource: Resource | None = None
+        self._trace = TraceState()  # shared with the debug runs and the traced entries
+        self._entries = TracedEntries()
 
     # ---- state
 
@@ -175,8 +179,14 @@ class Debugger:
         if specs and resource.variables.code is None:
             raise Refusal("state", "the resource has no configuration to debug")
         user = resource.recorder.acting_user
+        kept = list(self.points.get(file, []))
         points = []
         for spec in specs:
+            same = next((point for point in kept if point.spec == spec), None)
+            if same is not None:  # sent again unchanged: its id and hits stay
+                kept.remove(same)
+                points.append(same)
+                continue
             points.append(Breakpoint(self._next_id, file, spec, user))
             self._next_id += 1
         if points:
@@ -204,10 +214,10 @@ class Debugger:
         pause = self._paused(name)
         program = pause.program
         if pause.frame is None:  # at the end of a cycle: to the first statement of the next
-            self.stepping = Stepping("cycle" if kind == "cycle" else "into", 0)
+            self.stepping = Stepping(program, "cycle" if kind == "cycle" else "into", 0)
         else:
             depth = len(stack.code_frames(pause.frame, self._loaded().statements))
-            self.stepping = Stepping(kind, depth)
+            self.stepping = Stepping(program, kind, depth)
         self.pause = None
         program.state = ProgramState.RUN
         program.last_start_ns = None  # its time advances one cycle, as in single step
@@ -234,7 +244,7 @@ class Debugger:
         at = statements.statement_at(file, line)
         if at == 0:
             raise Refusal("bad_value", f"no statement at or after {file}:{line}")
-        self.stepping = Stepping("to", 0, (statements.code_files(file, at), at))
+        self.stepping = Stepping(pause.program, "to", 0, (statements.code_files(file, at), at))
         self._continue(resource, pause, f"runs to {file}:{at}")
 
     def set_timeout(self, resource: Resource, seconds: int) -> None:
@@ -297,7 +307,9 @@ class Debugger:
             paused = self.pause is not None and self.pause.program is program
             program.debug_run = self._run_for(program, code) if wanted or paused else None
         code_image = resource.variables.code
+        self._entries.remove()
         code_image.run_as_python(bool(armed) or self.pause is not None)
+        self._entries.install(code_image, self._files, self._trace)
         if self._at and not self.heard_ns:
             self.heard(resource)
 
@@ -331,10 +343,13 @@ class Debugger:
     def traced(self, filename: str) -> bool:
         return self.stepping is not None or filename in self._files
 
+    def stepping_program(self, program: UserProgram) -> bool:
+        return self.stepping is not None and self.stepping.program is program
+
     def statement(self, program: UserProgram, frame: FrameType, filename: str, line: int) -> bool:
         if self.pause is not None:  # another program stands in BKPT: one at a time
             return False
-        stepping = self.stepping
+        stepping = self.stepping if self.stepping_program(program) else None
         stop: tuple[str, int | None] | None = None
         if stepping is not None and stepping.kind != "cycle":
             stop = self._step_ends(stepping, frame, filename, line)
@@ -443,6 +458,7 @@ class Debugger:
         self.stepping = None
         program.state = ProgramState.BKPT
         program.cpu_cycles = 0  # its program watchdog is held while it stands
+        self._trace.throughout = True  # the rest of its cycle is traced, callers too
         run = program.run
         if isinstance(run, DebugRun):
             run.tracer.trace_stack(frame)
@@ -507,7 +523,8 @@ class Debugger:
 
     def _run_for(self, program: UserProgram, code: _Code) -> Callable[[Any], DebugRun]:
         tracer = ProgramTracer(_ProgramStatements(self, program), code.lines)
-        return lambda body: DebugRun(body, tracer)
+        state = self._trace
+        return lambda body: DebugRun(body, tracer, state)
 
 
 @dataclass(frozen=True)
@@ -522,3 +539,6 @@ class _ProgramStatements:
 
     def statement(self, frame: FrameType, filename: str, line: int) -> bool:
         return self.debugger.statement(self.program, frame, filename, line)
+
+    def stepping(self) -> bool:
+        return self.debugger.stepping_program(self.program)

@@ -3,13 +3,16 @@ begin (the first generated line of a different ST line in the same frame) and as
 debugger whether to stop there; to stop it switches from the program's greenlet back to
 whoever resumed it (the CPU cycle, or a step command), which resumes it later.
 
-Only code of the resource's units is traced, and a frame only when a breakpoint is armed
-in its unit or a step is under way; other calls cost the tracer one dictionary test."""
+Tracing is on only inside the POUs with an armed point (their entry points turn it on:
+`traced_entry`), and for a whole program cycle once it has stopped or while it steps; a
+frame gets a line tracer only when a point is armed in its unit or a step is under way."""
 
 from __future__ import annotations
 
+import functools
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass
 from types import FrameType
 from typing import Any, Protocol
 
@@ -29,6 +32,10 @@ class StatementHandler(Protocol):
 
     def statement(self, frame: FrameType, filename: str, line: int) -> bool:
         """A statement at ST `line` begins in `frame`: True to stop before it."""
+        ...
+
+    def stepping(self) -> bool:
+        """Whether this program steps: all its code is to be traced."""
         ...
 
 
@@ -67,6 +74,9 @@ class ProgramTracer:
             return None
         return LineTracer(self._handler, filename, lines)
 
+    def stepping(self) -> bool:
+        return self._handler.stepping()
+
     def trace_stack(self, frame: FrameType) -> None:
         """Trace every frame of generated code on the stack from `frame` outwards (frames
         entered while nothing was armed in their code have no local tracer; a step out of
@@ -83,18 +93,55 @@ class ProgramTracer:
             current = current.f_back
 
 
-class DebugRun(ProgramRun):
-    """A program cycle that runs traced; it stops (returns False from `resume`) at a
-    breakpoint or a step's end, as a time slice does when it is used up."""
+@dataclass
+class TraceState:
+    """Which program's debug run runs now (its tracer), and whether all of it is traced:
+    once it has stopped or while it steps. Otherwise only the POUs with an armed point
+    trace themselves (`traced_entry`)."""
 
-    def __init__(self, body: Callable[[], object], tracer: ProgramTracer) -> None:
+    running: ProgramTracer | None = None
+    throughout: bool = False
+
+
+class DebugRun(ProgramRun):
+    """A program cycle that may stop (`resume` returns False) at a breakpoint or a step's
+    end, as a time slice does when it is used up."""
+
+    def __init__(
+        self, body: Callable[[], object], tracer: ProgramTracer, state: TraceState
+    ) -> None:
         super().__init__(body)
-        self.tracer = tracer
+        self.tracer, self._state = tracer, state
+        self.stopped = False  # it has stopped in this program cycle: traced to its end
 
     def resume(self) -> bool:
-        previous = sys.gettrace()
-        sys.settrace(self.tracer)
+        state, previous = self._state, sys.gettrace()
+        state.running = self.tracer
+        state.throughout = self.stopped or self.tracer.stepping()
+        if state.throughout:
+            sys.settrace(self.tracer)
         try:
-            return super().resume()
+            done = super().resume()
+            self.stopped = self.stopped or not done
+            return done
         finally:
             sys.settrace(previous)
+            state.running, state.throughout = None, False
+
+
+def traced_entry(code: Callable[..., Any], state: TraceState) -> Callable[..., Any]:
+    """`code` (a block's body or method, a FUNCTION) tracing itself and what it calls while
+    a debug run runs: a breakpoint in a POU costs the programs only inside that POU."""
+
+    @functools.wraps(code)
+    def entry(*args: Any, **kwargs: Any) -> Any:
+        tracer = state.running
+        if tracer is None or sys.gettrace() is not None:
+            return code(*args, **kwargs)
+        sys.settrace(tracer)
+        try:
+            return code(*args, **kwargs)
+        finally:  # a stop inside: the caller's statements are traced from here on
+            sys.settrace(tracer if state.throughout else None)
+
+    return entry

@@ -192,6 +192,11 @@ WELL_FORMED: dict[str, dict[str, Any]] = {
     "record_stop": {"id": "r1"},
     "record_read": {"file": "r1-1.mcap"},
     "record_delete": {"id": "r1"},
+    "debug_set": {"file": "p.st", "breakpoints": [{"line": 3}]},
+    **{name: {"program": "P"} for name in ("debug_continue", "debug_step", "debug_stack")},
+    "debug_variables": {"program": "P"},
+    "debug_run_to": {"program": "P", "file": "p.st", "line": 3},
+    "debug_options": {"silent_s": 60},
 }
 
 

@@ -214,6 +214,9 @@ def test_hit_count_and_writes_at_a_break(tier: NativeTier | None) -> None:
     i = {v.name: v.value for v in ask(resource, p.DebugVariables("Main", 0)).variables}["i"]
     assert i == 2  # the fifth pass: the second of the second cycle
     assert ask(resource, p.DebugGet()).debug.breakpoints[0].hits == 5
+    # the file's points sent again with one more: the first keeps its id and its hits
+    again = debug_set(resource, p.BreakpointSpec(33, hit_count=5), p.BreakpointSpec(28))
+    assert [(b.id, b.hits) for b in again.breakpoints] == [(1, 5), (2, 0)]
     online_writes.write(resource, "Main.n", 1000)  # writes are allowed at a break
     ask(resource, p.DebugStep("Main", "over"))
     n = {v.name: v.value for v in ask(resource, p.DebugVariables("Main", 0)).variables}["n"]
