@@ -147,7 +147,7 @@ def bench_armed(cycles: int = 2_000) -> None:
     print(f"  nothing armed (Python tier, this process):            {plain:8,.1f} us per cycle")
     print(
         f"  a breakpoint armed in a POU it never calls:           {elsewhere:8,.1f} us "
-        f"({elsewhere / plain:.2f}x: the program runs under the tracer)"
+        f"({elsewhere / plain:.2f}x: nothing traced until it enters that POU)"
     )
     print(
         f"  a breakpoint on one of its lines, condition FALSE:    {never:8,.1f} us "
