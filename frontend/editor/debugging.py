@@ -10,7 +10,7 @@ page as one message when it differs from what the page was sent last."""
 
 from __future__ import annotations
 
-import logging
+import contextlib
 import threading
 import time
 from collections.abc import Callable
@@ -25,8 +25,6 @@ from frontend.permissions import Allowed
 from runtime.contract import protocol as p
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import format_for_display
-
-log = logging.getLogger("padt.ui")
 
 LOOK_S = 2.0  # the breakpoints' hits and verdicts read again this often while any is set
 MAX_SHOWN = 2000  # variables listed (expanded members included)
@@ -87,8 +85,11 @@ class EditorDebugging:
                 self._changed += 1
             key = _status_key(target)
             now = time.monotonic()
-            armed = self._seen.state is not None and bool(self._seen.state.breakpoints)
-            due = armed and now - self._looked >= LOOK_S
+            # while breakpoints are set (their hits), and after a refusal (a login since?)
+            again = self._seen.error or (
+                self._seen.state is not None and bool(self._seen.state.breakpoints)
+            )
+            due = bool(again) and now - self._looked >= LOOK_S
             if target is not None and not target.runs and (key != self._status_key or due):
                 self._status_key, self._looked = key, now
                 self._work.submit("look", self._look)
@@ -187,7 +188,8 @@ class EditorDebugging:
             self._started.discard(target.resource)
         if changing and target.resource not in self._started:
             self._started.add(target.resource)  # its threads run from here on, answered or not
-            session.start()
+            with contextlib.suppress(Refusal, ResourceUnreachable):
+                session.start()  # refused or unanswered: the command that follows says why
         return session
 
     def _asking(self, what: str, command: Callable[[], p.DebugState]) -> None:
@@ -345,8 +347,9 @@ def _in_bkpt(status: p.Status | None) -> list[str]:
 
 
 def _status_key(target: Target | None) -> tuple[object, ...]:
-    """What, in the resource's status, says the debug state may have changed."""
+    """What, in the resource's status, says the debug state may have changed (or that it
+    may be read now: the editor's project is found to be the running one, a login)."""
     if target is None or target.status is None:
         return ()
     programs = tuple((x.name, x.state, x.paused_at) for x in target.status.programs)
-    return (target.resource, target.status.crc, programs)
+    return (target.resource, target.runs, target.allowed, target.status.crc, programs)

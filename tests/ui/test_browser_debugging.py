@@ -6,7 +6,8 @@ button, then F10) moves the lit line to the next statement; Run to cursor, Step 
 block's call (the caller's frame chosen: its line and variables), Step out; with the
 breakpoint removed,
 Continue runs on: the lit line goes and the program is back in RUN. A user who may only
-read at the resource sets no breakpoint and finds the steps disabled, with the reason."""
+read at the resource sees the breakpoints another engineer set, sets none and finds the
+steps disabled, with the reason."""
 
 from __future__ import annotations
 
@@ -48,15 +49,19 @@ def paused_line(page: Page) -> int:
     return line
 
 
-def lit_text(page: Page) -> str:
-    """The text of the line lit as the one the program stands at ("" when none is), without
-    the live values shown at its end."""
-    lit = page.locator('#padt-editor .cm-line[data-lit="paused"]')
-    if not lit.count():
-        return ""
-    text: str = lit.first.evaluate(
-        "line => Array.from(line.childNodes).filter(n => !n.classList ||"
-        " !n.classList.contains('padt-live')).map(n => n.textContent).join('')"
+def lit_text(page: Page, kind: str = "paused") -> str:
+    """The text of the line lit as the one the program stands at (`frame`: the chosen
+    frame's), without the live values at its end; "" when none is. Read at once: the line
+    may be drawn anew at any moment."""
+    text: str = page.evaluate(
+        """kind => {
+          const root = document.querySelector('#padt-editor').shadowRoot;
+          const line = root.querySelector(`.cm-line[data-lit="${kind}"]`);
+          if (!line) return "";
+          return Array.from(line.childNodes).filter(n => !n.classList ||
+            !n.classList.contains('padt-live')).map(n => n.textContent).join('');
+        }""",
+        kind,
     )
     return text
 
@@ -75,6 +80,14 @@ def click_gutter(page: Page, line: int, button: str = "left") -> None:
     assert row is not None and gutter is not None
     x, y = gutter["x"] + gutter["width"] / 2, row["y"] + row["height"] / 2
     page.mouse.click(x, y, button="right" if button == "right" else "left")
+
+
+def told(page: Page) -> str:
+    """The debug state the page was sent last and what the editor said last."""
+    text: str = page.evaluate(
+        "JSON.stringify([window.padtEditor.debug.state, window.padtEditor.status.textContent])"
+    )
+    return text
 
 
 def program_state(page: Page) -> str:
@@ -104,7 +117,10 @@ def test_a_gutter_breakpoint_stops_the_program_and_the_panel_steps_it(demo: Demo
         click_gutter(page, LINE)
         dot = page.locator(f'#padt-editor [data-bp-line="{LINE}"][data-bp="verified"]')
         wait_until("the breakpoint is armed", lambda: dot.count() == 1, timeout_s=STOP_S)
-        wait_until("TankControl stops at it", lambda: paused_line(page) == LINE, timeout_s=STOP_S)
+        try:
+            wait_until("TankControl stops", lambda: paused_line(page) == LINE, timeout_s=STOP_S)
+        except AssertionError as never:  # what the page knew, for whoever reads the failure
+            raise AssertionError(f"{never}; the page: {told(page)}") from None
         wait_until(
             "its line is lit", lambda: lit_text(page) == line_text(page, LINE), timeout_s=STOP_S
         )
@@ -148,11 +164,7 @@ def test_a_gutter_breakpoint_stops_the_program_and_the_panel_steps_it(demo: Demo
             "TankControl below", lambda: "tank.st:25" in text_of(page, f'{stack} [data-frame="1"]')
         )
         page.locator(f'{stack} [data-frame="1"]').click()
-        frame_line = page.locator('#padt-editor .cm-line[data-lit="frame"]')
-        wait_until(
-            "its line is lit",
-            lambda: frame_line.count() == 1 and "refillDelay(IN" in frame_line.inner_text(),
-        )
+        wait_until("its line is lit", lambda: lit_text(page, "frame") == line_text(page, 25))
         wait_until("its variables listed", lambda: page.locator(level).count() == 1)
         page.locator('#padt-editor [data-debug="out"]').click()
         wait_until("Step out: back in TankControl", lambda: paused_line(page) == 26)
@@ -197,6 +209,9 @@ def test_a_gutter_breakpoint_stops_the_program_and_the_panel_steps_it(demo: Demo
 
 
 def test_a_user_who_may_only_read_sets_no_breakpoint(plant: Plant) -> None:
+    plant.client.login("admin", PASSWORD)  # another engineer's breakpoint, never hit
+    spec = p.BreakpointSpec(22, condition="level > 30000")
+    plant.client.ask(p.DebugSet("tank.st", [spec]))
     with chromium() as browser:
         page = browser.new_page(viewport={"width": 1400, "height": 900})
         open_as(page, plant, "viewer")  # read-write on the PADT, read at the resource
@@ -207,12 +222,14 @@ def test_a_user_who_may_only_read_sets_no_breakpoint(plant: Plant) -> None:
         wait_until(
             "the panel says why", lambda: reason in text_of(page, '[data-testid="debug-reason"]')
         )
+        theirs = page.locator('#padt-editor [data-bp-line="22"][data-bp="verified"]')
+        wait_until("the other engineer's breakpoint shows", lambda: theirs.count() == 1)
         for action in ("continue", "over", "into", "out", "cycle", "run_to"):
             button = page.locator(f'#padt-editor [data-debug="{action}"]')
             assert button.is_disabled() and reason in (button.get_attribute("title") or "")
         click_gutter(page, LINE)
         status = '[data-testid="editor-status"]'
         wait_until("the click is answered with the reason", lambda: reason in text_of(page, status))
-        assert page.locator("#padt-editor [data-bp-line]").count() == 0
-        plant.client.login("viewer", PASSWORD)
-        assert plant.client.ask(p.DebugGet()).debug.breakpoints == []  # none reached it
+        assert page.locator(f'#padt-editor [data-bp-line="{LINE}"]').count() == 0
+        armed = plant.client.ask(p.DebugGet()).debug.breakpoints
+        assert [(b.file, b.line) for b in armed] == [("tank.st", 22)]  # none came from the page

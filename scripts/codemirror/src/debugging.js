@@ -56,7 +56,7 @@ class DebugMarker extends GutterMarker {
       if (!b.verified) kinds.push("padt-bp-unverified");
       if (b.pending) kinds.push("padt-bp-pending");
       box.append(el("span", {
-        class: kinds.join(" "), "data-bp-line": String(b.shown), "data-bp": b.verified ? "verified" : "unverified",
+        class: kinds.join(" "), "data-bp-line": String(b.shown), "data-bp": b.pending ? "pending" : b.verified ? "verified" : "unverified",
         title: describe(b),
       }));
     }
