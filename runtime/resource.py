@@ -360,9 +360,11 @@ class Resource:
 
     @property
     def shown_state(self) -> ResourceState:
-        """RUN/UP STOP when the resource runs but none of its programs does."""
+        """RUN/UP STOP when the resource runs but none of its programs does (one held by
+        single step or at a breakpoint counts as running)."""
         if self.state == ResourceState.RUN and not any(
-            p.state in (ProgramState.RUN, ProgramState.RUN_FREEZE) for p in self.programs
+            p.state in (ProgramState.RUN, ProgramState.RUN_FREEZE, ProgramState.BKPT)
+            for p in self.programs
         ):
             return ResourceState.RUN_UP_STOP
         return self.state

@@ -153,6 +153,7 @@ def test_a_breakpoint_for_one_instance_stops_only_there(tier: NativeTier | None)
     assert shown["step"].value == 2 and shown["step"].path == "Main.b.step"
     status = program(resource, "Main")
     assert status.state == ProgramState.BKPT and status.paused_at == f"{FILE}:17 (POU Counter)"
+    assert resource.status().state == p.ResourceState.RUN  # held, not stopped
     # the other program runs on while Main stands
     before = program(resource, "Other").cycles
     cycles(resource, 5)
