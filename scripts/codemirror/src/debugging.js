@@ -162,7 +162,9 @@ export class DebugPanel {
       if (p.line > 0) this.show(p.file, p.line, p.pou);
     }
     this.apply();
-    ed.drawBottom();
+    // a timeout being typed is not drawn over (the panel follows when the field is left)
+    if (this.timeoutBox && ed.shadow.activeElement === this.timeoutBox) this.later = true;
+    else ed.drawBottom();
   }
 
   serverItems(file) {
@@ -362,6 +364,13 @@ export class DebugPanel {
     const right = el("div", { style: "flex:3;min-width:200px;overflow:auto" }, this.variableTable());
     const columns = el("div", { style: "display:flex;flex:1;min-height:0;border-top:1px solid #dee2e6" }, left, right);
     root.append(where, bar, columns);
+    // drawn anew at each change (a logpoint's hits): the lists stay where they were scrolled
+    const [top, down] = [this.left ? this.left.scrollTop : 0, this.right ? this.right.scrollTop : 0];
+    [this.left, this.right] = [left, right];
+    queueMicrotask(() => {
+      left.scrollTop = top;
+      right.scrollTop = down;
+    });
     return root;
   }
 
@@ -384,7 +393,14 @@ export class DebugPanel {
       if (e.key === "Enter") set();
     });
     box.addEventListener("change", set);
+    box.addEventListener("blur", () => {
+      if (this.later) {
+        this.later = false;
+        setTimeout(() => this.editor.drawBottom(), 0);
+      }
+    });
     box.disabled = !m.allowed;
+    this.timeoutBox = box;
     return el("span", { style: "margin-left:auto;color:#495057;white-space:nowrap" }, "Continues by itself after ", box, " s without a debugger");
   }
 
