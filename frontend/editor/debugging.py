@@ -309,7 +309,8 @@ def _rows(
         is_open = v.children and path in found
         value = "" if v.children else format_for_display(v.value, v.type)
         rows.append({"name": v.name, "type": v.type, "value": value, "path": path,
-                     "children": v.children, "open": is_open, "depth": depth})  # fmt: skip
+                     "children": v.children, "open": is_open, "depth": depth,
+                     "resource_path": v.path})  # fmt: skip
         if is_open:
             _rows(found, path, depth + 1, rows)
     return rows

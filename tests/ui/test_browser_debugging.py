@@ -138,6 +138,8 @@ def test_a_gutter_breakpoint_stops_the_program_and_the_panel_steps_it(demo: Demo
         wait_until(
             "level has a value", lambda: re.fullmatch(r"-?\d+", text_of(page, level)) is not None
         )
+        row = page.locator('[data-testid="debug-variables"] [data-var-path="level"]')
+        assert "TankControl.level" in (row.get_attribute("title") or ""), "where to write it"
         dismiss_notifications(page)
         shoot_both(page, "debugging-bkpt")
 

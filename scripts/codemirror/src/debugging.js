@@ -474,7 +474,10 @@ export class DebugPanel {
     for (const v of m.variables || []) {
       const toggle = v.children ? (v.open ? "▾ " : "▸ ") : "";
       const name = el("td", { style: `${CELL};padding-left:${8 + 14 * v.depth}px` }, `${toggle}${v.name}`);
-      const row = el("tr", { "data-var-path": v.path, style: "border-bottom:1px solid #f1f3f5" }, name,
+      const title = v.resource_path
+        ? `${v.resource_path}: written or forced in Online test as at any time`
+        : "a local of a function or method: shown, not written";
+      const row = el("tr", { "data-var-path": v.path, title, style: "border-bottom:1px solid #f1f3f5" }, name,
         el("td", { style: `${CELL};width:100%;color:#1864ab`, "data-value": v.path }, v.value),
         el("td", { style: `${CELL};color:#868e96` }, v.type));
       if (v.children) {
