@@ -3,6 +3,7 @@ command in a subprocess."""
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import subprocess
@@ -13,6 +14,7 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
+from tests.support.forked_cli import run_command
 from tests.support.ports import free_port as free_port  # tests import it from here
 
 # CI must judge the submission, not the luck of the draw: there the property tests replay
@@ -27,15 +29,25 @@ REPO = Path(__file__).resolve().parent.parent
 def padt(
     *args: str, env: dict[str, str] | None = None, timeout: float = 120
 ) -> subprocess.CompletedProcess[str]:
-    """Run the `padt` command line in a fresh process, as a user would."""
-    return subprocess.run(
-        [sys.executable, "-m", "padt.cli", *args],
-        capture_output=True,
-        text=True,
-        cwd=REPO,
-        env={**os.environ, **(env or {})},
-        timeout=timeout,
-    )
+    """Run the `padt` command line in a process of its own, as a user would: forked from a
+    server that imported it once (tests/support/forked_cli.py), or, where that cannot be
+    (PYTHONHASHSEED and the like, another thread's command under way), started afresh."""
+    command = [sys.executable, "-m", "padt.cli", *args]
+    environment = {**os.environ, **(env or {})}
+    forked = run_command(list(args), environment, REPO, timeout)
+    if forked is None:
+        return subprocess.run(
+            command, capture_output=True, text=True, cwd=REPO, env=environment, timeout=timeout
+        )
+    if forked.returncode is None:
+        raise subprocess.TimeoutExpired(command, timeout, forked.stdout, forked.stderr)
+    stdout, stderr = (_as_text(output) for output in (forked.stdout, forked.stderr))
+    return subprocess.CompletedProcess(command, forked.returncode, stdout, stderr)
+
+
+def _as_text(output: bytes) -> str:
+    """Bytes read as `subprocess.run(..., text=True)` reads them."""
+    return io.TextIOWrapper(io.BytesIO(output)).read()
 
 
 def sim_trace(tmp_path: Path, source: str, cycles: int, *sets: str) -> dict[str, list[object]]:
