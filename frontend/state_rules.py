@@ -52,7 +52,11 @@ def program_allows(
             return Allowed(False, "a program starts only while the resource runs")
         if state not in (p.ProgramState.STOP, p.ProgramState.ERROR):
             return Allowed(False, f"{name} runs already")
-    if command is p.StopProgram and state not in (p.ProgramState.RUN, p.ProgramState.RUN_FREEZE):
+    if command is p.StopProgram and state not in (
+        p.ProgramState.RUN,
+        p.ProgramState.RUN_FREEZE,
+        p.ProgramState.BKPT,  # it leaves its breakpoint for STOP
+    ):
         return Allowed(False, f"{name} is not running")
     if command is p.Freeze and (status.state != p.ResourceState.RUN or state != p.ProgramState.RUN):
         frozen = state == p.ProgramState.RUN_FREEZE

@@ -10,8 +10,9 @@ from functools import partial
 import pytest
 
 from backend.engineering.resource_client import ResourceLogin
-from frontend.permissions import allowed
+from frontend.permissions import Allowed, allowed
 from frontend.screens import events, parameters
+from frontend.state_rules import program_allows
 from runtime.contract import protocol as p
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME, ParameterError
@@ -141,3 +142,12 @@ def test_what_a_user_wrote_is_escaped() -> None:
     hostile = p.Event(1, NOW, "write", "<script>x</script>", "<b>", {"v": "<i>"})
     page = events.render([hostile], 1, 1, "short-term")
     assert "<script>" not in page and "<b>" not in page and "<i>" not in page
+
+
+def test_a_program_at_a_breakpoint_can_be_stopped_not_frozen() -> None:
+    stats = p.CycleStatistics(1, 0.1, 0.1, 0.1, 0.1, 100.0, 0.0, 0, 0)
+    held = p.ProgramStatus("Main", 1, 0, p.ProgramState.BKPT, "0000ABCD", 5, 1, None, "m.st:3")
+    status = p.Status("R", p.ResourceState.RUN, "0000ABCD", None, "x", 9, 100.0, stats, False,
+                      "open", None, [held])  # fmt: skip
+    assert program_allows(p.StopProgram, status, held).ok
+    assert program_allows(p.Freeze, status, held) == Allowed(False, "Main is not running")
