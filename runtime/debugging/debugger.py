@@ -459,6 +459,8 @@ class Debugger:
         program.state = ProgramState.BKPT
         program.cpu_cycles = 0  # its program watchdog is held while it stands
         self._trace.throughout = True  # the rest of its cycle is traced, callers too
+        # what it wrote so far reaches the others and the outputs; the rest waits for it
+        self._resource_of().variables.publish([program])
         run = program.run
         if isinstance(run, DebugRun):
             run.tracer.trace_stack(frame)

@@ -365,3 +365,34 @@ def test_breakpoints_at_a_step_and_a_transition_of_a_chart(tier: NativeTier | No
     assert where is not None and where.line == 13
     shown = {v.name: v.value for v in ask(resource, p.DebugVariables("Chart", 0)).variables}
     assert shown["go"] is True and shown["n"] >= 1
+
+
+WRITER = """\
+VAR_GLOBAL out1, out2 : INT; END_VAR
+PROGRAM Writer
+out1 := out1 + 1;
+out2 := out2 + 1;
+END_PROGRAM
+PROGRAM Reader
+VAR seen : INT; END_VAR
+seen := out1;
+END_PROGRAM
+"""
+
+
+def test_at_a_break_what_the_program_wrote_so_far_is_out(tier: NativeTier | None) -> None:
+    config = ResourceConfig(name="R", watchdog_ms=5_000, safety_operation=False)
+    programs = [
+        ProgramConfig(name="Writer", pou="Writer", program_id=1),
+        ProgramConfig(name="Reader", pou="Reader", program_id=2, priority=1),
+    ]
+    result = compile_sources([SourceFile(FILE, WRITER)], resource=config, programs=programs)
+    assert result.artifact is not None, result.diagnostics
+    resource = running(result.artifact, tier)
+    cycles(resource, 2)
+    debug_set(resource, p.BreakpointSpec(4))  # out2 := out2 + 1;
+    cycles(resource, 1)
+    values = resource.variables.read_values()()
+    assert (values["out1"], values["out2"]) == (3, 2)  # out1 written, out2 not yet
+    cycles(resource, 1)
+    assert resource.variables.read_values()()["Reader.seen"] == 3
