@@ -17,51 +17,10 @@ from runtime.contract.protocol import ProgramState
 from runtime.contract.refusal import Refusal
 from runtime.native.tier import NativeTier
 from runtime.resource import Resource
+from tests.support.debugged_program import COUNTERS as SOURCE
 from tests.support.native_runs import advance, same
 from tests.support.native_runs import running as started
 
-SOURCE = """\
-INTERFACE ICount
-  METHOD Bump : INT
-  VAR_INPUT by : INT; END_VAR
-  END_METHOD
-END_INTERFACE
-
-FUNCTION Twice : INT
-VAR_INPUT x : INT; END_VAR
-VAR tmp : INT; END_VAR
-tmp := x * 2;
-Twice := tmp;
-END_FUNCTION
-
-FUNCTION_BLOCK Counter IMPLEMENTS ICount
-VAR_INPUT step : INT; END_VAR
-VAR_OUTPUT total : INT; END_VAR
-total := total + step;
-total := Twice(total) / 2;
-METHOD PUBLIC Bump : INT
-VAR_INPUT by : INT; END_VAR
-total := total + by;
-Bump := total;
-END_METHOD
-END_FUNCTION_BLOCK
-
-PROGRAM Main
-VAR a, b : Counter; i : INT; n : INT; c : ICount; END_VAR
-a(step := 1);
-b(step := 2);
-c := a;
-n := c.Bump(by := 3);
-FOR i := 1 TO 3 DO
-  n := n + i;
-END_FOR;
-END_PROGRAM
-
-PROGRAM Other
-VAR ticks : DINT; END_VAR
-ticks := ticks + 1;
-END_PROGRAM
-"""
 FILE = "prog.st"
 PROGRAMS = [
     ProgramConfig(name="Main", pou="Main", program_id=1),
