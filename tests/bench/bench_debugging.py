@@ -16,7 +16,6 @@ from __future__ import annotations
 import atexit
 import functools
 import shutil
-import statistics
 import subprocess
 import tempfile
 import time
@@ -31,12 +30,18 @@ from runtime.clock import RealClock
 from runtime.commands import HANDLERS
 from runtime.contract import protocol as p
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
-from runtime.contract.protocol import ProgramState
 from runtime.contract.session import open_client
 from runtime.resource import Resource
 from tests.bench.baseline import REPO, probe
 from tests.bench.bench_language import thousand_statements
-from tests.bench.bench_runtime import TARGET_MS, TARGET_NS, LoggedResource, Spread, driven
+from tests.bench.bench_runtime import (
+    TARGET_MS,
+    TARGET_NS,
+    LoggedResource,
+    Spread,
+    _cycle_us,
+    driven,
+)
 
 # main just before the debugger came (issue 32): the cycle with nothing armed against it
 BEFORE_DEBUGGER = "e1a6e69"
@@ -70,20 +75,6 @@ def _line_of(text: str, start: str) -> int:
 def _ask(resource: Resource, command: p.Command[p.DebugReply]) -> p.DebugState:
     reply: p.DebugReply = HANDLERS[type(command)](resource, command)
     return reply.debug
-
-
-def _median_us(resource: Resource, cycles: int) -> float:
-    for _ in range(200):
-        resource.cycle()
-    samples = []
-    for _ in range(cycles):
-        started = time.perf_counter_ns()
-        resource.cycle()
-        samples.append((time.perf_counter_ns() - started) / 1e3)
-    for program in resource.programs:
-        if program.state != ProgramState.RUN:
-            print(f"  WARNING: program {program.name} is {program.state}: {program.error}")
-    return statistics.median(samples)
 
 
 @functools.cache
@@ -124,7 +115,7 @@ def _measured(text: str, program: str, arm: Callable[[Resource], object], cycles
     resource.load(_artifact(text, [ProgramConfig(name=program, pou=program, program_id=1)]))
     resource.start()
     arm(resource)
-    return _median_us(resource, cycles)
+    return _cycle_us(resource, cycles, warmup=200).p50
 
 
 def _armed(
