@@ -385,11 +385,9 @@ class Debugger:
             return False
         if point.instance is not None and frame.f_locals.get("s") is not point.instance:
             return False
-        resource = self._resource_of()
-        scope = self._scope(frame, program, self._loaded())
         if point.condition is not None:
             try:
-                holds = evaluate(point.condition, scope)
+                holds = evaluate(point.condition, self._scope(frame, program, self._loaded()))
             except Refusal as refused:
                 point.message = f"condition: {refused.message}"
                 return True  # stop and show why, as a debugger does
@@ -397,16 +395,17 @@ class Debugger:
                 return False
         point.hits += 1
         if point.logpoint:
-            self._log(resource, point, scope, program)
+            self._log(self._resource_of(), point, frame, program)
             return False
         return spec.hit_count is None or point.hits >= spec.hit_count
 
     def _log(
-        self, resource: Resource, point: Breakpoint, scope: FrameScope, program: UserProgram
+        self, resource: Resource, point: Breakpoint, frame: FrameType, program: UserProgram
     ) -> None:
         now_ns = resource.clock.now_ns()
-        if not point.may_log(now_ns):
+        if not point.may_log(now_ns):  # over the rate: a counter, nothing evaluated
             return
+        scope = self._scope(frame, program, self._loaded())
         shown: list[str] = []
         values: dict[str, str] = {}
         errors: dict[str, str] = {}

@@ -27,6 +27,7 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.engineering.resource_client import ResourceClient
 from runtime.clock import RealClock
+from runtime.collector import COLLECTOR
 from runtime.commands import HANDLERS
 from runtime.contract import protocol as p
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
@@ -179,6 +180,7 @@ def bench_other_programs(seconds: float = 5.0) -> None:
     resource = LoggedResource("R", clock)
     resource.load(_artifact(text, programs, TARGET_MS))
     resource.start()
+    COLLECTOR.manage()  # as a runtime process keeps the collector off the cycle's path
     first = _line_of(text, "END_VAR") + 1
     print(
         f"  under the cycle driver, target {TARGET_MS} ms, {seconds:g} s each; the period "
@@ -202,6 +204,7 @@ def bench_other_programs(seconds: float = 5.0) -> None:
             client.ask(p.DebugClear())
         finally:
             session.close()
+            COLLECTOR.release()
     for label, spread in (
         ("both programs running", quiet),
         ("Bench in BKPT", stopped),
