@@ -28,11 +28,24 @@ from padt.demo_plant import DemoPlant
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from tests.conftest import REPO, free_port
+from tests.support.browser import one_browser_for_the_tests_within
 from tests.support.runtime_process import running_resource, store_artifact
 from tests.ui.browser_steps import PASSWORD, Demo, Plant
 
 URL_LINE = re.compile(r"padt demo: open (http://\S+)")
 PASSWORD_LINE = re.compile(r"administrator 'admin', password (\S+)")
+
+
+@pytest.fixture(autouse=True, scope="module")
+def one_browser_per_module(request: pytest.FixtureRequest) -> Iterator[None]:
+    """The browser tests of a module share one Chromium process, each test with its own
+    pages and contexts (tests/support/browser.py); a module that runs an asyncio loop in
+    the tests' thread says SHARED_BROWSER = False and starts one per test."""
+    if not getattr(request.module, "SHARED_BROWSER", True):
+        yield
+        return
+    with one_browser_for_the_tests_within():
+        yield
 
 
 @pytest.fixture

@@ -27,6 +27,7 @@ from tests.ui.browser_steps import (
 )
 
 pytestmark = pytest.mark.browser
+SHARED_BROWSER = False  # asyncio.run cannot run while a Playwright lives (tests/ui/conftest.py)
 
 
 async def _send_raw(url: str, message: dict[str, object]) -> None:

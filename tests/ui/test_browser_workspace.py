@@ -36,6 +36,8 @@ from tests.ui.browser_steps import (
 pytestmark = pytest.mark.browser
 
 SHOTS = Path(os.environ.get("PADT_WORKSPACE_SHOTS", "/work/notes/31/shots"))
+# screenshots for a person to look at: none in CI unless asked for
+SHOOT = os.environ.get("CI") != "true" or "PADT_WORKSPACE_SHOTS" in os.environ
 
 
 class Cycles(Screen):
@@ -155,7 +157,7 @@ def test_nothing_is_cut_off_and_no_viser_controls(plant: Plant, size: tuple[int,
         for tab in ("Resources", "Online test", "Online change", "Trends"):
             page.get_by_role("tab", name=tab).click()
             page.wait_for_timeout(600)  # the panel's width follows the tab
-            if tab in ("Resources", "Trends"):
+            if tab in ("Resources", "Trends") and SHOOT:
                 SHOTS.mkdir(parents=True, exist_ok=True)
                 shot = SHOTS / f"workspace-{tab.lower()}-{width}x{height}.png"
                 page.screenshot(path=str(shot))
@@ -291,6 +293,8 @@ def test_settings_are_checked_as_typed_and_saved_with_comments_kept(
 
 
 def shoot_settings(page: Page) -> None:
+    if not SHOOT:
+        return
     SHOTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(SHOTS / "settings-1400x900.png"))
 
