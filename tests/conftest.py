@@ -27,17 +27,17 @@ REPO = Path(__file__).resolve().parent.parent
 
 
 def padt(
-    *args: str, env: dict[str, str] | None = None, timeout: float = 120
+    *args: str, env: dict[str, str] | None = None, timeout: float = 120, cwd: Path = REPO
 ) -> subprocess.CompletedProcess[str]:
     """Run the `padt` command line in a process of its own, as a user would: forked from a
     server that imported it once (tests/support/forked_cli.py), or, where that cannot be
     (PYTHONHASHSEED and the like, another thread's command under way), started afresh."""
     command = [sys.executable, "-m", "padt.cli", *args]
     environment = {**os.environ, **(env or {})}
-    forked = run_command(list(args), environment, REPO, timeout)
+    forked = run_command(list(args), environment, cwd, timeout)
     if forked is None:
         return subprocess.run(
-            command, capture_output=True, text=True, cwd=REPO, env=environment, timeout=timeout
+            command, capture_output=True, text=True, cwd=cwd, env=environment, timeout=timeout
         )
     if forked.returncode is None:
         raise subprocess.TimeoutExpired(command, timeout, forked.stdout, forked.stderr)
