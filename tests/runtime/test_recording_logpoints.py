@@ -250,6 +250,11 @@ def test_every_recording_that_writes_takes_the_hits_one_waiting_for_its_trigger_
     recordings.close()
     [point] = resource.debugger.points[FILE]
     resource.stop()
+    wait_for(  # `close` waits a while for the writers; a loaded machine may need longer
+        "the writers to finish their files",
+        lambda: all(i.state != "recording" for i in recordings.infos() if i.id in ("one", "two")),
+        120,
+    )
 
     found = {
         recording_id: ours(tmp_path / "recordings" / f"{recording_id}-1.mcap", log_topic("Plant"))
