@@ -58,8 +58,10 @@ LOGPOINT = p.BreakpointSpec(IN_THE_LOOP, program="Loop", log=LOGGED)
 BURST, PER_SECOND = 20, 20  # runtime/debugging/breakpoints.py
 
 
-def artifact() -> Artifact:
-    config = ResourceConfig(name="Plant", target_cycle_ms=10, safety_operation=False)
+def artifact(watchdog_ms: int = 200) -> Artifact:
+    config = ResourceConfig(
+        name="Plant", target_cycle_ms=10, watchdog_ms=watchdog_ms, safety_operation=False
+    )
     programs = [ProgramConfig("Loop", "Loop", 1), ProgramConfig("Other", "Other", 2)]
     result = compile_sources([SourceFile(FILE, SOURCE)], resource=config, programs=programs)
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
@@ -231,7 +233,9 @@ def test_every_recording_that_writes_takes_the_hits_one_waiting_for_its_trigger_
     resource = Resource("Plant", VirtualClock(epoch_ns=1_700_000_000 * 10**9))
     recordings = Recordings(tmp_path / "recordings")
     resource.recordings = recordings
-    resource.load(artifact())
+    # the watchdog counts real time: in the test process, late in a suite, one collection
+    # of its large heap took longer than 200 ms (a runtime process keeps it frozen)
+    resource.load(artifact(watchdog_ms=5_000))
     resource.start()
     for recording_id in ("one", "two"):
         recordings.start(resource, p.RecordStart(["Loop.n"], id=recording_id))
