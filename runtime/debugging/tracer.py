@@ -128,6 +128,15 @@ class DebugRun(ProgramRun):
             sys.settrace(previous)
             state.running, state.throughout = None, False
 
+    def abandon(self) -> None:
+        """Dropped while it stands (a stop): its frames unwind under no tracer of theirs,
+        and the thread's tracer is left as it was."""
+        previous = sys.gettrace()
+        try:
+            super().abandon()
+        finally:
+            sys.settrace(previous)
+
 
 def traced_entry(code: Callable[..., Any], state: TraceState) -> Callable[..., Any]:
     """`code` (a block's body or method, a FUNCTION) tracing itself and what it calls while
@@ -141,7 +150,8 @@ def traced_entry(code: Callable[..., Any], state: TraceState) -> Callable[..., A
         sys.settrace(tracer)
         try:
             return code(*args, **kwargs)
-        finally:  # a stop inside: the caller's statements are traced from here on
-            sys.settrace(tracer if state.throughout else None)
+        finally:  # a stop inside: the caller's statements are traced from here on (not
+            # when the run was dropped meanwhile: nothing of it may stay traced)
+            sys.settrace(tracer if state.throughout and state.running is tracer else None)
 
     return entry

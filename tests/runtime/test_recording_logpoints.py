@@ -20,8 +20,6 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.engineering.replay import replay
 from backend.engineering.resource_client import ResourceClient
-from runtime.clock import VirtualClock
-from runtime.commands import HANDLERS
 from runtime.contract import protocol as p
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.recording import (
@@ -31,8 +29,6 @@ from runtime.contract.recording import (
     values_topic,
 )
 from runtime.contract.state_folder import recordings_path
-from runtime.recorder import Recordings
-from runtime.resource import Resource
 from tests.support.mcap_node import node_or_skip, read_with_node
 from tests.support.ports import free_port
 from tests.support.runtime_process import running_resource, store_artifact
@@ -222,58 +218,3 @@ def test_a_recording_without_logpoints_has_an_empty_log_channel(
     assert topics == [log_topic("Plant"), values_topic("Plant")]
     assert list(theirs["messages"]) == [values_topic("Plant")]
     assert theirs["messages"][values_topic("Plant")]["count"] == info.cycles
-
-
-def test_every_recording_that_writes_takes_the_hits_one_waiting_for_its_trigger_none(
-    tmp_path: Path,
-) -> None:
-    """In this process on virtual time, every hit counted: the recordings writing each get
-    every hit logged, with the expressions that have no value named; the one waiting for
-    its trigger gets none; their end events count them."""
-    resource = Resource("Plant", VirtualClock(epoch_ns=1_700_000_000 * 10**9))
-    recordings = Recordings(tmp_path / "recordings")
-    resource.recordings = recordings
-    # the watchdog counts real time: in the test process, late in a suite, one collection
-    # of its large heap took longer than 200 ms (a runtime process keeps it frozen)
-    resource.load(artifact(watchdog_ms=5_000))
-    resource.start()
-    for recording_id in ("one", "two"):
-        recordings.start(resource, p.RecordStart(["Loop.n"], id=recording_id))
-    never = p.Trigger("Loop.n", "<", 0)
-    recordings.start(resource, p.RecordStart(["Loop.n"], trigger=never, id="waiting"))
-    logpoint = p.BreakpointSpec(IN_THE_LOOP, log=["i", "nope"])
-    command = p.decode_request(p.encode_request(p.DebugSet(FILE, [logpoint]), None)).command
-    HANDLERS[type(command)](resource, command)
-    clock = resource.clock
-    assert isinstance(clock, VirtualClock)
-    for _ in range(300):  # 3 s of 10 hits a cycle
-        resource.cycle()
-        clock.advance(10_000_000)
-    for recording_id in ("one", "two", "waiting"):
-        recordings.stop(resource, recording_id)
-    recordings.close()
-    [point] = resource.debugger.points[FILE]
-    resource.stop()
-    wait_for(  # `close` waits a while for the writers; a loaded machine may need longer
-        "the writers to finish their files",
-        lambda: all(i.state != "recording" for i in recordings.infos() if i.id in ("one", "two")),
-        120,
-    )
-
-    found = {
-        recording_id: ours(tmp_path / "recordings" / f"{recording_id}-1.mcap", log_topic("Plant"))
-        for recording_id in ("one", "two")
-    }
-    assert not (tmp_path / "recordings" / "waiting-1.mcap").exists()  # nothing to write
-    assert found["one"] == found["two"]
-    messages = [m for _, _, m in found["one"]]
-    assert BURST < len(messages) <= BURST + PER_SECOND * 3 + 1
-    assert point.hits == 3000
-    assert len(messages) + sum(m["unlogged"] for m in messages) + point.unlogged == point.hits
-    assert all(m["dropped"] == 0 and m["program"] == "Loop" for m in messages)
-    assert [m["values"]["i"] for m in messages[:10]] == [str(i) for i in range(1, 11)]
-    assert all(list(m["values"]) == ["i"] and list(m["errors"]) == ["nope"] for m in messages)
-    assert "nope" in messages[0]["errors"]["nope"]
-    ended = [e.message for e in resource.events.recent(0, 1000) if e.kind == "recording"]
-    assert f"recording one stopped after 300 cycles, {len(messages)} logpoint messages" in ended
-    assert "recording waiting stopped after 0 cycles" in ended
