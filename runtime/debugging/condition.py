@@ -26,6 +26,7 @@ _TOKEN = re.compile(
     r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
     r"|(?P<op><=|>=|<>|[-+*/=<>()\[\].,&]))"
 )
+MAX_NESTING = 32  # parentheses in one expression
 _TIME_PREFIXES = {"T", "TIME", "LT", "LTIME"}
 _WORDS = {"AND", "OR", "XOR", "NOT", "MOD", "TRUE", "FALSE"}
 _LEVELS: tuple[tuple[str, ...], ...] = (
@@ -73,6 +74,7 @@ def _tokens(text: str) -> list[str]:
 class _Parser:
     def __init__(self, tokens: list[str], text: str) -> None:
         self.tokens, self.text, self.at = tokens, text, 0
+        self.depth = 0  # parentheses open here
 
     def peek(self) -> str:
         return self.tokens[self.at] if self.at < len(self.tokens) else ""
@@ -111,8 +113,12 @@ class _Parser:
         token = self.take()
         upper = token.upper()
         if token == "(":
+            self.depth += 1
+            if self.depth > MAX_NESTING:  # each level is a few Python frames deep
+                raise Refusal("bad_value", f"'{self.text[:40]}...': nested too deep")
             node = self.expression(0)
             self.take(")")
+            self.depth -= 1
             return node
         if upper in ("TRUE", "FALSE"):
             return Node("const", (upper == "TRUE",))

@@ -258,12 +258,14 @@ def test_refused_in_safety_operation_and_a_bad_condition_is_not_armed() -> None:
         p.BreakpointSpec(2),
         p.BreakpointSpec(500),
         p.BreakpointSpec(28, program="Nobody"),
+        p.BreakpointSpec(28, condition="(" * 250 + "1" + ")" * 250),
     )
     messages = [(b.verified, b.line, b.message) for b in state.breakpoints]
     assert messages[0] == (False, 0, "'n >': more expected")
     assert messages[1] == (True, 10, None)  # moved to the first statement after line 2
     assert messages[2] == (False, 0, f"no statement at or after line 500 of {FILE}")
     assert messages[3] == (False, 0, "no program 'Nobody'")
+    assert messages[4][2] is not None and messages[4][2].endswith("nested too deep")
 
 
 def test_a_stop_ends_the_break_and_a_reload_waits_for_continue() -> None:
