@@ -451,6 +451,9 @@ class Pou:
     extends: tuple[str, ...] = ()  # the base function block (IEC allows one)
     implements: tuple[str, ...] = ()
     modifiers: tuple[str, ...] = ()  # ABSTRACT, FINAL
+    # a body drawn in FBD or LD (`backend.compiler.graphics.model.GraphicBody`); `body` is
+    # then its lowering to statements, each at the line of the element it comes from
+    graphic: Any = None
 
 
 @dataclass(frozen=True)

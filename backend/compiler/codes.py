@@ -6,9 +6,9 @@ followed by four digits, grouped by hundreds: 00 syntax and literals, 01 declara
 02 names, types and expressions, 03 statements and assignments, 04 calls, 05 sequential
 function charts, 06 the resource (user programs, safe values, users, Modbus), 07 what padt does not
 compile (features it lacks, limits), 08 extensions of other dialects (CODESYS, TwinCAT) that
-padt accepts, each with a warning that it is not IEC 61131-3. Notes (`N`) tell what was
-ignored without changing what the program does. docs/diagnostics.md explains every code
-with a failing and a passing example.
+padt accepts, each with a warning that it is not IEC 61131-3, 09 graphical bodies (FBD, LD).
+Notes (`N`) tell what was ignored without changing what the program does.
+docs/diagnostics.md explains every code with a failing and a passing example.
 """
 
 from __future__ import annotations
@@ -194,6 +194,15 @@ class Code(Enum):
     IMPLICIT_METHOD = "E0715", "FB_INIT, FB_REINIT or FB_EXIT, which CODESYS calls by itself"
     STRUCT_LOCATION = "E0716", "location of a structure member"
     PROGRAM_SCOPE_BLOCK = "E0717", "VAR_GLOBAL or VAR_ACCESS inside a PROGRAM"
+
+    # ---- 09: graphical bodies (FBD, LD)
+    GRAPHIC_SYNTAX = "E0901", "element line of a graphical body that does not read"
+    GRAPHIC_WIRE = "E0902", "wire from an element or pin that is not there"
+    GRAPHIC_UNCONNECTED = "E0903", "input of an element that needs a wire and has none"
+    GRAPHIC_FEEDBACK = "E0904", "feedback loop through a FUNCTION's output"
+    GRAPHIC_LABEL = "E0905", "jump to a label that is not there, or a name given twice"
+    GRAPHIC_NAME = "E0906", "variable named like one the lowering of a drawing needs"
+    GRAPHIC_KIND = "E0907", "element of LD in an FBD body"
 
     # ---- 08: extensions of other dialects, accepted with a warning
     QUALIFIED_ENUM = "W0801", "qualified enumeration value E.Value (CODESYS/TwinCAT)"

@@ -27,6 +27,9 @@ from lark.exceptions import (
 from backend.compiler import ast
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
+from backend.compiler.graphics.lower import Context, lower
+from backend.compiler.graphics.model import GraphicBody
+from backend.compiler.graphics.text_form import read_body
 from backend.compiler.limits import (
     MAX_BRANCH_DEPTH,
     MAX_COMMENT_NESTING,
@@ -718,7 +721,8 @@ class _ToAst(Transformer[Token, Any]):
         if kind == "FUNCTION" and rest and not isinstance(rest[0], ast.VarBlock | tuple | _Clause):
             return_type, *rest = rest
         blocks = tuple(r for r in rest if isinstance(r, ast.VarBlock))
-        body = next(r for r in rest if isinstance(r, tuple))
+        graphic = next((r for r in rest if isinstance(r, GraphicBody)), None)
+        body = next((r for r in rest if isinstance(r, tuple)), ())
         elements = [r for r in rest if isinstance(r, ast.Step | ast.Transition | ast.Action)]
         sfc = None
         if elements:
@@ -735,7 +739,14 @@ class _ToAst(Transformer[Token, Any]):
             extends=clauses.get("EXTENDS", ()),
             implements=clauses.get("IMPLEMENTS", ()),
             modifiers=modifiers,
+            graphic=graphic,
         )  # fmt: skip
+
+    def graphic_body(self, items: list[Token]) -> GraphicBody:
+        pos = self._pos(items[0])
+        body, problems = read_body(str(items[0]), self.file, pos.line, pos.col)
+        self.errors += problems
+        return body
 
     def _pou_specifiers(self, kind: str, name: str, specifiers: list[Token]) -> tuple[str, ...]:
         """The modifiers (ABSTRACT, FINAL) of a POU, an interface or a data type; its access
@@ -1254,7 +1265,7 @@ def unit_of(file: str, pieces: Sequence[Piece]) -> ast.SourceUnit:
     errors = [e for p in pieces for e in p.errors]
     if errors or misplaced:
         raise CompileError(errors + misplaced)
-    pous = tuple(i for i in items if isinstance(i, ast.Pou))
+    pous = _with_drawings_lowered(file, tuple(i for i in items if isinstance(i, ast.Pou)))
     globals_ = tuple(i for i in items if isinstance(i, ast.VarBlock))
     types = tuple(t for i in items if isinstance(i, list) for t in i)
     configurations = tuple(i for i in items if isinstance(i, ast.Configuration))
@@ -1270,6 +1281,82 @@ def unit_of(file: str, pieces: Sequence[Piece]) -> ast.SourceUnit:
     return ast.SourceUnit(
         file, pous, globals_, types, warnings, configurations, addresses, interfaces
     )
+
+
+def _with_drawings_lowered(file: str, pous: tuple[ast.Pou, ...]) -> tuple[ast.Pou, ...]:
+    """The POUs with each drawn body (FBD, LD) lowered to statements, which the rest of the
+    compiler takes as it takes any body. Raises `CompileError` for a drawing that does not
+    lower."""
+    if not any(p.graphic is not None for p in pous):
+        return pous
+    functions = {ast.key(p.name): _type_text(p.return_type) for p in pous if p.kind == "FUNCTION"}
+    result = []
+    problems: list[Diagnostic] = []
+    for pou in pous:
+        if pou.graphic is None:
+            result.append(pou)
+            continue
+        try:
+            result.append(_lowered(file, pou, pou.graphic, functions))
+        except CompileError as exc:
+            problems += exc.diagnostics
+    if problems:
+        raise CompileError(problems)
+    return tuple(result)
+
+
+def _lowered(file: str, pou: ast.Pou, body: GraphicBody, functions: dict[str, str]) -> ast.Pou:
+    variables = {
+        ast.key(d.name): _type_text(d.type) for block in pou.var_blocks for d in block.decls
+    }
+    if pou.kind == "FUNCTION":
+        variables[ast.key(pou.name)] = _type_text(pou.return_type)
+    lowered = lower(body, file, Context(variables, functions))
+    if lowered.diagnostics:
+        raise CompileError(lowered.diagnostics)
+    # the lowered text, parsed as the body of a program: line 1 is its header, then the
+    # hidden variables, then one line of statements per element
+    header = ["PROGRAM lowered"]
+    if lowered.temporaries:
+        header.append(
+            "VAR " + " ".join(f"{n} : {t};" for n, t in lowered.temporaries.items()) + " END_VAR"
+        )
+    text = "\n".join([*header, *(line.text for line in lowered.lines), "END_PROGRAM"])
+    at = Pos(file, body.line, body.col)
+    places = [at] * len(header) + [
+        Pos(file, line.element.line, line.element.col) if line.element else at
+        for line in lowered.lines
+    ]
+    parsed = syntax_tree(text)
+    if parsed.error is not None:
+        raise CompileError([_moved(parsed.error, places, at)])
+    try:
+        unit = unit_of(file, [piece_of(file, parsed)])
+    except CompileError as exc:
+        raise CompileError([_moved(d, places, at) for d in exc.diagnostics]) from None
+    (program,) = unit.pous
+
+    def moved(node: Any) -> Any:
+        pos = getattr(node, "pos", None)
+        if not isinstance(pos, Pos):
+            return node
+        return replace(node, pos=places[pos.line - 1] if 0 < pos.line <= len(places) else at)
+
+    statements = ast.rebuilt(program.body, moved)
+    hidden = ast.rebuilt(program.var_blocks, moved)
+    return replace(pou, var_blocks=pou.var_blocks + hidden, body=statements)
+
+
+def _moved(diagnostic: Diagnostic, places: list[Pos], at: Pos) -> Diagnostic:
+    """A diagnostic of the lowered text put at the element its line comes from."""
+    place = places[diagnostic.line - 1] if 0 < diagnostic.line <= len(places) else at
+    return replace(diagnostic, file=place.file, line=place.line, col=place.col)
+
+
+def _type_text(type_ref: ast.TypeRef | None) -> str:
+    """A declared type as the lowering of a drawing can name it: an elementary or named
+    type; "" for the others (arrays, strings with a length, references)."""
+    return type_ref.name if isinstance(type_ref, ast.NamedType) else ""
 
 
 def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast.SourceUnit:

@@ -1,0 +1,573 @@
+"""A drawing lowered to Structured Text: the statements that do what its elements do, in
+their execution order, each on a line of its own that says which element it comes from;
+and the hidden variables that hold what the drawing keeps between its elements.
+
+What the lowering guarantees (the live views and docs/language.md rely on it):
+- an output pin P of a FUNCTION block with id N and type T is the variable
+  `_TMP_<T>N_<P>` when its type can be told from the drawing (the declared type of a
+  variable wired into it, a conversion's target, BOOL for a comparison, a FUNCTION's type);
+  else the call is written where its output is used (and the value is not observable);
+- an FB instance is called once, and its outputs are read as `instance.P`;
+- a block with EN wired runs only when EN is TRUE; its ENO is `_TMP_<T>N_ENO` (FALSE when
+  it did not run);
+- the power flow out of an LD contact or coil with id N is the BOOL `_TMP_LD<N>`;
+  a rising or falling contact or coil keeps the last value it saw in `_TMP_LD<N>_M`;
+- an edge on an input pin (R_EDGE, F_EDGE) keeps its last value in `_TMP_E<N>_<P>_M`;
+- jumps run the drawing as segments from label to label (`_TMP_JUMP`).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+from backend.compiler.codes import Code
+from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.graphics.model import LD_KINDS, Element, GraphicBody, Pin, Wire
+from backend.compiler.graphics.order import evaluation_order
+from backend.compiler.source import Pos
+
+# standard FUNCTIONs whose result has the type of their first typed input
+_SAME_TYPE = frozenset(
+    [
+        "ADD",
+        "SUB",
+        "MUL",
+        "DIV",
+        "MOD",
+        "MAX",
+        "MIN",
+        "LIMIT",
+        "SEL",
+        "MUX",
+        "MOVE",
+        "ABS",
+        "NEG",
+        "AND",
+        "OR",
+        "XOR",
+        "NOT",
+        "SHL",
+        "SHR",
+        "ROL",
+        "ROR",
+        "EXPT",
+        "SQRT",
+        "LN",
+        "LOG",
+        "EXP",
+        "SIN",
+        "COS",
+        "TAN",
+        "ASIN",
+        "ACOS",
+        "ATAN",
+    ]
+)
+_COMPARISONS = frozenset(("GT", "GE", "EQ", "LE", "LT", "NE"))
+_CONVERSION = re.compile(r"^(?:[A-Z]+_)?TO_([A-Z]+)$")
+_ELEMENTARY = frozenset(
+    [
+        "BOOL",
+        "SINT",
+        "INT",
+        "DINT",
+        "LINT",
+        "USINT",
+        "UINT",
+        "UDINT",
+        "ULINT",
+        "REAL",
+        "LREAL",
+        "BYTE",
+        "WORD",
+        "DWORD",
+        "LWORD",
+        "TIME",
+        "LTIME",
+        "DATE",
+        "TIME_OF_DAY",
+        "TOD",
+        "DATE_AND_TIME",
+        "DT",
+        "STRING",
+        "WSTRING",
+        "CHAR",
+        "WCHAR",
+    ]
+)
+_TYPED_LITERAL = re.compile(r"^([A-Za-z_]+)#")
+_IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_ENABLE = "EN"
+_ENABLE_OUT = "ENO"
+
+
+@dataclass(frozen=True)
+class Context:
+    """What the POU around the drawing declares: its variables with their types' text
+    (upper-case names), and the result types of the FUNCTIONs its file declares."""
+
+    variables: dict[str, str]
+    functions: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Line:
+    """One line of the lowered body: ST text and the element it comes from (None: the
+    body's own framing, such as the jump dispatcher)."""
+
+    text: str
+    element: Element | None
+
+
+@dataclass
+class Lowered:
+    lines: list[Line] = field(default_factory=list)
+    temporaries: dict[str, str] = field(default_factory=dict)  # name -> ST type
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+
+
+def value_variable(body: GraphicBody, element_id: int, pin: str = "") -> str | None:
+    """The variable of the POU instance that holds the value an element puts out on `pin`
+    (see the module's guarantees); None where the value is the element's own expression
+    (read `Element.text`), a constant (a left rail) or nowhere."""
+    element = body.element(element_id)
+    if element is None:
+        return None
+    if element.kind in ("CONTACT", "COIL"):
+        return f"_TMP_LD{element.id}"
+    if element.kind != "BLOCK":
+        return None
+    if pin.upper() == _ENABLE_OUT:
+        return _temporary(element, _ENABLE_OUT)
+    if element.instance:
+        return f"{element.instance}.{pin}"
+    return _temporary(element, pin or _result_pin(element))
+
+
+def lower(body: GraphicBody, file: str, context: Context) -> Lowered:
+    """The statements of `body`, in execution order, with its hidden variables."""
+    return _Lowering(body, file, context).run()
+
+
+def _temporary(element: Element, pin: str) -> str:
+    return f"_TMP_{element.text}{element.id}_{pin}".upper()
+
+
+def _result_pin(element: Element) -> str:
+    outputs = [p.name for p in element.outputs if p.name.upper() != _ENABLE_OUT]
+    return outputs[0] if outputs else "OUT"
+
+
+class _Lowering:
+    """One lowering: the expressions and types found so far (they refer to each other)."""
+
+    def __init__(self, body: GraphicBody, file: str, context: Context) -> None:
+        self.body = body
+        self.file = file
+        self.context = context
+        self.by_id = {e.id: e for e in body.elements}
+        self.connectors = {
+            e.text.upper(): e for e in body.elements if e.kind == "CONNECTOR" and e.text
+        }
+        self.out = Lowered()
+        self.types: dict[tuple[int, str], str | None] = {}
+        self.feedback: set[tuple[int, int]] = set()
+        self.evaluated: set[int] = set()
+
+    # ---- the whole body ----------------------------------------------------------------
+
+    def run(self) -> Lowered:
+        self._check_elements()
+        if self.out.diagnostics:
+            return self.out
+        labels = sorted((e for e in self.body.elements if e.kind == "LABEL"), key=lambda e: e.at.y)
+        segments = self._segments(labels)
+        jumps = any(e.kind == "JUMP" for e in self.body.elements)
+        if not jumps:
+            for segment in segments:
+                self._segment_lines(segment, None, -1)
+            return self.out
+        self.out.temporaries["_TMP_JUMP"] = "INT"
+        self.out.lines.append(Line("_TMP_JUMP := 0;", None))
+        self.out.lines.append(Line("WHILE _TMP_JUMP >= 0 DO CASE _TMP_JUMP OF", None))
+        label_index = {e.text.upper(): i + 1 for i, e in enumerate(labels)}
+        for index, segment in enumerate(segments):
+            following = index + 1 if index + 1 < len(segments) else -1
+            self.out.lines.append(Line(f"{index}:", None))
+            self._segment_lines(segment, label_index, following)
+        self.out.lines.append(Line("ELSE _TMP_JUMP := -1; END_CASE; END_WHILE;", None))
+        return self.out
+
+    def _segments(self, labels: list[Element]) -> list[list[Element]]:
+        """The elements from each label to the next (the first segment: those above every
+        label); a drawing without labels is one segment."""
+        segments: list[list[Element]] = [[] for _ in range(len(labels) + 1)]
+        for element in self.body.elements:
+            if element.kind == "LABEL":
+                continue
+            index = sum(1 for label in labels if label.at.y <= element.at.y)
+            segments[index].append(element)
+        return segments
+
+    def _segment_lines(
+        self, elements: list[Element], labels: dict[str, int] | None, following: int
+    ) -> None:
+        nodes = [e for e in elements if self._has_statement(e)]
+        ordered, feedback = evaluation_order(nodes, self._depends_on)
+        self.feedback |= feedback
+        closing = 0
+        for element in ordered:
+            if element.kind == "JUMP" and labels is not None:
+                target = labels.get(element.text.upper())
+                if target is None:
+                    self._error(element, Code.GRAPHIC_LABEL, f"no label '{element.text}'")
+                    continue
+                condition = self._pin_value(element, element.inputs[0])
+                text = f"IF {condition} THEN _TMP_JUMP := {target}; ELSE"
+                self.out.lines.append(Line(text, element))
+                closing += 1
+                continue
+            self._element_lines(element)
+        if labels is not None:
+            ends = " END_IF;" * closing
+            self.out.lines.append(Line(f"_TMP_JUMP := {following};{ends}", None))
+
+    def _has_statement(self, element: Element) -> bool:
+        if element.kind in ("OUT", "INOUT", "JUMP", "RETURN", "CONTACT", "COIL"):
+            return True
+        if element.kind != "BLOCK":
+            return False
+        # a FUNCTION whose value can be kept is evaluated where the order says; one whose
+        # type is unknown is written into the expressions that use it
+        return bool(element.instance) or self._result_type(element) is not None
+
+    def _depends_on(self, element: Element) -> set[int]:
+        """The elements with a statement that `element` takes a value from."""
+        found: set[int] = set()
+        seen: set[int] = set()
+        stack = [w.element for p in element.inputs for w in p.wires]
+        while stack:
+            source_id = stack.pop()
+            if source_id in seen:
+                continue
+            seen.add(source_id)
+            source = self.by_id.get(source_id)
+            if source is None:
+                continue
+            if self._has_statement(source):
+                found.add(source_id)
+            elif source.kind == "CONTINUATION":
+                connector = self.connectors.get(source.text.upper())
+                if connector is not None:
+                    stack += [w.element for p in connector.inputs for w in p.wires]
+            else:
+                stack += [w.element for p in source.inputs for w in p.wires]
+        return found
+
+    # ---- one element -------------------------------------------------------------------
+
+    def _element_lines(self, element: Element) -> None:
+        kind = element.kind
+        if kind in ("OUT", "INOUT"):
+            self._store(element, element.text, self._pin_value(element, element.inputs[0]))
+        elif kind == "RETURN":
+            self._emit(
+                element, f"IF {self._pin_value(element, element.inputs[0])} THEN RETURN; END_IF;"
+            )
+        elif kind == "CONTACT":
+            self._contact(element)
+        elif kind == "COIL":
+            self._coil(element)
+        elif kind == "BLOCK":
+            self._block(element)
+        self.evaluated.add(element.id)
+
+    def _store(self, element: Element, target: str, value: str) -> None:
+        if "SET" in element.modifiers:
+            self._emit(element, f"IF {value} THEN {target} := TRUE; END_IF;")
+        elif "RESET" in element.modifiers:
+            self._emit(element, f"IF {value} THEN {target} := FALSE; END_IF;")
+        else:
+            self._emit(element, f"{target} := {value};")
+
+    def _contact(self, element: Element) -> None:
+        power = self._pin_value(element, element.inputs[0]) if element.inputs else "TRUE"
+        flow = f"_TMP_LD{element.id}"
+        self._temporary(flow, "BOOL")
+        variable = element.text
+        if "NEGATED" in element.modifiers:
+            self._emit(element, f"{flow} := {power} AND NOT {variable};")
+        elif "RISING" in element.modifiers or "FALLING" in element.modifiers:
+            memory = self._temporary(f"{flow}_M", "BOOL")
+            edge = (
+                f"{variable} AND NOT {memory}"
+                if "RISING" in element.modifiers
+                else f"NOT {variable} AND {memory}"
+            )
+            self._emit(element, f"{flow} := {power} AND ({edge}); {memory} := {variable};")
+        else:
+            self._emit(element, f"{flow} := {power} AND {variable};")
+
+    def _coil(self, element: Element) -> None:
+        power = self._pin_value(element, element.inputs[0]) if element.inputs else "FALSE"
+        flow = self._temporary(f"_TMP_LD{element.id}", "BOOL")
+        variable = element.text
+        modifiers = element.modifiers
+        text = f"{flow} := {power};"
+        if "NEGATED" in modifiers:
+            text += f" {variable} := NOT {flow};"
+        elif "SET" in modifiers:
+            text += f" IF {flow} THEN {variable} := TRUE; END_IF;"
+        elif "RESET" in modifiers:
+            text += f" IF {flow} THEN {variable} := FALSE; END_IF;"
+        elif "RISING" in modifiers or "FALLING" in modifiers:
+            memory = self._temporary(f"{flow}_M", "BOOL")
+            edge = (
+                f"{flow} AND NOT {memory}" if "RISING" in modifiers else f"NOT {flow} AND {memory}"
+            )
+            text += f" {variable} := {edge}; {memory} := {flow};"
+        else:
+            text += f" {variable} := {flow};"
+        self._emit(element, text)
+
+    def _block(self, element: Element) -> None:
+        arguments = self._arguments(element)
+        enable = element.input(_ENABLE)
+        enabled = enable is not None and enable.wires
+        if element.instance:
+            call = f"{element.instance}({', '.join(arguments)});"
+        else:
+            result = self._temporary(
+                _temporary(element, _result_pin(element)), self._result_type(element) or ""
+            )
+            call = f"{result} := {element.text}({', '.join(arguments)});"
+        if enabled and enable is not None:
+            eno = self._temporary(_temporary(element, _ENABLE_OUT), "BOOL")
+            condition = self._pin_value(element, enable)
+            call = f"IF {condition} THEN {call} {eno} := TRUE; ELSE {eno} := FALSE; END_IF;"
+        self._emit(element, self._edges(element) + call)
+
+    def _arguments(self, element: Element) -> list[str]:
+        arguments = []
+        for pin in element.inputs:
+            if pin.name.upper() in (_ENABLE, "") or not pin.wires:
+                continue
+            if pin.flag in ("R_EDGE", "F_EDGE"):
+                value = f"_TMP_E{element.id}_{pin.name}".upper()
+            else:
+                value = self._pin_value(element, pin)
+            arguments.append(f"{pin.name} := {value}")
+        return arguments
+
+    def _edges(self, element: Element) -> str:
+        """The statements that sense the edges of a block's edge-triggered inputs."""
+        text = ""
+        for pin in element.inputs:
+            if pin.flag not in ("R_EDGE", "F_EDGE") or not pin.wires:
+                continue
+            value = self._wires_value(element, pin)
+            edge = self._temporary(f"_TMP_E{element.id}_{pin.name}".upper(), "BOOL")
+            memory = self._temporary(f"{edge}_M", "BOOL")
+            sensed = (
+                f"{value} AND NOT {memory}" if pin.flag == "R_EDGE" else f"NOT {value} AND {memory}"
+            )
+            text += f"{edge} := {sensed}; {memory} := {value}; "
+        return text
+
+    # ---- values ------------------------------------------------------------------------
+
+    def _pin_value(self, consumer: Element, pin: Pin) -> str:
+        value = self._wires_value(consumer, pin)
+        return f"NOT ({value})" if pin.flag == "NOT" else value
+
+    def _wires_value(self, consumer: Element, pin: Pin) -> str:
+        values = [self._wire_value(consumer, w) for w in pin.wires]
+        if not values:
+            return "FALSE"
+        return values[0] if len(values) == 1 else "(" + " OR ".join(values) + ")"
+
+    def _wire_value(self, consumer: Element, wire: Wire, depth: int = 0) -> str:
+        source = self.by_id[wire.element]
+        value = self._output_value(consumer, source, wire.pin, depth)
+        pin = next((p for p in source.outputs if p.name.upper() == wire.pin.upper()), None)
+        return f"NOT ({value})" if pin is not None and pin.flag == "NOT" else value
+
+    def _output_value(self, consumer: Element, source: Element, pin: str, depth: int) -> str:
+        kind = source.kind
+        if kind in ("IN", "INOUT"):
+            return source.text if _IDENTIFIER.match(source.text) else f"({source.text})"
+        if kind == "LEFT_RAIL":
+            return "TRUE"
+        if kind in ("CONTACT", "COIL"):
+            return f"_TMP_LD{source.id}"
+        if kind == "CONTINUATION":
+            connector = self.connectors[source.text.upper()]
+            return self._pin_value(connector, connector.inputs[0])
+        # a BLOCK
+        if pin.upper() == _ENABLE_OUT:
+            enable = source.input(_ENABLE)
+            return _temporary(source, _ENABLE_OUT) if enable and enable.wires else "TRUE"
+        if source.instance:
+            return f"{source.instance}.{pin}"
+        if self._result_type(source) is not None:
+            return _temporary(source, pin or _result_pin(source))
+        if (consumer.id, source.id) in self.feedback or depth > len(self.by_id):
+            self._error(consumer, Code.GRAPHIC_FEEDBACK, self._feedback_message(source))
+            return "FALSE"
+        arguments = []
+        for input_pin in source.inputs:
+            if input_pin.name.upper() in (_ENABLE, "") or not input_pin.wires:
+                continue
+            values = [self._wire_value(source, w, depth + 1) for w in input_pin.wires]
+            value = values[0] if len(values) == 1 else "(" + " OR ".join(values) + ")"
+            arguments.append(
+                f"{input_pin.name} := {'NOT (' + value + ')' if input_pin.flag == 'NOT' else value}"
+            )
+        return f"{source.text}({', '.join(arguments)})"
+
+    def _feedback_message(self, source: Element) -> str:
+        return (
+            f"the output of {source.text} (element {source.id}) feeds back into its own "
+            "inputs: write it into a variable and read that variable back"
+        )
+
+    def _result_type(self, element: Element) -> str | None:
+        """The type of a FUNCTION block's result, when the drawing tells it."""
+        memo_key = (element.id, "")
+        if memo_key in self.types:
+            return self.types[memo_key]
+        self.types[memo_key] = None  # a loop of FUNCTIONs: no type
+        name = element.text.upper()
+        found: str | None = None
+        conversion = _CONVERSION.match(name)
+        if name in self.context.functions:
+            found = self.context.functions[name] or None
+        elif name in _COMPARISONS:
+            found = "BOOL"
+        elif conversion is not None and conversion.group(1) in _ELEMENTARY:
+            found = conversion.group(1)
+        elif name in _SAME_TYPE:
+            found = self._first_input_type(element)
+        self.types[memo_key] = found
+        return found
+
+    def _first_input_type(self, element: Element) -> str | None:
+        pins = [p for p in element.inputs if p.name.upper() not in (_ENABLE, "G", "K")]
+        if element.text.upper() == "LIMIT":
+            pins = [p for p in pins if p.name.upper() == "IN"] + pins
+        for pin in pins:
+            for wire in pin.wires:
+                found = self._source_type(self.by_id[wire.element], wire.pin)
+                if found is not None:
+                    return found
+        return None
+
+    def _source_type(self, source: Element, pin: str) -> str | None:
+        if source.kind in ("IN", "INOUT"):
+            literal = _TYPED_LITERAL.match(source.text.strip())
+            if literal is not None and literal.group(1).upper() in _ELEMENTARY:
+                return literal.group(1).upper()
+            declared = self.context.variables.get(source.text.strip().upper(), "")
+            return declared if declared.upper() in _ELEMENTARY else None
+        if source.kind in ("LEFT_RAIL", "CONTACT", "COIL"):
+            return "BOOL"
+        if source.kind == "CONTINUATION":
+            connector = self.connectors.get(source.text.upper())
+            if connector is None or not connector.inputs or not connector.inputs[0].wires:
+                return None
+            wire = connector.inputs[0].wires[0]
+            return self._source_type(self.by_id[wire.element], wire.pin)
+        if source.kind == "BLOCK" and not source.instance:
+            if pin.upper() == _ENABLE_OUT:
+                return "BOOL"
+            if pin and pin.upper() != _result_pin(source).upper():
+                return None
+            return self._result_type(source)
+        return None
+
+    # ---- checks and output -------------------------------------------------------------
+
+    def _check_elements(self) -> None:
+        language = self.body.language
+        for element in self.body.elements:
+            if language == "FBD" and element.kind in LD_KINDS:
+                self._error(
+                    element, Code.GRAPHIC_KIND, f"{element.kind} belongs in an LD body, not FBD"
+                )
+            for pin in element.inputs:
+                for wire in pin.wires:
+                    self._check_wire(element, wire)
+            needs_wire = element.kind in ("OUT", "INOUT", "JUMP", "RETURN", "CONNECTOR", "COIL")
+            if needs_wire and not (element.inputs and element.inputs[0].wires):
+                what = f"{element.kind} {element.text}".strip()
+                self._error(
+                    element,
+                    Code.GRAPHIC_UNCONNECTED,
+                    f"{what} (element {element.id}) has no wire into it",
+                )
+            if element.kind == "CONTINUATION" and element.text.upper() not in self.connectors:
+                self._error(
+                    element,
+                    Code.GRAPHIC_LABEL,
+                    f"no connector '{element.text}' for this continuation",
+                )
+            if element.kind == "BLOCK" and not _IDENTIFIER.match(element.text):
+                self._error(element, Code.GRAPHIC_SYNTAX, f"'{element.text}' is not a block type")
+        seen: dict[str, Element] = {}
+        for element in self.body.elements:
+            if element.kind in ("LABEL", "CONNECTOR"):
+                name = f"{element.kind} {element.text.upper()}"
+                if name in seen:
+                    self._error(
+                        element,
+                        Code.GRAPHIC_LABEL,
+                        f"{element.kind.lower()} '{element.text}' is given twice",
+                    )
+                seen[name] = element
+
+    def _check_wire(self, consumer: Element, wire: Wire) -> None:
+        source = self.by_id.get(wire.element)
+        if source is None:
+            self._error(
+                consumer,
+                Code.GRAPHIC_WIRE,
+                f"a wire comes from element {wire.element}, which is not in the drawing",
+            )
+            return
+        if not source.outputs:
+            self._error(
+                consumer,
+                Code.GRAPHIC_WIRE,
+                f"a wire comes from element {wire.element} ({source.kind}), which has no output",
+            )
+            return
+        names = [p.name.upper() for p in source.outputs]
+        if wire.pin and wire.pin.upper() not in names and wire.pin.upper() != _ENABLE_OUT:
+            self._error(
+                consumer,
+                Code.GRAPHIC_WIRE,
+                f"a wire comes from output '{wire.pin}' of element {wire.element}, "
+                "which has no such output",
+            )
+
+    def _temporary(self, name: str, type_text: str) -> str:
+        if name.upper() in self.context.variables:
+            self.out.diagnostics.append(
+                Diagnostic.at(
+                    Pos(self.file, self.body.line, self.body.col),
+                    Code.GRAPHIC_NAME,
+                    f"the variable '{name}' is declared, and the drawing needs that name itself",
+                )
+            )
+        if type_text:
+            self.out.temporaries.setdefault(name, type_text)
+        return name
+
+    def _emit(self, element: Element, text: str) -> None:
+        self.out.lines.append(Line(text, element))
+
+    def _error(self, element: Element, code: Code, message: str) -> None:
+        self.out.diagnostics.append(
+            Diagnostic.at(Pos(self.file, element.line, element.col), code, message)
+        )
