@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
+from runtime.native.tier import NativeTier
 from tests.support.forked_cli import run_command
 from tests.support.ports import free_port as free_port  # tests import it from here
 
@@ -90,3 +91,17 @@ def known_resources(
     path = tmp_path_factory.mktemp("known") / "known_resources"
     monkeypatch.setenv("PADT_KNOWN_RESOURCES", str(path))
     return path
+
+
+# The native tier needs a C compiler and Python's headers. Both are on the development
+# machines and in CI (scripts/install-c-compiler.sh, which `make test` runs); where they are
+# missing the tests skip with the reason, except in CI, where they must run.
+@pytest.fixture(scope="session")
+def native_tier(tmp_path_factory: pytest.TempPathFactory) -> NativeTier:
+    """One tier (and one cache of compiled modules) for the whole session."""
+    tier = NativeTier(tmp_path_factory.mktemp("native-cache"))
+    if not tier.available:
+        if os.environ.get("CI") == "true":
+            pytest.fail("the native tier needs a C compiler and Python.h; CI must have both")
+        pytest.skip("no C compiler or no Python.h here: the native tier cannot build")
+    return tier
