@@ -1,10 +1,12 @@
 """The logic: the source of every POU with its line numbers as in the file, highlighted,
-long lines wrapped; an SFC chart also drawn as a diagram."""
+long lines wrapped; an SFC chart, an FBD or an LD body also drawn as a diagram."""
 
 from __future__ import annotations
 
 import re
 
+from backend.compiler.graphics.model import GraphicBody
+from backend.engineering.documentation.graphic_chart import graphic_charts
 from backend.engineering.documentation.interfaces import project_interfaces, project_pous
 from backend.engineering.documentation.markup import Section, anchor, code, escape, heading
 from backend.engineering.documentation.sfc_chart import chart_svg
@@ -31,6 +33,8 @@ def logic_section(subject: Subject) -> Section:
             svg = chart_svg(pou.sfc, subject.lines.get(file, ()))
             caption = f'<p class="caption">SFC chart of {escape(pou.name)}</p>'
             chart = f'<div class="chart">{caption}{svg}</div>'
+        if isinstance(pou.graphic, GraphicBody):
+            chart = _graphic(pou.graphic, pou.name)
         parts.append(
             f'<div class="pou">{sub}<p class="facts">{facts}</p>{chart}'
             f"{listing(source.lines, source.first_line)}</div>"
@@ -46,6 +50,17 @@ def logic_section(subject: Subject) -> Section:
             f"{listing(text[first - 1 : last], first)}</div>"
         )
     return Section('<section class="part">' + "".join(parts) + "</section>", tuple(headings))
+
+
+def _graphic(body: GraphicBody, name: str) -> str:
+    """The drawing of an FBD or LD body, a part to a page when it is larger than one."""
+    svgs = graphic_charts(body)
+    charts = []
+    for number, svg in enumerate(svgs, 1):
+        part = f", part {number} of {len(svgs)}" if len(svgs) > 1 else ""
+        caption = f'<p class="caption">{body.language} body of {escape(name)}{part}</p>'
+        charts.append(f'<div class="chart">{caption}{svg}</div>')
+    return "".join(charts)
 
 
 def _end_line(lines: tuple[str, ...], first: int, keyword: str) -> int:
