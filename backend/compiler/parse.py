@@ -1265,8 +1265,8 @@ def unit_of(file: str, pieces: Sequence[Piece]) -> ast.SourceUnit:
     errors = [e for p in pieces for e in p.errors]
     if errors or misplaced:
         raise CompileError(errors + misplaced)
-    pous = _with_drawings_lowered(file, tuple(i for i in items if isinstance(i, ast.Pou)))
     globals_ = tuple(i for i in items if isinstance(i, ast.VarBlock))
+    pous = _with_drawings_lowered(file, tuple(i for i in items if isinstance(i, ast.Pou)), globals_)
     types = tuple(t for i in items if isinstance(i, list) for t in i)
     configurations = tuple(i for i in items if isinstance(i, ast.Configuration))
     # globals of a configuration or resource are globals like any other
@@ -1283,13 +1283,16 @@ def unit_of(file: str, pieces: Sequence[Piece]) -> ast.SourceUnit:
     )
 
 
-def _with_drawings_lowered(file: str, pous: tuple[ast.Pou, ...]) -> tuple[ast.Pou, ...]:
+def _with_drawings_lowered(
+    file: str, pous: tuple[ast.Pou, ...], globals_: tuple[ast.VarBlock, ...]
+) -> tuple[ast.Pou, ...]:
     """The POUs with each drawn body (FBD, LD) lowered to statements, which the rest of the
-    compiler takes as it takes any body. Raises `CompileError` for a drawing that does not
-    lower."""
+    compiler takes as it takes any body; the globals and FUNCTIONs of the same file tell
+    the lowering types. Raises `CompileError` for a drawing that does not lower."""
     if not any(p.graphic is not None for p in pous):
         return pous
     functions = {ast.key(p.name): _type_text(p.return_type) for p in pous if p.kind == "FUNCTION"}
+    file_globals = _declared_types(globals_)
     result = []
     problems: list[Diagnostic] = []
     for pou in pous:
@@ -1297,7 +1300,7 @@ def _with_drawings_lowered(file: str, pous: tuple[ast.Pou, ...]) -> tuple[ast.Po
             result.append(pou)
             continue
         try:
-            result.append(_lowered(file, pou, pou.graphic, functions))
+            result.append(_lowered(file, pou, pou.graphic, functions, file_globals))
         except CompileError as exc:
             problems += exc.diagnostics
     if problems:
@@ -1305,10 +1308,14 @@ def _with_drawings_lowered(file: str, pous: tuple[ast.Pou, ...]) -> tuple[ast.Po
     return tuple(result)
 
 
-def _lowered(file: str, pou: ast.Pou, body: GraphicBody, functions: dict[str, str]) -> ast.Pou:
-    variables = {
-        ast.key(d.name): _type_text(d.type) for block in pou.var_blocks for d in block.decls
-    }
+def _lowered(
+    file: str,
+    pou: ast.Pou,
+    body: GraphicBody,
+    functions: dict[str, str],
+    file_globals: dict[str, str],
+) -> ast.Pou:
+    variables = {**file_globals, **_declared_types(pou.var_blocks)}
     if pou.kind == "FUNCTION":
         variables[ast.key(pou.name)] = _type_text(pou.return_type)
     lowered = lower(body, file, Context(variables, functions))
@@ -1345,6 +1352,10 @@ def _lowered(file: str, pou: ast.Pou, body: GraphicBody, functions: dict[str, st
     statements = ast.rebuilt(program.body, moved)
     hidden = ast.rebuilt(program.var_blocks, moved)
     return replace(pou, var_blocks=pou.var_blocks + hidden, body=statements)
+
+
+def _declared_types(blocks: tuple[ast.VarBlock, ...]) -> dict[str, str]:
+    return {ast.key(d.name): _type_text(d.type) for block in blocks for d in block.decls}
 
 
 def _moved(diagnostic: Diagnostic, places: list[Pos], at: Pos) -> Diagnostic:

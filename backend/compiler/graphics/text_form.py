@@ -232,9 +232,8 @@ def _pin_value(name: str, text: str, col: int) -> Pin:
         if match is None:
             if not part.strip() and not wires and offset == 0 and "|" not in text:
                 break  # `NAME :=` with nothing after it: unconnected
-            raise _LineError(
-                col + offset, f"expected a wire `ID` or `ID.PIN`, not '{part.strip()}'"
-            )
+            at = col + offset + _indent(part)
+            raise _LineError(at, f"expected a wire `ID` or `ID.PIN`, not '{part.strip()}'")
         wires.append(Wire(int(match.group(1)), match.group(2) or ""))
     return Pin(name, tuple(wires), flag)
 
@@ -348,7 +347,7 @@ def _wires_text(pin: Pin) -> str:
 
 def _outputs_text(element: Element) -> str:
     outputs = element.outputs
-    if element.kind in _ONE_OUTPUT and outputs == (Pin(),):
+    if element.kind in _ONE_OUTPUT and len(outputs) == 1 and replace(outputs[0], at=None) == Pin():
         return ""
     if not outputs:
         return ""
