@@ -13,6 +13,7 @@ where possible), each an SVG of its own that a page takes whole.
 
 from __future__ import annotations
 
+import math
 import textwrap
 from dataclasses import dataclass, replace
 
@@ -114,11 +115,12 @@ def _cuts(
     pieces = []
     while end - start > most * _SLACK:
         limit = start + most
-        candidates = [b + 6 for _, b in spans] + [t - 6 for t, _ in spans]
+        near = [(t, b) for t, b in spans if b > start and t < limit]
+        candidates = [b + 6 for _, b in near] + [t - 6 for t, _ in near]
         free = [
             c
             for c in candidates
-            if start + most / 3 < c <= limit and not any(t < c < b for t, b in spans)
+            if start + most / 3 < c <= limit and not any(t < c < b for t, b in near)
         ]
         cut = max(free) if free else limit
         pieces.append((start, cut))
@@ -130,14 +132,24 @@ def _cuts(
 # ---- where things are --------------------------------------------------------------------
 
 _DRAWN_WITHOUT_SIZE = ("COMMENT",)
+_FARTHEST = 50_000  # drawing units from the origin a place may be (TC6 sheets: a few 1,000)
 
 
 def _laid_out(body: GraphicBody) -> bool:
     """Whether the body says where each element is (an import does; a hand-written body
-    may not, and one element without a place would land on the others)."""
-    return all(
-        e.size.x > 0 and e.size.y > 0 for e in body.elements if e.kind not in _DRAWN_WITHOUT_SIZE
-    )
+    may not, and one element without a place would land on the others), within a sheet a
+    document can print: a file may give any number, and a place a million units away would
+    make a million parts."""
+    numbers: list[float] = []
+    for element in body.elements:
+        if element.kind not in _DRAWN_WITHOUT_SIZE and (element.size.x <= 0 or element.size.y <= 0):
+            return False
+        numbers += [element.at.x, element.at.y, element.size.x, element.size.y]
+        for pin in (*element.inputs, *element.outputs):
+            if pin.at is not None:
+                numbers += [pin.at.x, pin.at.y]
+            numbers += [c for w in pin.wires for p in w.points for c in (p.x, p.y)]
+    return all(math.isfinite(n) and abs(n) <= _FARTHEST for n in numbers)
 
 
 def _pin_places(element: Element) -> tuple[list[Point], list[Point]]:
@@ -188,9 +200,9 @@ _INSTANCE_ROOM = 16  # an FB instance's name is written above its box
 def _natural_size(element: Element) -> Point:
     kind = element.kind
     if kind == "BLOCK":
-        left = max((len(p.name) for p in element.inputs), default=0)
-        right = max((len(p.name) for p in element.outputs), default=0)
-        width = max(70, (left + right) * 6.2 + 30, len(element.text) * 7.5 + 20)
+        left = max((min(len(p.name), _MAX_TEXT) for p in element.inputs), default=0)
+        right = max((min(len(p.name), _MAX_TEXT) for p in element.outputs), default=0)
+        width = max(70, (left + right) * 6.2 + 30, min(len(element.text), _MAX_TEXT) * 7.5 + 20)
         rows = max(len(element.inputs), len(element.outputs), 1)
         return Point(width, _BLOCK_HEAD + _BLOCK_ROW * rows + 6)
     if kind in ("CONTACT", "COIL"):

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from backend.compiler.graphics.model import Element, GraphicBody, Pin, Point, Wire
+from backend.compiler.parse import parse_source
 from backend.engineering.documentation.graphic_chart import WIDTH, graphic_charts
 from padt.cli import main
 from tests.engineering.documentation.test_document import pages
@@ -254,3 +255,17 @@ def test_an_imported_layout_is_drawn_where_tc6_put_it() -> None:
 
 def test_an_empty_body_draws_nothing() -> None:
     assert graphic_charts(GraphicBody("LD", ())) == []
+
+
+@pytest.mark.parametrize("place", ["inf 0", "1e308 0", "nan 5", "0 -40000000"])
+def test_a_place_no_page_can_hold_is_laid_out_anew(place: str) -> None:
+    """A file may give any number as a place: the drawing is laid out as if it gave none
+    (one chart of finite numbers), not cut into millions of parts."""
+    text = (
+        "PROGRAM p\nVAR a : BOOL; END_VAR\nFBD\n"
+        f"  1: IN a {{at {place} size 40 20}}\n  2: OUT a := 1 {{at 100 0 size 40 20}}\n"
+        "END_FBD\nEND_PROGRAM\n"
+    )
+    body = parse_source("p.st", text).pous[0].graphic
+    (svg,) = graphic_charts(body)
+    assert not re.search(r"inf|nan|e\+", svg), svg
