@@ -15,6 +15,7 @@ import argparse
 import re
 import sys
 import tempfile
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -105,6 +106,15 @@ def main(argv: list[str]) -> int:
         f"files with FBD or LD bodies: {len(graphic)}; imported whole and compiled: "
         f"{rate(graphic_both, len(graphic))}"
     )
+    # what stops the others, by the code of the first error (import first, then compile)
+    stops = Counter(
+        (o.import_note if not o.imported else o.compile_note).split(" ", 1)[0]
+        for o in outcomes
+        if not (o.imported and o.compiled)
+    )
+    if stops:
+        listed = ", ".join(f"{code} {count}" for code, count in sorted(stops.items()))
+        print(f"first error of the others, by code: {listed}")
     return 0
 
 
