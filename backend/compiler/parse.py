@@ -27,7 +27,8 @@ from lark.exceptions import (
 from backend.compiler import ast
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
-from backend.compiler.graphics.lower import Context, lower
+from backend.compiler.graphics.context import context_of
+from backend.compiler.graphics.lower import Context, lower, temporaries_block
 from backend.compiler.graphics.model import GraphicBody
 from backend.compiler.graphics.text_form import read_body
 from backend.compiler.limits import (
@@ -1287,12 +1288,10 @@ def _with_drawings_lowered(
     file: str, pous: tuple[ast.Pou, ...], globals_: tuple[ast.VarBlock, ...]
 ) -> tuple[ast.Pou, ...]:
     """The POUs with each drawn body (FBD, LD) lowered to statements, which the rest of the
-    compiler takes as it takes any body; the globals and FUNCTIONs of the same file tell
-    the lowering types. Raises `CompileError` for a drawing that does not lower."""
+    compiler takes as it takes any body. Raises `CompileError` for a drawing that does not
+    lower."""
     if not any(p.graphic is not None for p in pous):
         return pous
-    functions = {ast.key(p.name): _type_text(p.return_type) for p in pous if p.kind == "FUNCTION"}
-    file_globals = _declared_types(globals_)
     result = []
     problems: list[Diagnostic] = []
     for pou in pous:
@@ -1300,7 +1299,7 @@ def _with_drawings_lowered(
             result.append(pou)
             continue
         try:
-            result.append(_lowered(file, pou, pou.graphic, functions, file_globals))
+            result.append(_lowered(file, pou, pou.graphic, context_of(pou, pous, globals_)))
         except CompileError as exc:
             problems += exc.diagnostics
     if problems:
@@ -1308,26 +1307,15 @@ def _with_drawings_lowered(
     return tuple(result)
 
 
-def _lowered(
-    file: str,
-    pou: ast.Pou,
-    body: GraphicBody,
-    functions: dict[str, str],
-    file_globals: dict[str, str],
-) -> ast.Pou:
-    variables = {**file_globals, **_declared_types(pou.var_blocks)}
-    if pou.kind == "FUNCTION":
-        variables[ast.key(pou.name)] = _type_text(pou.return_type)
-    lowered = lower(body, file, Context(variables, functions))
+def _lowered(file: str, pou: ast.Pou, body: GraphicBody, context: Context) -> ast.Pou:
+    lowered = lower(body, file, context)
     if lowered.diagnostics:
         raise CompileError(lowered.diagnostics)
     # the lowered text, parsed as the body of a program: line 1 is its header, then the
     # hidden variables, then one line of statements per element
     header = ["PROGRAM lowered"]
     if lowered.temporaries:
-        header.append(
-            "VAR " + " ".join(f"{n} : {t};" for n, t in lowered.temporaries.items()) + " END_VAR"
-        )
+        header.append(temporaries_block(lowered))
     text = "\n".join([*header, *(line.text for line in lowered.lines), "END_PROGRAM"])
     at = Pos(file, body.line, body.col)
     places = [at] * len(header) + [
@@ -1354,20 +1342,10 @@ def _lowered(
     return replace(pou, var_blocks=pou.var_blocks + hidden, body=statements)
 
 
-def _declared_types(blocks: tuple[ast.VarBlock, ...]) -> dict[str, str]:
-    return {ast.key(d.name): _type_text(d.type) for block in blocks for d in block.decls}
-
-
 def _moved(diagnostic: Diagnostic, places: list[Pos], at: Pos) -> Diagnostic:
     """A diagnostic of the lowered text put at the element its line comes from."""
     place = places[diagnostic.line - 1] if 0 < diagnostic.line <= len(places) else at
     return replace(diagnostic, file=place.file, line=place.line, col=place.col)
-
-
-def _type_text(type_ref: ast.TypeRef | None) -> str:
-    """A declared type as the lowering of a drawing can name it: an elementary or named
-    type; "" for the others (arrays, strings with a length, references)."""
-    return type_ref.name if isinstance(type_ref, ast.NamedType) else ""
 
 
 def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast.SourceUnit:

@@ -119,3 +119,33 @@ END_PROGRAM
     assert _diagnostics(nowhere) == [
         "main.st:5:3: error: a wire comes from element 9, which is not in the drawing [E0902]"
     ]
+
+
+def _chain(blocks: int, first: str) -> str:
+    """A drawing of `blocks` ADDs in a chain, each taking the one before twice."""
+    lines = [f"  1: IN {first}"]
+    for n in range(2, blocks + 2):
+        lines.append(f"  {n}: BLOCK ADD (IN1 := {n - 1}, IN2 := {n - 1}) -> (OUT)")
+    lines.append(f"  {blocks + 2}: OUT n := {blocks + 1}")
+    body = "\n".join(lines)
+    return f"PROGRAM Main\nVAR n : DINT; END_VAR\nFBD\n{body}\nEND_FBD\nEND_PROGRAM\n"
+
+
+def test_a_crafted_drawing_is_refused_with_a_reason_not_a_hang_or_a_crash() -> None:
+    # a chain whose type the drawing cannot tell would double its text at every block
+    assert _diagnostics(_chain(40, "1"))[0].endswith("[E0706]")
+    # continuations that feed their own connector
+    looped = """PROGRAM Main
+VAR n : DINT; END_VAR
+FBD
+  1: CONTINUATION a
+  2: CONNECTOR b := 1
+  3: CONTINUATION b
+  4: CONNECTOR a := 3
+  5: OUT n := 3
+END_FBD
+END_PROGRAM
+"""
+    assert _diagnostics(looped)[0].endswith("[E0706]")
+    # a long chain the drawing can type is kept in variables: it compiles
+    assert _diagnostics(_chain(3000, "n")) == []

@@ -19,7 +19,7 @@ What the lowering guarantees (the live views and docs/language.md rely on it):
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
@@ -99,6 +99,10 @@ _ELEMENTARY = frozenset(
 _TYPED_LITERAL = re.compile(r"^([A-Za-z_]+)#")
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _ENABLE = "EN"
+# how deep values are written into each other (continuations, FUNCTIONs without a type):
+# a bound on the text a crafted drawing can make the lowering write
+MAX_INLINE_DEPTH = 32
+MAX_INLINE_TEXT = 16_384
 _ENABLE_OUT = "ENO"
 
 
@@ -145,6 +149,12 @@ def value_variable(body: GraphicBody, element_id: int, pin: str = "") -> str | N
     return _temporary(element, pin or _result_pin(element))
 
 
+def temporaries_block(lowered: Lowered) -> str:
+    """The declarations of the hidden variables, as one ST `VAR` block on one line."""
+    names = " ".join(f"{n} : {t};" for n, t in lowered.temporaries.items())
+    return f"VAR {names} END_VAR"
+
+
 def lower(body: GraphicBody, file: str, context: Context) -> Lowered:
     """The statements of `body`, in execution order, with its hidden variables."""
     return _Lowering(body, file, context).run()
@@ -171,7 +181,9 @@ class _Lowering:
             e.text.upper(): e for e in body.elements if e.kind == "CONNECTOR" and e.text
         }
         self.out = Lowered()
-        self.types: dict[tuple[int, str], str | None] = {}
+        self.types: dict[int, str | None] = {}  # FUNCTION blocks' result types
+        self.inline: dict[int, str] = {}  # calls of untyped FUNCTIONs, as written
+        self.expanding: set[int] = set()  # those being written: one met again is a loop
         self.feedback: set[tuple[int, int]] = set()
         self.evaluated: set[int] = set()
 
@@ -181,6 +193,7 @@ class _Lowering:
         self._check_elements()
         if self.out.diagnostics:
             return self.out
+        self._type_functions()
         labels = sorted((e for e in self.body.elements if e.kind == "LABEL"), key=lambda e: e.at.y)
         segments = self._segments(labels)
         jumps = any(e.kind == "JUMP" for e in self.body.elements)
@@ -366,7 +379,7 @@ class _Lowering:
         for pin in element.inputs:
             if pin.flag not in ("R_EDGE", "F_EDGE") or not pin.wires:
                 continue
-            value = self._wires_value(element, pin)
+            value = self._pin_value(element, replace(pin, flag=""))
             edge = self._temporary(f"_TMP_E{element.id}_{pin.name}".upper(), "BOOL")
             memory = self._temporary(f"{edge}_M", "BOOL")
             sensed = (
@@ -377,17 +390,14 @@ class _Lowering:
 
     # ---- values ------------------------------------------------------------------------
 
-    def _pin_value(self, consumer: Element, pin: Pin) -> str:
-        value = self._wires_value(consumer, pin)
-        return f"NOT ({value})" if pin.flag == "NOT" else value
-
-    def _wires_value(self, consumer: Element, pin: Pin) -> str:
-        values = [self._wire_value(consumer, w) for w in pin.wires]
+    def _pin_value(self, consumer: Element, pin: Pin, depth: int = 0) -> str:
+        values = [self._wire_value(consumer, w, depth) for w in pin.wires]
         if not values:
             return "FALSE"
-        return values[0] if len(values) == 1 else "(" + " OR ".join(values) + ")"
+        value = values[0] if len(values) == 1 else "(" + " OR ".join(values) + ")"
+        return f"NOT ({value})" if pin.flag == "NOT" else value
 
-    def _wire_value(self, consumer: Element, wire: Wire, depth: int = 0) -> str:
+    def _wire_value(self, consumer: Element, wire: Wire, depth: int) -> str:
         source = self.by_id[wire.element]
         value = self._output_value(consumer, source, wire.pin, depth)
         pin = next((p for p in source.outputs if p.name.upper() == wire.pin.upper()), None)
@@ -401,30 +411,47 @@ class _Lowering:
             return "TRUE"
         if kind in ("CONTACT", "COIL"):
             return f"_TMP_LD{source.id}"
-        if kind == "CONTINUATION":
-            connector = self.connectors[source.text.upper()]
-            return self._pin_value(connector, connector.inputs[0])
-        # a BLOCK
-        if pin.upper() == _ENABLE_OUT:
+        if kind == "BLOCK" and pin.upper() == _ENABLE_OUT:
             enable = source.input(_ENABLE)
             return _temporary(source, _ENABLE_OUT) if enable and enable.wires else "TRUE"
-        if source.instance:
+        if kind == "BLOCK" and source.instance:
             return f"{source.instance}.{pin}"
-        if self._result_type(source) is not None:
+        if kind == "BLOCK" and self._result_type(source) is not None:
             return _temporary(source, pin or _result_pin(source))
-        if (consumer.id, source.id) in self.feedback or depth > len(self.by_id):
+        # a value written where it is used: a continuation's, or an untyped FUNCTION's
+        if depth >= MAX_INLINE_DEPTH:
+            message = (
+                f"element {source.id} is reached through more than {MAX_INLINE_DEPTH} "
+                "continuations or FUNCTIONs whose type the drawing cannot tell: a loop, or "
+                "a chain to cut with a variable"
+            )
+            self._error(consumer, Code.EXPRESSION_DEPTH, message)
+            return "FALSE"
+        if kind == "CONTINUATION":
+            connector = self.connectors[source.text.upper()]
+            return self._pin_value(connector, connector.inputs[0], depth + 1)
+        if (consumer.id, source.id) in self.feedback or source.id in self.expanding:
             self._error(consumer, Code.GRAPHIC_FEEDBACK, self._feedback_message(source))
             return "FALSE"
-        arguments = []
-        for input_pin in source.inputs:
-            if input_pin.name.upper() in (_ENABLE, "") or not input_pin.wires:
-                continue
-            values = [self._wire_value(source, w, depth + 1) for w in input_pin.wires]
-            value = values[0] if len(values) == 1 else "(" + " OR ".join(values) + ")"
-            arguments.append(
-                f"{input_pin.name} := {'NOT (' + value + ')' if input_pin.flag == 'NOT' else value}"
+        if source.id not in self.inline:
+            self.expanding.add(source.id)
+            arguments = [
+                f"{p.name} := {self._pin_value(source, p, depth + 1)}"
+                for p in source.inputs
+                if p.name.upper() not in (_ENABLE, "") and p.wires
+            ]
+            self.expanding.discard(source.id)
+            self.inline[source.id] = f"{source.text}({', '.join(arguments)})"
+        call = self.inline[source.id]
+        if len(call) > MAX_INLINE_TEXT:
+            message = (
+                f"the call of {source.text} (element {source.id}), written where its value is "
+                f"used, is longer than {MAX_INLINE_TEXT:,} characters: cut the chain with a "
+                "variable"
             )
-        return f"{source.text}({', '.join(arguments)})"
+            self._error(consumer, Code.EXPRESSION_DEPTH, message)
+            return "FALSE"
+        return call
 
     def _feedback_message(self, source: Element) -> str:
         return (
@@ -434,36 +461,67 @@ class _Lowering:
 
     def _result_type(self, element: Element) -> str | None:
         """The type of a FUNCTION block's result, when the drawing tells it."""
-        memo_key = (element.id, "")
-        if memo_key in self.types:
-            return self.types[memo_key]
-        self.types[memo_key] = None  # a loop of FUNCTIONs: no type
-        name = element.text.upper()
-        found: str | None = None
-        conversion = _CONVERSION.match(name)
-        if name in self.context.functions:
-            found = self.context.functions[name] or None
-        elif name in _COMPARISONS:
-            found = "BOOL"
-        elif conversion is not None and conversion.group(1) in _ELEMENTARY:
-            found = conversion.group(1)
-        elif name in _SAME_TYPE:
-            found = self._first_input_type(element)
-        self.types[memo_key] = found
+        return self.types.get(element.id)
+
+    def _type_functions(self) -> None:
+        """The result types of the FUNCTION blocks, each found after those feeding it (in
+        the order of the data flow, so no chain of blocks nests a call)."""
+        blocks = [e for e in self.body.elements if e.kind == "BLOCK" and not e.instance]
+        ordered, _ = evaluation_order(blocks, self._feeding_blocks)
+        for block in ordered:
+            self.types[block.id] = self._typed(block)
+
+    def _feeding_blocks(self, element: Element) -> set[int]:
+        found: set[int] = set()
+        stack = [w for p in element.inputs for w in p.wires]
+        seen: set[int] = set()
+        while stack:
+            wire = stack.pop()
+            source = self.by_id.get(wire.element)
+            if source is None or source.id in seen:
+                continue
+            seen.add(source.id)
+            if source.kind == "BLOCK":
+                found.add(source.id)
+            elif source.kind == "CONTINUATION" and source.text.upper() in self.connectors:
+                stack += self.connectors[source.text.upper()].inputs[0].wires
         return found
 
-    def _first_input_type(self, element: Element) -> str | None:
+    def _typed(self, element: Element) -> str | None:
+        name = element.text.upper()
+        conversion = _CONVERSION.match(name)
+        if name in self.context.functions:
+            return self.context.functions[name] or None
+        if name in _COMPARISONS:
+            return "BOOL"
+        if conversion is not None and conversion.group(1) in _ELEMENTARY:
+            return conversion.group(1)
+        if name not in _SAME_TYPE:
+            return None
         pins = [p for p in element.inputs if p.name.upper() not in (_ENABLE, "G", "K")]
-        if element.text.upper() == "LIMIT":
+        if name == "LIMIT":
             pins = [p for p in pins if p.name.upper() == "IN"] + pins
         for pin in pins:
             for wire in pin.wires:
-                found = self._source_type(self.by_id[wire.element], wire.pin)
+                found = self._source_type(wire)
                 if found is not None:
                     return found
         return None
 
-    def _source_type(self, source: Element, pin: str) -> str | None:
+    def _source_type(self, wire: Wire) -> str | None:
+        """The type of what comes along `wire`, when known already."""
+        for _ in range(MAX_INLINE_DEPTH):
+            source = self.by_id.get(wire.element)
+            if source is None:
+                return None
+            if source.kind != "CONTINUATION":
+                break
+            connector = self.connectors.get(source.text.upper())
+            if connector is None or not connector.inputs or not connector.inputs[0].wires:
+                return None
+            wire = connector.inputs[0].wires[0]
+        else:
+            return None
         if source.kind in ("IN", "INOUT"):
             literal = _TYPED_LITERAL.match(source.text.strip())
             if literal is not None and literal.group(1).upper() in _ELEMENTARY:
@@ -472,18 +530,12 @@ class _Lowering:
             return declared if declared.upper() in _ELEMENTARY else None
         if source.kind in ("LEFT_RAIL", "CONTACT", "COIL"):
             return "BOOL"
-        if source.kind == "CONTINUATION":
-            connector = self.connectors.get(source.text.upper())
-            if connector is None or not connector.inputs or not connector.inputs[0].wires:
-                return None
-            wire = connector.inputs[0].wires[0]
-            return self._source_type(self.by_id[wire.element], wire.pin)
         if source.kind == "BLOCK" and not source.instance:
-            if pin.upper() == _ENABLE_OUT:
+            if wire.pin.upper() == _ENABLE_OUT:
                 return "BOOL"
-            if pin and pin.upper() != _result_pin(source).upper():
+            if wire.pin and wire.pin.upper() != _result_pin(source).upper():
                 return None
-            return self._result_type(source)
+            return self.types.get(source.id)
         return None
 
     # ---- checks and output -------------------------------------------------------------
