@@ -4,26 +4,31 @@ with the others kept, and every diagnostic of a drawing points at the element's 
 
 from __future__ import annotations
 
-from backend.compiler.graphics.model import Element, GraphicBody, Pin, Point, Wire
+from backend.compiler.graphics.model import Element, Pin, Point, Wire
 from backend.compiler.graphics.text_form import read_body, write_body
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 
-EVERY_KIND = """FBD
-  1: IN a {at 10 20 size 40 20 out 0 40 10}
-  2: IN NOT b -> (NOT _)
-  3: BLOCK TON t1 (EN := 1, IN := NOT 1 | 2, PT := 4, R) -> (ENO, Q, NOT ET) {at 100 20 size 60 80 order 3 in 1 0 30 wire 1 0 60 30 80 30.5 wire 1 1 70 40}
-  4: IN T#5s
-  5: OUT[SET] x := 3.Q
-  6: INOUT y := R_EDGE 3.ENO
-  7: CONNECTOR c := 1
-  8: CONTINUATION c
-  9: JUMP done := F_EDGE 8
-  10: LABEL done
-  11: RETURN := 1
-  12: COMMENT 'it$'s $'quoted$' and $$ costs$Nmore'
-  13: OUT z
-END_FBD"""
+EVERY_KIND = "\n".join(
+    [
+        "FBD",
+        "  1: IN a {at 10 20 size 40 20 out 0 40 10}",
+        "  2: IN NOT b -> (NOT _)",
+        "  3: BLOCK TON t1 (EN := 1, IN := NOT 1 | 2, PT := 4, R) -> (ENO, Q, NOT ET)"
+        " {at 100 20 size 60 80 order 3 in 1 0 30 wire 1 0 60 30 80 30.5 wire 1 1 70 40}",
+        "  4: IN T#5s",
+        "  5: OUT[SET] x := 3.Q",
+        "  6: INOUT y := R_EDGE 3.ENO",
+        "  7: CONNECTOR c := 1",
+        "  8: CONTINUATION c",
+        "  9: JUMP done := F_EDGE 8",
+        "  10: LABEL done",
+        "  11: RETURN := 1",
+        "  12: COMMENT 'it$'s $'quoted$' and $$ costs$Nmore'",
+        "  13: OUT z",
+        "END_FBD",
+    ]
+)
 
 LADDER = """LD
   1: LEFT_RAIL -> (_, _) {at 0 0 size 3 80 out 0 3 20 out 1 3 60}
