@@ -185,7 +185,7 @@ def _sim(args: argparse.Namespace) -> int:
 
 
 # `padt import` exit codes past 0 (all imported)
-IMPORT_INCOMPLETE = 1  # written, but POUs in FBD, LD or IL (or a structure's EXTENDS) were not
+IMPORT_INCOMPLETE = 1  # written, but POUs (IL, a broken drawing) or a structure's EXTENDS were not
 IMPORT_NOTHING = 2  # nothing written: the file cannot be imported or DIR cannot take it
 
 
@@ -463,9 +463,9 @@ def build_parser() -> argparse.ArgumentParser:
     import_ = sub.add_parser(
         "import",
         help="a PLCopen TC6 XML file (Beremiz, OpenPLC, CODESYS export) into a project folder",
-        epilog="exit codes: 0 imported, 1 written but POUs in FBD, LD or IL (or a CODESYS "
-        "structure's EXTENDS) not imported, named in an error, 2 nothing written (the file "
-        "cannot be imported, or DIR cannot take it)",
+        epilog="exit codes: 0 imported, 1 written but POUs in IL or with a drawing that "
+        "cannot be read (or a CODESYS structure's EXTENDS) not imported, named in an error, 2 "
+        "nothing written (the file cannot be imported, or DIR cannot take it)",
     )
     import_.add_argument("file", type=Path, metavar="FILE.xml")
     import_.add_argument(

@@ -2,9 +2,10 @@
 project folder.
 
 Everything is read and every file made in memory first: a file that cannot be imported
-leaves DIR untouched. POUs in FBD, LD or IL are not imported; the rest of the project is
-still written (an engineer gets the ST and SFC parts), and those POUs are named in one
-error and at the top of padt.toml. docs/plcopen-import.md is the user's description.
+leaves DIR untouched. FBD and LD bodies are written in their text form (docs/project-
+format.md). POUs in IL, or with a drawing that cannot be read, are not imported; the rest
+of the project is still written, and those POUs are named in errors and at the top of
+padt.toml. docs/plcopen-import.md is the user's description.
 """
 
 from __future__ import annotations
@@ -19,6 +20,9 @@ from backend.engineering.plcopen.project_files import project_files
 from backend.engineering.plcopen.reader import read_project
 from backend.engineering.plcopen.xml_tree import MAX_XML_BYTES, parse_xml
 from backend.engineering.project import PROJECT_FILE
+
+# what a P0006 error adds when it names a POU with a part in IL
+IL_DEPRECATED = "IL is deprecated in IEC 61131-3 edition 3, and padt does not compile it"
 
 
 class FolderRefused(Exception):
@@ -77,16 +81,25 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
     result = ImportResult(
         [], sorted(files.contents), project.not_imported, project.dropped, summary
     )
-    if project.not_imported:
-        first = project.not_imported[0]
-        listed = ", ".join(f"{m.name} ({m.reason})" for m in project.not_imported)
+    result.diagnostics += [
+        diagnostic(
+            display,
+            missing.problem,
+            ImportCode.DRAWING,
+            f"{missing.name} not imported: {missing.reason}",
+        )
+        for missing in project.not_imported
+        if missing.problem is not None
+    ]
+    refused = [m for m in project.not_imported if m.problem is None]
+    if refused:
+        listed = ", ".join(f"{m.name} ({m.reason})" for m in refused)
         result.diagnostics.append(
             diagnostic(
                 display,
-                first.where,
+                refused[0].where,
                 ImportCode.NOT_IMPORTED,
-                f"{_count(len(project.not_imported), 'POU')} not imported, padt compiles "
-                f"ST and SFC only: {listed}",
+                f"{_count(len(refused), 'POU')} not imported: {listed}{_why(refused)}",
             )
         )
     result.diagnostics += [
@@ -109,6 +122,11 @@ def import_plcopen(xml: Path, folder: Path, force: bool = False) -> ImportResult
     for name, text in files.contents.items():
         (folder / name).write_text(text, encoding="utf-8", newline="\n")
     return result
+
+
+def _why(refused: list[NotImported]) -> str:
+    in_il = any(m.reason == "IL" or m.reason.endswith(" in IL") for m in refused)
+    return f"; {IL_DEPRECATED}" if in_il else ""
 
 
 def _count(count: int, thing: str) -> str:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from backend.compiler.graphics.model import GraphicBody
 from backend.engineering.plcopen.issues import Where
 
 
@@ -89,6 +90,7 @@ class Pou:
     implements: tuple[str, ...] = ()
     methods: tuple[Method, ...] = ()
     properties: tuple[Property, ...] = ()
+    graphic: GraphicBody | None = None  # a body drawn in FBD or LD (`body` empty)
 
 
 @dataclass(frozen=True)
@@ -105,11 +107,13 @@ class Interface:
 
 @dataclass(frozen=True)
 class NotImported:
-    """A POU the import leaves out, and why (`FBD`, `LD`, `IL`, or a sentence)."""
+    """A POU the import leaves out, and why (`IL`, or a sentence). `problem`: the place of
+    a fault in one of its drawings (reported there, with its own code)."""
 
     name: str
     reason: str
     where: Where
+    problem: Where | None = None
 
 
 @dataclass(frozen=True)

@@ -1,15 +1,18 @@
 """The element tree of a PLCopen TC6 XML file (versions 1.0 to 2.01) into the model.
 
-Types and initial values become ST text here. A POU in a graphical language or IL becomes
-a `NotImported` entry (the importer lists them all); a file that breaks the schema where
-the import relies on it fails with the place of the problem.
+Types and initial values become ST text here, FBD and LD bodies `GraphicBody`s
+(`graphic.py`). A POU in IL, or with a drawing that cannot be read, becomes a `NotImported`
+entry (the importer lists them all); a file that breaks the schema where the import relies
+on it fails with the place of the problem.
 """
 
 from __future__ import annotations
 
 import re
 
-from backend.engineering.plcopen.issues import ImportCode, ImportFailed
+from backend.compiler.graphics.model import GraphicBody
+from backend.engineering.plcopen.graphic import DrawingProblem, graphic_body
+from backend.engineering.plcopen.issues import ImportCode, ImportFailed, Where
 from backend.engineering.plcopen.model import (
     Accessor,
     Action,
@@ -59,7 +62,7 @@ ELEMENTARY = frozenset((
     "LTOD", "CHAR", "WCHAR", "ANY", "ANY_DERIVED", "ANY_ELEMENTARY", "ANY_MAGNITUDE",
     "ANY_NUM", "ANY_REAL", "ANY_INT", "ANY_BIT", "ANY_STRING", "ANY_DATE",
 ))  # fmt: skip
-GRAPHICAL = ("FBD", "LD", "IL")
+GRAPHICAL = ("FBD", "LD")
 CONFIGURATION_PARTS = {"accessVars": "VAR_ACCESS", "configVars": "VAR_CONFIG"}
 NOT_TYPES = ("documentation", "addData")
 # CODESYS's access modifiers (attributes of <AccessModifiers>): ST keyword by attribute
@@ -259,24 +262,43 @@ def var_section(element: Element, kind: str) -> VarSection:
 
 
 class _Refused(Exception):
-    """The POU cannot be imported: `reason` says why (a language, or a sentence)."""
+    """The POU cannot be imported: `reason` says why (a language, or a sentence); `where`,
+    the place of a fault in a drawing."""
 
-    def __init__(self, reason: str) -> None:
+    def __init__(self, reason: str, where: Where | None = None) -> None:
         super().__init__(reason)
         self.reason = reason
+        self.where = where
 
 
-def st_text(body: Element) -> str:
-    """The ST of a body, an action or a transition."""
+def _language(body: Element) -> Element:
     language = [c for c in body.children if c.tag not in NOT_TYPES]
     if len(language) != 1:
         raise _Refused(f"a <{body.tag}> at line {body.where.line} with {len(language)} languages")
-    element = language[0]
-    if element.tag in GRAPHICAL:
+    return language[0]
+
+
+def st_text(body: Element) -> str:
+    """The ST of a body, an action or a transition (the bodies that must be ST)."""
+    element = _language(body)
+    if element.tag in GRAPHICAL:  # the grammar takes a drawing as a POU's body only
+        raise _Refused(f"{element.tag}, which padt takes as the body of a POU only")
+    if element.tag == "IL":  # the importer says why
         raise _Refused(element.tag)
     if element.tag != "ST":
         raise _Refused(f"a body in <{element.tag}>")
     return st_source(element)
+
+
+def drawn_or_st(body: Element) -> tuple[str, GraphicBody | None]:
+    """The ST of a POU's body, or its drawing in FBD or LD."""
+    element = _language(body)
+    if element.tag not in GRAPHICAL:
+        return st_text(body), None
+    try:
+        return "", graphic_body(element)
+    except DrawingProblem as problem:
+        raise _Refused(f"{element.tag}: {problem.message}", problem.where) from None
 
 
 def _declarations(interface: Element | None) -> tuple[str, tuple[VarSection, ...]]:
@@ -307,21 +329,22 @@ def pou(element: Element) -> Pou | NotImported:
         bodies = element.all("body")
         if len(bodies) > 1:
             raise fail(bodies[1], f"POU {name} has more than one <body>")
-        body = _body(bodies[0], actions, transitions) if bodies else ("", ())
+        body = _body(bodies[0], actions, transitions) if bodies else ("", None, ())
         holders = _holders(element)
         methods = tuple(_method(m) for d in _data(holders, "method") for m in d.all("Method"))
         properties = tuple(
             _property(p) for d in _data(holders, "property") for p in d.all("Property")
         )
     except _Refused as refused:
-        return NotImported(name, refused.reason, element.where)
+        return NotImported(name, refused.reason, element.where, refused.where)
     extends, implements = _inheritance(holders)
     if len(extends) > 1:
         raise fail(element, f"POU {name} extends {', '.join(extends)}: a block extends one")
-    text, inline_actions = body
+    text, drawn, inline_actions = body
     return Pou(
         name, kind, return_type, sections, text, (*actions, *inline_actions),
         _comment(element), element.where, "".join(extends), implements, methods, properties,
+        drawn,
     )  # fmt: skip
 
 
@@ -503,15 +526,16 @@ def transition_condition(name: str, text: str) -> str:
 
 def _body(
     body: Element, actions: tuple[Action, ...], transitions: dict[str, str]
-) -> tuple[str, tuple[Action, ...]]:
+) -> tuple[str, GraphicBody | None, tuple[Action, ...]]:
+    """The ST or SFC text of a POU's body, or its drawing; and the inline actions of SFC."""
     language = [c for c in body.children if c.tag not in NOT_TYPES]
     if len(language) == 1 and language[0].tag == "SFC":
         try:
             chart = sfc_text(language[0], transitions, {a.name.upper() for a in actions})
         except SfcProblem as problem:
             raise _Refused(f"SFC: {problem}") from None
-        return chart.text, tuple(Action(name, text) for name, text in chart.inline_actions)
-    return st_text(body), ()
+        return chart.text, None, tuple(Action(name, text) for name, text in chart.inline_actions)
+    return *drawn_or_st(body), ()
 
 
 # ---- data types, configurations ---------------------------------------------------------

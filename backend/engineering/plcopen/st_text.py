@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import textwrap
 
+from backend.compiler.graphics.text_form import write_body
 from backend.engineering.plcopen.model import (
     Accessor,
     DataType,
@@ -52,7 +53,9 @@ def pou_text(pou: Pou) -> str:
     # IEC's order: the methods (and properties) after the declarations, before the body
     parts += [method_text(method) for method in pou.methods]
     parts += [property_text(item) for item in pou.properties]
-    if pou.body:
+    if pou.graphic is not None:  # the drawing in its text form, in place of statements
+        parts.append(write_body(pou.graphic))
+    elif pou.body:
         parts.append(pou.body)
     parts += [f"ACTION {action.name}:\n{action.body}\nEND_ACTION" for action in pou.actions]
     parts.append(f"END_{pou.kind}")

@@ -1,6 +1,7 @@
-"""PLCopen XML nobody here wrote, imported with `padt import` and compiled: OSCAT BASIC and
-BUILDING as PLCopen projects, and matiec's PLCopen test projects. Each must import, and its
-project compile with no error, or be listed with its reason in
+"""PLCopen XML nobody here wrote, imported with `padt import` and compiled with `padt
+compile`, as a user runs them: OSCAT BASIC and BUILDING as PLCopen projects (each with an
+FBD program), and matiec's PLCopen test projects (in ST, SFC, FBD and LD). Each must import
+whole, and its project compile with no error, or be listed with its reason in
 tests/compiler/corpus/plcopen_known_failures.tsv (where a listed file must still fail)."""
 
 from __future__ import annotations
@@ -10,7 +11,6 @@ from pathlib import Path
 
 import pytest
 
-from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import read_source
 from backend.engineering.plcopen.importer import import_plcopen
@@ -20,23 +20,23 @@ from tests.support.corpus_paths import CORPUS, corpus_dir, known_failures
 
 KNOWN = known_failures("plcopen_known_failures.tsv")
 FOLDERS = ("oscat/plcopen", "matiec/tests")
-# what each folder's files may hold that padt does not compile: OSCAT's test program0
-# is FBD; matiec's test projects are in FBD and LD on purpose
-LEFT_OUT = {"oscat/plcopen": {"FBD"}, "matiec/tests": {"FBD", "LD"}}
 
 
 def xml_files(folder: str) -> list[str]:
     return sorted(str(p.relative_to(CORPUS)) for p in corpus_dir(folder).glob("*.xml"))
 
 
-def imported_errors(name: str, tmp_path: Path) -> list[Diagnostic]:
-    """Import the file, check what was left out, compile: the compile errors."""
+def imported_errors(name: str, tmp_path: Path) -> list[str]:
+    """`padt import` the file (it must import whole: exit 0), `padt compile` the folder:
+    the compile's error lines."""
     folder = tmp_path / "project"
-    result = import_plcopen(CORPUS / name, folder)
-    reasons = {missing.reason for missing in result.not_imported}
-    assert reasons <= LEFT_OUT[str(Path(name).parent)], result.not_imported
-    compiled = compile_project(load_project([folder]))
-    return [d for d in compiled.diagnostics if d.severity == "error"]
+    run = padt("import", str(CORPUS / name), "-o", str(folder))
+    assert (run.returncode, run.stderr) == (0, ""), name
+    compiled = padt("compile", str(folder))
+    output = compiled.stdout + compiled.stderr
+    errors = [line for line in output.splitlines() if ": error: " in line]
+    assert (compiled.returncode == 0) == (not errors), output
+    return errors
 
 
 @pytest.mark.parametrize("folder", FOLDERS)
@@ -90,26 +90,39 @@ def test_matiecs_sfc_test_runs_after_import(tmp_path: Path) -> None:
 
 
 def test_oscat_building_through_the_command_line(tmp_path: Path) -> None:
-    """As a user does it: `padt import` (exit 1: the FBD test program is named and left
-    out), then `padt compile` on the folder it wrote."""
+    """As a user does it: `padt import` (exit 0: the FBD test program is imported too),
+    `padt compile` on the folder it wrote, and `padt sim` runs the drawn program (an ADD
+    of two variables into a third)."""
     source = corpus_dir("oscat/plcopen") / "BUILDING_1.0.xml"
     folder = tmp_path / "building"
     run = padt("import", str(source), "-o", str(folder))
-    assert run.returncode == 1, run.stderr
-    assert "1 POU not imported, padt compiles ST and SFC only: program0 (FBD) [P0006]" in (
-        run.stderr
-    )
-    imported = "105 POUs, 4 data types, 0 global variables, 0 programs"
+    assert (run.returncode, run.stderr) == (0, "")
+    imported = "106 POUs, 4 data types, 0 global variables, 1 program"
     assert run.stdout == f"padt import: {imported} written to {folder}\n"
+    assert "\nFBD\n  1: BLOCK ADD (IN1 := 2, IN2 := 3) -> (OUT) {at 600 140" in (
+        (folder / "program0.st").read_text()
+    )
     compiled = padt("compile", str(folder))
     assert compiled.returncode == 0, compiled.stdout
     assert "configuration CRC" in compiled.stdout
+    names = [f"instance0.LocalVar{k}" for k in range(3)]
+    ran = padt(
+        "sim", str(folder), "--cycles", "2", "--trace", ",".join(names),
+        "--set", "instance0.LocalVar0=40", "--set", "instance0.LocalVar1=2@2",
+    )  # fmt: skip
+    assert ran.returncode == 0, ran.stderr
+    rows = [json.loads(line)["values"] for line in ran.stdout.splitlines()]
+    assert [[row[name] for name in names] for row in rows] == [[40, 0, 40], [40, 2, 42]]
 
 
 # POUs whose XML and ST in the corpus differ in their text, not in the import
 SOURCES_DIFFER = {
     "BASIC_3.33-5_Mathematics/SQRTN": "oscat/st declares X and N as VAR, the XML as inputs",
 }
+# the FBD program0 of each chapter is in oscat/st as Beremiz translated it, with a variable
+# ADD1_OUT where padt's lowering has its hidden _TMP_ADD1_OUT: other code, the same sum
+# (test_oscat_building_through_the_command_line runs it)
+DRAWN = "PROGRAM0"
 
 
 def test_oscat_xml_compiles_to_the_same_code_as_the_oscat_st(tmp_path: Path) -> None:
@@ -130,8 +143,11 @@ def test_oscat_xml_compiles_to_the_same_code_as_the_oscat_st(tmp_path: Path) -> 
         assert from_st is not None
         st_crcs = {pou.name: pou.crc for pou in from_st.pous}
         for pou in from_xml.pous:
+            if pou.name.upper() == DRAWN:
+                continue
             compared += 1
             if st_crcs.get(pou.name) != pou.crc:
                 differing.append(f"{st.stem}/{pou.name}")
     assert sorted(differing) == sorted(SOURCES_DIFFER)
-    assert compared >= 650  # 690, with the standard blocks they use
+    # 625, with the standard blocks they use (chapter 12 fails on its drawn program0, listed)
+    assert compared >= 620

@@ -158,23 +158,6 @@ def test_initial_values_of_types_and_variables_meet(tmp_path: Path) -> None:
     assert values["Dose.label"] == "dosing line"
 
 
-def test_graphical_pous_are_named_in_one_error_and_the_rest_is_written(tmp_path: Path) -> None:
-    folder, code, stderr = imported(tmp_path, "graphical")
-    assert code == 1
-    errors = [line for line in stderr.splitlines() if ": error: " in line]
-    assert errors == [
-        f"{FIXTURES / 'graphical.xml'}:22:7: error: 3 POUs not imported, padt compiles ST and "
-        "SFC only: Adder (FBD), Ladder (LD), Lister (IL) [P0006]"
-    ]
-    assert "program instance AdderInstance left out" in stderr
-    assert sorted(p.name for p in folder.iterdir()) == ["Main.st", "Twice.st", "padt.toml"]
-    toml = (folder / "padt.toml").read_text()
-    assert "#   Adder: FBD\n#   Ladder: LD\n#   Lister: IL\n" in toml
-    assert 'name = "MainInstance"' in toml and "AdderInstance" not in toml
-    compiled = padt("compile", str(folder))
-    assert compiled.returncode == 0, compiled.stdout + compiled.stderr
-
-
 @pytest.mark.parametrize(
     ("name", "message"),
     [
@@ -282,8 +265,8 @@ def test_task_settings_padt_cannot_keep_are_reported(tmp_path: Path) -> None:
     assert code == 1
     lines = [line.removeprefix(f"{FIXTURES / 'tasks.xml'}:") for line in stderr.splitlines()]
     assert lines == [
-        "19:7: error: 1 POU not imported, padt compiles ST and SFC only: Drawn (SFC: the "
-        "transition at line 25 has its condition in FBD or LD) [P0006]",
+        "19:7: error: 1 POU not imported: Drawn (SFC: the transition at line 25 has its "
+        "condition in FBD or LD) [P0006]",
         "42:13: warning: program instance SlowOne: task priority 40 is lower than padt's "
         "lowest, 31, which it gets [P0102]",
         "44:11: warning: task Alarm has no interval (an event task): its programs run in every "
@@ -386,6 +369,7 @@ def test_program_instances_beyond_32_are_left_out(tmp_path: Path) -> None:
     instances = "".join(f'<pouInstance name="Run{k}" typeName="Main"/>' for k in range(1, 34))
     text = (FIXTURES / "graphical.xml").read_text()
     text = text.replace('<pouInstance name="MainInstance" typeName="Main"/>', instances)
+    text = text.replace('<pouInstance name="AdderInstance" typeName="Adder"/>', "")
     xml = tmp_path / "many.xml"
     xml.write_text(text)
     result = import_plcopen(xml, tmp_path / "out")

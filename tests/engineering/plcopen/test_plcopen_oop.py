@@ -99,12 +99,16 @@ def test_a_method_or_accessor_not_in_st_is_named_and_its_block_left_out(tmp_path
     folder, code, stderr = imported(tmp_path, "graphical_method")
     assert code == 1
     assert stderr.splitlines() == [
-        f"{FIXTURES / 'graphical_method.xml'}:17:7: error: 2 POUs not imported, padt compiles "
-        "ST and SFC only: FB_Drawn (method Reset in FBD), FB_Listed (property Count GET in "
-        "IL) [P0006]"
+        f"{FIXTURES / 'graphical_method.xml'}:17:7: error: 2 POUs not imported: FB_Drawn "
+        "(method Reset in FBD, which padt takes as the body of a POU only), FB_Listed "
+        "(property Count GET in IL); IL is deprecated in IEC 61131-3 edition 3, and padt does "
+        "not compile it [P0006]"
     ]
     toml = (folder / "padt.toml").read_text()
-    assert "#   FB_Drawn: method Reset in FBD\n#   FB_Listed: property Count GET in IL\n" in toml
+    assert (
+        "#   FB_Drawn: method Reset in FBD, which padt takes as the body of a POU only\n"
+        "#   FB_Listed: property Count GET in IL\n"
+    ) in toml
     assert sorted(p.name for p in folder.iterdir()) == ["FB_Text.st", "padt.toml"]
     assert "METHOD PUBLIC Clear\nz := 0;\nEND_METHOD" in (folder / "FB_Text.st").read_text()
 
