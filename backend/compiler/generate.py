@@ -38,7 +38,14 @@ from backend.compiler.infer import (
     is_implicit,
 )
 from backend.compiler.limits import MAX_INDENT, MAX_UNIT_CODE, MiB
-from backend.compiler.resolve import STEP_STRUCT, PouSymbols, Resolved, StructInfo, Variable
+from backend.compiler.resolve import (
+    STEP_STRUCT,
+    PouSymbols,
+    Resolved,
+    StructInfo,
+    Variable,
+    transition_variable,
+)
 from backend.compiler.source import Pos
 from backend.compiler.types import (
     ANY_INT,
@@ -1515,7 +1522,7 @@ class _Chart:
         )
         fired: list[tuple[str, ast.Transition]] = []
         leaving: dict[str, list[int]] = {}  # step -> the transitions in `fired` from it
-        for _, transition in ordered:
+        for number, transition in ordered:
             flag = emitter.temp()
             sources = [
                 f"{emitter.var_code(_step_variable(scope, name))}.X" for name in transition.sources
@@ -1524,10 +1531,16 @@ class _Chart:
             earlier = sorted({i for step in steps for i in leaving.get(step, [])})
             blockers = [fired[i][0] for i in earlier]
             condition = emitter.exact(transition.condition).code
-            terms = sources + [f"not {b}" for b in blockers] + [condition]
+            enabled = sources + [f"not {b}" for b in blockers]
+            # the condition's value is kept where a live chart reads it, evaluated only
+            # while the transition is enabled, as before
+            kept = emitter.var_code(_transition_value(scope, number))
             # the line of the TRANSITION: a breakpoint there stops as it is evaluated
             outer, emitter.st_line = emitter.st_line, transition.pos.line
-            emitter.emit(depth, f"{flag} = {' and '.join(terms)}")
+            emitter.emit(depth, f"{flag} = {' and '.join(enabled)}")
+            emitter.emit(depth, f"if {flag}:")
+            emitter.emit(depth + 1, f"{kept} = {condition}")
+            emitter.emit(depth + 1, f"{flag} = {kept}")
             emitter.st_line = outer
             for step in steps:
                 leaving.setdefault(step, []).append(len(fired))
@@ -1544,6 +1557,13 @@ class _Chart:
                 emitter.emit(
                     depth + 1, f"_step_enter({emitter.var_code(_step_variable(scope, name))})"
                 )
+
+
+def _transition_value(scope: Scope, number: int) -> Variable:
+    """The hidden BOOL that keeps the last value of the chart's transition `number`."""
+    variable = scope.variable(transition_variable(number))
+    assert variable is not None, number
+    return variable
 
 
 def _step_variable(scope: Scope, name: str) -> Variable:

@@ -685,7 +685,33 @@ def _resolve_pou(pou: ast.Pou, types: _TypeResolver, result: Resolved) -> PouSym
             )  # fmt: skip
             symbols.variables.append(variable)
             symbols.by_key[key(step.name)] = variable
+        for number, transition in enumerate(pou.sfc.transitions):
+            _add_transition_value(symbols, number, transition, result)
     return symbols
+
+
+TRANSITION_VARIABLE = "_TMP_TRANSITION"
+
+
+def transition_variable(number: int) -> str:
+    """The hidden BOOL in which a chart keeps the last value its transition `number`
+    (0-based, in text order) took, for a live chart to show (it is evaluated only while
+    the transition is enabled): `_TMP_TRANSITION1` for the first."""
+    return f"{TRANSITION_VARIABLE}{number + 1}"
+
+
+def _add_transition_value(
+    symbols: PouSymbols, number: int, transition: ast.Transition, result: Resolved
+) -> None:
+    name = transition_variable(number)
+    if key(name) in symbols.by_key:
+        message = f"'{name}' is the name of the hidden value of transition {number + 1}"
+        first = symbols.by_key[key(name)]
+        result.diagnostics.append(Diagnostic.at(first.pos, Code.DUPLICATE_VARIABLE, message))
+        return
+    variable = Variable(name, "VAR", BOOL, None, False, False, None, name, transition.pos)
+    symbols.variables.append(variable)
+    symbols.by_key[key(name)] = variable
 
 
 def _resolve_method(
@@ -758,7 +784,11 @@ def _inherit(result: Resolved) -> None:
             return
         settle(key(base_name), (*chain, name))
         pou.base = key(base_name)
-        inherited = [v for v in base.variables if v.kind != "STEP"]
+        inherited = [  # a chart is the block's own: not its steps, nor its transitions
+            v
+            for v in base.variables
+            if v.kind != "STEP" and not v.name.startswith(TRANSITION_VARIABLE)
+        ]
         for variable in inherited:
             own = pou.by_key.get(key(variable.name))
             if own is not None:

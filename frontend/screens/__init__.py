@@ -9,6 +9,7 @@ from frontend.screens.documentation import Documentation
 from frontend.screens.events import Events
 from frontend.screens.forcing import Forcing
 from frontend.screens.io import Io
+from frontend.screens.logic import Logic
 from frontend.screens.online_test import OnlineTest
 from frontend.screens.parameters import Parameters
 from frontend.screens.reload import Reload
@@ -26,6 +27,7 @@ SCREENS: tuple[type[Screen], ...] = (
     Events,
     Reload,
     Code,
+    Logic,
     Io,
     Documentation,
     Trends,

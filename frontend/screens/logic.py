@@ -1,0 +1,168 @@
+"""The Logic screen: the body of a program or FB instance of the selected resource drawn with
+its live values, as the runtime publishes them: an SFC chart with its active steps lit, each
+step's time and each transition condition's value. It follows the program wherever it
+stands (running, frozen and stepped, at a breakpoint): what it shows is what the resource
+last published. A click on a value puts it into the Write or force editor below, with
+the Online test's checks and confirmations.
+
+As on the Code screen, the body is taken only from a project the PADT knows that compiles
+to the configuration CRC the resource runs."""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import viser
+
+from backend.engineering.logic_view import LiveChart, LogicBodies
+from backend.engineering.sources import find_sources, instances
+from frontend.editor.live_lines import SourceLookup
+from frontend.logic_view import sfc
+from frontend.page_clicks import Click
+from frontend.resource_feed import ResourceFeed, latest_reading
+from frontend.screen_registry import Now, Screen, Work
+from frontend.screens import value_edit
+from frontend.state_rules import state_words
+from runtime.contract import protocol as p
+
+NO_INSTANCE = "-"
+
+
+@dataclass
+class LogicScreen:
+    instance: viser.GuiDropdownHandle[str]
+    view: viser.GuiHtmlHandle
+    lookup: SourceLookup
+    bodies: LogicBodies | None = None
+    offered_for: tuple[int, str] = (0, "")  # (id of the variable table, CRC) offered
+    chart: LiveChart | None = None  # the chart in view
+    shown: str = ""
+
+
+def build(gui: viser.GuiApi) -> LogicScreen:
+    instance = gui.add_dropdown(
+        "Instance", (NO_INSTANCE,), hint="a program or FB instance with a chart to draw"
+    )
+    gui.add_html(sfc.legend())
+    view = gui.add_html("")
+    return LogicScreen(instance, view, SourceLookup(find_sources))
+
+
+def wanted(screen: LogicScreen) -> list[str]:
+    """The variables the drawing in view shows."""
+    return screen.chart.watched() if screen.chart is not None else []
+
+
+def refresh(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str, Path]) -> None:
+    page = _page(screen, feed, projects)
+    if page != screen.shown:
+        screen.view.content = page
+        screen.shown = page
+    offered = tuple(screen.instance.options) != (NO_INSTANCE,)
+    if screen.instance.disabled == offered:
+        screen.instance.disabled = not offered
+
+
+def _page(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str, Path]) -> str:
+    screen.chart = None
+    if feed is None:
+        _offer(screen, ())
+        return _message("Select a resource you are logged in to.")
+    status, values, types, quality = latest_reading(feed)
+    if status is None or not status.crc:
+        _offer(screen, ())
+        return _message("Waiting for the resource's configuration.")
+    screen.lookup.ask(status.crc, projects)
+    done, sources = screen.lookup.answer()
+    if not done:
+        _offer(screen, ())
+        return _message(
+            f"Looking for the source of configuration {status.crc} among the projects "
+            "this PADT knows ..."
+        )
+    if sources is None:
+        _offer(screen, ())
+        known = ", ".join(sorted(projects)) or "none"
+        return _message(
+            f"The source of configuration {status.crc} is not among the projects this PADT "
+            f"knows ({known}): no logic is drawn rather than one that may differ from what "
+            "runs."
+        )
+    if not types:
+        _offer(screen, ())
+        return _message("No variables of the resource yet: they come once you are logged in to it.")
+    if screen.bodies is None or screen.bodies.sources is not sources:
+        screen.bodies = LogicBodies(sources)
+    if screen.offered_for != (id(types), sources.crc):
+        _offer(screen, tuple(screen.bodies.drawable(instances(sources, types))))
+        screen.offered_for = (id(types), sources.crc)
+    chosen = screen.instance.value
+    if chosen == NO_INSTANCE:
+        return _message(
+            "No program or FB instance of this resource has a chart: an ST body is shown on "
+            "the Code screen."
+        )
+    chart = screen.bodies.chart(chosen)
+    if chart is None:
+        return _message(f"{chosen} has no chart to draw.")
+    screen.chart = chart
+    return _header(chart, sources.project, sources.crc, status) + sfc.chart_svg(
+        chart, values, types, quality
+    )
+
+
+def _header(chart: LiveChart, project: str, crc: str, status: p.Status) -> str:
+    program = chart.instance.split(".")[0].upper()
+    running = next((x for x in status.programs if x.name.upper() == program), None)
+    where = (
+        f" · program {html.escape(running.name)} {html.escape(state_words(running.state))}, "
+        f"cycle {running.cycles}"
+        if running is not None
+        else ""
+    )
+    return (
+        f'<div data-testid="logic-header" style="font-size:0.85em;color:#495057;'
+        f'margin-bottom:4px"><b>{html.escape(chart.instance)}</b>: SFC chart of '
+        f"{html.escape(chart.pou)} ({html.escape(chart.file)} of project "
+        f"{html.escape(project)}, configuration {html.escape(crc)})"
+        f'<span data-testid="logic-program">{where}</span></div>'
+    )
+
+
+def _offer(screen: LogicScreen, options: tuple[str, ...]) -> None:
+    if not options:  # offered again once there is something to offer
+        screen.offered_for = (0, "")
+    options = options or (NO_INSTANCE,)
+    if tuple(screen.instance.options) != options:
+        screen.instance.options = options
+
+
+def _message(text: str) -> str:
+    return f'<p data-testid="logic-message">{html.escape(text)}</p>'
+
+
+class Logic(Screen):
+    """The drawing with, below it, the editor of one value (`value_edit`)."""
+
+    name = "Logic"
+    icon = viser.Icon.SITEMAP
+    width = 1000  # a drawing wants room: the plant drawing gives way while Logic is in front
+
+    def __init__(self, work: Work) -> None:
+        super().__init__(work)
+        self.screen = build(work.gui)
+        self.value_edit = value_edit.build(work.gui, work.send_all)
+
+    def refresh(self, now: Now) -> None:
+        refresh(self.screen, now.feed, self.work.context.projects)
+        value_edit.refresh(self.value_edit, now.status, now.forcing, now.feed, self.work.allowed)
+
+    def watches(self) -> list[str]:
+        return wanted(self.screen) + value_edit.wanted(self.value_edit)
+
+    def clicked(self, click: Click) -> None:
+        if click.kind == "logic":  # checked as typed text by the value editor
+            value_edit.choose(self.value_edit, click.name)

@@ -1,0 +1,231 @@
+"""The Logic screen as an engineer sees it, on a resource running the `sequence` template
+(an SFC chart: Idle, Fill, Heat, Drain): the chart drawn with the active step lit as the
+program advances, each step's time, each transition condition's value from the runtime;
+the chart following the program frozen and stepped one cycle at a time; a value clicked on
+the chart forced, and drawn as forced."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+from playwright.sync_api import Locator, Page
+
+from backend.engineering.padt_accounts import PadtAccounts, write_accounts
+from backend.engineering.project import (
+    PROJECT_FILE,
+    compile_project,
+    load_project,
+    user_entry,
+)
+from backend.engineering.resource_directory import ResourceDirectory
+from backend.engineering.watch_lists import WatchLists
+from frontend.app import PadtUi
+from frontend.ui_context import UiContext
+from runtime.contract.accounts import hash_password
+from runtime.contract.artifact import UserAccount
+from tests.conftest import REPO, free_port
+from tests.support.browser import chromium
+from tests.support.runtime_process import running_resource, store_artifact
+from tests.ui.browser_steps import (
+    PASSWORD,
+    START_S,
+    banner,
+    button_enabled,
+    choose,
+    confirm,
+    field,
+    log_in,
+    log_in_to_resource,
+    state,
+    text_of,
+    wait_until,
+)
+
+pytestmark = pytest.mark.browser
+
+TEMPLATE = REPO / "backend" / "projects" / "templates" / "sequence"
+SHOTS = Path("/work/notes/35/shots")
+
+
+@pytest.fixture
+def sequence(tmp_path: Path, zenoh_endpoint: str) -> Iterator[str]:
+    """The sequence template running as Resource1 (cycle 100 ms), an administrator on it
+    and on the PADT, and the UI knowing the project as `sequence`; yields the UI's URL."""
+    folder = tmp_path / "project"
+    shutil.copytree(TEMPLATE, folder)
+    admin = UserAccount("admin", "administrator", hash_password(PASSWORD))
+    config = (folder / PROJECT_FILE).read_text().replace('autostart = "off"', 'autostart = "cold"')
+    (folder / PROJECT_FILE).write_text(config + "\n" + user_entry(admin))
+    result = compile_project(load_project([folder]))
+    assert result.artifact is not None, result.diagnostics
+    store_artifact(tmp_path, result.artifact)
+    accounts_file = tmp_path / "padt-accounts.json"
+    write_accounts(
+        accounts_file, (UserAccount("admin", "security-administrator", admin.password_hash),)
+    )
+    with running_resource("Resource1", tmp_path, zenoh_endpoint) as (_, client):
+        context = UiContext(
+            ResourceDirectory(client.session),
+            PadtAccounts(accounts_file, time.monotonic_ns),
+            zenoh_endpoint,
+            WatchLists(tmp_path / "watch-lists.json"),
+            {"sequence": folder},
+            tmp_path / "bak",
+        )
+        ui = PadtUi(context, port=free_port())
+        try:
+            yield ui.url
+        finally:
+            ui.close()
+
+
+def step_active(page: Page, step: str) -> bool:
+    return page.locator(f'[data-step="{step}"]').first.get_attribute("data-active") == "true"
+
+
+def transition(page: Page, number: int) -> tuple[str, str, str]:
+    """(value, evaluated, quality) drawn beside transition `number` (1-based)."""
+    found = page.locator(f'[data-transition="{number}"]').first
+    return (
+        found.get_attribute("data-value") or "",
+        found.get_attribute("data-evaluated") or "",
+        found.get_attribute("data-quality") or "",
+    )
+
+
+def step_time_ms(page: Page, step: str) -> int:
+    """The time shown for a step, `T = T#1s200ms`, in milliseconds."""
+    text = page.locator(f'[data-step-time="{step}"]').first.text_content() or ""
+    match = re.fullmatch(r"T = T#(?:(\d+)m)?(?:(\d+)s)?(?:(\d+)ms)?", text)
+    assert match is not None, text
+    minutes, seconds, millis = (int(x or 0) for x in match.groups())
+    return (minutes * 60 + seconds) * 1000 + millis
+
+
+def shoot(page: Page, name: str) -> None:
+    if SHOTS.is_dir():  # for a person to look at (the issue's notes)
+        page.screenshot(path=str(SHOTS / f"{name}.png"))
+
+
+def test_an_sfc_chart_lit_live_stepped_and_a_forced_value_marked(sequence: str) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(sequence)
+        log_in(page, "admin", PASSWORD)
+        log_in_to_resource(page, "admin", PASSWORD)
+        wait_until("Resource1 runs", lambda: state(page) == "RUN", timeout_s=START_S)
+        page.get_by_role("tab", name="Logic").click()
+        choose(page, "Instance", "Batch")
+        wait_until("the chart is drawn", lambda: page.locator('[data-step="Drain"]').count() > 0)
+        header = text_of(page, '[data-testid="logic-header"]')
+        assert "SFC chart of Batch (Batch.st of project sequence" in header, header
+
+        # the batch goes round: each step lights up in turn, one at a time
+        for step in ("Fill", "Heat", "Drain", "Idle", "Fill"):
+            wait_until(f"{step} is the one step lit", the_one_lit(page, step))
+        # while Fill is active its transition (level >= 80) is evaluated: FALSE, until
+        # the vessel is full; Heat's (temperature, time) is not evaluated now
+        wait_until("level >= 80 is FALSE", lambda: transition(page, 2)[:2] == ("FALSE", "true"))
+        assert transition(page, 3)[1] == "false"
+        shoot(page, "logic-sfc-1400")
+        # Heat's condition needs Heat.T >= T#2s: TRUE once Heat has run 2 s and is hot
+        wait_until("Heat lights up", lambda: step_active(page, "Heat"))
+        wait_until("Heat's time runs", lambda: step_time_ms(page, "Heat") >= 500)
+        wait_until(
+            "temperature >= 60 AND Heat.T >= T#2s turns TRUE",
+            lambda: transition(page, 3)[:2] == ("TRUE", "true") or step_active(page, "Drain"),
+        )
+
+        # a click on the value of Heat's transition chooses it: forced TRUE (the program
+        # sets it again only while Heat is active); and `enable`, typed, forced FALSE: the
+        # batch comes back to Idle and waits there, Idle's transition evaluated FALSE
+        page.locator('[data-transition="3"]').first.click()
+        wait_until(
+            "the editor has the variable",
+            lambda: editor(page, "Variable").input_value() == "Batch._TMP_TRANSITION3",
+        )
+        force(page, "TRUE", "Force Batch._TMP_TRANSITION3 (BOOL)")
+        editor(page, "Variable").fill("Batch.enable")
+        force(page, "FALSE", "Force Batch.enable (BOOL)")
+        page.get_by_role("tab", name="Forcing").click()
+        choose(page, "Forcing level", "Batch (local)")
+        field(page, "Time limit").fill("T#5m")
+        wait_until("Start forcing is enabled", lambda: button_enabled(page, "Start forcing"))
+        page.get_by_role("button", name="Start forcing", exact=True).click()
+        confirm(page, "Start local forcing of Batch")
+        wait_until("the banner shows", lambda: "local Batch" in banner(page))
+        page.get_by_role("tab", name="Logic").click()
+        wait_until("the batch waits in Idle", lambda: active_steps(page) == ["Idle"], 60)
+        wait_until("Idle has waited a second", lambda: step_time_ms(page, "Idle") >= 1000)
+        assert transition(page, 1) == ("FALSE", "true", "live")
+        assert transition(page, 3) == ("TRUE", "false", "forced")
+        color = page.locator('[data-transition="3"]').first.get_attribute("fill")
+        assert color == "#c92a2a", color  # red, as the Online test marks a forced value
+        shoot(page, "logic-sfc-forced-1400")
+
+        # single step: Batch frozen, its chart stands still; each Step is one cycle of
+        # 100 ms on Idle's time
+        page.get_by_role("tab", name="Single step").click()
+        page.get_by_role("button", name="Freeze", exact=True).click()
+        confirm(page, "Freeze Batch: it stops between cycles")
+        page.get_by_role("tab", name="Logic").click()
+        wait_until("the chart says Batch is frozen", lambda: "frozen" in program_line(page))
+        time.sleep(0.5)  # the last values published of the running program
+        frozen = step_time_ms(page, "Idle")
+        time.sleep(1.0)  # ten cycles of the resource
+        assert step_time_ms(page, "Idle") == frozen
+        for steps in (1, 2):
+            page.get_by_role("tab", name="Single step").click()
+            page.get_by_role("button", name="Step", exact=True).click()
+            page.get_by_role("tab", name="Logic").click()
+            wait_until(
+                f"Idle's time is {steps} cycle(s) on", idle_time_is(page, frozen + 100 * steps)
+            )
+        assert active_steps(page) == ["Idle"]
+        shoot(page, "logic-sfc-stepped-1400")
+        page.set_viewport_size({"width": 1920, "height": 1080})
+        time.sleep(1.0)
+        shoot(page, "logic-sfc-stepped-1920")
+
+
+def program_line(page: Page) -> str:
+    return text_of(page, '[data-testid="logic-program"]')
+
+
+def active_steps(page: Page) -> list[str]:
+    found: list[str] = page.evaluate(
+        "[...document.querySelectorAll('[data-step][data-active=true]')].map(e => e.dataset.step)"
+    )
+    return found
+
+
+def force(page: Page, literal: str, question: str) -> None:
+    editor(page, "New value").fill(literal)
+    wait_until("Force is enabled", lambda: logic_button(page, "Force").is_enabled())
+    logic_button(page, "Force").click()
+    confirm(page, question)
+
+
+def the_one_lit(page: Page, step: str) -> Callable[[], bool]:
+    return lambda: active_steps(page) == [step]
+
+
+def idle_time_is(page: Page, ms: int) -> Callable[[], bool]:
+    return lambda: step_time_ms(page, "Idle") == ms
+
+
+def editor(page: Page, label: str) -> Locator:
+    return (
+        page.locator(f"div:has(> div > p > label:text-is('{label}')) input")
+        .locator("visible=true")
+        .first
+    )
+
+
+def logic_button(page: Page, name: str) -> Locator:
+    return page.get_by_role("button", name=name, exact=True).locator("visible=true").first
