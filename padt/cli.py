@@ -211,6 +211,31 @@ def _import(args: argparse.Namespace) -> int:
     return 0 if result.complete else IMPORT_INCOMPLETE
 
 
+def _convert(args: argparse.Namespace) -> int:
+    from backend.engineering.drawing_to_text import convert_project, write_conversion
+    from backend.engineering.project import ProjectError, load_project
+
+    if not args.path.is_dir():
+        print(f"padt convert: {args.path}: not a project folder", file=sys.stderr)
+        return 2
+    try:
+        conversion = convert_project(load_project([args.path]), set(args.pou or []) or None)
+    except (ProjectError, ValueError) as exc:
+        print(f"padt convert: {exc}", file=sys.stderr)
+        return 2
+    for diagnostic in conversion.diagnostics:
+        print(diagnostic, file=sys.stderr)
+    if not conversion.ok:
+        print("padt convert: nothing written", file=sys.stderr)
+        return 1
+    write_conversion(args.path, conversion)
+    for pou in conversion.converted:
+        print(f"{pou.file}: {pou.pou} ({pou.language}, {pou.elements} elements) is now ST")
+    if not conversion.converted:
+        print("padt convert: no drawn POU in the project")
+    return 0
+
+
 def _check_twice(args: argparse.Namespace) -> int:
     from backend.engineering.check_twice import check_twice
 
@@ -477,6 +502,22 @@ def build_parser() -> argparse.ArgumentParser:
         help="replace the project in a project folder DIR (its padt.toml and .st files)",
     )
     import_.set_defaults(func=_import)
+
+    convert = sub.add_parser(
+        "convert",
+        help="rewrite drawn bodies (FBD, LD) of a project as ST, in their files",
+        epilog="exit codes: 0 converted (the project still compiles), 1 nothing written "
+        "(a drawing that does not lower, or the project would not compile), 2 bad options "
+        "or project",
+    )
+    convert.add_argument("path", type=Path, metavar="DIR", help="the project folder")
+    convert.add_argument(
+        "--pou",
+        action="append",
+        metavar="NAME",
+        help="convert only this POU (repeatable; default: every drawn POU)",
+    )
+    convert.set_defaults(func=_convert)
 
     from padt.new_project import add_arguments as new_arguments
 

@@ -1348,6 +1348,21 @@ def _moved(diagnostic: Diagnostic, places: list[Pos], at: Pos) -> Diagnostic:
     return replace(diagnostic, file=place.file, line=place.line, col=place.col)
 
 
+def parse_as_drawn(file: str, text: str) -> tuple[tuple[ast.Pou, ...], tuple[ast.VarBlock, ...]]:
+    """The POUs and globals of one file as written: a drawn body is not lowered (`padt
+    convert` lowers it into the text). Raises `CompileError` as `parse_source` does."""
+    parsed = syntax_tree(text)
+    if parsed.error is not None:
+        raise CompileError([placed(parsed.error, file, 0)])
+    piece = piece_of(file, parsed)
+    if piece.stopped is not None:
+        raise CompileError([piece.stopped[1]])
+    if piece.errors:
+        raise CompileError(list(piece.errors))
+    pous = tuple(i for i in piece.items if isinstance(i, ast.Pou))
+    return pous, tuple(i for i in piece.items if isinstance(i, ast.VarBlock))
+
+
 def parse_source(file: str, text: str, budget: TokenBudget | None = None) -> ast.SourceUnit:
     """Parse one ST file, taking its tokens from the project's `budget`. Raises
     `CompileError` with a `file:line:col` diagnostic."""
