@@ -114,10 +114,8 @@ et := t1.ET;
 edge(CLK := b);
 counter(tick := edge.Q);
 m := counter.n;
-IF b THEN sum := i + m; ok := TRUE; ELSE ok := FALSE; END_IF;
-acc := sum;
-IF c THEN t2(IN := a, PT := T#250ms); ok2 := TRUE; ELSE ok2 := FALSE; END_IF;
-q2 := t2.Q;
+IF b THEN sum := i + m; ok := TRUE; acc := sum; ELSE ok := FALSE; END_IF;
+IF c THEN t2(IN := a, PT := T#250ms); ok2 := TRUE; q2 := t2.Q; ELSE ok2 := FALSE; END_IF;
 END_PROGRAM
 """,
     ),
@@ -212,8 +210,7 @@ m4 := b AND NOT last_b;
 last_b := b;
 m5 := NOT b AND last_b2;
 last_b2 := b;
-IF c THEN t1(IN := a, PT := T#300ms); m7 := TRUE; ELSE m7 := FALSE; END_IF;
-m6 := t1.Q;
+IF c THEN t1(IN := a, PT := T#300ms); m7 := TRUE; m6 := t1.Q; ELSE m7 := FALSE; END_IF;
 END_PROGRAM
 """,
     ),

@@ -283,7 +283,8 @@ class _Lowering:
     def _element_lines(self, element: Element) -> None:
         kind = element.kind
         if kind in ("OUT", "INOUT"):
-            self._store(element, element.text, self._pin_value(element, element.inputs[0]))
+            value = self._pin_value(element, element.inputs[0])
+            self._store(element, element.text, value, self._gate(element.inputs[0]))
         elif kind == "RETURN":
             self._emit(
                 element, f"IF {self._pin_value(element, element.inputs[0])} THEN RETURN; END_IF;"
@@ -296,13 +297,25 @@ class _Lowering:
             self._block(element)
         self.evaluated.add(element.id)
 
-    def _store(self, element: Element, target: str, value: str) -> None:
+    def _store(self, element: Element, target: str, value: str, gate: str | None) -> None:
         if "SET" in element.modifiers:
-            self._emit(element, f"IF {value} THEN {target} := TRUE; END_IF;")
+            text = f"IF {value} THEN {target} := TRUE; END_IF;"
         elif "RESET" in element.modifiers:
-            self._emit(element, f"IF {value} THEN {target} := FALSE; END_IF;")
+            text = f"IF {value} THEN {target} := FALSE; END_IF;"
         else:
-            self._emit(element, f"{target} := {value};")
+            text = f"{target} := {value};"
+        self._emit(element, text if gate is None else f"IF {gate} THEN {text} END_IF;")
+
+    def _gate(self, pin: Pin) -> str | None:
+        """The ENO of the block a variable's one wire comes from, when that block has EN
+        wired: the variable is written only in a cycle the block ran (as Beremiz does)."""
+        if len(pin.wires) != 1:
+            return None
+        source = self.by_id[pin.wires[0].element]
+        enable = source.input(_ENABLE) if source.kind == "BLOCK" else None
+        if enable is None or not enable.wires or pin.wires[0].pin.upper() == _ENABLE_OUT:
+            return None
+        return _temporary(source, _ENABLE_OUT)
 
     def _contact(self, element: Element) -> None:
         power = self._pin_value(element, element.inputs[0]) if element.inputs else "TRUE"
