@@ -42,9 +42,10 @@ class LogicBodies:
         self._parsed: dict[str, ast.Pou | None] = {}
 
     def kind(self, instance: str) -> str | None:
-        """ "SFC" when the instance's body is a chart; None when it has nothing to draw."""
-        pou = self._pou(instance)
-        return "SFC" if pou is not None and pou.sfc is not None and pou.sfc.steps else None
+        """`SFC` when the instance's body is a chart; None when it has nothing to draw.
+        Read from the compiled configuration: nothing is parsed for an instance not drawn."""
+        unit = self.sources.pou_of(instance)
+        return "SFC" if unit is not None and unit.chart is not None and unit.chart.steps else None
 
     def drawable(self, instances: list[str]) -> list[str]:
         return [instance for instance in instances if self.kind(instance) is not None]
