@@ -16,6 +16,7 @@ import re
 from dataclasses import replace
 
 from backend.compiler.graphics.model import Element, GraphicBody, Pin, Point, Wire
+from backend.compiler.graphics.text_form import read_body, write_body
 from backend.engineering.plcopen.issues import Where
 from backend.engineering.plcopen.xml_tree import Element as Xml
 from backend.engineering.plcopen.xml_tree import st_source
@@ -59,6 +60,7 @@ def graphic_body(body: Xml) -> GraphicBody:
     """The <FBD> or <LD> element as a GraphicBody, its elements in the order of the file."""
     elements: list[Element] = []
     seen: dict[int, Xml] = {}
+    connections: list[Xml] = []  # each wire's <connection>, in the order they are read
     for item in body.children:
         if item.tag in NOT_PARTS:
             continue
@@ -66,7 +68,7 @@ def graphic_body(body: Xml) -> GraphicBody:
             raise DrawingProblem(
                 item.where, f"a <{item.tag}> in an <{body.tag}> body, which padt does not draw"
             )
-        element = _element(item)
+        element = _element(item, connections)
         if element.id in seen:
             raise DrawingProblem(
                 item.where,
@@ -75,11 +77,28 @@ def graphic_body(body: Xml) -> GraphicBody:
         seen[element.id] = item
         elements.append(element)
     drawn = GraphicBody(body.tag, tuple(elements))
-    _check_wires(drawn, seen)
+    _check_wires(drawn, connections)
+    _check_text_form(drawn, seen)
     return drawn
 
 
-def _element(item: Xml) -> Element:
+def _check_text_form(body: GraphicBody, items: dict[int, Xml]) -> None:
+    """Each element reads back from its line of the text form as it is: an expression or a
+    name that would not (one holding `//`, `{`, `->`, ...) is refused here, not written
+    into a file that means something else."""
+    read, _ = read_body(write_body(body), "", 1, 1)
+    for element in body.elements:
+        again = read.element(element.id)
+        if again is None or replace(again, line=0, col=0) != element:
+            words = f" {element.text!r}" if element.text else ""
+            raise DrawingProblem(
+                items[element.id].where,
+                f"the {element.kind}{words} does not fit a line of the text form (ST "
+                "comments, pragmas or arrows in its text)",
+            )
+
+
+def _element(item: Xml, connections: list[Xml]) -> Element:
     kind = KIND_OF[item.tag]
     local = _whole(item, "localId", required=True)
     base = Element(
@@ -98,7 +117,7 @@ def _element(item: Xml) -> Element:
             base,
             text=_expression(item),
             modifiers=_storage(item, "storage"),
-            inputs=(_pin_in(item, "", _flag(item, "negated", "edge")),),
+            inputs=(_pin_in(item, connections, "", _flag(item, "negated", "edge")),),
         )
     if kind == "INOUT":
         _no_storage(item, "storageOut")
@@ -106,11 +125,11 @@ def _element(item: Xml) -> Element:
             base,
             text=_expression(item),
             modifiers=_storage(item, "storageIn"),
-            inputs=(_pin_in(item, "", _flag(item, "negatedIn", "edgeIn")),),
+            inputs=(_pin_in(item, connections, "", _flag(item, "negatedIn", "edgeIn")),),
             outputs=(_pin_out(item, "", _output_flag(item, "negatedOut", "edgeOut")),),
         )
     if kind == "BLOCK":
-        inputs, outputs = _block_pins(item)
+        inputs, outputs = _block_pins(item, connections)
         instance = item.attrs.get("instanceName", "").strip()
         return replace(
             base,
@@ -122,33 +141,33 @@ def _element(item: Xml) -> Element:
     if kind in ("CONNECTOR", "CONTINUATION"):
         name = _identifier(item, "name")
         if kind == "CONNECTOR":
-            return replace(base, text=name, inputs=(_pin_in(item, "", ""),))
+            return replace(base, text=name, inputs=(_pin_in(item, connections, "", ""),))
         return replace(base, text=name, outputs=(_pin_out(item, "", ""),))
     if kind == "JUMP":
         text = _identifier(item, "label")
-        return replace(base, text=text, inputs=(_pin_in(item, "", ""),))
+        return replace(base, text=text, inputs=(_pin_in(item, connections, "", ""),))
     if kind == "LABEL":
         return replace(base, text=_identifier(item, "label"))
     if kind == "RETURN":
-        return replace(base, inputs=(_pin_in(item, "", ""),))
+        return replace(base, inputs=(_pin_in(item, connections, "", ""),))
     if kind == "COMMENT":
         return replace(base, text=st_source(_required(item, "content")))
     if kind == "LEFT_RAIL":
         pins = tuple(_out(point, "") for point in item.all("connectionPointOut"))
         return replace(base, outputs=pins)
     if kind == "RIGHT_RAIL":
-        pins = tuple(_in(point, "", "") for point in item.all("connectionPointIn"))
+        pins = tuple(_in(p, connections, "", "") for p in item.all("connectionPointIn"))
         return replace(base, inputs=pins)
     return replace(  # CONTACT, COIL
         base,
         text=_variable(item),
         modifiers=_ld_modifiers(item, kind),
-        inputs=(_pin_in(item, "", ""),),
+        inputs=(_pin_in(item, connections, "", ""),),
         outputs=(_pin_out(item, "", ""),),
     )
 
 
-def _block_pins(block: Xml) -> tuple[tuple[Pin, ...], tuple[Pin, ...]]:
+def _block_pins(block: Xml, connections: list[Xml]) -> tuple[tuple[Pin, ...], tuple[Pin, ...]]:
     """The inputs (inputVariables, then inOutVariables) and outputs (inOutVariables, then
     outputVariables) of a block: an in-out variable is a pin of each, of the same name."""
     inputs: list[Pin] = []
@@ -174,17 +193,17 @@ def _block_pins(block: Xml) -> tuple[tuple[Pin, ...], tuple[Pin, ...]]:
                 variable, "negated", "edge"
             )
             if group != "outputVariables":
-                inputs.append(_pin_in(variable, name, flag))
+                inputs.append(_pin_in(variable, connections, name, flag))
             if group != "inputVariables":
                 # an in-out pin's negation and edge belong to its input
                 outputs.append(_pin_out(variable, name, "" if group == "inOutVariables" else flag))
     return tuple(inputs), tuple(outputs)
 
 
-def _pin_in(item: Xml, name: str, flag: str) -> Pin:
+def _pin_in(item: Xml, connections: list[Xml], name: str, flag: str) -> Pin:
     """The input pin of an element (TC6 lets an unconnected pin leave out its point)."""
     point = item.child("connectionPointIn")
-    return _in(point, name, flag) if point is not None else Pin(name, (), flag)
+    return _in(point, connections, name, flag) if point is not None else Pin(name, (), flag)
 
 
 def _pin_out(item: Xml, name: str, flag: str) -> Pin:
@@ -192,7 +211,7 @@ def _pin_out(item: Xml, name: str, flag: str) -> Pin:
     return _out(point, name, flag) if point is not None else Pin(name, (), flag)
 
 
-def _in(point: Xml, name: str, flag: str) -> Pin:
+def _in(point: Xml, connections: list[Xml], name: str, flag: str) -> Pin:
     if point.child("expression") is not None:
         raise DrawingProblem(
             point.where, "an expression on a connection point (padt wires pins only)"
@@ -203,6 +222,7 @@ def _in(point: Xml, name: str, flag: str) -> Pin:
         pin = connection.attrs.get("formalParameter", "")
         points = tuple(_point(p) for p in connection.all("position"))
         wires.append(Wire(source, pin, points))
+        connections.append(connection)
     return Pin(name, tuple(wires), flag, _relative(point))
 
 
@@ -219,36 +239,25 @@ def _relative(point: Xml) -> Point | None:
     return _point(relative) if relative is not None else None
 
 
-def _check_wires(body: GraphicBody, items: dict[int, Xml]) -> None:
+def _check_wires(body: GraphicBody, connections: list[Xml]) -> None:
     """Each connection leads from an element of the body (and a block's output pin)."""
-    for element in body.elements:
-        wires = [wire for pin in element.inputs for wire in pin.wires]
-        # the <connection>s of an element, in the order of its wires
-        for wire, connection in zip(wires, _connections(items[element.id]), strict=True):
-            source = body.element(wire.element)
-            if source is None:
-                problem = f"localId {wire.element}, which is no element of the body"
-            elif source.kind == "BLOCK" and not any(
-                p.name.upper() == wire.pin.upper() for p in source.outputs
-            ):
-                problem = (
-                    f"output {wire.pin or '(none)'} of block {source.id} ({source.text}), "
-                    "which has no such output"
-                )
-            elif not source.outputs:
-                problem = f"element {source.id}, which has no output"
-            else:
-                continue
-            raise DrawingProblem(
-                connection.where, f"element {element.id} is connected to {problem}"
+    wires = [(e, w) for e in body.elements for pin in e.inputs for w in pin.wires]
+    for (element, wire), connection in zip(wires, connections, strict=True):
+        source = body.element(wire.element)
+        if source is None:
+            problem = f"localId {wire.element}, which is no element of the body"
+        elif source.kind == "BLOCK" and not any(
+            p.name.upper() == wire.pin.upper() for p in source.outputs
+        ):
+            problem = (
+                f"output {wire.pin or '(none)'} of block {source.id} ({source.text}), "
+                "which has no such output"
             )
-
-
-def _connections(item: Xml) -> list[Xml]:
-    found = []
-    for child in item.children:
-        found += [child] if child.tag == "connection" else _connections(child)
-    return found
+        elif not source.outputs:
+            problem = f"element {source.id}, which has no output"
+        else:
+            continue
+        raise DrawingProblem(connection.where, f"element {element.id} is connected to {problem}")
 
 
 # ---- attributes -------------------------------------------------------------------------

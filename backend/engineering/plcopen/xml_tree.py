@@ -104,6 +104,12 @@ def parse_xml(data: bytes) -> Element:
         where, what = refusal[0]
         code = ImportCode.UNSAFE if "nested" not in what else ImportCode.STRUCTURE
         raise ImportFailed(where, code, f"refused: {what}") from None
+    except LookupError as exc:  # the XML declaration names an encoding Python lacks
+        raise ImportFailed(
+            Where(parser.CurrentLineNumber, parser.CurrentColumnNumber + 1),
+            ImportCode.MALFORMED,
+            f"not readable XML: {exc}",
+        ) from None
     except expat.ExpatError as exc:
         message = expat.errors.messages.get(exc.code, str(exc)) if exc.code else str(exc)
         raise ImportFailed(

@@ -13,12 +13,15 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from backend.compiler.graphics.model import GraphicBody
 from backend.compiler.graphics.text_form import read_body, write_body
 from backend.engineering.plcopen.graphic import graphic_body
 from backend.engineering.plcopen.graphic_xml import body_xml
-from backend.engineering.plcopen.importer import import_plcopen
+from backend.engineering.plcopen.importer import import_plcopen, read_plcopen
+from backend.engineering.plcopen.issues import ImportFailed
 from backend.engineering.plcopen.xml_tree import Element, parse_xml
 from tests.conftest import padt
 from tests.support.corpus_paths import corpus_dir
@@ -119,9 +122,7 @@ def test_il_stays_refused_by_name_with_the_reason(tmp_path: Path) -> None:
     assert sorted(p.name for p in folder.iterdir()) == [
         "Adder.st", "Ladder.st", "Main.st", "Twice.st", "padt.toml",
     ]  # fmt: skip
-    assert "1: LEFT_RAIL {at 10 10 size 3 40 out 0 3 20}" in (
-        (folder / "Ladder.st").read_text()
-    )
+    assert "1: LEFT_RAIL {at 10 10 size 3 40 out 0 3 20}" in ((folder / "Ladder.st").read_text())
     toml = (folder / "padt.toml").read_text()
     assert "#   Lister: IL\n" in toml and 'name = "AdderInstance"' in toml
 
@@ -209,6 +210,79 @@ def test_a_broken_drawing_through_the_command_line(tmp_path: Path) -> None:
         "imported (FBD: <connection> without its refLocalId) [P0103]",
     ]
     assert padt("compile", str(folder)).returncode == 0
+
+
+# what a hostile drawing puts into attributes and texts (numbers that are none, names that
+# are none, ST comments, pragmas and arrows that the text form gives a meaning)
+VALUES = ["", "7", "99", "-1", "NaN", "1e9", "1.5", "true", "rising", "set", "bogus", "Q", "a b"]
+TEXTS = ["a -> (b)", "x // c", "x (* c *)", "{at 1 2}", "a | b", "x}", "3: IN y", "", "a\nb"]
+ATTRIBUTE = re.compile(r'(\w+)="([^"]*)"')
+TEXT = re.compile(r"<(expression|variable)>([^<]*)</\1>")
+
+
+def damaged(text: str, edits: list[tuple[int, float, int]]) -> str:
+    """drawn.xml with attribute values, texts and whole lines changed, still well-formed
+    mostly: the drawing's reader, not the XML parser, meets the damage."""
+    for kind, place, pick in edits:
+        if kind == 0:
+            found = list(ATTRIBUTE.finditer(text))
+            match = found[int(place * (len(found) - 1))]
+            text = text[: match.start(2)] + VALUES[pick % len(VALUES)] + text[match.end(2) :]
+        elif kind == 1:
+            found = list(TEXT.finditer(text))
+            match = found[int(place * (len(found) - 1))]
+            text = text[: match.start(2)] + TEXTS[pick % len(TEXTS)] + text[match.end(2) :]
+        else:
+            lines = text.split("\n")
+            at = int(place * (len(lines) - 1))
+            lines[at : at + 1] = [] if kind == 2 else [lines[at]] * 2
+            text = "\n".join(lines)
+    return text
+
+
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    edits=st.lists(
+        st.tuples(st.integers(0, 3), st.floats(0, 1), st.integers(0, 20)), min_size=1, max_size=3
+    )
+)
+def test_a_damaged_drawing_is_refused_at_a_place_or_read_whole(
+    tmp_path: Path, edits: list[tuple[int, float, int]]
+) -> None:
+    """Attribute values, expressions and lines of drawn.xml changed, removed or doubled: the
+    file is refused at a place, or a POU is left out with the place of the fault, or each
+    drawing goes through its text form unchanged; never another failure."""
+    xml = tmp_path / "damaged.xml"
+    xml.write_text(damaged(DRAWN.read_text(), edits))
+    try:
+        project = read_plcopen(xml)
+    except ImportFailed as refused:
+        assert refused.where.line >= 1 and refused.code.id.startswith("P")
+        return
+    for missing in project.not_imported:
+        assert missing.problem is None or missing.problem.line >= 1
+    for pou in project.pous:
+        if pou.graphic is not None:
+            read, problems = read_body(write_body(pou.graphic), "x.st", 1, 1)
+            assert problems == [] and without_places(read) == pou.graphic, pou.name
+
+
+def test_a_text_the_text_form_would_change_is_refused(tmp_path: Path) -> None:
+    """An expression holding an ST comment (or a pragma, an arrow) would mean something
+    else on its line: the POU is left out, at the element."""
+    xml = tmp_path / "comment.xml"
+    xml.write_text(DRAWN.read_text().replace("<expression>limit<", "<expression>limit // 3<"))
+    result = import_plcopen(xml, tmp_path / "out")
+    assert [(d.line, d.code, d.message) for d in result.diagnostics if d.code == "P0011"] == [
+        (
+            143,
+            "P0011",
+            "Counter not imported: FBD: the IN 'limit // 3' does not fit a line of the text "
+            "form (ST comments, pragmas or arrows in its text)",
+        )
+    ]
 
 
 # ---- the round trip: XML -> model -> text form -> model -> XML ----------------------------

@@ -178,6 +178,15 @@ def test_a_bad_file_is_refused_at_its_place_and_nothing_written(
     assert not folder.exists()
 
 
+def test_an_encoding_python_does_not_know_is_refused(tmp_path: Path) -> None:
+    xml = tmp_path / "odd.xml"
+    xml.write_text('<?xml version="1.0" encoding="falling"?>\n<project/>\n')
+    with pytest.raises(ImportFailed) as refused:
+        import_plcopen(xml, tmp_path / "out")
+    assert (refused.value.where.line, refused.value.code.id) == (1, "P0001")
+    assert refused.value.message == "not readable XML: unknown encoding: falling"
+
+
 def test_a_file_of_another_kind_is_no_plcopen_project(tmp_path: Path) -> None:
     xml = tmp_path / "other.xml"
     xml.write_text('<?xml version="1.0"?>\n<svg xmlns="http://www.w3.org/2000/svg"/>\n')
