@@ -198,11 +198,11 @@ class Code(Enum):
     # ---- 09: graphical bodies (FBD, LD)
     GRAPHIC_SYNTAX = "E0901", "element line of a graphical body that does not read"
     GRAPHIC_WIRE = "E0902", "wire from an element or pin that is not there"
-    GRAPHIC_UNCONNECTED = "E0903", "input of an element that needs a wire and has none"
     GRAPHIC_FEEDBACK = "E0904", "feedback loop through a FUNCTION's output"
     GRAPHIC_LABEL = "E0905", "jump to a label that is not there, or a name given twice"
     GRAPHIC_NAME = "E0906", "variable named like one the lowering of a drawing needs"
     GRAPHIC_KIND = "E0907", "element of LD in an FBD body"
+    GRAPHIC_UNCONNECTED = "W0901", "element without the wire it acts on, left out"
 
     # ---- 08: extensions of other dialects, accepted with a warning
     QUALIFIED_ENUM = "W0801", "qualified enumeration value E.Value (CODESYS/TwinCAT)"

@@ -28,7 +28,7 @@ from backend.compiler import ast
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.graphics.context import context_of
-from backend.compiler.graphics.lower import Context, lower, temporaries_block
+from backend.compiler.graphics.lower import Lowered, lower, temporaries_block
 from backend.compiler.graphics.model import GraphicBody
 from backend.compiler.graphics.text_form import read_body
 from backend.compiler.limits import (
@@ -1267,7 +1267,9 @@ def unit_of(file: str, pieces: Sequence[Piece]) -> ast.SourceUnit:
     if errors or misplaced:
         raise CompileError(errors + misplaced)
     globals_ = tuple(i for i in items if isinstance(i, ast.VarBlock))
-    pous = _with_drawings_lowered(file, tuple(i for i in items if isinstance(i, ast.Pou)), globals_)
+    pous, drawing_warnings = _with_drawings_lowered(
+        file, tuple(i for i in items if isinstance(i, ast.Pou)), globals_
+    )
     types = tuple(t for i in items if isinstance(i, list) for t in i)
     configurations = tuple(i for i in items if isinstance(i, ast.Configuration))
     # globals of a configuration or resource are globals like any other
@@ -1276,7 +1278,7 @@ def unit_of(file: str, pieces: Sequence[Piece]) -> ast.SourceUnit:
         for c in configurations
         for block in (*c.globals, *(b for r in c.resources for b in r.globals))
     )
-    warnings = tuple(w for p in pieces for w in p.warnings)
+    warnings = tuple(w for p in pieces for w in p.warnings) + drawing_warnings
     addresses = tuple(a for p in pieces for a in p.addresses)
     interfaces = tuple(i for i in items if isinstance(i, ast.Interface))
     return ast.SourceUnit(
@@ -1286,31 +1288,35 @@ def unit_of(file: str, pieces: Sequence[Piece]) -> ast.SourceUnit:
 
 def _with_drawings_lowered(
     file: str, pous: tuple[ast.Pou, ...], globals_: tuple[ast.VarBlock, ...]
-) -> tuple[ast.Pou, ...]:
+) -> tuple[tuple[ast.Pou, ...], tuple[Diagnostic, ...]]:
     """The POUs with each drawn body (FBD, LD) lowered to statements, which the rest of the
-    compiler takes as it takes any body. Raises `CompileError` for a drawing that does not
-    lower."""
+    compiler takes as it takes any body, and the warnings of the drawings. Raises
+    `CompileError` for a drawing that does not lower."""
     if not any(p.graphic is not None for p in pous):
-        return pous
+        return pous, ()
     result = []
     problems: list[Diagnostic] = []
+    warnings: list[Diagnostic] = []
     for pou in pous:
         if pou.graphic is None:
             result.append(pou)
             continue
+        lowered = lower(pou.graphic, file, context_of(pou, pous, globals_))
+        errors = [d for d in lowered.diagnostics if d.severity == "error"]
+        warnings += [d for d in lowered.diagnostics if d.severity != "error"]
+        if errors:
+            problems += errors
+            continue
         try:
-            result.append(_lowered(file, pou, pou.graphic, context_of(pou, pous, globals_)))
+            result.append(_parsed_lowering(file, pou, pou.graphic, lowered))
         except CompileError as exc:
             problems += exc.diagnostics
     if problems:
         raise CompileError(problems)
-    return tuple(result)
+    return tuple(result), tuple(warnings)
 
 
-def _lowered(file: str, pou: ast.Pou, body: GraphicBody, context: Context) -> ast.Pou:
-    lowered = lower(body, file, context)
-    if lowered.diagnostics:
-        raise CompileError(lowered.diagnostics)
+def _parsed_lowering(file: str, pou: ast.Pou, body: GraphicBody, lowered: Lowered) -> ast.Pou:
     # the lowered text, parsed as the body of a program: line 1 is its header, then the
     # hidden variables, then one line of statements per element
     header = ["PROGRAM lowered"]

@@ -87,8 +87,9 @@ def converted_text(file: str, text: str, wanted: set[str] | None) -> tuple[str, 
     for pou in drawn:
         body = pou.graphic
         lowered = lower(body, file, context_of(pou, pous, globals_))
-        if lowered.diagnostics:
-            raise CompileError(lowered.diagnostics)
+        errors = [d for d in lowered.diagnostics if d.severity == "error"]
+        if errors:
+            raise CompileError(errors)
         start = offsets[body.line - 1] + body.col - 1
         end = _END.search(text, start)
         if end is None:  # the parser found it: cannot happen

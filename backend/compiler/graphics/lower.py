@@ -160,6 +160,14 @@ def lower(body: GraphicBody, file: str, context: Context) -> Lowered:
     return _Lowering(body, file, context).run()
 
 
+# kinds that act on what is wired into them, and without a wire do nothing
+_ACTS_ON_ITS_WIRE = ("OUT", "INOUT", "JUMP", "RETURN", "CONNECTOR", "COIL")
+
+
+def _wired(element: Element) -> bool:
+    return bool(element.inputs and element.inputs[0].wires)
+
+
 def _temporary(element: Element, pin: str) -> str:
     return f"_TMP_{element.text}{element.id}_{pin}".upper()
 
@@ -191,7 +199,7 @@ class _Lowering:
 
     def run(self) -> Lowered:
         self._check_elements()
-        if self.out.diagnostics:
+        if any(d.severity == "error" for d in self.out.diagnostics):
             return self.out
         self._type_functions()
         labels = sorted((e for e in self.body.elements if e.kind == "LABEL"), key=lambda e: e.at.y)
@@ -247,6 +255,8 @@ class _Lowering:
             self.out.lines.append(Line(f"_TMP_JUMP := {following};{ends}", None))
 
     def _has_statement(self, element: Element) -> bool:
+        if element.kind in _ACTS_ON_ITS_WIRE and not _wired(element):
+            return False  # left out, with a warning (W0901)
         if element.kind in ("OUT", "INOUT", "JUMP", "RETURN", "CONTACT", "COIL"):
             return True
         if element.kind != "BLOCK":
@@ -563,13 +573,12 @@ class _Lowering:
             for pin in element.inputs:
                 for wire in pin.wires:
                     self._check_wire(element, wire)
-            needs_wire = element.kind in ("OUT", "INOUT", "JUMP", "RETURN", "CONNECTOR", "COIL")
-            if needs_wire and not (element.inputs and element.inputs[0].wires):
+            if element.kind in _ACTS_ON_ITS_WIRE and not _wired(element):
                 what = f"{element.kind} {element.text}".strip()
                 self._error(
                     element,
                     Code.GRAPHIC_UNCONNECTED,
-                    f"{what} (element {element.id}) has no wire into it",
+                    f"{what} (element {element.id}) has no wire into it: it is left out",
                 )
             if element.kind == "CONTINUATION" and element.text.upper() not in self.connectors:
                 self._error(
