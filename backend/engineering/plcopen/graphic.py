@@ -16,16 +16,19 @@ import re
 from dataclasses import replace
 
 from backend.compiler.graphics.model import Element, GraphicBody, Pin, Point, Wire
-from backend.compiler.graphics.text_form import read_body, write_body
+from backend.compiler.graphics.text_form import element_line, read_body, write_body
 from backend.engineering.plcopen.issues import Where
 from backend.engineering.plcopen.xml_tree import Element as Xml
 from backend.engineering.plcopen.xml_tree import st_source
 
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 NUMBER = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)\Z")  # xsd:decimal: no NaN, no 1e9
-WHOLE = re.compile(r"[0-9]{1,9}\Z")  # a local id or an execution order
+# a local id or an execution order (CODESYS numbers elements from 10^10 up, per network)
+WHOLE = re.compile(r"[0-9]{1,18}\Z")
 LARGEST = 1e9  # a coordinate or size beyond this is no drawing
 NOT_PARTS = ("addData", "documentation")
+GROUPS = ("inputVariables", "inOutVariables", "outputVariables")  # a block's pins
+UNSET = "???"  # CODESYS's expression on a connection point that is not connected
 # TC6 element -> the model's kind
 KIND_OF = {
     "inVariable": "IN",
@@ -64,6 +67,8 @@ def graphic_body(body: Xml) -> GraphicBody:
     for item in body.children:
         if item.tag in NOT_PARTS:
             continue
+        if item.tag == "vendorElement" and not _pins(item):
+            continue  # drawn only for the tool that wrote it (CODESYS's network titles)
         if item.tag not in KIND_OF:
             raise DrawingProblem(
                 item.where, f"a <{item.tag}> in an <{body.tag}> body, which padt does not draw"
@@ -82,19 +87,27 @@ def graphic_body(body: Xml) -> GraphicBody:
     return drawn
 
 
+def _pins(item: Xml) -> bool:
+    """Whether a vendor's element takes part in the logic: it has a connection point."""
+    parts = ("connectionPointIn", "connectionPointOut", *GROUPS)
+    return any(child.tag in parts for child in item.children)
+
+
 def _check_text_form(body: GraphicBody, items: dict[int, Xml]) -> None:
     """Each element reads back from its line of the text form as it is: an expression or a
     name that would not (one holding `//`, `{`, `->`, ...) is refused here, not written
     into a file that means something else."""
-    read, _ = read_body(write_body(body), "", 1, 1)
-    for element in body.elements:
+    read, problems = read_body(write_body(body), "", 1, 1)
+    why = {problem.line: problem.message for problem in problems}
+    for line, element in enumerate(body.elements, start=2):  # line 1: the keyword
         again = read.element(element.id)
         if again is None or replace(again, line=0, col=0) != element:
             words = f" {element.text!r}" if element.text else ""
+            reason = why.get(line, f"`{element_line(element)}` reads back as another element")
             raise DrawingProblem(
                 items[element.id].where,
-                f"the {element.kind}{words} does not fit a line of the text form (ST "
-                "comments, pragmas or arrows in its text)",
+                f"the {element.kind}{words} (localId {element.id}) does not fit a line of the "
+                f"text form: {reason}",
             )
 
 
@@ -173,7 +186,7 @@ def _block_pins(block: Xml, connections: list[Xml]) -> tuple[tuple[Pin, ...], tu
     inputs: list[Pin] = []
     outputs: list[Pin] = []
     names: dict[str, int] = {}
-    for group in ("inputVariables", "inOutVariables", "outputVariables"):
+    for group in GROUPS:
         holder = block.child(group)
         for variable in holder.all("variable") if holder is not None else []:
             name = variable.attrs.get("formalParameter")
@@ -212,10 +225,7 @@ def _pin_out(item: Xml, name: str, flag: str) -> Pin:
 
 
 def _in(point: Xml, connections: list[Xml], name: str, flag: str) -> Pin:
-    if point.child("expression") is not None:
-        raise DrawingProblem(
-            point.where, "an expression on a connection point (padt wires pins only)"
-        )
+    _no_expression(point)
     wires = []
     for connection in point.all("connection"):
         source = _whole(connection, "refLocalId", required=True)
@@ -227,11 +237,18 @@ def _in(point: Xml, connections: list[Xml], name: str, flag: str) -> Pin:
 
 
 def _out(point: Xml, name: str, flag: str = "") -> Pin:
-    if point.child("expression") is not None:
-        raise DrawingProblem(
-            point.where, "an expression on a connection point (padt wires pins only)"
-        )
+    _no_expression(point)
     return Pin(name, (), flag, _relative(point))
+
+
+def _no_expression(point: Xml) -> None:
+    """TC6 lets a connection point hold an expression instead of connections; padt wires
+    pins only. CODESYS's `???` (nothing there) is taken for what it says."""
+    expression = point.child("expression")
+    if expression is not None and expression.text().strip() not in ("", UNSET):
+        raise DrawingProblem(
+            expression.where, "an expression on a connection point (padt wires pins only)"
+        )
 
 
 def _relative(point: Xml) -> Point | None:

@@ -112,6 +112,37 @@ def test_an_imported_ladder_runs(tmp_path: Path) -> None:
     }
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="the text form reads local ids of at most 9 digits and writes an unconnected pin "
+    "of a right rail as nothing; CODESYS numbers elements from 10^10 and leaves its right "
+    "rail unconnected",
+)
+def test_a_codesys_ladder_is_imported_and_runs(tmp_path: Path) -> None:
+    """LD as CODESYS exports it (network titles as vendor elements, `???` on an output
+    nothing is connected to, no places, local ids from 10^10): imported, and it runs."""
+    folder, code, stderr = imported(tmp_path, FIXTURES / "codesys_ld.xml")
+    assert (code, stderr) == (0, "")
+    body = (folder / "PLC_PRG.st").read_text()
+    for line in (
+        "  10000000002: CONTACT start := 0\n",
+        "  10000000004: BLOCK TON delay (IN := 10000000002, PT := 10000000003) -> (Q, ET)\n",
+        "  20000000001: CONTACT[NEGATED] stop := 20000000000\n",
+    ):
+        assert line in body
+    assert "10000000000:" not in body  # the network title, a vendor's element, left out
+    names = ["PLC_PRG.ready", "PLC_PRG.motor"]
+    run = padt(
+        "sim", str(folder), "--cycles", "5", "--cycle-ms", "20", "--trace", ",".join(names),
+        "--set", "PLC_PRG.start=TRUE",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    rows = [json.loads(row)["values"] for row in run.stdout.splitlines()]
+    # TON 50 ms on 20 ms cycles: Q at 60 ms, the fourth cycle; the motor's rung reads it
+    assert [row["PLC_PRG.ready"] for row in rows] == [False, False, False, True, True]
+    assert [row["PLC_PRG.motor"] for row in rows][::4] == [False, True]
+
+
 def test_il_stays_refused_by_name_with_the_reason(tmp_path: Path) -> None:
     folder, code, stderr = imported(tmp_path, FIXTURES / "graphical.xml")
     assert code == 1
@@ -174,9 +205,10 @@ BROKEN = [
         "FBD: <outVariable> both negated and R_EDGE (a pin takes one of them)",
     ),
     (
-        "an element of a vendor",
+        "an element of a vendor with a pin",
         "<label label=",
-        '<vendorElement localId="40"><position x="0" y="0"/></vendorElement><label label=',
+        '<vendorElement localId="40"><position x="0" y="0"/><connectionPointOut/>'
+        "</vendorElement><label label=",
         "FBD: a <vendorElement> in an <FBD> body, which padt does not draw",
     ),
 ]
@@ -279,8 +311,9 @@ def test_a_text_the_text_form_would_change_is_refused(tmp_path: Path) -> None:
         (
             143,
             "P0011",
-            "Counter not imported: FBD: the IN 'limit // 3' does not fit a line of the text "
-            "form (ST comments, pragmas or arrows in its text)",
+            "Counter not imported: FBD: the IN 'limit // 3' (localId 12) does not fit a line "
+            "of the text form: `12: IN limit // 3 {at 460 240 size 60 30 out 0 60 15}` reads "
+            "back as another element",
         )
     ]
 
