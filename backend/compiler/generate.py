@@ -33,7 +33,9 @@ from backend.compiler.infer import (
     Scope,
     SizeOf,
     binds_reference,
+    block_eno,
     enable_argument,
+    instance_fields,
     is_external,
     is_implicit,
 )
@@ -100,7 +102,7 @@ def class_members(pou: PouSymbols) -> set[str]:
     sfc = pou.pou.sfc
     chart = _Chart(sfc).slots() if sfc is not None else []
     actions = [_action_method(action.name) for action in sfc.actions] if sfc is not None else []
-    edges = [_edge_memory(v) for v in _instance_variables(pou) if v.edge is not None]
+    edges = [_edge_memory(v) for v in instance_fields(pou) if v.edge is not None]
     methods = [method_attr(m.name) for m in pou.methods.values()]
     methods += [f(p.name) for p in pou.properties.values() for f in (getter_attr, setter_attr)]
     return {"__slots__", "KIND__", "__init__", "__call__", *chart, *actions, *edges, *methods}
@@ -197,6 +199,8 @@ class _Emitter:
     counter_ranges: dict[str, tuple[int, int]] = field(default_factory=dict)
     # generating a method: its own variables (by id), Python locals of its function
     method_locals: frozenset[int] = frozenset()
+    # the temporary holding the EN of each call generated with one, by id() of the call
+    enables: dict[int, str] = field(default_factory=dict)
 
     def emit(self, depth: int, line: str) -> None:
         if depth > MAX_INDENT:
@@ -551,11 +555,13 @@ class _Emitter:
         assert builtin is not None, call.name
         args = self.scope.builtin_arguments(builtin, call)
         assert not isinstance(args, Misfit)
+        enable = self._function_enable(call, None)
         values = [self.exact(arg) for arg in args]
         result = _type(self.scope, call)
-        return _Value(
-            builtin.emit([v.code for v in values], [v.type for v in values], result), result
-        )
+        code = builtin.emit([v.code for v in values], [v.type for v in values], result)
+        if enable is not None:  # EN FALSE: the function does not run and gives its default
+            code = f"({code} if {enable} else {self.initial(result, None)})"
+        return _Value(code, result)
 
     def _accessor_owner(self, access: PropertyAccess) -> tuple[str, str | None]:
         """(the object or class whose accessor runs, the instance a static call passes)."""
@@ -628,7 +634,7 @@ class _Emitter:
             keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
         code = f"{callee}({', '.join(keywords)})"
         result = pou.return_type or BOOL
-        enable = self._enable(call, pou)
+        enable = self._function_enable(call, pou)
         if enable is not None:  # EN FALSE: the function does not run and gives its default
             default = self.initial(result, None)
             if returns_tuple(pou):
@@ -652,27 +658,29 @@ class _Emitter:
             self.pre.append(store if enable is None else f"if {enable}: {store}")
         return _Value(f"{handle}[0]", result)
 
-    def _enable(self, call: ast.Call, callee: PouSymbols) -> str | None:
-        """EN of a call, evaluated once into a temporary (None when always enabled); ENO
-        outputs are stored from it right away, since a call that runs always succeeds."""
+    def _enable(self, call: ast.Call, callee: PouSymbols | None) -> str | None:
+        """EN of a call (`callee` None: of a standard function), evaluated once into a
+        temporary; None when the call always runs."""
         enable_expr = enable_argument(call, callee)
-        eno_targets = [
-            arg.value
-            for arg in call.args
-            if arg.name is not None
-            and key(arg.name) == "ENO"
-            and arg.value is not None
-            and "ENO" not in callee.by_key
-        ]
-        if enable_expr is None and not eno_targets:
+        if enable_expr is None:
             return None
         enable = self.temp()
-        self.pre.append(
-            f"{enable} = {self.exact(enable_expr).code if enable_expr is not None else 'True'}"
-        )
-        for target in eno_targets:
-            self.pre.append(self.store(target, enable))
+        self.pre.append(f"{enable} = {self.exact(enable_expr).code}")
+        self.enables[id(call)] = enable
         return enable
+
+    def _function_enable(self, call: ast.Call, callee: PouSymbols | None) -> str | None:
+        """`_enable`, and the ENO outputs stored from it right away: a function that runs
+        always succeeds."""
+        enable = self._enable(call, callee)
+        for target in _eno_targets(call, callee):
+            self.pre.append(self._eno_store(target, enable or "True"))
+        return enable
+
+    def _eno_store(self, target: ast.Argument, code: str) -> str:
+        """`ENO => ok` (`NOT ENO => failed`) with ENO's value in `code`."""
+        assert target.value is not None
+        return self.store(target.value, f"(not {code})" if target.negated else code)
 
     def converted(self, target: Type, value_expr: ast.Expr) -> str:
         """Code for `value_expr` stored into a variable of type `target`."""
@@ -858,6 +866,10 @@ class _Emitter:
             code = self.initial(target_type, value)
         else:
             code = self.converted(target_type, value)
+        enable = self.enables.get(id(value))
+        if enable is not None:  # `x := F(EN := FALSE, ...)` leaves x as it was (as Beremiz)
+            self.emit(depth, f"if {enable}:")
+            depth += 1
         self.emit(depth, self.store(target, code))
 
     def attempt(self, target: Type, value: ast.Expr) -> str:
@@ -1167,11 +1179,17 @@ class _Emitter:
         else:  # a program, an instance, what a REFERENCE TO refers to
             instance = self.expr(ast.NameRef(call.name, call.pos)).code
         enable = self._enable(call, callee)
+        eno = block_eno(callee)
+        eno_targets = _eno_targets(call, callee)
+        if eno is None:  # a program: ENO TRUE when it runs
+            for target in eno_targets:
+                self.pre.append(self._eno_store(target, enable or "True"))
+        handle = self.temp()
+        self.emit(depth, f"{handle} = {instance}")
+        outer = depth
         if enable is not None:
             self.emit(depth, f"if {enable}:")
             depth += 1
-        handle = self.temp()
-        self.emit(depth, f"{handle} = {instance}")
         outputs: list[tuple[ast.Argument, Variable]] = []
         for arg, param in self.scope.connect_arguments(callee, call):
             if arg.value is None or param is None or is_implicit(param):
@@ -1209,6 +1227,15 @@ class _Emitter:
             self.emit(
                 depth, self.store(arg.value, convert_value(_Value(value, param.type), target_type))
             )
+        if eno is None:
+            return
+        for target in eno_targets:  # what the block's body left in ENO
+            self.emit(depth, self._eno_store(target, f"{handle}.ENO"))
+        if enable is not None:  # EN FALSE: the body does not run, ENO is FALSE
+            self.emit(outer, "else:")
+            self.emit(outer + 1, f"{handle}.ENO = False")
+            for target in eno_targets:
+                self.emit(outer + 1, self._eno_store(target, "False"))
 
     def _action_instance(self, action: ActionCall) -> str:
         """The object whose action is called: this POU's own, a program's, an instance's."""
@@ -1219,6 +1246,18 @@ class _Emitter:
                 return f"_P.{class_name(pou.name)}"
             case receiver:
                 return self.expr(receiver).code
+
+
+def _eno_targets(call: ast.Call, callee: PouSymbols | None) -> list[ast.Argument]:
+    """The arguments that store a call's implicit ENO (`ENO => ok`): none when the POU
+    declares a variable named ENO, which is then an output like any other."""
+    if callee is not None and "ENO" in callee.by_key:
+        return []
+    return [
+        arg
+        for arg in call.args
+        if arg.name is not None and key(arg.name) == "ENO" and arg.value is not None
+    ]
 
 
 def wrap_constant(value: int, t: ElementaryType) -> int:
@@ -1358,10 +1397,6 @@ def _type(scope: Scope, expr: ast.Expr) -> Type:
     return result
 
 
-def _instance_variables(pou: PouSymbols) -> list[Variable]:
-    return [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
-
-
 @dataclass(frozen=True)
 class GeneratedPou:
     source: str
@@ -1382,7 +1417,7 @@ def generate_pou(
 
 
 def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
-    fields = _instance_variables(pou)
+    fields = instance_fields(pou)
     sfc = pou.pou.sfc
     chart = _Chart(sfc) if sfc is not None else None
     edges = [v for v in fields if v.edge is not None]
@@ -1409,6 +1444,8 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
             emitter.emit(2, f"s.{slot} = _ActionControl()")
     emitter.emit(0, "")
     emitter.emit(1, "def __call__(s):")
+    if block_eno(pou) is not None:  # a call that runs has ENO TRUE unless its body says not
+        emitter.emit(2, "s.ENO = True")
     for variable in edges:  # the body sees TRUE only in the call that brings the edge
         attr, memory = f"s.{variable.attr}", f"s.{_edge_memory(variable)}"
         rising = variable.edge == "R_EDGE"

@@ -210,6 +210,8 @@ class Scope:
         found = visible(self.resolved, self.pou, name)
         if found is None and key(name) in SELF_NAMES:
             return self._self_reference(key(name))
+        if found is None and key(name) == "ENO":  # a block's body may set its own ENO
+            return block_eno(self.pou)
         return found
 
     def block(self) -> PouSymbols | None:
@@ -539,7 +541,10 @@ class Scope:
             return self.resolved.system.get(key(expr.member))
         base_type = self.type_of(expr.base)
         if isinstance(base_type, FbType):
-            member = self.fb_symbols(base_type).by_key.get(key(expr.member))
+            block = self.fb_symbols(base_type)
+            member = block.by_key.get(key(expr.member))
+            if member is None and key(expr.member) == "ENO":
+                return block_eno(block)
             if member is None or member.kind in ("VAR_TEMP", "VAR_GLOBAL"):
                 return None
             return member
@@ -695,7 +700,7 @@ class Scope:
     ) -> list[ast.Expr] | Misfit:
         """The arguments of a builtin call in parameter order: named ones in their place,
         positional ones filling the remaining places from the left."""
-        values = [arg for arg in call.args if arg.value is not None]
+        values = [arg for arg in call.args if arg.value is not None and not is_en_eno(arg)]
         if builtin.name == "PRINTF":  # the test helper prints through pointers: unwrap them
             return [_unwrap_pointer(arg.value) for arg in values if arg.value is not None]
         if all(arg.name is None for arg in values):
@@ -773,10 +778,35 @@ class Scope:
 
 
 # Every function and function block has EN (run only when TRUE) and ENO (TRUE when it ran).
+# A function block's ENO is a variable of each instance too (TRUE until a call with EN
+# FALSE), unless the block declares a variable of that name itself.
+_NOWHERE = Pos("", 0, 0)
+_TRUE = ast.BoolLiteral(True, _NOWHERE)
 IMPLICIT_PARAMETERS = {
-    "EN": Variable("EN", "VAR_INPUT", BOOL, None, False, False, None, "EN", Pos("", 0, 0)),
-    "ENO": Variable("ENO", "VAR_OUTPUT", BOOL, None, False, False, None, "ENO", Pos("", 0, 0)),
+    "EN": Variable("EN", "VAR_INPUT", BOOL, None, False, False, None, "EN", _NOWHERE),
+    "ENO": Variable("ENO", "VAR_OUTPUT", BOOL, _TRUE, False, False, None, "ENO", _NOWHERE),
 }
+
+
+def block_eno(pou: PouSymbols) -> Variable | None:
+    """The implicit ENO of a FUNCTION_BLOCK's instances (None: not a block, or it declares
+    a variable named ENO, which is then its own)."""
+    if pou.kind != "FUNCTION_BLOCK" or "ENO" in pou.by_key:
+        return None
+    return IMPLICIT_PARAMETERS["ENO"]
+
+
+def instance_fields(pou: PouSymbols) -> list[Variable]:
+    """The variables an instance of a PROGRAM or FUNCTION_BLOCK holds: its own (but the
+    globals and temporaries) and a block's implicit ENO, last."""
+    own = [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
+    eno = block_eno(pou)
+    return own if eno is None else [*own, eno]
+
+
+def is_en_eno(arg: ast.Argument) -> bool:
+    """Is `arg` the EN or ENO of a standard function's call (which have no other)?"""
+    return arg.name is not None and key(arg.name) in IMPLICIT_PARAMETERS
 
 
 def smallest_unsigned(value: int) -> ElementaryType:
@@ -794,10 +824,11 @@ def binds_reference(param: Variable, arg: ast.Argument) -> bool:
     return param.kind == "VAR_INPUT" and not arg.is_output and is_implicit_reference(param.type)
 
 
-def enable_argument(call: ast.Call, callee: PouSymbols) -> ast.Expr | None:
+def enable_argument(call: ast.Call, callee: PouSymbols | None) -> ast.Expr | None:
     """The expression connected to the implicit EN, unless it is missing or the literal TRUE
-    (a POU that declares its own `EN` input gets that input instead)."""
-    if "EN" in callee.by_key:
+    (a POU that declares its own `EN` input gets that input instead; `callee` None: a
+    standard function)."""
+    if callee is not None and "EN" in callee.by_key:
         return None
     for arg in call.args:
         if arg.name is not None and key(arg.name) == "EN" and arg.value is not None:

@@ -31,7 +31,7 @@ from backend.compiler.generate import (
     generate_struct,
     struct_class,
 )
-from backend.compiler.infer import is_external
+from backend.compiler.infer import instance_fields, is_external
 from backend.compiler.limits import MAX_PROJECT_CODE, MiB
 from backend.compiler.parse import TokenBudget, parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
@@ -526,11 +526,7 @@ def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
             code = replace(code, returns=_type_text(pou.return_type))
     else:
         # a variable-length in-out is the caller's array, shown where the caller has it
-        stored = [
-            v
-            for v in pou.variables
-            if v.kind not in ("VAR_GLOBAL", "VAR_TEMP") and not isinstance(v.type, OpenArrayType)
-        ]
+        stored = [v for v in instance_fields(pou) if not isinstance(v.type, OpenArrayType)]
         code = _unit_code(pou.name, pou.kind, class_name(pou.name), generated.source, stored)
     return replace(
         code, file=pou.pou.pos.file, st_lines=generated.st_lines, chart=_chart(pou.pou.sfc)

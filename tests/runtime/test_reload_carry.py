@@ -138,7 +138,7 @@ def test_a_pou_that_gains_a_variable_is_copied_and_the_program_around_it_adopted
     main = h.resource.programs[0].instance
     counter, small = main.c, main.s
     job = prepared(h, SMALL_LAYOUT)
-    assert job.prepared.copied == 2  # Small's x and y; everything else comes along
+    assert job.prepared.copied == 3  # Small's x, y and ENO; everything else comes along
     reload_switch.finish(h.resource, job)
     assert h.resource.programs[0].instance is main and main.c is counter
     assert main.s is not small and h.value("Main.s.k") == 0

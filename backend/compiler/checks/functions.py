@@ -4,6 +4,7 @@ parameters, standard ones with arguments their typing accepts."""
 from __future__ import annotations
 
 from backend.compiler import ast
+from backend.compiler.ast import key
 from backend.compiler.builtins import Builtin
 from backend.compiler.checks.calls import check_connection
 from backend.compiler.checks.conversions import (
@@ -22,6 +23,7 @@ from backend.compiler.checks.references import (
 from backend.compiler.checks.targets import refuse_system_write
 from backend.compiler.codes import Code
 from backend.compiler.infer import (
+    IMPLICIT_PARAMETERS,
     IsValidRef,
     MethodCall,
     Misfit,
@@ -32,6 +34,7 @@ from backend.compiler.infer import (
     StandardFunction,
     UserFunction,
     binds_reference,
+    is_en_eno,
 )
 from backend.compiler.qualified_names import unknown_qualified
 from backend.compiler.resolve import PouSymbols, Variable
@@ -62,6 +65,7 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
         case MethodCall():
             pass  # checks.methods (check_method_call), which needs to know how it is used
         case StandardFunction(builtin=builtin):
+            check_standard_enable(scope, call)
             misfit = scope.standard_call(builtin, call)
             if isinstance(misfit, Misfit):
                 code, problem = _misfit(misfit, builtin)
@@ -89,6 +93,19 @@ def _misfit(misfit: Misfit, builtin: Builtin) -> tuple[Code, str]:
             return Code.MISSING_ARGUMENTS, f"needs at least {builtin.min_args} arguments"
         case "types":
             return Code.STANDARD_ARGUMENTS, misfit.detail  # what the function's typing says
+
+
+def check_standard_enable(scope: Scope, call: ast.Call) -> None:
+    """EN (a BOOL input) and ENO (a BOOL output) of a standard function's call."""
+    for arg in call.args:
+        if not is_en_eno(arg):
+            continue
+        param = IMPLICIT_PARAMETERS[key(arg.name or "")]
+        if arg.is_output and param.kind == "VAR_INPUT":
+            message = f"'{param.name}' of '{call.name}' is an input, not an output"
+            scope.report(arg.pos, Code.INPUT_AS_OUTPUT, message)
+            continue
+        check_argument(scope, arg, param)
 
 
 def check_user_call(scope: Scope, pou: PouSymbols, call: ast.Call) -> None:

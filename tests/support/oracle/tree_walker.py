@@ -201,6 +201,11 @@ def stored_variables(pou: PouSymbols) -> list[Variable]:
     return [v for v in pou.variables if v.kind not in ("VAR_GLOBAL", "VAR_TEMP")]
 
 
+def _has_implicit_eno(pou: PouSymbols) -> bool:
+    """Every function block instance has a BOOL ENO, unless the block declares its own."""
+    return pou.kind == "FUNCTION_BLOCK" and "ENO" not in pou.by_key
+
+
 @dataclass
 class _Typing:
     """The types of one POU's expressions, from the compiler's own typing rules, each
@@ -306,6 +311,8 @@ class TreeWalker:
         instance = Instance(pou)
         for variable in stored_variables(pou):
             instance.slots[key(variable.name)] = self._initial(variable, instance)
+        if _has_implicit_eno(pou):
+            instance.slots["ENO"] = True
         return instance
 
     def _initial(self, variable: Variable, owner: Instance) -> Value | Instance:
@@ -331,6 +338,8 @@ class TreeWalker:
     def invoke(self, instance: Instance) -> None:
         """One call of a function block (or one cycle of a program)."""
         pou = instance.pou
+        if _has_implicit_eno(pou):  # IEC: a block that runs sets ENO TRUE
+            instance.slots["ENO"] = True
         if key(pou.name) == "TON" and pou.pou.pos.file.startswith("stdlib/"):
             self._ton(instance)
             return
@@ -695,6 +704,8 @@ def _collect(instance: Instance, prefix: str, out: dict[str, object]) -> None:
             _collect(found, path, out)
         else:
             out[path] = found
+    if _has_implicit_eno(instance.pou):
+        out[f"{prefix}.ENO"] = instance.get("ENO")
 
 
 def _front_end(sources: list[SourceFile]) -> tuple[Resolved, list[str]]:

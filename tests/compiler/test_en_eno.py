@@ -1,0 +1,172 @@
+"""EN and ENO in Structured Text (docs/language.md, "EN and ENO"): every standard and user
+FUNCTION takes EN (a BOOL input) and gives ENO (a BOOL output, `ENO => ok`) in a formal
+call; every function block instance has ENO. With EN FALSE nothing runs: ENO is FALSE, the
+target of `x := F(EN := FALSE, ...)` and of the call's `=>` outputs keep their values (as
+Beremiz leaves them), and inside a larger expression the call gives its type's initial
+value. The same program runs on the Python tier (`padt sim`) and on the native tier (the
+runtime's default), every variable compared after every cycle. Real C compiles, real
+resources on virtual clocks."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from backend.compiler.pipeline import compile_sources
+from backend.compiler.source import SourceFile
+from runtime.native.tier import NativeTier
+from tests.support.native_runs import Pair, program_error, side_by_side
+
+
+@pytest.fixture(scope="module")
+def tier(tmp_path_factory: pytest.TempPathFactory) -> NativeTier:
+    found = NativeTier(tmp_path_factory.mktemp("native-cache"))
+    if not found.available:
+        if os.environ.get("CI") == "true":
+            pytest.fail("the native tier needs a C compiler and Python.h; CI must have both")
+        pytest.skip("no C compiler or no Python.h here: the native tier cannot build")
+    return found
+
+
+BLOCKS = """
+FUNCTION Twice : INT
+VAR_INPUT v : INT; END_VAR
+VAR_OUTPUT half : INT; END_VAR
+Twice := v * 2;
+half := v / 2;
+END_FUNCTION
+FUNCTION_BLOCK Guard
+VAR_INPUT limit : INT; END_VAR
+VAR_OUTPUT runs : INT; END_VAR
+runs := runs + 1;
+IF limit = 5 THEN ENO := FALSE; END_IF;   (* IEC lets a body say it failed *)
+END_FUNCTION_BLOCK
+"""
+
+PROGRAM = (
+    BLOCKS
+    + """
+PROGRAM Main
+VAR
+  n : INT;
+  c : BOOL;
+  a : INT := 3;
+  b : INT := 4;
+  sum, prod, big, lim : INT := -1;
+  nested : INT;
+  okAdd, okMul, okMax, okLim, okT, okG : BOOL := TRUE;
+  t1 : TON;
+  et1 : TIME := T#5s;
+  tEno : BOOL := TRUE;
+  g, spare : Guard;
+  gEno, offEno, onEno, maxFailed, tFailed : BOOL;
+  real1 : REAL := -1.0;
+END_VAR
+n := n + 1;
+c := n >= 3;   (* cycles 1 and 2: EN FALSE; then TRUE *)
+sum := ADD(EN := c, IN1 := a, IN2 := b, ENO => okAdd);
+prod := MUL(EN := c, IN1 := a, IN2 := b, ENO => okMul);
+big := MAX(EN := c, IN1 := a, IN2 := b, ENO => okMax, NOT ENO => maxFailed);
+lim := LIMIT(EN := c, MN := 0, IN := n, MX := 4, ENO => okLim);
+real1 := INT_TO_REAL(EN := c, IN := n);
+nested := 100 + ADD(EN := c, IN1 := a, IN2 := b);
+t1(EN := c, IN := TRUE, PT := T#1s, ET => et1, ENO => okT, NOT ENO => tFailed);
+tEno := t1.ENO;
+g(EN := n <> 4, limit := n, ENO => okG);
+gEno := g.ENO;
+spare(EN := FALSE);
+offEno := spare.ENO;
+spare();
+onEno := spare.ENO;
+END_PROGRAM
+PROGRAM Outputs   (* a FUNCTION with VAR_OUTPUT: left to Python on the native tier too *)
+VAR n : INT; tw, half : INT := -1; okTwice : BOOL := TRUE; END_VAR
+n := n + 1;
+tw := Twice(EN := n >= 3, v := n, half => half, ENO => okTwice);
+END_PROGRAM
+"""
+)
+
+
+def run_alike(text: str, tier: NativeTier) -> Pair:
+    pair = side_by_side(text, tier)
+    assert "Main" in pair.report.bodies and "Guard" in pair.report.bodies, pair.report.left
+    assert [pou for pou, _ in pair.report.left] == ["Outputs"]
+    return pair
+
+
+def test_en_false_runs_nothing_and_keeps_the_targets_on_both_tiers(tier: NativeTier) -> None:
+    pair = run_alike(PROGRAM, tier)
+    pair.cycle_and_compare(2)
+    found = pair.native.variables.values()
+    assert not program_error(pair.native), program_error(pair.native)
+    kept = ("Main.sum", "Main.prod", "Main.big", "Main.lim", "Outputs.tw", "Outputs.half")
+    assert [found[path] for path in kept] == [-1] * 6
+    assert found["Main.real1"] == -1.0
+    flags = ("okAdd", "okMul", "okMax", "okLim", "okT", "tEno")
+    assert [found[f"Main.{name}"] for name in flags] == [False] * 6
+    assert found["Outputs.okTwice"] is False
+    assert found["Main.nested"] == 100  # the call inside an expression gives INT's 0
+    assert found["Main.maxFailed"] is True and found["Main.tFailed"] is True
+    # the timer's body never ran: its elapsed time and the target of ET => keep theirs
+    assert found["Main.t1.ET"] == 0 and found["Main.et1"] == 5_000_000_000
+    assert found["Main.t1.ENO"] is False
+    # an instance called with EN FALSE, then without EN: ENO FALSE, then TRUE
+    assert found["Main.offEno"] is False and found["Main.onEno"] is True
+    assert found["Main.spare.runs"] == 2  # the call without EN ran, each cycle
+
+
+def test_en_true_runs_the_call_and_sets_eno_on_both_tiers(tier: NativeTier) -> None:
+    pair = run_alike(PROGRAM, tier)
+    pair.cycle_and_compare(3)
+    found = pair.native.variables.values()
+    assert not program_error(pair.native), program_error(pair.native)
+    ran = ("Main.sum", "Main.prod", "Main.big", "Main.lim", "Outputs.tw", "Outputs.half")
+    assert [found[path] for path in ran] == [7, 12, 4, 3, 6, 1]
+    assert found["Main.real1"] == 3.0 and found["Main.nested"] == 107
+    flags = ("okAdd", "okMul", "okMax", "okLim", "okT", "tEno")
+    assert [found[f"Main.{name}"] for name in flags] == [True] * 6
+    assert found["Outputs.okTwice"] is True
+    assert found["Main.et1"] == 0  # the timer ran: ET => copied its elapsed time
+    assert found["Main.maxFailed"] is False and found["Main.tFailed"] is False
+
+
+def test_a_block_body_may_set_its_eno_and_en_false_skips_it(tier: NativeTier) -> None:
+    pair = run_alike(PROGRAM, tier)
+    seen = []
+    for _ in range(6):
+        pair.cycle_and_compare(1)
+        found = pair.native.variables.values()
+        seen.append((found["Main.g.runs"], found["Main.okG"], found["Main.gEno"]))
+    assert seen == [
+        (1, True, True),
+        (2, True, True),
+        (3, True, True),
+        (3, False, False),  # n = 4: EN FALSE, the body did not run
+        (4, False, False),  # n = 5: the body set ENO FALSE
+        (5, True, True),  # a call that runs starts with ENO TRUE
+    ]
+
+
+def diagnostics(source: str) -> list[str]:
+    return [str(d) for d in compile_sources([SourceFile("t.st", source)]).diagnostics]
+
+
+def test_en_and_eno_are_bool_and_eno_needs_a_variable() -> None:
+    source = """PROGRAM Main
+VAR a, b, x : INT; ok : BOOL; t : TON; END_VAR
+x := ADD(EN := a, IN1 := a, IN2 := b);
+x := MAX(IN1 := a, IN2 := b, ENO => x);
+x := MUL(EN => ok, IN1 := a, IN2 := b);
+t(EN := b, IN := ok);
+x := t.ENO;
+END_PROGRAM
+"""
+    assert [d.removeprefix("t.st:") for d in diagnostics(source)] == [
+        "3:16: error: type mismatch: cannot pass INT as BOOL [E0401]",
+        "4:37: error: cannot store BOOL output in INT [E0402]",
+        "5:10: error: 'EN' of 'MUL' is an input, not an output [E0407]",
+        "6:9: error: type mismatch: cannot assign INT to BOOL [E0401]",
+        "7:6: error: type mismatch: cannot assign BOOL to INT [E0209]",
+    ]
