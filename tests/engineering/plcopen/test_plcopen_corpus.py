@@ -149,5 +149,4 @@ def test_oscat_xml_compiles_to_the_same_code_as_the_oscat_st(tmp_path: Path) -> 
             if st_crcs.get(pou.name) != pou.crc:
                 differing.append(f"{st.stem}/{pou.name}")
     assert sorted(differing) == sorted(SOURCES_DIFFER)
-    # 625, with the standard blocks they use (chapter 12 fails on its drawn program0, listed)
-    assert compared >= 620
+    assert compared >= 650  # 690, with the standard blocks they use
