@@ -523,7 +523,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     new = sub.add_parser(
         "new",
-        help="a new project folder from a template (empty, tank, sequence)",
+        help="a new project folder from a template (empty, tank, sequence, conveyor)",
         epilog="exit codes: 0 made, 2 not made (the name, the folder or the template)",
     )
     new_arguments(new)

@@ -48,6 +48,11 @@ def templates() -> list[Template]:
         Template(
             "sequence", "A step sequence in SFC: fill, heat, drain a vessel", own / "sequence"
         ),
+        Template(
+            "conveyor",
+            "A conveyor drive drawn in LD and FBD: interlock, run timer, temperature alarm",
+            own / "conveyor",
+        ),
     ]
 
 

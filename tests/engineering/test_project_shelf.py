@@ -4,6 +4,7 @@ listed again when another tool adds one."""
 
 from __future__ import annotations
 
+import json
 import time
 import tomllib
 from pathlib import Path
@@ -44,6 +45,16 @@ def test_the_sequence_template_runs_its_steps(shelf: ProjectShelf) -> None:
     assert '"Batch.batches": 1' in last
 
 
+def test_the_conveyor_template_runs_its_drawings(shelf: ProjectShelf) -> None:
+    folder = shelf.new_project("belt", "conveyor", ANNA)
+    ran = padt("sim", str(folder), "--cycles", "140", "--trace", "motorOn,overTemp,serviceDue")
+    assert ran.returncode == 0, ran.stderr
+    seen = [json.loads(line)["values"] for line in ran.stdout.splitlines()]
+    # the LD latches the drive on, the FBD's alarm drops it, the run timer flags service
+    for name in ("motorOn", "overTemp", "serviceDue"):
+        assert {cycle[name] for cycle in seen} == {True, False}, name
+
+
 def test_a_template_keeps_its_comments(shelf: ProjectShelf) -> None:
     folder = shelf.new_project("tank", "tank", ANNA)
     assert "# Field I/O over Modbus TCP" in (folder / "padt.toml").read_text()
@@ -77,7 +88,7 @@ def test_a_taken_name_an_unknown_template_and_a_bad_resource_are_refused(
     shelf.new_project("Line", "empty", ANNA)
     with pytest.raises(Refusal, match="there is a project 'line' already"):
         shelf.new_project("line", "empty", ANNA)
-    with pytest.raises(Refusal, match=r"no template 'ladder'.*empty, tank, sequence"):
+    with pytest.raises(Refusal, match=r"no template 'ladder'.*empty, tank, sequence, conveyor"):
         shelf.new_project("other", "ladder", ANNA)
     with pytest.raises(Refusal, match="cannot name a resource"):
         shelf.new_project("other", "empty", ANNA, resource="Line/**")
