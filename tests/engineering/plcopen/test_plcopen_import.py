@@ -318,7 +318,9 @@ PIECES = [
     max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
 @given(
-    source=st.sampled_from(["plant", "tasks", "codesys", "graphical", "oop", "graphical_method"]),
+    source=st.sampled_from(
+        ["plant", "tasks", "codesys", "graphical", "oop", "graphical_method", "drawn"]
+    ),
     edits=st.lists(
         st.tuples(st.floats(0, 1), st.integers(0, 40), st.sampled_from(PIECES)),
         min_size=1,
