@@ -1,9 +1,10 @@
 """The Logic screen: the body of a program or FB instance of the selected resource drawn with
 its live values, as the runtime publishes them: an SFC chart with its active steps lit, each
-step's time and each transition condition's value. It follows the program wherever it
-stands (running, frozen and stepped, at a breakpoint): what it shows is what the resource
-last published. A click on a value puts it into the Write or force editor below, with
-the Online test's checks and confirmations.
+step's time and each transition condition's value; an FBD or LD body with the value on each
+connection and LD's power flow. It follows the program wherever it stands (running, frozen
+and stepped, at a breakpoint): what it shows is what the resource last published. A click
+on a value puts it into the Write or force editor below, with the Online test's checks and
+confirmations.
 
 As on the Code screen, the body is taken only from a project the PADT knows that compiles
 to the configuration CRC the resource runs."""
@@ -17,10 +18,10 @@ from pathlib import Path
 
 import viser
 
-from backend.engineering.logic_view import LiveChart, LogicBodies
-from backend.engineering.sources import find_sources, instances
+from backend.engineering.logic_view import LiveChart, LiveGraphic, LogicBodies
+from backend.engineering.sources import ConfigurationSources, find_sources, instances
 from frontend.editor.live_lines import SourceLookup
-from frontend.logic_view import sfc
+from frontend.logic_view import fbd_ld, sfc
 from frontend.page_clicks import Click
 from frontend.resource_feed import ResourceFeed, latest_reading
 from frontend.screen_registry import Now, Screen, Work
@@ -38,22 +39,22 @@ class LogicScreen:
     lookup: SourceLookup
     bodies: LogicBodies | None = None
     offered_for: tuple[int, str] = (0, "")  # (id of the variable table, CRC) offered
-    chart: LiveChart | None = None  # the chart in view
+    drawn: LiveChart | LiveGraphic | None = None  # the drawing in view
+    drawn_for: tuple[object, ...] = ()  # (CRC, instance, variable table) it was made for
     shown: str = ""
 
 
 def build(gui: viser.GuiApi) -> LogicScreen:
     instance = gui.add_dropdown(
-        "Instance", (NO_INSTANCE,), hint="a program or FB instance with a chart to draw"
+        "Instance", (NO_INSTANCE,), hint="a program or FB instance with a chart or drawing"
     )
-    gui.add_html(sfc.legend())
     view = gui.add_html("")
     return LogicScreen(instance, view, SourceLookup(find_sources))
 
 
 def wanted(screen: LogicScreen) -> list[str]:
     """The variables the drawing in view shows."""
-    return screen.chart.watched() if screen.chart is not None else []
+    return screen.drawn.watched() if screen.drawn is not None else []
 
 
 def refresh(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str, Path]) -> None:
@@ -67,7 +68,6 @@ def refresh(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[st
 
 
 def _page(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str, Path]) -> str:
-    screen.chart = None
     if feed is None:
         _offer(screen, ())
         return _message("Select a resource you are logged in to.")
@@ -102,20 +102,32 @@ def _page(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str,
     chosen = screen.instance.value
     if chosen == NO_INSTANCE:
         return _message(
-            "No program or FB instance of this resource has a chart: an ST body is shown on "
-            "the Code screen."
+            "No program or FB instance of this resource has a chart or a drawn body: an ST "
+            "body is shown on the Code screen."
         )
-    chart = screen.bodies.chart(chosen)
-    if chart is None:
-        return _message(f"{chosen} has no chart to draw.")
-    screen.chart = chart
-    return _header(chart, sources.project, sources.crc, status) + sfc.chart_svg(
-        chart, values, types, quality
-    )
+    key = (sources.crc, chosen, id(types))
+    if key != screen.drawn_for:  # made once, then only the values change
+        screen.drawn_for = key
+        screen.drawn = (
+            screen.bodies.chart(chosen)
+            if screen.bodies.kind(chosen) == "SFC"
+            else screen.bodies.graphic(chosen, types)
+        )
+    drawn = screen.drawn
+    if isinstance(drawn, LiveChart):
+        head = _header(chosen, f"SFC chart of {drawn.pou}", drawn.file, sources, status)
+        return head + sfc.legend() + sfc.chart_svg(drawn, values, types, quality)
+    if isinstance(drawn, LiveGraphic):
+        what = f"{drawn.language} body of {drawn.pou}"
+        head = _header(chosen, what, drawn.file, sources, status)
+        return head + fbd_ld.legend() + fbd_ld.graphic_svg(drawn, values, types, quality)
+    return _message(f"{chosen} has nothing drawn.")
 
 
-def _header(chart: LiveChart, project: str, crc: str, status: p.Status) -> str:
-    program = chart.instance.split(".")[0].upper()
+def _header(
+    instance: str, what: str, file: str, sources: ConfigurationSources, status: p.Status
+) -> str:
+    program = instance.split(".")[0].upper()
     running = next((x for x in status.programs if x.name.upper() == program), None)
     where = (
         f" · program {html.escape(running.name)} {html.escape(state_words(running.state))}, "
@@ -125,16 +137,16 @@ def _header(chart: LiveChart, project: str, crc: str, status: p.Status) -> str:
     )
     return (
         f'<div data-testid="logic-header" style="font-size:0.85em;color:#495057;'
-        f'margin-bottom:4px"><b>{html.escape(chart.instance)}</b>: SFC chart of '
-        f"{html.escape(chart.pou)} ({html.escape(chart.file)} of project "
-        f"{html.escape(project)}, configuration {html.escape(crc)})"
-        f'<span data-testid="logic-program">{where}</span></div>'
+        f'margin-bottom:4px"><b>{html.escape(instance)}</b>: {html.escape(what)} '
+        f"({html.escape(file)} of project {html.escape(sources.project)}, configuration "
+        f'{html.escape(sources.crc)})<span data-testid="logic-program">{where}</span></div>'
     )
 
 
 def _offer(screen: LogicScreen, options: tuple[str, ...]) -> None:
-    if not options:  # offered again once there is something to offer
+    if not options:  # offered again once there is something to offer; nothing drawn
         screen.offered_for = (0, "")
+        screen.drawn, screen.drawn_for = None, ()
     options = options or (NO_INSTANCE,)
     if tuple(screen.instance.options) != options:
         screen.instance.options = options

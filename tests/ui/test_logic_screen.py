@@ -10,6 +10,7 @@ import re
 import shutil
 import time
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -52,29 +53,123 @@ TEMPLATE = REPO / "backend" / "projects" / "templates" / "sequence"
 SHOTS = Path("/work/notes/35/shots")
 
 
+COUNTER_ST = """\
+(* Counts the cycles and blinks: TRUE while the count MOD 20 is over 9. *)
+PROGRAM Counter
+VAR_EXTERNAL
+  blink : BOOL;
+END_VAR
+VAR
+  count : DINT;
+  step : DINT := 1;
+END_VAR
+FBD
+  1: IN count {at 20 30 size 70 26}
+  2: IN step {at 20 70 size 70 26}
+  3: BLOCK ADD (IN1 := 1, IN2 := 2) -> (OUT) {at 150 20 size 70 70}
+  4: OUT count := 3.OUT {at 290 40 size 70 26}
+  5: IN 20 {at 150 130 size 70 26}
+  6: BLOCK MOD (IN1 := 3.OUT, IN2 := 5) -> (OUT) {at 290 110 size 70 70}
+  7: IN 9 {at 290 200 size 70 26}
+  8: BLOCK GT (IN1 := 6.OUT, IN2 := 7) -> (OUT) {at 430 120 size 70 70}
+  9: OUT blink := 8.OUT {at 560 140 size 70 26}
+END_FBD
+END_PROGRAM
+"""
+
+LAMP_ST = """\
+(* The lamp follows the blinker unless stopped; laid out by the PADT (no places given). *)
+PROGRAM LampRung
+VAR_EXTERNAL
+  blink : BOOL;
+END_VAR
+VAR
+  stop : BOOL;
+  lamp : BOOL;
+END_VAR
+LD
+  1: LEFT_RAIL -> (_)
+  2: CONTACT blink := 1
+  3: CONTACT[NEGATED] stop := 2
+  4: COIL lamp := 3
+  5: RIGHT_RAIL (4)
+END_LD
+END_PROGRAM
+"""
+
+DRAWN_TOML = """\
+[project]
+name = "Drawn"
+version = "0.1"
+
+[resource]
+name = "Cell"
+target_cycle_ms = 100
+target_cycle_mode = "fixed"
+autostart = "cold"
+safety_operation = false
+global_forcing_allowed = true
+
+[[resource.program]]
+name = "Count"
+pou = "Counter"
+id = 1
+priority = 0
+
+[[resource.program]]
+name = "Lamp"
+pou = "LampRung"
+id = 2
+priority = 1
+local_forcing_allowed = true
+"""
+
+
 @pytest.fixture
 def sequence(tmp_path: Path, zenoh_endpoint: str) -> Iterator[str]:
     """The sequence template running as Resource1 (cycle 100 ms), an administrator on it
-    and on the PADT, and the UI knowing the project as `sequence`; yields the UI's URL."""
+    and on the PADT, and the UI knowing the project; yields the UI's URL."""
     folder = tmp_path / "project"
     shutil.copytree(TEMPLATE, folder)
-    admin = UserAccount("admin", "administrator", hash_password(PASSWORD))
     config = (folder / PROJECT_FILE).read_text().replace('autostart = "off"', 'autostart = "cold"')
+    (folder / PROJECT_FILE).write_text(config)
+    with running_ui(folder, "Resource1", tmp_path, zenoh_endpoint) as url:
+        yield url
+
+
+@pytest.fixture
+def drawn(tmp_path: Path, zenoh_endpoint: str) -> Iterator[str]:
+    """A resource Cell running an FBD program Count and an LD program Lamp (100 ms)."""
+    folder = tmp_path / "project"
+    folder.mkdir()
+    (folder / PROJECT_FILE).write_text(DRAWN_TOML)
+    (folder / "globals.st").write_text("VAR_GLOBAL\n  blink : BOOL;\nEND_VAR\n")
+    (folder / "counter.st").write_text(COUNTER_ST)
+    (folder / "lamp.st").write_text(LAMP_ST)
+    with running_ui(folder, "Cell", tmp_path, zenoh_endpoint) as url:
+        yield url
+
+
+@contextmanager
+def running_ui(folder: Path, resource: str, tmp_path: Path, endpoint: str) -> Iterator[str]:
+    """The project of `folder` with an administrator added, compiled and running as
+    `resource`; the UI with an administrator, knowing the project as `project`."""
+    admin = UserAccount("admin", "administrator", hash_password(PASSWORD))
+    config = (folder / PROJECT_FILE).read_text()
     (folder / PROJECT_FILE).write_text(config + "\n" + user_entry(admin))
     result = compile_project(load_project([folder]))
     assert result.artifact is not None, result.diagnostics
     store_artifact(tmp_path, result.artifact)
     accounts_file = tmp_path / "padt-accounts.json"
-    write_accounts(
-        accounts_file, (UserAccount("admin", "security-administrator", admin.password_hash),)
-    )
-    with running_resource("Resource1", tmp_path, zenoh_endpoint) as (_, client):
+    padt_admin = UserAccount("admin", "security-administrator", admin.password_hash)
+    write_accounts(accounts_file, (padt_admin,))
+    with running_resource(resource, tmp_path, endpoint) as (_, client):
         context = UiContext(
             ResourceDirectory(client.session),
             PadtAccounts(accounts_file, time.monotonic_ns),
-            zenoh_endpoint,
+            endpoint,
             WatchLists(tmp_path / "watch-lists.json"),
-            {"sequence": folder},
+            {"project": folder},
             tmp_path / "bak",
         )
         ui = PadtUi(context, port=free_port())
@@ -115,15 +210,11 @@ def shoot(page: Page, name: str) -> None:
 def test_an_sfc_chart_lit_live_stepped_and_a_forced_value_marked(sequence: str) -> None:
     with chromium() as browser:
         page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.goto(sequence)
-        log_in(page, "admin", PASSWORD)
-        log_in_to_resource(page, "admin", PASSWORD)
-        wait_until("Resource1 runs", lambda: state(page) == "RUN", timeout_s=START_S)
-        page.get_by_role("tab", name="Logic").click()
+        open_logic(page, sequence)
         choose(page, "Instance", "Batch")
         wait_until("the chart is drawn", lambda: page.locator('[data-step="Drain"]').count() > 0)
         header = text_of(page, '[data-testid="logic-header"]')
-        assert "SFC chart of Batch (Batch.st of project sequence" in header, header
+        assert "SFC chart of Batch (Batch.st of project project" in header, header
 
         # the batch goes round: each step lights up in turn, one at a time
         for step in ("Fill", "Heat", "Drain", "Idle", "Fill"):
@@ -229,3 +320,93 @@ def editor(page: Page, label: str) -> Locator:
 
 def logic_button(page: Page, name: str) -> Locator:
     return page.get_by_role("button", name=name, exact=True).locator("visible=true").first
+
+
+def open_logic(page: Page, url: str) -> None:
+    """Log in to the PADT and to the resource as admin, the resource running, and open the
+    Logic tab."""
+    page.goto(url)
+    log_in(page, "admin", PASSWORD)
+    log_in_to_resource(page, "admin", PASSWORD)
+    wait_until("the resource runs", lambda: state(page) == "RUN", timeout_s=START_S)
+    page.get_by_role("tab", name="Logic").click()
+
+
+def drawn_value(page: Page, path: str) -> str:
+    return page.locator(f'[data-value-of="{path}"]').first.get_attribute("data-value") or ""
+
+
+def is_on(page: Page, selector: str) -> bool:
+    return page.locator(selector).first.get_attribute("data-on") == "true"
+
+
+def test_fbd_and_ld_bodies_with_live_values_power_flow_and_a_forced_contact(drawn: str) -> None:
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_logic(page, drawn)
+
+        # the FBD body: the count on ADD's output and after the OUT, counting
+        choose(page, "Instance", "Count")
+        wait_until(
+            "the FBD body is drawn",
+            lambda: "FBD body of Counter" in text_of(page, '[data-testid="logic-header"]'),
+        )
+        wait_until("the count is shown", lambda: drawn_value(page, "Count.count").isdigit())
+        first = int(drawn_value(page, "Count.count"))
+        wait_until("the count counts", lambda: int(drawn_value(page, "Count.count")) > first + 2)
+        assert drawn_value(page, "Count._TMP_ADD3_OUT").isdigit()  # ADD's output pin
+        assert drawn_value(page, "blink") in ("TRUE", "FALSE")  # the OUT writes a global
+        # GT's output wire to blink lights while it carries TRUE, and goes dark again
+        wait_until("the wire from GT lights up", lambda: is_on(page, '[data-wire-from="8"]'))
+        wait_until("and goes dark", lambda: not is_on(page, '[data-wire-from="8"]'))
+        wait_until("and lights up", lambda: is_on(page, '[data-wire-from="8"]'))
+        shoot(page, "logic-fbd-1400")
+
+        # the LD rung: the power flow through blink and NOT stop into the coil lamp
+        choose(page, "Instance", "Lamp")
+        wait_until(
+            "the LD body is drawn",
+            lambda: "LD body of LampRung" in text_of(page, '[data-testid="logic-header"]'),
+        )
+        assert is_on(page, '[data-wire-from="1"]')  # the left rail: always powered
+        wait_until("the coil is powered", lambda: is_on(page, '[data-element="4"]'))
+        assert drawn_value(page, "Lamp.lamp") == "TRUE"
+        shoot(page, "logic-ld-1400")
+        wait_until("the coil is not", lambda: not is_on(page, '[data-element="4"]'))
+
+        # a click on stop's value chooses it: forced TRUE, the negated contact opens the rung
+        page.locator('[data-value-of="Lamp.stop"]').first.click()
+        wait_until(
+            "the editor has the variable",
+            lambda: editor(page, "Variable").input_value() == "Lamp.stop",
+        )
+        force(page, "TRUE", "Force Lamp.stop (BOOL)")
+        page.get_by_role("tab", name="Forcing").click()
+        choose(page, "Forcing level", "Lamp (local)")
+        field(page, "Time limit").fill("T#5m")
+        wait_until("Start forcing is enabled", lambda: button_enabled(page, "Start forcing"))
+        page.get_by_role("button", name="Start forcing", exact=True).click()
+        confirm(page, "Start local forcing of Lamp")
+        page.get_by_role("tab", name="Logic").click()
+        stop = '[data-value-of="Lamp.stop"]'
+        wait_until(
+            "stop is drawn forced",
+            lambda: page.locator(stop).first.get_attribute("data-quality") == "forced",
+        )
+        assert page.locator(stop).first.get_attribute("fill") == "#c92a2a"
+        assert "forced" in (page.locator('[data-element="3"]').first.get_attribute("class") or "")
+        # blink still powers the first contact's wire; nothing passes the open contact
+        wait_until("blink passes", lambda: is_on(page, '[data-wire-from="2"]'))
+        assert not is_on(page, '[data-element="3"]') and not is_on(page, '[data-element="4"]')
+        assert drawn_value(page, "Lamp.lamp") == "FALSE"
+        shoot(page, "logic-ld-forced-1400")
+        page.set_viewport_size({"width": 1920, "height": 1080})
+        time.sleep(1.0)
+        shoot(page, "logic-ld-forced-1920")
+        choose(page, "Instance", "Count")
+        wait_until(
+            "the FBD body is drawn",
+            lambda: page.locator('[data-value-of="Count.count"]').count() > 0,
+        )
+        time.sleep(0.5)
+        shoot(page, "logic-fbd-1920")
