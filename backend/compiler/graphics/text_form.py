@@ -41,8 +41,8 @@ _ONE_OUTPUT = ("IN", "INOUT", "CONTINUATION", "CONTACT", "COIL", "LEFT_RAIL")
 # kinds whose text is followed by `:= wires` into one unnamed input pin
 _ONE_INPUT = ("OUT", "INOUT", "CONNECTOR", "JUMP", "RETURN", "CONTACT", "COIL")
 
-_HEAD = re.compile(r"\s*(\d{1,9})\s*:\s*([A-Za-z_]+)\s*(?:\[([A-Za-z_,\s]*)\])?")
-_WIRE = re.compile(r"(\d{1,9})(?:\.([A-Za-z_][A-Za-z0-9_]*))?$")
+_HEAD = re.compile(r"\s*(\d{1,18})\s*:\s*([A-Za-z_]+)\s*(?:\[([A-Za-z_,\s]*)\])?")
+_WIRE = re.compile(r"(\d{1,18})(?:\.([A-Za-z_][A-Za-z0-9_]*))?$")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*$")
 _LAYOUT_WORDS = {"at": 2, "size": 2, "order": 1, "in": 3, "out": 3}
 
@@ -150,7 +150,7 @@ def _element(content: str) -> Element:
     outputs = _outputs(outputs_text, rest_start + arrow + 2) if arrow >= 0 else ()
     if not outputs and kind in _ONE_OUTPUT:
         outputs = (Pin(),)
-    if not outputs and kind == "BLOCK":
+    if arrow < 0 and kind == "BLOCK":  # `-> ()`: a block drawn without outputs
         raise _LineError(rest_start, "a BLOCK lists its outputs: `-> (OUT)`")
     return _placed(replace(element, outputs=outputs), layout, rest_start)
 
@@ -213,6 +213,8 @@ def _pin_list(text: str, col: int) -> tuple[Pin, ...]:
             if not _NAME.match(name):
                 raise _LineError(entry_col, f"expected a pin name before ':=', not '{name}'")
             pins.append(_pin_value(name, entry[assign + 2 :], entry_col + assign + 2))
+        elif entry.strip() == "_":
+            pins.append(Pin())
         elif _NAME.match(entry.strip()) and entry.strip().upper() not in PIN_FLAGS:
             pins.append(Pin(entry.strip()))
         else:
@@ -242,6 +244,8 @@ def _outputs(text: str, col: int) -> tuple[Pin, ...]:
     stripped = text.strip()
     if not (stripped.startswith("(") and stripped.endswith(")")):
         raise _LineError(col, "expected the outputs in parentheses: `-> (OUT, Q)`")
+    if not stripped[1:-1].strip():
+        return ()
     pins: list[Pin] = []
     for offset, entry in _split_top(stripped[1:-1], ","):
         words = entry.split()
@@ -336,7 +340,7 @@ def _inputs_text(element: Element) -> str:
         if pin.name and wires:
             entries.append(f"{pin.name} := {wires}")
         else:
-            entries.append(pin.name or wires)
+            entries.append(pin.name or wires or "_")  # `_`: an unnamed pin, unconnected
     return f"({', '.join(entries)})"
 
 
@@ -350,7 +354,7 @@ def _outputs_text(element: Element) -> str:
     if element.kind in _ONE_OUTPUT and len(outputs) == 1 and replace(outputs[0], at=None) == Pin():
         return ""
     if not outputs:
-        return ""
+        return "-> ()" if element.kind == "BLOCK" else ""
     names = [f"NOT {p.name or '_'}" if p.flag == "NOT" else p.name or "_" for p in outputs]
     return f"-> ({', '.join(names)})"
 
