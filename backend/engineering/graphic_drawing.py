@@ -337,7 +337,7 @@ def _contact_or_coil(element: Element) -> Part:
     x, y, w, h = element.at.x, element.at.y, element.size.x, element.size.y
     inputs, _ = pin_places(element)
     pin_y = inputs[0].y if inputs else y + h / 2
-    left, right = x + w * 0.3, x + w * 0.7
+    left, right = x + w * 0.25, x + w * 0.75  # room for a mark (/, P, N, S, R) between
     top, bottom = pin_y - h / 2, pin_y + h / 2
     mark = ""
     modifier = element.modifiers[0] if element.modifiers else ""
@@ -369,17 +369,21 @@ def _contact_or_coil(element: Element) -> Part:
 def _block(element: Element) -> Part:
     x, y, w, h = element.at.x, element.at.y, element.size.x, element.size.y
     inputs, outputs = pin_places(element)
+    # the type inside the box above its pins, or above the box when a pin is too near its
+    # top edge to leave a line for it (a drawing may put pins anywhere)
+    inside = min((p.y for p in (*inputs, *outputs)), default=y + h) - y >= 22
+    type_y = y + 14 if inside else y - 4
     svg = [
         f'<rect x="{x:g}" y="{y:g}" width="{w:g}" height="{h:g}" class="box"/>'
-        f'<text x="{x + w / 2:g}" y="{y + 14:g}" class="type">'
+        f'<text x="{x + w / 2:g}" y="{type_y:g}" class="type">'
         f"{escape(_short(element.text, int(w / 7.5) + 2))}</text>"
     ]
-    above = 0.0
+    above = 0.0 if inside else _INSTANCE_ROOM
     if element.instance:
-        above = _INSTANCE_ROOM
+        above += _INSTANCE_ROOM
         svg.append(
-            f'<text x="{x + w / 2:g}" y="{y - 4:g}" class="inst">'
-            f"{escape(_short(element.instance, _MAX_TEXT))}</text>"
+            f'<text x="{x + w / 2:g}" y="{y - 4 - (0 if inside else _INSTANCE_ROOM):g}" '
+            f'class="inst">{escape(_short(element.instance, _MAX_TEXT))}</text>'
         )
     if element.order:
         svg.append(
