@@ -29,6 +29,7 @@ def test_converted_bodies_run_exactly_as_the_drawings_did(tmp_path: Path) -> Non
         "blocks.st: Drawn_blocks (FBD, 17 elements) is now ST",
         "flow.st: Drawn_flow (FBD, 18 elements) is now ST",
         "functions.st: Drawn_functions (FBD, 14 elements) is now ST",
+        "ordered.st: Drawn_ordered (FBD, 11 elements) is now ST",
     ]
     assert _trace(folder) == before  # every variable, hidden ones included, every cycle
     again = padt("convert", str(folder))

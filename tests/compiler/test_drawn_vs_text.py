@@ -163,6 +163,39 @@ r2 := b;
 END_PROGRAM
 """,
     ),
+    # the order of execution given (TC6 executionOrderId) and no places: a jump past the
+    # elements before its label, edge-sensing outputs, a FUNCTION's output read after the
+    # jump skipped it (its last value)
+    "ordered": (
+        """
+PROGRAM Drawn_ordered
+VAR n, m : INT; up, down : BOOL; END_VAR
+FBD
+  1: IN a
+  2: JUMP L := 1 {order 1}
+  4: IN n
+  5: IN 1
+  6: BLOCK ADD (IN1 := 4, IN2 := 5) -> (OUT) {order 2}
+  7: OUT n := 6.OUT {order 3}
+  3: LABEL L {order 4}
+  8: IN b
+  9: OUT up := R_EDGE 8 {order 5}
+  10: OUT down := F_EDGE 8 {order 6}
+  11: OUT m := 6.OUT {order 7}
+END_FBD
+END_PROGRAM
+""",
+        """
+PROGRAM Text_ordered
+VAR n, m : INT; up, down : BOOL; sum : INT; last : BOOL; END_VAR
+IF NOT a THEN sum := n + 1; n := sum; END_IF;
+up := b AND NOT last;
+down := NOT b AND last;
+last := b;
+m := sum;
+END_PROGRAM
+""",
+    ),
     # LD: contacts in series and parallel, negated, rising and falling; coils normal,
     # negated, set, reset, rising and falling; a coil's power flowing on; an FB in a rung
     # with EN from a contact and ENO into a coil

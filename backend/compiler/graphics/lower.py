@@ -12,7 +12,8 @@ What the lowering guarantees (the live views and docs/language.md rely on it):
   it did not run);
 - the power flow out of an LD contact or coil with id N is the BOOL `_TMP_LD<N>`;
   a rising or falling contact or coil keeps the last value it saw in `_TMP_LD<N>_M`;
-- an edge on an input pin (R_EDGE, F_EDGE) keeps its last value in `_TMP_E<N>_<P>_M`;
+- an edge on an input pin (R_EDGE, F_EDGE) is sensed into `_TMP_E<N>_<P>` (`_TMP_E<N>` for
+  an element's one pin), with its last value in `..._M`;
 - jumps run the drawing as segments from label to label (`_TMP_JUMP`).
 """
 
@@ -164,6 +165,20 @@ def lower(body: GraphicBody, file: str, context: Context) -> Lowered:
 _ACTS_ON_ITS_WIRE = ("OUT", "INOUT", "JUMP", "RETURN", "CONNECTOR", "COIL")
 
 
+_EDGES = ("R_EDGE", "F_EDGE")
+
+
+def _edge(element: Element, pin: Pin) -> str:
+    """The variable holding the sensed edge of an input pin."""
+    return f"_TMP_E{element.id}_{pin.name}".upper() if pin.name else f"_TMP_E{element.id}"
+
+
+def _place(element: Element) -> tuple[int, float, float, int]:
+    """Where an element stands on the sheet, for what comes before a label: its execution
+    order, its height, its left, then its line in the file."""
+    return (element.order, element.at.y, element.at.x, element.line)
+
+
 def _wired(element: Element) -> bool:
     return bool(element.inputs and element.inputs[0].wires)
 
@@ -192,6 +207,7 @@ class _Lowering:
         self.types: dict[int, str | None] = {}  # FUNCTION blocks' result types
         self.inline: dict[int, str] = {}  # calls of untyped FUNCTIONs, as written
         self.expanding: set[int] = set()  # those being written: one met again is a loop
+        self.prefix = ""  # edge sensing to put before the next statement
         self.feedback: set[tuple[int, int]] = set()
         self.evaluated: set[int] = set()
 
@@ -202,7 +218,7 @@ class _Lowering:
         if any(d.severity == "error" for d in self.out.diagnostics):
             return self.out
         self._type_functions()
-        labels = sorted((e for e in self.body.elements if e.kind == "LABEL"), key=lambda e: e.at.y)
+        labels = sorted((e for e in self.body.elements if e.kind == "LABEL"), key=_place)
         segments = self._segments(labels)
         jumps = any(e.kind == "JUMP" for e in self.body.elements)
         if not jumps:
@@ -221,13 +237,13 @@ class _Lowering:
         return self.out
 
     def _segments(self, labels: list[Element]) -> list[list[Element]]:
-        """The elements from each label to the next (the first segment: those above every
-        label); a drawing without labels is one segment."""
+        """The elements from each label to the next, by their places (the first segment:
+        those before every label); a drawing without labels is one segment."""
         segments: list[list[Element]] = [[] for _ in range(len(labels) + 1)]
         for element in self.body.elements:
             if element.kind == "LABEL":
                 continue
-            index = sum(1 for label in labels if label.at.y <= element.at.y)
+            index = sum(1 for label in labels if _place(label) < _place(element))
             segments[index].append(element)
         return segments
 
@@ -245,8 +261,7 @@ class _Lowering:
                     self._error(element, Code.GRAPHIC_LABEL, f"no label '{element.text}'")
                     continue
                 condition = self._pin_value(element, element.inputs[0])
-                text = f"IF {condition} THEN _TMP_JUMP := {target}; ELSE"
-                self.out.lines.append(Line(text, element))
+                self._emit(element, f"IF {condition} THEN _TMP_JUMP := {target}; ELSE")
                 closing += 1
                 continue
             self._element_lines(element)
@@ -292,6 +307,7 @@ class _Lowering:
 
     def _element_lines(self, element: Element) -> None:
         kind = element.kind
+        self._edges(element)
         if kind in ("OUT", "INOUT"):
             value = self._pin_value(element, element.inputs[0])
             self._store(element, element.text, value, self._gate(element.inputs[0]))
@@ -382,38 +398,35 @@ class _Lowering:
             eno = self._temporary(_temporary(element, _ENABLE_OUT), "BOOL")
             condition = self._pin_value(element, enable)
             call = f"IF {condition} THEN {call} {eno} := TRUE; ELSE {eno} := FALSE; END_IF;"
-        self._emit(element, self._edges(element) + call)
+        self._emit(element, call)
 
     def _arguments(self, element: Element) -> list[str]:
         arguments = []
         for pin in element.inputs:
             if pin.name.upper() in (_ENABLE, "") or not pin.wires:
                 continue
-            if pin.flag in ("R_EDGE", "F_EDGE"):
-                value = f"_TMP_E{element.id}_{pin.name}".upper()
-            else:
-                value = self._pin_value(element, pin)
-            arguments.append(f"{pin.name} := {value}")
+            arguments.append(f"{pin.name} := {self._pin_value(element, pin)}")
         return arguments
 
-    def _edges(self, element: Element) -> str:
-        """The statements that sense the edges of a block's edge-triggered inputs."""
-        text = ""
+    def _edges(self, element: Element) -> None:
+        """The statements that sense the edges of an element's edge-triggered inputs, put
+        before the next statement written (`_emit`)."""
         for pin in element.inputs:
-            if pin.flag not in ("R_EDGE", "F_EDGE") or not pin.wires:
+            if pin.flag not in _EDGES or not pin.wires:
                 continue
             value = self._pin_value(element, replace(pin, flag=""))
-            edge = self._temporary(f"_TMP_E{element.id}_{pin.name}".upper(), "BOOL")
+            edge = self._temporary(_edge(element, pin), "BOOL")
             memory = self._temporary(f"{edge}_M", "BOOL")
             sensed = (
                 f"{value} AND NOT {memory}" if pin.flag == "R_EDGE" else f"NOT {value} AND {memory}"
             )
-            text += f"{edge} := {sensed}; {memory} := {value}; "
-        return text
+            self.prefix += f"{edge} := {sensed}; {memory} := {value}; "
 
     # ---- values ------------------------------------------------------------------------
 
     def _pin_value(self, consumer: Element, pin: Pin, depth: int = 0) -> str:
+        if pin.flag in _EDGES and pin.wires:
+            return _edge(consumer, pin)  # sensed before the statement (`_edges`)
         values = [self._wire_value(consumer, w, depth) for w in pin.wires]
         if not values:
             return "FALSE"
@@ -458,6 +471,7 @@ class _Lowering:
             return "FALSE"
         if source.id not in self.inline:
             self.expanding.add(source.id)
+            self._edges(source)
             arguments = [
                 f"{p.name} := {self._pin_value(source, p, depth + 1)}"
                 for p in source.inputs
@@ -639,7 +653,8 @@ class _Lowering:
         return name
 
     def _emit(self, element: Element, text: str) -> None:
-        self.out.lines.append(Line(text, element))
+        self.out.lines.append(Line(self.prefix + text, element))
+        self.prefix = ""
 
     def _error(self, element: Element, code: Code, message: str) -> None:
         self.out.diagnostics.append(
