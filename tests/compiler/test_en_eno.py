@@ -170,3 +170,66 @@ END_PROGRAM
         "6:9: error: type mismatch: cannot assign INT to BOOL [E0401]",
         "7:6: error: type mismatch: cannot assign BOOL to INT [E0209]",
     ]
+
+
+SWEEP = """
+PROGRAM Main
+VAR
+  n : INT; c, ok, b : BOOL; i : INT := 5; d : DINT := 7; r : REAL := 2.0; s : STRING := 'abc';
+  w : WORD := 3; t : TIME;
+  i1, i2, i3, i4, i5, i6, i7, i8, i9 : INT := -1;
+  s1, s2, s3 : STRING := 'keep';
+  r1, r2 : REAL := -1.0;
+  w1 : WORD := 7;
+  b1, b2, b3 : BOOL := TRUE;
+  t1 : TIME := T#9s;
+  eno : ARRAY[1..22] OF BOOL := [22(TRUE)];
+END_VAR
+n := n + 1;
+c := n >= 2;
+i1 := SEL(EN := c, G := b, IN0 := 1, IN1 := 2, ENO => eno[1]);
+i2 := MUX(EN := c, K := 0, IN0 := 1, IN1 := 2, ENO => eno[2]);
+i3 := LEN(EN := c, IN := s, ENO => eno[3]);
+s1 := LEFT(EN := c, IN := s, L := 2, ENO => eno[4]);
+s2 := CONCAT(EN := c, IN1 := s, IN2 := 'x', ENO => eno[5]);
+r1 := SQRT(EN := c, IN := r * 2.0, ENO => eno[6]);
+i4 := ABS(EN := c, IN := -i, ENO => eno[7]);
+w1 := SHL(EN := c, IN := w, N := 2, ENO => eno[8]);
+b1 := AND(EN := c, IN1 := b, IN2 := b, ENO => eno[9]);
+b2 := GT(EN := c, IN1 := i, IN2 := 20, ENO => eno[10]);
+i5 := MOVE(EN := c, IN := i, ENO => eno[11]);
+i6 := TRUNC(EN := c, IN := r, ENO => eno[12]);
+i7 := DINT_TO_INT(EN := c, IN := d, ENO => eno[13]);
+r2 := TO_REAL(EN := c, IN := i, ENO => eno[14]);
+s3 := MID(EN := c, IN := s, L := 1, P := 2, ENO => eno[15]);
+b3 := EQ(EN := c, IN1 := s, IN2 := 'abd', ENO => eno[16]);
+i8 := MIN(EN := c, IN1 := 4, IN2 := 2, IN3 := 3, ENO => eno[17]);
+i9 := SUB(EN := c, IN1 := 1, IN2 := i, ENO => eno[18]);
+t1 := ADD(EN := c, IN1 := t, IN2 := T#1s, ENO => eno[19]);
+i1 := i1 + DIV(EN := c, IN1 := 7, IN2 := 2, ENO => eno[20]);
+i2 := i2 + MOD(EN := c, IN1 := 7, IN2 := 2, ENO => eno[21]);
+i3 := i3 + LIMIT(EN := c, MN := 1, IN := 9, MX := 3, ENO => eno[22]);
+END_PROGRAM
+"""
+SWEPT = ("i1", "i2", "i3", "i4", "i5", "i6", "i7", "i8", "i9", "s1", "s2", "s3", "r1", "r2")
+SWEPT += ("w1", "b1", "b2", "b3", "t1")
+
+
+def test_every_kind_of_standard_function_takes_en_and_eno_on_both_tiers(tier: NativeTier) -> None:
+    """Selection, strings, numerics, bit shifts, logic, comparisons, MOVE, conversions,
+    variadic MIN, TIME arithmetic; the last three inside an expression (their default, 0,
+    is added in the cycle with EN FALSE)."""
+    pair = side_by_side(SWEEP, tier)
+    pair.cycle_and_compare(1)  # EN FALSE: every target as it was, every ENO FALSE
+    found = pair.python.variables.values()
+    kept = [-1] * 9 + ["keep"] * 3 + [-1.0] * 2 + [7, True, True, True, 9_000_000_000]
+    assert [found[f"Main.{name}"] for name in SWEPT] == kept
+    assert found["Main.eno"] == [False] * 22
+    pair.cycle_and_compare(1)  # EN TRUE
+    found = pair.python.variables.values()
+    assert [found[f"Main.{name}"] for name in SWEPT[:9]] == [1 + 3, 1 + 1, 3 + 3, 5, 5, 2, 7, 2, -4]
+    assert [found[f"Main.{name}"] for name in SWEPT[9:]] == [
+        "ab", "abcx", "b", 2.0, 5.0, 12, False, False, False, 1_000_000_000,
+    ]  # fmt: skip
+    assert found["Main.eno"] == [True] * 22
+    assert not program_error(pair.python) and not program_error(pair.native)
