@@ -16,6 +16,7 @@ from backend.compiler.graphics.model import Element, GraphicBody, Pin, Point, Wi
 from backend.compiler.parse import parse_source
 from backend.engineering.documentation.graphic_chart import WIDTH, graphic_charts
 from padt.cli import main
+from tests.conftest import REPO
 from tests.engineering.documentation.test_document import pages
 
 PADT_TOML = """\
@@ -251,6 +252,28 @@ def test_an_imported_layout_is_drawn_where_tc6_put_it() -> None:
     assert 'd="M560,90 L540,90 L540,85 L520,85"' in svg, "the wire through TC6's points"
     width = float(re.search(r'width="([\d.]+)"', svg).group(1))  # type: ignore[union-attr]
     assert width == WIDTH, "the sheet is scaled to the page width"
+
+
+def test_an_imported_plcopen_drawing_is_printed_as_its_author_laid_it_out(
+    tmp_path: Path,
+) -> None:
+    """`padt import` of a PLCopen file drawn in FBD and LD, then `padt docs`: the TON block
+    at the place TC6 gives it, its IN wire through TC6's points, the LD contact where the
+    file puts it, both bodies on the PDF's pages."""
+    xml = REPO / "tests" / "engineering" / "plcopen" / "fixtures" / "drawn.xml"
+    assert main(["import", str(xml), "-o", str(tmp_path / "project")]) == 0
+    assert main(["docs", str(tmp_path / "project"), "-o", str(tmp_path / "out")]) == 0
+    (html_file,) = (tmp_path / "out").glob("*.html")
+    html = html_file.read_text()
+    (counter,) = svgs_after(html, "FBD body of Counter")
+    assert '<rect x="160" y="70" width="60" height="80"' in counter, "TON t1 at 160,70"
+    assert 'd="M160,95 L140.5,95 L140.5,40 L600,40"' in counter, "t1.IN's wire"
+    (line,) = svgs_after(html, "LD body of Line")
+    assert 'd="M60,80 L13,80"' in line, "the contact motor's wire from the left rail"
+    (pdf,) = (tmp_path / "out").glob("*.pdf")
+    texts = pages(pdf)
+    assert any("FBD body of Counter" in t and "TON" in t and "t1" in t for t in texts)
+    assert any("LD body of Line" in t and "motor" in t for t in texts)
 
 
 def test_an_empty_body_draws_nothing() -> None:
