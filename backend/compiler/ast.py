@@ -392,6 +392,7 @@ class Action:
     name: str
     body: tuple[Statement, ...]
     pos: Pos
+    graphic: Any = None  # a drawn body, lowered into `body` as a POU's (see `Pou.graphic`)
 
 
 @dataclass(frozen=True)

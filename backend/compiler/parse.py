@@ -28,7 +28,7 @@ from backend.compiler import ast
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.graphics.context import context_of
-from backend.compiler.graphics.lower import Lowered, lower, temporaries_block
+from backend.compiler.graphics.lower import Context, Lowered, lower, temporaries_block
 from backend.compiler.graphics.model import GraphicBody
 from backend.compiler.graphics.text_form import read_body
 from backend.compiler.limits import (
@@ -898,10 +898,15 @@ class _ToAst(Transformer[Token, Any]):
 
     def action_decl(self, items: list[Any]) -> ast.Action:
         _keyword, name, body = items
-        return ast.Action(self._declared(name), body, self._pos(name))
+        return self._action(name, body)
 
     def actions_item(self, items: list[Any]) -> ast.Action:
         name, body = items
+        return self._action(name, body)
+
+    def _action(self, name: Token, body: tuple[ast.Statement, ...] | GraphicBody) -> ast.Action:
+        if isinstance(body, GraphicBody):
+            return ast.Action(self._declared(name), (), self._pos(name), graphic=body)
         return ast.Action(self._declared(name), body, self._pos(name))
 
     def actions_block(self, items: list[Any]) -> _ActionsBlock:
@@ -1289,34 +1294,61 @@ def unit_of(file: str, pieces: Sequence[Piece]) -> ast.SourceUnit:
 def _with_drawings_lowered(
     file: str, pous: tuple[ast.Pou, ...], globals_: tuple[ast.VarBlock, ...]
 ) -> tuple[tuple[ast.Pou, ...], tuple[Diagnostic, ...]]:
-    """The POUs with each drawn body (FBD, LD) lowered to statements, which the rest of the
-    compiler takes as it takes any body, and the warnings of the drawings. Raises
-    `CompileError` for a drawing that does not lower."""
-    if not any(p.graphic is not None for p in pous):
-        return pous, ()
+    """The POUs with each drawn body (FBD, LD) of a POU or an action lowered to statements,
+    which the rest of the compiler takes as it takes any body, and the warnings of the
+    drawings. Raises `CompileError` for a drawing that does not lower."""
     result = []
     problems: list[Diagnostic] = []
     warnings: list[Diagnostic] = []
     for pou in pous:
-        if pou.graphic is None:
+        actions = pou.sfc.actions if pou.sfc is not None else ()
+        if pou.graphic is None and all(a.graphic is None for a in actions):
             result.append(pou)
             continue
-        lowered = lower(pou.graphic, file, context_of(pou, pous, globals_))
-        errors = [d for d in lowered.diagnostics if d.severity == "error"]
-        warnings += [d for d in lowered.diagnostics if d.severity != "error"]
-        if errors:
-            problems += errors
-            continue
         try:
-            result.append(_parsed_lowering(file, pou, pou.graphic, lowered))
+            lowered, found = _lowered_pou(file, pou, context_of(pou, pous, globals_))
         except CompileError as exc:
             problems += exc.diagnostics
+            continue
+        result.append(lowered)
+        warnings += found
     if problems:
         raise CompileError(problems)
     return tuple(result), tuple(warnings)
 
 
-def _parsed_lowering(file: str, pou: ast.Pou, body: GraphicBody, lowered: Lowered) -> ast.Pou:
+def _lowered_pou(file: str, pou: ast.Pou, context: Context) -> tuple[ast.Pou, list[Diagnostic]]:
+    """`pou` with its drawn body and actions lowered, and their warnings."""
+    hidden: list[ast.VarBlock] = []
+    warnings: list[Diagnostic] = []
+
+    def lowered(body: GraphicBody, action: str = "") -> tuple[ast.Statement, ...]:
+        done = lower(body, file, context, action)
+        warnings.extend(d for d in done.diagnostics if d.severity != "error")
+        errors = [d for d in done.diagnostics if d.severity == "error"]
+        if errors:
+            raise CompileError(errors)
+        statements, blocks = _parsed_lowering(file, body, done)
+        hidden.extend(blocks)
+        return statements
+
+    body = lowered(pou.graphic) if pou.graphic is not None else pou.body
+    sfc = pou.sfc
+    if sfc is not None:
+        actions = tuple(
+            replace(a, body=lowered(a.graphic, a.name)) if a.graphic is not None else a
+            for a in sfc.actions
+        )
+        sfc = replace(sfc, actions=actions)
+    blocks = pou.var_blocks + tuple(hidden)
+    return replace(pou, body=body, sfc=sfc, var_blocks=blocks), warnings
+
+
+def _parsed_lowering(
+    file: str, body: GraphicBody, lowered: Lowered
+) -> tuple[tuple[ast.Statement, ...], tuple[ast.VarBlock, ...]]:
+    """The statements of a lowered drawing, each placed at its element, and the
+    declarations of its hidden variables."""
     # the lowered text, parsed as the body of a program: line 1 is its header, then the
     # hidden variables, then one line of statements per element
     header = ["PROGRAM lowered"]
@@ -1343,9 +1375,7 @@ def _parsed_lowering(file: str, pou: ast.Pou, body: GraphicBody, lowered: Lowere
             return node
         return replace(node, pos=places[pos.line - 1] if 0 < pos.line <= len(places) else at)
 
-    statements = ast.rebuilt(program.body, moved)
-    hidden = ast.rebuilt(program.var_blocks, moved)
-    return replace(pou, var_blocks=pou.var_blocks + hidden, body=statements)
+    return ast.rebuilt(program.body, moved), ast.rebuilt(program.var_blocks, moved)
 
 
 def _moved(diagnostic: Diagnostic, places: list[Pos], at: Pos) -> Diagnostic:

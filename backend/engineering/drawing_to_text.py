@@ -19,6 +19,7 @@ from backend.compiler.source import SourceFile
 from backend.engineering.project import Project, compile_project
 
 _END = re.compile(r"\bEND_(FBD|LD)\b", re.IGNORECASE)
+_END_VAR = re.compile(r"\bEND_VAR\b", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -60,7 +61,7 @@ def convert_project(project: Project, pous: set[str] | None = None) -> Conversio
             texts[source.name] = text
             converted += done
     if wanted is not None:
-        missing = wanted - {ast.key(c.pou) for c in converted}
+        missing = wanted - {ast.key(c.pou.split(".")[0]) for c in converted}
         if missing:
             raise ValueError(f"no drawn POU named {', '.join(sorted(missing))}")
     if problems:
@@ -76,40 +77,51 @@ def write_conversion(folder: Path, conversion: Conversion) -> None:
 
 
 def converted_text(file: str, text: str, wanted: set[str] | None) -> tuple[str, list[ConvertedPou]]:
-    """`text` with its drawn POUs (those in `wanted`, upper case; None: all) written as ST."""
+    """`text` with its drawn POUs (those in `wanted`, upper case; None: all) written as ST:
+    the body and the drawn actions of each."""
     pous, globals_ = parse_as_drawn(file, text)
-    drawn = [p for p in pous if p.graphic is not None]
     if wanted is not None:
-        drawn = [p for p in drawn if ast.key(p.name) in wanted]
+        pous_wanted = [p for p in pous if ast.key(p.name) in wanted]
+    else:
+        pous_wanted = list(pous)
     offsets = _line_offsets(text)
     edits: list[tuple[int, int, str]] = []
     done: list[ConvertedPou] = []
-    for pou in drawn:
-        body = pou.graphic
-        lowered = lower(body, file, context_of(pou, pous, globals_))
-        errors = [d for d in lowered.diagnostics if d.severity == "error"]
-        if errors:
-            raise CompileError(errors)
-        start = offsets[body.line - 1] + body.col - 1
-        end = _END.search(text, start)
-        if end is None:  # the parser found it: cannot happen
-            raise CompileError([])
-        indent = " " * (body.col - 1)
-        statements = _statements(lowered.lines, indent)
-        note = f"(* {body.language} converted to ST by padt convert *)"
-        members = [m.pos.line for m in pou.methods] + [p.pos.line for p in pou.properties]
-        before = [line for line in members if line < body.line]
-        if lowered.temporaries and before:
-            # variables go before the methods and properties written before the body
-            at = offsets[min(before) - 1]
-            edits.append((at, at, f"{temporaries_block(lowered)}\n"))
-            replacement = f"{note}\n{statements}"
-        elif lowered.temporaries:
-            replacement = f"{temporaries_block(lowered)}\n{indent}{note}\n{statements}"
-        else:
-            replacement = f"{note}\n{statements}"
-        edits.append((start, end.end(), replacement.rstrip("\n")))
-        done.append(ConvertedPou(file, pou.name, body.language, len(body.elements)))
+    for pou in pous_wanted:
+        actions = pou.sfc.actions if pou.sfc is not None else ()
+        drawings = [("", pou.graphic)] if pou.graphic is not None else []
+        drawings += [(a.name, a.graphic) for a in actions if a.graphic is not None]
+        if not drawings:
+            continue
+        context = context_of(pou, pous, globals_)
+        declarations: list[str] = []
+        for action, body in drawings:
+            lowered = lower(body, file, context, action)
+            errors = [d for d in lowered.diagnostics if d.severity == "error"]
+            if errors:
+                raise CompileError(errors)
+            if lowered.temporaries:
+                declarations.append(temporaries_block(lowered))
+            start = offsets[body.line - 1] + body.col - 1
+            end = _END.search(text, start)
+            if end is None:  # the parser found it: cannot happen
+                raise CompileError([])
+            indent = " " * (body.col - 1)
+            note = f"(* {body.language} converted to ST by padt convert *)"
+            replacement = f"{note}\n{_statements(lowered.lines, indent)}".rstrip("\n")
+            edits.append((start, end.end(), replacement))
+            what = f"{pou.name}.{action}" if action else pou.name
+            done.append(ConvertedPou(file, what, body.language, len(body.elements)))
+        if declarations:
+            # the hidden variables go after the POU's own (so the variables keep their
+            # order), or after its header when it has none
+            at = offsets[pou.pos.line]
+            if pou.var_blocks:
+                last = max(pou.var_blocks, key=lambda b: (b.pos.line, b.pos.col)).pos
+                end_var = _END_VAR.search(text, offsets[last.line - 1] + last.col - 1)
+                if end_var is not None:
+                    at = text.find("\n", end_var.end()) + 1 or len(text)
+            edits.append((at, at, "".join(f"{d}\n" for d in declarations)))
     for begin, finish, insert in sorted(edits, reverse=True):
         text = text[:begin] + insert + text[finish:]
     return text, done

@@ -26,6 +26,8 @@ def test_converted_bodies_run_exactly_as_the_drawings_did(tmp_path: Path) -> Non
     run = padt("convert", str(folder))
     assert run.returncode == 0, run.stderr
     assert sorted(run.stdout.splitlines()) == [
+        "actions.st: Drawn_actions.Count (LD, 7 elements) is now ST",
+        "actions.st: Drawn_actions.Latch (LD, 5 elements) is now ST",
         "blocks.st: Drawn_blocks (FBD, 17 elements) is now ST",
         "flow.st: Drawn_flow (FBD, 18 elements) is now ST",
         "functions.st: Drawn_functions (FBD, 14 elements) is now ST",

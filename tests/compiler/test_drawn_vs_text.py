@@ -196,6 +196,61 @@ m := sum;
 END_PROGRAM
 """,
     ),
+    # drawn actions, called from the body and run by a step of a chart; each keeps its
+    # own hidden variables (both have a contact 2)
+    "actions": (
+        """
+PROGRAM Drawn_actions
+VAR m1, m2 : BOOL; n : INT; END_VAR
+Latch();
+INITIAL_STEP Waiting : Count(N); END_STEP
+STEP Counting : Count(N); END_STEP
+TRANSITION FROM Waiting TO Counting := c; END_TRANSITION
+TRANSITION FROM Counting TO Waiting := NOT c; END_TRANSITION
+ACTION Latch :
+LD
+  1: LEFT_RAIL
+  2: CONTACT[RISING] a := 1
+  3: COIL[SET] m1 := 2
+  4: CONTACT b := 1
+  5: COIL[RESET] m1 := 4
+END_LD
+END_ACTION
+ACTION Count :
+LD
+  1: LEFT_RAIL
+  2: CONTACT[FALLING] a := 1
+  3: COIL m2 := 2
+  6: IN n
+  7: IN 1
+  8: BLOCK ADD (EN := 2, IN1 := 6, IN2 := 7) -> (ENO, OUT)
+  9: OUT n := 8.OUT
+END_LD
+END_ACTION
+END_PROGRAM
+""",
+        """
+PROGRAM Text_actions
+VAR m1, m2 : BOOL; n : INT; last_a, last_a2 : BOOL; fell : BOOL; END_VAR
+Latch();
+INITIAL_STEP Waiting : Count(N); END_STEP
+STEP Counting : Count(N); END_STEP
+TRANSITION FROM Waiting TO Counting := c; END_TRANSITION
+TRANSITION FROM Counting TO Waiting := NOT c; END_TRANSITION
+ACTION Latch :
+IF a AND NOT last_a THEN m1 := TRUE; END_IF;
+last_a := a;
+IF b THEN m1 := FALSE; END_IF;
+END_ACTION
+ACTION Count :
+fell := NOT a AND last_a2;
+last_a2 := a;
+m2 := fell;
+IF fell THEN n := n + 1; END_IF;
+END_ACTION
+END_PROGRAM
+""",
+    ),
     # LD: contacts in series and parallel, negated, rising and falling; coils normal,
     # negated, set, reset, rising and falling; a coil's power flowing on; an FB in a rung
     # with EN from a contact and ENO into a coil
@@ -313,4 +368,6 @@ def test_a_drawing_runs_alike_on_both_tiers(native_tier: NativeTier, name: str) 
     ]
     pair = side_by_side(text, NativeTier(native_tier.cache, native_tier.toolchain), programs)
     pair.cycle_and_compare(CYCLES)
-    assert f"Drawn_{name}".upper() in {b.upper() for b in pair.report.bodies}, pair.report.left
+    translated = f"Drawn_{name}".upper() in {b.upper() for b in pair.report.bodies}
+    # the native tier leaves a POU with a chart or actions to Python (docs/native-code.md)
+    assert translated or name == "actions", pair.report.left

@@ -14,7 +14,8 @@ What the lowering guarantees (the live views and docs/language.md rely on it):
   a rising or falling contact or coil keeps the last value it saw in `_TMP_LD<N>_M`;
 - an edge on an input pin (R_EDGE, F_EDGE) is sensed into `_TMP_E<N>_<P>` (`_TMP_E<N>` for
   an element's one pin), with its last value in `..._M`;
-- jumps run the drawing as segments from label to label (`_TMP_JUMP`).
+- jumps run the drawing as segments from label to label (`_TMP_JUMP`);
+- in a drawn ACTION the names start `_TMP_<ACTION>_` (`_TMP_FILL_LD5`).
 """
 
 from __future__ import annotations
@@ -132,22 +133,32 @@ class Lowered:
     diagnostics: list[Diagnostic] = field(default_factory=list)
 
 
-def value_variable(body: GraphicBody, element_id: int, pin: str = "") -> str | None:
+def value_variable(
+    body: GraphicBody, element_id: int, pin: str = "", action: str = ""
+) -> str | None:
     """The variable of the POU instance that holds the value an element puts out on `pin`
-    (see the module's guarantees); None where the value is the element's own expression
-    (read `Element.text`), a constant (a left rail) or nowhere."""
+    (see the module's guarantees; `action`: the action the body is of); None where the
+    value is the element's own expression (read `Element.text`), a constant (a left rail)
+    or nowhere."""
     element = body.element(element_id)
+    tmp = _hidden_prefix(action)
     if element is None:
         return None
     if element.kind in ("CONTACT", "COIL"):
-        return f"_TMP_LD{element.id}"
+        return f"{tmp}LD{element.id}"
     if element.kind != "BLOCK":
         return None
     if pin.upper() == _ENABLE_OUT:
-        return _temporary(element, _ENABLE_OUT)
+        return _temporary(tmp, element, _ENABLE_OUT)
     if element.instance:
         return f"{element.instance}.{pin}"
-    return _temporary(element, pin or _result_pin(element))
+    return _temporary(tmp, element, pin or _result_pin(element))
+
+
+def _hidden_prefix(action: str) -> str:
+    """How the names of a body's hidden variables start: an action's have its name, so that
+    they differ from the POU body's and the other actions'."""
+    return f"_TMP_{action.upper()}_" if action else "_TMP_"
 
 
 def temporaries_block(lowered: Lowered) -> str:
@@ -156,9 +167,10 @@ def temporaries_block(lowered: Lowered) -> str:
     return f"VAR {names} END_VAR"
 
 
-def lower(body: GraphicBody, file: str, context: Context) -> Lowered:
-    """The statements of `body`, in execution order, with its hidden variables."""
-    return _Lowering(body, file, context).run()
+def lower(body: GraphicBody, file: str, context: Context, action: str = "") -> Lowered:
+    """The statements of `body` (of the POU, or of its action `action`), in execution
+    order, with its hidden variables."""
+    return _Lowering(body, file, context, _hidden_prefix(action)).run()
 
 
 # kinds that act on what is wired into them, and without a wire do nothing
@@ -168,9 +180,9 @@ _ACTS_ON_ITS_WIRE = ("OUT", "INOUT", "JUMP", "RETURN", "CONNECTOR", "COIL")
 _EDGES = ("R_EDGE", "F_EDGE")
 
 
-def _edge(element: Element, pin: Pin) -> str:
+def _edge(tmp: str, element: Element, pin: Pin) -> str:
     """The variable holding the sensed edge of an input pin."""
-    return f"_TMP_E{element.id}_{pin.name}".upper() if pin.name else f"_TMP_E{element.id}"
+    return f"{tmp}E{element.id}_{pin.name}".upper() if pin.name else f"{tmp}E{element.id}"
 
 
 def _place(element: Element) -> tuple[int, float, float, int]:
@@ -183,8 +195,8 @@ def _wired(element: Element) -> bool:
     return bool(element.inputs and element.inputs[0].wires)
 
 
-def _temporary(element: Element, pin: str) -> str:
-    return f"_TMP_{element.text}{element.id}_{pin}".upper()
+def _temporary(tmp: str, element: Element, pin: str) -> str:
+    return f"{tmp}{element.text}{element.id}_{pin}".upper()
 
 
 def _result_pin(element: Element) -> str:
@@ -195,8 +207,9 @@ def _result_pin(element: Element) -> str:
 class _Lowering:
     """One lowering: the expressions and types found so far (they refer to each other)."""
 
-    def __init__(self, body: GraphicBody, file: str, context: Context) -> None:
+    def __init__(self, body: GraphicBody, file: str, context: Context, tmp: str) -> None:
         self.body = body
+        self.tmp = tmp  # how the hidden variables' names start
         self.file = file
         self.context = context
         self.by_id = {e.id: e for e in body.elements}
@@ -225,15 +238,16 @@ class _Lowering:
             for segment in segments:
                 self._segment_lines(segment, None, -1)
             return self.out
-        self.out.temporaries["_TMP_JUMP"] = "INT"
-        self.out.lines.append(Line("_TMP_JUMP := 0;", None))
-        self.out.lines.append(Line("WHILE _TMP_JUMP >= 0 DO CASE _TMP_JUMP OF", None))
+        self.out.temporaries[f"{self.tmp}JUMP"] = "INT"
+        self.out.lines.append(Line(f"{self.tmp}JUMP := 0;", None))
+        jump = f"{self.tmp}JUMP"
+        self.out.lines.append(Line(f"WHILE {jump} >= 0 DO CASE {jump} OF", None))
         label_index = {e.text.upper(): i + 1 for i, e in enumerate(labels)}
         for index, segment in enumerate(segments):
             following = index + 1 if index + 1 < len(segments) else -1
             self.out.lines.append(Line(f"{index}:", None))
             self._segment_lines(segment, label_index, following)
-        self.out.lines.append(Line("ELSE _TMP_JUMP := -1; END_CASE; END_WHILE;", None))
+        self.out.lines.append(Line(f"ELSE {jump} := -1; END_CASE; END_WHILE;", None))
         return self.out
 
     def _segments(self, labels: list[Element]) -> list[list[Element]]:
@@ -261,13 +275,13 @@ class _Lowering:
                     self._error(element, Code.GRAPHIC_LABEL, f"no label '{element.text}'")
                     continue
                 condition = self._pin_value(element, element.inputs[0])
-                self._emit(element, f"IF {condition} THEN _TMP_JUMP := {target}; ELSE")
+                self._emit(element, f"IF {condition} THEN {self.tmp}JUMP := {target}; ELSE")
                 closing += 1
                 continue
             self._element_lines(element)
         if labels is not None:
             ends = " END_IF;" * closing
-            self.out.lines.append(Line(f"_TMP_JUMP := {following};{ends}", None))
+            self.out.lines.append(Line(f"{self.tmp}JUMP := {following};{ends}", None))
 
     def _has_statement(self, element: Element) -> bool:
         if element.kind in _ACTS_ON_ITS_WIRE and not _wired(element):
@@ -341,11 +355,11 @@ class _Lowering:
         enable = source.input(_ENABLE) if source.kind == "BLOCK" else None
         if enable is None or not enable.wires or pin.wires[0].pin.upper() == _ENABLE_OUT:
             return None
-        return _temporary(source, _ENABLE_OUT)
+        return _temporary(self.tmp, source, _ENABLE_OUT)
 
     def _contact(self, element: Element) -> None:
         power = self._pin_value(element, element.inputs[0]) if element.inputs else "TRUE"
-        flow = f"_TMP_LD{element.id}"
+        flow = f"{self.tmp}LD{element.id}"
         self._temporary(flow, "BOOL")
         variable = element.text
         if "NEGATED" in element.modifiers:
@@ -363,7 +377,7 @@ class _Lowering:
 
     def _coil(self, element: Element) -> None:
         power = self._pin_value(element, element.inputs[0]) if element.inputs else "FALSE"
-        flow = self._temporary(f"_TMP_LD{element.id}", "BOOL")
+        flow = self._temporary(f"{self.tmp}LD{element.id}", "BOOL")
         variable = element.text
         modifiers = element.modifiers
         text = f"{flow} := {power};"
@@ -391,11 +405,12 @@ class _Lowering:
             call = f"{element.instance}({', '.join(arguments)});"
         else:
             result = self._temporary(
-                _temporary(element, _result_pin(element)), self._result_type(element) or ""
+                _temporary(self.tmp, element, _result_pin(element)),
+                self._result_type(element) or "",
             )
             call = f"{result} := {element.text}({', '.join(arguments)});"
         if enabled and enable is not None:
-            eno = self._temporary(_temporary(element, _ENABLE_OUT), "BOOL")
+            eno = self._temporary(_temporary(self.tmp, element, _ENABLE_OUT), "BOOL")
             condition = self._pin_value(element, enable)
             call = f"IF {condition} THEN {call} {eno} := TRUE; ELSE {eno} := FALSE; END_IF;"
         self._emit(element, call)
@@ -415,7 +430,7 @@ class _Lowering:
             if pin.flag not in _EDGES or not pin.wires:
                 continue
             value = self._pin_value(element, replace(pin, flag=""))
-            edge = self._temporary(_edge(element, pin), "BOOL")
+            edge = self._temporary(_edge(self.tmp, element, pin), "BOOL")
             memory = self._temporary(f"{edge}_M", "BOOL")
             sensed = (
                 f"{value} AND NOT {memory}" if pin.flag == "R_EDGE" else f"NOT {value} AND {memory}"
@@ -426,7 +441,7 @@ class _Lowering:
 
     def _pin_value(self, consumer: Element, pin: Pin, depth: int = 0) -> str:
         if pin.flag in _EDGES and pin.wires:
-            return _edge(consumer, pin)  # sensed before the statement (`_edges`)
+            return _edge(self.tmp, consumer, pin)  # sensed before the statement (`_edges`)
         values = [self._wire_value(consumer, w, depth) for w in pin.wires]
         if not values:
             return "FALSE"
@@ -446,14 +461,14 @@ class _Lowering:
         if kind == "LEFT_RAIL":
             return "TRUE"
         if kind in ("CONTACT", "COIL"):
-            return f"_TMP_LD{source.id}"
+            return f"{self.tmp}LD{source.id}"
         if kind == "BLOCK" and pin.upper() == _ENABLE_OUT:
             enable = source.input(_ENABLE)
-            return _temporary(source, _ENABLE_OUT) if enable and enable.wires else "TRUE"
+            return _temporary(self.tmp, source, _ENABLE_OUT) if enable and enable.wires else "TRUE"
         if kind == "BLOCK" and source.instance:
             return f"{source.instance}.{pin}"
         if kind == "BLOCK" and self._result_type(source) is not None:
-            return _temporary(source, pin or _result_pin(source))
+            return _temporary(self.tmp, source, pin or _result_pin(source))
         # a value written where it is used: a continuation's, or an untyped FUNCTION's
         if depth >= MAX_INLINE_DEPTH:
             message = (
