@@ -1,9 +1,9 @@
 """What the user does in the page that viser does not report: the tab of the work area
 (viser's tabs switch in the browser alone), a row of the Online test's table, a value drawn
-on the Logic screen and an entry of the project tree (plain HTML), and the window's size
-(viser does not tell the server; the workspace chooses its panels' widths by it). A small
-script reports each through a text input it hides; the server reads it like any input from
-a browser, as untrusted text.
+on the Logic screen or a place on its drawing (in the drawing's units) and an entry of the
+project tree (plain HTML), and the window's size (viser does not tell the server; the
+workspace chooses its panels' widths by it). A small script reports each through a text
+input it hides; the server reads it like any input from a browser, as untrusted text.
 
 Knowing the tab in view, the workspace redraws that screen only: ten browsers drawing
 every screen ten times a second cost most of two cores."""
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import viser
 
 LABEL = "Page click"
-KINDS = ("tab", "variable", "tree", "window", "layout", "drawing", "logic")
+KINDS = ("tab", "variable", "tree", "window", "layout", "drawing", "logic", "place")
 MAX_NAME = 1000  # longer than any tab name, variable path or tree entry
 
 # Installed once per page (a later workspace after logging in again finds the new input by
@@ -44,6 +44,9 @@ _SCRIPT = (
     "if(!said){var entry=at.closest('[data-tree]');if(entry)said='tree|'+entry.dataset.tree}"
     "if(!said){var drawn=at.closest('[data-logic-var]');"
     "if(drawn)said='logic|'+drawn.dataset.logicVar}"
+    "if(!said){var sheet=at.closest('svg.gfx');var m=sheet&&sheet.getScreenCTM();"
+    "if(m){var q=new DOMPoint(e.clientX,e.clientY).matrixTransform(m.inverse());"
+    "said='place|'+Math.round(q.x)+','+Math.round(q.y)}}"
     "if(!said&&at.closest('[data-action=drawing],[data-action=editor]')){"
     "setTimeout(function(){var e=window.padtEditor;"
     "tell('drawing|'+(e&&e.showDrawing?'on':'off'))},0)}"

@@ -2,7 +2,8 @@
 the users log in with, the router's address (shown in the status bar), the users' watch
 lists, the projects the PADT knows (by name, each a folder: a `ProjectShelf`, which also holds
 the audit log of their changes), where the backups of what was loaded go, and the users'
-workspace layouts (kept beside the watch lists unless given)."""
+workspace layouts and online test fields on drawn logic (kept beside the watch lists unless
+given)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from backend.engineering.backup import DEFAULT_BACKUP_DIR
+from backend.engineering.logic_fields import LogicFields
 from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.project_shelf import ProjectShelf
 from backend.engineering.resource_directory import ResourceDirectory
@@ -27,11 +29,15 @@ class UiContext:
     projects: Mapping[str, Path] = field(default_factory=dict)  # name -> project folder
     backup_dir: Path = DEFAULT_BACKUP_DIR
     layouts: UserLayouts | None = None
+    logic_fields: LogicFields | None = None
 
     def __post_init__(self) -> None:
         if self.layouts is None:
             where = self.watch_lists.path.with_name("layouts.json")
             object.__setattr__(self, "layouts", UserLayouts(where))
+        if self.logic_fields is None:
+            where = self.watch_lists.path.with_name("logic-fields.json")
+            object.__setattr__(self, "logic_fields", LogicFields(where))
         # a plain mapping (tests, tools) is a shelf with no folder for new projects and no
         # audit log: its projects can be read, not changed
         if not isinstance(self.projects, ProjectShelf):
@@ -41,6 +47,11 @@ class UiContext:
     def user_layouts(self) -> UserLayouts:
         assert self.layouts is not None  # made so by __post_init__
         return self.layouts
+
+    @property
+    def fields(self) -> LogicFields:
+        assert self.logic_fields is not None  # made so by __post_init__
+        return self.logic_fields
 
     @property
     def shelf(self) -> ProjectShelf:

@@ -167,16 +167,24 @@ def _maybe_drawn(source: PouSource) -> bool:
 _REFERENCE = re.compile(r"[A-Za-z_]\w*(?:\.[A-Za-z_]\w*)*")
 
 
+def variable_path(instance: str, text: str, known: dict[str, str]) -> str | None:
+    """The path of the variable `text` names in a POU of `instance`: the instance's own
+    (`Count.total`, `Count.timer.Q`) before a global of the same name, as in ST; None for
+    an expression or a constant, which no one variable holds. `known`: the resource's
+    paths by their upper case."""
+    text = text.strip()
+    if not _REFERENCE.fullmatch(text):
+        return None
+    return known.get(f"{instance}.{text}".upper()) or known.get(text.upper())
+
+
 def _named(instance: str, body: GraphicBody, paths: Collection[str]) -> dict[int, str]:
-    """element id -> the path of the variable an IN, OUT, INOUT, contact or coil names: the
-    instance's own (`Count.total`, `Count.timer.Q`) before a global of the same name, as
-    in ST; none for an expression or a constant, which no one variable holds."""
+    """element id -> the path of the variable an IN, OUT, INOUT, contact or coil names."""
     known = {path.upper(): path for path in paths}
     found: dict[int, str] = {}
     for element in body.elements:
-        text = element.text.strip()
-        if element.kind in ("IN", "OUT", "INOUT", "CONTACT", "COIL") and _REFERENCE.fullmatch(text):
-            path = known.get(f"{instance}.{text}".upper()) or known.get(text.upper())
+        if element.kind in ("IN", "OUT", "INOUT", "CONTACT", "COIL"):
+            path = variable_path(instance, element.text, known)
             if path is not None:
                 found[element.id] = path
     return found

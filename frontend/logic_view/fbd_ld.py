@@ -8,14 +8,26 @@ forcing."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from backend.engineering.graphic_drawing import CLASSES
 from backend.engineering.logic_view import TRUE, LiveGraphic
-from frontend.logic_view.svg import ACTIVE, FORCED, MUTED, clickable, escape, shown, value_color
+from frontend.logic_view.svg import (
+    ACTIVE,
+    FORCED,
+    MUTED,
+    Live,
+    clickable,
+    escape,
+    shown,
+    value_color,
+)
 
 _MARGIN = 14
 _LABEL_CHAR = 6.2  # a value label's character width, in drawing units (monospace 10 px)
+_ROOM = 12  # characters a value may grow to without leaving the drawing's frame
 _INK = "#343a40"
 _CLASS_STYLES = {
     "box": f"fill:#fff;stroke:{_INK};stroke-width:1.2",
@@ -46,9 +58,30 @@ _STYLE = (
 )
 
 
+@dataclass(frozen=True)
+class PlacedField:
+    """An online test field on the drawing: its variable as named in the POU, the path of
+    that variable in the resource (None: the resource has none of that name), its place."""
+
+    variable: str
+    path: str | None
+    x: float
+    y: float
+
+
+_FIELD_H = 18
+
+
 def graphic_svg(
-    graphic: LiveGraphic, values: dict[str, Any], types: dict[str, str], quality: dict[str, str]
+    graphic: LiveGraphic,
+    values: dict[str, Any],
+    types: dict[str, str],
+    quality: dict[str, str],
+    fields: Sequence[PlacedField],
+    live: Live,
 ) -> str:
+    """The body with the values now; its live parts in `live`."""
+
     def carries_true(element: int, pin: str) -> bool:
         path = graphic.carried.get((element, pin))
         return path == TRUE or (path is not None and values.get(path) is True)
@@ -62,40 +95,68 @@ def graphic_svg(
     for part in graphic.parts:
         if part.source:  # a wire: lit when what it carries is TRUE
             lit = carries_true(part.source, part.source_pin)
-            parts.append(
-                f'<g class="{"on" if lit else ""}" data-wire-from="{part.source}"'
-                f' data-on="{str(lit).lower()}">{part.svg}</g>'
-            )
+            state = {"class": "on" if lit else "", "data-on": str(lit).lower()}
+            parts.append(f'<g data-wire-from="{part.source}" {live.node(state)}>{part.svg}</g>')
         elif part.element:
             lit = carries_true(part.element, "")
             names = " ".join(x for x, on in (("on", lit), ("forced", part.element in forced)) if on)
-            parts.append(
-                f'<g class="{names}" data-element="{part.element}" '
-                f'data-on="{str(lit).lower()}">{part.svg}</g>'
-            )
+            state = {"class": names, "data-on": str(lit).lower()}
+            parts.append(f'<g data-element="{part.element}" {live.node(state)}>{part.svg}</g>')
         else:
             parts.append(part.svg)
     right = max((p.right for p in graphic.parts), default=0.0)
     for drawn in graphic.values:
         text, how = shown(drawn.path, values, types, quality)
         color = value_color(text, how) if how != "live" or text in ("TRUE", "FALSE") else _INK
+        state = {"fill": color, "data-value": text, "data-quality": how}
         parts.append(
-            f'<text class="val" x="{drawn.at.x:g}" y="{drawn.at.y:g}" fill="{color}" '
-            f'data-value-of="{escape(drawn.path)}" data-value="{escape(text)}" '
-            f'data-quality="{how}" '
-            f"{clickable(drawn.path)}><title>{escape(drawn.path)}"
-            f"{' (forced)' if how == 'forced' else ''}</title>{escape(text)}</text>"
+            f'<text class="val" x="{drawn.at.x:g}" y="{drawn.at.y:g}" '
+            f'data-value-of="{escape(drawn.path)}" {live.node(state)} {clickable(drawn.path)}>'
+            f"<title>{escape(drawn.path)}</title>{live.text(text)}</text>"
         )
-        right = max(right, drawn.at.x + _LABEL_CHAR * max(len(text), 5))
-    left = min((p.left for p in graphic.parts), default=0.0) - _MARGIN
-    top = min((p.top for p in graphic.parts), default=0.0) - _MARGIN
-    bottom = max((p.bottom for p in graphic.parts), default=0.0) + _MARGIN + 14
+        right = max(right, drawn.at.x + _LABEL_CHAR * max(len(text), _ROOM))
+    left = min((p.left for p in graphic.parts), default=0.0)
+    top = min((p.top for p in graphic.parts), default=0.0)
+    bottom = max((p.bottom for p in graphic.parts), default=0.0) + 14
+    for placed in fields:
+        box, width = _field(placed, values, types, quality, live)
+        parts.append(box)
+        left, top = min(left, placed.x), min(top, placed.y)
+        right, bottom = max(right, placed.x + width), max(bottom, placed.y + _FIELD_H)
+    left, top, bottom = left - _MARGIN, top - _MARGIN, bottom + _MARGIN
     width, height = right + _MARGIN - left, bottom - top
     return (
-        f'{_STYLE}<svg xmlns="http://www.w3.org/2000/svg" class="gfx" data-testid="graphic" '
+        f'{_STYLE}<svg xmlns="http://www.w3.org/2000/svg" class="gfx" data-testid="drawing" '
         f'data-language="{graphic.language}" viewBox="{left:g} {top:g} {width:g} {height:g}" '
         f'style="width:100%;max-width:{width * 1.6:.0f}px;height:auto">{"".join(parts)}</svg>'
     )
+
+
+def _field(
+    placed: PlacedField,
+    values: dict[str, Any],
+    types: dict[str, str],
+    quality: dict[str, str],
+    live: Live,
+) -> tuple[str, float]:
+    """An online test field's box (`variable = value`) and the width it may take."""
+    if placed.path is None:
+        text, how = "not in this configuration", "unknown"
+    else:
+        text, how = shown(placed.path, values, types, quality)
+    label = f"{placed.variable} = {text}"
+    color = FORCED if how == "forced" else MUTED if how != "live" else _INK
+    click = clickable(placed.path) if placed.path is not None else ""
+    state = {"data-value": text, "data-quality": how}
+    box = (
+        f'<g data-field="{escape(placed.variable)}" {live.node(state)} {click}>'
+        f'<rect x="{placed.x:g}" y="{placed.y:g}" '
+        f'{live.node({"width": f"{10 + _LABEL_CHAR * len(label):g}"})} height="{_FIELD_H}" '
+        f'rx="3" fill="#fff3bf" stroke="#f08c00"/>'
+        f'<text class="val" x="{placed.x + 5:g}" y="{placed.y + 13:g}" '
+        f"{live.node({'fill': color})}>{live.text(label)}</text></g>"
+    )
+    return box, 10 + _LABEL_CHAR * (len(placed.variable) + 3 + max(len(text), _ROOM))
 
 
 def _named_forced(graphic: LiveGraphic, element: int, quality: dict[str, str]) -> bool:
@@ -109,7 +170,7 @@ def legend() -> str:
         "TRUE, power flow in LD",
         f'<span style="color:{FORCED};font-weight:600">forced</span>',
         f'<span style="color:{MUTED}">…</span> no value yet',
-        "click a value to write or force it",
+        "click a value to write or force it, the drawing to place a field",
     )
     spans = "".join(f'<span style="margin-right:14px">{item}</span>' for item in items)
     return f'<div data-testid="graphic-legend" style="font-size:0.8em">{spans}</div>'

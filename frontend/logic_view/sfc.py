@@ -29,12 +29,17 @@ from frontend.logic_view.svg import (
     FORCED,
     IDLE,
     MUTED,
+    Live,
     clickable,
     escape,
     shown,
     value_color,
 )
 
+_TRANSITION_TITLE = (
+    "the condition's value in the last cycle; muted: not evaluated now (a step it leaves is "
+    "not active), the last value it took"
+)
 TIME_X = ACTION_X + QUALIFIER_W + ACTION_W + 12  # a step's time, right of its actions
 _STYLE = (
     "<style>.sfc-live text{font-family:sans-serif;font-size:11px}"
@@ -44,8 +49,13 @@ _STYLE = (
 
 
 def chart_svg(
-    chart: LiveChart, values: dict[str, Any], types: dict[str, str], quality: dict[str, str]
+    chart: LiveChart,
+    values: dict[str, Any],
+    types: dict[str, str],
+    quality: dict[str, str],
+    live: Live,
 ) -> str:
+    """The chart with the values now; its live parts in `live`."""
     layout = chart.layout
     parts: list[str] = []
     for line in layout.lines:
@@ -59,13 +69,13 @@ def chart_svg(
         text, how = shown(f"{path}.X", values, types, quality)
         lit = text == "TRUE"
         active[step.name.upper()] = lit
-        parts.append(_step(step.name, step.initial, step.y, path, lit, how))
+        parts.append(_step(step.name, step.initial, step.y, path, lit, how, live))
         time_text, time_how = shown(f"{path}.T", values, types, quality)
+        tint = {"fill": _time_color(lit, time_how)}
         parts.append(
             f'<text x="{TIME_X}" y="{step.y + 17}" class="mono" '
-            f'data-step-time="{escape(step.name)}" fill="{_time_color(lit, time_how)}" '
-            f'{clickable(f"{path}.T")}>'
-            f"T = {escape(time_text)}</text>"
+            f'data-step-time="{escape(step.name)}" {live.node(tint)} {clickable(f"{path}.T")}>'
+            f"{live.text(f'T = {time_text}')}</text>"
         )
     for action in layout.actions:
         parts.append(
@@ -85,14 +95,18 @@ def chart_svg(
         evaluated = all(active.get(source.upper(), False) for source in bar.sources)
         color = value_color(text, how) if evaluated or how == "forced" else MUTED
         bar_color = ACTIVE if evaluated and text == "TRUE" else IDLE
+        shown_value = {
+            "fill": color,
+            "data-value": text,
+            "data-evaluated": str(evaluated).lower(),
+            "data-quality": how,
+        }
         parts.append(
             f'<line x1="{LINE_X - BAR_HALF}" y1="{bar.y}" x2="{LINE_X + BAR_HALF}" y2="{bar.y}" '
-            f'stroke="{bar_color}" stroke-width="3"/>'
+            f'{live.node({"stroke": bar_color})} stroke-width="3"/>'
             f'<text x="{LINE_X - BAR_HALF - 5}" y="{bar.y + 4}" text-anchor="end" class="mono b" '
-            f'fill="{color}" data-transition="{bar.number + 1}" data-value="{escape(text)}" '
-            f'data-evaluated="{str(evaluated).lower()}" data-quality="{how}" '
-            f"{clickable(path)}><title>{_transition_title(evaluated, how)}</title>"
-            f"{escape(text)}</text>"
+            f'data-transition="{bar.number + 1}" {live.node(shown_value)} {clickable(path)}>'
+            f"<title>{_TRANSITION_TITLE}</title>{live.text(text)}</text>"
             f'<text x="{LABEL_X}" y="{bar.y + 4}" class="mono" fill="{IDLE}">'
             f"{escape(bar.label)}</text>"
         )
@@ -108,29 +122,28 @@ def chart_svg(
     height = layout.height
     return (
         f'{_STYLE}<svg xmlns="http://www.w3.org/2000/svg" class="sfc-live" '
-        f'data-testid="sfc-chart" viewBox="0 0 {width} {height}" '
+        f'data-testid="drawing" viewBox="0 0 {width} {height}" '
         f'style="width:100%;max-width:{width * 1.4:.0f}px;height:auto">{"".join(parts)}</svg>'
     )
 
 
-def _step(name: str, initial: bool, y: int, path: str, lit: bool, how: str) -> str:
+def _step(name: str, initial: bool, y: int, path: str, lit: bool, how: str, live: Live) -> str:
     stroke = FORCED if how == "forced" else ACTIVE if lit else IDLE
-    fill = ACTIVE_FILL if lit else "#ffffff"
-    width = 2.2 if lit else 1.2
-    box = (
-        f'<rect x="{STEP_X}" y="{y}" width="{STEP_W}" height="{STEP_H}" fill="{fill}" '
-        f'stroke="{stroke}" stroke-width="{width}"/>'
-    )
+    frame = {
+        "fill": ACTIVE_FILL if lit else "#ffffff",
+        "stroke": stroke,
+        "stroke-width": "2.2" if lit else "1.2",
+    }
+    box = f'<rect x="{STEP_X}" y="{y}" width="{STEP_W}" height="{STEP_H}" {live.node(frame)}/>'
     if initial:
         box += (
             f'<rect x="{STEP_X + 3}" y="{y + 3}" width="{STEP_W - 6}" height="{STEP_H - 6}" '
-            f'fill="none" stroke="{stroke}" stroke-width="1"/>'
+            f'fill="none" {live.node({"stroke": stroke})} stroke-width="1"/>'
         )
-    state = "active" if lit else "inactive"
+    state = {"data-active": str(lit).lower(), "data-quality": how}
     return (
-        f'<g data-step="{escape(name)}" data-active="{str(lit).lower()}" data-quality="{how}" '
-        f"{clickable(f'{path}.X')}><title>{escape(name)}: {state}"
-        f"{' (forced)' if how == 'forced' else ''}</title>{box}"
+        f'<g data-step="{escape(name)}" {live.node(state)} {clickable(f"{path}.X")}>'
+        f"<title>step {escape(name)}</title>{box}"
         f'<text x="{LINE_X}" y="{y + 17}" text-anchor="middle" class="b">'
         f"{escape(short(name, 20))}</text></g>"
     )
@@ -140,14 +153,6 @@ def _time_color(lit: bool, how: str) -> str:
     if how == "forced":
         return FORCED
     return ACTIVE if lit else MUTED
-
-
-def _transition_title(evaluated: bool, how: str) -> str:
-    if how == "forced":
-        return "forced"
-    if evaluated:
-        return "the condition's value in the last cycle"
-    return "not evaluated now (a step it leaves is not active): the last value it took"
 
 
 def legend() -> str:

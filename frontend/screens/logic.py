@@ -4,7 +4,8 @@ step's time and each transition condition's value; an FBD or LD body with the va
 connection and LD's power flow. It follows the program wherever it stands (running, frozen
 and stepped, at a breakpoint): what it shows is what the resource last published. A click
 on a value puts it into the Write or force editor below, with the Online test's checks and
-confirmations.
+confirmations; online test fields (a variable and its value) are placed on a drawing per
+user.
 
 As on the Code screen, the body is taken only from a project the PADT knows that compiles
 to the configuration CRC the resource runs."""
@@ -18,10 +19,12 @@ from pathlib import Path
 
 import viser
 
+from backend.engineering.logic_fields import LogicFields
 from backend.engineering.logic_view import LiveChart, LiveGraphic, LogicBodies
 from backend.engineering.sources import ConfigurationSources, find_sources, instances
 from frontend.editor.live_lines import SourceLookup
-from frontend.logic_view import fbd_ld, sfc
+from frontend.logic_view import fbd_ld, field_panel, sfc
+from frontend.logic_view.svg import Live
 from frontend.page_clicks import Click
 from frontend.resource_feed import ResourceFeed, latest_reading
 from frontend.screen_registry import Now, Screen, Work
@@ -30,44 +33,73 @@ from frontend.state_rules import state_words
 from runtime.contract import protocol as p
 
 NO_INSTANCE = "-"
+DRAWING = "drawing"  # the data-testid of the drawing's SVG, which the patch finds it by
+
+
+@dataclass(frozen=True)
+class Page:
+    """What one refresh shows: the line above the drawing (or a message), the drawing with
+    the values now and what it was drawn from (`key`), and its live parts."""
+
+    head: str
+    drawing: str = ""
+    key: tuple[object, ...] = ()
+    live: Live | None = None
 
 
 @dataclass
 class LogicScreen:
     instance: viser.GuiDropdownHandle[str]
+    head: viser.GuiHtmlHandle
     view: viser.GuiHtmlHandle
+    patch: viser.GuiHtmlHandle  # new values, as a patch of the drawing's live parts
+    fields: field_panel.FieldPanel
     lookup: SourceLookup
     bodies: LogicBodies | None = None
     offered_for: tuple[int, str] = (0, "")  # (id of the variable table, CRC) offered
     drawn: LiveChart | LiveGraphic | None = None  # the drawing in view
     drawn_for: tuple[object, ...] = ()  # (CRC, instance, variable table) it was made for
-    shown: str = ""
+    shown: tuple[str, tuple[object, ...], str] = ("", (), "")  # head, drawing's key, patch
 
 
-def build(gui: viser.GuiApi) -> LogicScreen:
+def build(gui: viser.GuiApi, fields: LogicFields, user: str) -> LogicScreen:
     instance = gui.add_dropdown(
         "Instance", (NO_INSTANCE,), hint="a program or FB instance with a chart or drawing"
     )
+    head = gui.add_html("")
     view = gui.add_html("")
-    return LogicScreen(instance, view, SourceLookup(find_sources))
+    patch = gui.add_html("")
+    panel = field_panel.build(gui, fields, user)
+    return LogicScreen(instance, head, view, patch, panel, SourceLookup(find_sources))
 
 
 def wanted(screen: LogicScreen) -> list[str]:
-    """The variables the drawing in view shows."""
-    return screen.drawn.watched() if screen.drawn is not None else []
+    """The variables the drawing in view shows, its online test fields' among them."""
+    drawn = screen.drawn.watched() if screen.drawn is not None else []
+    return drawn + field_panel.wanted(screen.fields)
 
 
 def refresh(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str, Path]) -> None:
     page = _page(screen, feed, projects)
-    if page != screen.shown:
-        screen.view.content = page
-        screen.shown = page
+    if screen.drawn is None:  # no fields to show or place
+        field_panel.refresh(screen.fields, None, "", {})
+    head, key, patch = screen.shown
+    if page.head != head:
+        screen.head.content = page.head
+    # the drawing whole when it is another; else only its values
+    if page.key != key:
+        screen.view.content = page.drawing
+        patch = ""
+    elif page.live is not None and page.live.patch(DRAWING) != patch:
+        patch = page.live.patch(DRAWING)
+        screen.patch.content = patch
+    screen.shown = (page.head, page.key, patch)
     offered = tuple(screen.instance.options) != (NO_INSTANCE,)
     if screen.instance.disabled == offered:
         screen.instance.disabled = not offered
 
 
-def _page(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str, Path]) -> str:
+def _page(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str, Path]) -> Page:
     if feed is None:
         _offer(screen, ())
         return _message("Select a resource you are logged in to.")
@@ -114,13 +146,18 @@ def _page(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str,
             else screen.bodies.graphic(chosen, types)
         )
     drawn = screen.drawn
+    field_panel.refresh(screen.fields, drawn, chosen, types)
+    fields = screen.fields.placed
+    live = Live()
     if isinstance(drawn, LiveChart):
         head = _header(chosen, f"SFC chart of {drawn.pou}", drawn.file, sources, status)
-        return head + sfc.legend() + sfc.chart_svg(drawn, values, types, quality)
+        svg = sfc.chart_svg(drawn, values, types, quality, live)
+        return Page(head, sfc.legend() + svg, key, live)
     if isinstance(drawn, LiveGraphic):
         what = f"{drawn.language} body of {drawn.pou}"
         head = _header(chosen, what, drawn.file, sources, status)
-        return head + fbd_ld.legend() + fbd_ld.graphic_svg(drawn, values, types, quality)
+        svg = fbd_ld.graphic_svg(drawn, values, types, quality, fields, live)
+        return Page(head, fbd_ld.legend() + svg, (*key, tuple(fields)), live)
     return _message(f"{chosen} has nothing drawn.")
 
 
@@ -152,8 +189,8 @@ def _offer(screen: LogicScreen, options: tuple[str, ...]) -> None:
         screen.instance.options = options
 
 
-def _message(text: str) -> str:
-    return f'<p data-testid="logic-message">{html.escape(text)}</p>'
+def _message(text: str) -> Page:
+    return Page(f'<p data-testid="logic-message">{html.escape(text)}</p>')
 
 
 class Logic(Screen):
@@ -165,7 +202,7 @@ class Logic(Screen):
 
     def __init__(self, work: Work) -> None:
         super().__init__(work)
-        self.screen = build(work.gui)
+        self.screen = build(work.gui, work.context.fields, work.user)
         self.value_edit = value_edit.build(work.gui, work.send_all)
 
     def refresh(self, now: Now) -> None:
@@ -178,3 +215,5 @@ class Logic(Screen):
     def clicked(self, click: Click) -> None:
         if click.kind == "logic":  # checked as typed text by the value editor
             value_edit.choose(self.value_edit, click.name)
+        elif click.kind == "place":  # where the next field goes
+            field_panel.place(self.screen.fields, click.name)

@@ -336,6 +336,10 @@ def drawn_value(page: Page, path: str) -> str:
     return page.locator(f'[data-value-of="{path}"]').first.get_attribute("data-value") or ""
 
 
+def field_value(page: Page, variable: str) -> str:
+    return page.locator(f'[data-field="{variable}"]').first.get_attribute("data-value") or ""
+
+
 def is_on(page: Page, selector: str) -> bool:
     return page.locator(selector).first.get_attribute("data-on") == "true"
 
@@ -360,6 +364,16 @@ def test_fbd_and_ld_bodies_with_live_values_power_flow_and_a_forced_contact(draw
         wait_until("the wire from GT lights up", lambda: is_on(page, '[data-wire-from="8"]'))
         wait_until("and goes dark", lambda: not is_on(page, '[data-wire-from="8"]'))
         wait_until("and lights up", lambda: is_on(page, '[data-wire-from="8"]'))
+
+        # an online test field: `step` placed where the drawing is clicked, kept for the user
+        page.get_by_text("Online test fields", exact=True).click()
+        field(page, "Field variable").fill("step")
+        box = page.locator("svg.gfx").first.bounding_box()
+        assert box is not None
+        page.mouse.click(box["x"] + box["width"] * 0.6, box["y"] + box["height"] * 0.08)
+        wait_until("the click gives the place", lambda: field(page, "Field x").input_value() != "0")
+        page.get_by_role("button", name="Add field", exact=True).click()
+        wait_until("the field is drawn", lambda: field_value(page, "step") == "1")
         shoot(page, "logic-fbd-1400")
 
         # the LD rung: the power flow through blink and NOT stop into the coil lamp
@@ -410,3 +424,18 @@ def test_fbd_and_ld_bodies_with_live_values_power_flow_and_a_forced_contact(draw
         )
         time.sleep(0.5)
         shoot(page, "logic-fbd-1920")
+
+        # the field is the user's: another browser logged in as them finds it there; a click
+        # on it chooses its variable; it is removed
+        other = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_logic(other, drawn)
+        choose(other, "Instance", "Count")
+        wait_until("the kept field is drawn", lambda: field_value(other, "step") == "1")
+        other.locator('[data-field="step"]').first.click()
+        wait_until(
+            "the editor has its variable",
+            lambda: editor(other, "Variable").input_value() == "Count.step",
+        )
+        other.get_by_text("Online test fields", exact=True).click()
+        other.get_by_role("button", name="Remove field", exact=True).click()
+        wait_until("the field is gone", lambda: other.locator('[data-field="step"]').count() == 0)
