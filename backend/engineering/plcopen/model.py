@@ -42,6 +42,7 @@ class DataType:
 class Action:
     name: str
     body: str  # ST statements
+    drawing: GraphicBody | None = None  # or a drawing in FBD or LD
 
 
 @dataclass(frozen=True)

@@ -281,8 +281,10 @@ def _language(body: Element) -> Element:
 def st_text(body: Element) -> str:
     """The ST of a body, an action or a transition (the bodies that must be ST)."""
     element = _language(body)
-    if element.tag in GRAPHICAL:  # the grammar takes a drawing as a POU's body only
-        raise _Refused(f"{element.tag}, which padt takes as the body of a POU only")
+    if (
+        element.tag in GRAPHICAL
+    ):  # the grammar takes a drawing as the body of a POU or an action only
+        raise _Refused(f"{element.tag}, which padt takes as the body of a POU or an action only")
     if element.tag == "IL":  # the importer says why
         raise _Refused(element.tag)
     if element.tag != "ST":
@@ -491,7 +493,7 @@ def _actions(element: Element) -> tuple[Action, ...]:
     for action in holder.all("action"):
         name = name_of(action)
         try:
-            found.append(Action(name, st_text(required(action, "body"))))
+            found.append(Action(name, *drawn_or_st(required(action, "body"))))
         except _Refused as refused:
             raise _Refused(f"action {name} in {refused.reason}") from None
     return tuple(found)

@@ -7,6 +7,7 @@ import textwrap
 from backend.compiler.graphics.text_form import write_body
 from backend.engineering.plcopen.model import (
     Accessor,
+    Action,
     DataType,
     Interface,
     Method,
@@ -57,9 +58,13 @@ def pou_text(pou: Pou) -> str:
         parts.append(write_body(pou.graphic))
     elif pou.body:
         parts.append(pou.body)
-    parts += [f"ACTION {action.name}:\n{action.body}\nEND_ACTION" for action in pou.actions]
+    parts += [f"ACTION {a.name}:\n{_action_body(a)}\nEND_ACTION" for a in pou.actions]
     parts.append(f"END_{pou.kind}")
     return "\n".join(parts) + "\n"
+
+
+def _action_body(action: Action) -> str:
+    return write_body(action.drawing) if action.drawing is not None else action.body
 
 
 def _member_head(word: str, access: str, modifiers: tuple[str, ...], name: str) -> str:

@@ -394,3 +394,17 @@ def test_corpus_bodies_go_back_to_xml_with_everything_they_had() -> None:
     matiec = corpus_dir("matiec/tests")
     assert round_trip(matiec / "STD_TEST.xml") == 4
     assert round_trip(matiec / "LD_TEST.xml") == 1
+
+
+def test_an_action_drawn_in_ld_is_imported_as_a_drawing_and_runs(tmp_path: Path) -> None:
+    folder, code, _ = imported(tmp_path, FIXTURES / "drawn_action.xml")
+    assert code == 0
+    text = (folder / "Belt.st").read_text()
+    assert "ACTION Latch:\nLD\n" in text and "COIL[SET] motor := 2" in text
+    run = padt(
+        "sim", str(folder), "--cycles", "5", "--trace", "belt.motor",
+        "--set", "belt.start=TRUE@2", "--set", "belt.start=FALSE@3", "--set", "belt.stop=TRUE@4",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    motor = [json.loads(row)["values"]["belt.motor"] for row in run.stdout.splitlines()]
+    assert motor == [False, True, True, False, False]

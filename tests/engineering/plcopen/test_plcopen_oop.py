@@ -100,13 +100,14 @@ def test_a_method_or_accessor_not_in_st_is_named_and_its_block_left_out(tmp_path
     assert code == 1
     assert stderr.splitlines() == [
         f"{FIXTURES / 'graphical_method.xml'}:17:7: error: 2 POUs not imported: FB_Drawn "
-        "(method Reset in FBD, which padt takes as the body of a POU only), FB_Listed "
+        "(method Reset in FBD, which padt takes as the body of a POU or an action only), FB_Listed "
         "(property Count GET in IL); IL is deprecated in IEC 61131-3 edition 3, and padt does "
         "not compile it [P0006]"
     ]
     toml = (folder / "padt.toml").read_text()
     assert (
-        "#   FB_Drawn: method Reset in FBD, which padt takes as the body of a POU only\n"
+        "#   FB_Drawn: method Reset in FBD, which padt takes as the body of a POU or an "
+        "action only\n"
         "#   FB_Listed: property Count GET in IL\n"
     ) in toml
     assert sorted(p.name for p in folder.iterdir()) == ["FB_Text.st", "padt.toml"]
