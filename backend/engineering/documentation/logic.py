@@ -35,6 +35,9 @@ def logic_section(subject: Subject) -> Section:
             chart = f'<div class="chart">{caption}{svg}</div>'
         if isinstance(pou.graphic, GraphicBody):
             chart = _graphic(pou.graphic, pou.name)
+        for action in pou.sfc.actions if pou.sfc is not None else ():
+            if isinstance(action.graphic, GraphicBody):
+                chart += _graphic(action.graphic, f"action {action.name} of {pou.name}")
         parts.append(
             f'<div class="pou">{sub}<p class="facts">{facts}</p>{chart}'
             f"{listing(source.lines, source.first_line)}</div>"

@@ -42,6 +42,11 @@ id = 2
 name = "Many"
 pou = "Tall"
 id = 3
+
+[[resource.program]]
+name = "Lights"
+pou = "Sequence"
+id = 4
 """
 
 MIXER_ST = """\
@@ -84,6 +89,23 @@ END_LD
 END_PROGRAM
 """
 
+SEQUENCE_ST = """\
+PROGRAM Sequence
+VAR go, lamp, beacon : BOOL; END_VAR
+INITIAL_STEP Idle : END_STEP
+STEP Flashing : Flash(N); END_STEP
+TRANSITION FROM Idle TO Flashing := go; END_TRANSITION
+TRANSITION FROM Flashing TO Idle := NOT go; END_TRANSITION
+ACTION Flash :
+LD
+  1: LEFT_RAIL
+  2: CONTACT[NEGATED] lamp := 1
+  3: COIL beacon := 2
+END_LD
+END_ACTION
+END_PROGRAM
+"""
+
 TALL_ROWS = 60
 
 
@@ -107,6 +129,7 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, Path]:
     (project / "mixer.st").write_text(MIXER_ST)
     (project / "motor.st").write_text(MOTOR_ST)
     (project / "tall.st").write_text(tall_st())
+    (project / "sequence.st").write_text(SEQUENCE_ST)
     out = tmp_path_factory.mktemp("out")
     assert main(["docs", str(project), "-o", str(out)]) == 0
     return (out / "Drawn_logic.html").read_text(), out / "Drawn_logic.pdf"
@@ -145,6 +168,15 @@ def test_an_ld_body_is_drawn_with_rails_contacts_and_coils(written) -> None:
     page = next(text for text in pages(pdf) if "LD body of MotorRung" in text)
     for shown in ("start_button", "stop_button", "motor_on", "lamp_test", "alarm_latched"):
         assert shown in page, shown
+
+
+def test_an_action_drawn_in_ld_is_drawn_under_its_chart(written) -> None:
+    html, pdf = written
+    (svg,) = svgs_after(html, "LD body of action Flash of Sequence")
+    assert ">lamp<" in svg and ">beacon<" in svg and ">/<" in svg
+    assert html.index("SFC chart of Sequence") < html.index("LD body of action Flash")
+    page = next(text for text in pages(pdf) if "LD body of action Flash of Sequence" in text)
+    assert "lamp" in page and "beacon" in page
 
 
 def test_a_body_taller_than_a_page_is_split_over_pages(written) -> None:
