@@ -28,76 +28,17 @@ from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.graphics.model import LD_KINDS, Element, GraphicBody, Pin, Wire
 from backend.compiler.graphics.order import evaluation_order
 from backend.compiler.source import Pos
+from backend.compiler.types import ELEMENTARY
 
 # standard FUNCTIONs whose result has the type of their first typed input
-_SAME_TYPE = frozenset(
-    [
-        "ADD",
-        "SUB",
-        "MUL",
-        "DIV",
-        "MOD",
-        "MAX",
-        "MIN",
-        "LIMIT",
-        "SEL",
-        "MUX",
-        "MOVE",
-        "ABS",
-        "NEG",
-        "AND",
-        "OR",
-        "XOR",
-        "NOT",
-        "SHL",
-        "SHR",
-        "ROL",
-        "ROR",
-        "EXPT",
-        "SQRT",
-        "LN",
-        "LOG",
-        "EXP",
-        "SIN",
-        "COS",
-        "TAN",
-        "ASIN",
-        "ACOS",
-        "ATAN",
-    ]
-)
+_SAME_TYPE = frozenset((
+    "ADD", "SUB", "MUL", "DIV", "MOD", "MAX", "MIN", "LIMIT", "SEL", "MUX", "MOVE", "ABS", "NEG",
+    "AND", "OR", "XOR", "NOT", "SHL", "SHR", "ROL", "ROR", "EXPT", "SQRT", "LN", "LOG", "EXP",
+    "SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN",
+))  # fmt: skip
 _COMPARISONS = frozenset(("GT", "GE", "EQ", "LE", "LT", "NE"))
 _CONVERSION = re.compile(r"^(?:[A-Z]+_)?TO_([A-Z]+)$")
-_ELEMENTARY = frozenset(
-    [
-        "BOOL",
-        "SINT",
-        "INT",
-        "DINT",
-        "LINT",
-        "USINT",
-        "UINT",
-        "UDINT",
-        "ULINT",
-        "REAL",
-        "LREAL",
-        "BYTE",
-        "WORD",
-        "DWORD",
-        "LWORD",
-        "TIME",
-        "LTIME",
-        "DATE",
-        "TIME_OF_DAY",
-        "TOD",
-        "DATE_AND_TIME",
-        "DT",
-        "STRING",
-        "WSTRING",
-        "CHAR",
-        "WCHAR",
-    ]
-)
+_ELEMENTARY = frozenset(ELEMENTARY)
 _TYPED_LITERAL = re.compile(r"^([A-Za-z_]+)#")
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _ENABLE = "EN"
