@@ -1,8 +1,11 @@
 """The Logic screen as an engineer sees it, on a resource running the `sequence` template
 (an SFC chart: Idle, Fill, Heat, Drain): the chart drawn with the active step lit as the
 program advances, each step's time, each transition condition's value from the runtime;
-the chart following the program frozen and stepped one cycle at a time; a value clicked on
-the chart forced, and drawn as forced."""
+the chart following the program frozen and stepped one cycle at a time, and standing at a
+breakpoint; a value clicked on the chart forced, and drawn as forced. And a resource with
+an FBD and an LD program: values on the connections changing, LD's power flow lit, a
+contact's variable clicked, forced and marked; an online test field placed by a click,
+found again by the same user in another browser, removed."""
 
 from __future__ import annotations
 
@@ -16,6 +19,7 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import Locator, Page
 
+from backend.engineering.debug_session import DebugSession
 from backend.engineering.padt_accounts import PadtAccounts, write_accounts
 from backend.engineering.project import (
     PROJECT_FILE,
@@ -23,10 +27,12 @@ from backend.engineering.project import (
     load_project,
     user_entry,
 )
+from backend.engineering.resource_client import ResourceClient
 from backend.engineering.resource_directory import ResourceDirectory
 from backend.engineering.watch_lists import WatchLists
 from frontend.app import PadtUi
 from frontend.ui_context import UiContext
+from runtime.contract import protocol as p
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from tests.conftest import REPO, free_port
@@ -50,6 +56,7 @@ from tests.ui.browser_steps import (
 pytestmark = pytest.mark.browser
 
 TEMPLATE = REPO / "backend" / "projects" / "templates" / "sequence"
+IDLE_STEP_LINE = 18  # `INITIAL_STEP Idle :` in the template's Batch.st
 SHOTS = Path("/work/notes/35/shots")
 
 
@@ -126,19 +133,19 @@ local_forcing_allowed = true
 
 
 @pytest.fixture
-def sequence(tmp_path: Path, zenoh_endpoint: str) -> Iterator[str]:
+def sequence(tmp_path: Path, zenoh_endpoint: str) -> Iterator[tuple[str, ResourceClient]]:
     """The sequence template running as Resource1 (cycle 100 ms), an administrator on it
-    and on the PADT, and the UI knowing the project; yields the UI's URL."""
+    and on the PADT, and the UI knowing the project; yields the UI's URL and a client."""
     folder = tmp_path / "project"
     shutil.copytree(TEMPLATE, folder)
     config = (folder / PROJECT_FILE).read_text().replace('autostart = "off"', 'autostart = "cold"')
     (folder / PROJECT_FILE).write_text(config)
-    with running_ui(folder, "Resource1", tmp_path, zenoh_endpoint) as url:
-        yield url
+    with running_ui(folder, "Resource1", tmp_path, zenoh_endpoint) as running:
+        yield running
 
 
 @pytest.fixture
-def drawn(tmp_path: Path, zenoh_endpoint: str) -> Iterator[str]:
+def drawn(tmp_path: Path, zenoh_endpoint: str) -> Iterator[tuple[str, ResourceClient]]:
     """A resource Cell running an FBD program Count and an LD program Lamp (100 ms)."""
     folder = tmp_path / "project"
     folder.mkdir()
@@ -146,14 +153,17 @@ def drawn(tmp_path: Path, zenoh_endpoint: str) -> Iterator[str]:
     (folder / "globals.st").write_text("VAR_GLOBAL\n  blink : BOOL;\nEND_VAR\n")
     (folder / "counter.st").write_text(COUNTER_ST)
     (folder / "lamp.st").write_text(LAMP_ST)
-    with running_ui(folder, "Cell", tmp_path, zenoh_endpoint) as url:
-        yield url
+    with running_ui(folder, "Cell", tmp_path, zenoh_endpoint) as running:
+        yield running
 
 
 @contextmanager
-def running_ui(folder: Path, resource: str, tmp_path: Path, endpoint: str) -> Iterator[str]:
+def running_ui(
+    folder: Path, resource: str, tmp_path: Path, endpoint: str
+) -> Iterator[tuple[str, ResourceClient]]:
     """The project of `folder` with an administrator added, compiled and running as
-    `resource`; the UI with an administrator, knowing the project as `project`."""
+    `resource`; the UI with an administrator, knowing the project as `project`; yields
+    the UI's URL and a client of the resource."""
     admin = UserAccount("admin", "administrator", hash_password(PASSWORD))
     config = (folder / PROJECT_FILE).read_text()
     (folder / PROJECT_FILE).write_text(config + "\n" + user_entry(admin))
@@ -174,7 +184,7 @@ def running_ui(folder: Path, resource: str, tmp_path: Path, endpoint: str) -> It
         )
         ui = PadtUi(context, port=free_port())
         try:
-            yield ui.url
+            yield ui.url, client
         finally:
             ui.close()
 
@@ -207,10 +217,13 @@ def shoot(page: Page, name: str) -> None:
         page.screenshot(path=str(SHOTS / f"{name}.png"))
 
 
-def test_an_sfc_chart_lit_live_stepped_and_a_forced_value_marked(sequence: str) -> None:
+def test_an_sfc_chart_lit_live_stepped_at_a_breakpoint_and_a_forced_value_marked(
+    sequence: tuple[str, ResourceClient],
+) -> None:
+    url, client = sequence
     with chromium() as browser:
         page = browser.new_page(viewport={"width": 1400, "height": 900})
-        open_logic(page, sequence)
+        open_logic(page, url)
         choose(page, "Instance", "Batch")
         wait_until("the chart is drawn", lambda: page.locator('[data-step="Drain"]').count() > 0)
         header = text_of(page, '[data-testid="logic-header"]')
@@ -279,9 +292,43 @@ def test_an_sfc_chart_lit_live_stepped_and_a_forced_value_marked(sequence: str) 
             )
         assert active_steps(page) == ["Idle"]
         shoot(page, "logic-sfc-stepped-1400")
+        page.get_by_role("tab", name="Single step").click()
+        page.get_by_role("button", name="Unfreeze", exact=True).click()
+        page.get_by_role("tab", name="Logic").click()
+        wait_until("Batch runs again", lambda: "frozen" not in program_line(page))
+
+        # a breakpoint at Idle's STEP line (it stops while Idle is active): the chart stands
+        # at the stop; a Continue runs to the next stop, a cycle on
+        client.login("admin", PASSWORD)
+        debug = DebugSession(client)
+        debug.start()
+        try:
+            debug.set_breakpoints("Batch.st", [p.BreakpointSpec(IDLE_STEP_LINE)])
+            wait_until(
+                "the chart says Batch stands at a breakpoint", lambda: "BKPT" in program_line(page)
+            )
+            time.sleep(0.5)
+            stopped = step_time_ms(page, "Idle")
+            time.sleep(1.0)
+            assert step_time_ms(page, "Idle") == stopped
+            shoot(page, "logic-sfc-breakpoint-1400")
+            debug.continue_("Batch")
+            # the program's clock runs only while it runs: about one cycle interval on
+            wait_until("Idle's time moves on", lambda: step_time_ms(page, "Idle") != stopped)
+            wait_until("Batch stands at the breakpoint again", lambda: "BKPT" in program_line(page))
+            time.sleep(0.5)
+            moved = step_time_ms(page, "Idle")
+            assert stopped < moved < stopped + 1000, (stopped, moved)
+            assert active_steps(page) == ["Idle"]
+            time.sleep(1.0)
+            assert step_time_ms(page, "Idle") == moved  # and stands still again
+        finally:
+            debug.clear_all()  # Batch continues
+            debug.close()
+        wait_until("Batch runs on", lambda: "BKPT" not in program_line(page))
         page.set_viewport_size({"width": 1920, "height": 1080})
         time.sleep(1.0)
-        shoot(page, "logic-sfc-stepped-1920")
+        shoot(page, "logic-sfc-1920")
 
 
 def program_line(page: Page) -> str:
@@ -344,10 +391,13 @@ def is_on(page: Page, selector: str) -> bool:
     return page.locator(selector).first.get_attribute("data-on") == "true"
 
 
-def test_fbd_and_ld_bodies_with_live_values_power_flow_and_a_forced_contact(drawn: str) -> None:
+def test_fbd_and_ld_bodies_with_live_values_power_flow_and_a_forced_contact(
+    drawn: tuple[str, ResourceClient],
+) -> None:
+    url = drawn[0]
     with chromium() as browser:
         page = browser.new_page(viewport={"width": 1400, "height": 900})
-        open_logic(page, drawn)
+        open_logic(page, url)
 
         # the FBD body: the count on ADD's output and after the OUT, counting
         choose(page, "Instance", "Count")
@@ -428,7 +478,7 @@ def test_fbd_and_ld_bodies_with_live_values_power_flow_and_a_forced_contact(draw
         # the field is the user's: another browser logged in as them finds it there; a click
         # on it chooses its variable; it is removed
         other = browser.new_page(viewport={"width": 1400, "height": 900})
-        open_logic(other, drawn)
+        open_logic(other, url)
         choose(other, "Instance", "Count")
         wait_until("the kept field is drawn", lambda: field_value(other, "step") == "1")
         other.locator('[data-field="step"]').first.click()
