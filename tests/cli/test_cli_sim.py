@@ -130,7 +130,8 @@ def test_globals_and_fb_members(tmp_path: Path) -> None:
 def test_an_instance_name_traces_everything_below_it(tmp_path: Path) -> None:
     result = padt("sim", write(tmp_path, GLOBALS), "--cycles", "1", "--trace", "main.C")
     assert result.returncode == 0, result.stderr
-    assert lines(result.stdout)[0]["values"] == {"Main.c.step": 2, "Main.c.count": 2}
+    found = lines(result.stdout)[0]["values"]
+    assert found == {"Main.c.step": 2, "Main.c.count": 2, "Main.c.ENO": True}
 
 
 def test_sfc_steps_are_traced_with_x_and_t(tmp_path: Path) -> None:
