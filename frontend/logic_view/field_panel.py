@@ -8,13 +8,12 @@ from __future__ import annotations
 import html
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import viser
 
 from backend.engineering.logic_fields import FARTHEST, Field, FieldError, LogicFields
 from backend.engineering.logic_fields import field as checked_field
-from backend.engineering.logic_view import LiveGraphic, variable_path
+from backend.engineering.logic_view import LiveChart, LiveGraphic, variable_path
 from frontend.gui_value import set_value
 from frontend.logic_view.fbd_ld import PlacedField
 
@@ -106,7 +105,9 @@ def place(panel: FieldPanel, where: str) -> None:
         set_value(panel.y, at[1])
 
 
-def refresh(panel: FieldPanel, drawn: Any, instance: str, types: dict[str, str]) -> None:
+def refresh(
+    panel: FieldPanel, drawn: LiveChart | LiveGraphic | None, instance: str, types: dict[str, str]
+) -> None:
     """The fields of the drawing in view, with the paths their variables have in the
     resource; the panel shown only for a drawing that takes fields (FBD, LD)."""
     graphic = drawn if isinstance(drawn, LiveGraphic) else None
