@@ -5,8 +5,9 @@ drawing (`Live`).
 
 A drawing is sent to the browser whole only when it changes (another instance, a field
 placed); new values travel as a patch of its live parts, which the browser applies to the
-drawing it has: a tenth of the bytes, and the drawing under the user's pointer stays (a
-drawing replaced ten times a second loses the clicks that fall between two of them)."""
+drawing it has: a third of the bytes (2 kB against 6-8 kB for the test bodies), and the
+drawing under the user's pointer stays (a drawing replaced ten times a second loses the
+clicks that fall between two of them)."""
 
 from __future__ import annotations
 
