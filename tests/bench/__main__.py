@@ -13,6 +13,7 @@ from tests.bench import (
     bench_jitter_loaded,
     bench_language,
     bench_language_services,
+    bench_logic_view,
     bench_lsp,
     bench_modbus,
     bench_projects,
@@ -50,6 +51,7 @@ def main() -> None:
     bench_editor.main()
     bench_documentation.main()
     bench_trends.main()
+    bench_logic_view.main()
     bench_workspace.main()
 
 
