@@ -97,7 +97,7 @@ def test_every_cycle_of_the_chosen_variables_is_in_the_file(tmp_path: Path) -> N
     resource = started(tmp_path)
     recordings = recordings_of(resource)
     info = recordings.start(resource, p.RecordStart(["Control.*", "level"], cycles=40, id="r1"))
-    assert info.state == "recording" and info.variables == 12  # TON: IN, PT, Q, ET
+    assert info.state == "recording" and info.variables == 13  # the TON's 7 with its ENO
     run(resource, 60, [500])
     finished(resource)
     [done] = recordings.infos()
@@ -244,7 +244,7 @@ def test_the_recordings_of_an_earlier_run_are_listed_from_their_files(tmp_path: 
         (tmp_path / "recordings" / "old-1.mcap").read_bytes()[:-300]  # cut before its end
     )
     [cut, old] = Recordings(tmp_path / "recordings").infos()  # the runtime restarted
-    assert (old.id, old.state, old.cycles, old.variables) == ("old", "done", 25, 11)
+    assert (old.id, old.state, old.cycles, old.variables) == ("old", "done", 25, 12)
     assert old.started_ns == before.started_ns and old.files == before.files
     assert cut.id == "cut" and cut.cycles == 25 and "cut short" in (cut.error or "")
 
@@ -256,12 +256,12 @@ def test_the_variables_recorded_at_once_are_limited_over_all_recordings(
     resource = started(tmp_path)
     recordings = recordings_of(resource)
     first = recordings.start(resource, p.RecordStart(["Control.*"], id="a"))
-    assert first.variables == 11
-    with pytest.raises(Refusal) as refused:  # 11 running + 5 more is over 15
+    assert first.variables == 12
+    with pytest.raises(Refusal) as refused:  # 12 running + 5 more is over 15
         recordings.start(
             resource, p.RecordStart(["Other.*", "level", "pump", "alarms", "Control.n"])
         )
-    assert refused.value.code == "too_many" and "11 by the recordings running" in str(refused.value)
+    assert refused.value.code == "too_many" and "12 by the recordings running" in str(refused.value)
     # many patterns, each found by bisection, and a prefix of any case
     patterns = [f"control.h{'i' * (n % 3)}*" for n in range(4096)]
     with pytest.raises(Refusal) as refused:
