@@ -74,7 +74,7 @@ def error(reply: httpx.Response) -> dict[str, Any]:
 
 def test_a_new_project_from_a_template_with_its_tree(api: Api) -> None:
     templates = api.call("GET", "/api/projects/templates", "reader").json()
-    assert [t["name"] for t in templates] == ["empty", "tank", "sequence"]
+    assert [t["name"] for t in templates] == ["empty", "tank", "sequence", "conveyor"]
     made = api.call(
         "POST", "/api/projects", "builder", json={"name": "seq", "template": "sequence"}
     )
