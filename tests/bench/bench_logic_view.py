@@ -47,7 +47,7 @@ CHAINS = 50  # of 4 elements each: 200
 CYCLE_MS = 100
 RESOURCE = "Bench"
 BIG, SMALL = "Main", "Small"  # the 200-element instance; a 4-element one to switch to
-MARKER = f"{BIG}.mark"  # an IN of the drawing that the program only reads: written by the bench
+MARKER = "mark"  # a global both drawings read (an IN) and no program writes: the bench does
 DRAWS = 5  # times the big drawing is chosen
 MEASURE_S = 20.0
 MARKS = 40
@@ -74,19 +74,22 @@ OBSERVE_DRAWING = """() => {
   }).observe(document.body, {childList: true, subtree: true});
 }"""
 
-# Each new value of the count and of the marker as the drawing shows it, with the time; and
-# the patches of values that came (their number and the characters of their data).
+# Each new value of the count and of the marker as the drawing in the page shows it, with the
+# time (again for each drawing); once, the patches of values that came (their number and the
+# characters of their data) and the page's long tasks.
 OBSERVE_VALUES = """() => {
-  window.__counts = []; window.__marks = []; window.__patches = {count: 0, chars: 0};
+  window.__counts = []; window.__marks = [];
   const drawing = document.querySelector('[data-testid=drawing]');
   let count = null, mark = null;
   new MutationObserver(() => {
     const c = drawing.querySelector('[data-value-of="Main.count"]')?.getAttribute('data-value');
-    const m = drawing.querySelector('[data-value-of="Main.mark"]')?.getAttribute('data-value');
+    const m = drawing.querySelector('[data-value-of="mark"]')?.getAttribute('data-value');
     const now = Date.now();
     if (c !== count) { count = c; window.__counts.push([Number(c), now]); }
     if (m !== mark) { mark = m; window.__marks.push([Number(m), now]); }
   }).observe(drawing, {subtree: true, attributes: true, attributeFilter: ['data-value']});
+  if (window.__patches) return;
+  window.__patches = {count: 0, chars: 0};
   new MutationObserver((changes) => {
     for (const change of changes) for (const node of change.addedNodes) {
       const data = node.querySelectorAll?.('script[type="application/json"]') ?? [];
@@ -117,7 +120,7 @@ def _chain(n: int) -> tuple[list[str], list[str]]:
     elif n == 1:  # its parity, to switch the comparisons every cycle
         inputs, kind, target, declared = ("count", "2"), "MOD", "par", ["par : DINT;"]
     elif n == 2:  # the marker, which the bench writes
-        inputs, kind, target, declared = ("count", "mark"), "ADD", "r2", ["mark, r2 : DINT;"]
+        inputs, kind, target, declared = ("count", "mark"), "ADD", "r2", ["r2 : DINT;"]
     elif kind == "GT":
         inputs, target, declared = ("par", "0"), f"b{n}", [f"b{n} : BOOL;"]
     elif kind == "TON":  # restarts when it ends: its ET runs every cycle
@@ -146,10 +149,12 @@ def _sources() -> str:
     declared = "".join(f"  {d}\n" for _, names in chains for d in names)
     body = "".join(f"{line}\n" for lines, _ in chains for line in lines)
     return (
-        f"PROGRAM Drawn200\nVAR\n  count : DINT;\n{declared}END_VAR\nFBD\n{body}END_FBD\n"
+        "VAR_GLOBAL\n  mark : DINT;\nEND_VAR\n\n"
+        "PROGRAM Drawn200\nVAR_EXTERNAL\n  mark : DINT;\nEND_VAR\n"
+        f"VAR\n  count : DINT;\n{declared}END_VAR\nFBD\n{body}END_FBD\n"
         "END_PROGRAM\n\n"
-        "PROGRAM Tiny\nVAR\n  n : DINT;\nEND_VAR\nFBD\n"
-        "  1: IN n {at 20 20 size 70 26}\n  2: IN 1 {at 20 60 size 70 26}\n"
+        "PROGRAM Tiny\nVAR_EXTERNAL\n  mark : DINT;\nEND_VAR\nVAR\n  n : DINT;\nEND_VAR\nFBD\n"
+        "  1: IN mark {at 20 20 size 70 26}\n  2: IN 1 {at 20 60 size 70 26}\n"
         "  3: BLOCK ADD (IN1 := 1, IN2 := 2) -> (OUT) {at 150 10 size 70 70}\n"
         "  4: OUT n := 3.OUT {at 290 30 size 70 26}\nEND_FBD\nEND_PROGRAM\n"
     )
@@ -367,22 +372,24 @@ def _cpu(label: str, runtime: list[int], browser: list[int], page: Page | None) 
     return figures
 
 
-def _latency(client: ResourceClient, page: Page) -> None:
-    """Write the marker MARKS times; from each write to the page showing its value."""
+def _latency(client: ResourceClient, page: Page, label: str, first: int) -> tuple[float, float]:
+    """Write the marker MARKS times; from each write to the page showing its value: the
+    median and the 95th percentile."""
     written: dict[int, float] = {}
-    for mark in range(1000, 1000 + MARKS):
+    for mark in range(first, first + MARKS):
         written[mark] = time.time() * 1000
         client.ask(p.Write(MARKER, mark))
         time.sleep(MARK_GAP_S)
     time.sleep(1.0)
     seen = {int(value): at for value, at in page.evaluate("window.__marks") if value is not None}
     latencies = sorted(seen[mark] - at for mark, at in written.items() if mark in seen)
+    median, p95 = statistics.median(latencies), latencies[int(0.95 * (len(latencies) - 1))]
     print(
-        f"  write of {MARKER} in the runtime -> its value in the drawing: "
-        f"median {statistics.median(latencies):.0f} ms, "
-        f"p95 {latencies[int(0.95 * (len(latencies) - 1))]:.0f} ms, "
-        f"max {latencies[-1]:.0f} ms ({len(latencies)} of {MARKS} writes seen)"
+        f"  write of {MARKER} in the runtime -> its value in the {label}: "
+        f"median {median:.0f} ms, p95 {p95:.0f} ms, max {latencies[-1]:.0f} ms "
+        f"({len(latencies)} of {MARKS} writes seen)"
     )
+    return median, p95
 
 
 def main() -> None:
@@ -410,14 +417,20 @@ def main() -> None:
             _server_side(ui, project)
             viewers = _browser_pids(runtime_pid)
             shown = _cpu("the drawing in front", runtime, viewers, page)
-            _latency(client, page)
+            big = _latency(client, page, f"drawing of {CHAINS * 4} elements", 1000)
+            choose(page, "Instance", SMALL)
+            wait_until("the small drawing is in the page", _drawn(page, SMALL))
+            page.evaluate(OBSERVE_VALUES)
+            small = _latency(client, page, "drawing of 4 elements", 2000)
             page.get_by_role("tab", name="Resources").click()
             behind = _cpu("another tab in front (Resources)", runtime, viewers, page)
         print(
             f"  ratios: UI server with the drawing in front / another tab "
             f"{shown['ui'] / max(behind['ui'], 1e-9):.1f}, / no browser "
             f"{shown['ui'] / max(quiet['ui'], 1e-9):.1f}; browser with the drawing in front / "
-            f"another tab {shown['browser'] / max(behind['browser'], 1e-9):.2f}"
+            f"another tab {shown['browser'] / max(behind['browser'], 1e-9):.2f}; latency with "
+            f"{CHAINS * 4} elements / with 4: median {big[0] / small[0]:.2f}, "
+            f"p95 {big[1] / small[1]:.2f}"
         )
 
 
