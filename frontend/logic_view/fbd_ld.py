@@ -125,10 +125,14 @@ def graphic_svg(
         right, bottom = max(right, placed.x + width), max(bottom, placed.y + _FIELD_H)
     left, top, bottom = left - _MARGIN, top - _MARGIN, bottom + _MARGIN
     width, height = right + _MARGIN - left, bottom - top
+    # never drawn smaller than 85 % of its own size, where its 10 px labels stay readable:
+    # a large drawing scrolls in its frame instead
     return (
-        f'{_STYLE}<svg xmlns="http://www.w3.org/2000/svg" class="gfx" data-testid="drawing" '
+        f'{_STYLE}<div data-testid="drawing-frame" style="overflow:auto;max-height:75vh">'
+        f'<svg xmlns="http://www.w3.org/2000/svg" class="gfx" data-testid="drawing" '
         f'data-language="{graphic.language}" viewBox="{left:g} {top:g} {width:g} {height:g}" '
-        f'style="width:100%;max-width:{width * 1.6:.0f}px;height:auto">{"".join(parts)}</svg>'
+        f'style="width:100%;min-width:{width * 0.85:.0f}px;max-width:{width * 1.6:.0f}px;'
+        f'height:auto">{"".join(parts)}</svg></div>'
     )
 
 
