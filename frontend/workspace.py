@@ -157,7 +157,7 @@ class Workspace:
         self.drawing = plant_view.PlantView(client)
         if self.layout.project in self.shelf:  # the files the user left open
             for path in self.layout.open_files:
-                self.editor_area.open_file(self.layout.project, path)
+                self.editor_area.open_file(self.layout.project, path, keyboard=False)
         # last: the page then reports the window's size, and clicks, to a whole workspace
         self.page_clicks = page_clicks.build(gui, self._clicked)
 
@@ -431,7 +431,7 @@ class Workspace:
             first = next((i for i in tree.pous if i.kind == "PROGRAM"), None)
             project = self.project()
             if first is not None and project is not None and not self.editor_area.documents:
-                self.editor_area.open_file(project, first.file, first.line)
+                self.editor_area.open_file(project, first.file, first.line, keyboard=False)
 
     def _follow_forcing(
         self, resource: str | None, status: p.Status | None, login_there: ResourceLogin | None

@@ -107,16 +107,19 @@ class EditorArea:
         self._show(True)
 
     # ---- the workspace's calls
-    def open_file(self, project: str, path: str, line: int = 0) -> None:
+    def open_file(self, project: str, path: str, line: int = 0, keyboard: bool = True) -> None:
         """Open `path` of `project` in a tab in front, at `line` if given (another
-        project's files are closed first: the language services see one project)."""
+        project's files are closed first: the language services see one project);
+        `keyboard`: the editor takes the keyboard (not when the workspace reopens files by
+        itself: what the user is typing elsewhere, a password, must not land in the code)."""
         with self._lock:
             try:
                 if project != self.project:
                     self._switch_project(project)
-                self._open(path, focus=True)
+                self._open(path, focus=True, keyboard=keyboard)
                 if line > 0:
                     goto = {"k": "goto", "file": path, "line": line, "col": 1}
+                    goto["keyboard"] = keyboard
                     page_push.send(self.client, "goto", goto)
             except (Refusal, LanguageError) as exc:
                 self._notice(f"{path} cannot be opened: {_reason(exc)}")
@@ -240,20 +243,21 @@ class EditorArea:
         self.project = project
         self.language = ProjectLanguage(folder)
 
-    def _open(self, path: str, focus: bool) -> None:
+    def _open(self, path: str, focus: bool, keyboard: bool = True) -> None:
         assert self.project is not None and self.language is not None
         known = self.documents.get(path)
         if known is not None:  # its tab comes to the front, with the user's edits
-            page_push.send(self.client, "goto", {"k": "goto", "file": path, "line": 0, "col": 0})
+            goto = {"k": "goto", "file": path, "line": 0, "col": 0, "keyboard": keyboard}
+            page_push.send(self.client, "goto", goto)
             return
         read = project_files.read_file(self.shelf, self.project, path, self.editor)
         document = Document.of(self.project, read.path, read.text, read.hash)
         self.documents[read.path] = document
         self.language.open(read.path, read.text)
-        self._push_open(document, focus)
+        self._push_open(document, focus, keyboard)
         self._diagnose()
 
-    def _push_open(self, document: Document, focus: bool) -> None:
+    def _push_open(self, document: Document, focus: bool, keyboard: bool = True) -> None:
         readonly, reason = self._read_only()
         page_push.send(
             self.client,
@@ -267,6 +271,7 @@ class EditorArea:
                 "readonly": readonly,
                 "reason": reason,
                 "focus": focus,
+                "keyboard": keyboard,
             },
         )
 

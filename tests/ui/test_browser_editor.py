@@ -79,6 +79,23 @@ def problems(page: Page) -> str:
     return page.locator('[data-testid="problems-list"]').inner_text()
 
 
+def test_files_reopened_at_login_leave_the_keyboard_where_the_user_types(demo: Demo) -> None:
+    """The workspace reopens the user's files after the login; typing the resource's
+    password meanwhile must not land in the code."""
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(demo.url)
+        log_in(page, "admin", demo.password)
+        page.get_by_role("button", name="Log in to resource").wait_for(timeout=30_000)
+        page.locator("#padt-editor .cm-content").wait_for(timeout=30_000)
+        wait_until("the file is back", lambda: "PROGRAM TankControl" in editor_text(page))
+        in_editor = "document.activeElement.closest('#padt-editor') !== null"
+        assert not page.evaluate(in_editor)
+        before = editor_text(page)
+        page.keyboard.type("secret-typed-here")
+        assert editor_text(page) == before
+
+
 def test_an_error_typed_is_underlined_listed_and_found_again(demo: Demo) -> None:
     with chromium() as browser:
         page = browser.new_page(viewport={"width": 1400, "height": 900})

@@ -427,7 +427,9 @@ class PadtEditor {
     }
   }
 
-  select(file, line, col) {
+  // `keyboard`: the editor takes the keyboard; not for a file the workspace reopens by
+  // itself, while the user may be typing elsewhere (a password)
+  select(file, line, col, keyboard = true) {
     const doc = this.docs.get(file);
     if (!doc) {
       this.afterOpen = { file, line, col };
@@ -455,7 +457,7 @@ class PadtEditor {
       this.view.dispatch({ selection: EditorSelection.cursor(pos), scrollIntoView: true });
       this.view.dispatch({ effects: EditorView.scrollIntoView(pos, { y: "center" }) });
     }
-    this.view.focus();
+    if (keyboard) this.view.focus();
   }
 
   markDirty(doc, dirty) {
@@ -799,12 +801,14 @@ class PadtEditor {
     this.docs.set(m.file, doc);
     const after = this.afterOpen && this.afterOpen.file === m.file ? this.afterOpen : null;
     this.afterOpen = null;
-    if (m.focus || after) this.select(m.file, after && after.line, after && after.col);
+    if (m.focus || after) {
+      this.select(m.file, after && after.line, after && after.col, m.keyboard !== false);
+    }
     else this.drawTabs();
   }
 
   on_goto(m) {
-    if (this.docs.has(m.file)) this.select(m.file, m.line, m.col);
+    if (this.docs.has(m.file)) this.select(m.file, m.line, m.col, m.keyboard !== false);
   }
 
   on_answer(m) {
