@@ -211,7 +211,22 @@ i2 := i2 + MOD(EN := c, IN1 := 7, IN2 := 2, ENO => eno[21]);
 i3 := i3 + LIMIT(EN := c, MN := 1, IN := 9, MX := 3, ENO => eno[22]);
 END_PROGRAM
 """
-SWEPT: tuple[str, ...] = ("i1", "i2", "i3", "i4", "i5", "i6", "i7", "i8", "i9", "s1", "s2", "s3", "r1", "r2")
+SWEPT: tuple[str, ...] = (
+    "i1",
+    "i2",
+    "i3",
+    "i4",
+    "i5",
+    "i6",
+    "i7",
+    "i8",
+    "i9",
+    "s1",
+    "s2",
+    "s3",
+    "r1",
+    "r2",
+)
 SWEPT += ("w1", "b1", "b2", "b3", "t1")
 
 
