@@ -141,11 +141,15 @@ def bench_cycles(cycles: int = 2_000, check_cycles: int = 100) -> None:
     )
     if compared.before is not None:
         before_us = compared.before["program_us"]
-        same = compared.before["values"] == compared.now["values"]
+        # the variables the baseline had (later code may add some: every FB's ENO)
+        before, now = compared.before["values"], compared.now["values"]
+        same = all(now.get(path) == value for path, value in before.items())
+        added = len(now.keys() - before.keys())
         print(
             f"  baseline ({compared.name}): {before_us:,.1f} us per cycle: "
             f"today's is {before_us / now_us:.2f}x faster; "
-            f"the same values after {check_cycles} cycles: {same}"
+            f"the same values after {check_cycles} cycles: {same} "
+            f"({len(before)} variables; {added} new since)"
         )
     bench_native(request, compared)
 
