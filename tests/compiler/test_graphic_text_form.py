@@ -79,6 +79,7 @@ def test_a_line_that_does_not_read_is_refused_there_and_the_others_are_kept() ->
             "  4: CONTACT[SHINY] c := 1",
             "  1: IN again",
             "  5: OUT c := 1 {at 1}",
+            "  7: OUT d := 1 {at inf nan}",
             "  6: OUT d := 1",
             "END_FBD",
         ]
@@ -92,6 +93,7 @@ def test_a_line_that_does_not_read_is_refused_there_and_the_others_are_kept() ->
         "FALLING) [E0901]",
         "t.st:10:3: error: element 1 is written twice (first on line 6) [E0901]",
         "t.st:11:18: error: wrong count of numbers after 'at' [E0901]",
+        "t.st:12:18: error: a place or size is a number within ±1,000,000, not 'inf' [E0901]",
     ]
 
 

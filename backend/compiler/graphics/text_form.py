@@ -45,6 +45,9 @@ _HEAD = re.compile(r"\s*(\d{1,18})\s*:\s*([A-Za-z_]+)\s*(?:\[([A-Za-z_,\s]*)\])?
 _WIRE = re.compile(r"(\d{1,18})(?:\.([A-Za-z_][A-Za-z0-9_]*))?$")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*$")
 _LAYOUT_WORDS = {"at": 2, "size": 2, "order": 1, "in": 3, "out": 3}
+# the largest place, size or order a layout takes: a drawing is drawn and printed from them,
+# and infinities or huge numbers would make that endless
+MAX_COORDINATE = 1_000_000
 
 
 class _LineError(Exception):
@@ -275,6 +278,9 @@ def _layout(text: str, col: int) -> dict[str, list[list[float]]]:
             number = float(token)
         except ValueError:
             raise _LineError(col, f"expected a number after '{word}', not '{token}'") from None
+        if not abs(number) <= MAX_COORDINATE:  # NaN too
+            message = f"a place or size is a number within ±{MAX_COORDINATE:,}, not '{token}'"
+            raise _LineError(col, message)
         result[word][-1].append(number)
     for name, groups in result.items():
         size = _LAYOUT_WORDS.get(name)

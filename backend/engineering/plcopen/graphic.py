@@ -16,7 +16,12 @@ import re
 from dataclasses import replace
 
 from backend.compiler.graphics.model import Element, GraphicBody, Pin, Point, Wire
-from backend.compiler.graphics.text_form import element_line, read_body, write_body
+from backend.compiler.graphics.text_form import (
+    MAX_COORDINATE,
+    element_line,
+    read_body,
+    write_body,
+)
 from backend.engineering.plcopen.issues import Where
 from backend.engineering.plcopen.xml_tree import Element as Xml
 from backend.engineering.plcopen.xml_tree import st_source
@@ -25,7 +30,7 @@ IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 NUMBER = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)\Z")  # xsd:decimal: no NaN, no 1e9
 # a local id or an execution order (CODESYS numbers elements from 10^10 up, per network)
 WHOLE = re.compile(r"[0-9]{1,18}\Z")
-LARGEST = 1e9  # a coordinate or size beyond this is no drawing
+LARGEST = MAX_COORDINATE  # a coordinate, size or execution order beyond this is no drawing
 NOT_PARTS = ("addData", "documentation")
 GROUPS = ("inputVariables", "inOutVariables", "outputVariables")  # a block's pins
 UNSET = "???"  # CODESYS's expression on a connection point that is not connected
@@ -117,7 +122,7 @@ def _element(item: Xml, connections: list[Xml]) -> Element:
     base = Element(
         id=local,
         kind=kind,
-        order=_whole(item, "executionOrderId"),
+        order=_order(item),
         at=_point(_required(item, "position")),
         size=Point(_number(item, "width"), _number(item, "height")),
     )
@@ -296,6 +301,13 @@ def _whole(item: Xml, attribute: str, required: bool = False) -> int:
     if not WHOLE.match(text.strip()):
         raise DrawingProblem(item.where, f"<{item.tag}> {attribute} {text!r} is no whole number")
     return int(text)
+
+
+def _order(item: Xml) -> int:
+    order = _whole(item, "executionOrderId")
+    if abs(order) > LARGEST:
+        raise DrawingProblem(item.where, f"<{item.tag}> executionOrderId {order} is no order")
+    return order
 
 
 def _number(item: Xml, attribute: str, required: bool = False) -> float:
