@@ -63,6 +63,26 @@ class SourceLookup:
         with self._lock:
             return self.done, self.result
 
+    def found_or_why(
+        self, crc: str, projects: Mapping[str, Path], instead: str
+    ) -> tuple[ConfigurationSources | None, str]:
+        """The sources of configuration `crc` (asked for if need be), or what a screen says
+        while there are none (`instead`: what it does then, "no source is shown")."""
+        self.ask(crc, projects)
+        done, sources = self.answer()
+        if not done:
+            return None, (
+                f"Looking for the source of configuration {crc} among the projects this PADT "
+                "knows ..."
+            )
+        if sources is None:
+            known = ", ".join(sorted(projects)) or "none"
+            return None, (
+                f"The source of configuration {crc} is not among the projects this PADT knows "
+                f"({known}): {instead} rather than one that may differ from what runs."
+            )
+        return sources, ""
+
 
 def value_text(shown: Shown, values: dict[str, Any], types: dict[str, str]) -> str | None:
     """A variable's value as the screens show it; None when not (yet) delivered."""

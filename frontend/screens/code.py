@@ -109,22 +109,10 @@ def _page(
     if status is None or not status.crc:
         _offer(screen, ())
         return _message("Waiting for the resource's configuration."), []
-    screen.lookup.ask(status.crc, projects)
-    done, sources = screen.lookup.answer()
-    if not done:
-        _offer(screen, ())
-        return _message(
-            f"Looking for the source of configuration {status.crc} among the projects "
-            "this PADT knows ..."
-        ), []
+    sources, why = screen.lookup.found_or_why(status.crc, projects, "no source is shown")
     if sources is None:
         _offer(screen, ())
-        known = ", ".join(sorted(projects)) or "none"
-        return _message(
-            f"The source of configuration {status.crc} is not among the projects this PADT "
-            f"knows ({known}): no source is shown rather than one that may differ from what "
-            "runs."
-        ), []
+        return _message(why), []
     if not types:
         _offer(screen, ())
         return _message(

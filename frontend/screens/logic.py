@@ -107,22 +107,10 @@ def _page(screen: LogicScreen, feed: ResourceFeed | None, projects: Mapping[str,
     if status is None or not status.crc:
         _offer(screen, ())
         return _message("Waiting for the resource's configuration.")
-    screen.lookup.ask(status.crc, projects)
-    done, sources = screen.lookup.answer()
-    if not done:
-        _offer(screen, ())
-        return _message(
-            f"Looking for the source of configuration {status.crc} among the projects "
-            "this PADT knows ..."
-        )
+    sources, why = screen.lookup.found_or_why(status.crc, projects, "no logic is drawn")
     if sources is None:
         _offer(screen, ())
-        known = ", ".join(sorted(projects)) or "none"
-        return _message(
-            f"The source of configuration {status.crc} is not among the projects this PADT "
-            f"knows ({known}): no logic is drawn rather than one that may differ from what "
-            "runs."
-        )
+        return _message(why)
     if not types:
         _offer(screen, ())
         return _message("No variables of the resource yet: they come once you are logged in to it.")

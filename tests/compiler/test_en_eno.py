@@ -9,8 +9,6 @@ resources on virtual clocks."""
 
 from __future__ import annotations
 
-import os
-
 import pytest
 
 from backend.compiler.pipeline import compile_sources
@@ -19,14 +17,10 @@ from runtime.native.tier import NativeTier
 from tests.support.native_runs import Pair, program_error, side_by_side
 
 
-@pytest.fixture(scope="module")
-def tier(tmp_path_factory: pytest.TempPathFactory) -> NativeTier:
-    found = NativeTier(tmp_path_factory.mktemp("native-cache"))
-    if not found.available:
-        if os.environ.get("CI") == "true":
-            pytest.fail("the native tier needs a C compiler and Python.h; CI must have both")
-        pytest.skip("no C compiler or no Python.h here: the native tier cannot build")
-    return found
+@pytest.fixture
+def tier(native_tier: NativeTier) -> NativeTier:
+    """A tier of its own, sharing the session's compiled modules (tests/conftest.py)."""
+    return NativeTier(native_tier.cache, native_tier.toolchain)
 
 
 BLOCKS = """
