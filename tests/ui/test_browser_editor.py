@@ -139,8 +139,9 @@ def test_completion_offers_the_members_of_a_function_block(demo: Demo) -> None:
         put_cursor(page, 20, 100)
         page.keyboard.press("Enter")
         page.keyboard.type("  pumpStarts := refillDelay.")
+        wait_until("typed", lambda: line_of(page, 21).strip() == "pumpStarts := refillDelay.")
         menu = page.locator(".cm-tooltip-autocomplete")
-        menu.wait_for(timeout=10_000)
+        menu.wait_for(timeout=30_000)  # the language service answers off the page's thread
         wait_until("TON's members are offered", lambda: "ET" in menu.inner_text())
         offered = menu.inner_text()
         for member in ("IN", "PT", "Q", "ET"):
