@@ -225,10 +225,7 @@ END_PROGRAM
     ]
 
 
-def test_an_interface_extending_the_system_interface_works_as_one_extending_nothing(
-    tmp_path: Path,
-) -> None:
-    source = """INTERFACE I_Object EXTENDS __SYSTEM.IQueryInterface
+SYSTEM_INTERFACE = """INTERFACE I_Object EXTENDS __SYSTEM.IQueryInterface
 METHOD Id : INT
 END_METHOD
 END_INTERFACE
@@ -245,9 +242,14 @@ itf := o;
 id := itf.Id();
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 3)
+
+
+def test_an_interface_extending_the_system_interface_works_as_one_extending_nothing(
+    tmp_path: Path,
+) -> None:
+    trace = sim_trace(tmp_path, SYSTEM_INTERFACE, 3)
     assert trace["Main.id"] == [41, 42, 43]
-    assert codes(source) == ["N0803", "N0803"]
+    assert codes(SYSTEM_INTERFACE) == ["N0803", "N0803"]
 
 
 def test_a_method_call_through_an_unknown_qualified_global_names_the_global() -> None:

@@ -96,8 +96,7 @@ END_PROGRAM
     ]
 
 
-def test_an_instance_called_through_a_reference(tmp_path: Path) -> None:
-    source = """
+TON_THROUGH_A_REFERENCE = """
 PROGRAM Main
 VAR t : TON; p : REF_TO TON; q : BOOL; END_VAR
 p := REF(t);
@@ -105,7 +104,10 @@ p^(IN := TRUE, PT := T#100ms);
 q := p^.Q;
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 3)
+
+
+def test_an_instance_called_through_a_reference(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, TON_THROUGH_A_REFERENCE, 3)
     assert t["Main.t.Q"] == [False, True, True]
     assert t["Main.q"] == [False, True, True]
 

@@ -36,10 +36,9 @@ END_FUNCTION_BLOCK
 """
 
 
-def test_a_method_sees_its_block_and_gives_a_result_and_outputs(tmp_path: Path) -> None:
-    source = (
-        COUNTER
-        + """
+COUNTER_CALLS = (
+    COUNTER
+    + """
 PROGRAM Main
 VAR c : Counter; r, b : INT; END_VAR
 c(step := 2);
@@ -48,8 +47,11 @@ c.Add(5);
 IF r > 50 THEN c.Clear(); END_IF;
 END_PROGRAM
 """
-    )
-    t = sim_trace(tmp_path, source, 5)
+)
+
+
+def test_a_method_sees_its_block_and_gives_a_result_and_outputs(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, COUNTER_CALLS, 5)
     # body +2, Add(10) +10 (its local tmp is 1 in every call), Add(5) +5
     assert t["Main.r"] == [12, 29, 46, 63, 12]
     assert t["Main.b"] == [2, 19, 36, 53, 2]
@@ -59,8 +61,7 @@ END_PROGRAM
     assert "Main.c.tmp" not in t and "Main.c.k" not in t  # temporaries are no members
 
 
-def test_methods_of_a_program_called_inside_and_from_another_program(tmp_path: Path) -> None:
-    source = """
+PUMP_AND_MAIN = """
 PROGRAM Pump
 VAR runs : INT; END_VAR
 METHOD PUBLIC Stop
@@ -85,12 +86,14 @@ CONFIGURATION C
   END_RESOURCE
 END_CONFIGURATION
 """
-    t = sim_trace(tmp_path, source, 5)
+
+
+def test_methods_of_a_program_called_inside_and_from_another_program(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, PUMP_AND_MAIN, 5)
     assert t["Pump.runs"] == [1, 3, 0, 1, 3]
 
 
-def test_a_method_called_in_a_for_loop_that_writes_the_counter_slot(tmp_path: Path) -> None:
-    source = """
+WALKER = """
 FUNCTION_BLOCK Walker
 VAR i : INT; visits : INT; END_VAR
 METHOD Skip
@@ -106,7 +109,10 @@ VAR w : Walker; END_VAR
 w();
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 2)
+
+
+def test_a_method_called_in_a_for_loop_that_writes_the_counter_slot(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, WALKER, 2)
     assert t["Main.w.visits"] == [3, 6]  # 1, 3, 5: the method moved the counter on
 
 
@@ -133,10 +139,9 @@ END_FUNCTION_BLOCK
 """
 
 
-def test_extends_inherits_members_overrides_and_calls_super(tmp_path: Path) -> None:
-    source = (
-        DRIVES
-        + """
+DRIVES_CALLS = (
+    DRIVES
+    + """
 PROGRAM Main
 VAR d : Drive; s : Servo; x : INT; END_VAR
 d(speed := 1); s(speed := 2);
@@ -144,8 +149,11 @@ d.Run(); s.Run();
 x := s.Code();
 END_PROGRAM
 """
-    )
-    t = sim_trace(tmp_path, source, 3)
+)
+
+
+def test_extends_inherits_members_overrides_and_calls_super(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, DRIVES_CALLS, 3)
     assert t["Main.d.log"] == [11, 121, 1221]
     # Servo: body adds 2 through SUPER^(), Run appends its Code 3 (2 + the base's 1)
     assert t["Main.s.log"] == [23, 253, 2553]
@@ -154,10 +162,9 @@ END_PROGRAM
     assert t["Main.x"] == [3, 3, 3]
 
 
-def test_a_derived_block_without_body_runs_none_and_a_base_method_sees_it(tmp_path: Path) -> None:
-    source = (
-        DRIVES
-        + """
+QUIET_DRIVE = (
+    DRIVES
+    + """
 FUNCTION_BLOCK Quiet EXTENDS Drive
 END_FUNCTION_BLOCK
 PROGRAM Main
@@ -166,8 +173,11 @@ q(speed := 5);
 q.Run();
 END_PROGRAM
 """
-    )
-    t = sim_trace(tmp_path, source, 2)
+)
+
+
+def test_a_derived_block_without_body_runs_none_and_a_base_method_sees_it(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, QUIET_DRIVE, 2)
     assert t["Main.q.log"] == [1, 11]  # its own (empty) body: the base's is not run
 
 
@@ -285,10 +295,9 @@ END_FUNCTION_BLOCK
 """
 
 
-def test_calls_through_an_interface_dispatch_on_the_instance_assigned(tmp_path: Path) -> None:
-    source = (
-        MACHINES
-        + """
+MACHINES_THROUGH_AN_INTERFACE = (
+    MACHINES
+    + """
 PROGRAM Main
 VAR slow : Mixer; fast : FastMixer; i : IRunnable; k, r : INT; END_VAR
 k := k + 1;
@@ -296,18 +305,20 @@ IF k MOD 2 = 1 THEN i := slow; ELSE i := fast; END_IF;
 r := i.Run(1);
 END_PROGRAM
 """
-    )
-    t = sim_trace(tmp_path, source, 4)
+)
+
+
+def test_calls_through_an_interface_dispatch_on_the_instance_assigned(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, MACHINES_THROUGH_AN_INTERFACE, 4)
     assert t["Main.i"] == ["Main.slow", "Main.fast", "Main.slow", "Main.fast"]
     assert t["Main.r"] == [1, 100, 2, 200]
     assert t["Main.slow.n"] == [1, 1, 2, 2]
     assert t["Main.fast.n"] == [0, 100, 100, 200]
 
 
-def test_a_reference_to_a_base_block_calls_the_override(tmp_path: Path) -> None:
-    source = (
-        MACHINES
-        + """
+MACHINES_THROUGH_A_REFERENCE = (
+    MACHINES
+    + """
 PROGRAM Main
 VAR slow : Mixer; fast : FastMixer; r : REF_TO Mixer; k, got : INT; END_VAR
 k := k + 1;
@@ -315,18 +326,18 @@ IF k = 1 THEN r := REF(slow); ELSE r := REF(fast); END_IF;
 got := r^.Run(2);
 END_PROGRAM
 """
-    )
-    t = sim_trace(tmp_path, source, 3)
+)
+
+
+def test_a_reference_to_a_base_block_calls_the_override(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, MACHINES_THROUGH_A_REFERENCE, 3)
     assert t["Main.r"] == ["Main.slow", "Main.fast", "Main.fast"]
     assert t["Main.got"] == [2, 200, 400]
 
 
-def test_an_assignment_attempt_gives_null_where_the_instance_does_not_fit(
-    tmp_path: Path,
-) -> None:
-    source = (
-        MACHINES
-        + """
+MACHINES_ATTEMPTED = (
+    MACHINES
+    + """
 PROGRAM Main
 VAR slow : Mixer; fast : FastMixer; i : IRunnable; named : INamed; k : INT;
     asFast : REF_TO FastMixer; asValve : REF_TO Valve; valve : Valve; code : INT; END_VAR
@@ -338,26 +349,33 @@ asValve ?= valve;
 IF named <> NULL THEN code := named.Code(); ELSE code := -1; END_IF;
 END_PROGRAM
 """
-    )
-    t = sim_trace(tmp_path, source, 3)
+)
+
+
+def test_an_assignment_attempt_gives_null_where_the_instance_does_not_fit(
+    tmp_path: Path,
+) -> None:
+    t = sim_trace(tmp_path, MACHINES_ATTEMPTED, 3)
     assert t["Main.named"] == ["Main.slow", "Main.fast", "NULL"]
     assert t["Main.asFast"] == ["NULL", "Main.fast", "NULL"]
     assert t["Main.asValve"] == ["Main.valve"] * 3
     assert t["Main.code"] == [1, 1, -1]
 
 
-def test_a_call_through_an_unassigned_interface_is_a_program_error(tmp_path: Path) -> None:
-    source = (
-        MACHINES
-        + """
+MACHINES_UNASSIGNED = (
+    MACHINES
+    + """
 PROGRAM Main
 VAR i : IRunnable; r : INT; END_VAR
 r := i.Run(1);
 END_PROGRAM
 """
-    )
+)
+
+
+def test_a_call_through_an_unassigned_interface_is_a_program_error(tmp_path: Path) -> None:
     path = tmp_path / "sim.st"
-    path.write_text(source)
+    path.write_text(MACHINES_UNASSIGNED)
     run = padt("sim", str(path), "--cycles", "2")
     assert run.returncode == 3
     assert "dereference of NULL in POU Main" in run.stderr and "sim.st:34)" in run.stderr
@@ -434,10 +452,9 @@ END_FUNCTION_BLOCK
 """
 
 
-def test_a_property_runs_its_get_when_read_and_its_set_when_written(tmp_path: Path) -> None:
-    source = (
-        MOTOR
-        + """
+MOTOR_CALLS = (
+    MOTOR
+    + """
 PROGRAM Main
 VAR m : Motor; k, seen, most : INT; END_VAR
 k := k + 1;
@@ -447,8 +464,11 @@ seen := m.Velocity;
 most := m.MaxSpeed;
 END_PROGRAM
 """
-    )
-    t = sim_trace(tmp_path, source, 4)
+)
+
+
+def test_a_property_runs_its_get_when_read_and_its_set_when_written(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, MOTOR_CALLS, 4)
     # cycle 2: the SET clips 500 to the limit; cycle 3: the body's own write sets 10
     assert t["Main.m.speed"] == [1, 100, 10, 11]
     assert t["Main.seen"] == [1, 100, 10, 11]
@@ -457,11 +477,7 @@ END_PROGRAM
     assert "Main.m.Velocity" not in t and "Main.m.clipped" not in t  # no variables
 
 
-def test_get_and_set_are_names_outside_a_property(tmp_path: Path) -> None:
-    """GET and SET begin a property's accessor only there: a method called Get assigns its
-    result (`Get := ...;` right after its VAR block), variables may be called get and set,
-    and the property beside them still has its accessors."""
-    source = """FUNCTION_BLOCK Box
+BOX = """FUNCTION_BLOCK Box
 VAR v : INT; set : BOOL; END_VAR
 METHOD PUBLIC Get : INT
 VAR n : INT; END_VAR
@@ -492,16 +508,21 @@ get := b.Value;
 IF set = 2 THEN b.Value := 7; END_IF;
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 3)
+
+
+def test_get_and_set_are_names_outside_a_property(tmp_path: Path) -> None:
+    """GET and SET begin a property's accessor only there: a method called Get assigns its
+    result (`Get := ...;` right after its VAR block), variables may be called get and set,
+    and the property beside them still has its accessors."""
+    trace = sim_trace(tmp_path, BOX, 3)
     assert trace["Main.r"] == [2, 3, 4]
     assert trace["Main.get"] == [10, 20, 30]
     assert trace["Main.b.set"] == [True, True, True]
     assert trace["Main.b.v"] == [1, 7, 3]
-    assert not [d for d in diagnostics(source) if "error" in d]
+    assert not [d for d in diagnostics(BOX) if "error" in d]
 
 
-def test_properties_through_interfaces_overrides_and_super(tmp_path: Path) -> None:
-    source = """
+TANKS = """
 INTERFACE IGauge
 PROPERTY Value : INT
 GET END_GET
@@ -535,7 +556,10 @@ s.Value := s.Value + 1;
 x := g.Value;
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 3)
+
+
+def test_properties_through_interfaces_overrides_and_super(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, TANKS, 3)
     assert t["Main.g"] == ["Main.t", "Main.b", "Main.b"]
     assert t["Main.t.fill"] == [1, 1, 1]
     # BigTank reads 1000 + fill and stores twice what it is given: (1000 + 0 + 1) * 2
@@ -597,8 +621,7 @@ END_PROGRAM
         assert line in found, (line, found)
 
 
-def test_a_block_with_temporaries_and_methods_compiles_and_runs(tmp_path: Path) -> None:
-    source = """
+TEMPORARIES_AND_METHODS = """
 FUNCTION_BLOCK F
 VAR_TEMP t : INT; END_VAR
 VAR n : INT; END_VAR
@@ -613,7 +636,10 @@ VAR f : F; END_VAR
 f();
 END_PROGRAM
 """
-    assert sim_trace(tmp_path, source, 2)["Main.f.n"] == [2, 4]
+
+
+def test_a_block_with_temporaries_and_methods_compiles_and_runs(tmp_path: Path) -> None:
+    assert sim_trace(tmp_path, TEMPORARIES_AND_METHODS, 2)["Main.f.n"] == [2, 4]
 
 
 def test_a_global_a_method_writes_is_written_by_each_program_that_calls_it() -> None:
@@ -646,8 +672,7 @@ END_PROGRAM
     ]
 
 
-def test_a_block_extends_a_standard_function_block(tmp_path: Path) -> None:
-    source = """
+HALF_TON = """
 FUNCTION_BLOCK HalfTon EXTENDS TON
 VAR_OUTPUT half : BOOL; END_VAR
 SUPER^();                 (* the timer itself *)
@@ -658,14 +683,16 @@ VAR t : HalfTon; END_VAR
 t(IN := TRUE, PT := T#400ms);
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 6)
+
+
+def test_a_block_extends_a_standard_function_block(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, HALF_TON, 6)
     assert t["Main.t.ET"] == [0, 100, 200, 300, 400, 400]
     assert t["Main.t.half"] == [False, False, True, True, True, True]
     assert t["Main.t.Q"] == [False, False, False, False, True, True]
 
 
-def test_a_method_calls_an_action_of_its_block(tmp_path: Path) -> None:
-    source = """
+PRIMED_PUMP = """
 FUNCTION_BLOCK Pump
 VAR strokes : INT; END_VAR
 METHOD PUBLIC Prime
@@ -681,11 +708,13 @@ VAR p : Pump; END_VAR
 p.Prime();
 END_PROGRAM
 """
-    assert sim_trace(tmp_path, source, 2)["Main.p.strokes"] == [2, 4]
 
 
-def test_methods_and_properties_after_the_block_as_twincat_writes_them(tmp_path: Path) -> None:
-    source = """
+def test_a_method_calls_an_action_of_its_block(tmp_path: Path) -> None:
+    assert sim_trace(tmp_path, PRIMED_PUMP, 2)["Main.p.strokes"] == [2, 4]
+
+
+TWINCAT_ORDER = """
 INTERFACE I_Counter
 END_INTERFACE
 
@@ -728,17 +757,19 @@ c := ten;
 b := c.Tick();
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 2)
+
+
+def test_methods_and_properties_after_the_block_as_twincat_writes_them(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, TWINCAT_ORDER, 2)
     assert t["Main.a"] == [2, 4]
     assert t["Main.b"] == [10, 20]
-    orphan = "METHOD PUBLIC Start\nEND_METHOD\n" + source
+    orphan = "METHOD PUBLIC Start\nEND_METHOD\n" + TWINCAT_ORDER
     assert diagnostics(orphan) == [
         "t.st:1:15: error: method 'Start' follows no FUNCTION_BLOCK, PROGRAM or INTERFACE [E0135]"
     ]
 
 
-def test_an_instance_hands_itself_over_as_this(tmp_path: Path) -> None:
-    source = """
+LISTENER = """
 INTERFACE IListener
 METHOD Notify
 VAR_INPUT v : INT; END_VAR
@@ -775,15 +806,17 @@ IF k = 1 THEN d.Attach(bus); END_IF;
 bus.Send(k * 7);
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 2)
+
+
+def test_an_instance_hands_itself_over_as_this(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, LISTENER, 2)
     assert t["Main.bus.listener"] == ["Main.d", "Main.d"]
     assert t["Main.d.shown"] == [7, 14]
     assert t["Main.d.me"] == ["Main.d", "Main.d"]
     assert t["Main.d.field"] == ["Main.d.shown", "Main.d.shown"]
 
 
-def test_a_method_with_an_in_out_a_loop_and_en(tmp_path: Path) -> None:
-    source = """
+ACCUMULATOR = """
 FUNCTION_BLOCK Acc
 VAR total : DINT; END_VAR
 METHOD PUBLIC SumTo : DINT
@@ -803,14 +836,16 @@ r := a.SumTo(n := 4, calls := c);
 a.SumTo(n := 2, calls := c, EN := go);   (* runs from cycle 2 on *)
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 3, "Main.go=TRUE@2")
+
+
+def test_a_method_with_an_in_out_a_loop_and_en(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, ACCUMULATOR, 3, "Main.go=TRUE@2")
     assert t["Main.r"] == [10, 10, 10]  # the result starts at 0 in every call
     assert t["Main.c"] == [1, 3, 5]
     assert t["Main.a.total"] == [10, 23, 36]
 
 
-def test_three_generations_whose_names_sort_against_their_order(tmp_path: Path) -> None:
-    source = """
+GENERATIONS = """
 FUNCTION_BLOCK Zeta
 VAR n : INT; END_VAR
 METHOD PUBLIC Step : INT
@@ -834,13 +869,15 @@ VAR a : Alpha; r : INT; END_VAR
 r := a.Twice();     (* Zeta's Twice, Mid's Step *)
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 2)
+
+
+def test_three_generations_whose_names_sort_against_their_order(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, GENERATIONS, 2)
     assert t["Main.r"] == [20, 40]
     assert t["Main.a.n"] == [10, 20]
 
 
-def test_a_method_takes_a_variable_length_array(tmp_path: Path) -> None:
-    source = """
+VARIABLE_LENGTH_ARRAY = """
 FUNCTION_BLOCK A
 VAR calls : INT; END_VAR
 METHOD PUBLIC Sum : INT
@@ -856,12 +893,14 @@ VAR a : A; v : ARRAY[1..3] OF INT := [1, 2, 3]; w : ARRAY[0..1] OF INT := [10, 2
 r := a.Sum(v) + a.Sum(x := w);
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 1)
+
+
+def test_a_method_takes_a_variable_length_array(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, VARIABLE_LENGTH_ARRAY, 1)
     assert (t["Main.r"], t["Main.a.calls"]) == ([36], [2])
 
 
-def test_a_block_called_through_a_reference(tmp_path: Path) -> None:
-    source = """
+CALLED_THROUGH_A_REFERENCE = """
 FUNCTION_BLOCK Cnt
 VAR_INPUT step : INT := 1; END_VAR
 VAR_OUTPUT n : INT; END_VAR
@@ -874,7 +913,10 @@ IF k MOD 2 = 1 THEN r := REF(a); ELSE r := REF(b); END_IF;
 r^(step := 10, n => out);
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 3)
+
+
+def test_a_block_called_through_a_reference(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, CALLED_THROUGH_A_REFERENCE, 3)
     assert t["Main.a.n"] == [10, 10, 20]
     assert t["Main.b.n"] == [0, 10, 10]
     assert t["Main.out"] == [10, 10, 20]
@@ -898,8 +940,7 @@ END_FUNCTION_BLOCK
     ]
 
 
-def test_a_block_called_through_a_reference_to_of_codesys(tmp_path: Path) -> None:
-    source = """
+CALLED_THROUGH_A_REFERENCE_TO = """
 FUNCTION_BLOCK Cnt
 VAR_INPUT step : INT := 1; END_VAR
 VAR_OUTPUT n : INT; END_VAR
@@ -911,7 +952,10 @@ ref REF= a;
 ref(step := 2);
 END_PROGRAM
 """
-    assert sim_trace(tmp_path, source, 2)["Main.a.n"] == [2, 4]
+
+
+def test_a_block_called_through_a_reference_to_of_codesys(tmp_path: Path) -> None:
+    assert sim_trace(tmp_path, CALLED_THROUGH_A_REFERENCE_TO, 2)["Main.a.n"] == [2, 4]
 
 
 def test_a_derived_block_cannot_reuse_its_bases_names() -> None:
@@ -936,8 +980,7 @@ END_PROGRAM
     ]
 
 
-def test_an_interface_output_goes_to_an_interface_it_extends(tmp_path: Path) -> None:
-    source = """
+INTERFACE_OUTPUTS = """
 INTERFACE IBase
 END_INTERFACE
 INTERFACE IMore EXTENDS IBase
@@ -959,5 +1002,8 @@ g(out => b);
 g.Give(o => c);
 END_PROGRAM
 """
-    t = sim_trace(tmp_path, source, 1)
+
+
+def test_an_interface_output_goes_to_an_interface_it_extends(tmp_path: Path) -> None:
+    t = sim_trace(tmp_path, INTERFACE_OUTPUTS, 1)
     assert (t["Main.b"], t["Main.c"]) == (["Main.g.own"], ["Main.g.own"])

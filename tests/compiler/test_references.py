@@ -16,8 +16,7 @@ def diagnostics(source: str) -> list[str]:
     return [str(d) for d in compile_sources([SourceFile("t.st", source)]).diagnostics]
 
 
-def test_a_reference_reads_and_writes_what_it_refers_to(tmp_path: Path) -> None:
-    source = """VAR_GLOBAL g : INT := 7; END_VAR
+READ_AND_WRITTEN = """VAR_GLOBAL g : INT := 7; END_VAR
 PROGRAM Main
 VAR_EXTERNAL g : INT; END_VAR
 VAR a : INT := 100; arr : ARRAY[1..3] OF INT; k : INT := 2; n, seen : INT; END_VAR
@@ -30,7 +29,10 @@ IF r <> NULL THEN
 END_IF;
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 5)
+
+
+def test_a_reference_reads_and_writes_what_it_refers_to(tmp_path: Path) -> None:
+    trace = sim_trace(tmp_path, READ_AND_WRITTEN, 5)
     assert trace["Main.r"] == ["NULL", "Main.a", "Main.arr[2]", "g", "g"]
     assert trace["Main.seen"] == [0, 100, 0, 7, 8]
     assert trace["Main.a"] == [100, 101, 101, 101, 101]
@@ -38,8 +40,7 @@ END_PROGRAM
     assert trace["g"] == [7, 7, 7, 8, 9]
 
 
-def test_a_reference_passed_to_a_block_changes_the_callers_variable(tmp_path: Path) -> None:
-    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+PASSED_TO_A_BLOCK = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
 FUNCTION_BLOCK Bump
 VAR_INPUT target : REF_TO INT; point : REF_TO Point; END_VAR
 VAR own : INT; mine : REF_TO INT; END_VAR
@@ -53,7 +54,10 @@ VAR count : INT; p : Point; bump : Bump; END_VAR
 bump(target := REF(count), point := REF(p));
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 3)
+
+
+def test_a_reference_passed_to_a_block_changes_the_callers_variable(tmp_path: Path) -> None:
+    trace = sim_trace(tmp_path, PASSED_TO_A_BLOCK, 3)
     assert trace["Main.count"] == [1, 2, 3]
     assert trace["Main.p.x"] == [10, 20, 30]
     assert trace["Main.bump.own"] == [2, 4, 6]
@@ -63,8 +67,7 @@ END_PROGRAM
     assert trace["Main.bump.mine"] == ["Main.bump.own"] * 3
 
 
-def test_a_reference_survives_a_structure_assignment_below_its_root(tmp_path: Path) -> None:
-    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+BELOW_AN_ASSIGNED_ROOT = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
 PROGRAM Main
 VAR p, q : Point; r : REF_TO INT; n : INT; END_VAR
 n := n + 1;
@@ -75,13 +78,15 @@ n := n + 0;
 r^ := r^ + 1000;
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 3)
+
+
+def test_a_reference_survives_a_structure_assignment_below_its_root(tmp_path: Path) -> None:
+    trace = sim_trace(tmp_path, BELOW_AN_ASSIGNED_ROOT, 3)
     assert trace["Main.r"] == ["Main.p.y"] * 3
     assert trace["Main.p.y"] == [1041, 1042, 1043]
 
 
-def test_references_compare_equal_when_they_refer_to_the_same_place(tmp_path: Path) -> None:
-    source = """PROGRAM Main
+COMPARED = """PROGRAM Main
 VAR a, b : INT; r1, r2 : REF_TO INT; same, isnull : BOOL; n : INT; END_VAR
 n := n + 1;
 isnull := r1 = NULL;
@@ -90,17 +95,27 @@ IF n = 1 THEN r2 := REF(a); ELSE r2 := REF(b); END_IF;
 same := r1 = r2;
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 2)
+
+
+def test_references_compare_equal_when_they_refer_to_the_same_place(tmp_path: Path) -> None:
+    trace = sim_trace(tmp_path, COMPARED, 2)
     assert trace["Main.isnull"] == [True, False]
     assert trace["Main.same"] == [True, False]
 
 
+NULL_DEREFERENCED = """PROGRAM Main
+VAR r : REF_TO INT; n : INT; END_VAR
+n := n + 1;
+IF n = 3 THEN
+  n := r^;
+END_IF;
+END_PROGRAM
+"""
+
+
 def test_a_dereference_of_null_is_a_program_fault_naming_the_line(tmp_path: Path) -> None:
     path = tmp_path / "null.st"
-    path.write_text(
-        "PROGRAM Main\nVAR r : REF_TO INT; n : INT; END_VAR\nn := n + 1;\n"
-        "IF n = 3 THEN\n  n := r^;\nEND_IF;\nEND_PROGRAM\n"
-    )
+    path.write_text(NULL_DEREFERENCED)
     run = padt("sim", str(path), "--cycles", "4", "--trace", "Main.n")
     assert run.returncode == 3, run.stderr
     assert f"cycle 3: program Main: dereference of NULL in POU Main ({path}:5)" in run.stderr
@@ -142,8 +157,7 @@ END_PROGRAM
     ]
 
 
-def test_codesys_pointers_are_references_with_a_warning(tmp_path: Path) -> None:
-    source = """PROGRAM Main
+POINTERS = """PROGRAM Main
 VAR a : ARRAY[0..2] OF INT; p : POINTER TO INT; i : INT; valid : INT; END_VAR
 IF p <> 0 THEN valid := valid + 1; END_IF;
 i := i + 1;
@@ -151,11 +165,14 @@ p := ADR(a[i MOD 3]);
 p^ := p^ + 10;
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 3)
+
+
+def test_codesys_pointers_are_references_with_a_warning(tmp_path: Path) -> None:
+    trace = sim_trace(tmp_path, POINTERS, 3)
     assert trace["Main.p"] == ["Main.a[1]", "Main.a[2]", "Main.a[0]"]
     assert trace["Main.a"] == [[0, 10, 0], [0, 10, 10], [10, 10, 10]]
     assert trace["Main.valid"] == [0, 1, 2]  # NULL before the first ADR
-    assert diagnostics(source) == [
+    assert diagnostics(POINTERS) == [
         "t.st:2:33: warning: POINTER TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO [W0805]",
         "t.st:5:6: warning: ADR is CODESYS/TwinCAT; IEC 61131-3 writes REF (no address "
         "arithmetic) [W0805]",
@@ -181,8 +198,7 @@ END_PROGRAM
     ) in found
 
 
-def test_codesys_reference_to_reads_and_writes_what_it_is_bound_to(tmp_path: Path) -> None:
-    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+REFERENCE_TO_BOUND = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
 PROGRAM Main
 VAR a, b, n : INT; p : Point; END_VAR
 VAR ra : REFERENCE TO INT; rp : REFERENCE TO Point; r : REF_TO INT; END_VAR
@@ -195,13 +211,16 @@ r := REF(ra);
 r^ := r^ + 100;
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 3)
+
+
+def test_codesys_reference_to_reads_and_writes_what_it_is_bound_to(tmp_path: Path) -> None:
+    trace = sim_trace(tmp_path, REFERENCE_TO_BOUND, 3)
     assert trace["Main.ra"] == ["Main.a", "Main.a", "Main.b"]
     assert trace["Main.a"] == [110, 220, 220]
     assert trace["Main.b"] == [0, 0, 110]
     assert trace["Main.p.x"] == [1, 2, 3]
     assert trace["Main.r"] == ["Main.a", "Main.a", "Main.b"]  # REF of a REFERENCE TO
-    found = diagnostics(source)
+    found = diagnostics(REFERENCE_TO_BOUND)
     assert (
         "t.st:4:10: warning: REFERENCE TO is CODESYS/TwinCAT; IEC 61131-3 writes REF_TO and ^ "
         "[W0806]"
@@ -209,9 +228,16 @@ END_PROGRAM
     assert sum("REF= is CODESYS/TwinCAT" in d for d in found) == 3
 
 
+UNBOUND_REFERENCE_TO = """PROGRAM Main
+VAR ra : REFERENCE TO INT; END_VAR
+ra := 5;
+END_PROGRAM
+"""
+
+
 def test_an_unbound_reference_to_is_a_program_fault(tmp_path: Path) -> None:
     path = tmp_path / "unbound.st"
-    path.write_text("PROGRAM Main\nVAR ra : REFERENCE TO INT; END_VAR\nra := 5;\nEND_PROGRAM\n")
+    path.write_text(UNBOUND_REFERENCE_TO)
     run = padt("sim", str(path), "--cycles", "2")
     assert run.returncode == 3, run.stderr
     assert f"program Main: dereference of NULL in POU Main ({path}:3)" in run.stderr
@@ -248,13 +274,9 @@ END_FUNCTION_BLOCK
 """
 
 
-def test_a_reference_to_input_is_bound_to_the_callers_variable(tmp_path: Path) -> None:
-    """CODESYS `VAR_INPUT r : REFERENCE TO T`: the call binds r to the variable passed (it
-    is not a copy), the instance keeps the binding until the next call binds it anew; a
-    function and a method are bound likewise."""
-    source = (
-        BUMP
-        + """FUNCTION Twice : BOOL
+REFERENCE_TO_INPUTS = (
+    BUMP
+    + """FUNCTION Twice : BOOL
 VAR_INPUT out : REFERENCE TO DINT; END_VAR
 out := out * 2;
 Twice := TRUE;
@@ -276,22 +298,38 @@ ok := Twice(out := d);
 got := h.Add(r := h.own, step := 10);
 END_PROGRAM
 """
-    )
-    trace = sim_trace(tmp_path, source, 4)
+)
+
+
+def test_a_reference_to_input_is_bound_to_the_callers_variable(tmp_path: Path) -> None:
+    """CODESYS `VAR_INPUT r : REFERENCE TO T`: the call binds r to the variable passed (it
+    is not a copy), the instance keeps the binding until the next call binds it anew; a
+    function and a method are bound likewise."""
+    trace = sim_trace(tmp_path, REFERENCE_TO_INPUTS, 4)
     assert trace["Main.x"] == [6, 7, 7, 7]  # bound by the first call, kept by b()
     assert trace["Main.y"] == [0, 0, 1, 2]
     assert trace["Main.b.target"] == ["Main.x", "Main.x", "Main.y", "Main.y"]
     assert trace["Main.d"] == [6, 12, 24, 48]
     assert trace["Main.h.own"] == [10, 20, 30, 40]
     assert trace["Main.got"] == [10, 20, 30, 40]
-    found = diagnostics(source)
+    found = diagnostics(REFERENCE_TO_INPUTS)
     assert not [d for d in found if "error" in d or "W0301" in d]  # writing through is meant
     assert sum("[W0806]" in d for d in found) == 3  # each REFERENCE TO declared
 
 
+UNBOUND_REFERENCE_TO_INPUT = (
+    BUMP
+    + """PROGRAM Main
+VAR b : Bump; END_VAR
+b();
+END_PROGRAM
+"""
+)
+
+
 def test_an_unbound_reference_to_input_is_a_program_fault(tmp_path: Path) -> None:
     path = tmp_path / "unbound.st"
-    path.write_text(BUMP + "PROGRAM Main\nVAR b : Bump; END_VAR\nb();\nEND_PROGRAM\n")
+    path.write_text(UNBOUND_REFERENCE_TO_INPUT)
     run = padt("sim", str(path), "--cycles", "2")
     assert run.returncode == 3, run.stderr
     assert f"dereference of NULL in POU Bump ({path}:3)" in run.stderr
@@ -327,8 +365,7 @@ END_PROGRAM
     assert f"t.st:16:13: {prefix} a single bit [E0220]" in found
 
 
-def test_a_reference_made_in_a_global_block_reads_as_its_global_path(tmp_path: Path) -> None:
-    source = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
+GLOBAL_KEEPER = """TYPE Point : STRUCT x, y : INT; END_STRUCT END_TYPE
 FUNCTION_BLOCK Keep
 VAR own : INT; spot : Point; mine, there : REF_TO INT; END_VAR
 mine := REF(own);
@@ -340,16 +377,15 @@ VAR_EXTERNAL keeper : Keep; END_VAR
 keeper();
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 1)
+
+
+def test_a_reference_made_in_a_global_block_reads_as_its_global_path(tmp_path: Path) -> None:
+    trace = sim_trace(tmp_path, GLOBAL_KEEPER, 1)
     assert trace["keeper.mine"] == ["keeper.own"]
     assert trace["keeper.there"] == ["keeper.spot.y"]
 
 
-def test_ref_assign_zero_unbinds_and_isvalidref_tells(tmp_path: Path) -> None:
-    """CODESYS `r REF= 0;` makes a REFERENCE TO refer to nothing; `__ISVALIDREF(r)` is
-    TRUE while it is bound (the pattern of the TwinCAT command samples: a method binds or
-    unbinds the reference it is given, another uses it only when it is valid)."""
-    source = """FUNCTION_BLOCK Lamp
+LAMP_COMMAND = """FUNCTION_BLOCK Lamp
 VAR_OUTPUT level : INT; END_VAR
 METHOD PUBLIC SetLevel
 VAR_INPUT l : INT; END_VAR
@@ -380,11 +416,17 @@ bound := __ISVALIDREF(c.refLamp);
 c.Run();
 END_PROGRAM
 """
-    trace = sim_trace(tmp_path, source, 5)
+
+
+def test_ref_assign_zero_unbinds_and_isvalidref_tells(tmp_path: Path) -> None:
+    """CODESYS `r REF= 0;` makes a REFERENCE TO refer to nothing; `__ISVALIDREF(r)` is
+    TRUE while it is bound (the pattern of the TwinCAT command samples: a method binds or
+    unbinds the reference it is given, another uses it only when it is valid)."""
+    trace = sim_trace(tmp_path, LAMP_COMMAND, 5)
     assert trace["Main.bound"] == [False, True, True, False, False]
     assert trace["Main.c.refLamp"] == ["NULL", "Main.lamp", "Main.lamp", "NULL", "NULL"]
     assert trace["Main.lamp.level"] == [0, 1, 2, 2, 2]
-    found = diagnostics(source)
+    found = diagnostics(LAMP_COMMAND)
     assert not [d for d in found if "error" in d]
     assert (
         "t.st:12:4: warning: __ISVALIDREF is CODESYS/TwinCAT; IEC 61131-3 writes r <> NULL "

@@ -11,9 +11,11 @@ from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.native.tier import NativeReport, NativeTier
+from runtime.online_writes import simulate
 from runtime.resource import Resource
 
 CYCLE_NS = 100_000_000
+Writes = dict[int, list[tuple[str, object]]]  # cycle: (variable, value) written before it
 
 
 def compiled(text: str, programs: list[ProgramConfig] | None = None) -> Artifact:
@@ -66,8 +68,12 @@ class Pair:
         assert code is not None and code.native is not None
         return code.native
 
-    def cycle_and_compare(self, cycles: int) -> None:
+    def cycle_and_compare(self, cycles: int, writes: Writes | None = None) -> None:
+        """`writes`: what is written into both before a cycle (as `padt sim --set`)."""
         for cycle in range(1, cycles + 1):
+            for path, value in (writes or {}).get(cycle, []):
+                simulate(self.python, path, value)
+                simulate(self.native, path, value)
             advance(self.python)
             advance(self.native)
             expected, found = self.python.variables.values(), self.native.variables.values()
