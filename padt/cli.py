@@ -519,6 +519,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     convert.set_defaults(func=_convert)
 
+    from padt.testing import add_arguments as test_arguments
+
+    test = sub.add_parser(
+        "test",
+        help="run the project's unit tests (ST, in its test/ folder) on both tiers",
+        epilog="exit codes: 0 all passed, 1 a test failed, 2 the project or its tests do not "
+        "compile (or bad options), 5 no test found. docs/testing.md",
+    )
+    test_arguments(test)
+    test.set_defaults(func=_lazy("padt.testing", "run"))
+
     from padt.new_project import add_arguments as new_arguments
 
     new = sub.add_parser(

@@ -53,3 +53,8 @@ class VirtualClock:
 
     def advance(self, delta_ns: int) -> None:
         self._now += delta_ns
+
+    def rewind(self) -> None:
+        """Back to virtual time 0 (`padt test`: every test starts there, so that its result
+        does not depend on the tests before it)."""
+        self._now = 0

@@ -16,7 +16,7 @@ from runtime.contract.artifact import Artifact, PouCode, VarInfo
 from runtime.contract.generated_code import check_artifact_names
 from runtime.contract.values import array_shape
 from runtime.fault_location import SourceLocation, code_filename, locate
-from runtime.intrinsics import SystemView, namespace
+from runtime.intrinsics import Namespace, SystemView, namespace
 from runtime.native.tier import NativeJob, NativeReport, NativeTier
 
 # An attribute name, or an offset into the flat list that holds an array.
@@ -211,6 +211,19 @@ class CodeImage:
     def replace_function(self, pou_name: str, function: Callable[..., Any]) -> None:
         """What calls of a FUNCTION reach from now on (a debugger's traced entry)."""
         self._namespace[self._pous[pou_name.upper()].class_name] = function
+
+    def renew(self) -> None:
+        """Forget the instances made so far: fresh globals, and the program instances
+        registered again by whoever makes them next (`padt test` starts every test from
+        fresh instances of one image)."""
+        self._namespace["_P"] = Namespace()
+        if self.artifact.globals is not None:
+            self.globals = self._namespace["_G"] = self.new_globals()
+
+    def run_tests_with(self, runner: Callable[..., Any]) -> None:
+        """`padt test`: the test functions of test files call `runner` (the `_test`
+        intrinsic; docs/testing.md)."""
+        self._namespace["_test"] = runner
 
     def new_instance(self, pou_name: str) -> Any:
         pou = self._pous[pou_name.upper()]

@@ -43,7 +43,13 @@ def instantiate(
     native: NativeTier | None = None,
 ) -> Instances:
     """Fresh instances of everything: every variable at its initial value."""
-    image = CodeImage(artifact, system, compile_units=compile_units, native=native)
+    return instances_of(CodeImage(artifact, system, compile_units=compile_units, native=native))
+
+
+def instances_of(image: CodeImage) -> Instances:
+    """The instances of a new image, or fresh ones of an image whose instances are done
+    with once it is `renew`ed (`padt test`: each test starts from them)."""
+    artifact = image.artifact
     configs = sorted(artifact.programs, key=lambda p: (p.priority, p.program_id))
     # a program needs its own view of the globals when another program could change them
     # during its program cycle, or when its cycle spans several CPU cycles

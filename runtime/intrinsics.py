@@ -417,6 +417,15 @@ def _s2w(text: str) -> str:
     )
 
 
+class NotUnderTest(RuntimeError):
+    """A test function called outside `padt test` (no configuration of a test file is ever
+    downloaded: only a crafted artifact gets here)."""
+
+
+def _no_test_runner(*args: Any) -> Any:
+    raise NotUnderTest("a test function (docs/testing.md) runs only under padt test")
+
+
 def _stdout_printf(fmt: str, *args: Any) -> int:
     from runtime.printf import format_printf
 
@@ -591,6 +600,7 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         "_ActionControl": _ActionControl,
         "_step_time": _step_time,
         "_step_enter": _step_enter,
+        "_test": _no_test_runner,  # `CodeImage.run_tests_with` gives it a test runner
     }
     assert names.keys() - {"__builtins__", "__name__"} == INTRINSICS, "see generated_code.py"
     return names

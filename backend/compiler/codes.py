@@ -6,7 +6,8 @@ followed by four digits, grouped by hundreds: 00 syntax and literals, 01 declara
 02 names, types and expressions, 03 statements and assignments, 04 calls, 05 sequential
 function charts, 06 the resource (user programs, safe values, users, Modbus), 07 what padt does not
 compile (features it lacks, limits), 08 extensions of other dialects (CODESYS, TwinCAT) that
-padt accepts, each with a warning that it is not IEC 61131-3, 09 graphical bodies (FBD, LD).
+padt accepts, each with a warning that it is not IEC 61131-3, 09 graphical bodies (FBD, LD),
+10 unit tests.
 Notes (`N`) tell what was ignored without changing what the program does.
 docs/diagnostics.md explains every code with a failing and a passing example.
 """
@@ -203,6 +204,10 @@ class Code(Enum):
     GRAPHIC_NAME = "E0906", "variable named like one the lowering of a drawing needs"
     GRAPHIC_KIND = "E0907", "element of LD in an FBD body"
     GRAPHIC_UNCONNECTED = "W0901", "element without the wire it acts on, left out"
+
+    # ---- 10: unit tests (test files, docs/testing.md)
+    TEST_FUNCTION = "E1001", "test function called with arguments it does not take"
+    TEST_VALUE = "E1002", "test function used as a value"
 
     # ---- 08: extensions of other dialects, accepted with a warning
     QUALIFIED_ENUM = "W0801", "qualified enumeration value E.Value (CODESYS/TwinCAT)"

@@ -49,6 +49,7 @@ from backend.compiler.resolve import (
     transition_variable,
 )
 from backend.compiler.source import Pos
+from backend.compiler.test_functions import TEST_CYCLES_CODE, test_call_lines
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -244,6 +245,12 @@ class _Emitter:
     # ---- expressions
     def exact(self, expr: ast.Expr) -> _Value:
         return _exact(self.expr(expr))
+
+    def exact_code(self, expr: ast.Expr) -> str:
+        return self.exact(expr).code
+
+    def type_of(self, expr: ast.Expr) -> Type:
+        return _type(self.scope, expr)
 
     def expr(self, expr: ast.Expr) -> _Value:
         ring = (isinstance(expr, ast.Binary) and expr.op in ("+", "-", "*")) or (
@@ -551,6 +558,8 @@ class _Emitter:
             held = self.held_reference(referenced) if referenced is not None else None
             assert held is not None
             return _Value(f"({held} is not None)", BOOL)
+        if self.scope.test_call(call) is not None:  # TEST_CYCLES(), the one with a value
+            return _Value(TEST_CYCLES_CODE, _type(self.scope, call))
         builtin = builtins.lookup(call.name)
         assert builtin is not None, call.name
         args = self.scope.builtin_arguments(builtin, call)
@@ -1153,6 +1162,12 @@ class _Emitter:
         method = self.scope.method_call(call)
         if method is not None:
             self.emit(depth, self._method_call(method, call).code)
+            return
+        test = self.scope.test_call(call)
+        if test is not None:
+            for line in test_call_lines(self, call, test):
+                body = line.startswith("    ")
+                self.emit(depth + body, line.removeprefix("    "))
             return
         base = self.scope.super_body(call)
         if base is not None:  # SUPER^(): the base's body on this instance

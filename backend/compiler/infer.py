@@ -29,6 +29,7 @@ from backend.compiler.resolve import (
 )
 from backend.compiler.sizes import codesys_layout
 from backend.compiler.source import Pos
+from backend.compiler.test_functions import TestFunction, test_function
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -161,9 +162,18 @@ class SuperBody:
     base: PouSymbols
 
 
+@dataclass(frozen=True)
+class TestCall:
+    """A test function of a test file (`backend.compiler.test_functions`)."""
+
+    function: TestFunction
+
+
 # What else a call in an expression may name; none of these gives a value.
 NoValue = Literal["method", "action", "instance", "program", "external", "unknown", "super"]
-Callee = UserFunction | StandardFunction | RefOf | IsValidRef | SizeOf | MethodCall | NoValue
+Callee = (
+    UserFunction | StandardFunction | RefOf | IsValidRef | SizeOf | MethodCall | TestCall | NoValue
+)
 
 # THIS and SUPER: references to the instance the code runs on, as itself or as its base
 SELF_NAMES = ("THIS", "SUPER")
@@ -633,6 +643,11 @@ class Scope:
         if isinstance(callee, SizeOf):
             size = self.size_of(call)
             return None if size is None else smallest_unsigned(size)
+        if isinstance(callee, TestCall):
+            for arg in call.args:
+                if arg.value is not None:
+                    self.type_of(arg.value)
+            return callee.function.gives
         if isinstance(callee, IsValidRef):
             referenced = self.referenced(call)
             if referenced is not None:
@@ -688,12 +703,21 @@ class Scope:
             return RefOf(pointer=key(call.name) == "ADR")
         if key(call.name) == "__ISVALIDREF":
             return IsValidRef()
+        test = self.test_call(call)
+        if test is not None:
+            return TestCall(test)
         builtin = builtins.lookup(call.name)
         if builtin is not None:
             return StandardFunction(builtin)
         if pou is not None and pou.kind == "FUNCTION":
             return "external"
         return "unknown"
+
+    def test_call(self, call: ast.Call) -> TestFunction | None:
+        """The test function `call` calls, in a test file."""
+        if call.receiver is not None or call.instance is not None:
+            return None
+        return test_function(call.name, self.pou.pou.pos.file)
 
     def builtin_arguments(
         self, builtin: builtins.Builtin, call: ast.Call

@@ -15,6 +15,7 @@ from typing import Any
 from backend.compiler.limits import MAX_FILE_BYTES, MAX_PROJECT_FILES, MiB
 from backend.compiler.pipeline import CompileResult, Parsed, compile_sources
 from backend.compiler.source import SourceFile, read_sources
+from backend.compiler.test_functions import is_test_file
 from backend.compiler.toml_lines import key_lines
 from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount
 from runtime.contract.parameters import (
@@ -72,11 +73,17 @@ def load_project(paths: list[Path]) -> Project:
 
 
 def project_sources(folder: Path) -> list[SourceFile]:
-    """The .st files of a project folder, named by their path in it."""
+    """The .st files of a project folder, named by their path in it; not those of its
+    `test/` folder, which only `padt test` compiles (docs/testing.md)."""
     # a folder with more files than a project may have is refused by the compiler: its
     # walk stops one file after the limit
-    st_files = sorted(itertools.islice(folder.rglob("*.st"), MAX_PROJECT_FILES + 1))
-    return read_sources([(p, str(p.relative_to(folder))) for p in st_files])
+    st_files = (p for p in folder.rglob("*.st") if not is_test_file(_name_in(folder, p)))
+    chosen = sorted(itertools.islice(st_files, MAX_PROJECT_FILES + 1))
+    return read_sources([(p, str(p.relative_to(folder))) for p in chosen])
+
+
+def _name_in(folder: Path, path: Path) -> str:
+    return path.relative_to(folder).as_posix()
 
 
 def _load_folder(folder: Path) -> Project:

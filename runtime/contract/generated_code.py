@@ -52,7 +52,7 @@ CALLED_INTRINSICS = frozenset(
         "_str_to_int", "_str_to_real", "_str_to_bool", "_real_to_str", "_time_to_str",
         "_date_to_str", "_str_to_time", "_w2s", "_bcd_to_int", "_int_to_bcd", "_ord", "_s2w",
         "_left", "_right", "_mid", "_insert", "_delete", "_replace", "_find", "_safe_math",
-        "_printf", "_ActionControl", "_step_time", "_step_enter",
+        "_printf", "_ActionControl", "_step_time", "_step_enter", "_test",
     }
 )  # fmt: skip
 # objects: `_SYS` the system variables, `_G` the globals, `_P` the program instances, `_tick`

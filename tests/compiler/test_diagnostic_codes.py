@@ -98,10 +98,12 @@ def expand(st: str) -> str:
 SECTIONS = parse_page(PAGE.read_text(encoding="utf-8"))
 
 
-def compile_example(example: Example, folder: Path) -> CompileResult:
-    """As `padt compile` does: a lone file, or a project folder with its padt.toml."""
+def compile_example(example: Example, folder: Path, code: str = "") -> CompileResult:
+    """As `padt compile` does: a lone file, or a project folder with its padt.toml; the
+    examples of the unit tests' codes (E10xx) as a test file, as `padt test` compiles it."""
     if example.toml is None:
-        return compile_sources([SourceFile("main.st", example.st)])
+        name = "test/main_test.st" if code.startswith("E10") else "main.st"
+        return compile_sources([SourceFile(name, example.st)])
     folder.mkdir()
     (folder / PROJECT_FILE).write_text(example.toml, encoding="utf-8")
     (folder / "main.st").write_text(example.st, encoding="utf-8")
@@ -126,10 +128,10 @@ def test_the_page_and_the_registry_list_the_same_codes_in_code_order() -> None:
 def test_the_failing_example_gets_its_code_and_the_passing_one_compiles(
     section: Section, tmp_path: Path
 ) -> None:
-    failing = compile_example(section.fails, tmp_path / "fails")
+    failing = compile_example(section.fails, tmp_path / "fails", section.code)
     assert section.code in [d.code for d in failing.diagnostics], [
         str(d) for d in failing.diagnostics
     ]
-    passing = compile_example(section.passes, tmp_path / "passes")
+    passing = compile_example(section.passes, tmp_path / "passes", section.code)
     problems = [d for d in passing.diagnostics if d.severity == "error" or d.code == section.code]
     assert passing.ok and not problems, [str(d) for d in problems]

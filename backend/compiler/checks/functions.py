@@ -32,12 +32,14 @@ from backend.compiler.infer import (
     Scope,
     SizeOf,
     StandardFunction,
+    TestCall,
     UserFunction,
     binds_reference,
     is_en_eno,
 )
 from backend.compiler.qualified_names import unknown_qualified
 from backend.compiler.resolve import PouSymbols, Variable
+from backend.compiler.test_functions import check_test_call
 from backend.compiler.types import OpenArrayType, assignable
 
 # why a call in an expression gives no value, by what it calls
@@ -64,6 +66,13 @@ def check_function_call(scope: Scope, call: ast.Call) -> None:
             check_is_valid_ref(scope, call)
         case MethodCall():
             pass  # checks.methods (check_method_call), which needs to know how it is used
+        case TestCall(function=function):
+            # as a statement, checks.statements takes it before it is typed as a value
+            if function.gives is None:
+                message = f"{function.name} gives no value: call it as a statement"
+                scope.report(call.pos, Code.TEST_VALUE, message)
+            else:
+                check_test_call(scope, call, function)
         case StandardFunction(builtin=builtin):
             check_standard_enable(scope, call)
             misfit = scope.standard_call(builtin, call)

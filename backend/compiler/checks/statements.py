@@ -13,6 +13,7 @@ from backend.compiler.checks.targets import writable_target
 from backend.compiler.codes import Code
 from backend.compiler.infer import Scope
 from backend.compiler.source import Pos
+from backend.compiler.test_functions import check_test_call
 from backend.compiler.types import BOOL, ElementaryType, Type, assignable, integer_like
 
 
@@ -35,8 +36,11 @@ def check_statement(scope: Scope, statement: ast.Statement, loop_depth: int) -> 
                 scope.type_of(value)
         case ast.CallStatement(call=call):
             method = scope.method_call(call)
+            test = scope.test_call(call)
             if method is not None:
                 check_method_call(scope, call, method, as_value=False)
+            elif test is not None:
+                check_test_call(scope, call, test)
             elif call.name == "^" and scope.called_instance(call) is None:
                 check_super_call(scope, call)
             else:

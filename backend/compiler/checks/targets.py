@@ -8,6 +8,7 @@ from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.infer import EnumValue, NonFinite, ProgramRef, PropertyAccess, Scope
 from backend.compiler.resolve import Variable
+from backend.compiler.test_functions import is_test_file
 from backend.compiler.types import FbType, StructType, Type, is_implicit_reference, value_type
 from runtime.contract.system_variables import NAMESPACE
 
@@ -77,6 +78,8 @@ def writable_target(scope: Scope, target: ast.Expr) -> Type | None:
                 )
                 return value_type(member.type)
         own = scope.self_deref(target.base) is not None  # THIS^.x: the block's own
+        # a test writes any variable, as an online write does (docs/testing.md)
+        own = own or is_test_file(scope.pou.pou.pos.file)
         if isinstance(base_type, FbType) and member.kind not in WRITABLE_MEMBER_KINDS and not own:
             scope.report(
                 target.pos,

@@ -1,0 +1,282 @@
+"""The tests of a build run on one tier: one resource on a virtual clock, each test from fresh
+instances at time 0 (docs/testing.md, "How a test runs").
+
+The test methods are called here, between cycles; the test functions in them call back
+through the `_test` intrinsic (`UnitTestFunctions`), which runs cycles, checks asserts and
+forces. A failed assert raises `UnitTestFailure`, which ends the test."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from backend.engineering.simulation import sim_cycle_ms
+from backend.engineering.testing.test_build import UnitTest
+from runtime.clock import VirtualClock
+from runtime.contract.artifact import Artifact
+from runtime.contract.protocol import ProgramState, ResourceState
+from runtime.contract.refusal import Refusal
+from runtime.contract.values import format_value
+from runtime.fault_location import locate
+from runtime.force_table import GLOBAL, ForceEntry
+from runtime.instances import instances_of
+from runtime.native.tier import NativeTier
+from runtime.resource import Resource
+
+NS_PER_MS = 1_000_000
+# a test that runs longer than this is stopped: an endless RUN_UNTIL loop of the test's own
+# making, or a RUN_CYCLES with a wrong count
+MAX_CYCLES_PER_TEST = 1_000_000
+
+
+@dataclass(frozen=True)
+class Place:
+    file: str
+    line: int
+    col: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.col}"
+
+
+class UnitTestFailure(Exception):
+    """An assert that failed, or a test that cannot go on (a program faulted)."""
+
+    def __init__(self, message: str, place: Place | None, detail: str = "") -> None:
+        super().__init__(message)
+        self.message, self.place, self.detail = message, place, detail
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """How one test ended on one tier."""
+
+    status: str  # passed | failed | error
+    message: str = ""
+    place: Place | None = None
+    detail: str = ""  # expected and actual
+    cycles: int = 0
+
+
+# (cycle number, every variable's value after it): the tiers compare through it
+CycleWatcher = Callable[[int, dict[str, Any]], None]
+
+
+class WatchStop(Exception):
+    """Raised by a CycleWatcher to end the test; `UnitTestBench.run` lets it through."""
+
+
+def same(a: Any, b: Any) -> bool:
+    """ST equality of two values of one type: REALs by value (a NaN equals no value),
+    arrays element by element, structures and blocks member by member."""
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b, strict=True))
+    slots = getattr(type(a), "__slots__", None)
+    if slots is not None and type(a) is type(b):
+        return all(same(getattr(a, s), getattr(b, s)) for s in slots)
+    return bool(a == b)
+
+
+def shown(value: Any, type_name: str) -> str:
+    """A value as an ST literal, structures as `(a := 1, b := TRUE)`."""
+    slots = getattr(type(value), "__slots__", None)
+    if slots is not None and not isinstance(value, str):
+        members = ", ".join(
+            f"{s.removesuffix('__')} := {shown(getattr(value, s), '')}" for s in slots
+        )
+        return f"({members})"
+    if isinstance(value, float) and type_name.startswith("ANY"):
+        type_name = "LREAL"
+    return format_value(value, type_name)
+
+
+@dataclass
+class UnitTestFunctions:
+    """The `_test` intrinsic of one resource: what the test functions of a test do."""
+
+    resource: Resource
+    clock: VirtualClock
+    cycle_ns: int
+    watch: CycleWatcher | None = None
+    cycles: int = 0  # run by the current test
+    until: int | None = None  # RUN_UNTIL's last cycle
+    forced: set[str] = field(default_factory=set)
+
+    def __call__(self, op: str, *args: Any) -> Any:
+        if op == "count":
+            return self.cycles
+        *values, file, line, col = args
+        place = Place(file, line, col)
+        handler = getattr(self, f"_{op}")
+        return handler(place, *values)
+
+    # ---- asserts
+    def _true(self, place: Place, condition: bool, message: str) -> None:
+        if condition is not True:
+            raise UnitTestFailure(
+                _failed("ASSERT_TRUE", message), place, "expected TRUE, actual FALSE"
+            )
+
+    def _false(self, place: Place, condition: bool, message: str) -> None:
+        if condition is not False:
+            raise UnitTestFailure(
+                _failed("ASSERT_FALSE", message), place, "expected FALSE, actual TRUE"
+            )
+
+    def _equal(
+        self, place: Place, expected: Any, actual: Any, type_name: str, message: str
+    ) -> None:
+        if not same(expected, actual):
+            detail = f"expected {shown(expected, type_name)}, actual {shown(actual, type_name)}"
+            raise UnitTestFailure(_failed("ASSERT_EQUAL", message), place, detail)
+
+    def _not_equal(
+        self, place: Place, expected: Any, actual: Any, type_name: str, message: str
+    ) -> None:
+        if same(expected, actual):
+            detail = f"expected anything but {shown(expected, type_name)}, actual the same"
+            raise UnitTestFailure(_failed("ASSERT_NOT_EQUAL", message), place, detail)
+
+    def _near(
+        self,
+        place: Place,
+        expected: float,
+        actual: float,
+        tolerance: float,
+        type_name: str,
+        message: str,
+    ) -> None:
+        if not abs(expected - actual) <= tolerance:  # NaN: never near
+            detail = (
+                f"expected {shown(expected, type_name)} within {shown(tolerance, type_name)}, "
+                f"actual {shown(actual, type_name)}"
+            )
+            raise UnitTestFailure(_failed("ASSERT_NEAR", message), place, detail)
+
+    def _fail(self, place: Place, message: str) -> None:
+        raise UnitTestFailure(_failed("FAIL", message), place)
+
+    # ---- cycles on virtual time
+    def _cycles(self, place: Place, count: int) -> None:
+        if count < 0:
+            raise UnitTestFailure(f"RUN_CYCLES({count}): the count must not be negative", place)
+        for _ in range(count):
+            self.cycle(place)
+
+    def _for(self, place: Place, duration_ns: int) -> None:
+        if duration_ns < 0:
+            raise UnitTestFailure("RUN_FOR: the time must not be negative", place)
+        self._cycles(place, math.ceil(duration_ns / self.cycle_ns))
+
+    def _until(self, place: Place, duration_ns: int) -> None:
+        self.until = self.cycles + max(0, math.ceil(duration_ns / self.cycle_ns))
+
+    def _step(self, place: Place) -> None:
+        if self.until is None or self.cycles >= self.until:
+            limit = format_value((self.until or 0) * self.cycle_ns, "TIME")
+            raise UnitTestFailure(f"RUN_UNTIL: the condition was not TRUE within {limit}", place)
+        self.cycle(place)
+
+    def cycle(self, place: Place) -> None:
+        """One CPU cycle, then virtual time moves on by one cycle time."""
+        if self.cycles >= MAX_CYCLES_PER_TEST:
+            raise UnitTestFailure(f"the test ran {MAX_CYCLES_PER_TEST} cycles: stopped", place)
+        resource = self.resource
+        resource.cycle()
+        self.cycles += 1
+        self.clock.advance(self.cycle_ns)
+        if self.watch is not None:
+            self.watch(self.cycles, resource.variables.values())
+        if resource.state == ResourceState.ERROR_STOP:
+            raise UnitTestFailure(f"cycle {self.cycles}: ERROR STOP, {resource.error}", place)
+        for program in resource.programs:
+            if program.state == ProgramState.ERROR:
+                message = f"cycle {self.cycles}: program {program.config.name} faulted"
+                raise UnitTestFailure(message, place, program.error or "")
+
+    # ---- forcing (the project's forcing permissions are for the controller, not tests)
+    def _force(self, place: Place, path: str, value: Any) -> None:
+        variables = self.resource.variables
+        bound = variables.find(path)
+        if bound is None:
+            raise UnitTestFailure(f"FORCE: no variable {path}", place)
+        level = GLOBAL if bound.program is None else bound.program.name
+        table = self.resource.forcing.table
+        table.set(ForceEntry(bound.path.path, level, variables.checked(bound, value), True))
+        table.start(level, self.clock.now_ns(), None)
+        self.forced.add(bound.path.path)
+        self.resource.forcing.apply()
+
+    def _release(self, place: Place, path: str) -> None:
+        bound = self.resource.variables.find(path)
+        if bound is None or self.resource.forcing.table.remove(bound.path.path) is None:
+            raise UnitTestFailure(f"RELEASE: {path} is not forced", place)
+
+
+def _failed(function: str, message: str) -> str:
+    return f"{function} failed: {message}" if message else f"{function} failed"
+
+
+class UnitTestBench:
+    """A resource for the tests of one build on one tier."""
+
+    def __init__(self, artifact: Artifact, native: NativeTier | None) -> None:
+        self.clock = VirtualClock()
+        self.resource = Resource(artifact.resource.name, self.clock)
+        self.resource.native = native
+        self.resource.load(artifact)
+        if native is not None:
+            self.resource.tier_up(wait=True)
+        code = self.resource.variables.code
+        assert code is not None
+        self.image = code
+        self.functions = UnitTestFunctions(
+            self.resource, self.clock, sim_cycle_ms(artifact) * NS_PER_MS
+        )
+        self.image.run_tests_with(self.functions)
+
+    @property
+    def native_bodies(self) -> tuple[str, ...]:
+        report = self.image.native
+        return report.bodies if report is not None else ()
+
+    def run(self, case: UnitTest, watch: CycleWatcher | None = None) -> Outcome:
+        functions = self.functions
+        self._fresh()
+        functions.watch, functions.cycles, functions.until = watch, 0, None
+        suite = self.image.new_instance(case.suite)
+        try:
+            try:
+                if case.setup is not None:
+                    getattr(suite, case.setup)()
+                getattr(suite, case.method)()
+            finally:
+                if case.teardown is not None:
+                    getattr(suite, case.teardown)()
+        except WatchStop:
+            raise
+        except UnitTestFailure as failure:
+            return Outcome(
+                "failed", failure.message, failure.place, failure.detail, functions.cycles
+            )
+        except Refusal as refused:
+            return Outcome("error", f"refused: {refused.message}", None, "", functions.cycles)
+        except Exception as exc:  # a fault of the test's own code (a division by zero)
+            where = locate(exc, self.image.units)
+            place = Place(where.file, where.line, 0) if where is not None else None
+            message = f"{type(exc).__name__}: {exc}"
+            return Outcome("error", message, place, "", functions.cycles)
+        return Outcome("passed", cycles=functions.cycles)
+
+    def _fresh(self) -> None:
+        """Every variable at its initial value, time 0, no forcing, the resource in RUN."""
+        resource = self.resource
+        if resource.running():
+            resource.stop("test start")
+        resource.forcing.reset()
+        self.image.renew()
+        resource.variables.adopt(instances_of(self.image))
+        self.clock.rewind()
+        resource.start()

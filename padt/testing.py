@@ -1,0 +1,99 @@
+"""`padt test PATH...`: the unit tests of a project, written in ST, run on virtual time on
+both tiers (docs/testing.md)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+# exit codes past 0 (all passed) and 1 (a test failed)
+TEST_NOT_COMPILED = 2  # the project or its tests do not compile, or bad options
+NO_TESTS = 5  # nothing to run (as pytest)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "paths",
+        nargs="+",
+        type=Path,
+        metavar="PATH",
+        help="a project folder (all its tests), or test files or folders below its test/",
+    )
+    parser.add_argument(
+        "-k", dest="pattern", metavar="PATTERN", help="only tests whose Suite.Test contains PATTERN"
+    )
+    parser.add_argument("--junit", type=Path, metavar="FILE", help="write the results as JUnit XML")
+    parser.add_argument(
+        "--library",
+        action="append",
+        type=Path,
+        default=[],
+        metavar="PATH",
+        help="a .st file or folder compiled with the project (repeatable)",
+    )
+    parser.add_argument(
+        "--tier",
+        choices=("both", "python", "native"),
+        default="both",
+        help="run each test on both tiers and compare them (default), or on one",
+    )
+    parser.add_argument(
+        "-j",
+        dest="jobs",
+        type=int,
+        default=1,
+        metavar="N",
+        help="run the tests in N worker processes",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    # imported here: building the command line's parser loads no compiler
+    from backend.engineering.project import ProjectError
+    from backend.engineering.testing.report import (
+        failure_text,
+        junit_xml,
+        result_line,
+        summary_line,
+        totals,
+    )
+    from backend.engineering.testing.test_build import build_tests, matching
+    from backend.engineering.testing.test_session import run_session
+    from backend.engineering.testing.tiers import Tier
+
+    if args.jobs < 1:
+        print("padt test: -j takes a number of workers from 1", file=sys.stderr)
+        return TEST_NOT_COMPILED
+    try:
+        build = build_tests(args.paths, tuple(args.library))
+    except ProjectError as exc:
+        print(f"padt test: {exc}", file=sys.stderr)
+        return TEST_NOT_COMPILED
+    for diagnostic in build.diagnostics:
+        print(diagnostic, file=sys.stderr)
+    if build.artifact is None:
+        return TEST_NOT_COMPILED
+    cases = matching(build.cases, args.pattern)
+    if not cases:
+        print(
+            "padt test: no test found (docs/testing.md says how tests are written)", file=sys.stderr
+        )
+        return NO_TESTS
+    tiers: tuple[Tier, ...] = ("python", "native") if args.tier == "both" else (args.tier,)
+    order = {case: index for index, case in enumerate(cases)}
+    results = []
+    for result in run_session(build.artifact, cases, tiers, args.jobs):
+        results.append(result)
+        print(result_line(result))
+        if not result.passed:
+            print(failure_text(result))
+    results.sort(key=lambda r: order[r.case])
+    ran = sorted({tier for r in results for tier in r.tiers})
+    if "native" in tiers and "native" not in ran:
+        print("padt test: no C compiler here: the native tier was not run", file=sys.stderr)
+    found = totals(results)
+    print(summary_line(found, " and ".join(ran) or "no tier"))
+    if args.junit is not None:
+        args.junit.write_bytes(junit_xml(results, build.project.name))
+    return 0 if found.passed == found.total else 1
