@@ -19,6 +19,7 @@ test: $(VENV)/.stamp-dev
 	bash scripts/install-mcap-reader.sh
 	bash scripts/install-codemirror.sh
 	bash scripts/install-c-compiler.sh $(BIN)/python
+	bash scripts/install-junit-schema.sh $(BIN)/python
 	$(MAKE) lint typecheck pytest
 
 lint: $(VENV)/.stamp-dev

@@ -1,6 +1,6 @@
 """What a test run found, for a terminal (`padt test`) and as JUnit XML for CI systems
-(the schema Jenkins' and GitLab's readers take: `testsuites` > `testsuite` per suite >
-`testcase` per test, with `failure` or `error`)."""
+(the schema of Jenkins' xUnit plugin, junit-10.xsd, which Jenkins' and GitLab's readers take:
+`testsuites` > `testsuite` per suite > `testcase` per test, with `failure` or `error`)."""
 
 from __future__ import annotations
 
@@ -73,7 +73,7 @@ def junit_xml(results: list[UnitTestResult], project: str) -> bytes:
             failures=str(found.failed),
             errors=str(found.errors),
             skipped="0",
-            time=f"{found.seconds:.6f}",
+            time=_seconds(found.seconds),
         )
         suites[suite] = element
         for result in listed:
@@ -82,20 +82,26 @@ def junit_xml(results: list[UnitTestResult], project: str) -> bytes:
                 "testcase",
                 name=result.case.name,
                 classname=suite,
-                file=result.case.file,
-                line=str(result.case.line),
-                time=f"{result.seconds:.6f}",
+                time=_seconds(result.seconds),
             )
             if result.outcome.status != "passed":
                 tag = "failure" if result.outcome.status == "failed" else "error"
                 problem = ET.SubElement(case, tag, message=result.outcome.message, type=tag)
                 problem.text = failure_text(result).strip()
-            ET.SubElement(case, "system-out").text = f"tiers: {', '.join(result.tiers)}"
+            # the schema has no place for a test's file and line on its testcase
+            declared = f"{result.case.file}:{result.case.line}"
+            tiers = ", ".join(result.tiers)
+            ET.SubElement(case, "system-out").text = f"{declared}: tiers {tiers}"
     totals_all = totals(results)
     root.set("tests", str(totals_all.total))
     root.set("failures", str(totals_all.failed))
     root.set("errors", str(totals_all.errors))
-    root.set("time", f"{totals_all.seconds:.6f}")
+    root.set("time", _seconds(totals_all.seconds))
     ET.indent(root)
     text: bytes = ET.tostring(root, encoding="utf-8", xml_declaration=True)
     return text + b"\n"
+
+
+def _seconds(seconds: float) -> str:
+    """A time as the schema takes it: at most three decimals."""
+    return f"{seconds:.3f}"
