@@ -52,6 +52,7 @@ TEST_FUNCTIONS: dict[str, TestFunction] = {
         TestFunction("TEST_CYCLES", (), 0, gives=UDINT),
         TestFunction("FORCE", ("VARIABLE", "VALUE"), 2),
         TestFunction("RELEASE", ("VARIABLE",), 1),
+        TestFunction("REPLAY", ("FILE",), 1),
     )
 }
 
@@ -117,6 +118,7 @@ def check_test_call(scope: _Scope, call: ast.Call, function: TestFunction) -> No
         return t.category if isinstance(t, ElementaryType) else ""
 
     want(_MESSAGE, category(_MESSAGE) == "string", "a STRING")
+    want("FILE", category("FILE") == "string", "a STRING (the recording's path in the project)")
     want("CONDITION", types.get("CONDITION") == BOOL, "BOOL")
     want("N", category("N") == "int", "an integer")
     want("T", types.get("T") == TIME, "a TIME")
@@ -219,6 +221,8 @@ def test_call_lines(emitter: _Emitter, call: ast.Call, function: TestFunction) -
             return [f"_test('force', {path!r}, {value}, {at})"]
         case "RELEASE":
             return [f"_test('release', {place_path(named['VARIABLE'])!r}, {at})"]
+        case "REPLAY":
+            return [f"_test('replay', {code('FILE')}, {at})"]
     raise AssertionError(function.name)
 
 

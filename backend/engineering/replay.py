@@ -199,9 +199,9 @@ def _replay_cycle(resource: Resource, clock: VirtualClock, item: CycleInputs) ->
             program.state = ProgramState(changed[0])
             program.last_start_ns = changed[1]
     _set_system(resource, item.system)
-    _store(resource, item.before)
+    store_recorded(resource, item.before)
     resource.run_programs(item.begin_ns)
-    _store(resource, item.after)
+    store_recorded(resource, item.after)
     resource.cycle_count = item.cycle
 
 
@@ -213,7 +213,8 @@ def _set_system(resource: Resource, values: dict[str, Any]) -> None:
         setattr(resource.system, name, value)
 
 
-def _store(resource: Resource, stores: list[tuple[str, Any]]) -> None:
+def store_recorded(resource: Resource, stores: list[tuple[str, Any]]) -> None:
+    """Values set from outside, as recorded (`padt test`'s REPLAY feeds them too)."""
     variables = resource.variables
     for path, value in stores:
         bound = variables.find(path)

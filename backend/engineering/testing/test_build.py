@@ -22,7 +22,8 @@ from backend.engineering.project import (
     compile_project,
     load_project,
 )
-from runtime.contract.artifact import Artifact
+from runtime.contract.artifact import Artifact, VarInfo
+from runtime.contract.values import array_shape
 
 LIBRARY_FOLDER = "library/"  # how library files are named among the sources
 
@@ -35,10 +36,17 @@ class UnitTest:
     line: int
     setup: str | None  # the generated method names of SetUp and TearDown, if the suite has them
     teardown: str | None
+    # a parameterised test: its cases' array (the suite's variable `<Test>_Cases`) and the
+    # index of this case in it, as ST counts (`TestAdd[2]`)
+    cases: str | None = None
+    case: int | None = None
+    first: int = 0  # the array's lower bound
+    problem: str = ""  # why it cannot run (a parameterised test without its cases)
 
     @property
     def full_name(self) -> str:
-        return f"{self.suite}.{self.name}"
+        index = f"[{self.case}]" if self.case is not None else ""
+        return f"{self.suite}.{self.name}{index}"
 
     @property
     def method(self) -> str:
@@ -115,7 +123,7 @@ def build_tests(paths: list[Path], libraries: tuple[Path, ...] = ()) -> UnitTest
     result = compile_project(project, parsed=parsed)
     cases = tuple(
         case
-        for case in unit_tests_of(parsed[0])
+        for case in unit_tests_of(parsed[0], result.artifact)
         if not selected or any(_selects(choice, case.file) for choice in selected)
     )
     return UnitTestBuild(project, folder, result.artifact, result.diagnostics, cases)
@@ -125,10 +133,11 @@ def _selects(choice: str, file: str) -> bool:
     return file == choice or (choice.endswith("/") and file.startswith(choice))
 
 
-def unit_tests_of(units: list[ast.SourceUnit]) -> list[UnitTest]:
+def unit_tests_of(units: list[ast.SourceUnit], artifact: Artifact | None) -> list[UnitTest]:
     """Every test of the test files: the methods named Test... of their function blocks,
-    by suite and test name."""
+    by suite and test name; a method with an input is a test per element of its cases."""
     cases = []
+    compiled = {key(p.name): p for p in artifact.pous} if artifact is not None else {}
     for unit in units:
         for pou in unit.pous:
             if pou.kind != "FUNCTION_BLOCK" or not is_test_file(pou.pos.file):
@@ -136,22 +145,58 @@ def unit_tests_of(units: list[ast.SourceUnit]) -> list[UnitTest]:
             methods = {key(m.name): m for m in pou.methods}
             setup = method_attr(methods["SETUP"].name) if "SETUP" in methods else None
             teardown = method_attr(methods["TEARDOWN"].name) if "TEARDOWN" in methods else None
+            code = compiled.get(key(pou.name))
+            variables = {key(v.name): v for v in code.variables} if code is not None else {}
             for method in pou.methods:
-                if key(method.name).startswith("TEST"):
-                    cases.append(
-                        UnitTest(
-                            pou.name, method.name, pou.pos.file, method.pos.line, setup, teardown
-                        )
-                    )
-    return sorted(cases, key=lambda c: (key(c.suite), key(c.name)))
+                if not key(method.name).startswith("TEST"):
+                    continue
+                test = UnitTest(
+                    pou.name, method.name, pou.pos.file, method.pos.line, setup, teardown
+                )
+                if _inputs(method):
+                    cases += _parameterised(test, variables, len(_inputs(method)))
+                else:
+                    cases.append(test)
+    return sorted(cases, key=lambda c: (key(c.suite), key(c.name), c.case or 0))
+
+
+def _inputs(method: ast.Method) -> list[str]:
+    return [
+        decl.name
+        for block in method.var_blocks
+        if block.kind == "VAR_INPUT"
+        for decl in block.decls
+    ]
+
+
+def _parameterised(test: UnitTest, variables: dict[str, VarInfo], inputs: int) -> list[UnitTest]:
+    """A test per element of the suite's array `<Test>_Cases`, whose elements are what the
+    test method's one input takes (docs/testing.md, "Parameterised tests")."""
+    wanted = f"{test.name}_Cases"
+    found = variables.get(key(wanted))
+    shape = array_shape(found.type) if found is not None else None
+    problem = ""
+    if inputs != 1:
+        problem = f"{test.name} takes {inputs} inputs: a parameterised test takes one, its case"
+    elif found is None or shape is None or len(shape.dims) != 1:
+        problem = (
+            f"{test.name} takes an input: declare {wanted}, an array of its cases, in the suite"
+        )
+    if problem:
+        return [replace(test, problem=problem)]
+    assert found is not None and shape is not None
+    low, high = shape.dims[0]
+    return [
+        replace(test, cases=found.attr, case=index, first=low) for index in range(low, high + 1)
+    ]
 
 
 def matching(cases: tuple[UnitTest, ...], pattern: str | None) -> tuple[UnitTest, ...]:
-    """`-k PATTERN`: the tests whose `Suite.Test` contains PATTERN, any case; `*` and `?`
-    as in a shell."""
+    """`-k PATTERN`: the tests whose `Suite.Test` (`Suite.Test[2]`, a case of a
+    parameterised one) contains PATTERN, any case; `*` and `?` as in a shell."""
     if not pattern:
         return cases
-    wanted = pattern.upper()
-    if not any(ch in wanted for ch in "*?["):
+    wanted = pattern.upper().replace("[", "[[]")  # `TestAdd[2]` names a case, no set
+    if not any(ch in pattern for ch in "*?"):
         wanted = f"*{wanted}*"
     return tuple(c for c in cases if fnmatch.fnmatchcase(c.full_name.upper(), wanted))

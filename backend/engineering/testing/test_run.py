@@ -10,13 +10,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
+from backend.engineering.replay import ReplayError, read_parts, store_recorded
 from backend.engineering.simulation import sim_cycle_ms
 from backend.engineering.testing.test_build import UnitTest
 from runtime.clock import VirtualClock
 from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import ProgramState, ResourceState
+from runtime.contract.recording import Recording, RecordingUnreadable
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import format_value
 from runtime.fault_location import locate
@@ -99,6 +102,7 @@ class UnitTestFunctions:
     resource: Resource
     clock: VirtualClock
     cycle_ns: int
+    folder: Path | None = None  # the project's: where REPLAY finds recordings
     watch: CycleWatcher | None = None
     cycles: int = 0  # run by the current test
     until: int | None = None  # RUN_UNTIL's last cycle
@@ -179,6 +183,35 @@ class UnitTestFunctions:
             raise UnitTestFailure(f"RUN_UNTIL: the condition was not TRUE within {limit}", place)
         self.cycle(place)
 
+    # ---- a recording's inputs
+    def _replay(self, place: Place, name: str) -> None:
+        """Every cycle of a recording made with all inputs, each with what it took from
+        outside, at the recorded times (one cycle time apart at least)."""
+        recording = self._recording(place, name)
+        clock, start = self.clock, self.clock.now_ns()
+        first = recording.inputs[0].begin_ns if recording.inputs else 0
+        for item in recording.inputs:
+            clock.sleep_until(start + item.begin_ns - first)
+            store_recorded(self.resource, item.before)
+            self.cycle(place)
+            store_recorded(self.resource, item.after)
+
+    def _recording(self, place: Place, name: str) -> Recording:
+        folder = self.folder
+        if folder is None:
+            raise UnitTestFailure("REPLAY: these tests have no project folder", place)
+        path = (folder / name).resolve()
+        if not path.is_relative_to(folder.resolve()) or not path.is_file():
+            raise UnitTestFailure(f"REPLAY: no recording {name!r} in the project folder", place)
+        try:
+            recording = read_parts(path)
+        except (RecordingUnreadable, ReplayError) as exc:
+            raise UnitTestFailure(f"REPLAY: {name}: {exc}", place) from None
+        if not recording.header.all_inputs:
+            message = f"REPLAY: {name} holds no inputs: record with --all-inputs"
+            raise UnitTestFailure(message, place)
+        return recording
+
     def cycle(self, place: Place) -> None:
         """One CPU cycle, then virtual time moves on by one cycle time."""
         if self.cycles >= MAX_CYCLES_PER_TEST:
@@ -187,6 +220,7 @@ class UnitTestFunctions:
         resource.cycle()
         self.cycles += 1
         self.clock.advance(self.cycle_ns)
+        between_cycles(resource)
         if self.watch is not None:
             self.watch(self.cycles, resource.variables.values())
         if resource.state == ResourceState.ERROR_STOP:
@@ -215,6 +249,16 @@ class UnitTestFunctions:
             raise UnitTestFailure(f"RELEASE: {path} is not forced", place)
 
 
+def between_cycles(resource: Resource) -> None:
+    """What the test's code sees between cycles: the globals all programs share (not the
+    view of the program that ran last) and the clock's time (`TIME()`, a timer of the
+    suite), as online test sees them."""
+    code = resource.variables.code
+    assert code is not None
+    code.use(resource.variables.globals, None)
+    resource.system.now_ns = resource.clock.now_ns()
+
+
 def _failed(function: str, message: str) -> str:
     return f"{function} failed: {message}" if message else f"{function} failed"
 
@@ -222,7 +266,9 @@ def _failed(function: str, message: str) -> str:
 class UnitTestBench:
     """A resource for the tests of one build on one tier."""
 
-    def __init__(self, artifact: Artifact, native: NativeTier | None) -> None:
+    def __init__(
+        self, artifact: Artifact, native: NativeTier | None, folder: Path | None = None
+    ) -> None:
         self.clock = VirtualClock()
         self.resource = Resource(artifact.resource.name, self.clock)
         self.resource.native = native
@@ -233,7 +279,7 @@ class UnitTestBench:
         assert code is not None
         self.image = code
         self.functions = UnitTestFunctions(
-            self.resource, self.clock, sim_cycle_ms(artifact) * NS_PER_MS
+            self.resource, self.clock, sim_cycle_ms(artifact) * NS_PER_MS, folder
         )
         self.image.run_tests_with(self.functions)
 
@@ -244,6 +290,8 @@ class UnitTestBench:
 
     def run(self, case: UnitTest, watch: CycleWatcher | None = None) -> Outcome:
         functions = self.functions
+        if case.problem:
+            return Outcome("error", case.problem, Place(case.file, case.line, 1))
         self._fresh()
         functions.watch, functions.cycles, functions.until = watch, 0, None
         suite = self.image.new_instance(case.suite)
@@ -251,7 +299,11 @@ class UnitTestBench:
             try:
                 if case.setup is not None:
                     getattr(suite, case.setup)()
-                getattr(suite, case.method)()
+                arguments = []
+                if case.cases is not None and case.case is not None:
+                    elements = getattr(suite, case.cases)
+                    arguments.append(elements[case.case - case.first])
+                getattr(suite, case.method)(*arguments)
             finally:
                 if case.teardown is not None:
                     getattr(suite, case.teardown)()
@@ -280,3 +332,4 @@ class UnitTestBench:
         resource.variables.adopt(instances_of(self.image))
         self.clock.rewind()
         resource.start()
+        between_cycles(resource)

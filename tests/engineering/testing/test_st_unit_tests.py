@@ -310,3 +310,86 @@ def test_on_the_native_tier_what_translates_runs_as_c(
     case = next(c for c in build.cases if c.name == "TestCyclesOnVirtualTime")
     outcome: Outcome = bench.run(case)
     assert (outcome.status, outcome.cycles) == ("passed", 14)
+
+
+TWO_PROGRAMS_TOML = (
+    PADT_TOML
+    + """
+[[resource.program]]
+name = "Watcher"
+pou = "Watcher"
+id = 2
+priority = 2
+"""
+)
+
+WATCHER = """
+PROGRAM Watcher
+VAR seen : INT; END_VAR
+IF start THEN seen := seen + 1; END_IF;
+END_PROGRAM
+"""
+
+SHARED_AND_PARAMETERISED = """
+TYPE AddCase : STRUCT a, b, sum : INT; END_STRUCT; END_TYPE
+FUNCTION_BLOCK Shared
+VAR
+  timer : TON;
+  TestAdd_Cases : ARRAY[0..2] OF AddCase :=
+    [(a := 1, b := 2, sum := 3), (a := 2, b := 2, sum := 4), (a := -1, b := 1, sum := 1)];
+END_VAR
+METHOD TestBothProgramsSeeTheGlobalsATestWrites
+start := TRUE;
+RUN_CYCLES(2);
+ASSERT_EQUAL(2, Main.count);
+ASSERT_EQUAL(2, Watcher.seen);
+start := FALSE;
+RUN_CYCLES(1);
+ASSERT_EQUAL(2, Watcher.seen, 'the write reached the second program too');
+END_METHOD
+METHOD TestATimerOfTheSuiteRunsOnTheTestsClock
+timer(IN := TRUE, PT := T#300ms);
+RUN_CYCLES(3);
+timer(IN := TRUE, PT := T#300ms);
+ASSERT_TRUE(timer.Q, '300 ms after the start of the test');
+END_METHOD
+METHOD TestAdd
+VAR_INPUT case : AddCase; END_VAR
+ASSERT_EQUAL(case.sum, case.a + case.b, 'the sum');
+END_METHOD
+METHOD TestWithoutCases
+VAR_INPUT n : INT; END_VAR
+END_METHOD
+END_FUNCTION_BLOCK
+"""
+
+
+def test_globals_clock_and_parameterised_tests(tmp_path: Path, native_tier: NativeTier) -> None:
+    folder = project(tmp_path, shared=SHARED_AND_PARAMETERISED)
+    (folder / "padt.toml").write_text(TWO_PROGRAMS_TOML)
+    (folder / "watcher.st").write_text(WATCHER)
+    built = build_tests([folder])
+    assert built.artifact is not None, [str(d) for d in built.diagnostics]
+    tier = NativeTier(native_tier.cache, native_tier.toolchain)
+    # the clock test runs after a test that ran cycles: time starts again at 0
+    ran = run_tests(built.artifact, built.cases, ("python", "native"), tier)
+    results = {r.case.full_name: r.outcome for r in ran}
+    assert list(results) == [
+        "Shared.TestAdd[0]",
+        "Shared.TestAdd[1]",
+        "Shared.TestAdd[2]",
+        "Shared.TestATimerOfTheSuiteRunsOnTheTestsClock",
+        "Shared.TestBothProgramsSeeTheGlobalsATestWrites",
+        "Shared.TestWithoutCases",
+    ]
+    assert [results[f"Shared.TestAdd[{i}]"].status for i in range(3)] == ["passed"] * 2 + ["failed"]
+    assert results["Shared.TestAdd[2]"].detail == "expected 1, actual 0"
+    assert results["Shared.TestATimerOfTheSuiteRunsOnTheTestsClock"].status == "passed"
+    assert results["Shared.TestBothProgramsSeeTheGlobalsATestWrites"].status == "passed"
+    problem = results["Shared.TestWithoutCases"]
+    assert problem.status == "error"
+    assert problem.message == (
+        "TestWithoutCases takes an input: declare TestWithoutCases_Cases, an array of its "
+        "cases, in the suite"
+    )
+    assert [c.full_name for c in matching(built.cases, "testadd[1]")] == ["Shared.TestAdd[1]"]
