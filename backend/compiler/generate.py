@@ -278,7 +278,10 @@ class _Emitter:
                     v = wrap_constant(v, literal_type)
                 return _Value(repr(v), literal_type)
             case ast.RealLiteral(value=v):
-                return _Value(repr(v), _type(self.scope, expr))
+                literal_type = _type(self.scope, expr)
+                if isinstance(literal_type, ElementaryType) and literal_type.bits == 32:
+                    v = to_real32(v)  # REAL#7.3 is the single nearest 7.3, as a REAL holds it
+                return _Value(repr(v), literal_type)
             case ast.BoolLiteral(value=v):
                 return _Value(repr(v), BOOL)
             case ast.TimeLiteral(nanoseconds=ns):

@@ -314,3 +314,22 @@ END_PROGRAM
         "t.st:7:24: error: an in-out parameter of type ARRAY[1..3] OF DINT needs a variable "
         "of that type, not ARRAY[0..2] OF INT [E0417]"
     ]
+
+
+def test_a_typed_real_literal_is_the_single_a_real_holds(tmp_path: Path) -> None:
+    """REAL#7.3 is the IEEE single nearest 7.3 (7.300000190734863), as a REAL variable
+    initialised with 7.3 holds it; found by the OSCAT tests of `padt test` (STAIR)."""
+    source = """
+PROGRAM Main
+VAR v : REAL := 7.3; typed, untyped, stored : BOOL; w : REAL; d : LREAL; END_VAR
+typed := v = REAL#7.3;
+untyped := v = 7.3;
+w := REAL#7.3;
+stored := w = v;
+d := LREAL#7.3;
+END_PROGRAM
+"""
+    t = sim_trace(tmp_path, source, 1)
+    assert t["Main.typed"] == t["Main.untyped"] == t["Main.stored"] == [True]
+    assert t["Main.w"] == [7.300000190734863]
+    assert t["Main.d"] == [7.3]  # an LREAL literal keeps its double
