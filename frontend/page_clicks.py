@@ -1,9 +1,10 @@
 """What the user does in the page that viser does not report: the tab of the work area
 (viser's tabs switch in the browser alone), a row of the Online test's table, a value drawn
-on the Logic screen or a place on its drawing (in the drawing's units) and an entry of the
-project tree (plain HTML), and the window's size (viser does not tell the server; the
-workspace chooses its panels' widths by it). A small script reports each through a text
-input it hides; the server reads it like any input from a browser, as untrusted text.
+on the Logic screen or a place on its drawing (in the drawing's units), an entry of the
+project tree and a test or a failure's place on the Tests screen (plain HTML), and the
+window's size (viser does not tell the server; the workspace chooses its panels' widths by
+it). A small script reports each through a text input it hides; the server reads it like
+any input from a browser, as untrusted text.
 
 Knowing the tab in view, the workspace redraws that screen only: ten browsers drawing
 every screen ten times a second cost most of two cores."""
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 import viser
 
 LABEL = "Page click"
-KINDS = ("tab", "variable", "tree", "window", "layout", "drawing", "logic", "place")
+KINDS = ("tab", "variable", "tree", "window", "layout", "drawing", "logic", "place", "test")
 MAX_NAME = 1000  # longer than any tab name, variable path or tree entry
 
 # Installed once per page (a later workspace after logging in again finds the new input by
@@ -42,6 +43,8 @@ _SCRIPT = (
     "var tr=at.closest('table.olt tr');var cell=tr&&tr.querySelector('td[data-var]');"
     "if(cell)said='variable|'+cell.dataset.var}"
     "if(!said){var entry=at.closest('[data-tree]');if(entry)said='tree|'+entry.dataset.tree}"
+    "if(!said){var tested=at.closest('[data-test-click]');"
+    "if(tested)said='test|'+tested.dataset.testClick}"
     "if(!said){var drawn=at.closest('[data-logic-var]');"
     "if(drawn)said='logic|'+drawn.dataset.logicVar}"
     "if(!said){var sheet=at.closest('svg.gfx');var m=sheet&&sheet.getScreenCTM();"
@@ -76,7 +79,7 @@ _SCRIPT = (
 @dataclass(frozen=True)
 class Click:
     kind: str  # one of KINDS
-    name: str  # the tab's label, the variable's path, the tree entry, a size or a layout
+    name: str  # the tab's label, the variable's path, the tree entry, a size, a layout, ...
 
 
 def read(text: str) -> Click | None:

@@ -67,6 +67,9 @@ class Work(Protocol):
         then: Callable[[], None],
     ) -> None: ...
     def screen(self, kind: type[S]) -> S | None: ...
+    def open_in_editor(self, project: str, file: str, line: int, col: int) -> None:
+        """Open a file of a project in the editor, the cursor at line:col."""
+        ...
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,7 @@ the users log in with, the router's address (shown in the status bar), the users
 lists, the projects the PADT knows (by name, each a folder: a `ProjectShelf`, which also holds
 the audit log of their changes), where the backups of what was loaded go, and the users'
 workspace layouts and online test fields on drawn logic (kept beside the watch lists unless
-given)."""
+given), and the unit test runs under way."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from backend.engineering.logic_fields import LogicFields
 from backend.engineering.padt_accounts import PadtAccounts
 from backend.engineering.project_shelf import ProjectShelf
 from backend.engineering.resource_directory import ResourceDirectory
+from backend.engineering.testing.project_tests import UnitTestRuns
 from backend.engineering.user_layouts import UserLayouts
 from backend.engineering.watch_lists import WatchLists
 
@@ -30,6 +31,8 @@ class UiContext:
     backup_dir: Path = DEFAULT_BACKUP_DIR
     layouts: UserLayouts | None = None
     logic_fields: LogicFields | None = None
+    # the unit test runs of this UI server: a bound on the runs at once of all its browsers
+    test_runs: UnitTestRuns = field(default_factory=UnitTestRuns)
 
     def __post_init__(self) -> None:
         if self.layouts is None:

@@ -165,6 +165,9 @@ class Workspace:
         """The screen of that kind in this workspace (a screen that reads another's)."""
         return next((s for s in self.screens if isinstance(s, kind)), None)
 
+    def open_in_editor(self, project: str, file: str, line: int, col: int) -> None:
+        self.editor_area.open_file(project, file, line, col=col)
+
     def _navigation_width(self) -> int:
         """As the user dragged it, else narrower in a narrow window."""
         if self.layout.navigation_width is not None:

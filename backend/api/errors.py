@@ -37,6 +37,7 @@ HTTP_STATUS = {
     "unknown_project": 404,
     "unknown_resource": 404,
     "unknown_recording": 404,
+    "unknown_test": 404,
     "not_found": 404,
     "method_not_allowed": 405,
     "compile": 422,
@@ -45,6 +46,7 @@ HTTP_STATUS = {
     "path": 400,  # a project file's path: outside the project, or no file it edits
     "settings": 422,  # padt.toml's settings with problems (listed in `problems`)
     "audit": 503,  # the audit log cannot be written: the change was not made
+    "tests_busy": 503,  # as many unit test runs as the server runs at once are under way
     "unreachable": 504,
     # the resource's side did not answer as the resource: another party, or a lie
     "impostor": 502,

@@ -1,8 +1,8 @@
 """The projects the API serves (folders given to `padt api --project`, and those of
-`--projects-dir`): compile, the compile-twice check and the printable documentation (these
-write nothing; they still need Read+Write, because they cost the server real work); and
-editing: new projects from templates, files read and saved with conflicts, POUs added,
-renamed and deleted, padt.toml's settings checked and written."""
+`--projects-dir`): compile, the compile-twice check, the unit tests and the printable
+documentation (these write nothing; they still need Read+Write, because they cost the server
+real work); and editing: new projects from templates, files read and saved with conflicts,
+POUs added, renamed and deleted, padt.toml's settings checked and written."""
 
 from __future__ import annotations
 
@@ -43,6 +43,7 @@ from backend.engineering.project_settings import (
 )
 from backend.engineering.project_shelf import templates
 from backend.engineering.project_tree import ProjectTree, project_tree
+from backend.engineering.testing.project_tests import UnitTestChoice
 
 router = APIRouter(prefix="/api/projects", tags=["projects"])
 
@@ -61,6 +62,25 @@ def compile_project(project: str, caller: ReadWrite, service: Service) -> dict[s
 @router.post("/{project}/check-twice", summary="Compile in two processes and compare CRCs")
 def check_twice(project: str, caller: ReadWrite, service: Service) -> dict[str, Any]:
     return service.check_twice(project)
+
+
+class UnitTestRun(BaseModel):
+    """Which unit tests to run: all (no suite), a suite's, or one (suite and test)."""
+
+    suite: str | None = Field(default=None, max_length=64, description="a test suite (an FB)")
+    test: str | None = Field(default=None, max_length=64, description="a test of the suite")
+    tier: Literal["both", "python", "native"] = "both"
+
+
+@router.post(
+    "/{project}/tests",
+    summary="Run the project's unit tests (all, a suite or one test): the report",
+)
+def run_tests(
+    project: str, caller: ReadWrite, service: Service, body: UnitTestRun | None = None
+) -> dict[str, Any]:
+    chosen = body or UnitTestRun()
+    return service.run_tests(project, UnitTestChoice(chosen.suite, chosen.test, chosen.tier))
 
 
 @router.get(

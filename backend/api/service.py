@@ -43,6 +43,7 @@ from backend.engineering.resource_client import (
     ResourceUnreachable,
 )
 from backend.engineering.resource_directory import ResourceDirectory
+from backend.engineering.testing.project_tests import UnitTestChoice, UnitTestRuns
 from runtime.contract.protocol import Command, GetParameters, GetStatus, Logout
 from runtime.contract.refusal import Refusal
 
@@ -65,6 +66,7 @@ class PadtService:
         accounts: PadtAccounts,
         projects: Mapping[str, Path],
         backup_dir: Path,
+        test_runs: UnitTestRuns | None = None,
     ) -> None:
         self.accounts = accounts
         # a plain mapping is a shelf with no folder for new projects and no audit log
@@ -72,6 +74,7 @@ class PadtService:
         self.projects: Mapping[str, Path] = self.shelf
         self.backup_dir = backup_dir
         self.directory = directory
+        self.test_runs = test_runs or UnitTestRuns()  # this server's: a bound on runs at once
 
     def close(self) -> None:
         self.directory.close()
@@ -100,6 +103,11 @@ class PadtService:
             "mismatches": list(result.mismatches),
             "runs": [dataclasses.asdict(run) for run in (result.first, result.second)],
         }
+
+    def run_tests(self, name: str, choice: UnitTestChoice) -> dict[str, Any]:
+        """The report of the project's unit tests (all, a suite's or one), run in a
+        process of their own while the request's thread waits."""
+        return self.test_runs.run(self.project_path(name), choice)
 
     def documentation(self, name: str, compare: str | None) -> Document:
         """The document of a project served, compared with another project served or a

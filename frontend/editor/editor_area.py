@@ -107,8 +107,10 @@ class EditorArea:
         self._show(True)
 
     # ---- the workspace's calls
-    def open_file(self, project: str, path: str, line: int = 0, keyboard: bool = True) -> None:
-        """Open `path` of `project` in a tab in front, at `line` if given (another
+    def open_file(
+        self, project: str, path: str, line: int = 0, keyboard: bool = True, col: int = 1
+    ) -> None:
+        """Open `path` of `project` in a tab in front, at `line` (and `col`) if given (another
         project's files are closed first: the language services see one project);
         `keyboard`: the editor takes the keyboard (not when the workspace reopens files by
         itself: what the user is typing elsewhere, a password, must not land in the code)."""
@@ -118,7 +120,7 @@ class EditorArea:
                     self._switch_project(project)
                 self._open(path, focus=True, keyboard=keyboard)
                 if line > 0:
-                    goto = {"k": "goto", "file": path, "line": line, "col": 1}
+                    goto = {"k": "goto", "file": path, "line": line, "col": col}
                     goto["keyboard"] = keyboard
                     page_push.send(self.client, "goto", goto)
             except (Refusal, LanguageError) as exc:

@@ -16,6 +16,7 @@ from frontend.screens.reload import Reload
 from frontend.screens.resources import Resources
 from frontend.screens.settings import SettingsScreen
 from frontend.screens.single_step import SingleStep
+from frontend.screens.tests import Tests
 from frontend.screens.trends import Trends
 
 SCREENS: tuple[type[Screen], ...] = (
@@ -27,6 +28,7 @@ SCREENS: tuple[type[Screen], ...] = (
     Events,
     Reload,
     Code,
+    Tests,
     Logic,
     Io,
     Documentation,
