@@ -1,6 +1,7 @@
 """The project tree in the left panel: the project as `backend/engineering/project_tree.py`
 reads it, drawn as folding groups (POUs by kind, data types, global variable lists, the
-resource with its program instances, Modbus, accounts). Each entry carries `data-tree`;
+declarations of the test files apart from them, the resource with its program instances,
+Modbus, accounts). Each entry carries `data-tree`;
 a click on it is reported by the page script (frontend/page_clicks.py) and read back with
 `entry_of`, as untrusted text. The tree is read on a thread of its own (OSCAT's project
 takes a second and a half the first time) and again every few seconds: what another tool
@@ -14,7 +15,7 @@ from dataclasses import dataclass
 
 from backend.engineering.project_access import Editor
 from backend.engineering.project_shelf import ProjectShelf
-from backend.engineering.project_tree import ProjectTree, project_tree
+from backend.engineering.project_tree import ProjectTree, in_tests, project_tree
 from runtime.contract.refusal import Refusal
 
 LOOK_AGAIN_S = 2.0  # how often the folder is looked at for files changed by other tools
@@ -99,13 +100,22 @@ def render(tree: ProjectTree | str | None, chosen: Entry | None) -> str:
         words = html.escape(tree or "reading the project ...")
         return f'<div data-testid="project-tree" style="{_NOTE}">{words}</div>'
     groups: list[str] = []
+    pous = [i for i in tree.pous if not in_tests(i)]
+    types = [t for t in tree.types if not in_tests(t)]
     for kind, title in KINDS.items():
-        rows = [_file_row(i.name, i.file, i.line, chosen) for i in tree.pous if i.kind == kind]
+        rows = [_file_row(i.name, i.file, i.line, chosen) for i in pous if i.kind == kind]
         groups.append(_group(title, f"pous-{kind.lower()}", rows))
-    rows = [_file_row(t.name, t.file, t.line, chosen) for t in tree.types]
+    rows = [_file_row(t.name, t.file, t.line, chosen) for t in types]
     groups.append(_group("Data types", "types", rows))
-    rows = [_file_row(g.name, g.file, g.line, chosen) for g in tree.globals]
+    rows = [_file_row(g.name, g.file, g.line, chosen) for g in tree.globals if not in_tests(g)]
     groups.append(_group("Global variables", "globals", rows))
+    # the suites and helpers of test/ (padt test's), which no download holds
+    tests = sorted(
+        (i for i in (*tree.pous, *tree.types, *tree.globals) if in_tests(i)),
+        key=lambda i: (i.file, i.line),
+    )
+    rows = [_file_row(i.name, i.file, i.line, chosen) for i in tests]
+    groups.append(_group("Tests (test/)", "tests", rows))
     resource = []
     if tree.resource is not None:
         name = tree.resource.name
@@ -126,7 +136,7 @@ def render(tree: ProjectTree | str | None, chosen: Entry | None) -> str:
     problems = "".join(
         f'<div style="color:#c92a2a;font-size:0.85em">{html.escape(p)}</div>' for p in tree.problems
     )
-    counts = f"{len(tree.pous)} POUs, {len(tree.types)} types, {len(tree.files)} files"
+    counts = f"{len(pous)} POUs, {len(types)} types, {len(tree.files)} files"
     return (
         f'<div data-testid="project-tree" style="font-size:0.9em">'
         f'<div style="{_NOTE}">{html.escape(tree.project)}: {counts}</div>'

@@ -499,7 +499,8 @@ def build_parser() -> argparse.ArgumentParser:
     import_.add_argument(
         "--force",
         action="store_true",
-        help="replace the project in a project folder DIR (its padt.toml and .st files)",
+        help="replace the project in a project folder DIR (its padt.toml and .st files; "
+        "its tests stay)",
     )
     import_.set_defaults(func=_import)
 

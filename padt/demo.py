@@ -82,13 +82,16 @@ def demo_project_with_accounts(
     """The embedded demo project, copied into the state folder with the demo's accounts
     added (and the port the simulated plant listens on): the runtime gets it from there,
     and the REST API serves it as `demo`, so a load through the API keeps the accounts."""
-    from backend.engineering.project import PROJECT_FILE, demo_project_path, user_entry
+    from backend.engineering.project import (
+        PROJECT_FILE,
+        copy_template_sources,
+        demo_project_path,
+        user_entry,
+    )
 
     folder = state_dir / "project"
     folder.mkdir(parents=True, exist_ok=True)
-    for source in sorted(demo_project_path().iterdir()):
-        if source.is_file() and source.name != PROJECT_FILE:
-            (folder / source.name).write_text(source.read_text(encoding="utf-8"))
+    copy_template_sources(demo_project_path(), folder)  # its tests too: the tank template
     entries = "".join("\n" + user_entry(account) for account in accounts)
     config = (demo_project_path() / PROJECT_FILE).read_text(encoding="utf-8") + entries
     if plant_port is not None:

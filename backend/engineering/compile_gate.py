@@ -5,11 +5,12 @@ sent, must give the configuration CRC they agreed on."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from backend.engineering.check_twice import check_twice
 from backend.engineering.project import PROJECT_FILE, Project, compile_project, load_project
+from backend.engineering.testing.test_build import sources_of_tests
 from runtime.contract.artifact import Artifact
 from runtime.contract.refusal import Refusal
 
@@ -24,6 +25,9 @@ class CheckedCompile:
     config_text: str | None  # the project's padt.toml as read for this compile, if any
     # the configuration CRCs of the two check compiles (equal, and equal to the artifact's)
     check_crcs: tuple[str, str]
+    # the project's tests (docs/testing.md) by name, read with its sources: not compiled into
+    # the configuration, kept in its backup, which they travel with
+    tests: dict[str, str] = field(default_factory=dict)
 
 
 def compile_failed(message: str, diagnostics: Sequence[str]) -> Refusal:
@@ -41,6 +45,7 @@ def compile_checked(paths: Sequence[Path]) -> CheckedCompile:
     folder = Path(paths[0]) if len(paths) == 1 and Path(paths[0]).is_dir() else None
     config = folder / PROJECT_FILE if folder is not None else None
     config_text = config.read_text(encoding="utf-8") if config and config.is_file() else None
+    tests = {t.name: t.text for t in sources_of_tests(folder)} if folder is not None else {}
     check = check_twice(paths)
     if not check.compiled:
         failures = [run.failure for run in (check.first, check.second) if run.failure]
@@ -62,4 +67,4 @@ def compile_checked(paths: Sequence[Path]) -> CheckedCompile:
             f"compiles gave {agreed} (was a source changed meanwhile?)",
         )
     crcs = (agreed or "", check.second.configuration or "")
-    return CheckedCompile(project, result.artifact, diagnostics, config_text, crcs)
+    return CheckedCompile(project, result.artifact, diagnostics, config_text, crcs, tests)

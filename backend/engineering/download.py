@@ -156,7 +156,8 @@ def keep_backup(
         action=action,
         command=how,
     )
-    sources = {source.name: source.text for source in checked.project.sources}
+    # the tests too: a project rebuilt from its backup keeps them
+    sources = {source.name: source.text for source in checked.project.sources} | checked.tests
     try:
         path = write_backup(folder, info, checked.artifact.to_json(), sources, checked.config_text)
     except BackupError as exc:

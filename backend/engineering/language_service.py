@@ -4,7 +4,12 @@ its files open: `padt lsp`, the REST API and the browser's editor each hold a
 
 The project is the folder's `.st` files as the compiler finds them (`project_sources`)
 and its `padt.toml`; a document open in the editor stands for its file until it is
-closed. Files are named as diagnostics name them: their path in the folder, with "/"."""
+closed. Files are named as diagnostics name them: their path in the folder, with "/".
+
+The test files of the folder's `test/` (docs/testing.md) are analysed as `padt test`
+compiles them: together with the project's sources, which they use, in a second analysis.
+A file of the project is analysed without them, as a download compiles it: it never sees
+a test's POUs, nor the diagnostics they would cause."""
 
 from __future__ import annotations
 
@@ -31,6 +36,7 @@ from backend.compiler.language.tokens import lex
 from backend.compiler.limits import MAX_FILE_BYTES, MiB
 from backend.compiler.pipeline import Parsed
 from backend.compiler.source import source_bytes
+from backend.compiler.test_functions import is_test_file
 from backend.engineering.project import (
     PROJECT_FILE,
     ProjectError,
@@ -38,6 +44,7 @@ from backend.engineering.project import (
     configured_project,
     project_sources,
 )
+from backend.engineering.testing.test_build import sources_of_tests
 
 # what the services answer, for the adapters' annotations (they do not import the compiler)
 __all__ = [
@@ -72,6 +79,16 @@ class ProjectUnreadable(OSError):
     """The project's folder or one of its files cannot be read; the message says why."""
 
 
+class _View:
+    """One analysis over some of the texts (the project's sources alone, or with its
+    tests), and the last one of it in which every open document it holds parsed."""
+
+    def __init__(self, texts: dict[str, str]) -> None:
+        self.project = LanguageProject(texts)
+        # a file broken on disk and not open does not keep it old
+        self.parsed: Analysis | None = None
+
+
 class ProjectLanguage:
     """One editor's view of one project: the files on disk, the documents it has open over
     them, and the analysis of both. Thread-safe: the UI asks from several threads."""
@@ -81,10 +98,9 @@ class ProjectLanguage:
         self._lock = threading.RLock()
         self._disk = _files_of(self.folder)
         self._open: dict[str, str] = {}
-        self._project = LanguageProject(self._disk)
-        # the last analysis in which every open document parsed (a file broken on disk and
-        # not open does not keep it old)
-        self._parsed: Analysis | None = None
+        sources = {name: text for name, text in self._disk.items() if not is_test_file(name)}
+        self._sources = _View(sources)
+        self._with_tests = _View(dict(self._disk))
 
     # ---- files and documents
 
@@ -108,6 +124,22 @@ class ProjectLanguage:
                 return name
         raise LanguageError(f"the project has no file '{name}'")
 
+    def _views_of(self, name: str) -> tuple[_View, ...]:
+        """The analyses a file takes part in: a test file only in the one with the tests."""
+        return (self._with_tests,) if is_test_file(name) else (self._sources, self._with_tests)
+
+    def _view(self, name: str) -> _View:
+        """The analysis a file is read in: as `padt test` compiles a test file, as a
+        download compiles any other."""
+        return self._views_of(name)[0]
+
+    def _whole(self) -> _View:
+        """The analysis of every file, the tests' too: where a search or a rename must find
+        every use of a name (the project's alone while it has no tests: the same texts)."""
+        with self._lock:
+            tests = any(is_test_file(name) for name in {*self._disk, *self._open})
+        return self._with_tests if tests else self._sources
+
     def open(self, name: str, text: str) -> None:
         """The editor's text of a file, from now on instead of the file's."""
         if source_bytes(text) > MAX_FILE_BYTES:
@@ -115,27 +147,31 @@ class ProjectLanguage:
         with self._lock:
             self._open[name] = text
             if name != PROJECT_FILE:
-                self._project.set_text(name, text)
+                for view in self._views_of(name):
+                    view.project.set_text(name, text)
 
     def close(self, name: str) -> None:
         """The editor closed the document: the file on disk counts again."""
         with self._lock:
             if self._open.pop(name, None) is None or name == PROJECT_FILE:
                 return
-            if name in self._disk:
-                self._project.set_text(name, self._disk[name])
-            else:
-                self._project.remove(name)
+            for view in self._views_of(name):
+                if name in self._disk:
+                    view.project.set_text(name, self._disk[name])
+                else:
+                    view.project.remove(name)
 
     def reread(self) -> None:
         """The files on disk changed (saved, added, deleted by another tool)."""
         disk = _files_of(self.folder)
         with self._lock:
             for name in sorted(set(self._disk) - set(disk) - set(self._open)):
-                self._project.remove(name)
+                for view in self._views_of(name):
+                    view.project.remove(name)
             for name, text in sorted(disk.items()):
                 if name not in self._open:
-                    self._project.set_text(name, text)
+                    for view in self._views_of(name):
+                        view.project.set_text(name, text)
             self._disk = disk
 
     def text(self, name: str) -> str:
@@ -167,14 +203,18 @@ class ProjectLanguage:
 
     # ---- the analysis
 
-    def analysis(self) -> Analysis:
-        """The analysis of the texts as the editor has them (re-analysed incrementally
-        after a change)."""
-        analysis = self._project.analysis()
+    def analysis(self, name: str = "") -> Analysis:
+        """The analysis `name` is read in (without a name: the project's sources, as a
+        download compiles them), of the texts as the editor has them (re-analysed
+        incrementally after a change)."""
+        return self._analysed(self._view(name))
+
+    def _analysed(self, view: _View) -> Analysis:
+        analysis = view.project.analysis()
         parsed = {unit.file for unit in analysis.units}
         with self._lock:
-            if parsed >= set(self._open) - {PROJECT_FILE}:
-                self._parsed = analysis
+            if parsed >= set(analysis.texts) & set(self._open):
+                view.parsed = analysis
         return analysis
 
     def readable(self, name: str) -> Analysis:
@@ -182,9 +222,12 @@ class ProjectLanguage:
         parse (a line half typed), the symbols of the last analysis in which every open
         document did, over the texts as they are now; the services find the place in the
         text."""
-        analysis = self.analysis()
+        return self._readable(self._view(name), name)
+
+    def _readable(self, view: _View, name: str) -> Analysis:
+        analysis = self._analysed(view)
         with self._lock:
-            good = self._parsed
+            good = view.parsed
         if good is None or any(unit.file == name for unit in analysis.units):
             return analysis
         return replace(good, texts=analysis.texts)
@@ -194,19 +237,27 @@ class ProjectLanguage:
         services', of padt.toml the compiler's on the configuration."""
         if name == PROJECT_FILE:
             return self._configuration_diagnostics()
-        return self._project.diagnostics(name)
+        return self.analysis(name).diagnostics_of(name)
 
     def all_diagnostics(self) -> dict[str, list[Diagnostic]]:
         """The diagnostics of every file of the project, each file's in order of position."""
-        analysis = self.analysis()
         with self._lock:
             found: dict[str, list[Diagnostic]] = {name: [] for name in {*self._disk, *self._open}}
         found.pop(PROJECT_FILE, None)
         for name in found:
-            found[name] = analysis.diagnostics_of(name)
+            found[name] = self.diagnostics(name)
         if (self.folder / PROJECT_FILE).is_file() or PROJECT_FILE in self._open:
             found[PROJECT_FILE] = self._configuration_diagnostics()
         return dict(sorted(found.items()))
+
+    def problems(self) -> list[Diagnostic]:
+        """The diagnostics of the .st files, the cause before its consequences: the
+        project's sources' (as a download compiles them), then those of the test files."""
+        found = list(self.analysis().diagnostics)
+        whole = self._whole()
+        if whole is not self._sources:
+            found += [d for d in self._analysed(whole).diagnostics if is_test_file(d.file)]
+        return found
 
     def diagnostic_range(self, diagnostic: Diagnostic) -> tuple[int, int, int, int]:
         """Where an editor underlines a diagnostic: the token it points at, else the one
@@ -267,9 +318,10 @@ class ProjectLanguage:
         return definition(self.readable(name), name, line, col)
 
     def references(self, name: str, line: int, col: int) -> list[Location]:
-        """Every place that names the symbol at the place, its declaration among them."""
+        """Every place that names the symbol at the place, its declaration among them,
+        in the tests too."""
         name = self.checked_name(name)
-        return references(self.readable(name), name, line, col)
+        return references(self._readable(self._whole(), name), name, line, col)
 
     def renamed_at(self, name: str, line: int, col: int) -> Range | None:
         """The name a rename at the place would change, None where there is none."""
@@ -279,18 +331,21 @@ class ProjectLanguage:
 
     def rename(self, name: str, line: int, col: int, new_name: str) -> RenameResult:
         """The edits per file that rename the symbol at the place, checked by the compiler
-        on the texts as they are (nothing is written); or why it cannot be renamed."""
-        return rename(self.analysis(), self.checked_name(name), line, col, new_name)
+        on the texts as they are (nothing is written), the tests' uses renamed too; or why it
+        cannot be renamed."""
+        name = self.checked_name(name)
+        return rename(self._analysed(self._whole()), name, line, col, new_name)
 
     def formatted(self, name: str) -> Formatted:
         """The file's text indented by its blocks, keywords in upper case; or why not."""
-        return format_file(self.analysis(), self.checked_name(name))
+        name = self.checked_name(name)
+        return format_file(self.analysis(name), name)
 
     def project_symbols(self, query: str) -> list[tuple[str, OutlineSymbol]]:
         """The POUs, their methods and properties, the types and the globals of every file
-        whose name holds `query` (any case), with their files, by name."""
+        whose name holds `query` (any case), with their files, by name; the tests' too."""
         wanted = query.casefold()
-        analysis = self.analysis()
+        analysis = self._analysed(self._whole())
         found = []
         for name in sorted(analysis.texts):
             for symbol in outline(analysis, name):
@@ -302,13 +357,16 @@ class ProjectLanguage:
 
     def outline(self, name: str) -> list[OutlineSymbol]:
         """What the file declares, nested, in the order it stands."""
-        return outline(self.analysis(), self.checked_name(name))
+        name = self.checked_name(name)
+        return outline(self.analysis(name), name)
 
 
 def _files_of(folder: Path) -> dict[str, str]:
-    """The .st files of the project folder by name, as the compiler reads them."""
+    """The .st files of the project folder by name, as the compiler reads them, and its
+    test files as `padt test` reads them."""
     try:
-        return {source.name: source.text for source in project_sources(folder)}
+        sources = [*project_sources(folder), *sources_of_tests(folder)]
+        return {source.name: source.text for source in sources}
     except OSError as exc:
         raise ProjectUnreadable(f"the project cannot be read: {exc}") from None
 

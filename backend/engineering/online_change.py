@@ -13,6 +13,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from backend.compiler.test_functions import is_test_file
 from backend.engineering.backup import (
     BackupError,
     project_files,
@@ -128,7 +129,9 @@ def running_sources(
             _, files = restore_backup(archive)
         except BackupError:
             continue  # a damaged or foreign archive proves nothing
-        return RunningSources(crc, f"backup {archive.name}", files)
+        # the backup holds the project's tests too, which are no part of a configuration
+        sources = {name: text for name, text in files.items() if not is_test_file(name)}
+        return RunningSources(crc, f"backup {archive.name}", sources)
     for name, folder in sorted(projects.items()):
         try:
             loaded = load_project([folder])

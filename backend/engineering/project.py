@@ -6,6 +6,7 @@ The TOML format is documented in docs/project-format.md.
 from __future__ import annotations
 
 import itertools
+import shutil
 import tomllib
 from dataclasses import dataclass, field, replace
 from importlib import resources
@@ -15,7 +16,7 @@ from typing import Any
 from backend.compiler.limits import MAX_FILE_BYTES, MAX_PROJECT_FILES, MiB
 from backend.compiler.pipeline import CompileResult, Parsed, compile_sources
 from backend.compiler.source import SourceFile, read_sources
-from backend.compiler.test_functions import is_test_file
+from backend.compiler.test_functions import TEST_FOLDER, is_test_file
 from backend.compiler.toml_lines import key_lines
 from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount
 from runtime.contract.parameters import (
@@ -80,6 +81,20 @@ def project_sources(folder: Path) -> list[SourceFile]:
     st_files = (p for p in folder.rglob("*.st") if not is_test_file(_name_in(folder, p)))
     chosen = sorted(itertools.islice(st_files, MAX_PROJECT_FILES + 1))
     return read_sources([(p, str(p.relative_to(folder))) for p in chosen])
+
+
+def copy_template_sources(source: Path, target: Path) -> None:
+    """The .st files of a template's folder (the demo's too) and its tests, the .st files
+    below its `test/` folder, copied into the folder `target`: tests travel with the
+    project (docs/testing.md)."""
+    tests = source / TEST_FOLDER.rstrip("/")
+    chosen = sorted(source.glob("*.st"))
+    if tests.is_dir():
+        chosen += sorted(tests.rglob("*.st"))
+    for path in chosen:
+        copy = target / path.relative_to(source)
+        copy.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(path, copy)
 
 
 def _name_in(folder: Path, path: Path) -> str:

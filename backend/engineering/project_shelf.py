@@ -22,7 +22,7 @@ from pathlib import Path
 import tomlkit
 
 from backend.engineering.padt_audit_log import PadtAuditLog
-from backend.engineering.project import PROJECT_FILE, demo_project_path
+from backend.engineering.project import PROJECT_FILE, copy_template_sources, demo_project_path
 from backend.engineering.project_access import WRITE, Editor, require
 from runtime.contract.refusal import Refusal
 
@@ -216,11 +216,10 @@ def resource_name_problem(name: str) -> str | None:
 
 
 def _copy_template(source: Path, target: Path, name: str, resource: str | None) -> None:
-    """The template's padt.toml and .st files (nothing else: a template is a project)."""
+    """The template's padt.toml, .st files and tests (nothing else: a template is a
+    project)."""
     target.mkdir(parents=True)
-    for path in sorted(source.iterdir()):
-        if path.suffix == ".st":
-            shutil.copyfile(path, target / path.name)
+    copy_template_sources(source, target)
     document = tomlkit.parse((source / PROJECT_FILE).read_text(encoding="utf-8"))
     project = document.get("project")
     if isinstance(project, dict):

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from backend.compiler.language.tokens import declarations, lex
+from backend.compiler.test_functions import is_test_file
 from backend.engineering.project import PROJECT_FILE
 from backend.engineering.project_access import READ, Editor, require
 from backend.engineering.project_files import FileText, ProjectFile, folder_files, folder_text
@@ -33,6 +34,12 @@ class TreeItem:
     file: str
     line: int
     detail: str = ""  # a FUNCTION's return type, a type's kind (STRUCT, enum, ...)
+
+
+def in_tests(item: TreeItem) -> bool:
+    """Whether a declaration is one of the project's tests' (a file below its `test/`
+    folder, docs/testing.md): shown apart from the configuration's."""
+    return is_test_file(item.file)
 
 
 @dataclass(frozen=True)

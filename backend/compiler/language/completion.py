@@ -2,7 +2,8 @@
 (a structure's members, a function block's inputs, outputs, methods and properties);
 after `Color#` the enum's values; after `:` in a var block the types; elsewhere the
 variables in scope, the globals, the POUs, types and standard functions (a call with its
-parameters as a snippet), the keywords and snippets for statements and POU skeletons.
+parameters as a snippet), in a test file the test functions alike, the keywords and
+snippets for statements and POU skeletons.
 
 The text around the cursor is read as it is, parsed or not (the line being typed); the
 names come from the last analysis that resolved, plus those the cursor's POU declares in
@@ -16,9 +17,11 @@ from backend.compiler import builtins
 from backend.compiler.ast import key
 from backend.compiler.language.analysis import Analysis
 from backend.compiler.language.hover import (
+    TEST_FUNCTION_HELP,
     declaration_comment,
     interface_lines,
     standard_signature,
+    test_signature,
 )
 from backend.compiler.language.position import (
     Symbol,
@@ -31,6 +34,7 @@ from backend.compiler.language.position import (
 )
 from backend.compiler.language.tokens import KEYWORDS, VAR_KINDS, Lexed, piece_at
 from backend.compiler.resolve import PouSymbols, Variable
+from backend.compiler.test_functions import TEST_FUNCTIONS, is_test_file
 from backend.compiler.types import FbType
 
 ELEMENTARY_TYPES = (
@@ -311,11 +315,29 @@ def _general_items(
         standard = builtins.lookup(name)
         params = standard.params if standard is not None else None
         names = params if params is not None else ("IN1", "IN2")
-        body = ", ".join(f"${{{n}:{p}}}" for n, p in enumerate(names, 1))
         item = CompletionItem(
-            name, "function", "standard function", f"{name}({body})", True, standard_signature(name)
+            name,
+            "function",
+            "standard function",
+            _placeholders(name, names),
+            True,
+            standard_signature(name),
         )
         found.append(_Ranked(_RANK["standard"], item))
+    if is_test_file(file):
+        for name, function in TEST_FUNCTIONS.items():
+            documentation = "\n\n".join(
+                part for part in (test_signature(name), TEST_FUNCTION_HELP.get(name, "")) if part
+            )
+            item = CompletionItem(
+                name,
+                "function",
+                "test function",
+                _placeholders(name, function.params),
+                True,
+                documentation,
+            )
+            found.append(_Ranked(_RANK["standard"], item))
     for label, detail, body in SNIPPETS:
         found.append(
             _Ranked(_RANK["snippet"], CompletionItem(label, "snippet", detail, body, True))
@@ -380,6 +402,12 @@ def _pou_items(analysis: Analysis) -> list[_Ranked]:
             _Ranked(rank, CompletionItem(pou.name, kind, detail, insert, snippet, documentation))
         )
     return found
+
+
+def _placeholders(name: str, params: tuple[str, ...]) -> str:
+    """`LIMIT(${1:MN}, ${2:IN}, ${3:MX})`: a call, each parameter a placeholder named after it."""
+    body = ", ".join(f"${{{n}:{p}}}" for n, p in enumerate(params, 1))
+    return f"{name}({body})"
 
 
 def _call_snippet(name: str, parameters: list[Variable]) -> tuple[str, bool]:

@@ -1,7 +1,7 @@
 """Hover: what the name under the cursor is, as an engineer wants it at a glance: its
 declaration (type, block, initial value), where it is declared, and the comment written
-with it; a POU's or method's interface; a standard function's parameters. The live value
-when online is the adapters' to add."""
+with it; a POU's or method's interface; a standard function's parameters; in a test file
+what a test function does. The live value when online is the adapters' to add."""
 
 from __future__ import annotations
 
@@ -21,9 +21,30 @@ from backend.compiler.language.position import (
 from backend.compiler.language.tokens import Lexed, piece_at
 from backend.compiler.resolve import PouSymbols
 from backend.compiler.source import Pos, stdlib_sources
+from backend.compiler.test_functions import TEST_FUNCTIONS
 from backend.compiler.types import ElementaryType
 
 _MAX_COMMENT = 2000  # characters of a declaration's comment shown
+
+# what each test function does (docs/testing.md), shown where a hover shows a comment
+TEST_FUNCTION_HELP = {
+    "ASSERT_TRUE": "The test fails unless CONDITION is TRUE.",
+    "ASSERT_FALSE": "The test fails unless CONDITION is FALSE.",
+    "ASSERT_EQUAL": "The test fails unless EXPECTED and ACTUAL, of the same type, are equal "
+    "(arrays element by element, structures member by member).",
+    "ASSERT_NOT_EQUAL": "The test fails when EXPECTED and ACTUAL, of the same type, are equal.",
+    "ASSERT_NEAR": "The test fails unless ABS(EXPECTED - ACTUAL) <= TOLERANCE (a NaN never "
+    "passes).",
+    "FAIL": "The test fails here with MESSAGE.",
+    "RUN_CYCLES": "Runs N cycles of the resource, virtual time moving on by its cycle time each.",
+    "RUN_FOR": "Runs as many cycles of the resource as T of virtual time takes.",
+    "RUN_UNTIL": "Runs cycles until CONDITION is TRUE after one; the test fails when T of "
+    "virtual time passes first.",
+    "TEST_CYCLES": "The cycles this test has run so far.",
+    "FORCE": "Forces a program's or a global variable to VALUE until RELEASE or the end of "
+    "the test.",
+    "RELEASE": "Ends the force of VARIABLE.",
+}
 
 
 @dataclass(frozen=True)
@@ -31,9 +52,10 @@ class Hover:
     range: Range  # the identifier hovered
     kind: str  # the symbol's kind (position.Symbol.kind)
     signature: str  # the declaration as ST reads it, one or more lines
-    declared: Location | None  # None for the standard functions
+    declared: Location | None  # None for the standard and the test functions
     owner: str  # the POU, structure or enum it belongs to; "" at the top
-    comment: str  # the comment on or above the declaration's line; "" if none
+    # the comment on or above the declaration's line, what a test function does; "" if none
+    comment: str
 
     @property
     def markdown(self) -> str:
@@ -56,7 +78,9 @@ def hover(analysis: Analysis, file: str, line: int, col: int) -> Hover | None:
     declared = None
     comment = ""
     pos = current_declaration(analysis, symbol)
-    if pos is not None:
+    if symbol.kind == "test_function":
+        comment = TEST_FUNCTION_HELP.get(symbol.name, "")
+    elif pos is not None:
         end = pos.col + len(symbol.name)
         declared = Location(pos.file, Range(pos.line, pos.col, pos.line, end))
         comment = declaration_comment(_text(analysis, pos.file), pos)
@@ -92,6 +116,8 @@ def signature(analysis: Analysis, symbol: Symbol) -> str:
             return f"INTERFACE {symbol.name}"
         case "standard_function":
             return standard_signature(symbol.name)
+        case "test_function":
+            return test_signature(symbol.name)
         case _:
             return f"{symbol.name} : {symbol.detail}"
 
@@ -108,6 +134,18 @@ def standard_signature(name: str) -> str:
         return name
     params = ", ".join(found.params) if found.params is not None else "IN1, IN2, ..."
     return f"{found.name}({params}) (standard function)"
+
+
+def test_signature(name: str) -> str:
+    """`ASSERT_EQUAL(EXPECTED, ACTUAL [, MESSAGE]) (test function)`; with the type of the
+    value of one that gives one."""
+    found = TEST_FUNCTIONS.get(key(name))
+    if found is None:
+        return name
+    params = ", ".join(found.params[: found.required])
+    optional = "".join(f" [, {p}]" for p in found.params[found.required :])
+    gives = f" : {found.gives.name}" if found.gives is not None else ""
+    return f"{found.name}({params}{optional}){gives} (test function)"
 
 
 def declaration_comment(text: str | None, pos: Pos) -> str:

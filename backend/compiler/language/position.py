@@ -31,6 +31,7 @@ from backend.compiler.resolve import (
     visible,
 )
 from backend.compiler.source import Pos
+from backend.compiler.test_functions import test_function
 from backend.compiler.types import (
     ArrayType,
     EnumType,
@@ -74,7 +75,9 @@ class Location:
 
 @dataclass(frozen=True)
 class Symbol:
-    kind: str  # variable, pou, method, property, type, enum_value, interface, standard_function
+    # variable, pou, method, property, type, enum_value, interface, standard_function,
+    # test_function (of a test file, docs/testing.md)
+    kind: str
     name: str  # as declared
     declared: Pos | None  # the declaration's name; None for a standard function
     owner: str  # the POU (`Tank`, `Tank.Fill`), struct or enum it belongs to; "" at the top
@@ -194,14 +197,17 @@ def _token_symbol(place: _Place, index: int, depth: int) -> Symbol | None:
         here = _declared_here(place, token)
         if here is not None:
             return here
-    return lookup(place.analysis, place.scope, token.text) or _declared_here(place, token)
+    found = lookup(place.analysis, place.scope, token.text, place.file)
+    return found or _declared_here(place, token)
 
 
-def lookup(analysis: Analysis, scope: PouSymbols | None, name: str) -> Symbol | None:
-    """What a plain name means in `scope` (None: outside every POU), as the compiler looks
-    it up: a variable of the scope (its block's, in a method), a global, a method or
-    property of the block, a POU, a type, an interface, an enum value, a standard
-    function."""
+def lookup(
+    analysis: Analysis, scope: PouSymbols | None, name: str, file: str = ""
+) -> Symbol | None:
+    """What a plain name means in `scope` (None: outside every POU) of `file`, as the
+    compiler looks it up: a variable of the scope (its block's, in a method), a global, a
+    method or property of the block, a POU, a type, an interface, an enum value, a test
+    function (in a test file), a standard function."""
     resolved = analysis.resolved
     name_key = key(name)
     variable = (
@@ -234,6 +240,9 @@ def lookup(analysis: Analysis, scope: PouSymbols | None, name: str) -> Symbol | 
         return _enum_value(analysis, found[0][0].type.name, name)
     if name_key == key(NAMESPACE) and resolved.system:
         return Symbol("namespace", NAMESPACE, None, "", "system variables")
+    test = test_function(name, file)
+    if test is not None:
+        return Symbol("test_function", test.name, None, "", "FUNCTION")
     standard = builtins.lookup(name)
     if standard is not None and not name.startswith("_"):
         return Symbol("standard_function", standard.name, None, "", "FUNCTION")

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from backend.compiler.diagnostics import Diagnostic
+from backend.compiler.test_functions import is_test_file
 from backend.engineering.plcopen.issues import ImportCode, ImportFailed, Where, diagnostic
 from backend.engineering.plcopen.model import Dropped, NotImported, PlcProject
 from backend.engineering.plcopen.project_files import project_files
@@ -135,8 +136,9 @@ def _count(count: int, thing: str) -> str:
 
 def _prepare(folder: Path, force: bool) -> None:
     """An empty or new folder; with force, a project folder (one with a padt.toml) whose
-    padt.toml and .st files go, anything else in it staying. A folder without padt.toml
-    is never emptied: `-o ~ --force` must not delete a home folder's .st files."""
+    padt.toml and .st files go, anything else in it staying, its tests too (below test/:
+    the user's, which no XML brings). A folder without padt.toml is never emptied:
+    `-o ~ --force` must not delete a home folder's .st files."""
     if folder.exists() and not folder.is_dir():
         raise FolderRefused(f"{folder} is a file, not a folder")
     if folder.is_dir() and any(folder.iterdir()):
@@ -150,7 +152,12 @@ def _prepare(folder: Path, force: bool) -> None:
                 f"{folder} is not empty and holds no {PROJECT_FILE}: --force replaces only a "
                 "project folder"
             )
-        for old in [*sorted(folder.rglob("*.st")), folder / PROJECT_FILE]:
+        sources = (p for p in folder.rglob("*.st") if not _is_test(folder, p))
+        for old in [*sorted(sources), folder / PROJECT_FILE]:
             if old.is_file() or old.is_symlink():
                 old.unlink()
     folder.mkdir(parents=True, exist_ok=True)
+
+
+def _is_test(folder: Path, path: Path) -> bool:
+    return is_test_file(path.relative_to(folder).as_posix())
