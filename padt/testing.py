@@ -5,11 +5,21 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
+from importlib import metadata
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from backend.engineering.testing.coverage.model import Coverage
 
 # exit codes past 0 (all passed) and 1 (a test failed)
 TEST_NOT_COMPILED = 2  # the project or its tests do not compile, or bad options
 NO_TESTS = 5  # nothing to run (as pytest)
+
+COVERAGE_FORMATS = ("html", "cobertura", "summary")
+DEFAULT_HTML = "coverage-html"
+DEFAULT_COBERTURA = "coverage.xml"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -39,6 +49,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="run each test on both tiers and compare them (default), or on one",
     )
     parser.add_argument(
+        "--coverage",
+        action="append",
+        choices=COVERAGE_FORMATS,
+        default=[],
+        help="statement and branch coverage of the POUs, measured on the Python tier: an HTML "
+        "report, Cobertura XML or a table after the results (repeatable)",
+    )
+    parser.add_argument(
+        "--coverage-output",
+        type=Path,
+        metavar="PATH",
+        help=f"where --coverage html (a folder, default {DEFAULT_HTML}/) or cobertura (a file, "
+        f"default {DEFAULT_COBERTURA}) is written",
+    )
+    parser.add_argument(
         "-j",
         dest="jobs",
         type=int,
@@ -51,6 +76,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     # imported here: building the command line's parser loads no compiler
     from backend.engineering.project import ProjectError
+    from backend.engineering.testing.coverage.measure import CoverageMeter, measured_files
+    from backend.engineering.testing.coverage.model import coverage_of
     from backend.engineering.testing.report import (
         failure_text,
         junit_xml,
@@ -64,6 +91,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.jobs < 1:
         print("padt test: -j takes a number of workers from 1", file=sys.stderr)
+        return TEST_NOT_COMPILED
+    problem = _coverage_problem(args)
+    if problem:
+        print(f"padt test: {problem}", file=sys.stderr)
         return TEST_NOT_COMPILED
     try:
         build = build_tests(args.paths, tuple(args.library))
@@ -83,7 +114,11 @@ def run(args: argparse.Namespace) -> int:
     tiers: tuple[Tier, ...] = ("python", "native") if args.tier == "both" else (args.tier,)
     order = {case: index for index, case in enumerate(cases)}
     results = []
-    for result in run_session(build.artifact, cases, tiers, args.jobs):
+    meter = None
+    if args.coverage:
+        meter = CoverageMeter(measured_files(source.name for source in build.project.sources))
+    session = run_session(build.artifact, cases, tiers, args.jobs, coverage=meter)
+    for result in session:
         results.append(result)
         print(result_line(result))
         if not result.passed:
@@ -96,4 +131,49 @@ def run(args: argparse.Namespace) -> int:
     print(summary_line(found, " and ".join(ran) or "no tier"))
     if args.junit is not None:
         args.junit.write_bytes(junit_xml(results, build.project.name))
+    if meter is not None:
+        coverage = coverage_of(
+            build.artifact, build.syntax, build.project.sources, meter.files, meter.hits
+        )
+        _write_coverage(args, coverage, build.folder, build.project.name)
     return 0 if found.passed == found.total else 1
+
+
+def _coverage_problem(args: argparse.Namespace) -> str:
+    if args.coverage and args.tier == "native":
+        return "--coverage is measured on the Python tier: not with --tier native"
+    written = {"html", "cobertura"} & set(args.coverage)
+    if args.coverage_output is not None and len(written) != 1:
+        return "--coverage-output goes with one of --coverage html or --coverage cobertura"
+    return ""
+
+
+def _write_coverage(
+    args: argparse.Namespace, coverage: Coverage, folder: Path, project: str
+) -> None:
+    from backend.engineering.testing.coverage.cobertura import cobertura_xml
+    from backend.engineering.testing.coverage.html import write_html
+    from backend.engineering.testing.coverage.summary import summary_table
+
+    asked = set(args.coverage)
+    if "summary" in asked:
+        print(summary_table(coverage))
+    if "html" in asked:
+        pages = args.coverage_output or Path(DEFAULT_HTML)
+        write_html(coverage, pages, project)
+        print(f"padt test: coverage report in {pages / 'index.html'}")
+    if "cobertura" in asked:
+        path = args.coverage_output or Path(DEFAULT_COBERTURA)
+        path.write_bytes(cobertura_xml(coverage, folder, _padt_version(), _now_ms))
+        print(f"padt test: coverage as Cobertura XML in {path}")
+
+
+def _now_ms() -> int:
+    return int(time.time() * 1000)
+
+
+def _padt_version() -> str:
+    try:
+        return metadata.version("padt")
+    except metadata.PackageNotFoundError:
+        return "0"

@@ -60,6 +60,7 @@ class UnitTestBuild:
     artifact: Artifact | None  # None: it does not compile
     diagnostics: tuple[Diagnostic, ...]
     cases: tuple[UnitTest, ...]  # by suite, then test, names in upper case
+    syntax: tuple[ast.SourceUnit, ...] = ()  # the parse of the sources (coverage reads it)
 
 
 def sources_of_tests(folder: Path) -> list[SourceFile]:
@@ -126,7 +127,9 @@ def build_tests(paths: list[Path], libraries: tuple[Path, ...] = ()) -> UnitTest
         for case in unit_tests_of(parsed[0], result.artifact)
         if not selected or any(_selects(choice, case.file) for choice in selected)
     )
-    return UnitTestBuild(project, folder, result.artifact, result.diagnostics, cases)
+    return UnitTestBuild(
+        project, folder, result.artifact, result.diagnostics, cases, tuple(parsed[0])
+    )
 
 
 def _selects(choice: str, file: str) -> bool:

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator
+from contextlib import nullcontext
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from backend.engineering.testing.coverage.measure import CoverageMeter
 from backend.engineering.testing.test_build import UnitTest
 from backend.engineering.testing.test_run import Outcome, UnitTestBench, WatchStop, same, shown
 from runtime.contract.artifact import Artifact
@@ -68,8 +70,10 @@ def run_tests(
     tiers: tuple[Tier, ...],
     native: NativeTier | None,
     timer: Callable[[], float] = time.perf_counter,
+    coverage: CoverageMeter | None = None,
 ) -> Iterator[UnitTestResult]:
-    """Each test's result as it ends; `native` None (or no C compiler): Python only."""
+    """Each test's result as it ends; `native` None (or no C compiler): Python only.
+    `coverage` counts the lines the Python tier runs (C bodies cannot be traced)."""
     python = UnitTestBench(artifact, None) if "python" in tiers else None
     on_native = "native" in tiers and native is not None and native.available
     compiled = UnitTestBench(artifact, native) if on_native else None
@@ -82,7 +86,8 @@ def run_tests(
         outcome: Outcome | None = None
         cycles: list[dict[str, Any]] = []
         if python is not None:
-            outcome = python.run(case, _keeper(cycles))
+            with coverage.measuring(python.image) if coverage is not None else nullcontext():
+                outcome = python.run(case, _keeper(cycles))
             ran.append("python")
         if compiled is not None:
             watch = _comparer(cycles, types) if python is not None else None
