@@ -117,7 +117,9 @@ def run(args: argparse.Namespace) -> int:
     meter = None
     if args.coverage:
         meter = CoverageMeter(measured_files(source.name for source in build.project.sources))
-    session = run_session(build.artifact, cases, tiers, args.jobs, coverage=meter)
+    session = run_session(
+        build.artifact, cases, tiers, args.jobs, project=build.folder, coverage=meter
+    )
     for result in session:
         results.append(result)
         print(result_line(result))

@@ -4,6 +4,7 @@ and a deliberate change of the program reported at the cycle and variable it sho
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 import time
@@ -16,9 +17,9 @@ from backend.engineering.project import compile_project, load_project
 from padt.demo import demo_project_with_accounts
 from padt.demo_plant import DemoPlant
 from runtime.contract import protocol as p
-from runtime.contract.recording import read_recording
+from runtime.contract.recording import Recording, read_recording
 from runtime.contract.state_folder import recordings_path
-from tests.conftest import REPO
+from tests.conftest import REPO, padt
 from tests.support.runtime_process import running_resource, store_artifact
 
 
@@ -78,10 +79,11 @@ def record_and_replay(tmp_path: Path, zenoh_endpoint: str, last_s: float) -> Non
     same = padt_replay(path, folder)
     assert same.returncode == 0, same.stderr
     assert same.stdout.strip() == f"replay: {stopped.cycles} cycles, identical"
+    replayed_by_a_unit_test(folder, path, recording)
 
     changed = tmp_path / "changed"
     changed.mkdir()
-    for source in folder.iterdir():
+    for source in (f for f in folder.iterdir() if f.is_file()):  # not its tests
         text = source.read_text(encoding="utf-8")
         changed.joinpath(source.name).write_text(
             text.replace("alarmLow := level < 100;", "alarmLow := level < 1000;")
@@ -94,6 +96,27 @@ def record_and_replay(tmp_path: Path, zenoh_endpoint: str, last_s: float) -> Non
         "recorded False, replayed True"
     ), differs.stdout
     assert "values carried over as by a reload" in differs.stderr
+
+
+def replayed_by_a_unit_test(folder: Path, path: Path, recording: Recording) -> None:
+    """The recording as a regression test (docs/testing.md, REPLAY): from a cold start,
+    its cycles with their inputs; the level the program ends with is the plant's last."""
+    (folder / "test").mkdir(exist_ok=True)
+    shutil.copy(path, folder / "test" / "plant.mcap")
+    last_level = recording.column("TankControl.level")[-1]
+    (folder / "test" / "replay_test.st").write_text(
+        "FUNCTION_BLOCK PlantReplay\n"
+        "METHOD TestTheRecordedRun\n"
+        "REPLAY('test/plant.mcap');\n"
+        f"ASSERT_EQUAL(UDINT#{len(recording.inputs)}, TEST_CYCLES(), 'every recorded cycle');\n"
+        f"ASSERT_EQUAL({last_level}, TankControl.level, 'the plant$'s last level');\n"
+        "ASSERT_FALSE(TankControl.alarmPlant);\n"
+        "END_METHOD\n"
+        "END_FUNCTION_BLOCK\n"
+    )
+    run = padt("test", str(folder), "-k", "PlantReplay", "--tier", "python")
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "PASS PlantReplay.TestTheRecordedRun" in run.stdout
 
 
 def _finished(path: Path) -> bool:

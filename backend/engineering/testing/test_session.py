@@ -28,6 +28,7 @@ def run_session(
     tiers: tuple[Tier, ...],
     jobs: int = 1,
     cache: Path | None = None,
+    project: Path | None = None,
     coverage: CoverageMeter | None = None,
 ) -> Iterator[UnitTestResult]:
     """The results as the tests end (with `jobs` > 1: a worker's share at a time);
@@ -35,7 +36,7 @@ def run_session(
     folder = cache or native_cache()
     if jobs <= 1 or len(cases) < 2:
         native = _native(tiers, folder)
-        yield from run_tests(artifact, cases, tiers, native, coverage=coverage)
+        yield from run_tests(artifact, cases, tiers, native, project=project, coverage=coverage)
         return
     shares = [cases[i::jobs] for i in range(min(jobs, len(cases)))]
     # fork: a worker starts with the compiled artifact and the imported compiler in place
@@ -43,7 +44,8 @@ def run_session(
     with ProcessPoolExecutor(len(shares), mp_context=context) as pool:
         files = coverage.files if coverage is not None else None
         futures = [
-            pool.submit(_run_share, artifact, share, tiers, folder, files) for share in shares
+            pool.submit(_run_share, artifact, share, tiers, folder, project, files)
+            for share in shares
         ]
         for future in as_completed(futures):
             results, hits = future.result()
@@ -64,10 +66,11 @@ def _run_share(
     cases: tuple[UnitTest, ...],
     tiers: tuple[Tier, ...],
     cache: Path,
+    project: Path | None,
     files: frozenset[str] | None,
 ) -> tuple[list[UnitTestResult], LineHits | None]:
     """A worker's share: its results, and the lines it ran when it measures coverage."""
     meter = CoverageMeter(files) if files is not None else None
     native = _native(tiers, cache)
-    results = list(run_tests(artifact, cases, tiers, native, coverage=meter))
+    results = list(run_tests(artifact, cases, tiers, native, project=project, coverage=meter))
     return results, meter.hits if meter is not None else None

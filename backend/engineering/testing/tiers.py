@@ -8,6 +8,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import nullcontext
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Literal
 
 from backend.engineering.testing.coverage.measure import CoverageMeter
@@ -70,13 +71,14 @@ def run_tests(
     tiers: tuple[Tier, ...],
     native: NativeTier | None,
     timer: Callable[[], float] = time.perf_counter,
+    project: Path | None = None,
     coverage: CoverageMeter | None = None,
 ) -> Iterator[UnitTestResult]:
     """Each test's result as it ends; `native` None (or no C compiler): Python only.
     `coverage` counts the lines the Python tier runs (C bodies cannot be traced)."""
-    python = UnitTestBench(artifact, None) if "python" in tiers else None
+    python = UnitTestBench(artifact, None, project) if "python" in tiers else None
     on_native = "native" in tiers and native is not None and native.available
-    compiled = UnitTestBench(artifact, native) if on_native else None
+    compiled = UnitTestBench(artifact, native, project) if on_native else None
     types = {}
     if python is not None:
         types = {v.path: v.type for v in python.resource.variables.infos()}
