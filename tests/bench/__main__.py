@@ -24,6 +24,7 @@ from tests.bench import (
     bench_scale,
     bench_trends,
     bench_ui,
+    bench_unit_tests,
     bench_watch,
     bench_workspace,
 )
@@ -53,6 +54,7 @@ def main() -> None:
     bench_trends.main()
     bench_logic_view.main()
     bench_workspace.main()
+    bench_unit_tests.main()
 
 
 if __name__ == "__main__":
