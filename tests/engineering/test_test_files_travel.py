@@ -13,6 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from backend.compiler.language.hover import TEST_FUNCTION_HELP
+from backend.compiler.test_functions import TEST_FUNCTIONS
 from backend.engineering.backup import restore_backup
 from backend.engineering.compile_gate import CheckedCompile, compile_checked
 from backend.engineering.documentation.document import document_html
@@ -114,6 +116,10 @@ def test_a_plcopen_import_over_the_project_leaves_its_tests(demo: Path) -> None:
     assert run.returncode == 0, run.stderr
     assert not (demo / "tank.st").exists()
     assert (demo / TESTS).read_text() == (demo_project_path() / TESTS).read_text()
+
+
+def test_every_test_function_is_explained_on_hover() -> None:
+    assert set(TEST_FUNCTION_HELP) == set(TEST_FUNCTIONS)
 
 
 def test_the_editor_s_problems_of_a_test_file_are_its_own(demo: Path) -> None:

@@ -44,6 +44,8 @@ TEST_FUNCTION_HELP = {
     "FORCE": "Forces a program's or a global variable to VALUE until RELEASE or the end of "
     "the test.",
     "RELEASE": "Ends the force of VARIABLE.",
+    "REPLAY": "Runs the cycles of the recording FILE (its path in the project folder), each "
+    "cycle given what it took from outside in the recorded run.",
 }
 
 
