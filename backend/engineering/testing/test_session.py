@@ -11,7 +11,14 @@ from pathlib import Path
 
 from backend.engineering.testing.coverage.measure import CoverageMeter, LineHits
 from backend.engineering.testing.test_build import UnitTest
-from backend.engineering.testing.tiers import Tier, UnitTestResult, run_tests
+from backend.engineering.testing.tiers import (
+    Benches,
+    Tier,
+    UnitTestResult,
+    benches,
+    run_on,
+    run_tests,
+)
 from runtime.contract.artifact import Artifact
 from runtime.native.tier import NativeTier
 
@@ -39,19 +46,26 @@ def run_session(
         yield from run_tests(artifact, cases, tiers, native, project=project, coverage=coverage)
         return
     shares = [cases[i::jobs] for i in range(min(jobs, len(cases)))]
-    # fork: a worker starts with the compiled artifact and the imported compiler in place
+    # the benches are made here, once: the workers fork with them (and the compiled
+    # artifact, the imported compiler, the native tier's bound modules) in place
+    global _BENCHES
+    _BENCHES = benches(artifact, tiers, _native(tiers, folder), project)
     context = multiprocessing.get_context("fork")
-    with ProcessPoolExecutor(len(shares), mp_context=context) as pool:
-        files = coverage.files if coverage is not None else None
-        futures = [
-            pool.submit(_run_share, artifact, share, tiers, folder, project, files)
-            for share in shares
-        ]
-        for future in as_completed(futures):
-            results, hits = future.result()
-            if coverage is not None and hits is not None:
-                coverage.hits.merge(hits)
-            yield from results
+    try:
+        with ProcessPoolExecutor(len(shares), mp_context=context) as pool:
+            files = coverage.files if coverage is not None else None
+            futures = [pool.submit(_run_share, share, files) for share in shares]
+            for future in as_completed(futures):
+                results, hits = future.result()
+                if coverage is not None and hits is not None:
+                    coverage.hits.merge(hits)
+                yield from results
+    finally:
+        _BENCHES = None
+
+
+# the benches `-j`'s workers inherit when they fork
+_BENCHES: Benches | None = None
 
 
 def _native(tiers: tuple[Tier, ...], cache: Path) -> NativeTier | None:
@@ -62,15 +76,9 @@ def _native(tiers: tuple[Tier, ...], cache: Path) -> NativeTier | None:
 
 
 def _run_share(
-    artifact: Artifact,
-    cases: tuple[UnitTest, ...],
-    tiers: tuple[Tier, ...],
-    cache: Path,
-    project: Path | None,
-    files: frozenset[str] | None,
+    cases: tuple[UnitTest, ...], files: frozenset[str] | None
 ) -> tuple[list[UnitTestResult], LineHits | None]:
     """A worker's share: its results, and the lines it ran when it measures coverage."""
+    assert _BENCHES is not None, "a worker forks from run_session"
     meter = CoverageMeter(files) if files is not None else None
-    native = _native(tiers, cache)
-    results = list(run_tests(artifact, cases, tiers, native, project=project, coverage=meter))
-    return results, meter.hits if meter is not None else None
+    return list(run_on(_BENCHES, cases, coverage=meter)), meter.hits if meter is not None else None

@@ -65,6 +65,31 @@ def _keeper(cycles: list[dict[str, Any]]) -> Callable[[int, dict[str, Any]], Non
     return keep
 
 
+@dataclass
+class Benches:
+    """A test bench per tier asked for, made once: `-j`'s workers fork with them in place."""
+
+    python: UnitTestBench | None
+    native: UnitTestBench | None
+    types: dict[str, str]  # every variable's type, to show a disagreement's values
+
+
+def benches(
+    artifact: Artifact,
+    tiers: tuple[Tier, ...],
+    native: NativeTier | None,
+    project: Path | None = None,
+) -> Benches:
+    """`native` None (or no C compiler): Python only."""
+    python = UnitTestBench(artifact, None, project) if "python" in tiers else None
+    on_native = "native" in tiers and native is not None and native.available
+    compiled = UnitTestBench(artifact, native, project) if on_native else None
+    types = {}
+    if python is not None:
+        types = {v.path: v.type for v in python.resource.variables.infos()}
+    return Benches(python, compiled, types)
+
+
 def run_tests(
     artifact: Artifact,
     cases: tuple[UnitTest, ...],
@@ -74,14 +99,20 @@ def run_tests(
     project: Path | None = None,
     coverage: CoverageMeter | None = None,
 ) -> Iterator[UnitTestResult]:
-    """Each test's result as it ends; `native` None (or no C compiler): Python only.
-    `coverage` counts the lines the Python tier runs (C bodies cannot be traced)."""
-    python = UnitTestBench(artifact, None, project) if "python" in tiers else None
-    on_native = "native" in tiers and native is not None and native.available
-    compiled = UnitTestBench(artifact, native, project) if on_native else None
-    types = {}
-    if python is not None:
-        types = {v.path: v.type for v in python.resource.variables.infos()}
+    """Each test's result as it ends, on benches made for them."""
+    made = benches(artifact, tiers, native, project)
+    return run_on(made, cases, timer, coverage)
+
+
+def run_on(
+    made: Benches,
+    cases: tuple[UnitTest, ...],
+    timer: Callable[[], float] = time.perf_counter,
+    coverage: CoverageMeter | None = None,
+) -> Iterator[UnitTestResult]:
+    """Each test's result as it ends. `coverage` counts the lines the Python tier runs (C
+    bodies cannot be traced)."""
+    python, compiled = made.python, made.native
     for case in cases:
         began = timer()
         ran: list[Tier] = []
@@ -92,7 +123,7 @@ def run_tests(
                 outcome = python.run(case, _keeper(cycles))
             ran.append("python")
         if compiled is not None:
-            watch = _comparer(cycles, types) if python is not None else None
+            watch = _comparer(cycles, made.types) if python is not None else None
             try:
                 native_outcome = compiled.run(case, watch)
             except _Disagreement as disagreement:
