@@ -71,6 +71,10 @@ class Work(Protocol):
         """Open a file of a project in the editor, the cursor at line:col."""
         ...
 
+    def show_coverage(self, project: str, files: dict[str, Any]) -> None:
+        """Shade the lines of the project's files in the editor as a test run ran them."""
+        ...
+
 
 @dataclass(frozen=True)
 class Now:

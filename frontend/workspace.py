@@ -168,6 +168,9 @@ class Workspace:
     def open_in_editor(self, project: str, file: str, line: int, col: int) -> None:
         self.editor_area.open_file(project, file, line, col=col)
 
+    def show_coverage(self, project: str, files: dict[str, Any]) -> None:
+        self.editor_area.show_coverage(project, files)
+
     def _navigation_width(self) -> int:
         """As the user dragged it, else narrower in a narrow window."""
         if self.layout.navigation_width is not None:

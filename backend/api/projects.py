@@ -70,6 +70,7 @@ class UnitTestRun(BaseModel):
     suite: str | None = Field(default=None, max_length=64, description="a test suite (an FB)")
     test: str | None = Field(default=None, max_length=64, description="a test of the suite")
     tier: Literal["both", "python", "native"] = "both"
+    coverage: bool = Field(default=False, description="measure the lines run (Python tier)")
 
 
 @router.post(
@@ -80,7 +81,8 @@ def run_tests(
     project: str, caller: ReadWrite, service: Service, body: UnitTestRun | None = None
 ) -> dict[str, Any]:
     chosen = body or UnitTestRun()
-    return service.run_tests(project, UnitTestChoice(chosen.suite, chosen.test, chosen.tier))
+    choice = UnitTestChoice(chosen.suite, chosen.test, chosen.tier, chosen.coverage)
+    return service.run_tests(project, choice)
 
 
 @router.get(

@@ -9,6 +9,7 @@ For the workspace (its Python API):
     area.refresh(feed, allowed)     # at each UI tick: files changed on disk, live values,
                                     # the debug state (`allowed`: may the user debug)
     area.wanted()                   # the variables the live values need watched
+    area.show_coverage(project, files)  # the lines a test run with coverage ran, shaded
     area.remove()                   # the workspace goes
 
 `EditorHooks` are the toolbar's Compile, Download and Online change, supplied by the
@@ -98,6 +99,8 @@ class EditorArea:
         self._polled = 0.0
         self.live = LiveLines()
         self._events: list[dict[str, object]] = []  # as the page was sent them last
+        # the last run with coverage: its project and per file its lines' hits and branches
+        self._coverage: tuple[str | None, dict[str, Any]] = (None, {})
         self.box = client.gui.add_text(INPUT_LABEL, "")
         self.box.on_update(lambda _: self._heard(self.box.value))
         self.missing = page_push.install(client)
@@ -174,6 +177,19 @@ class EditorArea:
             self._events = rows
             page_push.send(self.client, "events", {"k": "events", "items": rows})
 
+    def show_coverage(self, project: str, files: dict[str, Any]) -> None:
+        """Shade the lines of the project's files as a test run with coverage ran them
+        (`files` as `Coverage.as_json()` has them; empty: no shading), in the files open
+        and in those opened later; another project's files are not shaded."""
+        with self._lock:
+            self._coverage = (project, files)
+            self._push_coverage()
+
+    def _push_coverage(self) -> None:
+        project, files = self._coverage
+        shown = files if project == self.project else {}
+        page_push.send(self.client, "coverage", {"k": "coverage", "files": shown})
+
     def wanted(self) -> list[str]:
         """The variables the live values beside the lines need."""
         with self._lock:
@@ -244,6 +260,7 @@ class EditorArea:
             self._close(file)
         self.project = project
         self.language = ProjectLanguage(folder)
+        self._push_coverage()
 
     def _open(self, path: str, focus: bool, keyboard: bool = True) -> None:
         assert self.project is not None and self.language is not None

@@ -54,6 +54,7 @@ class Found:
     results: dict[str, dict[str, Any]] = field(default_factory=dict)  # by test id
     diagnostics: list[dict[str, Any]] = field(default_factory=list)  # the build's errors
     report: dict[str, Any] | None = None  # the last run's report
+    coverage: list[tuple[str, dict[str, Any]]] = field(default_factory=list)  # by file
     listing: bool = False
     running: tuple[int, int] | None = None  # tests ended, planned (-1: building)
     said: tuple[str, str] = ("", "")  # a message and its colour
@@ -68,6 +69,7 @@ class TestsScreen:
     run_all: viser.GuiButtonHandle
     run_suite: viser.GuiButtonHandle
     run_test: viser.GuiButtonHandle
+    run_coverage: viser.GuiButtonHandle
     status: viser.GuiHtmlHandle
     results: viser.GuiHtmlHandle
     allowed: bool
@@ -97,15 +99,18 @@ class Tests(Screen):
         run_all = gui.add_button("Run all", color="blue", disabled=not allowed, hint=why)
         run_suite = gui.add_button("Run suite", disabled=not allowed, hint=why)
         run_test = gui.add_button("Run test", disabled=not allowed, hint=why)
+        covered = why or "run all and shade the lines they ran in the editor (Python tier)"
+        run_coverage = gui.add_button("Run with coverage", disabled=not allowed, hint=covered)
         status = gui.add_html("")
         results = gui.add_html("")
         self.screen = TestsScreen(
-            suite, test, tier, run_all, run_suite, run_test, status, results, allowed
+            suite, test, tier, run_all, run_suite, run_test, run_coverage, status, results, allowed
         )
         suite.on_update(lambda _: self._offer_tests())
         run_all.on_click(lambda _: self._start(UnitTestChoice()))
         run_suite.on_click(lambda _: self._start(UnitTestChoice(self._suite())))
         run_test.on_click(lambda _: self._start(UnitTestChoice(self._suite(), self._test())))
+        run_coverage.on_click(lambda _: self._start(UnitTestChoice(coverage=True)))
 
     # ---- drawing
     def refresh(self, now: Now) -> None:
@@ -126,7 +131,7 @@ class Tests(Screen):
             suites = _suites(found.tests)
         screen.status.content = status
         screen.results.content = results
-        for button in (screen.run_all, screen.run_suite, screen.run_test):
+        for button in (screen.run_all, screen.run_suite, screen.run_test, screen.run_coverage):
             disabled = busy or not screen.allowed or not suites
             if button.disabled != disabled:
                 button.disabled = disabled
@@ -196,7 +201,9 @@ class Tests(Screen):
         if not screen.allowed or project is None:
             return
         tier = TIERS.get(screen.tier.value, "both")
-        chosen = UnitTestChoice(choice.suite, choice.test, tier)
+        if choice.coverage and tier == "native":
+            tier = "python"  # coverage is measured on the Python tier
+        chosen = UnitTestChoice(choice.suite, choice.test, tier, choice.coverage)
         with screen.lock:
             found = screen.found
             if found.running is not None or found.project != project:
@@ -234,6 +241,10 @@ class Tests(Screen):
                     found.results[result["id"]] = result
                 if choice.suite is None and report["compiled"]:  # all: the list as run
                     found.tests = [_listed(result) for result in report["tests"]]
+                measured = report["coverage"] or {"files": {}}
+                found.coverage = sorted(measured["files"].items())
+            # the editor shades the lines as the last run measured them: none without coverage
+            self.work.show_coverage(project, measured["files"])
 
         threading.Thread(target=run, daemon=True, name="padt-tests-run").start()
 
@@ -257,6 +268,11 @@ class Tests(Screen):
                     return
                 self.work.open_in_editor(found.project, place["file"], place["line"], place["col"])
                 return
+            elif what == "cover" and index < len(found.coverage) and found.project is not None:
+                file, measured = found.coverage[index]
+                line = _first_uncovered(measured)
+                self.work.open_in_editor(found.project, file, line, 1)
+                return
             elif what == "problem" and index < len(found.diagnostics):
                 d = found.diagnostics[index]
                 if found.project is not None:
@@ -267,6 +283,13 @@ class Tests(Screen):
         set_value(self.screen.suite, suite)
         self._offer_tests()
         set_value(self.screen.test, name)
+
+
+def _first_uncovered(measured: dict[str, Any]) -> int:
+    """Where to look first in a file: its first line never run, else its first line run."""
+    lines = sorted((int(line), hits) for line, hits in measured["lines"].items())
+    never = [line for line, hits in lines if hits == 0]
+    return never[0] if never else lines[0][0] if lines else 1
 
 
 def _listed(result: dict[str, Any]) -> dict[str, Any]:
@@ -362,8 +385,41 @@ def render_results(found: Found) -> str:
     return (
         '<table data-testid="tests-results" style="border-collapse:collapse;width:100%;'
         'font-size:0.9em;table-layout:fixed"><colgroup><col style="width:84px"><col>'
-        f'<col style="width:56px"></colgroup>{"".join(rows)}</table>'
+        f'<col style="width:56px"></colgroup>{"".join(rows)}</table>{render_coverage(found)}'
     )
+
+
+def render_coverage(found: Found) -> str:
+    """After a run with coverage: per file of the project, its statements and branches
+    run; a click on the file opens it at its first line never run."""
+    if not found.coverage:
+        return ""
+    rows = []
+    for index, (file, measured) in enumerate(found.coverage):
+        figures = measured["figures"]
+        rows.append(
+            f'<tr data-coverage-file="{html.escape(file)}"><td style="{_CELL}">'
+            f'<span data-test-click="cover:{index}" style="{_LINK}" title="open it at its '
+            f'first line never run">{html.escape(file)}</span></td>'
+            f'<td style="{_CELL};text-align:right">'
+            f"{_share(figures['statements_covered'], figures['statements'])}</td>"
+            f'<td style="{_CELL};text-align:right">'
+            f"{_share(figures['branches_covered'], figures['branches'])}</td></tr>"
+        )
+    head = f'<th style="{_CELL};text-align:right;font-weight:normal;color:{_MUTED}">'
+    return (
+        '<div style="margin-top:12px"><b>Coverage</b> <span style="color:#868e96">(Python '
+        "tier; the editor shades the lines: green ran, red never ran, amber a way not "
+        'taken)</span></div><table data-testid="tests-coverage" style="border-collapse:'
+        'collapse;width:100%;font-size:0.9em"><tr><th></th>'
+        f"{head}statements</th>{head}branches</th></tr>{''.join(rows)}</table>"
+    )
+
+
+def _share(covered: int, total: int) -> str:
+    if not total:
+        return "-"
+    return f"{covered}/{total} ({100 * covered // total} %)"
 
 
 def _suite_row(suite: str, found: Found) -> str:

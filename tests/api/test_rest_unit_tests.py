@@ -136,6 +136,20 @@ def test_one_suite_or_one_test_on_one_tier(api: Api) -> None:
     assert one.json()["totals"]["passed"] == 1
 
 
+def test_coverage_of_the_project_the_tests_ran(api: Api) -> None:
+    one = {"suite": "TankTests", "test": "TestTheLevelFollowsThePlant", "coverage": True}
+    report = api.run("demo", one).json()
+    measured = report["coverage"]["files"]
+    assert list(measured) == ["tank.st"]  # the project's POUs: not the tests, not stdlib
+    tank = (demo_project_path() / "tank.st").read_text(encoding="utf-8").split("\n")
+    stop = 1 + tank.index("  pump := FALSE;")  # the high level is never reached
+    assert measured["tank.st"]["lines"][str(stop)] == 0
+    assert measured["tank.st"]["lines"][str(stop - 1)] == 1  # IF level >= highLevel
+    figures = report["coverage"]["figures"]
+    assert 0 < figures["statements_covered"] < figures["statements"]
+    assert api.run("demo", {"tier": "python"}).json()["coverage"] is None
+
+
 def test_tests_that_do_not_compile_report_the_diagnostics(api: Api) -> None:
     reply = api.run("broken")
     assert reply.status_code == 200, reply.text
@@ -180,6 +194,7 @@ def test_an_endless_test_is_stopped_and_a_run_beyond_the_bound_refused(api: Api)
         ({"suite": "TankTests", "test": "TestNothing"}, 404, "unknown_test"),
         ({"test": "TestTheLowAlarm"}, 400, "bad_request"),
         ({"tier": "quantum"}, 400, "bad_request"),
+        ({"tier": "native", "coverage": True}, 400, "bad_request"),
         ({"suite": 12}, 400, "bad_request"),
         ({"suite": "S" * 65}, 400, "bad_request"),
         ([1, 2], 400, "bad_request"),

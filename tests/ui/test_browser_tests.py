@@ -8,7 +8,7 @@ from __future__ import annotations
 import shutil
 import time
 from collections.abc import Iterator
-from contextlib import ExitStack
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 import pytest
@@ -92,15 +92,12 @@ def test_the_demos_tests_all_pass_from_the_tests_screen(demo: Demo) -> None:
         shoot_both(page, "tests-demo-passed")
 
 
-@pytest.fixture
-def failing_ui(tmp_path: Path) -> Iterator[str]:
-    """The UI serving a copy of the demo project whose low alarm test expects wrongly."""
-    folder = tmp_path / "failing"
+@contextmanager
+def serving(tmp_path: Path, tests: str) -> Iterator[str]:
+    """The UI serving a copy of the demo project with `tests` as its test file."""
+    folder = tmp_path / "copy"
     shutil.copytree(demo_project_path(), folder)
-    tests = folder / TEST_FILE
-    text = tests.read_text(encoding="utf-8")
-    assert RIGHT in text
-    tests.write_text(text.replace(RIGHT, WRONG), encoding="utf-8")
+    (folder / TEST_FILE).write_text(tests, encoding="utf-8")
     accounts_file = tmp_path / "padt-accounts.json"
     admin = UserAccount("admin", "security-administrator", hash_password(PASSWORD))
     write_accounts(accounts_file, (admin,))
@@ -112,11 +109,20 @@ def failing_ui(tmp_path: Path) -> Iterator[str]:
         directory = ResourceDirectory(session)
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
         lists = WatchLists(tmp_path / "watch-lists.json")
-        projects = {"failing": folder}
+        projects = {"copy": folder}
         context = UiContext(directory, accounts, endpoint, lists, projects, tmp_path / "bak")
         ui = PadtUi(context, port=free_port())
         stack.callback(ui.close)
         yield ui.url
+
+
+@pytest.fixture
+def failing_ui(tmp_path: Path) -> Iterator[str]:
+    """A copy of the demo project whose low alarm test expects wrongly."""
+    text = (demo_project_path() / TEST_FILE).read_text(encoding="utf-8")
+    assert RIGHT in text
+    with serving(tmp_path, text.replace(RIGHT, WRONG)) as url:
+        yield url
 
 
 def test_a_failure_shows_expected_and_actual_and_opens_at_its_line(failing_ui: str) -> None:
@@ -163,3 +169,48 @@ def test_a_failure_shows_expected_and_actual_and_opens_at_its_line(failing_ui: s
         )
         run(page, "Run test", "1 passed of 1 test (native and python) in ")
         assert page.locator(failed).get_attribute("data-status") == "failed"
+
+
+# one test of the demo's: the level is read, the pump never stops nor restarts
+ONE_TEST = """FUNCTION_BLOCK TankTests
+METHOD TestTheLevelFollowsThePlant
+tankLevel := 500;
+RUN_CYCLES(1);
+ASSERT_EQUAL(500, TankControl.level, 'the level is the plant$'s measurement');
+END_METHOD
+END_FUNCTION_BLOCK
+"""
+
+
+def shades(page: Page) -> dict[int, tuple[str, str]]:
+    """The shaded lines of the file in front: line -> (how, title)."""
+    found: list[list[object]] = page.evaluate(
+        "(() => { const v = window.padtEditor.view;"
+        " return [...v.dom.querySelectorAll('.cm-line[data-coverage]')].map(e =>"
+        " [v.state.doc.lineAt(v.posAtDOM(e)).number, e.dataset.coverage, e.title]); })()"
+    )
+    return {int(str(line)): (str(how), str(title)) for line, how, title in found}
+
+
+def test_run_with_coverage_shades_the_lines_in_the_editor(tmp_path: Path) -> None:
+    tank = (demo_project_path() / "tank.st").read_text(encoding="utf-8").split("\n")
+    stop = 1 + tank.index("  pump := FALSE;")  # the high level is never reached
+    decided = stop - 1  # IF level >= highLevel THEN: its THEN never taken
+    read = 1 + tank.index("  level := tankLevel;")
+    with serving(tmp_path, ONE_TEST) as url, chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_tests(page, url, PASSWORD)
+        run(page, "Run with coverage", "1 passed of 1 test (native and python) in ")
+        row = text_of(page, '[data-coverage-file="tank.st"]')
+        assert "%" in row and "100 %" not in row, row
+        page.locator('[data-coverage-file="tank.st"] [data-test-click]').click()
+        # tank.st comes to the front at its first line never run
+        wait_until(f"tank.st is at line {stop}", lambda: editor_at(page)[:2] == ("tank.st", stop))
+        lines = shades(page)
+        assert lines[stop] == ("uncovered", "never ran in the tests")
+        assert lines[decided][0] == "partial" and "not taken: THEN" in lines[decided][1]
+        assert lines[read] == ("covered", "ran 1 time in the tests")
+        shoot_both(page, "tests-coverage")
+        # a run without coverage takes the shading away
+        run(page, "Run all", "1 passed of 1 test (native and python) in ")
+        wait_until("no line is shaded", lambda: shades(page) == {})

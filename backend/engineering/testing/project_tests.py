@@ -21,6 +21,8 @@ from typing import Any, Literal
 
 from backend.compiler.ast import key
 from backend.engineering.project import ProjectError
+from backend.engineering.testing.coverage.measure import CoverageMeter, measured_files
+from backend.engineering.testing.coverage.model import coverage_of
 from backend.engineering.testing.test_build import UnitTest, build_tests
 from backend.engineering.testing.test_session import run_session
 from backend.engineering.testing.tiers import Tier, UnitTestResult
@@ -37,11 +39,13 @@ STATUSES = ("passed", "failed", "error", NOT_RUN)
 
 @dataclass(frozen=True)
 class UnitTestChoice:
-    """What to run: every test, a suite's (`suite`), or one test (`suite` and `test`)."""
+    """What to run: every test, a suite's (`suite`), or one test (`suite` and `test`);
+    `coverage`: measure which lines of the project's POUs they run (on the Python tier)."""
 
     suite: str | None = None
     test: str | None = None
     tier: TierChoice = "both"
+    coverage: bool = False
 
     @property
     def tiers(self) -> tuple[Tier, ...]:
@@ -102,6 +106,8 @@ def chosen(cases: tuple[UnitTest, ...], choice: UnitTestChoice) -> tuple[UnitTes
     """The tests a choice names (names in any case, as ST); refused when it names none."""
     if choice.test is not None and choice.suite is None:
         raise Refusal("bad_request", "a test is named with its suite")
+    if choice.coverage and choice.tier == "native":
+        raise Refusal("bad_request", "coverage is measured on the Python tier: not with native")
     found = cases
     if choice.suite is not None:
         found = tuple(c for c in found if key(c.suite) == key(choice.suite))
@@ -127,6 +133,7 @@ class _Run:
     planned: tuple[dict[str, Any], ...] = ()
     results: dict[str, dict[str, Any]] | None = None  # by test id, as they ended
     native_missing: bool = False
+    coverage: dict[str, Any] | None = None  # `Coverage.as_json()`, when it was measured
     stopped: str = ""  # why the run ended before its tests did
 
 
@@ -169,6 +176,7 @@ def _report(run: _Run, choice: UnitTestChoice) -> dict[str, Any]:
         "tiers": ran,
         "notes": notes,
         "stopped": run.stopped or None,
+        "coverage": run.coverage,
     }
 
 
@@ -189,10 +197,20 @@ def _work(folder: str, choice: UnitTestChoice, out: Connection) -> None:
         cases = chosen(build.cases, choice)
         out.send(("planned", [test_json(case) for case in cases]))
         ran: set[str] = set()
-        for result in run_session(build.artifact, cases, choice.tiers):
+        meter = None
+        if choice.coverage:
+            meter = CoverageMeter(measured_files(source.name for source in build.project.sources))
+        session = run_session(
+            build.artifact, cases, choice.tiers, project=build.folder, coverage=meter
+        )
+        for result in session:
             ran.update(result.tiers)
             out.send(("result", result_json(result)))
         out.send(("native", "native" in choice.tiers and "native" not in ran and bool(cases)))
+        if meter is not None:
+            sources = build.project.sources
+            measured = coverage_of(build.artifact, build.syntax, sources, meter.files, meter.hits)
+            out.send(("coverage", measured.as_json()))
     except Refusal as refused:
         out.send(("refused", refused.code, refused.message))
     except Exception as exc:  # a defect: the server says so in one line, the log in full
@@ -281,6 +299,8 @@ def _heard(run: _Run, said: tuple[Any, ...], progress: Progress) -> None:
         progress(len(run.results), len(run.planned), said[1])
     elif kind == "native":
         run.native_missing = said[1]
+    elif kind == "coverage":
+        run.coverage = said[1]
 
 
 def _quiet(done: int, planned: int, result: dict[str, Any] | None) -> None:

@@ -67,6 +67,10 @@ const theme = EditorView.theme({
   ".padt-arrow": { flex: "none", width: "0", height: "0", borderTop: "6px solid transparent", borderBottom: "6px solid transparent", borderLeft: "9px solid #e8590c" },
   ".padt-arrow-frame": { borderLeftColor: "#1971c2" },
   ".padt-paused-line": { backgroundColor: "#ffec99 !important" },
+  // the lines the unit tests ran (green), never ran (red), ran without taking every way (amber)
+  ".padt-cov-covered": { backgroundColor: "#ebfbee" },
+  ".padt-cov-uncovered": { backgroundColor: "#ffe3e3" },
+  ".padt-cov-partial": { backgroundColor: "#fff3bf" },
   ".padt-frame-line": { backgroundColor: "#d0ebff !important" },
 });
 
@@ -120,6 +124,41 @@ function liveDecorations(doc, items) {
   return builder.finish();
 }
 
+// ---- coverage: each line with a statement shaded by how the unit tests ran it
+
+const setCoverage = StateEffect.define();
+const coverageField = StateField.define({
+  create: () => Decoration.none,
+  update(value, tr) {
+    value = value.map(tr.changes);
+    for (const e of tr.effects) if (e.is(setCoverage)) value = e.value;
+    return value;
+  },
+  provide: (f) => EditorView.decorations.from(f),
+});
+
+// `shown`: the file's {lines: {line: hits}, branches: [{line, label, taken}]}; a title says
+// in words what the shade says, for who does not tell the colours apart
+function coverageDecorations(doc, shown) {
+  const builder = new RangeSetBuilder();
+  if (!shown) return builder.finish();
+  const missed = new Map();
+  for (const b of shown.branches || []) {
+    if (!b.taken) missed.set(b.line, [...(missed.get(b.line) || []), b.label]);
+  }
+  const lines = Object.entries(shown.lines || {}).map(([line, hits]) => [Number(line), hits]);
+  for (const [number, hits] of lines.sort((a, b) => a[0] - b[0])) {
+    if (number < 1 || number > doc.lines) continue;
+    const notTaken = missed.get(number);
+    const how = hits === 0 ? "uncovered" : notTaken ? "partial" : "covered";
+    let title = hits === 0 ? "never ran in the tests" : `ran ${hits} time${hits === 1 ? "" : "s"} in the tests`;
+    if (hits && notTaken) title += `; not taken: ${notTaken.join(", ")}`;
+    const at = doc.line(number).from;
+    builder.add(at, at, Decoration.line({ class: `padt-cov-${how}`, attributes: { "data-coverage": how, title } }));
+  }
+  return builder.finish();
+}
+
 // ---- the page around the editor
 
 class PadtEditor {
@@ -138,6 +177,7 @@ class PadtEditor {
     this.bottomTab = "problems";
     this.liveItems = []; // the lines in view with their variables' values, when online
     this.events = []; // the selected resource's newest events, newest first
+    this.coverage = {}; // file -> its lines' hits and branches, from the last run with coverage
     this.showDrawing = false;
     this.readonlyCompartment = new Compartment();
     this.debug = new DebugPanel(this);
@@ -360,6 +400,7 @@ class PadtEditor {
         autocompletion({ override: [(ctx) => editor.complete(ctx)], activateOnTyping: true }),
         hoverTooltip((view, pos) => editor.hover(view, pos), { hoverTime: 350 }),
         liveField,
+        coverageField,
         this.readonlyCompartment.of([EditorState.readOnly.of(readonly), EditorView.editable.of(!readonly)]),
         keymap.of([
           { key: "F12", run: (v) => (editor.definition(v.state.selection.main.head), true) },
@@ -442,6 +483,7 @@ class PadtEditor {
       this.current = file;
       this.view.setState(doc.state);
       this.applyDiagnostics(doc);
+      this.applyCoverage();
       this.debug.apply();
       this.sendView();
     }
@@ -769,6 +811,12 @@ class PadtEditor {
     this.view.dispatch(setDiagnostics(this.view.state, items));
   }
 
+  applyCoverage() {
+    if (!this.current) return;
+    const shades = coverageDecorations(this.view.state.doc, this.coverage[this.current]);
+    this.view.dispatch({ effects: setCoverage.of(shades) });
+  }
+
   // ---- from the server
   receive(m) {
     const handler = this["on_" + m.k];
@@ -889,6 +937,11 @@ class PadtEditor {
   on_events(m) {
     this.events = m.items;
     if (this.bottomTab === "events") this.drawBottom();
+  }
+
+  on_coverage(m) {
+    this.coverage = m.files || {};
+    this.applyCoverage();
   }
 
   on_notice(m) {
