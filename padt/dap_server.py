@@ -20,7 +20,7 @@ import signal
 import socket
 import sys
 import threading
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -139,11 +139,15 @@ class DapServer:
 
     # ---- the loop
 
-    def serve(self, stream: BinaryIO) -> None:
-        """Take requests until `disconnect` or the end of the stream; the resource's
-        breakpoints of this client are cleared either way."""
+    def serve(self, stream: BinaryIO, stop: StopSignal) -> None:
+        """Take requests until `disconnect`, the end of the stream or `stop`; the
+        resource's breakpoints of this client are cleared either way."""
         try:
-            while (message := read_message(stream)) is not None:
+            while True:
+                with stop.waiting():
+                    message = read_message(stream)
+                if message is None:
+                    return
                 if isinstance(message, Malformed):
                     log.warning("padt dap: malformed message: %s", message.reason)
                     self.out.refuse(message.seq, message.command, message.reason)
@@ -734,28 +738,62 @@ def run(args: Any) -> int:
     """`padt dap [--port N]`: one client on stdin/stdout, or clients one after the other
     on 127.0.0.1:N. SIGTERM ends it as Ctrl-C does: a client's breakpoints cleared first."""
     logging.basicConfig(stream=sys.stderr, level=logging.INFO, format="%(message)s")
-    signal.signal(signal.SIGTERM, _interrupt)
+    stop = StopSignal()
     if args.port is None:
         # the protocol's own copy of stdout; whatever else writes to stdout (a library's
         # print) goes to stderr instead of corrupting the protocol
         protocol = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
         os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
         writer = MessageWriter(protocol)
-        with contextlib.suppress(KeyboardInterrupt):
-            DapServer(writer).serve(sys.stdin.buffer)
+        with contextlib.suppress(Stopped):
+            DapServer(writer).serve(sys.stdin.buffer, stop)
         writer.close()
         return 0
     if not 0 <= args.port <= 65535:
         log.error("padt dap: --port %d is no TCP port", args.port)
         return 2
-    return _serve_tcp(args.port)
+    return _serve_tcp(args.port, stop)
 
 
-def _interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
+class Stopped(BaseException):
+    """Raised by `StopSignal` in a wait for a client or a request; a BaseException, so
+    that no `except Exception` of a request takes it."""
 
 
-def _serve_tcp(port: int) -> int:
+class StopSignal:
+    """SIGTERM and SIGINT end `padt dap` in order. The handler runs on the main thread
+    between two of its bytecodes: an exception raised there at any moment could land in
+    a cleanup (`finally`, a `__del__`, a library's handler) that swallows it, or cut one
+    short and leave a Zenoh session open, whose callback threads are not daemons (the
+    interpreter waits for them at exit): the process would not end. So it raises
+    `Stopped` only while the main thread waits (for a client, or for a request: nothing is
+    half done there); during a request it only notes the stop, which the next wait sees."""
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._waiting = False
+        for sig in (signal.SIGTERM, signal.SIGINT):
+            signal.signal(sig, self._handle)
+
+    def _handle(self, signum: int, frame: Any) -> None:
+        self.requested = True
+        if self._waiting:
+            raise Stopped
+
+    @contextlib.contextmanager
+    def waiting(self) -> Iterator[None]:
+        """Around a blocking wait: `Stopped` on a stop that came before it or comes during
+        it (marked waiting first: a signal between the check and the wait is not lost)."""
+        self._waiting = True
+        try:
+            if self.requested:
+                raise Stopped
+            yield
+        finally:
+            self._waiting = False
+
+
+def _serve_tcp(port: int, stop: StopSignal) -> int:
     try:
         server = socket.create_server(("127.0.0.1", port))
     except OSError as exc:
@@ -765,20 +803,21 @@ def _serve_tcp(port: int) -> int:
         log.info("padt dap: listening on 127.0.0.1:%d", server.getsockname()[1])
         try:
             while True:
-                connection, peer = server.accept()
+                with stop.waiting():
+                    connection, peer = server.accept()
                 log.info("padt dap: a client from %s:%d", *peer[:2])
                 with connection:
-                    _serve_connection(connection)
+                    _serve_connection(connection, stop)
                 log.info("padt dap: the client left")
-        except KeyboardInterrupt:
+        except Stopped:
             return 0
 
 
-def _serve_connection(connection: socket.socket) -> None:
+def _serve_connection(connection: socket.socket, stop: StopSignal) -> None:
     reading, writing = connection.makefile("rb"), connection.makefile("wb")
     writer = MessageWriter(writing)
     try:
-        DapServer(writer).serve(reading)
+        DapServer(writer).serve(reading, stop)
     finally:
         writer.close()
         with contextlib.suppress(OSError):  # a client gone leaves the last bytes unsent

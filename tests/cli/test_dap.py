@@ -514,6 +514,28 @@ def test_on_a_tcp_port_clients_come_one_after_the_other_and_a_viewer_may_not_deb
     assert process.wait(WAIT_S) == 0
 
 
+def test_on_a_tcp_port_sigterm_ends_it_and_the_client_s_program_runs_on(bench: Bench) -> None:
+    """SIGTERM while a client's program stands at its breakpoint and the adapter waits for
+    the client's next request: it ends with 0 and clears the client's breakpoints."""
+    port = free_port()
+    process = padt_dap("--port", str(port), password=PASSWORDS["engineer"])
+    try:
+        with connected(port) as connection:
+            reading, writing = connection.makefile("rb"), connection.makefile("wb")
+            client = DapClient(reading, writing)
+            attached(client, bench)
+            client.ask("setBreakpoints", source={"path": bench.source}, breakpoints=[{"line": 31}])
+            client.ask("configurationDone")
+            stopped_at(client)
+            assert bench.program("Main").state == p.ProgramState.BKPT
+            process.terminate()
+            assert process.wait(WAIT_S) == 0
+    finally:
+        process.kill()
+    wait_for(lambda: bench.program("Main").state == p.ProgramState.RUN, "Main runs again")
+    assert bench.client.ask(p.DebugGet()).debug.breakpoints == []
+
+
 def connected(port: int) -> socket.socket:
     """A connection to `padt dap --port`, once it listens."""
     deadline = time.monotonic() + WAIT_S
