@@ -29,14 +29,14 @@ log = logging.getLogger("padt.ui")
 NO_SUITE = "(no test suite)"
 TIERS: dict[str, TierChoice] = {"Python and native": "both", "Python": "python", "Native": "native"}
 # a refresh after this long without one: the tab was just opened, the list is read again
-OPENED_AFTER_S = 1.0
+OPENED_AFTER_S = 2.0
 # status -> (mark, word, colour): the marks of the rest of the UI, never colour alone
 MARKS = {
     "passed": ("✓", "PASS", "#2b8a3e"),
     "failed": ("✗", "FAIL", "#c92a2a"),
     "error": ("!", "ERROR", "#e67700"),
     "not_run": ("-", "NOT RUN", "#868e96"),
-    "": ("·", "not run yet", "#868e96"),
+    "": ("·", "not run", "#868e96"),
 }
 _MUTED = "#868e96"
 _RED = "#c92a2a"
@@ -384,7 +384,7 @@ def render_results(found: Found) -> str:
         return ""
     return (
         '<table data-testid="tests-results" style="border-collapse:collapse;width:100%;'
-        'font-size:0.9em;table-layout:fixed"><colgroup><col style="width:84px"><col>'
+        'font-size:0.9em;table-layout:fixed"><colgroup><col style="width:92px"><col>'
         f'<col style="width:56px"></colgroup>{"".join(rows)}</table>{render_coverage(found)}'
     )
 

@@ -83,6 +83,7 @@ def test_the_demos_tests_all_pass_from_the_tests_screen(demo: Demo) -> None:
         page = browser.new_page(viewport={"width": 1400, "height": 900})
         open_tests(page, demo.url, demo.password)
         wait_for_text(page, STATUS, "6 tests in 1 suite: not run yet.", timeout_s=RUN_S)
+        shoot_both(page, "tests-demo-listed")
         run(page, "Run all", "6 passed of 6 tests (native and python) in ")
         rows = page.locator('[data-testid="tests-results"] tr[data-test]')
         assert rows.count() == 6
