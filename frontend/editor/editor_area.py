@@ -333,7 +333,7 @@ class EditorArea:
             lines = {file: list(d.lines) for file, d in self.documents.items()}
         if language is None:
             return
-        found = language.analysis().diagnostics
+        found = language.problems()
         files: dict[str, list[dict[str, Any]]] = {file: [] for file in versions}
         problems: list[dict[str, Any]] = []
         for d in found:
