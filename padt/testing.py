@@ -76,8 +76,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     # imported here: building the command line's parser loads no compiler
     from backend.engineering.project import ProjectError
-    from backend.engineering.testing.coverage.measure import CoverageMeter, measured_files
-    from backend.engineering.testing.coverage.model import coverage_of
+    from backend.engineering.testing.coverage.of_build import coverage_measured, meter_for
     from backend.engineering.testing.report import (
         failure_text,
         junit_xml,
@@ -116,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     results = []
     meter = None
     if args.coverage:
-        meter = CoverageMeter(measured_files(source.name for source in build.project.sources))
+        meter = meter_for(build)
     session = run_session(
         build.artifact, cases, tiers, args.jobs, project=build.folder, coverage=meter
     )
@@ -134,10 +133,7 @@ def run(args: argparse.Namespace) -> int:
     if args.junit is not None:
         args.junit.write_bytes(junit_xml(results, build.project.name))
     if meter is not None:
-        coverage = coverage_of(
-            build.artifact, build.syntax, build.project.sources, meter.files, meter.hits
-        )
-        _write_coverage(args, coverage, build.folder, build.project.name)
+        _write_coverage(args, coverage_measured(build, meter), build.folder, build.project.name)
     return 0 if found.passed == found.total else 1
 
 

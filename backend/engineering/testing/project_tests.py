@@ -21,8 +21,7 @@ from typing import Any, Literal
 
 from backend.compiler.ast import key
 from backend.engineering.project import ProjectError
-from backend.engineering.testing.coverage.measure import CoverageMeter, measured_files
-from backend.engineering.testing.coverage.model import coverage_of
+from backend.engineering.testing.coverage.of_build import coverage_measured, meter_for
 from backend.engineering.testing.test_build import UnitTest, build_tests
 from backend.engineering.testing.test_session import run_session
 from backend.engineering.testing.tiers import Tier, UnitTestResult
@@ -199,7 +198,7 @@ def _work(folder: str, choice: UnitTestChoice, out: Connection) -> None:
         ran: set[str] = set()
         meter = None
         if choice.coverage:
-            meter = CoverageMeter(measured_files(source.name for source in build.project.sources))
+            meter = meter_for(build)
         session = run_session(
             build.artifact, cases, choice.tiers, project=build.folder, coverage=meter
         )
@@ -208,9 +207,7 @@ def _work(folder: str, choice: UnitTestChoice, out: Connection) -> None:
             out.send(("result", result_json(result)))
         out.send(("native", "native" in choice.tiers and "native" not in ran and bool(cases)))
         if meter is not None:
-            sources = build.project.sources
-            measured = coverage_of(build.artifact, build.syntax, sources, meter.files, meter.hits)
-            out.send(("coverage", measured.as_json()))
+            out.send(("coverage", coverage_measured(build, meter).as_json()))
     except Refusal as refused:
         out.send(("refused", refused.code, refused.message))
     except Exception as exc:  # a defect: the server says so in one line, the log in full
