@@ -158,7 +158,9 @@ def test_every_state_changing_route_is_refused_by_the_resource_below_its_pes_lev
     assert (after["state"], after["crc"]) == (before["state"], before["crc"])
     assert after["cycle"] > before["cycle"]  # it kept running all along
     events = site.call("GET", f"{R}/events", viewer, params={"after": last}).json()
-    assert {e["kind"] for e in events} == {"login"}  # nothing else happened
+    # nothing else happened; the native tier's report comes when its build ends, which
+    # under load may be during the requests
+    assert {e["kind"] for e in events} - {"native"} == {"login"}
 
 
 def test_the_long_term_log_comes_with_its_chain_which_a_client_can_check(site: Plant) -> None:
