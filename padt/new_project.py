@@ -14,7 +14,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--template",
         default="empty",
         metavar="T",
-        help="what it starts from: empty (default), tank (the demo) or sequence (SFC)",
+        help="what it starts from: empty (default), tank (the demo), sequence (SFC) or "
+        "conveyor (LD and FBD)",
     )
     parser.add_argument("--dir", default=".", metavar="DIR", help="where its folder goes")
     parser.add_argument("--resource", metavar="NAME", help="the resource's name")
