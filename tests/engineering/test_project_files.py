@@ -123,7 +123,8 @@ def test_a_symbolic_link_out_of_the_project_is_refused(shelf: ProjectShelf, tmp_
             read_file(shelf, "plant", path, ANNA)
         with refused("path"):
             save_file(shelf, "plant", path, "", content_hash(secret.read_bytes()), ANNA)
-    assert [f.path for f in list_files(shelf, "plant", ANNA)] == ["padt.toml", "tank.st"]
+    listed = [f.path for f in list_files(shelf, "plant", ANNA)]
+    assert listed == ["padt.toml", "tank.st", "test/tank_test.st"]  # the demo's tests too
     assert secret.read_text() == "PROGRAM Secret END_PROGRAM\n"
 
 
@@ -229,6 +230,7 @@ def test_the_tree_lists_pous_types_globals_resource_modbus_and_accounts(
         ("PROGRAM", "Broken", "broken.st"),  # listed while it does not parse
         ("PROGRAM", "TankControl", "tank.st"),
         ("FUNCTION_BLOCK", "Pump", "scale.st"),
+        ("FUNCTION_BLOCK", "TankTests", "test/tank_test.st"),  # the demo's tests (a group)
         ("FUNCTION", "Scale", "scale.st"),
     ]
     assert next(p for p in tree.pous if p.name == "Scale").detail == "REAL"
