@@ -97,8 +97,15 @@ def log_in_to_resource(page: Page, user: str, password: str) -> None:
             wait_until("the resource login is shown", lambda: _logged_in(page), timeout_s=15)
             return
         except AssertionError:
-            if time.monotonic() > deadline:
-                raise
+            if time.monotonic() > deadline:  # say what the page showed instead
+                try:
+                    shown = text_of(page, '[data-testid="resource-login"]')
+                except PlaywrightError:
+                    shown = "(no resource login on the page)"
+                raise AssertionError(
+                    f"never: the resource login is shown; it shows {shown!r}, the page: "
+                    f"{page.inner_text('body')[:2000]!r}"
+                ) from None
 
 
 def _logged_in(page: Page) -> bool:
