@@ -10,7 +10,7 @@ import shutil
 import threading
 import time
 from collections.abc import Iterator
-from contextlib import ExitStack
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,7 +32,7 @@ from tests.support.rest_plant import PADT_PASSWORDS, padt_accounts_file
 from tests.support.runtime_process import router
 
 ROUTE = "/api/projects/{}/tests"
-LIMIT_S = 20.0  # the time limit of a run here: the endless test's run takes twice this
+RUN_S = 3.0  # how long the endless test runs: far beyond what the demo's tests take
 TEST_FILE = "test/tank_test.st"
 # the demo's low alarm test with a wrong expectation (a level of 100 l is not critical)
 WRONG = "ASSERT_FALSE(TankControl.alarmLow, '100 l is not critical');"
@@ -75,6 +75,24 @@ def demo_copy(folder: Path, tests: str = "") -> Path:
     return folder
 
 
+@contextmanager
+def serving(base: Path, projects: dict[str, Path], runs: UnitTestRuns) -> Iterator[Api]:
+    """A REST server of `projects` on a router of its own, its test runs bounded by `runs`."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with ExitStack() as stack:
+        stack.enter_context(router(endpoint))
+        session = open_client(endpoint)
+        stack.callback(session.close)
+        accounts = PadtAccounts(padt_accounts_file(base / "accounts.json"), time.monotonic_ns)
+        shelf = shelf_of(projects, None, base / "audit.jsonl")
+        service = PadtService(ResourceDirectory(session), accounts, shelf, base / "bak", runs)
+        stack.callback(service.close)
+        server = ApiServer(service)
+        stack.callback(server.close)
+        http = stack.enter_context(httpx.Client(timeout=300))
+        yield Api(server.url, http)
+
+
 @pytest.fixture(scope="module")
 def api(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Api]:
     base = tmp_path_factory.mktemp("rest-unit-tests")
@@ -84,22 +102,22 @@ def api(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Api]:
         "demo": demo_copy(base / "demo"),
         "failing": demo_copy(base / "failing", tests.replace(WRONG, WRONG_BY)),
         "broken": demo_copy(base / "broken", tests.replace("RUN_CYCLES(1);", "RUN_CYCLES(;", 1)),
-        "endless": demo_copy(base / "endless", tests + ENDLESS),
     }
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    with ExitStack() as stack:
-        stack.enter_context(router(endpoint))
-        session = open_client(endpoint)
-        stack.callback(session.close)
-        accounts = PadtAccounts(padt_accounts_file(base / "accounts.json"), time.monotonic_ns)
-        shelf = shelf_of(projects, None, base / "audit.jsonl")
-        runs = UnitTestRuns(most=1, limit_s=LIMIT_S)
-        service = PadtService(ResourceDirectory(session), accounts, shelf, base / "bak", runs)
-        stack.callback(service.close)
-        server = ApiServer(service)
-        stack.callback(server.close)
-        http = stack.enter_context(httpx.Client(timeout=300))
-        yield Api(server.url, http)
+    with serving(base, projects, UnitTestRuns()) as api:
+        yield api
+
+
+@pytest.fixture
+def one_short_run(tmp_path: Path) -> Iterator[Api]:
+    """A server that runs one test run at a time and stops a run's tests after RUN_S
+    (its building, and a native build, keep the usual limit)."""
+    tests = (demo_project_path() / TEST_FILE).read_text(encoding="utf-8")
+    projects = {
+        "demo": demo_copy(tmp_path / "demo"),
+        "endless": demo_copy(tmp_path / "endless", tests + ENDLESS),
+    }
+    with serving(tmp_path, projects, UnitTestRuns(most=1, run_s=RUN_S)) as api:
+        yield api
 
 
 def test_the_demos_tests_all_pass_on_both_tiers(api: Api) -> None:
@@ -158,7 +176,10 @@ def test_tests_that_do_not_compile_report_the_diagnostics(api: Api) -> None:
     assert any(d["file"] == TEST_FILE and d["severity"] == "error" for d in report["diagnostics"])
 
 
-def test_an_endless_test_is_stopped_and_a_run_beyond_the_bound_refused(api: Api) -> None:
+def test_an_endless_test_is_stopped_and_a_run_beyond_the_bound_refused(
+    one_short_run: Api,
+) -> None:
+    api = one_short_run
     ended: list[httpx.Response] = []
 
     def endless() -> threading.Thread:
@@ -178,7 +199,7 @@ def test_an_endless_test_is_stopped_and_a_run_beyond_the_bound_refused(api: Api)
     first.join()
     assert "try again" in error(refused, 503, "tests_busy")
     report = ended[0].json()
-    assert report["stopped"].startswith("stopped: running the tests took longer than 20 s")
+    assert report["stopped"].startswith("stopped: running the tests took longer than 3 s")
     status = {t["id"]: (t["status"], t["place"]) for t in report["tests"]}
     forever = status.pop("EndlessTests.TestForever")
     assert forever[0] == "error" and forever[1]["file"] == TEST_FILE

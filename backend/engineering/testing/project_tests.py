@@ -31,7 +31,7 @@ log = logging.getLogger("padt.tests")
 
 TierChoice = Literal["both", "python", "native"]
 MOST_RUNS = 2  # runs at the same time on one server: each takes a core
-TIME_LIMIT_S = 300.0  # for building the tests, and again for running them
+TIME_LIMIT_S = 300.0  # for building the tests, and again for running them (native build included)
 NOT_RUN, STOPPED = "not_run", "error"  # the status of a test a stopped run did not end
 STATUSES = ("passed", "failed", "error", NOT_RUN)
 
@@ -223,10 +223,12 @@ Progress = Callable[[int, int, dict[str, Any] | None], None]  # tests ended, pla
 
 class UnitTestRuns:
     """The test runs of one server: at most `most` at a time (one more is refused as
-    `tests_busy`), each stopped after `limit_s` seconds of building and as many of running."""
+    `tests_busy`), each stopped after `build_s` seconds of building or `run_s` of running."""
 
-    def __init__(self, most: int = MOST_RUNS, limit_s: float = TIME_LIMIT_S) -> None:
-        self.most, self.limit_s = most, limit_s
+    def __init__(
+        self, most: int = MOST_RUNS, build_s: float = TIME_LIMIT_S, run_s: float = TIME_LIMIT_S
+    ) -> None:
+        self.most, self.build_s, self.run_s = most, build_s, run_s
         self._slots = threading.BoundedSemaphore(most)
 
     def run(
@@ -253,14 +255,14 @@ class UnitTestRuns:
         worker.start()
         send.close()  # the worker's end: a worker gone is then an end of file here
         run = _Run()
-        deadline = time.monotonic() + self.limit_s
+        deadline, limit_s = time.monotonic() + self.build_s, self.build_s
         try:
             while True:
                 left = deadline - time.monotonic()
                 if left <= 0 or not receive.poll(left):
                     phase = "running the tests" if run.planned else "building the tests"
                     run.stopped = (
-                        f"stopped: {phase} took longer than {self.limit_s:g} s, the time "
+                        f"stopped: {phase} took longer than {limit_s:g} s, the time "
                         "limit of a test run on this server"
                     )
                     break
@@ -274,7 +276,8 @@ class UnitTestRuns:
                 if said[0] == "refused":
                     raise Refusal(said[1], said[2])
                 if said[0] == "planned":
-                    deadline = time.monotonic() + self.limit_s  # the tests' own time
+                    limit_s = self.run_s  # the tests' own time
+                    deadline = time.monotonic() + limit_s
                 _heard(run, said, progress)
         finally:
             receive.close()
