@@ -159,7 +159,7 @@ class CycleDriver:
 
     def _follow_field_io(self) -> None:
         """After what may have changed the configuration (a reload, a command), in the
-        ordinary class: a Modbus thread it starts gets the runtime's nice value, where one
+        ordinary class: the field I/O thread it starts gets the runtime's nice value, where one
         started from the real-time class would get the default (SCHED_RESET_ON_FORK)."""
         if self.resource.field_io is not None:
             self.resource.field_io.follow_configuration()

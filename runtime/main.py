@@ -28,8 +28,8 @@ from runtime.contract.state_folder import (
 from runtime.contract.stop_request import StopRequest
 from runtime.event_log import EventLog
 from runtime.event_recorder import LONG_TERM_SHARES
+from runtime.field_io.modbus.request_meter import REQUESTS_PER_SECOND
 from runtime.identity import Identity
-from runtime.modbus_meter import REQUESTS_PER_SECOND
 from runtime.native.tier import NativeTier
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start

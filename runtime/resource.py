@@ -117,7 +117,7 @@ class Resource:
         self._boot_ns = clock.now_ns()
         # where every new configuration (load or reload) is kept for the next power-up
         self.store: ConfigurationStore | None = None
-        self.field_io: FieldIo | None = None  # Modbus TCP, in a runtime process
+        self.field_io: FieldIo | None = None  # the field I/O drivers, in a runtime process
         # the recordings (runtime/recorder.py), in a runtime process with a state folder
         self.recordings: CycleRecorder | None = None
         # the native tier (runtime/native/), when the runtime was started with it

@@ -42,7 +42,7 @@ class CycleScheduling:
 
     Ordinary (SCHED_OTHER at its nice value) while it answers commands and keeps house:
     Linux gives a new thread or process its creator's class, and a reload's worker, the
-    compile worker, a recording's writer or the Modbus thread are started then. (One
+    compile worker, a recording's writer or the I/O thread are started then. (One
     started in a real-time stretch anyway starts ordinary: SCHED_RESET_ON_FORK.) A program
     looping endlessly on it still yields the interpreter lock to the watchdog thread, on
     another CPU or in the time Linux keeps for other threads (5% by default)."""

@@ -31,7 +31,7 @@ from backend.compiler.source import SourceFile
 from runtime.clock import RealClock
 from runtime.contract.artifact import Artifact
 from runtime.field_io import FieldIo
-from runtime.modbus_client import Delivery, DevicePoller
+from runtime.field_io.modbus.poller import Delivery, DevicePoller
 from runtime.resource import Resource
 from tests.bench.bench_runtime import (
     TARGET_MS,

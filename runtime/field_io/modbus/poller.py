@@ -1,4 +1,4 @@
-"""Polling one remote I/O device as a Modbus TCP client (pymodbus), on the Modbus thread.
+"""Polling one remote I/O device as a Modbus TCP client (pymodbus), on the I/O thread.
 
 Each period the poller reads the device's input points (in blocks of adjacent addresses)
 and sends the output points whose value changed (all of them after a reconnect). What it

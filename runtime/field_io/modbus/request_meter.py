@@ -1,6 +1,6 @@
 """How many Modbus requests the served image answers per second, whoever sends them.
 
-pymodbus decodes and answers each frame in Python, on the Modbus thread: about 70 us of
+pymodbus decodes and answers each frame in Python, on the I/O thread: about 70 us of
 the interpreter lock each here, which the cycle thread then waits for. A flood of 5,000 to
 14,000 requests a second kept that lock busy and stretched the periods of a 20 ms cycle
 to 25-55 ms. The meter is a token bucket over every connection of the server: past its rate, the
@@ -21,7 +21,7 @@ QUIET_S = 10.0  # a wait after this long without one begins a new flood (one eve
 @dataclass
 class RequestMeter:
     rate: int = REQUESTS_PER_SECOND
-    floods: int = 0  # times the meter began to hold requests back (Modbus thread)
+    floods: int = 0  # times the meter began to hold requests back (I/O thread)
     _tokens: float = field(default=0.0, init=False)
     _at: float = field(default=0.0, init=False)
     _last_wait: float = field(default=-QUIET_S, init=False)
@@ -35,7 +35,7 @@ class RequestMeter:
         return max(1.0, self.rate / 40)
 
     def take(self, loop: asyncio.AbstractEventLoop, transport: asyncio.BaseTransport) -> None:
-        """A request was received on `transport` (on the Modbus thread): one token; when
+        """A request was received on `transport` (on the I/O thread): one token; when
         none is left, the connection is read again once there is one for it."""
         now = loop.time()
         self._tokens = min(self.burst, self._tokens + (now - self._at) * self.rate)

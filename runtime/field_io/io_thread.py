@@ -1,11 +1,10 @@
-"""The Modbus thread of a resource: one asyncio event loop that runs the served image's
-server and the polling of every remote device, never the cycle thread."""
+"""The I/O thread of a resource: one asyncio event loop on which every field I/O driver
+does its network work (servers and the polling of remote devices), never the cycle thread."""
 
 from __future__ import annotations
 
 import asyncio
 import concurrent.futures
-import logging
 import threading
 from collections.abc import Coroutine
 from typing import Any, TypeVar
@@ -13,13 +12,10 @@ from typing import Any, TypeVar
 T = TypeVar("T")
 
 
-class ModbusLoop:
+class IoThread:
     def __init__(self) -> None:
-        # a lost device would log a failed connection every period: what goes wrong on the
-        # bus is reported as events and in the status instead
-        logging.getLogger("pymodbus").setLevel(logging.CRITICAL)
         self.loop = asyncio.new_event_loop()
-        self._thread = threading.Thread(target=self._run, name="padt-modbus", daemon=True)
+        self._thread = threading.Thread(target=self._run, name="padt-field-io", daemon=True)
         self._thread.start()
 
     def _run(self) -> None:

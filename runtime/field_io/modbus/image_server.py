@@ -1,5 +1,5 @@
 """The served process image: a Modbus TCP server (pymodbus) that answers from the latest
-snapshot the cycle left, on the Modbus thread's event loop (`modbus_loop.py`).
+snapshot the cycle left, on the I/O thread's event loop (`../io_thread.py`).
 
 The cycle never waits on it: it hands over an immutable `ServedImage` after each cycle (one
 reference assignment) and takes the writes of clients from a queue before the next one.
@@ -7,7 +7,7 @@ pymodbus decodes the frames; malformed ones and unknown function codes get its e
 responses. Everything else is decided here: a table is as long as its highest mapped
 address (unmapped addresses below it read 0); reading beyond it, or writing anything but a
 configured writable point, is ILLEGAL ADDRESS; nothing of a refused request is written.
-No more requests are read than the meter allows (`modbus_meter.py`), all clients together.
+No more requests are read than the meter allows (`request_meter.py`), all clients together.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from runtime.contract.modbus import (
     decode,
     encode,
 )
-from runtime.modbus_meter import RequestMeter
+from runtime.field_io.modbus.request_meter import RequestMeter
 
 # function codes by table (pymodbus maps 22 and 23 to holding registers too)
 _AREA_OF_CODE = {1: COIL, 5: COIL, 15: COIL, 2: DISCRETE_INPUT, 4: INPUT_REGISTER}
