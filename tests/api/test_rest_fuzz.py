@@ -45,13 +45,13 @@ def authorization(site: Plant) -> dict[str, str]:
     return {"Authorization": f"Bearer {site.session('builder', 'admin')}"}
 
 
-def fuzz(operation: Any, authorization: dict[str, str]) -> Counter[int]:
-    """Send the generated cases of one operation; the HTTP statuses they got."""
+def fuzz(operation: Any, authorization: dict[str, str], examples: int) -> Counter[int]:
+    """Send `examples` generated cases of one operation; the HTTP statuses they got."""
     statuses: Counter[int] = Counter()
 
     @given(case=operation.as_strategy(), known=st.none() | KNOWN)
     @settings(
-        max_examples=12,
+        max_examples=examples,
         deadline=None,
         database=None,
         suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much],
@@ -69,14 +69,18 @@ def fuzz(operation: Any, authorization: dict[str, str]) -> Counter[int]:
     return statuses
 
 
-def test_no_request_gets_a_server_error(site: Plant, authorization: dict[str, str]) -> None:
+# every run sends some cases of each operation; the slow run (-m slow) many more
+@pytest.mark.parametrize("examples", [6, pytest.param(40, marks=pytest.mark.slow)])
+def test_no_request_gets_a_server_error(
+    site: Plant, authorization: dict[str, str], examples: int
+) -> None:
     # logging out would end the session the rest of the run uses
     schema = schemathesis.openapi.from_url(f"{site.url}/openapi.json").exclude(
         path_regex=r".*/logout$"
     )
     operations = [result.ok() for result in schema.get_all_operations()]  # type: ignore[union-attr]
     assert len(operations) >= 30
-    answered = {operation.label: fuzz(operation, authorization) for operation in operations}
+    answered = {op.label: fuzz(op, authorization, examples) for op in operations}
     # the generated requests got past validation into the resource, and were refused too
     succeeded = sorted(label for label, statuses in answered.items() if statuses[200])
     print(f"{len(succeeded)} of {len(answered)} operations answered 200 at least once")
