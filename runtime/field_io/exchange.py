@@ -53,7 +53,7 @@ class FieldIo:
         self._context = DriverContext(variables, io, recorder, running)
         self._kinds = driver_kinds(ModbusOptions(modbus_port, modbus_rate))
         self._configs: list[Any] = [kind.config_of(None) for kind in self._kinds]
-        self.drivers: list[FieldDriver | None] = [None for _ in self._kinds]
+        self._drivers: list[FieldDriver | None] = [None for _ in self._kinds]  # by kind
         self._active: tuple[FieldDriver, ...] = ()  # the drivers made, in their order
         self._artifact: Artifact | None = None
         self._bound_of: list[BoundVariable] | None = None
@@ -96,11 +96,11 @@ class FieldIo:
     def _replace(self, index: int, config: Any) -> None:
         """The driver made from `config` in place of the one that ran: the old one stops,
         then the new one starts, on the I/O thread (the cycle does not wait for either)."""
-        old = self.drivers[index]
+        old = self._drivers[index]
         new = self._kinds[index].make(config, self._context)
-        self.drivers[index], self._configs[index] = new, config
-        self._active = tuple(driver for driver in self.drivers if driver is not None)
-        self._bound_of = None
+        self._drivers[index], self._configs[index] = new, config
+        self._active = tuple(driver for driver in self._drivers if driver is not None)
+        self._bound_of = None  # the new driver binds the variables below
         if self._thread is None and new is not None:
             self._thread = IoThread()
         if self._thread is not None:
@@ -141,7 +141,7 @@ class FieldIo:
         return modbus.pollers if modbus is not None else []
 
     def _modbus(self) -> ModbusDriver | None:
-        return next((d for d in self.drivers if isinstance(d, ModbusDriver)), None)
+        return next((d for d in self._active if isinstance(d, ModbusDriver)), None)
 
     def close(self) -> None:
         if self._thread is None:

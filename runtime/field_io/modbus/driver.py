@@ -72,9 +72,8 @@ class ModbusDriver:
         self._applied = 0  # the last client write taken
         self._seen: dict[str, tuple[int, str]] = {}  # device -> (delivery seq, state) taken
         self._server_reported = False
-        self._reader = ImageReader((), context.variables)
+        self._reader = ImageReader((), context.variables)  # until `rebind`
         self.bad: frozenset[str] = frozenset()  # upper-case paths of inputs of lost devices
-        self.rebind()
 
     # ---- the I/O thread
     async def start(self) -> None:
