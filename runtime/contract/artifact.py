@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from runtime.contract.modbus import ModbusConfig, modbus_config
+from runtime.contract.opcua import OpcuaConfig, opcua_config
 from runtime.contract.outside_json import MIB, JsonRefused, read_json
 
 FORMAT = "padt-artifact"
@@ -139,7 +140,7 @@ class AccessPath:
 # fields added within version 4: left out of the CRC while empty, so that a configuration
 # that does not use them keeps its CRC (and a runtime that does not know them refuses one
 # that does: its CRC does not match)
-_OPTIONAL_FIELDS = ("located", "access_paths")
+_OPTIONAL_FIELDS = ("located", "access_paths", "opcua")
 
 
 @dataclass(frozen=True)
@@ -159,6 +160,8 @@ class Artifact:
     # configuration's VAR_CONFIG gives them, sorted
     located: tuple[tuple[str, str], ...] = ()
     access_paths: tuple[AccessPath, ...] = ()  # sorted by name
+    # the served address space and the remote servers (opcua.py); None: no OPC UA at all
+    opcua: OpcuaConfig | None = None
     crc: str = field(default="")
     format: str = FORMAT
     version: int = VERSION
@@ -238,6 +241,7 @@ def load_artifact(text: str | bytes) -> Artifact:
             modbus=modbus_config(data["modbus"]),
             located=tuple((path, location) for path, location in data.get("located", ())),
             access_paths=tuple(AccessPath(**entry) for entry in data.get("access_paths", ())),
+            opcua=opcua_config(data["opcua"]) if data.get("opcua") is not None else None,
             crc=data["crc"],
         )
     except (KeyError, TypeError, ValueError, AttributeError) as exc:  # ValueError: unpacking
