@@ -109,6 +109,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         f"(default {REQUESTS_PER_SECOND}); a flood is answered no faster",
     )
     parser.add_argument(
+        "--opcua-port",
+        type=int,
+        default=None,
+        metavar="PORT",
+        help="port of the OPC UA server instead of the configured one (0: any free)",
+    )
+    parser.add_argument(
         "--native-code",
         action=argparse.BooleanOptionalAction,
         default=True,
@@ -207,7 +214,9 @@ def run(args: argparse.Namespace) -> int:
         if context is not None:
             saver.submit(context)
 
+    from runtime import online_writes
     from runtime.field_io import FieldIo
+    from runtime.field_io.opcua.driver import OpcuaOptions
 
     resource.field_io = FieldIo(
         lambda: resource.artifact,
@@ -217,6 +226,10 @@ def run(args: argparse.Namespace) -> int:
         resource.running,
         args.modbus_port,
         args.modbus_rate,
+        resource=args.resource,
+        accounts=lambda: resource.access.users,
+        write=lambda path, value, user: online_writes.write(resource, path, value, user),
+        opcua=OpcuaOptions(args.opcua_port, args.state_dir / "opcua"),
     )
     from runtime.recorder import Recordings
 

@@ -10,8 +10,10 @@ from runtime.contract.values import format_value
 from runtime.resource import Resource
 
 
-def write(resource: Resource, name: str, value: object) -> None:
-    """Write a value once: a forced variable keeps its force value at the next cycle."""
+def write(resource: Resource, name: str, value: object, user: str | None = None) -> None:
+    """Write a value once: a forced variable keeps its force value at the next cycle.
+    `user`: who wrote it, where not the sender of the command being carried out (an OPC
+    UA client's write)."""
     if resource.params.safety_operation:
         raise Refusal("safety_operation", "no writes from OLT in safety operation")
     variables = resource.variables
@@ -24,6 +26,7 @@ def write(resource: Resource, name: str, value: object) -> None:
         "write",
         # as people write values (T#1s500ms, TRUE); the details keep the run-time values
         f"{bound.path.path} written: {format_value(old, kind)} -> {format_value(stored, kind)}",
+        user=user,
         variable=bound.path.path,
         old=old,
         new=stored,

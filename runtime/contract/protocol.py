@@ -124,37 +124,48 @@ class ProgramStatus:
 
 
 @dataclass(frozen=True)
-class ModbusServerStatus:
-    """The served process image (docs/modbus.md)."""
+class ServerStatus:
+    """A server of the resource's field I/O: the served Modbus image (docs/modbus.md), the
+    OPC UA server (docs/opcua.md)."""
 
     host: str
     port: int  # where it listens; 0 while it does not
     listening: bool
     error: str | None  # why it does not listen
-    requests: int  # Modbus frames received
-    exceptions: int  # exception responses sent (malformed, unknown, out of range, refused)
-    writes: int  # write requests taken
+    requests: int  # Modbus frames; OPC UA Read and Write calls
+    exceptions: int  # Modbus exception responses; OPC UA logins, certificates, writes refused
+    writes: int  # write requests taken (Modbus), values written (OPC UA)
+    protocol: str = "modbus"  # modbus | opcua
+    sessions: int = 0  # OPC UA sessions opened
+    certificate: str = ""  # OPC UA: the SHA-1 thumbprint of the server's certificate
+
+
+ModbusServerStatus = ServerStatus  # its name while Modbus was the only protocol
 
 
 @dataclass(frozen=True)
 class DeviceStatus:
-    """A remote I/O device the resource polls."""
+    """A remote I/O device the resource reaches as a client: a Modbus device it polls, an
+    OPC UA server it reads or subscribes."""
 
     name: str
-    host: str
+    host: str  # Modbus: its host; OPC UA: its endpoint URL
     port: int
-    unit_id: int
+    unit_id: int  # Modbus; 0 for OPC UA
     state: str  # connecting | connected | lost
     last_error: str | None
-    requests: int  # Modbus requests sent
-    failures: int  # polls that failed (its inputs then hold their safe values)
-    round_trip_ms: float  # of the last good poll
+    requests: int  # Modbus requests sent; OPC UA service calls
+    failures: int  # losses (its inputs then hold their safe values)
+    round_trip_ms: float  # of the last good poll or call
+    protocol: str = "modbus"  # modbus | opcua
 
 
 @dataclass(frozen=True)
 class IoStatus:
-    server: ModbusServerStatus | None  # None: the image is not served
+    # the Modbus server (as in `servers`): where clients written before OPC UA read it
+    server: ServerStatus | None
     devices: list[DeviceStatus]
+    servers: list[ServerStatus] = field(default_factory=list)  # every protocol's
 
 
 @dataclass(frozen=True)
@@ -174,7 +185,7 @@ class Status:
     access: str  # "open" (no accounts), "users", or "setup" (no configuration yet)
     start: str | None  # how it starts next (cold, warm) or last started (continued)
     programs: list[ProgramStatus]
-    io: IoStatus | None = None  # Modbus TCP; None: the configuration uses none
+    io: IoStatus | None = None  # field I/O; None: the configuration uses none
 
 
 @dataclass(frozen=True)
@@ -253,17 +264,19 @@ class ValuesReply:
 
 @dataclass(frozen=True)
 class IoPoint:
-    """A located variable on Modbus with what is on the wire now."""
+    """A variable on the field bus with what is on the wire now."""
 
-    source: str  # "server" (the served image) or the name of a remote device
+    source: str  # "server" (the served Modbus image), "OPC UA server", or a device's name
     variable: str
-    location: str
+    location: str  # its direct address; "" for an OPC UA server's variable
     type: str
-    area: str  # coil | discrete_input | input_register | holding_register
-    address: int
+    area: str  # Modbus: coil | discrete_input | input_register | holding_register
+    address: int  # Modbus
     writable: bool  # a client may write it (served points)
     value: Value  # served: as served (safe in STOP); device inputs: as delivered
     quality: str  # good | bad (its device is lost) | safe (the served output is safe)
+    protocol: str = "modbus"  # modbus | opcua
+    place: str = ""  # where on the bus, as text: `holding_register 1024`, an OPC UA node id
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from runtime.contract.artifact import Artifact
+from runtime.contract.artifact import Artifact, UserAccount
 from runtime.contract.protocol import IoPoint, IoStatus
 from runtime.event_recorder import EventRecorder
 from runtime.process_image import ProcessImage
@@ -31,6 +31,12 @@ class DriverContext:
     io: ProcessImage
     recorder: EventRecorder
     running: Callable[[], bool]  # whether the resource runs (outputs are safe otherwise)
+    resource: str = "resource"  # its name
+    # its accounts now, for a server that logs users in
+    accounts: Callable[[], tuple[UserAccount, ...]] = tuple
+    # a client's write of a variable (path, value, user) as an online write, with its
+    # checks and event (cycle thread); Refusal when it is refused
+    write: Callable[[str, Any, str], None] | None = None
 
 
 class FieldDriver(Protocol):

@@ -17,7 +17,7 @@ import logging
 from collections.abc import Callable
 from typing import Any
 
-from runtime.contract.artifact import Artifact
+from runtime.contract.artifact import Artifact, UserAccount
 from runtime.contract.protocol import DeviceStatus, IoPoint, IoStatus
 from runtime.event_recorder import EventRecorder
 from runtime.field_io.driver import DriverContext, FieldDriver
@@ -27,6 +27,7 @@ from runtime.field_io.modbus.driver import ModbusDriver, ModbusOptions
 from runtime.field_io.modbus.image_server import ImageServer
 from runtime.field_io.modbus.poller import DevicePoller
 from runtime.field_io.modbus.request_meter import REQUESTS_PER_SECOND
+from runtime.field_io.opcua.driver import OpcuaOptions
 from runtime.instances import BoundVariable
 from runtime.process_image import ProcessImage
 from runtime.variables import Variables
@@ -44,14 +45,21 @@ class FieldIo:
         running: Callable[[], bool],
         modbus_port: int | None = None,
         modbus_rate: int = REQUESTS_PER_SECOND,
+        *,
+        resource: str = "resource",
+        accounts: Callable[[], tuple[UserAccount, ...]] = tuple,
+        write: Callable[[str, Any, str], None] | None = None,
+        opcua: OpcuaOptions | None = None,
     ) -> None:
         """The resource's parts it works with: the loaded configuration (`artifact`), its
         variables, process image and event recorder, and whether it runs; `modbus_port`
         overrides the configured port of the served Modbus image (0: any free one), which
-        answers at most `modbus_rate` requests a second (all clients together)."""
+        answers at most `modbus_rate` requests a second (all clients together). A server
+        that logs users in takes the resource's `accounts`, and carries a client's write
+        out with `write` (the online write: `runtime/online_writes.py`)."""
         self._loaded = artifact
-        self._context = DriverContext(variables, io, recorder, running)
-        self._kinds = driver_kinds(ModbusOptions(modbus_port, modbus_rate))
+        self._context = DriverContext(variables, io, recorder, running, resource, accounts, write)
+        self._kinds = driver_kinds(ModbusOptions(modbus_port, modbus_rate), opcua or OpcuaOptions())
         self._configs: list[Any] = [kind.config_of(None) for kind in self._kinds]
         self._drivers: list[FieldDriver | None] = [None for _ in self._kinds]  # by kind
         self._active: tuple[FieldDriver, ...] = ()  # the drivers made, in their order
@@ -122,9 +130,10 @@ class FieldIo:
         statuses = [driver.status() for driver in self._active]
         if not statuses:
             return None
-        server = next((s.server for s in statuses if s.server is not None), None)
+        servers = [server for s in statuses for server in s.servers]
         devices: list[DeviceStatus] = [d for s in statuses for d in s.devices]
-        return IoStatus(server, devices)
+        modbus = next((s for s in servers if s.protocol == "modbus"), None)
+        return IoStatus(modbus, devices, servers)
 
     def points(self) -> list[IoPoint]:
         return [point for driver in self._active for point in driver.points()]

@@ -19,7 +19,7 @@ from typing import Any
 
 from runtime.contract.artifact import Artifact
 from runtime.contract.modbus import ModbusConfig, Point
-from runtime.contract.protocol import DeviceStatus, IoPoint, IoStatus, ModbusServerStatus
+from runtime.contract.protocol import DeviceStatus, IoPoint, IoStatus, ServerStatus
 from runtime.contract.refusal import Refusal
 from runtime.field_io.driver import DriverContext, DriverKind, FieldDriver
 from runtime.field_io.modbus.image_reader import ImageReader, is_output
@@ -185,7 +185,7 @@ class ModbusDriver:
         server = None
         if self.server is not None:
             counts = self.server.store.counts
-            server = ModbusServerStatus(
+            server = ServerStatus(
                 self.server.host, self.server.port, self.server.port != 0, self.server.error,
                 counts.requests, counts.exceptions, counts.writes,
             )  # fmt: skip
@@ -205,7 +205,7 @@ class ModbusDriver:
             )
             for p in self.pollers
         ]
-        return IoStatus(server, devices)
+        return IoStatus(server, devices, [server] if server is not None else [])
 
     def points(self) -> list[IoPoint]:
         points: list[IoPoint] = []
@@ -231,5 +231,5 @@ class ModbusDriver:
 def _io_point(source: str, point: Point, value: Any, quality: str) -> IoPoint:
     return IoPoint(
         source, point.variable, point.location, point.type, point.area, point.address,
-        point.writable, value, quality,
+        point.writable, value, quality, "modbus", f"{point.area} {point.address}",
     )  # fmt: skip
