@@ -83,25 +83,14 @@ def status_lines(status: p.Status) -> list[str]:
 
 
 def io_lines(io: p.IoStatus | None) -> list[str]:
-    """Modbus TCP: the served image and each remote device."""
+    """Field I/O: each server (Modbus TCP, OPC UA) and each remote device."""
     if io is None:
         return []
-    lines = []
-    server = io.server
-    if server is not None:
-        where = (
-            f"{server.host}:{server.port}"
-            if server.listening
-            else f"not listening ({server.error or 'starting'})"
-        )
-        lines.append(
-            f"Modbus server {where}: {server.requests} requests, {server.exceptions} "
-            f"exception responses, {server.writes} writes"
-        )
+    lines = [_server_line(server) for server in io.servers]
     if io.devices:
         rows = [
-            [d.name, f"{d.host}:{d.port}", str(d.unit_id), d.state, str(d.requests),
-             str(d.failures), _ms(d.round_trip_ms), d.last_error or ""]
+            [d.name, _device_address(d), str(d.unit_id) if d.protocol == "modbus" else "",
+             d.state, str(d.requests), str(d.failures), _ms(d.round_trip_ms), d.last_error or ""]
             for d in io.devices
         ]  # fmt: skip
         header = ["device", "address", "unit", "state", "requests", "failures", "round trip"]
@@ -109,14 +98,42 @@ def io_lines(io: p.IoStatus | None) -> list[str]:
     return lines
 
 
+def _server_line(server: p.ServerStatus) -> str:
+    if server.protocol == "opcua":
+        where = (
+            f"opc.tcp://{server.host}:{server.port}"
+            if server.listening
+            else f"not listening ({server.error or 'starting'})"
+        )
+        return (
+            f"OPC UA server {where}: {server.sessions} sessions, {server.requests} requests, "
+            f"{server.exceptions} refused, {server.writes} writes; certificate SHA-1 "
+            f"{server.certificate or '-'}"
+        )
+    where = (
+        f"{server.host}:{server.port}"
+        if server.listening
+        else f"not listening ({server.error or 'starting'})"
+    )
+    return (
+        f"Modbus server {where}: {server.requests} requests, {server.exceptions} "
+        f"exception responses, {server.writes} writes"
+    )
+
+
+def _device_address(device: p.DeviceStatus) -> str:
+    return device.host if device.protocol == "opcua" else f"{device.host}:{device.port}"
+
+
 def point_lines(points: list[p.IoPoint]) -> list[str]:
-    """Every mapped point with what is on the wire now."""
+    """Every mapped point with what is on the wire now; `place` is where on the bus (a
+    Modbus table and address, an OPC UA node id)."""
     rows = [
-        [x.source, x.variable, x.location, x.type, x.area, str(x.address),
+        [x.source.replace(" ", "_"), x.variable, x.location or "-", x.type, x.place,
          "yes" if x.writable else "", json.dumps(x.value), x.quality]
         for x in points
     ]  # fmt: skip
-    header = ["source", "variable", "location", "type", "table", "address", "writable"]
+    header = ["source", "variable", "location", "type", "place", "writable"]
     return table([*header, "value", "quality"], rows)
 
 

@@ -33,11 +33,13 @@ _QUALITY_STYLES = {
     "good": "color:#2b8a3e",
     "bad": "color:#e67700;font-style:italic",
     "safe": "color:#868e96",
+    "waiting": "color:#868e96;font-style:italic",
 }
 _QUALITY_WORDS = {
     "good": "as on the wire",
     "bad": "safe value: its device is lost",
     "safe": "safe value: the resource does not run",
+    "waiting": "no value served yet",
 }
 
 
@@ -95,7 +97,7 @@ def refresh(
 
 
 def _source_order(source: str) -> tuple[int, str]:
-    return (0 if source == "server" else 1, source)
+    return ({"server": 0, "OPC UA server": 1}.get(source, 2), source)
 
 
 def _show(screen: IoScreen, name: str, handle: viser.GuiHtmlHandle, content: str) -> None:
@@ -121,21 +123,38 @@ def _table(head: list[str], rows: list[str], testid: str) -> str:
 
 
 def render_server(io: p.IoStatus | None) -> str:
+    """A line per server of the resource's: Modbus TCP first, then OPC UA."""
     if io is None:
-        return _note("This configuration has no field I/O over Modbus TCP.")
-    server = io.server
-    if server is None:
-        return _note("The process image is not served over Modbus TCP (serve = false).")
-    where = f"{html.escape(server.host)}:{server.port}"
+        return _note("This configuration has no field I/O (Modbus TCP, OPC UA).")
+    if not io.servers:
+        return _note("The resource serves no field I/O (Modbus TCP serve = false, no OPC UA).")
+    return "".join(_server_line(server) for server in io.servers)
+
+
+_PROTOCOLS = {"modbus": "Modbus TCP server", "opcua": "OPC UA server"}
+
+
+def _server_line(server: p.ServerStatus) -> str:
+    name = _PROTOCOLS.get(server.protocol, server.protocol)
+    opening = f'<p data-testid="io-server" data-protocol="{html.escape(server.protocol)}">'
     if not server.listening:
         why = html.escape(server.error or "not listening")
         return (
-            f'<p data-testid="io-server"><b>Modbus TCP server</b> '
-            f'<span style="color:#c92a2a">does not listen: {why}</span></p>'
+            f'{opening}<b>{name}</b> <span style="color:#c92a2a">does not listen: {why}</span></p>'
+        )
+    if server.protocol == "opcua":
+        where = f"opc.tcp://{html.escape(server.host)}:{server.port}"
+        return (
+            f"{opening}<b>{name}</b> listening on <code>{where}</code> · "
+            f"{counted(server.sessions, 'session')} · {counted(server.requests, 'request')} · "
+            f"{counted(server.exceptions, 'refusal')} · {counted(server.writes, 'write')} taken"
+            f'<br><span style="{_GREY}">certificate SHA-1 '
+            f"<code>{html.escape(server.certificate)}</code></span></p>"
         )
     return (
-        f'<p data-testid="io-server"><b>Modbus TCP server</b> listening on '
-        f"<code>{where}</code> · {counted(server.requests, 'request')} · "
+        f"{opening}<b>{name}</b> listening on "
+        f"<code>{html.escape(server.host)}:{server.port}</code> · "
+        f"{counted(server.requests, 'request')} · "
         f"{counted(server.exceptions, 'exception response')} · "
         f"{counted(server.writes, 'write')} taken</p>"
     )
@@ -154,8 +173,7 @@ def render_devices(io: p.IoStatus | None) -> str:
         rows.append(
             f'<tr data-device="{html.escape(device.name)}">'
             f'<td style="{_CELL}"><b>{html.escape(device.name)}</b></td>'
-            f'<td style="{_CELL}"><code>{html.escape(device.host)}:{device.port}</code> '
-            f"unit {device.unit_id}</td>"
+            f'<td style="{_CELL}">{_device_address(device)}</td>'
             f'<td style="{_CELL};color:{color};font-weight:600" data-state>'
             f"{html.escape(device.state)}</td>"
             f'<td style="{_CELL};text-align:right">{device.requests}</td>'
@@ -165,6 +183,12 @@ def render_devices(io: p.IoStatus | None) -> str:
         )
     head = ["Device", "Address", "State", "Requests", "Failures", "Round trip", "Last error"]
     return _table(head, rows, "io-devices")
+
+
+def _device_address(device: p.DeviceStatus) -> str:
+    if device.protocol == "opcua":
+        return f"<code>{html.escape(device.host)}</code>"
+    return f"<code>{html.escape(device.host)}:{device.port}</code> unit {device.unit_id}"
 
 
 def render_points(points: list[p.IoPoint], error: str) -> str:
@@ -180,8 +204,7 @@ def render_points(points: list[p.IoPoint], error: str) -> str:
             f'<tr><td style="{_CELL}">{html.escape(point.source)}</td>'
             f'<td style="{_CELL}">{html.escape(point.variable)}</td>'
             f'<td style="{_CELL}"><code>{html.escape(point.location)}</code></td>'
-            f'<td style="{_CELL}">{html.escape(point.area.replace("_", " "))} '
-            f"{point.address}</td>"
+            f'<td style="{_CELL}"><code>{html.escape(point.place.replace("_", " "))}</code></td>'
             f'<td style="{_CELL};{_GREY}">{html.escape(point.type)}</td>'
             f'<td style="{_CELL}" data-writable>{_writable(point)}</td>'
             f'<td style="{_CELL};text-align:right;font-family:monospace;{style}" '
@@ -190,14 +213,14 @@ def render_points(points: list[p.IoPoint], error: str) -> str:
         )
     more = len(points) - MAX_ROWS
     count = _note(f"the first {MAX_ROWS} of {len(points)} points shown") if more > 0 else ""
-    head = ["Source", "Variable", "Location", "Modbus", "Type", "Writable", "Value"]
+    head = ["Source", "Variable", "Location", "Place", "Type", "Writable", "Value"]
     return count + _table(head, rows, "io-points") + legend()
 
 
 def _writable(point: p.IoPoint) -> str:
-    """Whether a Modbus client may write a served point; a remote device's points are
-    the resource's own to read and write there."""
-    if point.source != "server":
+    """Whether a client may write a served point; a remote device's points are the
+    resource's own to read and write there."""
+    if point.source not in ("server", "OPC UA server"):
         return f'<span style="{_GREY}">no (device)</span>'
     return "yes" if point.writable else "no"
 
