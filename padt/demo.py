@@ -45,6 +45,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=5020,
         help="Modbus TCP port of the resource's served image on 127.0.0.1 (0: any free one)",
     )
+    parser.add_argument(
+        "--opcua-port",
+        type=int,
+        default=OPCUA_PORT,
+        help=f"OPC UA port of the resource's server on 127.0.0.1 (default {OPCUA_PORT}; "
+        "0: any free one)",
+    )
+    parser.add_argument(
+        "--no-opcua",
+        action="store_true",
+        help="no OPC UA server (its start takes about 2 s of CPU)",
+    )
     add_trusted_proxy_option(parser)
 
 
@@ -74,14 +86,32 @@ def demo_administrator(state_dir: Path) -> tuple[UserAccount, str | None]:
 
 
 PLANT_PORT_LINE = "port = 5021  # the plant's port"
+OPCUA_PORT = 4840
+# what `padt demo` adds to the demo's padt.toml: the tank over OPC UA (docs/opcua.md)
+OPCUA_SECTION = """
+# OPC UA (docs/opcua.md): the tank for SCADA and HMI clients on opc.tcp://127.0.0.1:4840
+# (`padt demo --opcua-port` moves it). Clients log in with the demo's accounts over
+# Basic256Sha256; the demo trusts a client's certificate at first contact (a plant would
+# trust each by hand).
+[opcua]
+host = "127.0.0.1"
+port = 4840
+expose = ["TankControl", "tankLevel", "pumpRunning", "pumpCommand"]
+writable = ["TankControl.highLevel", "TankControl.lowLevel", "TankControl.restartDelay"]
+trust_unknown_clients = true
+"""
 
 
 def demo_project_with_accounts(
-    state_dir: Path, accounts: list[UserAccount], plant_port: int | None = None
+    state_dir: Path,
+    accounts: list[UserAccount],
+    plant_port: int | None = None,
+    opcua: bool = False,
 ) -> Path:
     """The embedded demo project, copied into the state folder with the demo's accounts
-    added (and the port the simulated plant listens on): the runtime gets it from there,
-    and the REST API serves it as `demo`, so a load through the API keeps the accounts."""
+    added (and the port the simulated plant listens on, and the OPC UA server): the
+    runtime gets it from there, and the REST API serves it as `demo`, so a load through
+    the API keeps the accounts."""
     from backend.engineering.project import (
         PROJECT_FILE,
         copy_template_sources,
@@ -93,7 +123,8 @@ def demo_project_with_accounts(
     folder.mkdir(parents=True, exist_ok=True)
     copy_template_sources(demo_project_path(), folder)  # its tests too: the tank template
     entries = "".join("\n" + user_entry(account) for account in accounts)
-    config = (demo_project_path() / PROJECT_FILE).read_text(encoding="utf-8") + entries
+    config = (demo_project_path() / PROJECT_FILE).read_text(encoding="utf-8")
+    config += (OPCUA_SECTION if opcua else "") + entries
     if plant_port is not None:
         assert PLANT_PORT_LINE in config, "the demo's padt.toml names the plant's port"
         config = config.replace(PLANT_PORT_LINE, f"port = {plant_port}  # the plant's port")
@@ -153,7 +184,7 @@ def _run_with_plant(
     from runtime.contract.session import open_client, open_router
     from runtime.contract.state_folder import artifact_path
 
-    folder = demo_project_with_accounts(args.state_dir, [admin], plant_port)
+    folder = demo_project_with_accounts(args.state_dir, [admin], plant_port, not args.no_opcua)
     project = load_project([folder])
     result = compile_project(project)
     if result.artifact is None:  # the embedded project always compiles; guard all the same
@@ -176,6 +207,8 @@ def _run_with_plant(
     command = [sys.executable, "-m", "padt.cli", "runtime", "--resource", resource]
     command += ["--state-dir", str(args.state_dir), "--zenoh", endpoint]
     command += ["--modbus-port", str(args.modbus_port)]
+    if not args.no_opcua:
+        command += ["--opcua-port", str(args.opcua_port)]
     # in a process group of its own: a Ctrl-C at the terminal reaches the demo alone, which
     # ends the runtime in order (the runtime ends its own workers)
     runtime = subprocess.Popen(command, preexec_fn=_die_with_parent, process_group=0)
@@ -218,6 +251,13 @@ def _run_with_plant(
                 f"register 0, the pump command coil 0 (the plant: 127.0.0.1:{plant_port})",
                 flush=True,
             )
+            if not args.no_opcua:
+                where = args.opcua_port or "a free port (padt status --io shows it)"
+                print(
+                    f"padt demo: OPC UA opc.tcp://127.0.0.1:{where} (Basic256Sha256, log in "
+                    f"as {admin.name}): the tank is the object ns=2;s={resource}",
+                    flush=True,
+                )
             stop.sleep_until_requested(lambda: runtime.poll() is None)
             if runtime.returncode is not None:
                 code = runtime.returncode

@@ -52,6 +52,7 @@ def test_ctrl_c_ends_the_demo_without_a_traceback(tmp_path: Path) -> None:
     command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(tmp_path)]
     command += ["--port", str(free_port()), "--zenoh-port", str(free_port())]
     command += ["--api-port", "0", "--modbus-port", str(free_port())]
+    command += ["--opcua-port", str(free_port())]  # its server ends in order too
     demo = subprocess.Popen(
         command,
         cwd=REPO,

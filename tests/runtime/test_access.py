@@ -174,6 +174,7 @@ def test_the_runtime_refuses_whoever_sends_the_command(tmp_path: Path, zenoh_end
 def start_demo(state_dir: Path, zenoh_port: int) -> tuple[subprocess.Popen[str], list[str]]:
     command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(state_dir)]
     command += ["--port", str(free_port()), "--zenoh-port", str(zenoh_port), "--api-port", "0"]
+    command += ["--no-opcua"]
     process = subprocess.Popen(command, cwd=REPO, stdout=subprocess.PIPE, text=True)
     assert process.stdout is not None
     lines = []

@@ -28,6 +28,7 @@ class Demo:
     url: str
     password: str
     modbus_port: int = 0  # where the resource serves its image over Modbus TCP
+    opcua_port: int = 0  # where its OPC UA server listens (0: it has none)
 
 
 @dataclass(frozen=True)

@@ -49,11 +49,15 @@ def one_browser_per_module(request: pytest.FixtureRequest) -> Iterator[None]:
 
 
 @pytest.fixture
-def demo(tmp_path: Path) -> Iterator[Demo]:
+def demo(tmp_path: Path, request: pytest.FixtureRequest) -> Iterator[Demo]:
+    """`padt demo`; without its OPC UA server (2 s of CPU to start) unless the test asks
+    for it (`@pytest.mark.parametrize("demo", ["opcua"], indirect=True)`)."""
     command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(tmp_path)]
     command += ["--port", str(free_port()), "--zenoh-port", str(free_port()), "--api-port", "0"]
     modbus_port = free_port()  # never the fixed 5020: demos of parallel tests would collide
     command += ["--modbus-port", str(modbus_port)]
+    opcua_port = free_port() if getattr(request, "param", None) == "opcua" else 0
+    command += ["--opcua-port", str(opcua_port)] if opcua_port else ["--no-opcua"]
     process = subprocess.Popen(
         command, cwd=REPO, stdout=subprocess.PIPE, text=True, env=dict(os.environ)
     )
@@ -69,7 +73,7 @@ def demo(tmp_path: Path) -> Iterator[Demo]:
     assert password is not None, "padt demo printed no administrator password"
     assert time.monotonic() - started < 60
     try:
-        yield Demo(url, password, modbus_port)
+        yield Demo(url, password, modbus_port, opcua_port)
     finally:
         process.send_signal(signal.SIGINT)  # Ctrl-C
         assert process.wait(timeout=15) == 0

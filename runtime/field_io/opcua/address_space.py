@@ -15,6 +15,7 @@ import re
 from dataclasses import dataclass
 
 from runtime.contract.opcua import OpcuaServer
+from runtime.contract.values import array_shape
 from runtime.field_io.opcua.types import variant_type
 from runtime.instances import BoundVariable
 
@@ -70,7 +71,10 @@ def plan(bound: list[BoundVariable], server: OpcuaServer) -> Plan:
                 segments[-1],
                 descriptions.get(path.upper(), ""),
                 variable,
-                writable.cover(path) and not variable.path.constant,
+                # an online write takes elementary values: arrays are served read-only
+                writable.cover(path)
+                and not variable.path.constant
+                and array_shape(variable.path.type) is None,
             )
         )
     return Plan(tuple(objects.values()), tuple(variables))

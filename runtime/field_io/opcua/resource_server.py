@@ -64,6 +64,8 @@ from runtime.instances import BoundVariable
 from runtime.value_reader import value_reader
 
 log = logging.getLogger(__name__)
+# asyncua tells every request at INFO: what goes wrong is reported as events instead
+logging.getLogger("asyncua").setLevel(logging.WARNING)
 
 MIN_SAMPLING_MS = 10  # the fastest the served values follow the cycle
 WRITE_TIMEOUT_S = 2.0  # a write the cycle did not take by then is answered BadTimeout
