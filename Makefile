@@ -17,6 +17,7 @@ test: $(VENV)/.stamp-dev
 	bash scripts/install-mbpoll.sh
 	bash scripts/install-document-tools.sh
 	bash scripts/install-mcap-reader.sh
+	bash scripts/install-opcua-client.sh
 	bash scripts/install-codemirror.sh
 	bash scripts/install-c-compiler.sh $(BIN)/python
 	bash scripts/install-junit-schema.sh $(BIN)/python
