@@ -31,7 +31,8 @@ from backend.compiler.source import SourceFile
 from runtime.clock import RealClock
 from runtime.contract.artifact import Artifact
 from runtime.field_io import FieldIo
-from runtime.field_io.modbus.poller import Delivery, DevicePoller
+from runtime.field_io.delivery import Delivery
+from runtime.field_io.modbus.poller import DevicePoller
 from runtime.resource import Resource
 from tests.bench.bench_runtime import (
     TARGET_MS,

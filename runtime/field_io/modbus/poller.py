@@ -30,19 +30,11 @@ from runtime.contract.modbus import (
     decode,
     encode,
 )
+from runtime.field_io.delivery import Delivery
 
 MAX_REGISTERS = 120  # per request (Modbus allows 125 to read, 123 to write)
 MAX_BITS = 1968
 MAX_GAP = 8  # unmapped addresses read along rather than in a request of their own
-
-
-@dataclass(frozen=True)
-class Delivery:
-    """What the device last delivered for its input points; `good` False: safe values."""
-
-    seq: int
-    values: dict[str, Any]
-    good: bool
 
 
 @dataclass(frozen=True)
