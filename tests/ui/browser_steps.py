@@ -29,6 +29,7 @@ class Demo:
     password: str
     modbus_port: int = 0  # where the resource serves its image over Modbus TCP
     opcua_port: int = 0  # where its OPC UA server listens (0: it has none)
+    zenoh: str = ""  # its Zenoh router's endpoint
 
 
 @dataclass(frozen=True)

@@ -53,7 +53,8 @@ def demo(tmp_path: Path, request: pytest.FixtureRequest) -> Iterator[Demo]:
     """`padt demo`; without its OPC UA server (2 s of CPU to start) unless the test asks
     for it (`@pytest.mark.parametrize("demo", ["opcua"], indirect=True)`)."""
     command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(tmp_path)]
-    command += ["--port", str(free_port()), "--zenoh-port", str(free_port()), "--api-port", "0"]
+    zenoh_port = free_port()
+    command += ["--port", str(free_port()), "--zenoh-port", str(zenoh_port), "--api-port", "0"]
     modbus_port = free_port()  # never the fixed 5020: demos of parallel tests would collide
     command += ["--modbus-port", str(modbus_port)]
     opcua_port = free_port() if getattr(request, "param", None) == "opcua" else 0
@@ -73,7 +74,7 @@ def demo(tmp_path: Path, request: pytest.FixtureRequest) -> Iterator[Demo]:
     assert password is not None, "padt demo printed no administrator password"
     assert time.monotonic() - started < 60
     try:
-        yield Demo(url, password, modbus_port, opcua_port)
+        yield Demo(url, password, modbus_port, opcua_port, f"tcp/127.0.0.1:{zenoh_port}")
     finally:
         process.send_signal(signal.SIGINT)  # Ctrl-C
         assert process.wait(timeout=15) == 0
