@@ -11,21 +11,21 @@ the cycle thread.
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import queue
 from dataclasses import dataclass
 from typing import Any
 
 from runtime.contract.artifact import Artifact
-from runtime.contract.modbus import ModbusConfig, Point
-from runtime.contract.protocol import DeviceStatus, IoPoint, IoStatus, ServerStatus
+from runtime.contract.modbus import Device, ModbusConfig, Point
+from runtime.contract.protocol import IoPoint, IoStatus, ServerStatus
 from runtime.contract.refusal import Refusal
 from runtime.field_io.driver import DriverContext, DriverKind, FieldDriver
 from runtime.field_io.modbus.image_reader import ImageReader, is_output
 from runtime.field_io.modbus.image_server import ImageServer, ImageStore, ServedImage
 from runtime.field_io.modbus.poller import DevicePoller
 from runtime.field_io.modbus.request_meter import REQUESTS_PER_SECOND, RequestMeter
+from runtime.field_io.remote_devices import RemoteDevices
 
 
 @dataclass(frozen=True)
@@ -67,32 +67,33 @@ class ModbusDriver:
             self.server = ImageServer(ImageStore(tuple(points)), config.host, port, meter)
         outputs = lambda: context.io.outputs  # noqa: E731  # replaced, never changed
         self.pollers = [DevicePoller(device, outputs) for device in config.devices]
-        self._tasks: list[asyncio.Task[None]] = []  # the pollers' (only the I/O thread's)
+        self._devices = RemoteDevices(
+            self.pollers, context, "modbus", "Modbus device", _device_address
+        )
         self._floods = 0  # the floods of requests the meter held back, reported
         self._applied = 0  # the last client write taken
-        self._seen: dict[str, tuple[int, str]] = {}  # device -> (delivery seq, state) taken
         self._server_reported = False
         self._reader = ImageReader((), context.variables)  # until `rebind`
-        self.bad: frozenset[str] = frozenset()  # upper-case paths of inputs of lost devices
+
+    @property
+    def bad(self) -> frozenset[str]:
+        """The upper-case paths of inputs of lost devices."""
+        return self._devices.bad
 
     # ---- the I/O thread
     async def start(self) -> None:
         if self.server is not None:
             await self.server.start()
-        self._tasks = [asyncio.create_task(p.run()) for p in self.pollers]
+        self._devices.start()
 
     async def stop(self) -> None:
-        for task in self._tasks:
-            task.cancel()
-        await asyncio.gather(*self._tasks, return_exceptions=True)
+        await self._devices.stop()
         if self.server is not None:
             await self.server.stop()
 
     # ---- the cycle thread
     def rebind(self) -> None:
-        # fresh instances hold initial values: the inputs the devices delivered last go
-        # in again at once, not a poll period later
-        self._seen = {name: (0, state) for name, (_, state) in self._seen.items()}
+        self._devices.rebind()
         if self.server is not None:
             self._reader = ImageReader(self.server.store.points, self._context.variables)
 
@@ -102,23 +103,7 @@ class ModbusDriver:
             self._report_server()
             if self.server.meter.floods != self._floods:
                 self._report_flood(self.server.meter)
-        io = self._context.io
-        bad: set[str] = set()
-        for poller in self.pollers:
-            # the poller writes its delivery before its state: read in the other order, a
-            # state seen comes with its delivery
-            state = poller.state
-            delivery = poller.delivery
-            seen = self._seen.get(poller.device.name, (0, "connecting"))
-            if delivery.seq != seen[0]:
-                io.set_inputs(delivery.values)
-            if state != seen[1]:
-                self._report_device(poller, state, seen[1])
-            self._seen[poller.device.name] = (delivery.seq, state)
-            if not delivery.good:
-                bad.update(name.upper() for name in delivery.values)
-        if bad != self.bad:
-            self.bad = frozenset(bad)
+        self._devices.before_cycle()
 
     def after_cycle(self) -> None:
         if self.server is None:
@@ -166,20 +151,6 @@ class ModbusDriver:
             long_term=False,
         )
 
-    def _report_device(self, poller: DevicePoller, state: str, before: str) -> None:
-        device, recorder = poller.device, self._context.recorder
-        if state == "lost":
-            recorder.record(
-                "io", f"Modbus device {device.name} lost: {poller.last_error}; "
-                "its inputs hold their safe values", long_term=True, device=device.name,
-            )  # fmt: skip
-        elif state == "connected":
-            again = " again" if before == "lost" else ""
-            recorder.record(
-                "io", f"Modbus device {device.name} connected{again}", long_term=bool(again),
-                device=device.name,
-            )  # fmt: skip
-
     # ---- what the status and the `io` command show (cycle thread)
     def status(self) -> IoStatus:
         server = None
@@ -189,22 +160,7 @@ class ModbusDriver:
                 self.server.host, self.server.port, self.server.port != 0, self.server.error,
                 counts.requests, counts.exceptions, counts.writes,
             )  # fmt: skip
-        devices = [
-            DeviceStatus(
-                p.device.name,
-                p.device.host,
-                p.device.port,
-                p.device.unit_id,
-                # the state the cycle has taken, with its inputs: a status that says
-                # "lost" comes after the safe values are in the process image
-                self._seen.get(p.device.name, (0, "connecting"))[1],
-                p.last_error,
-                p.requests,
-                p.failures,
-                round(p.round_trip_ms, 3),
-            )
-            for p in self.pollers
-        ]
+        devices = self._devices.statuses()
         return IoStatus(server, devices, [server] if server is not None else [])
 
     def points(self) -> list[IoPoint]:
@@ -215,17 +171,13 @@ class ModbusDriver:
             for point, value in zip(self.server.store.points, image.values, strict=True):
                 quality = "safe" if is_output(point) and safe else "good"
                 points.append(_io_point("server", point, value, quality))
-        for poller in self.pollers:
-            delivery = poller.delivery
-            for point in poller.device.points:
-                if point.is_input:
-                    value = delivery.values.get(point.variable, point.input_safe_value)
-                    quality = "good" if delivery.good else "bad"
-                else:
-                    value = poller.sent.get(point.variable)
-                    quality = "good" if point.variable in poller.sent else "bad"
-                points.append(_io_point(poller.device.name, point, value, quality))
+        for device, point, value, quality in self._devices.point_values():
+            points.append(_io_point(device, point, value, quality))
         return points
+
+
+def _device_address(device: Device) -> tuple[str, int, int]:
+    return device.host, device.port, device.unit_id
 
 
 def _io_point(source: str, point: Point, value: Any, quality: str) -> IoPoint:

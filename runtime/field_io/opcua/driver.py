@@ -1,9 +1,10 @@
 """OPC UA as a field I/O driver: the resource's server and the remote servers of one
 `[opcua]` configuration, between the cycle and the I/O thread.
 
-Before a cycle the writes of OPC UA clients are carried out as online writes, and what the
-server noticed (listening, a login or a certificate refused) becomes events; after it the
-server takes a snapshot of the exposed variables when it asked for one.
+Before a cycle the inputs the remote servers delivered go into the process image, the
+writes of OPC UA clients are carried out as online writes, and what the server noticed
+(listening, a login or a certificate refused) becomes events; after it the server takes a
+snapshot of the exposed variables when it asked for one.
 """
 
 from __future__ import annotations
@@ -13,11 +14,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from runtime.contract.artifact import Artifact
-from runtime.contract.opcua import OpcuaConfig
+from runtime.contract.opcua import OpcuaConfig, OpcuaDevice
 from runtime.contract.protocol import IoPoint, IoStatus, ServerStatus
 from runtime.contract.refusal import Refusal
 from runtime.field_io.driver import DriverContext, DriverKind, FieldDriver
+from runtime.field_io.opcua.remote import RemoteServer
 from runtime.field_io.opcua.resource_server import ResourceServer
+from runtime.field_io.remote_devices import RemoteDevices
 
 
 @dataclass(frozen=True)
@@ -61,23 +64,38 @@ class OpcuaDriver:
                 context.accounts,
                 lambda: context.variables.globals,
             )
-        self.bad: frozenset[str] = frozenset()
+        outputs = lambda: context.io.outputs  # noqa: E731  # replaced, never changed
+        self.remotes = [
+            RemoteServer(device, outputs, folder / "client") for device in config.devices
+        ]
+        self._devices = RemoteDevices(
+            self.remotes, context, "opcua", "OPC UA server", _device_address
+        )
+
+    @property
+    def bad(self) -> frozenset[str]:
+        """The upper-case paths of inputs of lost remote servers."""
+        return self._devices.bad
 
     # ---- the I/O thread
     async def start(self) -> None:
         if self.server is not None:
             await self.server.start()
+        self._devices.start()
 
     async def stop(self) -> None:
+        await self._devices.stop()
         if self.server is not None:
             await self.server.stop()
 
     # ---- the cycle thread
     def rebind(self) -> None:
+        self._devices.rebind()
         if self.server is not None:
             self.server.rebind(self._context.variables.bound)
 
     def before_cycle(self) -> None:
+        self._devices.before_cycle()
         server = self.server
         if server is None:
             return
@@ -97,43 +115,49 @@ class OpcuaDriver:
         servers = []
         server = self.server
         if server is not None:
-            counts = server.counts
-            certificate = server.certificate.thumbprint if server.certificate is not None else ""
+            counts, certificate = server.counts, server.certificate
             servers.append(
                 ServerStatus(
                     server.host,
                     server.port,
-                    server.port != 0,
-                    server.error,
-                    counts.requests,
-                    counts.refused,
-                    counts.writes,
-                    "opcua",
-                    counts.sessions,
-                    certificate,
+                    listening=server.port != 0,
+                    error=server.error,
+                    requests=counts.requests,
+                    exceptions=counts.refused,
+                    writes=counts.writes,
+                    protocol="opcua",
+                    sessions=counts.sessions,
+                    certificate=certificate.thumbprint if certificate is not None else "",
                 )
             )
-        return IoStatus(None, [], servers)
+        return IoStatus(None, self._devices.statuses(), servers)
 
     def points(self) -> list[IoPoint]:
-        if self.server is None:
-            return []
-        return [
-            IoPoint(
-                "OPC UA server",
-                path,
-                "",
-                kind,
-                "",
-                0,
-                writable,
-                value,
-                "good" if value is not None else "waiting",
-                "opcua",
-                node,
-            )
-            for path, kind, writable, value, node in self.server.shown()
+        points = [
+            _point(device, point.variable, point.location, point.type, value, quality, point.node)
+            for device, point, value, quality in self._devices.point_values()
         ]
+        if self.server is not None:
+            for path, kind, writable, value, node in self.server.shown():
+                quality = "good" if value is not None else "waiting"
+                points.append(
+                    _point("OPC UA server", path, "", kind, value, quality, node, writable)
+                )
+        return points
+
+
+def _point(
+    source: str, variable: str, location: str, kind: str, value: object, quality: str,
+    node: str, writable: bool = False,
+) -> IoPoint:  # fmt: skip
+    return IoPoint(
+        source, variable, location, kind, area="", address=0, writable=writable,
+        value=value, quality=quality, protocol="opcua", place=node,
+    )  # fmt: skip
+
+
+def _device_address(device: OpcuaDevice) -> tuple[str, int, int]:
+    return device.endpoint, 0, 0
 
 
 def _no_writes(path: str, value: object, user: str) -> None:
