@@ -16,6 +16,7 @@ from tests.bench import (
     bench_logic_view,
     bench_lsp,
     bench_modbus,
+    bench_opcua,
     bench_projects,
     bench_recording,
     bench_reload,
@@ -45,6 +46,7 @@ def main() -> None:
     bench_watch.main()
     bench_recording.main()
     bench_modbus.main()
+    bench_opcua.main()
     bench_jitter_loaded.main()
     bench_rest.main()
     bench_hostile.main()
