@@ -117,7 +117,7 @@ def test_a_resource_reads_and_writes_another_over_opc_ua_and_survives_its_loss(
     sink_settings = SINK_SETTINGS.format(port=port, password_file=password_file)
     sink_state = project(tmp_path / "sink", sink_settings, SINK, [admin])
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    src_command = [src_state, endpoint, "--opcua-port", str(port)]
+    source = ("Src", src_state, endpoint, "--opcua-port", str(port))
     with (
         router(endpoint),
         client_session(endpoint) as session,
@@ -139,7 +139,7 @@ def test_a_resource_reads_and_writes_another_over_opc_ua_and_survives_its_loss(
         def lines() -> list[str]:
             return [e.message for e in sink.ask(GetEvents(limit=500)).events if e.kind == "io"]
 
-        with runtime_process("Src", *src_command) as src_process:
+        with runtime_process(*source) as src_process:
             src = ResourceClient(session, "Src")
             wait_until_answering(src)
             src.login("admin", PASSWORD)
@@ -159,7 +159,7 @@ def test_a_resource_reads_and_writes_another_over_opc_ua_and_survives_its_loss(
             assert quality() == "bad"
             wait_for("the loss is an event", lambda: any("source lost" in m for m in lines()))
 
-        with runtime_process("Src", *src_command):
+        with runtime_process(*source):
             wait_for(
                 "connected again", lambda: lines()[-1] == "OPC UA server source connected again"
             )

@@ -339,8 +339,11 @@ def test_anonymous_and_a_wrong_password_are_refused(served: Served) -> None:
     assert run(lambda: attempt(None, "")) == "BadIdentityTokenRejected"
     assert run(lambda: attempt("op", "wrong")) == "BadUserAccessDenied"
     assert run(lambda: attempt("nobody", PASSWORD)) == "BadUserAccessDenied"
-    refused = [e for e in events(served) if "OPC UA login" in e[1]]
-    assert any("'op' refused" in e[1] for e in refused)
+    # recorded by the cycle thread at its next cycle
+    wait_for(
+        "the refusal is an event",
+        lambda: any("OPC UA login of 'op' refused" in e[1] for e in events(served)),
+    )
 
 
 def test_an_unknown_certificate_is_refused_until_it_is_trusted(
@@ -360,6 +363,9 @@ def test_an_unknown_certificate_is_refused_until_it_is_trusted(
     assert run(attempt) == "BadSecurityChecksFailed"
     rejected = served.pki / "rejected" / name
     assert rejected.is_file()
-    assert any(thumbprint(cert) in e[1] and "refused" in e[1] for e in events(served))
+    wait_for(
+        "the refusal is an event",
+        lambda: any(thumbprint(cert) in e[1] and "refused" in e[1] for e in events(served)),
+    )
     rejected.rename(served.pki / "trusted" / name)  # what an engineer does to trust it
     assert run(attempt) == "Good"
