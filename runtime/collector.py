@@ -46,6 +46,7 @@ class Collector:
         self.arrivals = 0  # freezes of new configurations since the last reclaim
         self._lock = threading.Lock()
         self._holding = 0  # how many `held_back` blocks are running
+        self._arriving = False  # one of them is an arrival
         self._threshold: tuple[int, int, int] | None = None
 
     def manage(self) -> None:
@@ -66,6 +67,12 @@ class Collector:
             self.arrivals += 1
             gc.freeze()
 
+    def settled(self) -> None:
+        """What a long-lived part just made (a field I/O server's monitored items) out of
+        sight now, without counting as an arrival: it replaces nothing."""
+        if self.managed:
+            gc.freeze()
+
     def between_cycles(self, running: bool = True) -> None:
         """Free what replaced configurations left when no cycle waits for it (STOP), or,
         running, once enough of them wait."""
@@ -81,9 +88,12 @@ class Collector:
         self.arrivals = 0
 
     @contextmanager
-    def held_back(self) -> Iterator[None]:
+    def held_back(self, arrival: bool = True) -> Iterator[None]:
         """A reload's preparation: no collection meanwhile, in the whole process; at the
-        end, what it made (and what the cycles made meanwhile) frozen, one arrival."""
+        end, what it made (and what the cycles made meanwhile) frozen, one arrival.
+        `arrival` False: what a long-lived part makes (a field I/O server starting, its
+        address space growing), frozen at the end without counting as an arrival, since
+        it replaces nothing whose reference cycles wait."""
         if not self.managed:
             yield
             return
@@ -92,6 +102,7 @@ class Collector:
                 self._threshold = gc.get_threshold()
                 gc.set_threshold(0)  # CPython: no automatic collection
             self._holding += 1
+            self._arriving = self._arriving or arrival
         try:
             yield
         finally:
@@ -100,7 +111,11 @@ class Collector:
                 if not self._holding and self._threshold is not None:
                     # the young objects' count starts again at 0 with the freeze: the next
                     # young collection walks only what is made from now on
-                    self.arrived()
+                    if self._arriving:
+                        self.arrived()
+                    else:
+                        gc.freeze()
+                    self._arriving = False
                     gc.set_threshold(*self._threshold)
                     self._threshold = None
 

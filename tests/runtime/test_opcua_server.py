@@ -50,6 +50,7 @@ VAR
   history : ARRAY[1..3] OF INT := [1, 2, 3];
   delay : TON;
   origin : Point;
+  corners : ARRAY[1..2] OF Point;
 END_VAR
 count := count + 1;
 delay(IN := TRUE, PT := T#1h);
@@ -186,6 +187,8 @@ def test_the_address_space_mirrors_the_configuration(served: Served) -> None:
                 else:
                     seen[name] = await child.read_data_value()
             seen["gLevel"] = await client.get_node(node("gLevel")).read_data_value()
+            corner = client.get_node(node("Main.corners[2].x"))
+            seen["corner"] = ((await corner.read_description()).Text, await corner.read_value())
             seen["description"] = (
                 await client.get_node(node("Main.setpoint")).read_description()
             ).Text
@@ -203,6 +206,8 @@ def test_the_address_space_mirrors_the_configuration(served: Served) -> None:
     assert {"ET", "IN", "PT", "Q"} <= set(seen["delay"])  # a function block: an object
     assert seen["origin"] == ["x", "y"]
     assert seen["description"] == "operators set this"
+    assert seen["corners"] == ["[1]", "[2]"]  # an array of structures: an object per element
+    assert seen["corner"] == ("across", 0.0)  # described as the structure's member is
     label, history = seen["label"].Value, seen["history"].Value
     assert (label.Value, label.VariantType) == ("idle", ua.VariantType.String)
     assert (history.Value, history.VariantType) == ([1, 2, 3], ua.VariantType.Int16)

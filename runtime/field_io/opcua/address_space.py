@@ -20,6 +20,7 @@ from runtime.field_io.opcua.types import variant_type
 from runtime.instances import BoundVariable
 
 _SEGMENT = re.compile(r"[^.\[\]]+|\[[^\]]*\]")
+_ANY_INDEX = re.compile(r"\[[^\]]*\]")
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ def plan(bound: list[BoundVariable], server: OpcuaServer) -> Plan:
     """The nodes of the variables `server` exposes, among `bound` (the configuration's)."""
     exposed = _Prefixes(server.exposed)
     writable = _Prefixes(server.writable)
-    descriptions = {path.upper(): text for path, text in server.descriptions}
+    descriptions = _Descriptions(server.descriptions)
     objects: dict[str, PlannedNode] = {}
     variables: list[PlannedNode] = []
     for variable in bound:
@@ -61,7 +62,7 @@ def plan(bound: list[BoundVariable], server: OpcuaServer) -> Plan:
             prefix = _joined(segments[:count])
             if prefix.upper() not in objects:
                 objects[prefix.upper()] = PlannedNode(
-                    prefix, parent, segments[count - 1], descriptions.get(prefix.upper(), "")
+                    prefix, parent, segments[count - 1], descriptions.of(prefix)
                 )
             parent = objects[prefix.upper()].path
         variables.append(
@@ -69,7 +70,7 @@ def plan(bound: list[BoundVariable], server: OpcuaServer) -> Plan:
                 path,
                 parent,
                 segments[-1],
-                descriptions.get(path.upper(), ""),
+                descriptions.of(path),
                 variable,
                 # an online write takes elementary values: arrays are served read-only
                 writable.cover(path)
@@ -85,6 +86,19 @@ def _joined(segments: list[str]) -> str:
     for segment in segments:
         text += segment if segment.startswith("[") or not text else f".{segment}"
     return text
+
+
+class _Descriptions:
+    """The declarations' comments by path; what lies inside the elements of an array is
+    described once for all of them, with the index written `[*]` (`gPoints[*].x`)."""
+
+    def __init__(self, descriptions: tuple[tuple[str, str], ...]) -> None:
+        self._by_path = {path.upper(): text for path, text in descriptions}
+
+    def of(self, path: str) -> str:
+        upper = path.upper()
+        found = self._by_path.get(upper)
+        return found if found is not None else self._by_path.get(_ANY_INDEX.sub("[*]", upper), "")
 
 
 class _Prefixes:
