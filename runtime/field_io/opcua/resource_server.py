@@ -378,8 +378,8 @@ class ResourceServer:
         attrs.ValueRank = len(lengths) if lengths else ua.ValueRank.Scalar
         if lengths:
             attrs.ArrayDimensions = [ua.UInt32(n) for n in lengths]
-        # no value before the first snapshot: a client reads BadWaitingForInitialData, never
-        # a made-up initial value
+        # no value until the first snapshot (null, without a source timestamp), never a
+        # made-up initial value
         attrs.Value = ua.Variant(None, ua.VariantType.Null)
         attrs.AccessLevel = _READ_WRITE if node.writable else _READ
         attrs.UserAccessLevel = _READ  # raised per user (`_user_access`)
