@@ -29,6 +29,9 @@ ALL_SOURCES = "(all)"
 _CELL = "padding:2px 8px;border-bottom:1px solid #e9ecef;vertical-align:top"
 _GREY = "color:#868e96"
 _STATE_COLORS = {"connected": "#2b8a3e", "connecting": "#e67700", "lost": "#c92a2a"}
+# a Modbus place stays on one line; a node id is long: it wraps anywhere (within a width
+# it keeps) rather than push the table wide
+_PLACE = {"modbus": "white-space:nowrap", "opcua": "overflow-wrap:anywhere;min-width:14em"}
 _QUALITY_STYLES = {
     "good": "color:#2b8a3e",
     "bad": "color:#e67700;font-style:italic",
@@ -200,20 +203,21 @@ def render_points(points: list[p.IoPoint], error: str) -> str:
     for point in points[:MAX_ROWS]:
         style = _QUALITY_STYLES.get(point.quality, "")
         value = format_for_display(point.value, point.type)
+        place = html.escape(point.place.replace("_", " "))
         rows.append(
-            f'<tr><td style="{_CELL}">{html.escape(point.source)}</td>'
+            f'<tr><td style="{_CELL};white-space:nowrap">{html.escape(point.source)}</td>'
             f'<td style="{_CELL}">{html.escape(point.variable)}</td>'
-            f'<td style="{_CELL}"><code>{html.escape(point.location)}</code></td>'
-            f'<td style="{_CELL}"><code>{html.escape(point.place.replace("_", " "))}</code></td>'
-            f'<td style="{_CELL};{_GREY}">{html.escape(point.type)}</td>'
-            f'<td style="{_CELL}" data-writable>{_writable(point)}</td>'
             f'<td style="{_CELL};text-align:right;font-family:monospace;{style}" '
             f'data-point="{html.escape(point.variable)}" data-quality="{point.quality}" '
-            f'title="{_QUALITY_WORDS.get(point.quality, "")}">{html.escape(value)}</td></tr>'
+            f'title="{_QUALITY_WORDS.get(point.quality, "")}">{html.escape(value)}</td>'
+            f'<td style="{_CELL};{_GREY}">{html.escape(point.type)}</td>'
+            f'<td style="{_CELL}" data-writable>{_writable(point)}</td>'
+            f'<td style="{_CELL}"><code>{html.escape(point.location)}</code></td>'
+            f'<td style="{_CELL};{_PLACE.get(point.protocol, "")}"><code>{place}</code></td></tr>'
         )
     more = len(points) - MAX_ROWS
     count = _note(f"the first {MAX_ROWS} of {len(points)} points shown") if more > 0 else ""
-    head = ["Source", "Variable", "Location", "Place", "Type", "Writable", "Value"]
+    head = ["Source", "Variable", "Value", "Type", "Writable", "Location", "Place"]
     return count + _table(head, rows, "io-points") + legend()
 
 

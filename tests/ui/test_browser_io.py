@@ -49,6 +49,7 @@ def served(page: Page) -> list[list[str]]:
     return found
 
 
+@pytest.mark.parametrize("demo", ["opcua"], indirect=True)
 def test_the_served_image_the_plant_and_the_points_with_their_values(demo: Demo) -> None:
     wait_for(lambda: reachable(demo.modbus_port), 30)
     with chromium() as browser:
@@ -58,6 +59,11 @@ def test_the_served_image_the_plant_and_the_points_with_their_values(demo: Demo)
         wait_until(
             "the server listens",
             lambda: f"127.0.0.1:{demo.modbus_port}" in text_of(page, '[data-testid="io-server"]'),
+        )
+        wait_until(
+            "the OPC UA server listens",
+            lambda: f"opc.tcp://127.0.0.1:{demo.opcua_port}"
+            in text_of(page, '[data-testid="io-server"][data-protocol="opcua"]'),
         )
         wait_until(
             "the plant is connected",
