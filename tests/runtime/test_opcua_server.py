@@ -32,7 +32,7 @@ from backend.engineering.resource_client import ResourceClient
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from runtime.contract.protocol import GetEvents, GetIo, GetValues
-from tests.conftest import free_port
+from tests.conftest import free_port, padt
 from tests.support.runtime_process import running_resource, store_artifact
 
 PASSWORD = "opc-ua-test"
@@ -81,6 +81,8 @@ class Served:
     pki: Path  # the server's trust list
     certificate: Path  # a client certificate the server trusts
     key: Path
+    project: Path  # its project folder
+    zenoh: str  # the router's endpoint
 
 
 def client_certificate(folder: Path, name: str) -> tuple[Path, Path]:
@@ -129,7 +131,7 @@ def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
         client.login("admin", PASSWORD)
         url = f"opc.tcp://127.0.0.1:{port}/"
         wait_for("the server listens", lambda: listening(client))
-        yield Served(url, client, state / "opcua" / "pki", cert, key)
+        yield Served(url, client, state / "opcua" / "pki", cert, key, folder, endpoint)
 
 
 def listening(client: ResourceClient) -> bool:
@@ -374,3 +376,51 @@ def test_an_unknown_certificate_is_refused_until_it_is_trusted(
     )
     rejected.rename(served.pki / "trusted" / name)  # what an engineer does to trust it
     assert run(attempt) == "Good"
+
+
+def test_an_online_change_adds_nodes_and_keeps_the_subscriptions(served: Served) -> None:
+    """Last in the module: it changes the served configuration."""
+
+    async def across_the_reload() -> tuple[list[int], Any]:
+        client = await connected(served, "viewer")
+        seen: list[int] = []
+
+        class Handler:
+            def datachange_notification(self, node: Any, value: int, data: Any) -> None:
+                seen.append(value)
+
+        try:
+            subscription = await client.create_subscription(50, Handler())
+            await subscription.subscribe_data_change(client.get_node(node("Main.count")))
+            source = (served.project / "main.st").read_text()
+            changed = source.replace(
+                "  limit : INT := 100;", "  limit : INT := 100;\n  added : INT := 5;"
+            )
+            (served.project / "main.st").write_text(changed)
+            online = ["--resource", "Ua1", "--zenoh", served.zenoh, "--user", "admin"]
+            reload = await asyncio.to_thread(
+                padt, "reload", str(served.project), *online, "--yes",
+                env={"PADT_PASSWORD": PASSWORD},
+            )  # fmt: skip
+            assert reload.returncode == 0, reload.stdout + reload.stderr
+            before = len(seen)
+            for _ in range(100):  # the subscription goes on after the switch-over
+                if len(seen) >= before + 3:
+                    break
+                await asyncio.sleep(0.1)
+            added = None
+            for _ in range(100):  # the new variable's node, built after the switch-over
+                try:
+                    added = await client.get_node(node("Main.added")).read_value()
+                    if added is not None:
+                        break
+                except UaStatusCodeError:
+                    pass
+                await asyncio.sleep(0.1)
+            return seen[before:], added
+        finally:
+            await client.disconnect()
+
+    after, added = run(across_the_reload)
+    assert len(after) >= 3 and after == sorted(after)  # a warm change: the count goes on
+    assert added == 5
