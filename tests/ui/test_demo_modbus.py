@@ -1,11 +1,16 @@
 """The demo over Modbus TCP: `padt demo` polls its simulated plant as remote I/O and serves
 its image; mbpoll (Debian, libmodbus) reads the tank level at input register 0 and the pump
-command at coil 0, and they are what the resource holds."""
+command at coil 0, and they are what the resource holds. The tank's two levels are written
+closer together first (online writes), so that a whole tank cycle takes seconds, not half
+a minute."""
 
 from __future__ import annotations
 
 from itertools import pairwise
 
+from backend.engineering.resource_client import ResourceClient
+from runtime.contract.protocol import Write
+from runtime.contract.session import open_client
 from tests.runtime.test_modbus_server import mbpoll, polled, wait_for
 from tests.support.modbus_device import modbus_client, reachable
 from tests.ui.browser_steps import Demo
@@ -19,9 +24,16 @@ def test_mbpoll_reads_the_demos_level_and_pump(demo: Demo) -> None:
         first = modbus.read_input_registers(0, count=1).registers[0]
         wait_for(lambda: modbus.read_input_registers(0, count=1).registers[0] != first, 20)
         # the loop is closed: TankControl reads the plant's level and commands its pump,
-        # so over a tank cycle (half a minute) the pump stops at the high level (800 l) and
-        # starts again after the refill delay at the low one (300 l), and the level served
-        # stays between them (give or take a poll period and the refill delay's draining)
+        # so over a tank cycle the pump stops at the high level and starts again after the
+        # refill delay at the low one, and the level served stays between them (give or
+        # take a poll period and the refill delay's draining: 60 l)
+        level = modbus.read_input_registers(0, count=1).registers[0]
+        low, high = max(level - 50, 150), max(level - 50, 150) + 100
+        with open_client(demo.zenoh) as session:
+            client = ResourceClient(session, "Tank1")
+            client.login("admin", demo.password)
+            client.ask(Write("TankControl.lowLevel", low))
+            client.ask(Write("TankControl.highLevel", high))
         samples: list[tuple[int, bool]] = []
 
         def restarted() -> bool:
@@ -31,11 +43,11 @@ def test_mbpoll_reads_the_demos_level_and_pump(demo: Demo) -> None:
             runs = pumping[:1] + [on for was, on in pairwise(pumping) if on != was]
             return runs[-3:] == [True, False, True]  # on, stopped, started again
 
-        wait_for(restarted, 90)
-        assert all(200 <= level <= 850 for level, _ in samples), samples
+        wait_for(restarted, 60)
+        assert all(low - 100 <= level <= high + 100 for level, _ in samples), samples
         switches = [i for i in range(1, len(samples)) if samples[i][1] != samples[i - 1][1]]
         stopped_at, started_at = (samples[i - 1][0] for i in switches[-2:])
-        assert stopped_at >= 780 and started_at <= 300, samples
+        assert stopped_at >= high - 20 and started_at <= low, samples
     level = polled(mbpoll(port, "-t", "3", "-r", "0", "-c", "1"))[0]
     assert 0 <= int(level.split()[0]) <= 1000
     assert polled(mbpoll(port, "-t", "0", "-r", "0", "-c", "1"))[0] in ("0", "1")
