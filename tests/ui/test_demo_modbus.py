@@ -48,8 +48,8 @@ def test_mbpoll_reads_the_demos_level_and_pump(demo: Demo) -> None:
         switches = [i for i in range(1, len(samples)) if samples[i][1] != samples[i - 1][1]]
         stopped_at, started_at = (samples[i - 1][0] for i in switches[-2:])
         assert stopped_at >= high - 20 and started_at <= low, samples
-    level = polled(mbpoll(port, "-t", "3", "-r", "0", "-c", "1"))[0]
-    assert 0 <= int(level.split()[0]) <= 1000
+    served = polled(mbpoll(port, "-t", "3", "-r", "0", "-c", "1"))[0]
+    assert 0 <= int(served.split()[0]) <= 1000
     assert polled(mbpoll(port, "-t", "0", "-r", "0", "-c", "1"))[0] in ("0", "1")
     assert polled(mbpoll(port, "-t", "1", "-r", "0", "-c", "1"))[0] in ("0", "1")  # feedback
     refused = mbpoll(port, "-t", "0", "-r", "0", write="1")  # the demo serves nothing writable
