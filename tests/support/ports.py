@@ -4,6 +4,7 @@ bench` runs without them)."""
 from __future__ import annotations
 
 import socket
+import time
 
 _HANDED_OUT: set[int] = set()
 
@@ -19,3 +20,16 @@ def free_port() -> int:
         if port not in _HANDED_OUT:
             _HANDED_OUT.add(port)
             return port
+
+
+def wait_until_listening(port: int, timeout_s: float = 60) -> None:
+    """Until something takes TCP connections on 127.0.0.1:`port` (a server a runtime
+    starts after it answers on the bus)."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+            return
+        except OSError:
+            assert time.monotonic() < deadline, f"nothing listens on 127.0.0.1:{port}"
+            time.sleep(0.1)

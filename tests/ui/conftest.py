@@ -29,6 +29,7 @@ from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from tests.conftest import REPO, free_port
 from tests.support.browser import one_browser_for_the_tests_within
+from tests.support.ports import wait_until_listening
 from tests.support.runtime_process import running_resource, store_artifact
 from tests.ui.browser_steps import PASSWORD, Demo, Plant
 
@@ -73,6 +74,8 @@ def demo(tmp_path: Path, request: pytest.FixtureRequest) -> Iterator[Demo]:
     assert url is not None, "padt demo printed no URL"
     assert password is not None, "padt demo printed no administrator password"
     assert time.monotonic() - started < 60
+    if opcua_port:  # the runtime comes up after the UI
+        wait_until_listening(opcua_port)
     try:
         yield Demo(url, password, modbus_port, opcua_port, f"tcp/127.0.0.1:{zenoh_port}")
     finally:

@@ -25,6 +25,7 @@ from runtime.contract.protocol import GetEvents
 from runtime.contract.session import open_client
 from tests.conftest import free_port
 from tests.support.opcua_client import browsed, node_or_skip, run_plan
+from tests.support.ports import wait_until_listening
 from tests.support.runtime_process import running_resource, store_artifact
 from tests.ui.browser_steps import Demo
 
@@ -58,7 +59,7 @@ def test_node_opcua_browses_subscribes_and_writes_the_demo(demo: Demo, pki: Path
             demo.opcua_port, "admin", demo.password, pki,
             {"browse": tank, "depth": 3},
             {"subscribe": {"nodes": [level], "sampling_ms": 100, "publishing_ms": 100,
-                           "for_ms": 6000}},
+                           "for_ms": 2000}},
             {"write": [{"node": high, "value": 790, "dataType": "Int16"}]},
             {"write": [{"node": level, "value": 1, "dataType": "Int16"}]},
             {"read": [high]},
@@ -182,6 +183,7 @@ def every_type(tmp_path_factory: pytest.TempPathFactory) -> Iterator[int]:
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with running_resource("Types", state, endpoint, "--opcua-port", str(port)):
+        wait_until_listening(port)
         yield port
 
 

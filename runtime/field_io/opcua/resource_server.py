@@ -22,6 +22,7 @@ writes, and who may do what.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import queue
 import socket
@@ -91,6 +92,7 @@ _INTERNAL = User(role=UserRole.Admin)  # who asyncua's own writes come from
 
 @dataclass(frozen=True)
 class Snapshot:
+    seq: int  # counted by the cycle thread
     at: ua.DateTime  # when the cycle ended
     values: list[Any]  # of `variables`, in their order
     variables: tuple[PlannedNode, ...]
@@ -101,7 +103,7 @@ class PendingWrite:
     node: PlannedNode
     value: Any
     user: str
-    done: asyncio.Future[ua.StatusCode]
+    done: asyncio.Future[tuple[ua.StatusCode, int]]  # with the snapshot that shows it
     loop: asyncio.AbstractEventLoop
 
 
@@ -154,6 +156,10 @@ class ResourceServer:
         self._read_plan: Plan | None = None
         self.wanted = False  # set here, taken by the cycle thread
         self.snapshot: Snapshot | None = None
+        self.taken = 0  # snapshots taken (cycle thread)
+        self.shown_seq = 0  # the last one the nodes show (I/O thread)
+        self._prompt = False  # a write waits to show: wake the I/O thread (cycle thread)
+        self._wake = asyncio.Event()
         self._shown: list[Any] = []  # the values the nodes show, in the plan's order
         self._tasks: list[asyncio.Task[None]] = []
         self._plan_changed = asyncio.Event()
@@ -184,7 +190,16 @@ class ResourceServer:
         if not self.wanted or self._read_plan is None:
             return
         self.wanted = False
-        self.snapshot = Snapshot(ua.DateTime.now(UTC), self._read(), self._read_plan.variables)
+        self.taken += 1
+        values = self._read()
+        self.snapshot = Snapshot(
+            self.taken, ua.DateTime.now(UTC), values, self._read_plan.variables
+        )
+        if self._prompt:  # clients wait for their writes to show: the I/O thread, now
+            self._prompt = False
+            loop = self._loop
+            if loop is not None:
+                loop.call_soon_threadsafe(self._wake.set)
 
     def take_writes(self, write: Callable[[str, Any, str], None]) -> None:
         """The writes the clients made, as online writes (`write(path, value, user)`)."""
@@ -198,10 +213,12 @@ class ResourceServer:
             try:
                 write(variable.path.path, pending.value, pending.user)
                 status = _status(StatusCodes.Good)
+                # the snapshot after this cycle shows it: taken at once, not when sampled
+                self.wanted = self._prompt = True
             except Refusal as refused:
                 code = _REFUSED.get(refused.code, StatusCodes.BadNotWritable)
                 status = _status(code)
-            pending.loop.call_soon_threadsafe(_settle, pending.done, status)
+            pending.loop.call_soon_threadsafe(_settle, pending.done, (status, self.taken + 1))
 
     def shown(self) -> list[tuple[str, str, bool, Any, str]]:
         """Each variable node: its path, type, whether it is writable, the value it shows
@@ -325,11 +342,14 @@ class ResourceServer:
                 self._plan_changed.clear()
                 await self._build(self._plan)
             self.wanted = True
-            await asyncio.sleep(self._sampling_ms() / 1000)
+            with contextlib.suppress(TimeoutError):  # woken early for a write to show
+                await asyncio.wait_for(self._wake.wait(), self._sampling_ms() / 1000)
+            self._wake.clear()
             snapshot = self.snapshot
             if snapshot is not None and snapshot.variables is self._plan.variables:
                 self.snapshot = None
                 await self._show(snapshot)
+                self.shown_seq = snapshot.seq
 
     async def _build(self, planned: Plan) -> None:
         """The nodes of `planned`: those of variables gone (or changed in type or access)
@@ -422,18 +442,25 @@ class ResourceServer:
             return await self._internal_write(params, user)
         self.counts.requests += 1
         loop = asyncio.get_running_loop()
-        results: list[ua.StatusCode | asyncio.Future[ua.StatusCode]] = []
+        results: list[ua.StatusCode | asyncio.Future[tuple[ua.StatusCode, int]]] = []
         for item in params.NodesToWrite:
             results.append(self._checked_write(item, user, loop))
         statuses = []
+        showing = 0  # the snapshot that shows the values written
         for result in results:
             if isinstance(result, ua.StatusCode):
                 statuses.append(result)
                 continue
             try:
-                statuses.append(await asyncio.wait_for(asyncio.shield(result), WRITE_TIMEOUT_S))
+                status, seq = await asyncio.wait_for(asyncio.shield(result), WRITE_TIMEOUT_S)
             except TimeoutError:
-                statuses.append(_status(StatusCodes.BadTimeout))
+                status, seq = _status(StatusCodes.BadTimeout), 0
+            statuses.append(status)
+            showing = max(showing, seq if status.is_good() else 0)
+        # the answer after the nodes show what was written: a read that follows sees it
+        deadline = loop.time() + WRITE_TIMEOUT_S
+        while self.shown_seq < showing and loop.time() < deadline:
+            await asyncio.sleep(0.002)
         for status in statuses:
             if status.is_good():
                 self.counts.writes += 1
@@ -443,7 +470,7 @@ class ResourceServer:
 
     def _checked_write(
         self, item: ua.WriteValue, user: User, loop: asyncio.AbstractEventLoop
-    ) -> ua.StatusCode | asyncio.Future[ua.StatusCode]:
+    ) -> ua.StatusCode | asyncio.Future[tuple[ua.StatusCode, int]]:
         node = self._by_node.get(item.NodeId)
         if node is None or item.AttributeId != AttributeIds.Value or not node.writable:
             return _status(
@@ -465,13 +492,13 @@ class ResourceServer:
             return _status(StatusCodes.BadOutOfRange)
         if self._pending >= MAX_PENDING_WRITES:
             return _status(StatusCodes.BadTooManyOperations)
-        done: asyncio.Future[ua.StatusCode] = loop.create_future()
+        done: asyncio.Future[tuple[ua.StatusCode, int]] = loop.create_future()
         self._pending += 1
         done.add_done_callback(self._taken)
         self.writes.put(PendingWrite(node, value, name, done, loop))
         return done
 
-    def _taken(self, _: asyncio.Future[ua.StatusCode]) -> None:
+    def _taken(self, _: asyncio.Future[tuple[ua.StatusCode, int]]) -> None:
         self._pending -= 1
 
     def _counted(self, event: ServerItemCallback, _: Any) -> None:
@@ -634,9 +661,11 @@ def _standard(object_id: int) -> ua.NodeId:
     return ua.NodeId(ua.Int32(object_id))
 
 
-def _settle(done: asyncio.Future[ua.StatusCode], status: ua.StatusCode) -> None:
+def _settle(
+    done: asyncio.Future[tuple[ua.StatusCode, int]], outcome: tuple[ua.StatusCode, int]
+) -> None:
     if not done.done():
-        done.set_result(status)
+        done.set_result(outcome)
 
 
 def _hosts(host: str) -> tuple[str, ...]:
