@@ -62,8 +62,10 @@ def test_the_served_image_the_plant_and_the_points_with_their_values(demo: Demo)
         )
         wait_until(
             "the OPC UA server listens",
-            lambda: f"opc.tcp://127.0.0.1:{demo.opcua_port}"
-            in text_of(page, '[data-testid="io-server"][data-protocol="opcua"]'),
+            lambda: (
+                f"opc.tcp://127.0.0.1:{demo.opcua_port}"
+                in text_of(page, '[data-testid="io-server"][data-protocol="opcua"]')
+            ),
         )
         wait_until(
             "the plant is connected",
