@@ -26,6 +26,7 @@ from runtime.field_io.modbus.image_server import ImageServer, ImageStore, Served
 from runtime.field_io.modbus.poller import DevicePoller
 from runtime.field_io.modbus.request_meter import REQUESTS_PER_SECOND, RequestMeter
 from runtime.field_io.remote_devices import RemoteDevices
+from runtime.field_io.server_and_devices import ServerAndDevices
 
 
 @dataclass(frozen=True)
@@ -50,7 +51,7 @@ def _config_of(artifact: Artifact | None) -> ModbusConfig:
     return artifact.modbus if artifact is not None else ModbusConfig()
 
 
-class ModbusDriver:
+class ModbusDriver(ServerAndDevices):
     def __init__(
         self, config: ModbusConfig, context: DriverContext, options: ModbusOptions
     ) -> None:
@@ -67,35 +68,17 @@ class ModbusDriver:
             self.server = ImageServer(ImageStore(tuple(points)), config.host, port, meter)
         outputs = lambda: context.io.outputs  # noqa: E731  # replaced, never changed
         self.pollers = [DevicePoller(device, outputs) for device in config.devices]
-        self._devices = RemoteDevices(
-            self.pollers, context, "modbus", "Modbus device", _device_address
-        )
+        devices = RemoteDevices(self.pollers, context, "modbus", "Modbus device", _device_address)
+        super().__init__(self.server, devices)
         self._floods = 0  # the floods of requests the meter held back, reported
         self._applied = 0  # the last client write taken
         self._server_reported = False
         self._reader = ImageReader((), context.variables)  # until `rebind`
 
-    @property
-    def bad(self) -> frozenset[str]:
-        """The upper-case paths of inputs of lost devices."""
-        return self._devices.bad
-
-    # ---- the I/O thread
-    async def start(self) -> None:
-        if self.server is not None:
-            await self.server.start()
-        self._devices.start()
-
-    async def stop(self) -> None:
-        await self._devices.stop()
-        if self.server is not None:
-            await self.server.stop()
-
     # ---- the cycle thread
-    def rebind(self) -> None:
-        self._devices.rebind()
-        if self.server is not None:
-            self._reader = ImageReader(self.server.store.points, self._context.variables)
+    def _rebind_server(self) -> None:
+        assert self.server is not None
+        self._reader = ImageReader(self.server.store.points, self._context.variables)
 
     def before_cycle(self) -> None:
         if self.server is not None:

@@ -2,6 +2,7 @@
 state folder, and the clients' it trusts.
 
 The folder (`<state>/opcua/`) holds `certificate.der` and `private-key.pem` (owner-only),
+the client's `client/client-certificate.der` and `client/client-private-key.pem`,
 and `pki/trusted/` and `pki/rejected/` with one DER file of a client certificate each,
 named by its SHA-1 thumbprint (as OPC UA tools show it). A client whose certificate is
 in neither is refused and its certificate lands in `rejected/`; moving the file to
@@ -13,6 +14,7 @@ from __future__ import annotations
 import datetime
 import hashlib
 import ipaddress
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,32 +35,44 @@ class ApplicationCertificate:
     certificate: Path  # DER
     private_key: Path  # PEM, owner-only
     thumbprint: str  # SHA-1, upper-case hex
-    created: bool  # made just now (not found)
+    created: bool  # made just now (none usable was there)
+
+
+SERVER_FILES = ("certificate.der", "private-key.pem")
+SERVER_USAGES = (ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH)
+_making = threading.Lock()  # the drivers of one process make one certificate per folder
 
 
 def application_certificate(
-    folder: Path, name: str, uri: str, hosts: tuple[str, ...], now: datetime.datetime
+    folder: Path,
+    name: str,
+    uri: str,
+    hosts: tuple[str, ...],
+    now: datetime.datetime,
+    files: tuple[str, str] = SERVER_FILES,
+    usages: tuple[x509.ObjectIdentifier, ...] = SERVER_USAGES,
 ) -> ApplicationCertificate:
-    """The application certificate kept in `folder`, or a new one made there for an
-    application `name` with the application URI `uri` (which clients compare with the
-    certificate's) reachable at `hosts`."""
-    certificate, key = folder / "certificate.der", folder / "private-key.pem"
-    if certificate.is_file() and key.is_file():
-        found = x509.load_der_x509_certificate(certificate.read_bytes())
-        if uri in _uris(found):
+    """The application certificate kept in `folder` (its `files`: certificate, key), or a
+    new one made there for an application `name` with the application URI `uri` (which
+    peers compare with the certificate's) reachable at `hosts`, when the one kept is
+    missing, of another URI, expiring within a day, or not of its key."""
+    certificate, key = folder / files[0], folder / files[1]
+    with _making:
+        found = _usable(certificate, key, uri, now)
+        if found is not None:
             return ApplicationCertificate(certificate, key, thumbprint(found), False)
-    folder.mkdir(parents=True, exist_ok=True)
-    private = rsa.generate_private_key(public_exponent=65537, key_size=KEY_BITS)
-    made = _certificate(private, name, uri, hosts, now)
-    write_private(
-        key,
-        private.private_bytes(
-            serialization.Encoding.PEM,
-            serialization.PrivateFormat.TraditionalOpenSSL,
-            serialization.NoEncryption(),
-        ),
-    )
-    certificate.write_bytes(made.public_bytes(serialization.Encoding.DER))
+        folder.mkdir(parents=True, exist_ok=True)
+        private = rsa.generate_private_key(public_exponent=65537, key_size=KEY_BITS)
+        made = _certificate(private, name, uri, hosts, now, usages)
+        write_private(
+            key,
+            private.private_bytes(
+                serialization.Encoding.PEM,
+                serialization.PrivateFormat.TraditionalOpenSSL,
+                serialization.NoEncryption(),
+            ),
+        )
+        certificate.write_bytes(made.public_bytes(serialization.Encoding.DER))
     return ApplicationCertificate(certificate, key, thumbprint(made), True)
 
 
@@ -66,16 +80,30 @@ def thumbprint(certificate: x509.Certificate) -> str:
     return hashlib.sha1(certificate.public_bytes(serialization.Encoding.DER)).hexdigest().upper()
 
 
-def _uris(certificate: x509.Certificate) -> list[str]:
+def _usable(
+    certificate: Path, key: Path, uri: str, now: datetime.datetime
+) -> x509.Certificate | None:
     try:
-        names = certificate.extensions.get_extension_for_class(x509.SubjectAlternativeName)
-    except x509.ExtensionNotFound:
-        return []
-    return names.value.get_values_for_type(x509.UniformResourceIdentifier)
+        found = x509.load_der_x509_certificate(certificate.read_bytes())
+        private = serialization.load_pem_private_key(key.read_bytes(), password=None)
+        names = found.extensions.get_extension_for_class(x509.SubjectAlternativeName)
+    except (OSError, ValueError, TypeError, x509.ExtensionNotFound):
+        return None
+    usable = (
+        uri in names.value.get_values_for_type(x509.UniformResourceIdentifier)
+        and found.not_valid_after_utc > now + datetime.timedelta(days=1)
+        and found.public_key() == private.public_key()
+    )
+    return found if usable else None
 
 
 def _certificate(
-    key: rsa.RSAPrivateKey, name: str, uri: str, hosts: tuple[str, ...], now: datetime.datetime
+    key: rsa.RSAPrivateKey,
+    name: str,
+    uri: str,
+    hosts: tuple[str, ...],
+    now: datetime.datetime,
+    usages: tuple[x509.ObjectIdentifier, ...],
 ) -> x509.Certificate:
     subject = x509.Name(
         [
@@ -113,12 +141,7 @@ def _certificate(
             ),
             critical=True,
         )
-        .add_extension(
-            x509.ExtendedKeyUsage(
-                [ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH]
-            ),
-            critical=False,
-        )
+        .add_extension(x509.ExtendedKeyUsage(list(usages)), critical=False)
         .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
         .sign(key, hashes.SHA256())
     )

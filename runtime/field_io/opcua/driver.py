@@ -21,6 +21,7 @@ from runtime.field_io.driver import DriverContext, DriverKind, FieldDriver
 from runtime.field_io.opcua.remote import RemoteServer
 from runtime.field_io.opcua.resource_server import ResourceServer
 from runtime.field_io.remote_devices import RemoteDevices
+from runtime.field_io.server_and_devices import ServerAndDevices
 
 
 @dataclass(frozen=True)
@@ -46,7 +47,7 @@ def _config_of(artifact: Artifact | None) -> OpcuaConfig:
     return found if found is not None else OpcuaConfig()
 
 
-class OpcuaDriver:
+class OpcuaDriver(ServerAndDevices):
     def __init__(self, config: OpcuaConfig, context: DriverContext, options: OpcuaOptions) -> None:
         self.config, self._context = config, context
         folder = options.folder
@@ -68,31 +69,13 @@ class OpcuaDriver:
         self.remotes = [
             RemoteServer(device, outputs, folder / "client") for device in config.devices
         ]
-        self._devices = RemoteDevices(
-            self.remotes, context, "opcua", "OPC UA server", _device_address
-        )
-
-    @property
-    def bad(self) -> frozenset[str]:
-        """The upper-case paths of inputs of lost remote servers."""
-        return self._devices.bad
-
-    # ---- the I/O thread
-    async def start(self) -> None:
-        if self.server is not None:
-            await self.server.start()
-        self._devices.start()
-
-    async def stop(self) -> None:
-        await self._devices.stop()
-        if self.server is not None:
-            await self.server.stop()
+        devices = RemoteDevices(self.remotes, context, "opcua", "OPC UA server", _device_address)
+        super().__init__(self.server, devices)
 
     # ---- the cycle thread
-    def rebind(self) -> None:
-        self._devices.rebind()
-        if self.server is not None:
-            self.server.rebind(self._context.variables.bound)
+    def _rebind_server(self) -> None:
+        assert self.server is not None
+        self.server.rebind(self._context.variables.bound)
 
     def before_cycle(self) -> None:
         self._devices.before_cycle()

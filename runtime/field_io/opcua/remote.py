@@ -49,7 +49,6 @@ import math
 import os
 import socket
 import stat
-import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -66,15 +65,12 @@ from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 from asyncua.observer import Observer
 from asyncua.ua.attribute_ids import AttributeIds
 from asyncua.ua.uaerrors import UaStatusCodeError
-from cryptography import x509
-from cryptography.hazmat.primitives import hashes, serialization
-from cryptography.hazmat.primitives.asymmetric import rsa
-from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
+from cryptography.x509.oid import ExtendedKeyUsageOID
 
 from runtime.contract.opcua import OpcuaDevice, OpcuaPoint
-from runtime.contract.private_files import write_private
 from runtime.contract.values import ValueRejected
 from runtime.field_io.delivery import Delivery
+from runtime.field_io.opcua.certificates import application_certificate
 from runtime.field_io.opcua.types import from_opcua, to_opcua, variant_type
 
 MAX_ITEMS = 1000  # monitored items per CreateMonitoredItems call
@@ -83,8 +79,6 @@ MAX_PASSWORD_BYTES = 1024
 SESSION_TIMEOUT_MS = 60_000  # a session left behind (a lost server) ends this soon after
 CERTIFICATE = "client-certificate.der"
 PRIVATE_KEY = "client-private-key.pem"
-KEY_BITS = 2048  # what Basic256Sha256 asks for
-VALID_DAYS = 3650
 _MODES = {
     "sign": ua.MessageSecurityMode.Sign,
     "sign_encrypt": ua.MessageSecurityMode.SignAndEncrypt,
@@ -95,7 +89,6 @@ _USER_REFUSED = (
     "BadIdentityTokenRejected",
     "BadUserSignatureInvalid",
 )
-_certificate_lock = threading.Lock()  # devices sharing `pki` make one certificate
 
 
 class Refused(Exception):
@@ -528,77 +521,9 @@ def read_password(device: OpcuaDevice) -> str:
 def client_certificate(pki: Path, uri: str, host: str) -> tuple[Path, Path]:
     """The client's certificate (DER) and private key (PEM, owner-only) in `pki`, made
     there when missing, expiring within a day, not of `uri`, or not of each other."""
-    certificate, key = pki / CERTIFICATE, pki / PRIVATE_KEY
-    with _certificate_lock:
-        if _usable(certificate, key, uri):
-            return certificate, key
-        private = rsa.generate_private_key(public_exponent=65537, key_size=KEY_BITS)
-        made = _certificate(private, uri, host, datetime.datetime.now(datetime.UTC))
-        pki.mkdir(parents=True, exist_ok=True)
-        write_private(
-            key,
-            private.private_bytes(
-                serialization.Encoding.PEM,
-                serialization.PrivateFormat.TraditionalOpenSSL,
-                serialization.NoEncryption(),
-            ),
-        )
-        certificate.write_bytes(made.public_bytes(serialization.Encoding.DER))
-    return certificate, key
-
-
-def _usable(certificate: Path, key: Path, uri: str) -> bool:
-    try:
-        found = x509.load_der_x509_certificate(certificate.read_bytes())
-        private = serialization.load_pem_private_key(key.read_bytes(), password=None)
-        names = found.extensions.get_extension_for_class(x509.SubjectAlternativeName)
-    except (OSError, ValueError, TypeError, x509.ExtensionNotFound):
-        return False
-    soon = datetime.datetime.now(datetime.UTC) + datetime.timedelta(days=1)
-    return (
-        uri in names.value.get_values_for_type(x509.UniformResourceIdentifier)
-        and found.not_valid_after_utc > soon
-        and found.public_key() == private.public_key()
-    )
-
-
-def _certificate(
-    key: rsa.RSAPrivateKey, uri: str, host: str, now: datetime.datetime
-) -> x509.Certificate:
-    subject = x509.Name(
-        [
-            x509.NameAttribute(NameOID.COMMON_NAME, f"padt runtime client@{host}"),
-            x509.NameAttribute(NameOID.ORGANIZATION_NAME, "padt"),
-        ]
-    )
-    return (
-        x509.CertificateBuilder()
-        .subject_name(subject)
-        .issuer_name(subject)  # self-signed, as OPC UA applications' are
-        .public_key(key.public_key())
-        .serial_number(x509.random_serial_number())
-        .not_valid_before(now - datetime.timedelta(days=1))
-        .not_valid_after(now + datetime.timedelta(days=VALID_DAYS))
-        .add_extension(
-            x509.SubjectAlternativeName([x509.UniformResourceIdentifier(uri), x509.DNSName(host)]),
-            critical=False,
-        )
-        .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
-        .add_extension(
-            x509.KeyUsage(
-                digital_signature=True,
-                content_commitment=True,
-                key_encipherment=True,
-                data_encipherment=True,
-                key_agreement=False,
-                key_cert_sign=False,
-                crl_sign=False,
-                encipher_only=False,
-                decipher_only=False,
-            ),
-            critical=True,
-        )
-        .add_extension(x509.ExtendedKeyUsage([ExtendedKeyUsageOID.CLIENT_AUTH]), critical=False)
-        .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
-        .sign(key, hashes.SHA256())
-    )
+    made = application_certificate(
+        pki, f"padt runtime client@{host}", uri, (host,),
+        datetime.datetime.now(datetime.UTC), (CERTIFICATE, PRIVATE_KEY),
+        (ExtendedKeyUsageOID.CLIENT_AUTH,),
+    )  # fmt: skip
+    return made.certificate, made.private_key
