@@ -4,10 +4,10 @@ A code names one kind of problem and keeps its meaning across releases, so that 
 people can refer to it; the message around it may change. Errors are `E` and warnings `W`
 followed by four digits, grouped by hundreds: 00 syntax and literals, 01 declarations,
 02 names, types and expressions, 03 statements and assignments, 04 calls, 05 sequential
-function charts, 06 the resource (user programs, safe values, users, Modbus), 07 what padt does not
-compile (features it lacks, limits), 08 extensions of other dialects (CODESYS, TwinCAT) that
-padt accepts, each with a warning that it is not IEC 61131-3, 09 graphical bodies (FBD, LD),
-10 unit tests.
+function charts, 06 the resource (user programs, safe values, users, Modbus, OPC UA), 07 what
+padt does not compile (features it lacks, limits), 08 extensions of other dialects (CODESYS,
+TwinCAT) that padt accepts, each with a warning that it is not IEC 61131-3, 09 graphical
+bodies (FBD, LD), 10 unit tests.
 Notes (`N`) tell what was ignored without changing what the program does.
 docs/diagnostics.md explains every code with a failing and a passing example.
 """
@@ -175,6 +175,13 @@ class Code(Enum):
     VAR_CONFIG_ADDRESS = "E0618", "VAR_CONFIG entry that does not fit its variable"
     ACCESS_PATH = "E0619", "access path to no variable of its type"
     RESOURCE_NAME = "E0620", "resource name that is no plain identifier"
+    OPCUA_SETTING = "E0621", "invalid OPC UA setting"
+    OPCUA_PATH = "E0622", "OPC UA path to no variable of the resource"
+    OPCUA_WRITABLE = "E0623", "writable OPC UA path that is not exposed or is a constant"
+    OPCUA_ENDPOINT = "E0624", "OPC UA endpoint that is no opc.tcp address"
+    OPCUA_NODE = "E0625", "OPC UA node id that does not read"
+    OPCUA_VARIABLE = "E0626", "OPC UA point on no suitable located variable"
+    OPCUA_MAPPED_TWICE = "E0627", "variable mapped by two device points"
     EXTRA_RESOURCE = "W0601", "resource ignored"
     PROGRAM_ARGUMENTS = "W0602", "program arguments in a configuration ignored"
 

@@ -16,6 +16,7 @@ from backend.compiler.ast import key
 from backend.compiler.check import check
 from backend.compiler.checks.generated_names import check_generated_names
 from backend.compiler.checks.modbus import check_modbus
+from backend.compiler.checks.opcua import check_opcua
 from backend.compiler.checks.programs import check_programs, globals_read, globals_written
 from backend.compiler.checks.var_config import check_configuration
 from backend.compiler.codes import Code
@@ -158,13 +159,15 @@ def compile_sources(
     users: list[UserAccount] | None = None,
     modbus: Any = None,
     config_lines: dict[str, int] | None = None,
+    opcua: Any = None,
     parsed: Parsed | None = None,
 ) -> CompileResult:
-    """`modbus` is the `[modbus]` table of padt.toml as read (None: there is none);
+    """`modbus` and `opcua` are the `[modbus]` and `[opcua]` tables of padt.toml as read
+    (None: there is none);
     `config_lines` where each setting of padt.toml is written (`toml_lines.key_lines`);
     `parsed`: `parse_project(sources)` when the caller has it already (the documentation
     needs the parse too; the AST is immutable, so sharing it is safe)."""
-    settings = _Settings(safe_values or {}, users or [], modbus, config_lines or {})
+    settings = _Settings(safe_values or {}, users or [], modbus, config_lines or {}, opcua)
     try:
         return _compile(sources, project, resource, programs, config_file, settings, parsed)
     except (RecursionError, MemoryError) as exc:
@@ -208,6 +211,7 @@ class _Settings:
     users: list[UserAccount]
     modbus: Any
     lines: dict[str, int]
+    opcua: Any = None
 
 
 def _compile(
@@ -250,6 +254,10 @@ def _compile(
         resolved, settings.modbus, config_file, settings.lines
     )
     diagnostics.extend(modbus_diagnostics)
+    opcua, opcua_diagnostics = check_opcua(
+        resolved, programs, sources, settings.opcua, config_file, settings.lines, modbus
+    )
+    diagnostics.extend(opcua_diagnostics)
     diagnostics.extend(_check_users(users, config_file))
     unparsed = {source.name for source in sources} - {unit.file for unit in units}
     diagnostics = in_reading_order(diagnostics, unparsed)
@@ -274,6 +282,7 @@ def _compile(
         modbus=modbus,
         located=instance_io.located,
         access_paths=instance_io.access_paths,
+        opcua=opcua,
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
 

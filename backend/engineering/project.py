@@ -44,6 +44,7 @@ class Project:
     safe_values: dict[str, Any] = field(default_factory=dict)  # output -> its safe value
     users: list[UserAccount] = field(default_factory=list)  # PES accounts ([[resource.user]])
     modbus: Any = None  # the [modbus] table as read; the compiler checks it
+    opcua: Any = None  # the [opcua] table as read (None: none); the compiler checks it
     config_lines: dict[str, int] = field(default_factory=dict)  # where each setting is
     author: str = ""  # [project] author and date: for the cover of the documentation
     date: str = ""
@@ -178,6 +179,7 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
         safe_values,
         users,
         modbus=data.get("modbus"),
+        opcua=data.get("opcua"),
         author=str(meta.get("author", "")),
         date=str(meta.get("date", "")),
     )
@@ -214,5 +216,6 @@ def compile_project(
         users=project.users,
         modbus=project.modbus,
         config_lines=project.config_lines,
+        opcua=project.opcua,
         parsed=parsed,
     )

@@ -15,10 +15,10 @@ from dataclasses import dataclass
 
 from backend.compiler import builtins
 from backend.compiler.ast import key
+from backend.compiler.comments import declaration_comment
 from backend.compiler.language.analysis import Analysis
 from backend.compiler.language.hover import (
     TEST_FUNCTION_HELP,
-    declaration_comment,
     interface_lines,
     standard_signature,
     test_signature,

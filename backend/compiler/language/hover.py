@@ -10,6 +10,7 @@ from functools import cache
 
 from backend.compiler import builtins
 from backend.compiler.ast import key
+from backend.compiler.comments import declaration_comment
 from backend.compiler.language.analysis import Analysis
 from backend.compiler.language.position import (
     Location,
@@ -23,8 +24,6 @@ from backend.compiler.resolve import PouSymbols
 from backend.compiler.source import Pos, stdlib_sources
 from backend.compiler.test_functions import TEST_FUNCTIONS
 from backend.compiler.types import ElementaryType
-
-_MAX_COMMENT = 2000  # characters of a declaration's comment shown
 
 # what each test function does (docs/testing.md), shown where a hover shows a comment
 TEST_FUNCTION_HELP = {
@@ -148,36 +147,6 @@ def test_signature(name: str) -> str:
     optional = "".join(f" [, {p}]" for p in found.params[found.required :])
     gives = f" : {found.gives.name}" if found.gives is not None else ""
     return f"{found.name}({params}{optional}){gives} (test function)"
-
-
-def declaration_comment(text: str | None, pos: Pos) -> str:
-    """The comment written on a declaration's line after it, else the one that ends on
-    the line above it (a line of its own)."""
-    if text is None:
-        return ""
-    lexed, before = piece_at(text, pos.line)
-    same_line = [c.text for c in lexed.comments if c.line + before == pos.line]
-    if same_line:
-        return _clip(" ".join(same_line))
-    # the line above may end the declaration before (a POU's comment stands before it)
-    lexed, before = piece_at(text, pos.line - 1) if pos.line > 1 else (lexed, before)
-    line = pos.line - 1 - before
-    above = [c for c in lexed.comments if c.end_line == line]
-    if above and not _code_on(lexed, line, above[-1].line):
-        return _clip(above[-1].text)
-    return ""
-
-
-def _code_on(lexed: Lexed, line: int, first_line: int) -> bool:
-    """Whether a token of code stands on lines first_line..line (a comment after code
-    belongs to that code, not to the next line)."""
-    index = lexed.index_at(first_line, 1)
-    return index < len(lexed.tokens) and lexed.tokens[index].line <= line
-
-
-def _clip(comment: str) -> str:
-    comment = "\n".join(line.strip() for line in comment.splitlines())
-    return comment if len(comment) <= _MAX_COMMENT else comment[:_MAX_COMMENT] + " ..."
 
 
 def _initial_value(analysis: Analysis, pos: Pos | None) -> str:
