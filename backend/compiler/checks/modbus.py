@@ -8,15 +8,13 @@ the user sees them all. What passes becomes the artifact's `ModbusConfig`.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
 from typing import Any
 
 from backend.compiler.ast import key
+from backend.compiler.checks.settings_table import SettingsChecker
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.resolve import Resolved, Variable
-from backend.compiler.source import Pos
-from backend.compiler.toml_lines import line_of
 from runtime.contract.modbus import (
     AREAS,
     BIT_AREAS,
@@ -41,42 +39,10 @@ DEVICE_KEYS = ("name", "host", "port", "unit_id", "period_ms", "timeout_ms", "po
 POINT_KEYS = ("variable", "area", "address", "byte_order", "word_order", "safe_value")
 
 
-@dataclass
-class _Checker:
-    resolved: Resolved
-    config_file: str
-    lines: dict[str, int]
-    diagnostics: list[Diagnostic] = field(default_factory=list)
-
-    def report(self, path: str, code: Code, message: str) -> None:
-        pos = Pos(self.config_file, line_of(self.lines, path), 1)
-        self.diagnostics.append(Diagnostic.at(pos, code, message))
-
-    def unknown_keys(self, table: dict[str, Any], allowed: tuple[str, ...], path: str) -> None:
-        for name in sorted(set(table) - set(allowed)):
-            self.report(
-                f"{path}.{name}", Code.MODBUS_SETTING, f"[{_shown(path)}]: unknown setting '{name}'"
-            )
-
-    def setting(
-        self, table: dict[str, Any], name: str, path: str, default: Any, valid: Any, expected: str
-    ) -> Any:
-        """A setting that passes `valid`, or its default after a diagnostic."""
-        if name not in table:
-            return default
-        value = table[name]
-        if not valid(value):
-            message = f"[{_shown(path)}] {name} must be {expected}, not {value!r}"
-            self.report(f"{path}.{name}", Code.MODBUS_SETTING, message)
-            return default
-        return value
-
-    def integer(
-        self, table: dict[str, Any], name: str, path: str, default: int, low: int, high: int
-    ) -> int:
-        valid = lambda v: isinstance(v, int) and not isinstance(v, bool) and low <= v <= high  # noqa: E731
-        result: int = self.setting(table, name, path, default, valid, f"an integer {low}..{high}")
-        return result
+class _Checker(SettingsChecker):
+    def __init__(self, resolved: Resolved, config_file: str, lines: dict[str, int]) -> None:
+        super().__init__(config_file, lines, Code.MODBUS_SETTING)
+        self.resolved = resolved
 
     def text(self, table: dict[str, Any], name: str, path: str, default: str, pattern: Any) -> str:
         valid = lambda v: isinstance(v, str) and pattern.match(v) is not None  # noqa: E731
@@ -308,11 +274,6 @@ def _overlaps(checker: _Checker, points: list[Point], path: str, where: str) -> 
 
 def _is_bool(value: Any) -> bool:
     return isinstance(value, bool)
-
-
-def _shown(path: str) -> str:
-    """A path as the user wrote the table: `modbus.device` for `modbus.device.0`."""
-    return ".".join(part for part in path.split(".") if not part.isdigit())
 
 
 def _type_name(variable: Variable) -> str:

@@ -30,18 +30,18 @@ import binascii
 import re
 from bisect import bisect_left
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import PurePosixPath, PureWindowsPath
 from typing import Any
 
 from backend.compiler.ast import key
+from backend.compiler.checks.settings_table import SettingsChecker
 from backend.compiler.checks.var_config import instance_variables
 from backend.compiler.codes import Code
 from backend.compiler.comments import declaration_comment
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.resolve import PouSymbols, Resolved, Variable
-from backend.compiler.source import Pos, SourceFile, stdlib_sources
-from backend.compiler.toml_lines import line_of
+from backend.compiler.source import SourceFile, stdlib_sources
 from backend.compiler.types import ArrayType, ElementaryType, FbType, StructType, Type
 from runtime.contract.artifact import ProgramConfig
 from runtime.contract.modbus import ModbusConfig
@@ -93,60 +93,16 @@ class _Node:
     constant: bool = False  # the variable, or one it is in, is a CONSTANT
 
 
-@dataclass
-class _Checker:
-    resolved: Resolved
-    config_file: str
-    lines: dict[str, int]
-    diagnostics: list[Diagnostic] = field(default_factory=list)
+class _Checker(SettingsChecker):
+    def __init__(self, resolved: Resolved, config_file: str, lines: dict[str, int]) -> None:
+        super().__init__(config_file, lines, Code.OPCUA_SETTING, {"password": _NO_PASSWORD})
+        self.resolved = resolved
 
-    def report(self, path: str, code: Code, message: str) -> None:
-        pos = Pos(self.config_file, line_of(self.lines, path), 1)
-        self.diagnostics.append(Diagnostic.at(pos, code, message))
 
-    def unknown_keys(self, table: dict[str, Any], allowed: tuple[str, ...], path: str) -> None:
-        for name in sorted(set(table) - set(allowed)):
-            message = f"[{_shown(path)}]: unknown setting '{name}'"
-            if name == "password":
-                message = (
-                    f"[{_shown(path)}]: no password in the project: write it into a file on "
-                    "the runtime's host (readable by the runtime only) and name that file "
-                    "with password_file"
-                )
-            self.report(f"{path}.{name}", Code.OPCUA_SETTING, message)
-
-    def setting(
-        self, table: dict[str, Any], name: str, path: str, default: Any, valid: Any, expected: str
-    ) -> Any:
-        """A setting that passes `valid`, or its default after a diagnostic."""
-        if name not in table:
-            return default
-        value = table[name]
-        if not valid(value):
-            message = f"[{_shown(path)}] {name} must be {expected}, not {value!r}"
-            self.report(f"{path}.{name}", Code.OPCUA_SETTING, message)
-            return default
-        return value
-
-    def integer(
-        self, table: dict[str, Any], name: str, path: str, default: int, low: int, high: int
-    ) -> int:
-        valid = lambda v: isinstance(v, int) and not isinstance(v, bool) and low <= v <= high  # noqa: E731
-        result: int = self.setting(table, name, path, default, valid, f"an integer {low}..{high}")
-        return result
-
-    def flag(self, table: dict[str, Any], name: str, path: str, default: bool) -> bool:
-        result: bool = self.setting(
-            table, name, path, default, lambda v: isinstance(v, bool), "true or false"
-        )
-        return result
-
-    def choice(
-        self, table: dict[str, Any], name: str, path: str, default: str, choices: tuple[str, ...]
-    ) -> str:
-        expected = " or ".join(f'"{c}"' for c in choices)
-        result: str = self.setting(table, name, path, default, choices.__contains__, expected)
-        return result
+_NO_PASSWORD = (
+    "no password in the project: write it into a file on the runtime's host (readable by "
+    "the runtime only) and name that file with password_file"
+)
 
 
 def check_opcua(
@@ -576,8 +532,3 @@ def _type_text(t: Type) -> str:
     if isinstance(t, ElementaryType) and t.category == "string" and t.name in ("STRING", "WSTRING"):
         return f"{t.name}[{t.max_length}]"
     return t.name
-
-
-def _shown(path: str) -> str:
-    """A path as the user wrote the table: `opcua.device` for `opcua.device.0`."""
-    return ".".join(part for part in path.split(".") if not part.isdigit())
