@@ -43,7 +43,8 @@ from tests.bench.bench_runtime import (
     _ms,
     driven,
 )
-from tests.bench.bench_watch import START_TIMEOUT_S, ClientProcess, select
+from tests.bench.bench_watch import START_TIMEOUT_S, select
+from tests.bench.client_process import ClientProcess
 from tests.support.ports import free_port
 
 REGISTERS = 100  # served holding registers, %MW0..%MW99
@@ -121,7 +122,9 @@ def _periods(
                 busy = [subprocess.Popen(loop) for _ in range(os.cpu_count() or 1)]
             with driven(resource, clock) as endpoint:
                 if "watch" in loads:
-                    watcher = ClientProcess(endpoint, WATCHED, PERIOD_MS)
+                    watcher = ClientProcess(
+                        "tests.bench.bench_watch", endpoint, str(WATCHED), str(PERIOD_MS)
+                    )
                     watcher.receive(START_TIMEOUT_S)  # watching
                 if "hmi" in loads:
                     command = [sys.executable, "-m", "tests.bench.bench_jitter_loaded"]
@@ -132,7 +135,7 @@ def _periods(
                 resource.log.starts_ns.clear()  # the window starts with every load on
                 time.sleep(seconds)
                 if watcher is not None:
-                    arrivals = watcher.stop()["arrivals"]
+                    arrivals = watcher.ask("stop")["arrivals"]
                     complete = sum(1 for _, _, count, _ in arrivals if count == WATCHED)
                     said.append(
                         f"watch: {len(arrivals)} messages of {WATCHED} values ({complete} complete)"

@@ -33,12 +33,9 @@ import gc
 import json
 import logging
 import os
-import queue
 import socket
-import subprocess
 import sys
 import tempfile
-import threading
 import time
 from contextlib import suppress
 from dataclasses import dataclass
@@ -58,6 +55,7 @@ from runtime.field_io import FieldIo
 from runtime.field_io.opcua.driver import OpcuaDriver, OpcuaOptions
 from runtime.field_io.opcua.resource_server import ResourceServer
 from tests.bench.bench_runtime import TARGET_MS, TARGET_NS, LoggedResource, Spread, _config, driven
+from tests.bench.client_process import ClientProcess
 from tests.support.ports import free_port
 
 ROWS = 100
@@ -194,51 +192,6 @@ def _window(resource: LoggedResource, field_io: TimedFieldIo, seconds: float) ->
 
 
 # ---- the client, in its own process ----------------------------------------------------------
-
-
-class ClientProcess:
-    """The client in a subprocess; its JSON lines come through a reader thread."""
-
-    def __init__(self, port: int) -> None:
-        # back to normal priority, should this process run with a raised one
-        back = ["nice", "-n", str(-os.getpriority(os.PRIO_PROCESS, 0))]
-        command = [*back, sys.executable, "-m", "tests.bench.bench_opcua", "--client", str(port)]
-        self.process = subprocess.Popen(
-            command, cwd=REPO, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
-        )
-        self._lines: queue.Queue[dict[str, Any] | None] = queue.Queue()
-        threading.Thread(target=self._read, name="bench-opcua-client", daemon=True).start()
-
-    def _read(self) -> None:
-        assert self.process.stdout is not None
-        for line in self.process.stdout:
-            if line.startswith("{"):
-                self._lines.put(json.loads(line))
-        self._lines.put(None)
-
-    def receive(self, timeout_s: float) -> dict[str, Any]:
-        try:
-            message = self._lines.get(timeout=timeout_s)
-        except queue.Empty:
-            raise RuntimeError(f"the client said nothing for {timeout_s:g} s") from None
-        if message is None:
-            raise RuntimeError(f"the client ended (exit code {self.process.wait()})")
-        return message
-
-    def tell(self, word: str) -> None:
-        assert self.process.stdin is not None
-        self.process.stdin.write(f"{word}\n")
-        self.process.stdin.flush()
-
-    def close(self) -> None:
-        assert self.process.stdin is not None
-        with suppress(BrokenPipeError):  # end of input: the client disconnects and exits
-            self.process.stdin.close()
-        try:
-            self.process.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
 
 
 def _client(port: int) -> None:
@@ -412,7 +365,7 @@ def _served(seconds: float) -> Served:
             nodes = len(server._built)
             time.sleep(SETTLE_S)
             quiet = _window(resource, field_io, seconds)
-            client = ClientProcess(port)
+            client = ClientProcess("tests.bench.bench_opcua", str(port))
             try:
                 ready = client.receive(180)
                 time.sleep(SETTLE_S)  # the initial values of all items delivered

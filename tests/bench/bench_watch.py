@@ -25,14 +25,13 @@ import json
 import os
 import queue
 import secrets
-import subprocess
 import sys
 import threading
 import time
 import traceback
 from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager, suppress
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from itertools import pairwise
 from pathlib import Path
@@ -73,6 +72,7 @@ from tests.bench.bench_runtime import (
     _compile,
     ten_thousand_paths,
 )
+from tests.bench.client_process import ClientProcess
 from tests.support.ports import free_port
 
 REPO = Path(__file__).resolve().parents[2]
@@ -279,54 +279,6 @@ def client_main(endpoint: str, count: int, period_ms: int) -> None:
         session.close()
 
 
-class ClientProcess:
-    """The client in a subprocess; its JSON lines come through a reader thread."""
-
-    def __init__(self, endpoint: str, count: int, period_ms: int) -> None:
-        # the client at normal priority, as a PADT beside the runtime is: back from the
-        # runtime's raised priority, which a child process inherits
-        back = ["nice", "-n", str(-os.getpriority(os.PRIO_PROCESS, 0))]
-        command = [*back, sys.executable, "-m", "tests.bench.bench_watch", "--client", endpoint]
-        command += [str(count), str(period_ms)]
-        self.process = subprocess.Popen(
-            command, cwd=REPO, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
-        )
-        self._lines: queue.Queue[dict[str, Any] | None] = queue.Queue()
-        threading.Thread(target=self._read, name="bench-client-reader", daemon=True).start()
-
-    def _read(self) -> None:
-        assert self.process.stdout is not None
-        for line in self.process.stdout:
-            if line.startswith("{"):
-                self._lines.put(json.loads(line))
-        self._lines.put(None)
-
-    def receive(self, timeout_s: float) -> dict[str, Any]:
-        try:
-            message = self._lines.get(timeout=timeout_s)
-        except queue.Empty:
-            raise RuntimeError(f"the client said nothing for {timeout_s:g} s") from None
-        if message is None:
-            raise RuntimeError(f"the client ended (exit code {self.process.wait()})")
-        return message
-
-    def stop(self) -> dict[str, Any]:
-        assert self.process.stdin is not None
-        self.process.stdin.write("stop\n")
-        self.process.stdin.flush()
-        return self.receive(30)
-
-    def close(self) -> None:
-        assert self.process.stdin is not None
-        with suppress(BrokenPipeError):  # end of input: the client stops watching and exits
-            self.process.stdin.close()
-        try:
-            self.process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
-
-
 # ---- one watch set ------------------------------------------------------------------------------
 
 
@@ -366,7 +318,7 @@ def bench_watch_set(artifact: Artifact, count: int, seconds: float, cycle_priori
         f"cycle thread: {_scheduling(cycle_priority)}:"
     )
     with serving(resource, clock, log, cycle_priority) as endpoint:
-        client = ClientProcess(endpoint, count, PERIOD_MS)
+        client = ClientProcess("tests.bench.bench_watch", endpoint, str(count), str(PERIOD_MS))
         try:
             hello = client.receive(START_TIMEOUT_S)
             watch_id = str(hello["ready"])
@@ -396,7 +348,7 @@ def bench_watch_set(artifact: Artifact, count: int, seconds: float, cycle_priori
             window_start = resource.ends_ns[published[1].cycle]
             window_end = window_start + int(seconds * 1e9)
             time.sleep(max(0.0, (window_end - time.monotonic_ns()) / 1e9) + SETTLE_S)
-            arrivals = client.stop()["arrivals"]
+            arrivals = client.ask("stop")["arrivals"]
         finally:
             client.close()
     _report(resource, log, watch_id, selection, arrivals, window_start, window_end)
