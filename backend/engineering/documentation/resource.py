@@ -6,11 +6,11 @@ from __future__ import annotations
 
 from typing import Any
 
+from backend.engineering.documentation.field_bus import field_bus
 from backend.engineering.documentation.markup import Section, anchor, code, escape, heading, table
 from backend.engineering.documentation.signals import located_signals
 from backend.engineering.documentation.subject import Subject
 from runtime.contract.keyspace import ROOT
-from runtime.contract.modbus import ModbusConfig, Point
 from runtime.contract.parameters import PROGRAM_PARAMETERS, RESOURCE_PARAMETERS
 from runtime.contract.session_options import DEFAULT_ENDPOINT
 from runtime.contract.system_variables import NAMESPACE, SYSTEM_VARIABLES
@@ -146,50 +146,4 @@ def _io_and_network(subject: Subject) -> str:
         f"(default {code(DEFAULT_ENDPOINT)}, loopback only); it is not part of the "
         "configuration and does not change its CRC.</p>" + table(["key", "what"], key_rows)
     )
-    return io + network + _field_bus(subject.artifact.modbus)
-
-
-def _field_bus(modbus: ModbusConfig) -> str:
-    """The Modbus TCP maps (docs/modbus.md): the served image and every remote device."""
-    if not modbus.serve and not modbus.devices:
-        return "<h3>Field bus (Modbus TCP)</h3><p>The configuration uses no Modbus TCP.</p>"
-    parts = ["<h3>Field bus (Modbus TCP)</h3>"]
-    if modbus.serve:
-        parts.append(
-            f"<p>The process image is served on {code(f'{modbus.host}:{modbus.port}')} "
-            "(the port can be moved when the runtime starts). In STOP and ERROR STOP the "
-            "outputs are served at their safe values.</p>"
-            + _points_table(modbus.served, served=True)
-        )
-    else:
-        parts.append("<p>The process image is not served.</p>")
-    for device in modbus.devices:
-        parts.append(
-            f"<h4>Remote device {escape(device.name)}</h4><p>{code(f'{device.host}:{device.port}')}"
-            f" unit {device.unit_id}, polled every {device.period_ms} ms, lost after "
-            f"{device.timeout_ms} ms without an answer (its inputs then take their safe "
-            "values).</p>" + _points_table(device.points, served=False)
-        )
-    return "".join(parts)
-
-
-def _points_table(points: tuple[Point, ...], served: bool) -> str:
-    rows = [
-        [
-            escape(point.area.replace("_", " ")),
-            str(point.address),
-            code(point.location),
-            escape(point.variable),
-            escape(point.type),
-            escape(f"{point.byte_order}/{point.word_order}"),
-            ("yes" if point.writable else "") if served else escape(_shown(point.safe_value)),
-        ]
-        for point in points
-    ]
-    last = "writable" if served else "safe value"
-    head = ["table", "address", "location", "variable", "type", "byte/word order", last]
-    return table(head, rows)
-
-
-def _shown(value: bool | int | float) -> str:
-    return str(value).upper() if isinstance(value, bool) else str(value)
+    return io + network + field_bus(subject.artifact)

@@ -19,6 +19,7 @@ from backend.engineering.documentation.subject import load_subject
 from backend.engineering.documentation.xref import xref_rows
 from backend.engineering.project import compile_project, load_project
 from padt.cli import main
+from padt.demo import demo_project_with_accounts
 from tests.conftest import REPO
 from tests.engineering.documentation.filling_line import write_filling_line
 
@@ -265,6 +266,26 @@ def test_the_modbus_maps_of_the_demo(tmp_path: Path) -> None:
     device = field_bus[field_bus.index("Remote device plant") :]
     assert "127.0.0.1:5021 unit 1, polled every 100 ms, lost after 500 ms" in device
     assert re.search(r"input register\s+0\s+%IW0\s+tankLevel\s+INT\s+big/big\s+-1", device)
+
+
+def test_the_opcua_server_and_a_remote_server_of_the_demo(tmp_path: Path) -> None:
+    """The demo's OPC UA server as `padt demo` configures it, and a remote server."""
+    folder = demo_project_with_accounts(tmp_path / "state", [], opcua=True)
+    with (folder / "padt.toml").open("a") as config:
+        config.write(
+            '\n[[opcua.device]]\nname = "filler"\nendpoint = "opc.tcp://192.168.0.20:4840"\n'
+            'user = "padt"\npassword_file = "/etc/padt/filler.password"\nmode = "read"\n'
+        )
+    assert main(["docs", str(folder), "-o", str(tmp_path)]) == 0
+    text = "\n".join(pages(tmp_path / "Demo_tank.pdf"))
+    opcua = text[text.index("OPC UA\n") :]
+    assert "Served on opc.tcp://127.0.0.1:4840" in opcua
+    assert re.search(r"TankControl\.highLevel\s+yes", opcua)
+    assert re.search(r"TankControl\s+TankControl\.highLevel", opcua)  # sorted, each once
+    remote = opcua[opcua.index("Remote OPC UA server filler") :]
+    described = "opc.tcp://192.168.0.20:4840, Basic256Sha256, signed and encrypted, as user padt"
+    assert described in remote
+    assert "/etc/padt" not in remote  # where the password is kept is the runtime's business
 
 
 def test_loose_files_are_named_without_their_folder(project: Path) -> None:
