@@ -216,7 +216,7 @@ def run(args: argparse.Namespace) -> int:
 
     from runtime import online_writes
     from runtime.field_io import FieldIo
-    from runtime.field_io.opcua.driver import OpcuaOptions
+    from runtime.field_io.opcua.kind import OpcuaOptions
 
     resource.field_io = FieldIo(
         lambda: resource.artifact,

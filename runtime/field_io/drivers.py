@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from runtime.field_io.driver import DriverKind
 from runtime.field_io.modbus.driver import ModbusOptions, modbus_kind
-from runtime.field_io.opcua.driver import OpcuaOptions, opcua_kind
+from runtime.field_io.opcua.kind import OpcuaOptions, opcua_kind
 
 
 def driver_kinds(modbus: ModbusOptions, opcua: OpcuaOptions) -> tuple[DriverKind, ...]:

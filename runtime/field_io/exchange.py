@@ -27,7 +27,7 @@ from runtime.field_io.modbus.driver import ModbusDriver, ModbusOptions
 from runtime.field_io.modbus.image_server import ImageServer
 from runtime.field_io.modbus.poller import DevicePoller
 from runtime.field_io.modbus.request_meter import REQUESTS_PER_SECOND
-from runtime.field_io.opcua.driver import OpcuaOptions
+from runtime.field_io.opcua.kind import OpcuaOptions
 from runtime.instances import BoundVariable
 from runtime.process_image import ProcessImage
 from runtime.variables import Variables

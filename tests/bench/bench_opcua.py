@@ -52,7 +52,8 @@ from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import Artifact, UserAccount
 from runtime.contract.opcua import OpcuaConfig, OpcuaServer
 from runtime.field_io import FieldIo
-from runtime.field_io.opcua.driver import OpcuaDriver, OpcuaOptions
+from runtime.field_io.opcua.driver import OpcuaDriver
+from runtime.field_io.opcua.kind import OpcuaOptions
 from runtime.field_io.opcua.resource_server import ResourceServer
 from tests.bench.bench_runtime import TARGET_MS, TARGET_NS, LoggedResource, Spread, _config, driven
 from tests.bench.client_process import ClientProcess

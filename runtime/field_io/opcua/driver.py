@@ -10,53 +10,31 @@ snapshot of the exposed variables when it asked for one.
 from __future__ import annotations
 
 import tempfile
-from dataclasses import dataclass
 from pathlib import Path
 
-from runtime.contract.artifact import Artifact
 from runtime.contract.opcua import OpcuaConfig, OpcuaDevice
 from runtime.contract.protocol import IoPoint, IoStatus, ServerStatus
 from runtime.contract.refusal import Refusal
-from runtime.field_io.driver import DriverContext, DriverKind, FieldDriver
+from runtime.field_io.driver import DriverContext
 from runtime.field_io.opcua.remote import RemoteServer
 from runtime.field_io.opcua.resource_server import ResourceServer
 from runtime.field_io.remote_devices import RemoteDevices
 from runtime.field_io.server_and_devices import ServerAndDevices
 
 
-@dataclass(frozen=True)
-class OpcuaOptions:
-    """What the runtime's command line sets: the server's port instead of the configured
-    one (0: any free one), and the folder of its certificates (None: a temporary one)."""
-
-    port: int | None = None
-    folder: Path | None = None
-
-
-def opcua_kind(options: OpcuaOptions) -> DriverKind:
-    def make(config: OpcuaConfig, context: DriverContext) -> FieldDriver | None:
-        if config.server is None and not config.devices:
-            return None
-        return OpcuaDriver(config, context, options)
-
-    return DriverKind("opcua", _config_of, make)
-
-
-def _config_of(artifact: Artifact | None) -> OpcuaConfig:
-    found = artifact.opcua if artifact is not None else None
-    return found if found is not None else OpcuaConfig()
-
-
 class OpcuaDriver(ServerAndDevices):
-    def __init__(self, config: OpcuaConfig, context: DriverContext, options: OpcuaOptions) -> None:
+    def __init__(
+        self, config: OpcuaConfig, context: DriverContext, port: int | None, folder: Path | None
+    ) -> None:
+        """`port`: the server's instead of the configured one (0: any free one); `folder`:
+        of the certificates (None: a temporary one)."""
         self.config, self._context = config, context
-        folder = options.folder
         if folder is None:  # a resource without a state folder (tests): certificates for now
             self._temporary = tempfile.TemporaryDirectory(prefix="padt-opcua-")
             folder = Path(self._temporary.name)
         self.server: ResourceServer | None = None
         if config.server is not None:
-            port = options.port if options.port is not None else config.server.port
+            port = port if port is not None else config.server.port
             self.server = ResourceServer(
                 config.server,
                 context.resource,

@@ -149,6 +149,7 @@ class ResourceServer:
         self._internal_write: Callable[..., Awaitable[list[ua.StatusCode]]] | None = None
         self._namespace = 0
         self._plan = Plan((), ())
+        self._built_plan: Plan | None = None  # the plan whose nodes are there (I/O thread)
         self._by_node: dict[ua.NodeId, PlannedNode] = {}
         self._built: dict[str, tuple[str, bool]] = {}  # path -> (type, writable) of its node
         # the cycle thread's side of the hand-over
@@ -338,18 +339,32 @@ class ResourceServer:
     async def _follow(self) -> None:
         """Keep the nodes as the plan says, and their values as the snapshots say."""
         while True:
-            if self._plan_changed.is_set() or (not self._by_node and self._plan.variables):
-                self._plan_changed.clear()
-                await self._build(self._plan)
-            self.wanted = True
-            with contextlib.suppress(TimeoutError):  # woken early for a write to show
-                await asyncio.wait_for(self._wake.wait(), self._sampling_ms() / 1000)
-            self._wake.clear()
-            snapshot = self.snapshot
-            if snapshot is not None and snapshot.variables is self._plan.variables:
-                self.snapshot = None
-                await self._show(snapshot)
-                self.shown_seq = snapshot.seq
+            try:
+                await self._follow_once()
+            except asyncio.CancelledError:
+                raise
+            except Exception:  # a defect here must not end the serving of values
+                log.exception("OPC UA server: following the cycle")
+                await asyncio.sleep(IDLE_SAMPLING_MS / 1000)
+
+    async def _follow_once(self) -> None:
+        if self._plan_changed.is_set() or self._built_plan is None:
+            self._plan_changed.clear()
+            planned = self._plan
+            await self._build(planned)
+            self._built_plan = planned
+        self.wanted = True
+        with contextlib.suppress(TimeoutError):  # woken early for a write to show
+            await asyncio.wait_for(self._wake.wait(), self._sampling_ms() / 1000)
+        self._wake.clear()
+        snapshot = self.snapshot
+        # only a snapshot of the variables whose nodes are built (a rebind may have come
+        # meanwhile: its nodes are built first, at the next turn)
+        built = self._built_plan
+        if snapshot is not None and built is not None and snapshot.variables is built.variables:
+            self.snapshot = None
+            await self._show(snapshot)
+            self.shown_seq = snapshot.seq
 
     async def _build(self, planned: Plan) -> None:
         """The nodes of `planned`: those of variables gone (or changed in type or access)
