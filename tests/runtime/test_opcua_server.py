@@ -423,6 +423,8 @@ def test_an_online_change_adds_nodes_and_keeps_the_subscriptions(served: Served)
 
     after, added = run(across_the_reload)
     assert len(after) >= 3 and after == sorted(after), (  # a warm change: the count goes on
-        after, served.client.ask(GetValues()).values["Main.count"], events(served)[-8:]
+        after,
+        served.client.ask(GetValues()).values["Main.count"],
+        events(served)[-8:],
     )
     assert added == 5
