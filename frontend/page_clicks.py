@@ -29,7 +29,8 @@ MAX_NAME = 1000  # longer than any tab name, variable path or tree entry
 # settled; the panels' widths and whether they are folded after the user dragged an edge
 # or folded a panel (not when the server moved them), as "<left>x<folded>x<right>x<folded>"
 # (a folded panel's width 0: the width it had is kept). Whether the editor's toolbar shows
-# the plant drawing is said after each press of its toggle ("on" or "off").
+# the plant drawing is said after each press of its toggle ("on" or "off"); the toggle is in
+# the editor's shadow root, where a click's target is the root's host: its path tells.
 _SCRIPT = (
     "var find=function(){var l=Array.from(document.querySelectorAll('label')).find("
     f"function(x){{return x.textContent==='{LABEL}'}});"
@@ -50,7 +51,8 @@ _SCRIPT = (
     "if(!said){var sheet=at.closest('svg.gfx');var m=sheet&&sheet.getScreenCTM();"
     "if(m){var q=new DOMPoint(e.clientX,e.clientY).matrixTransform(m.inverse());"
     "said='place|'+Math.round(q.x)+','+Math.round(q.y)}}"
-    "if(!said&&at.closest('[data-action=drawing],[data-action=editor]')){"
+    "if(!said&&e.composedPath().some(function(x){return x.dataset&&"
+    "(x.dataset.action==='drawing'||x.dataset.action==='editor')})){"
     "setTimeout(function(){var e=window.padtEditor;"
     "tell('drawing|'+(e&&e.showDrawing?'on':'off'))},0)}"
     "tell(said)},true);"

@@ -4,11 +4,14 @@ open in the centre without a click; no note of viser's about software WebGL cove
 editor's toolbar; the inputs through which the page talks to the server are never seen;
 a confirmation and a dropdown's list opened while a file is open are above the editor and
 answer a click where they are drawn; the stop confirmed is the newest event below the
-editor."""
+editor; the plant drawing and the editor take turns."""
 
 from __future__ import annotations
 
+import io
+
 import pytest
+from PIL import Image
 from playwright.sync_api import Locator, Page
 
 from tests.support.browser import chromium
@@ -102,3 +105,41 @@ def test_the_first_program_is_open_and_nothing_covers_it(
         option.wait_for(timeout=20_000)
         assert on_top(option) == "it"
         page.keyboard.press("Escape")
+
+
+CANVAS_WIDTH = "() => document.querySelector('canvas[data-engine]').getBoundingClientRect().width"
+RUN_GREEN = (47, 158, 68)  # frontend/plant_view.py: a block in RUN
+
+
+def green_share(page: Page) -> float:
+    """The share of the canvas' pixels in the green of RUN, as the user sees them."""
+    box = page.locator("canvas[data-engine]").bounding_box()
+    assert box is not None
+    shot = Image.open(io.BytesIO(page.screenshot(clip=box))).convert("RGB")
+    pixels = list(shot.getdata())
+    near = [p for p in pixels if all(abs(a - b) <= 12 for a, b in zip(p, RUN_GREEN, strict=True))]
+    return len(near) / len(pixels)
+
+
+def test_the_plant_drawing_and_the_editor_take_turns(plant: Plant) -> None:
+    """The editor's "Plant drawing" shows the resource and its programs in the colours of
+    their states in the editor's place; "Editor" brings the editor back. While the editor
+    shows, the canvas under it is out of the page, so that viser does not draw it: it drew
+    its scene anew after each of the editor's live values, which cost a browser that draws
+    without a GPU more than a core."""
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_as(page, plant, "admin")
+        page.locator("#padt-editor .cm-content").wait_for(timeout=30_000)
+        log_in_to_resource(page, "admin", "correct-horse-7")
+        wait_until("Tank1 runs", lambda: state(page) == "RUN", timeout_s=30)
+        wait_until("no canvas under the editor", lambda: page.evaluate(CANVAS_WIDTH) == 0)
+
+        page.locator('#padt-editor [data-action="drawing"]').click()
+        wait_until("the canvas fills the editor's place", lambda: page.evaluate(CANVAS_WIDTH) > 300)
+        wait_until("the resource and its program drawn in RUN", lambda: green_share(page) > 0.1)
+        assert not page.locator("#padt-editor .cm-content").is_visible()
+
+        page.get_by_role("button", name="Editor", exact=True).click()
+        page.locator("#padt-editor .cm-content").wait_for(timeout=20_000)
+        wait_until("no canvas under the editor again", lambda: page.evaluate(CANVAS_WIDTH) == 0)

@@ -76,6 +76,16 @@ const theme = EditorView.theme({
 
 // ---- the live values at the end of lines
 
+// viser's canvas sits in a box of its own (the one it watches to know whether the canvas is
+// in view) inside the area that the docked panels leave free: the editor is laid over the
+// area and hides the box.
+function canvasPlace() {
+  const canvas = document.querySelector("canvas[data-engine]") || document.querySelector("canvas");
+  const canvasBox = canvas && canvas.parentElement && canvas.parentElement.parentElement
+    && canvas.parentElement.parentElement.parentElement;
+  return { canvasBox, area: canvasBox && canvasBox.parentElement };
+}
+
 class LiveWidget extends WidgetType {
   constructor(text, quality) {
     super();
@@ -294,8 +304,7 @@ class PadtEditor {
   // Laid exactly over viser's canvas: its container keeps the space the docked panels leave.
   follow() {
     const place = () => {
-      const canvas = document.querySelector("canvas[data-engine]") || document.querySelector("canvas");
-      const area = canvas && canvas.parentElement && canvas.parentElement.parentElement;
+      const area = canvasPlace().area;
       if (!area) return;
       const r = area.getBoundingClientRect();
       const s = this.root.style;
@@ -324,10 +333,13 @@ class PadtEditor {
     const editing = on && !this.showDrawing;
     this.root.style.display = editing ? "block" : "none";
     this.visible = on;
-    // the canvas under the editor is not composited while hidden by it: in a browser that
-    // draws without a GPU that was a third of a core while one types
-    const canvas = document.querySelector("canvas[data-engine]");
-    if (canvas) canvas.style.visibility = editing ? "hidden" : "";
+    // the canvas under the editor is out of the page while the editor covers it: viser
+    // then stops drawing it (it draws only a canvas in view). It draws its scene anew for a
+    // quarter of a second after every message that is not for its panels, so the editor's
+    // live values (ten a second) had it drawn without pause; in a browser that draws
+    // without a GPU that took more than a core
+    const { canvasBox } = canvasPlace();
+    if (canvasBox) canvasBox.style.display = editing ? "none" : "";
   }
 
   toggleDrawing() {
