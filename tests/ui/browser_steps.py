@@ -91,23 +91,49 @@ def log_in_to_resource(page: Page, user: str, password: str) -> None:
     # viser sends a field's value at most every 50 ms: a click right after typing may reach
     # the server before the password does (then refused, the field emptied): typed again
     deadline = time.monotonic() + START_S
+    answers: list[str] = []  # the toasts of the attempts, for the message if none holds
     while True:
         field(page, "User").fill(user, timeout=START_S * 1000)
         field(page, "Password").fill(password, timeout=START_S * 1000)
         page.get_by_role("button", name="Log in to resource").click(timeout=START_S * 1000)
-        try:
-            wait_until("the resource login is shown", lambda: _logged_in(page), timeout_s=15)
+        answer = _login_answer(page)
+        if answer == "logged in":
             return
-        except AssertionError:
-            if time.monotonic() > deadline:  # say what the page showed instead
-                try:
-                    shown = text_of(page, '[data-testid="resource-login"]')
-                except PlaywrightError:
-                    shown = "(no resource login on the page)"
-                raise AssertionError(
-                    f"never: the resource login is shown; it shows {shown!r}, the page: "
-                    f"{page.inner_text('body')[:2000]!r}"
-                ) from None
+        answers.append(answer)
+        if time.monotonic() > deadline:  # say what the page showed instead
+            try:
+                shown = text_of(page, '[data-testid="resource-login"]')
+            except PlaywrightError:
+                shown = "(no resource login on the page)"
+            raise AssertionError(
+                f"never: the resource login is shown; it shows {shown!r}; the attempts' "
+                f"answers: {answers}; the page: {page.inner_text('body')[:2000]!r}"
+            )
+
+
+def _login_answer(page: Page) -> str:
+    """ "logged in", else the refusal the attempt was answered with (a red toast), else
+    "no answer in 15 s"."""
+    refusals = page.locator(".mantine-Notification-root", has_text="refused")
+    unanswered = page.locator(".mantine-Notification-root", has_text="No answer")
+    deadline = time.monotonic() + 15
+    while time.monotonic() < deadline:
+        try:
+            if _logged_in(page):
+                return "logged in"
+            for toasts in (refusals, unanswered):
+                if toasts.count():
+                    text = " ".join(toasts.all_inner_texts())
+                    page.evaluate(  # closed: the next attempt's answer is told apart
+                        "document.querySelectorAll('.mantine-Notification-closeButton')"
+                        ".forEach(b => b.click())"
+                    )
+                    page.wait_for_timeout(300)  # their fade
+                    return text
+        except PlaywrightError:
+            pass
+        time.sleep(0.1)
+    return "no answer in 15 s"
 
 
 def _logged_in(page: Page) -> bool:
