@@ -226,6 +226,10 @@ def _compile(
     users = settings.users
     units, parse_diagnostics, user_pous = parsed if parsed is not None else parse_project(sources)
     diagnostics = list(parse_diagnostics)  # the caller's parse stays as it was
+    if any(d.code == Code.PROJECT_SIZE.id for d in diagnostics):
+        # refused as a whole: checking the files parsed before the limit would only add
+        # to what the refusal costs (seconds, on a project of that size)
+        return CompileResult(tuple(sorted(diagnostics)), None)
     resolved = resolve(units)
     diagnostics.extend(resolved.diagnostics)
     diagnostics.extend(check(resolved))
