@@ -603,6 +603,14 @@ def build_parser() -> argparse.ArgumentParser:
     demo_arguments(demo)
     demo.set_defaults(func=_demo)
 
+    from padt.router import add_arguments as router_arguments
+
+    router = sub.add_parser(
+        "router", help="a Zenoh router (TLS, usrpwd, access control; a mesh with --connect)"
+    )
+    router_arguments(router)
+    router.set_defaults(func=_lazy("padt.router", "run"))
+
     from runtime.contract.accounts import LEVELS
 
     load = sub.add_parser(

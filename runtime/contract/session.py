@@ -40,9 +40,44 @@ def session_config(
     return config
 
 
-def open_router(endpoint: str, config_file: Path | None = None) -> zenoh.Session:
-    """A Zenoh router inside this Python process (no zenohd binary needed)."""
-    return zenoh.open(session_config(mode="router", listen=[endpoint], config_file=config_file))
+def open_router(
+    endpoint: str | list[str], config_file: Path | None = None, connect: list[str] | None = None
+) -> zenoh.Session:
+    """A Zenoh router inside this Python process (no zenohd binary needed), listening on
+    `endpoint` (one or several) and linked to the routers at `connect`, if any (a mesh:
+    router to router, reached again whenever one of them comes back)."""
+    listen = [endpoint] if isinstance(endpoint, str) else endpoint
+    return zenoh.open(
+        session_config(mode="router", listen=listen, connect=connect, config_file=config_file)
+    )
+
+
+class RouterNotOpened(Exception):
+    """The router could not be opened: a configuration file that Zenoh cannot read, an
+    endpoint that is no endpoint or cannot listen (Zenoh's reason, in one line)."""
+
+
+def open_mesh_router(
+    listen: list[str], connect: list[str], config_file: Path | None
+) -> zenoh.Session:
+    """`open_router` for the command line: Zenoh's error as RouterNotOpened, so that the
+    caller needs no import of Zenoh to tell it from a bug."""
+    try:
+        config = session_config(
+            mode="router", listen=listen, connect=connect, config_file=config_file
+        )
+    except zenoh.ZError as exc:
+        raise RouterNotOpened(f"cannot read the Zenoh configuration: {_reason(exc)}") from None
+    try:
+        return zenoh.open(config)
+    except zenoh.ZError as exc:
+        raise RouterNotOpened(f"cannot open the router: {_reason(exc)}") from None
+
+
+def _reason(exc: zenoh.ZError) -> str:
+    """Zenoh's message without the Rust source location it appends, on one line."""
+    text = " ".join(str(exc).split())
+    return text.split(" at /", 1)[0]
 
 
 def open_client(endpoint: str, config_file: Path | None = None) -> zenoh.Session:
