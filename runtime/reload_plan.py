@@ -18,6 +18,7 @@ from typing import Any
 
 from runtime.code_image import CodeImage, VariablePath
 from runtime.contract.artifact import Artifact, ChartInfo, PouCode, ResourceConfig
+from runtime.contract.exchange import ExchangeConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
 from runtime.contract.protocol import Hazard, ProgramChanges, ReloadPlanInfo, VariableChange
 from runtime.contract.values import array_shape, base_type, is_reference_type
@@ -237,6 +238,49 @@ def _hazards(
         instance = old_charts.get(rename_source(target.path, renames).upper())
         if instance is not None:  # a new or renamed instance starts afresh: no trap
             hazards.extend(_chart_hazards(instance, target.chart, live))
+    return hazards + _exchange_hazards(old.exchange, new.exchange)
+
+
+def _exchange_hazards(old: ExchangeConfig | None, new: ExchangeConfig | None) -> list[Hazard]:
+    """What a changed exchange with other resources does (docs/exchange.md): the driver is
+    made anew, so every subscription starts again from its safe values."""
+    before, after = old or ExchangeConfig(), new or ExchangeConfig()
+    if before == after:
+        return []
+    hazards = []
+    old_subscriptions = {s.name: s for s in before.subscriptions}
+    for subscription in after.subscriptions:
+        names = ", ".join(p.variable for p in subscription.points)
+        kept = subscription.name in old_subscriptions
+        hazards.append(
+            Hazard(
+                "exchange-restarted" if kept else "exchange-subscribed",
+                subscription.name,
+                f"{names}: safe values until the next message of "
+                f"{subscription.name} (within its publisher's period)",
+            )
+        )
+    for name in sorted(old_subscriptions.keys() - {s.name for s in after.subscriptions}):
+        names = ", ".join(p.variable for p in old_subscriptions[name].points)
+        hazards.append(
+            Hazard(
+                "exchange-unsubscribed",
+                name,
+                f"{names}: the last values stay, no longer updated from {name}",
+            )
+        )
+    new_publications = {p.name: p for p in after.publications}
+    for publication in before.publications:
+        changed = new_publications.get(publication.name)
+        if changed is None:
+            message = "is no longer published: its subscribers take their safe values"
+            hazards.append(Hazard("exchange-unpublished", publication.name, message))
+        elif {v.variable for v in publication.variables} - {v.variable for v in changed.variables}:
+            message = (
+                "loses variables: a subscriber that takes one of them refuses its messages "
+                "and takes its safe values"
+            )
+            hazards.append(Hazard("exchange-publication-changed", publication.name, message))
     return hazards
 
 

@@ -182,6 +182,8 @@ class Code(Enum):
     OPCUA_NODE = "E0625", "OPC UA node id that does not read"
     OPCUA_VARIABLE = "E0626", "OPC UA point on no suitable located variable"
     OPCUA_MAPPED_TWICE = "E0627", "variable mapped by two device points"
+    EXCHANGE_SETTING = "E0628", "invalid exchange setting"
+    EXCHANGE_VARIABLE = "E0629", "exchange of no suitable global variable"
     EXTRA_RESOURCE = "W0601", "resource ignored"
     PROGRAM_ARGUMENTS = "W0602", "program arguments in a configuration ignored"
 

@@ -14,6 +14,7 @@ from typing import Any
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.check import check
+from backend.compiler.checks.exchange import check_exchange
 from backend.compiler.checks.generated_names import check_generated_names
 from backend.compiler.checks.modbus import check_modbus
 from backend.compiler.checks.opcua import check_opcua
@@ -40,12 +41,11 @@ from backend.compiler.source import Pos, ProjectSize, SourceFile, stdlib_sources
 from backend.compiler.toml_lines import line_of
 from backend.compiler.types import (
     ArrayType,
-    ElementaryType,
     FbType,
-    InterfaceType,
     OpenArrayType,
     StructType,
     Type,
+    artifact_type_text,
 )
 from runtime.contract.accounts import account_problems
 from runtime.contract.artifact import (
@@ -161,13 +161,16 @@ def compile_sources(
     config_lines: dict[str, int] | None = None,
     opcua: Any = None,
     parsed: Parsed | None = None,
+    exchange: Any = None,
 ) -> CompileResult:
-    """`modbus` and `opcua` are the `[modbus]` and `[opcua]` tables of padt.toml as read
-    (None: there is none);
+    """`modbus`, `opcua` and `exchange` are the `[modbus]`, `[opcua]` and `[exchange]`
+    tables of padt.toml as read (None: there is none);
     `config_lines` where each setting of padt.toml is written (`toml_lines.key_lines`);
     `parsed`: `parse_project(sources)` when the caller has it already (the documentation
     needs the parse too; the AST is immutable, so sharing it is safe)."""
-    settings = _Settings(safe_values or {}, users or [], modbus, config_lines or {}, opcua)
+    settings = _Settings(
+        safe_values or {}, users or [], modbus, config_lines or {}, opcua, exchange
+    )
     try:
         return _compile(sources, project, resource, programs, config_file, settings, parsed)
     except (RecursionError, MemoryError) as exc:
@@ -212,6 +215,7 @@ class _Settings:
     modbus: Any
     lines: dict[str, int]
     opcua: Any = None
+    exchange: Any = None
 
 
 def _compile(
@@ -262,6 +266,10 @@ def _compile(
         resolved, programs, sources, settings.opcua, config_file, settings.lines, modbus
     )
     diagnostics.extend(opcua_diagnostics)
+    exchange, exchange_diagnostics = check_exchange(
+        resolved, programs, settings.exchange, resource.name, config_file, settings.lines
+    )
+    diagnostics.extend(exchange_diagnostics)
     diagnostics.extend(_check_users(users, config_file))
     unparsed = {source.name for source in sources} - {unit.file for unit in units}
     diagnostics = in_reading_order(diagnostics, unparsed)
@@ -287,6 +295,7 @@ def _compile(
         located=instance_io.located,
         access_paths=instance_io.access_paths,
         opcua=opcua,
+        exchange=exchange,
     ).with_crc()
     return CompileResult(tuple(diagnostics), artifact)
 
@@ -422,7 +431,7 @@ def _safe_values(
             )
             continue
         try:
-            stored = representation(_type_text(variable.type), value)
+            stored = representation(artifact_type_text(variable.type), value)
         except ValueRejected as exc:
             diagnostics.append(
                 Diagnostic.at(where, Code.SAFE_VALUE, f"safe value for '{name}': {exc}")
@@ -507,7 +516,7 @@ def _unit_code(
         VarInfo(
             name=v.name,
             attr=v.attr,
-            type=_type_text(v.type),
+            type=artifact_type_text(v.type),
             kind=v.kind,
             retain=v.retain,
             constant=v.constant,
@@ -518,25 +527,12 @@ def _unit_code(
     return PouCode(name, kind, class_, source, crc32_hex(source), infos)
 
 
-def _type_text(t: Type) -> str:
-    """A type as the artifact names it; strings keep their length (`STRING[4]`) so that the
-    runtime can check what it writes."""
-    if isinstance(t, ElementaryType) and t.category == "string" and t.name in ("STRING", "WSTRING"):
-        return f"{t.name}[{t.max_length}]"
-    if isinstance(t, InterfaceType):  # a reference to the instance it is assigned
-        return f"INTERFACE {t.name}"
-    if isinstance(t, ArrayType) and isinstance(t.element, InterfaceType):  # elements too
-        ranges = ", ".join(f"{low}..{high}" for low, high in t.dims)
-        return f"ARRAY[{ranges}] OF {_type_text(t.element)}"
-    return t.name
-
-
 def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
     generated = generate_pou(resolved, pou)
     if pou.kind == "FUNCTION":
         code = _unit_code(pou.name, pou.kind, function_name(pou.name), generated.source, [])
         if pou.return_type is not None:
-            code = replace(code, returns=_type_text(pou.return_type))
+            code = replace(code, returns=artifact_type_text(pou.return_type))
     else:
         # a variable-length in-out is the caller's array, shown where the caller has it
         stored = [v for v in instance_fields(pou) if not isinstance(v.type, OpenArrayType)]

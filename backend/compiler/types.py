@@ -343,3 +343,16 @@ def assignable(target: Type, source: Type) -> bool:
     # do not mix: `i := TRUE` and `b := 42` are mistakes (the literals 0 and 1 as BOOL are
     # a question of the value, answered by the check stage: `bool_literal`)
     return target.category == "bits" and source.category == "bool"
+
+
+def artifact_type_text(t: Type) -> str:
+    """A type as the artifact names it; strings keep their length (`STRING[4]`) so that the
+    runtime can check what it writes."""
+    if isinstance(t, ElementaryType) and t.category == "string" and t.name in ("STRING", "WSTRING"):
+        return f"{t.name}[{t.max_length}]"
+    if isinstance(t, InterfaceType):  # a reference to the instance it is assigned
+        return f"INTERFACE {t.name}"
+    if isinstance(t, ArrayType) and isinstance(t.element, InterfaceType):  # elements too
+        ranges = ", ".join(f"{low}..{high}" for low, high in t.dims)
+        return f"ARRAY[{ranges}] OF {artifact_type_text(t.element)}"
+    return t.name

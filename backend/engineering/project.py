@@ -45,6 +45,7 @@ class Project:
     users: list[UserAccount] = field(default_factory=list)  # PES accounts ([[resource.user]])
     modbus: Any = None  # the [modbus] table as read; the compiler checks it
     opcua: Any = None  # the [opcua] table as read (None: none); the compiler checks it
+    exchange: Any = None  # the [exchange] table as read (None: none); the compiler checks it
     config_lines: dict[str, int] = field(default_factory=dict)  # where each setting is
     author: str = ""  # [project] author and date: for the cover of the documentation
     date: str = ""
@@ -180,6 +181,7 @@ def _project_from_toml(data: dict[str, Any], sources: list[SourceFile], where: s
         users,
         modbus=data.get("modbus"),
         opcua=data.get("opcua"),
+        exchange=data.get("exchange"),
         author=str(meta.get("author", "")),
         date=str(meta.get("date", "")),
     )
@@ -218,4 +220,5 @@ def compile_project(
         config_lines=project.config_lines,
         opcua=project.opcua,
         parsed=parsed,
+        exchange=project.exchange,
     )

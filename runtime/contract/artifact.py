@@ -14,6 +14,7 @@ import zlib
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from runtime.contract.exchange import ExchangeConfig, exchange_config
 from runtime.contract.modbus import ModbusConfig, modbus_config
 from runtime.contract.opcua import OpcuaConfig, opcua_config
 from runtime.contract.outside_json import MIB, JsonRefused, read_json
@@ -140,7 +141,7 @@ class AccessPath:
 # fields added within version 4: left out of the CRC while empty, so that a configuration
 # that does not use them keeps its CRC (and a runtime that does not know them refuses one
 # that does: its CRC does not match)
-_OPTIONAL_FIELDS = ("located", "access_paths", "opcua")
+_OPTIONAL_FIELDS = ("located", "access_paths", "opcua", "exchange")
 
 
 @dataclass(frozen=True)
@@ -162,6 +163,8 @@ class Artifact:
     access_paths: tuple[AccessPath, ...] = ()  # sorted by name
     # the served address space and the remote servers (opcua.py); None: no OPC UA at all
     opcua: OpcuaConfig | None = None
+    # the variable exchange with other resources (exchange.py); None: none
+    exchange: ExchangeConfig | None = None
     crc: str = field(default="")
     format: str = FORMAT
     version: int = VERSION
@@ -242,6 +245,9 @@ def load_artifact(text: str | bytes) -> Artifact:
             located=tuple((path, location) for path, location in data.get("located", ())),
             access_paths=tuple(AccessPath(**entry) for entry in data.get("access_paths", ())),
             opcua=opcua_config(data["opcua"]) if data.get("opcua") is not None else None,
+            exchange=(
+                exchange_config(data["exchange"]) if data.get("exchange") is not None else None
+            ),
             crc=data["crc"],
         )
     except (KeyError, TypeError, ValueError, AttributeError) as exc:  # ValueError: unpacking

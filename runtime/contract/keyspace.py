@@ -6,6 +6,8 @@ padt/v2/res/<resource>/alive    liveliness token while the runtime process lives
 padt/v2/res/<resource>/events   every event of the event log, in order (reliable)
 padt/v2/res/<resource>/watch/<id>     the values of watch set <id>, once per its period
 padt/v2/res/<resource>/watchers/<id>  liveliness token of the client that owns watch set <id>
+padt/v2/res/<resource>/exchange/<name>  publication <name> of the variable exchange between
+                                        resources (docs/exchange.md)
 """
 
 from __future__ import annotations
@@ -85,6 +87,12 @@ def watches_key_expr(resource: str) -> str:
 
 def watcher_key(resource: str, watch_set: str) -> str:
     return _key(resource, f"watchers/{watch_id(watch_set)}")
+
+
+def exchange_key(resource: str, publication: str) -> str:
+    """A publication of the variable exchange between resources; its name follows the
+    rule of watch set ids (a plain chunk)."""
+    return _key(resource, f"exchange/{watch_id(publication)}")
 
 
 def events_key(resource: str) -> str:
