@@ -217,6 +217,7 @@ def run(args: argparse.Namespace) -> int:
     from runtime import online_writes
     from runtime.field_io import FieldIo
     from runtime.field_io.opcua.kind import OpcuaOptions
+    from runtime.field_io.peer_exchange.kind import ExchangeOptions
 
     resource.field_io = FieldIo(
         lambda: resource.artifact,
@@ -230,6 +231,7 @@ def run(args: argparse.Namespace) -> int:
         accounts=lambda: resource.access.users,
         write=lambda path, value, user: online_writes.write(resource, path, value, user),
         opcua=OpcuaOptions(args.opcua_port, args.state_dir / "opcua"),
+        exchange=ExchangeOptions(session, identity, args.state_dir / "exchange-peers"),
     )
     from runtime.recorder import Recordings
 

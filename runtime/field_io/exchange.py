@@ -28,6 +28,7 @@ from runtime.field_io.modbus.image_server import ImageServer
 from runtime.field_io.modbus.poller import DevicePoller
 from runtime.field_io.modbus.request_meter import REQUESTS_PER_SECOND
 from runtime.field_io.opcua.kind import OpcuaOptions
+from runtime.field_io.peer_exchange.kind import ExchangeOptions
 from runtime.instances import BoundVariable
 from runtime.process_image import ProcessImage
 from runtime.variables import Variables
@@ -50,16 +51,23 @@ class FieldIo:
         accounts: Callable[[], tuple[UserAccount, ...]] = tuple,
         write: Callable[[str, Any, str], None] | None = None,
         opcua: OpcuaOptions | None = None,
+        exchange: ExchangeOptions | None = None,
     ) -> None:
         """The resource's parts it works with: the loaded configuration (`artifact`), its
         variables, process image and event recorder, and whether it runs; `modbus_port`
         overrides the configured port of the served Modbus image (0: any free one), which
         answers at most `modbus_rate` requests a second (all clients together). A server
         that logs users in takes the resource's `accounts`, and carries a client's write
-        out with `write` (the online write: `runtime/online_writes.py`)."""
+        out with `write` (the online write: `runtime/online_writes.py`). `exchange`: the
+        Zenoh session and key the exchange with other resources uses (none: it exchanges
+        nothing)."""
         self._loaded = artifact
         self._context = DriverContext(variables, io, recorder, running, resource, accounts, write)
-        self._kinds = driver_kinds(ModbusOptions(modbus_port, modbus_rate), opcua or OpcuaOptions())
+        self._kinds = driver_kinds(
+            ModbusOptions(modbus_port, modbus_rate),
+            opcua or OpcuaOptions(),
+            exchange or ExchangeOptions(),
+        )
         self._configs: list[Any] = [kind.config_of(None) for kind in self._kinds]
         self._drivers: list[FieldDriver | None] = [None for _ in self._kinds]  # by kind
         self._active: tuple[FieldDriver, ...] = ()  # the drivers made, in their order

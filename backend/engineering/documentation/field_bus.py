@@ -1,10 +1,13 @@
-"""The field bus of the resource: the Modbus TCP maps (docs/modbus.md) and the OPC UA
-server and remote servers (docs/opcua.md), as the configuration says them."""
+"""The field bus of the resource: the Modbus TCP maps (docs/modbus.md), the OPC UA server
+and remote servers (docs/opcua.md) and the variables exchanged with other resources
+(docs/exchange.md), as the configuration says them."""
 
 from __future__ import annotations
 
 from backend.engineering.documentation.markup import code, escape, table
 from runtime.contract.artifact import Artifact
+from runtime.contract.exchange import ExchangeConfig
+from runtime.contract.keyspace import exchange_key
 from runtime.contract.modbus import ModbusConfig, Point
 from runtime.contract.opcua import OpcuaConfig, OpcuaDevice
 
@@ -13,7 +16,11 @@ _SECURITY = {"none": "no security", "sign": "Basic256Sha256, signed",
 
 
 def field_bus(artifact: Artifact) -> str:
-    return _modbus(artifact.modbus) + _opcua(artifact.opcua)
+    return (
+        _modbus(artifact.modbus)
+        + _opcua(artifact.opcua)
+        + _exchange(artifact.resource.name, artifact.exchange)
+    )
 
 
 def _modbus(modbus: ModbusConfig) -> str:
@@ -116,3 +123,35 @@ def _remote_server(device: OpcuaDevice) -> str:
         "(its inputs then take their safe values).</p>"
         + table(["location", "variable", "type", "node", "safe value"], rows)
     )
+
+
+def _exchange(resource: str, exchange: ExchangeConfig | None) -> str:
+    """What the resource publishes to other resources and takes from them."""
+    if exchange is None:
+        return ""
+    parts = ["<h3>Exchange with other resources</h3>"]
+    for publication in exchange.publications:
+        rows = [[escape(v.variable), escape(v.type)] for v in publication.variables]
+        parts.append(
+            f"<h4>Publication {escape(publication.name)}</h4><p>On "
+            f"{code(exchange_key(resource, publication.name))} every {publication.period_ms} "
+            "ms, signed with the resource's key.</p>" + table(["variable", "type"], rows)
+        )
+    for subscription in exchange.subscriptions:
+        rows = [
+            [
+                escape(point.variable),
+                escape(point.type),
+                escape(point.source),
+                escape(_shown(point.safe_value)),
+            ]
+            for point in subscription.points
+        ]
+        parts.append(
+            f"<h4>From {escape(subscription.name)}</h4><p>Publication "
+            f"{code(exchange_key(subscription.resource, subscription.publication))}; stale "
+            f"after {subscription.timeout_ms} ms without a message, or at once when its "
+            "resource does not run (the variables then take their safe values).</p>"
+            + table(["variable", "type", "from", "safe value"], rows)
+        )
+    return "".join(parts)

@@ -10,7 +10,7 @@ from backend.engineering.documentation.field_bus import field_bus
 from backend.engineering.documentation.markup import Section, anchor, code, escape, heading, table
 from backend.engineering.documentation.signals import located_signals
 from backend.engineering.documentation.subject import Subject
-from runtime.contract.keyspace import ROOT
+from runtime.contract.keyspace import ROOT, exchange_key
 from runtime.contract.parameters import PROGRAM_PARAMETERS, RESOURCE_PARAMETERS
 from runtime.contract.session_options import DEFAULT_ENDPOINT
 from runtime.contract.system_variables import NAMESPACE, SYSTEM_VARIABLES
@@ -140,6 +140,13 @@ def _io_and_network(subject: Subject) -> str:
     resource = subject.artifact.resource.name
     prefix = f"{ROOT}/res/{resource}/"
     key_rows = [[code(prefix + key), escape(meaning)] for key, meaning in _KEYS]
+    exchange = subject.artifact.exchange
+    for publication in exchange.publications if exchange else ():
+        meaning = f"publication: exchange '{publication.name}' to other resources"
+        key_rows.append([code(exchange_key(resource, publication.name)), escape(meaning)])
+    for subscription in exchange.subscriptions if exchange else ():
+        key = exchange_key(subscription.resource, subscription.publication)
+        key_rows.append([code(key), escape(f"subscribed: exchange from {subscription.resource}")])
     network = (
         "<h3>Network (Zenoh)</h3>"
         f"<p>Key space {code(prefix)}. The endpoint is chosen when the runtime starts "

@@ -288,6 +288,32 @@ def test_the_opcua_server_and_a_remote_server_of_the_demo(tmp_path: Path) -> Non
     assert "/etc/padt" not in remote  # where the password is kept is the runtime's business
 
 
+def test_the_exchange_with_other_resources(tmp_path: Path) -> None:
+    """What a resource publishes and takes from others, with keys, periods and safe values."""
+    folder = tmp_path / "packer"
+    folder.mkdir()
+    (folder / "main.st").write_text(
+        "VAR_GLOBAL speed : REAL; fillerLevel : REAL; END_VAR\n"
+        "PROGRAM Main VAR_EXTERNAL speed : REAL; END_VAR speed := 1.0; END_PROGRAM\n"
+    )
+    (folder / "padt.toml").write_text(
+        '[project]\nname = "packer"\n[resource]\nname = "Packer"\n'
+        '[[exchange.publish]]\nname = "line"\nvariables = ["speed"]\nperiod_ms = 50\n'
+        '[[exchange.subscribe]]\nresource = "Filler"\npublication = "levels"\n'
+        "timeout_ms = 400\n"
+        '[[exchange.subscribe.variable]]\nvariable = "fillerLevel"\nfrom = "tankLevel"\n'
+        "safe_value = -1.0\n"
+    )
+    assert main(["docs", str(folder), "-o", str(tmp_path)]) == 0
+    text = "\n".join(pages(tmp_path / "packer.pdf"))
+    exchange = text[text.index("Exchange with other resources") :]
+    assert "On padt/v2/res/Packer/exchange/line every 50 ms" in exchange
+    assert re.search(r"speed\s+REAL", exchange)
+    taken = exchange[exchange.index("From Filler/levels") :]
+    assert "stale after 400 ms" in " ".join(taken.split())
+    assert re.search(r"fillerLevel\s+REAL\s+tankLevel\s+-1\.0", taken)
+
+
 def test_loose_files_are_named_without_their_folder(project: Path) -> None:
     # given by absolute path (as `padt docs /path/a.st /path/b.st` does), the folder they
     # share is no part of the program: the cross-reference and the listings leave it out
