@@ -49,6 +49,8 @@ def _ms(value: float) -> str:
 def status_lines(status: p.Status) -> list[str]:
     """A resource status for people: state, configuration, cycle statistics, programs."""
     lines = [f"resource {status.resource}: {status.state}"]
+    if status.host is not None or status.zenoh_id is not None:
+        lines.append(f"host {status.host or '-'}, Zenoh session {status.zenoh_id or '-'}")
     if status.error:
         lines.append(f"error: {status.error}")
     if status.crc is None:
@@ -83,7 +85,8 @@ def status_lines(status: p.Status) -> list[str]:
 
 
 def io_lines(io: p.IoStatus | None) -> list[str]:
-    """Field I/O: each server (Modbus TCP, OPC UA) and each remote device."""
+    """Field I/O: each server (Modbus TCP, OPC UA, a publication of the exchange between
+    resources) and each remote device (a subscription of the exchange is one)."""
     if io is None:
         return []
     lines = [_server_line(server) for server in io.servers]
@@ -99,6 +102,9 @@ def io_lines(io: p.IoStatus | None) -> list[str]:
 
 
 def _server_line(server: p.ServerStatus) -> str:
+    if server.protocol == "zenoh":
+        failed = f" (the last put failed: {server.error})" if server.error else ""
+        return f"Exchange publication {server.host}: {server.requests} messages put{failed}"
     if server.protocol == "opcua":
         where = (
             f"opc.tcp://{server.host}:{server.port}"
@@ -122,7 +128,9 @@ def _server_line(server: p.ServerStatus) -> str:
 
 
 def _device_address(device: p.DeviceStatus) -> str:
-    return device.host if device.protocol == "opcua" else f"{device.host}:{device.port}"
+    if device.protocol in ("opcua", "zenoh"):  # an endpoint URL, a publication's key
+        return device.host
+    return f"{device.host}:{device.port}"
 
 
 def point_lines(points: list[p.IoPoint]) -> list[str]:

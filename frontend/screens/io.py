@@ -31,7 +31,11 @@ _GREY = "color:#868e96"
 _STATE_COLORS = {"connected": "#2b8a3e", "connecting": "#e67700", "lost": "#c92a2a"}
 # a Modbus place stays on one line; a node id is long: it wraps anywhere (within a width
 # it keeps) rather than push the table wide
-_PLACE = {"modbus": "white-space:nowrap", "opcua": "overflow-wrap:anywhere;min-width:14em"}
+_PLACE = {
+    "modbus": "white-space:nowrap",
+    "opcua": "overflow-wrap:anywhere;min-width:14em",
+    "zenoh": "overflow-wrap:anywhere;min-width:10em",
+}
 _QUALITY_STYLES = {
     "good": "color:#2b8a3e",
     "bad": "color:#e67700;font-style:italic",
@@ -128,13 +132,20 @@ def _table(head: list[str], rows: list[str], testid: str) -> str:
 def render_server(io: p.IoStatus | None) -> str:
     """A line per server of the resource's: Modbus TCP first, then OPC UA."""
     if io is None:
-        return _note("This configuration has no field I/O (Modbus TCP, OPC UA).")
+        return _note("This configuration has no field I/O (Modbus TCP, OPC UA, exchange).")
     if not io.servers:
-        return _note("The resource serves no field I/O (Modbus TCP serve = false, no OPC UA).")
+        return _note(
+            "The resource serves no field I/O (Modbus TCP serve = false, no OPC UA, "
+            "no exchange publication)."
+        )
     return "".join(_server_line(server) for server in io.servers)
 
 
-_PROTOCOLS = {"modbus": "Modbus TCP server", "opcua": "OPC UA server"}
+_PROTOCOLS = {
+    "modbus": "Modbus TCP server",
+    "opcua": "OPC UA server",
+    "zenoh": "Exchange publication",
+}
 
 
 def _server_line(server: p.ServerStatus) -> str:
@@ -144,6 +155,11 @@ def _server_line(server: p.ServerStatus) -> str:
         why = html.escape(server.error or "not listening")
         return (
             f'{opening}<b>{name}</b> <span style="color:#c92a2a">does not listen: {why}</span></p>'
+        )
+    if server.protocol == "zenoh":
+        return (
+            f"{opening}<b>{name}</b> on <code>{html.escape(server.host)}</code> · "
+            f"{counted(server.requests, 'message')} put</p>"
         )
     if server.protocol == "opcua":
         where = f"opc.tcp://{html.escape(server.host)}:{server.port}"
@@ -189,7 +205,7 @@ def render_devices(io: p.IoStatus | None) -> str:
 
 
 def _device_address(device: p.DeviceStatus) -> str:
-    if device.protocol == "opcua":
+    if device.protocol in ("opcua", "zenoh"):  # an endpoint URL, a publication's key
         return f"<code>{html.escape(device.host)}</code>"
     return f"<code>{html.escape(device.host)}:{device.port}</code> unit {device.unit_id}"
 
@@ -203,7 +219,10 @@ def render_points(points: list[p.IoPoint], error: str) -> str:
     for point in points[:MAX_ROWS]:
         style = _QUALITY_STYLES.get(point.quality, "")
         value = format_for_display(point.value, point.type)
-        place = html.escape(point.place.replace("_", " "))
+        # a Modbus table's name reads as words; a node id or a variable keeps its _
+        place = html.escape(
+            point.place.replace("_", " ") if point.protocol == "modbus" else point.place
+        )
         rows.append(
             f'<tr><td style="{_CELL};white-space:nowrap">{html.escape(point.source)}</td>'
             f'<td style="{_CELL}">{html.escape(point.variable)}</td>'
@@ -224,6 +243,8 @@ def render_points(points: list[p.IoPoint], error: str) -> str:
 def _writable(point: p.IoPoint) -> str:
     """Whether a client may write a served point; a remote device's points are the
     resource's own to read and write there."""
+    if point.protocol == "zenoh":  # the exchange writes it, or it goes out to others
+        return f'<span style="{_GREY}">no (exchange)</span>'
     if point.source not in ("server", "OPC UA server"):
         return f'<span style="{_GREY}">no (device)</span>'
     return "yes" if point.writable else "no"

@@ -88,11 +88,34 @@ def _group(pattern: re.Pattern[str], line: str) -> str | None:
     return match.group(1) if match else None
 
 
+# what the plant's project adds for `@pytest.mark.parametrize("plant", ["exchange"],
+# indirect=True)`: a publication of the tank's level to other resources, and a global that
+# takes the level of another resource's publication (docs/exchange.md)
+EXCHANGE_ST = "VAR_GLOBAL fillerLevel : REAL; END_VAR\n"
+EXCHANGE_TOML = """
+[[exchange.publish]]
+name = "tank"
+variables = ["tankLevel", "pumpRunning"]
+period_ms = 100
+
+[[exchange.subscribe]]
+resource = "Filler"
+publication = "levels"
+timeout_ms = 300
+
+[[exchange.subscribe.variable]]
+variable = "fillerLevel"
+from = "level"
+safe_value = -1.0
+"""
+
+
 @pytest.fixture
-def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
+def plant(tmp_path: Path, zenoh_endpoint: str, request: pytest.FixtureRequest) -> Iterator[Plant]:
     """The demo resource, polling its simulated plant, with a read-only user `viewer`, and
     the UI with three PADT accounts: `admin` (security administrator), `viewer`
-    (read-write), `guest` (read-only); the UI knows the demo's project as `demo`."""
+    (read-write), `guest` (read-only); the UI knows the demo's project as `demo`. With the
+    parameter "exchange", the project also exchanges variables with other resources."""
     verifier = hash_password(PASSWORD)
     resource_users = [
         UserAccount("admin", "administrator", verifier),
@@ -100,6 +123,10 @@ def plant(tmp_path: Path, zenoh_endpoint: str) -> Iterator[Plant]:
     ]
     tank = DemoPlant()  # the level moves as in `padt demo`: the plant fills and drains it
     folder = demo_project_with_accounts(tmp_path, resource_users, tank.start())
+    if getattr(request, "param", None) == "exchange":
+        (folder / "Exchange.st").write_text(EXCHANGE_ST)
+        with (folder / "padt.toml").open("a") as config:
+            config.write(EXCHANGE_TOML)
     result = compile_project(load_project([folder]))
     assert result.artifact is not None
     store_artifact(tmp_path, result.artifact)
