@@ -270,15 +270,39 @@ def until(what: str, probe: Callable[[], T | None], timeout_s: float = 120) -> T
         time.sleep(0.5)
 
 
+# the variable exchange (docs/exchange.md): Ctl1 publishes its level, Ctl2 and Ctl3 take it
+PUBLISHED = """
+[[exchange.publish]]
+name = "levels"
+variables = ["gLevel"]
+period_ms = 50
+"""
+SUBSCRIBED = """
+[[exchange.subscribe]]
+resource = "Ctl1"
+publication = "levels"
+timeout_ms = 500
+
+[[exchange.subscribe.variable]]
+variable = "gFromCtl1"
+from = "gLevel"
+safe_value = -1
+"""
+WRITTEN = 4711  # Ctl1's level, written online; the subscribers' safe value is -1
+
+
 def small_project(folder: Path, resource: str) -> Path:
     project = folder / resource
     project.mkdir(parents=True)
     (project / "padt.toml").write_text(
         f'[project]\nname = "{resource}"\nversion = "1"\n\n'
-        f'[resource]\nname = "{resource}"\ntarget_cycle_ms = 50\n\n'
+        f'[resource]\nname = "{resource}"\ntarget_cycle_ms = 50\n'
+        "safety_operation = false\n\n"  # the test writes Ctl1's level online
         '[[resource.program]]\nname = "Main"\npou = "Main"\nid = 1\npriority = 0\n'
+        + (PUBLISHED if resource == "Ctl1" else SUBSCRIBED)
     )
     (project / "Main.st").write_text(
+        "VAR_GLOBAL gLevel : DINT; gFromCtl1 : DINT; END_VAR\n"
         "PROGRAM Main\nVAR\n  n : DINT;\nEND_VAR\nn := n + 1;\nEND_PROGRAM\n"
     )
     return project
@@ -308,11 +332,34 @@ class Phase(enum.Enum):
 
 
 def check_variable_exchange(mesh: Mesh, phase: Phase) -> None:
-    """The variable exchange between the resources in each phase of this test. To come
-    with the exchange itself: ALL_UP, a value written in Ctl1 arrives in Ctl2 and Ctl3;
-    ROUTER2_DOWN, Ctl2 and Ctl3 hold their safe values; ROUTER2_BACK, the exchange
-    recovers. The access control above already lets the exchange's keys through
+    """The variable exchange between the resources in each phase of this test: with all
+    routers up, a value written in Ctl1 arrives in Ctl2 and Ctl3 across both routers;
+    with router2 down, Ctl2 and Ctl3 (out of the PADT's reach then) took their safe
+    values, which their event logs show once router2 is back; then the exchange
+    recovered by itself. The access control above lets the exchange's keys through
     (`padt/v2/res/<resource>/exchange/*`)."""
+    consumers = ("Ctl2", "Ctl3")
+    if phase is Phase.ALL_UP:
+        written = mesh.padt("write", "--resource", "Ctl1", "gLevel", str(WRITTEN))
+        assert written.returncode == 0, written.stderr
+        for resource in consumers:
+            until(f"{WRITTEN} in {resource}", functools.partial(exchanged, mesh, resource))
+    elif phase is Phase.ROUTER2_BACK:
+        for resource in consumers:
+            until(f"{WRITTEN} in {resource} again", functools.partial(exchanged, mesh, resource))
+            shown = mesh.padt("events", "--resource", resource, "--json")
+            io = [json.loads(line)["message"] for line in shown.stdout.splitlines()]
+            io = [message for message in io if message.startswith("Exchange Ctl1/levels")]
+            lost = next(i for i, m in enumerate(io) if "lost: no message for 500 ms" in m)
+            assert "Exchange Ctl1/levels connected again" in io[lost:], io
+
+
+def exchanged(mesh: Mesh, resource: str) -> bool | None:
+    """Whether `resource` holds what the test wrote in Ctl1 (None: not yet)."""
+    shown = mesh.padt("values", "--resource", resource, "--json", "gFromCtl1")
+    if shown.returncode != 0:
+        return None
+    return True if json.loads(shown.stdout)["values"].get("gFromCtl1") == WRITTEN else None
 
 
 # --- the probes inside the namespaces -----------------------------------------------
