@@ -8,10 +8,12 @@ people (IEC literals: TRUE, T#1s500ms, not Python reprs).
 from __future__ import annotations
 
 import fractions
+import functools
 import itertools
 import math
 import re
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any
@@ -219,6 +221,25 @@ def representation(type_name: str, value: Any) -> Any:
             raise ValueRejected(f"type {type_name} holds at most {length} characters")
         return value
     raise ValueRejected(f"variables of type {type_name} cannot be written")
+
+
+@functools.cache
+def representation_of(type_name: str) -> Callable[[Any], Any]:
+    """`representation` for one type, found once: for values that come by the thousand (a
+    message of the exchange between resources), the common case of each elementary type is
+    checked at once, and anything else goes through `representation` with its reasons."""
+    name, _ = base_type(type_name)
+    slow = functools.partial(representation, type_name)
+    if is_reference_type(type_name):
+        return slow
+    if name == "BOOL":
+        return lambda value: value if type(value) is bool else slow(value)
+    if name in _INT_RANGES:
+        low, high = _INT_RANGES[name]
+        return lambda value: value if type(value) is int and low <= value <= high else slow(value)
+    if name == "LREAL":
+        return lambda value: value if type(value) is float else slow(value)
+    return slow
 
 
 def format_value(value: Any, type_name: str) -> str:

@@ -50,6 +50,8 @@ class RemoteDevice(Protocol):
     async def run(self) -> None: ...
 
 
+_NONE = object()  # no value delivered before
+
 # a device's address as the status shows it: (host or endpoint, port, Modbus unit)
 Address = Callable[[Any], tuple[str, int, int]]
 
@@ -62,8 +64,14 @@ class RemoteDevices:
         protocol: str,
         label: str,
         address: Address,
+        only_changes: bool = False,
     ) -> None:
-        """`label` names a device in events ("Modbus device", "OPC UA server")."""
+        """`label` names a device in events ("Modbus device", "OPC UA server");
+        `only_changes`: a delivery stores only the values that differ from those the
+        devices delivered before (a subscription of the exchange between resources brings
+        a thousand values a message, most of them the same each time: storing them all
+        would cost the cycle milliseconds). The first delivery after a (re)bind stores
+        all."""
         self.devices = devices
         self._context, self._protocol, self._label, self._address = (
             context,
@@ -72,6 +80,8 @@ class RemoteDevices:
             address,
         )
         self._seen: dict[str, tuple[int, str]] = {}  # device -> (delivery seq, state) taken
+        self._only_changes = only_changes
+        self._given: dict[str, dict[str, Any]] = {}  # device -> the values stored last
         self._tasks: list[asyncio.Task[None]] = []  # the I/O thread's
         self.bad: frozenset[str] = frozenset()  # upper-case paths of inputs of lost devices
 
@@ -89,6 +99,7 @@ class RemoteDevices:
         # fresh instances hold initial values: the inputs the devices delivered last go
         # in again at once, not a period later
         self._seen = {name: (0, state) for name, (_, state) in self._seen.items()}
+        self._given = {}
 
     def before_cycle(self) -> None:
         io = self._context.io
@@ -101,7 +112,7 @@ class RemoteDevices:
             name = device.device.name
             seen = self._seen.get(name, (0, "connecting"))
             if delivery.seq != seen[0]:
-                io.set_inputs(delivery.values)
+                io.set_inputs(self._changes(name, delivery.values))
             if state != seen[1]:
                 self._report(device, state, seen[1])
             self._seen[name] = (delivery.seq, state)
@@ -109,6 +120,15 @@ class RemoteDevices:
                 bad.update(variable.upper() for variable in delivery.values)
         if bad != self.bad:
             self.bad = frozenset(bad)
+
+    def _changes(self, device: str, values: dict[str, Any]) -> dict[str, Any]:
+        if not self._only_changes:
+            return values
+        before = self._given.get(device)
+        self._given[device] = values  # a delivery's values are never changed after
+        if before is None:
+            return values
+        return {path: value for path, value in values.items() if before.get(path, _NONE) != value}
 
     def _report(self, device: RemoteDevice, state: str, before: str) -> None:
         name, recorder = device.device.name, self._context.recorder

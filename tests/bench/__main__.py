@@ -9,6 +9,7 @@ from tests.bench import (
     bench_documentation,
     bench_editor,
     bench_event_log,
+    bench_exchange,
     bench_hostile,
     bench_jitter_loaded,
     bench_language,
@@ -47,6 +48,7 @@ def main() -> None:
     bench_recording.main()
     bench_modbus.main()
     bench_opcua.main()
+    bench_exchange.main()
     bench_jitter_loaded.main()
     bench_rest.main()
     bench_hostile.main()

@@ -46,8 +46,9 @@ class PeerExchangeDriver:
             PeerSubscription(s, session, keys, freshness) for s in config.subscriptions
         ]
         self._devices = RemoteDevices(
-            self.subscriptions, context, PROTOCOL, "Exchange", _subscription_address
-        )
+            self.subscriptions, context, PROTOCOL, "Exchange", _subscription_address,
+            only_changes=True,
+        )  # fmt: skip
         self._tasks: list[asyncio.Task[None]] = []
 
     @property

@@ -9,6 +9,7 @@ encodes, and what a subscriber reads of it, every byte checked (it comes from th
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from dataclasses import dataclass
@@ -16,9 +17,11 @@ from typing import Any
 
 from runtime.contract.exchange import MAX_MESSAGE_BYTES, MAX_VARIABLES, ExchangePoint
 from runtime.contract.outside_json import JsonRefused, read_json
-from runtime.contract.values import ValueRejected, base_type, jsonable, representation
+from runtime.contract.values import ValueRejected, base_type, jsonable, representation_of
 
 _NON_FINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
+_SCALARS = (bool, int, float, str)
+_REALS = ("REAL", "LREAL")
 
 
 class MessageRefused(ValueError):
@@ -31,7 +34,13 @@ class Message:
     publication: str
     running: bool
     key: str  # the publisher's public key (base64)
-    values: dict[str, tuple[str, Any]]  # by upper-case name: (type, value as sent)
+    values: dict[str, list[Any]]  # by name as sent: [type, value], each checked a scalar
+
+    @functools.cached_property
+    def folded(self) -> dict[str, list[Any]]:
+        """The values by upper-case name: ST names are the same in any case (made only
+        when a subscriber names a value in another case than the publisher)."""
+        return {name.upper(): entry for name, entry in self.values.items()}
 
 
 def encode(
@@ -45,12 +54,16 @@ def encode(
         "running": running,
         "values": {name: [type_, jsonable(value)] for name, type_, value in values},
     }
-    return json.dumps(body, sort_keys=True, separators=(",", ":")).encode()
+    # in the order made (the publication's variables are sorted): the bytes are signed as
+    # they are, and sorting a thousand keys again would only cost the I/O thread
+    return json.dumps(body, separators=(",", ":")).encode()
 
 
 def decode(payload: bytes) -> Message:
+    """The message checked in shape: every value a `[type, scalar]` pair, so that nothing
+    in it is nested (no walk of its depth is needed: json.loads' own recursion is caught)."""
     try:
-        data = read_json(payload, "the exchange message", MAX_MESSAGE_BYTES, max_depth=4)
+        data = read_json(payload, "the exchange message", MAX_MESSAGE_BYTES, max_depth=None)
     except JsonRefused as exc:
         raise MessageRefused(str(exc)) from None
     if not isinstance(data, dict):
@@ -63,29 +76,33 @@ def decode(payload: bytes) -> Message:
         raise MessageRefused("the message has no state or no values")
     if len(values) > MAX_VARIABLES:
         raise MessageRefused(f"the message holds more than {MAX_VARIABLES} values")
-    taken: dict[str, tuple[str, Any]] = {}
     for name, entry in values.items():
-        if not isinstance(entry, list) or len(entry) != 2 or not isinstance(entry[0], str):
+        if (
+            type(entry) is not list
+            or len(entry) != 2
+            or type(entry[0]) is not str
+            or type(entry[1]) not in _SCALARS
+        ):
             raise MessageRefused(f"value '{name[:64]}' is not [type, value]")
-        taken[name.upper()] = (entry[0], entry[1])
-    return Message(resource, publication, running, key, taken)
+    return Message(resource, publication, running, key, values)
 
 
 def point_value(message: Message, point: ExchangePoint) -> Any:
     """The value of `point` in `message` as its variable holds it; MessageRefused when the
     message has none, or one of another type or that the variable cannot hold."""
-    entry = message.values.get(point.source.upper())
+    entry = message.values.get(point.source) or message.folded.get(point.source.upper())
     if entry is None:
         raise MessageRefused(f"the publication has no value '{point.source}'")
     sent_type, value = entry
-    wanted = base_type(point.type)[0]
-    if base_type(sent_type)[0] != wanted:
-        raise MessageRefused(
-            f"'{point.source}' comes as {sent_type[:40]}, '{point.variable}' is {point.type}"
-        )
-    if wanted in ("REAL", "LREAL") and isinstance(value, str) and value in _NON_FINITE:
+    if sent_type != point.type:  # the same name is the same type; else compare the bases
+        wanted = base_type(point.type)[0]
+        if base_type(sent_type)[0] != wanted:
+            raise MessageRefused(
+                f"'{point.source}' comes as {sent_type[:40]}, '{point.variable}' is {point.type}"
+            )
+    if type(value) is str and value in _NON_FINITE and base_type(point.type)[0] in _REALS:
         value = _NON_FINITE[value]
     try:
-        return representation(point.type, value)
+        return representation_of(point.type)(value)
     except ValueRejected as exc:
         raise MessageRefused(f"'{point.source}' for '{point.variable}': {exc}") from None
