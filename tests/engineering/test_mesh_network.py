@@ -4,9 +4,12 @@ runtimes (Ctl1 on router1, Ctl2 and Ctl3 on router2), the PADT in a namespace of
 on router1, and a rogue host on router1 with a valid certificate and Zenoh account that
 the access control gives no rights.
 
-The PADT commissions, loads and starts all three resources across the mesh; the rogue
-gets no answer and its forged status reaches nobody; router2 killed, the runtimes cycle
-on, and once it is back the PADT sees all three again.
+The PADT commissions, loads and starts all three resources across the mesh; Ctl1's level,
+written online, reaches Ctl2 and Ctl3 through the variable exchange (docs/exchange.md);
+the rogue gets no answer and its forged status reaches nobody; router2 killed, the
+runtimes cycle on, Ctl2 and Ctl3 go stale, and once it is back the PADT sees all three
+again and the exchange recovers; Ctl3's cable pulled, the rest of the plant exchanges on,
+and once it is plugged in again Ctl3 takes the new value.
 
 Run as a module, this file is also the probe the test starts inside the namespaces (a
 Zenoh client there cannot be a session of the test's own process, which lives in the
@@ -329,6 +332,8 @@ class Phase(enum.Enum):
     ALL_UP = "all routers up"
     ROUTER2_DOWN = "router2 killed"
     ROUTER2_BACK = "router2 restarted"
+    CTL3_CUT = "Ctl3's link to router2 cut"
+    CTL3_BACK = "Ctl3's link mended"
 
 
 def check_variable_exchange(mesh: Mesh, phase: Phase) -> None:
@@ -343,23 +348,37 @@ def check_variable_exchange(mesh: Mesh, phase: Phase) -> None:
         written = mesh.padt("write", "--resource", "Ctl1", "gLevel", str(WRITTEN))
         assert written.returncode == 0, written.stderr
         for resource in consumers:
-            until(f"{WRITTEN} in {resource}", functools.partial(exchanged, mesh, resource))
+            until(f"{WRITTEN} in {resource}", functools.partial(exchanged, mesh, resource, WRITTEN))
     elif phase is Phase.ROUTER2_BACK:
         for resource in consumers:
-            until(f"{WRITTEN} in {resource} again", functools.partial(exchanged, mesh, resource))
+            until(
+                f"{WRITTEN} in {resource} again",
+                functools.partial(exchanged, mesh, resource, WRITTEN),
+            )
             shown = mesh.padt("events", "--resource", resource, "--json")
             io = [json.loads(line)["message"] for line in shown.stdout.splitlines()]
             io = [message for message in io if message.startswith("Exchange Ctl1/levels")]
             lost = next(i for i, m in enumerate(io) if "lost: no message for 500 ms" in m)
             assert "Exchange Ctl1/levels connected again" in io[lost:], io
+    elif phase is Phase.CTL3_CUT:
+        # the rest of the plant goes on: a new value reaches Ctl2, not the cut-off Ctl3
+        written = mesh.padt("write", "--resource", "Ctl1", "gLevel", str(WRITTEN + 1))
+        assert written.returncode == 0, written.stderr
+        until("the new value in Ctl2", functools.partial(exchanged, mesh, "Ctl2", WRITTEN + 1))
+    elif phase is Phase.CTL3_BACK:
+        until("the new value in Ctl3", functools.partial(exchanged, mesh, "Ctl3", WRITTEN + 1))
+        shown = mesh.padt("events", "--resource", "Ctl3", "--json")
+        io = [json.loads(line)["message"] for line in shown.stdout.splitlines()]
+        stale = [m for m in io if m.startswith("Exchange Ctl1/levels lost: no message for 500 ms")]
+        assert len(stale) == 2, io  # with router2 down, then with its own link cut
 
 
-def exchanged(mesh: Mesh, resource: str) -> bool | None:
-    """Whether `resource` holds what the test wrote in Ctl1 (None: not yet)."""
+def exchanged(mesh: Mesh, resource: str, value: int) -> bool | None:
+    """Whether `resource` holds `value`, written in Ctl1 (None: not yet)."""
     shown = mesh.padt("values", "--resource", resource, "--json", "gFromCtl1")
     if shown.returncode != 0:
         return None
-    return True if json.loads(shown.stdout)["values"].get("gFromCtl1") == WRITTEN else None
+    return True if json.loads(shown.stdout)["values"].get("gFromCtl1") == value else None
 
 
 # --- the probes inside the namespaces -----------------------------------------------
@@ -503,6 +522,16 @@ def run_the_plant(net: Network, tmp: Path) -> None:
     for resource in RESOURCES:
         cycling(mesh, resource, before[resource])
     check_variable_exchange(mesh, Phase.ROUTER2_BACK)
+
+    # a controller host cut off: Ctl3's cable pulled, then plugged in again
+    net.cut("ctl3", "router2")
+    until("Ctl3 out of the PADT's reach", lambda: True if mesh.status("Ctl3") is None else None)
+    check_variable_exchange(mesh, Phase.CTL3_CUT)
+    cycling(mesh, "Ctl2", cycle_of(mesh, "Ctl2") + 20)
+    net.mend("ctl3", "router2")
+    cycling(mesh, "Ctl3", before["Ctl3"])
+    check_variable_exchange(mesh, Phase.CTL3_BACK)
+    assert mesh.runtimes["Ctl3"].poll() is None, "Ctl3 ended while cut off"
 
 
 if __name__ == "__main__":

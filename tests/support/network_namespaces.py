@@ -86,6 +86,13 @@ class Network:
         found = [link.a_address for link in self.links if link.a == host]
         return found + [link.b_address for link in self.links if link.b == host]
 
+    def cut(self, host: str, towards: str) -> None:
+        """The link of `host` to `towards` down at `host`'s end: a cable pulled."""
+        _ip("-n", self.namespace(host), "link", "set", _interface(towards), "down")
+
+    def mend(self, host: str, towards: str) -> None:
+        _ip("-n", self.namespace(host), "link", "set", _interface(towards), "up")
+
     def command(self, host: str, args: Sequence[str]) -> list[str]:
         # `ip netns exec` execs the command in place: the process started is the command
         # itself, so its pid is the one to signal (no wrapper left in between)
@@ -123,6 +130,11 @@ class Network:
         )
 
 
+def _interface(towards: str) -> str:
+    """The name of a host's end of its link to `towards` (inside its namespace only)."""
+    return f"to-{towards}"[:15]
+
+
 def _ip(*args: str) -> None:
     done = subprocess.run(["ip", *args], capture_output=True, text=True)
     if done.returncode != 0:
@@ -145,7 +157,7 @@ def network(hosts: Sequence[str], links: Sequence[tuple[str, str]]) -> Iterator[
             _ip("-n", net.namespace(host), "link", "set", "lo", "up")
         for number, (a, b) in enumerate(links, start=1):
             # the interface names live inside the namespaces only: short and readable
-            a_name, b_name = f"to-{b}"[:15], f"to-{a}"[:15]
+            a_name, b_name = _interface(b), _interface(a)
             _ip("link", "add", "name", a_name, "netns", net.namespace(a), "type", "veth",
                 "peer", "name", b_name, "netns", net.namespace(b))  # fmt: skip
             link = Link(a, b, f"10.91.{number}.1", f"10.91.{number}.2")
