@@ -20,10 +20,15 @@ from runtime.contract.session_options import RouterUnreachable, add_zenoh_option
 
 
 def _compile(args: argparse.Namespace) -> int:
-    from backend.engineering.project import ProjectError, compile_project, load_project
+    from backend.engineering.project import (
+        ProjectError,
+        compile_project,
+        for_resource,
+        load_project,
+    )
 
     try:
-        project = load_project(args.paths)
+        project = for_resource(load_project(args.paths), args.as_resource)
     except ProjectError as exc:
         print(f"padt compile: {exc}", file=sys.stderr)
         return 2
@@ -385,6 +390,13 @@ def build_parser() -> argparse.ArgumentParser:
     compile_.add_argument(
         "-o", "--output", type=Path, help="write the compiled artifact (JSON) to this file"
     )
+    compile_.add_argument(
+        "--as-resource",
+        type=resource_argument,
+        metavar="NAME",
+        help="compile the project for resource NAME in place of its [resource] name (as "
+        "padt fleet load does for each resource)",
+    )
     compile_.set_defaults(func=_compile)
 
     docs = sub.add_parser(
@@ -689,6 +701,7 @@ def build_parser() -> argparse.ArgumentParser:
     _backup_option(reload)
     reload.set_defaults(func=_lazy("padt.configuration", "reload"))
 
+    _fleet_commands(sub)
     _online_test_commands(sub)
     _recording_commands(sub)
     _debug_commands(sub)
@@ -714,6 +727,87 @@ def build_parser() -> argparse.ArgumentParser:
     add_user_arguments(api_user)
     api_user.set_defaults(func=_api_user)
     return parser
+
+
+def _wait_seconds(text: str) -> float:
+    try:
+        seconds = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number of seconds") from None
+    if not 0.1 <= seconds <= 60:
+        raise argparse.ArgumentTypeError("the wait is 0.1 to 60 seconds")
+    return seconds
+
+
+def _fleet_commands(sub: Any) -> None:
+    """fleet status, fleet load (docs/cli.md)."""
+    fleet = sub.add_parser(
+        "fleet",
+        help="every resource on the router mesh: one status table; one project into several",
+    )
+    verbs = fleet.add_subparsers(dest="verb", required=True, metavar="VERB")
+    status = verbs.add_parser(
+        "status",
+        help="one table of every resource online: host, state, CRC, project, cycle time",
+        description="Every resource whose liveliness token is on the bus, with its status "
+        "when it is signed with the resource's known key (pinned at an earlier login, or "
+        "proved now by --user); the others are 'not yet verified'.",
+        epilog="exit codes: 0 every resource found is RUN (and verified), 1 one is not, or "
+        "none is online, or no router answers, 2 bad options",
+    )
+    add_zenoh_options(status, "Zenoh router of the mesh")
+    status.add_argument(
+        "--user",
+        metavar="NAME",
+        help="log in as NAME to each resource whose key is not known yet (the password from "
+        "PADT_PASSWORD, else asked for once)",
+    )
+    status.add_argument("--json", action="store_true", help="print a JSON list, a resource each")
+    status.add_argument(
+        "--wait",
+        type=_wait_seconds,
+        default=2.5,
+        metavar="S",
+        help="how long to wait for the signed statuses (default 2.5 s; each comes every second)",
+    )
+    status.set_defaults(func=_lazy("padt.fleet", "status"))
+
+    load = verbs.add_parser(
+        "load",
+        help="compile the project for each resource and download it, one after another",
+        description="Load one project into several resources in STOP, in the order given: "
+        "each gets the project compiled for it (its name in place of the project's [resource] "
+        "name) through the compile-twice gate, downloaded, and backed up. The first resource "
+        "that refuses (or gives no answer, or whose backup cannot be written) ends it: those "
+        "after it are not tried.",
+        epilog="exit codes: 0 every resource done, 1 one refused (the others after it not "
+        "tried), 2 bad options or the project cannot be read",
+    )
+    load.add_argument("paths", nargs="+", type=Path, metavar="PATH")
+    load.add_argument(
+        "--resource",
+        action="append",
+        required=True,
+        type=resource_argument,
+        metavar="NAME",
+        help="a resource to load, in this order; repeat for each",
+    )
+    add_zenoh_options(load, "Zenoh router of the mesh")
+    load.add_argument(
+        "--user",
+        metavar="NAME",
+        help="log in to each resource as NAME (password from PADT_PASSWORD, else asked for once)",
+    )
+    load.add_argument(
+        "--setup-secret-file",
+        type=Path,
+        metavar="FILE",
+        help="a runtime without a configuration: log in as 'setup' with the secret in FILE "
+        "(or PADT_SETUP_SECRET); only for runtimes that share it",
+    )
+    load.add_argument("--json", action="store_true", help="print one JSON object at the end")
+    _backup_option(load)
+    load.set_defaults(func=_lazy("padt.fleet", "load"))
 
 
 def _online_test_commands(sub: Any) -> None:

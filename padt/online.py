@@ -44,10 +44,7 @@ def resource_client(args: argparse.Namespace) -> Iterator[ResourceClient]:
         raise Failed(str(exc)) from None
     try:
         client = ResourceClient(session, args.resource)
-        if args.user is not None:
-            _log_in(client, args.user)
-        elif _commissioning(args) and _waits_for_setup(client):
-            _log_in(client, SETUP_USER, _setup_secret(args))
+        sign_in(client, args)
         yield client
     except ResourceUnreachable as exc:
         raise Failed(
@@ -56,6 +53,22 @@ def resource_client(args: argparse.Namespace) -> Iterator[ResourceClient]:
         ) from None
     finally:
         session.close()
+
+
+def sign_in(client: ResourceClient, args: argparse.Namespace, password: str | None = None) -> None:
+    """Log in as `--user` (with `password`, else as `_log_in` finds it), or as the setup
+    account when the command may commission a runtime that waits for it; else not at all.
+    Failed when the resource refuses the login."""
+    if args.user is not None:
+        _log_in(client, args.user, password)
+    elif _commissioning(args) and _waits_for_setup(client):
+        _log_in(client, SETUP_USER, _setup_secret(args))
+
+
+def password_of(user: str) -> str:
+    """From PADT_PASSWORD, else asked for (never an option: shell histories keep those)."""
+    password = os.environ.get("PADT_PASSWORD")
+    return password if password is not None else getpass.getpass(f"password of {user}: ")
 
 
 def _commissioning(args: argparse.Namespace) -> bool:
@@ -89,9 +102,7 @@ def _log_in(client: ResourceClient, user: str, password: str | None = None) -> N
     """Log in as `user`: the password given, else from PADT_PASSWORD, else asked for
     (never an option, so that it stays out of shell histories and process lists)."""
     if password is None:
-        password = os.environ.get("PADT_PASSWORD")
-    if password is None:
-        password = getpass.getpass(f"password of {user}: ")
+        password = password_of(user)
     try:
         client.login(user, password)
     except Refusal as refused:

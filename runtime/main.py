@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import socket
 import sys
 from pathlib import Path
 
@@ -14,6 +15,7 @@ from runtime.configuration_store import ConfigurationStore
 from runtime.context import ContextInvalid, load_context
 from runtime.contract.artifact import ArtifactError, load_artifact
 from runtime.contract.keyspace import resource_argument
+from runtime.contract.protocol import safe_host
 from runtime.contract.refusal import Refusal
 from runtime.contract.session_options import add_zenoh_options
 from runtime.contract.setup_secret import SetupSecretError
@@ -206,6 +208,8 @@ def run(args: argparse.Namespace) -> int:
     from runtime.link import ResourceLink
 
     session = open_client(args.zenoh, args.zenoh_config)
+    resource.host = safe_host(socket.gethostname())
+    resource.zenoh_id = str(session.zid())
     link = ResourceLink(session, args.resource, identity)
     saver = ContextSaver(context_path(args.state_dir))
 

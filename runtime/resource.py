@@ -110,6 +110,9 @@ class Resource:
         # until the first configuration, in a runtime process: its only account is `setup`
         self.setup: SetupSecret | None = None
         self.incoming = IncomingArtifact()  # a configuration arriving for load or reload
+        # where it runs, as its status tells (runtime/main.py sets them in a process)
+        self.host: str | None = None
+        self.zenoh_id: str | None = None
         self.start_kind: str | None = "cold"  # what the next first cycle is: cold | warm
         self.last_start = ""  # how the resource last started: cold | warm | continued
         self._first_cycle = False  # the next CPU cycle is the first after a start
@@ -515,6 +518,8 @@ class Resource:
                 for p in self.programs
             ],
             io=self.field_io.status() if self.field_io is not None else None,
+            host=self.host,
+            zenoh_id=self.zenoh_id,
         )
 
 

@@ -19,6 +19,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from backend.api.auth import Credentials, ReadOnly, ReadWrite, Service
 from backend.engineering import recordings
+from backend.engineering.fleet import fleet_done
 from backend.engineering.literals import LiteralError, literals_of, parse_literal
 from backend.engineering.recordings import RecordingSpec, TriggerError
 from backend.engineering.reload import ReloadOptions, needs_confirmation, rename_map
@@ -113,8 +114,31 @@ def _renames(renames: dict[str, str]) -> dict[str, str]:
 @router.get("", summary="The resources online, with their last published status")
 def resources(caller: ReadOnly, service: Service) -> list[dict[str, Any]]:
     return [
-        {"resource": name, "status": encode(status)} for name, status in service.directory.online()
+        {
+            "resource": name,
+            "host": status.host if status is not None else None,
+            "status": encode(status),
+        }
+        for name, status in service.directory.online()
     ]
+
+
+class FleetLoadRequest(ProjectChoice):
+    resources: list[Annotated[str, Field(max_length=64)]] = Field(
+        min_length=1,
+        max_length=256,
+        description="the resources to load, in this order; each gets the project compiled "
+        "for it, and the first refusal ends it",
+    )
+
+
+@router.post("/load", summary="Download one project into several resources in turn (a fleet load)")
+def load_fleet(body: FleetLoadRequest, caller: ReadWrite, service: Service) -> Any:
+    results = service.load_fleet(caller, body.resources, body.project)
+    return {
+        "done": fleet_done(results),
+        "resources": [result.as_json() for result in results],
+    }
 
 
 @router.post("/{resource}/login", summary="Log in to the resource (its own accounts)")

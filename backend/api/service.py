@@ -26,6 +26,7 @@ from backend.engineering.download import (
     download_checked,
     plan_download,
 )
+from backend.engineering.fleet import FleetLoad, download_fleet
 from backend.engineering.online_change import (
     OnlineChanged,
     OnlineChangePreview,
@@ -165,6 +166,26 @@ class PadtService:
             checked = compile_checked([path])
             how = f"REST API: load of project {project} by {caller.user}"
             return download_checked(self.client(caller, resource), checked, self.backup_dir, how)
+
+    def load_fleet(self, caller: Caller, resources: list[str], project: str) -> list[FleetLoad]:
+        """One project into several resources in turn, each compiled for it, up to the
+        first refusal (`fleet.download_fleet`); the caller's PES session of each."""
+        path = self.project_path(project)
+        how = f"REST API: fleet load of project {project} by {caller.user}"
+
+        with _project_errors():
+            results = download_fleet(
+                [path], resources, lambda name: self.client(caller, name), self.backup_dir, how
+            )
+        return [self._as_caller_reads(caller, result) for result in results]
+
+    def _as_caller_reads(self, caller: Caller, result: FleetLoad) -> FleetLoad:
+        """A resource's `unauthenticated` as `resource_refusal` words it."""
+        if result.code != "unauthenticated":
+            return result
+        refusal = Refusal(result.code, result.message or "")
+        worded = self.resource_refusal(caller, result.resource, refusal)
+        return dataclasses.replace(result, code=worded.code, message=worded.message)
 
     def preview_load(self, caller: Caller, resource: str, project: str) -> DownloadPlan:
         """What a download would do, or why it cannot be done now (the level on the

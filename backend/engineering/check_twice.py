@@ -54,19 +54,25 @@ class CheckTwiceResult:
         return self.compiled and not self.mismatches
 
 
-def check_twice(paths: Sequence[Path | str], seeds: tuple[str, str] = SEEDS) -> CheckTwiceResult:
-    """Compile `paths` (a project folder or .st files) in two processes at once."""
+def check_twice(
+    paths: Sequence[Path | str], seeds: tuple[str, str] = SEEDS, resource: str | None = None
+) -> CheckTwiceResult:
+    """Compile `paths` (a project folder or .st files) in two processes at once; with
+    `resource`, compiled for that resource in place of the project's (`for_resource`)."""
     if seeds[0] == seeds[1]:
         raise ValueError("check_twice needs two different hash seeds")
-    started = [(_start_compile(paths, seed), seed) for seed in seeds]
+    started = [(_start_compile(paths, seed, resource), seed) for seed in seeds]
     first, second = (_finish_compile(process, seed) for process, seed in started)
     return CheckTwiceResult(first, second, compare(first, second))
 
 
-def _start_compile(paths: Sequence[Path | str], seed: str) -> subprocess.Popen[str]:
+def _start_compile(
+    paths: Sequence[Path | str], seed: str, resource: str | None
+) -> subprocess.Popen[str]:
     python_path = os.pathsep.join(filter(None, (str(_REPO), os.environ.get("PYTHONPATH"))))
+    named = ["--as-resource", resource] if resource is not None else []
     return subprocess.Popen(
-        [sys.executable, "-m", "padt.cli", "compile", "--json", *map(str, paths)],
+        [sys.executable, "-m", "padt.cli", "compile", "--json", *named, *map(str, paths)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

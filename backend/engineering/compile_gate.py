@@ -9,7 +9,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from backend.engineering.check_twice import check_twice
-from backend.engineering.project import PROJECT_FILE, Project, compile_project, load_project
+from backend.engineering.project import (
+    PROJECT_FILE,
+    Project,
+    compile_project,
+    for_resource,
+    load_project,
+)
 from backend.engineering.testing.test_build import sources_of_tests
 from runtime.contract.artifact import Artifact
 from runtime.contract.refusal import Refusal
@@ -36,17 +42,19 @@ def compile_failed(message: str, diagnostics: Sequence[str]) -> Refusal:
     return Refusal("compile", message, diagnostics=list(diagnostics))
 
 
-def compile_checked(paths: Sequence[Path]) -> CheckedCompile:
-    """Compile-twice gate, then the in-process compile whose artifact is sent. Raises
-    ProjectError when the project cannot be read, Refusal (`compile`, `check_twice`)
-    otherwise."""
-    project = load_project(list(paths))  # an unreadable project fails fast, before two
+def compile_checked(paths: Sequence[Path], resource: str | None = None) -> CheckedCompile:
+    """Compile-twice gate, then the in-process compile whose artifact is sent; with
+    `resource`, all three compile the project for that resource in place of its own
+    (`for_resource`: a fleet load). Raises ProjectError when the project cannot be read,
+    Refusal (`compile`, `check_twice`) otherwise."""
+    # an unreadable project fails fast, before two
+    project = for_resource(load_project(list(paths)), resource)
     # kept for the backup: the project model holds the sources but not padt.toml's text
     folder = Path(paths[0]) if len(paths) == 1 and Path(paths[0]).is_dir() else None
     config = folder / PROJECT_FILE if folder is not None else None
     config_text = config.read_text(encoding="utf-8") if config and config.is_file() else None
     tests = {t.name: t.text for t in sources_of_tests(folder)} if folder is not None else {}
-    check = check_twice(paths)
+    check = check_twice(paths, resource=resource)
     if not check.compiled:
         failures = [run.failure for run in (check.first, check.second) if run.failure]
         first = check.first if check.first.failure is None else check.second

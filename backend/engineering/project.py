@@ -75,6 +75,21 @@ def load_project(paths: list[Path]) -> Project:
     return Project(name, "", None, None, sources)
 
 
+def for_resource(project: Project, name: str | None) -> Project:
+    """The project compiled for resource `name` in place of its `[resource] name` (the
+    fleet load: one project, several resources, each its own configuration and CRC); the
+    project itself when `name` is None. ProjectError for a project without a `[resource]`
+    (loose .st files): there is no configuration to name."""
+    if name is None:
+        return project
+    if project.resource is None:
+        raise ProjectError(
+            f"{project.name}: the project names no resource (no padt.toml with [resource]); "
+            f"it cannot be compiled for resource {name}"
+        )
+    return replace(project, resource=replace(project.resource, name=name))
+
+
 def project_sources(folder: Path) -> list[SourceFile]:
     """The .st files of a project folder, named by their path in it; not those of its
     `test/` folder, which only `padt test` compiles (docs/testing.md)."""

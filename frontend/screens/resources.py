@@ -1,7 +1,7 @@
-"""The Resources screen: every resource on the router with its state, configuration CRC,
-cycle statistics and programs; and the commands of the selected resource (Start, Stop,
-Cold start, Init; each program's Start and Stop), each confirmed, each disabled with the
-reason when the user's levels do not allow it."""
+"""The Resources screen: every resource on the router with the host it runs on, its state,
+configuration CRC, cycle statistics and programs; and the commands of the selected
+resource (Start, Stop, Cold start, Init; each program's Start and Stop), each confirmed,
+each disabled with the reason when the user's levels do not allow it."""
 
 from __future__ import annotations
 
@@ -121,12 +121,12 @@ def _program(status: p.Status | None, name: str) -> p.ProgramStatus | None:
 def render(online: list[tuple[str, p.Status | None]], selected: str | None) -> str:
     head = "".join(
         f'<th style="{_CELL};text-align:left">{name}</th>'
-        for name in ("Resource", "State", "CRC", "Cycle", "Last", "Min", "Max", "Mean",
+        for name in ("Resource", "Host", "State", "CRC", "Cycle", "Last", "Min", "Max", "Mean",
                      "Jitter", "Overruns", "Programs")
     )  # fmt: skip
     rows = [_row(name, status, name == selected) for name, status in online]
     if not rows:
-        rows = [f'<tr><td style="{_CELL}" colspan="11">No resource is online.</td></tr>']
+        rows = [f'<tr><td style="{_CELL}" colspan="12">No resource is online.</td></tr>']
     return (
         '<div style="overflow-x:auto"><table data-testid="resources" '
         f'style="font-size:0.85em;border-collapse:collapse"><tr>{head}</tr>{"".join(rows)}'
@@ -141,10 +141,12 @@ def _row(name: str, status: p.Status | None, selected: bool) -> str:
     ]
     if status is None:
         note = "log in to the resource to see its state"
-        return "".join(cells) + f'<td style="{_CELL};color:#868e96" colspan="10">{note}</td>'
+        return "".join(cells) + f'<td style="{_CELL};color:#868e96" colspan="11">{note}</td>'
     stats = status.stats
     color = STATE_COLORS.get(status.state, "#e67700")
     cells += [
+        f'<td style="{_CELL}" data-host="{html.escape(name)}">'
+        f"{html.escape(status.host or '-')}</td>",
         f'<td style="{_CELL};color:{color};font-weight:600" data-state="{html.escape(name)}">'
         f"{html.escape(state_words(status.state))}</td>",
         f'<td style="{_CELL};font-family:monospace">{html.escape(status.crc or "-")}</td>',

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import re
 import typing
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -92,6 +93,11 @@ Crc = Annotated[str, Pattern(r"[0-9A-Fa-f]{8}", "8 hex digits")]
 WatchId = Annotated[str, Pattern(WATCH_ID_PATTERN, WATCH_ID_RULE)]  # a chunk of its keys
 AccountName = Annotated[str, Pattern(NAME_PATTERN, "1 to 32 of A-Z a-z 0-9 _ -")]
 Value = Annotated[Any, JsonValue()]  # a variable's value; checked against its type later
+# where a resource runs: its machine's name as the OS gives it, in a set safe to show in a
+# terminal or a page (letters, digits, '.', '-', '_'; at most 253 characters, as DNS)
+HOST_PATTERN = r"[A-Za-z0-9][A-Za-z0-9._-]{0,252}"
+HostName = Annotated[str, Pattern(HOST_PATTERN, "a host name: 1 to 253 of A-Z a-z 0-9 . - _")]
+ZenohId = Annotated[str, Pattern(r"[0-9a-f]{1,32}", "a Zenoh session id: 1 to 32 hex digits")]
 
 
 # ---- publications
@@ -186,6 +192,16 @@ class Status:
     start: str | None  # how it starts next (cold, warm) or last started (continued)
     programs: list[ProgramStatus]
     io: IoStatus | None = None  # field I/O; None: the configuration uses none
+    # where the runtime runs (None: a runtime before these fields, or a name outside the
+    # safe set): the OS's host name and the id of its Zenoh session
+    host: HostName | None = None
+    zenoh_id: ZenohId | None = None
+
+
+def safe_host(name: str) -> str | None:
+    """A host name as `Status.host` takes it, or None when it is not one (too long, or a
+    character outside the safe set): the status must still decode everywhere."""
+    return name if re.fullmatch(HOST_PATTERN, name) else None
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import socket
 import stat
 import subprocess
 import sys
@@ -492,6 +493,44 @@ def test_two_resources_on_one_router_and_a_killed_one_leaves_the_list(tmp_path: 
         assert site.call("POST", "/api/resources/Line2/login", token, json=line2).status_code == 200
         status = site.call("GET", "/api/resources/Line2/status", token).json()
         assert (status["resource"], status["state"]) == ("Line2", "RUN")
+        # the list names the host each runs on, once its status is verified
+        deadline = time.monotonic() + 20
+        hosts: dict[str, Any] = {}
+        while None in (hosts.get("Line2"), hosts.get("Plant")) and time.monotonic() < deadline:
+            listed_now = site.call("GET", "/api/resources", token).json()
+            hosts = {e["resource"]: e["host"] for e in listed_now}
+        assert hosts == {"Line2": socket.gethostname(), "Plant": socket.gethostname()}
+
+        # a fleet load: Line2 (stopped) takes plant_v2 compiled for it, Plant refuses (it
+        # runs), Ghost is not tried
+        engineer = site.session("builder", "engineer")
+        body = {"user": "engineer", "password": PES_PASSWORDS["engineer"]}
+        assert (
+            site.call("POST", "/api/resources/Line2/login", engineer, json=body).status_code == 200
+        )
+        assert site.call("POST", "/api/resources/Line2/stop", engineer).status_code == 200
+        fleet = {"project": "plant_v2", "resources": ["Line2", "Plant", "Ghost"]}
+        reply = site.call("POST", "/api/resources/load", engineer, json=fleet)
+        assert reply.status_code == 200, reply.text
+        report = reply.json()
+        assert report["done"] is False
+        outcomes = [(r["resource"], r["outcome"], r["code"]) for r in report["resources"]]
+        assert outcomes == [
+            ("Line2", "done", None),
+            ("Plant", "refused", "state"),
+            ("Ghost", "not tried", None),
+        ]
+        line2_crc = report["resources"][0]["crc"]
+        status = site.call("GET", "/api/resources/Line2/status", engineer).json()
+        assert (status["crc"], status["state"]) == (line2_crc, "STOP/VALID CONFIGURATION")
+        assert report["resources"][0]["backup"].startswith("Plant_" + line2_crc)
+        # only a reader of the PADT: refused before anything; a bad list: 400, no traceback
+        reader = site.session("reader")
+        assert site.call("POST", "/api/resources/load", reader, json=fleet).status_code == 403
+        twice = {"project": "plant_v2", "resources": ["Line2", "Line2"]}
+        error(site.call("POST", "/api/resources/load", engineer, json=twice), 400, "bad_request")
+        none = {"project": "plant_v2", "resources": []}
+        error(site.call("POST", "/api/resources/load", engineer, json=none), 400, "bad_request")
         ws_url = site.url.replace("http://", "ws://") + f"{R}/live"
         with connect(ws_url) as ws:
             ws.send(json.dumps({"token": token, "variables": ["P.n"], "period_ms": 50}))

@@ -426,7 +426,7 @@ def test_compile_twice_gate(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> 
     assert checked.config_text == (project / "padt.toml").read_text()
     crc = checked.artifact.crc
 
-    def differing(paths: object) -> CheckTwiceResult:
+    def differing(paths: object, resource: str | None = None) -> CheckTwiceResult:
         first, second = _run("1", crc), _run("2", "0BADC0DE", "33333333")
         return CheckTwiceResult(first, second, compare(first, second))
 
@@ -437,7 +437,7 @@ def test_compile_twice_gate(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> 
     assert f"configuration CRC: {crc} != 0BADC0DE" in mismatch.value.message
     assert "POU Main CRC: 11111111 != 33333333" in mismatch.value.message
 
-    def agreeing_elsewhere(paths: object) -> CheckTwiceResult:
+    def agreeing_elsewhere(paths: object, resource: str | None = None) -> CheckTwiceResult:
         return CheckTwiceResult(_run("1", "0BADC0DE"), _run("2", "0BADC0DE"), ())
 
     monkeypatch.setattr(compile_gate, "check_twice", agreeing_elsewhere)

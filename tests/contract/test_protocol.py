@@ -272,3 +272,35 @@ def test_watch_values_plain_or_nested_within_the_limit_pass_and_deeper_ones_are_
     with pytest.raises(Refusal) as refused:
         decode(p.WatchPublication, message)
     assert "values[5]" in refused.value.message
+
+
+def _status(**where: Any) -> dict[str, Any]:
+    stats = p.CycleStatistics(1, 0.1, 0.1, 0.1, 0.1, 20.0, 0.0, 0, 0)
+    status = p.Status(
+        "Line1", p.ResourceState.RUN, "0A1B2C3D", None, "P", 1, 20.0, stats, False, "users",
+        None, [], None, **where,
+    )  # fmt: skip
+    data: dict[str, Any] = encode(status)
+    return data
+
+
+def test_the_host_of_a_status_is_optional_bounded_and_of_a_safe_set() -> None:
+    host = "plc-hall1.example_site"
+    data = _status(host=host, zenoh_id="3f0c2a9d1e7b4c55a1d0e8f2b6c49a17")
+    decoded = p.decode_publication(p.Status, json.dumps(data).encode())
+    assert (decoded.host, decoded.zenoh_id) == (host, "3f0c2a9d1e7b4c55a1d0e8f2b6c49a17")
+    # a runtime before the fields: they decode as None
+    older = {k: v for k, v in _status().items() if k not in ("host", "zenoh_id")}
+    decoded = p.decode_publication(p.Status, json.dumps(older).encode())
+    assert (decoded.host, decoded.zenoh_id) == (None, None)
+    assert p.decode_publication(p.Status, json.dumps({**older, "host": "a" * 253}).encode())
+    for bad in ("a" * 254, "", "-lead", "plc 1", "plc\x1b[2J", "<b>plc</b>", "plc/1", 7):
+        with pytest.raises(Refusal) as refused:
+            p.decode_publication(p.Status, json.dumps({**older, "host": bad}).encode())
+        assert refused.value.code == "bad_reply"
+    for bad_id in ("XYZ", "a" * 33, ""):
+        with pytest.raises(Refusal):
+            p.decode_publication(p.Status, json.dumps({**older, "zenoh_id": bad_id}).encode())
+    # the runtime gives no name outside the set: None rather than an undecodable status
+    assert p.safe_host("plc-1") == "plc-1"
+    assert p.safe_host("plc 1") is None and p.safe_host("a" * 254) is None

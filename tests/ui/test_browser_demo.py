@@ -5,6 +5,7 @@ it, freeze and step one program, log out."""
 from __future__ import annotations
 
 import re
+import socket
 import time
 
 import pytest
@@ -62,6 +63,8 @@ def test_log_in_stop_step_start_freeze_and_log_out(demo: Demo) -> None:
         log_in_to_resource(page, "admin", demo.password)
         wait_for_text(page, '[data-testid="resource-state"]', "RUN", timeout_s=30)
         assert re.fullmatch(r"[0-9A-F]{8}", text_of(page, '[data-testid="resource-crc"]'))
+        # the Resources table names the machine each resource runs on (its status says)
+        wait_for_text(page, '[data-host="Tank1"]', socket.gethostname())
         shoot(page, "resources")
 
         page.get_by_role("button", name="Stop", exact=True).click()

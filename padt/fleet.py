@@ -1,0 +1,129 @@
+"""`padt fleet status` and `padt fleet load`: the resources on a router mesh as one table,
+and one project loaded into several of them in turn (docs/cli.md)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+from contextlib import closing
+
+from backend.engineering.fleet import (
+    FleetEntry,
+    FleetLoad,
+    download_fleet,
+    fleet_done,
+    fleet_refusal,
+    survey,
+)
+from backend.engineering.project import load_project
+from backend.engineering.resource_client import ResourceClient
+from padt.online import Failed, password_of, run, sign_in, table
+from runtime.contract.refusal import Refusal
+from runtime.contract.session import open_client
+
+# `padt fleet status` exit codes
+ALL_RUN, NOT_ALL_RUN = 0, 1
+
+
+def _cells(entry: FleetEntry) -> list[str]:
+    status = entry.status
+    if status is None:
+        return [entry.resource, "-", entry.note, "-", "-", "-", "-"]
+    return [
+        entry.resource,
+        status.host or "-",
+        str(status.state),
+        status.crc or "-",
+        status.project or "-",
+        f"{status.cycle_ms:g} ms",
+        f"{status.stats.mean_ms:.3f} ms",
+    ]
+
+
+def fleet_lines(entries: list[FleetEntry]) -> list[str]:
+    header = ["resource", "host", "state", "crc", "project", "target", "mean"]
+    return table(header, [_cells(entry) for entry in entries])
+
+
+def status(args: argparse.Namespace) -> int:
+    def body() -> int:
+        password = password_of(args.user) if args.user is not None else None
+
+        def login(client: ResourceClient) -> None:
+            client.login(args.user, password or "")
+
+        # no router: main() says so in one line, exit code 1
+        with closing(open_client(args.zenoh, args.zenoh_config)) as session:
+            entries = survey(session, login=login if args.user else None, wait_s=args.wait)
+        if args.json:
+            print(json.dumps([e.as_json() for e in entries], indent=2, sort_keys=True))
+        elif entries:
+            print("\n".join(fleet_lines(entries)))
+        if not entries:
+            print(f"padt fleet status: no resource is online on {args.zenoh}", file=sys.stderr)
+            return NOT_ALL_RUN
+        return ALL_RUN if all(entry.running for entry in entries) else NOT_ALL_RUN
+
+    return run("fleet status", args, body)
+
+
+def _told(result: FleetLoad) -> None:
+    for line in result.diagnostics:
+        print(line, file=sys.stderr)
+    for warning in result.warnings:
+        print(f"{result.resource}: {warning}", file=sys.stderr)
+    if result.outcome == "done":
+        backup = f"backup {result.backup}" if result.backup else f"no backup: {result.backup_error}"
+        print(f"{result.resource}: done, configuration CRC {result.crc}, {result.state}, {backup}")
+    elif result.outcome == "refused":
+        crc = f" (configuration CRC {result.crc})" if result.crc else ""
+        print(f"{result.resource}: refused ({result.code}){crc}: {result.message}")
+    else:
+        print(f"{result.resource}: not tried")
+
+
+def load(args: argparse.Namespace) -> int:
+    wrong = fleet_refusal(args.resource)
+    if wrong is not None:
+        print(f"padt fleet load: {wrong.message}", file=sys.stderr)
+        return 2
+
+    def body() -> int:
+        load_project(list(args.paths))  # an unreadable project before any router is asked
+        password = password_of(args.user) if args.user is not None else None
+        words = ["padt", "fleet", "load", *map(str, args.paths)]
+        for name in args.resource:
+            words += ["--resource", name]
+        how = shlex.join([*words, "--zenoh", args.zenoh, "--backup-dir", str(args.backup_dir)])
+        # no router: main() says so in one line, exit code 1
+        with closing(open_client(args.zenoh, args.zenoh_config)) as session:
+
+            def client_of(name: str) -> ResourceClient:
+                client = ResourceClient(session, name)
+                try:
+                    sign_in(client, args, password)
+                except Failed as exc:
+                    raise Refusal("login", str(exc)) from None
+                return client
+
+            results = download_fleet(
+                args.paths,
+                args.resource,
+                client_of,
+                args.backup_dir,
+                how,
+                told=None if args.json else _told,
+            )
+        if args.json:
+            shown = {
+                "done": fleet_done(results),
+                "resources": [
+                    {**r.as_json(), "backup": str(r.backup) if r.backup else None} for r in results
+                ],
+            }
+            print(json.dumps(shown, indent=2, sort_keys=True))
+        return 0 if fleet_done(results) else 1
+
+    return run("fleet load", args, body)
