@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
@@ -25,6 +26,15 @@ RETRY_S = 1.0  # an unreachable runtime: try again this much later
 log = logging.getLogger("padt.ui")
 
 
+@dataclass(frozen=True)
+class Reach:
+    """Whether the runtime process is on the bus (its liveliness token), and the last time
+    it was not: the status bar says so, as the values shown meanwhile are the last known."""
+
+    away_since_ns: int | None = None  # gone since (wall clock); None: there
+    last_outage: tuple[int, int] | None = None  # (gone, back) of the last time it was away
+
+
 @dataclass
 class Latest:
     """What the runtime last told us."""
@@ -38,14 +48,21 @@ class Latest:
     cycle: int = 0
     version: int = 0  # changes with anything above
     values_version: int = 0  # changes with the values (and their qualities) only
+    reach: Reach = field(default_factory=Reach)
 
 
 class ResourceFeed:
-    def __init__(self, client: ResourceClient, on_news: Callable[[], None] = lambda: None) -> None:
+    def __init__(
+        self,
+        client: ResourceClient,
+        on_news: Callable[[], None] = lambda: None,
+        clock: Callable[[], int] = time.time_ns,
+    ) -> None:
         """`on_news` is called after every change of `latest` (from Zenoh's threads: it
-        must not wait)."""
+        must not wait); `clock`: the wall clock in ns, for when the runtime went and came."""
         self.client = client
         self._on_news = on_news
+        self._clock = clock
         self.latest = Latest()
         self._wanted: tuple[str, ...] = ()
         self._watch: WatchHandle | None = None
@@ -95,7 +112,20 @@ class ResourceFeed:
         self.show_status(status)
 
     def _on_alive(self, present: bool) -> None:
-        """A runtime that (re)appears knows nothing of our watch set: register it again."""
+        """A runtime that (re)appears knows nothing of our watch set: register it again.
+        Its going and coming are noted for the status bar."""
+        now = self._clock()
+        with self.latest.lock:
+            reach = self.latest.reach
+            if not present and reach.away_since_ns is None:
+                self.latest.reach = Reach(now, reach.last_outage)
+            elif present and reach.away_since_ns is not None:
+                self.latest.reach = Reach(None, (reach.away_since_ns, now))
+            changed = self.latest.reach is not reach
+            if changed:
+                self.latest.version += 1
+        if changed:
+            self._on_news()
         if present:
             self._forget_registration(variables_too=False)
 

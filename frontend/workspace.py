@@ -108,6 +108,8 @@ class Workspace:
         self.forcing_feed = ForcingFeed()
         self.forcing_banner = forcing.build_banner(gui)  # on top, seen from every tab
         keep(self.forcing_banner.handle)
+        self.reach_banner = gui.add_html("", visible=False)  # the resource out of reach
+        keep(self.reach_banner)
         keep(gui.add_html(_header(session.user, session.level)))
         self.session_note = gui.add_html("")
         keep(self.session_note)
@@ -396,14 +398,25 @@ class Workspace:
         self._refresh_tree()
         project_edit_panel.refresh(self.edits, self.edit_target)
         online = self.context.directory.online()
-        names = tuple(name for name, _ in online) or (NONE,)
+        names = tuple(name for name, _ in online)
+        chosen = self.selected()
+        if chosen is not None and chosen not in names:
+            # out of reach (its host cut off, its process gone): kept chosen, so that the
+            # status bar says since when, and it is there again when it comes back
+            names = (*names, chosen)
+        names = names or (NONE,)
         if tuple(self.resource.options) != names:
             self.resource.options = names
         resource = self.selected()
         status = self._status(resource)
+        reach = self.session.feed_of(resource).latest.reach if resource is not None else None
         self.status.content = status_bar.render(
-            self.context.router, self.user, self.level, resource, status
+            self.context.router, self.user, self.level, resource, status, reach
         )
+        banner = status_bar.reach_banner(resource, reach)
+        if banner != self.reach_banner.content:
+            self.reach_banner.content = banner
+            self.reach_banner.visible = bool(banner)
         login_there = self.session.resource_login(resource) if resource is not None else None
         self.resource_login.content = _login_note(resource, login_there)
         feed = self.session.feed_of(resource) if resource is not None else None

@@ -5,6 +5,7 @@ keep a screenshot for a person to look at (`PADT_SHOTS=folder`)."""
 from __future__ import annotations
 
 import os
+import subprocess
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -37,6 +38,9 @@ class Plant:
     url: str
     client: ResourceClient
     ui: PadtUi  # the UI server, in the test's process
+    runtime: subprocess.Popen[bytes] | None = None  # the resource's runtime process
+    state: Path | None = None  # its state folder
+    zenoh: str = ""  # the router's endpoint
 
 
 def shoot(page: Page, name: str) -> None:

@@ -141,7 +141,10 @@ def plant(tmp_path: Path, zenoh_endpoint: str, request: pytest.FixtureRequest) -
     )
     with (
         closing(tank),
-        running_resource("Tank1", tmp_path, zenoh_endpoint, "--modbus-port", "0") as (_, client),
+        running_resource("Tank1", tmp_path, zenoh_endpoint, "--modbus-port", "0") as (
+            runtime,
+            client,
+        ),
     ):
         session = client.session
         accounts = PadtAccounts(accounts_file, time.monotonic_ns)
@@ -151,6 +154,6 @@ def plant(tmp_path: Path, zenoh_endpoint: str, request: pytest.FixtureRequest) -
         context = UiContext(directory, accounts, zenoh_endpoint, lists, projects, tmp_path / "bak")
         ui = PadtUi(context, port=free_port())
         try:
-            yield Plant(ui.url, client, ui)
+            yield Plant(ui.url, client, ui, runtime, tmp_path, zenoh_endpoint)
         finally:
             ui.close()

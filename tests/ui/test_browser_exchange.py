@@ -1,7 +1,8 @@
-"""The exchange between resources on the I/O screen (docs/exchange.md): the resource's
-publication with its messages counted, a subscription to a publisher that is not there
-(lost, its global at its safe value, marked bad, the reason shown), then the publisher's
-messages arriving (connected, the value good)."""
+"""A plant of several resources as the PADT shows it: the exchange between resources on
+the I/O screen (docs/exchange.md): the resource's publication with its messages counted, a
+subscription to a publisher that is not there (lost, its global at its safe value, marked
+bad, the reason shown), then the publisher's messages arriving (connected, the value
+good); and a resource out of the PADT's reach and back, in the status bar."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from runtime.contract.signatures import stamp_bytes, stamped
 from runtime.field_io.peer_exchange.message import encode
 from runtime.identity import Identity
 from tests.support.browser import chromium
+from tests.support.runtime_process import runtime_process
 from tests.ui.browser_steps import (
     PASSWORD,
     Plant,
@@ -103,3 +105,44 @@ def _publishing(plant: Plant, level: float) -> Iterator[None]:
     finally:
         stop.set()
         thread.join()
+
+
+def test_a_resource_out_of_reach_and_back_in_the_status_bar(plant: Plant) -> None:
+    """Its runtime process gone (killed: a host cut off looks the same to the PADT), the
+    status bar says since when and that the values shown are the last it sent; back, it
+    says for how long it was away and where the gap is."""
+    assert plant.runtime is not None and plant.state is not None
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        open_as(page, plant, "admin")
+        log_in_to_resource(page, "admin", PASSWORD)
+        wait_until("RUN", lambda: text_of(page, '[data-testid="resource-state"]') == "RUN")
+        plant.runtime.kill()
+        plant.runtime.wait()
+        wait_until(
+            "out of reach",
+            lambda: "out of reach since" in text_of(page, '[data-testid="resource-reach"]'),
+        )
+        assert "what is shown is what it last sent" in text_of(page, '[data-testid="statusbar"]')
+        banner = text_of(page, '[data-testid="reach-banner"]')
+        assert re.fullmatch(
+            r"Tank1 OUT OF REACH since \d\d:\d\d:\d\d: the values shown are the last it sent",
+            banner.strip(),
+        ), banner
+        shoot_both(page, "status-out-of-reach")
+        with runtime_process("Tank1", plant.state, plant.zenoh, "--modbus-port", "0"):
+            wait_until(
+                "back",
+                lambda: (
+                    re.search(
+                        r"out of reach \d\d:\d\d:\d\d to \d\d:\d\d:\d\d \(\d+\.\d s\)",
+                        text_of(page, '[data-testid="resource-reach"]'),
+                    )
+                    is not None
+                ),
+            )
+            assert "values and trends have a gap there" in text_of(
+                page, '[data-testid="statusbar"]'
+            )
+            assert not page.locator('[data-testid="reach-banner"]').is_visible()
+            shoot_both(page, "status-back-in-reach")
