@@ -23,7 +23,9 @@ COMMANDS: tuple[tuple[str, type[p.Command[p.StatusReply]], str], ...] = (
     ("Cold start", p.ColdStart, "set every variable to its initial value (in STOP)"),
     ("Init", p.Init, "leave ERROR STOP for STOP (a cold start follows)"),
 )
-_CELL = "padding:3px 8px;border-bottom:1px solid #e9ecef;white-space:nowrap"
+_CELL = "padding:3px 6px;border-bottom:1px solid #e9ecef;white-space:nowrap"
+# a host name may be 253 characters: the cell shows its start, the tooltip all of it
+_HOST_CELL = "max-width:12em;overflow:hidden;text-overflow:ellipsis"
 STATE_COLORS = {"RUN": "#2b8a3e", "ERROR STOP": "#c92a2a"}
 
 
@@ -145,8 +147,8 @@ def _row(name: str, status: p.Status | None, selected: bool) -> str:
     stats = status.stats
     color = STATE_COLORS.get(status.state, "#e67700")
     cells += [
-        f'<td style="{_CELL}" data-host="{html.escape(name)}">'
-        f"{html.escape(status.host or '-')}</td>",
+        f'<td style="{_CELL};{_HOST_CELL}" data-host="{html.escape(name)}" '
+        f'title="{html.escape(status.host or "")}">{html.escape(status.host or "-")}</td>',
         f'<td style="{_CELL};color:{color};font-weight:600" data-state="{html.escape(name)}">'
         f"{html.escape(state_words(status.state))}</td>",
         f'<td style="{_CELL};font-family:monospace">{html.escape(status.crc or "-")}</td>',
