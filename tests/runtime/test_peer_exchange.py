@@ -205,8 +205,13 @@ def test_values_flow_and_a_stale_publisher_gives_safe_values(tmp_path: Path) -> 
         wait_for(lambda: "another key" in (_subscription(consumer).last_error or ""))
         _forge(session, {"gCount": ["DINT", 8]}, claimed_key=publisher_key)
         wait_for(lambda: "does not verify" in (_subscription(consumer).last_error or ""))
-        assert _subscription(consumer).failures >= refused_before + 2
+        # and bytes that are no message at all: refused, and the resource cycles on
+        for garbage in (b"[" * 100_000, b"\xff" * 300_000, b"{}"):
+            session.put(exchange_key("Producer", "levels"), garbage)
+        wait_for(lambda: _subscription(consumer).failures >= refused_before + 5)
         assert _values(consumer) == SAFE
+        cycle = consumer.ask(GetStatus()).status.cycle
+        wait_for(lambda: consumer.ask(GetStatus()).status.cycle > cycle + 10)
 
         # it comes back: values flow again by themselves
         with _resource("Producer", producer_state, endpoint, session) as (_, producer):
