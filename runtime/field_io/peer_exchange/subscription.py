@@ -4,9 +4,9 @@ this resource, as a remote device of the driver (`RemoteDevices`).
 Zenoh calls `_take` on its own threads with each message: it is checked whole (size,
 signature, stamp newer than the last taken, the publisher's pinned key, every value of the
 type its variable has) and becomes one immutable `Delivery` of all the subscription's
-variables, handed over with one reference assignment. `run`, on the I/O thread, notices a
-publication that went stale: no message taken for `timeout_ms` puts the safe values in
-place. A message of a publisher that does not run (STOP, ERROR STOP) is taken as stale at
+variables, handed over with one reference assignment. `run`, on the I/O thread, wakes
+when the last message taken goes stale: no message taken for `timeout_ms` puts the safe
+values in place then. A message of a publisher that does not run (STOP, ERROR STOP) is taken as stale at
 once. The cycle never waits for either.
 """
 
@@ -65,16 +65,19 @@ class PeerSubscription:
         timeout_ns = self.device.timeout_ms * NS_PER_MS
         started = time.monotonic_ns()
         try:
-            while True:  # look often enough to notice staleness within a tenth of the timeout
-                await asyncio.sleep(max(self.device.timeout_ms / 10_000, 0.002))
+            while True:
                 with self._lock:
-                    since = self._taken_ns or started
-                    if self.state != "lost" and time.monotonic_ns() - since > timeout_ns:
+                    since, now = self._taken_ns or started, time.monotonic_ns()
+                    stale = now - since >= timeout_ns
+                    if stale and self.state != "lost":
                         why = f"no message for {self.device.timeout_ms} ms"
                         if self._refused is not None:
                             why = f"{why}; the last one was refused: {self._refused}"
                         self.failures += 1
                         self._lose(why)
+                # wake when the last message taken goes stale, so that the safe values are
+                # in place by then (lost: a timeout later, never past a new message's end)
+                await asyncio.sleep((timeout_ns if stale else since + timeout_ns - now) / 1e9)
         finally:
             subscriber.undeclare()
 
