@@ -698,6 +698,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="set PARAM's online value again right after the reload, which resets it to the "
         "project's (the preview lists them); repeatable",
     )
+    reload.add_argument(
+        "--compile-for-resource",
+        action="store_true",
+        help="compile the project for --resource NAME in place of its [resource] name, as "
+        "padt fleet load did (without it, a project of another name is refused)",
+    )
     _backup_option(reload)
     reload.set_defaults(func=_lazy("padt.configuration", "reload"))
 

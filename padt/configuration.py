@@ -36,8 +36,10 @@ def parse_rename(text: str) -> tuple[str, str]:
         raise argparse.ArgumentTypeError(refused.message) from None
 
 
-def _compile(paths: list[Path]) -> CheckedCompile:
-    checked = compile_checked(paths)
+def _compile(paths: list[Path], resource: str | None = None) -> CheckedCompile:
+    """`resource`: compiled for that resource in place of the project's own (a resource
+    a fleet load loaded with a project named for another)."""
+    checked = compile_checked(paths, resource)
     for diagnostic in checked.diagnostics:  # warnings: errors never get this far
         print(diagnostic, file=sys.stderr)
     print(f"check-twice: OK, configuration CRC {checked.artifact.crc}")
@@ -133,7 +135,7 @@ def reload(args: argparse.Namespace) -> int:
             renames = rename_map(args.rename)
         except Refusal as refused:
             raise Failed(f"--rename: {refused.message}", 2) from None
-        checked = _compile(args.paths)
+        checked = _compile(args.paths, args.resource if args.compile_for_resource else None)
         with resource_client(args) as client:
             project = checked.project.name
             preview = preview_online_change(client, checked, project, renames, args.backup_dir, {})
@@ -157,6 +159,8 @@ def reload(args: argparse.Namespace) -> int:
                 if value is not None:
                     extra += [flag, str(value)]
             extra += [word for name in args.keep_online for word in ("--keep-online", name)]
+            if args.compile_for_resource:
+                extra.append("--compile-for-resource")
             options = ReloadOptions(renames, plan.old_crc, args.watchdog_ms, args.target_cycle_ms)
             how = _command_line(args, "reload", *extra, "--yes")
             keep = chosen_resets(client, checked, args.keep_online)

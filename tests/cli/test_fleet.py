@@ -165,6 +165,18 @@ def test_fleet_status_and_load(
     assert state(fleet["LineA"])["crc"] == crcs["LineA"]
     assert state(fleet["LineC"])["crc"] == crcs["LineC"]
 
+    # an online change of LineA with the fleet's project: compiled for LineA, or refused
+    reload = ["reload", str(changed), "--resource", "LineA", "--zenoh", zenoh_endpoint]
+    reload += ["--backup-dir", str(backups), "--user", "admin", "--yes"]
+    refused = padt(*reload, env=admin)
+    assert refused.returncode == 1 and "(needs_download)" in refused.stderr
+    assert "the resource identity changes (LineA -> Line1)" in refused.stderr
+    reloaded = padt(*reload, "--compile-for-resource", env=admin)
+    assert reloaded.returncode == 0, reloaded.stderr
+    assert "source diff against backup Fleet_test_" + crcs["LineA"] in reloaded.stdout
+    crcs["LineA"] = state(fleet["LineA"])["crc"]
+    assert state(fleet["LineA"])["state"] == "RUN"
+
     # the keys are known now (the logins pinned them): signed statuses, with the host
     code, entries = fleet_status(zenoh_endpoint)
     shown = by_name(entries)
