@@ -20,6 +20,7 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
+from runtime.contract.keyspace import resource_name_problem
 from runtime.contract.values import ValueRejected, representation
 
 PUBLICATION_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")  # a plain chunk of a key
@@ -109,7 +110,7 @@ def _publication(data: dict[str, Any]) -> Publication:
 
 def _subscription(data: dict[str, Any]) -> Subscription:
     subscription = Subscription(
-        resource=_text(data["resource"]),
+        resource=_resource(data["resource"]),
         publication=_name(data["publication"]),
         timeout_ms=_period(data["timeout_ms"]),
         points=tuple(_point(p) for p in data["points"]),
@@ -129,6 +130,15 @@ def _point(data: dict[str, Any]) -> ExchangePoint:
     except ValueRejected as exc:
         raise TypeError(f"the safe value of exchanged '{point.variable}': {exc}") from None
     return point
+
+
+def _resource(value: Any) -> str:
+    """A publisher's name, one plain chunk of a key (never a wildcard that would reach
+    other resources' keys)."""
+    problem = resource_name_problem(value) if isinstance(value, str) else "no text"
+    if problem is not None:
+        raise TypeError(f"{value!r} is no resource name: {problem}")
+    return str(value)
 
 
 def _name(value: Any) -> str:

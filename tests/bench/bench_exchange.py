@@ -42,14 +42,13 @@ from pathlib import Path
 
 import zenoh
 
-from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.keyspace import exchange_key
 from runtime.contract.protocol import GetEvents, GetStatus, ResetStats, Write
 from runtime.contract.session import open_client
 from tests.support.impaired_link import ImpairedLink, impaired_link
 from tests.support.ports import free_port
-from tests.support.runtime_process import runtime_process, store_artifact, wait_until_answering
+from tests.support.runtime_process import runtime_process, stored_project, wait_until_answering
 
 REPO = Path(__file__).resolve().parents[2]
 SECONDS_ENV, DEFAULT_SECONDS = "PADT_BENCH_SECONDS", 5.0
@@ -102,18 +101,6 @@ def _head(resource: str) -> str:
         f'[project]\nname = "{resource.lower()}"\n[resource]\nname = "{resource}"\n'
         'autostart = "cold"\ntarget_cycle_ms = 5\nsafety_operation = false\n'
     )
-
-
-def _state(folder: Path, name: str, source: str, settings: str) -> Path:
-    project = folder / name
-    project.mkdir(parents=True)
-    (project / "main.st").write_text(source)
-    (project / "padt.toml").write_text(settings)
-    result = compile_project(load_project([project]))
-    assert result.artifact is not None, [str(d) for d in result.diagnostics[:5]]
-    state = folder / f"{name}-state"
-    store_artifact(state, result.artifact)
-    return state
 
 
 @contextlib.contextmanager
@@ -204,8 +191,12 @@ class _Plant:
 
 @contextlib.contextmanager
 def _plant(folder: Path, publications: int) -> Iterator[_Plant]:
-    producer_state = _state(folder / f"p{publications}", "producer", *_producer(publications))
-    consumer_state = _state(folder / f"p{publications}", "consumer", *_consumer(publications))
+    producer_state = stored_project(
+        folder / f"p{publications}", "producer", *_producer(publications)
+    )
+    consumer_state = stored_project(
+        folder / f"p{publications}", "consumer", *_consumer(publications)
+    )
     port_a, port_b, port_link = free_port(), free_port(), free_port()
     a, b = f"tcp/127.0.0.1:{port_a}", f"tcp/127.0.0.1:{port_b}"
     with (

@@ -4,11 +4,15 @@ docs/exchange.md)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
+from typing import Any
+
+import pytest
 
 from backend.compiler.pipeline import CompileResult
 from backend.engineering.project import compile_project, load_project
-from runtime.contract.artifact import load_artifact
+from runtime.contract.artifact import ArtifactError, load_artifact
 from runtime.contract.exchange import ExchangeConfig, ExchangePoint, Publication, Published
 from runtime.reload_plan import plan_reload
 
@@ -222,3 +226,32 @@ variable = "remoteLabel"
         ),
     }
     assert plan_reload(old, old).hazards == ()
+
+
+@pytest.mark.parametrize(
+    "crafted",
+    [
+        {"resource": "Tank1/**"},  # a wildcard that would reach every resource's keys
+        {"publication": "a/b"},
+        {"timeout_ms": 0},
+        {"points": (ExchangePoint("remoteLevel", "REAL", "level", "high"),)},
+        {"points": (ExchangePoint("remoteLevel", "REF_TO INT", "level", 0),)},
+    ],
+    ids=["wildcard", "key chunk", "timeout", "safe value", "reference"],
+)
+def test_a_crafted_exchange_in_an_artifact_is_refused(
+    tmp_path: Path, crafted: dict[str, Any]
+) -> None:
+    """A CRC is no signature: the runtime checks what an artifact's exchange says before it
+    uses any of it (a download of a crafted artifact is refused whole)."""
+    result = _compile(
+        tmp_path,
+        '[[exchange.subscribe]]\nresource = "Tank1"\npublication = "levels"\n'
+        '[[exchange.subscribe.variable]]\nvariable = "remoteLevel"\n',
+    )
+    assert result.artifact is not None and result.artifact.exchange is not None
+    subscription = replace(result.artifact.exchange.subscriptions[0], **crafted)
+    exchange = replace(result.artifact.exchange, subscriptions=(subscription,))
+    crafted_artifact = replace(result.artifact, exchange=exchange).with_crc()
+    with pytest.raises(ArtifactError):
+        load_artifact(crafted_artifact.to_json())

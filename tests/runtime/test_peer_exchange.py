@@ -14,7 +14,6 @@ from typing import Any
 
 import zenoh
 
-from backend.engineering.project import compile_project, load_project
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.keyspace import exchange_key
 from runtime.contract.protocol import (
@@ -37,7 +36,7 @@ from tests.support.runtime_process import (
     client_session,
     router,
     runtime_process,
-    store_artifact,
+    stored_project,
     wait_until_answering,
 )
 
@@ -108,18 +107,6 @@ safe_value = "lost"
 SAFE = {"gRemoteCount": -1, "gRemoteSetpoint": -2.5, "gRemoteName": "lost"}
 
 
-def _state_folder(tmp_path: Path, name: str, source: str, settings: str) -> Path:
-    folder = tmp_path / name
-    folder.mkdir()
-    (folder / "padt.toml").write_text(settings)
-    (folder / "main.st").write_text(source)
-    result = compile_project(load_project([folder]))
-    assert result.artifact is not None, [str(d) for d in result.diagnostics]
-    state = tmp_path / f"{name}-state"
-    store_artifact(state, result.artifact)
-    return state
-
-
 @contextlib.contextmanager
 def _resource(
     name: str, state: Path, endpoint: str, session: zenoh.Session
@@ -154,8 +141,8 @@ def _flowing(consumer: ResourceClient) -> bool:
 
 
 def test_values_flow_and_a_stale_publisher_gives_safe_values(tmp_path: Path) -> None:
-    producer_state = _state_folder(tmp_path, "producer", PRODUCER_ST, PRODUCER_TOML)
-    consumer_state = _state_folder(tmp_path, "consumer", CONSUMER_ST, CONSUMER_TOML)
+    producer_state = stored_project(tmp_path, "producer", PRODUCER_ST, PRODUCER_TOML)
+    consumer_state = stored_project(tmp_path, "consumer", CONSUMER_ST, CONSUMER_TOML)
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with (
         router(endpoint),

@@ -29,6 +29,21 @@ def store_artifact(state_dir: Path, artifact: Artifact) -> None:
     path.write_text(artifact.to_json())
 
 
+def stored_project(folder: Path, name: str, source: str, settings: str) -> Path:
+    """The project `folder/name` of one ST file and its padt.toml, compiled, with its
+    configuration stored where `padt runtime` finds it at power-up: in the state folder
+    `folder/name-state`, which is returned."""
+    project = folder / name
+    project.mkdir(parents=True)
+    (project / "padt.toml").write_text(settings)
+    (project / "main.st").write_text(source)
+    result = compile_project(load_project([project]))
+    assert result.artifact is not None, [str(d) for d in result.diagnostics[:5]]
+    state = folder / f"{name}-state"
+    store_artifact(state, result.artifact)
+    return state
+
+
 def write_demo_artifact(state_dir: Path) -> str:
     result = compile_project(load_project([demo_project_path()]))
     assert result.artifact is not None
