@@ -1,21 +1,25 @@
 """The exchange between resources as the field I/O knows it (`drivers.py`): its section of
 the configuration, and its driver, made only for a configuration that exchanges something
-and a runtime on the bus."""
+and a runtime on the bus. The driver's module (and Zenoh with it) is imported then and not
+before: every padt command builds its parser with the runtime's options, and Zenoh takes
+a third of a second to import."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-
-import zenoh
+from typing import TYPE_CHECKING
 
 from runtime.contract.artifact import Artifact
 from runtime.contract.exchange import ExchangeConfig
 from runtime.contract.signatures import Freshness
 from runtime.field_io.driver import DriverContext, DriverKind, FieldDriver
-from runtime.field_io.peer_exchange.driver import PeerExchangeDriver
 from runtime.field_io.peer_exchange.peer_keys import PeerKeys
-from runtime.identity import Identity
+
+if TYPE_CHECKING:
+    import zenoh
+
+    from runtime.identity import Identity
 
 
 @dataclass(frozen=True)
@@ -36,6 +40,8 @@ def exchange_kind(options: ExchangeOptions) -> DriverKind:
     def make(config: ExchangeConfig, context: DriverContext) -> FieldDriver | None:
         if not config or options.session is None or options.identity is None:
             return None
+        from runtime.field_io.peer_exchange.driver import PeerExchangeDriver  # Zenoh: above
+
         return PeerExchangeDriver(
             config, context, options.session, options.identity, keys, freshness
         )
