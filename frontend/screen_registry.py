@@ -91,6 +91,12 @@ class Now:
     def token(self) -> str | None:
         return self.login.token if self.login is not None else None
 
+    @property
+    def away(self) -> bool:
+        """The selected resource's runtime is gone from the bus (what is shown of it is
+        what it last sent)."""
+        return self.feed is not None and self.feed.latest.reach.away_since_ns is not None
+
 
 class Screen:
     """A tab of the work area. A subclass names its tab and icon, builds its controls in

@@ -79,7 +79,9 @@ def refresh(
     online: list[tuple[str, p.Status | None]],
     selected: str | None,
     allowed: Callable[[type[p.Command[Any]]], Allowed],
+    away: bool = False,
 ) -> None:
+    """`away`: the selected resource is out of reach, so no command can reach it."""
     page = render(online, selected)
     if page != screen.shown:
         screen.table.content = page
@@ -94,6 +96,8 @@ def refresh(
     by_state: list[str] = []
     for command, button in [*screen.buttons.items(), *screen.program_buttons.items()]:
         verdict = allowed(command) if selected is not None else Allowed(False, "no resource")
+        if away:
+            verdict = Allowed(False, f"{selected} is out of reach")
         if verdict.reason and verdict.reason not in reasons:
             reasons.append(verdict.reason)
         if verdict.ok and status is not None:  # what the state allows
@@ -187,6 +191,6 @@ class Resources(Screen):
 
     def refresh(self, now: Now) -> None:
         directory = dict(now.directory)
-        if now.resource is not None and now.status is not None:
+        if now.resource is not None and now.status is not None and not now.away:
             directory[now.resource] = now.status  # what this browser's login verified
-        refresh(self.screen, list(directory.items()), now.resource, self.work.allowed)
+        refresh(self.screen, list(directory.items()), now.resource, self.work.allowed, now.away)

@@ -129,6 +129,13 @@ def test_a_resource_out_of_reach_and_back_in_the_status_bar(plant: Plant) -> Non
             r"Tank1 OUT OF REACH since \d\d:\d\d:\d\d: the values shown are the last it sent",
             banner.strip(),
         ), banner
+        # the Resources screen lists it no more, and no command is offered for it
+        wait_until(
+            "no Tank1 row",
+            lambda: "Tank1" not in text_of(page, '[data-testid="resources"]'),
+        )
+        assert not page.get_by_role("button", name="Stop", exact=True).first.is_enabled()
+        assert "Tank1 is out of reach" in text_of(page, '[data-testid="commands-disabled"]')
         shoot_both(page, "status-out-of-reach")
         with runtime_process("Tank1", plant.state, plant.zenoh, "--modbus-port", "0"):
             wait_until(
