@@ -6,8 +6,8 @@ signature, stamp newer than the last taken, the publisher's pinned key, every va
 type its variable has) and becomes one immutable `Delivery` of all the subscription's
 variables, handed over with one reference assignment. `run`, on the I/O thread, wakes
 when the last message taken goes stale: no message taken for `timeout_ms` puts the safe
-values in place then. A message of a publisher that does not run (STOP, ERROR STOP) is taken as stale at
-once. The cycle never waits for either.
+values in place then. A message of a publisher that does not run (STOP, ERROR STOP) is
+taken as stale at once. The cycle never waits for either.
 """
 
 from __future__ import annotations
