@@ -194,8 +194,10 @@ def test_values_flow_and_a_stale_publisher_gives_safe_values(tmp_path: Path) -> 
         wait_for(lambda: "does not verify" in (_subscription(consumer).last_error or ""))
         # and bytes that are no message at all: refused, and the resource cycles on
         for garbage in (b"[" * 100_000, b"\xff" * 300_000, b"{}"):
-            session.put(exchange_key("Producer", "levels"), garbage)
-        wait_for(lambda: _subscription(consumer).failures >= refused_before + 5)
+            before = _subscription(consumer).failures
+            _put(session, garbage)
+            wait_for(lambda: _subscription(consumer).failures > before)  # noqa: B023
+        assert _subscription(consumer).failures >= refused_before + 5
         assert _values(consumer) == SAFE
         cycle = consumer.ask(GetStatus()).status.cycle
         wait_for(lambda: consumer.ask(GetStatus()).status.cycle > cycle + 10)
@@ -214,4 +216,15 @@ def _forge(session: zenoh.Session, values: dict[str, list[Any]], claimed_key: st
     payload = encode("Producer", "levels", True, claimed_key or signer.public_key, entries)
     stamp = stamp_bytes(1 << 40, 1)  # newer than anything the publisher stamped
     attachment = stamp + signer.sign(stamped(stamp, payload))
-    session.put(exchange_key("Producer", "levels"), payload, attachment=attachment)
+    _put(session, payload, attachment)
+
+
+def _put(session: zenoh.Session, payload: bytes, attachment: bytes | None = None) -> None:
+    """On the publication's key, never dropped (Zenoh drops a put under congestion unless
+    told to block: a test's message must arrive)."""
+    session.put(
+        exchange_key("Producer", "levels"),
+        payload,
+        attachment=attachment,
+        congestion_control=zenoh.CongestionControl.BLOCK,
+    )
