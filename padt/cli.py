@@ -746,10 +746,11 @@ def _wait_seconds(text: str) -> float:
 
 
 def _fleet_commands(sub: Any) -> None:
-    """fleet status, fleet load (docs/cli.md)."""
+    """fleet status, fleet load, fleet reload (docs/cli.md)."""
     fleet = sub.add_parser(
         "fleet",
-        help="every resource on the router mesh: one status table; one project into several",
+        help="every resource on the router mesh: one status table; one project into several, "
+        "loaded or changed online",
     )
     verbs = fleet.add_subparsers(dest="verb", required=True, metavar="VERB")
     status = verbs.add_parser(
@@ -814,6 +815,63 @@ def _fleet_commands(sub: Any) -> None:
     load.add_argument("--json", action="store_true", help="print one JSON object at the end")
     _backup_option(load)
     load.set_defaults(func=_lazy("padt.fleet", "load"))
+
+    reload = verbs.add_parser(
+        "reload",
+        help="compile the project for each resource, show each reload plan, change them "
+        "online one after another",
+        description="An online change of several running resources, in the order given: "
+        "each gets the project compiled for it (as fleet load) and its reload plan against "
+        "what it runs. --preview only shows the plans; without --yes nothing changes; with "
+        "--yes each is reloaded in turn, and the first whose plan needs STOP and a download, "
+        "that refuses, gives no answer or whose backup cannot be written ends it: those "
+        "after it are not tried.",
+        epilog="exit codes: 0 every resource done (--preview: every plan possible), 1 one "
+        "refused (the others after it not tried), a plan not possible, or no --yes, 2 bad "
+        "options or the project cannot be read",
+    )
+    reload.add_argument("paths", nargs="+", type=Path, metavar="PATH")
+    reload.add_argument(
+        "--resource",
+        action="append",
+        required=True,
+        type=resource_argument,
+        metavar="NAME",
+        help="a resource to change online, in this order; repeat for each",
+    )
+    add_zenoh_options(reload, "Zenoh router of the mesh")
+    reload.add_argument(
+        "--user",
+        metavar="NAME",
+        help="log in to each resource as NAME (password from PADT_PASSWORD, else asked for once)",
+    )
+    reload.add_argument(
+        "--preview", action="store_true", help="only show each plan; change nothing"
+    )
+    reload.add_argument(
+        "--yes",
+        action="store_true",
+        help="confirm the reloads (without it, only the plans are shown and exit code is 1)",
+    )
+    reload.add_argument(
+        "--rename",
+        action="append",
+        default=[],
+        type=_rename,
+        metavar="OLD=NEW",
+        help="carry the values of OLD over to NEW in each resource; repeatable",
+    )
+    reload.add_argument(
+        "--keep-online",
+        action="append",
+        default=[],
+        metavar="PARAM",
+        help="where the reload resets PARAM to the project's value, set its online value "
+        "again right after the switch-over; repeatable",
+    )
+    reload.add_argument("--json", action="store_true", help="print one JSON object at the end")
+    _backup_option(reload)
+    reload.set_defaults(func=_lazy("padt.fleet", "reload"))
 
 
 def _online_test_commands(sub: Any) -> None:

@@ -73,11 +73,12 @@ def load(args: argparse.Namespace) -> int:
     return run("load", args, body)
 
 
-def plan_lines(preview: OnlineChangePreview) -> list[str]:
+def plan_lines(preview: OnlineChangePreview, with_diff: bool = True) -> list[str]:
     """The reload preview: every value that is not simply kept, the hazards, the summary,
     the online parameter settings it resets, why it cannot be made online, and the source
-    diff since the running configuration. Kept values are only counted: they are most of a
-    plan, and nothing happens to them."""
+    diff since the running configuration (`with_diff` False: only the files that differ,
+    counted). Kept values are only counted: they are most of a plan, and nothing happens
+    to them."""
     plan = preview.plan
     lines = [f"reload preview: configuration CRC {plan.old_crc} -> {plan.new_crc}"]
     for what, names in (
@@ -117,6 +118,12 @@ def plan_lines(preview: OnlineChangePreview) -> list[str]:
         lines += [f"  {why}" for why in preview.why_not]
     if not preview.running_from:
         lines.append("source diff: the running configuration's sources are not known here")
+    elif not with_diff:
+        differ = "differs" if len(preview.diff) == 1 else "differ"
+        lines.append(
+            f"source diff against {preview.running_from}: "
+            f"{counted(len(preview.diff), 'file')} {differ}"
+        )
     else:
         lines.append(f"source diff against {preview.running_from}:")
         for diff in preview.diff:

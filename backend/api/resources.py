@@ -19,7 +19,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from backend.api.auth import Credentials, ReadOnly, ReadWrite, Service
 from backend.engineering import recordings
-from backend.engineering.fleet import fleet_done
+from backend.engineering.fleet import FleetReload, fleet_done, reload_fleet_done
 from backend.engineering.literals import LiteralError, literals_of, parse_literal
 from backend.engineering.recordings import RecordingSpec, TriggerError
 from backend.engineering.reload import ReloadOptions, needs_confirmation, rename_map
@@ -139,6 +139,56 @@ def load_fleet(body: FleetLoadRequest, caller: ReadWrite, service: Service) -> A
         "done": fleet_done(results),
         "resources": [result.as_json() for result in results],
     }
+
+
+class FleetReloadPreviewRequest(FleetLoadRequest):
+    renames: dict[str, str] = Field(
+        default_factory=dict,
+        description="OLD name -> NEW name: values of OLD go to NEW, in each resource",
+    )
+
+
+class FleetReloadRequest(FleetReloadPreviewRequest):
+    expected_crcs: dict[str, Annotated[str, Field(pattern=r"^[0-9A-Fa-f]{8}$")]] = Field(
+        description="each resource's `old_crc` of the preview confirmed, by its name: its "
+        "reload is refused when it runs another configuration by now",
+    )
+    keep_online: list[Annotated[str, Field(max_length=64)]] = Field(
+        default_factory=list,
+        max_length=32,
+        description="parameters whose online value is set again right after the reload, "
+        "in each resource whose reload resets them",
+    )
+
+
+def _fleet_reload(results: list[FleetReload]) -> dict[str, Any]:
+    return {
+        "done": reload_fleet_done(results),
+        "possible": all(result.possible for result in results),
+        "resources": [result.as_json() for result in results],
+    }
+
+
+@router.post(
+    "/reload/preview",
+    summary="The reload plan of one project in each of several resources (nothing changes)",
+)
+def preview_reload_fleet(
+    body: FleetReloadPreviewRequest, caller: ReadWrite, service: Service
+) -> Any:
+    renames = _renames(body.renames)
+    results = service.reload_fleet(caller, body.resources, body.project, renames, None, [])
+    return _fleet_reload(results)
+
+
+@router.post("/reload", summary="Reload one project into several resources in turn (online)")
+def reload_fleet(body: FleetReloadRequest, caller: ReadWrite, service: Service) -> Any:
+    renames = _renames(body.renames)
+    expected = {name: crc.upper() for name, crc in body.expected_crcs.items()}
+    results = service.reload_fleet(
+        caller, body.resources, body.project, renames, expected, body.keep_online
+    )
+    return _fleet_reload(results)
 
 
 @router.post("/{resource}/login", summary="Log in to the resource (its own accounts)")

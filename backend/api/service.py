@@ -26,7 +26,7 @@ from backend.engineering.download import (
     download_checked,
     plan_download,
 )
-from backend.engineering.fleet import FleetLoad, download_fleet
+from backend.engineering.fleet import FleetLoad, FleetReload, download_fleet, reload_fleet
 from backend.engineering.online_change import (
     OnlineChanged,
     OnlineChangePreview,
@@ -49,6 +49,7 @@ from runtime.contract.protocol import Command, GetParameters, GetStatus, Logout
 from runtime.contract.refusal import Refusal
 
 R = TypeVar("R")
+Fleet = TypeVar("Fleet", FleetLoad, FleetReload)  # what a fleet operation did to a resource
 
 
 @dataclass(frozen=True)
@@ -179,7 +180,36 @@ class PadtService:
             )
         return [self._as_caller_reads(caller, result) for result in results]
 
-    def _as_caller_reads(self, caller: Caller, result: FleetLoad) -> FleetLoad:
+    def reload_fleet(
+        self,
+        caller: Caller,
+        resources: list[str],
+        project: str,
+        renames: dict[str, str],
+        expected: dict[str, str] | None,
+        keep_online: list[str],
+    ) -> list[FleetReload]:
+        """Each resource's reload plan of the project compiled for it (`expected` None: a
+        preview, nothing changed); else each reloaded in turn, provided it still runs the
+        configuration of `expected`, up to the first refusal (`fleet.reload_fleet`)."""
+        path = self.project_path(project)
+        how = f"REST API: fleet reload of project {project} by {caller.user}"
+        with _project_errors():
+            results = reload_fleet(
+                [path],
+                resources,
+                lambda name: self.client(caller, name),
+                self.backup_dir,
+                how,
+                confirmed=expected is not None,
+                renames=renames,
+                keep_online=keep_online,
+                expected=expected,
+                projects=self.projects,
+            )
+        return [self._as_caller_reads(caller, result) for result in results]
+
+    def _as_caller_reads(self, caller: Caller, result: Fleet) -> Fleet:
         """A resource's `unauthenticated` as `resource_refusal` words it."""
         if result.code != "unauthenticated":
             return result

@@ -13,13 +13,21 @@ given, each the project compiled for it (its name in place of the project's `[re
 name`: `project.for_resource`) through the compile-twice gate, downloaded and backed up.
 The first resource that refuses (the compile, its state, its level, no answer) or whose
 backup cannot be written ends it: the resources after it are not tried.
+
+**One online change of several resources** (`reload_fleet`). The same, for a reload: each
+resource gets the project compiled for it and its reload plan against what it runs
+(`preview_online_change`); a preview only (`confirmed` False) previews every one and
+changes nothing; confirmed, each is reloaded in turn, and the first whose plan needs STOP
+and a download, whose reload is refused, that does not answer, whose backup cannot be
+written or whose kept online values cannot be set again ends it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -29,7 +37,13 @@ import zenoh
 from backend.engineering.compile_gate import compile_checked
 from backend.engineering.download import download_checked
 from backend.engineering.known_resources import KnownResources
+from backend.engineering.online_change import (
+    OnlineChangePreview,
+    online_change,
+    preview_online_change,
+)
 from backend.engineering.project import ProjectError, load_project
+from backend.engineering.reload import ReloadOptions, needs_confirmation
 from backend.engineering.resource_client import ResourceClient, ResourceUnreachable
 from runtime.contract import signatures
 from runtime.contract.keyspace import (
@@ -39,6 +53,7 @@ from runtime.contract.keyspace import (
     resource_of,
     status_key,
 )
+from runtime.contract.parameters import RESOURCE_BY_NAME
 from runtime.contract.protocol import ResourceState, Status, decode_publication
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import encode
@@ -308,3 +323,211 @@ def _load_one(
 
 def fleet_done(results: Sequence[FleetLoad]) -> bool:
     return all(r.outcome == "done" and r.backup_error is None for r in results)
+
+
+# ---- one online change of several resources
+
+ReloadOutcome = Literal["done", "refused", "not tried", "previewed"]
+
+
+@dataclass(frozen=True)
+class FleetReload:
+    """What the fleet reload did to one resource: `previewed` (a preview only: `preview`
+    says whether the plan is possible), `done`, `refused` or `not tried`."""
+
+    resource: str
+    outcome: ReloadOutcome
+    preview: OnlineChangePreview | None = None  # its plan, when the resource gave one
+    code: str | None = None  # why refused: the refusal's code
+    message: str | None = None
+    old_crc: str | None = None  # done: the configuration it ran, and runs now
+    new_crc: str | None = None
+    pause_us: float | None = None
+    carried: int | None = None
+    state: str | None = None  # its state after the reload
+    backup: Path | None = None
+    backup_error: str | None = None  # done, but its backup could not be written
+    kept_online: tuple[str, ...] = field(default=())
+    not_kept_online: tuple[str, ...] = field(default=())  # done, these not set again
+    diagnostics: tuple[str, ...] = field(default=())  # of a project that does not compile
+
+    @property
+    def complete(self) -> bool:
+        """Done in full: reloaded, backed up, every kept online value set again."""
+        return self.outcome == "done" and self.backup_error is None and not self.not_kept_online
+
+    @property
+    def possible(self) -> bool:
+        """A plan came, and it can be made online."""
+        return self.preview is not None and self.preview.possible
+
+    def as_json(self) -> dict[str, Any]:
+        preview = self.preview
+        plan: dict[str, Any] = {
+            "possible": False,
+            "plan": None,
+            "risks": [],
+            "why_not_online": [],
+            "parameter_resets": [],
+            "running_sources": None,
+        }
+        if preview is not None:
+            plan = {
+                "possible": preview.possible,
+                "plan": encode(preview.plan),
+                "risks": needs_confirmation(preview.plan),
+                "why_not_online": list(preview.why_not),
+                "parameter_resets": [dataclasses.asdict(reset) for reset in preview.resets],
+                "running_sources": preview.running_from or None,
+            }
+        return {
+            "resource": self.resource,
+            "outcome": self.outcome,
+            "code": self.code,
+            "message": self.message,
+            **plan,
+            "old_crc": self.old_crc,
+            "new_crc": self.new_crc,
+            "pause_us": self.pause_us,
+            "carried": self.carried,
+            "state": self.state,
+            "backup": self.backup.name if self.backup is not None else None,
+            "backup_error": self.backup_error,
+            "kept_online": list(self.kept_online),
+            "not_kept_online": list(self.not_kept_online),
+            "diagnostics": list(self.diagnostics),
+        }
+
+
+def keep_online_refusal(names: Sequence[str]) -> Refusal | None:
+    """Why names to keep online are not: each must be a resource parameter that changes
+    online (which ones a reload resets differs from resource to resource)."""
+    for name in names:
+        spec = RESOURCE_BY_NAME.get(name)
+        if spec is None or not spec.online:
+            return Refusal("bad_request", f"{name[:64]} is no resource parameter set online")
+    return None
+
+
+def reload_fleet(
+    paths: Sequence[Path],
+    targets: Sequence[str],
+    client_of: Callable[[str], ResourceClient],
+    backups: Path,
+    how: str,
+    *,
+    confirmed: bool,
+    renames: Mapping[str, str] | None = None,
+    keep_online: Sequence[str] = (),
+    expected: Mapping[str, str] | None = None,
+    projects: Mapping[str, Path] | None = None,
+    told: Callable[[FleetReload], None] | None = None,
+) -> list[FleetReload]:
+    """The online change of the project of `paths` in each resource of `targets`, each
+    compiled for it. Not `confirmed`: every resource's plan, nothing changed (`previewed`,
+    or `refused` when no plan came). `confirmed`: each previewed and reloaded in turn,
+    stopping at the first that is not done in full (`FleetReload.complete`); a plan that
+    needs STOP and a download is refused `needs_download` without a reload being tried.
+
+    `renames` NEW -> OLD, the same for each; `keep_online` the parameters whose online
+    value is set again after the switch-over where the reload resets them; `expected`
+    each resource's configuration CRC of the plan its caller confirmed (the reload is
+    refused `changed` when it runs another by now), else the CRC of the plan just made.
+    `client_of`, `backups`, `how`, `told` and what is raised before anything is sent are
+    as for `download_fleet`, and names to keep that are no online parameters, or
+    `expected` not naming each resource, are refused too."""
+    wrong = fleet_refusal(targets) or keep_online_refusal(keep_online)
+    if wrong is None and expected is not None and set(expected) != set(targets):
+        wrong = Refusal("bad_request", "give the expected CRC of each resource, and only them")
+    if wrong is not None:
+        raise wrong
+    load_project(list(paths))  # an unreadable project: nothing tried, nothing sent
+    results: list[FleetReload] = []
+    stopped = False
+    for name in targets:
+        if stopped:
+            result = FleetReload(name, "not tried")
+        else:
+            result = _reload_one(
+                paths, name, client_of, backups, how, confirmed, dict(renames or {}),
+                keep_online, (expected or {}).get(name), projects or {},
+            )  # fmt: skip
+            stopped = confirmed and not result.complete
+        results.append(result)
+        if told is not None:
+            told(result)
+    return results
+
+
+def _reload_one(
+    paths: Sequence[Path],
+    name: str,
+    client_of: Callable[[str], ResourceClient],
+    backups: Path,
+    how: str,
+    confirmed: bool,
+    renames: dict[str, str],
+    keep_online: Sequence[str],
+    expected: str | None,
+    projects: Mapping[str, Path],
+) -> FleetReload:
+    preview = None
+    try:
+        checked = compile_checked(paths, name)
+        client = client_of(name)
+        preview = preview_online_change(
+            client, checked, checked.project.name, renames, backups, projects
+        )
+        plan = preview.plan
+        if not confirmed:
+            return FleetReload(name, "previewed", preview)
+        if plan.refusals:
+            raise Refusal("needs_download", "needs STOP and download: " + "; ".join(plan.refusals))
+        options = ReloadOptions(renames, expected or plan.old_crc)
+        keep = [reset for reset in preview.resets if reset.name in keep_online]
+        changed = online_change(client, checked, options, keep, backups, f"{how} (resource {name})")
+    except Refusal as refused:
+        diagnostics = tuple(str(d) for d in refused.details.get("diagnostics", ()))
+        return FleetReload(
+            name, "refused", preview, refused.code, refused.message, diagnostics=diagnostics
+        )
+    except ProjectError as exc:  # the project changed meanwhile and can no longer be read
+        return FleetReload(name, "refused", preview, "project", str(exc))
+    except ResourceUnreachable as exc:
+        return FleetReload(name, "refused", preview, "unreachable", str(exc))
+    done = changed.reloaded
+    outcome = done.reply.reload
+    return FleetReload(
+        name,
+        "done",
+        preview,
+        old_crc=outcome.old_crc,
+        new_crc=outcome.new_crc,
+        pause_us=outcome.pause_us,
+        carried=outcome.carried,
+        state=str(done.reply.status.state),
+        backup=done.backup.path,
+        backup_error=done.backup.error,
+        kept_online=changed.kept,
+        not_kept_online=changed.not_kept,
+    )
+
+
+def reload_fleet_done(results: Sequence[FleetReload]) -> bool:
+    return all(result.complete for result in results)
+
+
+def fleet_confirmation(results: Sequence[FleetReload]) -> str:
+    """What a confirmation of the previewed fleet reload accepts, resource by resource:
+    `LineA: 1 value initialised; LineB: needs STOP and download` ("" when nothing)."""
+    said = []
+    for result in results:
+        if result.preview is None:
+            continue
+        if result.preview.plan.refusals:
+            said.append(f"{result.resource}: needs STOP and download")
+            continue
+        risks = needs_confirmation(result.preview.plan)
+        if risks:
+            said.append(f"{result.resource}: {', '.join(risks)}")
+    return "; ".join(said)

@@ -531,6 +531,38 @@ def test_two_resources_on_one_router_and_a_killed_one_leaves_the_list(tmp_path: 
         error(site.call("POST", "/api/resources/load", engineer, json=twice), 400, "bad_request")
         none = {"project": "plant_v2", "resources": []}
         error(site.call("POST", "/api/resources/load", engineer, json=none), 400, "bad_request")
+
+        # a fleet reload: the plans first (nothing changes), then each provided it still
+        # runs the configuration of the plan confirmed; a stale one ends it
+        plants = {"project": "plant_v2", "resources": ["Plant", "Ghost"]}
+        reply = site.call("POST", "/api/resources/reload/preview", engineer, json=plants)
+        assert reply.status_code == 200, reply.text
+        previews = reply.json()["resources"]
+        assert [(r["outcome"], r["possible"]) for r in previews] == [
+            ("previewed", True),
+            ("refused", False),
+        ]
+        plant_crc = previews[0]["plan"]["old_crc"]
+        for path in ("/api/resources/reload/preview", "/api/resources/reload"):
+            error(site.call("POST", path, reader, json=plants), 403, "forbidden")
+        assert site.call("GET", f"{R}/status", engineer).json()["crc"] == plant_crc
+        stale = {**plants, "expected_crcs": {"Plant": "0BADC0DE", "Ghost": "00000000"}}
+        report = site.call("POST", "/api/resources/reload", engineer, json=stale).json()
+        assert [(r["outcome"], r["code"]) for r in report["resources"]] == [
+            ("refused", "changed"),
+            ("not tried", None),
+        ]
+        missing = {**plants, "expected_crcs": {"Plant": plant_crc}}
+        error(
+            site.call("POST", "/api/resources/reload", engineer, json=missing), 400, "bad_request"
+        )
+        confirmed = {**plants, "resources": ["Plant"], "expected_crcs": {"Plant": plant_crc}}
+        report = site.call("POST", "/api/resources/reload", engineer, json=confirmed).json()
+        assert report["done"] is True, report
+        (done,) = report["resources"]
+        assert (done["outcome"], done["old_crc"], done["state"]) == ("done", plant_crc, "RUN")
+        assert site.call("GET", f"{R}/status", engineer).json()["crc"] == done["new_crc"]
+        assert done["backup"].startswith("Plant_" + done["new_crc"])
         ws_url = site.url.replace("http://", "ws://") + f"{R}/live"
         with connect(ws_url) as ws:
             ws.send(json.dumps({"token": token, "variables": ["P.n"], "period_ms": 50}))

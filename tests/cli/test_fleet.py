@@ -1,6 +1,7 @@
 """A fleet on one router: three real runtime processes, `padt fleet status` (signed
-statuses only, the host of each) and `padt fleet load` (one project, each resource its own
-compile, stopping at the first refusal), and `padt status` naming the host."""
+statuses only, the host of each), `padt fleet load` and `padt fleet reload` (one project,
+each resource its own compile, stopping at the first refusal), and `padt status` naming
+the host."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from typing import Any
 
 import pytest
 
-from backend.engineering.project import user_entry
+from backend.engineering.project import compile_project, for_resource, load_project, user_entry
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
@@ -25,6 +26,7 @@ from tests.support.runtime_process import (
     know_setup_secret,
     router,
     runtime_process,
+    store_artifact,
     wait_until_answering,
 )
 
@@ -223,3 +225,95 @@ def test_bad_fleet_options(tmp_path: Path, zenoh_endpoint: str) -> None:
     with router(zenoh_endpoint):
         empty = padt("fleet", "status", "--zenoh", zenoh_endpoint)
     assert empty.returncode == 1 and "no resource is online" in empty.stderr
+
+
+@pytest.fixture
+def running_fleet(tmp_path: Path, zenoh_endpoint: str) -> Iterator[dict[str, ResourceClient]]:
+    """The three runtimes in RUN from their stored configurations: the fleet's project
+    compiled for each, LineB's with another safety time (not changed online); a client of
+    each, logged in as admin."""
+    project = write_project(tmp_path / "project")
+    other = write_project(tmp_path / "other")
+    toml = other / "padt.toml"
+    toml.write_text(
+        toml.read_text().replace("safety_operation", "safety_time_ms = 700\nsafety_operation")
+    )
+    with ExitStack() as stack:
+        stack.enter_context(router(zenoh_endpoint))
+        for name in FLEET:
+            folder = other if name == "LineB" else project
+            compiled = compile_project(for_resource(load_project([folder]), name))
+            assert compiled.artifact is not None
+            state_dir = tmp_path / "state" / name
+            store_artifact(state_dir, compiled.artifact)
+            stack.enter_context(
+                runtime_process(name, state_dir, zenoh_endpoint, "--no-native-code")
+            )
+        session = stack.enter_context(client_session(zenoh_endpoint))
+        clients = {name: ResourceClient(session, name) for name in FLEET}
+        for client in clients.values():
+            wait_until_answering(client)
+            client.login("admin", PASSWORD)
+            if state(client)["state"] != "RUN":
+                assert client.command("start")["ok"]
+        yield clients
+
+
+def test_fleet_reload(
+    running_fleet: dict[str, ResourceClient], tmp_path: Path, zenoh_endpoint: str
+) -> None:
+    """`padt fleet reload`: the plans previewed change nothing, nor do they without --yes;
+    confirmed, LineA is changed online, LineB's plan needs a download (its safety time
+    differs) and ends the run, LineC is not tried."""
+    fleet = running_fleet
+    crcs = {name: state(client)["crc"] for name, client in fleet.items()}
+    backups = tmp_path / "backups"
+    changed = write_project(tmp_path / "changed", start=100)
+    targets = [word for name in FLEET for word in ("--resource", name)]
+    command = ["fleet", "reload", str(changed), "--zenoh", zenoh_endpoint]
+    command += ["--backup-dir", str(backups), "--user", "admin"]
+    admin = {"PADT_PASSWORD": PASSWORD}
+
+    # the plans only: each compiled for its resource, LineB's not possible
+    preview = padt(*command, *targets, "--preview", "--json", env=admin)
+    assert preview.returncode == 1, preview.stderr
+    report = json.loads(preview.stdout)
+    assert (report["done"], report["possible"]) == (False, False)
+    plans = [(r["resource"], r["outcome"], r["possible"]) for r in report["resources"]]
+    assert plans == [
+        ("LineA", "previewed", True),
+        ("LineB", "previewed", False),
+        ("LineC", "previewed", True),
+    ]
+    assert report["resources"][0]["plan"]["old_crc"] == crcs["LineA"]
+    assert "safety_time_ms changes from 700 to" in report["resources"][1]["why_not_online"][0]
+
+    # without --yes: the plan, and nothing changed either
+    unconfirmed = padt(*command, "--resource", "LineA", env=admin)
+    assert unconfirmed.returncode == 1
+    assert unconfirmed.stderr.strip().endswith("nothing changed; confirm with --yes")
+    lines = unconfirmed.stdout.splitlines()
+    assert lines[0].startswith(f"LineA: reload preview: configuration CRC {crcs['LineA']} -> ")
+    assert "  summary: " in unconfirmed.stdout
+    assert {name: state(client)["crc"] for name, client in fleet.items()} == crcs
+    assert not backups.exists()
+
+    # confirmed: LineA done, LineB refused (its plan), LineC not tried
+    confirmed = padt(*command, *targets, "--yes", env=admin)
+    assert confirmed.returncode == 1, confirmed.stderr
+    outcomes = [line for line in confirmed.stdout.splitlines() if not line.startswith(" ")]
+    assert outcomes[0].startswith("LineA: reload preview: ")
+    assert outcomes[1].startswith(f"LineA: done, configuration CRC {crcs['LineA']} -> ")
+    assert ", RUN, backup " in outcomes[1]
+    assert outcomes[2].startswith("LineB: reload preview: ")
+    assert outcomes[3].startswith("LineB: refused (needs_download): needs STOP and download: ")
+    assert outcomes[4:] == ["LineC: not tried"]
+    after = {name: state(client) for name, client in fleet.items()}
+    assert after["LineA"]["crc"] != crcs["LineA"] and after["LineA"]["state"] == "RUN"
+    assert (after["LineB"]["crc"], after["LineC"]["crc"]) == (crcs["LineB"], crcs["LineC"])
+    (archive,) = backups.glob("*.zip")
+    with zipfile.ZipFile(archive) as opened:
+        manifest = json.loads(opened.read("MANIFEST.json"))
+    assert manifest["resource"] == "LineA"
+    assert manifest["crc"]["configuration"] == after["LineA"]["crc"]
+    assert manifest["command"].startswith("padt fleet reload ")
