@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
+from runtime.contract.state_folder import NATIVE_CACHE_ENV
 from runtime.native.tier import NativeTier
 from tests.support.forked_cli import run_command
 from tests.support.ports import free_port as free_port  # tests import it from here
@@ -93,13 +94,26 @@ def known_resources(
     return path
 
 
+@pytest.fixture(autouse=True, scope="session")
+def one_native_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
+    """One cache of the native tier's compiled modules for every runtime and demo the tests
+    start (PADT_NATIVE_CACHE, docs/native-code.md): each has a fresh state folder, and with a
+    cache of its own each would translate and compile the same bodies again (about 0.7 s of
+    CPU per start of the demo). The tier still runs everywhere, as `padt runtime` runs it;
+    what is built where by default is tests/runtime/native/test_native_process.py's."""
+    path = tmp_path_factory.mktemp("native-cache")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv(NATIVE_CACHE_ENV, str(path))
+        yield path
+
+
 # The native tier needs a C compiler and Python's headers. Both are on the development
 # machines and in CI (scripts/install-c-compiler.sh, which `make test` runs); where they are
 # missing the tests skip with the reason, except in CI, where they must run.
 @pytest.fixture(scope="session")
-def native_tier(tmp_path_factory: pytest.TempPathFactory) -> NativeTier:
-    """One tier (and one cache of compiled modules) for the whole session."""
-    tier = NativeTier(tmp_path_factory.mktemp("native-cache"))
+def native_tier(one_native_cache: Path) -> NativeTier:
+    """One tier (and the one cache of compiled modules) for the whole session."""
+    tier = NativeTier(one_native_cache)
     if not tier.available:
         if os.environ.get("CI") == "true":
             pytest.fail("the native tier needs a C compiler and Python.h; CI must have both")

@@ -5,7 +5,12 @@ one it powers up with (the demo does that)."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+
+# A folder for the native tier's compiled modules instead of STATE_DIR/native: runtimes that
+# build the same bodies (a test session's hundreds of runtimes and demos) share one cache.
+NATIVE_CACHE_ENV = "PADT_NATIVE_CACHE"
 
 
 def artifact_path(state_dir: Path) -> Path:
@@ -29,8 +34,10 @@ def identity_path(state_dir: Path) -> Path:
 
 
 def native_path(state_dir: Path) -> Path:
-    """The compiled modules of the native tier (docs/native-code.md), a cache."""
-    return state_dir / "native"
+    """The compiled modules of the native tier (docs/native-code.md), a cache: the folder
+    PADT_NATIVE_CACHE names when it is set, else `native` in the state folder."""
+    shared = os.environ.get(NATIVE_CACHE_ENV)
+    return Path(shared) if shared else state_dir / "native"
 
 
 def recordings_path(state_dir: Path) -> Path:

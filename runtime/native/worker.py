@@ -105,6 +105,18 @@ def _known(entry: Path) -> dict[str, Any] | None:
     return answer
 
 
+def _write_atomically(path: Path, text: str) -> None:
+    """`path` with `text`, whole or not at all: runtimes that share a cache (PADT_NATIVE_CACHE)
+    may write and read the same entry at once, and a reader must never see half of it."""
+    scratch = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        scratch.write_text(text)
+        os.replace(scratch, path)
+    except OSError:  # not kept (a full disk, a prune meanwhile): translated again when needed
+        with contextlib.suppress(OSError):
+            scratch.unlink()
+
+
 def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
     """Per program and function block: the POU, its module (name and built shared object)
     when a body translated, the bodies left to Python with the reasons, a build failure."""
@@ -138,7 +150,7 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
                 else:
                     answer.update(module=translated.module, path=str(path))
             if "failed" not in answer:
-                known.write_text(json.dumps(answer))
+                _write_atomically(known, json.dumps(answer))
         answers.append(answer)
     prune(cache)
     return {"units": answers}

@@ -7,8 +7,10 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import pytest
+
 from runtime.contract.protocol import GetStatus
-from runtime.contract.state_folder import events_path, native_path
+from runtime.contract.state_folder import NATIVE_CACHE_ENV, events_path, native_path
 from runtime.native.tier import NativeTier
 from tests.support.runtime_process import running_resource, write_demo_artifact
 
@@ -19,8 +21,9 @@ def _events(state_dir: Path) -> str:
 
 
 def test_the_runtime_builds_the_demo_and_runs_it_as_c_by_default(
-    tmp_path: Path, zenoh_endpoint: str, native_tier: NativeTier
+    tmp_path: Path, zenoh_endpoint: str, native_tier: NativeTier, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    monkeypatch.delenv(NATIVE_CACHE_ENV)  # as a user starts it: the cache in the state folder
     write_demo_artifact(tmp_path)
     with running_resource("Tank1", tmp_path, zenoh_endpoint) as (process, _):
         deadline = time.monotonic() + 120
@@ -33,9 +36,19 @@ def test_the_runtime_builds_the_demo_and_runs_it_as_c_by_default(
     assert list(native_path(tmp_path).rglob("*.so"))
 
 
-def test_with_no_native_code_the_runtime_runs_everything_as_python(
-    tmp_path: Path, zenoh_endpoint: str
+def test_a_cache_named_in_the_environment_serves_every_state_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    monkeypatch.setenv(NATIVE_CACHE_ENV, str(tmp_path / "shared"))
+    assert native_path(tmp_path / "a") == native_path(tmp_path / "b") == tmp_path / "shared"
+    monkeypatch.setenv(NATIVE_CACHE_ENV, "")  # empty: as if not set
+    assert native_path(tmp_path / "a") == tmp_path / "a" / "native"
+
+
+def test_with_no_native_code_the_runtime_runs_everything_as_python(
+    tmp_path: Path, zenoh_endpoint: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv(NATIVE_CACHE_ENV)
     write_demo_artifact(tmp_path)
     with running_resource("Tank1", tmp_path, zenoh_endpoint, "--no-native-code") as (_, client):
         before = client.ask(GetStatus()).status.cycle
