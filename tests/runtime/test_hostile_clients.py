@@ -16,6 +16,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import pytest
 import zenoh
 
 from backend.compiler.pipeline import compile_sources
@@ -396,6 +397,8 @@ def test_readers_at_their_watch_quota_are_all_served(tmp_path: Path, zenoh_endpo
             time.sleep(0.1)
 
 
+# a soak (12,000 messages, 37 s: the longest test of tests/runtime), run with -m slow
+@pytest.mark.slow
 def test_memory_stays_flat_under_ten_thousand_hostile_messages(
     tmp_path: Path, zenoh_endpoint: str
 ) -> None:
