@@ -266,7 +266,13 @@ class Workspace:
     # ---- actions
     def _log_in_to_resource(self) -> None:
         resource = self.selected()
-        if resource is None:
+        if resource is None:  # said, not silently ignored: the user may wonder why
+            self.session.client.add_notification(
+                "Login to a resource refused",
+                "no resource is online on this PADT's Zenoh yet: it is listed once it is",
+                color="red",
+                auto_close_seconds=8,
+            )
             return
         user, password = self.resource_user.value.strip(), self.resource_password.value
         set_value(self.resource_password, "")  # not kept in the browser either

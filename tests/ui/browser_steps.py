@@ -92,6 +92,8 @@ def log_in_to_resource(page: Page, user: str, password: str) -> None:
         page.get_by_role("button", name="Log in to resource").wait_for(timeout=START_S * 1000)
     except PlaywrightError:  # seen rarely under load: say what the page showed instead
         raise AssertionError(f"no workspace; the page shows: {page.inner_text('body')}") from None
+    # as a user does: the resource listed (chosen) before the login to it is tried
+    wait_until("a resource is chosen", lambda: bool(_login_note(page)), timeout_s=START_S)
     # viser sends a field's value at most every 50 ms: a click right after typing may reach
     # the server before the password does (then refused, the field emptied): typed again
     deadline = time.monotonic() + START_S
@@ -110,8 +112,8 @@ def log_in_to_resource(page: Page, user: str, password: str) -> None:
             except PlaywrightError:
                 shown = "(no resource login on the page)"
             raise AssertionError(
-                f"never: the resource login is shown; it shows {shown!r}; the attempts' "
-                f"answers: {answers}; the page: {page.inner_text('body')[:2000]!r}"
+                f"never logged in to the resource; the attempts' answers: {answers}; its "
+                f"login note: {shown!r}; the page: {page.inner_text('body')[:2000]!r}"
             )
 
 
@@ -120,11 +122,14 @@ def _login_answer(page: Page) -> str:
     "no answer in 15 s"."""
     refusals = page.locator(".mantine-Notification-root", has_text="refused")
     unanswered = page.locator(".mantine-Notification-root", has_text="No answer")
+    done = page.locator(".mantine-Notification-root", has_text="done")
     deadline = time.monotonic() + 15
+    answered = False  # the green toast: it closes after 3 s
     while time.monotonic() < deadline:
         try:
-            if _logged_in(page):
+            if _login_note(page).startswith("logged in"):
                 return "logged in"
+            answered = answered or done.count() > 0
             for toasts in (refusals, unanswered):
                 if toasts.count():
                     text = " ".join(toasts.all_inner_texts())
@@ -137,11 +142,15 @@ def _login_answer(page: Page) -> str:
         except PlaywrightError:
             pass
         time.sleep(0.1)
+    if answered:  # the server answered, but the page did not follow
+        return f"done, yet the login note says {_login_note(page)!r} after 15 s"
     return "no answer in 15 s"
 
 
-def _logged_in(page: Page) -> bool:
-    return text_of(page, '[data-testid="resource-login"]').startswith("logged in")
+def _login_note(page: Page) -> str:
+    """What the workspace says of the login to the chosen resource ("" with none chosen)."""
+    note = page.locator('[data-testid="resource-login"]')
+    return note.first.inner_text(timeout=1000) if note.count() else ""
 
 
 def open_demo_as_admin(page: Page, demo: Demo) -> None:
