@@ -32,6 +32,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
+import pytest
+
 from tests.support.network_namespaces import Network, end, leftovers, network, require_namespaces
 from tests.support.runtime_process import KNOWN_SETUP_SECRET, know_setup_secret
 
@@ -476,6 +478,9 @@ def check_the_rogue(mesh: Mesh) -> None:
 # --- the test -----------------------------------------------------------------------
 
 
+# a minute of the suite's 25: run with `pytest -m slow tests/engineering/test_mesh_network.py`;
+# the exchange, the router and the access control each have tests of their own in `make test`
+@pytest.mark.slow
 def test_a_meshed_plant_network_with_tls_access_control_and_a_router_lost(
     tmp_path: Path,
 ) -> None:
