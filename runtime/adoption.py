@@ -22,10 +22,10 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from runtime.code_image import Accessor, CodeImage, slot_names
-from runtime.instances import Instances
+from runtime.code.code_image import Accessor, CodeImage, slot_names
+from runtime.code.instances import Instances
+from runtime.code.user_program import UserProgram
 from runtime.reload_plan import KEPT, ReloadPlan
-from runtime.user_program import UserProgram
 
 _VALUES = (bool, int, float, str, type(None))
 

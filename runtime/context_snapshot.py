@@ -19,7 +19,7 @@ from math import isfinite
 from operator import attrgetter
 from typing import Any
 
-from runtime.intrinsics import Reference
+from runtime.code.intrinsics import Reference
 
 # Node tags. Slot names are identifiers, so no tag can be taken for a field; a dict node is
 # told apart by its keys.

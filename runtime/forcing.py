@@ -8,13 +8,13 @@ from __future__ import annotations
 from typing import Any, Protocol
 
 from runtime.clock import Clock
+from runtime.code.intrinsics import SystemView
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.protocol import ForceInfo, ForcingState
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import format_value
 from runtime.event_recorder import EventRecorder
 from runtime.force_table import GLOBAL, ForceEntry, ForceTable
-from runtime.intrinsics import SystemView
 from runtime.variables import Variables
 
 

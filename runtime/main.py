@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from runtime.clock import RealClock
+from runtime.code.native.tier import NativeTier
 from runtime.collector import COLLECTOR
 from runtime.commissioning import setup_secret
 from runtime.configuration_store import ConfigurationStore
@@ -32,7 +33,6 @@ from runtime.event_log import EventLog
 from runtime.event_recorder import LONG_TERM_SHARES
 from runtime.field_io.modbus.request_meter import REQUESTS_PER_SECOND
 from runtime.identity import Identity
-from runtime.native.tier import NativeTier
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
 from runtime.runtime_priority import (

@@ -8,9 +8,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from runtime.code.instances import BoundVariable
 from runtime.contract.protocol import LETTER_OF_QUALITY, ProgramState, Quality
 from runtime.force_table import ForceTable
-from runtime.instances import BoundVariable
 from runtime.value_reader import value_reader
 from runtime.variables import Variables
 from runtime.watch_sets import WatchSet, WatchSets, WatchSnapshot

@@ -4,10 +4,10 @@ each an event. The other programs keep running."""
 
 from __future__ import annotations
 
+from runtime.code.user_program import UserProgram
 from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.contract.refusal import Refusal
 from runtime.resource import Resource
-from runtime.user_program import UserProgram
 
 
 def start_program(resource: Resource, name: str) -> None:

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
 
+from runtime.code.instances import BoundVariable
 from runtime.contract import protocol as p
 from runtime.contract.recording import (
     ARTIFACT_ATTACHMENT,
@@ -42,7 +43,6 @@ from runtime.contract.recording import (
 )
 from runtime.contract.refusal import Refusal
 from runtime.contract.system_variables import SYSTEM_VARIABLES
-from runtime.instances import BoundVariable
 from runtime.trace_writer import CycleGate, Inputs, Logged, TraceWriter, Values
 from runtime.value_reader import value_reader
 

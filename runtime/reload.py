@@ -25,10 +25,11 @@ from operator import attrgetter
 from typing import Any
 
 from runtime.adoption import Adoption, Graft, plan_adoption, rebind, resolve
-from runtime.code_image import Accessor, slot_names
+from runtime.code.code_image import Accessor, slot_names
+from runtime.code.instances import BoundVariable, Instances
+from runtime.code.user_program import UserProgram, share_globals
 from runtime.contract.artifact import Artifact
 from runtime.contract.values import array_shape
-from runtime.instances import BoundVariable, Instances
 from runtime.reload_plan import (
     CONVERTED,
     KEPT,
@@ -39,7 +40,6 @@ from runtime.reload_plan import (
     convert,
     rename_source,
 )
-from runtime.user_program import UserProgram, share_globals
 
 _SCALARS = (bool, int, float, str, type(None))
 CHECK_EVERY = 256  # values between two looks at the clock

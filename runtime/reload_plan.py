@@ -16,13 +16,13 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from runtime.code_image import CodeImage, VariablePath
+from runtime.code.code_image import CodeImage, VariablePath
+from runtime.code.intrinsics import SystemView
 from runtime.contract.artifact import Artifact, ChartInfo, PouCode, ResourceConfig
 from runtime.contract.exchange import ExchangeConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
 from runtime.contract.protocol import Hazard, ProgramChanges, ReloadPlanInfo, VariableChange
 from runtime.contract.values import array_shape, base_type, is_reference_type
-from runtime.intrinsics import SystemView
 
 KEPT, CONVERTED, INITIALISED, NEW, DELETED = "kept", "converted", "initialised", "new", "deleted"
 TIMED_QUALIFIERS = ("L", "D", "SD", "DS", "SL")

@@ -8,17 +8,17 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from runtime.code_image import reusing
+from runtime.code.code_image import reusing
+from runtime.code.compile_worker import COMPILE_WORKER
+from runtime.code.instances import Instances, instantiate
+from runtime.code.intrinsics import SystemView
+from runtime.code.native.tier import NativeTier
 from runtime.collector import COLLECTOR
-from runtime.compile_worker import COMPILE_WORKER
 from runtime.configuration_store import ConfigurationStore, Staged
 from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import ProgramState, ReloadOutcome
 from runtime.contract.refusal import Refusal
 from runtime.disposal import DISPOSAL
-from runtime.instances import Instances, instantiate
-from runtime.intrinsics import SystemView
-from runtime.native.tier import NativeTier
 from runtime.reload import (
     SwitchOver,
     SwitchOverTooLong,

@@ -20,6 +20,10 @@ import logging
 from typing import TYPE_CHECKING, Any, Protocol
 
 from runtime.clock import Clock
+from runtime.code.instances import Instances, instantiate, instantiated
+from runtime.code.intrinsics import EMERGENCY_STOPS, SystemView
+from runtime.code.native.tier import NativeTier
+from runtime.code.user_program import UserProgram
 from runtime.commissioning import SetupSecret
 from runtime.configuration_store import ConfigurationStore
 from runtime.contract.accounts import AccessControl, Challenge, Proven
@@ -35,15 +39,11 @@ from runtime.event_recorder import EventRecorder
 from runtime.force_table import GLOBAL
 from runtime.forcing import Forcing
 from runtime.identity import Identity
-from runtime.instances import Instances, instantiate, instantiated
-from runtime.intrinsics import EMERGENCY_STOPS, SystemView
 from runtime.login_audit import LoginAudit
-from runtime.native.tier import NativeTier
 from runtime.online_values import OnlineValues
 from runtime.process_image import ProcessImage
 from runtime.scheduler import Scheduler
 from runtime.transfer import IncomingArtifact
-from runtime.user_program import UserProgram
 from runtime.variables import Variables
 
 if TYPE_CHECKING:
@@ -123,7 +123,7 @@ class Resource:
         self.field_io: FieldIo | None = None  # the field I/O drivers, in a runtime process
         # the recordings (runtime/recorder.py), in a runtime process with a state folder
         self.recordings: CycleRecorder | None = None
-        # the native tier (runtime/native/), when the runtime was started with it
+        # the native tier (runtime/code/native/), when the runtime was started with it
         self.native: NativeTier | None = None
 
     @property

@@ -3,11 +3,11 @@ taking a valid one back at power-up. Safety-related programs always cold-start."
 
 from __future__ import annotations
 
+from runtime.code.user_program import share_globals
 from runtime.context import Context
 from runtime.context_snapshot import ContextMismatch, capture, restore, snapshot
 from runtime.contract.protocol import ProgramState
 from runtime.resource import Resource
-from runtime.user_program import share_globals
 
 
 def take_context(resource: Resource, *, deferred: bool = False) -> Context | None:

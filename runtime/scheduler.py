@@ -10,12 +10,12 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from runtime.clock import Clock
+from runtime.code.intrinsics import ProgramFault, SystemView, emergency_switches
+from runtime.code.user_program import UserProgram
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.protocol import ProgramState
 from runtime.event_recorder import EventRecorder
-from runtime.intrinsics import ProgramFault, SystemView, emergency_switches
 from runtime.slicing import SliceMeter
-from runtime.user_program import UserProgram
 from runtime.variables import Variables
 from runtime.watchdog import Watchdog, WatchdogExpired, process_watchdog
 

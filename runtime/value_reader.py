@@ -9,7 +9,7 @@ from collections.abc import Callable
 from copy import deepcopy
 from typing import Any, cast
 
-from runtime.instances import BoundVariable
+from runtime.code.instances import BoundVariable
 
 Accessor = str | int
 _Group = tuple[Any, tuple[Accessor, ...], list[int], list[str]]

@@ -8,20 +8,20 @@ import copy
 from collections.abc import Callable
 from typing import Any
 
-from runtime.code_image import CodeImage, read_path, write_path
-from runtime.collector import COLLECTOR
-from runtime.contract.artifact import AccessPath
-from runtime.contract.protocol import VariableInfo
-from runtime.contract.refusal import Refusal
-from runtime.contract.values import ValueRejected, representation
-from runtime.instances import (
+from runtime.code.code_image import CodeImage, read_path, write_path
+from runtime.code.instances import (
     BoundVariable,
     Instances,
     index,
     name_reference_roots,
     output_points,
 )
-from runtime.user_program import UserProgram
+from runtime.code.user_program import UserProgram
+from runtime.collector import COLLECTOR
+from runtime.contract.artifact import AccessPath
+from runtime.contract.protocol import VariableInfo
+from runtime.contract.refusal import Refusal
+from runtime.contract.values import ValueRejected, representation
 from runtime.value_reader import value_reader
 
 

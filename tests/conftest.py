@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
+from runtime.code.native.tier import NativeTier
 from runtime.contract.state_folder import NATIVE_CACHE_ENV
-from runtime.native.tier import NativeTier
 from tests.support.forked_cli import run_command
 from tests.support.ports import free_port as free_port  # tests import it from here
 

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from runtime.clock import VirtualClock
+from runtime.code.user_program import share_globals
 from runtime.context_snapshot import ContextMismatch, restore
 from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
 from runtime.contract.protocol import ProgramState, ResourceState
@@ -31,7 +32,6 @@ from runtime.contract.refusal import Refusal
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.reload_switch import reload
 from runtime.resource import Resource
-from runtime.user_program import share_globals
 
 _SYSTEM = frozenset(v.name for v in SYSTEM_VARIABLES)
 

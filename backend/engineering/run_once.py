@@ -11,9 +11,9 @@ from pathlib import Path
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import read_source
-from runtime.code_image import CodeImage
+from runtime.code.code_image import CodeImage
+from runtime.code.intrinsics import ProgramFault, SystemView
 from runtime.contract.artifact import ArtifactError
-from runtime.intrinsics import ProgramFault, SystemView
 
 
 def run_entry(path: Path, entry: str = "main") -> int:

@@ -18,6 +18,7 @@ from typing import Any
 from backend.compiler.diagnostics import clipped, shortened
 from backend.engineering.literals import LiteralError, parse_literal
 from runtime.clock import VirtualClock
+from runtime.code.intrinsics import to_bytes
 from runtime.contract.artifact import Artifact, ArtifactError
 from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.contract.refusal import Refusal
@@ -28,7 +29,6 @@ from runtime.contract.values import (
     is_reference_type,
     representation,
 )
-from runtime.intrinsics import to_bytes
 from runtime.online_writes import simulate
 from runtime.resource import Resource
 

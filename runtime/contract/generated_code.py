@@ -42,7 +42,7 @@ from typing import NoReturn
 from runtime.contract.artifact import Artifact, ArtifactError, PouCode
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 
-# The names generated code finds in its global namespace (runtime/intrinsics.py `namespace`
+# The names generated code finds in its global namespace (runtime/code/intrinsics.py `namespace`
 # is checked against these). Called ones are only ever called: never read as a value, so no
 # attribute of the functions behind them (`__globals__`) can be reached.
 CALLED_INTRINSICS = frozenset(

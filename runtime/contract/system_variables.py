@@ -2,7 +2,7 @@
 
 This table is the one definition both sides use: the compiler (which types `SYS.NAME` and
 refuses writes to the read-only ones) and the runtime (which keeps the values in
-`runtime.intrinsics.SystemView`, one attribute per entry, named as here). Generated code
+`runtime.code.intrinsics.SystemView`, one attribute per entry, named as here). Generated code
 reads and writes them as `_SYS.<NAME>`. Types are ST type names; the values have the
 run-time representation of the artifact (BOOL as bool, TIME and DT as int nanoseconds, DT
 counted from 1970-01-01, integers as int). `docs/language.md` documents the table.

@@ -10,6 +10,7 @@ from types import FrameType
 from typing import Any, Protocol
 
 from runtime.clock import Clock
+from runtime.code.user_program import UserProgram
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.protocol import (
     BreakpointSpec,
@@ -32,7 +33,6 @@ from runtime.event_recorder import EventRecorder
 from runtime.forcing import Forcing
 from runtime.process_image import ProcessImage
 from runtime.scheduler import Scheduler
-from runtime.user_program import UserProgram
 from runtime.variables import Variables
 
 

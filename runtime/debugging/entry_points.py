@@ -8,7 +8,7 @@ import functools
 from collections.abc import Callable
 from types import FunctionType
 
-from runtime.code_image import CodeImage
+from runtime.code.code_image import CodeImage
 from runtime.debugging.tracer import TraceState, traced_entry
 
 

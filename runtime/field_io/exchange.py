@@ -17,6 +17,7 @@ import logging
 from collections.abc import Callable
 from typing import Any
 
+from runtime.code.instances import BoundVariable
 from runtime.contract.artifact import Artifact, UserAccount
 from runtime.contract.protocol import DeviceStatus, IoPoint, IoStatus
 from runtime.event_recorder import EventRecorder
@@ -29,7 +30,6 @@ from runtime.field_io.modbus.poller import DevicePoller
 from runtime.field_io.modbus.request_meter import REQUESTS_PER_SECOND
 from runtime.field_io.opcua.kind import OpcuaOptions
 from runtime.field_io.peer_exchange.kind import ExchangeOptions
-from runtime.instances import BoundVariable
 from runtime.process_image import ProcessImage
 from runtime.variables import Variables
 

@@ -16,10 +16,10 @@ from typing import Any
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.code_image import CodeImage, VariablePath
+from runtime.code.code_image import CodeImage, VariablePath
+from runtime.code.intrinsics import SystemView
 from runtime.context import Context, ContextInvalid, encode_context, load_context, save_context
 from runtime.context_snapshot import restore, snapshot
-from runtime.intrinsics import SystemView
 
 SCALARS, TIMERS, POINTS, SAMPLES = 2_399, 100, 1_000, 2_000  # and the loop counter
 SCALAR_TYPES = ("INT", "DINT", "LREAL", "BOOL", "REAL", "TIME", "STRING[16]", "ULINT")

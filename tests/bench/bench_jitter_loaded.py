@@ -9,7 +9,7 @@ and on its own, with other programs keeping every CPU busy (a busy loop per CPU,
 normal priority).
 
 Beside it, the same resource with none of the three, measured in the same run: the
-baseline. Last, everything on again with the bodies as C (runtime/native/), the runtime's
+baseline. Last, everything on again with the bodies as C (runtime/code/native/), the runtime's
 default. Run with `python -m tests.bench.bench_jitter_loaded [--seconds S]` (30 s per run
 unless `--seconds` or `PADT_BENCH_SECONDS` says otherwise); it prints figures and asserts
 nothing (machines are shared and noisy).
@@ -29,9 +29,9 @@ from pathlib import Path
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import RealClock
+from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import RecordStart
-from runtime.native.tier import NativeTier
 from runtime.recorder import Recordings
 from tests.bench.bench_language import thousand_statements
 from tests.bench.bench_modbus import _field_io

@@ -18,7 +18,7 @@ from backend.compiler.diagnostics import CompileError
 from backend.compiler.parse import parse_source
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
-from runtime.native.worker import ArtifactTranslation
+from runtime.code.native.worker import ArtifactTranslation
 from tests.bench.baseline import REPO as CODE_BASE
 from tests.bench.baseline import Compared, compare, probe
 
@@ -155,7 +155,7 @@ def bench_cycles(cycles: int = 2_000, check_cycles: int = 100) -> None:
 
 
 def bench_native(request: dict[str, Any], python: Compared, rounds: int = 3) -> None:
-    """The same program on the native tier (runtime/native/): its first round compiles
+    """The same program on the native tier (runtime/code/native/): its first round compiles
     into a fresh cache, the others find it there."""
     with tempfile.TemporaryDirectory(prefix="padt-bench-native-") as cache:
         replies = [probe(CODE_BASE, {**request, "native_cache": cache}) for _ in range(rounds)]

@@ -9,8 +9,8 @@ adopted); the large program's code (every instance adopted, the code the cycle r
 every instance migrated (every type gains a variable: every value copied). The baselines
 of the same run: the same switch-over with every value copied (what the runtime did before
 it adopted objects, with today's grouped copying), the same without warming up the new
-code (runtime/code_warmup.py), and the median cycle; then the same back to back with the
-bodies as C, the runtime's default (runtime/native/). Last, the cycles after a reload
+code (runtime/code/code_warmup.py), and the median cycle; then the same back to back with the
+bodies as C, the runtime's default (runtime/code/native/). Last, the cycles after a reload
 of one small POU in a program of 1,000 straight-line statements, whose code the reload
 kept: copied and warmed up, against the running code kept as it was.
 
@@ -33,10 +33,14 @@ from pathlib import Path
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime import code_image, code_warmup, reload_switch
 from runtime import reload as reload_module
+from runtime import reload_switch
 from runtime.adoption import Adopted, Adoption
 from runtime.clock import RealClock, VirtualClock
+from runtime.code import code_image, code_warmup
+from runtime.code.instances import instantiate
+from runtime.code.intrinsics import SystemView
+from runtime.code.native.tier import NativeTier
 from runtime.collector import COLLECTOR
 from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME
@@ -45,9 +49,6 @@ from runtime.contract.refusal import Refusal
 from runtime.cycle_driver import SWITCH_INTERVAL_S
 from runtime.disposal import DISPOSAL, STEP_NS
 from runtime.event_log import EventLog
-from runtime.instances import instantiate
-from runtime.intrinsics import SystemView
-from runtime.native.tier import NativeTier
 from runtime.reload_plan import (
     CONVERTED,
     DELETED,

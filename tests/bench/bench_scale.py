@@ -23,8 +23,8 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime import reload_switch
 from runtime.clock import VirtualClock
+from runtime.code.compile_worker import COMPILE_WORKER, compile_here
 from runtime.collector import COLLECTOR
-from runtime.compile_worker import COMPILE_WORKER, compile_here
 from runtime.context import encode_context, save_context
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.protocol import MAX_SET_VARIABLES, ValuesReply, encode_reply

@@ -47,7 +47,7 @@ def _running(
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
     resource = Resource("R", clock)
     if native_cache:
-        from runtime.native.tier import NativeTier  # today's code only
+        from runtime.code.native.tier import NativeTier  # today's code only
 
         resource.native = NativeTier(Path(native_cache))
     started = time.perf_counter()

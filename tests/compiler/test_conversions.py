@@ -12,7 +12,7 @@ import pytest
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.intrinsics import _round
+from runtime.code.intrinsics import _round
 from tests.conftest import sim_trace
 from tests.support.oracle.tree_walker import round_half_away
 

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import ProgramConfig
-from runtime.native.tier import NativeTier
 from tests.conftest import padt
 from tests.support.native_runs import side_by_side
 

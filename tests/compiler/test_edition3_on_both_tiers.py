@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import pytest
 
+from runtime.code.native.tier import NativeTier
 from runtime.contract.protocol import ProgramState
-from runtime.native.tier import NativeTier
 from tests.compiler import test_dialect_names as dialect_names
 from tests.compiler import test_instance_calls as instance_calls
 from tests.compiler import test_oop as oop

@@ -13,7 +13,7 @@ import pytest
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.native.tier import NativeTier
+from runtime.code.native.tier import NativeTier
 from tests.support.native_runs import Pair, program_error, side_by_side
 
 

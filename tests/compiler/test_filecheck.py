@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime.printf import format_printf
+from runtime.code.printf import format_printf
 from tests.support.corpus_paths import CORPUS as CORPUS_ROOT
 from tests.support.corpus_paths import corpus_dir
 from tests.support.filecheck import Check, CheckKind, match_output, parse_checks, run_line

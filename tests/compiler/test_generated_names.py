@@ -16,8 +16,8 @@ import pytest
 
 from backend.compiler.pipeline import CompileResult, compile_sources
 from backend.compiler.source import SourceFile
-from runtime.code_image import CodeImage
-from runtime.intrinsics import SystemView, namespace
+from runtime.code.code_image import CodeImage
+from runtime.code.intrinsics import SystemView, namespace
 from tests.conftest import padt
 
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")

@@ -20,7 +20,10 @@ from hypothesis import HealthCheck, given, settings
 from backend.compiler import builtins as compiler_builtins
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
-from runtime.compile_worker import child_environment
+from runtime.code.compile_worker import child_environment
+from runtime.code.fault_location import code_filename
+from runtime.code.intrinsics import ProgramFault, Reference, SystemView, namespace, reference_maker
+from runtime.code.native.worker import ArtifactTranslation
 from runtime.contract.artifact import Artifact, PouCode, VarInfo
 from runtime.contract.generated_code import (
     BUILTINS,
@@ -31,9 +34,6 @@ from runtime.contract.generated_code import (
     check_source,
     compile_unit,
 )
-from runtime.fault_location import code_filename
-from runtime.intrinsics import ProgramFault, Reference, SystemView, namespace, reference_maker
-from runtime.native.worker import ArtifactTranslation
 from tests.compiler.test_corpus_iec import FOLDERS, KNOWN, name_of, st_files
 from tests.compiler.test_differential import programs
 from tests.compiler.test_generated_names import KITCHEN_SINK
@@ -290,7 +290,7 @@ def test_the_native_worker_builds_nothing_of_an_artifact_with_a_name_of_its_own(
     named = replace(fb, name=C_INJECTION)
     bad = replace(artifact, pous=(named, *(p for p in artifact.pous if p is not fb))).with_crc()
     done = subprocess.run(
-        [sys.executable, "-m", "runtime.native.worker", str(tmp_path / "cache")],
+        [sys.executable, "-m", "runtime.code.native.worker", str(tmp_path / "cache")],
         input=bad.to_json().encode(),
         capture_output=True,
         env=child_environment(),
@@ -312,7 +312,7 @@ def test_a_name_that_reached_the_translator_stays_in_its_comment() -> None:
     source = translation.translate(replace(fb, name=C_INJECTION)).source
     first = source.splitlines()[0]
     assert first.startswith("/* native code of <FUNCTION_BLOCK X * / __attribute__")
-    assert first.endswith("runtime/native/translate.py */") and first.count("*/") == 1
+    assert first.endswith("runtime/code/native/translate.py */") and first.count("*/") == 1
 
 
 def test_no_text_of_a_source_reaches_the_c_of_the_native_tier_unchecked() -> None:

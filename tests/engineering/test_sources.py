@@ -14,8 +14,8 @@ from backend.engineering.sources import (
     instances,
     line_variables,
 )
-from runtime.code_image import CodeImage
-from runtime.intrinsics import SystemView
+from runtime.code.code_image import CodeImage
+from runtime.code.intrinsics import SystemView
 
 
 def _copy_demo(folder: Path) -> Path:

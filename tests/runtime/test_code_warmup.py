@@ -1,4 +1,4 @@
-"""Fresh code warmed up when it is compiled (runtime/code_warmup.py): a program runs its
+"""Fresh code warmed up when it is compiled (runtime/code/code_warmup.py): a program runs its
 first CPU cycle on quickened code, after a load and after a reload (also where the reload
 kept its code), and the warm-up's calls change nothing a program, a function block, a
 function or the globals hold."""
@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
-from runtime import code_warmup
-from runtime.code_warmup import warm_up
+from runtime.code import code_warmup
+from runtime.code.code_warmup import warm_up
 from tests.support.resource_harness import compiled, harness
 
 # side effects everywhere a warm-up call could reach: globals, a function writing through

@@ -1,4 +1,4 @@
-"""Generated code compiled by the compile worker's child process (runtime/compile_worker.py),
+"""Generated code compiled by the compile worker's child process (runtime/code/compile_worker.py),
 as a reload prepared while cycles run has it compiled: the same code as compiled here, a
 unit that does not compile raising its own error, and a child that died replaced."""
 
@@ -10,7 +10,7 @@ from types import CodeType
 
 import pytest
 
-from runtime.compile_worker import COMPILE_WORKER, CompileWorker, compile_here
+from runtime.code.compile_worker import COMPILE_WORKER, CompileWorker, compile_here
 from runtime.contract.generated_code import GeneratedCodeError
 from tests.support.resource_harness import compiled, harness
 
@@ -112,7 +112,7 @@ def test_a_reload_compiles_only_the_units_it_changed_and_copies_the_running_code
     assert h.cmd("reload")["ok"]
     assert asked == ["<FUNCTION_BLOCK Small>"]  # P's generated source did not change
     # a copy of the same code, in a class of the new image: none of the old code's
-    # specializations for the classes the reload replaced (runtime/code_warmup.py)
+    # specializations for the classes the reload replaced (runtime/code/code_warmup.py)
     call_after = type(running).__call__.__code__
     assert call_after == call_before and call_after is not call_before
     h.cycle()

@@ -19,7 +19,8 @@ from hypothesis import strategies as st
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
-from runtime.code_image import CodeImage
+from runtime.code.code_image import CodeImage
+from runtime.code.intrinsics import SystemView
 from runtime.context import (
     CONTEXT_FORMAT,
     CONTEXT_VERSION,
@@ -31,7 +32,6 @@ from runtime.context import (
 )
 from runtime.context_snapshot import ContextMismatch, UnsupportedValue, restore, snapshot
 from runtime.contract.artifact import Artifact
-from runtime.intrinsics import SystemView
 from tests.conftest import REPO
 
 CYCLE_NS = 100_000_000

@@ -1,4 +1,4 @@
-"""`runtime.printf.format_printf` against what glibc's printf prints on x86-64 Linux.
+"""`runtime.code.printf.format_printf` against what glibc's printf prints on x86-64 Linux.
 
 The expected strings in the tables were worked out from the C standard and glibc's rules and
 then confirmed once against a C program compiled with gcc; the tests themselves need no C
@@ -14,7 +14,7 @@ import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
 
-from runtime.printf import format_printf
+from runtime.code.printf import format_printf
 
 NAN = math.nan
 NEG_NAN = -math.nan

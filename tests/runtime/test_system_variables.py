@@ -15,10 +15,10 @@ from backend.compiler.source import SourceFile
 from backend.compiler.types import elementary
 from backend.engineering.check_twice import check_twice
 from runtime.clock import VirtualClock
-from runtime.code_image import CodeImage
+from runtime.code.code_image import CodeImage
+from runtime.code.intrinsics import SystemView
 from runtime.contract.artifact import Artifact
 from runtime.contract.system_variables import BY_NAME, NAMESPACE, SYSTEM_VARIABLES, initial_value
-from runtime.intrinsics import SystemView
 from runtime.resource import Resource
 
 EXPECTED = {

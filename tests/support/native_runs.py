@@ -9,8 +9,8 @@ from dataclasses import dataclass
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
+from runtime.code.native.tier import NativeReport, NativeTier
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
-from runtime.native.tier import NativeReport, NativeTier
 from runtime.online_writes import simulate
 from runtime.resource import Resource
 

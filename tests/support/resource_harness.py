@@ -12,6 +12,7 @@ from typing import Any
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import VirtualClock
+from runtime.code.native.tier import NativeTier
 from runtime.commands import execute
 from runtime.contract import scram
 from runtime.contract.artifact import (
@@ -22,7 +23,6 @@ from runtime.contract.artifact import (
     crc32_hex,
 )
 from runtime.contract.protocol import pieces
-from runtime.native.tier import NativeTier
 from runtime.resource import Resource
 
 # what tests mostly want: single step, forcing and writes allowed

@@ -6,7 +6,7 @@ Every problem is a diagnostic at the line of the setting; the check goes on afte
 the user sees them all. What passes becomes the artifact's `OpcuaConfig`; a project without
 an `[opcua]` table has none (None), and its artifact's CRC is as before.
 
-Paths are written as the runtime names the resource's variables (runtime/code_image.py):
+Paths are written as the runtime names the resource's variables (runtime/code/code_image.py):
 a global by its bare name (`gSetpoint`), a program's variable after the program instance
 (`TankControl.level`), the members of block instances and structures after a dot
 (`TankControl.refillDelay.ET`, `gLine.speed`), each name as its declaration spells it

@@ -17,15 +17,15 @@ from backend.engineering.replay import ReplayError, read_parts, store_recorded
 from backend.engineering.simulation import sim_cycle_ms
 from backend.engineering.testing.test_build import UnitTest
 from runtime.clock import VirtualClock
+from runtime.code.fault_location import locate
+from runtime.code.instances import instances_of
+from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.contract.recording import Recording, RecordingUnreadable
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import format_value
-from runtime.fault_location import locate
 from runtime.force_table import GLOBAL, ForceEntry
-from runtime.instances import instances_of
-from runtime.native.tier import NativeTier
 from runtime.resource import Resource
 
 NS_PER_MS = 1_000_000

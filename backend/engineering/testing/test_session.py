@@ -19,8 +19,8 @@ from backend.engineering.testing.tiers import (
     run_on,
     run_tests,
 )
+from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import Artifact
-from runtime.native.tier import NativeTier
 
 
 def native_cache() -> Path:

@@ -14,8 +14,8 @@ from typing import Any, Literal
 from backend.engineering.testing.coverage.measure import CoverageMeter
 from backend.engineering.testing.test_build import UnitTest
 from backend.engineering.testing.test_run import Outcome, UnitTestBench, WatchStop, same, shown
+from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import Artifact
-from runtime.native.tier import NativeTier
 
 Tier = Literal["python", "native"]
 

@@ -14,10 +14,10 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from runtime.code.instances import BoundVariable
 from runtime.contract.opcua import OpcuaServer
 from runtime.contract.values import array_shape
 from runtime.field_io.opcua.types import variant_type
-from runtime.instances import BoundVariable
 
 _SEGMENT = re.compile(r"[^.\[\]]+|\[[^\]]*\]")
 _ANY_INDEX = re.compile(r"\[[^\]]*\]")

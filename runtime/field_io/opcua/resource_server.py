@@ -43,6 +43,7 @@ from asyncua.ua.object_ids import ObjectIds
 from asyncua.ua.status_codes import StatusCodes
 from cryptography import x509
 
+from runtime.code.instances import BoundVariable
 from runtime.collector import COLLECTOR
 from runtime.contract.artifact import UserAccount
 from runtime.contract.opcua import OpcuaServer
@@ -63,7 +64,6 @@ from runtime.field_io.opcua.types import (
     to_opcua,
     variant_type,
 )
-from runtime.instances import BoundVariable
 from runtime.value_reader import value_reader
 
 log = logging.getLogger(__name__)

@@ -15,12 +15,12 @@ from typing import Any
 
 import zenoh
 
+from runtime.code.instances import BoundVariable
 from runtime.contract.exchange import Publication
 from runtime.contract.keyspace import exchange_key
 from runtime.contract.signatures import stamp_bytes, stamped
 from runtime.field_io.peer_exchange.message import encode
 from runtime.identity import Identity
-from runtime.instances import BoundVariable
 
 
 class PublicationSender:

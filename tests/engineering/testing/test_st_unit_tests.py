@@ -12,7 +12,7 @@ from backend.engineering.project import compile_project, load_project
 from backend.engineering.testing.test_build import UnitTestBuild, build_tests, matching
 from backend.engineering.testing.test_run import Outcome, UnitTestBench, WatchStop
 from backend.engineering.testing.tiers import UnitTestResult, run_tests
-from runtime.native.tier import NativeTier
+from runtime.code.native.tier import NativeTier
 
 PADT_TOML = """
 [project]

@@ -10,12 +10,12 @@ import pytest
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime import online_writes
+from runtime.code.native.tier import NativeTier
 from runtime.commands import HANDLERS
 from runtime.contract import protocol as p
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.protocol import ProgramState
 from runtime.contract.refusal import Refusal
-from runtime.native.tier import NativeTier
 from runtime.resource import Resource
 from tests.support.debugged_program import COUNTERS as SOURCE
 from tests.support.native_runs import advance, same

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime.native.tier import NativeTier
+from runtime.code.native.tier import NativeTier
 
 
 @pytest.fixture

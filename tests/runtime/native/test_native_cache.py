@@ -6,9 +6,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from runtime.native.build import prune
-from runtime.native.tier import NativeTier
-from runtime.native.worker import make
+from runtime.code.native.build import prune
+from runtime.code.native.tier import NativeTier
+from runtime.code.native.worker import make
 from tests.support.native_runs import compiled
 
 

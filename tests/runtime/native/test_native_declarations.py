@@ -5,7 +5,7 @@ identical after every cycle, no fault, and the values the language gives."""
 
 from __future__ import annotations
 
-from runtime.native.tier import NativeTier
+from runtime.code.native.tier import NativeTier
 from tests.runtime.native.test_native_oop import run_alike, values
 
 INITIAL_REFERENCES = """

@@ -10,7 +10,7 @@ from collections import Counter
 
 from hypothesis import HealthCheck, given, settings
 
-from runtime.native.tier import NativeTier
+from runtime.code.native.tier import NativeTier
 from tests.compiler.test_differential import CYCLES, programs
 from tests.support.native_runs import side_by_side
 

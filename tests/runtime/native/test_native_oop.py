@@ -6,7 +6,7 @@ gives. Real C compiles, real resources on virtual clocks."""
 
 from __future__ import annotations
 
-from runtime.native.tier import NativeTier
+from runtime.code.native.tier import NativeTier
 from tests.support.native_runs import Pair, program_error, side_by_side
 
 

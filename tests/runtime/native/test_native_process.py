@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
+from runtime.code.native.tier import NativeTier
 from runtime.contract.protocol import GetStatus
 from runtime.contract.state_folder import NATIVE_CACHE_ENV, events_path, native_path
-from runtime.native.tier import NativeTier
 from tests.support.runtime_process import running_resource, write_demo_artifact
 
 

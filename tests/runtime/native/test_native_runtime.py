@@ -11,9 +11,9 @@ import time
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime import reload_switch
+from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 from runtime.contract.protocol import ResourceState
-from runtime.native.tier import NativeTier
 from tests.bench.bench_language import thousand_statements
 from tests.support.native_runs import compiled, program_error, running, side_by_side
 from tests.support.resource_harness import compiled as harness_artifact

@@ -1,14 +1,14 @@
 """An SFC step's action on a BOOL global sets the global on both tiers, whatever the way to
 it (VAR_EXTERNAL, the global named directly, a located output), with every qualifier, when
 each program runs on its own view of the globals (more than one program, or a sliced one:
-runtime/instances.py). A step's time (L, D, SD, DS, SL) read from a global another program
+runtime/code/instances.py). A step's time (L, D, SD, DS, SL) read from a global another program
 writes is the value that program wrote (docs/language.md, SFC). The same set of the globals a
 program writes holds those it passes to an in-out."""
 
 from __future__ import annotations
 
+from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import ProgramConfig
-from runtime.native.tier import NativeTier
 from runtime.resource import Resource
 from tests.support.native_runs import advance, side_by_side
 

@@ -7,8 +7,8 @@ import re
 
 import pytest
 
-from runtime.native.kinds import class_table, function_table
-from runtime.native.translate import c_int, translate_unit
+from runtime.code.native.kinds import class_table, function_table
+from runtime.code.native.translate import c_int, translate_unit
 from tests.support.native_runs import compiled
 
 FUNCTIONS = """

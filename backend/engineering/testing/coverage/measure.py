@@ -13,7 +13,7 @@ from types import FrameType
 from typing import Any
 
 from backend.compiler.test_functions import is_test_file
-from runtime.code_image import CodeImage
+from runtime.code.code_image import CodeImage
 
 # a frame's local trace function, as sys.settrace takes it
 LocalTrace = Any

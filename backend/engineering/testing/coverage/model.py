@@ -19,8 +19,8 @@ from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.source import SourceFile
 from backend.engineering.testing.coverage.measure import LineHits
+from runtime.code.fault_location import code_filename
 from runtime.contract.artifact import Artifact, PouCode
-from runtime.fault_location import code_filename
 
 
 @dataclass(frozen=True)

@@ -8,14 +8,14 @@ from dataclasses import dataclass
 from types import CodeType
 from typing import Any
 
-from runtime.code_image import CodeImage, VariablePath
-from runtime.compile_worker import compile_here
+from runtime.code.code_image import CodeImage, VariablePath
+from runtime.code.compile_worker import compile_here
+from runtime.code.intrinsics import Reference, SystemView
+from runtime.code.native.tier import NativeTier
+from runtime.code.user_program import UserProgram
 from runtime.contract.artifact import Artifact, VarInfo
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import is_reference_type
-from runtime.intrinsics import Reference, SystemView
-from runtime.native.tier import NativeTier
-from runtime.user_program import UserProgram
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from runtime.code_image import VariablePath, slot_names
+from runtime.code.code_image import VariablePath, slot_names
 from runtime.contract.artifact import ProgramConfig
 from runtime.contract.protocol import ProgramState
 from runtime.slicing import ProgramRun

@@ -25,9 +25,9 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from runtime.compile_worker import child_environment
+from runtime.code.compile_worker import child_environment
+from runtime.code.native.build import Toolchain, find_toolchain
 from runtime.contract.artifact import Artifact
-from runtime.native.build import Toolchain, find_toolchain
 
 # Attributes the tier sets on a bound class. Their names have `__`, which no ST name has
 # (E0004): a variable of the block is a slot of the same class, which a class attribute of
@@ -99,7 +99,7 @@ class NativeTier:
         statics; no class changes yet): the bodies to install, and the report."""
         try:
             done = subprocess.run(
-                [sys.executable, "-m", "runtime.native.worker", str(self.cache)],
+                [sys.executable, "-m", "runtime.code.native.worker", str(self.cache)],
                 input=artifact.to_json().encode(),
                 capture_output=True,
                 env=child_environment(),

@@ -12,7 +12,7 @@ reload is background work. Should it fail in any way, the code is compiled here 
 before, which also raises the error a broken unit deserves. Both sides compile only what
 `runtime.contract.generated_code` finds to be generated code.
 
-Run as `python -m runtime.compile_worker` it is that child.
+Run as `python -m runtime.code.compile_worker` it is that child.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from pathlib import Path
 from types import CodeType
 from typing import IO
 
-from runtime.code_warmup import warm_up
+from runtime.code.code_warmup import warm_up
 from runtime.contract.generated_code import compile_unit
 
 _LENGTH = struct.Struct("<Q")
@@ -74,7 +74,7 @@ class CompileWorker:
         child = self._child
         if child is None or child.poll() is not None:
             child = self._child = subprocess.Popen(
-                [sys.executable, "-m", "runtime.compile_worker"],
+                [sys.executable, "-m", "runtime.code.compile_worker"],
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
                 env=child_environment(),
@@ -106,7 +106,7 @@ class CompileWorker:
 def child_environment() -> dict[str, str]:
     """This process's environment, with the folder this package is in first on the
     child's path: it finds `runtime` wherever the runtime was started from."""
-    here = str(Path(__file__).resolve().parents[1])
+    here = str(Path(__file__).resolve().parents[2])
     path = os.environ.get("PYTHONPATH")
     return {**os.environ, "PYTHONPATH": here if not path else f"{here}{os.pathsep}{path}"}
 

@@ -10,14 +10,14 @@ from dataclasses import dataclass
 from types import CodeType
 from typing import Any
 
-from runtime.code_warmup import unspecialized, warm_up
-from runtime.compile_worker import compile_here
+from runtime.code.code_warmup import unspecialized, warm_up
+from runtime.code.compile_worker import compile_here
+from runtime.code.fault_location import SourceLocation, code_filename, locate
+from runtime.code.intrinsics import Namespace, SystemView, namespace
+from runtime.code.native.tier import NativeJob, NativeReport, NativeTier
 from runtime.contract.artifact import Artifact, PouCode, VarInfo
 from runtime.contract.generated_code import check_artifact_names
 from runtime.contract.values import array_shape
-from runtime.fault_location import SourceLocation, code_filename, locate
-from runtime.intrinsics import Namespace, SystemView, namespace
-from runtime.native.tier import NativeJob, NativeReport, NativeTier
 
 # An attribute name, or an offset into the flat list that holds an array.
 Accessor = str | int
@@ -36,7 +36,7 @@ def reusing(
     previous: CodeImage, compile_units: Callable[[list[tuple[str, str]]], list[CodeType]]
 ) -> Callable[[list[tuple[str, str]]], list[CodeType]]:
     """`compile_units` for the units a reload changed; the others take copies of the code
-    objects of the running image, never run and warmed up (`runtime/code_warmup.py`): the
+    objects of the running image, never run and warmed up (`runtime/code/code_warmup.py`): the
     compile saved, and none of the old code's specializations, which were made for the
     classes the reload replaces."""
 
@@ -177,7 +177,7 @@ class CodeImage:
 
     def reference_roots(self) -> dict[int, str]:
         """The paths of instances by id, that references made by the code read as paths
-        (`runtime.instances.name_reference_roots` fills it)."""
+        (`runtime.code.instances.name_reference_roots` fills it)."""
         roots: dict[int, str] = self._namespace["_reference_roots"]
         return roots
 

@@ -427,7 +427,7 @@ def _no_test_runner(*args: Any) -> Any:
 
 
 def _stdout_printf(fmt: str, *args: Any) -> int:
-    from runtime.printf import format_printf
+    from runtime.code.printf import format_printf
 
     data = to_bytes(format_printf(fmt, args))
     sys.stdout.flush()

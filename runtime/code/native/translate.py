@@ -1,9 +1,9 @@
 """Generated Python to C: the bodies (`__call__`) of the generated classes of one unit of an
-artifact, as one C module that `runtime/native/binding.py` loads and binds.
+artifact, as one C module that `runtime/code/native/binding.py` loads and binds.
 
 The Python code is the reference. A body is translated only when every construct in it is
 one the translator knows and every integer it computes provably fits the C type it is
-computed in (`runtime/native/kinds.py`); anything else leaves the body to Python, with
+computed in (`runtime/code/native/kinds.py`); anything else leaves the body to Python, with
 the reason. The C code works on the same objects as the Python code (slots of the
 generated classes), so both tiers can run side by side and every service of the runtime
 sees one kind of data.
@@ -21,9 +21,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 from typing import NoReturn
 
-from runtime.contract.artifact import PouCode
-from runtime.fault_location import code_filename
-from runtime.native.kinds import (
+from runtime.code.fault_location import code_filename
+from runtime.code.native.kinds import (
     EXACT_IN_DOUBLE,
     FROM_REAL,
     FULL64,
@@ -45,6 +44,7 @@ from runtime.native.kinds import (
     System,
     join,
 )
+from runtime.contract.artifact import PouCode
 
 NAME_PLACEHOLDER = "padt_unit"
 WIDEN_AFTER = 3  # passes over a body before a growing local takes the whole 64-bit range
@@ -1433,7 +1433,7 @@ def translate_unit(
 def _module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
     types = [module.type_ref(cls) for cls, _ in functions]
     lines = [
-        c_comment(f"native code of {module.filename}: written by runtime/native/translate.py"),
+        c_comment(f"native code of {module.filename}: written by runtime/code/native/translate.py"),
         '#include "padt_native.h"',
         "",
         *module.statics(),

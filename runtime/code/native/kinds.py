@@ -97,7 +97,7 @@ Kind = Int | Bool | Float | Instance | Array | Hook | System | Range
 # integers a double holds exactly: Python converts and compares beyond them exactly, C not
 EXACT_IN_DOUBLE = Int(-(1 << 53), 1 << 53)
 
-# the attributes of `_SYS` (runtime.intrinsics.SystemView): BOOL flags, the rest integers of
+# the attributes of `_SYS` (runtime.code.intrinsics.SystemView): BOOL flags, the rest integers of
 # at most 64 bits (TIME, UDINT, DWORD, DT)
 SYSTEM_BOOLS = frozenset(
     {

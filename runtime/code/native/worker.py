@@ -10,7 +10,7 @@ itself), so a unit built before is neither translated nor compiled again.
 Nothing is translated of an artifact with a unit that is not generated code
 (`runtime.contract.generated_code`): a name or a source of its choosing must not become C.
 
-Run as `python -m runtime.native.worker CACHE`: a request (JSON) on stdin, the answer on
+Run as `python -m runtime.code.native.worker CACHE`: a request (JSON) on stdin, the answer on
 stdout.
 """
 
@@ -25,16 +25,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from runtime.code.fault_location import code_filename
+from runtime.code.native.build import BuildError, build, find_toolchain, mark_used, prune
+from runtime.code.native.kinds import ClassInfo, FunctionInfo, class_table, function_table
+from runtime.code.native.translate import Translated, translate_unit
 from runtime.contract.artifact import Artifact, PouCode, load_artifact
 from runtime.contract.generated_code import (
     GeneratedCodeError,
     check_artifact_names,
     check_source,
 )
-from runtime.fault_location import code_filename
-from runtime.native.build import BuildError, build, find_toolchain, mark_used, prune
-from runtime.native.kinds import ClassInfo, FunctionInfo, class_table, function_table
-from runtime.native.translate import Translated, translate_unit
 
 WORKER_NICE = 10  # background work: below the runtime and below normal programs
 _SOURCES = ("translate.py", "kinds.py", "padt_native.h", "build.py")
