@@ -1,4 +1,4 @@
-/* What every C unit of the native tier includes (runtime/native/translate.py writes the
+/* What every C unit of the native tier includes (runtime/code/native/translate.py writes the
  * units). The units work on the runtime's own objects: a variable is the slot of a
  * generated class, read and written at its offset, so that every service of the runtime
  * (online values, forcing, reload, context) sees the same data as with the Python tier.
@@ -27,12 +27,12 @@ typedef __int128 padt_i128;
 
 /* ---- state one module copy binds (padt_bind_common) ---------------------------------- */
 
-/* Borrowed: each bound class holds the namespace (runtime/native/tier.py), and a body
+/* Borrowed: each bound class holds the namespace (runtime/code/native/tier.py), and a body
  * runs as C only on an instance of its class; the classes are in the namespace. */
 static PyObject *padt_ns;           /* the resource's namespace of generated code */
 static PyObject *padt_breathe_fn;   /* a Python function of no code: see padt_breathe */
 static PyObject *padt_str_call;     /* "__call__" */
-static PyObject *padt_str_python_body; /* PYTHON_BODY_ATTR of runtime/native/tier.py */
+static PyObject *padt_str_python_body; /* PYTHON_BODY_ATTR of runtime/code/native/tier.py */
 
 /* A call site of `x.__call__()`: the type it last met, by version tag (no reference is
  * held, and a tag is never given to two types), and that type's native body. */
@@ -258,7 +258,7 @@ padt_set_float(PyObject **place, double v)
     return padt_put(place, PyFloat_FromDouble(v));
 }
 
-/* runtime.intrinsics._fdiv: IEC division of REALs, by zero an infinity or NaN, no fault */
+/* runtime.code.intrinsics._fdiv: IEC division of REALs, by zero an infinity or NaN, no fault */
 static inline double
 padt_fdiv(double a, double b)
 {
@@ -270,7 +270,7 @@ padt_fdiv(double a, double b)
     return a / b;
 }
 
-/* A REAL taken to an integer (runtime/native/kinds.py, Int.stand_in): exact below 2**126;
+/* A REAL taken to an integer (runtime/code/native/kinds.py, Int.stand_in): exact below 2**126;
  * beyond, a stand-in of that size that equals the true value modulo 2**64 (fmod is exact),
  * which is all a wrap to at most 64 bits keeps of it. */
 #define PADT_TWO_126 85070591730234615865843651857942052864.0
@@ -284,7 +284,7 @@ padt_whole(double whole) /* a non-negative integral double */
     return ((padt_i128)1 << 126) + (padt_i128)(uint64_t)fmod(whole, PADT_TWO_64);
 }
 
-/* runtime.intrinsics._round: to the nearest, halves away from zero; NaN and infinities 0 */
+/* runtime.code.intrinsics._round: to the nearest, halves away from zero; NaN and infinities 0 */
 static inline int
 padt_round(double x, padt_i128 *out)
 {
