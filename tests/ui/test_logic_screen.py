@@ -475,8 +475,11 @@ def test_fbd_and_ld_bodies_with_live_values_power_flow_and_a_forced_contact(
         time.sleep(0.5)
         shoot(page, "logic-fbd-1920")
 
-        # the field is the user's: another browser logged in as them finds it there; a click
-        # on it chooses its variable; it is removed
+        # the field is the user's: another browser logged in as them finds it there once the
+        # first is closed (two live pages at once, drawn without a GPU, took this machine's
+        # two cores for up to 100 s to load the second); a click on it chooses its
+        # variable; it is removed
+        page.close()
         other = browser.new_page(viewport={"width": 1400, "height": 900})
         open_logic(other, url)
         choose(other, "Instance", "Count")
