@@ -14,7 +14,8 @@ variables, the locale) a forked child cannot take: a command whose environment d
 from the server's there runs in a process of its own from the start (`run_command` says
 None). `run_commands` runs a batch, several at once;
 `run_command` one, through a server kept for the whole test session (`padt` of
-tests/conftest.py)."""
+tests/conftest.py). A long-running command (`padt demo`) is forked from a server of its own
+by tests/support/forked_process.py, as its child is made here (`become_command`)."""
 
 from __future__ import annotations
 
@@ -31,16 +32,15 @@ import tempfile
 import threading
 import time
 import traceback
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, NoReturn
 
 REPO = Path(__file__).resolve().parent.parent.parent
 # environment variables a forked child cannot honour: read by the interpreter as it starts
 _AT_START = ("PYTHON", "LANG", "LC_")
-# what the commands import when they run, imported once by the server (a module missing,
-# renamed by later work, is simply left to the children)
+# what the commands import when they run, imported once by the server
 _WARM = (
     "padt.online",
     "padt.online_test",
@@ -117,11 +117,16 @@ class _Server:
         if self.process.stdin is not None:
             with contextlib.suppress(OSError):
                 self.process.stdin.close()
-        try:
-            self.process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
+        end_server(self.process)
+
+
+def end_server(process: subprocess.Popen[bytes]) -> None:
+    """Wait for a server told to end (its requests' end closed); killed if it hangs."""
+    try:
+        process.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
 
 
 _server: _Server | None = None
@@ -164,7 +169,10 @@ def _finished(row: dict[str, Any]) -> Finished:
 # ---- the server's side
 
 
-def _warm_up() -> None:
+def warm_up(modules: tuple[str, ...]) -> None:
+    """In a server: import the command line and `modules` (one missing, renamed by later
+    work, is simply left to the children), parse the standard library of ST; with no
+    thread started, so that a forked child inherits no lock held by another thread."""
     import importlib
 
     from backend.compiler.pipeline import compile_sources
@@ -172,11 +180,16 @@ def _warm_up() -> None:
     from padt import cli
 
     cli.build_parser()  # imports what every command's parser needs
-    for module in _WARM:
+    for module in modules:
         with contextlib.suppress(ImportError):
             importlib.import_module(module)
     # the standard library parsed once, here, instead of in every child
     compile_sources([SourceFile("warm.st", "FUNCTION f : INT f := 1; END_FUNCTION")], programs=[])
+    # OpenBLAS (under numpy, which the UI imports) starts its threads as it loads and stops
+    # them before every fork (pthread_atfork): a first fork stops them before they are counted
+    if (pid := os.fork()) == 0:
+        os._exit(0)
+    os.waitpid(pid, 0)
     threads = len(os.listdir("/proc/self/task"))
     assert threads == 1, f"{threads} threads in the server: a child could inherit a held lock"
     sys.stdout.flush()
@@ -188,23 +201,33 @@ def _fork(
 ) -> tuple[int, IO[bytes], IO[bytes]]:
     """A child running `padt ARGS`: its pid and the files of its stdout and stderr."""
     out, err = tempfile.TemporaryFile(), tempfile.TemporaryFile()  # noqa: SIM115 - closed once read
+    nothing = os.open(os.devnull, os.O_RDONLY)
     pid = os.fork()
     if pid == 0:
-        _child(args, env, cwd, out.fileno(), err.fileno())
+        become_command(args, env, cwd, (nothing, out.fileno(), err.fileno()), _REPLIES)
+    os.close(nothing)
     return pid, out, err
 
 
-def _child(
-    args: list[str], env: Mapping[str, str] | None, cwd: str | None, out: int, err: int
-) -> None:
-    """In the forked child: be `python -m padt.cli ARGS`; never returns."""
+def become_command(
+    args: list[str],
+    env: Mapping[str, str] | None,
+    cwd: str | None,
+    streams: tuple[int, int, int],
+    server_fds: Iterable[int],
+) -> NoReturn:
+    """In a child forked from a server: be `python -m padt.cli ARGS` with `streams` as its
+    stdin, stdout and stderr and none of the server's own files (`server_fds`, and the
+    streams' other numbers); `env` (None: the server's) in place of the server's
+    environment; never returns."""
     code = 1
     try:
-        for fd in _REPLIES:
+        for fd in server_fds:
             os.close(fd)
-        os.dup2(os.open(os.devnull, os.O_RDONLY), 0)
-        os.dup2(out, 1)
-        os.dup2(err, 2)
+        for target, fd in enumerate(streams):
+            os.dup2(fd, target)
+        for fd in set(streams) - {0, 1, 2}:
+            os.close(fd)
         signal.signal(signal.SIGINT, signal.default_int_handler)
         if env is not None:
             os.environ.clear()
@@ -305,7 +328,7 @@ def _batch() -> None:
 
 
 def main() -> None:
-    _warm_up()
+    warm_up(_WARM)
     if sys.argv[1:] == ["serve"]:
         _serve()
     else:

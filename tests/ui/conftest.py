@@ -29,6 +29,7 @@ from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from tests.conftest import REPO, free_port
 from tests.support.browser import one_browser_for_the_tests_within
+from tests.support.forked_process import CommandServer
 from tests.support.ports import wait_until_listening
 from tests.support.runtime_process import running_resource, store_artifact
 from tests.ui.browser_steps import PASSWORD, Demo, Plant
@@ -49,19 +50,38 @@ def one_browser_per_module(request: pytest.FixtureRequest) -> Iterator[None]:
         yield
 
 
+@pytest.fixture(scope="session")
+def demo_server() -> Iterator[CommandServer]:
+    """The server the session's demos are forked from, their parts imported once
+    (tests/support/forked_process.py)."""
+    server = CommandServer()
+    try:
+        yield server
+    finally:
+        server.close()
+
+
 @pytest.fixture
-def demo(tmp_path: Path, request: pytest.FixtureRequest) -> Iterator[Demo]:
-    """`padt demo`; without its OPC UA server (2 s of CPU to start) unless the test asks
-    for it (`@pytest.mark.parametrize("demo", ["opcua"], indirect=True)`)."""
-    command = [sys.executable, "-m", "padt.cli", "demo", "--state-dir", str(tmp_path)]
+def demo(
+    tmp_path: Path, request: pytest.FixtureRequest, demo_server: CommandServer
+) -> Iterator[Demo]:
+    """`padt demo`, forked from the session's server (or, where that cannot be, started
+    afresh); without its OPC UA server (2 s of CPU to start) unless the test asks for it
+    (`@pytest.mark.parametrize("demo", ["opcua"], indirect=True)`)."""
+    args = ["demo", "--state-dir", str(tmp_path)]
     zenoh_port = free_port()
-    command += ["--port", str(free_port()), "--zenoh-port", str(zenoh_port), "--api-port", "0"]
+    args += ["--port", str(free_port()), "--zenoh-port", str(zenoh_port), "--api-port", "0"]
     modbus_port = free_port()  # never the fixed 5020: demos of parallel tests would collide
-    command += ["--modbus-port", str(modbus_port)]
+    args += ["--modbus-port", str(modbus_port)]
     opcua_port = free_port() if getattr(request, "param", None) == "opcua" else 0
-    command += ["--opcua-port", str(opcua_port)] if opcua_port else ["--no-opcua"]
-    process = subprocess.Popen(
-        command, cwd=REPO, stdout=subprocess.PIPE, text=True, env=dict(os.environ)
+    args += ["--opcua-port", str(opcua_port)] if opcua_port else ["--no-opcua"]
+    env = dict(os.environ)
+    process = demo_server.start(args, env, REPO) or subprocess.Popen(
+        [sys.executable, "-m", "padt.cli", *args],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        text=True,
+        env=env,
     )
     assert process.stdout is not None
     url = password = None
