@@ -66,9 +66,14 @@ def sign_in(client: ResourceClient, args: argparse.Namespace, password: str | No
 
 
 def password_of(user: str) -> str:
-    """From PADT_PASSWORD, else asked for (never an option: shell histories keep those)."""
+    """From PADT_PASSWORD, else asked for (never an option: shell histories keep those);
+    Failed (exit 2) with no terminal to ask at: a script, a pipe, a service."""
     password = os.environ.get("PADT_PASSWORD")
-    return password if password is not None else getpass.getpass(f"password of {user}: ")
+    if password is not None:
+        return password
+    if not sys.stdin.isatty():
+        raise Failed(f"no terminal to ask the password of {user} at: set PADT_PASSWORD", 2)
+    return getpass.getpass(f"password of {user}: ")
 
 
 def _commissioning(args: argparse.Namespace) -> bool:

@@ -212,6 +212,10 @@ def test_without_a_login_the_refusal_says_how(tmp_path: Path, zenoh_endpoint: st
         assert "refused (unauthenticated)" in anonymous.stderr
         assert "log in with --user NAME" in anonymous.stderr
         assert "Traceback" not in anonymous.stderr
+        # --user without a terminal to ask the password at (a script): said, not a traceback
+        unasked = padt("values", *online, "--user", "admin")
+        assert unasked.returncode == 2, unasked.stderr
+        assert "set PADT_PASSWORD" in unasked.stderr and "Traceback" not in unasked.stderr
 
 
 def test_a_reader_that_stops_reading_ends_padt_quietly(tmp_path: Path, zenoh_endpoint: str) -> None:
