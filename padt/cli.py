@@ -745,6 +745,25 @@ def _wait_seconds(text: str) -> float:
     return seconds
 
 
+def _fleet_targets(parser: argparse.ArgumentParser, what: str) -> None:
+    """The project, the resources in their order, the mesh and the login of a fleet command."""
+    parser.add_argument("paths", nargs="+", type=Path, metavar="PATH")
+    parser.add_argument(
+        "--resource",
+        action="append",
+        required=True,
+        type=resource_argument,
+        metavar="NAME",
+        help=f"a resource to {what}, in this order; repeat for each",
+    )
+    add_zenoh_options(parser, "Zenoh router of the mesh")
+    parser.add_argument(
+        "--user",
+        metavar="NAME",
+        help="log in to each resource as NAME (password from PADT_PASSWORD, else asked for once)",
+    )
+
+
 def _fleet_commands(sub: Any) -> None:
     """fleet status, fleet load, fleet reload (docs/cli.md)."""
     fleet = sub.add_parser(
@@ -790,21 +809,7 @@ def _fleet_commands(sub: Any) -> None:
         epilog="exit codes: 0 every resource done, 1 one refused (the others after it not "
         "tried), 2 bad options or the project cannot be read",
     )
-    load.add_argument("paths", nargs="+", type=Path, metavar="PATH")
-    load.add_argument(
-        "--resource",
-        action="append",
-        required=True,
-        type=resource_argument,
-        metavar="NAME",
-        help="a resource to load, in this order; repeat for each",
-    )
-    add_zenoh_options(load, "Zenoh router of the mesh")
-    load.add_argument(
-        "--user",
-        metavar="NAME",
-        help="log in to each resource as NAME (password from PADT_PASSWORD, else asked for once)",
-    )
+    _fleet_targets(load, "load")
     load.add_argument(
         "--setup-secret-file",
         type=Path,
@@ -830,21 +835,7 @@ def _fleet_commands(sub: Any) -> None:
         "refused (the others after it not tried), a plan not possible, or no --yes, 2 bad "
         "options or the project cannot be read",
     )
-    reload.add_argument("paths", nargs="+", type=Path, metavar="PATH")
-    reload.add_argument(
-        "--resource",
-        action="append",
-        required=True,
-        type=resource_argument,
-        metavar="NAME",
-        help="a resource to change online, in this order; repeat for each",
-    )
-    add_zenoh_options(reload, "Zenoh router of the mesh")
-    reload.add_argument(
-        "--user",
-        metavar="NAME",
-        help="log in to each resource as NAME (password from PADT_PASSWORD, else asked for once)",
-    )
+    _fleet_targets(reload, "change online")
     reload.add_argument(
         "--preview", action="store_true", help="only show each plan; change nothing"
     )

@@ -92,6 +92,26 @@ def _told(result: FleetLoad) -> None:
         print(f"{result.resource}: not tried")
 
 
+def _command_words(command: str, args: argparse.Namespace) -> list[str]:
+    """The start of the command line that repeats a fleet command (kept with its backups)."""
+    words = ["padt", "fleet", command, *map(str, args.paths)]
+    for name in args.resource:
+        words += ["--resource", name]
+    return [*words, "--zenoh", args.zenoh]
+
+
+def _logged_in(
+    client: ResourceClient, args: argparse.Namespace, password: str | None
+) -> ResourceClient:
+    """`client`, logged in as `--user`; a refused login is a Refusal (`login`), which ends
+    the fleet command at that resource."""
+    try:
+        sign_in(client, args, password)
+    except Failed as exc:
+        raise Refusal("login", str(exc)) from None
+    return client
+
+
 def load(args: argparse.Namespace) -> int:
     wrong = fleet_refusal(args.resource)
     if wrong is not None:
@@ -101,20 +121,12 @@ def load(args: argparse.Namespace) -> int:
     def body() -> int:
         load_project(list(args.paths))  # an unreadable project before any router is asked
         password = password_of(args.user) if args.user is not None else None
-        words = ["padt", "fleet", "load", *map(str, args.paths)]
-        for name in args.resource:
-            words += ["--resource", name]
-        how = shlex.join([*words, "--zenoh", args.zenoh, "--backup-dir", str(args.backup_dir)])
+        how = shlex.join([*_command_words("load", args), "--backup-dir", str(args.backup_dir)])
         # no router: main() says so in one line, exit code 1
         with closing(open_client(args.zenoh, args.zenoh_config)) as session:
 
             def client_of(name: str) -> ResourceClient:
-                client = ResourceClient(session, name)
-                try:
-                    sign_in(client, args, password)
-                except Failed as exc:
-                    raise Refusal("login", str(exc)) from None
-                return client
+                return _logged_in(ResourceClient(session, name), args, password)
 
             results = download_fleet(
                 args.paths,
@@ -177,10 +189,7 @@ def reload(args: argparse.Namespace) -> int:
         load_project(list(args.paths))  # an unreadable project before any router is asked
         password = password_of(args.user) if args.user is not None else None
         confirmed = args.yes and not args.preview
-        words = ["padt", "fleet", "reload", *map(str, args.paths)]
-        for name in args.resource:
-            words += ["--resource", name]
-        words += ["--zenoh", args.zenoh]
+        words = _command_words("reload", args)
         words += [word for new, old in args.rename for word in ("--rename", f"{old}={new}")]
         words += [word for name in args.keep_online for word in ("--keep-online", name)]
         how = shlex.join([*words, "--backup-dir", str(args.backup_dir), "--yes"])
@@ -188,12 +197,7 @@ def reload(args: argparse.Namespace) -> int:
         with closing(open_client(args.zenoh, args.zenoh_config)) as session:
 
             def client_of(name: str) -> ResourceClient:
-                client = ResourceClient(session, name)
-                try:
-                    sign_in(client, args, password)
-                except Failed as exc:
-                    raise Refusal("login", str(exc)) from None
-                return client
+                return _logged_in(ResourceClient(session, name), args, password)
 
             results = reload_fleet(
                 args.paths,

@@ -30,7 +30,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 import zenoh
 
@@ -207,6 +207,7 @@ def survey(
 
 # ---- one project into several resources
 
+R = TypeVar("R")  # a resource's result of a fleet command
 Outcome = Literal["done", "refused", "not tried"]
 
 
@@ -273,15 +274,29 @@ def download_fleet(
     if wrong is not None:
         raise wrong
     load_project(list(paths))  # an unreadable project: nothing tried, nothing sent
-    results: list[FleetLoad] = []
+    return _in_turn(
+        targets,
+        lambda name: _load_one(paths, name, client_of, backups, how),
+        lambda name: FleetLoad(name, "not tried"),
+        lambda result: not fleet_done([result]),
+        told,
+    )
+
+
+def _in_turn(
+    targets: Sequence[str],
+    attempt: Callable[[str], R],
+    not_tried: Callable[[str], R],
+    ends: Callable[[R], bool],
+    told: Callable[[R], None] | None,
+) -> list[R]:
+    """Each target's result, attempted in turn; once one `ends` the run, the rest are
+    `not_tried`. `told` hears each result as soon as it is known."""
+    results: list[R] = []
     stopped = False
     for name in targets:
-        result = (
-            FleetLoad(name, "not tried")
-            if stopped
-            else _load_one(paths, name, client_of, backups, how)
-        )
-        stopped = stopped or not fleet_done([result])
+        result = not_tried(name) if stopped else attempt(name)
+        stopped = stopped or ends(result)
         results.append(result)
         if told is not None:
             told(result)
@@ -442,21 +457,24 @@ def reload_fleet(
     if wrong is not None:
         raise wrong
     load_project(list(paths))  # an unreadable project: nothing tried, nothing sent
-    results: list[FleetReload] = []
-    stopped = False
-    for name in targets:
-        if stopped:
-            result = FleetReload(name, "not tried")
-        else:
-            result = _reload_one(
-                paths, name, client_of, backups, how, confirmed, dict(renames or {}),
-                keep_online, (expected or {}).get(name), projects or {},
-            )  # fmt: skip
-            stopped = confirmed and not result.complete
-        results.append(result)
-        if told is not None:
-            told(result)
-    return results
+    return _in_turn(
+        targets,
+        lambda name: _reload_one(
+            paths,
+            name,
+            client_of,
+            backups,
+            how,
+            confirmed,
+            dict(renames or {}),
+            keep_online,
+            (expected or {}).get(name),
+            projects or {},
+        ),
+        lambda name: FleetReload(name, "not tried"),
+        lambda result: confirmed and not result.complete,
+        told,
+    )
 
 
 def _reload_one(
