@@ -40,28 +40,17 @@ from types import CodeType
 from typing import NoReturn
 
 from runtime.contract.artifact import Artifact, ArtifactError, PouCode
+from runtime.contract.intrinsic_table import INTRINSICS as INTRINSIC_TABLE
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 
-# The names generated code finds in its global namespace (runtime/code/intrinsics.py `namespace`
-# is checked against these). Called ones are only ever called: never read as a value, so no
-# attribute of the functions behind them (`__globals__`) can be reached.
-CALLED_INTRINSICS = frozenset(
-    {
-        "_idiv", "_imod", "_fdiv", "_tdiv", "_pow", "_f32", "_ix", "_ref", "_deref",
-        "_deref_set", "_setbits", "_copy", "_init", "_round", "_rol", "_ror", "_mux",
-        "_str_to_int", "_str_to_real", "_str_to_bool", "_real_to_str", "_time_to_str",
-        "_date_to_str", "_str_to_time", "_w2s", "_bcd_to_int", "_int_to_bcd", "_ord", "_s2w",
-        "_left", "_right", "_mid", "_insert", "_delete", "_replace", "_find", "_safe_math",
-        "_printf", "_ActionControl", "_step_time", "_step_enter", "_test",
-    }
-)  # fmt: skip
-# objects: `_SYS` the system variables, `_G` the globals, `_P` the program instances, `_tick`
-# the slice meter's tick (or None), `_math` the math module (only `_safe_math(_math.f, x)`),
-# `_SfcStep` the class of SFC steps (only `STRUCT_SFC_STEP = _SfcStep`), and the paths of
-# instances that references read, which generated code never names
-OBJECT_INTRINSICS = frozenset(
-    {"_SYS", "_G", "_P", "_tick", "_math", "_SfcStep", "_reference_roots"}
-)
+# The names generated code finds in its global namespace, from the one table of them
+# (`intrinsic_table.py`; runtime/code/intrinsics.py `namespace` is checked against it).
+# Called ones are only ever called: never read as a value, so no attribute of the functions
+# behind them (`__globals__`) can be reached. The objects are only read (`_SYS`, `_G`,
+# `_P`, `_tick`), `_math` only as `_safe_math(_math.f, x)`, `_SfcStep` only as
+# `STRUCT_SFC_STEP = _SfcStep`, and `_reference_roots` never named by generated code.
+CALLED_INTRINSICS = frozenset(i.name for i in INTRINSIC_TABLE if i.called)
+OBJECT_INTRINSICS = frozenset(i.name for i in INTRINSIC_TABLE if not i.called)
 INTRINSICS = CALLED_INTRINSICS | OBJECT_INTRINSICS
 # the builtins generated code calls (the whole of its `__builtins__` but `__build_class__`)
 BUILTINS = frozenset({"float", "int", "abs", "len", "max", "min", "range", "str"})

@@ -45,6 +45,7 @@ from runtime.code.native.kinds import (
     join,
 )
 from runtime.contract.artifact import PouCode
+from runtime.contract.intrinsic_table import F32, FDIV, IDIV, IMOD, IX, ROUND, TICK
 
 NAME_PLACEHOLDER = "padt_unit"
 WIDEN_AFTER = 3  # passes over a body before a growing local takes the whole 64-bit range
@@ -623,10 +624,10 @@ class _Body:
             return self.named[name]
         if name == "s":
             return V(Instance(self.cls.name), "s")
-        if name == "_tick":
+        if name == TICK.name:
             held = self.temp("PyObject *", "NULL")
             self.objects.remove(held)  # borrowed: the namespace holds it
-            self.line(f"{held} = padt_global({self.module.key('_tick')});")
+            self.line(f"{held} = padt_global({self.module.key(TICK.name)});")
             self.line(f"if (PADT_UNLIKELY({held} == NULL)) goto padt_error;")
             return V(Hook(), held)
         if name == "_G":
@@ -906,45 +907,46 @@ class _Body:
             return self.unboxed(returned, info.result, f"the result of {name}", node)
         if node.keywords:
             _refuse(f"a call of {ast.unparse(node.func)} with keywords", node)
-        if name == "_ix" and len(node.args) == 3:
+        if name == IX.name and len(node.args) == len(IX.params):
             index = self.int_value(node.args[0])
             low, high = (_constant_int(arg) for arg in node.args[1:])
             if low is None or high is None:
-                _refuse("_ix with bounds that are not constants", node)
+                _refuse(f"{IX.name} with bounds that are not constants", node)
             held = self.temp("int64_t")
             self.line(f"if (PADT_LIKELY({low} <= {index.c} && {index.c} <= {high})) {{")
             self.line(f"    {held} = {index.c} - {c_int(low)};")
             self.line("} else {")
-            self.line(f'    padt_raise_through("_ix", 3, {index.c}, {c_int(low)}, {c_int(high)});')
+            raised = f'"{IX.name}", 3, {index.c}, {c_int(low)}, {c_int(high)}'
+            self.line(f"    padt_raise_through({raised});")
             self.line("    goto padt_error;")
             self.line("}")
             return V(Int(0, max(0, high - low)), held)
-        if name in ("_idiv", "_imod") and len(node.args) == 2:
+        if name in (IDIV.name, IMOD.name) and len(node.args) == len(IDIV.params):
             a, b = (self.int_value(arg) for arg in node.args)
             assert isinstance(a.kind, Int) and isinstance(b.kind, Int)
             top = max(abs(a.kind.lo), abs(a.kind.hi))
-            if name == "_imod":  # smaller than the divisor
+            if name == IMOD.name:  # smaller than the divisor
                 top = min(top, max(0, max(abs(b.kind.lo), abs(b.kind.hi)) - 1))
             result = Int(-top, top)  # the smallest 64-bit integer / -1: 2**63, in 128 bits
             held = self.temp(result.ctype)
-            helper = f"padt{name}" if result.fits64 else "padt_idiv128"
+            helper = f"padt{name}" if result.fits64 else "padt_idiv128"  # padt_idiv, padt_imod
             self.check(f"{helper}({a.c}, {b.c}, &{held})")
             return V(result, held)
-        if name in ("_f32", "float") and len(node.args) == 1:
+        if name in (F32.name, "float") and len(node.args) == 1:
             value = self.expr(node.args[0])
             number = _as_float(value, node)
             if name == "float":
                 return number
             # REAL: rounded to 32 bits (an integer, as Python converts it: to a double first)
             return V(Float(), f"((double)(float){number.c})")
-        if name in ("_round", "int") and len(node.args) == 1:
+        if name in (ROUND.name, "int") and len(node.args) == 1:
             value = self.expr(node.args[0])
             if isinstance(value.kind, Float):
                 held = self.temp("padt_i128")
-                helper = "padt_round" if name == "_round" else "padt_trunc"
+                helper = "padt_round" if name == ROUND.name else "padt_trunc"
                 self.check(f"{helper}({value.c}, &{held})")
                 return V(FROM_REAL, held)
-        if name == "_fdiv" and len(node.args) == 2:
+        if name == FDIV.name and len(node.args) == len(FDIV.params):
             a, b = (_as_float(self.expr(arg), node) for arg in node.args)
             return V(Float(), f"padt_fdiv({a.c}, {b.c})")
         if name == "abs" and len(node.args) == 1:
