@@ -16,6 +16,14 @@ millisecond; each look takes the interpreter lock, and on a machine kept busy by
 programs the operating system now and then took the CPU from the thread while it held
 the lock. The real-time cycle thread then waited for the lock: with ten browsers on the
 2-core development machine, a cycle started 8 ms late.
+
+A fired exception is never taken back by clearing it (`PyThreadState_SetAsyncExc` with
+NULL): CPython 3.11 then keeps the interpreter's "asynchronous exception pending" signal
+on, since only delivering an exception turns it off. Every function call and loop pass
+then stops to look for one, and under a trace function (a breakpoint's) the interpreter
+looks again and again at the start of the first function it enters, never running it:
+every later debug run in the process spun there until the watchdog struck again. `disarm`
+replaces the exception with one of its own and lets it arrive, which turns the signal off.
 """
 
 from __future__ import annotations
@@ -33,10 +41,28 @@ class WatchdogExpired(BaseException):
     a program run can swallow it."""
 
 
-def _raise_in(thread_id: int, exception: type[BaseException] | None) -> None:
-    """Set (or, with None, clear) the asynchronous exception pending in a thread."""
-    target = ctypes.py_object(exception) if exception is not None else None
-    ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread_id), target)
+class _TakenBack(BaseException):
+    """Stands in for a WatchdogExpired taken back; it never leaves `_take_back`."""
+
+
+def _raise_in(thread_id: int, exception: type[BaseException]) -> bool:
+    """Make `exception` the asynchronous exception pending in a thread (replacing one
+    pending there); False when no such thread runs Python."""
+    found = ctypes.pythonapi.PyThreadState_SetAsyncExc(
+        ctypes.c_ulong(thread_id), ctypes.py_object(exception)
+    )
+    return bool(found)
+
+
+def _take_back() -> None:
+    """Take back the exception the watchdog raised into this thread, delivered already or
+    still pending, and leave no pending signal behind (see the module's text)."""
+    try:
+        if _raise_in(get_ident(), _TakenBack):
+            while True:  # delivered at once, at the latest at the loop's jump back
+                pass
+    except _TakenBack:
+        pass
 
 
 class Watchdog:
@@ -74,7 +100,7 @@ class Watchdog:
             if thread_id not in self._fired:
                 return False
             self._fired.discard(thread_id)
-            _raise_in(thread_id, None)
+            _take_back()
             return True
 
     def _watch(self) -> None:

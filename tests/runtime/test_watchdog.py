@@ -4,6 +4,7 @@ cycle in ERROR STOP, the runtime keeps answering, and INIT leads back to STOP.""
 from __future__ import annotations
 
 import json
+import sys
 import threading
 import time
 from pathlib import Path
@@ -169,3 +170,28 @@ def test_a_shorter_budget_wakes_the_watchdog_sleeping_to_a_longer_one() -> None:
     spinner.join(timeout=5)  # long before the 10 s: only waking for the 50 ms ends it
     watchdog.disarm()
     assert ended == ["expired"]
+
+
+def test_once_it_struck_a_function_called_under_a_trace_function_runs() -> None:
+    # taken back by clearing it, the exception left CPython's "pending exception" signal
+    # on: a function called under a trace function then spun at its entry, never running
+    watchdog = Watchdog()
+    watchdog.arm(50_000_000)
+    try:
+        while True:
+            pass
+    except WatchdogExpired:
+        assert watchdog.disarm() is True
+    ran: list[str] = []
+    watchdog.arm(5_000_000_000)  # what ends the spin if it comes back: this test fails
+    sys.settrace(lambda frame, event, arg: None)
+    try:
+        _called(ran)
+    finally:
+        sys.settrace(None)
+        watchdog.disarm()
+    assert ran == ["called"]
+
+
+def _called(ran: list[str]) -> None:
+    ran.append("called")

@@ -123,6 +123,38 @@ def test_a_breakpoint_for_one_instance_stops_only_there(tier: NativeTier | None)
     assert program(resource, "Main").state == ProgramState.RUN and paused(resource) is None
 
 
+ENDLESS = """
+PROGRAM Main
+VAR n : DINT; END_VAR
+WHILE TRUE DO n := n + 1; END_WHILE;
+END_PROGRAM
+"""
+
+
+def test_a_breakpoint_stops_after_the_watchdog_struck_in_this_process(
+    tier: NativeTier | None,
+) -> None:
+    # the watchdog's exception used to be taken back in a way that left CPython's "pending
+    # exception" signal on for good: every later debug run in the process spun at the
+    # entry of the first POU it traced until the watchdog ended the cycle again
+    config = ResourceConfig(name="R", watchdog_ms=100)
+    endless = compile_sources([SourceFile(FILE, ENDLESS)], resource=config).artifact
+    assert endless is not None
+    resource = running(endless, tier)
+    cycles(resource, 1)
+    assert resource.state == p.ResourceState.ERROR_STOP
+    assert "watchdog" in (resource.error or "")
+    resource.init()  # a cold start of another configuration, debugged
+    resource.load(artifact())
+    resource.tier_up(wait=True)
+    resource.start()
+    cycles(resource, 2)
+    debug_set(resource, p.BreakpointSpec(17, instance="Main.b", condition="step = 2"))
+    cycles(resource, 1)
+    assert paused(resource) == p.DebugPause("Main", "Counter", FILE, 17, "breakpoint", 1)
+    assert resource.status().state == p.ResourceState.RUN  # held, not stopped
+
+
 def test_step_into_a_method_through_an_interface_and_out_again(tier: NativeTier | None) -> None:
     resource = running(artifact(), tier)
     debug_set(resource, p.BreakpointSpec(31))  # n := c.Bump(by := 3);
