@@ -113,5 +113,3 @@ INTRINSICS: tuple[Intrinsic, ...] = (
     _object("_SfcStep", "the class of SFC steps"),
     _object("_reference_roots", "the paths of instances that references read"),
 )
-
-BY_NAME = {intrinsic.name: intrinsic for intrinsic in INTRINSICS}

@@ -1,5 +1,5 @@
 """Generated Python to C: the bodies (`__call__`) of the generated classes of one unit of an
-artifact, as one C module that `runtime/code/native/binding.py` loads and binds.
+artifact, as one C module that `runtime/code/native/tier.py` loads and binds.
 
 The Python code is the reference. A body is translated only when every construct in it is
 one the translator knows and every integer it computes provably fits the C type it is
@@ -916,7 +916,7 @@ class _Body:
             self.line(f"if (PADT_LIKELY({low} <= {index.c} && {index.c} <= {high})) {{")
             self.line(f"    {held} = {index.c} - {c_int(low)};")
             self.line("} else {")
-            raised = f'"{IX.name}", 3, {index.c}, {c_int(low)}, {c_int(high)}'
+            raised = f'"{IX.name}", {len(IX.params)}, {index.c}, {c_int(low)}, {c_int(high)}'
             self.line(f"    padt_raise_through({raised});")
             self.line("    goto padt_error;")
             self.line("}")
