@@ -1,4 +1,4 @@
-"""Where the shared third-party corpus lives, and the rule for its absence."""
+"""Where the shared third-party corpus (and the peers) live, and the rule for their absence."""
 
 from __future__ import annotations
 
@@ -9,17 +9,23 @@ import pytest
 
 from tests.conftest import REPO
 
-CORPUS = REPO.parent / "shared" / "corpus"
+SHARED = REPO.parent / "shared"
+CORPUS = SHARED / "corpus"
+
+
+def shared_dir(folder: Path) -> Path:
+    """A folder of ../shared; skips the test when it is absent, except in CI, where it must
+    exist."""
+    if not folder.is_dir():
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"folder {folder} is missing (CI never skips tests of ../shared)")
+        pytest.skip(f"folder {folder} is absent: put shared/ beside the repo")
+    return folder
 
 
 def corpus_dir(name: str) -> Path:
     """The corpus folder; skips the test when it is absent, except in CI, where it must exist."""
-    folder = CORPUS / name
-    if not folder.is_dir():
-        if os.environ.get("CI") == "true":
-            pytest.fail(f"corpus folder {folder} is missing (CI never skips corpus tests)")
-        pytest.skip(f"corpus folder {folder} is absent: put shared/corpus beside the repo")
-    return folder
+    return shared_dir(CORPUS / name)
 
 
 def known_failures(name: str) -> dict[str, str]:
