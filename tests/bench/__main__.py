@@ -18,6 +18,7 @@ from tests.bench import (
     bench_lsp,
     bench_modbus,
     bench_opcua,
+    bench_peers,
     bench_projects,
     bench_recording,
     bench_reload,
@@ -35,6 +36,7 @@ from tests.bench import (
 def main() -> None:
     bench_compiler.main()
     bench_language.main()
+    bench_peers.main()
     bench_language_services.main()
     bench_lsp.main()
     bench_projects.main()

@@ -6,6 +6,8 @@ The baseline is the commit before the cycle work of issue 16, taken from this re
 history with `git archive`, or what $PADT_BENCH_BASELINE names: a checkout of another
 version (a folder) or another commit. Without git history (a shallow clone) the baseline
 figures are left out, with a note.
+
+A figure with a goal rather than a baseline says where it stands with `against_goal`.
 """
 
 from __future__ import annotations
@@ -91,3 +93,14 @@ def compare(request: dict[str, Any], key: str, rounds: int = 3) -> Compared:
     best_now = min(now, key=lambda reply: float(reply[key]))
     best_before = min(before, key=lambda reply: float(reply[key])) if before else None
     return Compared(best_now, best_before, other.name if other is not None else "")
+
+
+def against_goal(value: float, limit: float, goal: str, strict: bool = False) -> str:
+    """Where a figure stands against a goal of `value <= limit` (`value < limit` if
+    `strict`): the goal, the ratio of the figure to the limit, met or not."""
+    met = value < limit if strict else value <= limit
+    return f"goal {goal}: {value / limit:.2f}x the goal, {verdict(met)}"
+
+
+def verdict(met: bool) -> str:
+    return "met" if met else "NOT MET"
