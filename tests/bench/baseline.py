@@ -4,8 +4,10 @@ of a few rounds each (the machine is shared: the best is the least disturbed).
 
 The baseline is the commit before the cycle work of issue 16, taken from this repository's
 history with `git archive`, or what $PADT_BENCH_BASELINE names: a checkout of another
-version (a folder) or another commit. Without git history (a shallow clone) the baseline
-figures are left out, with a note.
+version (a folder) or another commit. The figures issue 34 (native code, variables in
+native memory) must keep or better have a baseline of their own, the commit before that
+work (`ISSUE_34_COMMIT`). Without git history (a shallow clone) the baseline figures are
+left out, with a note.
 
 A figure with a goal rather than a baseline says where it stands with `against_goal`.
 """
@@ -28,6 +30,7 @@ REPO = Path(__file__).resolve().parents[2]
 PROBE = Path(__file__).with_name("cycle_probe.py")
 BASELINE_COMMIT = "929e050f999accff3b980eb9de2afea51ee07ed0"  # main before the cycle work
 BASELINE_ENV = "PADT_BENCH_BASELINE"
+ISSUE_34_COMMIT = "2956fcef2b74f10ce841193e9d87546e50b4918d"  # main before issue 34's work
 
 
 @dataclass(frozen=True)
@@ -37,11 +40,13 @@ class Baseline:
 
 
 @functools.cache
-def baseline() -> Baseline | None:
-    given = os.environ.get(BASELINE_ENV, "")
+def baseline(commit: str = "") -> Baseline | None:
+    """The code base at `commit`; without one, issue 16's baseline or what
+    $PADT_BENCH_BASELINE names."""
+    given = "" if commit else os.environ.get(BASELINE_ENV, "")
     if given and Path(given).is_dir():
         return Baseline(Path(given).resolve(), given)
-    commit = given or BASELINE_COMMIT
+    commit = commit or given or BASELINE_COMMIT
     archive = subprocess.run(
         ["git", "-C", str(REPO), "archive", commit, "runtime", "backend"],
         capture_output=True,
@@ -80,18 +85,29 @@ class Compared:
     name: str  # the baseline's name
 
 
-def compare(request: dict[str, Any], key: str, rounds: int = 3) -> Compared:
-    """Today's code and the baseline, alternately; per side the round with the smallest
-    `key` (a figure of the probe's reply)."""
-    other = baseline()
-    now: list[dict[str, Any]] = []
-    before: list[dict[str, Any]] = []
+Replies = list[dict[str, Any]]
+
+
+def alternate(request: dict[str, Any], rounds: int, commit: str = "") -> tuple[Replies, Replies]:
+    """Today's code and the baseline (`baseline(commit)`), alternately, `rounds` probes
+    each: today's replies and the baseline's (none without a baseline)."""
+    other = baseline(commit)
+    now: Replies = []
+    before: Replies = []
     for _ in range(rounds):
         if other is not None:
             before.append(probe(other.tree, request))
         now.append(probe(REPO, request))
+    return now, before
+
+
+def compare(request: dict[str, Any], key: str, rounds: int = 3, commit: str = "") -> Compared:
+    """Today's code and the baseline, alternately; per side the round with the smallest
+    `key` (a figure of the probe's reply)."""
+    now, before = alternate(request, rounds, commit)
     best_now = min(now, key=lambda reply: float(reply[key]))
     best_before = min(before, key=lambda reply: float(reply[key])) if before else None
+    other = baseline(commit)
     return Compared(best_now, best_before, other.name if other is not None else "")
 
 

@@ -3,7 +3,10 @@
 a warm start and a reload of one small POU take (and how long its preparation, beside the
 cycles, holds the interpreter lock with the compile worker and without), beside the same
 for 10,000 variables measured in the same run. Each figure says whether it runs on the
-cycle thread (between two cycles: it delays the next one) or elsewhere.
+cycle thread (between two cycles: it delays the next one) or elsewhere. Last, the figures
+issue 34 (variables in native memory) must keep or better, the reload pause and online read
+at 10,000 variables and the context save at 100,000, beside the code before issue 34, each
+in a process of its own (tests/bench/baseline.py).
 
 Run with `python -m tests.bench.bench_scale`; it prints figures and asserts nothing.
 """
@@ -33,48 +36,23 @@ from runtime.reload_switch import reload
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
 from runtime.watch_sets import WatchSet
+from tests.bench.baseline import ISSUE_34_COMMIT, alternate, baseline
+from tests.bench.cycle_probe import BEST_OF, STATE_ROUNDS, best_ms, scale_source
 
 SIZES = (10_000, 100_000)
-ROUNDS = 3
-
-
-def source(variables: int, step: int = 1) -> str:
-    """`variables` elementary variables: an array of structures of five members in the
-    globals, and a small program that changes some of them every cycle."""
-    points = variables // 5
-    return "\n".join(
-        [
-            "TYPE Point : STRUCT x, y : REAL; n : DINT; ok : BOOL; t : TIME; END_STRUCT; END_TYPE",
-            f"VAR_GLOBAL points : ARRAY[1..{points}] OF Point; END_VAR",
-            "PROGRAM Small",
-            "VAR i, k : DINT; END_VAR",
-            f"k := k + {step};",
-            "FOR i := 1 TO 100 DO points[(k + i) MOD "
-            f"{points} + 1].n := k; points[i].x := DINT_TO_REAL(k); END_FOR;",
-            "END_PROGRAM",
-        ]
-    )
+ROUNDS = BEST_OF
 
 
 def compiled(variables: int, step: int = 1) -> tuple[Artifact, float]:
     config = ResourceConfig(name="R", target_cycle_ms=10, watchdog_ms=60_000)
     started = time.process_time()
     result = compile_sources(
-        [SourceFile("scale.st", source(variables, step))],
+        [SourceFile("scale.st", scale_source(variables, step))],
         resource=config,
         programs=[ProgramConfig("Small", "Small", 1)],
     )
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
     return result.artifact, time.process_time() - started
-
-
-def best_ms(work: Callable[[], object]) -> float:
-    times = []
-    for _ in range(ROUNDS):
-        started = time.perf_counter()
-        work()
-        times.append(time.perf_counter() - started)
-    return min(times) * 1000
 
 
 def longest_wait_ms(work: Callable[[], object]) -> float:
@@ -189,6 +167,43 @@ def measure(variables: int) -> dict[str, float]:
     return figures
 
 
+# what issue 34 (variables in native memory) must keep or better: (probe figure, label)
+KEPT_FIGURES = {
+    10_000: (
+        ("pause_ms", "reload pause (cycle thread)"),
+        ("read_ms", "online read of every value (cycle thread)"),
+        ("values_ms", "online read with the values built"),
+    ),
+    100_000: (
+        ("take_ms", "context save: taken (cycle thread)"),
+        ("save_ms", "context save: encoded + saved (saver thread)"),
+    ),
+}
+
+
+def bench_against_issue_34(rounds: int = 2) -> None:
+    """The figures of KEPT_FIGURES, today's code beside the code before issue 34, each in
+    processes of its own, alternately (tests/bench/baseline.py); per figure the best."""
+    other = baseline(ISSUE_34_COMMIT)
+    print(
+        f"beside the baseline of issue 34 ({other.name if other else 'none'}), {rounds} "
+        f"processes each, alternately, best of {rounds} x {STATE_ROUNDS} (ms; ratio: today / "
+        "baseline):"
+    )
+    width = max(len(label) for figures in KEPT_FIGURES.values() for _, label in figures)
+    for variables, figures in KEPT_FIGURES.items():
+        reloads = any(key == "pause_ms" for key, _ in figures)
+        request = {"state_variables": variables, "reload": reloads}
+        now, before = alternate(request, rounds, ISSUE_34_COMMIT)
+        for key, label in figures:
+            best = min(float(reply[key]) for reply in now)
+            line = f"  {variables:>7,} variables, {label + ':':<{width + 1}} {best:8.2f}"
+            if before:
+                was = min(float(reply[key]) for reply in before)
+                line += f"   baseline {was:8.2f}   ratio {best / was:5.2f}"
+            print(line)
+
+
 def main() -> None:
     print("scale benchmark: a resource of 10,000 and of 100,000 variables, best of 3 (ms)")
     compiled(10)  # the compiler's own start-up (grammar, imports) counts in neither
@@ -199,6 +214,7 @@ def main() -> None:
     for name, value in large.items():
         ratio = value / small[name] if small[name] else float("nan")
         print(f"  {name:{width}}  {small[name]:10.2f}  {value:10.2f}  {ratio:5.1f}x")
+    bench_against_issue_34()
 
 
 if __name__ == "__main__":

@@ -7,12 +7,20 @@ It uses only what every version of the project since the artifact's version 3 ha
 today's code beside the same figure of an older commit, measured in the same run.
 
 Request: {"program": ST text, "cycles": n, "check_cycles": m, "fixed_cycles": f,
-"native_cache": folder}, each part left out when empty or 0; with `native_cache` (today's
-code only) the program runs on the native tier, its modules compiled into that folder.
+"native_cache": folder, "state_variables": v, "reload": r}, each part left out when empty
+or 0; with
+`native_cache` (today's code only) the program runs on the native tier, its modules
+compiled into that folder.
 Reply: {"program_us": median us per cycle of the program (virtual clock), "values": every
 variable after `check_cycles` cycles, "fixed_us": median us per cycle of a resource with one
 empty program (real clock), "native_build_s": how long the native bodies took to be in
-place, "native_bodies": the POUs that run as C}.
+place, "native_bodies": the POUs that run as C, "read_ms", "values_ms", "take_ms",
+"save_ms", "pause_ms": for a resource of `state_variables` variables (`scale_source`), the
+best of a few rounds of reading every value (the online test's `values`: the read on the
+cycle thread, and the whole read with the values built), taking the periodic context
+(cycle thread), encoding and saving it (saver thread), and with `reload` the pause of a
+reload of its small program}. The state figures take what every version since the issue 34
+baseline (tests/bench/baseline.py) has.
 """
 
 from __future__ import annotations
@@ -20,18 +28,25 @@ from __future__ import annotations
 import json
 import statistics
 import sys
+import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.clock import RealClock, VirtualClock
+from runtime.context import save_context
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
+from runtime.reload_switch import reload
 from runtime.resource import Resource
+from runtime.restart import take_context
 
 CYCLE_NS = 100_000_000
 EMPTY = "PROGRAM Empty\nEND_PROGRAM\n"
+BEST_OF = 3  # rounds of `best_ms`
+STATE_ROUNDS = 7  # rounds of each state figure: each is short beside the process's compile
 
 
 def _running(
@@ -94,6 +109,66 @@ def fixed_cycles(cycles: int) -> float:
     return _median_us(resource.cycle, cycles)
 
 
+def scale_source(variables: int, step: int = 1) -> str:
+    """`variables` elementary variables: an array of structures of five members in the
+    globals, and a small program that changes some of them every cycle."""
+    points = variables // 5
+    return "\n".join(
+        [
+            "TYPE Point : STRUCT x, y : REAL; n : DINT; ok : BOOL; t : TIME; END_STRUCT; END_TYPE",
+            f"VAR_GLOBAL points : ARRAY[1..{points}] OF Point; END_VAR",
+            "PROGRAM Small",
+            "VAR i, k : DINT; END_VAR",
+            f"k := k + {step};",
+            "FOR i := 1 TO 100 DO points[(k + i) MOD "
+            f"{points} + 1].n := k; points[i].x := DINT_TO_REAL(k); END_FOR;",
+            "END_PROGRAM",
+        ]
+    )
+
+
+def best_ms(work: Callable[[], object], rounds: int = BEST_OF) -> float:
+    """The best of `rounds` runs of `work`, in milliseconds."""
+    times = []
+    for _ in range(rounds):
+        started = time.perf_counter()
+        work()
+        times.append(time.perf_counter() - started)
+    return min(times) * 1000
+
+
+def state_figures(variables: int, reloads: bool) -> dict[str, float]:
+    config = ResourceConfig(name="R", target_cycle_ms=10, watchdog_ms=60_000)
+    program = [ProgramConfig("Small", "Small", 1)]
+    artifacts = []
+    for step in (1, 2) if reloads else (1,):  # the second: the reload's
+        text = scale_source(variables, step)
+        result = compile_sources([SourceFile("scale.st", text)], resource=config, programs=program)
+        assert result.artifact is not None, [str(d) for d in result.diagnostics]
+        artifacts.append(result.artifact)
+    resource = Resource("R", VirtualClock())
+    resource.load(artifacts[0])
+    resource.start()
+    for _ in range(20):  # past Python's warm-up of new code
+        resource.cycle()
+    figures = {"read_ms": best_ms(resource.variables.read_values, STATE_ROUNDS)}
+    figures["values_ms"] = best_ms(resource.variables.values, STATE_ROUNDS)
+    figures["take_ms"] = best_ms(lambda: take_context(resource, deferred=True), STATE_ROUNDS)
+    context = take_context(resource, deferred=True)
+    assert context is not None
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "context"
+        figures["save_ms"] = best_ms(lambda: save_context(path, context), STATE_ROUNDS)
+    if reloads:
+        pauses = []
+        for n in range(STATE_ROUNDS):  # to the other version and back
+            pauses.append(reload(resource, artifacts[(n + 1) % 2], {}).pause_us / 1000)
+            for _ in range(20):
+                resource.cycle()
+        figures["pause_ms"] = min(pauses)
+    return figures
+
+
 def main() -> None:
     request = json.load(sys.stdin)
     reply: dict[str, Any] = {}
@@ -108,6 +183,8 @@ def main() -> None:
         reply.update(program_us=program_us, values=values)
     if request.get("fixed_cycles"):
         reply["fixed_us"] = fixed_cycles(request["fixed_cycles"])
+    if request.get("state_variables"):
+        reply.update(state_figures(request["state_variables"], request.get("reload", False)))
     json.dump(reply, sys.stdout)
 
 
