@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from backend.engineering.testing.test_build import build_tests, matching
     from backend.engineering.testing.test_session import run_session
-    from backend.engineering.testing.tiers import Tier
+    from backend.engineering.tiers import NO_COMPILER, Tier
 
     if args.jobs < 1:
         print("padt test: -j takes a number of workers from 1", file=sys.stderr)
@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     results.sort(key=lambda r: order[r.case])
     ran = sorted({tier for r in results for tier in r.tiers})
     if "native" in tiers and "native" not in ran:
-        print("padt test: no C compiler here: the native tier was not run", file=sys.stderr)
+        print(f"padt test: {NO_COMPILER}: the native tier was not run", file=sys.stderr)
     found = totals(results)
     print(summary_line(found, " and ".join(ran) or "no tier"))
     if args.junit is not None:

@@ -47,12 +47,6 @@ END_FUNCTION_BLOCK
 """
 
 
-@pytest.fixture(scope="session")
-def cache_env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
-    """One cache of native modules for the whole session: each compiles once."""
-    return {"XDG_CACHE_HOME": str(tmp_path_factory.mktemp("xdg-cache"))}
-
-
 @pytest.fixture
 def project(tmp_path: Path) -> Path:
     """A copy of the demo with one more test file, whose test fails."""
@@ -77,8 +71,8 @@ def results(stdout: str) -> tuple[list[str], str]:
 
 
 @pytest.mark.usefixtures("native_tier")
-def test_the_demo_passes_on_both_tiers(cache_env: dict[str, str]) -> None:
-    run = padt("test", str(DEMO), env=cache_env)
+def test_the_demo_passes_on_both_tiers() -> None:
+    run = padt("test", str(DEMO))
     assert run.returncode == 0, run.stderr
     passed, summary = results(run.stdout)
     assert passed == [f"PASS {name}" for name in DEMO_TESTS]
@@ -86,10 +80,8 @@ def test_the_demo_passes_on_both_tiers(cache_env: dict[str, str]) -> None:
 
 
 @pytest.mark.usefixtures("native_tier")
-def test_a_failed_assert_names_its_place_expected_and_actual(
-    project: Path, cache_env: dict[str, str]
-) -> None:
-    run = padt("test", str(project), env=cache_env)
+def test_a_failed_assert_names_its_place_expected_and_actual(project: Path) -> None:
+    run = padt("test", str(project))
     assert run.returncode == 1, run.stderr
     found, summary = results(run.stdout)
     assert (
@@ -101,49 +93,47 @@ def test_a_failed_assert_names_its_place_expected_and_actual(
 
 
 @pytest.mark.usefixtures("native_tier")
-def test_two_workers_find_what_one_process_finds(project: Path, cache_env: dict[str, str]) -> None:
-    serial = padt("test", str(project), env=cache_env)
-    parallel = padt("test", str(project), "-j", "2", env=cache_env)
+def test_two_workers_find_what_one_process_finds(project: Path) -> None:
+    serial = padt("test", str(project))
+    parallel = padt("test", str(project), "-j", "2")
     assert serial.returncode == parallel.returncode == 1
     assert results(parallel.stdout) == results(serial.stdout)
 
 
-def test_k_and_a_test_file_choose_the_tests(project: Path, cache_env: dict[str, str]) -> None:
-    chosen = padt("test", str(project), "-k", "pumpstops", "--tier", "python", env=cache_env)
+def test_k_and_a_test_file_choose_the_tests(project: Path) -> None:
+    chosen = padt("test", str(project), "-k", "pumpstops", "--tier", "python")
     assert chosen.returncode == 0, chosen.stderr
     assert results(chosen.stdout) == (
         ["PASS TankTests.TestThePumpStopsAtTheHighLevel"],
         "1 passed of 1 tests (python)",
     )
     one_file = project / "test" / "level_test.st"
-    alone = padt("test", str(one_file), "--tier", "python", env=cache_env)
+    alone = padt("test", str(one_file), "--tier", "python")
     assert alone.returncode == 1, alone.stderr
     names = [block.splitlines()[0] for block in results(alone.stdout)[0]]
     assert names == ["FAIL LevelTests.TestTheLevelIsFourHundred"]
 
 
-def test_the_python_tier_alone(cache_env: dict[str, str]) -> None:
-    run = padt("test", str(DEMO), "--tier", "python", env=cache_env)
+def test_the_python_tier_alone() -> None:
+    run = padt("test", str(DEMO), "--tier", "python")
     assert run.returncode == 0, run.stderr
     assert results(run.stdout)[1] == "6 passed of 6 tests (python)"
 
 
-def test_a_test_file_that_does_not_compile_exits_2_with_its_diagnostic(
-    project: Path, cache_env: dict[str, str]
-) -> None:
+def test_a_test_file_that_does_not_compile_exits_2_with_its_diagnostic(project: Path) -> None:
     (project / "test" / "x.st").write_text(NOT_COMPILING)
-    run = padt("test", str(project), env=cache_env)
+    run = padt("test", str(project))
     assert run.returncode == 2
     assert re.search(r"^test/x\.st:4:1: error: .*nowhere.* \[E\d{4}\]$", run.stderr, re.M)
     assert run.stdout == ""
 
 
-def test_no_test_exits_5(project: Path, cache_env: dict[str, str]) -> None:
-    unmatched = padt("test", str(project), "-k", "NoSuchTest", env=cache_env)
+def test_no_test_exits_5(project: Path) -> None:
+    unmatched = padt("test", str(project), "-k", "NoSuchTest")
     assert unmatched.returncode == 5
     assert "no test found" in unmatched.stderr
     shutil.rmtree(project / "test")
-    none = padt("test", str(project), env=cache_env)
+    none = padt("test", str(project))
     assert none.returncode == 5
     assert "no test found" in none.stderr
 
@@ -159,12 +149,10 @@ def xmllint_or_skip() -> str:
     return xmllint
 
 
-def test_the_junit_xml_is_valid_for_the_junit_schema(
-    project: Path, cache_env: dict[str, str], tmp_path: Path
-) -> None:
+def test_the_junit_xml_is_valid_for_the_junit_schema(project: Path, tmp_path: Path) -> None:
     xmllint = xmllint_or_skip()
     report = tmp_path / "junit.xml"
-    run = padt("test", str(project), "--tier", "python", "--junit", str(report), env=cache_env)
+    run = padt("test", str(project), "--tier", "python", "--junit", str(report))
     assert run.returncode == 1, run.stderr
     checked = subprocess.run(
         [xmllint, "--noout", "--schema", str(SCHEMA), str(report)],

@@ -24,7 +24,8 @@ from backend.engineering.project import ProjectError
 from backend.engineering.testing.coverage.of_build import coverage_measured, meter_for
 from backend.engineering.testing.test_build import UnitTest, build_tests
 from backend.engineering.testing.test_session import run_session
-from backend.engineering.testing.tiers import Tier, UnitTestResult
+from backend.engineering.testing.tiers import UnitTestResult
+from backend.engineering.tiers import Tier
 from runtime.contract.refusal import Refusal
 
 log = logging.getLogger("padt.tests")

@@ -4,7 +4,6 @@ spread over worker processes (`-j N`), the results in the order of the tests."""
 from __future__ import annotations
 
 import multiprocessing
-import os
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
@@ -13,20 +12,14 @@ from backend.engineering.testing.coverage.measure import CoverageMeter, LineHits
 from backend.engineering.testing.test_build import UnitTest
 from backend.engineering.testing.tiers import (
     Benches,
-    Tier,
     UnitTestResult,
     benches,
     run_on,
     run_tests,
 )
+from backend.engineering.tiers import Tier, native_cache, native_tier
 from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import Artifact
-
-
-def native_cache() -> Path:
-    """Where `padt test` keeps the native tier's compiled modules between runs."""
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "padt" / "native"
 
 
 def run_session(
@@ -69,10 +62,7 @@ _BENCHES: Benches | None = None
 
 
 def _native(tiers: tuple[Tier, ...], cache: Path) -> NativeTier | None:
-    if "native" not in tiers:
-        return None
-    cache.mkdir(parents=True, exist_ok=True)
-    return NativeTier(cache)
+    return native_tier(cache) if "native" in tiers else None
 
 
 def _run_share(

@@ -9,15 +9,14 @@ from collections.abc import Callable, Iterator
 from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 from backend.engineering.testing.coverage.measure import CoverageMeter
 from backend.engineering.testing.test_build import UnitTest
 from backend.engineering.testing.test_run import Outcome, UnitTestBench, WatchStop, same, shown
+from backend.engineering.tiers import Tier
 from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import Artifact
-
-Tier = Literal["python", "native"]
 
 
 @dataclass(frozen=True)
