@@ -81,6 +81,7 @@ REPLAY_DIFFERS, REPLAY_CANNOT, REPLAY_COMPILE_ERRORS = 1, 2, 3
 def _replay(args: argparse.Namespace) -> int:
     from backend.engineering.project import ProjectError, compile_project, load_project
     from backend.engineering.replay import ReplayError, read_parts, replay
+    from backend.engineering.tiers import one_tier
     from runtime.contract.recording import RecordingUnreadable
 
     try:
@@ -101,8 +102,11 @@ def _replay(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return REPLAY_CANNOT
+    native, note = one_tier(args.tier)
+    if note:
+        print(f"padt replay: {note}", file=sys.stderr)
     try:
-        outcome = replay(recording, result.artifact)
+        outcome = replay(recording, result.artifact, native)
     except ReplayError as exc:
         print(f"padt replay: {exc}", file=sys.stderr)
         return REPLAY_CANNOT
@@ -145,6 +149,7 @@ def _sim(args: argparse.Namespace) -> int:
         run,
         trace_names,
     )
+    from backend.engineering.tiers import one_tier
 
     try:
         project = load_project(args.paths)
@@ -162,8 +167,11 @@ def _sim(args: argparse.Namespace) -> int:
         print(diagnostic, file=sys.stderr)
     if result.artifact is None:
         return 1
+    native, note = one_tier(args.tier)
+    if note:
+        print(f"padt sim: {note}", file=sys.stderr)
     try:
-        simulation = prepare(result.artifact, plan)
+        simulation = prepare(result.artifact, plan, native)
     except SimulationError as exc:
         print(f"padt sim: {exc}", file=sys.stderr)
         return 2
@@ -285,6 +293,19 @@ def _positive(text: str) -> int:
 def _whole(text: str) -> int:
     """A whole number, 0 or more."""
     return 0 if text.strip() == "0" else _positive(text)
+
+
+def _tier_argument(parser: argparse.ArgumentParser) -> None:
+    """`--tier` of the commands that run the programs offline: by default the tier that
+    `padt runtime` runs by default, so that they run what the controller runs."""
+    parser.add_argument(
+        "--tier",
+        choices=("native", "python"),
+        default="native",
+        help="run the bodies of programs and function blocks as C compiled here where they "
+        "translate, as padt runtime does (native, the default; without a C compiler or "
+        "Python.h all run as Python, said on stderr), or all as Python",
+    )
 
 
 def _tcp_address(text: str) -> tuple[str, int]:
@@ -474,6 +495,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME,...",
         help="print only these variables (or everything below an instance); repeatable",
     )
+    _tier_argument(sim)
     sim.set_defaults(func=_sim)
 
     replay = sub.add_parser(
@@ -495,6 +517,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PROJECT",
         help="the project to replay with: the recorded version or a new one",
     )
+    _tier_argument(replay)
     replay.set_defaults(func=_replay)
 
     import_ = sub.add_parser(

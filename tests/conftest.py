@@ -97,10 +97,10 @@ def known_resources(
 @pytest.fixture(autouse=True, scope="session")
 def one_native_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
     """One cache of the native tier's compiled modules for every runtime, demo and `padt
-    test` the tests start (PADT_NATIVE_CACHE, docs/native-code.md): each runtime has a fresh
-    state folder, and with a cache of its own each would translate and compile the same
-    bodies again (about 0.7 s of CPU per start of the demo), as a command would into the
-    user's home. The tier still runs everywhere, as `padt runtime` runs it;
+    test`, `sim` or `replay` the tests start (PADT_NATIVE_CACHE, docs/native-code.md): each
+    runtime has a fresh state folder, and with a cache of its own each would translate and
+    compile the same bodies again (about 0.7 s of CPU per start of the demo), as a command
+    would into the user's home. The tier still runs everywhere, as `padt runtime` runs it;
     what is built where by default is tests/runtime/native/test_native_process.py's."""
     path = tmp_path_factory.mktemp("native-cache")
     with pytest.MonkeyPatch.context() as patch:

@@ -7,7 +7,8 @@ recorded start state, and, when the project given is another version, reloads it
 online reload would (values carried by name). Then, per recorded cycle, it sets the clock,
 the program states, the system variables and every value set from outside, runs the user
 programs (`Resource.run_programs`, the code path of the real cycle) and compares every
-recorded variable (the outputs among them) with the recording.
+recorded variable (the outputs among them) with the recording. The programs run on the tier
+asked for (`tiers.py`): either must reproduce a recording of either.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from runtime.clock import VirtualClock
+from runtime.code.native.tier import NativeTier
 from runtime.code.user_program import share_globals
 from runtime.context_snapshot import ContextMismatch, restore
 from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
@@ -98,8 +100,11 @@ def _later_parts(path: Path) -> list[Path]:
     return parts
 
 
-def replay(recording: Recording, artifact: Artifact) -> ReplayResult:
-    """Replay `recording` with the configuration `artifact` (the project given)."""
+def replay(
+    recording: Recording, artifact: Artifact, native: NativeTier | None = None
+) -> ReplayResult:
+    """Replay `recording` with the configuration `artifact` (the project given), on the
+    native tier when `native` is given, else all as Python."""
     header = recording.header
     if not header.all_inputs or recording.artifact is None or recording.start is None:
         raise ReplayError("the recording holds no inputs: record with --all-inputs to replay it")
@@ -108,7 +113,7 @@ def replay(recording: Recording, artifact: Artifact) -> ReplayResult:
     except ArtifactError as exc:
         raise ReplayError(f"the recorded configuration is damaged: {exc}") from None
     try:
-        resource = _started(_unsliced(recorded), recording)
+        resource = _started(_unsliced(recorded), recording, native)
     except ReplayError:
         raise  # says what is wrong already
     except (KeyError, TypeError, ValueError, ArithmeticError) as exc:
@@ -157,17 +162,22 @@ def _unsliced(artifact: Artifact) -> Artifact:
     return replace(artifact, programs=programs)
 
 
-def _started(artifact: Artifact, recording: Recording) -> Resource:
-    """A resource in RUN on the recorded configuration, in the state the recording began."""
+def _started(artifact: Artifact, recording: Recording, native: NativeTier | None) -> Resource:
+    """A resource in RUN on the recorded configuration, in the state the recording began;
+    the reload of another version takes its native tier along (`reload_switch`)."""
     start = recording.start
     assert start is not None
     first = recording.inputs[0].begin_ns if recording.inputs else 0
     clock = VirtualClock(start_ns=first, epoch_ns=0)
     resource = Resource(recording.header.resource, clock)
+    resource.native = native
     try:
         resource.load(artifact)
     except (Refusal, ArtifactError) as refusal:  # its code is checked before it runs
         raise ReplayError(f"the recorded configuration does not load: {refusal}") from None
+    # every replayed cycle on the tier asked for: the recorded run may have begun as Python,
+    # before its C bodies were built, but either tier gives the same values
+    resource.tier_up(wait=True)
     context = start.context
     try:
         if context["globals"] is not None:

@@ -3,7 +3,8 @@
 Cycle k (from 1) runs with the clock at (k-1) x the cycle interval. Time comes from a
 `VirtualClock` only, so the same project and options give the same output bit for bit.
 Values are set and read through the resource (`online_writes.simulate`, `Variables.values`), the
-same way online test does it.
+same way online test does it. The bodies run on the tier asked for (`tiers.py`), as a runtime
+runs them.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from backend.compiler.diagnostics import clipped, shortened
 from backend.engineering.literals import LiteralError, parse_literal
 from runtime.clock import VirtualClock
 from runtime.code.intrinsics import to_bytes
+from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import Artifact, ArtifactError
 from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.contract.refusal import Refusal
@@ -170,9 +172,10 @@ def sim_cycle_ms(artifact: Artifact) -> int:
     return artifact.resource.target_cycle_ms or DEFAULT_CYCLE_MS
 
 
-def prepare(artifact: Artifact, plan: Plan) -> Simulation:
-    """Load the artifact into a resource on a virtual clock and check every option; raises
-    SimulationError before anything has run."""
+def prepare(artifact: Artifact, plan: Plan, native: NativeTier | None = None) -> Simulation:
+    """Load the artifact into a resource on a virtual clock, on the native tier when
+    `native` is given (else all as Python), and check every option; raises SimulationError
+    before anything has run."""
     if plan.cycles < 1:
         raise SimulationError("--cycles must be at least 1")
     cycle_ms = plan.cycle_ms if plan.cycle_ms is not None else sim_cycle_ms(artifact)
@@ -180,6 +183,7 @@ def prepare(artifact: Artifact, plan: Plan) -> Simulation:
         raise SimulationError("--cycle-ms must be at least 1")
     clock = VirtualClock()
     resource = Resource(artifact.resource.name, clock)
+    resource.native = native
     try:
         resource.load(artifact)
     except (Refusal, ArtifactError) as exc:  # the check of generated code before it runs
@@ -195,6 +199,9 @@ def prepare(artifact: Artifact, plan: Plan) -> Simulation:
             )
         path, value = _checked_write(resource, setting)
         simulation.writes.setdefault(setting.cycle, []).append((path, value))
+    # a runtime runs as Python until its C bodies are built; waiting for them (once the
+    # options are good: a refusal need not) makes every cycle run on the tier asked for
+    resource.tier_up(wait=True)
     return simulation
 
 

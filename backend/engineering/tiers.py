@@ -1,7 +1,8 @@
 """The tiers the engineering tools run a configuration's code on, as a runtime does
 (docs/native-code.md): Python, or native, where the bodies of programs and function blocks
 that translate run as C compiled on this machine. `padt test` runs both and compares them
-(`testing/tiers.py`)."""
+(`testing/tiers.py`); `padt sim` and `padt replay` run one, by default the one `padt
+runtime` runs by default: native where it can be built, else Python."""
 
 from __future__ import annotations
 
@@ -34,3 +35,15 @@ def native_tier(cache: Path | None = None) -> NativeTier:
     folder = cache or native_cache()
     folder.mkdir(parents=True, exist_ok=True)
     return NativeTier(folder)
+
+
+def one_tier(asked: Tier) -> tuple[NativeTier | None, str]:
+    """For a tool that runs one tier: the native tier to give its resource (None: Python),
+    and what to say once on stderr when native was asked for but cannot be built here,
+    where the bodies run as Python, as `padt runtime` runs them then."""
+    if asked == "python":
+        return None, ""
+    native = native_tier()
+    if native.available:
+        return native, ""
+    return None, f"{NO_COMPILER}: the bodies run as Python"

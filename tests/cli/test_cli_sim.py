@@ -6,6 +6,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from tests.conftest import padt
 
 TIMER = """
@@ -372,4 +374,53 @@ def test_an_element_of_a_two_dimensional_array_is_traced_by_its_name(tmp_path: P
     assert [line["values"] for line in lines(result.stdout)] == [
         {"M.g[1,0].x": 10, "M.n": 1},
         {"M.g[1,0].x": 20, "M.n": 2},
+    ]
+
+
+SHARED = """
+FUNCTION_BLOCK Share
+VAR_INPUT total : DINT; parts : INT; END_VAR
+VAR_OUTPUT each : DINT; calls : INT; END_VAR
+calls := calls + 1;
+each := total / parts;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+VAR
+  n : INT := 3;
+  total : DINT := 100;
+  mean : REAL;
+  split : Share;
+END_VAR
+n := n - 1;
+total := total * 3 + n;
+split(total := total, parts := n);
+mean := DINT_TO_REAL(split.each) / 3.0;
+END_PROGRAM
+"""
+
+
+@pytest.mark.usefixtures("native_tier")
+def test_both_tiers_give_the_same_output_and_fault(tmp_path: Path) -> None:
+    """The default is the tier `padt runtime` runs by default: the bodies built as C (into
+    the cache), where `--tier python` builds nothing; both print the same values and the
+    same fault, at the same ST line of the function block."""
+    path = write(tmp_path, SHARED)
+    cache = tmp_path / "native"
+    env = {"PADT_NATIVE_CACHE": str(cache)}
+    python = padt("sim", path, "--cycles", "4", "--tier", "python", env=env)
+    assert not list(cache.rglob("*.so"))
+    native = padt("sim", path, "--cycles", "4", env=env)
+    assert list(cache.rglob("*.so")), native.stderr  # Main and Share, compiled
+    named = padt("sim", path, "--cycles", "4", "--tier", "native", env=env)
+    assert python.returncode == native.returncode == named.returncode == 3, python.stderr
+    assert python.stdout == native.stdout == named.stdout
+    assert python.stderr == native.stderr == named.stderr
+    records = lines(python.stdout)
+    assert column(records, "Main.total") == [302, 907, 2721, 2721]
+    assert column(records, "Main.split.each") == [151, 907, 907, 907]
+    # REAL: the 32-bit float of each quotient
+    assert column(records, "Main.mean") == [50.33333206176758] + [302.3333435058594] * 3
+    assert python.stderr.splitlines() == [
+        f"padt sim: cycle 3: program Main: integer division by zero in POU Share ({path}:6)"
     ]

@@ -201,6 +201,36 @@ def test_all_inputs_recorded_replay_identically_and_a_change_is_found(
     assert "(the 1st recorded) differs in Main.count" in differs.stdout
 
 
+@pytest.mark.usefixtures("native_tier")
+def test_a_recording_replays_alike_on_both_tiers(cell: Cell, tmp_path: Path) -> None:
+    """The default tier is native, as `padt runtime`'s: Main built as C (into the cache),
+    where `--tier python` builds nothing; each tier reproduces the runtime's recording
+    and names the same first difference of a changed version."""
+    output = tmp_path / "tiers.mcap"
+    args = ["--all-inputs", "--var", "Main.count", "--var", "Main.level", "--cycles", "50"]
+    done = as_user(cell, "op", "record", *args, "-o", str(output))
+    assert done.returncode == 0, done.stderr
+    changed = tmp_path / "changed"
+    shutil.copytree(cell.project, changed)
+    main = changed / "main.st"
+    main.write_text(main.read_text().replace("/ 2.0;", "/ 4.0;"))
+    cache = tmp_path / "native"
+    env = {"PADT_NATIVE_CACHE": str(cache)}
+    python = padt("replay", str(output), str(cell.project), "--tier", "python", env=env)
+    assert not list(cache.rglob("*.so"))
+    native = padt("replay", str(output), str(cell.project), env=env)
+    assert list(cache.rglob("*.so")), native.stderr
+    assert python.returncode == native.returncode == 0, python.stderr + native.stderr
+    assert python.stdout.strip() == native.stdout.strip() == "replay: 50 cycles, identical"
+    differs = [
+        padt("replay", str(output), str(changed), "--tier", tier, env=env)
+        for tier in ("python", "native")
+    ]
+    assert [d.returncode for d in differs] == [1, 1], differs[0].stderr + differs[1].stderr
+    assert differs[0].stdout == differs[1].stdout
+    assert "recorded) differs in Main.level: recorded " in differs[0].stdout
+
+
 def test_refusals_and_bad_options(cell: Cell, tmp_path: Path) -> None:
     output = tmp_path / "no.mcap"
     # recording needs the operator level: a read-level user is refused by the resource
