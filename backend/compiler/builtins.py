@@ -1,8 +1,9 @@
 """The standard functions of IEC 61131-3 that the compiler knows by name.
 
 Each builtin gives the type of a call from its argument types (or an error message) and
-the Python code of the call from the arguments' code. Standard *function blocks* (TON,
-CTU, ...) are not here: they are written in ST in `stdlib/`.
+the call in the typed form (runtime/contract/code/typed_form.py) from its arguments'.
+Standard *function blocks* (TON, CTU, ...) are not here: they are written in ST in
+`stdlib/`.
 """
 
 from __future__ import annotations
@@ -10,7 +11,9 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Literal
 
+from backend.compiler.conversions import call, converted, wrapped
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -27,15 +30,29 @@ from backend.compiler.types import (
     EnumType,
     OpenArrayType,
     Type,
+    artifact_type_text,
     common_numeric,
     elementary,
     integer_like,
 )
+from runtime.contract.code.typed_form import (
+    Binary,
+    BinaryOp,
+    Chain,
+    Choice,
+    Const,
+    Expr,
+    Index,
+    Named,
+    Sequence,
+    Unary,
+    Var,
+)
 
 # (argument types) -> result type, or an error message
 Typing = Callable[[list[Type]], Type | str]
-# (argument code, argument types, result type) -> code
-Emitting = Callable[[list[str], list[Type], Type], str]
+# (arguments, argument types, result type) -> the call's value
+Emitting = Callable[[list[Expr], list[Type], Type], Expr]
 
 
 @dataclass(frozen=True)
@@ -58,99 +75,6 @@ def _concrete(t: ElementaryType) -> ElementaryType:
     return {ANY_INT.name: DINT, ANY_REAL.name: LREAL}.get(t.name, t)
 
 
-NS_PER_DAY = 86_400_000_000_000
-
-
-def wrap_code(code: str, t: ElementaryType, offset: int = 0) -> str:
-    """Bring an integer expression, plus `offset`, into the range of its type (two's
-    complement; a time of day wraps around midnight). A signed wrap to 8 or 16 bits adds
-    a constant anyway: an offset costs nothing there (`x + 1` wraps as
-    `(x + 32769 & 65535) - 32768`); elsewhere it is added to the expression."""
-    masked = t.signed and t.is_integer and not t.is_any_literal and t.bits < 32
-    if offset and not masked:
-        code, offset = f"(({code}) + {offset})", 0
-    if t.name in ("TOD", "LTOD"):
-        return f"(({code}) % {NS_PER_DAY})"
-    if t.is_any_literal or not (t.is_integer or t.category in ("time", "date")):
-        return code
-    mask = (1 << t.bits) - 1
-    half = 1 << (t.bits - 1)
-    if t.bits >= 32:
-        # the wrap's constants are numbers of several digits for CPython (30 bits a digit),
-        # slower to add and mask than testing a value that is in range almost always: a
-        # DINT store 67 -> 34 ns, a LINT or TIME one 53 -> 35. Nested wraps may share the
-        # name: an inner one is read before an outer one binds it
-        low, high = (-half, half - 1) if t.signed else (0, mask)
-        wrap = f"(__w + {half} & {mask}) - {half}" if t.signed else f"__w & {mask}"
-        return f"(__w if {low} <= (__w := {code}) <= {high} else {wrap})"
-    if t.signed:
-        return f"((({code}) + {half + offset} & {mask}) - {half})"
-    return f"(({code}) & {mask})"
-
-
-# ---- conversions ------------------------------------------------------------------------
-
-
-def convert_code(code: str, source: Type, target: ElementaryType) -> str:
-    """Code converting a value of `source` to `target` (X_TO_Y semantics)."""
-    src = integer_like(source) or source
-    if not isinstance(src, ElementaryType):
-        return code
-    cat, tcat = src.category, target.category
-    if tcat == "bool":
-        if cat == "string":
-            return f"_str_to_bool({code})"
-        return f"({code} != 0)" if cat != "bool" else code
-    if tcat in ("int", "bits"):
-        if cat == "real":
-            return wrap_code(f"_round({code})", target)
-        if cat == "string" and src.name in ("CHAR", "WCHAR"):
-            return f"_ord({code})"
-        if cat == "string":
-            if not target.signed:  # a negative text does not convert to an unsigned type
-                return wrap_code(f"max(_str_to_int({code}), 0)", target)
-            return wrap_code(f"_str_to_int({code})", target)
-        if cat == "bool":
-            return f"int({code})"
-        if src.is_any_literal or (
-            src.is_integer and (src.bits < target.bits and (target.signed or not src.signed))
-        ):
-            return code
-        return wrap_code(code, target)
-    if tcat == "real":
-        if cat == "string":
-            return f"_str_to_real({code})"
-        if target.bits == 32 and not (cat == "real" and src.bits == 32):
-            return f"_f32({code})"
-        return f"float({code})"
-    if tcat == "string":
-        if cat == "real":
-            return f"_real_to_str({code})"
-        if cat == "bool":
-            return f"('TRUE' if {code} else 'FALSE')"
-        if cat == "time":
-            prefix = "LTIME#" if src.name == "LTIME" else "T#"
-            return f"_time_to_str({code}, {prefix!r})"
-        if cat == "date":
-            return f"_date_to_str({code}, {src.name!r})"
-        if cat == "string":
-            if src.name.startswith("W") and not target.name.startswith("W"):
-                return f"_w2s({code})"
-            if target.name.startswith("W") and not src.name.startswith("W"):
-                return f"_s2w({code})"
-            return code
-        return f"str({code})"
-    if tcat in ("time", "date"):
-        if cat == "string":
-            return f"_str_to_time({code})"
-        if cat == "real":
-            return wrap_code(f"_round({code} * 1000000)", target)  # REAL ms -> ns
-        if cat in ("int", "bits"):
-            return wrap_code(f"({code}) * 1000000", target)  # integers count milliseconds
-        return code
-    return code
-
-
 def _same_kind(a: Type, b: ElementaryType) -> bool:
     if not isinstance(a, ElementaryType):
         return False
@@ -171,13 +95,14 @@ def _conversion(target: ElementaryType, source_name: str | None) -> Builtin:
                 return f"expects {wanted.name}, not {arg.name}"
         return target
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
         source = args[0]
         if isinstance(target, ElementaryType) and target.is_integer:
             src = integer_like(source) or source
             if isinstance(src, ElementaryType) and src.category in ("time", "date"):
-                return wrap_code(f"_idiv({codes[0]}, 1000000)", target)  # ns -> ms
-        return convert_code(codes[0], source, target)
+                milliseconds = call("_idiv", target, values[0], Const(1_000_000, "LINT"))
+                return wrapped(milliseconds, target)  # ns -> ms
+        return converted(values[0], source, target)
 
     return Builtin(f"TO_{target.name}", ("IN",), typing, emit)
 
@@ -188,8 +113,8 @@ def _truncation(target: ElementaryType) -> Builtin:
             return "expects one number"
         return target
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
-        return wrap_code(f"int({codes[0]})", target)
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
+        return wrapped(call("int", target, values[0]), target)
 
     return Builtin("TRUNC", ("IN",), typing, emit)
 
@@ -202,9 +127,9 @@ def _bcd(to_bcd: bool, target: ElementaryType) -> Builtin:
             return "expects one integer or bit string"
         return target
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
         helper = "_int_to_bcd" if to_bcd else "_bcd_to_int"
-        return wrap_code(f"{helper}({codes[0]})", target)
+        return wrapped(call(helper, target, values[0]), target)
 
     return Builtin("BCD", ("IN",), typing, emit)
 
@@ -249,24 +174,25 @@ def _real_result(args: list[Type]) -> Type | str:
     return number if number.category == "real" and not number.is_any_literal else LREAL
 
 
-def _fn(template: str) -> Emitting:
-    """Code from a template with {0}, {1}... for the arguments."""
-    return lambda codes, _args, _result: template.format(*codes)
+def _fn(callee: str) -> Emitting:
+    """A call of an intrinsic (or of what Python has) with the arguments as they are."""
+    return lambda values, _args, result: call(callee, result, *values)
 
 
-def _numeric_result(name: str, wrap_result: bool) -> Emitting:
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
-        code = f"{name}({', '.join(codes)})"
-        if wrap_result and isinstance(result, ElementaryType):
-            return wrap_code(code, result)
-        return code
+def _chained(op: BinaryOp, values: list[Expr], result: Type) -> Expr:
+    """`a op b op c ...`, left to right."""
+    name = artifact_type_text(result)
+    chain = values[0]
+    for value in values[1:]:
+        chain = Binary(op, chain, value, name)
+    return chain
 
-    return emit
 
+def _compare_chain(op: BinaryOp) -> Emitting:
+    """GT(a, b, c): a > b > c, as Python chains comparisons (each value evaluated once)."""
 
-def _compare_chain(op: str) -> Emitting:
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
-        return "(" + f" {op} ".join(codes) + ")"
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
+        return Chain(op, tuple(values))
 
     return emit
 
@@ -280,25 +206,24 @@ def _shift(kind: str) -> Builtin:
             return "expects integers"
         return _concrete(value)
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
         assert isinstance(result, ElementaryType)
-        value, n = codes
-        mask = (1 << result.bits) - 1
-        bits = result.bits
+        value, n = values
+        name = artifact_type_text(result)
         if kind == "SHL":
-            return wrap_code(f"({value} << {n})", result)
-        if kind == "SHR":  # arithmetic for signed types, logical for unsigned and bit strings
-            if result.signed:
-                return f"({value} >> {n})"
-            return wrap_code(f"(({value} & {mask}) >> {n})", result)
-        if kind == "ROL":
-            return wrap_code(f"_rol({value} & {mask}, {n}, {bits})", result)
-        return wrap_code(f"_ror({value} & {mask}, {n}, {bits})", result)
+            return wrapped(Binary("<<", value, n, name), result)
+        if kind == "SHR" and result.signed:  # arithmetic for signed types
+            return Binary(">>", value, n, name)
+        bits = Binary("&", value, Const((1 << result.bits) - 1, name), name)
+        if kind == "SHR":  # logical for unsigned types and bit strings
+            return wrapped(Binary(">>", bits, n, name), result)
+        width = Const(result.bits, "INT")
+        return wrapped(call("_rol" if kind == "ROL" else "_ror", result, bits, n, width), result)
 
     return Builtin(kind, ("IN", "N"), typing, emit, min_args=2)
 
 
-def _bitwise(op: str, name: str) -> Builtin:
+def _bitwise(op: BinaryOp, name: str) -> Builtin:
     def typing(args: list[Type]) -> Type | str:
         if all(a == BOOL for a in args):
             return BOOL
@@ -307,8 +232,8 @@ def _bitwise(op: str, name: str) -> Builtin:
             return "expects BOOL or bit strings"
         return _concrete(result)
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
-        return "(" + f" {op} ".join(codes) + ")"
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
+        return _chained(op, values, result)
 
     return Builtin(name, None, typing, emit, min_args=2)
 
@@ -322,11 +247,11 @@ def _not_typing(args: list[Type]) -> Type | str:
     return _concrete(value) if value is not None else "expects BOOL or a bit string"
 
 
-def _not_emit(codes: list[str], args: list[Type], result: Type) -> str:
+def _not_emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
     if result == BOOL:
-        return f"(not {codes[0]})"
+        return Unary("not", values[0], "BOOL")
     assert isinstance(result, ElementaryType)
-    return wrap_code(f"(~{codes[0]})", result)
+    return wrapped(Unary("~", values[0], artifact_type_text(result)), result)
 
 
 def _sel_typing(args: list[Type]) -> Type | str:
@@ -351,6 +276,17 @@ def _common(args: list[Type]) -> Type | str:
     return _concrete(numeric)
 
 
+def _select(values: list[Expr], args: list[Type], result: Type) -> Expr:
+    """SEL(G, IN0, IN1): only the input chosen is evaluated."""
+    return Choice(values[0], values[2], values[1], artifact_type_text(result))
+
+
+def _limit(values: list[Expr], args: list[Type], result: Type) -> Expr:
+    """LIMIT(MN, IN, MX) = MIN(MAX(IN, MN), MX)."""
+    low, value, high = values
+    return call("min", result, call("max", result, value, low), high)
+
+
 def _mux_typing(args: list[Type]) -> Type | str:
     if len(args) < 2:
         return "takes K and at least one input"
@@ -371,13 +307,15 @@ def _bound(kind: str) -> Builtin:
             return "takes an array and a dimension"
         return DINT
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
         array = args[0]
+        dim = Binary("-", values[1], Const(1, "DINT"), "DINT")
         if isinstance(array, OpenArrayType):  # [items, bounds] of the array passed
-            return f"{codes[0]}[1][{codes[1]} - 1][{0 if kind == 'LOWER' else 1}]"
+            bounds = Index(Index(values[0], Const(1, "DINT"), ""), dim, "")
+            return Index(bounds, Const(0 if kind == "LOWER" else 1, "DINT"), "DINT")
         assert isinstance(array, ArrayType)
-        values = [lo if kind == "LOWER" else hi for lo, hi in array.dims]
-        return f"{tuple(values)!r}[{codes[1]} - 1]"
+        ends = tuple(Const(lo if kind == "LOWER" else hi, "DINT") for lo, hi in array.dims)
+        return Index(Sequence(ends, "", as_tuple=True), dim, "DINT")
 
     return Builtin(f"{kind}_BOUND", ("ARR", "DIM"), typing, emit, min_args=2)
 
@@ -389,12 +327,12 @@ def _abs_typing(args: list[Type]) -> Type | str:
     return _concrete(number) if number is not None else "expects a number"
 
 
-def _abs_emit(codes: list[str], args: list[Type], result: Type) -> str:
+def _abs_emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
     assert isinstance(result, ElementaryType)
-    return wrap_code(f"abs({codes[0]})", result)
+    return wrapped(call("abs", result, values[0]), result)
 
 
-def _arith(name: str, op: str, variadic: bool) -> Builtin:
+def _arith(name: str, op: BinaryOp | Literal["/", "MOD"], variadic: bool) -> Builtin:
     def typing(args: list[Type]) -> Type | str:
         if not variadic and len(args) != 2:
             return "takes two arguments"
@@ -403,14 +341,14 @@ def _arith(name: str, op: str, variadic: bool) -> Builtin:
         result = _same_numeric(args)
         return result if isinstance(result, str) else _concrete(result)
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
         assert isinstance(result, ElementaryType)
         if op == "/":
             helper = "_fdiv" if result.category == "real" else "_idiv"
-            return wrap_code(f"{helper}({codes[0]}, {codes[1]})", result)
+            return wrapped(call(helper, result, *values), result)
         if op == "MOD":
-            return f"_imod({codes[0]}, {codes[1]})"
-        return wrap_code("(" + f" {op} ".join(codes) + ")", result)
+            return call("_imod", result, *values)
+        return wrapped(_chained(op, values, result), result)
 
     return Builtin(name, None if variadic else ("IN1", "IN2"), typing, emit, min_args=2)
 
@@ -426,9 +364,9 @@ _MATH["LOG"] = "_math.log10"
 def _math_fn(name: str) -> Builtin:
     helper = _MATH[name]
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
-        code = f"_safe_math({helper}, {codes[0]})"
-        return f"_f32({code})" if result == REAL else code
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
+        value = call("_safe_math", result, Named(helper), values[0])
+        return call("_f32", result, value) if result == REAL else value
 
     return Builtin(name, ("IN",), _real_result, emit)
 
@@ -455,7 +393,7 @@ def _string_of(args: list[Type]) -> Type:
     return WSTRING if args and args[0].name == WSTRING.name else STRING
 
 
-def _time_arith(name: str, op: str, result_name: str | None) -> Builtin:
+def _time_arith(name: str, op: BinaryOp, result_name: str | None) -> Builtin:
     """ADD_TIME, SUB_DT_TIME, ...: the typed forms of + and - on times and dates."""
 
     def typing(args: list[Type]) -> Type | str:
@@ -467,9 +405,9 @@ def _time_arith(name: str, op: str, result_name: str | None) -> Builtin:
             return found
         return args[0]
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
         assert isinstance(result, ElementaryType)
-        return wrap_code(f"({codes[0]} {op} {codes[1]})", result)
+        return wrapped(Binary(op, values[0], values[1], artifact_type_text(result)), result)
 
     return Builtin(name, ("IN1", "IN2"), typing, emit, min_args=2)
 
@@ -486,11 +424,13 @@ def _time_scale(name: str, op: str) -> Builtin:
             return "takes a TIME and a number"
         return args[0]
 
-    def emit(codes: list[str], args: list[Type], result: Type) -> str:
+    def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
         assert isinstance(result, ElementaryType)
         if op == "*":
-            return wrap_code(f"_round({codes[0]} * {codes[1]})", result)
-        return wrap_code(f"_round(_fdiv({codes[0]}, {codes[1]}))", result)
+            scaled: Expr = Binary("*", values[0], values[1], "LREAL")
+        else:
+            scaled = call("_fdiv", "LREAL", *values)
+        return wrapped(call("_round", result, scaled), result)
 
     return Builtin(name, ("IN1", "IN2"), typing, emit, min_args=2)
 
@@ -501,19 +441,54 @@ def _printf_typing(args: list[Type]) -> Type | str:
     return DINT
 
 
+_COMPARISONS: tuple[tuple[str, BinaryOp], ...] = (
+    ("GT", ">"),
+    ("GE", ">="),
+    ("EQ", "=="),
+    ("LE", "<="),
+    ("LT", "<"),
+    ("NE", "!="),
+)
+# the typed forms of + and - on times and dates: (name, operation, result type)
+_TIME_ARITHMETIC: tuple[tuple[str, BinaryOp, str], ...] = (
+    ("ADD_TIME", "+", "TIME"),
+    ("ADD_LTIME", "+", "LTIME"),
+    ("SUB_TIME", "-", "TIME"),
+    ("SUB_LTIME", "-", "LTIME"),
+    ("ADD_TOD_TIME", "+", "TOD"),
+    ("ADD_LTOD_LTIME", "+", "TOD"),
+    ("ADD_DT_TIME", "+", "DT"),
+    ("ADD_LDT_LTIME", "+", "DT"),
+    ("SUB_TOD_TIME", "-", "TOD"),
+    ("SUB_LTOD_LTIME", "-", "TOD"),
+    ("SUB_DT_TIME", "-", "DT"),
+    ("SUB_LDT_LTIME", "-", "DT"),
+    ("SUB_DATE_DATE", "-", "TIME"),
+    ("SUB_LDATE_LDATE", "-", "LTIME"),
+    ("SUB_TOD_TOD", "-", "TIME"),
+    ("SUB_LTOD_LTOD", "-", "LTIME"),
+    ("SUB_DT_DT", "-", "TIME"),
+    ("SUB_LDT_LDT", "-", "LTIME"),
+    ("CONCAT_DATE_TOD", "+", "DT"),
+    ("CONCAT_LDATE_LTOD", "+", "DT"),
+)
+
 _FIXED: dict[str, Builtin] = {
     b.name: b
     for b in [
         Builtin("ABS", ("IN",), _abs_typing, _abs_emit),
         *(_math_fn(name) for name in _MATH),
-        Builtin("EXPT", ("IN1", "IN2"), _expt_typing, _fn("_pow({0}, {1})"), min_args=2),
+        Builtin("EXPT", ("IN1", "IN2"), _expt_typing, _fn("_pow"), min_args=2),
         _arith("ADD", "+", True),
         _arith("MUL", "*", True),
         _arith("SUB", "-", False),
         _arith("DIV", "/", False),
         _arith("MOD", "MOD", False),
         Builtin(
-            "MOVE", ("IN",), lambda a: a[0] if len(a) == 1 else "takes one argument", _fn("{0}")
+            "MOVE",
+            ("IN",),
+            lambda a: a[0] if len(a) == 1 else "takes one argument",
+            lambda values, _args, _result: values[0],
         ),
         _shift("SHL"),
         _shift("SHR"),
@@ -523,70 +498,37 @@ _FIXED: dict[str, Builtin] = {
         _bitwise("|", "OR"),
         _bitwise("^", "XOR"),
         Builtin("NOT", ("IN",), _not_typing, _not_emit),
-        Builtin("SEL", ("G", "IN0", "IN1"), _sel_typing, _fn("({2} if {0} else {1})"), min_args=3),
-        Builtin("MUX", None, _mux_typing, lambda c, a, r: f"_mux({', '.join(c)})", min_args=2),
-        Builtin("MAX", None, _common, _numeric_result("max", False), min_args=1),
-        Builtin("MIN", None, _common, _numeric_result("min", False), min_args=1),
-        Builtin(
-            "LIMIT", ("MN", "IN", "MX"), _limit_typing, _fn("min(max({1}, {0}), {2})"), min_args=3
-        ),
+        Builtin("SEL", ("G", "IN0", "IN1"), _sel_typing, _select, min_args=3),
+        Builtin("MUX", None, _mux_typing, _fn("_mux"), min_args=2),
+        Builtin("MAX", None, _common, _fn("max"), min_args=1),
+        Builtin("MIN", None, _common, _fn("min"), min_args=1),
+        Builtin("LIMIT", ("MN", "IN", "MX"), _limit_typing, _limit, min_args=3),
         *(
             Builtin(name, None, _comparable, _compare_chain(op), min_args=2)
-            for name, op in (
-                ("GT", ">"),
-                ("GE", ">="),
-                ("EQ", "=="),
-                ("LE", "<="),
-                ("LT", "<"),
-                ("NE", "!="),
-            )
+            for name, op in _COMPARISONS
         ),
-        Builtin("LEN", ("IN",), lambda a: INT, _fn("len({0})")),
-        Builtin("LEFT", ("IN", "L"), _string_of, _fn("_left({0}, {1})"), min_args=2),
-        Builtin("RIGHT", ("IN", "L"), _string_of, _fn("_right({0}, {1})"), min_args=2),
-        Builtin("MID", ("IN", "L", "P"), _string_of, _fn("_mid({0}, {1}, {2})"), min_args=3),
-        Builtin("CONCAT", None, _strings, lambda c, a, r: "(" + " + ".join(c) + ")", min_args=1),
+        Builtin("LEN", ("IN",), lambda a: INT, _fn("len")),
+        Builtin("LEFT", ("IN", "L"), _string_of, _fn("_left"), min_args=2),
+        Builtin("RIGHT", ("IN", "L"), _string_of, _fn("_right"), min_args=2),
+        Builtin("MID", ("IN", "L", "P"), _string_of, _fn("_mid"), min_args=3),
+        Builtin("CONCAT", None, _strings, lambda v, a, r: _chained("+", v, r), min_args=1),
         Builtin(
             "INSERT",
             ("IN1", "IN2", "P"),
             _string_of,
-            _fn("_insert({0}, {1}, {2})"),
+            _fn("_insert"),
             min_args=3,
         ),
-        Builtin("DELETE", ("IN", "L", "P"), _string_of, _fn("_delete({0}, {1}, {2})"), min_args=3),
+        Builtin("DELETE", ("IN", "L", "P"), _string_of, _fn("_delete"), min_args=3),
         Builtin(
             "REPLACE",
             ("IN1", "IN2", "L", "P"),
             _string_of,
-            _fn("_replace({0}, {1}, {2}, {3})"),
+            _fn("_replace"),
             min_args=4,
         ),
-        Builtin("FIND", ("IN1", "IN2"), lambda a: INT, _fn("_find({0}, {1})"), min_args=2),
-        *(
-            _time_arith(name, op, result)
-            for name, op, result in (
-                ("ADD_TIME", "+", "TIME"),
-                ("ADD_LTIME", "+", "LTIME"),
-                ("SUB_TIME", "-", "TIME"),
-                ("SUB_LTIME", "-", "LTIME"),
-                ("ADD_TOD_TIME", "+", "TOD"),
-                ("ADD_LTOD_LTIME", "+", "TOD"),
-                ("ADD_DT_TIME", "+", "DT"),
-                ("ADD_LDT_LTIME", "+", "DT"),
-                ("SUB_TOD_TIME", "-", "TOD"),
-                ("SUB_LTOD_LTIME", "-", "TOD"),
-                ("SUB_DT_TIME", "-", "DT"),
-                ("SUB_LDT_LTIME", "-", "DT"),
-                ("SUB_DATE_DATE", "-", "TIME"),
-                ("SUB_LDATE_LDATE", "-", "LTIME"),
-                ("SUB_TOD_TOD", "-", "TIME"),
-                ("SUB_LTOD_LTOD", "-", "LTIME"),
-                ("SUB_DT_DT", "-", "TIME"),
-                ("SUB_LDT_LDT", "-", "LTIME"),
-                ("CONCAT_DATE_TOD", "+", "DT"),
-                ("CONCAT_LDATE_LTOD", "+", "DT"),
-            )
-        ),
+        Builtin("FIND", ("IN1", "IN2"), lambda a: INT, _fn("_find"), min_args=2),
+        *(_time_arith(name, op, result) for name, op, result in _TIME_ARITHMETIC),
         *(
             _time_scale(name, op)
             for name, op in (
@@ -600,8 +542,14 @@ _FIXED: dict[str, Builtin] = {
         ),
         _bound("LOWER"),
         _bound("UPPER"),
-        Builtin("PRINTF", None, _printf_typing, lambda c, a, r: f"_printf({', '.join(c)})"),
-        Builtin("__CURRENT_TIME", (), lambda a: TIME, _fn("_SYS.now_ns"), min_args=0),
+        Builtin("PRINTF", None, _printf_typing, _fn("_printf")),
+        Builtin(
+            "__CURRENT_TIME",
+            (),
+            lambda a: TIME,
+            lambda _values, _args, _result: Var("now_ns", "system", "TIME"),
+            min_args=0,
+        ),
     ]
 }
 

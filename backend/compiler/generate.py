@@ -16,9 +16,9 @@ from dataclasses import dataclass, field, fields, is_dataclass
 
 from backend.compiler import ast, builtins
 from backend.compiler.ast import key
-from backend.compiler.builtins import convert_code, wrap_code
 from backend.compiler.codes import Code
 from backend.compiler.constants import is_zero_literal
+from backend.compiler.conversions import call, converted, wrapped
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     ActionCall,
@@ -49,7 +49,7 @@ from backend.compiler.resolve import (
     transition_variable,
 )
 from backend.compiler.source import Pos
-from backend.compiler.test_functions import TEST_CYCLES_CODE, test_call_lines
+from backend.compiler.test_functions import TEST_CYCLES_CALL, test_call_lines
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -65,15 +65,38 @@ from backend.compiler.types import (
     StructType,
     Type,
     VariadicType,
+    artifact_type_text,
     common_numeric,
     integer_like,
     is_implicit_reference,
     value_type,
 )
+from runtime.contract.code.python_text import python_text
+from runtime.contract.code.typed_form import (
+    Assigned,
+    Binary,
+    BinaryOp,
+    Call,
+    Chain,
+    Choice,
+    Const,
+    Expr,
+    Index,
+    Member,
+    Members,
+    Named,
+    Repeated,
+    Sequence,
+    Slice,
+    This,
+    Unary,
+    Var,
+)
 from runtime.contract.values import to_real32
 
 INDENT = "    "
-_COMPARE = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
+_COMPARE: dict[str, BinaryOp] = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
+_BITWISE: dict[str, BinaryOp] = {"AND": "&", "&": "&", "OR": "|", "XOR": "^"}
 LOCAL_KINDS = ("VAR_TEMP", "RETURN")  # Python locals even in a class's __call__
 
 
@@ -169,11 +192,15 @@ class GenerationError(Exception):
 
 @dataclass
 class _Value:
-    code: str
+    node: Expr
     type: Type
     unwrapped: bool = False  # an integer result that may lie outside its type's range
     # an unwrapped `head + n` (n a literal): its wrap adds n to the wrap's own constant
-    constant_tail: tuple[str, int] | None = None
+    constant_tail: tuple[Expr, int] | None = None
+
+    @property
+    def code(self) -> str:
+        return python_text(self.node)
 
 
 @dataclass
@@ -230,21 +257,28 @@ class _Emitter:
         return f"__t{self.temp_count}"
 
     # ---- storage
-    def var_code(self, variable: Variable) -> str:
+    def var_node(self, variable: Variable) -> Var:
+        type_text = artifact_type_text(variable.type)
         counter = self.counters.get((variable.kind, variable.attr))
         if counter is not None:
-            return counter
+            return Var(counter, "local", type_text)
         if variable.kind == "SYSTEM":  # SYS.COLDSTART
-            return f"_SYS.{variable.attr}"
+            return Var(variable.attr, "system", type_text)
         if variable.kind == "VAR_GLOBAL":
-            return f"{'s' if self.in_globals else '_G'}.{variable.attr}"
+            return Var(variable.attr, "instance" if self.in_globals else "globals", type_text)
         if id(variable) in self.method_locals or is_python_local(variable, self.local):
-            return variable.attr
-        return f"s.{variable.attr}"
+            return Var(variable.attr, "local", type_text)
+        return Var(variable.attr, "instance", type_text)
+
+    def var_code(self, variable: Variable) -> str:
+        return python_text(self.var_node(variable))
 
     # ---- expressions
     def exact(self, expr: ast.Expr) -> _Value:
         return _exact(self.expr(expr))
+
+    def exact_node(self, expr: ast.Expr) -> Expr:
+        return self.exact(expr).node
 
     def exact_code(self, expr: ast.Expr) -> str:
         return self.exact(expr).code
@@ -270,59 +304,65 @@ class _Emitter:
                 literal_type = _type(self.scope, expr)
                 if isinstance(literal_type, ElementaryType) and literal_type.category == "real":
                     number = float(v)  # REAL#5
-                    return _Value(
-                        repr(to_real32(number) if literal_type.bits == 32 else number),
-                        literal_type,
-                    )
+                    value = to_real32(number) if literal_type.bits == 32 else number
+                    return _constant(value, literal_type)
                 if isinstance(literal_type, ElementaryType) and not literal_type.is_any_literal:
                     v = wrap_constant(v, literal_type)
-                return _Value(repr(v), literal_type)
+                return _constant(v, literal_type)
             case ast.RealLiteral(value=v):
                 literal_type = _type(self.scope, expr)
                 if isinstance(literal_type, ElementaryType) and literal_type.bits == 32:
                     v = to_real32(v)  # REAL#7.3 is the single nearest 7.3, as a REAL holds it
-                return _Value(repr(v), literal_type)
+                return _constant(v, literal_type)
             case ast.BoolLiteral(value=v):
-                return _Value(repr(v), BOOL)
+                return _constant(v, BOOL)
             case ast.TimeLiteral(nanoseconds=ns):
-                return _Value(repr(ns), _type(self.scope, expr))
+                return _constant(ns, _type(self.scope, expr))
             case ast.StringLiteral(value=v):
-                return _Value(repr(v), _type(self.scope, expr))
+                return _constant(v, _type(self.scope, expr))
             case ast.EnumLiteral():
-                return _Value(repr(self.scope.enum_literal_value(expr)), _type(self.scope, expr))
+                return _constant(self.scope.enum_literal_value(expr), _type(self.scope, expr))
             case ast.NameRef(name=name):
                 binding = self.scope.enum_hint(expr) or self.scope.lookup(name)
                 if isinstance(binding, EnumValue):
-                    return _Value(repr(binding.value), binding.type)
+                    return _constant(binding.value, binding.type)
                 if isinstance(binding, NonFinite):  # float('inf'), float('nan')
-                    return _Value(f"float({str(binding.value)!r})", binding.type)
+                    return _constant(float(binding.value), binding.type)
                 if isinstance(binding, ProgramRef):
-                    return _Value(f"_P.{class_name(binding.pou.name)}", FbType(binding.pou.name))
+                    program = FbType(binding.pou.name)
+                    return _Value(
+                        Var(class_name(binding.pou.name), "programs", _t(program)), program
+                    )
                 if binding is None:  # a property of the block
                     return self._property_get(expr)
                 if binding.kind == "THIS":  # a reference to the instance the code runs on
-                    return _Value("_ref(s, (), '')", binding.type)
-                return _implicit(self.var_code(binding), binding.type)
+                    return _Value(_reference_call(This(""), (), Const("", "STRING")), binding.type)
+                return _implicit(self.var_node(binding), binding.type)
             case ast.MemberRef(base=base):
                 member = self.scope.member(expr)
                 if member is None:
                     return self._property_get(expr)
                 if member.kind == "SYSTEM":
-                    return _Value(self.var_code(member), member.type)
-                return _implicit(f"{self.expr(base).code}.{member.attr}", member.type)
+                    return _Value(self.var_node(member), member.type)
+                owner = self.expr(base).node
+                return _implicit(Member(owner, member.attr, _t(member.type)), member.type)
             case ast.IndexRef():
                 return self._index(expr)
             case ast.NullLiteral():
-                return _Value("None", NULL_TYPE)
+                return _Value(Const(None, NULL_TYPE.name), NULL_TYPE)
             case ast.Deref() if self.scope.self_deref(expr) is not None:
-                return _Value("s", _type(self.scope, expr))  # THIS^, SUPER^: the instance
+                return _Value(This(""), _type(self.scope, expr))  # THIS^, SUPER^: the instance
             case ast.Deref(base=base):  # NULL is a program fault (`_deref`)
-                return _Value(f"_deref({self.expr(base).code})", _type(self.scope, expr))
+                result = _type(self.scope, expr)
+                return _Value(call("_deref", _t(result), self.expr(base).node), result)
             case ast.BitRef(base=base, bit=bit, width=width):
-                shifted = f"(({self.exact(base).code}) >> {bit * width})"
+                whole = self.exact(base)
+                shifted = Binary(">>", whole.node, _int(bit * width), _t(whole.type))
                 if width == 1:
-                    return _Value(f"({shifted} & 1 == 1)", BOOL)
-                return _Value(f"({shifted} & {(1 << width) - 1})", _type(self.scope, expr))
+                    low = Binary("&", shifted, _int(1), "BOOL")
+                    return _Value(Binary("==", low, _int(1), "BOOL"), BOOL)
+                result = _type(self.scope, expr)
+                return _Value(Binary("&", shifted, _int((1 << width) - 1), _t(result)), result)
             case ast.Unary():
                 return self._unary(expr)
             case ast.Binary():
@@ -335,212 +375,240 @@ class _Emitter:
         base = self.expr(expr.base)
         array = base.type
         if isinstance(array, OpenArrayType):
-            return self._open_index(base.code, array, expr.indices)
+            return self._open_index(base.node, array, expr.indices)
         assert isinstance(array, ArrayType)
-        return _Value(f"{base.code}[{self._flat_offset(expr, array)}]", array.element)
+        offset = self._flat_offset(expr, array)
+        return _Value(Index(base.node, offset, _t(array.element)), array.element)
 
-    def _flat_offset(self, expr: ast.IndexRef, array: ArrayType) -> str:
+    def _flat_offset(self, expr: ast.IndexRef, array: ArrayType) -> Expr:
         """The list offset of an element, each index checked against its bounds."""
-        parts: list[str] = []
-        stride = 1
+        offsets: list[Expr] = []
+        # the last index first, as its code has always been generated (temporaries in order)
         for index_expr, (low, high) in reversed(list(zip(expr.indices, array.dims, strict=True))):
             constant = self.scope.constant_int(index_expr)
             if constant is not None and low <= constant <= high:
-                offset = repr(constant - low)
+                offsets.append(_int(constant - low))
             else:
-                offset = self._checked_offset(self.exact(index_expr).code, low, high)
-            parts.append(offset if stride == 1 else f"{offset} * {stride}")
-            stride *= high - low + 1
-        return " + ".join(reversed(parts))
+                offsets.append(self._checked_offset(self.exact_node(index_expr), low, high))
+        return _flat(offsets[::-1], array.dims)
 
-    def reference(self, expr: ast.Expr) -> str:
-        """Code of REF(expr): `_ref(root, steps, label)`, the object that holds the variable,
-        the accessors below it (a list offset computed now) and its ST path below the root
+    def reference(self, expr: ast.Expr) -> Expr:
+        """REF(expr): `_ref(root, steps, label)`, the object that holds the variable, the
+        accessors below it (a list offset computed now) and its ST path below the root
         (the runtime puts the root's path before it)."""
         held = self.held_reference(expr)
         if held is not None:  # REF of a REFERENCE TO: the reference it holds
             return held
         root, steps, label, whole = self._place(expr)
-        return f"_ref({root}, ({''.join(s + ', ' for s in steps)}), {label}, {whole})"
+        return _reference_call(root, tuple(steps), label, whole)
 
-    def _place(self, expr: ast.Expr) -> tuple[str, list[str], str, bool]:
-        """(root code, accessor codes, label code, whether the label is a whole path)."""
+    def _place(self, expr: ast.Expr) -> tuple[Expr, list[Expr], Expr, bool]:
+        """(root, accessors, label, whether the label is a whole path)."""
         match expr:
             case ast.NameRef(name=name):
                 binding = self.scope.lookup(name)
                 if isinstance(binding, ProgramRef):
-                    return f"_P.{class_name(binding.pou.name)}", [], repr(name), False
+                    program = Var(class_name(binding.pou.name), "programs", binding.pou.name)
+                    return program, [], _text(name), False
                 assert isinstance(binding, Variable)
-                root, _, attr = self.var_code(binding).rpartition(".")
-                return root, [repr(attr)], repr(binding.name), False
+                variable = self.var_node(binding)
+                assert variable.where != "local", "REF of a local is refused before this"
+                return _ROOTS[variable.where], [_text(variable.name)], _text(binding.name), False
             case ast.MemberRef(base=base, member=member_name):
                 member = self.scope.member(expr)
                 assert member is not None
                 root, steps, label, whole = self._place(base)
-                named = repr(member_name) if label == "''" else f"{label} + {'.' + member_name!r}"
-                return root, [*steps, repr(member.attr)], named, whole
+                if label == _text(""):
+                    named: Expr = _text(member_name)
+                else:
+                    named = Binary("+", label, _text("." + member_name), "STRING")
+                return root, [*steps, _text(member.attr)], named, whole
             case ast.IndexRef(base=base, indices=indices):
                 array = _type(self.scope, base)
                 assert isinstance(array, ArrayType)
                 held = [self.temp() for _ in indices]  # each index evaluated once
                 for temp, index in zip(held, indices, strict=True):
-                    self.pre.append(f"{temp} = {self.exact(index).code}")
+                    self.pre.append(f"{temp} = {self.exact_code(index)}")
                 offset = self._offset_of_held(array, held)
                 root, steps, label, whole = self._place(base)
-                shown = " + ', ' + ".join(f"str({t})" for t in held)
-                return root, [*steps, f"({offset})"], f"{label} + '[' + {shown} + ']'", whole
+                shown = Binary("+", label, _text("["), "STRING")
+                for number, temp in enumerate(held):
+                    if number:
+                        shown = Binary("+", shown, _text(", "), "STRING")
+                    index_text = call("str", "STRING", Var(temp, "local", "DINT"))
+                    shown = Binary("+", shown, index_text, "STRING")
+                return root, [*steps, offset], Binary("+", shown, _text("]"), "STRING"), whole
             case ast.Deref() if self.scope.self_deref(expr) is not None:
-                return "s", [], "''", False  # THIS^: the instance, named by its own path
+                return This(""), [], _text(""), False  # THIS^: the instance, by its own path
             case ast.Deref(base=base):  # REF(r^.x): below what r refers to, named by r
-                code = self.expr(base).code
-                return f"_deref({code})", [], f"str({code}) + '^'", True
+                reference = self.expr(base).node
+                named = Binary("+", call("str", "STRING", reference), _text("^"), "STRING")
+                return call("_deref", "", reference), [], named, True
         raise AssertionError(f"no place for {expr!r}")
 
-    def _offset_of_held(self, array: ArrayType, held: list[str]) -> str:
+    def _offset_of_held(self, array: ArrayType, held: list[str]) -> Expr:
         """The list offset of an element whose indices are held in `held`."""
-        parts: list[str] = []
-        stride = 1
-        for index, (low, high) in reversed(list(zip(held, array.dims, strict=True))):
-            offset = self._checked_offset(index, low, high)
-            parts.append(offset if stride == 1 else f"{offset} * {stride}")
-            stride *= high - low + 1
-        return " + ".join(reversed(parts))
+        offsets = [
+            self._checked_offset(Var(index, "local", "DINT"), low, high)
+            for index, (low, high) in zip(held, array.dims, strict=True)
+        ]
+        return _flat(offsets, array.dims)
 
-    def _open_index(self, base: str, array: OpenArrayType, indices: tuple[ast.Expr, ...]) -> _Value:
+    def _open_index(
+        self, base: Expr, array: OpenArrayType, indices: tuple[ast.Expr, ...]
+    ) -> _Value:
         """An element of a variable-length array, `[items, bounds]` at run time: its offset
         in the items from the bounds of the array passed, each index checked by `_ix`."""
-        offset = ""
+        offset: Expr = _int(0)
+        bounds = Index(base, _int(1), "")
         for dim, index_expr in enumerate(indices):
-            low, high = f"{base}[1][{dim}][0]", f"{base}[1][{dim}][1]"
-            checked = f"_ix({self.exact(index_expr).code}, {low}, {high})"
-            offset = checked if dim == 0 else f"({offset}) * ({high} - {low} + 1) + {checked}"
-        return _Value(f"{base}[0][{offset}]", array.element)
+            low, high = (Index(Index(bounds, _int(dim), ""), _int(end), "DINT") for end in (0, 1))
+            checked = call("_ix", "DINT", self.exact_node(index_expr), low, high)
+            if dim == 0:
+                offset = checked
+                continue
+            length = Binary("+", Binary("-", high, low, "DINT"), _int(1), "DINT")
+            offset = Binary("+", Binary("*", offset, length, "DINT"), checked, "DINT")
+        items = Index(base, _int(0), "")
+        return _Value(Index(items, offset, _t(array.element)), array.element)
 
-    def open_array_argument(self, param: Variable, value_expr: ast.Expr) -> str:
+    def open_array_argument(self, param: Variable, value_expr: ast.Expr) -> Expr:
         """What a variable-length array parameter is bound to: the items of the array passed
         (the caller's own for an in-out, a copy for an input) and its bounds, in lists, which
         a saved context holds (the items as an alias of the caller's array)."""
         passed = self.expr(value_expr)
+        bound_type = _t(param.type)
         if isinstance(passed.type, OpenArrayType):  # passed on: its items and bounds
-            items, bounds = f"{passed.code}[0]", f"{passed.code}[1]"
+            items: Expr = Index(passed.node, _int(0), "")
+            bounds: Expr = Index(passed.node, _int(1), "")
         else:
             assert isinstance(passed.type, ArrayType)
-            items, bounds = passed.code, repr([list(dim) for dim in passed.type.dims])
+            items = passed.node
+            dims = tuple(Sequence((_int(low), _int(high)), "") for low, high in passed.type.dims)
+            bounds = Sequence(dims, "")
         if param.kind != "VAR_INPUT":  # an in-out, or a function's output: the caller's
-            return passed.code if isinstance(passed.type, OpenArrayType) else f"[{items}, {bounds}]"
-        return f"[_copy({items}), {bounds}]"
+            if isinstance(passed.type, OpenArrayType):
+                return passed.node
+            return Sequence((items, bounds), bound_type)
+        return Sequence((call("_copy", "", items), bounds), bound_type)
 
-    def _checked_offset(self, index: str, low: int, high: int) -> str:
+    def _checked_offset(self, index: Expr, low: int, high: int) -> Expr:
         """The list offset of an array index, checked against the bounds inline (the
         index evaluated once); `_ix` is called only to raise the fault outside them."""
-        known = self.counter_ranges.get(index)
+        local = index.name if isinstance(index, Var) and index.where == "local" else None
+        known = self.counter_ranges.get(local) if local is not None else None
         if known is not None and low <= known[0] and known[1] <= high:
-            return f"{index} - {low}" if low else index
-        if index.isidentifier():  # a Python local: read it twice
+            return Binary("-", index, _int(low), "DINT") if low else index
+        if local is not None:  # a Python local: read it twice
             value, bound = index, index
         else:
-            value = self.temp()
-            bound = f"({value} := {index})"
-        return f"({value} - {low} if {low} <= {bound} <= {high} else _ix({value}, {low}, {high}))"
+            held = self.temp()
+            value, bound = Var(held, "local", "DINT"), Assigned(held, index, "DINT")
+        within = Chain("<=", (_int(low), bound, _int(high)))
+        fault = call("_ix", "DINT", value, _int(low), _int(high))
+        return Choice(within, Binary("-", value, _int(low), "DINT"), fault, "DINT")
 
     def _unary(self, expr: ast.Unary) -> _Value:
         result = _type(self.scope, expr)
         operand = self.expr(expr.operand)  # generated once: it may hoist calls
         if expr.op == "NOT":
             if result == BOOL:
-                return _Value(f"(not {operand.code})", BOOL)
+                return _Value(Unary("not", operand.node, "BOOL"), BOOL)
             assert isinstance(result, ElementaryType)
-            exact = _exact(operand).code
+            exact = _exact(operand).node
             if result.signed:  # two's complement: NOT x = -x - 1
-                return _Value(f"(~{exact})", result)
-            return _Value(f"({exact} ^ {(1 << result.bits) - 1})", result)
+                return _Value(Unary("~", exact, _t(result)), result)
+            return _Value(Binary("^", exact, _int((1 << result.bits) - 1), _t(result)), result)
         if expr.op == "+":
             return operand
         integral = isinstance(result, ElementaryType) and result.category != "real"
-        return _Value(f"(-{operand.code})", result, integral)
+        return _Value(Unary("-", operand.node, _t(result)), result, integral)
 
     def _binary(self, expr: ast.Binary) -> _Value:
         result = _type(self.scope, expr)
         op = expr.op
         if op in _COMPARE and isinstance(_type(self.scope, expr.left), RefType | InterfaceType):
-            right = (
-                "None" if is_zero_literal(expr.right) else self.exact(expr.right).code
-            )  # CODESYS 0
-            return _Value(f"({self.exact(expr.left).code} {_COMPARE[op]} {right})", BOOL)
+            # CODESYS 0
+            right = _NULL if is_zero_literal(expr.right) else self.exact_node(expr.right)
+            return _Value(Binary(_COMPARE[op], self.exact_node(expr.left), right, "BOOL"), BOOL)
         if op in _COMPARE and isinstance(_type(self.scope, expr.right), RefType | InterfaceType):
-            left = "None" if is_zero_literal(expr.left) else self.exact(expr.left).code
-            return _Value(f"({left} {_COMPARE[op]} {self.exact(expr.right).code})", BOOL)
+            left = _NULL if is_zero_literal(expr.left) else self.exact_node(expr.left)
+            return _Value(Binary(_COMPARE[op], left, self.exact_node(expr.right), "BOOL"), BOOL)
         if op in _COMPARE:
             common = _comparison_type(self.scope, expr)
             left, right = self.operand(expr.left, common), self.operand(expr.right, common)
-            return _Value(f"({left} {_COMPARE[op]} {right})", BOOL)
-        if op in ("AND", "&", "OR", "XOR"):
-            left_value, right_value = self.exact(expr.left), self.exact(expr.right)
-            symbol = {"AND": "&", "&": "&", "OR": "|", "XOR": "^"}[op]
-            return _Value(f"({left_value.code} {symbol} {right_value.code})", result)
+            return _Value(Binary(_COMPARE[op], left, right, "BOOL"), BOOL)
+        if op in _BITWISE:
+            left, right = self.exact_node(expr.left), self.exact_node(expr.right)
+            return _Value(Binary(_BITWISE[op], left, right, _t(result)), result)
         assert isinstance(result, ElementaryType)
         if result.category in ("time", "date"):
             return self._time_binary(expr, result)
         integral = result.category in ("int", "bits")
+        name = _t(result)
         if op in ("+", "-", "*"):
             # + - * commute with wrapping: operands of the result's type stay unwrapped
             left = self.operand(expr.left, result, ring=True)
             right = self.operand(expr.right, result, ring=True)
+            ring_op: BinaryOp = "+" if op == "+" else "-" if op == "-" else "*"
+            value = Binary(ring_op, left, right, name)
             if result.category == "real":
-                code = f"({left} {op} {right})"
-                return _Value(f"_f32{code}" if result.bits == 32 else code, result)
+                return _Value(call("_f32", result, value) if result.bits == 32 else value, result)
             tail = None
-            if integral and op != "*" and right.lstrip("-").isdigit():
-                tail = (left, int(right) if op == "+" else -int(right))
-            return _Value(f"({left} {op} {right})", result, integral, tail)
+            if integral and op != "*" and _is_int_constant(right):
+                assert isinstance(right, Const) and isinstance(right.value, int)
+                tail = (left, right.value if op == "+" else -right.value)
+            return _Value(value, result, integral, tail)
         left, right = self.operand(expr.left, result), self.operand(expr.right, result)
         if op == "/":
             if result.category == "real":
-                code = f"_fdiv({left}, {right})"
-                return _Value(f"_f32({code})" if result.bits == 32 else code, result)
-            return _Value(f"_idiv({left}, {right})", result, True)
+                quotient = call("_fdiv", result, left, right)
+                return _Value(
+                    call("_f32", result, quotient) if result.bits == 32 else quotient, result
+                )
+            return _Value(call("_idiv", result, left, right), result, True)
         if op == "MOD":
-            return _Value(f"_imod({left}, {right})", result)
+            return _Value(call("_imod", result, left, right), result)
         if op == "**":
-            return _Value(f"_pow({left}, {right})", result)
+            return _Value(call("_pow", result, left, right), result)
         raise AssertionError(f"unhandled operator {op}")
 
     def _time_binary(self, expr: ast.Binary, result: ElementaryType) -> _Value:
         """TIME/date arithmetic: nanosecond counts, scaled by numbers for * and /."""
         right_type = integer_like(_type(self.scope, expr.right)) or _type(self.scope, expr.right)
-        left, right = self.exact(expr.left).code, self.exact(expr.right).code
-        op = expr.op
+        left, right = self.exact_node(expr.left), self.exact_node(expr.right)
+        op, name = expr.op, _t(result)
         if op in ("+", "-"):
-            return _Value(f"({left} {op} {right})", result, True)
+            return _Value(Binary("+" if op == "+" else "-", left, right, name), result, True)
         if op == "*":
-            return _Value(f"_round({left} * {right})", result, True)
+            return _Value(call("_round", result, Binary("*", left, right, "LREAL")), result, True)
         if isinstance(right_type, ElementaryType) and right_type.category == "real":
-            return _Value(f"_tdiv({left}, {right})", result, True)
-        return _Value(f"_idiv({left}, {right})", result, True)
+            return _Value(call("_tdiv", result, left, right), result, True)
+        return _Value(call("_idiv", result, left, right), result, True)
 
-    def operand(self, expr: ast.Expr, target: Type, ring: bool = False) -> str:
-        """Code of `expr` as an operand of an operation computed in `target` (IEC: the
-        operands are converted to the operation's type first). With `ring`, an operand of
-        the target's own integer type may stay unwrapped (+ - * commute with wrapping)."""
+    def operand(self, expr: ast.Expr, target: Type, ring: bool = False) -> Expr:
+        """`expr` as an operand of an operation computed in `target` (IEC: the operands
+        are converted to the operation's type first). With `ring`, an operand of the
+        target's own integer type may stay unwrapped (+ - * commute with wrapping)."""
         value = self.expr(expr)
         source = integer_like(value.type) or value.type
         if not isinstance(target, ElementaryType) or not isinstance(source, ElementaryType):
-            return _exact(value).code
+            return _exact(value).node
         if target.category == "real":
             number = _literal_number(expr) if source.is_any_literal else None
             if number is not None:  # a literal takes the type of the operation: REAL#0.1
-                return repr(to_real32(number) if target.bits == 32 else number)
+                return Const(to_real32(number) if target.bits == 32 else number, _t(target))
             if source.category == "real":
-                return value.code
-            code = _exact(value).code  # an integer: made a REAL before the operation
-            return f"_f32({code})" if target.bits == 32 else f"float({code})"
+                return value.node
+            exact = _exact(value).node  # an integer: made a REAL before the operation
+            return call("_f32" if target.bits == 32 else "float", target, exact)
         if ring and value.unwrapped and source == target:
-            return value.code
+            return value.node
         if ring and value.unwrapped and self.modulus_bits and source.bits >= self.modulus_bits:
             # the whole + - * expression is wrapped to fewer bits at its store: an inner wrap
             # to as many bits or more cannot change the stored result
-            return value.code
-        return _exact(value).code
+            return value.node
+        return _exact(value).node
 
     # ---- calls
     def call(self, call: ast.Call) -> _Value:
@@ -551,7 +619,7 @@ class _Emitter:
         if pou is not None and pou.kind == "FUNCTION" and not is_external(pou):
             return self._user_call(pou, call, function_name(pou.name))
         if isinstance(callee, SizeOf):  # a constant: its argument never runs
-            return _Value(repr(self.scope.size_of(call)), _type(self.scope, call))
+            return _constant(self.scope.size_of(call), _type(self.scope, call))
         if isinstance(callee, RefOf):
             referenced = self.scope.referenced(call)
             assert referenced is not None
@@ -560,9 +628,9 @@ class _Emitter:
             referenced = self.scope.referenced(call)
             held = self.held_reference(referenced) if referenced is not None else None
             assert held is not None
-            return _Value(f"({held} is not None)", BOOL)
+            return _Value(Binary("is not", held, _NULL, "BOOL"), BOOL)
         if self.scope.test_call(call) is not None:  # TEST_CYCLES(), the one with a value
-            return _Value(TEST_CYCLES_CODE, _type(self.scope, call))
+            return _Value(TEST_CYCLES_CALL, _type(self.scope, call))
         builtin = builtins.lookup(call.name)
         assert builtin is not None, call.name
         args = self.scope.builtin_arguments(builtin, call)
@@ -570,54 +638,56 @@ class _Emitter:
         enable = self._function_enable(call, None)
         values = [self.exact(arg) for arg in args]
         result = _type(self.scope, call)
-        code = builtin.emit([v.code for v in values], [v.type for v in values], result)
+        node = builtin.emit([v.node for v in values], [v.type for v in values], result)
         if enable is not None:  # EN FALSE: the function does not run and gives its default
-            code = f"({code} if {enable} else {self.initial(result, None)})"
-        return _Value(code, result)
+            node = Choice(_enabled(enable), node, self.initial(result, None), _t(result))
+        return _Value(node, result)
 
-    def _accessor_owner(self, access: PropertyAccess) -> tuple[str, str | None]:
+    def _accessor_owner(self, access: PropertyAccess) -> tuple[Expr, Expr | None]:
         """(the object or class whose accessor runs, the instance a static call passes)."""
         if access.static is not None:
-            return class_name(access.static.name), "s"
+            return Named(class_name(access.static.name)), This("")
         if access.receiver is None:
-            return "s", None
-        receiver = self.expr(access.receiver).code
+            return This(""), None
+        receiver = self.expr(access.receiver).node
         if isinstance(_type(self.scope, access.receiver), InterfaceType):
-            receiver = f"_deref({receiver})"
+            receiver = call("_deref", "", receiver)
         return receiver, None
 
     def _property_get(self, expr: ast.Expr) -> _Value:
         access = self.scope.property_access(expr)
         assert access is not None
         owner, first = self._accessor_owner(access)
-        return _Value(f"{owner}.{getter_attr(access.prop.name)}({first or ''})", access.prop.type)
+        getter = Member(owner, getter_attr(access.prop.name), "")
+        arguments = () if first is None else (first,)
+        return _Value(Call(getter, arguments, _t(access.prop.type)), access.prop.type)
 
-    def _property_set(self, target: ast.Expr, code: str) -> str | None:
-        """The statement that writes `code` through a property's SET (None: no property)."""
+    def _property_set(self, target: ast.Expr, value: Expr) -> str | None:
+        """The statement that writes `value` through a property's SET (None: no property)."""
         access = self.scope.property_access(target)
         if access is None:
             return None
         owner, first = self._accessor_owner(access)
-        arguments = f"{first}, {code}" if first else code
-        return f"{owner}.{setter_attr(access.prop.name)}({arguments})"
+        setter = Member(owner, setter_attr(access.prop.name), "")
+        arguments = (value,) if first is None else (first, value)
+        return python_text(Call(setter, arguments, ""))
 
     def _method_call(self, target: MethodCall, call: ast.Call) -> _Value:
         """`inst.M(...)`: the method the instance's class has (an override, dispatched by
         Python); `SUPER^.M(...)`: the base's own, called on this instance."""
         method = method_attr(target.method.name)
         if target.static is not None:
-            return self._user_call(
-                target.method, call, f"{class_name(target.static.name)}.{method}", "s"
-            )
-        receiver = "s" if target.receiver is None else self.expr(target.receiver).code
+            static = Member(Named(class_name(target.static.name)), method, "")
+            return self._user_call(target.method, call, static, This(""))
+        receiver = This("") if target.receiver is None else self.expr(target.receiver).node
         if target.receiver is not None and isinstance(
             _type(self.scope, target.receiver), InterfaceType
         ):  # the instance it refers to; none is a program fault, as NULL^ is
-            receiver = f"_deref({receiver})"
-        return self._user_call(target.method, call, f"{receiver}.{method}")
+            receiver = Call("_deref", (receiver,), "")
+        return self._user_call(target.method, call, Member(receiver, method, ""))
 
     def _user_call(
-        self, pou: PouSymbols, call: ast.Call, callee: str, first: str | None = None
+        self, pou: PouSymbols, call: ast.Call, callee: str | Expr, first: Expr | None = None
     ) -> _Value:
         """A call of a function (or a method: `first` the instance a static call passes)."""
         pairs = self.scope.connect_arguments(pou, call)
@@ -626,36 +696,40 @@ class _Emitter:
             for arg, param in pairs
             if param is not None and not is_implicit(param)
         }
-        keywords: list[str] = [first] if first is not None else []
+        keywords: list[tuple[str, Expr]] = []
         for param in pou.parameters:
             arg = assigned.get(key(param.name))
             if arg is not None and arg.value is not None and isinstance(param.type, OpenArrayType):
-                keywords.append(f"{param.attr}={self.open_array_argument(param, arg.value)}")
+                keywords.append((param.attr, self.open_array_argument(param, arg.value)))
                 continue
             if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
                 continue
             if binds_reference(param, arg):
-                keywords.append(f"{param.attr}={self.reference(arg.value)}")
+                keywords.append((param.attr, self.reference(arg.value)))
                 continue
             if param.kind == "VAR_IN_OUT" and isinstance(param.type, FbType):
                 # the instance itself, as a block's call passes it: a copy stored back would
                 # leave whatever else refers to the instance (another block's in-out) on
                 # the old one
-                keywords.append(f"{param.attr}={self.expr(arg.value).code}")
+                keywords.append((param.attr, self.expr(arg.value).node))
                 continue
-            keywords.append(f"{param.attr}={self.converted(param.type, arg.value)}")
-        code = f"{callee}({', '.join(keywords)})"
+            keywords.append((param.attr, self.converted(param.type, arg.value)))
         result = pou.return_type or BOOL
+        tupled = returns_tuple(pou)
+        positional = () if first is None else (first,)
+        node: Expr = Call(callee, positional, "" if tupled else _t(result), tuple(keywords))
         enable = self._function_enable(call, pou)
         if enable is not None:  # EN FALSE: the function does not run and gives its default
             default = self.initial(result, None)
-            if returns_tuple(pou):
-                default = f"({default},{' None,' * len(tuple_members(pou))})"
-            code = f"({code} if {enable} else {default})"
-        if not returns_tuple(pou):
-            return _Value(code, result)
+            if tupled:
+                nothing = [Const(None, "")] * len(tuple_members(pou))
+                default = Sequence((default, *nothing), "", as_tuple=True)
+            node = Choice(_enabled(enable), node, default, "" if tupled else _t(result))
+        if not tupled:
+            return _Value(node, result)
         handle = self.temp()
-        self.pre.append(f"{handle} = {code}")
+        self.pre.append(f"{handle} = {python_text(node)}")
+        returned = Var(handle, "local", "")
         slots = {key(member.name): index for index, member in enumerate(tuple_members(pou), 1)}
         # outputs are stored in the order the call names them (as CODESYS does)
         for arg, connected in pairs:
@@ -665,10 +739,11 @@ class _Emitter:
                 continue
             if not _is_lvalue(arg.value):
                 continue
-            output = _Value(f"{handle}[{slots[key(connected.name)]}]", connected.type)
+            slot = _int(slots[key(connected.name)])
+            output = _Value(Index(returned, slot, _t(connected.type)), connected.type)
             store = self.store(arg.value, convert_value(output, _type(self.scope, arg.value)))
             self.pre.append(store if enable is None else f"if {enable}: {store}")
-        return _Value(f"{handle}[0]", result)
+        return _Value(Index(returned, _int(0), _t(result)), result)
 
     def _enable(self, call: ast.Call, callee: PouSymbols | None) -> str | None:
         """EN of a call (`callee` None: of a standard function), evaluated once into a
@@ -677,7 +752,7 @@ class _Emitter:
         if enable_expr is None:
             return None
         enable = self.temp()
-        self.pre.append(f"{enable} = {self.exact(enable_expr).code}")
+        self.pre.append(f"{enable} = {self.exact_code(enable_expr)}")
         self.enables[id(call)] = enable
         return enable
 
@@ -686,16 +761,17 @@ class _Emitter:
         always succeeds."""
         enable = self._enable(call, callee)
         for target in _eno_targets(call, callee):
-            self.pre.append(self._eno_store(target, enable or "True"))
+            ran = _enabled(enable) if enable is not None else Const(True, "BOOL")
+            self.pre.append(self._eno_store(target, ran))
         return enable
 
-    def _eno_store(self, target: ast.Argument, code: str) -> str:
-        """`ENO => ok` (`NOT ENO => failed`) with ENO's value in `code`."""
+    def _eno_store(self, target: ast.Argument, value: Expr) -> str:
+        """`ENO => ok` (`NOT ENO => failed`) with ENO's value in `value`."""
         assert target.value is not None
-        return self.store(target.value, f"(not {code})" if target.negated else code)
+        return self.store(target.value, Unary("not", value, "BOOL") if target.negated else value)
 
-    def converted(self, target: Type, value_expr: ast.Expr) -> str:
-        """Code for `value_expr` stored into a variable of type `target`."""
+    def converted(self, target: Type, value_expr: ast.Expr) -> Expr:
+        """`value_expr` as stored into a variable of type `target`."""
         self.scope.expect(value_expr, target)
         if isinstance(target, InterfaceType) and isinstance(_type(self.scope, value_expr), FbType):
             return self.reference(value_expr)  # an interface refers to the instance
@@ -703,59 +779,63 @@ class _Emitter:
         if integer is not None and _type(self.scope, value_expr) == ANY_INT:
             constant = self.scope.constant_int(value_expr)
             if constant is not None:
-                return repr(wrap_constant(constant, integer))
+                return Const(wrap_constant(constant, integer), _t(target))
         self.modulus_bits = integer.bits if integer is not None else None
         try:
             raw = self.expr(value_expr)  # generated once: it may hoist calls
         finally:
             self.modulus_bits = None
         if is_aggregate(target):
-            return f"_copy({raw.code})" if _is_lvalue(value_expr) else raw.code
+            return call("_copy", target, raw.node) if _is_lvalue(value_expr) else raw.node
         short_literal = isinstance(value_expr, ast.StringLiteral) and not _longer_than(
             value_expr.value, target
         )
         return convert_value(raw, target, already_fits=short_literal)
 
-    def initial(self, var_type: Type, init: ast.Initializer | None) -> str:
-        """Code that creates the initial value of a variable."""
+    def initial(self, var_type: Type, init: ast.Initializer | None) -> Expr:
+        """The initial value of a variable."""
         if isinstance(init, ast.ArrayInit):
             assert isinstance(var_type, ArrayType)
             return self._array_initial(var_type, init)
         if isinstance(init, ast.StructInit):
-            members = ", ".join(
-                f"{self._member_attr(var_type, name)!r}: "
-                + self.initial(self._member_type(var_type, name), value)
+            members = tuple(
+                (
+                    self._member_attr(var_type, name),
+                    self.initial(self._member_type(var_type, name), value),
+                )
                 for name, value in init.members
             )
-            return f"_init({self.initial(var_type, None)}, {{{members}}})"
+            whole = self.initial(var_type, None)
+            return call("_init", var_type, whole, Members(members))
         if init is not None:
             return self.converted(var_type, init)
+        name = _t(var_type)
         match var_type:
-            case FbType(name=name):
-                return f"{class_name(name)}()"
-            case StructType(name=name):
-                return f"{struct_class(name)}()"
+            case FbType(name=block):
+                return Call(class_name(block), (), name)
+            case StructType(name=struct):
+                return Call(struct_class(struct), (), name)
             case EnumType():
                 info = self.scope.resolved.enums[key(var_type.name)]
                 first = next(iter(info.values.values()), ("", 0))
-                return repr(first[1])
+                return Const(first[1], name)
             case ArrayType(element=element):
-                if is_aggregate(element):
-                    return f"[{self.initial(element, None)} for _ in range({var_type.size})]"
-                return f"[{self.initial(element, None)}] * {var_type.size}"
+                return Repeated(
+                    self.initial(element, None), var_type.size, is_aggregate(element), name
+                )
             case ElementaryType(category=category):
-                return {"bool": "False", "real": "0.0", "string": "''"}.get(category, "0")
+                return Const(_ZERO.get(category, 0), name)
             case VariadicType():
-                return "()"
+                return Sequence((), name, as_tuple=True)
             case OpenArrayType():  # bound to an array at each call
-                return "None"
+                return Const(None, name)
             case RefType() | InterfaceType():
-                return "None"  # NULL
+                return Const(None, name)  # NULL
         raise AssertionError(f"no initial value for {var_type!r}")
 
-    def _array_initial(self, array: ArrayType, init: ast.ArrayInit) -> str:
+    def _array_initial(self, array: ArrayType, init: ast.ArrayInit) -> Expr:
         element = array.element
-        items: list[str] = []
+        items: list[Expr] = []
         for repeat, value in init.items:
             times = repeat.value if isinstance(repeat, ast.IntLiteral) else 1
             if isinstance(value, ast.ArrayInit) and not isinstance(element, ArrayType):
@@ -764,13 +844,17 @@ class _Emitter:
             else:
                 items.extend([self.initial(element, value)] * times)
         missing = array.size - len(items)
-        self.make_room(sum(len(item) + 2 for item in items))  # `n(...)` is written n times
-        body = f"[{', '.join(items)}]"
+        unique = {id(item): item for item in items}
+        sizes = {number: len(python_text(item)) + 2 for number, item in unique.items()}
+        self.make_room(sum(sizes[id(item)] for item in items))  # `n(...)` is written n times
+        name = _t(array)
+        body = Sequence(tuple(items), name)
         if missing > 0:
-            filler = self.initial(array, None) if is_aggregate(element) else None
-            if filler is not None:
-                return f"{body} + {filler}[{len(items)}:]"
-            return f"{body} + [{self.initial(element, None)}] * {missing}"
+            if is_aggregate(element):
+                filler: Expr = Slice(self.initial(array, None), len(items), None, name)
+            else:
+                filler = Repeated(self.initial(element, None), missing, False, name)
+            return Binary("+", body, filler, name)
         return body
 
     def _member_type(self, owner: Type, name: str) -> Type:
@@ -831,13 +915,13 @@ class _Emitter:
             case ast.CallStatement(call=call):
                 self.call_statement(call, depth)
             case ast.ExprStatement(expr=expr):
-                self.emit(depth, self.exact(expr).code)  # for its calls; the value is dropped
+                self.emit(depth, self.exact_code(expr))  # for its calls; the value is dropped
             case ast.If(branches=branches, orelse=orelse):
                 self.if_statement(branches, orelse, depth)
             case ast.Case():
                 self.case(statement, depth)
             case ast.While(condition=condition, body=body):
-                self.tested_loop(self.exact(condition).code, depth)
+                self.tested_loop(self.exact_code(condition), depth)
                 self.block(body, depth + 1)
             case ast.Repeat(body=body, until=until):
                 self.repeat(body, until, depth)
@@ -871,20 +955,20 @@ class _Emitter:
         if bind:  # `r REF= x`: the REFERENCE TO itself now holds REF(x) (`REF= 0`: NULL)
             held = self.held_reference(target)
             assert held is not None and isinstance(value, ast.Call | ast.NullLiteral)
-            self.emit(depth, f"{held} = {self.expr(value).code}")
+            self.emit(depth, f"{python_text(held)} = {self.expr(value).code}")
             return
         target_type = _type(self.scope, target)
         if isinstance(value, ast.ArrayInit | ast.StructInit):
-            code = self.initial(target_type, value)
+            node = self.initial(target_type, value)
         else:
-            code = self.converted(target_type, value)
+            node = self.converted(target_type, value)
         enable = self.enables.get(id(value))
         if enable is not None:  # `x := F(EN := FALSE, ...)` leaves x as it was (as Beremiz)
             self.emit(depth, f"if {enable}:")
             depth += 1
-        self.emit(depth, self.store(target, code))
+        self.emit(depth, self.store(target, node))
 
-    def attempt(self, target: Type, value: ast.Expr) -> str:
+    def attempt(self, target: Type, value: ast.Expr) -> Expr:
         """`t ?= x`: a reference to the instance x is or refers to where that instance is
         a `target` (its block, a base of it, an interface it implements), else NULL. The
         test reads the instance's class: its name, and `KIND__` (what it conforms to) of
@@ -892,55 +976,57 @@ class _Emitter:
         wanted = target.target if isinstance(target, RefType) else target
         assert isinstance(wanted, FbType | InterfaceType)
         source = _type(self.scope, value)
-        reference = self.reference(value) if isinstance(source, FbType) else self.expr(value).code
+        reference = self.reference(value) if isinstance(source, FbType) else self.expr(value).node
         held = self.temp()
-        kind = f"_deref({held}).__class__"  # generated code has no type() nor getattr()
-        fits = (
-            f"{kind}.__name__ == {class_name(wanted.name)!r} or "
-            f"{key(wanted.name)!r} in {kind}.__dict__.get('KIND__', ())"
-        )
-        return f"({held} if (({held} := {reference}) is not None and ({fits})) else None)"
+        found = Var(held, "local", _t(target))
+        # generated code has no type() nor getattr(): the class, and what it conforms to
+        kind = Member(call("_deref", "", found), "__class__", "")
+        named = Binary("==", Member(kind, "__name__", ""), _text(class_name(wanted.name)), "BOOL")
+        nothing = Sequence((), "", as_tuple=True)
+        kinds = Member(Member(kind, "__dict__", ""), "get", "")
+        conforms = Call(kinds, (_text("KIND__"), nothing), "")
+        fits = Binary("or", named, Binary("in", _text(key(wanted.name)), conforms, "BOOL"), "BOOL")
+        bound = Binary("is not", Assigned(held, reference, _t(target)), _NULL, "BOOL")
+        return Choice(Binary("and", bound, fits, "BOOL"), found, _NULL, _t(target))
 
-    def store(self, target: ast.Expr, code: str) -> str:
-        """The statement that stores `code` (already converted) into `target`."""
+    def store(self, target: ast.Expr, value: Expr) -> str:
+        """The statement that stores `value` (already converted) into `target`."""
         target_type = _type(self.scope, target)
         length = target_type.max_length if isinstance(target_type, ElementaryType) else 0
-        if length and not code.endswith(f"[:{length}]"):  # only strings have a length
-            code = f"{code}[:{length}]"
+        if length and not (isinstance(value, Slice) and value.stop == length):
+            value = Slice(value, None, length, _t(target_type))  # only strings have a length
         if isinstance(target, ast.BitRef):
             base = self.expr(target.base)
             shift, width = target.bit * target.width, target.width
-            updated = f"_setbits({base.code}, {shift}, {width}, {code})"
+            updated = call("_setbits", base.type, base.node, _int(shift), _int(width), value)
             integer = integer_like(base.type)
-            return self._assignment(
-                target.base, wrap_code(updated, integer) if integer else updated
-            )
-        return self._assignment(target, code)
+            return self._assignment(target.base, wrapped(updated, integer) if integer else updated)
+        return self._assignment(target, value)
 
-    def _assignment(self, target: ast.Expr, code: str) -> str:
-        """`target := code`; through a reference (`r^ := v`, a REFERENCE TO r) the place it
+    def _assignment(self, target: ast.Expr, value: Expr) -> str:
+        """`target := value`; through a reference (`r^ := v`, a REFERENCE TO r) the place it
         refers to."""
         if isinstance(target, ast.Deref):
-            return f"_deref_set({self.expr(target.base).code}, {code})"
-        through_setter = self._property_set(target, code)
+            return python_text(call("_deref_set", "", self.expr(target.base).node, value))
+        through_setter = self._property_set(target, value)
         if through_setter is not None:
             return through_setter
         held = self.held_reference(target)
         if held is not None:
-            return f"_deref_set({held}, {code})"
-        return f"{self.expr(target).code} = {code}"
+            return python_text(call("_deref_set", "", held, value))
+        return f"{self.expr(target).code} = {python_text(value)}"
 
-    def held_reference(self, expr: ast.Expr) -> str | None:
-        """The code of the slot of a REFERENCE TO variable `expr` names (None: it names
-        no such variable), the reference itself rather than what it refers to."""
+    def held_reference(self, expr: ast.Expr) -> Expr | None:
+        """The slot of a REFERENCE TO variable `expr` names (None: it names no such
+        variable), the reference itself rather than what it refers to."""
         if isinstance(expr, ast.NameRef):
             binding = self.scope.lookup(expr.name)
             if isinstance(binding, Variable) and is_implicit_reference(binding.type):
-                return self.var_code(binding)
+                return self.var_node(binding)
         if isinstance(expr, ast.MemberRef):
             member = self.scope.member(expr)
             if member is not None and is_implicit_reference(member.type):
-                return f"{self.expr(expr.base).code}.{member.attr}"
+                return Member(self.expr(expr.base).node, member.attr, _t(member.type))
         return None
 
     def if_statement(
@@ -1024,7 +1110,7 @@ class _Emitter:
         counter = self.scope.variable(loop.variable)
         assert counter is not None and isinstance(counter.type, ElementaryType)
         ref = self.var_code(counter)
-        self.emit(depth, f"{ref} = {self.converted(counter.type, loop.start)}")
+        self.emit(depth, f"{ref} = {python_text(self.converted(counter.type, loop.start))}")
         step_constant = self.scope.constant_int(loop.step) if loop.step is not None else 1
         stop_constant = self.scope.constant_int(loop.stop)
         if (
@@ -1043,7 +1129,7 @@ class _Emitter:
         following = self.temp()
         increment = [
             f"{following} = {ref} + {step}",
-            f"{ref} = {wrap_code(following, counter.type)}",
+            f"{ref} = {_wrapped_local(following, counter.type)}",
             f"if {ref} != {following}:",
             f"{INDENT}break",
         ]
@@ -1096,7 +1182,7 @@ class _Emitter:
         self.emit(depth + 1, f"{local} += {step}")
         past = f"> {counter.type.max}" if step >= 0 else f"< {counter.type.min}"
         self.emit(depth + 1, f"if {local} {past}:")
-        self.emit(depth + 2, f"{ref} = {wrap_code(local, counter.type)}")
+        self.emit(depth + 2, f"{ref} = {_wrapped_local(local, counter.type)}")
         self.emit(depth + 2, "break")
         self.emit(depth + 1, f"{ref} = {local}")
 
@@ -1127,7 +1213,7 @@ class _Emitter:
             self.counter_ranges.pop(local, None)
         self.emit(depth + 1, "else:")  # not left by EXIT: one step past the last pass
         self.emit(depth + 2, f"{local} = {numbers}.start + len({numbers}) * {step}")
-        self.emit(depth + 1, f"{ref} = {wrap_code(local, counter.type)}")
+        self.emit(depth + 1, f"{ref} = {_wrapped_local(local, counter.type)}")
         self.emit(depth, "else:")
         self.counted_loop(loop, counter, ref, step, str(stop), depth + 1)
 
@@ -1200,8 +1286,9 @@ class _Emitter:
         eno = block_eno(callee)
         eno_targets = _eno_targets(call, callee)
         if eno is None:  # a program: ENO TRUE when it runs
+            ran = _enabled(enable) if enable is not None else Const(True, "BOOL")
             for target in eno_targets:
-                self.pre.append(self._eno_store(target, enable or "True"))
+                self.pre.append(self._eno_store(target, ran))
         handle = self.temp()
         self.emit(depth, f"{handle} = {instance}")
         outer = depth
@@ -1217,17 +1304,19 @@ class _Emitter:
                 continue
             if isinstance(param.type, OpenArrayType):
                 bound = self.open_array_argument(param, arg.value)
-                self.emit(depth, f"{handle}.{param.attr} = {bound}")
+                self.emit(depth, f"{handle}.{param.attr} = {python_text(bound)}")
                 continue
             if binds_reference(param, arg):  # the input now refers to the variable passed
-                self.emit(depth, f"{handle}.{param.attr} = {self.reference(arg.value)}")
+                reference = python_text(self.reference(arg.value))
+                self.emit(depth, f"{handle}.{param.attr} = {reference}")
                 continue
             if param.kind == "VAR_IN_OUT":
                 self.emit(depth, f"{handle}.{param.attr} = {self.expr(arg.value).code}")
                 if not is_aggregate(param.type):
                     outputs.append((arg, param))
                 continue
-            self.emit(depth, f"{handle}.{param.attr} = {self.converted(param.type, arg.value)}")
+            value = python_text(self.converted(param.type, arg.value))
+            self.emit(depth, f"{handle}.{param.attr} = {value}")
         # the method itself, not the instance called: CPython 3.11 calls an instance
         # through its type's __call__ slot at twice the cost (51 ns against 27)
         self.emit(depth, f"{handle}.__call__()")
@@ -1236,24 +1325,24 @@ class _Emitter:
             # the instance, for a saved context or a reload to carry
             if isinstance(param.type, OpenArrayType):
                 self.emit(depth, f"{handle}.{param.attr} = None")
+        block = Var(handle, "local", _t(FbType(callee.name)))
         for arg, param in outputs:
             assert arg.value is not None
-            value = f"{handle}.{param.attr}"
+            output: Expr = Member(block, param.attr, _t(param.type))
             if arg.negated:
-                value = f"(not {value})"
+                output = Unary("not", output, "BOOL")
             target_type = _type(self.scope, arg.value)
-            self.emit(
-                depth, self.store(arg.value, convert_value(_Value(value, param.type), target_type))
-            )
+            stored = convert_value(_Value(output, param.type), target_type)
+            self.emit(depth, self.store(arg.value, stored))
         if eno is None:
             return
         for target in eno_targets:  # what the block's body left in ENO
-            self.emit(depth, self._eno_store(target, f"{handle}.ENO"))
+            self.emit(depth, self._eno_store(target, Member(block, "ENO", "BOOL")))
         if enable is not None:  # EN FALSE: the body does not run, ENO is FALSE
             self.emit(outer, "else:")
             self.emit(outer + 1, f"{handle}.ENO = False")
             for target in eno_targets:
-                self.emit(outer + 1, self._eno_store(target, "False"))
+                self.emit(outer + 1, self._eno_store(target, Const(False, "BOOL")))
 
     def _action_instance(self, action: ActionCall) -> str:
         """The object whose action is called: this POU's own, a program's, an instance's."""
@@ -1288,8 +1377,8 @@ def wrap_constant(value: int, t: ElementaryType) -> int:
     return value
 
 
-def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> str:
-    """Code storing an elementary value in a variable of `target`: wrapped to its width,
+def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> Expr:
+    """An elementary value as stored in a variable of `target`: wrapped to its width,
     converted between types, strings cut to their length."""
     target_int = integer_like(target)
     raw_int = integer_like(raw.type)
@@ -1298,23 +1387,26 @@ def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> str:
         return _wrapped(raw, target_int)
     value = _exact(raw)
     if not isinstance(target, ElementaryType | EnumType):
-        return value.code
+        return value.node
     target_elem = target.base if isinstance(target, EnumType) else target
     source = value.type.base if isinstance(value.type, EnumType) else value.type
-    code = value.code
+    node = value.node
     if isinstance(source, ElementaryType) and source != target_elem:
         if source == ANY_INT and target_elem.is_integer:
             # an expression of literals (`-79 MOD 100`) may lie outside the target's range
             in_range = (
-                code.lstrip("-").isdigit() and target_elem.min <= int(code) <= target_elem.max
+                _is_int_constant(node)
+                and isinstance(node, Const)
+                and isinstance(node.value, int)
+                and target_elem.min <= node.value <= target_elem.max
             )
-            code = code if in_range else wrap_code(code, target_elem)
+            node = node if in_range else wrapped(node, target_elem)
         elif not (source == ANY_REAL and target_elem == ANY_REAL):
-            code = convert_code(code, source, target_elem)
+            node = converted(node, source, target_elem)
     length = target_elem.max_length
     if length and not already_fits:
-        code = f"{code}[:{length}]"
-    return code
+        node = Slice(node, None, length, _t(target_elem))
+    return node
 
 
 def _longer_than(text: str, target: Type) -> bool:
@@ -1350,18 +1442,78 @@ def _exact(value: _Value) -> _Value:
     return value
 
 
-def _wrapped(value: _Value, t: ElementaryType) -> str:
+def _wrapped(value: _Value, t: ElementaryType) -> Expr:
     if value.constant_tail is not None:
         head, n = value.constant_tail
-        return wrap_code(head, t, n)
-    return wrap_code(value.code, t)
+        return wrapped(head, t, n)
+    return wrapped(value.node, t)
 
 
-def _implicit(code: str, declared: Type) -> _Value:
+def _wrapped_local(name: str, t: ElementaryType) -> str:
+    """The text of a Python local's integer wrapped to `t`."""
+    return python_text(wrapped(Var(name, "local", _t(t)), t))
+
+
+def _implicit(node: Expr, declared: Type) -> _Value:
     """A variable's value: a REFERENCE TO reads as what it refers to (NULL: a fault)."""
     if is_implicit_reference(declared):
-        return _Value(f"_deref({code})", value_type(declared))
-    return _Value(code, declared)
+        target = value_type(declared)
+        return _Value(call("_deref", target, node), target)
+    return _Value(node, declared)
+
+
+_t = artifact_type_text
+_ZERO: dict[str, bool | float | str] = {"bool": False, "real": 0.0, "string": ""}
+_NULL = Const(None, NULL_TYPE.name)
+# the object that holds a variable of each place, for a reference to name
+_ROOTS: dict[str, Expr] = {
+    "instance": This(""), "globals": Named("_G"), "system": Named("_SYS"), "programs": Named("_P"),
+}  # fmt: skip
+
+
+def _int(value: int) -> Const:
+    return Const(value, "DINT")
+
+
+def _text(value: str) -> Const:
+    return Const(value, "STRING")
+
+
+def _constant(value: bool | int | float | str | None, t: Type) -> _Value:
+    return _Value(Const(value, _t(t)), t)
+
+
+def _is_int_constant(node: Expr) -> bool:
+    return isinstance(node, Const) and type(node.value) is int
+
+
+def _enabled(enable: str) -> Var:
+    """The temporary that holds a call's EN."""
+    return Var(enable, "local", "BOOL")
+
+
+def _reference_call(
+    root: Expr, steps: tuple[Expr, ...], label: Expr, whole: bool | None = None
+) -> Call:
+    """`_ref(root, steps, label[, whole])`: a reference to what `steps` reach from `root`."""
+    arguments: list[Expr] = [root, Sequence(steps, "", as_tuple=True), label]
+    if whole is not None:
+        arguments.append(Const(whole, "BOOL"))
+    return Call("_ref", tuple(arguments), "")
+
+
+def _flat(offsets: list[Expr], dims: tuple[tuple[int, int], ...]) -> Expr:
+    """The list offset of an element of an array of `dims` from its offset in each
+    dimension (the last one varying fastest)."""
+    total: Expr | None = None
+    for number, offset in enumerate(offsets):
+        stride = 1
+        for low, high in dims[number + 1 :]:
+            stride *= high - low + 1
+        term = offset if stride == 1 else Binary("*", offset, _int(stride), "DINT")
+        total = term if total is None else Binary("+", total, term, "DINT")
+    assert total is not None
+    return total
 
 
 def _has_continue(body: tuple[ast.Statement, ...]) -> bool:
@@ -1451,10 +1603,11 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
     if not slots:
         emitter.emit(2, "pass")
     for variable in fields:
-        code = emitter.initial(variable.type, variable.init)
+        initial = emitter.initial(variable.type, variable.init)
         if chart is not None and variable.kind == "STEP" and key(variable.name) in chart.initial:
-            code = f"_init({code}, {{'X': True}})"
-        emitter.emit(2, f"s.{variable.attr} = {code}")
+            active = Members((("X", Const(True, "BOOL")),))
+            initial = call("_init", variable.type, initial, active)
+        emitter.emit(2, f"s.{variable.attr} = {python_text(initial)}")
     for variable in edges:
         emitter.emit(2, f"s.{_edge_memory(variable)} = False")
     if chart is not None:
@@ -1497,7 +1650,8 @@ def _kinds(resolved: Resolved, pou: PouSymbols) -> tuple[str, ...]:
 def _emit_temporaries(emitter: _Emitter, pou: PouSymbols) -> None:
     for variable in pou.variables:
         if variable.kind == "VAR_TEMP":
-            emitter.emit(2, f"{variable.attr} = {emitter.initial(variable.type, variable.init)}")
+            initial = python_text(emitter.initial(variable.type, variable.init))
+            emitter.emit(2, f"{variable.attr} = {initial}")
 
 
 def _action_method(name: str) -> str:
@@ -1636,7 +1790,7 @@ def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0, name:
         for v in pou.variables
         if v.kind in ("VAR_INPUT", "VAR_IN_OUT") or isinstance(v.type, OpenArrayType)
     ]  # a variable-length output is bound to the caller's array like an in-out
-    params = [f"{v.attr}={emitter.initial(v.type, v.init)}" for v in inputs]
+    params = [f"{v.attr}={python_text(emitter.initial(v.type, v.init))}" for v in inputs]
     if pou.kind == "METHOD":
         header = f"def {name}({', '.join(['s', *params])}):"
     else:
@@ -1644,12 +1798,14 @@ def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0, name:
     emitter.emit(depth, header)
     result = pou.by_key.get(key(pou.name))
     if result is not None and result.kind == "RETURN":
-        emitter.emit(depth + 1, f"{result.attr} = {emitter.initial(result.type, None)}")
+        emitter.emit(
+            depth + 1, f"{result.attr} = {python_text(emitter.initial(result.type, None))}"
+        )
     for variable in pou.variables:
         if variable.kind in ("VAR", "VAR_TEMP", "VAR_STAT", "VAR_INST") or (
             variable.kind == "VAR_OUTPUT" and variable not in inputs
         ):
-            initial = emitter.initial(variable.type, variable.init)
+            initial = python_text(emitter.initial(variable.type, variable.init))
             emitter.emit(depth + 1, f"{variable.attr} = {initial}")
     emitter.block(pou.pou.body, depth + 1)
     emitter.emit(depth + 1, emitter.return_line())
@@ -1690,7 +1846,8 @@ def _data_class(emitter: _Emitter, name: str, fields: list[Variable]) -> str:
     if not fields:
         emitter.emit(2, "pass")
     for variable in fields:
-        emitter.emit(2, f"s.{variable.attr} = {emitter.initial(variable.type, variable.init)}")
+        initial = python_text(emitter.initial(variable.type, variable.init))
+        emitter.emit(2, f"s.{variable.attr} = {initial}")
     return "\n".join(emitter.lines) + "\n"
 
 

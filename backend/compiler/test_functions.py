@@ -18,6 +18,8 @@ from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.source import Pos
 from backend.compiler.types import BOOL, ELEMENTARY, TIME, ElementaryType, Type, assignable
+from runtime.contract.code.python_text import python_text
+from runtime.contract.code.typed_form import Call, Const, Expr
 
 TEST_FOLDER = "test/"
 UDINT = ELEMENTARY["UDINT"]
@@ -173,7 +175,7 @@ def place_path(expr: ast.Expr) -> str | None:
 
 class _Emitter(Protocol):
     def exact_code(self, expr: ast.Expr) -> str: ...
-    def converted(self, target: Type, value_expr: ast.Expr) -> str: ...
+    def converted(self, target: Type, value_expr: ast.Expr) -> Expr: ...
     def type_of(self, expr: ast.Expr) -> Type: ...
 
 
@@ -198,7 +200,7 @@ def test_call_lines(emitter: _Emitter, call: ast.Call, function: TestFunction) -
                 function.name, "near"
             )
             actual_type = emitter.type_of(named["ACTUAL"])
-            expected = emitter.converted(actual_type, named["EXPECTED"])
+            expected = python_text(emitter.converted(actual_type, named["EXPECTED"]))
             tolerance = f"{code('TOLERANCE')}, " if op == "near" else ""
             values = f"{expected}, {code('ACTUAL')}, {tolerance}{actual_type.name!r}"
             return [f"_test({op!r}, {values}, {message}, {at})"]
@@ -217,7 +219,7 @@ def test_call_lines(emitter: _Emitter, call: ast.Call, function: TestFunction) -
         case "FORCE":
             path = place_path(named["VARIABLE"])
             variable_type = emitter.type_of(named["VARIABLE"])
-            value = emitter.converted(variable_type, named["VALUE"])
+            value = python_text(emitter.converted(variable_type, named["VALUE"]))
             return [f"_test('force', {path!r}, {value}, {at})"]
         case "RELEASE":
             return [f"_test('release', {place_path(named['VARIABLE'])!r}, {at})"]
@@ -226,4 +228,4 @@ def test_call_lines(emitter: _Emitter, call: ast.Call, function: TestFunction) -
     raise AssertionError(function.name)
 
 
-TEST_CYCLES_CODE = "_test('count')"
+TEST_CYCLES_CALL = Call("_test", (Const("count", "STRING"),), "DINT")

@@ -1,0 +1,92 @@
+"""Typed-form nodes (runtime/contract/code/typed_form.py) that bring a value into a type:
+an integer wrapped to its width, a value converted between types (X_TO_Y semantics)."""
+
+from __future__ import annotations
+
+from backend.compiler.types import ElementaryType, Type, artifact_type_text, integer_like
+from runtime.contract.code.typed_form import Binary, Call, Choice, Const, Expr, Wrap
+from runtime.contract.generated_code import BUILTINS, CALLED_INTRINSICS
+
+NS_PER_DAY = 86_400_000_000_000
+
+
+def call(callee: str, result: Type | str, *args: Expr) -> Call:
+    """A call of an intrinsic (an entry of runtime/contract/intrinsic_table.py) or of a
+    conversion Python has, by position."""
+    assert callee in CALLED_INTRINSICS or callee in BUILTINS, f"{callee} is no intrinsic"
+    return Call(callee, args, result if isinstance(result, str) else artifact_type_text(result))
+
+
+def wrapped(value: Expr, t: ElementaryType, offset: int = 0) -> Expr:
+    """An integer expression, plus `offset`, brought into the range of its type (two's
+    complement; a time of day wraps around midnight)."""
+    name = artifact_type_text(t)
+    if t.name in ("TOD", "LTOD"):
+        if offset:
+            value = Binary("+", value, Const(offset, name), name)
+        return Binary("%", value, Const(NS_PER_DAY, name), name)
+    if t.is_any_literal or not (t.is_integer or t.category in ("time", "date")):
+        return Binary("+", value, Const(offset, name), name) if offset else value
+    return Wrap(value, t.bits, t.signed, offset, name)
+
+
+def converted(value: Expr, source: Type, target: ElementaryType) -> Expr:
+    """`value` of type `source` converted to `target` (X_TO_Y semantics)."""
+    src = integer_like(source) or source
+    if not isinstance(src, ElementaryType):
+        return value
+    cat, tcat, name = src.category, target.category, artifact_type_text(target)
+    if tcat == "bool":
+        if cat == "string":
+            return call("_str_to_bool", name, value)
+        return Binary("!=", value, Const(0, "DINT"), name) if cat != "bool" else value
+    if tcat in ("int", "bits"):
+        if cat == "real":
+            return wrapped(call("_round", name, value), target)
+        if cat == "string" and src.name in ("CHAR", "WCHAR"):
+            return call("_ord", name, value)
+        if cat == "string":
+            number = call("_str_to_int", "LINT", value)
+            if not target.signed:  # a negative text does not convert to an unsigned type
+                number = call("max", "LINT", number, Const(0, "LINT"))
+            return wrapped(number, target)
+        if cat == "bool":
+            return call("int", name, value)
+        if src.is_any_literal or (
+            src.is_integer and (src.bits < target.bits and (target.signed or not src.signed))
+        ):
+            return value
+        return wrapped(value, target)
+    if tcat == "real":
+        if cat == "string":
+            return call("_str_to_real", name, value)
+        if target.bits == 32 and not (cat == "real" and src.bits == 32):
+            return call("_f32", name, value)
+        return call("float", name, value)
+    if tcat == "string":
+        if cat == "real":
+            return call("_real_to_str", name, value)
+        if cat == "bool":
+            return Choice(value, Const("TRUE", name), Const("FALSE", name), name)
+        if cat == "time":
+            prefix = "LTIME#" if src.name == "LTIME" else "T#"
+            return call("_time_to_str", name, value, Const(prefix, "STRING"))
+        if cat == "date":
+            return call("_date_to_str", name, value, Const(src.name, "STRING"))
+        if cat == "string":
+            if src.name.startswith("W") and not target.name.startswith("W"):
+                return call("_w2s", name, value)
+            if target.name.startswith("W") and not src.name.startswith("W"):
+                return call("_s2w", name, value)
+            return value
+        return call("str", name, value)
+    if tcat in ("time", "date"):
+        if cat == "string":
+            return call("_str_to_time", name, value)
+        million = Const(1_000_000, "LINT")
+        if cat == "real":  # REAL ms -> ns
+            return wrapped(call("_round", name, Binary("*", value, million, "LREAL")), target)
+        if cat in ("int", "bits"):  # integers count milliseconds
+            return wrapped(Binary("*", value, million, name), target)
+        return value
+    return value
