@@ -23,6 +23,7 @@ every expression is evaluated afresh by recursion over the tree.
 
 from __future__ import annotations
 
+import functools
 import math
 import struct
 from collections.abc import Callable
@@ -717,8 +718,7 @@ def _front_end(sources: list[SourceFile]) -> tuple[Resolved, list[str]]:
         raise Unsupported("CONFIGURATION (the walker runs every PROGRAM once per cycle)")
     programs = [p.name for unit in units for p in unit.pous if p.kind == "PROGRAM"]
     user_pous = {key(p.name) for unit in units for p in unit.pous}
-    library, _ = parse_all(stdlib_sources())
-    for unit in library:
+    for unit in _standard_library():
         kept = tuple(p for p in unit.pous if key(p.name) not in user_pous)
         units.append(ast.SourceUnit(unit.file, kept, unit.globals, unit.types))
     resolved = resolve(units)
@@ -728,6 +728,15 @@ def _front_end(sources: list[SourceFile]) -> tuple[Resolved, list[str]]:
     if errors:
         raise ValueError("the program has errors:\n" + "\n".join(errors))
     return resolved, programs
+
+
+@functools.cache
+def _standard_library() -> tuple[ast.SourceUnit, ...]:
+    """The standard library parsed once per process, as the compiler parses it once: its
+    syntax tree is immutable, and each walker takes what it needs of it (parsed afresh for
+    each walker, it cost a random program's walker more than the rest of its front end)."""
+    library, _ = parse_all(stdlib_sources())
+    return tuple(library)
 
 
 def _globals_pou(resolved: Resolved) -> PouSymbols:
