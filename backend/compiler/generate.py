@@ -1,4 +1,6 @@
-"""Stage 4, generate: Python source for every POU and user data type.
+"""Stage 4, generate: every POU and user data type as the typed form of the contract
+(runtime/contract/code/: expressions and statements as data, with their types and ST
+lines), printed as the Python the runtime loads.
 
 PROGRAMs and FUNCTION_BLOCKs become classes (`POU_<NAME>`: variables as slots, `__call__`
 runs one cycle or call); FUNCTIONs become plain functions (`FN_<NAME>`) whose variables are
@@ -11,7 +13,7 @@ commutes with those.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, fields, is_dataclass
 
 from backend.compiler import ast, builtins
@@ -49,7 +51,7 @@ from backend.compiler.resolve import (
     transition_variable,
 )
 from backend.compiler.source import Pos
-from backend.compiler.test_functions import TEST_CYCLES_CALL, test_call_lines
+from backend.compiler.test_functions import TEST_CYCLES_CALL, test_call_statements
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -71,7 +73,19 @@ from backend.compiler.types import (
     is_implicit_reference,
     value_type,
 )
-from runtime.contract.code.python_text import python_text
+from runtime.contract.code.python_text import INDENT, python_lines, python_text
+from runtime.contract.code.statements import (
+    Assign,
+    Break,
+    Continue,
+    Evaluate,
+    ForEach,
+    If,
+    Pass,
+    Return,
+    Stmt,
+    While,
+)
 from runtime.contract.code.typed_form import (
     Assigned,
     Binary,
@@ -82,6 +96,7 @@ from runtime.contract.code.typed_form import (
     Const,
     Expr,
     Index,
+    Logic,
     Member,
     Members,
     Named,
@@ -94,7 +109,6 @@ from runtime.contract.code.typed_form import (
 )
 from runtime.contract.values import to_real32
 
-INDENT = "    "
 _COMPARE: dict[str, BinaryOp] = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 _BITWISE: dict[str, BinaryOp] = {"AND": "&", "&": "&", "OR": "|", "XOR": "^"}
 LOCAL_KINDS = ("VAR_TEMP", "RETURN")  # Python locals even in a class's __call__
@@ -209,7 +223,9 @@ class _Emitter:
     local: bool  # a FUNCTION: its variables are Python locals
     at: Pos  # what is being generated (a statement, a declaration), where a limit is met
     lines: list[str] = field(default_factory=list)
-    pre: list[str] = field(default_factory=list)  # hoisted statements for the next line
+    pre: list[Stmt] = field(default_factory=list)  # hoisted statements for the next one
+    body: list[Stmt] = field(default_factory=list)  # the block being generated
+    depth: int = 0  # the indentation of that block's lines
     temp_count: int = 0
     in_globals: bool = False  # initialising GLOBALS itself: other globals are on `s`
     # the width the + - * expression being generated is wrapped to where it is stored
@@ -231,19 +247,23 @@ class _Emitter:
     enables: dict[int, str] = field(default_factory=dict)
 
     def emit(self, depth: int, line: str) -> None:
-        if depth > MAX_INDENT:
-            message = f"statements nested {depth} blocks deep in the generated code"
-            raise GenerationError([Diagnostic.at(self.at, Code.STATEMENT_DEPTH, message)])
-        for hoisted in self.pre:
-            self._add(INDENT * depth + hoisted)
-        self.pre.clear()
-        self._add(INDENT * depth + line)
+        """A line of the unit's frame (a class, a function's header), of no ST line."""
+        self._add(INDENT * depth + line, self.st_line)
 
-    def _add(self, line: str) -> None:
+    def emit_body(self, depth: int, fill: Callable[[], object]) -> None:
+        """The statements `fill` generates, printed as the block at `depth`."""
+        self.depth, self.body = depth, []
+        fill()
+        self.add()  # what the last expression hoisted
+        statements, self.body = self.body, []
+        for line, st_line in python_lines(statements, depth):
+            self._add(line, st_line)
+
+    def _add(self, line: str, st_line: int) -> None:
         self.make_room(len(line) + 1)
         self.size += len(line) + 1
         self.lines.append(line)
-        self.st_lines.append(self.st_line)
+        self.st_lines.append(st_line)
 
     def make_room(self, size: int) -> None:
         """Refuse `size` more characters beyond the unit's limit, before a long line is
@@ -270,18 +290,12 @@ class _Emitter:
             return Var(variable.attr, "local", type_text)
         return Var(variable.attr, "instance", type_text)
 
-    def var_code(self, variable: Variable) -> str:
-        return python_text(self.var_node(variable))
-
     # ---- expressions
     def exact(self, expr: ast.Expr) -> _Value:
         return _exact(self.expr(expr))
 
     def exact_node(self, expr: ast.Expr) -> Expr:
         return self.exact(expr).node
-
-    def exact_code(self, expr: ast.Expr) -> str:
-        return self.exact(expr).code
 
     def type_of(self, expr: ast.Expr) -> Type:
         return _type(self.scope, expr)
@@ -428,7 +442,9 @@ class _Emitter:
                 assert isinstance(array, ArrayType)
                 held = [self.temp() for _ in indices]  # each index evaluated once
                 for temp, index in zip(held, indices, strict=True):
-                    self.pre.append(f"{temp} = {self.exact_code(index)}")
+                    self.pre.append(
+                        Assign(Var(temp, "local", "DINT"), self.exact_node(index), self.st_line)
+                    )
                 offset = self._offset_of_held(array, held)
                 root, steps, label, whole = self._place(base)
                 shown = Binary("+", label, _text("["), "STRING")
@@ -662,7 +678,7 @@ class _Emitter:
         arguments = () if first is None else (first,)
         return _Value(Call(getter, arguments, _t(access.prop.type)), access.prop.type)
 
-    def _property_set(self, target: ast.Expr, value: Expr) -> str | None:
+    def _property_set(self, target: ast.Expr, value: Expr) -> Stmt | None:
         """The statement that writes `value` through a property's SET (None: no property)."""
         access = self.scope.property_access(target)
         if access is None:
@@ -670,7 +686,7 @@ class _Emitter:
         owner, first = self._accessor_owner(access)
         setter = Member(owner, setter_attr(access.prop.name), "")
         arguments = (value,) if first is None else (first, value)
-        return python_text(Call(setter, arguments, ""))
+        return Evaluate(Call(setter, arguments, ""), self.st_line)
 
     def _method_call(self, target: MethodCall, call: ast.Call) -> _Value:
         """`inst.M(...)`: the method the instance's class has (an override, dispatched by
@@ -727,9 +743,8 @@ class _Emitter:
             node = Choice(_enabled(enable), node, default, "" if tupled else _t(result))
         if not tupled:
             return _Value(node, result)
-        handle = self.temp()
-        self.pre.append(f"{handle} = {python_text(node)}")
-        returned = Var(handle, "local", "")
+        returned = Var(self.temp(), "local", "")
+        self.pre.append(Assign(returned, node, self.st_line))
         slots = {key(member.name): index for index, member in enumerate(tuple_members(pou), 1)}
         # outputs are stored in the order the call names them (as CODESYS does)
         for arg, connected in pairs:
@@ -742,7 +757,9 @@ class _Emitter:
             slot = _int(slots[key(connected.name)])
             output = _Value(Index(returned, slot, _t(connected.type)), connected.type)
             store = self.store(arg.value, convert_value(output, _type(self.scope, arg.value)))
-            self.pre.append(store if enable is None else f"if {enable}: {store}")
+            self.pre.append(
+                store if enable is None else If(_enabled(enable), (store,), (), self.st_line)
+            )
         return _Value(Index(returned, _int(0), _t(result)), result)
 
     def _enable(self, call: ast.Call, callee: PouSymbols | None) -> str | None:
@@ -752,7 +769,7 @@ class _Emitter:
         if enable_expr is None:
             return None
         enable = self.temp()
-        self.pre.append(f"{enable} = {self.exact_code(enable_expr)}")
+        self.pre.append(Assign(_enabled(enable), self.exact_node(enable_expr), self.st_line))
         self.enables[id(call)] = enable
         return enable
 
@@ -765,7 +782,7 @@ class _Emitter:
             self.pre.append(self._eno_store(target, ran))
         return enable
 
-    def _eno_store(self, target: ast.Argument, value: Expr) -> str:
+    def _eno_store(self, target: ast.Argument, value: Expr) -> Stmt:
         """`ENO => ok` (`NOT ENO => failed`) with ENO's value in `value`."""
         assert target.value is not None
         return self.store(target.value, Unary("not", value, "BOOL") if target.negated else value)
@@ -870,92 +887,139 @@ class _Emitter:
         return self.scope.fb_symbols(owner).by_key[key(name)]
 
     # ---- statements
-    def block(self, statements: tuple[ast.Statement, ...], depth: int) -> None:
-        start = len(self.lines)
-        for statement in statements:
-            self.statement(statement, depth)
-        if len(self.lines) == start:
-            self.emit(depth, "pass")
+    def add(self, *statements: Stmt) -> None:
+        """Statements at the end of the block being generated, after those hoisted out of
+        their expressions."""
+        self.body.extend(self.pre)
+        self.pre.clear()
+        self.body.extend(statements)
 
-    def loop(self, depth: int, header: str, after_tick: tuple[str, ...] = ()) -> None:
-        """A loop header. Each pass starts with a tick where a program with a time slice
-        may be suspended until the next CPU cycle (see runtime/slicing.py). `_tick` is
-        None while no slice is metered: read once before the loop, a pass then costs a
-        test of a local instead of a call (the resource watchdog needs no tick)."""
-        tick = self.temp()
-        self.emit(depth, f"{tick} = _tick")
-        self.emit(depth, header)
-        self.emit(depth + 1, f"if {tick} is not None:")
-        self.emit(depth + 2, f"{tick}()")
-        for line in after_tick:
-            self.emit(depth + 2, line)
-
-    def tested_loop(self, condition: str, depth: int) -> None:
-        """A loop header testing `condition` before every pass. Statements hoisted out of
-        the condition (a call with outputs) belong inside the loop, before the test, so
-        that they run for every test, not once before the loop."""
-        if not self.pre:
-            self.loop(depth, f"while {condition}:")
-            return
+    def take_hoisted(self) -> list[Stmt]:
+        """The statements hoisted so far, to place before a block's header rather than
+        inside the block."""
         hoisted, self.pre = self.pre, []
-        self.loop(depth, "while True:")
-        self.pre = hoisted
-        self.emit(depth + 1, f"if not ({condition}):")
-        self.emit(depth + 2, "break")
+        return hoisted
 
-    def statement(self, statement: ast.Statement, depth: int) -> None:
+    def refuse_deeper_than_allowed(self, depth: int) -> None:
+        """Code this deep is more than a resource loads (limits.py)."""
+        if depth > MAX_INDENT:
+            message = f"statements nested {depth} blocks deep in the generated code"
+            raise GenerationError([Diagnostic.at(self.at, Code.STATEMENT_DEPTH, message)])
+
+    def nested(self, fill: Callable[[], object], deeper: bool = True) -> tuple[Stmt, ...]:
+        """The statements `fill` generates, as a block one level deeper (`deeper` False:
+        to be spliced into the block being generated)."""
+        assert not self.pre, "hoisted statements belong before the block's header"
+        step = 1 if deeper else 0
+        self.refuse_deeper_than_allowed(self.depth + step)
+        outer, self.body = self.body, []
+        self.depth += step
+        try:
+            fill()
+            self.add()  # what the last expression hoisted
+        finally:
+            inner, self.body = self.body, outer
+            self.depth -= step
+        return tuple(inner)
+
+    def block(self, statements: tuple[ast.Statement, ...], deeper: bool = True) -> tuple[Stmt, ...]:
+        """The code of ST statements as a block (`pass` for none); `deeper` False: to be
+        spliced into the block being generated (a loop's body after its tick)."""
+
+        def fill() -> None:
+            for statement in statements:
+                self.statement(statement)
+
+        return self.nested(fill, deeper) or (Pass(self.st_line),)
+
+    def loop(
+        self, test: Expr, fill: Callable[[], object], after_tick: tuple[Stmt, ...] = ()
+    ) -> None:
+        """A loop. Each pass starts with a tick where a program with a time slice may be
+        suspended until the next CPU cycle (see runtime/slicing.py). `_tick` is None
+        while no slice is metered: read once before the loop, a pass then costs a test of
+        a local instead of a call (the resource watchdog needs no tick)."""
+        tick = Var(self.temp(), "local", "")
+        self.add(Assign(tick, Named("_tick"), self.st_line))
+
+        def body() -> None:
+            ticked = (Evaluate(Call(tick, (), ""), self.st_line), *after_tick)
+            self.add(If(Binary("is not", tick, _NULL, "BOOL"), ticked, (), self.st_line))
+            fill()
+
+        self.add(While(test, self.nested(body), self.st_line))
+
+    def tested_loop(self, condition: Expr, fill: Callable[[], object]) -> None:
+        """A loop testing `condition` before every pass. Statements hoisted out of the
+        condition (a call with outputs) belong inside the loop, before the test, so that
+        they run for every test, not once before the loop."""
+        if not self.pre:
+            self.loop(condition, fill)
+            return
+        hoisted = self.take_hoisted()
+
+        def body() -> None:
+            line = self.st_line
+            self.add(*hoisted, If(Unary("not", condition, "BOOL"), (Break(line),), (), line))
+            fill()
+
+        self.loop(Const(True, "BOOL"), body)
+
+    def statement(self, statement: ast.Statement) -> None:
         outer, self.st_line, self.at = (self.st_line, self.at), statement.pos.line, statement.pos
-        self._statement(statement, depth)
+        self._statement(statement)
         self.st_line, self.at = outer
 
-    def _statement(self, statement: ast.Statement, depth: int) -> None:
+    def _statement(self, statement: ast.Statement) -> None:
+        line = self.st_line
         match statement:
             case ast.Assign(target=target, value=value, bind=bind, attempt=attempt):
-                self.assign(target, value, depth, bind, attempt)
+                self.assign(target, value, bind, attempt)
             case ast.CallStatement(call=call):
-                self.call_statement(call, depth)
-            case ast.ExprStatement(expr=expr):
-                self.emit(depth, self.exact_code(expr))  # for its calls; the value is dropped
+                self.call_statement(call)
+            case ast.ExprStatement(expr=expr):  # for its calls; the value is dropped
+                self.add(Evaluate(self.exact_node(expr), line))
             case ast.If(branches=branches, orelse=orelse):
-                self.if_statement(branches, orelse, depth)
+                self.add(*self.if_statement(branches, orelse))
             case ast.Case():
-                self.case(statement, depth)
+                self.case(statement)
             case ast.While(condition=condition, body=body):
-                self.tested_loop(self.exact_code(condition), depth)
-                self.block(body, depth + 1)
+                self.tested_loop(
+                    self.exact_node(condition), lambda: self.add(*self.block(body, deeper=False))
+                )
             case ast.Repeat(body=body, until=until):
-                self.repeat(body, until, depth)
+                self.repeat(body, until)
             case ast.For():
-                self.for_loop(statement, depth)
+                self.for_loop(statement)
             case ast.Exit():
-                self.emit(depth, "break")
+                self.add(Break(line))
             case ast.Continue():
-                self.emit(depth, "continue")
+                self.add(Continue(line))
             case ast.Return():
-                self.emit(depth, self.return_line())
+                self.add(self.return_statement())
 
-    def return_line(self) -> str:
+    def return_statement(self) -> Return:
         pou = self.scope.pou
         if pou.kind not in ("FUNCTION", "METHOD"):
-            return "return"
+            return Return(None, self.st_line)
         result = pou.by_key.get(key(pou.name))
-        result_code = result.attr if result is not None and result.kind == "RETURN" else "None"
+        result_node: Expr = _NULL
+        if result is not None and result.kind == "RETURN":
+            result_node = Var(result.attr, "local", _t(result.type))
         if returns_tuple(pou):
-            members = ", ".join(v.attr for v in tuple_members(pou))
-            return f"return ({result_code}, {members})"
-        return f"return {result_code}"
+            members = [Var(v.attr, "local", _t(v.type)) for v in tuple_members(pou)]
+            return Return(Sequence((result_node, *members), "", as_tuple=True), self.st_line)
+        return Return(result_node, self.st_line)
 
-    def assign(
-        self, target: ast.Expr, value: ast.Initializer, depth: int, bind: bool, attempt: bool
-    ) -> None:
+    def assign(self, target: ast.Expr, value: ast.Initializer, bind: bool, attempt: bool) -> None:
         if attempt:
             assert isinstance(value, ast.Expr)
-            self.emit(depth, self.store(target, self.attempt(_type(self.scope, target), value)))
+            self.add(self.store(target, self.attempt(_type(self.scope, target), value)))
             return
         if bind:  # `r REF= x`: the REFERENCE TO itself now holds REF(x) (`REF= 0`: NULL)
             held = self.held_reference(target)
             assert held is not None and isinstance(value, ast.Call | ast.NullLiteral)
-            self.emit(depth, f"{python_text(held)} = {self.expr(value).code}")
+            self.add(Assign(held, self.expr(value).node, self.st_line))
             return
         target_type = _type(self.scope, target)
         if isinstance(value, ast.ArrayInit | ast.StructInit):
@@ -963,10 +1027,11 @@ class _Emitter:
         else:
             node = self.converted(target_type, value)
         enable = self.enables.get(id(value))
+        stored = self.store(target, node)
         if enable is not None:  # `x := F(EN := FALSE, ...)` leaves x as it was (as Beremiz)
-            self.emit(depth, f"if {enable}:")
-            depth += 1
-        self.emit(depth, self.store(target, node))
+            self.add(If(_enabled(enable), (stored,), (), self.st_line))
+            return
+        self.add(stored)
 
     def attempt(self, target: Type, value: ast.Expr) -> Expr:
         """`t ?= x`: a reference to the instance x is or refers to where that instance is
@@ -985,11 +1050,11 @@ class _Emitter:
         nothing = Sequence((), "", as_tuple=True)
         kinds = Member(Member(kind, "__dict__", ""), "get", "")
         conforms = Call(kinds, (_text("KIND__"), nothing), "")
-        fits = Binary("or", named, Binary("in", _text(key(wanted.name)), conforms, "BOOL"), "BOOL")
+        fits = Logic("or", (named, Binary("in", _text(key(wanted.name)), conforms, "BOOL")))
         bound = Binary("is not", Assigned(held, reference, _t(target)), _NULL, "BOOL")
-        return Choice(Binary("and", bound, fits, "BOOL"), found, _NULL, _t(target))
+        return Choice(Logic("and", (bound, fits)), found, _NULL, _t(target))
 
-    def store(self, target: ast.Expr, value: Expr) -> str:
+    def store(self, target: ast.Expr, value: Expr) -> Stmt:
         """The statement that stores `value` (already converted) into `target`."""
         target_type = _type(self.scope, target)
         length = target_type.max_length if isinstance(target_type, ElementaryType) else 0
@@ -1003,18 +1068,19 @@ class _Emitter:
             return self._assignment(target.base, wrapped(updated, integer) if integer else updated)
         return self._assignment(target, value)
 
-    def _assignment(self, target: ast.Expr, value: Expr) -> str:
+    def _assignment(self, target: ast.Expr, value: Expr) -> Stmt:
         """`target := value`; through a reference (`r^ := v`, a REFERENCE TO r) the place it
         refers to."""
+        line = self.st_line
         if isinstance(target, ast.Deref):
-            return python_text(call("_deref_set", "", self.expr(target.base).node, value))
+            return Evaluate(call("_deref_set", "", self.expr(target.base).node, value), line)
         through_setter = self._property_set(target, value)
         if through_setter is not None:
             return through_setter
         held = self.held_reference(target)
         if held is not None:
-            return python_text(call("_deref_set", "", held, value))
-        return f"{self.expr(target).code} = {python_text(value)}"
+            return Evaluate(call("_deref_set", "", held, value), line)
+        return Assign(self.expr(target).node, value, line)
 
     def held_reference(self, expr: ast.Expr) -> Expr | None:
         """The slot of a REFERENCE TO variable `expr` names (None: it names no such
@@ -1031,35 +1097,39 @@ class _Emitter:
 
     def if_statement(
         self, branches: tuple[tuple[ast.Expr, tuple[ast.Statement, ...]], ...],
-        orelse: tuple[ast.Statement, ...], depth: int,
-    ) -> None:  # fmt: skip
-        condition, body = branches[0]
-        self.emit(depth, f"if {self.exact(condition).code}:")
-        self.block(body, depth + 1)
-        for index, (condition, body) in enumerate(branches[1:], 1):
-            condition_code = self.exact(condition).code
-            if self.pre:
-                # calls hoisted out of this condition must run only when it is reached
-                hoisted, self.pre = self.pre, []
-                self.emit(depth, "else:")
-                self.pre = hoisted
-                self.emit(depth + 1, f"if {condition_code}:")
-                self.block(body, depth + 2)
-                if index + 1 < len(branches):
-                    self.emit(depth + 1, "else:")
-                    self.if_statement(branches[index + 1 :], orelse, depth + 2)
-                elif orelse:
-                    self.emit(depth + 1, "else:")
-                    self.block(orelse, depth + 2)
-                return
-            self.emit(depth, f"elif {condition_code}:")
-            self.block(body, depth + 1)
-        if orelse:
-            self.emit(depth, "else:")
-            self.block(orelse, depth + 1)
+        orelse: tuple[ast.Statement, ...],
+    ) -> list[Stmt]:  # fmt: skip
+        """IF ... ELSIF ... ELSE, after what its first condition hoists."""
+        test = self.exact_node(branches[0][0])
+        hoisted = self.take_hoisted()
+        return [*hoisted, self._branches(test, branches, orelse)]
 
-    def case(self, case: ast.Case, depth: int) -> None:
-        selector = self.temp()
+    def _branches(
+        self, test: Expr, branches: tuple[tuple[ast.Expr, tuple[ast.Statement, ...]], ...],
+        orelse: tuple[ast.Statement, ...],
+    ) -> If:  # fmt: skip
+        """The IF of the first branch (its condition `test`), the others in its ELSE: an
+        ELSIF at its depth, but one whose condition hoists statements (which must run only
+        when that condition is reached) in an ELSE of its own, one level deeper."""
+        line = self.st_line
+        then = self.block(branches[0][1])
+        if len(branches) == 1:
+            return If(test, then, self.block(orelse) if orelse else (), line)
+        following = self.exact_node(branches[1][0])
+        hoisted = self.take_hoisted()
+        if not hoisted:
+            return If(test, then, (self._branches(following, branches[1:], orelse),), line)
+        self.refuse_deeper_than_allowed(self.depth + 1)
+        self.depth += 1
+        try:
+            rest = self._branches(following, branches[1:], orelse)
+        finally:
+            self.depth -= 1
+        return If(test, then, (*hoisted, rest), line)
+
+    def case(self, case: ast.Case) -> None:
+        line = self.st_line
+        selector = Var(self.temp(), "local", "")
         selector_value = self.exact(case.selector)
         for labels, _ in case.branches:
             for label in labels:
@@ -1067,50 +1137,58 @@ class _Emitter:
                     (label.low, label.high) if isinstance(label, ast.CaseRange) else (label,)
                 ):
                     self.scope.expect(bound, selector_value.type)
-        self.emit(depth, f"{selector} = {selector_value.code}")
-        first = True
+        self.add(Assign(selector, selector_value.node, line))
+        chosen: list[tuple[Expr, tuple[Stmt, ...]]] = []
         for labels, body in case.branches:
-            tests = []
+            tests: list[Expr] = []
             for label in labels:
                 if isinstance(label, ast.CaseRange):
-                    low, high = self.exact(label.low).code, self.exact(label.high).code
-                    tests.append(f"{low} <= {selector} <= {high}")
+                    low, high = self.exact_node(label.low), self.exact_node(label.high)
+                    tests.append(Chain("<=", (low, selector, high)))
                 else:
-                    tests.append(f"{selector} == {self.exact(label).code}")
-            self.emit(depth, f"{'if' if first else 'elif'} {' or '.join(tests)}:")
-            self.block(body, depth + 1)
-            first = False
-        if case.orelse:
-            if first:
-                self.emit(depth, "if True:")
-            else:
-                self.emit(depth, "else:")
-            self.block(case.orelse, depth + 1)
-
-    def repeat(self, body: tuple[ast.Statement, ...], until: ast.Expr, depth: int) -> None:
-        first = self.temp()
-        until_code = self.exact(until).code  # generated before the body, used after it
-        hoisted, self.pre = self.pre, []
-        if hoisted:  # the condition needs statements: test at the end, no CONTINUE support
-            self.loop(depth, "while True:")
-            self.block(body, depth + 1)
-            self.pre = hoisted
-            self.emit(depth + 1, f"if {until_code}:")
-            self.emit(depth + 2, "break")
+                    tests.append(Binary("==", selector, self.exact_node(label), "BOOL"))
+            test = tests[0] if len(tests) == 1 else Logic("or", tuple(tests))
+            chosen.append((test, self.block(body)))
+        otherwise = self.block(case.orelse) if case.orelse else ()
+        if not chosen:
+            if otherwise:
+                self.add(If(Const(True, "BOOL"), otherwise, (), line))
             return
-        self.emit(depth, f"{first} = True")
-        self.loop(depth, f"while {first} or not {until_code}:")
-        self.emit(depth + 1, f"{first} = False")
-        self.block(body, depth + 1)
+        for test, chosen_body in reversed(chosen):
+            otherwise = (If(test, chosen_body, otherwise, line),)
+        self.add(*otherwise)
 
-    def for_loop(self, loop: ast.For, depth: int) -> None:
+    def repeat(self, body: tuple[ast.Statement, ...], until: ast.Expr) -> None:
+        line = self.st_line
+        first = Var(self.temp(), "local", "BOOL")
+        until_node = self.exact_node(until)  # generated before the body, used after it
+        hoisted = self.take_hoisted()
+        if hoisted:  # the condition needs statements: test at the end, no CONTINUE support
+
+            def at_the_end() -> None:
+                self.add(*self.block(body, deeper=False))
+                self.add(*hoisted, If(until_node, (Break(line),), (), line))
+
+            self.loop(Const(True, "BOOL"), at_the_end)
+            return
+        self.add(Assign(first, Const(True, "BOOL"), line))
+        again = Logic("or", (first, Unary("not", until_node, "BOOL")))
+
+        def passes() -> None:
+            self.add(Assign(first, Const(False, "BOOL"), line))
+            self.add(*self.block(body, deeper=False))
+
+        self.loop(again, passes)
+
+    def for_loop(self, loop: ast.For) -> None:
         """IEC FOR: the end and step are evaluated for every test of the loop condition; a
         counter that would wrap past the end of its type ends the loop instead of running
         forever."""
+        line = self.st_line
         counter = self.scope.variable(loop.variable)
         assert counter is not None and isinstance(counter.type, ElementaryType)
-        ref = self.var_code(counter)
-        self.emit(depth, f"{ref} = {python_text(self.converted(counter.type, loop.start))}")
+        ref = self.var_node(counter)
+        self.add(Assign(ref, self.converted(counter.type, loop.start), line))
         step_constant = self.scope.constant_int(loop.step) if loop.step is not None else 1
         stop_constant = self.scope.constant_int(loop.stop)
         if (
@@ -1120,102 +1198,120 @@ class _Emitter:
             and self._counter_private(counter, loop.body)
         ):
             if _plain_body(loop.body):
-                self.range_loop(loop, counter, ref, step_constant, stop_constant, depth)
+                self.range_loop(loop, counter, ref, step_constant, stop_constant)
                 return
-            stop = self.exact(loop.stop).code  # a constant: the same at every test
-            self.counted_loop(loop, counter, ref, step_constant, stop, depth)
+            stop = self.exact_node(loop.stop)  # a constant: the same at every test
+            self.counted_loop(loop, counter, ref, step_constant, stop)
             return
-        step = self.temp() if step_constant is None else repr(step_constant)
-        following = self.temp()
-        increment = [
-            f"{following} = {ref} + {step}",
-            f"{ref} = {_wrapped_local(following, counter.type)}",
-            f"if {ref} != {following}:",
-            f"{INDENT}break",
-        ]
+        step: Expr = Const(step_constant, _t(counter.type))
+        if step_constant is None:  # evaluated for every test of the loop condition
+            step = Var(self.temp(), "local", _t(counter.type))
+        following = Var(self.temp(), "local", "LINT")
+        increment = (
+            Assign(following, Binary("+", ref, step, "LINT"), line),
+            Assign(ref, wrapped(following, counter.type), line),
+            If(Binary("!=", ref, following, "BOOL"), (Break(line),), (), line),
+        )
         if step_constant is not None and not _has_continue(loop.body):
-            stop = self.exact(loop.stop).code
-            comparison = "<=" if step_constant >= 0 else ">="
-            self.tested_loop(f"{ref} {comparison} {stop}", depth)
-            self.block(loop.body, depth + 1)
-            for line in increment:
-                self.emit(depth + 1, line)
+            stop = self.exact_node(loop.stop)
+            test = Binary("<=" if step_constant >= 0 else ">=", ref, stop, "BOOL")
+            self.tested_loop(
+                test, lambda: self.add(*self.block(loop.body, deeper=False), *increment)
+            )
             return
-        started = self.temp()
-        self.emit(depth, f"{started} = False")
-        self.loop(depth, "while True:")
-        self.emit(depth + 1, f"if {started}:")
-        for line in increment:
-            self.emit(depth + 2, line)
-        self.emit(depth + 1, f"{started} = True")
-        stop = self.exact(loop.stop).code
-        if step_constant is None:
-            assert loop.step is not None
-            self.emit(depth + 1, f"{step} = {self.exact(loop.step).code}")
-            test = f"({ref} <= {stop}) if {step} >= 0 else ({ref} >= {stop})"
-        else:
-            test = f"{ref} {'<=' if step_constant >= 0 else '>='} {stop}"
-        self.emit(depth + 1, f"if not ({test}):")
-        self.emit(depth + 2, "break")
-        self.block(loop.body, depth + 1)
+        started = Var(self.temp(), "local", "BOOL")
+        self.add(Assign(started, Const(False, "BOOL"), line))
+
+        def passes() -> None:
+            self.add(If(started, increment, (), line))
+            self.add(Assign(started, Const(True, "BOOL"), line))
+            stop = self.exact_node(loop.stop)
+            if step_constant is None:
+                assert loop.step is not None
+                self.add(Assign(step, self.exact_node(loop.step), line))
+                rising = Binary(">=", step, Const(0, "DINT"), "BOOL")
+                up, down = (Binary(op, ref, stop, "BOOL") for op in ("<=", ">="))
+                test: Expr = Choice(rising, up, down, "BOOL")
+            else:
+                test = Binary("<=" if step_constant >= 0 else ">=", ref, stop, "BOOL")
+            self.add(If(Unary("not", test, "BOOL"), (Break(line),), (), line))
+            self.add(*self.block(loop.body, deeper=False))
+
+        self.loop(Const(True, "BOOL"), passes)
 
     def counted_loop(
-        self, loop: ast.For, counter: Variable, ref: str, step: int, stop: str, depth: int
+        self, loop: ast.For, counter: Variable, ref: Var, step: int, stop: Expr
     ) -> None:
         """A FOR whose end and step are constants and whose counter nothing but the loop
         writes: the counter lives in a Python local (stored back after every step), the
         end needs no evaluation, and a step past the end of the type is a comparison. A
         write from outside while a sliced program was suspended at the tick (an online
         write, a force) is taken over, as the plain loop would."""
-        assert isinstance(counter.type, ElementaryType)
-        local = self.temp()
-        self.emit(depth, f"{local} = {ref}")
-        self.loop(
-            depth, f"while {local} {'<=' if step >= 0 else '>='} {stop}:", (f"{local} = {ref}",)
-        )
+        counter_type = counter.type
+        assert isinstance(counter_type, ElementaryType)
+        line = self.st_line
+        local = Var(self.temp(), "local", "LINT")
+        self.add(Assign(local, ref, line))
         key_ = (counter.kind, counter.attr)
-        self.counters[key_] = local
-        try:
-            self.block(loop.body, depth + 1)
-        finally:
-            del self.counters[key_]
-        self.emit(depth + 1, f"{local} += {step}")
-        past = f"> {counter.type.max}" if step >= 0 else f"< {counter.type.min}"
-        self.emit(depth + 1, f"if {local} {past}:")
-        self.emit(depth + 2, f"{ref} = {_wrapped_local(local, counter.type)}")
-        self.emit(depth + 2, "break")
-        self.emit(depth + 1, f"{ref} = {local}")
 
-    def range_loop(
-        self, loop: ast.For, counter: Variable, ref: str, step: int, stop: int, depth: int
-    ) -> None:
+        def passes() -> None:
+            self.counters[key_] = local.name
+            try:
+                self.add(*self.block(loop.body, deeper=False))
+            finally:
+                del self.counters[key_]
+            self.add(Assign(local, Const(step, "LINT"), line, augmented="+"))
+            past = Binary(">", local, Const(counter_type.max, "LINT"), "BOOL")
+            if step < 0:
+                past = Binary("<", local, Const(counter_type.min, "LINT"), "BOOL")
+            wrapped_back = (Assign(ref, wrapped(local, counter_type), line), Break(line))
+            self.add(If(past, wrapped_back, (), line), Assign(ref, local, line))
+
+        test = Binary("<=" if step >= 0 else ">=", local, stop, "BOOL")
+        self.loop(test, passes, (Assign(local, ref, line),))
+
+    def range_loop(self, loop: ast.For, counter: Variable, ref: Var, step: int, stop: int) -> None:
         """A counted loop whose body holds no loop and no RETURN: while no time slice is
         metered (no tick to call, so nothing can write the counter between passes) it is a
         Python `for` over a range, the counter stored at the start of each pass (what a
         fault leaves); with a constant start, an array indexed by the counter within its
         bounds is not checked. Otherwise the counted loop (the body's code twice, not its
         loops: nesting would multiply it)."""
-        assert isinstance(counter.type, ElementaryType)
-        local, numbers = self.temp(), self.temp()
-        self.emit(depth, "if _tick is None:")
-        self.emit(depth + 1, f"{numbers} = range({ref}, {stop + (1 if step >= 0 else -1)}, {step})")
-        self.emit(depth + 1, f"for {local} in {numbers}:")
-        self.emit(depth + 2, f"{ref} = {local}")  # what a fault in the pass leaves
+        counter_type = counter.type
+        assert isinstance(counter_type, ElementaryType)
+        line = self.st_line
+        local = Var(self.temp(), "local", "LINT")
+        numbers = Var(self.temp(), "local", "")
         start = self.scope.constant_int(loop.start)
         key_ = (counter.kind, counter.attr)
-        self.counters[key_] = local
-        if start is not None:
-            self.counter_ranges[local] = (min(start, stop), max(start, stop))
-        try:
-            self.block(loop.body, depth + 2)
-        finally:
-            del self.counters[key_]
-            self.counter_ranges.pop(local, None)
-        self.emit(depth + 1, "else:")  # not left by EXIT: one step past the last pass
-        self.emit(depth + 2, f"{local} = {numbers}.start + len({numbers}) * {step}")
-        self.emit(depth + 1, f"{ref} = {_wrapped_local(local, counter.type)}")
-        self.emit(depth, "else:")
-        self.counted_loop(loop, counter, ref, step, str(stop), depth + 1)
+        end = Const(stop + (1 if step >= 0 else -1), "LINT")
+
+        def unsliced() -> None:
+            self.add(Assign(numbers, call("range", "", ref, end, Const(step, "LINT")), line))
+
+            def passes() -> None:
+                self.add(Assign(ref, local, line))  # what a fault in the pass leaves
+                self.counters[key_] = local.name
+                if start is not None:
+                    self.counter_ranges[local.name] = (min(start, stop), max(start, stop))
+                try:
+                    self.add(*self.block(loop.body, deeper=False))
+                finally:
+                    del self.counters[key_]
+                    self.counter_ranges.pop(local.name, None)
+
+            body = self.nested(passes)
+            # not left by EXIT: one step past the last pass
+            past = Binary("*", call("len", "", numbers), Const(step, "LINT"), "LINT")
+            after = Binary("+", Member(numbers, "start", "LINT"), past, "LINT")
+            self.add(ForEach(local.name, numbers, body, (Assign(local, after, line),), line))
+            self.add(Assign(ref, wrapped(local, counter_type), line))
+
+        fast = self.nested(unsliced)
+        metered = self.nested(
+            lambda: self.counted_loop(loop, counter, ref, step, Const(stop, "LINT"))
+        )
+        self.add(If(Binary("is", Named("_tick"), _NULL, "BOOL"), fast, metered, line))
 
     def _counter_private(self, counter: Variable, body: tuple[ast.Statement, ...]) -> bool:
         """Nothing but the loop itself writes the counter while the body runs: the body
@@ -1247,41 +1343,42 @@ class _Emitter:
                         return False
         return True
 
-    def call_statement(self, call: ast.Call, depth: int) -> None:
+    def call_statement(self, call: ast.Call) -> None:
+        line = self.st_line
         method = self.scope.method_call(call)
         if method is not None:
-            self.emit(depth, self._method_call(method, call).code)
+            self.add(Evaluate(self._method_call(method, call).node, line))
             return
         test = self.scope.test_call(call)
         if test is not None:
-            for line in test_call_lines(self, call, test):
-                body = line.startswith("    ")
-                self.emit(depth + body, line.removeprefix("    "))
+            self.add(*test_call_statements(self, call, test, line))
             return
         base = self.scope.super_body(call)
         if base is not None:  # SUPER^(): the base's body on this instance
-            self.emit(depth, f"{class_name(base.base.name)}.__call__(s)")
+            body = Member(Named(class_name(base.base.name)), "__call__", "")
+            self.add(Evaluate(Call(body, (This(""),), ""), line))
             return
         action = self.scope.action_call(call)
         if action is not None:
-            self.emit(depth, f"{self._action_instance(action)}.{_action_method(call.name)}()")
+            method_node = Member(self._action_instance(action), _action_method(call.name), "")
+            self.add(Evaluate(Call(method_node, (), ""), line))
             return
         callee = self.scope.called_instance(call)
-        instance: str | None = None
+        instance: Expr | None = None
         if callee is None:  # `fbs[i](...)`, `s.fb(...)`: an instance given by an expression
             called = self.scope.expression_instance(call)
             if called is not None:
-                callee, instance = self.scope.fb_symbols(called[1]), self.expr(called[0]).code
+                callee, instance = self.scope.fb_symbols(called[1]), self.expr(called[0]).node
         if callee is None:
-            self.emit(depth, self.exact(call).code)
+            self.add(Evaluate(self.exact_node(call), line))
             return
         if instance is not None:
             pass
         elif call.name == "^":  # `r^(...)`: the instance r refers to
             assert call.receiver is not None
-            instance = self.expr(call.receiver).code
+            instance = self.expr(call.receiver).node
         else:  # a program, an instance, what a REFERENCE TO refers to
-            instance = self.expr(ast.NameRef(call.name, call.pos)).code
+            instance = self.expr(ast.NameRef(call.name, call.pos)).node
         enable = self._enable(call, callee)
         eno = block_eno(callee)
         eno_targets = _eno_targets(call, callee)
@@ -1289,12 +1386,31 @@ class _Emitter:
             ran = _enabled(enable) if enable is not None else Const(True, "BOOL")
             for target in eno_targets:
                 self.pre.append(self._eno_store(target, ran))
-        handle = self.temp()
-        self.emit(depth, f"{handle} = {instance}")
-        outer = depth
-        if enable is not None:
-            self.emit(depth, f"if {enable}:")
-            depth += 1
+        block = Var(self.temp(), "local", _t(FbType(callee.name)))
+        self.add(Assign(block, instance, line))
+
+        def run() -> None:
+            self._block_call(call, callee, block, eno is not None, eno_targets)
+
+        if enable is None:
+            run()
+            return
+        ran_body = self.nested(run)
+        skipped: tuple[Stmt, ...] = ()
+        if eno is not None:  # EN FALSE: the body does not run, ENO is FALSE
+            not_run = Const(False, "BOOL")
+            skipped = (
+                Assign(Member(block, "ENO", "BOOL"), not_run, line),
+                *(self._eno_store(target, not_run) for target in eno_targets),
+            )
+        self.add(If(_enabled(enable), ran_body, skipped, line))
+
+    def _block_call(
+        self, call: ast.Call, callee: PouSymbols, block: Var, eno: bool,
+        eno_targets: list[ast.Argument],
+    ) -> None:  # fmt: skip
+        """A block's call on `block`: its inputs set, its body run, its outputs stored."""
+        line = self.st_line
         outputs: list[tuple[ast.Argument, Variable]] = []
         for arg, param in self.scope.connect_arguments(callee, call):
             if arg.value is None or param is None or is_implicit(param):
@@ -1302,30 +1418,27 @@ class _Emitter:
             if arg.is_output or param.kind == "VAR_OUTPUT":
                 outputs.append((arg, param))
                 continue
+            slot = Member(block, param.attr, _t(param.type))
             if isinstance(param.type, OpenArrayType):
-                bound = self.open_array_argument(param, arg.value)
-                self.emit(depth, f"{handle}.{param.attr} = {python_text(bound)}")
+                self.add(Assign(slot, self.open_array_argument(param, arg.value), line))
                 continue
             if binds_reference(param, arg):  # the input now refers to the variable passed
-                reference = python_text(self.reference(arg.value))
-                self.emit(depth, f"{handle}.{param.attr} = {reference}")
+                self.add(Assign(slot, self.reference(arg.value), line))
                 continue
             if param.kind == "VAR_IN_OUT":
-                self.emit(depth, f"{handle}.{param.attr} = {self.expr(arg.value).code}")
+                self.add(Assign(slot, self.expr(arg.value).node, line))
                 if not is_aggregate(param.type):
                     outputs.append((arg, param))
                 continue
-            value = python_text(self.converted(param.type, arg.value))
-            self.emit(depth, f"{handle}.{param.attr} = {value}")
+            self.add(Assign(slot, self.converted(param.type, arg.value), line))
         # the method itself, not the instance called: CPython 3.11 calls an instance
         # through its type's __call__ slot at twice the cost (51 ns against 27)
-        self.emit(depth, f"{handle}.__call__()")
+        self.add(Evaluate(Call(Member(block, "__call__", ""), (), ""), line))
         for param in callee.parameters:
             # bound for the call only (each call binds one): no caller's array is kept in
             # the instance, for a saved context or a reload to carry
             if isinstance(param.type, OpenArrayType):
-                self.emit(depth, f"{handle}.{param.attr} = None")
-        block = Var(handle, "local", _t(FbType(callee.name)))
+                self.add(Assign(Member(block, param.attr, ""), Const(None, ""), line))
         for arg, param in outputs:
             assert arg.value is not None
             output: Expr = Member(block, param.attr, _t(param.type))
@@ -1333,26 +1446,20 @@ class _Emitter:
                 output = Unary("not", output, "BOOL")
             target_type = _type(self.scope, arg.value)
             stored = convert_value(_Value(output, param.type), target_type)
-            self.emit(depth, self.store(arg.value, stored))
-        if eno is None:
-            return
-        for target in eno_targets:  # what the block's body left in ENO
-            self.emit(depth, self._eno_store(target, Member(block, "ENO", "BOOL")))
-        if enable is not None:  # EN FALSE: the body does not run, ENO is FALSE
-            self.emit(outer, "else:")
-            self.emit(outer + 1, f"{handle}.ENO = False")
-            for target in eno_targets:
-                self.emit(outer + 1, self._eno_store(target, Const(False, "BOOL")))
+            self.add(self.store(arg.value, stored))
+        if eno:
+            for target in eno_targets:  # what the block's body left in ENO
+                self.add(self._eno_store(target, Member(block, "ENO", "BOOL")))
 
-    def _action_instance(self, action: ActionCall) -> str:
+    def _action_instance(self, action: ActionCall) -> Expr:
         """The object whose action is called: this POU's own, a program's, an instance's."""
         match action.instance:
             case None:
-                return "s"
+                return This("")
             case ProgramRef(pou=pou):
-                return f"_P.{class_name(pou.name)}"
+                return Var(class_name(pou.name), "programs", pou.name)
             case receiver:
-                return self.expr(receiver).code
+                return self.expr(receiver).node
 
 
 def _eno_targets(call: ast.Call, callee: PouSymbols | None) -> list[ast.Argument]:
@@ -1447,11 +1554,6 @@ def _wrapped(value: _Value, t: ElementaryType) -> Expr:
         head, n = value.constant_tail
         return wrapped(head, t, n)
     return wrapped(value.node, t)
-
-
-def _wrapped_local(name: str, t: ElementaryType) -> str:
-    """The text of a Python local's integer wrapped to `t`."""
-    return python_text(wrapped(Var(name, "local", _t(t)), t))
 
 
 def _implicit(node: Expr, declared: Type) -> _Value:
@@ -1615,25 +1717,36 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
             emitter.emit(2, f"s.{slot} = _ActionControl()")
     emitter.emit(0, "")
     emitter.emit(1, "def __call__(s):")
-    if block_eno(pou) is not None:  # a call that runs has ENO TRUE unless its body says not
-        emitter.emit(2, "s.ENO = True")
-    for variable in edges:  # the body sees TRUE only in the call that brings the edge
-        attr, memory = f"s.{variable.attr}", f"s.{_edge_memory(variable)}"
-        rising = variable.edge == "R_EDGE"
-        edge = f"({attr} and not {memory})" if rising else f"(not {attr} and {memory})"
-        emitter.emit(2, f"{attr}, {memory} = {edge}, {attr}")
-    _emit_temporaries(emitter, pou)
     steps = chart is not None and bool(chart.sfc.steps)
-    if pou.pou.body or not steps:  # a chart alone needs no `pass` before it
-        emitter.block(pou.pou.body, 2)
-    if chart is not None:
-        if steps:  # actions without steps run only when called
-            chart.emit_cycle(emitter, 2)
-        for action in chart.sfc.actions:
-            emitter.emit(0, "")
-            emitter.emit(1, f"def {_action_method(action.name)}(s):")
-            _emit_temporaries(emitter, pou)  # an action's call has temporaries of its own
-            emitter.block(action.body, 2)
+
+    def call_body() -> None:
+        if block_eno(pou) is not None:  # a call that runs has ENO TRUE unless its body says not
+            emitter.add(Assign(Member(This(""), "ENO", "BOOL"), Const(True, "BOOL"), 0))
+        for variable in edges:  # the body sees TRUE only in the call that brings the edge
+            now = Member(This(""), variable.attr, "BOOL")
+            before = Member(This(""), _edge_memory(variable), "BOOL")
+            if variable.edge == "R_EDGE":
+                edge = Logic("and", (now, Unary("not", before, "BOOL")))
+            else:
+                edge = Logic("and", (Unary("not", now, "BOOL"), before))
+            slots = Sequence((now, before), "", as_tuple=True)
+            emitter.add(Assign(slots, Sequence((edge, now), "", as_tuple=True), 0))
+        _add_temporaries(emitter, pou)
+        if pou.pou.body or not steps:  # a chart alone needs no `pass` before it
+            emitter.add(*emitter.block(pou.pou.body, deeper=False))
+        if chart is not None and steps:  # actions without steps run only when called
+            chart.add_cycle(emitter)
+
+    emitter.emit_body(2, call_body)
+    for action in chart.sfc.actions if chart is not None else ():
+        emitter.emit(0, "")
+        emitter.emit(1, f"def {_action_method(action.name)}(s):")
+
+        def action_body(action: ast.Action = action) -> None:
+            _add_temporaries(emitter, pou)  # an action's call has temporaries of its own
+            emitter.add(*emitter.block(action.body, deeper=False))
+
+        emitter.emit_body(2, action_body)
     _generate_methods(emitter, pou)
 
 
@@ -1647,11 +1760,11 @@ def _kinds(resolved: Resolved, pou: PouSymbols) -> tuple[str, ...]:
     return tuple(sorted(set(found)))
 
 
-def _emit_temporaries(emitter: _Emitter, pou: PouSymbols) -> None:
+def _add_temporaries(emitter: _Emitter, pou: PouSymbols) -> None:
     for variable in pou.variables:
         if variable.kind == "VAR_TEMP":
-            initial = python_text(emitter.initial(variable.type, variable.init))
-            emitter.emit(2, f"{variable.attr} = {initial}")
+            temporary = Var(variable.attr, "local", _t(variable.type))
+            emitter.add(Assign(temporary, emitter.initial(variable.type, variable.init), 0))
 
 
 def _action_method(name: str) -> str:
@@ -1689,83 +1802,89 @@ class _Chart:
     def slots(self) -> list[str]:
         return [action_control(name) for name in self.action_order]
 
-    def emit_cycle(self, emitter: _Emitter, depth: int) -> None:
+    def add_cycle(self, emitter: _Emitter) -> None:
         scope = emitter.scope
-        emitter.emit(depth, "now = _SYS.now_ns")
         outer = emitter.st_line
+        now = Var("now", "local", "TIME")
+        emitter.add(Assign(now, Var("now_ns", "system", "TIME"), outer))
         for step in self.sfc.steps:
-            ref = emitter.var_code(_step_variable(scope, step.name))
-            emitter.emit(depth, f"if {ref}.X:")
+            ref = emitter.var_node(_step_variable(scope, step.name))
             # the line of the STEP: a debugger's breakpoint there stops while it is active
-            emitter.st_line = step.pos.line
-            emitter.emit(depth + 1, f"{ref}.T = _step_time({ref}, now)")
-            emitter.st_line = outer
+            time = call("_step_time", "TIME", ref, now)
+            timed = Assign(Member(ref, "T", "TIME"), time, step.pos.line)
+            emitter.add(If(Member(ref, "X", "BOOL"), (timed,), (), outer))
         declared = {key(action.name) for action in self.sfc.actions}
         for action in self.action_order:
-            inputs: dict[str, list[str]] = {}
-            durations: dict[str, str] = {}
+            inputs: dict[str, list[Expr]] = {}
+            durations: dict[str, Expr] = {}
             for step, association in self.named_by[key(action)]:
-                flag = f"{emitter.var_code(_step_variable(scope, step.name))}.X"
+                flag = Member(emitter.var_node(_step_variable(scope, step.name)), "X", "BOOL")
                 inputs.setdefault(association.qualifier, []).append(flag)
                 if association.duration is not None:
-                    durations[association.qualifier] = emitter.exact(association.duration).code
+                    durations[association.qualifier] = emitter.exact_node(association.duration)
             arguments = [
-                f"{qualifier}=({' or '.join(flags)})" for qualifier, flags in sorted(inputs.items())
-            ] + [f"T{qualifier}={code}" for qualifier, code in sorted(durations.items())]
-            control = f"s.{action_control(action)}"
-            emitter.emit(depth, f"{control}.update(now, {', '.join(arguments)})")
+                (qualifier, _any_of(flags)) for qualifier, flags in sorted(inputs.items())
+            ] + [(f"T{qualifier}", node) for qualifier, node in sorted(durations.items())]
+            control = Member(This(""), action_control(action), "")
+            update = Call(Member(control, "update", ""), (now,), "", tuple(arguments))
+            emitter.add(Evaluate(update, outer))
             if key(action) in declared:
-                emitter.emit(depth, f"if {control}.A:")
-                emitter.emit(depth + 1, f"s.{_action_method(action)}()")
+                run = Evaluate(Call(Member(This(""), _action_method(action), ""), (), ""), outer)
+                emitter.add(If(Member(control, "A", "BOOL"), (run,), (), outer))
             else:  # a Boolean variable as action: it follows the action's Q
                 variable = scope.variable(action)
                 assert variable is not None
-                emitter.emit(depth, f"{emitter.var_code(variable)} = {control}.Q")
-        self._emit_transitions(emitter, depth)
+                follows = Assign(emitter.var_node(variable), Member(control, "Q", "BOOL"), outer)
+                emitter.add(follows)
+        self._add_transitions(emitter)
 
-    def _emit_transitions(self, emitter: _Emitter, depth: int) -> None:
+    def _add_transitions(self, emitter: _Emitter) -> None:
         scope = emitter.scope
+        outer = emitter.st_line
         ordered = sorted(
             enumerate(self.sfc.transitions),
             key=lambda item: (item[1].priority if item[1].priority is not None else 0, item[0]),
         )
-        fired: list[tuple[str, ast.Transition]] = []
+        fired: list[tuple[Var, ast.Transition]] = []
         leaving: dict[str, list[int]] = {}  # step -> the transitions in `fired` from it
         for number, transition in ordered:
-            flag = emitter.temp()
-            sources = [
-                f"{emitter.var_code(_step_variable(scope, name))}.X" for name in transition.sources
+            flag = Var(emitter.temp(), "local", "BOOL")
+            sources: list[Expr] = [
+                Member(emitter.var_node(_step_variable(scope, name)), "X", "BOOL")
+                for name in transition.sources
             ]
             steps = {key(name) for name in transition.sources}
             earlier = sorted({i for step in steps for i in leaving.get(step, [])})
-            blockers = [fired[i][0] for i in earlier]
-            condition = emitter.exact(transition.condition).code
-            enabled = sources + [f"not {b}" for b in blockers]
+            blockers: list[Expr] = [Unary("not", fired[i][0], "BOOL") for i in earlier]
+            # the line of the TRANSITION: a breakpoint there stops as it is evaluated
+            emitter.st_line = line = transition.pos.line
+            condition = emitter.exact_node(transition.condition)
             # the condition's value is kept where a live chart reads it, evaluated only
             # while the transition is enabled, as before
-            kept = emitter.var_code(_transition_value(scope, number))
-            # the line of the TRANSITION: a breakpoint there stops as it is evaluated
-            outer, emitter.st_line = emitter.st_line, transition.pos.line
-            emitter.emit(depth, f"{flag} = {' and '.join(enabled)}")
-            emitter.emit(depth, f"if {flag}:")
-            emitter.emit(depth + 1, f"{kept} = {condition}")
-            emitter.emit(depth + 1, f"{flag} = {kept}")
+            kept = emitter.var_node(_transition_value(scope, number))
+            emitter.add(Assign(flag, _all_of([*sources, *blockers]), line))
+            evaluated = (Assign(kept, condition, line), Assign(flag, kept, line))
+            emitter.add(If(flag, evaluated, (), line))
             emitter.st_line = outer
             for step in steps:
                 leaving.setdefault(step, []).append(len(fired))
             fired.append((flag, transition))
         for flag, transition in fired:
             for name in transition.sources:
-                emitter.emit(depth, f"if {flag}:")
-                emitter.emit(
-                    depth + 1, f"{emitter.var_code(_step_variable(scope, name))}.X = False"
-                )
+                active = Member(emitter.var_node(_step_variable(scope, name)), "X", "BOOL")
+                emitter.add(If(flag, (Assign(active, Const(False, "BOOL"), outer),), (), outer))
         for flag, transition in fired:
             for name in transition.targets:
-                emitter.emit(depth, f"if {flag}:")
-                emitter.emit(
-                    depth + 1, f"_step_enter({emitter.var_code(_step_variable(scope, name))})"
-                )
+                entered = call("_step_enter", "", emitter.var_node(_step_variable(scope, name)))
+                emitter.add(If(flag, (Evaluate(entered, outer),), (), outer))
+
+
+def _any_of(values: list[Expr]) -> Expr:
+    return values[0] if len(values) == 1 else Logic("or", tuple(values))
+
+
+def _all_of(values: list[Expr]) -> Expr:
+    return values[0] if len(values) == 1 else Logic("and", tuple(values))
 
 
 def _transition_value(scope: Scope, number: int) -> Variable:
@@ -1796,19 +1915,22 @@ def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0, name:
     else:
         header = f"def {function_name(pou.name)}({', '.join(params)}):"
     emitter.emit(depth, header)
-    result = pou.by_key.get(key(pou.name))
-    if result is not None and result.kind == "RETURN":
-        emitter.emit(
-            depth + 1, f"{result.attr} = {python_text(emitter.initial(result.type, None))}"
-        )
-    for variable in pou.variables:
-        if variable.kind in ("VAR", "VAR_TEMP", "VAR_STAT", "VAR_INST") or (
-            variable.kind == "VAR_OUTPUT" and variable not in inputs
-        ):
-            initial = python_text(emitter.initial(variable.type, variable.init))
-            emitter.emit(depth + 1, f"{variable.attr} = {initial}")
-    emitter.block(pou.pou.body, depth + 1)
-    emitter.emit(depth + 1, emitter.return_line())
+
+    def body() -> None:
+        result = pou.by_key.get(key(pou.name))
+        if result is not None and result.kind == "RETURN":
+            returned = Var(result.attr, "local", _t(result.type))
+            emitter.add(Assign(returned, emitter.initial(result.type, None), 0))
+        for variable in pou.variables:
+            if variable.kind in ("VAR", "VAR_TEMP", "VAR_STAT", "VAR_INST") or (
+                variable.kind == "VAR_OUTPUT" and variable not in inputs
+            ):
+                local = Var(variable.attr, "local", _t(variable.type))
+                emitter.add(Assign(local, emitter.initial(variable.type, variable.init), 0))
+        emitter.add(*emitter.block(pou.pou.body, deeper=False))
+        emitter.add(emitter.return_statement())
+
+    emitter.emit_body(depth + 1, body)
 
 
 def _generate_methods(emitter: _Emitter, pou: PouSymbols) -> None:

@@ -18,8 +18,8 @@ from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.source import Pos
 from backend.compiler.types import BOOL, ELEMENTARY, TIME, ElementaryType, Type, assignable
-from runtime.contract.code.python_text import python_text
-from runtime.contract.code.typed_form import Call, Const, Expr
+from runtime.contract.code.statements import Evaluate, Stmt, While
+from runtime.contract.code.typed_form import Call, Const, Expr, Unary
 
 TEST_FOLDER = "test/"
 UDINT = ELEMENTARY["UDINT"]
@@ -174,57 +174,63 @@ def place_path(expr: ast.Expr) -> str | None:
 
 
 class _Emitter(Protocol):
-    def exact_code(self, expr: ast.Expr) -> str: ...
+    def exact_node(self, expr: ast.Expr) -> Expr: ...
     def converted(self, target: Type, value_expr: ast.Expr) -> Expr: ...
     def type_of(self, expr: ast.Expr) -> Type: ...
 
 
-def test_call_lines(emitter: _Emitter, call: ast.Call, function: TestFunction) -> list[str]:
-    """The generated statements of a test function's call (indented by 4 where a loop's body
-    is); the place of the call ends every `_test` call."""
+def test_call_statements(
+    emitter: _Emitter, call: ast.Call, function: TestFunction, line: int
+) -> list[Stmt]:
+    """The generated statements of a test function's call; the place of the call ends
+    every `_test` call."""
     found = arguments(function, call)
     assert not isinstance(found, str), found
     named = dict(zip(function.params, found, strict=False))
-    at = f"{call.pos.file!r}, {call.pos.line}, {call.pos.col}"
+    at = (Const(call.pos.file, "STRING"), Const(call.pos.line, "DINT"), Const(call.pos.col, "DINT"))
 
-    def code(param: str) -> str:
-        return emitter.exact_code(named[param])
+    def node(param: str) -> Expr:
+        return emitter.exact_node(named[param])
 
-    message = code(_MESSAGE) if _MESSAGE in named else "''"
+    def test(*values: Expr) -> Evaluate:
+        return Evaluate(Call("_test", (*values, *at), ""), line)
+
+    def word(text: str) -> Const:
+        return Const(text, "STRING")
+
+    message = node(_MESSAGE) if _MESSAGE in named else word("")
     match function.name:
         case "ASSERT_TRUE" | "ASSERT_FALSE":
             op = "true" if function.name == "ASSERT_TRUE" else "false"
-            return [f"_test({op!r}, {code('CONDITION')}, {message}, {at})"]
+            return [test(word(op), node("CONDITION"), message)]
         case "ASSERT_EQUAL" | "ASSERT_NOT_EQUAL" | "ASSERT_NEAR":
             op = {"ASSERT_EQUAL": "equal", "ASSERT_NOT_EQUAL": "not_equal"}.get(
                 function.name, "near"
             )
             actual_type = emitter.type_of(named["ACTUAL"])
-            expected = python_text(emitter.converted(actual_type, named["EXPECTED"]))
-            tolerance = f"{code('TOLERANCE')}, " if op == "near" else ""
-            values = f"{expected}, {code('ACTUAL')}, {tolerance}{actual_type.name!r}"
-            return [f"_test({op!r}, {values}, {message}, {at})"]
+            expected = emitter.converted(actual_type, named["EXPECTED"])
+            tolerance = (node("TOLERANCE"),) if op == "near" else ()
+            values = (expected, node("ACTUAL"), *tolerance, word(actual_type.name))
+            return [test(word(op), *values, message)]
         case "FAIL":
-            return [f"_test('fail', {message}, {at})"]
+            return [test(word("fail"), message)]
         case "RUN_CYCLES":
-            return [f"_test('cycles', {code('N')}, {at})"]
+            return [test(word("cycles"), node("N"))]
         case "RUN_FOR":
-            return [f"_test('for', {code('T')}, {at})"]
+            return [test(word("for"), node("T"))]
         case "RUN_UNTIL":  # the condition is read again after every cycle
-            return [
-                f"_test('until', {code('T')}, {at})",
-                f"while not ({code('CONDITION')}):",
-                f"    _test('step', {at})",
-            ]
+            until = test(word("until"), node("T"))
+            condition = node("CONDITION")
+            return [until, While(Unary("not", condition, "BOOL"), (test(word("step")),), line)]
         case "FORCE":
             path = place_path(named["VARIABLE"])
             variable_type = emitter.type_of(named["VARIABLE"])
-            value = python_text(emitter.converted(variable_type, named["VALUE"]))
-            return [f"_test('force', {path!r}, {value}, {at})"]
+            value = emitter.converted(variable_type, named["VALUE"])
+            return [test(word("force"), Const(path, "STRING"), value)]
         case "RELEASE":
-            return [f"_test('release', {place_path(named['VARIABLE'])!r}, {at})"]
+            return [test(word("release"), Const(place_path(named["VARIABLE"]), "STRING"))]
         case "REPLAY":
-            return [f"_test('replay', {code('FILE')}, {at})"]
+            return [test(word("replay"), node("FILE"))]
     raise AssertionError(function.name)
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from tests.compiler.test_checks import diagnostics
+from tests.compiler.test_limits import compile_server as compile_server  # refused_with needs it
 from tests.compiler.test_limits import program, refused_with, right_deep
 from tests.conftest import sim_trace
 

@@ -1,6 +1,7 @@
-"""The typed form's expressions (runtime/contract/code/typed_form.py) and their Python
-text: every kind of node prints, and what prints computes what the node says (an
-integer wrapped to its bits, a chained comparison, a choice that evaluates one side)."""
+"""The typed form (runtime/contract/code/typed_form.py, statements.py) and its Python
+text: every kind of node prints, what prints computes what the node says (an integer
+wrapped to its bits, a chained comparison, a choice that evaluates one side), and every
+statement's line keeps its ST line."""
 
 from __future__ import annotations
 
@@ -10,8 +11,9 @@ import typing
 from hypothesis import given
 from hypothesis import strategies as st
 
+from runtime.contract.code import statements as sm
 from runtime.contract.code import typed_form as tf
-from runtime.contract.code.python_text import python_text
+from runtime.contract.code.python_text import python_lines, python_text
 
 
 def _run(node: tf.Expr, **names: object) -> object:
@@ -82,6 +84,7 @@ def test_every_kind_of_node_has_a_python_text() -> None:
         tf.Unary: tf.Unary("-", x, "INT"),
         tf.Binary: tf.Binary("+", x, one, "INT"),
         tf.Chain: tf.Chain("<", (one, x)),
+        tf.Logic: tf.Logic("or", (x, one)),
         tf.Choice: tf.Choice(x, one, x, "INT"),
         tf.Assigned: tf.Assigned("t", x, "INT"),
         tf.Wrap: tf.Wrap(x, 16, True, 0, "INT"),
@@ -103,6 +106,7 @@ def test_every_kind_of_node_has_a_python_text() -> None:
         "Unary": "(-x)",
         "Binary": "(x + 1)",
         "Chain": "(1 < x)",
+        "Logic": "(x or 1)",
         "Choice": "(1 if x else x)",
         "Assigned": "(t := x)",
         "Wrap": "(((x) + 32768 & 65535) - 32768)",
@@ -111,3 +115,33 @@ def test_every_kind_of_node_has_a_python_text() -> None:
         "Repeated": "[1] * 3",
         "Members": "{'x': 1}",
     }
+
+
+def test_statements_print_as_lines_each_with_its_st_line() -> None:
+    x, one = tf.Var("x", "local", "INT"), tf.Const(1, "INT")
+    done = tf.Binary(">", x, one, "BOOL")
+    body = (
+        sm.Assign(x, one, 3),
+        sm.Assign(x, one, 4, augmented="+"),
+        sm.If(done, (sm.Break(6),), (sm.If(x, (sm.Continue(7),), (sm.Pass(8),), 7),), 5),
+        sm.While(done, (sm.Evaluate(tf.Call("abs", (x,), "INT"), 10),), 9),
+        sm.ForEach("i", tf.Var("r", "local", ""), (sm.Pass(12),), (sm.Return(x, 13),), 11),
+        sm.Return(None, 14),
+    )
+    assert list(python_lines(body, 1)) == [
+        ("    x = 1", 3),
+        ("    x += 1", 4),
+        ("    if x > 1:", 5),
+        ("        break", 6),
+        ("    elif x:", 7),  # an IF alone in another's ELSE: ELSIF
+        ("        continue", 7),
+        ("    else:", 5),
+        ("        pass", 8),
+        ("    while x > 1:", 9),
+        ("        abs(x)", 10),
+        ("    for i in r:", 11),
+        ("        pass", 12),
+        ("    else:", 11),
+        ("        return x", 13),
+        ("    return", 14),
+    ]

@@ -1,15 +1,31 @@
 """The Python tier's text of a typed-form expression (runtime/contract/code/typed_form.py).
 
 Every compound node prints inside its own parentheses, so that no node depends on the
-precedence of what holds it (an index's brackets hold an operation on their own).
+precedence of what holds it; where an expression stands alone (in brackets, as the test of
+an `if` or a `while`) it prints without them.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
+from runtime.contract.code.statements import (
+    Assign,
+    Break,
+    Continue,
+    Evaluate,
+    ForEach,
+    If,
+    Pass,
+    Return,
+    Stmt,
+    While,
+)
 from runtime.contract.code.typed_form import (
-    Assigned,
+    Assigned as AssignedValue,
+)
+from runtime.contract.code.typed_form import (
     Binary,
     Call,
     Chain,
@@ -17,6 +33,7 @@ from runtime.contract.code.typed_form import (
     Const,
     Expr,
     Index,
+    Logic,
     Member,
     Members,
     Named,
@@ -29,6 +46,7 @@ from runtime.contract.code.typed_form import (
     Wrap,
 )
 
+INDENT = "    "
 _ROOT = {"instance": "s.", "globals": "_G.", "system": "_SYS.", "programs": "_P.", "local": ""}
 
 
@@ -46,11 +64,8 @@ def python_text(node: Expr) -> str:
             return name
         case Member(base=base, name=name):
             return f"{python_text(base)}.{name}"
-        case Index(base=base, offset=Binary(op=op, left=left, right=right)):
-            # the brackets hold the offset's operation together: `a[i - 1]`
-            return f"{python_text(base)}[{python_text(left)} {op} {python_text(right)}]"
         case Index(base=base, offset=offset):
-            return f"{python_text(base)}[{python_text(offset)}]"
+            return f"{python_text(base)}[{_bare(offset)}]"
         case Slice(value=value, start=start, stop=stop):
             low, high = ("" if bound is None else str(bound) for bound in (start, stop))
             return f"{python_text(value)}[{low}:{high}]"
@@ -60,11 +75,11 @@ def python_text(node: Expr) -> str:
             return f"({op}{python_text(operand)})"
         case Binary(op=op, left=left, right=right):
             return f"({python_text(left)} {op} {python_text(right)})"
-        case Chain(op=op, values=values):
+        case Chain(op=op, values=values) | Logic(op=op, values=values):
             return "(" + f" {op} ".join(python_text(value) for value in values) + ")"
         case Choice(test=test, then=then, orelse=orelse):
             return f"({python_text(then)} if {python_text(test)} else {python_text(orelse)})"
-        case Assigned(name=name, value=value):
+        case AssignedValue(name=name, value=value):
             return f"({name} := {python_text(value)})"
         case Wrap():
             return _wrap_text(node)
@@ -87,6 +102,19 @@ def python_text(node: Expr) -> str:
     raise AssertionError(f"no Python text for {node!r}")
 
 
+def _bare(node: Expr) -> str:
+    """The text of an expression that stands alone (an offset in brackets, the test of an
+    `if`): without the parentheses of its own operation."""
+    match node:
+        case Binary(op=op, left=left, right=right):
+            return f"{python_text(left)} {op} {python_text(right)}"
+        case Chain(op=op, values=values) | Logic(op=op, values=values):
+            return f" {op} ".join(python_text(value) for value in values)
+        case Unary(op="not", operand=operand):
+            return f"not {python_text(operand)}"
+    return python_text(node)
+
+
 def _wrap_text(node: Wrap) -> str:
     code, bits = python_text(node.value), node.bits
     mask, half = (1 << bits) - 1, 1 << (bits - 1)
@@ -103,3 +131,47 @@ def _wrap_text(node: Wrap) -> str:
         return f"((({code}) + {half + node.offset} & {mask}) - {half})"
     code = f"({code} + {node.offset})" if node.offset else code
     return f"(({code}) & {mask})"
+
+
+def python_lines(
+    statements: tuple[Stmt, ...] | list[Stmt], depth: int
+) -> Iterator[tuple[str, int]]:
+    """The lines of typed-form statements indented to `depth`, each with its ST line."""
+    pad = INDENT * depth
+    for statement in statements:
+        match statement:
+            case Assign(target=target, value=value, augmented=op, line=line):
+                sign = "=" if op is None else f"{op}="
+                yield f"{pad}{python_text(target)} {sign} {python_text(value)}", line
+            case Evaluate(value=value, line=line):
+                yield pad + python_text(value), line
+            case If(test=test, body=body, orelse=orelse, line=line):
+                yield f"{pad}if {_bare(test)}:", line
+                yield from python_lines(body, depth + 1)
+                while orelse:
+                    if len(orelse) == 1 and isinstance(orelse[0], If):  # ELSIF
+                        chained = orelse[0]
+                        yield f"{pad}elif {_bare(chained.test)}:", chained.line
+                        yield from python_lines(chained.body, depth + 1)
+                        orelse = chained.orelse
+                        continue
+                    yield f"{pad}else:", line
+                    yield from python_lines(orelse, depth + 1)
+                    break
+            case While(test=test, body=body, line=line):
+                yield f"{pad}while {_bare(test)}:", line
+                yield from python_lines(body, depth + 1)
+            case ForEach(name=name, numbers=numbers, body=body, orelse=orelse, line=line):
+                yield f"{pad}for {name} in {python_text(numbers)}:", line
+                yield from python_lines(body, depth + 1)
+                if orelse:
+                    yield f"{pad}else:", line
+                    yield from python_lines(orelse, depth + 1)
+            case Break(line=line):
+                yield pad + "break", line
+            case Continue(line=line):
+                yield pad + "continue", line
+            case Return(value=value, line=line):
+                yield pad + ("return" if value is None else f"return {python_text(value)}"), line
+            case Pass(line=line):
+                yield pad + "pass", line

@@ -21,7 +21,7 @@ Where = Literal["local", "instance", "globals", "system", "programs"]
 UnaryOp = Literal["not", "~", "-"]
 BinaryOp = Literal[
     "+", "-", "*", "%", "&", "|", "^", "<<", ">>", "==", "!=", "<", ">", "<=", ">=",
-    "and", "or", "is", "is not", "in",
+    "is", "is not", "in",
 ]  # fmt: skip
 
 
@@ -112,6 +112,15 @@ class Chain:
 
 
 @dataclass(frozen=True, slots=True)
+class Logic:
+    """`a and b and ...` (`or`): Booleans, evaluated left to right only as far as needed."""
+
+    op: Literal["and", "or"]
+    values: tuple[Expr, ...]
+    type: str = "BOOL"
+
+
+@dataclass(frozen=True, slots=True)
 class Choice:
     """`then` where `test` holds, else `orelse`; only the one chosen is evaluated."""
 
@@ -183,6 +192,6 @@ class Members:
 
 
 Expr = (
-    Const | Var | This | Named | Member | Index | Slice | Unary | Binary | Chain | Choice
+    Const | Var | This | Named | Member | Index | Slice | Unary | Binary | Chain | Logic | Choice
     | Assigned | Wrap | Call | Sequence | Repeated | Members
 )  # fmt: skip
