@@ -13,7 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
-from backend.compiler.conversions import call, converted, wrapped
+from backend.compiler.conversions import converted, intrinsic, wrapped
 from backend.compiler.types import (
     ANY_INT,
     ANY_REAL,
@@ -100,7 +100,7 @@ def _conversion(target: ElementaryType, source_name: str | None) -> Builtin:
         if isinstance(target, ElementaryType) and target.is_integer:
             src = integer_like(source) or source
             if isinstance(src, ElementaryType) and src.category in ("time", "date"):
-                milliseconds = call("_idiv", target, values[0], Const(1_000_000, "LINT"))
+                milliseconds = intrinsic("_idiv", target, values[0], Const(1_000_000, "LINT"))
                 return wrapped(milliseconds, target)  # ns -> ms
         return converted(values[0], source, target)
 
@@ -114,7 +114,7 @@ def _truncation(target: ElementaryType) -> Builtin:
         return target
 
     def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
-        return wrapped(call("int", target, values[0]), target)
+        return wrapped(intrinsic("int", target, values[0]), target)
 
     return Builtin("TRUNC", ("IN",), typing, emit)
 
@@ -129,7 +129,7 @@ def _bcd(to_bcd: bool, target: ElementaryType) -> Builtin:
 
     def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
         helper = "_int_to_bcd" if to_bcd else "_bcd_to_int"
-        return wrapped(call(helper, target, values[0]), target)
+        return wrapped(intrinsic(helper, target, values[0]), target)
 
     return Builtin("BCD", ("IN",), typing, emit)
 
@@ -176,7 +176,7 @@ def _real_result(args: list[Type]) -> Type | str:
 
 def _fn(callee: str) -> Emitting:
     """A call of an intrinsic (or of what Python has) with the arguments as they are."""
-    return lambda values, _args, result: call(callee, result, *values)
+    return lambda values, _args, result: intrinsic(callee, result, *values)
 
 
 def _chained(op: BinaryOp, values: list[Expr], result: Type) -> Expr:
@@ -218,7 +218,9 @@ def _shift(kind: str) -> Builtin:
         if kind == "SHR":  # logical for unsigned types and bit strings
             return wrapped(Binary(">>", bits, n, name), result)
         width = Const(result.bits, "INT")
-        return wrapped(call("_rol" if kind == "ROL" else "_ror", result, bits, n, width), result)
+        return wrapped(
+            intrinsic("_rol" if kind == "ROL" else "_ror", result, bits, n, width), result
+        )
 
     return Builtin(kind, ("IN", "N"), typing, emit, min_args=2)
 
@@ -284,7 +286,7 @@ def _select(values: list[Expr], args: list[Type], result: Type) -> Expr:
 def _limit(values: list[Expr], args: list[Type], result: Type) -> Expr:
     """LIMIT(MN, IN, MX) = MIN(MAX(IN, MN), MX)."""
     low, value, high = values
-    return call("min", result, call("max", result, value, low), high)
+    return intrinsic("min", result, intrinsic("max", result, value, low), high)
 
 
 def _mux_typing(args: list[Type]) -> Type | str:
@@ -329,7 +331,7 @@ def _abs_typing(args: list[Type]) -> Type | str:
 
 def _abs_emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
     assert isinstance(result, ElementaryType)
-    return wrapped(call("abs", result, values[0]), result)
+    return wrapped(intrinsic("abs", result, values[0]), result)
 
 
 def _arith(name: str, op: BinaryOp | Literal["/", "MOD"], variadic: bool) -> Builtin:
@@ -345,9 +347,9 @@ def _arith(name: str, op: BinaryOp | Literal["/", "MOD"], variadic: bool) -> Bui
         assert isinstance(result, ElementaryType)
         if op == "/":
             helper = "_fdiv" if result.category == "real" else "_idiv"
-            return wrapped(call(helper, result, *values), result)
+            return wrapped(intrinsic(helper, result, *values), result)
         if op == "MOD":
-            return call("_imod", result, *values)
+            return intrinsic("_imod", result, *values)
         return wrapped(_chained(op, values, result), result)
 
     return Builtin(name, None if variadic else ("IN1", "IN2"), typing, emit, min_args=2)
@@ -365,8 +367,8 @@ def _math_fn(name: str) -> Builtin:
     helper = _MATH[name]
 
     def emit(values: list[Expr], args: list[Type], result: Type) -> Expr:
-        value = call("_safe_math", result, Named(helper), values[0])
-        return call("_f32", result, value) if result == REAL else value
+        value = intrinsic("_safe_math", result, Named(helper), values[0])
+        return intrinsic("_f32", result, value) if result == REAL else value
 
     return Builtin(name, ("IN",), _real_result, emit)
 
@@ -429,8 +431,8 @@ def _time_scale(name: str, op: str) -> Builtin:
         if op == "*":
             scaled: Expr = Binary("*", values[0], values[1], "LREAL")
         else:
-            scaled = call("_fdiv", "LREAL", *values)
-        return wrapped(call("_round", result, scaled), result)
+            scaled = intrinsic("_fdiv", "LREAL", *values)
+        return wrapped(intrinsic("_round", result, scaled), result)
 
     return Builtin(name, ("IN1", "IN2"), typing, emit, min_args=2)
 

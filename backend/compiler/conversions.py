@@ -10,7 +10,7 @@ from runtime.contract.generated_code import BUILTINS, CALLED_INTRINSICS
 NS_PER_DAY = 86_400_000_000_000
 
 
-def call(callee: str, result: Type | str, *args: Expr) -> Call:
+def intrinsic(callee: str, result: Type | str, *args: Expr) -> Call:
     """A call of an intrinsic (an entry of runtime/contract/intrinsic_table.py) or of a
     conversion Python has, by position."""
     assert callee in CALLED_INTRINSICS or callee in BUILTINS, f"{callee} is no intrinsic"
@@ -38,20 +38,20 @@ def converted(value: Expr, source: Type, target: ElementaryType) -> Expr:
     cat, tcat, name = src.category, target.category, artifact_type_text(target)
     if tcat == "bool":
         if cat == "string":
-            return call("_str_to_bool", name, value)
+            return intrinsic("_str_to_bool", name, value)
         return Binary("!=", value, Const(0, "DINT"), name) if cat != "bool" else value
     if tcat in ("int", "bits"):
         if cat == "real":
-            return wrapped(call("_round", name, value), target)
+            return wrapped(intrinsic("_round", name, value), target)
         if cat == "string" and src.name in ("CHAR", "WCHAR"):
-            return call("_ord", name, value)
+            return intrinsic("_ord", name, value)
         if cat == "string":
-            number = call("_str_to_int", "LINT", value)
+            number = intrinsic("_str_to_int", "LINT", value)
             if not target.signed:  # a negative text does not convert to an unsigned type
-                number = call("max", "LINT", number, Const(0, "LINT"))
+                number = intrinsic("max", "LINT", number, Const(0, "LINT"))
             return wrapped(number, target)
         if cat == "bool":
-            return call("int", name, value)
+            return intrinsic("int", name, value)
         if src.is_any_literal or (
             src.is_integer and (src.bits < target.bits and (target.signed or not src.signed))
         ):
@@ -59,33 +59,33 @@ def converted(value: Expr, source: Type, target: ElementaryType) -> Expr:
         return wrapped(value, target)
     if tcat == "real":
         if cat == "string":
-            return call("_str_to_real", name, value)
+            return intrinsic("_str_to_real", name, value)
         if target.bits == 32 and not (cat == "real" and src.bits == 32):
-            return call("_f32", name, value)
-        return call("float", name, value)
+            return intrinsic("_f32", name, value)
+        return intrinsic("float", name, value)
     if tcat == "string":
         if cat == "real":
-            return call("_real_to_str", name, value)
+            return intrinsic("_real_to_str", name, value)
         if cat == "bool":
             return Choice(value, Const("TRUE", name), Const("FALSE", name), name)
         if cat == "time":
             prefix = "LTIME#" if src.name == "LTIME" else "T#"
-            return call("_time_to_str", name, value, Const(prefix, "STRING"))
+            return intrinsic("_time_to_str", name, value, Const(prefix, "STRING"))
         if cat == "date":
-            return call("_date_to_str", name, value, Const(src.name, "STRING"))
+            return intrinsic("_date_to_str", name, value, Const(src.name, "STRING"))
         if cat == "string":
             if src.name.startswith("W") and not target.name.startswith("W"):
-                return call("_w2s", name, value)
+                return intrinsic("_w2s", name, value)
             if target.name.startswith("W") and not src.name.startswith("W"):
-                return call("_s2w", name, value)
+                return intrinsic("_s2w", name, value)
             return value
-        return call("str", name, value)
+        return intrinsic("str", name, value)
     if tcat in ("time", "date"):
         if cat == "string":
-            return call("_str_to_time", name, value)
+            return intrinsic("_str_to_time", name, value)
         million = Const(1_000_000, "LINT")
         if cat == "real":  # REAL ms -> ns
-            return wrapped(call("_round", name, Binary("*", value, million, "LREAL")), target)
+            return wrapped(intrinsic("_round", name, Binary("*", value, million, "LREAL")), target)
         if cat in ("int", "bits"):  # integers count milliseconds
             return wrapped(Binary("*", value, million, name), target)
         return value

@@ -20,7 +20,7 @@ from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.constants import is_zero_literal
-from backend.compiler.conversions import call, converted, wrapped
+from backend.compiler.conversions import converted, intrinsic, wrapped
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     ActionCall,
@@ -212,10 +212,6 @@ class _Value:
     # an unwrapped `head + n` (n a literal): its wrap adds n to the wrap's own constant
     constant_tail: tuple[Expr, int] | None = None
 
-    @property
-    def code(self) -> str:
-        return python_text(self.node)
-
 
 @dataclass
 class _Emitter:
@@ -368,7 +364,7 @@ class _Emitter:
                 return _Value(This(""), _type(self.scope, expr))  # THIS^, SUPER^: the instance
             case ast.Deref(base=base):  # NULL is a program fault (`_deref`)
                 result = _type(self.scope, expr)
-                return _Value(call("_deref", _t(result), self.expr(base).node), result)
+                return _Value(intrinsic("_deref", _t(result), self.expr(base).node), result)
             case ast.BitRef(base=base, bit=bit, width=width):
                 whole = self.exact(base)
                 shifted = Binary(">>", whole.node, _int(bit * width), _t(whole.type))
@@ -451,15 +447,15 @@ class _Emitter:
                 for number, temp in enumerate(held):
                     if number:
                         shown = Binary("+", shown, _text(", "), "STRING")
-                    index_text = call("str", "STRING", Var(temp, "local", "DINT"))
+                    index_text = intrinsic("str", "STRING", Var(temp, "local", "DINT"))
                     shown = Binary("+", shown, index_text, "STRING")
                 return root, [*steps, offset], Binary("+", shown, _text("]"), "STRING"), whole
             case ast.Deref() if self.scope.self_deref(expr) is not None:
                 return This(""), [], _text(""), False  # THIS^: the instance, by its own path
             case ast.Deref(base=base):  # REF(r^.x): below what r refers to, named by r
                 reference = self.expr(base).node
-                named = Binary("+", call("str", "STRING", reference), _text("^"), "STRING")
-                return call("_deref", "", reference), [], named, True
+                named = Binary("+", intrinsic("str", "STRING", reference), _text("^"), "STRING")
+                return intrinsic("_deref", "", reference), [], named, True
         raise AssertionError(f"no place for {expr!r}")
 
     def _offset_of_held(self, array: ArrayType, held: list[str]) -> Expr:
@@ -479,7 +475,7 @@ class _Emitter:
         bounds = Index(base, _int(1), "")
         for dim, index_expr in enumerate(indices):
             low, high = (Index(Index(bounds, _int(dim), ""), _int(end), "DINT") for end in (0, 1))
-            checked = call("_ix", "DINT", self.exact_node(index_expr), low, high)
+            checked = intrinsic("_ix", "DINT", self.exact_node(index_expr), low, high)
             if dim == 0:
                 offset = checked
                 continue
@@ -506,7 +502,7 @@ class _Emitter:
             if isinstance(passed.type, OpenArrayType):
                 return passed.node
             return Sequence((items, bounds), bound_type)
-        return Sequence((call("_copy", "", items), bounds), bound_type)
+        return Sequence((intrinsic("_copy", "", items), bounds), bound_type)
 
     def _checked_offset(self, index: Expr, low: int, high: int) -> Expr:
         """The list offset of an array index, checked against the bounds inline (the
@@ -521,7 +517,7 @@ class _Emitter:
             held = self.temp()
             value, bound = Var(held, "local", "DINT"), Assigned(held, index, "DINT")
         within = Chain("<=", (_int(low), bound, _int(high)))
-        fault = call("_ix", "DINT", value, _int(low), _int(high))
+        fault = intrinsic("_ix", "DINT", value, _int(low), _int(high))
         return Choice(within, Binary("-", value, _int(low), "DINT"), fault, "DINT")
 
     def _unary(self, expr: ast.Unary) -> _Value:
@@ -569,7 +565,9 @@ class _Emitter:
             ring_op: BinaryOp = "+" if op == "+" else "-" if op == "-" else "*"
             value = Binary(ring_op, left, right, name)
             if result.category == "real":
-                return _Value(call("_f32", result, value) if result.bits == 32 else value, result)
+                return _Value(
+                    intrinsic("_f32", result, value) if result.bits == 32 else value, result
+                )
             tail = None
             if integral and op != "*" and _is_int_constant(right):
                 assert isinstance(right, Const) and isinstance(right.value, int)
@@ -578,15 +576,15 @@ class _Emitter:
         left, right = self.operand(expr.left, result), self.operand(expr.right, result)
         if op == "/":
             if result.category == "real":
-                quotient = call("_fdiv", result, left, right)
+                quotient = intrinsic("_fdiv", result, left, right)
                 return _Value(
-                    call("_f32", result, quotient) if result.bits == 32 else quotient, result
+                    intrinsic("_f32", result, quotient) if result.bits == 32 else quotient, result
                 )
-            return _Value(call("_idiv", result, left, right), result, True)
+            return _Value(intrinsic("_idiv", result, left, right), result, True)
         if op == "MOD":
-            return _Value(call("_imod", result, left, right), result)
+            return _Value(intrinsic("_imod", result, left, right), result)
         if op == "**":
-            return _Value(call("_pow", result, left, right), result)
+            return _Value(intrinsic("_pow", result, left, right), result)
         raise AssertionError(f"unhandled operator {op}")
 
     def _time_binary(self, expr: ast.Binary, result: ElementaryType) -> _Value:
@@ -597,10 +595,12 @@ class _Emitter:
         if op in ("+", "-"):
             return _Value(Binary("+" if op == "+" else "-", left, right, name), result, True)
         if op == "*":
-            return _Value(call("_round", result, Binary("*", left, right, "LREAL")), result, True)
+            return _Value(
+                intrinsic("_round", result, Binary("*", left, right, "LREAL")), result, True
+            )
         if isinstance(right_type, ElementaryType) and right_type.category == "real":
-            return _Value(call("_tdiv", result, left, right), result, True)
-        return _Value(call("_idiv", result, left, right), result, True)
+            return _Value(intrinsic("_tdiv", result, left, right), result, True)
+        return _Value(intrinsic("_idiv", result, left, right), result, True)
 
     def operand(self, expr: ast.Expr, target: Type, ring: bool = False) -> Expr:
         """`expr` as an operand of an operation computed in `target` (IEC: the operands
@@ -617,7 +617,7 @@ class _Emitter:
             if source.category == "real":
                 return value.node
             exact = _exact(value).node  # an integer: made a REAL before the operation
-            return call("_f32" if target.bits == 32 else "float", target, exact)
+            return intrinsic("_f32" if target.bits == 32 else "float", target, exact)
         if ring and value.unwrapped and source == target:
             return value.node
         if ring and value.unwrapped and self.modulus_bits and source.bits >= self.modulus_bits:
@@ -667,7 +667,7 @@ class _Emitter:
             return This(""), None
         receiver = self.expr(access.receiver).node
         if isinstance(_type(self.scope, access.receiver), InterfaceType):
-            receiver = call("_deref", "", receiver)
+            receiver = intrinsic("_deref", "", receiver)
         return receiver, None
 
     def _property_get(self, expr: ast.Expr) -> _Value:
@@ -699,7 +699,7 @@ class _Emitter:
         if target.receiver is not None and isinstance(
             _type(self.scope, target.receiver), InterfaceType
         ):  # the instance it refers to; none is a program fault, as NULL^ is
-            receiver = Call("_deref", (receiver,), "")
+            receiver = intrinsic("_deref", "", receiver)
         return self._user_call(target.method, call, Member(receiver, method, ""))
 
     def _user_call(
@@ -803,7 +803,7 @@ class _Emitter:
         finally:
             self.modulus_bits = None
         if is_aggregate(target):
-            return call("_copy", target, raw.node) if _is_lvalue(value_expr) else raw.node
+            return intrinsic("_copy", target, raw.node) if _is_lvalue(value_expr) else raw.node
         short_literal = isinstance(value_expr, ast.StringLiteral) and not _longer_than(
             value_expr.value, target
         )
@@ -823,7 +823,7 @@ class _Emitter:
                 for name, value in init.members
             )
             whole = self.initial(var_type, None)
-            return call("_init", var_type, whole, Members(members))
+            return intrinsic("_init", var_type, whole, Members(members))
         if init is not None:
             return self.converted(var_type, init)
         name = _t(var_type)
@@ -1045,7 +1045,7 @@ class _Emitter:
         held = self.temp()
         found = Var(held, "local", _t(target))
         # generated code has no type() nor getattr(): the class, and what it conforms to
-        kind = Member(call("_deref", "", found), "__class__", "")
+        kind = Member(intrinsic("_deref", "", found), "__class__", "")
         named = Binary("==", Member(kind, "__name__", ""), _text(class_name(wanted.name)), "BOOL")
         nothing = Sequence((), "", as_tuple=True)
         kinds = Member(Member(kind, "__dict__", ""), "get", "")
@@ -1063,7 +1063,7 @@ class _Emitter:
         if isinstance(target, ast.BitRef):
             base = self.expr(target.base)
             shift, width = target.bit * target.width, target.width
-            updated = call("_setbits", base.type, base.node, _int(shift), _int(width), value)
+            updated = intrinsic("_setbits", base.type, base.node, _int(shift), _int(width), value)
             integer = integer_like(base.type)
             return self._assignment(target.base, wrapped(updated, integer) if integer else updated)
         return self._assignment(target, value)
@@ -1073,13 +1073,13 @@ class _Emitter:
         refers to."""
         line = self.st_line
         if isinstance(target, ast.Deref):
-            return Evaluate(call("_deref_set", "", self.expr(target.base).node, value), line)
+            return Evaluate(intrinsic("_deref_set", "", self.expr(target.base).node, value), line)
         through_setter = self._property_set(target, value)
         if through_setter is not None:
             return through_setter
         held = self.held_reference(target)
         if held is not None:
-            return Evaluate(call("_deref_set", "", held, value), line)
+            return Evaluate(intrinsic("_deref_set", "", held, value), line)
         return Assign(self.expr(target).node, value, line)
 
     def held_reference(self, expr: ast.Expr) -> Expr | None:
@@ -1287,7 +1287,7 @@ class _Emitter:
         end = Const(stop + (1 if step >= 0 else -1), "LINT")
 
         def unsliced() -> None:
-            self.add(Assign(numbers, call("range", "", ref, end, Const(step, "LINT")), line))
+            self.add(Assign(numbers, intrinsic("range", "", ref, end, Const(step, "LINT")), line))
 
             def passes() -> None:
                 self.add(Assign(ref, local, line))  # what a fault in the pass leaves
@@ -1302,7 +1302,7 @@ class _Emitter:
 
             body = self.nested(passes)
             # not left by EXIT: one step past the last pass
-            past = Binary("*", call("len", "", numbers), Const(step, "LINT"), "LINT")
+            past = Binary("*", intrinsic("len", "", numbers), Const(step, "LINT"), "LINT")
             after = Binary("+", Member(numbers, "start", "LINT"), past, "LINT")
             self.add(ForEach(local.name, numbers, body, (Assign(local, after, line),), line))
             self.add(Assign(ref, wrapped(local, counter_type), line))
@@ -1560,7 +1560,7 @@ def _implicit(node: Expr, declared: Type) -> _Value:
     """A variable's value: a REFERENCE TO reads as what it refers to (NULL: a fault)."""
     if is_implicit_reference(declared):
         target = value_type(declared)
-        return _Value(call("_deref", target, node), target)
+        return _Value(intrinsic("_deref", target, node), target)
     return _Value(node, declared)
 
 
@@ -1601,7 +1601,7 @@ def _reference_call(
     arguments: list[Expr] = [root, Sequence(steps, "", as_tuple=True), label]
     if whole is not None:
         arguments.append(Const(whole, "BOOL"))
-    return Call("_ref", tuple(arguments), "")
+    return intrinsic("_ref", "", *arguments)
 
 
 def _flat(offsets: list[Expr], dims: tuple[tuple[int, int], ...]) -> Expr:
@@ -1708,7 +1708,7 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
         initial = emitter.initial(variable.type, variable.init)
         if chart is not None and variable.kind == "STEP" and key(variable.name) in chart.initial:
             active = Members((("X", Const(True, "BOOL")),))
-            initial = call("_init", variable.type, initial, active)
+            initial = intrinsic("_init", variable.type, initial, active)
         emitter.emit(2, f"s.{variable.attr} = {python_text(initial)}")
     for variable in edges:
         emitter.emit(2, f"s.{_edge_memory(variable)} = False")
@@ -1810,7 +1810,7 @@ class _Chart:
         for step in self.sfc.steps:
             ref = emitter.var_node(_step_variable(scope, step.name))
             # the line of the STEP: a debugger's breakpoint there stops while it is active
-            time = call("_step_time", "TIME", ref, now)
+            time = intrinsic("_step_time", "TIME", ref, now)
             timed = Assign(Member(ref, "T", "TIME"), time, step.pos.line)
             emitter.add(If(Member(ref, "X", "BOOL"), (timed,), (), outer))
         declared = {key(action.name) for action in self.sfc.actions}
@@ -1875,7 +1875,9 @@ class _Chart:
                 emitter.add(If(flag, (Assign(active, Const(False, "BOOL"), outer),), (), outer))
         for flag, transition in fired:
             for name in transition.targets:
-                entered = call("_step_enter", "", emitter.var_node(_step_variable(scope, name)))
+                entered = intrinsic(
+                    "_step_enter", "", emitter.var_node(_step_variable(scope, name))
+                )
                 emitter.add(If(flag, (Evaluate(entered, outer),), (), outer))
 
 

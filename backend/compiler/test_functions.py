@@ -16,10 +16,11 @@ from typing import Protocol
 from backend.compiler import ast
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
+from backend.compiler.conversions import intrinsic
 from backend.compiler.source import Pos
 from backend.compiler.types import BOOL, ELEMENTARY, TIME, ElementaryType, Type, assignable
 from runtime.contract.code.statements import Evaluate, Stmt, While
-from runtime.contract.code.typed_form import Call, Const, Expr, Unary
+from runtime.contract.code.typed_form import Const, Expr, Unary
 
 TEST_FOLDER = "test/"
 UDINT = ELEMENTARY["UDINT"]
@@ -193,7 +194,7 @@ def test_call_statements(
         return emitter.exact_node(named[param])
 
     def test(*values: Expr) -> Evaluate:
-        return Evaluate(Call("_test", (*values, *at), ""), line)
+        return Evaluate(intrinsic("_test", "", *values, *at), line)
 
     def word(text: str) -> Const:
         return Const(text, "STRING")
@@ -234,4 +235,4 @@ def test_call_statements(
     raise AssertionError(function.name)
 
 
-TEST_CYCLES_CALL = Call("_test", (Const("count", "STRING"),), "DINT")
+TEST_CYCLES_CALL = intrinsic("_test", "DINT", Const("count", "STRING"))
