@@ -73,11 +73,12 @@ from backend.compiler.types import (
     is_implicit_reference,
     value_type,
 )
-from runtime.contract.code.python_text import INDENT, python_lines, python_text
+from runtime.contract.code.python_text import python_text, unit_lines
 from runtime.contract.code.statements import (
     Assign,
     Break,
     Continue,
+    Elif,
     Evaluate,
     ForEach,
     If,
@@ -107,6 +108,7 @@ from runtime.contract.code.typed_form import (
     Unary,
     Var,
 )
+from runtime.contract.code.units import Alias, Class, Function, Inherited, Param, Slot, Unit
 from runtime.contract.values import to_real32
 
 _COMPARE: dict[str, BinaryOp] = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
@@ -218,7 +220,6 @@ class _Emitter:
     scope: Scope
     local: bool  # a FUNCTION: its variables are Python locals
     at: Pos  # what is being generated (a statement, a declaration), where a limit is met
-    lines: list[str] = field(default_factory=list)
     pre: list[Stmt] = field(default_factory=list)  # hoisted statements for the next one
     body: list[Stmt] = field(default_factory=list)  # the block being generated
     depth: int = 0  # the indentation of that block's lines
@@ -226,11 +227,8 @@ class _Emitter:
     in_globals: bool = False  # initialising GLOBALS itself: other globals are on `s`
     # the width the + - * expression being generated is wrapped to where it is stored
     modulus_bits: int | None = None
-    # the ST line each generated line comes from (0: none), so that a run-time error can
-    # name the line of the source
-    st_lines: list[int] = field(default_factory=list)
-    st_line: int = 0
-    size: int = 0  # characters generated so far
+    st_line: int = 0  # the ST line of the statement being generated (0: none)
+    size: int = 0  # characters printed so far
     max_size: int = MAX_UNIT_CODE
     # FOR counters held in a Python local while their loop runs: (kind, attr) -> local
     counters: dict[tuple[str, str], str] = field(default_factory=dict)
@@ -242,24 +240,13 @@ class _Emitter:
     # the temporary holding the EN of each call generated with one, by id() of the call
     enables: dict[int, str] = field(default_factory=dict)
 
-    def emit(self, depth: int, line: str) -> None:
-        """A line of the unit's frame (a class, a function's header), of no ST line."""
-        self._add(INDENT * depth + line, self.st_line)
-
-    def emit_body(self, depth: int, fill: Callable[[], object]) -> None:
-        """The statements `fill` generates, printed as the block at `depth`."""
+    def body_of(self, depth: int, fill: Callable[[], object]) -> tuple[Stmt, ...]:
+        """The statements `fill` generates, as the block of a function at `depth`."""
         self.depth, self.body = depth, []
         fill()
         self.add()  # what the last expression hoisted
         statements, self.body = self.body, []
-        for line, st_line in python_lines(statements, depth):
-            self._add(line, st_line)
-
-    def _add(self, line: str, st_line: int) -> None:
-        self.make_room(len(line) + 1)
-        self.size += len(line) + 1
-        self.lines.append(line)
-        self.st_lines.append(st_line)
+        return tuple(statements)
 
     def make_room(self, size: int) -> None:
         """Refuse `size` more characters beyond the unit's limit, before a long line is
@@ -1108,24 +1095,25 @@ class _Emitter:
         self, test: Expr, branches: tuple[tuple[ast.Expr, tuple[ast.Statement, ...]], ...],
         orelse: tuple[ast.Statement, ...],
     ) -> If:  # fmt: skip
-        """The IF of the first branch (its condition `test`), the others in its ELSE: an
-        ELSIF at its depth, but one whose condition hoists statements (which must run only
-        when that condition is reached) in an ELSE of its own, one level deeper."""
+        """The IF of the first branch (its condition `test`), the others as its ELIFs, up
+        to one whose condition hoists statements (which must run only when that condition
+        is reached): that one and those after it in an ELSE of its own, one level deeper."""
         line = self.st_line
         then = self.block(branches[0][1])
-        if len(branches) == 1:
-            return If(test, then, self.block(orelse) if orelse else (), line)
-        following = self.exact_node(branches[1][0])
-        hoisted = self.take_hoisted()
-        if not hoisted:
-            return If(test, then, (self._branches(following, branches[1:], orelse),), line)
-        self.refuse_deeper_than_allowed(self.depth + 1)
-        self.depth += 1
-        try:
-            rest = self._branches(following, branches[1:], orelse)
-        finally:
-            self.depth -= 1
-        return If(test, then, (*hoisted, rest), line)
+        elifs: list[Elif] = []
+        for index in range(1, len(branches)):
+            following = self.exact_node(branches[index][0])
+            hoisted = self.take_hoisted()
+            if hoisted:
+                self.refuse_deeper_than_allowed(self.depth + 1)
+                self.depth += 1
+                try:
+                    rest = self._branches(following, branches[index:], orelse)
+                finally:
+                    self.depth -= 1
+                return If(test, then, (*hoisted, rest), line, tuple(elifs))
+            elifs.append(Elif(following, self.block(branches[index][1]), line))
+        return If(test, then, self.block(orelse) if orelse else (), line, tuple(elifs))
 
     def case(self, case: ast.Case) -> None:
         line = self.st_line
@@ -1154,9 +1142,9 @@ class _Emitter:
             if otherwise:
                 self.add(If(Const(True, "BOOL"), otherwise, (), line))
             return
-        for test, chosen_body in reversed(chosen):
-            otherwise = (If(test, chosen_body, otherwise, line),)
-        self.add(*otherwise)
+        (test, chosen_body), others = chosen[0], chosen[1:]
+        elifs = tuple(Elif(other, body, line) for other, body in others)
+        self.add(If(test, chosen_body, otherwise, line, elifs))
 
     def repeat(self, body: tuple[ast.Statement, ...], until: ast.Expr) -> None:
         line = self.st_line
@@ -1670,53 +1658,51 @@ def _type(scope: Scope, expr: ast.Expr) -> Type:
 
 
 @dataclass(frozen=True)
-class GeneratedPou:
-    source: str
+class GeneratedUnit:
+    unit: Unit  # the typed form
+    source: str  # its Python text
     st_lines: tuple[int, ...]  # per line of `source`: the ST line it comes from, 0 for none
 
 
 def generate_pou(
     resolved: Resolved, pou: PouSymbols, max_size: int = MAX_UNIT_CODE
-) -> GeneratedPou:
-    """The Python source of one POU, of at most `max_size` characters."""
+) -> GeneratedUnit:
+    """The typed form of one POU, and its Python text of at most `max_size` characters."""
     scope = Scope(resolved, pou)
     emitter = _Emitter(scope, local=pou.kind == "FUNCTION", at=pou.pou.pos, max_size=max_size)
     if pou.kind == "FUNCTION":
-        _generate_function(emitter, pou)
-    else:
-        _generate_class(emitter, pou)
-    return GeneratedPou("\n".join(emitter.lines) + "\n", tuple(emitter.st_lines))
+        return _printed(emitter, _function(emitter, pou, function_name(pou.name)))
+    return _printed(emitter, _class(emitter, pou))
 
 
-def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
+def _printed(emitter: _Emitter, unit: Unit) -> GeneratedUnit:
+    """`unit` with its text, refused line by line where the text outgrows the unit's limit."""
+    lines: list[str] = []
+    st_lines: list[int] = []
+    for line, st_line in unit_lines(unit):
+        emitter.make_room(len(line) + 1)
+        emitter.size += len(line) + 1
+        lines.append(line)
+        st_lines.append(st_line)
+    return GeneratedUnit(unit, "\n".join(lines) + "\n", tuple(st_lines))
+
+
+def _class(emitter: _Emitter, pou: PouSymbols) -> Class:
     fields = instance_fields(pou)
     sfc = pou.pou.sfc
     chart = _Chart(sfc) if sfc is not None else None
     edges = [v for v in fields if v.edge is not None]
-    slots = [v.attr for v in fields] + [_edge_memory(v) for v in edges]
-    slots += chart.slots() if chart else []
-    emitter.emit(0, f"class {class_name(pou.name)}:")
-    emitter.emit(1, f"__slots__ = {tuple(slots)!r}")
-    kinds = _kinds(emitter.scope.resolved, pou)
-    if len(kinds) > 1:  # what `?=` finds it conforms to (an instance of a plain block: its name)
-        emitter.emit(1, f"KIND__ = {kinds!r}")
-    emitter.emit(0, "")
-    emitter.emit(1, "def __init__(s):")
-    if not slots:
-        emitter.emit(2, "pass")
+    slots: list[Slot] = []
     for variable in fields:
         initial = emitter.initial(variable.type, variable.init)
         if chart is not None and variable.kind == "STEP" and key(variable.name) in chart.initial:
             active = Members((("X", Const(True, "BOOL")),))
             initial = intrinsic("_init", variable.type, initial, active)
-        emitter.emit(2, f"s.{variable.attr} = {python_text(initial)}")
-    for variable in edges:
-        emitter.emit(2, f"s.{_edge_memory(variable)} = False")
+        slots.append(Slot(variable.attr, initial))
+    slots += [Slot(_edge_memory(v), Const(False, "BOOL")) for v in edges]
     if chart is not None:
-        for slot in chart.slots():
-            emitter.emit(2, f"s.{slot} = _ActionControl()")
-    emitter.emit(0, "")
-    emitter.emit(1, "def __call__(s):")
+        slots += [Slot(slot, Call("_ActionControl", (), "")) for slot in chart.slots()]
+    kinds = _kinds(emitter.scope.resolved, pou)
     steps = chart is not None and bool(chart.sfc.steps)
 
     def call_body() -> None:
@@ -1729,25 +1715,29 @@ def _generate_class(emitter: _Emitter, pou: PouSymbols) -> None:
                 edge = Logic("and", (now, Unary("not", before, "BOOL")))
             else:
                 edge = Logic("and", (Unary("not", now, "BOOL"), before))
-            slots = Sequence((now, before), "", as_tuple=True)
-            emitter.add(Assign(slots, Sequence((edge, now), "", as_tuple=True), 0))
+            memories = Sequence((now, before), "", as_tuple=True)
+            emitter.add(Assign(memories, Sequence((edge, now), "", as_tuple=True), 0))
         _add_temporaries(emitter, pou)
         if pou.pou.body or not steps:  # a chart alone needs no `pass` before it
             emitter.add(*emitter.block(pou.pou.body, deeper=False))
         if chart is not None and steps:  # actions without steps run only when called
             chart.add_cycle(emitter)
 
-    emitter.emit_body(2, call_body)
+    functions: list[Function | Inherited] = [
+        Function("__call__", (), emitter.body_of(2, call_body), method=True)
+    ]
     for action in chart.sfc.actions if chart is not None else ():
-        emitter.emit(0, "")
-        emitter.emit(1, f"def {_action_method(action.name)}(s):")
 
         def action_body(action: ast.Action = action) -> None:
             _add_temporaries(emitter, pou)  # an action's call has temporaries of its own
             emitter.add(*emitter.block(action.body, deeper=False))
 
-        emitter.emit_body(2, action_body)
-    _generate_methods(emitter, pou)
+        body = emitter.body_of(2, action_body)
+        functions.append(Function(_action_method(action.name), (), body, method=True))
+    functions += _methods(emitter, pou)
+    # what `?=` finds an instance conforms to; a plain block's instance: its name alone
+    conforms = kinds if len(kinds) > 1 else ()
+    return Class(class_name(pou.name), tuple(slots), conforms, tuple(functions))
 
 
 def _kinds(resolved: Resolved, pou: PouSymbols) -> tuple[str, ...]:
@@ -1902,21 +1892,16 @@ def _step_variable(scope: Scope, name: str) -> Variable:
     return variable
 
 
-def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0, name: str = "") -> None:
-    """A FUNCTION as a Python function; a method (kind METHOD, `depth` 1) as the function
-    `name` of its block's class (a property's GET and SET too), whose first parameter is
-    the instance."""
+def _function(emitter: _Emitter, pou: PouSymbols, name: str, depth: int = 0) -> Function:
+    """A FUNCTION as a Python function `name`; a method (kind METHOD, `depth` 1) as the
+    function `name` of its block's class (a property's GET and SET too), whose first
+    parameter is the instance."""
     inputs = [
         v
         for v in pou.variables
         if v.kind in ("VAR_INPUT", "VAR_IN_OUT") or isinstance(v.type, OpenArrayType)
     ]  # a variable-length output is bound to the caller's array like an in-out
-    params = [f"{v.attr}={python_text(emitter.initial(v.type, v.init))}" for v in inputs]
-    if pou.kind == "METHOD":
-        header = f"def {name}({', '.join(['s', *params])}):"
-    else:
-        header = f"def {function_name(pou.name)}({', '.join(params)}):"
-    emitter.emit(depth, header)
+    params = tuple(Param(v.attr, emitter.initial(v.type, v.init)) for v in inputs)
 
     def body() -> None:
         result = pou.by_key.get(key(pou.name))
@@ -1932,10 +1917,10 @@ def _generate_function(emitter: _Emitter, pou: PouSymbols, depth: int = 0, name:
         emitter.add(*emitter.block(pou.pou.body, deeper=False))
         emitter.add(emitter.return_statement())
 
-    emitter.emit_body(depth + 1, body)
+    return Function(name, params, emitter.body_of(depth + 1, body), method=pou.kind == "METHOD")
 
 
-def _generate_methods(emitter: _Emitter, pou: PouSymbols) -> None:
+def _methods(emitter: _Emitter, pou: PouSymbols) -> list[Function | Inherited]:
     """The methods of a block's class: its own, and each one it inherits and does not
     override as the declaring block's function itself (the artifact lists, and the runtime
     makes, a block's class after the classes of the blocks it extends)."""
@@ -1946,33 +1931,27 @@ def _generate_methods(emitter: _Emitter, pou: PouSymbols) -> None:
             accessors.append((getter_attr(prop.name), prop.getter))
         if prop.setter is not None:
             accessors.append((setter_attr(prop.name), prop.setter))
+    methods: list[Function | Inherited] = []
     for attr, method in accessors:
-        emitter.emit(0, "")
         if method.declared_in != key(pou.name):  # the declaring class's own function
-            emitter.emit(1, f"{attr} = {class_name(resolved.pous[method.declared_in].name)}.{attr}")
+            owner = class_name(resolved.pous[method.declared_in].name)
+            methods.append(Inherited(attr, owner))
             continue
         own = [*method.variables, *method.by_key.values()]
         inner = _Emitter(
-            Scope(resolved, method), local=False, at=method.pou.pos, lines=emitter.lines,
-            temp_count=emitter.temp_count, st_lines=emitter.st_lines, size=emitter.size,
-            max_size=emitter.max_size, method_locals=frozenset(id(v) for v in own),
+            Scope(resolved, method), local=False, at=method.pou.pos,
+            temp_count=emitter.temp_count, max_size=emitter.max_size,
+            method_locals=frozenset(id(v) for v in own),
         )  # fmt: skip
-        _generate_function(inner, method, depth=1, name=attr)
-        emitter.size, emitter.temp_count = inner.size, inner.temp_count
+        methods.append(_function(inner, method, attr, depth=1))
+        emitter.temp_count = inner.temp_count
+    return methods
 
 
-def _data_class(emitter: _Emitter, name: str, fields: list[Variable]) -> str:
-    """A class that only holds data: slots, and an __init__ with the initial values."""
-    emitter.emit(0, f"class {name}:")
-    emitter.emit(1, f"__slots__ = {tuple(v.attr for v in fields)!r}")
-    emitter.emit(0, "")
-    emitter.emit(1, "def __init__(s):")
-    if not fields:
-        emitter.emit(2, "pass")
-    for variable in fields:
-        initial = python_text(emitter.initial(variable.type, variable.init))
-        emitter.emit(2, f"s.{variable.attr} = {initial}")
-    return "\n".join(emitter.lines) + "\n"
+def _data_class(emitter: _Emitter, name: str, fields: list[Variable]) -> GeneratedUnit:
+    """A class that only holds data: slots with their initial values."""
+    slots = tuple(Slot(v.attr, emitter.initial(v.type, v.init)) for v in fields)
+    return _printed(emitter, Class(name, slots))
 
 
 def declared_at(variables: list[Variable], any_pou: PouSymbols) -> Pos:
@@ -1981,15 +1960,15 @@ def declared_at(variables: list[Variable], any_pou: PouSymbols) -> Pos:
     return variables[0].pos if variables else any_pou.pou.pos
 
 
-def generate_struct(resolved: Resolved, info: StructInfo, any_pou: PouSymbols) -> str:
-    if key(info.name) == key(STEP_STRUCT):  # SFC steps also remember when they started
-        return f"{struct_class(info.name)} = _SfcStep\n"
+def generate_struct(resolved: Resolved, info: StructInfo, any_pou: PouSymbols) -> GeneratedUnit:
     where = declared_at(info.members, any_pou)
     emitter = _Emitter(Scope(resolved, any_pou), local=False, at=where)
+    if key(info.name) == key(STEP_STRUCT):  # SFC steps also remember when they started
+        return _printed(emitter, Alias(struct_class(info.name), "_SfcStep"))
     return _data_class(emitter, struct_class(info.name), info.members)
 
 
-def generate_globals(resolved: Resolved, any_pou: PouSymbols) -> str:
+def generate_globals(resolved: Resolved, any_pou: PouSymbols) -> GeneratedUnit:
     """The class whose single instance `_G` holds the global variables."""
     where = declared_at(resolved.globals, any_pou)
     emitter = _Emitter(Scope(resolved, any_pou), local=False, at=where, in_globals=True)

@@ -38,10 +38,13 @@ MAX_ARRAY_VALUES = 1_000_000
 MAX_DATA_VALUES = 1_000_000
 
 # Generated code: a resource's Python compiles a unit in up to about 150 bytes per character
-# (a long list of initial values), so a unit stays within 2 MiB; and the artifact within
-# 16 MiB. Repeated initial values (`[100000(1.5)]`) and transitions sharing a step grow it.
+# (a long list of initial values), so a unit's Python stays within 2 MiB; the typed forms the
+# artifact carries (about 2.7 times the Python, 4 times for lists of constants) within
+# 48 MiB, so that the artifact, whose JSON escapes their quotes (a fifth more), stays within
+# the 64 MiB a runtime takes. Repeated initial values (`[100000(1.5)]`) and transitions
+# sharing a step grow both.
 MAX_UNIT_CODE = 2 * MiB
-MAX_PROJECT_CODE = 16 * MiB
+MAX_PROJECT_FORM = 48 * MiB
 
 # `(* (* *) *)`: how deep comments nest (a regular expression reads them, and cannot count);
 # a comment nested deeper is read as IEC 61131-3 edition 2 reads it, up to its first `*)`.

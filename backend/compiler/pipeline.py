@@ -23,6 +23,7 @@ from backend.compiler.checks.var_config import check_configuration
 from backend.compiler.codes import Code
 from backend.compiler.diagnostics import CompileError, Diagnostic
 from backend.compiler.generate import (
+    GeneratedUnit,
     GenerationError,
     action_control,
     class_name,
@@ -34,7 +35,7 @@ from backend.compiler.generate import (
     struct_class,
 )
 from backend.compiler.infer import instance_fields, is_external
-from backend.compiler.limits import MAX_PROJECT_CODE, MiB
+from backend.compiler.limits import MAX_PROJECT_FORM, MiB
 from backend.compiler.parse import TokenBudget, parse_source
 from backend.compiler.resolve import PouSymbols, Resolved, Variable, resolve
 from backend.compiler.source import Pos, ProjectSize, SourceFile, stdlib_sources
@@ -60,6 +61,7 @@ from runtime.contract.artifact import (
     canonical_json,
     crc32_hex,
 )
+from runtime.contract.code.form_json import FormRefused, encode_unit
 from runtime.contract.keyspace import resource_name_problem
 from runtime.contract.values import ValueRejected, representation
 
@@ -304,15 +306,15 @@ def _generate(
     resolved: Resolved, included: list[str]
 ) -> tuple[dict[str, PouCode], tuple[PouCode, ...], PouCode]:
     """The code of the POUs (by key), the structures and the globals: each unit within
-    MAX_UNIT_CODE (the generator keeps to that), all of them within MAX_PROJECT_CODE, and no
+    MAX_UNIT_CODE (the generator keeps to that), their forms within MAX_PROJECT_FORM, and no
     name of the user among the names of a POU's own code."""
     total = 0
 
     def counted(code: PouCode, where: Pos) -> PouCode:
         nonlocal total
-        total += len(code.source)
-        if total > MAX_PROJECT_CODE:
-            message = f"the project's generated code exceeds {MAX_PROJECT_CODE // MiB} MiB"
+        total += len(code.form)
+        if total > MAX_PROJECT_FORM:
+            message = f"the project's typed form exceeds {MAX_PROJECT_FORM // MiB} MiB"
             raise GenerationError([Diagnostic.at(where, Code.CODE_SIZE, message)])
         return code
 
@@ -330,13 +332,19 @@ def _generate(
             _unit_code(
                 info.name, "STRUCT", struct_class(info.name),
                 generate_struct(resolved, info, any_pou), info.members,
+                declared_at(info.members, any_pou),
             ),
             declared_at(info.members, any_pou),
         )
         for _, info in sorted(resolved.structs.items())
     )  # fmt: skip
     globals_code = _unit_code(
-        "GLOBALS", "GLOBALS", "GLOBALS", generate_globals(resolved, any_pou), resolved.globals
+        "GLOBALS",
+        "GLOBALS",
+        "GLOBALS",
+        generate_globals(resolved, any_pou),
+        resolved.globals,
+        declared_at(resolved.globals, any_pou),
     )
     return codes, types, counted(globals_code, declared_at(resolved.globals, any_pou))
 
@@ -510,8 +518,9 @@ def _included_pous(
 
 
 def _unit_code(
-    name: str, kind: str, class_: str, source: str, variables: list[Variable]
-) -> PouCode:
+    name: str, kind: str, class_: str, generated: GeneratedUnit, variables: list[Variable],
+    where: Pos,
+) -> PouCode:  # fmt: skip
     infos = tuple(
         VarInfo(
             name=v.name,
@@ -524,22 +533,27 @@ def _unit_code(
         )
         for v in variables
     )
-    return PouCode(name, kind, class_, source, crc32_hex(source), infos)
+    try:
+        form = encode_unit(generated.unit)
+    except FormRefused:
+        message = f"statements and expressions nested deeper than a resource reads ({name})"
+        raise GenerationError([Diagnostic.at(where, Code.STATEMENT_DEPTH, message)]) from None
+    return PouCode(name, kind, class_, form, crc32_hex(form), infos).knowing(generated.unit)
 
 
 def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
     generated = generate_pou(resolved, pou)
     if pou.kind == "FUNCTION":
-        code = _unit_code(pou.name, pou.kind, function_name(pou.name), generated.source, [])
+        code = _unit_code(pou.name, pou.kind, function_name(pou.name), generated, [], pou.pou.pos)
         if pou.return_type is not None:
-            code = replace(code, returns=artifact_type_text(pou.return_type))
+            returns = artifact_type_text(pou.return_type)
+            code = replace(code, returns=returns).knowing(generated.unit)
     else:
         # a variable-length in-out is the caller's array, shown where the caller has it
         stored = [v for v in instance_fields(pou) if not isinstance(v.type, OpenArrayType)]
-        code = _unit_code(pou.name, pou.kind, class_name(pou.name), generated.source, stored)
-    return replace(
-        code, file=pou.pou.pos.file, st_lines=generated.st_lines, chart=_chart(pou.pou.sfc)
-    )
+        code = _unit_code(pou.name, pou.kind, class_name(pou.name), generated, stored, pou.pou.pos)
+    chart = _chart(pou.pou.sfc)
+    return replace(code, file=pou.pou.pos.file, chart=chart).knowing(generated.unit)
 
 
 def _chart(sfc: ast.Sfc | None) -> ChartInfo | None:
@@ -575,6 +589,6 @@ def _program_config(
 
 def _program_crc(resolved: Resolved, codes: dict[str, PouCode], program: ProgramConfig) -> str:
     """CRC of a user program: its code, the code of every FB it uses, and its parameters."""
-    parts = [codes[name].source for name in _fb_dependencies(resolved, key(program.pou))]
+    parts = [codes[name].form for name in _fb_dependencies(resolved, key(program.pou))]
     params = replace(program, crc="").__dict__
     return crc32_hex(canonical_json({"code": parts, "parameters": params}))

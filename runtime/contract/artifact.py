@@ -1,7 +1,8 @@
 """The compiled artifact: the versioned contract between the compiler and the runtime.
 
-An artifact is canonical JSON (sorted keys, no spaces): the generated Python source of
-every POU, the variable tables the runtime needs for OLT and context saving, the user
+An artifact is canonical JSON (sorted keys, no spaces): the typed form of every POU (data
+the runtime checks and prints as Python itself, runtime/contract/code/), the variable
+tables the runtime needs for OLT and context saving, the user
 programs with their parameters, and the CRCs. `docs/artifact.md` documents the format.
 The configuration CRC is a CRC-32 over the canonical JSON of everything but the CRC
 itself, so the runtime can check that what it received is exactly what was compiled.
@@ -12,15 +13,21 @@ from __future__ import annotations
 import json
 import zlib
 from dataclasses import asdict, dataclass, field
+from functools import cached_property
 from typing import Any
 
+from runtime.contract.code.form_json import FormRefused, decode_unit
+from runtime.contract.code.python_text import unit_lines
+from runtime.contract.code.units import Unit
 from runtime.contract.exchange import ExchangeConfig, exchange_config
 from runtime.contract.modbus import ModbusConfig, modbus_config
 from runtime.contract.opcua import OpcuaConfig, opcua_config
 from runtime.contract.outside_json import MIB, JsonRefused, read_json
 
 FORMAT = "padt-artifact"
-VERSION = 4  # 3: Modbus TCP (`modbus`); 4: `_tick` is None while no slice is metered
+# 3: Modbus TCP (`modbus`); 4: `_tick` is None while no slice is metered; 5: each unit's
+# typed form (`form`) instead of its Python source
+VERSION = 5
 MAX_ARTIFACT_BYTES = 64 * MIB  # as protocol.MAX_ARTIFACT: a larger one could never be loaded
 
 
@@ -60,18 +67,48 @@ class ChartInfo:
 
 @dataclass(frozen=True)
 class PouCode:
+    """One unit: a POU, a structure or the globals. Its code comes as its typed form, which
+    the runtime decodes, checks and prints as Python itself (`unit`, `source`): nothing an
+    artifact carries is run as it came."""
+
     name: str
     kind: str  # PROGRAM | FUNCTION_BLOCK | FUNCTION | STRUCT | GLOBALS
     class_name: str
-    source: str
+    form: str  # the typed form (runtime/contract/code/form_json.py)
     crc: str
     variables: tuple[VarInfo, ...]
     file: str = ""  # the ST source file of a POU
-    st_lines: tuple[int, ...] = ()  # per line of `source`: its line in `file` (0: none)
     chart: ChartInfo | None = None
     # a FUNCTION's result type as `VarInfo.type` names types ("" without one): what a
     # caller in the native tier unboxes its result as
     returns: str = ""
+
+    @cached_property
+    def unit(self) -> Unit:
+        """The typed form, decoded and checked (FormRefused where it is not a unit's)."""
+        return decode_unit(self.form, f"the form of {self.kind} {self.name}")
+
+    def knowing(self, unit: Unit) -> PouCode:
+        """This code, given the unit its form was encoded from (the compiler's, in the
+        process that compiled it): a process that runs what it compiled need not decode
+        its own encoding again."""
+        self.__dict__["unit"] = unit  # where `cached_property` keeps `unit`
+        return self
+
+    @cached_property
+    def _printed(self) -> tuple[str, tuple[int, ...]]:
+        lines = list(unit_lines(self.unit))
+        return "\n".join(line for line, _ in lines) + "\n", tuple(st for _, st in lines)
+
+    @property
+    def source(self) -> str:
+        """The unit's Python, as the runtime prints it from the form."""
+        return self._printed[0]
+
+    @property
+    def st_lines(self) -> tuple[int, ...]:
+        """Per line of `source`: its line in `file` (0: none)."""
+        return self._printed[1]
 
 
 @dataclass(frozen=True)
@@ -175,6 +212,10 @@ class Artifact:
                 return pou
         raise ArtifactError(f"artifact has no POU '{name}'")
 
+    def units(self) -> tuple[PouCode, ...]:
+        """Every unit: the structures, the POUs, the globals."""
+        return (*self.types, *self.pous, *((self.globals,) if self.globals else ()))
+
     def body_json(self) -> str:
         """Canonical JSON of everything the configuration CRC covers."""
         data = asdict(self)
@@ -212,9 +253,7 @@ def _pou_code(data: dict[str, Any]) -> PouCode:
             associations=tuple(Association(**a) for a in chart["associations"]),
             controls=tuple((action, slot) for action, slot in chart["controls"]),
         )
-    return PouCode(
-        **{**data, "variables": variables, "st_lines": tuple(data["st_lines"]), "chart": chart}
-    )
+    return PouCode(**{**data, "variables": variables, "chart": chart})
 
 
 def _program_config(data: dict[str, Any]) -> ProgramConfig:
@@ -255,4 +294,9 @@ def load_artifact(text: str | bytes) -> Artifact:
     expected = crc32_hex(artifact.body_json())
     if artifact.crc != expected:
         raise ArtifactError(f"artifact CRC {artifact.crc} does not match its content ({expected})")
+    for unit in artifact.units():
+        try:
+            unit.unit  # noqa: B018 -- decoded and checked once, here
+        except FormRefused as exc:
+            raise ArtifactError(str(exc)) from None
     return artifact

@@ -114,8 +114,7 @@ def check_artifact_names(artifact: Artifact) -> None:
     """The names of an artifact's units and variables that the runtime and the native tier
     use as attribute names and put into C: plain identifiers, units named for their kind.
     Cheap: the sources are checked where they are compiled (`compile_unit`)."""
-    units = [*artifact.types, *artifact.pous, *([artifact.globals] if artifact.globals else [])]
-    for unit in units:
+    for unit in artifact.units():
         _check_unit_names(unit)
     for program in artifact.programs:
         for attr in (*program.writes, *program.reads):

@@ -138,7 +138,7 @@ def test_recorded_code_that_does_not_load_is_refused(
     run = replay(tmp_path, folder, hostile.recording(artifact, artifact_text=text))
     assert run.returncode == 2, run.stderr
     assert "Traceback" not in run.stderr
-    assert "recorded configuration" in run.stderr and "bad_configuration" in run.stderr
+    assert "recorded configuration is damaged: the form of PROGRAM Main" in run.stderr
 
 
 def test_a_start_state_nested_fifty_thousand_deep_is_refused(

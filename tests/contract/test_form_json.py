@@ -37,6 +37,7 @@ def _body() -> tuple[sm.Stmt, ...]:
         (sm.Break(5),),
         (sm.If(TRUE, (sm.Continue(6),), (sm.Pass(7),), 6),),
         5,
+        (sm.Elif(X, (sm.Pass(8),), 8),),
     )
     call = tf.Call(
         "_limit",
@@ -219,7 +220,7 @@ ALIAS_FORM = ["Alias", "A", "_B"]
         (["Function", "FN_T", [], [["Pass", 10**9]], False], "Function.body[0].line", "not 0"),
         (["Function", "FN_T", [], [], False], "Function.body", "has 0 items, not 1 to"),
         (
-            ["Function", "FN_T", [], [["If", C, [], [], 1]], False],
+            ["Function", "FN_T", [], [["If", C, [], [], 1, []]], False],
             "Function.body[0].body",
             "has 0 items",
         ),
@@ -268,6 +269,9 @@ def test_text_that_is_no_json_or_too_large_is_refused() -> None:
     assert "unit FN_T is not valid JSON" in refused("[1, ")
     assert "unit FN_T is not valid JSON" in refused(b"\xff")
     assert "larger than" in refused(b" " * (MAX_FORM_BYTES + 1))
+    for other in (None, 12, ["Pass", 1]):  # a form must be a text, as an artifact carries it
+        with pytest.raises(FormRefused, match=r"unit FN_T is .*, not a text"):
+            decode_unit(other, "unit FN_T")  # type: ignore[arg-type]
 
 
 def unary_nest(levels: int) -> list[Any]:
@@ -278,24 +282,33 @@ def unary_nest(levels: int) -> list[Any]:
     return form(expr)
 
 
-def elsif_chain(branches: int) -> Function:
+def nested_ifs(levels: int) -> Function:
+    """IFs each in the ELSE of the one before: two levels of JSON each (the If, its orelse)."""
     orelse: tuple[sm.Stmt, ...] = ()
-    for _ in range(branches):
+    for _ in range(levels):
         orelse = (sm.If(TRUE, (sm.Pass(1),), orelse, 1),)
     return Function("FN_T", (), orelse)
 
 
 def test_a_unit_nested_too_deep_for_its_form_is_not_encoded() -> None:
-    """Each ELSIF nests two levels (the If, its orelse): 173 fit, not the 999 the compiler
-    allows (backend/compiler/limits.py MAX_BRANCH_DEPTH)."""
-    deepest = encode_unit(elsif_chain((FORM_DEPTH - 4) // 2))
+    deepest = encode_unit(nested_ifs((FORM_DEPTH - 4) // 2))
     assert depth(json.loads(deepest), 10**6) == FORM_DEPTH - 1
-    assert decode_unit(deepest, "unit T") == elsif_chain((FORM_DEPTH - 4) // 2)
-    for branches in ((FORM_DEPTH - 2) // 2, 999):
+    assert decode_unit(deepest, "unit T") == nested_ifs((FORM_DEPTH - 4) // 2)
+    for levels in ((FORM_DEPTH - 2) // 2, 999):
         with pytest.raises(
             FormRefused, match=f"FN_T: the typed form is nested deeper than {FORM_DEPTH}"
         ):
-            encode_unit(elsif_chain(branches))
+            encode_unit(nested_ifs(levels))
+
+
+def test_a_thousand_elsifs_are_a_list_not_a_nest() -> None:
+    """The 999 ELSIFs the compiler allows (backend/compiler/limits.py MAX_BRANCH_DEPTH)."""
+    branches = tuple(sm.Elif(X, (sm.Pass(n),), n) for n in range(2, 1001))
+    unit = Function("FN_T", (), (sm.If(TRUE, (sm.Pass(1),), (sm.Pass(1001),), 1, branches),))
+    text = encode_unit(unit)
+    assert depth(json.loads(text), 10**6) < 10
+    assert encode_unit(decode_unit(text, "unit T")) == text
+    assert sum(line.strip().startswith("elif ") for line, _ in unit_lines(unit)) == 999
 
 
 def test_a_form_nested_deeper_than_form_depth_is_refused() -> None:

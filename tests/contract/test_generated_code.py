@@ -25,6 +25,8 @@ from runtime.code.fault_location import code_filename
 from runtime.code.intrinsics import ProgramFault, Reference, SystemView, namespace, reference_maker
 from runtime.code.native.worker import ArtifactTranslation
 from runtime.contract.artifact import Artifact, PouCode, VarInfo
+from runtime.contract.code.statements import Evaluate
+from runtime.contract.code.typed_form import Call, Const
 from runtime.contract.generated_code import (
     BUILTINS,
     INTRINSICS,
@@ -41,6 +43,7 @@ from tests.compiler.test_oop import DRIVES, MACHINES, MOTOR
 from tests.compiler.test_sfc import QUALIFIERS
 from tests.conftest import REPO
 from tests.support.corpus_paths import corpus_dir
+from tests.support.crafted_units import first_in_body
 
 # a block as the compiler writes one; `{body}` lines go at the end of its `__call__`
 BLOCK = """\
@@ -327,10 +330,10 @@ def test_no_text_of_a_source_reaches_the_c_of_the_native_tier_unchecked() -> Non
     for unit in translation.units:
         assert "system(" not in translation.translate(unit).source
     fb = artifact.pou("Fb")
-    hostile = replace(fb, source=fb.source + "\nimport os\n")
-    bad = replace(artifact, pous=(hostile, *(p for p in artifact.pous if p is not fb)))
+    first = replace(artifact, pous=(fb, *(p for p in artifact.pous if p is not fb)))
+    imported = Evaluate(Call("__import__", (Const("os", "STRING"),), ""), 0)
     with pytest.raises(GeneratedCodeError, match="generated code of FUNCTION_BLOCK Fb"):
-        ArtifactTranslation.of(bad.with_crc())
+        ArtifactTranslation.of(first_in_body(first, imported))
 
 
 # ---- every artifact the compiler makes passes

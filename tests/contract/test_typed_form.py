@@ -123,7 +123,7 @@ def test_statements_print_as_lines_each_with_its_st_line() -> None:
     body = (
         sm.Assign(x, one, 3),
         sm.Assign(x, one, 4, augmented="+"),
-        sm.If(done, (sm.Break(6),), (sm.If(x, (sm.Continue(7),), (sm.Pass(8),), 7),), 5),
+        sm.If(done, (sm.Break(6),), (sm.Pass(8),), 5, (sm.Elif(x, (sm.Continue(7),), 7),)),
         sm.While(done, (sm.Evaluate(tf.Call("abs", (x,), "INT"), 10),), 9),
         sm.ForEach("i", tf.Var("r", "local", ""), (sm.Pass(12),), (sm.Return(x, 13),), 11),
         sm.Return(None, 14),
@@ -133,7 +133,7 @@ def test_statements_print_as_lines_each_with_its_st_line() -> None:
         ("    x += 1", 4),
         ("    if x > 1:", 5),
         ("        break", 6),
-        ("    elif x:", 7),  # an IF alone in another's ELSE: ELSIF
+        ("    elif x:", 7),
         ("        continue", 7),
         ("    else:", 5),
         ("        pass", 8),

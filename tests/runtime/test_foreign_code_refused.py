@@ -1,12 +1,13 @@
-"""An artifact whose generated code reaches outside the restricted namespace, its CRC redone
-(as an attacker who read the code would): a real runtime process refuses it from a transfer
-and load, and from a reload, with the reason, runs on, and nothing of it ran; so it does an
-artifact whose POU name is C for its native tier; `padt replay` of a recording that carries
-such code refuses it too.
+"""An artifact whose typed form describes code that reaches outside the restricted namespace,
+or smuggles Python text in a name, its CRCs redone (as an attacker who read the format
+would): a real runtime process refuses it from a transfer and load, and from a reload, with
+the reason, runs on, and nothing of it ran; so it does an artifact whose POU name is C for
+its native tier; `padt replay` of a recording that carries such a form refuses it too.
 
-Before, `_idiv.__globals__['builtins'].__import__(...)` appended to a POU ran when the
-configuration was set up: on the controller host for a download, and in `padt replay`,
-which then said "identical"."""
+Before the check of generated code, `_idiv.__globals__['builtins'].__import__(...)`
+appended to a POU's source ran when the configuration was set up: on the controller host
+for a download, and in `padt replay`, which then said "identical". Since artifact version 5
+there is no source to append to: the runtime prints the Python from the form itself."""
 
 from __future__ import annotations
 
@@ -24,28 +25,18 @@ from runtime.contract.refusal import Refusal
 from tests.conftest import REPO
 from tests.runtime.test_hostile_clients import PASSWORD, RESOURCE, still_healthy, target
 from tests.runtime.test_recording import PLANT, compiled, finished, recordings_of, run, started
+from tests.support.crafted_units import (
+    ESCAPE_REFUSED,
+    SMUGGLED_REFUSED,
+    escape,
+    first_in_body,
+    smuggled,
+)
 
 
-def escaping(artifact: Artifact, written: Path, where: str = "body") -> Artifact:
-    """`artifact` with a line that writes `written` through the globals of an intrinsic in
-    its first POU, the CRC redone: in the body of its `__call__`, or appended to the unit
-    (`where="end"`, as the hostile run had it)."""
-    escape = (
-        "_idiv.__globals__['builtins'].__import__('pathlib')"
-        f".Path({str(written)!r}).write_text('ran')"
-    )
-    pou = artifact.pous[0]
-    if where == "end":
-        source = pou.source + escape + "\n"
-    else:
-        call = "    def __call__(s):\n"
-        assert call in pou.source
-        source = pou.source.replace(call, call + "        " + escape + "\n")
-    hostile = replace(pou, source=source)
-    return replace(artifact, pous=(hostile, *artifact.pous[1:])).with_crc()
-
-
-REASON = "a call of the attribute 'write_text' is not allowed"
+def escaping(artifact: Artifact, written: Path) -> Artifact:
+    """`artifact` whose first POU's body begins with a line that writes `written`."""
+    return first_in_body(artifact, escape(written))
 
 
 def test_a_runtime_refuses_foreign_code_by_load_and_by_reload_and_runs_on(
@@ -58,15 +49,15 @@ def test_a_runtime_refuses_foreign_code_by_load_and_by_reload_and_runs_on(
         genuine = load_artifact((tmp_path / "config" / "artifact.json").read_bytes())
         hostile = escaping(genuine, written)
         try:
-            reload(admin, escaping(genuine, written, "end"), ReloadOptions({}))
+            reload(admin, smuggled(genuine, written), ReloadOptions({}))
             raise AssertionError("a reload took code the compiler does not generate")
         except Refusal as refused:
-            assert "a second top-level statement is not allowed" in refused.message
+            assert SMUGGLED_REFUSED in refused.message, refused.message
         try:
             reload(admin, hostile, ReloadOptions({}))
             raise AssertionError("a reload took code the compiler does not generate")
         except Refusal as refused:
-            assert REASON in refused.message, refused.message
+            assert ESCAPE_REFUSED in refused.message, refused.message
         still_healthy(client)
         assert admin.command("stop")["ok"]
         try:
@@ -75,7 +66,7 @@ def test_a_runtime_refuses_foreign_code_by_load_and_by_reload_and_runs_on(
         except Refusal as refused:
             assert refused.code == "bad_configuration"
             assert "generated code of PROGRAM Main, line " in refused.message, refused.message
-            assert REASON in refused.message, refused.message
+            assert ESCAPE_REFUSED in refused.message, refused.message
         # a POU name that would close the comment of the native tier's C and add its own
         named = replace(genuine.pous[0], name=f'M */ system("touch {written}"); /*')
         try:
@@ -96,9 +87,8 @@ def test_padt_replay_refuses_a_recording_whose_configuration_escapes(tmp_path: P
     resource = started(tmp_path, genuine)
     level = [500]
     run(resource, 5, level)
-    # the recorder attaches `resource.artifact`: the escaping one, as a hostile file has it
-    # (appended to the unit: it runs when the configuration is set up)
-    resource.artifact = escaping(genuine, written, "end")
+    # the recorder attaches `resource.artifact`: the smuggling one, as a hostile file has it
+    resource.artifact = smuggled(genuine, written)
     recordings_of(resource).start(
         resource, p.RecordStart(["Control.*"], all_inputs=True, id="evil")
     )
@@ -121,9 +111,8 @@ def test_padt_replay_refuses_a_recording_whose_configuration_escapes(tmp_path: P
     done = subprocess.run(command, cwd=REPO, capture_output=True, text=True, timeout=300)
     assert done.returncode != 0, done.stdout
     assert "identical" not in done.stdout
-    assert "generated code of PROGRAM Control, line " in done.stderr, done.stderr
-    assert "a second top-level statement is not allowed" in done.stderr, done.stderr
-    assert "the recorded configuration does not load" in done.stderr
+    assert SMUGGLED_REFUSED in done.stderr, done.stderr
+    assert "the recorded configuration is damaged: the form of PROGRAM Control" in done.stderr
     assert "start state is damaged" not in done.stderr  # said once, as what it is
     assert "Traceback" not in done.stderr
     assert not written.exists()

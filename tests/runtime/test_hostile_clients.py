@@ -12,7 +12,6 @@ import threading
 import time
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +35,7 @@ from runtime.contract.protocol import (
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import encode
 from tests.conftest import padt
+from tests.support.crafted_units import failing_set_up, with_unit
 from tests.support.ports import free_port
 from tests.support.runtime_process import client_session, running_resource, store_artifact
 
@@ -458,9 +458,7 @@ def test_a_configuration_whose_code_fails_is_refused_and_the_resource_runs_on(
         admin = ResourceClient(client.session, RESOURCE)
         admin.login("admin", PASSWORD)
         artifact = load_artifact((tmp_path / "config" / "artifact.json").read_bytes())
-        pou = artifact.pous[0]
-        broken = replace(pou, source=pou.source + "\nraise RuntimeError('set up fails')\n")
-        hostile = replace(artifact, pous=(broken, *artifact.pous[1:])).with_crc()
+        hostile = with_unit(artifact, failing_set_up(artifact.pous[0].unit))
         assert admin.command("stop")["ok"]
         try:
             download(admin, hostile)

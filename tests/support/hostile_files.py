@@ -18,7 +18,7 @@ import threading
 import zipfile
 import zlib
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import zstandard
@@ -51,6 +51,7 @@ from runtime.contract.recording import (
 )
 from runtime.recorder import start_state
 from runtime.resource import Resource
+from tests.support.crafted_units import with_form
 
 REPO = Path(__file__).resolve().parent.parent.parent
 MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
@@ -93,10 +94,9 @@ def compiled(folder: Path) -> Artifact:
 
 
 def unloadable(artifact: Artifact) -> Artifact:
-    """The artifact with code its loader refuses (its CRC redone, so only loading finds it)."""
-    pou = artifact.pous[0]
-    broken = replace(pou, source=pou.source + "\n)(\n")
-    return replace(artifact, pous=(broken, *artifact.pous[1:])).with_crc()
+    """The artifact with a unit whose form its loader refuses (its CRCs redone, so only
+    loading finds it)."""
+    return with_form(artifact, artifact.pous[0].form[:-1])
 
 
 def start_json(artifact: Artifact) -> bytes:

@@ -61,8 +61,7 @@ class ArtifactTranslation:
         """GeneratedCodeError for an artifact with any unit that is not generated code:
         names and sources are checked before any of them is read or put into C."""
         check_artifact_names(artifact)
-        globals_unit = [artifact.globals] if artifact.globals is not None else []
-        for unit in [*artifact.types, *artifact.pous, *globals_unit]:
+        for unit in artifact.units():
             check_source(unit.source, code_filename(unit))
         units = translatable_units(artifact)
         return cls(

@@ -64,7 +64,7 @@ class FormRefused(ValueError):
 
 def encode_unit(unit: Unit) -> str:
     """`unit` as its canonical JSON text; FormRefused if it would be nested deeper than
-    FORM_DEPTH (no runtime would read it: a chain of ELSIFs takes two levels each)."""
+    FORM_DEPTH (no runtime would read it)."""
     try:
         data = _plain(unit, 1)
     except _Refusal as refusal:
@@ -96,12 +96,14 @@ def _plain(value: Any, level: int) -> Any:
 def decode_unit(text: str | bytes, what: str) -> Unit:
     """The unit `text` encodes (`encode_unit`); FormRefused naming `what` (a unit of an
     artifact) and where in the form otherwise."""
-    try:
-        data = read_json(text, what, MAX_FORM_BYTES, FORM_DEPTH)
+    if not isinstance(text, str | bytes):  # an artifact's field, as its JSON had it
+        raise FormRefused(f"{what} is {_shown(text)}, not a text")
+    try:  # the decoder counts the depth as it goes, cheaper than a walk of its own
+        data = read_json(text, what, MAX_FORM_BYTES, max_depth=None)
     except JsonRefused as exc:
         raise FormRefused(str(exc)) from None
     try:
-        unit: Unit = _value(data, _UNIT)
+        unit: Unit = _value(data, _UNIT, 1)
     except _Refusal as refusal:
         # the path from the top node's name down, e.g. Class.functions[1].body[3].value
         root = data[0] if refusal.where else "the form"
@@ -137,10 +139,10 @@ class _Spec:
     special: Callable[[Any], Any] | None = None
 
 
-def _value(data: Any, spec: _Spec) -> Any:
-    """`data` decoded as `spec` says. One function for nodes and tuples alike, calling
-    itself once per level of JSON: a form FORM_DEPTH deep must decode within the recursion
-    limit."""
+def _value(data: Any, spec: _Spec, level: int) -> Any:
+    """`data`, at `level` of the form's JSON, decoded as `spec` says. One function for
+    nodes and tuples alike, calling itself once per level of JSON: a form FORM_DEPTH deep
+    must decode within the recursion limit."""
     kind = type(data)
     if kind in spec.scalars:  # most values are: checked first
         if spec.check is not None and (kind is str or kind is int):
@@ -152,12 +154,14 @@ def _value(data: Any, spec: _Spec) -> Any:
         return data
     if spec.special is not None:
         return spec.special(data)
+    if kind is list and level > FORM_DEPTH:
+        raise _Refusal(f"is nested deeper than {FORM_DEPTH}")
     if kind is list and spec.tags is not None:
         cls, field_specs = _node_class(data, spec)
         values = []
         for (name, field_spec), item in zip(field_specs, data[1:], strict=True):
             try:
-                values.append(_value(item, field_spec))
+                values.append(_value(item, field_spec, level + 1))
             except _Refusal as refusal:
                 refusal.where.append(f".{name}")
                 raise
@@ -170,7 +174,7 @@ def _value(data: Any, spec: _Spec) -> Any:
         decoded = []
         for index, (item, item_spec) in enumerate(_parts(data, spec)):
             try:
-                decoded.append(_value(item, item_spec))
+                decoded.append(_value(item, item_spec, level + 1))
             except _Refusal as refusal:
                 refusal.where.append(f"[{index}]")
                 raise
@@ -305,7 +309,13 @@ _LINE = _within(0, MAX_LINE - 1)
 # Fields whose value the class's hint does not describe as JSON: decoded by a function
 _SPECIAL: dict[tuple[str, str], Callable[[Any], Any]] = {("Const", "value"): _const_value}
 # Blocks Python needs a statement in (the printer prints none for an empty one)
-_NOT_EMPTY = {("Function", "body"), ("If", "body"), ("While", "body"), ("ForEach", "body")}
+_NOT_EMPTY = {
+    ("Function", "body"),
+    ("If", "body"),
+    ("Elif", "body"),
+    ("While", "body"),
+    ("ForEach", "body"),
+}
 
 
 def _method_params(function: Function) -> None:

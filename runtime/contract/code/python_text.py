@@ -45,6 +45,7 @@ from runtime.contract.code.typed_form import (
     Var,
     Wrap,
 )
+from runtime.contract.code.units import Alias, Class, Function, Inherited, Unit
 
 INDENT = "    "
 _ROOT = {"instance": "s.", "globals": "_G.", "system": "_SYS.", "programs": "_P.", "local": ""}
@@ -145,19 +146,15 @@ def python_lines(
                 yield f"{pad}{python_text(target)} {sign} {python_text(value)}", line
             case Evaluate(value=value, line=line):
                 yield pad + python_text(value), line
-            case If(test=test, body=body, orelse=orelse, line=line):
+            case If(test=test, body=body, orelse=orelse, line=line, elifs=elifs):
                 yield f"{pad}if {_bare(test)}:", line
                 yield from python_lines(body, depth + 1)
-                while orelse:
-                    if len(orelse) == 1 and isinstance(orelse[0], If):  # ELSIF
-                        chained = orelse[0]
-                        yield f"{pad}elif {_bare(chained.test)}:", chained.line
-                        yield from python_lines(chained.body, depth + 1)
-                        orelse = chained.orelse
-                        continue
+                for branch in elifs:
+                    yield f"{pad}elif {_bare(branch.test)}:", branch.line
+                    yield from python_lines(branch.body, depth + 1)
+                if orelse:
                     yield f"{pad}else:", line
                     yield from python_lines(orelse, depth + 1)
-                    break
             case While(test=test, body=body, line=line):
                 yield f"{pad}while {_bare(test)}:", line
                 yield from python_lines(body, depth + 1)
@@ -175,3 +172,37 @@ def python_lines(
                 yield pad + ("return" if value is None else f"return {python_text(value)}"), line
             case Pass(line=line):
                 yield pad + "pass", line
+
+
+def unit_lines(unit: Unit) -> Iterator[tuple[str, int]]:
+    """The lines of a unit's module text, each with its ST line (0 for the frame)."""
+    match unit:
+        case Alias(name=name, target=target):
+            yield f"{name} = {target}", 0
+        case Function():
+            yield from _function_lines(unit, 0)
+        case Class(name=name, slots=slots, kinds=kinds, functions=functions):
+            yield f"class {name}:", 0
+            yield f"{INDENT}__slots__ = {tuple(slot.name for slot in slots)!r}", 0
+            if kinds:
+                yield f"{INDENT}KIND__ = {kinds!r}", 0
+            yield "", 0
+            yield f"{INDENT}def __init__(s):", 0
+            if not slots:
+                yield f"{INDENT * 2}pass", 0
+            for slot in slots:
+                yield f"{INDENT * 2}s.{slot.name} = {python_text(slot.initial)}", 0
+            for function in functions:
+                yield "", 0
+                if isinstance(function, Inherited):
+                    yield f"{INDENT}{function.name} = {function.owner}.{function.name}", 0
+                else:
+                    yield from _function_lines(function, 1)
+
+
+def _function_lines(function: Function, depth: int) -> Iterator[tuple[str, int]]:
+    params = [f"{param.name}={python_text(param.default)}" for param in function.params]
+    if function.method:
+        params.insert(0, "s")
+    yield f"{INDENT * depth}def {function.name}({', '.join(params)}):", 0
+    yield from python_lines(function.body, depth + 1)

@@ -28,11 +28,25 @@ class Evaluate:
 
 
 @dataclass(frozen=True, slots=True)
+class Elif:
+    """A further branch of an `If`: an ELSIF, a label of a CASE."""
+
+    test: Expr
+    body: tuple[Stmt, ...]
+    line: int
+
+
+@dataclass(frozen=True, slots=True)
 class If:
+    """`body` where `test` holds, else the first of `elifs` whose test holds, else
+    `orelse`. The branches are a list rather than an `If` in each `orelse`, so that a
+    thousand ELSIFs are a thousand items, not a form nested a thousand deep."""
+
     test: Expr
     body: tuple[Stmt, ...]
     orelse: tuple[Stmt, ...]
     line: int
+    elifs: tuple[Elif, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
