@@ -538,7 +538,10 @@ def _unit_code(
     except FormRefused:
         message = f"statements and expressions nested deeper than a resource reads ({name})"
         raise GenerationError([Diagnostic.at(where, Code.STATEMENT_DEPTH, message)]) from None
-    return PouCode(name, kind, class_, form, crc32_hex(form), infos).knowing(generated.unit)
+    # the CRC of the code itself: its Python, in which the ST lines the form also carries
+    # do not stand (a comment added above a POU does not change it)
+    crc = crc32_hex(generated.source)
+    return PouCode(name, kind, class_, form, crc, infos).knowing(generated.unit)
 
 
 def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
@@ -588,7 +591,8 @@ def _program_config(
 
 
 def _program_crc(resolved: Resolved, codes: dict[str, PouCode], program: ProgramConfig) -> str:
-    """CRC of a user program: its code, the code of every FB it uses, and its parameters."""
-    parts = [codes[name].form for name in _fb_dependencies(resolved, key(program.pou))]
+    """CRC of a user program: its code, the code of every FB it uses (their CRCs), and its
+    parameters."""
+    parts = [codes[name].crc for name in _fb_dependencies(resolved, key(program.pou))]
     params = replace(program, crc="").__dict__
     return crc32_hex(canonical_json({"code": parts, "parameters": params}))

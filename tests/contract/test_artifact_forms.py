@@ -87,3 +87,15 @@ def test_a_form_that_is_no_text_refuses_the_artifact() -> None:
     crafted = replace(artifact, pous=(numbered, *artifact.pous[1:])).with_crc()
     with pytest.raises(ArtifactError, match="is int 7, not a text"):
         load_artifact(crafted.to_json())
+
+
+def test_a_comment_above_a_pou_keeps_its_crc_and_changes_the_configurations() -> None:
+    """The POU CRC is over its code (the printed Python), the configuration CRC over the
+    forms, which carry the ST line of every statement."""
+    before = compiled()
+    result = compile_sources([SourceFile("main.st", "(* a comment *)\n" + PROGRAM)])
+    after = result.artifact
+    assert after is not None
+    assert [p.crc for p in after.pous] == [p.crc for p in before.pous]
+    assert after.pou("Main").form != before.pou("Main").form
+    assert after.crc != before.crc
