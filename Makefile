@@ -32,7 +32,7 @@ typecheck: $(VENV)/.stamp-dev
 	$(BIN)/mypy
 
 pytest: $(VENV)/.stamp-dev bytecode
-	$(BIN)/pytest -m "not slow" --durations=15 --tb=short
+	$(BIN)/pytest -n 2 --dist loadfile -m "not slow" --durations=15 --tb=short
 
 bench: $(VENV)/.stamp-run bytecode
 	bash scripts/install-codemirror.sh  # the editor's bench types into it

@@ -101,8 +101,13 @@ def one_native_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]
     runtime has a fresh state folder, and with a cache of its own each would translate and
     compile the same bodies again (about 0.7 s of CPU per start of the demo), as a command
     would into the user's home. The tier still runs everywhere, as `padt runtime` runs it;
-    what is built where by default is tests/runtime/native/test_native_process.py's."""
-    path = tmp_path_factory.mktemp("native-cache")
+    what is built where by default is tests/runtime/native/test_native_process.py's. The
+    processes of `pytest -n` share it too (their temporary folders have one parent)."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        path = tmp_path_factory.getbasetemp().parent / "native-cache"
+        path.mkdir(exist_ok=True)
+    else:
+        path = tmp_path_factory.mktemp("native-cache")
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv(NATIVE_CACHE_ENV, str(path))
         yield path
