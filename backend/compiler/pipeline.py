@@ -541,7 +541,7 @@ def _unit_code(
     # the CRC of the code itself: its Python, in which the ST lines the form also carries
     # do not stand (a comment added above a POU does not change it)
     crc = crc32_hex(generated.source)
-    return PouCode(name, kind, class_, form, crc, infos).knowing(generated.unit)
+    return _knowing(PouCode(name, kind, class_, form, crc, infos), generated)
 
 
 def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
@@ -550,13 +550,17 @@ def _pou_code(resolved: Resolved, pou: PouSymbols) -> PouCode:
         code = _unit_code(pou.name, pou.kind, function_name(pou.name), generated, [], pou.pou.pos)
         if pou.return_type is not None:
             returns = artifact_type_text(pou.return_type)
-            code = replace(code, returns=returns).knowing(generated.unit)
+            code = _knowing(replace(code, returns=returns), generated)
     else:
         # a variable-length in-out is the caller's array, shown where the caller has it
         stored = [v for v in instance_fields(pou) if not isinstance(v.type, OpenArrayType)]
         code = _unit_code(pou.name, pou.kind, class_name(pou.name), generated, stored, pou.pou.pos)
     chart = _chart(pou.pou.sfc)
-    return replace(code, file=pou.pou.pos.file, chart=chart).knowing(generated.unit)
+    return _knowing(replace(code, file=pou.pou.pos.file, chart=chart), generated)
+
+
+def _knowing(code: PouCode, generated: GeneratedUnit) -> PouCode:
+    return code.knowing(generated.unit, generated.source, generated.st_lines)
 
 
 def _chart(sfc: ast.Sfc | None) -> ChartInfo | None:

@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import zlib
 from dataclasses import asdict, dataclass, field
-from functools import cached_property
 from typing import Any
 
 from runtime.contract.code.form_json import FormRefused, decode_unit
@@ -83,32 +82,44 @@ class PouCode:
     # caller in the native tier unboxes its result as
     returns: str = ""
 
-    @cached_property
+    @property
     def unit(self) -> Unit:
-        """The typed form, decoded and checked (FormRefused where it is not a unit's)."""
+        """The typed form, decoded and checked (FormRefused where it is not a unit's).
+        Decoded anew at each call, but for the compiler's own code (`knowing`): a runtime
+        keeps the Python it printed, not the tree of nodes (hundreds of thousands of
+        objects for a large program, which the collector would walk and a reload free)."""
+        known: Unit | None = self.__dict__.get("_known")
+        if known is not None:
+            return known
         return decode_unit(self.form, f"the form of {self.kind} {self.name}")
 
-    def knowing(self, unit: Unit) -> PouCode:
-        """This code, given the unit its form was encoded from (the compiler's, in the
-        process that compiled it): a process that runs what it compiled need not decode
-        its own encoding again."""
-        self.__dict__["unit"] = unit  # where `cached_property` keeps `unit`
+    def knowing(self, unit: Unit, source: str, st_lines: tuple[int, ...]) -> PouCode:
+        """This code, given the unit its form was encoded from and its printed Python (the
+        compiler's, in the process that compiled it): a process that runs what it
+        compiled need not decode and print its own encoding again."""
+        # not fields: no part of the artifact or its CRC
+        self.__dict__["_known"], self.__dict__["_printed"] = unit, (source, st_lines)
         return self
 
-    @cached_property
-    def _printed(self) -> tuple[str, tuple[int, ...]]:
-        lines = list(unit_lines(self.unit))
-        return "\n".join(line for line, _ in lines) + "\n", tuple(st for _, st in lines)
+    def _text(self) -> tuple[str, tuple[int, ...]]:
+        """The Python printed from the form, and the ST line of each of its lines; printed
+        once (two threads that ask at once may both print it: the same text)."""
+        printed: tuple[str, tuple[int, ...]] | None = self.__dict__.get("_printed")
+        if printed is None:
+            lines = list(unit_lines(self.unit))
+            text = "\n".join(line for line, _ in lines) + "\n"
+            printed = self.__dict__["_printed"] = (text, tuple(st for _, st in lines))
+        return printed
 
     @property
     def source(self) -> str:
         """The unit's Python, as the runtime prints it from the form."""
-        return self._printed[0]
+        return self._text()[0]
 
     @property
     def st_lines(self) -> tuple[int, ...]:
         """Per line of `source`: its line in `file` (0: none)."""
-        return self._printed[1]
+        return self._text()[1]
 
 
 @dataclass(frozen=True)
@@ -296,7 +307,7 @@ def load_artifact(text: str | bytes) -> Artifact:
         raise ArtifactError(f"artifact CRC {artifact.crc} does not match its content ({expected})")
     for unit in artifact.units():
         try:
-            unit.unit  # noqa: B018 -- decoded and checked once, here
+            unit.source  # noqa: B018 -- decoded, checked and printed once, here
         except FormRefused as exc:
             raise ArtifactError(str(exc)) from None
     return artifact
