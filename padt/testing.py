@@ -127,7 +127,8 @@ def run(args: argparse.Namespace) -> int:
     results.sort(key=lambda r: order[r.case])
     ran = sorted({tier for r in results for tier in r.tiers})
     if "native" in tiers and "native" not in ran:
-        print(f"padt test: {NO_COMPILER}: the native tier was not run", file=sys.stderr)
+        instead = ", the tests ran on Python" if tiers == ("native",) else ""
+        print(f"padt test: {NO_COMPILER}: the native tier was not run{instead}", file=sys.stderr)
     found = totals(results)
     print(summary_line(found, " and ".join(ran) or "no tier"))
     if args.junit is not None:

@@ -120,6 +120,18 @@ def test_the_python_tier_alone() -> None:
     assert results(run.stdout)[1] == "6 passed of 6 tests (python)"
 
 
+def test_the_native_tier_alone_without_a_c_compiler_runs_on_python(tmp_path: Path) -> None:
+    """As `padt runtime` runs the bodies as Python where no C compiler is, and says so."""
+    nothing = tmp_path / "empty-path"  # no cc, no gcc on it
+    nothing.mkdir()
+    run = padt("test", str(DEMO), "--tier", "native", env={"PATH": str(nothing), "CC": ""})
+    assert run.returncode == 0, run.stderr
+    assert results(run.stdout)[1] == "6 passed of 6 tests (python)"
+    assert "no C compiler or no Python.h here: the native tier was not run, the tests ran on " \
+        "Python" in run.stderr  # fmt: skip
+    assert "Traceback" not in run.stderr
+
+
 def test_a_test_file_that_does_not_compile_exits_2_with_its_diagnostic(project: Path) -> None:
     (project / "test" / "x.st").write_text(NOT_COMPILING)
     run = padt("test", str(project))

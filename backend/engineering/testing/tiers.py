@@ -79,9 +79,11 @@ def benches(
     native: NativeTier | None,
     project: Path | None = None,
 ) -> Benches:
-    """`native` None (or no C compiler): Python only."""
-    python = UnitTestBench(artifact, None, project) if "python" in tiers else None
+    """`native` None (or no C compiler): Python only, also where native alone was asked
+    for (the tests run as `padt runtime` would run the bodies there)."""
     on_native = "native" in tiers and native is not None and native.available
+    on_python = "python" in tiers or not on_native
+    python = UnitTestBench(artifact, None, project) if on_python else None
     compiled = UnitTestBench(artifact, native, project) if on_native else None
     types = {}
     if python is not None:
