@@ -7,6 +7,7 @@ a user without Operator at the resource sees Record greyed out with the reason."
 
 from __future__ import annotations
 
+import math
 import re
 from typing import Any
 
@@ -61,9 +62,11 @@ def scales(page: Page) -> list[str]:
 
 
 def chart(page: Page) -> dict[str, Any]:
-    """The chart in view."""
+    """The chart in view; none yet (a tab just brought to the front draws it a moment
+    later): no series, no points, and a first and last point earlier than any."""
     found = charts(page)
-    return found[0] if found else {"series": [], "points": 0}
+    none = [-math.inf]
+    return found[0] if found else {"series": [], "points": 0, "first": none, "last": none}
 
 
 def close_notifications(page: Page) -> None:
