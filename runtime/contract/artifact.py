@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from runtime.contract.code.form_json import FormRefused, decode_unit
+from runtime.contract.code.form_size import UnitCells, check_cells, unit_cells
 from runtime.contract.code.python_text import unit_lines
 from runtime.contract.code.units import Unit
 from runtime.contract.exchange import ExchangeConfig, exchange_config
@@ -101,15 +102,20 @@ class PouCode:
         self.__dict__["_known"], self.__dict__["_printed"] = unit, (source, st_lines)
         return self
 
-    def _text(self) -> tuple[str, tuple[int, ...]]:
-        """The Python printed from the form, and the ST line of each of its lines; printed
-        once (two threads that ask at once may both print it: the same text)."""
+    def printed_from(self, unit: Unit) -> tuple[str, tuple[int, ...]]:
+        """The Python printed from `unit`, this code's form decoded, and the ST line of each
+        of its lines; printed once (two threads that ask at once may both print it: the
+        same text)."""
         printed: tuple[str, tuple[int, ...]] | None = self.__dict__.get("_printed")
         if printed is None:
-            lines = list(unit_lines(self.unit))
+            lines = list(unit_lines(unit))
             text = "\n".join(line for line, _ in lines) + "\n"
             printed = self.__dict__["_printed"] = (text, tuple(st for _, st in lines))
         return printed
+
+    def _text(self) -> tuple[str, tuple[int, ...]]:
+        printed: tuple[str, tuple[int, ...]] | None = self.__dict__.get("_printed")
+        return printed if printed is not None else self.printed_from(self.unit)
 
     @property
     def source(self) -> str:
@@ -305,9 +311,33 @@ def load_artifact(text: str | bytes) -> Artifact:
     expected = crc32_hex(artifact.body_json())
     if artifact.crc != expected:
         raise ArtifactError(f"artifact CRC {artifact.crc} does not match its content ({expected})")
-    for unit in artifact.units():
-        try:
-            unit.source  # noqa: B018 -- decoded, checked and printed once, here
-        except FormRefused as exc:
-            raise ArtifactError(str(exc)) from None
+    try:
+        check_cells([_decoded_and_printed(unit) for unit in artifact.units()], _instances(artifact))
+    except FormRefused as exc:
+        raise ArtifactError(str(exc)) from None
     return artifact
+
+
+def _decoded_and_printed(unit: PouCode) -> UnitCells:
+    """Decode and check a unit's form, print its Python once, and keep of its nodes only
+    what they allocate (a runtime keeps the text, not the tree)."""
+    decoded = unit.unit
+    cells = unit_cells(decoded)
+    unit.printed_from(decoded)
+    return cells
+
+
+def _instances(artifact: Artifact) -> dict[str, int]:
+    """How many instances of each class a resource sets up, at most: one of each PROGRAM and
+    one for each user program of it, the globals once and once more for each program's
+    view of them (runtime/code/instances.py)."""
+    classes = {pou.name.upper(): pou.class_name for pou in artifact.pous}
+    counted: dict[str, int] = {}
+    for name in [p.name for p in artifact.pous if p.kind == "PROGRAM"] + [
+        program.pou for program in artifact.programs
+    ]:
+        if (class_name := classes.get(name.upper())) is not None:
+            counted[class_name] = counted.get(class_name, 0) + 1
+    if artifact.globals is not None:
+        counted[artifact.globals.class_name] = 1 + len(artifact.programs)
+    return counted

@@ -21,6 +21,7 @@ import zenoh
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.engineering.download import download
+from backend.engineering.reload import ReloadOptions, reload
 from backend.engineering.resource_client import ResourceClient
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import ProgramConfig, ResourceConfig, UserAccount, load_artifact
@@ -35,7 +36,7 @@ from runtime.contract.protocol import (
 from runtime.contract.refusal import Refusal
 from runtime.contract.wire import encode
 from tests.conftest import padt
-from tests.support.crafted_units import failing_set_up, with_unit
+from tests.support.crafted_units import failing_set_up, memory_bomb, with_unit
 from tests.support.ports import free_port
 from tests.support.runtime_process import client_session, running_resource, store_artifact
 
@@ -459,11 +460,23 @@ def test_a_configuration_whose_code_fails_is_refused_and_the_resource_runs_on(
         admin.login("admin", PASSWORD)
         artifact = load_artifact((tmp_path / "config" / "artifact.json").read_bytes())
         hostile = with_unit(artifact, failing_set_up(artifact.pous[0].unit))
-        assert admin.command("stop")["ok"]
+        # counts within bounds that multiply to 10**12 values: refused before set-up, as
+        # data, where setting it up would have the process killed for memory
+        bomb = with_unit(artifact, memory_bomb(artifact.pous[0].unit))
         try:
-            download(admin, hostile)
-            raise AssertionError("a configuration whose code fails was taken")
+            reload(admin, bomb, ReloadOptions({}))
+            raise AssertionError("a reload took data no resource can hold")
         except Refusal as refused:
-            assert refused.code == "bad_configuration"
+            assert "cells or more; at most" in refused.message, refused.message
+        assert admin.command("stop")["ok"]
+        for crafted, code, said in (
+            (hostile, "bad_configuration", ""),
+            (bomb, "transfer", "cells"),
+        ):
+            try:
+                download(admin, crafted)
+                raise AssertionError("a configuration whose set-up fails was taken")
+            except Refusal as refused:
+                assert refused.code == code and said in refused.message, refused
         assert admin.command("start")["ok"]
         still_healthy(client)

@@ -10,7 +10,7 @@ from pathlib import Path
 from runtime.contract.artifact import Artifact, crc32_hex
 from runtime.contract.code.form_json import encode_unit
 from runtime.contract.code.statements import Evaluate, Stmt
-from runtime.contract.code.typed_form import Call, Const, Expr, Index, Member, Named, This
+from runtime.contract.code.typed_form import Call, Const, Expr, Index, Member, Named, Repeated, This
 from runtime.contract.code.units import Class, Function, Slot, Unit
 
 
@@ -72,3 +72,13 @@ def failing_set_up(unit: Unit) -> Class:
     assert isinstance(unit, Class), unit
     zero = Call("_idiv", (Const(1, "INT"), Const(0, "INT")), "INT")
     return replace(unit, slots=(*unit.slots, Slot("fails", zero)))
+
+
+def memory_bomb(unit: Unit) -> Class:
+    """`unit`'s class with a slot of a million lists of a million values each: every count
+    within the form's bounds, 10**12 cells together (a runtime that set it up would be
+    killed for memory)."""
+    assert isinstance(unit, Class), unit
+    row = Repeated(Const(0, "INT"), 1_000_000, False, "ARRAY[1..1000000] OF INT")
+    rows = Repeated(row, 1_000_000, True, "ARRAY[1..1000000] OF ARRAY[1..1000000] OF INT")
+    return replace(unit, slots=(*unit.slots, Slot("huge", rows)))
