@@ -110,6 +110,8 @@ def _replay(args: argparse.Namespace) -> int:
     except ReplayError as exc:
         print(f"padt replay: {exc}", file=sys.stderr)
         return REPLAY_CANNOT
+    for line in outcome.left_as_python:
+        print(f"padt replay: {line}", file=sys.stderr)
     if outcome.reloaded:
         print(
             f"padt replay: recorded configuration {outcome.recorded_crc}, replayed with "
@@ -149,7 +151,7 @@ def _sim(args: argparse.Namespace) -> int:
         run,
         trace_names,
     )
-    from backend.engineering.tiers import one_tier
+    from backend.engineering.tiers import left_as_python, one_tier
 
     try:
         project = load_project(args.paths)
@@ -175,6 +177,8 @@ def _sim(args: argparse.Namespace) -> int:
     except SimulationError as exc:
         print(f"padt sim: {exc}", file=sys.stderr)
         return 2
+    for line in left_as_python(simulation.resource.native_report):
+        print(f"padt sim: {line}", file=sys.stderr)
     # sim reports program faults itself, one line each; the resource's log would repeat them
     resource_log = logging.getLogger("runtime.resource")
     resource_log.addHandler(logging.NullHandler())

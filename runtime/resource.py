@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from runtime.clock import Clock
 from runtime.code.instances import Instances, instantiate, instantiated
 from runtime.code.intrinsics import EMERGENCY_STOPS, SystemView
-from runtime.code.native.tier import NativeTier
+from runtime.code.native.tier import NativeReport, NativeTier
 from runtime.code.user_program import UserProgram
 from runtime.commissioning import SetupSecret
 from runtime.configuration_store import ConfigurationStore
@@ -275,6 +275,13 @@ class Resource:
                 native=list(report.bodies),
                 python=[f"{pou}: {reason}" for pou, reason in report.left],
             )
+
+    @property
+    def native_report(self) -> NativeReport | None:
+        """What of the running code runs as C, and why the rest does not (None: all of it
+        runs as Python, the native tier not asked for, not available or not ready)."""
+        code = self.variables.code
+        return code.native if code is not None else None
 
     def instantiate(self) -> None:
         """Fresh instances of everything: every variable at its initial value."""

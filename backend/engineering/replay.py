@@ -18,6 +18,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from backend.engineering.tiers import left_as_python
 from runtime.clock import VirtualClock
 from runtime.code.native.tier import NativeTier
 from runtime.code.user_program import share_globals
@@ -59,6 +60,8 @@ class ReplayResult:
     complete: bool  # False: the file was cut short; the cycles up to its end were compared
     recorded_crc: str
     replayed_crc: str
+    # the bodies that ran as Python on the native tier, with why (tiers.left_as_python)
+    left_as_python: tuple[str, ...] = ()
 
     def summary(self) -> str:
         if self.difference is None:
@@ -130,6 +133,7 @@ def replay(
     assert isinstance(clock, VirtualClock)
     inputs = {item.cycle: item for item in recording.inputs}
     compared = 0
+    crcs, left = (recorded.crc, artifact.crc), tuple(left_as_python(resource.native_report))
     for index, (cycle, row) in enumerate(zip(recording.cycles, recording.rows, strict=True), 1):
         item = inputs.get(cycle)
         if item is None:
@@ -148,11 +152,9 @@ def replay(
             mine = resource.variables.read(where) if where is not None else "(no such variable)"
             if not _same(value, mine):
                 difference = Difference(cycle, index, path, value, mine)
-                return ReplayResult(
-                    compared, difference, reloaded, recording.complete, recorded.crc, artifact.crc
-                )
+                return ReplayResult(compared, difference, reloaded, recording.complete, *crcs, left)
         compared += 1
-    return ReplayResult(compared, None, reloaded, recording.complete, recorded.crc, artifact.crc)
+    return ReplayResult(compared, None, reloaded, recording.complete, *crcs, left)
 
 
 def _unsliced(artifact: Artifact) -> Artifact:

@@ -10,7 +10,7 @@ import os
 from pathlib import Path
 from typing import Literal
 
-from runtime.code.native.tier import NativeTier
+from runtime.code.native.tier import NativeReport, NativeTier
 from runtime.contract.state_folder import NATIVE_CACHE_ENV
 
 Tier = Literal["python", "native"]
@@ -47,3 +47,12 @@ def one_tier(asked: Tier) -> tuple[NativeTier | None, str]:
     if native.available:
         return native, ""
     return None, f"{NO_COMPILER}: the bodies run as Python"
+
+
+def left_as_python(report: NativeReport | None) -> list[str]:
+    """What a tool that ran the native tier says of the bodies that did not run as C, a
+    line each, with the reason the runtime's event gives (none where all ran as C)."""
+    if report is None:
+        return []
+    lines = [f"{pou} runs as Python: {reason}" for pou, reason in report.left]
+    return lines + [f"not built: {failed}" for failed in report.failed]
