@@ -365,7 +365,6 @@ def report(name: str, run: Run, reloader: Reloader, baseline: Run, cold: Run) ->
     disposing = [
         periods[i] for i in sorted(run.disposing - after - run.preparing) if i < len(periods)
     ]
-    normal_period = statistics.median(normal)
     copied = f"{min(run.copied):,}-{max(run.copied):,}"
     print(f"  {name} ({max(run.carried):,} values carried, {copied} of them copied):")
     print(
@@ -373,22 +372,38 @@ def report(name: str, run: Run, reloader: Reloader, baseline: Run, cold: Run) ->
         f"{statistics.median(baseline.pauses_us):8.0f} us   (ratio "
         f"{statistics.median(run.pauses_us) / statistics.median(baseline.pauses_us):.2f})"
     )
-    print(
-        f"    longest period with a reload {max(with_reload) / 1e3:8.0f} us   vs median period "
-        f"{normal_period / 1e3:8.0f} us   (ratio {max(with_reload) / normal_period:.2f})"
-    )
+    longest = max(with_reload)
     # medians: the baseline has fewer reloads, and a longest of more is longer by chance
     first = statistics.median(_first_periods(run))
     first_cold = statistics.median(_first_periods(cold))
-    print(
-        f"    first period on the new code {first / 1e3:8.0f} us   (ratio "
-        f"{first / normal_period:.2f}, median)   vs without the warm-up "
-        f"{first_cold / 1e3:6.0f} us   (ratio {first_cold / normal_period:.2f})"
-    )
-    print(
-        f"    periods while preparing (a worker thread, {len(preparing)} of them): median "
-        f"{statistics.median(preparing) / 1e3:8.0f} us   max {max(preparing) / 1e3:8.0f} us"
-    )
+    if normal:
+        normal_period = statistics.median(normal)
+        print(
+            f"    longest period with a reload {longest / 1e3:8.0f} us   vs median period "
+            f"{normal_period / 1e3:8.0f} us   (ratio {longest / normal_period:.2f})"
+        )
+        print(
+            f"    first period on the new code {first / 1e3:8.0f} us   (ratio "
+            f"{first / normal_period:.2f}, median)   vs without the warm-up "
+            f"{first_cold / 1e3:6.0f} us   (ratio {first_cold / normal_period:.2f})"
+        )
+    else:  # the disposal of a replaced configuration (or a preparation) took every cycle
+        print(
+            f"    no cycle outside every reload's preparation and disposal ({len(periods)} "
+            "periods): no median period, and no ratios to it"
+        )
+        print(f"    longest period with a reload {longest / 1e3:8.0f} us")
+        print(
+            f"    first period on the new code {first / 1e3:8.0f} us   (median)   vs without "
+            f"the warm-up {first_cold / 1e3:6.0f} us"
+        )
+    if preparing:
+        print(
+            f"    periods while preparing (a worker thread, {len(preparing)} of them): median "
+            f"{statistics.median(preparing) / 1e3:8.0f} us   max {max(preparing) / 1e3:8.0f} us"
+        )
+    else:  # the worker thread ended before the loop looked at it
+        print("    periods while preparing: none, every preparation was done before a cycle")
     if disposing:
         print(
             f"    periods while the replaced configuration is freed ({len(disposing)} of them, "
@@ -440,13 +455,22 @@ def bench_switch_over_native(artifacts: dict[str, Artifact]) -> None:
         with_reload = max(periods[i] for i in run.reload_after)
         special = run.reload_after.keys() | run.preparing | run.disposing
         special |= {i + 1 for i in run.reload_after}
-        normal = statistics.median(p for i, p in enumerate(periods) if i not in special)
+        normal = [p for i, p in enumerate(periods) if i not in special]
         first = statistics.median(_first_periods(run))
-        print(
+        head = (
             f"  {name + ':':<32} pause median {statistics.median(run.pauses_us):5.0f} us; "
-            f"longest period with a reload {with_reload / 1e3:5.0f} us (ratio "
-            f"{with_reload / normal:.2f} to the median {normal / 1e3:.0f} us); first period "
-            f"on the new code ratio {first / normal:.2f}"
+            f"longest period with a reload {with_reload / 1e3:5.0f} us"
+        )
+        if not normal:
+            print(
+                f"{head}; first period on the new code {first / 1e3:.0f} us (median); no cycle "
+                "outside every reload's preparation and disposal: no median period, no ratios"
+            )
+            continue
+        median = statistics.median(normal)
+        print(
+            f"{head} (ratio {with_reload / median:.2f} to the median {median / 1e3:.0f} us); "
+            f"first period on the new code ratio {first / median:.2f}"
         )
 
 
