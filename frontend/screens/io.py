@@ -26,16 +26,12 @@ from runtime.contract.values import format_for_display
 READS_PER_S = 2
 MAX_ROWS = 500
 ALL_SOURCES = "(all)"
-_CELL = "padding:2px 8px;border-bottom:1px solid #e9ecef;vertical-align:top"
+_CELL = "padding:2px 6px;border-bottom:1px solid #e9ecef;vertical-align:top"
 _GREY = "color:#868e96"
 _STATE_COLORS = {"connected": "#2b8a3e", "connecting": "#e67700", "lost": "#c92a2a"}
-# a Modbus place stays on one line; a node id is long: it wraps anywhere (within a width
-# it keeps) rather than push the table wide
-_PLACE = {
-    "modbus": "white-space:nowrap",
-    "opcua": "overflow-wrap:anywhere;min-width:14em",
-    "zenoh": "overflow-wrap:anywhere;min-width:10em",
-}
+# a node id or a key is long, one word: it wraps anywhere rather than push the table wide
+# (a Modbus place wraps between its words)
+_PLACE = {"opcua": "overflow-wrap:anywhere", "zenoh": "overflow-wrap:anywhere"}
 _QUALITY_STYLES = {
     "good": "color:#2b8a3e",
     "bad": "color:#e67700;font-style:italic",
@@ -187,21 +183,34 @@ def render_devices(io: p.IoStatus | None) -> str:
     rows = []
     for device in io.devices:
         color = _STATE_COLORS.get(device.state, "#495057")
-        error = html.escape(device.last_error or "")
         trip = f"{device.round_trip_ms:.1f} ms" if device.state == "connected" else ""
+        error = device.last_error or ""
+        # what the state says more (its round trip, its last error) under it: the table
+        # fits the side panel (1400x900) without scrolling sideways
+        below = _below(trip) + (
+            f'<div style="color:#c92a2a;overflow-wrap:anywhere">{html.escape(error)}</div>'
+            if error
+            else ""
+        )
         rows.append(
             f'<tr data-device="{html.escape(device.name)}">'
-            f'<td style="{_CELL}"><b>{html.escape(device.name)}</b></td>'
-            f'<td style="{_CELL}">{_device_address(device)}</td>'
-            f'<td style="{_CELL};color:{color};font-weight:600" data-state>'
-            f"{html.escape(device.state)}</td>"
+            f'<td style="{_CELL}"><b>{html.escape(device.name)}</b>'
+            f"{_below(_device_address(device), escaped=True)}</td>"
+            f'<td style="{_CELL}"><span style="color:{color};font-weight:600" data-state>'
+            f"{html.escape(device.state)}</span>{below}</td>"
             f'<td style="{_CELL};text-align:right">{device.requests}</td>'
-            f'<td style="{_CELL};text-align:right">{device.failures}</td>'
-            f'<td style="{_CELL};text-align:right">{trip}</td>'
-            f'<td style="{_CELL};color:#c92a2a;overflow-wrap:anywhere">{error}</td></tr>'
+            f'<td style="{_CELL};text-align:right">{device.failures}</td></tr>'
         )
-    head = ["Device", "Address", "State", "Requests", "Failures", "Round trip", "Last error"]
+    head = ["Device", "State", "Requests", "Failures"]
     return _table(head, rows, "io-devices")
+
+
+def _below(text: str, escaped: bool = False) -> str:
+    """A cell's second line: what completes its first, smaller and grey."""
+    if not text:
+        return ""
+    shown = text if escaped else html.escape(text)
+    return f'<div style="{_GREY};font-size:0.9em;overflow-wrap:anywhere">{shown}</div>'
 
 
 def _device_address(device: p.DeviceStatus) -> str:
@@ -224,19 +233,22 @@ def render_points(points: list[p.IoPoint], error: str) -> str:
             point.place.replace("_", " ") if point.protocol == "modbus" else point.place
         )
         rows.append(
-            f'<tr><td style="{_CELL};white-space:nowrap">{html.escape(point.source)}</td>'
-            f'<td style="{_CELL}">{html.escape(point.variable)}</td>'
+            f'<tr><td style="{_CELL}">{html.escape(point.source)}</td>'
+            f'<td style="{_CELL}">{html.escape(point.variable)}'
+            f"{_below(point.type)}</td>"
             f'<td style="{_CELL};text-align:right;font-family:monospace;{style}" '
             f'data-point="{html.escape(point.variable)}" data-quality="{point.quality}" '
             f'title="{_QUALITY_WORDS.get(point.quality, "")}">{html.escape(value)}</td>'
-            f'<td style="{_CELL};{_GREY}">{html.escape(point.type)}</td>'
             f'<td style="{_CELL}" data-writable>{_writable(point)}</td>'
-            f'<td style="{_CELL}"><code>{html.escape(point.location)}</code></td>'
-            f'<td style="{_CELL};{_PLACE.get(point.protocol, "")}"><code>{place}</code></td></tr>'
+            f'<td style="{_CELL}"><code>{html.escape(point.location)}</code>'
+            f'<div style="{_GREY};font-size:0.9em;{_PLACE.get(point.protocol, "")}">'
+            f"<code>{place}</code></div></td></tr>"
         )
     more = len(points) - MAX_ROWS
     count = _note(f"the first {MAX_ROWS} of {len(points)} points shown") if more > 0 else ""
-    head = ["Source", "Variable", "Value", "Type", "Writable", "Location", "Place"]
+    # the type under the variable, the place on the wire under the location: five columns
+    # fit the side panel at 1400x900
+    head = ["Source", "Variable", "Value", "Writable", "Location"]
     return count + _table(head, rows, "io-points") + legend()
 
 
