@@ -130,8 +130,12 @@ def _replay(args: argparse.Namespace) -> int:
 
 def _exec(args: argparse.Namespace) -> int:
     from backend.engineering.run_once import run_entry
+    from backend.engineering.tiers import one_tier
 
-    return run_entry(args.file, args.entry)
+    native, note = one_tier(args.tier)
+    if note:
+        print(f"padt exec: {note}", file=sys.stderr)
+    return run_entry(args.file, args.entry, native)
 
 
 # `padt sim` exit codes past 0 (ran), 1 (compile errors) and 2 (bad options or project)
@@ -468,6 +472,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     exec_.add_argument("file", type=Path, metavar="FILE.st")
     exec_.add_argument("--entry", default="main", help="FUNCTION or PROGRAM to run")
+    _tier_argument(exec_)
     exec_.set_defaults(func=_exec)
 
     sim = sub.add_parser(

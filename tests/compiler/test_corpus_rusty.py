@@ -1,13 +1,15 @@
 """rusty's lit tests: every runnable file through `padt exec`, its output matched against its
-`// CHECK:` lines; the expect-error files must be refused. Each command is a process of its
-own, forked from one that imported the command line once (tests/support/forked_cli.py).
-Known failures are listed, each with its reason, in
-tests/compiler/corpus/rusty_known_failures.tsv."""
+`// CHECK:` lines; the expect-error files must be refused. Each runnable file runs on both
+tiers, and the native tier (function blocks and programs as C) must print, exit and fail
+exactly as Python. Each command is a process of its own, forked from one that imported the
+command line once (tests/support/forked_cli.py). Known failures are listed, each with its
+reason, in tests/compiler/corpus/rusty_known_failures.tsv."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from runtime.code.native.tier import NativeTier
 from tests.support.corpus_paths import corpus_dir, known_failures
 from tests.support.filecheck import match_output, parse_checks
 from tests.support.forked_cli import Finished, run_commands
@@ -41,17 +43,33 @@ def refused(run: Finished) -> tuple[bool, str]:
     return run.returncode == 1 and ": error: " in stdout, stdout[-300:]
 
 
-def test_rusty_lit_corpus() -> None:
+def on_the_tier(run: Finished) -> tuple[int | None, bytes, list[bytes]]:
+    """What a user of either tier sees alike: the exit, the output, the errors but the
+    lines that say which bodies run as Python."""
+    said = [line for line in run.stderr.splitlines() if not line.startswith(b"padt exec: ")]
+    return run.returncode, run.stdout, said
+
+
+def test_rusty_lit_corpus(native_tier: NativeTier) -> None:
     root = corpus_dir("rusty-lit")
     files = sorted(root.rglob("*.st"))
     runnable = [f for f in files if "expect-error" not in f.parts]
     must_fail = [f for f in files if "expect-error" in f.parts]
-    commands = [["exec", str(f)] for f in runnable] + [["compile", str(f)] for f in must_fail]
+    commands = [["exec", str(f), "--tier", "python"] for f in runnable]
+    commands += [["exec", str(f), "--tier", "native"] for f in runnable]
+    commands += [["compile", str(f)] for f in must_fail]
     runs = run_commands(commands, TIMEOUT_S)
-    results = {f: ran(f, run) for f, run in zip(runnable, runs[: len(runnable)], strict=True)}
+    python, native = runs[: len(runnable)], runs[len(runnable) : 2 * len(runnable)]
+    results = {f: ran(f, run) for f, run in zip(runnable, python, strict=True)}
     results.update(
-        (f, refused(run)) for f, run in zip(must_fail, runs[len(runnable) :], strict=True)
+        (f, refused(run)) for f, run in zip(must_fail, runs[2 * len(runnable) :], strict=True)
     )
+    unlike = [
+        str(f.relative_to(root))
+        for f, ours, theirs in zip(runnable, python, native, strict=True)
+        if on_the_tier(ours) != on_the_tier(theirs)
+    ]
+    assert not unlike, f"the native tier runs these otherwise than Python: {unlike}"
     known = known_failures("rusty_known_failures.tsv")
     failing = {str(p.relative_to(root)): why for p, (ok, why) in results.items() if not ok}
 

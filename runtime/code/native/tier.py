@@ -97,6 +97,9 @@ class NativeTier:
     ) -> tuple[list[tuple[type, str, Any]], NativeReport]:
         """Translated and built by the worker process, then loaded and bound here (the C
         statics; no class changes yet): the bodies to install, and the report."""
+        if not any(pou.kind != "FUNCTION" for pou in artifact.pous):
+            # no body a class runs (FUNCTIONs stay Python): nothing to start a worker for
+            return [], NativeReport((), ())
         try:
             done = subprocess.run(
                 [sys.executable, "-m", "runtime.code.native.worker", str(self.cache)],
