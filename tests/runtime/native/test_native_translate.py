@@ -3,6 +3,7 @@ construct it knows, one of each it refuses (no C compiler needed: translation on
 
 from __future__ import annotations
 
+import importlib
 import re
 
 import pytest
@@ -82,6 +83,18 @@ def test_bodies_of_these_constructs_are_translated(body: str) -> None:
 def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> None:
     ok, why = translated(body)
     assert not ok and reason in why
+
+
+def test_a_body_left_to_python_names_the_st_line_of_the_statement_refused() -> None:
+    body_line = FUNCTIONS.count("\n") + 3  # PROGRAM Main, then VAR, then the body
+    ok, why = translated("i := 1;\nx := SQRT(x);")
+    assert not ok and why.endswith(f"(ST line {body_line + 1})")
+
+
+def test_the_native_tier_parses_no_python() -> None:
+    """The C is made from the typed form (issue 34, step 4), not from printed Python."""
+    for name in ("build", "kinds", "tier", "translate", "worker"):
+        assert "ast" not in vars(importlib.import_module(f"runtime.code.native.{name}"))
 
 
 def test_the_artifact_names_a_function_result_and_the_tier_reads_outputs_off_the_code() -> None:
