@@ -76,7 +76,7 @@ from runtime.contract.code.typed_form import (
     Var,
     Wrap,
 )
-from runtime.contract.code.units import Class, Function
+from runtime.contract.code.units import Class, Function, Unit
 from runtime.contract.intrinsic_table import F32, FDIV, IDIV, IMOD, IX, ROUND, TICK
 
 NAME_PLACEHOLDER = "padt_unit"
@@ -1441,16 +1441,16 @@ def _function_name(class_name: str) -> str:
 
 def translate_unit(
     unit: PouCode,
+    form: Unit,
     classes: dict[str, ClassInfo],
     globals_class: str | None,
     functions: dict[str, FunctionInfo] | None = None,
 ) -> Translated:
-    """The C module of one unit: the `__call__` of its class when it can be translated
-    (calling the FUNCTIONs of `functions` as Python code)."""
+    """The C module of one unit, of typed form `form` (`unit.unit`): the `__call__` of its
+    class when it can be translated (calling the FUNCTIONs of `functions` as Python code)."""
     module = _Module(
         classes, code_filename(unit), globals_class=globals_class, functions=functions or {}
     )
-    form = unit.unit
     bodies: list[tuple[str, str]] = []  # (class name, C text)
     left: list[tuple[str, str]] = []
     functions_of = form.functions if isinstance(form, Class) else ()

@@ -27,7 +27,7 @@ from typing import Any
 
 from runtime.code.fault_location import code_filename
 from runtime.code.native.build import BuildError, build, find_toolchain, mark_used, prune
-from runtime.code.native.kinds import ClassInfo, FunctionInfo, class_table, function_table
+from runtime.code.native.kinds import ClassInfo, Forms, FunctionInfo, class_table, function_table
 from runtime.code.native.translate import Translated, translate_unit
 from runtime.contract.artifact import Artifact, PouCode, load_artifact
 from runtime.contract.generated_code import (
@@ -54,6 +54,7 @@ class ArtifactTranslation:
     classes the bodies read and the FUNCTIONs they call."""
 
     units: list[PouCode]  # the programs and function blocks, whose bodies are translated
+    forms: Forms
     classes: dict[str, ClassInfo]
     functions: dict[str, FunctionInfo]
     globals_class: str | None
@@ -66,10 +67,14 @@ class ArtifactTranslation:
         for unit in artifact.units():
             check_source(unit.source, code_filename(unit))
         units = translatable_units(artifact)
+        bodies = [unit for unit in units if unit.kind in ("PROGRAM", "FUNCTION_BLOCK")]
+        functions = [unit for unit in artifact.pous if unit.kind == "FUNCTION"]
+        forms = {unit.class_name: unit.unit for unit in [*bodies, *functions]}
         return cls(
-            [unit for unit in units if unit.kind in ("PROGRAM", "FUNCTION_BLOCK")],
-            class_table(units),
-            function_table(list(artifact.pous)),
+            bodies,
+            forms,
+            class_table(units, forms),
+            function_table(functions, forms),
             artifact.globals.class_name if artifact.globals is not None else None,
         )
 
@@ -79,7 +84,8 @@ class ArtifactTranslation:
         return repr((self.globals_class, sorted(members), sorted(self.functions.items())))
 
     def translate(self, unit: PouCode) -> Translated:
-        return translate_unit(unit, self.classes, self.globals_class, self.functions)
+        form = self.forms[unit.class_name]
+        return translate_unit(unit, form, self.classes, self.globals_class, self.functions)
 
 
 def _translator_fingerprint() -> str:

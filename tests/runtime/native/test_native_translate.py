@@ -39,7 +39,10 @@ def translated(body: str, declarations: str = "") -> tuple[bool, str]:
     artifact = compiled(text)
     units = [*artifact.types, *artifact.pous]
     main = next(unit for unit in units if unit.name == "Main")
-    result = translate_unit(main, class_table(units), None, function_table(units))
+    forms = {unit.class_name: unit.unit for unit in units}
+    result = translate_unit(
+        main, forms[main.class_name], class_table(units, forms), None, function_table(units, forms)
+    )
     return bool(result.bodies), result.left[0][1] if result.left else ""
 
 
@@ -102,7 +105,7 @@ def test_the_artifact_names_a_function_result_and_the_tier_reads_outputs_off_the
     assert {unit.name: unit.returns for unit in units} == {
         "Twice": "INT", "Named": "STRING[80]", "Split": "BOOL", "Main": ""
     }  # fmt: skip
-    table = function_table(units)
+    table = function_table(units, {unit.class_name: unit.unit for unit in units})
     assert not table["FN_TWICE"].outputs and table["FN_SPLIT"].outputs
     assert table["FN_NAMED"].result is None  # a string: read by Python only
 
@@ -113,7 +116,8 @@ def test_the_same_unit_gives_the_same_c_and_module_name() -> None:
     results = []
     for artifact in (first, second):
         units = [*artifact.types, *artifact.pous]
-        results.append(translate_unit(units[-1], class_table(units), None))
+        forms = {unit.class_name: unit.unit for unit in units}
+        results.append(translate_unit(units[-1], units[-1].unit, class_table(units, forms), None))
     assert results[0].source == results[1].source and results[0].module == results[1].module
 
 
