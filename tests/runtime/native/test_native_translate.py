@@ -94,6 +94,31 @@ def test_a_body_left_to_python_names_the_st_line_of_the_statement_refused() -> N
     assert not ok and why.endswith(f"(ST line {body_line + 1})")
 
 
+def test_the_c_names_the_printed_line_of_each_statement_it_runs() -> None:
+    """`padt_line` is the line of the printed Python a statement's header is on (what a
+    fault's traceback names, and fault_location maps to the ST line): in the order
+    printed, every line of the body but an `else:`."""
+    text = (
+        "PROGRAM Main\nVAR i, j : INT; a : ARRAY[1..4] OF INT; END_VAR\n"
+        "IF i > 3 THEN j := 1; ELSIF i < 0 THEN j := 2; ELSIF i = 1 THEN j := 5; "
+        "ELSE IF j = 2 THEN i := 1; ELSE i := 2; END_IF; END_IF;\n"
+        "FOR i := 1 TO 4 DO a[i] := j; IF j > 9 THEN EXIT; END_IF; END_FOR;\n"
+        "WHILE j < 10 DO j := j + 1; END_WHILE;\nEND_PROGRAM\n"
+    )
+    units = [*compiled(text).pous]
+    main = units[-1]
+    forms = {unit.class_name: unit.unit for unit in units}
+    result = translate_unit(main, forms[main.class_name], class_table(units, forms), None)
+    assert result.bodies == ("POU_MAIN.__call__",)
+    lines = main.source.splitlines()
+    first = lines.index("    def __call__(s):") + 1
+    body = range(first + 1, len(lines) + 1)
+    assert f"f->line = {first};" in result.source
+    assert [int(n) for n in re.findall(r"padt_line = (\d+);", result.source)] == [
+        n for n in body if lines[n - 1].strip() != "else:"
+    ]
+
+
 def test_the_native_tier_parses_no_python() -> None:
     """The C is made from the typed form (issue 34, step 4), not from printed Python."""
     for name in ("build", "kinds", "tier", "translate", "worker"):
