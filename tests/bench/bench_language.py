@@ -191,7 +191,7 @@ def bench_native_coverage(sources: list[SourceFile]) -> None:
             translated += len(result.bodies)
             total += len(result.bodies) + len(result.left)
             for _, reason in result.left:
-                cause = reason.split(" (generated line")[0]
+                cause = reason.split(" (ST line")[0]
                 reasons[cause] = reasons.get(cause, 0) + 1
     common = sorted(reasons.items(), key=lambda item: (-item[1], item[0]))[:3]
     print(

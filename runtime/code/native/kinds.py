@@ -7,11 +7,13 @@ of its type) and from the arithmetic between them, so the translator can prove t
 
 from __future__ import annotations
 
-import ast
-import re
 from dataclasses import dataclass
 
 from runtime.contract.artifact import PouCode, VarInfo
+from runtime.contract.code.python_text import printed_lines
+from runtime.contract.code.statements import Return
+from runtime.contract.code.typed_form import Sequence
+from runtime.contract.code.units import Class, Unit
 from runtime.contract.values import array_shape, base_type, int_range
 
 INT64_MIN, INT64_MAX = -(1 << 63), (1 << 63) - 1
@@ -79,11 +81,6 @@ class Hook:
 
 
 @dataclass(frozen=True)
-class System:
-    """`_SYS`, the system values of the running program."""
-
-
-@dataclass(frozen=True)
 class Range:
     """A `range(start, stop, step)` held in a local, with a constant step."""
 
@@ -92,7 +89,7 @@ class Range:
     step: int
 
 
-Kind = Int | Bool | Float | Instance | Array | Hook | System | Range
+Kind = Int | Bool | Float | Instance | Array | Hook | Range
 
 # integers a double holds exactly: Python converts and compares beyond them exactly, C not
 EXACT_IN_DOUBLE = Int(-(1 << 53), 1 << 53)
@@ -128,10 +125,15 @@ class ClassInfo:
     members: dict[str, Kind | None]  # attribute -> kind (None: a type not translated)
 
 
-def class_table(units: list[PouCode]) -> dict[str, ClassInfo]:
+Forms = dict[str, Unit]
+"""The typed form of each unit of an artifact, by its class name: decoded once for all the
+translation needs (a decode takes about half of a translation's time)."""
+
+
+def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
     """Every generated class of an artifact with the kinds of its declared variables."""
     by_type = {unit.name.upper(): unit.class_name for unit in units if unit.kind != "FUNCTION"}
-    extended = _extended_blocks(units)
+    extended = _extended_blocks(units, forms)
     table: dict[str, ClassInfo] = {}
     for unit in units:
         if unit.kind == "FUNCTION":
@@ -150,23 +152,14 @@ def _member_kind(variable: VarInfo, classes: dict[str, str], extended: set[str])
     return kind
 
 
-_KINDS_LINE = re.compile(r"^    KIND__ = (\(.*\))$", re.MULTILINE)
-
-
-def _extended_blocks(units: list[PouCode]) -> set[str]:
+def _extended_blocks(units: list[PouCode], forms: Forms) -> set[str]:
     """The blocks (by upper-case name) that another block extends: what an instance
-    conforms to is in its class's `KIND__` (backend/compiler/generate.py)."""
+    conforms to is its class's `kinds` (backend/compiler/generate.py)."""
     found: set[str] = set()
     for unit in units:
-        line = _KINDS_LINE.search(unit.source) if unit.kind == "FUNCTION_BLOCK" else None
-        if line is None:
-            continue
-        try:
-            kinds = ast.literal_eval(line.group(1))
-        except (SyntaxError, ValueError):
-            continue
-        if isinstance(kinds, tuple):
-            found.update(str(k) for k in kinds if str(k) != unit.name.upper())
+        form = forms.get(unit.class_name) if unit.kind == "FUNCTION_BLOCK" else None
+        if isinstance(form, Class):
+            found.update(kind for kind in form.kinds if kind != unit.name.upper())
     return found
 
 
@@ -203,20 +196,20 @@ class FunctionInfo:
     outputs: bool
 
 
-def function_table(units: list[PouCode]) -> dict[str, FunctionInfo]:
+def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo]:
     """Every FUNCTION of an artifact, by its name in the namespace. Whether a call gives a
-    tuple is read off the generated code's `return` statements (the artifact names the
-    result type, not the outputs)."""
+    tuple is read off the form's `return` statements (the artifact names the result type,
+    not the outputs)."""
     table: dict[str, FunctionInfo] = {}
     for unit in units:
         if unit.kind != "FUNCTION" or not isinstance(unit.returns, str):
             continue
-        try:
-            tree = ast.parse(unit.source)
-        except (SyntaxError, ValueError, RecursionError):
-            continue  # a caller then leaves the call to Python: the name is not known
-        returned = [node.value for node in ast.walk(tree) if isinstance(node, ast.Return)]
-        outputs = any(isinstance(value, ast.Tuple) for value in returned)
+        outputs = any(
+            isinstance(line.header, Return)
+            and isinstance(line.header.value, Sequence)
+            and line.header.value.as_tuple
+            for line in printed_lines(forms[unit.class_name])
+        )
         result = kind_of_type(unit.returns, {}) if unit.returns else None
         table[unit.class_name] = FunctionInfo(unit.class_name, result, outputs)
     return table

@@ -1,17 +1,17 @@
-"""Generated Python to C: the bodies (`__call__`) of the generated classes of one unit of an
+"""The typed form to C: the bodies (`__call__`) of the generated classes of one unit of an
 artifact, as one C module that `runtime/code/native/tier.py` loads and binds.
 
-The Python code is the reference. A body is translated only when every construct in it is
-one the translator knows and every integer it computes provably fits the C type it is
-computed in (`runtime/code/native/kinds.py`); anything else leaves the body to Python, with
-the reason. The C code works on the same objects as the Python code (slots of the
-generated classes), so both tiers can run side by side and every service of the runtime
-sees one kind of data.
+The C is made from the unit's typed form (runtime/contract/code/), the nodes the Python
+tier's code is printed from, and the Python code is the reference: a body is translated
+only when every construct in it is one the translator knows and every integer it computes
+provably fits the C type it is computed in (`runtime/code/native/kinds.py`); anything else
+leaves the body to Python, with the reason. The C code works on the same objects as the
+Python code (slots of the generated classes), so both tiers can run side by side and every
+service of the runtime sees one kind of data.
 """
 
 from __future__ import annotations
 
-import ast
 import contextlib
 import hashlib
 import itertools
@@ -41,29 +41,61 @@ from runtime.code.native.kinds import (
     Int,
     Kind,
     Range,
-    System,
     join,
 )
 from runtime.contract.artifact import PouCode
+from runtime.contract.code.python_text import printed_lines, python_text
+from runtime.contract.code.statements import (
+    Assign,
+    Break,
+    Continue,
+    Elif,
+    Evaluate,
+    ForEach,
+    If,
+    Pass,
+    Return,
+    Stmt,
+    While,
+)
+from runtime.contract.code.typed_form import (
+    Assigned,
+    Binary,
+    Call,
+    Chain,
+    Choice,
+    Const,
+    Expr,
+    Index,
+    Logic,
+    Member,
+    Named,
+    Slice,
+    This,
+    Unary,
+    Var,
+    Wrap,
+)
+from runtime.contract.code.units import Class, Function, Unit
 from runtime.contract.intrinsic_table import F32, FDIV, IDIV, IMOD, IX, ROUND, TICK
 
 NAME_PLACEHOLDER = "padt_unit"
 WIDEN_AFTER = 3  # passes over a body before a growing local takes the whole 64-bit range
-_RELATIONS = {
-    ast.Eq: "==", ast.NotEq: "!=", ast.Lt: "<", ast.LtE: "<=", ast.Gt: ">", ast.GtE: ">=",
-}  # fmt: skip
+_RELATIONS = frozenset({"==", "!=", "<", "<=", ">", ">="})
+_BIT_OPS = frozenset({"&", "|", "^"})
 
 
 class NotTranslated(Exception):
-    """A body the tier leaves to Python; the message says why."""
+    """A body the tier leaves to Python; the message says why (and at which ST line, once
+    the statement is known)."""
 
-    def __init__(self, reason: str, node: ast.AST | None = None) -> None:
-        line = getattr(node, "lineno", 0)
-        super().__init__(f"{reason} (generated line {line})" if line else reason)
+    def __init__(self, reason: str, st_line: int = 0) -> None:
+        self.reason = reason
+        super().__init__(f"{reason} (ST line {st_line})" if st_line else reason)
 
 
-def _refuse(reason: str, node: ast.AST | None = None) -> NoReturn:
-    raise NotTranslated(reason, node)
+def _refuse(reason: str) -> NoReturn:
+    raise NotTranslated(reason)
 
 
 @dataclass(frozen=True)
@@ -205,12 +237,35 @@ class _Loop:
     end_label: str  # where `break` goes
 
 
+@dataclass(frozen=True)
+class _Numbered:
+    """A `__call__` with the line of the printed Python its header is on, and the lines of
+    its statements' (and ELSIF branches') headers in the order they are printed: the C
+    sets `padt_line` to them, so that a fault's traceback names the line a fault of the
+    Python tier names, which `runtime/code/fault_location.py` maps to the ST line."""
+
+    function: Function
+    line: int
+    headers: tuple[tuple[Stmt | Elif, int], ...]
+
+
+def _numbered(form: Class, function: Function) -> _Numbered:
+    line, headers, inside = 0, [], False
+    for number, printed in enumerate(printed_lines(form), start=1):
+        if isinstance(printed.header, Function):
+            inside = printed.header is function
+            line = number if inside else line
+        elif inside and printed.header is not None:
+            headers.append((printed.header, number))
+    return _Numbered(function, line, tuple(headers))
+
+
 class _Body:
     """The translation of one `__call__`, given the kinds of its locals; `assigned` collects
     the kinds the body gives them, for the next pass."""
 
     def __init__(
-        self, module: _Module, cls: ClassInfo, func: ast.FunctionDef, local_kinds: dict[str, Kind]
+        self, module: _Module, cls: ClassInfo, func: _Numbered, local_kinds: dict[str, Kind]
     ) -> None:
         self.module, self.cls, self.func = module, cls, func
         self.local_kinds = local_kinds
@@ -224,10 +279,13 @@ class _Body:
         self.frame_objects: list[str] = []
         self.marks: list[int] = []  # where each statement of the body begins in `out`
         self.named: dict[str, V] = {}  # targets of `:=`, within the statement
+        self.named_targets: set[str] = set()  # every `:=` target of the body
         self.narrowed: dict[str, Int] = {}  # locals known to lie in a smaller range here
         self.loops: list[_Loop] = []
         self.labels = 0
         self.uses_globals = False
+        self.headers = iter(func.headers)
+        self.st_line = 0  # of the statement being translated: where a refusal is
 
     # -- emission
     def line(self, text: str) -> None:
@@ -259,74 +317,81 @@ class _Body:
         self.labels += 1
         return f"L{self.labels}_{what}"
 
+    def header(self, node: Stmt | Elif) -> None:
+        """The statement (or branch) `node` begins: its printed line for a fault."""
+        printed, number = next(self.headers)
+        assert printed is node, "statements translated in another order than printed"
+        self.named = {}
+        self.st_line = node.line or self.st_line
+        self.line(f"padt_line = {number};")
+
     # -- statements
     def body(self) -> None:
-        for statement in self.func.body:
+        for statement in self.func.function.body:
             self.marks.append(len(self.out))
             self.statement(statement)
+        self.st_line = 0  # of the whole body
+        both = self.named_targets & self.assigned.keys()
+        if both:
+            # a `:=` target is kept in a temporary of its statement: a name the body also
+            # assigns otherwise would miss the value in its later reads
+            _refuse(f"{sorted(both)[0]} both a := target and a local")
 
-    def block(self, statements: list[ast.stmt]) -> None:
+    def block(self, statements: tuple[Stmt, ...]) -> None:
         for statement in statements:
             self.statement(statement)
 
-    def statement(self, node: ast.stmt) -> None:
-        self.named = {}
-        self.line(f"padt_line = {node.lineno};")
-        if isinstance(node, ast.Assign):
-            if len(node.targets) != 1:
-                _refuse("an assignment to several targets", node)
-            self.assign(node.targets[0], node.value, node)
-        elif isinstance(node, ast.AugAssign):
-            target = node.target
-            load = ast.copy_location(_as_load(target), target)
-            value = ast.copy_location(ast.BinOp(load, node.op, node.value), node)
-            self.assign(target, value, node)
-        elif isinstance(node, ast.Expr):
-            self.call_statement(node.value)
-        elif isinstance(node, ast.If):
-            self.if_statement(node)
-        elif isinstance(node, ast.While):
-            self.while_loop(node)
-        elif isinstance(node, ast.For):
-            self.for_loop(node)
-        elif isinstance(node, ast.Break | ast.Continue):
-            if not self.loops:
-                _refuse("break outside a loop", node)
-            loop = self.loops[-1]
-            self.line(f"goto {loop.end_label if isinstance(node, ast.Break) else loop.next_label};")
-        elif isinstance(node, ast.Return):
-            if node.value is not None and not _is_none(node.value):
-                _refuse("a body that returns a value", node)
-            self.line("goto padt_done;")
-        elif isinstance(node, ast.Pass):
-            pass
-        else:
-            _refuse(f"a {type(node).__name__} statement", node)
+    def statement(self, node: Stmt) -> None:
+        self.header(node)
+        match node:
+            case Assign(target=target, value=value, augmented=op):
+                if op is not None:
+                    value = Binary(op, target, value, "")
+                self.assign(target, value)
+            case Evaluate(value=value):
+                self.call_statement(value)
+            case If():
+                self.if_statement(node)
+            case While():
+                self.while_loop(node)
+            case ForEach():
+                self.for_loop(node)
+            case Break() | Continue():
+                if not self.loops:
+                    _refuse("break outside a loop")
+                loop = self.loops[-1]
+                self.line(f"goto {loop.end_label if isinstance(node, Break) else loop.next_label};")
+            case Return(value=value):
+                if value is not None and not _is_none(value):
+                    _refuse("a body that returns a value")
+                self.line("goto padt_done;")
+            case Pass():
+                pass
 
-    def assign(self, target: ast.expr, value_node: ast.expr, node: ast.stmt) -> None:
-        if isinstance(target, ast.Name):
-            self.assign_local(target.id, value_node, node)
+    def assign(self, target: Expr, value_node: Expr) -> None:
+        if isinstance(target, Var) and target.where == "local":
+            self.assign_local(target.name, value_node)
             return
         value = self.expr(value_node)
-        if isinstance(target, ast.Attribute):
-            owner = self.expr(target.value)
+        if isinstance(target, Var | Member):
+            owner = self.owner(target)
             if not isinstance(owner.kind, Instance):
-                _refuse("a store into something else than a generated object", node)
-            member = self.member_kind(owner.kind, target.attr, node)
-            slot = self.module.offset(owner.kind.cls, target.attr)
+                _refuse("a store into something else than a generated object")
+            member = self.member_kind(owner.kind, target.name)
+            slot = self.module.offset(owner.kind.cls, target.name)
             place = f"PADT_PLACE({owner.c}, {slot})"
-            self.store(place, value, member, f"{owner.kind.cls}.{target.attr}", node)
-        elif isinstance(target, ast.Subscript):
-            array = self.expr(target.value)
+            self.store(place, value, member, f"{owner.kind.cls}.{target.name}")
+        elif isinstance(target, Index):
+            array = self.expr(target.base)
             if not isinstance(array.kind, Array) or array.kind.element is None:
-                _refuse("a store into something else than an array of elementary values", node)
-            offset = self.list_offset(array, target.slice)
+                _refuse("a store into something else than an array of elementary values")
+            offset = self.list_offset(array, target.offset)
             place = f"PADT_ITEM_PLACE({array.c}, {offset})"
-            self.store(place, value, array.kind.element, "an array element", node)
+            self.store(place, value, array.kind.element, "an array element")
         else:
-            _refuse(f"a store into a {type(target).__name__}", node)
+            _refuse(f"a store into a {type(target).__name__}")
 
-    def store(self, place: str, value: V, declared: Kind | None, what: str, node: ast.AST) -> None:
+    def store(self, place: str, value: V, declared: Kind | None, what: str) -> None:
         """`value` into a slot or list item of a variable of `declared`, as Python holds it."""
         if isinstance(declared, Bool) and isinstance(value.kind, Bool):
             self.line(f"padt_set_bool({place}, {value.c});")
@@ -336,7 +401,7 @@ class _Body:
             return
         if isinstance(declared, Int) and isinstance(value.kind, Int):
             if value.kind.stand_in:
-                _refuse("a REAL's integer stored without a wrap", node)
+                _refuse("a REAL's integer stored without a wrap")
             if not value.kind.within(declared):
                 # not proven in range: the contract says it is; a value outside is a fault
                 self.check(
@@ -346,24 +411,24 @@ class _Body:
             setter = "padt_set_int" if value.kind.fits64 else "padt_set_int128"
             self.check(f"{setter}({place}, {value.c})")
             return
-        _refuse(f"a {_kind_name(value.kind)} stored into {_kind_name(declared)}", node)
+        _refuse(f"a {_kind_name(value.kind)} stored into {_kind_name(declared)}")
 
-    def assign_local(self, name: str, value_node: ast.expr, node: ast.stmt) -> None:
+    def assign_local(self, name: str, value_node: Expr) -> None:
         if name == "s" or (name.startswith("_") and not name.startswith("__")):
-            _refuse(f"an assignment to {name}", node)
-        if isinstance(value_node, ast.Call) and _called_name(value_node) == "range":
+            _refuse(f"an assignment to {name}")
+        if isinstance(value_node, Call) and value_node.callee == "range":
             kind: Kind = self.range_kind(value_node)
-            self.note_assigned(name, kind, node)
+            self.note_assigned(name, kind)
             start, stop = self.range_bounds(value_node)
-            local = self.local_ref(name, node)
+            local = self.local_ref(name)
             self.line(f"{local}_start = {start.c}; {local}_stop = {stop.c};")
             return
         value = self.expr(value_node)
         if isinstance(value.kind, Int) and value.kind.stand_in:
-            _refuse("a REAL's integer kept in a local", node)
-        self.note_assigned(name, value.kind, node)
+            _refuse("a REAL's integer kept in a local")
+        self.note_assigned(name, value.kind)
         local_kind = self.local_kind(name)
-        local = self.local_ref(name, node)
+        local = self.local_ref(name)
         if isinstance(local_kind, Int) and isinstance(value.kind, Int):
             if value.kind.fits64 or not local_kind.fits64:
                 self.line(f"{local} = {value.c};")
@@ -374,24 +439,24 @@ class _Body:
         elif isinstance(local_kind, Instance | Hook) and value.kind == local_kind:
             self.line(f"Py_XSETREF({local}, Py_NewRef({value.c}));")
         else:
-            _refuse(f"local {name} takes a {_kind_name(value.kind)}", node)
+            _refuse(f"local {name} takes a {_kind_name(value.kind)}")
 
-    def note_assigned(self, name: str, kind: Kind, node: ast.AST) -> None:
+    def note_assigned(self, name: str, kind: Kind) -> None:
         known = self.assigned.get(name)
         joined = kind if known is None else join(known, kind)
         if joined is None:
-            _refuse(f"local {name} holds values of different kinds", node)
+            _refuse(f"local {name} holds values of different kinds")
         self.assigned[name] = joined
 
     def local_kind(self, name: str) -> Kind | None:
         """The kind of a local: as the passes before found it, else as this pass has so far."""
         return self.local_kinds.get(name) or self.assigned.get(name)
 
-    def local_ref(self, name: str, node: ast.AST) -> str:
+    def local_ref(self, name: str) -> str:
         """The C variable of a Python local (declared once)."""
         kind = self.local_kind(name)
         if kind is None:
-            _refuse(f"local {name} is read before it is assigned", node)
+            _refuse(f"local {name} is read before it is assigned")
         c = f"l_{_identifier(name)}"
         if c not in self.frame:
             if isinstance(kind, Int):
@@ -406,50 +471,64 @@ class _Body:
             elif isinstance(kind, Range):
                 self.frame[c] = f"int64_t {c}_start, {c}_stop;"
             else:
-                _refuse(f"local {name} holds a {_kind_name(kind)}", node)
+                _refuse(f"local {name} holds a {_kind_name(kind)}")
         return f"f->{c}"
 
-    def call_statement(self, call: ast.expr) -> None:
-        if isinstance(call, ast.Call) and _called_name(call) in self.module.functions:
+    def call_statement(self, call: Expr) -> None:
+        if not isinstance(call, Call):
+            _refuse("an expression statement that is no call")
+        if isinstance(call.callee, str) and call.callee in self.module.functions:
             self.function_call(call)  # its result, if any, dropped at the chunk's end
             return
-        if not isinstance(call, ast.Call) or call.keywords:
-            _refuse("an expression statement that is no call", call)
-        func = call.func
-        if isinstance(func, ast.Attribute) and func.attr == "__call__" and not call.args:
-            target = self.expr(func.value)
+        if call.keywords:
+            _refuse("an expression statement that is no call")
+        callee = call.callee
+        if isinstance(callee, Member) and callee.name == "__call__" and not call.args:
+            target = self.expr(callee.base)
             if not isinstance(target.kind, Instance):
-                _refuse("a call of something else than a generated object", call)
+                _refuse("a call of something else than a generated object")
             self.check(f"padt_call({target.c}, &{self.module.site()})")
             return
-        if not call.args:
-            callee = self.expr(func)
-            if isinstance(callee.kind, Hook):
-                self.check(f"padt_call_any({callee.c})")
+        if not isinstance(callee, str) and not call.args:
+            hook = self.expr(callee)
+            if isinstance(hook.kind, Hook):
+                self.check(f"padt_call_any({hook.c})")
                 return
-        _refuse(f"a call of {ast.unparse(func)}", call)
+        _refuse(f"a call of {_callee_text(call)}")
 
-    def if_statement(self, node: ast.If) -> None:
-        test = self.condition(node.test)
-        self.line(f"if ({test}) {{")
-        self.depth += 1
-        with self.refined(node.test):
-            self.block(node.body)
-        self.depth -= 1
+    def if_statement(self, node: If) -> None:
+        """IF with its ELSIFs, each nested in the ELSE of the one before, as Python runs
+        them."""
+        self.branch(node.test, node.body)
+        for branch in node.elifs:
+            self.line("} else {")
+            self.depth += 1
+            self.header(branch)
+            self.branch(branch.test, branch.body)
         if node.orelse:
             self.line("} else {")
             self.depth += 1
             self.block(node.orelse)
             self.depth -= 1
+        for _ in node.elifs:
+            self.line("}")
+            self.depth -= 1
         self.line("}")
 
-    def while_loop(self, node: ast.While) -> None:
+    def branch(self, test: Expr, body: tuple[Stmt, ...]) -> None:
+        """`if (test) {` and the body, within the test's refinement; left open."""
+        self.line(f"if ({self.condition(test)}) {{")
+        self.depth += 1
+        with self.refined(test):
+            self.block(body)
+        self.depth -= 1
+
+    def while_loop(self, node: While) -> None:
         loop = _Loop(self.label("next"), self.label("end"))
-        otherwise = self.label("else")
         self.line("for (;;) {")
         self.depth += 1
         test = self.condition(node.test)
-        self.line(f"if (!({test})) goto {otherwise};")
+        self.line(f"if (!({test})) goto {loop.end_label};")
         self.loops.append(loop)
         self.block(node.body)
         self.loops.pop()
@@ -457,33 +536,30 @@ class _Body:
         self.breathe()
         self.depth -= 1
         self.line("}")
-        self.line(f"{otherwise}:;")
-        self.block(node.orelse)
         self.line(f"{loop.end_label}:;")
 
-    def for_loop(self, node: ast.For) -> None:
-        if not isinstance(node.target, ast.Name):
-            _refuse("a loop that unpacks", node)
-        if isinstance(node.iter, ast.Name) and isinstance(self.local_kind(node.iter.id), Range):
-            kind = self.local_kind(node.iter.id)
+    def for_loop(self, node: ForEach) -> None:
+        numbers = node.numbers
+        if isinstance(numbers, Var) and isinstance(self.local_kind(numbers.name), Range):
+            kind = self.local_kind(numbers.name)
             assert isinstance(kind, Range)
-            local = self.local_ref(node.iter.id, node)
+            local = self.local_ref(numbers.name)
             start, stop = V(kind.start, f"{local}_start"), V(kind.stop, f"{local}_stop")
-        elif isinstance(node.iter, ast.Call) and _called_name(node.iter) == "range":
-            kind = self.range_kind(node.iter)
-            start, stop = self.range_bounds(node.iter)
+        elif isinstance(numbers, Call) and numbers.callee == "range":
+            kind = self.range_kind(numbers)
+            start, stop = self.range_bounds(numbers)
         else:
-            _refuse("a loop over something else than a range", node)
+            _refuse("a loop over something else than a range")
         step = kind.step
         if not Int(kind.stop.lo - abs(step), kind.stop.hi + abs(step)).fits64:
-            _refuse("a range that ends at the limits of 64 bits", node)
+            _refuse("a range that ends at the limits of 64 bits")
         # the loop variable takes every value of the range
         first, last = (
             (kind.start.lo, kind.stop.hi - 1) if step > 0 else (kind.stop.lo + 1, kind.start.hi)
         )
         counter_kind = Int(min(first, last), max(first, last))
-        name = node.target.id
-        self.note_assigned(name, counter_kind, node)
+        name = node.name
+        self.note_assigned(name, counter_kind)
         local_kind = self.local_kind(name)
         loop = _Loop(self.label("next"), self.label("end"))
         counter = self.temp("int64_t")
@@ -495,8 +571,8 @@ class _Body:
         )
         self.depth += 1
         if not isinstance(local_kind, Int):
-            _refuse(f"loop variable {name} holds other values too", node)
-        self.line(f"{self.local_ref(name, node)} = {counter};")
+            _refuse(f"loop variable {name} holds other values too")
+        self.line(f"{self.local_ref(name)} = {counter};")
         self.loops.append(loop)
         self.block(node.body)
         self.loops.pop()
@@ -513,38 +589,38 @@ class _Body:
         self.line("    if (padt_breathe() < 0) goto padt_error;")
         self.line("}")
 
-    def range_kind(self, call: ast.Call) -> Range:
+    def range_kind(self, call: Call) -> Range:
         if call.keywords or len(call.args) != 3:
-            _refuse("a range without start, stop and step", call)
+            _refuse("a range without start, stop and step")
         step = _constant_int(call.args[2])
         if not step:
-            _refuse("a range with a step that is not a constant", call)
+            _refuse("a range with a step that is not a constant")
         start, stop = (self.expr_kind_int(arg) for arg in call.args[:2])
         return Range(start, stop, step)
 
-    def expr_kind_int(self, node: ast.expr) -> Int:
+    def expr_kind_int(self, node: Expr) -> Int:
         with self.captured():  # only the kind: the values are computed by range_bounds
             value = self.expr(node)
         if not isinstance(value.kind, Int) or not value.kind.fits64:
-            _refuse("a range over values beyond 64 bits", node)
+            _refuse("a range over values beyond 64 bits")
         return value.kind
 
-    def range_bounds(self, call: ast.Call) -> tuple[V, V]:
+    def range_bounds(self, call: Call) -> tuple[V, V]:
         start, stop = (self.int_value(arg) for arg in call.args[:2])
         held_start = self.temp("int64_t")
         self.line(f"{held_start} = {start.c};")  # Python evaluates start before stop
         return V(start.kind, held_start), stop
 
-    def int_value(self, node: ast.expr) -> V:
+    def int_value(self, node: Expr) -> V:
         value = self.expr(node)
         if isinstance(value.kind, Bool):
             return V(Int(0, 1), value.c)
         if not isinstance(value.kind, Int) or not value.kind.fits64:
-            _refuse("an integer beyond 64 bits where 64 are needed", node)
+            _refuse("an integer beyond 64 bits where 64 are needed")
         return value
 
     # -- conditions and refinements
-    def condition(self, node: ast.expr) -> str:
+    def condition(self, node: Expr) -> str:
         value = self.expr(node)
         if isinstance(value.kind, Bool):
             return value.c
@@ -552,10 +628,10 @@ class _Body:
             return f"({value.c}) != 0"
         if isinstance(value.kind, Float):
             return f"({value.c}) != 0.0"  # NaN is true, as in Python
-        _refuse(f"a {_kind_name(value.kind)} as a condition", node)
+        _refuse(f"a {_kind_name(value.kind)} as a condition")
 
     @contextlib.contextmanager
-    def refined(self, test: ast.expr) -> Iterator[None]:
+    def refined(self, test: Expr) -> Iterator[None]:
         """Within the true branch of `lo <= x <= hi` (x a local or a `:=` target), x is
         known to lie in lo..hi: an array offset proven in bounds needs no check."""
         found = _bounds_test(test)
@@ -587,96 +663,111 @@ class _Body:
         yield
 
     # -- expressions
-    def expr(self, node: ast.expr) -> V:
-        if isinstance(node, ast.Constant):
-            return _constant(node)
-        if isinstance(node, ast.Name):
-            return self.name(node)
-        if isinstance(node, ast.Attribute):
-            return self.attribute(node)
-        if isinstance(node, ast.Subscript):
-            return self.subscript(node)
-        if isinstance(node, ast.BinOp):
-            return self.binary(node)
-        if isinstance(node, ast.UnaryOp):
-            return self.unary(node)
-        if isinstance(node, ast.Compare):
-            return self.compare(node)
-        if isinstance(node, ast.BoolOp):
-            return self.bool_op(node)
-        if isinstance(node, ast.IfExp):
-            return self.if_expr(node)
-        if isinstance(node, ast.NamedExpr):
-            value = self.expr(node.value)
-            if not isinstance(value.kind, Int | Bool | Float):
-                _refuse("a := of something else than a number", node)
-            held = self.temp(_ctype(value.kind))
-            self.line(f"{held} = {value.c};")
-            self.named[node.target.id] = V(value.kind, held)
-            return V(value.kind, held)
-        if isinstance(node, ast.Call):
-            return self.call_value(node)
-        _refuse(f"a {type(node).__name__} expression", node)
+    def expr(self, node: Expr) -> V:
+        match node:
+            case Const():
+                return _constant(node)
+            case Var(where="local", name=name):
+                return self.local_value(name)
+            case Var(where="system", name=name):
+                return self.system_value(name)
+            case Var() | Member():
+                owner = self.owner(node)
+                if isinstance(owner.kind, Range) and node.name in ("start", "stop"):
+                    bound = owner.kind.start if node.name == "start" else owner.kind.stop
+                    return V(bound, f"{owner.c}_{node.name}")
+                if not isinstance(owner.kind, Instance):
+                    _refuse(f"the attribute {node.name} of a {_kind_name(owner.kind)}")
+                kind = self.member_kind(owner.kind, node.name)
+                slot = f"PADT_SLOT({owner.c}, {self.module.offset(owner.kind.cls, node.name)})"
+                return self.unboxed(slot, kind, node.name)
+            case This():
+                return V(Instance(self.cls.name), "s")
+            case Named(name=name) if name == TICK.name:
+                held = self.temp("PyObject *", "NULL")
+                self.objects.remove(held)  # borrowed: the namespace holds it
+                self.line(f"{held} = padt_global({self.module.key(TICK.name)});")
+                self.line(f"if (PADT_UNLIKELY({held} == NULL)) goto padt_error;")
+                return V(Hook(), held)
+            case Index():
+                return self.subscript(node)
+            case Binary(op=op) if op in _RELATIONS:
+                return self.compare(op, (node.left, node.right))
+            case Binary(op="is" | "is not"):
+                return self.identity(node)
+            case Binary():
+                return self.binary(node.op, self.expr(node.left), self.expr(node.right))
+            case Unary():
+                return self.unary(node)
+            case Chain(op=op, values=values):
+                return self.compare(op, values)
+            case Logic():
+                return self.logic(node)
+            case Choice():
+                return self.choice(node)
+            case Assigned(name=name, value=value_node):
+                value = self.expr(value_node)
+                if not isinstance(value.kind, Int | Bool | Float):
+                    _refuse("a := of something else than a number")
+                held = self.temp(_ctype(value.kind))
+                self.line(f"{held} = {value.c};")
+                self.named[name] = V(value.kind, held)
+                self.named_targets.add(name)
+                return V(value.kind, held)
+            case Wrap():
+                return self.wrap(node)
+            case Call():
+                return self.call_value(node)
+            case Slice():
+                self.expr(node.value)  # a string's refusal names the variable
+        _refuse(f"a {type(node).__name__} expression ({python_text(node)})")
 
-    def name(self, node: ast.Name) -> V:
-        name = node.id
+    def local_value(self, name: str) -> V:
         if name in self.named:
             return self.named[name]
-        if name == "s":
+        kind = self.local_kind(name)
+        if kind is None:
+            _refuse(f"the name {name}")
+        local = self.local_ref(name)
+        if isinstance(kind, Instance | Hook):
+            self.line(f"if (PADT_UNLIKELY({local} == NULL)) goto padt_unbound;")
+        narrowed = self.narrowed.get(name)
+        return V(narrowed if narrowed is not None else kind, local)
+
+    def owner(self, node: Var | Member) -> V:
+        """What holds the variable or member `node`: the instance, the globals, an object."""
+        if isinstance(node, Member):
+            return self.expr(node.base)
+        if node.where == "instance":
             return V(Instance(self.cls.name), "s")
-        if name == TICK.name:
-            held = self.temp("PyObject *", "NULL")
-            self.objects.remove(held)  # borrowed: the namespace holds it
-            self.line(f"{held} = padt_global({self.module.key(TICK.name)});")
-            self.line(f"if (PADT_UNLIKELY({held} == NULL)) goto padt_error;")
-            return V(Hook(), held)
-        if name == "_G":
+        if node.where == "globals":
             if self.module.globals_class is None:
-                _refuse("_G without globals", node)
+                _refuse("_G without globals")
             self.uses_globals = True
             self.module.type_ref(self.module.globals_class)
             return V(Instance(self.module.globals_class), "padt_g")
-        if name == "_SYS":
-            return V(System(), "padt_sys")
-        kind = self.local_kind(name)
-        if kind is not None:
-            local = self.local_ref(name, node)
-            if isinstance(kind, Instance | Hook):
-                self.line(f"if (PADT_UNLIKELY({local} == NULL)) goto padt_unbound;")
-            narrowed = self.narrowed.get(name)
-            return V(narrowed if narrowed is not None else kind, local)
-        _refuse(f"the name {name}", node)
+        _refuse(f"a variable of {node.where}")
 
-    def member_kind(self, owner: Instance, attr: str, node: ast.AST) -> Kind:
+    def system_value(self, name: str) -> V:
+        if name in SYSTEM_BOOLS:
+            kind: Kind = Bool()
+        elif name in SYSTEM_INTS:
+            kind = FULL64
+        else:
+            _refuse(f"_SYS.{name}")
+        held = self.temp("PyObject *", "NULL")
+        key = self.module.key(name)
+        self.line(f"Py_XSETREF({held}, PyObject_GetAttr(padt_sys, {key}));")
+        return self.unboxed(held, kind, f"_SYS.{name}")
+
+    def member_kind(self, owner: Instance, attr: str) -> Kind:
         info = self.module.classes.get(owner.cls)
         kind = info.members.get(attr) if info is not None else None
         if kind is None:
-            _refuse(f"the variable {attr}, of a type the tier leaves to Python", node)
+            _refuse(f"the variable {attr}, of a type the tier leaves to Python")
         return kind
 
-    def attribute(self, node: ast.Attribute) -> V:
-        owner = self.expr(node.value)
-        if isinstance(owner.kind, Instance):
-            kind = self.member_kind(owner.kind, node.attr, node)
-            slot = f"PADT_SLOT({owner.c}, {self.module.offset(owner.kind.cls, node.attr)})"
-            return self.unboxed(slot, kind, node.attr, node)
-        if isinstance(owner.kind, System):
-            if node.attr in SYSTEM_BOOLS:
-                kind = Bool()
-            elif node.attr in SYSTEM_INTS:
-                kind = FULL64
-            else:
-                _refuse(f"_SYS.{node.attr}", node)
-            held = self.temp("PyObject *", "NULL")
-            key = self.module.key(node.attr)
-            self.line(f"Py_XSETREF({held}, PyObject_GetAttr(padt_sys, {key}));")
-            return self.unboxed(held, kind, f"_SYS.{node.attr}", node)
-        if isinstance(owner.kind, Range) and node.attr in ("start", "stop"):
-            bound = owner.kind.start if node.attr == "start" else owner.kind.stop
-            return V(bound, f"{owner.c}_{node.attr}")
-        _refuse(f"the attribute {node.attr} of a {_kind_name(owner.kind)}", node)
-
-    def unboxed(self, obj: str, kind: Kind, what: str, node: ast.AST) -> V:
+    def unboxed(self, obj: str, kind: Kind, what: str) -> V:
         """The value of a Python object that holds a `kind` (of type checked on the way in:
         a wrong one is a fault, `padt_bad`)."""
         if isinstance(kind, Int):
@@ -701,48 +792,43 @@ class _Body:
         elif isinstance(kind, Array):
             self.line(f"PADT_CHECK_LIST({held});")
         else:
-            _refuse(f"a {_kind_name(kind)} read from {what}", node)
+            _refuse(f"a {_kind_name(kind)} read from {what}")
         return V(kind, held)
 
-    def list_offset(self, array: V, index_node: ast.expr) -> str:
+    def list_offset(self, array: V, index_node: Expr) -> str:
         index = self.int_value(index_node)
         offset = self.temp("Py_ssize_t")
         self.check(f"padt_index({array.c}, {index.c}, &{offset})")
         return offset
 
-    def subscript(self, node: ast.Subscript) -> V:
-        array = self.expr(node.value)
+    def subscript(self, node: Index) -> V:
+        array = self.expr(node.base)
         if not isinstance(array.kind, Array) or array.kind.element is None:
-            _refuse("an index into something else than an array the tier knows", node)
-        offset = self.list_offset(array, node.slice)
+            _refuse("an index into something else than an array the tier knows")
+        offset = self.list_offset(array, node.offset)
         element = f"PyList_GET_ITEM({array.c}, {offset})"
-        return self.unboxed(element, array.kind.element, "an array element", node)
+        return self.unboxed(element, array.kind.element, "an array element")
 
-    def binary(self, node: ast.BinOp) -> V:
-        left, right = self.expr(node.left), self.expr(node.right)
-        op = node.op
-        if isinstance(left.kind, Bool) and isinstance(right.kind, Bool):
-            symbol = {ast.BitAnd: "&", ast.BitOr: "|", ast.BitXor: "^"}.get(type(op))
-            if symbol is not None:
-                return V(Bool(), f"({left.c} {symbol} {right.c})")
+    def binary(self, op: str, left: V, right: V) -> V:
+        if isinstance(left.kind, Bool) and isinstance(right.kind, Bool) and op in _BIT_OPS:
+            return V(Bool(), f"({left.c} {op} {right.c})")
         if isinstance(left.kind, Float) or isinstance(right.kind, Float):
-            symbol = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*"}.get(type(op))
-            if symbol is None:
-                _refuse(f"the operator {type(op).__name__} on a REAL", node)
-            a, b = _as_float(left, node), _as_float(right, node)
-            return V(Float(), f"({a.c} {symbol} {b.c})")
-        a, b = _as_int(left, node), _as_int(right, node)
+            if op not in ("+", "-", "*"):
+                _refuse(f"the operator {op} on a REAL")
+            a, b = _as_float(left), _as_float(right)
+            return V(Float(), f"({a.c} {op} {b.c})")
+        a, b = _as_int(left), _as_int(right)
         assert isinstance(a.kind, Int) and isinstance(b.kind, Int)
-        result = _result_range(op, a.kind, b.kind, node)
+        result = _result_range(op, a.kind, b.kind)
         if a.kind.stand_in or b.kind.stand_in:
-            if isinstance(op, ast.RShift):
-                _refuse("a shift right of a REAL's integer", node)
-            masked = isinstance(op, ast.BitAnd) and result.lo >= 0 and result.hi < 1 << 64
+            if op == ">>":
+                _refuse("a shift right of a REAL's integer")
+            masked = op == "&" and result.lo >= 0 and result.hi < 1 << 64
             # a ring operation modulo 2**64 keeps the stand-in's congruence; a mask of at
             # most 64 bits takes it off: what is left is exact
             result = replace(result, stand_in=not masked)
         if not result.fits128:
-            _refuse("an integer beyond 128 bits", node)
+            _refuse("an integer beyond 128 bits")
         # computed in the widest C type among the operands and the result, then narrowed to
         # the result's, which holds the value
         wide = (
@@ -750,130 +836,130 @@ class _Body:
         )
         x = a.c if a.kind.ctype == wide else f"(({wide}){a.c})"
         y = b.c if b.kind.ctype == wide else f"(({wide}){b.c})"
-        if isinstance(op, ast.LShift):
+        if op == "<<":
             unsigned = "uint64_t" if wide == "int64_t" else "unsigned __int128"
             text = f"(({wide})(({unsigned}){x} << {b.c}))"
-        elif isinstance(op, ast.RShift):
+        elif op == ">>":
             width = 64 if wide == "int64_t" else 128
             if b.kind.hi >= width:
                 text = f"({b.c} >= {width - 1} ? ({x} >> {width - 1}) : ({x} >> {b.c}))"
             else:
                 text = f"({x} >> {b.c})"
         else:
-            symbol = {
-                ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.BitAnd: "&", ast.BitOr: "|",
-                ast.BitXor: "^",
-            }[type(op)]  # fmt: skip
-            text = f"({x} {symbol} {y})"
+            text = f"({x} {op} {y})"
         return V(result, text if wide == result.ctype else f"(({result.ctype}){text})")
 
-    def unary(self, node: ast.UnaryOp) -> V:
+    def wrap(self, node: Wrap) -> V:
+        """An integer brought into the range of `bits` bits as Python brings it: masked,
+        the sign taken back by adding and subtracting half the range (with the offset, in
+        one constant); nothing to do where its range is proven within the type's."""
+        value = _as_int(self.expr(node.value))
+        mask, half = (1 << node.bits) - 1, 1 << (node.bits - 1)
+        moved = self.binary("+", value, _int_constant(node.offset)) if node.offset else value
+        assert isinstance(moved.kind, Int)
+        if moved.kind.within(Int(-half, half - 1) if node.signed else Int(0, mask)):
+            return moved
+        if not node.signed:
+            return self.binary("&", moved, _int_constant(mask))
+        shifted = self.binary("+", value, _int_constant(half + node.offset))
+        masked = self.binary("&", shifted, _int_constant(mask))
+        return self.binary("-", masked, _int_constant(half))
+
+    def unary(self, node: Unary) -> V:
         value = self.expr(node.operand)
-        if isinstance(node.op, ast.Not):
+        if node.op == "not":
             if isinstance(value.kind, Bool):
                 return V(Bool(), f"(!{value.c})")
             if isinstance(value.kind, Int):
                 return V(Bool(), f"({value.c} == 0)")
             if isinstance(value.kind, Float):
                 return V(Bool(), f"({value.c} == 0.0)")
-            _refuse(f"not of a {_kind_name(value.kind)}", node)
+            _refuse(f"not of a {_kind_name(value.kind)}")
         if isinstance(value.kind, Float):
-            if isinstance(node.op, ast.USub):
+            if node.op == "-":
                 return V(Float(), f"(-{value.c})")
-            if isinstance(node.op, ast.UAdd):
-                return value
-            _refuse("~ of a REAL", node)
-        number = _as_int(value, node)
+            _refuse("~ of a REAL")
+        number = _as_int(value)
         assert isinstance(number.kind, Int)
         lo, hi = number.kind.lo, number.kind.hi
-        if isinstance(node.op, ast.UAdd):
-            return number
-        negated = isinstance(node.op, ast.USub)
-        result = Int(-hi, -lo) if negated else Int(-hi - 1, -lo - 1)
+        result = Int(-hi, -lo) if node.op == "-" else Int(-hi - 1, -lo - 1)
         result = replace(result, stand_in=number.kind.stand_in)
         if not result.fits128:
-            _refuse("an integer beyond 128 bits", node)
+            _refuse("an integer beyond 128 bits")
         wide = "padt_i128" if "padt_i128" in (number.kind.ctype, result.ctype) else "int64_t"
-        sign = "-" if isinstance(node.op, ast.USub) else "~"
         operand = number.c if number.kind.ctype == wide else f"(({wide}){number.c})"
-        text = f"({sign}{operand})"
+        text = f"({node.op}{operand})"
         return V(result, text if wide == result.ctype else f"(({result.ctype}){text})")
 
-    def compare(self, node: ast.Compare) -> V:
-        if len(node.ops) == 1 and isinstance(node.ops[0], ast.Is | ast.IsNot):
-            return self.identity(node)
-        left = self.comparable(self.expr(node.left), node)
-        pairs = list(zip(node.ops, node.comparators, strict=True))
-        op, right_node = pairs[0]
-        right = self.comparable(self.expr(right_node), node)
-        if len(pairs) == 1:
-            return V(Bool(), _comparison(left, op, right, node))
-        # `a < b < c`: b is evaluated once, c only while the comparisons before hold
+    def compare(self, op: str, nodes: tuple[Expr, ...]) -> V:
+        """`a op b`, or the chain `a op b op c`: b evaluated once, c only while the
+        comparisons before hold."""
+        if op not in _RELATIONS:
+            _refuse(f"a comparison {op}")
+        left = self.comparable(self.expr(nodes[0]))
+        right = self.comparable(self.expr(nodes[1]))
+        if len(nodes) == 2:
+            return V(Bool(), _comparison(left, op, right))
         right = self.held(right)
         flag = self.temp("int")
-        self.line(f"{flag} = {_comparison(left, op, right, node)};")
-        self.compare_rest(flag, right, pairs[1:], node)
+        self.line(f"{flag} = {_comparison(left, op, right)};")
+        left = right
+        rest = nodes[2:]
+        for n, right_node in enumerate(rest):
+            self.line(f"if ({flag}) {{")
+            with self.captured() as lines:
+                right = self.comparable(self.expr(right_node))
+                if n < len(rest) - 1:
+                    right = self.held(right)
+                self.line(f"{flag} = {_comparison(left, op, right)};")
+            self.out.extend(lines)
+            self.line("}")
+            left = right
         return V(Bool(), flag)
 
     def held(self, value: V) -> V:
         """The value in a temporary, unless it is one already (or a constant)."""
-        if value.c.isidentifier() or value.c.lstrip("-").isdigit():
+        if value.c.isidentifier() or value.c.strip("()-").isdigit():
             return value
         held = self.temp(_ctype(value.kind))
         self.line(f"{held} = {value.c};")
         return V(value.kind, held)
 
-    def compare_rest(
-        self, flag: str, left: V, rest: list[tuple[ast.cmpop, ast.expr]], node: ast.Compare
-    ) -> None:
-        for n, (op, right_node) in enumerate(rest):
-            self.line(f"if ({flag}) {{")
-            with self.captured() as lines:
-                right = self.comparable(self.expr(right_node), node)
-                if n < len(rest) - 1:
-                    right = self.held(right)
-                self.line(f"{flag} = {_comparison(left, op, right, node)};")
-            self.out.extend(lines)
-            self.line("}")
-            left = right
-
-    def comparable(self, value: V, node: ast.AST) -> V:
+    def comparable(self, value: V) -> V:
         if isinstance(value.kind, Int | Bool | Float):
             return value
-        _refuse(f"a comparison of a {_kind_name(value.kind)}", node)
+        _refuse(f"a comparison of a {_kind_name(value.kind)}")
 
-    def identity(self, node: ast.Compare) -> V:
-        left, right = node.left, node.comparators[0]
-        if not _is_none(right):
-            _refuse("`is` with something else than None", node)
-        value = self.expr(left)
+    def identity(self, node: Binary) -> V:
+        if not _is_none(node.right):
+            _refuse("`is` with something else than None")
+        value = self.expr(node.left)
         if not isinstance(value.kind, Hook):
-            _refuse(f"`is None` of a {_kind_name(value.kind)}", node)
-        symbol = "==" if isinstance(node.ops[0], ast.Is) else "!="
+            _refuse(f"`is None` of a {_kind_name(value.kind)}")
+        symbol = "==" if node.op == "is" else "!="
         return V(Bool(), f"({value.c} {symbol} Py_None)")
 
-    def bool_op(self, node: ast.BoolOp) -> V:
+    def logic(self, node: Logic) -> V:
         first = self.expr(node.values[0])
         if not isinstance(first.kind, Bool):
-            _refuse("and/or of something else than BOOL", node)
+            _refuse("and/or of something else than BOOL")
         flag = self.temp("int")
         self.line(f"{flag} = {first.c};")
-        is_and = isinstance(node.op, ast.And)
         for operand in node.values[1:]:
-            self.line(f"if ({flag if is_and else '!' + flag}) {{")
+            self.line(f"if ({flag if node.op == 'and' else '!' + flag}) {{")
             with self.captured() as lines:
                 value = self.expr(operand)
                 if not isinstance(value.kind, Bool):
-                    _refuse("and/or of something else than BOOL", node)
+                    _refuse("and/or of something else than BOOL")
                 self.line(f"{flag} = {value.c};")
             self.out.extend(lines)
             self.line("}")
         return V(Bool(), flag)
 
-    def if_expr(self, node: ast.IfExp) -> V:
+    def choice(self, node: Choice) -> V:
         test = self.condition(node.test)
         with self.captured() as body_lines, self.refined(node.test):
-            body = self.expr(node.body)
+            body = self.expr(node.then)
         with self.captured() as else_lines:
             orelse = self.expr(node.orelse)
         if isinstance(body.kind, Bool) and isinstance(orelse.kind, Bool):
@@ -883,7 +969,7 @@ class _Body:
         elif isinstance(body.kind, Float) and isinstance(orelse.kind, Float):
             kind = Float()
         else:
-            _refuse("a conditional expression of two kinds", node)
+            _refuse("a conditional expression of two kinds")
         ctype = _ctype(kind)
         if not body_lines and not else_lines:
             return V(kind, f"({test} ? ({ctype}){body.c} : ({ctype}){orelse.c})")
@@ -897,21 +983,21 @@ class _Body:
         self.line("}")
         return V(kind, held)
 
-    def call_value(self, node: ast.Call) -> V:
-        name = _called_name(node)
-        if name in self.module.functions:
+    def call_value(self, node: Call) -> V:
+        name = node.callee if isinstance(node.callee, str) else None
+        if name is not None and name in self.module.functions:
             info, returned = self.function_call(node)
             if not isinstance(info.result, Int | Bool | Float):
                 why = "a FUNCTION whose result the tier leaves to Python"
-                _refuse(f"a call of {name}, {why}", node)
-            return self.unboxed(returned, info.result, f"the result of {name}", node)
+                _refuse(f"a call of {name}, {why}")
+            return self.unboxed(returned, info.result, f"the result of {name}")
         if node.keywords:
-            _refuse(f"a call of {ast.unparse(node.func)} with keywords", node)
+            _refuse(f"a call of {_callee_text(node)} with keywords")
         if name == IX.name and len(node.args) == len(IX.params):
             index = self.int_value(node.args[0])
             low, high = (_constant_int(arg) for arg in node.args[1:])
             if low is None or high is None:
-                _refuse(f"{IX.name} with bounds that are not constants", node)
+                _refuse(f"{IX.name} with bounds that are not constants")
             held = self.temp("int64_t")
             self.line(f"if (PADT_LIKELY({low} <= {index.c} && {index.c} <= {high})) {{")
             self.line(f"    {held} = {index.c} - {c_int(low)};")
@@ -933,8 +1019,7 @@ class _Body:
             self.check(f"{helper}({a.c}, {b.c}, &{held})")
             return V(result, held)
         if name in (F32.name, "float") and len(node.args) == 1:
-            value = self.expr(node.args[0])
-            number = _as_float(value, node)
+            number = _as_float(self.expr(node.args[0]))
             if name == "float":
                 return number
             # REAL: rounded to 32 bits (an integer, as Python converts it: to a double first)
@@ -947,7 +1032,7 @@ class _Body:
                 self.check(f"{helper}({value.c}, &{held})")
                 return V(FROM_REAL, held)
         if name == FDIV.name and len(node.args) == len(FDIV.params):
-            a, b = (_as_float(self.expr(arg), node) for arg in node.args)
+            a, b = (_as_float(self.expr(arg)) for arg in node.args)
             return V(Float(), f"padt_fdiv({a.c}, {b.c})")
         if name == "abs" and len(node.args) == 1:
             value = self.expr(node.args[0])
@@ -961,19 +1046,17 @@ class _Body:
             target = self.expr(node.args[0])
             if isinstance(target.kind, Range):
                 return self.range_length(target)
-        _refuse(f"a call of {ast.unparse(node.func)}", node)
+        _refuse(f"a call of {_callee_text(node)}")
 
-    def function_call(self, node: ast.Call) -> tuple[FunctionInfo, str]:
+    def function_call(self, node: Call) -> tuple[FunctionInfo, str]:
         """A FUNCTION of the artifact called as Python calls it, with the values boxed;
         the result in a temporary that owns it."""
-        name = _called_name(node)
-        assert name is not None
+        name = node.callee
+        assert isinstance(name, str)
         info = self.module.functions[name]
         if info.outputs:
-            _refuse(f"a call of {name}, a FUNCTION with VAR_OUTPUT or VAR_IN_OUT", node)
-        if any(keyword.arg is None for keyword in node.keywords):
-            _refuse(f"a call of {name} with ** arguments", node)
-        values = [*node.args, *(keyword.value for keyword in node.keywords)]
+            _refuse(f"a call of {name}, a FUNCTION with VAR_OUTPUT or VAR_IN_OUT")
+        values = [*node.args, *(value for _, value in node.keywords)]
         boxed: list[str] = []
         for value_node in values:
             value = self.expr(value_node)
@@ -985,12 +1068,12 @@ class _Body:
             elif isinstance(kind, Float):
                 box = f"PyFloat_FromDouble({value.c})"
             else:
-                _refuse(f"an argument of {name} that holds a {_kind_name(kind)}", value_node)
+                _refuse(f"an argument of {name} that holds a {_kind_name(kind)}")
             held = self.temp("PyObject *", "NULL")
             self.line(f"Py_XSETREF({held}, {box});")
             self.line(f"if (PADT_UNLIKELY({held} == NULL)) goto padt_error;")
             boxed.append(held)
-        keywords = tuple(str(keyword.arg) for keyword in node.keywords)
+        keywords = tuple(keyword for keyword, _ in node.keywords)
         names = self.module.names(keywords) if keywords else "NULL"
         args = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
         result = self.temp("PyObject *", "NULL")
@@ -1010,7 +1093,7 @@ class _Body:
         x = value.c if kind.ctype == wide else f"(({wide}){value.c})"
         return V(result, f"(({result.ctype})({x} < 0 ? -{x} : {x}))")
 
-    def extreme(self, name: str, node: ast.Call) -> V:
+    def extreme(self, name: str, node: Call) -> V:
         """min() and max() of REALs or of integers, as Python takes them: the first
         argument, replaced by each later one that is smaller (larger); NaN as it does."""
         values = [self.held(self.expr(arg)) for arg in node.args]
@@ -1022,7 +1105,7 @@ class _Body:
             pick = min if name == "min" else max
             kind = Int(pick(k.lo for k in bounds), pick(k.hi for k in bounds))
         else:
-            _refuse(f"{name}() of mixed or wide values", node)
+            _refuse(f"{name}() of mixed or wide values")
         held = self.temp(_ctype(kind))
         self.line(f"{held} = {values[0].c};")
         for value in values[1:]:
@@ -1050,62 +1133,55 @@ class _Body:
 # ---- helpers of expressions ----------------------------------------------------------------------
 
 
-def _as_load(target: ast.expr) -> ast.expr:
-    copied = ast.parse(ast.unparse(target), mode="eval").body
-    return copied
+def _callee_text(call: Call) -> str:
+    return call.callee if isinstance(call.callee, str) else python_text(call.callee)
 
 
-def _is_none(node: ast.expr) -> bool:
-    return isinstance(node, ast.Constant) and node.value is None
+def _is_none(node: Expr) -> bool:
+    return isinstance(node, Const) and node.value is None
 
 
-def _called_name(call: ast.Call) -> str | None:
-    return call.func.id if isinstance(call.func, ast.Name) else None
-
-
-def _constant(node: ast.Constant) -> V:
+def _constant(node: Const) -> V:
     value = node.value
     if isinstance(value, bool):
         return V(Bool(), "1" if value else "0")
     if isinstance(value, int):
-        kind = Int(value, value)
-        if not kind.fits128:
-            _refuse("an integer constant beyond 128 bits", node)
-        return V(kind, c_int(value))
+        return _int_constant(value)
     if isinstance(value, float) and math.isfinite(value):
         return V(Float(), f"({value.hex()})")  # exact: C99 reads hexadecimal doubles
-    _refuse(f"a constant {type(value).__name__}", node)
+    _refuse(f"a constant {type(value).__name__}")
 
 
-def _constant_int(node: ast.expr) -> int | None:
-    if isinstance(node, ast.Constant) and type(node.value) is int:
+def _int_constant(value: int) -> V:
+    kind = Int(value, value)
+    if not kind.fits128:
+        _refuse("an integer constant beyond 128 bits")
+    text = c_int(value)
+    # in parentheses: no operator before it may take its sign for a `--`
+    return V(kind, f"({text})" if value < 0 and not text.startswith("(") else text)
+
+
+def _constant_int(node: Expr) -> int | None:
+    if isinstance(node, Const) and type(node.value) is int:
         return node.value
-    if (
-        isinstance(node, ast.UnaryOp)
-        and isinstance(node.op, ast.USub)
-        and isinstance(node.operand, ast.Constant)
-        and type(node.operand.value) is int
-    ):
-        return -node.operand.value
+    if isinstance(node, Unary) and node.op == "-":
+        operand = _constant_int(node.operand)
+        return None if operand is None else -operand
     return None
 
 
-def _bounds_test(test: ast.expr) -> tuple[str, int, int] | None:
+def _bounds_test(test: Expr) -> tuple[str, int, int] | None:
     """`lo <= x <= hi` (also with `x := ...`, and `<`): the name and its inclusive bounds."""
-    if not isinstance(test, ast.Compare) or len(test.ops) != 2:
+    if not isinstance(test, Chain) or len(test.values) != 3 or test.op not in ("<=", "<"):
         return None
-    low, high = _constant_int(test.left), _constant_int(test.comparators[1])
-    middle = test.comparators[0]
-    if isinstance(middle, ast.NamedExpr):
-        middle = middle.target
-    if low is None or high is None or not isinstance(middle, ast.Name):
+    low, high = _constant_int(test.values[0]), _constant_int(test.values[2])
+    middle = test.values[1]
+    named = isinstance(middle, Assigned) or (isinstance(middle, Var) and middle.where == "local")
+    if low is None or high is None or not named:
         return None
-    first, second = test.ops
-    if not isinstance(first, ast.LtE | ast.Lt) or not isinstance(second, ast.LtE | ast.Lt):
-        return None
-    low += isinstance(first, ast.Lt)
-    high -= isinstance(second, ast.Lt)
-    return middle.id, low, high
+    assert isinstance(middle, Assigned | Var)
+    strict = test.op == "<"
+    return middle.name, low + strict, high - strict
 
 
 def _plain64(kind: Kind) -> bool:
@@ -1118,12 +1194,12 @@ def _narrowed(kind: Int, lo: int, hi: int) -> Int:
     return Int(max(lo, kind.lo), min(hi, kind.hi), kind.stand_in and not exact)
 
 
-def _as_int(value: V, node: ast.AST) -> V:
+def _as_int(value: V) -> V:
     if isinstance(value.kind, Bool):
         return V(Int(0, 1), f"((int64_t){value.c})")
     if isinstance(value.kind, Int):
         return value
-    _refuse(f"arithmetic on a {_kind_name(value.kind)}", node)
+    _refuse(f"arithmetic on a {_kind_name(value.kind)}")
 
 
 def _bits(kind: Int) -> int:
@@ -1134,35 +1210,35 @@ def _bits(kind: Int) -> int:
     return k
 
 
-def _result_range(op: ast.operator, a: Int, b: Int, node: ast.AST) -> Int:
-    if isinstance(op, ast.Add):
+def _result_range(op: str, a: Int, b: Int) -> Int:
+    if op == "+":
         return Int(a.lo + b.lo, a.hi + b.hi)
-    if isinstance(op, ast.Sub):
+    if op == "-":
         return Int(a.lo - b.hi, a.hi - b.lo)
-    if isinstance(op, ast.Mult):
+    if op == "*":
         products = (a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi)
         return Int(min(products), max(products))
-    if isinstance(op, ast.BitAnd | ast.BitOr | ast.BitXor):
-        if isinstance(op, ast.BitAnd) and (a.lo >= 0 or b.lo >= 0):
+    if op in _BIT_OPS:
+        if op == "&" and (a.lo >= 0 or b.lo >= 0):
             highs = [k.hi for k in (a, b) if k.lo >= 0]
             return Int(0, min(highs))
         if a.lo >= 0 and b.lo >= 0:
             return Int(0, (1 << max(_bits(a), _bits(b))) - 1)
         k = max(_bits(a), _bits(b))
         return Int(-(1 << k), (1 << k) - 1)
-    if isinstance(op, ast.LShift | ast.RShift):
+    if op in ("<<", ">>"):
         if b.lo < 0:
-            _refuse("a shift by a count that may be negative", node)
-        if isinstance(op, ast.RShift):
+            _refuse("a shift by a count that may be negative")
+        if op == ">>":
             return Int(min(a.lo, a.lo >> b.hi), max(a.hi >> b.hi, a.hi >> b.lo))
         if b.hi > 127:
-            _refuse("a shift left by more than 127", node)
+            _refuse("a shift left by more than 127")
         ends = (a.lo << b.lo, a.lo << b.hi, a.hi << b.lo, a.hi << b.hi)
         return Int(min(ends), max(ends))
-    _refuse(f"the operator {type(op).__name__}", node)
+    _refuse(f"the operator {op}")
 
 
-def _comparison(left: V, op: ast.cmpop, right: V, node: ast.AST) -> str:
+def _comparison(left: V, op: str, right: V) -> str:
     for one, other in ((left, right), (right, left)):
         # a stand-in is beyond 2**126 where the true value is: on the same side of any
         # 64-bit value, but not of another stand-in
@@ -1171,20 +1247,13 @@ def _comparison(left: V, op: ast.cmpop, right: V, node: ast.AST) -> str:
             and one.kind.stand_in
             and not (isinstance(other.kind, Bool) or _plain64(other.kind))
         ):
-            _refuse("a REAL's integer compared with more than 64 bits", node)
+            _refuse("a REAL's integer compared with more than 64 bits")
     floats = isinstance(left.kind, Float) or isinstance(right.kind, Float)
     for side in (left, right):
         if floats and isinstance(side.kind, Int) and not side.kind.within(EXACT_IN_DOUBLE):
             # Python compares an integer with a REAL exactly; C would round it first
-            _refuse("an integer beyond 2**53 compared with a REAL", node)
-    return f"({left.c} {_relation(op, node)} {right.c})"
-
-
-def _relation(op: ast.cmpop, node: ast.AST) -> str:
-    symbol = _RELATIONS.get(type(op))
-    if symbol is None:
-        _refuse(f"a comparison {type(op).__name__}", node)
-    return symbol
+            _refuse("an integer beyond 2**53 compared with a REAL")
+    return f"({left.c} {op} {right.c})"
 
 
 def _ctype(kind: Kind) -> str:
@@ -1193,14 +1262,14 @@ def _ctype(kind: Kind) -> str:
     return "double" if isinstance(kind, Float) else "int"
 
 
-def _as_float(value: V, node: ast.AST) -> V:
+def _as_float(value: V) -> V:
     """A number as Python turns it into a float: an integer is converted (exactly as C
     does within 64 bits: to the nearest double, ties to even)."""
     if isinstance(value.kind, Float):
         return value
     if isinstance(value.kind, Bool) or (isinstance(value.kind, Int) and value.kind.fits64):
         return V(Float(), f"((double){value.c})")
-    _refuse(f"a {_kind_name(value.kind)} in REAL arithmetic", node)
+    _refuse(f"a {_kind_name(value.kind)} in REAL arithmetic")
 
 
 def _kind_name(kind: Kind | None) -> str:
@@ -1210,13 +1279,11 @@ def _kind_name(kind: Kind | None) -> str:
 # ---- a unit --------------------------------------------------------------------------------------
 
 
-def _translate_body(module: _Module, cls: ClassInfo, func: ast.FunctionDef) -> str:
+def _translate_body(module: _Module, cls: ClassInfo, func: _Numbered) -> str:
     """The C function of one `__call__`; NotTranslated when it cannot be. The statics it
     needs join `module` only when it is translated."""
-    args = func.args
-    if [a.arg for a in args.args] != ["s"] or args.vararg or args.kwarg or args.kwonlyargs:
-        _refuse("a body with arguments", func)
-    _check_named_targets(func)
+    if func.function.params or not func.function.method:
+        _refuse("a body with arguments")
     kinds: dict[str, Kind] = {}
     for attempt in range(2 * WIDEN_AFTER + 2):
         trial = replace(
@@ -1226,13 +1293,16 @@ def _translate_body(module: _Module, cls: ClassInfo, func: ast.FunctionDef) -> s
             keys=dict(module.keys),
         )
         body = _Body(trial, cls, func, kinds)
-        body.body()
+        try:
+            body.body()
+        except NotTranslated as refused:
+            raise NotTranslated(refused.reason, body.st_line) from None
         merged = dict(kinds)
         for name, kind in body.assigned.items():
             known = merged.get(name)
             joined = kind if known is None else join(known, kind)
             if joined is None:
-                _refuse(f"local {name} holds values of different kinds", func)
+                _refuse(f"local {name} holds values of different kinds")
             if (
                 attempt >= WIDEN_AFTER
                 and isinstance(joined, Int)
@@ -1248,25 +1318,7 @@ def _translate_body(module: _Module, cls: ClassInfo, func: ast.FunctionDef) -> s
             module.sites = trial.sites
             return _function_text(body, func)
         kinds = merged
-    _refuse("the kinds of the locals do not settle", func)
-
-
-def _check_named_targets(func: ast.FunctionDef) -> None:
-    """A `:=` target is kept in a temporary of its statement: refused when the body also
-    assigns that name otherwise (its later reads would miss the value)."""
-    targets = [node.target for node in ast.walk(func) if isinstance(node, ast.NamedExpr)]
-    named = {target.id for target in targets}
-    skipped = {id(target) for target in targets}
-    assigned = {
-        node.id
-        for node in ast.walk(func)
-        if isinstance(node, ast.Name)
-        and isinstance(node.ctx, ast.Store)
-        and id(node) not in skipped
-    }
-    both = named & assigned
-    if both:
-        _refuse(f"{sorted(both)[0]} both a := target and a local", func)
+    _refuse("the kinds of the locals do not settle")
 
 
 CHUNK_LINES = 300  # C lines per function: the compiler's time grows faster than their number
@@ -1284,7 +1336,7 @@ def _chunks(body: _Body) -> list[list[str]]:
     return chunks
 
 
-def _function_text(body: _Body, func: ast.FunctionDef) -> str:
+def _function_text(body: _Body, func: _Numbered) -> str:
     """The body as C: a function per chunk of statements (never inlined: one function of
     the whole body would take the compiler minutes), and the body's own, which calls them
     in turn. The Python locals are in a frame the chunks share."""
@@ -1366,7 +1418,7 @@ def _function_text(body: _Body, func: ast.FunctionDef) -> str:
         f"    {name}_frame *f = &frame;",
         "    int done = 0;",
         "    memset(f, 0, sizeof frame);",
-        f"    f->line = {func.lineno};",
+        f"    f->line = {func.line};",
         *setup,
         *(f"    if ((done = {chunk}(s, f)) != 0) goto padt_end;" for chunk in chunk_names),
         "padt_end:",
@@ -1389,35 +1441,32 @@ def _function_name(class_name: str) -> str:
 
 def translate_unit(
     unit: PouCode,
+    form: Unit,
     classes: dict[str, ClassInfo],
     globals_class: str | None,
     functions: dict[str, FunctionInfo] | None = None,
 ) -> Translated:
-    """The C module of one unit: every `__call__` of its classes that can be translated
-    (calling the FUNCTIONs of `functions` as Python code)."""
+    """The C module of one unit, of typed form `form` (`unit.unit`): the `__call__` of its
+    class when it can be translated (calling the FUNCTIONs of `functions` as Python code)."""
     module = _Module(
         classes, code_filename(unit), globals_class=globals_class, functions=functions or {}
     )
-    tree = ast.parse(unit.source)
     bodies: list[tuple[str, str]] = []  # (class name, C text)
     left: list[tuple[str, str]] = []
-    for node in tree.body:
-        if not isinstance(node, ast.ClassDef):
+    functions_of = form.functions if isinstance(form, Class) else ()
+    for call in (f for f in functions_of if isinstance(f, Function) and f.name == "__call__"):
+        assert isinstance(form, Class)
+        body_name = f"{form.name}.__call__"
+        info = classes.get(form.name)
+        if info is None:
+            left.append((body_name, "a class the artifact does not describe"))
             continue
-        for item in node.body:
-            if not isinstance(item, ast.FunctionDef) or item.name != "__call__":
-                continue
-            body_name = f"{node.name}.__call__"
-            info = classes.get(node.name)
-            if info is None:
-                left.append((body_name, "a class the artifact does not describe"))
-                continue
-            try:
-                bodies.append((node.name, _translate_body(module, info, item)))
-            except NotTranslated as reason:
-                left.append((body_name, str(reason)))
-            except RecursionError:
-                left.append((body_name, "an expression nested too deep"))
+        try:
+            bodies.append((form.name, _translate_body(module, info, _numbered(form, call))))
+        except NotTranslated as reason:
+            left.append((body_name, str(reason)))
+        except RecursionError:
+            left.append((body_name, "an expression nested too deep"))
     if not bodies:
         return Translated(unit.name, "", "", (), tuple(left))
     source = _module_text(module, bodies)

@@ -4,7 +4,7 @@ program) and the C compiler. The runtime sends the artifact, waits for the answe
 the lock released, and only loads and binds what the child built.
 
 A translation is kept beside the compiled modules, by the hash of what it depends on (the
-unit's name and source, the classes it reads, the FUNCTIONs it calls, the translator
+unit's name and typed form, the classes it reads, the FUNCTIONs it calls, the translator
 itself), so a unit built before is neither translated nor compiled again.
 
 Nothing is translated of an artifact with a unit that is not generated code
@@ -27,7 +27,7 @@ from typing import Any
 
 from runtime.code.fault_location import code_filename
 from runtime.code.native.build import BuildError, build, find_toolchain, mark_used, prune
-from runtime.code.native.kinds import ClassInfo, FunctionInfo, class_table, function_table
+from runtime.code.native.kinds import ClassInfo, Forms, FunctionInfo, class_table, function_table
 from runtime.code.native.translate import Translated, translate_unit
 from runtime.contract.artifact import Artifact, PouCode, load_artifact
 from runtime.contract.generated_code import (
@@ -38,6 +38,8 @@ from runtime.contract.generated_code import (
 
 WORKER_NICE = 10  # background work: below the runtime and below normal programs
 _SOURCES = ("translate.py", "kinds.py", "padt_native.h", "build.py")
+# the C is made from the typed form and numbers lines as the printer does
+_FORM_SOURCES = ("python_text.py", "typed_form.py", "statements.py", "units.py")
 
 
 def translatable_units(artifact: Artifact) -> list[PouCode]:
@@ -48,10 +50,11 @@ def translatable_units(artifact: Artifact) -> list[PouCode]:
 
 @dataclass(frozen=True)
 class ArtifactTranslation:
-    """What translating the bodies of one artifact needs beside each unit's own source: the
+    """What translating the bodies of one artifact needs beside each unit's own form: the
     classes the bodies read and the FUNCTIONs they call."""
 
     units: list[PouCode]  # the programs and function blocks, whose bodies are translated
+    forms: Forms
     classes: dict[str, ClassInfo]
     functions: dict[str, FunctionInfo]
     globals_class: str | None
@@ -64,25 +67,31 @@ class ArtifactTranslation:
         for unit in artifact.units():
             check_source(unit.source, code_filename(unit))
         units = translatable_units(artifact)
+        bodies = [unit for unit in units if unit.kind in ("PROGRAM", "FUNCTION_BLOCK")]
+        functions = [unit for unit in artifact.pous if unit.kind == "FUNCTION"]
+        forms = {unit.class_name: unit.unit for unit in [*bodies, *functions]}
         return cls(
-            [unit for unit in units if unit.kind in ("PROGRAM", "FUNCTION_BLOCK")],
-            class_table(units),
-            function_table(list(artifact.pous)),
+            bodies,
+            forms,
+            class_table(units, forms),
+            function_table(functions, forms),
             artifact.globals.class_name if artifact.globals is not None else None,
         )
 
     def shape(self) -> str:
-        """All of it a translation depends on but the unit's source (a cache key's part)."""
+        """All of it a translation depends on but the unit's form (a cache key's part)."""
         members = [(name, sorted(c.members.items(), key=str)) for name, c in self.classes.items()]
         return repr((self.globals_class, sorted(members), sorted(self.functions.items())))
 
     def translate(self, unit: PouCode) -> Translated:
-        return translate_unit(unit, self.classes, self.globals_class, self.functions)
+        form = self.forms[unit.class_name]
+        return translate_unit(unit, form, self.classes, self.globals_class, self.functions)
 
 
 def _translator_fingerprint() -> str:
-    here = Path(__file__).parent
-    text = "".join((here / name).read_text() for name in _SOURCES)
+    here, form = Path(__file__).parent, Path(__file__).parents[2] / "contract" / "code"
+    paths = [*(here / name for name in _SOURCES), *(form / name for name in _FORM_SOURCES)]
+    text = "".join(path.read_text() for path in paths)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -133,8 +142,8 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
     answers = []
     for unit in translation.units:
         # the unit's name too: it is in the C text (a module built before names were
-        # checked could otherwise serve another unit of the same source)
-        named = (fingerprint, shape, code_filename(unit), unit.source)
+        # checked could otherwise serve another unit of the same form)
+        named = (fingerprint, shape, code_filename(unit), unit.form)
         key = hashlib.sha256("\n".join(named).encode()).hexdigest()[:32]
         known = index / f"{key}.json"
         answer = _known(known)

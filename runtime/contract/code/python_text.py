@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from typing import NamedTuple
 
 from runtime.contract.code.statements import (
     Assign,
     Break,
     Continue,
+    Elif,
     Evaluate,
     ForEach,
     If,
@@ -134,75 +136,104 @@ def _wrap_text(node: Wrap) -> str:
     return f"(({code}) & {mask})"
 
 
-def python_lines(
+class PrintedLine(NamedTuple):
+    """A line of a unit's module text: its ST line (0 for the frame), and the statement,
+    ELSIF branch or function whose header it is (None for the frame, an `else:`). The
+    C tier (runtime/code/native/) numbers its statements by these, so that a fault there
+    names the generated line a fault of the Python tier names."""
+
+    text: str
+    st_line: int
+    header: Stmt | Elif | Function | None = None
+
+
+def _statement_lines(
     statements: tuple[Stmt, ...] | list[Stmt], depth: int
-) -> Iterator[tuple[str, int]]:
-    """The lines of typed-form statements indented to `depth`, each with its ST line."""
+) -> Iterator[PrintedLine]:
+    """The lines of typed-form statements indented to `depth`."""
     pad = INDENT * depth
     for statement in statements:
         match statement:
             case Assign(target=target, value=value, augmented=op, line=line):
                 sign = "=" if op is None else f"{op}="
-                yield f"{pad}{python_text(target)} {sign} {python_text(value)}", line
+                text = f"{pad}{python_text(target)} {sign} {python_text(value)}"
+                yield PrintedLine(text, line, statement)
             case Evaluate(value=value, line=line):
-                yield pad + python_text(value), line
+                yield PrintedLine(pad + python_text(value), line, statement)
             case If(test=test, body=body, orelse=orelse, line=line, elifs=elifs):
-                yield f"{pad}if {_bare(test)}:", line
-                yield from python_lines(body, depth + 1)
+                yield PrintedLine(f"{pad}if {_bare(test)}:", line, statement)
+                yield from _statement_lines(body, depth + 1)
                 for branch in elifs:
-                    yield f"{pad}elif {_bare(branch.test)}:", branch.line
-                    yield from python_lines(branch.body, depth + 1)
+                    yield PrintedLine(f"{pad}elif {_bare(branch.test)}:", branch.line, branch)
+                    yield from _statement_lines(branch.body, depth + 1)
                 if orelse:
-                    yield f"{pad}else:", line
-                    yield from python_lines(orelse, depth + 1)
+                    yield PrintedLine(f"{pad}else:", line)
+                    yield from _statement_lines(orelse, depth + 1)
             case While(test=test, body=body, line=line):
-                yield f"{pad}while {_bare(test)}:", line
-                yield from python_lines(body, depth + 1)
+                yield PrintedLine(f"{pad}while {_bare(test)}:", line, statement)
+                yield from _statement_lines(body, depth + 1)
             case ForEach(name=name, numbers=numbers, body=body, orelse=orelse, line=line):
-                yield f"{pad}for {name} in {python_text(numbers)}:", line
-                yield from python_lines(body, depth + 1)
+                text = f"{pad}for {name} in {python_text(numbers)}:"
+                yield PrintedLine(text, line, statement)
+                yield from _statement_lines(body, depth + 1)
                 if orelse:
-                    yield f"{pad}else:", line
-                    yield from python_lines(orelse, depth + 1)
+                    yield PrintedLine(f"{pad}else:", line)
+                    yield from _statement_lines(orelse, depth + 1)
             case Break(line=line):
-                yield pad + "break", line
+                yield PrintedLine(pad + "break", line, statement)
             case Continue(line=line):
-                yield pad + "continue", line
+                yield PrintedLine(pad + "continue", line, statement)
             case Return(value=value, line=line):
-                yield pad + ("return" if value is None else f"return {python_text(value)}"), line
+                text = pad + ("return" if value is None else f"return {python_text(value)}")
+                yield PrintedLine(text, line, statement)
             case Pass(line=line):
-                yield pad + "pass", line
+                yield PrintedLine(pad + "pass", line, statement)
+
+
+def python_lines(
+    statements: tuple[Stmt, ...] | list[Stmt], depth: int
+) -> Iterator[tuple[str, int]]:
+    """The lines of typed-form statements indented to `depth`, each with its ST line."""
+    for line in _statement_lines(statements, depth):
+        yield line.text, line.st_line
 
 
 def unit_lines(unit: Unit) -> Iterator[tuple[str, int]]:
     """The lines of a unit's module text, each with its ST line (0 for the frame)."""
+    for line in printed_lines(unit):
+        yield line.text, line.st_line
+
+
+def printed_lines(unit: Unit) -> Iterator[PrintedLine]:
+    """The lines of a unit's module text, in order (the first is line 1)."""
     match unit:
         case Alias(name=name, target=target):
-            yield f"{name} = {target}", 0
+            yield PrintedLine(f"{name} = {target}", 0)
         case Function():
             yield from _function_lines(unit, 0)
         case Class(name=name, slots=slots, kinds=kinds, functions=functions):
-            yield f"class {name}:", 0
-            yield f"{INDENT}__slots__ = {tuple(slot.name for slot in slots)!r}", 0
+            yield PrintedLine(f"class {name}:", 0)
+            yield PrintedLine(f"{INDENT}__slots__ = {tuple(slot.name for slot in slots)!r}", 0)
             if kinds:
-                yield f"{INDENT}KIND__ = {kinds!r}", 0
-            yield "", 0
-            yield f"{INDENT}def __init__(s):", 0
+                yield PrintedLine(f"{INDENT}KIND__ = {kinds!r}", 0)
+            yield PrintedLine("", 0)
+            yield PrintedLine(f"{INDENT}def __init__(s):", 0)
             if not slots:
-                yield f"{INDENT * 2}pass", 0
+                yield PrintedLine(f"{INDENT * 2}pass", 0)
             for slot in slots:
-                yield f"{INDENT * 2}s.{slot.name} = {python_text(slot.initial)}", 0
+                yield PrintedLine(f"{INDENT * 2}s.{slot.name} = {python_text(slot.initial)}", 0)
             for function in functions:
-                yield "", 0
+                yield PrintedLine("", 0)
                 if isinstance(function, Inherited):
-                    yield f"{INDENT}{function.name} = {function.owner}.{function.name}", 0
+                    text = f"{INDENT}{function.name} = {function.owner}.{function.name}"
+                    yield PrintedLine(text, 0)
                 else:
                     yield from _function_lines(function, 1)
 
 
-def _function_lines(function: Function, depth: int) -> Iterator[tuple[str, int]]:
+def _function_lines(function: Function, depth: int) -> Iterator[PrintedLine]:
     params = [f"{param.name}={python_text(param.default)}" for param in function.params]
     if function.method:
         params.insert(0, "s")
-    yield f"{INDENT * depth}def {function.name}({', '.join(params)}):", 0
-    yield from python_lines(function.body, depth + 1)
+    yield PrintedLine(f"{INDENT * depth}def {function.name}({', '.join(params)}):", 0, function)
+    yield from _statement_lines(function.body, depth + 1)

@@ -112,6 +112,41 @@ END_PROGRAM
     assert "in POU Main (prog.st:6)" in program_error(pair.native)
 
 
+def test_faults_in_an_elsif_test_and_under_an_else_name_their_st_lines_on_both_tiers(
+    native_tier: NativeTier,
+) -> None:
+    """The C numbers its statements as the printer numbers the lines of the Python: an
+    ELSIF's test and the statements under an ELSE (no line of their own in C) too."""
+    text = """
+PROGRAM Main
+VAR n, m : INT; q : DINT; arr : ARRAY[1..3] OF INT; END_VAR
+n := n + 1;
+IF n = 100 THEN
+  q := 1;
+ELSIF 10 / (3 - n) > 0 THEN
+  q := 2;
+ELSE
+  FOR m := 1 TO 3 DO
+    arr[m + n - 5] := m;
+  END_FOR;
+END_IF;
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(3)  # n = 3 in the third cycle: division by zero in the ELSIF
+    # the compiler gives an ELSIF's test the line of its IF (the generated line is the
+    # `elif`'s, the line after the first branch's)
+    assert "division by zero in POU Main (prog.st:5)" in program_error(pair.native)
+    assert program_error(pair.python) == program_error(pair.native)
+
+    under_else = text.replace("10 / (3 - n) > 0", "n < 4")
+    pair = side_by_side(under_else, native_tier)
+    pair.cycle_and_compare(4)  # n = 4: arr[0], out of bounds under the ELSE
+    assert "in POU Main (prog.st:11)" in program_error(pair.native)
+    assert program_error(pair.python) == program_error(pair.native)
+
+
 def test_the_watchdog_ends_an_endless_loop_of_native_code(native_tier: NativeTier) -> None:
     text = """
 PROGRAM Main

@@ -3,6 +3,7 @@ construct it knows, one of each it refuses (no C compiler needed: translation on
 
 from __future__ import annotations
 
+import importlib
 import re
 
 import pytest
@@ -38,7 +39,10 @@ def translated(body: str, declarations: str = "") -> tuple[bool, str]:
     artifact = compiled(text)
     units = [*artifact.types, *artifact.pous]
     main = next(unit for unit in units if unit.name == "Main")
-    result = translate_unit(main, class_table(units), None, function_table(units))
+    forms = {unit.class_name: unit.unit for unit in units}
+    result = translate_unit(
+        main, forms[main.class_name], class_table(units, forms), None, function_table(units, forms)
+    )
     return bool(result.bodies), result.left[0][1] if result.left else ""
 
 
@@ -84,12 +88,49 @@ def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> No
     assert not ok and reason in why
 
 
+def test_a_body_left_to_python_names_the_st_line_of_the_statement_refused() -> None:
+    body_line = FUNCTIONS.count("\n") + 3  # PROGRAM Main, then VAR, then the body
+    ok, why = translated("i := 1;\nx := SQRT(x);")
+    assert not ok and why.endswith(f"(ST line {body_line + 1})")
+
+
+def test_the_c_names_the_printed_line_of_each_statement_it_runs() -> None:
+    """`padt_line` is the line of the printed Python a statement's header is on (what a
+    fault's traceback names, and fault_location maps to the ST line): in the order
+    printed, every line of the body but an `else:`."""
+    text = (
+        "PROGRAM Main\nVAR i, j : INT; a : ARRAY[1..4] OF INT; END_VAR\n"
+        "IF i > 3 THEN j := 1; ELSIF i < 0 THEN j := 2; ELSIF i = 1 THEN j := 5; "
+        "ELSE IF j = 2 THEN i := 1; ELSE i := 2; END_IF; END_IF;\n"
+        "FOR i := 1 TO 4 DO a[i] := j; IF j > 9 THEN EXIT; END_IF; END_FOR;\n"
+        "WHILE j < 10 DO j := j + 1; END_WHILE;\nEND_PROGRAM\n"
+    )
+    units = [*compiled(text).pous]
+    main = units[-1]
+    forms = {unit.class_name: unit.unit for unit in units}
+    result = translate_unit(main, forms[main.class_name], class_table(units, forms), None)
+    assert result.bodies == ("POU_MAIN.__call__",)
+    lines = main.source.splitlines()
+    first = lines.index("    def __call__(s):") + 1
+    body = range(first + 1, len(lines) + 1)
+    assert f"f->line = {first};" in result.source
+    assert [int(n) for n in re.findall(r"padt_line = (\d+);", result.source)] == [
+        n for n in body if lines[n - 1].strip() != "else:"
+    ]
+
+
+def test_the_native_tier_parses_no_python() -> None:
+    """The C is made from the typed form (issue 34, step 4), not from printed Python."""
+    for name in ("build", "kinds", "tier", "translate", "worker"):
+        assert "ast" not in vars(importlib.import_module(f"runtime.code.native.{name}"))
+
+
 def test_the_artifact_names_a_function_result_and_the_tier_reads_outputs_off_the_code() -> None:
     units = [*compiled(FUNCTIONS + "PROGRAM Main\nEND_PROGRAM\n").pous]
     assert {unit.name: unit.returns for unit in units} == {
         "Twice": "INT", "Named": "STRING[80]", "Split": "BOOL", "Main": ""
     }  # fmt: skip
-    table = function_table(units)
+    table = function_table(units, {unit.class_name: unit.unit for unit in units})
     assert not table["FN_TWICE"].outputs and table["FN_SPLIT"].outputs
     assert table["FN_NAMED"].result is None  # a string: read by Python only
 
@@ -100,7 +141,8 @@ def test_the_same_unit_gives_the_same_c_and_module_name() -> None:
     results = []
     for artifact in (first, second):
         units = [*artifact.types, *artifact.pous]
-        results.append(translate_unit(units[-1], class_table(units), None))
+        forms = {unit.class_name: unit.unit for unit in units}
+        results.append(translate_unit(units[-1], units[-1].unit, class_table(units, forms), None))
     assert results[0].source == results[1].source and results[0].module == results[1].module
 
 
