@@ -25,12 +25,10 @@ from runtime.code.fault_location import code_filename
 from runtime.code.intrinsics import ProgramFault, Reference, SystemView, namespace, reference_maker
 from runtime.code.native.worker import ArtifactTranslation
 from runtime.contract.artifact import Artifact, PouCode, VarInfo
+from runtime.contract.code.names import BUILTINS, INTRINSICS, MATH_FUNCTIONS
 from runtime.contract.code.statements import Evaluate
 from runtime.contract.code.typed_form import Call, Const
 from runtime.contract.generated_code import (
-    BUILTINS,
-    INTRINSICS,
-    MATH_FUNCTIONS,
     GeneratedCodeError,
     check_artifact_names,
     check_source,
