@@ -116,7 +116,7 @@ def reference_maker(roots: dict[int, str]) -> Callable[..., Reference]:
 def check_reference(root: Any, steps: tuple[str | int, ...]) -> None:
     """What a reference may be made of: a root that generated code made (an instance of a
     generated class, a list), and steps that are list offsets or variable names. The
-    source check lets offsets be computed; this makes sure none of them computes to a
+    check of the form lets offsets be computed; this makes sure none of them computes to a
     name such as `__globals__`, nor lets `_deref_set` change a class or a module."""
     if not isinstance(root, list) and type(root).__module__ != GENERATED_MODULE:
         raise ProgramFault(f"a reference into a {type(root).__name__}")

@@ -13,8 +13,8 @@ position allows its kind, every field of its type (no Boolean for an integer nor
 reverse), and beyond the types, every string the printer writes into the program as it
 is a plain identifier (no text can slip a line or a statement in), and every number and
 size within limits a resource can run. Anything else is a `FormRefused` naming the form
-and where in it. The names themselves (which globals code may use) are checked on the
-printed text, with the rest of the code (runtime/contract/generated_code.py).
+and where in it. What the names are (which globals code may use, which attributes) is
+checked on the decoded unit, with the rest of what code may contain (form_check.py).
 """
 
 from __future__ import annotations
