@@ -14,8 +14,10 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import threading
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -29,7 +31,7 @@ from runtime.code.intrinsics import ProgramFault, Reference, SystemView, namespa
 from runtime.code.native.worker import ArtifactTranslation
 from runtime.contract.artifact import Artifact, ArtifactError, VarInfo, load_artifact
 from runtime.contract.code.form_check import check_unit
-from runtime.contract.code.form_json import FormRefused, decode_unit, encode_unit
+from runtime.contract.code.form_json import FORM_DEPTH, FormRefused, decode_unit, encode_unit
 from runtime.contract.code.names import BUILTINS, INTRINSICS, MATH_FUNCTIONS
 from runtime.contract.code.python_text import unit_lines
 from runtime.contract.code.statements import (
@@ -61,6 +63,7 @@ from runtime.contract.code.typed_form import (
 )
 from runtime.contract.code.units import Alias, Class, Function, Inherited, Param, Slot, Unit
 from runtime.contract.generated_code import GeneratedCodeError, check_artifact_names, compile_unit
+from runtime.contract.wire import depth
 from tests.compiler.test_corpus_iec import FOLDERS, KNOWN, name_of, st_files
 from tests.compiler.test_differential import programs
 from tests.compiler.test_generated_names import KITCHEN_SINK
@@ -367,6 +370,36 @@ def test_compile_unit_compiles_the_printed_python_and_refuses_what_does_not_comp
 
 def _printed(unit: Unit) -> str:
     return "\n".join(line for line, _ in unit_lines(unit)) + "\n"
+
+
+@pytest.mark.parametrize("kind", ["Member", "Call"])
+def test_the_deepest_form_is_checked_in_a_thread(kind: str) -> None:
+    """The nests the check takes the most frames for (two a level of JSON: a member's
+    base, a call's argument), FORM_DEPTH deep, decoded and checked under the recursion
+    limit a fresh thread has."""
+    expr: list[Any] = ["Var", "a", "local", ""]
+    levels = FORM_DEPTH - 4  # the Function, its body, the Evaluate, the Var
+    while levels > 1:
+        if kind == "Member":
+            expr, levels = ["Member", expr, "b", ""], levels - 1
+        else:  # a Call and its arguments: two levels
+            expr, levels = ["Call", "abs", [expr], "", []], levels - 2
+    param = ["Param", "a", ["Const", 0, "INT"]]
+    data = ["Function", "FN_T", [param], [["Evaluate", expr, 7]], False]
+    assert depth(data, 10**6) >= FORM_DEPTH - 1
+    failures: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            unit = decode_unit(json.dumps(data), "the form of FUNCTION T")
+            check_unit(unit, "FUNCTION", "FN_T", "the form of FUNCTION T")
+        except BaseException as exc:  # a RecursionError must fail the test, not the thread
+            failures.append(exc)
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    thread.join()
+    assert not failures, failures
 
 
 def test_the_runtime_names_are_one_table() -> None:
