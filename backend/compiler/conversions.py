@@ -4,8 +4,8 @@ an integer wrapped to its width, a value converted between types (X_TO_Y semanti
 from __future__ import annotations
 
 from backend.compiler.types import ElementaryType, Type, artifact_type_text, integer_like
+from runtime.contract.code.names import BUILTINS, CALLED_INTRINSICS
 from runtime.contract.code.typed_form import Binary, Call, Choice, Const, Expr, Wrap
-from runtime.contract.generated_code import BUILTINS, CALLED_INTRINSICS
 
 NS_PER_DAY = 86_400_000_000_000
 

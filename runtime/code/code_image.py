@@ -66,7 +66,7 @@ class CodeImage:
         """`compile_units`: how the generated source becomes code (a reload prepared
         while cycles run passes the compile worker's); `native`: the tier that binds C
         bodies to the classes, where it can."""
-        check_artifact_names(artifact)  # the sources: where they are compiled
+        check_artifact_names(artifact)  # the code: where its forms are decoded
         self.artifact = artifact
         self.system = system
         self._namespace = namespace(system) if printf is None else namespace(system, printf)

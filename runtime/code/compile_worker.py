@@ -9,8 +9,8 @@ for the pipe releases the lock, and loading them takes about 1/25 of the compile
 The child is started on first use and kept; it ends when the runtime closes the pipe
 (also when the runtime dies). It runs at a lower priority than the runtime: preparing a
 reload is background work. Should it fail in any way, the code is compiled here as
-before, which also raises the error a broken unit deserves. Both sides compile only what
-`runtime.contract.generated_code` finds to be generated code.
+before, which also raises the error a broken unit deserves. What either side compiles was
+printed from forms checked where they were decoded (runtime/contract/code/form_check.py).
 
 Run as `python -m runtime.code.compile_worker` it is that child.
 """
@@ -30,15 +30,15 @@ from types import CodeType
 from typing import IO
 
 from runtime.code.code_warmup import warm_up
-from runtime.contract.generated_code import compile_unit
+from runtime.contract.generated_code import GeneratedCodeError, compile_unit
 
 _LENGTH = struct.Struct("<Q")
 _CHILD_NICE = 10  # below the runtime's raised priority and below normal programs
 
 
 def compile_here(units: list[tuple[str, str]]) -> list[CodeType]:
-    """(source, file name) pairs checked and compiled in this process, in order, and warmed
-    up; GeneratedCodeError for a unit that is not generated code."""
+    """(source, file name) pairs compiled in this process, in order, and warmed up;
+    GeneratedCodeError for a unit that does not compile."""
     codes = [compile_unit(source, filename) for source, filename in units]
     warm_up(codes)
     return codes
@@ -128,9 +128,8 @@ def _receive(pipe: IO[bytes]) -> bytes:
 
 
 def _serve(requests: IO[bytes], answers: IO[bytes]) -> None:
-    """Check and compile every request until the pipe closes; a unit that is not generated
-    code or does not compile is answered with None (its error is raised where it is
-    compiled again)."""
+    """Compile every request until the pipe closes; a unit that does not compile is
+    answered with None (its error is raised where it is compiled again)."""
     while True:
         try:
             units = marshal.loads(_receive(requests))
@@ -140,7 +139,7 @@ def _serve(requests: IO[bytes], answers: IO[bytes]) -> None:
         for source, filename in units:
             try:
                 codes.append(compile_unit(source, filename))
-            except (SyntaxError, ValueError, RecursionError, MemoryError):  # ArtifactError too
+            except GeneratedCodeError:
                 codes.append(None)
         _send(answers, marshal.dumps(codes))
 
@@ -150,7 +149,7 @@ COMPILE_WORKER = CompileWorker()
 if __name__ == "__main__":
     with contextlib.suppress(OSError):  # else it stays at the runtime's priority
         os.setpriority(os.PRIO_PROCESS, 0, _CHILD_NICE)
-    # syntax trees and code objects hold no reference cycles: their counts free them, and
-    # the collections the trees' allocations would start made checking twice as slow
+    # code objects hold no reference cycles: their counts free them, and no collection
+    # need walk what a compile allocates
     gc.disable()
     _serve(sys.stdin.buffer, sys.stdout.buffer)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from operator import attrgetter
 from typing import Any
 
-from runtime.contract.generated_code import BUILTINS, INTRINSICS, is_data_attr
+from runtime.contract.code.names import BUILTINS, INTRINSICS, is_data_attr
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.contract.values import format_time, to_real32
 
@@ -116,7 +116,7 @@ def reference_maker(roots: dict[int, str]) -> Callable[..., Reference]:
 def check_reference(root: Any, steps: tuple[str | int, ...]) -> None:
     """What a reference may be made of: a root that generated code made (an instance of a
     generated class, a list), and steps that are list offsets or variable names. The
-    source check lets offsets be computed; this makes sure none of them computes to a
+    check of the form lets offsets be computed; this makes sure none of them computes to a
     name such as `__globals__`, nor lets `_deref_set` change a class or a module."""
     if not isinstance(root, list) and type(root).__module__ != GENERATED_MODULE:
         raise ProgramFault(f"a reference into a {type(root).__name__}")
@@ -541,8 +541,8 @@ class Namespace:
 
 def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -> dict[str, Any]:
     """A fresh global namespace for one resource's generated code: the names of
-    `runtime.contract.generated_code` (INTRINSICS, BUILTINS), which the source check
-    holds generated code to."""
+    `runtime.contract.code.names` (INTRINSICS, BUILTINS), which the check of generated
+    code holds it to."""
     reference_roots: dict[int, str] = {}  # filled by `Instances`: the paths of instances
     names = {
         # only what generated classes need: user code cannot reach open(), import, ...
@@ -602,5 +602,5 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         "_step_enter": _step_enter,
         "_test": _no_test_runner,  # `CodeImage.run_tests_with` gives it a test runner
     }
-    assert names.keys() - {"__builtins__", "__name__"} == INTRINSICS, "see generated_code.py"
+    assert names.keys() - {"__builtins__", "__name__"} == INTRINSICS, "see contract/code/names.py"
     return names

@@ -15,6 +15,7 @@ import zlib
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from runtime.contract.code.form_check import check_unit
 from runtime.contract.code.form_json import FormRefused, decode_unit
 from runtime.contract.code.form_size import UnitCells, check_cells, unit_cells
 from runtime.contract.code.python_text import unit_lines
@@ -92,7 +93,10 @@ class PouCode:
         known: Unit | None = self.__dict__.get("_known")
         if known is not None:
             return known
-        return decode_unit(self.form, f"the form of {self.kind} {self.name}")
+        what = f"the form of {self.kind} {self.name}"
+        unit = decode_unit(self.form, what)
+        check_unit(unit, self.kind, self.class_name, what)
+        return unit
 
     def knowing(self, unit: Unit, source: str, st_lines: tuple[int, ...]) -> PouCode:
         """This code, given the unit its form was encoded from and its printed Python (the

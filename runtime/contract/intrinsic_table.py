@@ -2,7 +2,7 @@
 gives, the program faults it raises and what it means (docs/artifact.md, "Generated code").
 
 The compiler writes calls of these, the check of generated code allows exactly these names
-(`generated_code.py`), the Python tier binds each to its implementation
+(`code/names.py`), the Python tier binds each to its implementation
 (`runtime/code/intrinsics.py`, checked against this table as it builds a namespace) and
 the native tier translates the ones it knows to C by these entries
 (`runtime/code/native/translate.py`). A test holds the implementations, their arities and

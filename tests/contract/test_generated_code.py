@@ -1,18 +1,23 @@
-"""Generated code is checked before it is compiled (runtime/contract/generated_code.py): the
-ways out of the restricted namespace are refused with the unit, the line and what, and every
-unit the compiler makes passes.
+"""What generated code may contain is checked on its typed form, where an artifact's form is
+decoded (runtime/contract/code/form_check.py): the ways out of the restricted namespace
+are refused with the unit, where in its form and what, the runtime compiles the Python it
+prints without parsing it again (runtime/contract/generated_code.py), and every unit the
+compiler makes passes.
 
 Before, the runtime compiled whatever source an artifact carried: `_idiv.__globals__` led
 from the first intrinsic to `__import__`, and a POU name put into the native tier's C went
-into its text as it was."""
+into its text as it was. Then the Python printed from the form was parsed and checked as
+text; each case that check refused is a form refused here."""
 
 from __future__ import annotations
 
 import json
 import subprocess
 import sys
+import threading
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -20,22 +25,45 @@ from hypothesis import HealthCheck, given, settings
 from backend.compiler import builtins as compiler_builtins
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
+from runtime.code.code_image import CodeImage
 from runtime.code.compile_worker import child_environment
-from runtime.code.fault_location import code_filename
 from runtime.code.intrinsics import ProgramFault, Reference, SystemView, namespace, reference_maker
 from runtime.code.native.worker import ArtifactTranslation
-from runtime.contract.artifact import Artifact, PouCode, VarInfo
-from runtime.contract.code.statements import Evaluate
-from runtime.contract.code.typed_form import Call, Const
-from runtime.contract.generated_code import (
-    BUILTINS,
-    INTRINSICS,
-    MATH_FUNCTIONS,
-    GeneratedCodeError,
-    check_artifact_names,
-    check_source,
-    compile_unit,
+from runtime.contract.artifact import Artifact, ArtifactError, VarInfo, load_artifact
+from runtime.contract.code.form_check import check_unit
+from runtime.contract.code.form_json import FORM_DEPTH, FormRefused, decode_unit, encode_unit
+from runtime.contract.code.names import BUILTINS, INTRINSICS, MATH_FUNCTIONS
+from runtime.contract.code.python_text import unit_lines
+from runtime.contract.code.statements import (
+    Assign,
+    Break,
+    Evaluate,
+    ForEach,
+    If,
+    Pass,
+    Return,
+    Stmt,
+    While,
 )
+from runtime.contract.code.typed_form import (
+    Assigned,
+    Binary,
+    Call,
+    Const,
+    Expr,
+    Index,
+    Member,
+    Members,
+    Named,
+    Repeated,
+    Sequence,
+    This,
+    Var,
+    Wrap,
+)
+from runtime.contract.code.units import Alias, Class, Function, Inherited, Param, Slot, Unit
+from runtime.contract.generated_code import GeneratedCodeError, check_artifact_names, compile_unit
+from runtime.contract.wire import depth
 from tests.compiler.test_corpus_iec import FOLDERS, KNOWN, name_of, st_files
 from tests.compiler.test_differential import programs
 from tests.compiler.test_generated_names import KITCHEN_SINK
@@ -43,161 +71,335 @@ from tests.compiler.test_oop import DRIVES, MACHINES, MOTOR
 from tests.compiler.test_sfc import QUALIFIERS
 from tests.conftest import REPO
 from tests.support.corpus_paths import corpus_dir
-from tests.support.crafted_units import first_in_body
+from tests.support.crafted_units import escape, first_in_body
 
-# a block as the compiler writes one; `{body}` lines go at the end of its `__call__`
-BLOCK = """\
-class POU_M:
-    __slots__ = ('n', 'text', 'fb')
-
-    def __init__(s):
-        s.n = 0
-        s.text = ''
-        s.fb = POU_OTHER()
-
-    def __call__(s):
-        __t1 = _tick
-        s.n = _idiv(s.n + 1, 2)
-{body}
-"""
-BODY_LINE = 12  # the line of the first body line in BLOCK
+N = Var("n", "instance", "INT")
+TEXT = Var("text", "instance", "STRING")
+FB_VAR = Var("fb", "instance", "FB_VAR")
+TICK = Var("__t1", "local", "")
 
 
-def block(*lines: str) -> str:
-    return BLOCK.format(body="\n".join("        " + line for line in lines))
+def const(value: bool | int | float | str | None) -> Const:
+    return Const(value, "")
 
 
-def refusal(source: str) -> str:
-    with pytest.raises(GeneratedCodeError) as refused:
-        check_source(source, "<PROGRAM Main>")
+def member(base: Expr, name: str) -> Member:
+    return Member(base, name, "")
+
+
+def call(callee: str | Expr, *args: Expr, keywords: tuple[tuple[str, Expr], ...] = ()) -> Call:
+    return Call(callee, args, "", keywords)
+
+
+def set_n(value: Expr) -> Assign:
+    return Assign(N, value, 12)
+
+
+def run(value: Expr) -> Evaluate:
+    return Evaluate(value, 12)
+
+
+def local(name: str) -> Var:
+    return Var(name, "local", "")
+
+
+def block(*body: Stmt) -> Class:
+    """A block as the compiler builds one, `body` at the end of its `__call__`."""
+    counted = Call("_idiv", (Binary("+", N, const(1), "INT"), const(2)), "INT")
+    call_body = (Assign(TICK, Named("_tick"), 10), Assign(N, counted, 11), *body)
+    slots = (Slot("n", const(0)), Slot("text", const("")), Slot("fb", call("POU_OTHER")))
+    return Class("POU_M", slots, functions=(Function("__call__", (), call_body, method=True),))
+
+
+def function(*params: Param, body: tuple[Stmt, ...] = (Return(const(1), 2),)) -> Function:
+    return Function("FN_X", params, body)
+
+
+def refusal(unit: Unit, kind: str = "PROGRAM", class_name: str | None = None) -> str:
+    """Why the check refuses `unit`, a form the decoder takes (so that the check, and not the
+    decoder, is what refuses it)."""
+    decoded = decode_unit(encode_unit(unit), "the form of PROGRAM Main")
+    assert decoded == unit
+    with pytest.raises(FormRefused) as refused:
+        name = decoded.name if class_name is None else class_name
+        check_unit(decoded, kind, name, "the form of PROGRAM Main")
     return str(refused.value)
 
 
-def test_a_block_as_the_compiler_writes_it_passes() -> None:
-    check_source(
-        block("if __t1 is not None:", "    __t1()", "__t2 = s.fb", "__t2.__call__()"), "<PROGRAM M>"
-    )
+def test_a_block_as_the_compiler_builds_it_passes() -> None:
+    ticked = If(Binary("is not", Named("_tick"), const(None), "BOOL"), (run(call(TICK)),), (), 12)
+    held = local("__t2")
+    ran = (Assign(held, FB_VAR, 13), run(call(member(held, "__call__"))))
+    check_unit(block(ticked, *ran), "PROGRAM", "POU_M", "the form of PROGRAM M")
 
 
-# (a body line, what the refusal names)
-ESCAPES = [
-    ("s.n = _idiv.__globals__['builtins']", "the attribute '__globals__'"),
-    ("_idiv.__globals__['builtins'].__import__('os').system('id')", "attribute 'system'"),
-    ("s.n = (1).__class__.__mro__", "the attribute '__mro__'"),
-    ("s.n = ''.__class__.__base__.__subclasses__()", "attribute '__subclasses__'"),
-    ("s.n = _copy.__closure__", "the attribute '__closure__'"),
-    ("s.n = (x for x in range(3)).gi_frame.f_globals", "a generator expression"),
-    ("s.n = str.mro()", "a call of the attribute 'mro'"),
-    ("s.n = str.mro", "str other than called"),
-    ("s.text = '{0.__globals__}'.format(_idiv)", "a call of the attribute 'format'"),
-    ("s.text = s.text.format_map(s)", "a call of the attribute 'format_map'"),
-    ("s.n = getattr(s, '__class__')", "a call of 'getattr'"),
-    ("s.n = type(s)", "a call of 'type'"),
-    ("s.n = eval('1')", "a call of 'eval'"),
-    ("exec('import os')", "a call of 'exec'"),
-    ("open('/tmp/padt-escape', 'w')", "a call of 'open'"),
-    ("__import__('os')", "a call of '__import__'"),
-    ("s.n = __builtins__", "the name '__builtins__'"),
-    ("s.n = _math.pi", "_math other than called"),
-    ("s.n = _safe_math(_math.__loader__, 1.0)", "_safe_math of anything but a function"),
-    ("s.n = _safe_math(s.text.format, 1.0)", "_safe_math of anything but a function"),
-    ("_math.sqrt = _copy", "_math other than called"),
-    ("s.n = (lambda: 0)()", "a call of a lambda"),
-    ("s.n = lambda: 0", "a lambda"),
-    ("yield s.n", "a yield"),
-    ("import os", "an import"),
-    ("from os import system", "an import"),
-    ("global x", "a global"),
-    ("try:\n            pass\n        except Exception:\n            pass", "a try"),
-    ("with s.fb:\n            pass", "a with"),
-    ("del s.n", "a del"),
-    ("s.text = f'{s}'", "an f-string"),
-    ("s.n = max(*s.text)", "a starred argument"),
-    ("s.n = max(s.n, key=_copy)", "max() with keywords"),
-    ("s.n = _copy(s.fb, memo=s)", "_copy() with keywords"),
-    ("s.n = FN_X(**s.fb)", "a ** argument"),
-    ("s.n = {'a': 1}", "a dict"),
-    ("s.n = {s.n}", "a set"),
-    ("__builtins__ = {}", "an assignment to '__builtins__'"),
-    ("_copy = s.text.format\n        _copy(s)", "_copy as a local"),
-    ("(_deref := s.text.format)\n        s.n = _deref(s)", "_deref as a local"),
-    ("__t2 = s.text.format\n        __t2('x')", "a call of '__t2'"),
-    ("__t1 = s.text.format\n        __t1()", "a call of '__t1'"),
-    ("_SYS.now_ns = 0", "an assignment to _SYS.now_ns"),
-    ("s.n = _SYS.__class__", "the attribute _SYS.__class__"),
-    ("_P.POU_M = s", "_P other than called"),
-    ("s.n = s.M__run", "the attribute 'M__run'"),
-    ("s.n = s.text.__call__", "the attribute '__call__'"),
-    ("POU_M.__call__(_idiv)", "__call__ other than of a block instance"),
-    ("s.n = _ref(s, ('__class__',), '')", "a reference through '__class__'"),
-    ("s.n = _init(s, {'__class__': 1})", "_init of a member that is not a variable name"),
-    ("s.n = _deref(s.fb).__class__.__base__", "the attribute '__base__'"),
-    ("s.n = _deref(s.fb).__class__.__dict__.get('__init__', ())", "attribute 'get'"),
-    ("s.n = _deref(s.fb).__class__.__dict__['KIND__']", "the attribute '__dict__'"),
-    ("s.é = 1", "an assignment to the attribute 'é'"),
-    ("é = 1", "an assignment to 'é'"),
-    ("s.n = s.n @ s.n", "the operator MatMult"),
-    ("s.n = b'x'", "a constant of type bytes"),
-    ("s.n = 1j", "a constant of type complex"),
-    ("s.n = ...", "a constant of type ellipsis"),
-    ("class Inner:\n            pass", "a class definition"),
-    ("def inner():\n            pass", "a function definition"),
-    ("assert s.n", "an assert"),
-    ("raise ProgramFault('x')", "a raise"),
-    ("a = b = 1", "a chained assignment"),
-]
+def _deref_class(held: Expr | None = None) -> Member:
+    """`_deref(held).__class__`, `held` the local `__t2` by default."""
+    return member(call("_deref", local("__t2") if held is None else held), "__class__")
 
 
-@pytest.mark.parametrize(("line", "reason"), ESCAPES, ids=[line for line, _ in ESCAPES])
-def test_an_escape_is_refused_naming_the_unit_the_line_and_what(line: str, reason: str) -> None:
-    found = refusal(block(line))
-    assert found.startswith("generated code of PROGRAM Main, line "), found
+_GLOBALS = Index(member(Named("_idiv"), "__globals__"), const("builtins"), "")
+_KIND_LOOKUP = member(member(_deref_class(), "__dict__"), "get")
+
+# (body statements, what the refusal names): each line the check of the printed Python
+# refused that the form can describe, and the escapes only a form can spell
+ESCAPES: list[tuple[tuple[Stmt, ...], str]] = [
+    ((set_n(_GLOBALS),), "the attribute '__globals__'"),
+    ((run(call(member(call(member(_GLOBALS, "__import__"), const("os")), "system"))),),
+     "a call of the attribute 'system'"),
+    ((set_n(member(member(const(1), "__class__"), "__mro__")),), "the attribute '__mro__'"),
+    ((set_n(call(member(member(member(const(""), "__class__"), "__base__"), "__subclasses__"))),),
+     "a call of the attribute '__subclasses__'"),
+    ((set_n(member(Named("_copy"), "__closure__")),), "the attribute '__closure__'"),
+    ((set_n(call(member(Named("str"), "mro"))),), "a call of the attribute 'mro'"),
+    ((set_n(member(Named("str"), "mro")),), "str other than called"),
+    ((Assign(TEXT, call(member(const("{0.__globals__}"), "format"), Named("_idiv")), 12),),
+     "a call of the attribute 'format'"),
+    ((Assign(TEXT, call(member(TEXT, "format_map"), This("")), 12),),
+     "a call of the attribute 'format_map'"),
+    ((set_n(call("getattr", This(""), const("__class__"))),), "a call of 'getattr'"),
+    ((set_n(call("type", This(""))),), "a call of 'type'"),
+    ((set_n(call("eval", const("1"))),), "a call of 'eval'"),
+    ((run(call("exec", const("import os"))),), "a call of 'exec'"),
+    ((run(call("open", const("/tmp/padt-escape"), const("w"))),), "a call of 'open'"),
+    ((run(call("__import__", const("os"))),), "a call of '__import__'"),
+    ((set_n(local("__builtins__")),), "the name '__builtins__'"),
+    ((set_n(Named("__builtins__")),), "the name '__builtins__'"),
+    ((set_n(Named("_math.pi")),), "_math.pi other than called"),
+    ((set_n(call("_safe_math", Named("_math.__loader__"), const(1.0))),),
+     "_safe_math of anything but a function of _math"),
+    ((set_n(call("_safe_math", member(TEXT, "format"), const(1.0))),),
+     "_safe_math of anything but a function of _math"),
+    ((Assign(member(Named("_math"), "sqrt"), Named("_copy"), 12),), "_math other than called"),
+    ((set_n(Members((("a", const(1)),))),), "a dict other than the members of _init"),
+    ((set_n(call("max", N, keywords=(("key", Named("_copy")),))),), "max() with keywords"),
+    ((set_n(call("_copy", FB_VAR, keywords=(("memo", This("")),))),), "_copy() with keywords"),
+    ((set_n(call("FN_X", keywords=(("__kw", FB_VAR),))),), "the keyword '__kw'"),
+    ((Assign(local("__builtins__"), Members(()), 12),), "the local name '__builtins__'"),
+    ((Assign(local("_copy"), member(TEXT, "format"), 12), run(call("_copy", This("")))),
+     "_copy as a local"),
+    ((run(Assigned("_deref", member(TEXT, "format"), "")), set_n(call("_deref", This("")))),
+     "_deref as a local"),
+    ((Assign(local("__t2"), member(TEXT, "format"), 12), run(call(local("__t2"), const("x")))),
+     "a call of '__t2' with arguments"),
+    ((Assign(TICK, member(TEXT, "format"), 12), run(call(TICK))), "a call of '__t1'"),
+    ((run(call(local("__t3"))),), "a call of '__t3'"),
+    ((Assign(Var("now_ns", "system", "TIME"), const(0), 12),), "an assignment to _SYS.now_ns"),
+    ((Assign(member(Named("_SYS"), "COLDSTART"), const(True), 12),),
+     "an assignment to _SYS.COLDSTART"),
+    ((set_n(member(Named("_SYS"), "__class__")),), "the attribute _SYS.__class__"),
+    ((set_n(Var("__class__", "system", "")),), "the attribute _SYS.__class__"),
+    ((Assign(Var("POU_M", "programs", ""), This(""), 12),), "an assignment to _P.POU_M"),
+    ((set_n(Var("n", "programs", "")),), "the attribute _P.n"),
+    ((set_n(Var("__dict__", "globals", "")),), "the attribute _G.__dict__"),
+    ((set_n(member(This(""), "M__run")),), "the attribute 'M__run'"),
+    ((set_n(Var("KIND__", "instance", "")),), "the attribute 'KIND__'"),
+    ((set_n(member(TEXT, "__call__")),), "the attribute '__call__'"),
+    ((run(call(member(Named("POU_M"), "__call__"), Named("_idiv"))),),
+     "__call__ other than of a block instance or SUPER^()"),
+    ((run(call(member(FB_VAR, "__call__"))),), "__call__ other than of a block instance"),
+    ((set_n(call("_ref", This(""), Sequence((const("__class__"),), "", True), const(""))),),
+     "a reference through '__class__'"),
+    ((set_n(call("_ref", Named("_SYS"), Sequence((const("COLDSTART"),), "", True), const(""))),),
+     "_SYS other than called or with its attributes"),
+    ((set_n(call("_init", This(""), Members((("__class__", const(1)),)))),),
+     "_init of the member '__class__'"),
+    ((set_n(member(_deref_class(FB_VAR), "__base__")),), "the attribute '__base__'"),
+    ((set_n(call(_KIND_LOOKUP, const("__init__"), Sequence((), "", True))),),
+     "a call of the attribute 'get'"),
+    ((set_n(Index(member(_deref_class(FB_VAR), "__dict__"), const("KIND__"), "")),),
+     "the attribute '__dict__'"),
+    ((set_n(member(_deref_class(FB_VAR), "__name__")),), "the attribute '__name__'"),
+    ((set_n(Named("_idiv")),), "_idiv other than called"),
+    ((set_n(local("_idiv")),), "_idiv other than called"),
+    ((set_n(local("x")),), "the name 'x'"),
+    ((set_n(call(Named("_idiv"), const(1), const(2))),), "a call of a Named"),
+    ((set_n(call("_SfcStep")),), "a call of '_SfcStep'"),
+    ((set_n(call("_reference_roots")),), "a call of '_reference_roots'"),
+    ((set_n(Named("_tick")),), "_tick other than called"),
+    ((Assign(local("range"), const(0), 12), set_n(Repeated(const(0), 2, True, ""))),
+     "range as a local"),
+    ((Assign(local("float"), const(0), 12), set_n(const(float("inf")))), "float as a local"),
+    ((set_n(Repeated(local("_"), 2, False, "")),), "the name '_'"),
+    ((Break(12),), "a Break outside a loop"),
+    ((While(const(True), (Pass(12),), 12), Break(13)), "a Break outside a loop"),
+    ((Assign(const(1), const(2), 12),), "an assignment to a Const"),
+    ((Assign(This(""), const(2), 12),), "an assignment to a This"),
+    ((Assign(Sequence((N, N), "", True), const(1), 12, "+"),), "an assignment to a Sequence"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("body", "reason"), ESCAPES, ids=[r for _, r in ESCAPES])
+def test_an_escape_is_refused_naming_the_unit_where_and_what(
+    body: tuple[Stmt, ...], reason: str
+) -> None:
+    found = refusal(block(*body))
+    assert found.startswith("the form of PROGRAM Main: Class.functions[0].body["), found
     assert reason in found, found
-    assert "is not allowed" in found
+    assert found.endswith(" is not allowed"), found
 
 
-def test_the_line_named_is_the_line_of_the_source() -> None:
-    found = refusal(block("s.n = 1", "s.n = _idiv.__globals__"))
-    assert f"line {BODY_LINE + 1}:" in found, found
+def test_the_place_named_is_the_node_at_fault() -> None:
+    found = refusal(block(set_n(const(1)), set_n(_GLOBALS)))
+    assert "Class.functions[0].body[3].value.base: the attribute '__globals__'" in found, found
+    found = refusal(block(set_n(call("FN_X", keywords=(("a", N), ("__b", N))))))
+    assert "body[2].value.keywords[1]: the keyword '__b'" in found, found
 
 
-# (a unit, what the refusal names): the shape of the unit around the bodies
-UNITS = [
-    (BLOCK.format(body="") + "import os\n", "a second top-level statement"),
-    ("import os\n", "an import at the top level"),
-    ("class _idiv:\n    __slots__ = ()\n", "a class named '_idiv'"),
-    ("def FN_X(a=open('/tmp/x', 'w')):\n    return a\n", "a call of 'open'"),
-    ("def FN_X(a=_idiv.__globals__):\n    return a\n", "the attribute '__globals__'"),
-    ("@FN_Y\ndef FN_X():\n    return 1\n", "decorators"),
-    ("def FN_X(*args):\n    return 1\n", "*args"),
-    ("def FN_X(a: int = 1):\n    return a\n", "annotations"),
-    ("class POU_M(FN_X):\n    __slots__ = ()\n", "a class with bases"),
-    ("class POU_M(metaclass=FN_X):\n    __slots__ = ()\n", "a class with bases"),
-    ("class POU_M:\n    def __call__(s):\n        pass\n", "a class without __slots__ first"),
-    ("class POU_M:\n    __slots__ = ('__dict__',)\n", "the slot '__dict__'"),
-    ("class POU_M:\n    __slots__ = ('M__run',)\n", "the slot 'M__run'"),
-    ("class POU_M:\n    __slots__ = ()\n    KIND__ = (FN_X(),)\n", "KIND__ entry"),
-    ("class POU_M:\n    __slots__ = ()\n    def __del__(s):\n        pass\n", "'__del__'"),
-    ("class POU_M:\n    __slots__ = ()\n    __getattr__ = FN_X\n", "an assignment in a class"),
-    ("class POU_M:\n    __slots__ = ()\n    M__a = _idiv.M__a\n", "an assignment in a class"),
-    ("class POU_M:\n    __slots__ = ()\n    @FN_X\n    def M__a(s):\n        pass\n", "decor"),
-    ("class POU_M:\n    __slots__ = ()\n    def M__a(s, x=open('f')):\n        pass\n", "'open'"),
-    ("POU_M = _idiv\n", "an assignment at the top level"),
-    ("async def FN_X():\n    return 1\n", "an async function at the top level"),
-    ("def FN_X(:\n", "generated code of PROGRAM Main, line 1: "),
-]
+def test_what_passes_where_the_compiler_writes_it_is_refused_elsewhere() -> None:
+    """The shapes of dunders the compiler writes, each only where it writes them."""
+    deref_name = member(_deref_class(), "__name__")
+    kinds = call(_KIND_LOOKUP, const("KIND__"), Sequence((), "", True))
+    held = (Assign(local("__t2"), FB_VAR, 12),)
+    check_unit(block(*held, set_n(deref_name), set_n(kinds)), "PROGRAM", "POU_M", "M")
+    super_call = run(call(member(Named("POU_BASE"), "__call__"), This("")))
+    check_unit(block(super_call), "PROGRAM", "POU_M", "M")
+    outside = function(Param("s", const(0)), body=(super_call, Return(const(1), 2)))
+    assert "__call__ other than of a block instance or SUPER^()" in refusal(outside, "FUNCTION")
 
 
-@pytest.mark.parametrize(("source", "reason"), UNITS, ids=[r for _, r in UNITS])
-def test_a_unit_of_another_shape_is_refused(source: str, reason: str) -> None:
-    found = refusal(source)
+def _method(*params: Param, name: str = "M__a", method: bool = True) -> Function:
+    return Function(name, params, (Pass(1),), method)
+
+
+def _class(*functions: Function | Inherited, slots: tuple[Slot, ...] = ()) -> Class:
+    return Class("POU_M", slots, (), functions)
+
+
+# (a unit, its kind, what the refusal names): the shape of the unit around the bodies
+UNITS: list[tuple[Unit, str, str]] = [
+    (Class("_idiv", ()), "PROGRAM", "a Class named '_idiv'"),
+    (Class("FN_X", ()), "PROGRAM", "a Class named 'FN_X'"),
+    (function(), "PROGRAM", "a Function for a PROGRAM"),
+    (block(), "FUNCTION", "a Class for a FUNCTION"),
+    (Alias("POU_M", "_SfcStep"), "FUNCTION_BLOCK", "an Alias for a FUNCTION_BLOCK"),
+    (block(), "MODULE", "a unit of kind 'MODULE'"),
+    (replace(function(), name="POU_X"), "FUNCTION", "a Function named 'POU_X'"),
+    (function(Param("a", call("open", const("/tmp/x"), const("w")))), "FUNCTION",
+     "a call of 'open'"),
+    (function(Param("a", member(Named("_idiv"), "__globals__"))), "FUNCTION",
+     "the attribute '__globals__'"),
+    (function(Param("a", Assigned("_idiv", const(1), ""))), "FUNCTION",
+     "binding '_idiv' where the unit is defined"),
+    (function(Param("a", Wrap(local("a"), 32, True, 0, ""))), "FUNCTION", "the name 'a'"),
+    (function(Param("a", const(0)), Param("a", const(1))), "FUNCTION", "a second parameter 'a'"),
+    (function(Param("__class__", const(0))), "FUNCTION", "the local name '__class__'"),
+    (replace(function(), method=True), "FUNCTION", "a function taking an instance outside"),
+    (function(body=(ForEach("__x__", const(0), (Pass(1),), (), 1),)), "FUNCTION",
+     "the local name '__x__'"),
+    (function(body=(run(call(local("a"))),)), "FUNCTION", "a call of 'a'"),
+    (function(Param("a", const(0)), body=(run(call(local("a"))),)), "FUNCTION", "a call of 'a'"),
+    (function(body=(Return(This(""), 1),)), "FUNCTION", "the name 's'"),
+    (_class(slots=(Slot("__dict__", const(0)),)), "PROGRAM", "the slot '__dict__'"),
+    (_class(slots=(Slot("M__run", const(0)),)), "PROGRAM", "the slot 'M__run'"),
+    (_class(slots=(Slot("KIND__", const(0)),)), "PROGRAM", "the slot 'KIND__'"),
+    (_class(slots=(Slot("a", local("x")),)), "PROGRAM", "the name 'x'"),
+    (_class(slots=(Slot("a", call("open", const("f"))),)), "PROGRAM", "a call of 'open'"),
+    (Class("POU_M", (), ("FB_VAR", "a')\nimport os #")), "PROGRAM", "the KIND__ entry"),
+    (_class(_method(name="__del__")), "PROGRAM", "a method named '__del__'"),
+    (_class(_method(name="__init__")), "PROGRAM", "a method named '__init__'"),
+    (_class(_method(method=False)), "PROGRAM", "the method M__a without its instance"),
+    (_class(_method(Param("a", const(0)), name="__call__")), "PROGRAM",
+     "__call__ with parameters"),
+    (_class(_method(Param("x", call("open", const("f"))))), "PROGRAM", "a call of 'open'"),
+    (_class(_method(Param("x", This("")))), "PROGRAM", "the name 's'"),
+    (_class(_method(Param("x", N))), "PROGRAM", "the name 's'"),
+    (_class(Inherited("__getattr__", "POU_BASE")), "PROGRAM", "inheriting '__getattr__'"),
+    (_class(Inherited("M__a", "_idiv")), "PROGRAM", "inheriting from '_idiv'"),
+    (_class(Inherited("M__a", "FN_X")), "PROGRAM", "inheriting from 'FN_X'"),
+    (Alias("STRUCT_M", "_idiv"), "STRUCT", "an alias of '_idiv'"),
+    (Alias("STRUCT_M", "__builtins__"), "STRUCT", "an alias of '__builtins__'"),
+    (Alias("_idiv", "_SfcStep"), "STRUCT", "an Alias named '_idiv'"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("unit", "kind", "reason"), UNITS, ids=[r for *_, r in UNITS])
+def test_a_unit_of_another_shape_is_refused(unit: Unit, kind: str, reason: str) -> None:
+    found = refusal(unit, kind)
+    assert found.startswith("the form of PROGRAM Main: "), found
     assert reason in found, found
 
 
-def test_compile_unit_compiles_nothing_it_refuses() -> None:
-    with pytest.raises(GeneratedCodeError, match="line 12: the attribute '__globals__'"):
-        compile_unit(block("s.n = _idiv.__globals__"), "<PROGRAM Main>")
-    assert compile_unit(block(), "<PROGRAM Main>").co_filename == "<PROGRAM Main>"
+def test_a_unit_is_the_class_of_its_name() -> None:
+    """The runtime finds a unit's class by the artifact's name for it: a form of another
+    name (another unit's) is refused."""
+    found = refusal(block(), "PROGRAM", "POU_OTHER")
+    assert "Class.name: the name 'POU_M' for the unit 'POU_OTHER' is not allowed" in found
+
+
+# the constructs the check of the printed Python refused by name: the form has no node for
+# any of them, so no artifact can carry one
+NO_NODE = [
+    "Import", "ImportFrom", "Lambda", "GeneratorExp", "Yield", "Await", "Try", "With",
+    "Global", "Nonlocal", "Delete", "JoinedStr", "Starred", "Dict", "Set", "DictComp",
+    "Raise", "Assert", "ClassDef", "FunctionDef", "AsyncFunctionDef", "Match", "Attribute",
+    "Name", "Subscript",
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("tag", NO_NODE)
+def test_a_construct_the_form_has_no_node_for_is_refused_as_it_is_decoded(tag: str) -> None:
+    data = json.loads(encode_unit(block()))
+    body = data[4][0][3]  # the __call__'s body
+    for node in (["Evaluate", [tag, "os"], 1], [tag, "os"]):
+        crafted = json.dumps([*data[:4], [[*data[4][0][:3], [*body, node], True]]])
+        with pytest.raises(FormRefused, match=f"is a '{tag}' node, not "):
+            decode_unit(crafted, "the form of PROGRAM Main")
+
+
+def test_nothing_of_a_form_that_is_refused_runs_nor_is_compiled(tmp_path: Path) -> None:
+    """A crafted artifact's code is refused where it is decoded: by load_artifact, and by
+    a code image made of the artifact as it is (never loaded), before anything compiles."""
+    written = tmp_path / "escaped"
+    crafted = first_in_body(_fb_first(_artifact(FB)), escape(written))
+    with pytest.raises(ArtifactError, match=r"the form of FUNCTION_BLOCK Fb: Class\.functions"):
+        load_artifact(crafted.to_json())
+    compiled: list[object] = []
+    with pytest.raises(FormRefused, match="a call of the attribute 'write_text' is not allowed"):
+        CodeImage(crafted, SystemView(), compile_units=compiled.extend)  # type: ignore[arg-type]
+    assert not compiled and not written.exists()
+
+
+def test_compile_unit_compiles_the_printed_python_and_refuses_what_does_not_compile() -> None:
+    assert compile_unit(_printed(block()), "<PROGRAM Main>").co_filename == "<PROGRAM Main>"
+    repeated = block(set_n(call("FN_X", keywords=(("a", N), ("a", N)))))
+    check_unit(repeated, "PROGRAM", "POU_M", "M")  # Python's to refuse
+    with pytest.raises(GeneratedCodeError, match="Main, line 12: keyword argument repeated"):
+        compile_unit(_printed(repeated), "<PROGRAM Main>")
+
+
+def _printed(unit: Unit) -> str:
+    return "\n".join(line for line, _ in unit_lines(unit)) + "\n"
+
+
+@pytest.mark.parametrize("kind", ["Member", "Call"])
+def test_the_deepest_form_is_checked_in_a_thread(kind: str) -> None:
+    """The nests the check takes the most frames for (two a level of JSON: a member's
+    base, a call's argument), FORM_DEPTH deep, decoded and checked under the recursion
+    limit a fresh thread has."""
+    expr: list[Any] = ["Var", "a", "local", ""]
+    levels = FORM_DEPTH - 4  # the Function, its body, the Evaluate, the Var
+    while levels > 1:
+        if kind == "Member":
+            expr, levels = ["Member", expr, "b", ""], levels - 1
+        else:  # a Call and its arguments: two levels
+            expr, levels = ["Call", "abs", [expr], "", []], levels - 2
+    param = ["Param", "a", ["Const", 0, "INT"]]
+    data = ["Function", "FN_T", [param], [["Evaluate", expr, 7]], False]
+    assert depth(data, 10**6) >= FORM_DEPTH - 1
+    failures: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            unit = decode_unit(json.dumps(data), "the form of FUNCTION T")
+            check_unit(unit, "FUNCTION", "FN_T", "the form of FUNCTION T")
+        except BaseException as exc:  # a RecursionError must fail the test, not the thread
+            failures.append(exc)
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    thread.join()
+    assert not failures, failures
 
 
 def test_the_runtime_names_are_one_table() -> None:
@@ -209,9 +411,10 @@ def test_the_runtime_names_are_one_table() -> None:
 
 
 def test_a_reference_made_at_run_time_keeps_to_variables_of_generated_objects() -> None:
-    """A step the source check cannot see (`'__glo' + 'bals__'`) is refused when the code
-    runs, and a reference once made cannot be changed."""
-    code = compile_unit(BLOCK.format(body="").replace("POU_OTHER()", "0"), "<PROGRAM M>")
+    """A step the check of the form cannot see (`'__glo' + 'bals__'`) is refused when the
+    code runs, and a reference once made cannot be changed."""
+    made_of = replace(block(), slots=block().slots[:2])
+    code = compile_unit(_printed(made_of), "<PROGRAM M>")
     names = namespace(SystemView())
     exec(code, names)
     instance = names["POU_M"]()
@@ -329,23 +532,25 @@ def test_no_text_of_a_source_reaches_the_c_of_the_native_tier_unchecked() -> Non
     translation = ArtifactTranslation.of(artifact)
     for unit in translation.units:
         assert "system(" not in translation.translate(unit).source
-    fb = artifact.pou("Fb")
-    first = replace(artifact, pous=(fb, *(p for p in artifact.pous if p is not fb)))
     imported = Evaluate(Call("__import__", (Const("os", "STRING"),), ""), 0)
-    with pytest.raises(GeneratedCodeError, match="generated code of FUNCTION_BLOCK Fb"):
-        ArtifactTranslation.of(first_in_body(first, imported))
+    with pytest.raises(ArtifactError, match=r"the form of FUNCTION_BLOCK Fb: Class\.functions"):
+        load_artifact(first_in_body(_fb_first(artifact), imported).to_json())
+
+
+def _fb_first(artifact: Artifact) -> Artifact:
+    fb = artifact.pou("Fb")
+    return replace(artifact, pous=(fb, *(p for p in artifact.pous if p is not fb)))
 
 
 # ---- every artifact the compiler makes passes
 
 
 def _check_all(artifact: Artifact) -> None:
+    """Every unit of the compiler's `artifact` passes: its form as the compiler built it
+    (the compiler's own code is not checked as it runs, `PouCode.knowing`)."""
     check_artifact_names(artifact)
-    units: list[PouCode] = [*artifact.types, *artifact.pous]
-    if artifact.globals is not None:
-        units.append(artifact.globals)
-    for unit in units:
-        check_source(unit.source, code_filename(unit))
+    for unit in artifact.units():
+        check_unit(unit.unit, unit.kind, unit.class_name, f"the form of {unit.kind} {unit.name}")
 
 
 def test_every_unit_of_the_demo_the_language_tests_and_the_feature_samples_passes() -> None:

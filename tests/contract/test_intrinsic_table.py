@@ -11,7 +11,7 @@ import pytest
 
 from runtime.code import intrinsics
 from runtime.code.intrinsics import ProgramFault, SystemView, namespace
-from runtime.contract.generated_code import CALLED_INTRINSICS, INTRINSICS
+from runtime.contract.code.names import CALLED_INTRINSICS, INTRINSICS
 from runtime.contract.intrinsic_table import INTRINSICS as TABLE
 from runtime.contract.intrinsic_table import Intrinsic
 from tests.conftest import REPO

@@ -21,9 +21,6 @@ UNITS = [
         "<pou P>",
     ),
 ]
-ESCAPE = (
-    "class POU_E:\n    __slots__ = ()\n    def __call__(s):\n        return _idiv.__globals__\n"
-)
 
 
 def _run(codes: list[CodeType]) -> object:
@@ -49,16 +46,6 @@ def test_a_unit_that_does_not_compile_raises_its_error_naming_its_unit() -> None
         with pytest.raises(GeneratedCodeError, match="pou BROKEN, line 1"):
             worker.compile([*UNITS, ("x = (", "<pou BROKEN>")])
         assert _run(worker.compile(UNITS)) == 42  # and it goes on serving
-    finally:
-        worker.close()
-
-
-def test_the_child_compiles_no_code_the_compiler_would_not_generate() -> None:
-    worker = CompileWorker()
-    try:
-        assert worker._in_child([*UNITS, (ESCAPE, "<pou E>")])[2] is None
-        with pytest.raises(GeneratedCodeError, match="pou E, line 4: the attribute '__glo"):
-            worker.compile([*UNITS, (ESCAPE, "<pou E>")])
     finally:
         worker.close()
 

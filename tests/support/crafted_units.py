@@ -1,6 +1,6 @@
 """Artifacts whose first POU's typed form is changed as an attacker who read the format
-would change it, every CRC redone: what only the runtime's check of the form, and of the
-Python it prints from the form, can refuse."""
+would change it, every CRC redone: what only the runtime's decoding and check of the form
+(runtime/contract/code/form_check.py) can refuse."""
 
 from __future__ import annotations
 
@@ -52,11 +52,11 @@ def escape(written: Path) -> Stmt:
     return Evaluate(_called(path, "write_text", _text("ran")), 0)
 
 
-# the refusal of `escape`'s line by the check of the Python printed from the form
+# the refusal of `escape`'s line by the check of the form
 ESCAPE_REFUSED = "a call of the attribute 'write_text' is not allowed"
 
 
-# the refusal of `smuggled`'s name by the check of the form
+# the refusal of `smuggled`'s name by the decoding of the form
 SMUGGLED_REFUSED = "not an identifier"
 
 

@@ -30,11 +30,7 @@ from runtime.code.native.build import BuildError, build, find_toolchain, mark_us
 from runtime.code.native.kinds import ClassInfo, Forms, FunctionInfo, class_table, function_table
 from runtime.code.native.translate import Translated, translate_unit
 from runtime.contract.artifact import Artifact, PouCode, load_artifact
-from runtime.contract.generated_code import (
-    GeneratedCodeError,
-    check_artifact_names,
-    check_source,
-)
+from runtime.contract.generated_code import GeneratedCodeError, check_artifact_names
 
 WORKER_NICE = 10  # background work: below the runtime and below normal programs
 _SOURCES = ("translate.py", "kinds.py", "padt_native.h", "build.py")
@@ -64,8 +60,6 @@ class ArtifactTranslation:
         """GeneratedCodeError for an artifact with any unit that is not generated code:
         names and sources are checked before any of them is read or put into C."""
         check_artifact_names(artifact)
-        for unit in artifact.units():
-            check_source(unit.source, code_filename(unit))
         units = translatable_units(artifact)
         bodies = [unit for unit in units if unit.kind in ("PROGRAM", "FUNCTION_BLOCK")]
         functions = [unit for unit in artifact.pous if unit.kind == "FUNCTION"]

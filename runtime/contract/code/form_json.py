@@ -13,8 +13,8 @@ position allows its kind, every field of its type (no Boolean for an integer nor
 reverse), and beyond the types, every string the printer writes into the program as it
 is a plain identifier (no text can slip a line or a statement in), and every number and
 size within limits a resource can run. Anything else is a `FormRefused` naming the form
-and where in it. The names themselves (which globals code may use) are checked on the
-printed text, with the rest of the code (runtime/contract/generated_code.py).
+and where in it. What the names are (which globals code may use, which attributes) is
+checked on the decoded unit, with the rest of what code may contain (form_check.py).
 """
 
 from __future__ import annotations
@@ -37,7 +37,8 @@ MAX_FORM_BYTES = 64 * MIB
 # The deepest nesting of JSON a form may have. A runtime keeps Python's recursion limit of
 # 1,000 and decodes and prints in threads of its own. The decoder takes one Python frame per
 # level of JSON (json.loads itself gives up near 990 levels); printing takes up to two (a
-# Wrap, or an Index offset, in another: python_text -> _wrap_text / _bare -> python_text).
+# Wrap, or an Index offset, in another: python_text -> _wrap_text / _bare -> python_text), and
+# so does the check (a member's base, a call's arguments: form_check.py; 700 frames at 350).
 # Measured in a fresh thread: a nest of Wraps or Indexes decodes and prints up to 499
 # levels of JSON, a Chain's up to 664, anything else up to json.loads' limit. 350 leaves
 # some 300 frames to whatever calls the decoder and the printer.
