@@ -144,7 +144,7 @@ def c_string(text: str) -> str:
 
 def c_comment(text: str) -> str:
     """A C comment of `text`, which cannot end it early (names are checked before they get
-    here, runtime/contract/generated_code.py; this holds whatever a name holds)."""
+    here, runtime/contract/code/form_check.py; this holds whatever a name holds)."""
     return "/* " + text.replace("*/", "* /") + " */"
 
 

@@ -7,8 +7,10 @@ A translation is kept beside the compiled modules, by the hash of what it depend
 unit's name and typed form, the classes it reads, the FUNCTIONs it calls, the translator
 itself), so a unit built before is neither translated nor compiled again.
 
-Nothing is translated of an artifact with a unit that is not generated code
-(`runtime.contract.generated_code`): a name or a source of its choosing must not become C.
+Nothing is translated of an artifact with a unit that is not one the compiler could have
+built: `load_artifact` decodes and checks every unit's typed form
+(`runtime/contract/code/form_check.py`), and the names the C is made of are checked again
+here (`check_artifact_names`), so no name of an artifact's choosing becomes C.
 
 Run as `python -m runtime.code.native.worker CACHE`: a request (JSON) on stdin, the answer on
 stdout.
@@ -57,8 +59,9 @@ class ArtifactTranslation:
 
     @classmethod
     def of(cls, artifact: Artifact) -> ArtifactTranslation:
-        """GeneratedCodeError for an artifact with any unit that is not generated code:
-        names and sources are checked before any of them is read or put into C."""
+        """GeneratedCodeError for an artifact with any unit named otherwise than the
+        compiler names units and variables, before any name is put into C (the forms are
+        checked as they are decoded)."""
         check_artifact_names(artifact)
         units = translatable_units(artifact)
         bodies = [unit for unit in units if unit.kind in ("PROGRAM", "FUNCTION_BLOCK")]
