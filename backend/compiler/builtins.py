@@ -179,6 +179,14 @@ def _fn(callee: str) -> Emitting:
     return lambda values, _args, result: intrinsic(callee, result, *values)
 
 
+def _extreme(callee: str) -> Emitting:
+    """MAX and MIN: Python's `max` or `min` of two values or more; of one, the value
+    itself (`max(x)` would iterate over x, and a FUNCTION faulted with a TypeError)."""
+    return lambda values, _args, result: (
+        values[0] if len(values) == 1 else intrinsic(callee, result, *values)
+    )
+
+
 def _chained(op: BinaryOp, values: list[Expr], result: Type) -> Expr:
     """`a op b op c ...`, left to right."""
     name = artifact_type_text(result)
@@ -502,8 +510,8 @@ _FIXED: dict[str, Builtin] = {
         Builtin("NOT", ("IN",), _not_typing, _not_emit),
         Builtin("SEL", ("G", "IN0", "IN1"), _sel_typing, _select, min_args=3),
         Builtin("MUX", None, _mux_typing, _fn("_mux"), min_args=2),
-        Builtin("MAX", None, _common, _fn("max"), min_args=1),
-        Builtin("MIN", None, _common, _fn("min"), min_args=1),
+        Builtin("MAX", None, _common, _extreme("max"), min_args=1),
+        Builtin("MIN", None, _common, _extreme("min"), min_args=1),
         Builtin("LIMIT", ("MN", "IN", "MX"), _limit_typing, _limit, min_args=3),
         *(
             Builtin(name, None, _comparable, _compare_chain(op), min_args=2)

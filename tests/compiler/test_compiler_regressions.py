@@ -62,3 +62,13 @@ def test_loose_files_take_resource_and_cycle_from_their_configuration(tmp_path: 
         "fixed",
     )
     assert [(p.name, p.pou, p.priority) for p in artifact.programs] == [("M", "Main", 1)]
+
+
+def test_max_and_min_of_one_value_are_that_value() -> None:
+    # they were Python's max(x) and min(x), which iterate over x: a TypeError that ended
+    # `padt exec` on a traceback (the check of the form now refuses both of one value)
+    values = run(
+        "PROGRAM Main\nVAR x : DINT := 7; hi : DINT; lo : REAL; END_VAR\n"
+        "hi := MAX(x); lo := MIN(REAL#2.5);\nEND_PROGRAM\n"
+    )
+    assert (values["Main.hi"], values["Main.lo"]) == (7, 2.5)

@@ -173,6 +173,8 @@ ESCAPES: list[tuple[tuple[Stmt, ...], str]] = [
     ((Assign(member(Named("_math"), "sqrt"), Named("_copy"), 12),), "_math other than called"),
     ((set_n(Members((("a", const(1)),))),), "a dict other than the members of _init"),
     ((set_n(call("max", N, keywords=(("key", Named("_copy")),))),), "max() with keywords"),
+    ((set_n(call("max", call("range", const(10**18)))),), "max() of fewer than two values"),
+    ((set_n(call("min", N)),), "min() of fewer than two values"),
     ((set_n(call("_copy", FB_VAR, keywords=(("memo", This("")),))),), "_copy() with keywords"),
     ((set_n(call("FN_X", keywords=(("__kw", FB_VAR),))),), "the keyword '__kw'"),
     ((Assign(local("__builtins__"), Members(()), 12),), "the local name '__builtins__'"),

@@ -460,6 +460,10 @@ class _Checker:
         if node.keywords and not unit:
             # the runtime's functions take positions only (`max(..., key=f)` would call f)
             _refuse(node, f"{name}() with keywords", ".keywords")
+        if name in ("max", "min") and len(node.args) < 2:
+            # of one value, max iterates over it: over `range(10**18)` in one call of C,
+            # which holds the interpreter and which no watchdog interrupts
+            _refuse(node, f"{name}() of fewer than two values", ".args")
         if name == "_safe_math":
             self.safe_math(node, scope)
         elif name == "_init":
