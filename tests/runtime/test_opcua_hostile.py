@@ -55,16 +55,22 @@ def target(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Target]:
     with log.open("wb") as sink, serving(tmp, sink) as served:
         for _ in range(3):  # the first visits make what the server keeps for them all
             genuine_read(served)
-        baseline = rss_kib(served.pid)
+        baseline = memory_kib(served.pid)
         print(f"RSS before the attacks: {baseline} KiB")
+        reset_peak(served.pid)
         yield Target(served, log, baseline)
 
 
-def rss_kib(pid: int) -> int:
+def memory_kib(pid: int, kind: str = "VmRSS") -> int:
+    """The process's memory now (VmRSS) or at most since `reset_peak` (VmHWM)."""
     for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
+        if line.startswith(f"{kind}:"):
             return int(line.split()[1])
     raise AssertionError(f"process {pid} is gone")
+
+
+def reset_peak(pid: int) -> None:
+    Path(f"/proc/{pid}/clear_refs").write_text("5")
 
 
 def genuine_read(served: Served) -> int:
@@ -81,13 +87,13 @@ def genuine_read(served: Served) -> int:
     return asyncio.run(read())
 
 
-def unharmed(target: Target, peak_kib: int | None = None) -> None:
+def unharmed(target: Target) -> None:
     """Alive, in RUN and cycling, serving a genuine client a count that moves, its memory
-    (and `peak_kib`, what it was during the attack) within the bound, no traceback."""
+    (now and at its peak during the attack) within the bound, no traceback."""
     served = target.served
-    rss = rss_kib(served.pid)
-    for kib in (rss, peak_kib or 0):
-        assert kib - target.baseline_kib < BOUND_KIB, (kib, target.baseline_kib)
+    rss, peak = memory_kib(served.pid), memory_kib(served.pid, "VmHWM")
+    print(f"RSS {rss} KiB, at most {peak} KiB")
+    assert peak - target.baseline_kib < BOUND_KIB, (peak, target.baseline_kib)
     status = served.client.command("status")["status"]
     assert status["state"] == "RUN"
     first = genuine_read(served)
@@ -98,6 +104,7 @@ def unharmed(target: Target, peak_kib: int | None = None) -> None:
     text = target.log.read_bytes()
     fresh, target.log_seen = text[target.log_seen :], len(text)
     assert b"Traceback" not in fresh, fresh.decode(errors="replace")[-3000:]
+    reset_peak(served.pid)  # for the next attack
 
 
 def opened(target: Target) -> socket.socket:
@@ -215,15 +222,14 @@ def test_random_bytes_of_many_sizes_and_frames(target: Target) -> None:
         with opened(target) as sock:
             send(sock, data)
             answered += bool(answer(sock, 0.05))
-    peak = rss_kib(target.served.pid)
     with opened(target) as sock:  # a flood of 10,000 garbage messages on one connection
         flood = b"".join(
             b"MSGF" + struct.pack("<I", 8 + 40) + rng.randbytes(40) for _ in range(10_000)
         )
         send(sock, flood)
         answer(sock, 0.5)
-    print(f"{len(attacks)} attacks, {answered} answered; RSS {peak} KiB")
-    unharmed(target, peak)
+    print(f"{len(attacks)} attacks, {answered} answered")
+    unharmed(target)
 
 
 def test_truncated_headers_closed_or_held(target: Target) -> None:
@@ -256,10 +262,9 @@ def test_a_header_announcing_two_gigabytes(target: Target) -> None:
         junk = random.Random(SEED).randbytes(1 << 20)
         while streamed < 256 << 20 and send(sock, junk):
             streamed += len(junk)
-        peak = rss_kib(target.served.pid)
-    print(f"streamed {streamed >> 20} MiB into one message; RSS {peak} KiB")
+    print(f"streamed {streamed >> 20} MiB into one message")
     assert streamed < 256 << 20, "the server took 256 MiB of one message"
-    unharmed(target, peak)
+    unharmed(target)
 
 
 @pytest.mark.parametrize(
@@ -321,14 +326,11 @@ def test_endless_intermediate_chunks(target: Target, message: int) -> None:
                 sent += 1
             taken.append(sent)
         time.sleep(1)  # the server reads what is on its way
-        peak = rss_kib(target.served.pid)
         refused = sum(answer(sock, 0.2).startswith(b"ERRF") for sock in socks)
-        peak = max(peak, rss_kib(target.served.pid))  # what came late is read by now
     print(f"chunks of {[n * len(body) >> 20 for n in taken]} MiB sent, {refused} refused")
-    print(f"RSS {peak} KiB")
     held = min(MAX_MESSAGE_BYTES, message) // len(body) * len(body)  # by each it holds
     assert refused >= len(socks) - (UNFINISHED_BYTES // held + 1)
-    unharmed(target, peak)
+    unharmed(target)
 
 
 def test_many_connections_held_half_open(target: Target) -> None:
@@ -349,9 +351,8 @@ def test_many_connections_held_half_open(target: Target) -> None:
         print(f"opened in {time.monotonic() - started:.1f} s")
         time.sleep(1)
         open_ = sum(not closed_by_server(s) for s in held)
-        peak = rss_kib(target.served.pid)
         fds = len(list(Path(f"/proc/{target.served.pid}/fd").iterdir()))
-        print(f"{len(held)} opened, {open_} held by the server; {fds} fds; RSS {peak} KiB")
+        print(f"{len(held)} opened, {open_} held by the server; {fds} fds")
         assert open_ <= MAX_CONNECTIONS
         genuine_read(target.served)
-    unharmed(target, peak)
+    unharmed(target)
