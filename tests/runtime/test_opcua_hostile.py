@@ -333,6 +333,24 @@ def test_endless_intermediate_chunks(target: Target, message: int) -> None:
     unharmed(target)
 
 
+def test_unfinished_messages_go_with_their_connections(target: Target) -> None:
+    """Round after round, 4 channels each build up a message to just below the server's
+    limit and close: what they held is not kept after them."""
+    body = random.Random(SEED).randbytes(CHUNK_BYTES - 24)
+    most = MAX_MESSAGE_BYTES // len(body) - 1  # chunks
+    for _ in range(8):
+        with ExitStack() as stack:
+            socks = [stack.enter_context(opened(target)) for _ in range(4)]
+            for sock in socks:
+                channel, token = open_channel(sock)
+                for sent in range(most):
+                    send(sock, chunk(b"C", channel, token, 2 + sent, body))
+            for sock in socks:  # the server took them all: it answers what follows
+                assert send(sock, hello())
+                assert received(sock).read(3) == b"ACK"
+    unharmed(target)
+
+
 def test_many_connections_held_half_open(target: Target) -> None:
     """More connections than the server takes, held silent or after a Hello: those beyond
     its limit are closed, and a genuine client still gets in while they are held."""

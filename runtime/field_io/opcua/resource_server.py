@@ -686,6 +686,14 @@ class _Connection(OPCUAProtocol):
         refused = self.transport is None or self.transport.is_closing()
         self._buffer = b"" if refused else self._buffer[start:]
 
+    def connection_lost(self, exc: BaseException | None) -> None:
+        # the chunks of a message it had not finished go now: asyncua keeps a connection
+        # until its cleanup, every 10 s, and with it those chunks (some 16 MiB for each
+        # round of connections that fill UNFINISHED_BYTES and close)
+        if self.processor is not None:
+            self.processor._connection._drop_incoming_parts()
+        super().connection_lost(exc)
+
     async def _process_one_msg(self, header: ua.Header, buf: Buffer) -> bool:
         if header.ChunkType == _INTERMEDIATE:
             held = sum(_unfinished(c) for c in self.clients)
