@@ -25,6 +25,7 @@ from asyncua.common.utils import Buffer
 from asyncua.ua.ua_binary import struct_from_binary, struct_to_binary
 
 from runtime.field_io.opcua.resource_server import (
+    CHUNK_BYTES,
     MAX_CONNECTIONS,
     MAX_MESSAGE_BYTES,
     UNFINISHED_BYTES,
@@ -34,7 +35,6 @@ from tests.runtime.test_opcua_server import Served, connected, node, serving
 # what the attacks may grow the runtime's memory by: the 16 MiB of unfinished messages
 # it holds at most (UNFINISHED_BYTES), with room to spare
 BOUND_KIB = 32 * 1024
-CHUNK_BYTES = 65535  # the largest chunk the server takes (asyncua's receive buffer)
 SEED = 20261203
 NO_SECURITY = "http://opcfoundation.org/UA/SecurityPolicy#None"
 TYPES = (b"HELF", b"ACKF", b"ERRF", b"OPNF", b"MSGF", b"MSGC", b"MSGA", b"CLOF", b"XYZF")
