@@ -15,9 +15,10 @@ import shutil
 import socket
 import time
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import pytest
 from asyncua import ua
@@ -83,6 +84,8 @@ class Served:
     key: Path
     project: Path  # its project folder
     zenoh: str  # the router's endpoint
+    port: int  # the OPC UA server's
+    pid: int  # the runtime's process
 
 
 def client_certificate(folder: Path, name: str) -> tuple[Path, Path]:
@@ -106,7 +109,13 @@ def thumbprint(cert: Path) -> str:
 
 @pytest.fixture(scope="module")
 def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
-    tmp = tmp_path_factory.mktemp("opcua")
+    with serving(tmp_path_factory.mktemp("opcua")) as server:
+        yield server
+
+
+@contextmanager
+def serving(tmp: Path, log: IO[bytes] | None = None) -> Iterator[Served]:
+    """The runtime of SOURCE serving OPC UA, with its files in `tmp` and its log to `log`."""
     accounts = [
         UserAccount("admin", "administrator", hash_password(PASSWORD)),
         UserAccount("op", "operator", hash_password(PASSWORD)),
@@ -127,11 +136,14 @@ def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
     shutil.copy(cert, trusted / f"{thumbprint(cert)}.der")
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    with running_resource("Ua1", state, endpoint, "--opcua-port", str(port)) as (_, client):
+    opcua = ("--opcua-port", str(port))
+    with running_resource("Ua1", state, endpoint, *opcua, log=log) as (process, client):
         client.login("admin", PASSWORD)
         url = f"opc.tcp://127.0.0.1:{port}/"
         wait_for("the server listens", lambda: listening(client))
-        yield Served(url, client, state / "opcua" / "pki", cert, key, folder, endpoint)
+        yield Served(
+            url, client, state / "opcua" / "pki", cert, key, folder, endpoint, port, process.pid
+        )
 
 
 def listening(client: ResourceClient) -> bool:

@@ -9,6 +9,7 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import IO
 
 import zenoh
 
@@ -96,11 +97,12 @@ def router(endpoint: str) -> Iterator[zenoh.Session]:
 
 @contextmanager
 def runtime_process(
-    resource: str, state_dir: Path, endpoint: str, *extra: str
+    resource: str, state_dir: Path, endpoint: str, *extra: str, log: IO[bytes] | None = None
 ) -> Iterator[subprocess.Popen[bytes]]:
+    """`log`: where its standard error (its log) goes; the test's by default."""
     command = [sys.executable, "-m", "padt.cli", "runtime", "--resource", resource]
     command += ["--state-dir", str(state_dir), "--zenoh", endpoint, *extra]
-    process = subprocess.Popen(command, cwd=REPO, env=dict(os.environ))
+    process = subprocess.Popen(command, cwd=REPO, env=dict(os.environ), stderr=log)
     try:
         yield process
     finally:
@@ -114,12 +116,13 @@ def runtime_process(
 
 @contextmanager
 def running_resource(
-    resource: str, state_dir: Path, endpoint: str, *extra: str
+    resource: str, state_dir: Path, endpoint: str, *extra: str, log: IO[bytes] | None = None
 ) -> Iterator[tuple[subprocess.Popen[bytes], ResourceClient]]:
-    """A router, a runtime process for `resource` and a client that it answers."""
+    """A router, a runtime process for `resource` (its log to `log`) and a client that it
+    answers."""
     with (
         router(endpoint),
-        runtime_process(resource, state_dir, endpoint, *extra) as process,
+        runtime_process(resource, state_dir, endpoint, *extra, log=log) as process,
         client_session(endpoint) as session,
     ):
         client = ResourceClient(session, resource)

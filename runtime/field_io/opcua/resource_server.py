@@ -30,17 +30,22 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from asyncua import ua
 from asyncua.common.callback import CallbackType, ServerItemCallback
+from asyncua.common.connection import TransportLimits
+from asyncua.common.utils import Buffer, NotEnoughData
 from asyncua.crypto.permission_rules import User, UserRole
+from asyncua.server import binary_server_asyncio
+from asyncua.server.binary_server_asyncio import OPCUAProtocol
 from asyncua.server.monitored_item_service import MonitoredItemValues
 from asyncua.server.server import Server
 from asyncua.server.user_managers import UserManager
 from asyncua.ua.attribute_ids import AttributeIds
 from asyncua.ua.object_ids import ObjectIds
 from asyncua.ua.status_codes import StatusCodes
+from asyncua.ua.ua_binary import header_from_binary, uatcp_to_binary
 from cryptography import x509
 
 from runtime.code.instances import BoundVariable
@@ -74,6 +79,16 @@ MIN_SAMPLING_MS = 10  # the fastest the served values follow the cycle
 IDLE_SAMPLING_MS = 100  # how they follow it while no client subscribes
 WRITE_TIMEOUT_S = 2.0  # a write the cycle did not take by then is answered BadTimeout
 MAX_PENDING_WRITES = 1000
+# What a hostile client may make the server hold (tests/runtime/test_opcua_hostile.py).
+# A connection costs a file descriptor and some 10 KB; asyncua takes 1,000 of them.
+MAX_CONNECTIONS = 64
+CHUNK_BYTES = 65535  # the largest chunk, either way (asyncua's)
+# The largest request. A resource takes no array writes, so a request only names nodes:
+# 4 MiB names some 50,000 at once. asyncua holds a message's chunks until its last one
+# comes, up to 100 MiB by default, each connection.
+MAX_MESSAGE_BYTES = 4 << 20
+# What all the connections together hold of messages whose last chunk has not come.
+UNFINISHED_BYTES = 16 << 20
 NODES_PER_BATCH = 500  # nodes added between two turns of the I/O loop
 WRITERS = ("operator", "read-write", "administrator")  # the levels that may write
 _READ = ua.AccessLevel.CurrentRead.mask
@@ -88,6 +103,10 @@ _REFUSED = {
 
 
 _INTERNAL = User(role=UserRole.Admin)  # who asyncua's own writes come from
+# asyncua types a header's message and chunk type as its classes MessageType and ChunkType,
+# whose attributes are in fact the bytes on the wire
+_INTERMEDIATE = cast(ua.ChunkType, ua.ChunkType.Intermediate)
+_ERROR = cast(ua.MessageType, ua.MessageType.Error)
 
 
 @dataclass(frozen=True)
@@ -268,6 +287,15 @@ class ResourceServer:
         accounts = _Accounts(self)
         server = Server(user_manager=accounts)
         await server.init()
+        server.limits = TransportLimits(
+            max_recv_buffer=CHUNK_BYTES,
+            max_send_buffer=CHUNK_BYTES,
+            max_chunk_count=-(-MAX_MESSAGE_BYTES // CHUNK_BYTES),
+            max_message_size=MAX_MESSAGE_BYTES,
+        )
+        server.iserver.max_connections = MAX_CONNECTIONS
+        # what asyncua's BinaryServer makes a connection of, by this name
+        binary_server_asyncio.OPCUAProtocol = _Connection  # type: ignore[misc]
         server.allow_remote_admin(False)
         server.set_server_name(f"padt {self.resource}")
         await server.set_application_uri(self.uri)
@@ -604,6 +632,105 @@ class _Accounts(UserManager):
         if not certificate:  # a channel without security: no session at all (see above)
             return None
         return self._server.login(username, password)
+
+
+class _Connection(OPCUAProtocol):
+    """asyncua's connection, against hostile clients: what it does not take gets an
+    ErrorMessage and the connection closed, never a traceback in the log; it holds no more
+    than a chunk of what it has not yet parsed, and all connections together no more than
+    UNFINISHED_BYTES of unfinished messages. (asyncua is pinned at the version this was
+    read in.)"""
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        if len(self.clients) >= self.iserver.max_connections:
+            # those that never log in make room for a new one: else a client that opens
+            # connections and says nothing shuts everyone out until they time out
+            idle = next((c for c in self.clients if not _activated(c)), None)
+            if idle is None:
+                _refuse(transport, StatusCodes.BadTcpServerTooBusy, "too many connections")
+                return
+            _refuse(idle.transport, StatusCodes.BadTcpServerTooBusy, "too many connections")
+            self.clients.remove(idle)
+        super().connection_made(transport)
+
+    def data_received(self, data: bytes) -> None:
+        """The chunks that came, each queued with its own bytes. asyncua's own holds a
+        chunk up to the 4 GB its header may announce (copying it whole at every read),
+        and queues each chunk with a copy of all that followed it in the read: up to
+        500 copies of up to 256 KiB."""
+        if self.transport is None or self.transport.is_closing():
+            return  # refused: what still comes is not read
+        self._buffer += data
+        start = 0
+        while len(self._buffer) - start >= 8:
+            size = int.from_bytes(self._buffer[start + 4 : start + 8], "little")
+            if size > self.limits.max_recv_buffer:
+                _refuse(self.transport, StatusCodes.BadTcpMessageTooLarge, "chunk too large")
+                break
+            if len(self._buffer) - start < size:
+                break
+            chunk = Buffer(self._buffer[start : start + size])
+            start += size
+            try:
+                header = header_from_binary(chunk)
+            except NotEnoughData:  # shorter than its header
+                header = None
+            if header is None or header.body_size < 0:
+                _refuse(self.transport, StatusCodes.BadDecodingError, "chunk too short")
+                break
+            try:
+                self.messages.put_nowait((header, chunk))
+            except asyncio.QueueFull:  # faster than they are answered
+                _refuse(self.transport, StatusCodes.BadTcpServerTooBusy, "too many requests")
+                break
+        refused = self.transport is None or self.transport.is_closing()
+        self._buffer = b"" if refused else self._buffer[start:]
+
+    def connection_lost(self, exc: BaseException | None) -> None:
+        # the chunks of a message it had not finished go now: asyncua keeps a connection
+        # until its cleanup, every 10 s, and with it those chunks (some 16 MiB for each
+        # round of connections that fill UNFINISHED_BYTES and close)
+        if self.processor is not None:
+            self.processor._connection._drop_incoming_parts()
+        super().connection_lost(exc)
+
+    async def _process_one_msg(self, header: ua.Header, buf: Buffer) -> bool:
+        if header.ChunkType == _INTERMEDIATE:
+            held = sum(_unfinished(c) for c in self.clients)
+            if held + header.body_size > UNFINISHED_BYTES:
+                _refuse(self.transport, StatusCodes.BadRequestTooLarge, "too many chunks")
+                return False
+        try:
+            return await super()._process_one_msg(header, buf)
+        except Exception as exc:  # asyncua fails on what it cannot decode
+            log.info("OPC UA connection from %s closed: %s", self.peer_name, type(exc).__name__)
+            _refuse(self.transport, StatusCodes.BadDecodingError, "cannot decode")
+            return False
+
+
+def _activated(connection: OPCUAProtocol) -> bool:
+    session = connection.processor.session if connection.processor is not None else None
+    return session is not None and session.is_activated()
+
+
+def _unfinished(connection: OPCUAProtocol) -> int:
+    """The bytes of the chunks `connection` holds of a message whose last has not come."""
+    if connection.processor is None:
+        return 0
+    return connection.processor._connection._incoming_size
+
+
+def _refuse(transport: asyncio.BaseTransport | None, code: int, reason: str) -> None:
+    """Tell the client why, and close its connection without waiting for it to read."""
+    if transport is None or transport.is_closing():
+        return
+    error = ua.ErrorMessage(_status(code), ua.String(reason))
+    assert isinstance(transport, asyncio.WriteTransport)
+    transport.write(uatcp_to_binary(_ERROR, error))
+    if transport.get_write_buffer_size():  # a client that does not read: not waited for
+        transport.abort()
+    else:
+        transport.close()
 
 
 def _validator(server: ResourceServer, trust: TrustList) -> Callable[..., Any]:
