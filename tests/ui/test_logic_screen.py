@@ -432,7 +432,9 @@ def test_fbd_and_ld_bodies_with_live_values_power_flow_and_a_forced_contact(
             "the LD body is drawn",
             lambda: "LD body of LampRung" in text_of(page, '[data-testid="logic-header"]'),
         )
-        assert is_on(page, '[data-wire-from="1"]')  # the left rail: always powered
+        # the left rail, always powered (its drawing may come a moment after the header,
+        # while the FBD body's element 1 is still shown: CI run 54, under load)
+        wait_until("the left rail is powered", lambda: is_on(page, '[data-wire-from="1"]'))
         wait_until("the coil is powered", lambda: is_on(page, '[data-element="4"]'))
         assert drawn_value(page, "Lamp.lamp") == "TRUE"
         shoot(page, "logic-ld-1400")
