@@ -54,8 +54,8 @@ Cells = dict[str, int]
 
 @dataclass(frozen=True)
 class UnitCells:
-    """What a unit allocates: an instance of a class (None for a FUNCTION), and the
-    largest single expression of its code (parameters' defaults, bodies)."""
+    """What a unit allocates: an instance of a class (None for a FUNCTION), and each
+    expression of its code (parameters' defaults, bodies) that allocates anything."""
 
     name: str
     instance: Cells | None
