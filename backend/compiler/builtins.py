@@ -219,7 +219,7 @@ def _shift(kind: str) -> Builtin:
         value, n = values
         name = artifact_type_text(result)
         if kind == "SHL":
-            return wrapped(Binary("<<", value, n, name), result)
+            return wrapped(Binary("<<", value, _shift_count(n, result.bits), name), result)
         if kind == "SHR" and result.signed:  # arithmetic for signed types
             return Binary(">>", value, n, name)
         bits = Binary("&", value, Const((1 << result.bits) - 1, name), name)
@@ -231,6 +231,17 @@ def _shift(kind: str) -> Builtin:
         )
 
     return Builtin(kind, ("IN", "N"), typing, emit, min_args=2)
+
+
+def _shift_count(n: Expr, bits: int) -> Expr:
+    """SHL's count, at most the width of the type: every bit is shifted out at `bits`
+    already, and Python makes the whole number before the wrap masks it (a count of two
+    thousand million made a 250 MB number, one of 10**15 a MemoryError; the form check
+    refuses a shift left by a count that is not so bounded). A negative count stays a
+    run-time error of the program."""
+    if isinstance(n, Const) and isinstance(n.value, int) and not isinstance(n.value, bool):
+        return n if n.value <= bits else Const(bits, n.type)
+    return intrinsic("min", n.type, n, Const(bits, n.type))
 
 
 def _bitwise(op: BinaryOp, name: str) -> Builtin:

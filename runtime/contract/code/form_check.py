@@ -26,7 +26,8 @@ checks, node by node, as Python will read what the printer writes of it:
 - no attribute with a leading `__` but in the shapes the compiler writes (`t.__call__()`,
   `POU_BASE.__call__(s)` for SUPER^(), `_deref(t).__class__.__name__` and
   `_deref(t).__class__.__dict__.get('KIND__', ())` for `?=`); methods are called, never
-  read as values; `_init` and `_ref` take variable names only.
+  read as values; `_init` and `_ref` take variable names only;
+- a shift left is by a constant count of at most 64 or by `min(n, c)` of such a constant.
 
 Anything else is a `FormRefused` naming the unit, where in its form and what is not
 allowed: a runtime answers the load with a refusal and keeps what it runs.
@@ -108,6 +109,8 @@ UNIT_KINDS = {
     "STRUCT": UnitKind(CLASS_NAME, (Class, Alias)),  # the SFC step structure: an alias
     "GLOBALS": UnitKind(CLASS_NAME, (Class,)),
 }
+# the largest count of a shift left: the widest integer type's bits
+MAX_SHIFT = 64
 # the objects of the namespace a variable lives in, by `Var.where`
 _ROOTS = {"globals": "_G", "system": "_SYS", "programs": "_P"}
 _ROOT_NAMES = frozenset(_ROOTS.values())
@@ -354,6 +357,10 @@ class _Checker:
                 if _is_tick_test(node):  # `_tick is None`: whether a slice is metered
                     scope.runtime("_tick", left)
                     return
+                if node.op == "<<" and not _is_shift_count(right):
+                    # Python makes the whole shifted number before anything masks it:
+                    # `1 << 2**33` is a GiB in one operation no watchdog interrupts
+                    _refuse(node, f"a shift left by more than {MAX_SHIFT} or by an unbounded count")
                 self.expr(left, scope)
                 self.expr(right, scope)
             case Index(base=base, offset=offset):
@@ -573,6 +580,17 @@ def _is_tick_test(node: Binary) -> bool:
     match node:
         case Binary(op="is" | "is not", left=Named(name="_tick"), right=Const(value=None)):
             return True
+    return False
+
+
+def _is_shift_count(node: Expr) -> bool:
+    """A count of at most MAX_SHIFT: a constant, or `min(n, c)` of a constant (SHL's count,
+    backend/compiler/builtins.py); a negative one is Python's error."""
+    match node:
+        case Const(value=int() as count) if type(count) is int:
+            return count <= MAX_SHIFT
+        case Call(callee="min", args=(_, Const(value=int() as bound)), keywords=()):
+            return type(bound) is int and bound <= MAX_SHIFT
     return False
 
 

@@ -310,6 +310,41 @@ END_PROGRAM
     pair.cycle_and_compare(4)
 
 
+def test_shifts_by_the_width_or_more_are_zero_at_once_on_both_tiers(
+    native_tier: NativeTier,
+) -> None:
+    # SHL by a DINT of two thousand million made a 250 MB number before the wrap masked
+    # it, by a LINT of 10**15 a MemoryError that stopped the program. Counts that cannot
+    # be negative run as C; the others (and LWORD) are left to Python on the native tier
+    text = """
+PROGRAM Main
+VAR
+  w : DWORD := 1; k : USINT := 3; u : UDINT := 4000000000; i : INT := -5;
+  a, b : DWORD; f, g : INT; by : BYTE := 16#81;
+END_VAR
+a := SHL(w, k); b := SHL(w, u); f := SHL(i, u); g := SHR(i, u); by := SHL(by, 1);
+k := k + 10;
+END_PROGRAM
+PROGRAM Wide
+VAR
+  w : LWORD := 1; n : DINT := 2000000000; l : LINT := 1000000000000000;
+  a, b, c, d : LWORD; i : INT := -5; f, g : INT;
+END_VAR
+a := SHL(w, n); b := SHL(w, l); c := SHL(w, 63); d := SHL(w, 64);
+f := SHL(i, n); g := SHR(i, n);
+END_PROGRAM
+"""
+    programs = [ProgramConfig(name, name, n) for n, name in enumerate(("Main", "Wide"), 1)]
+    pair = side_by_side(text, native_tier, programs)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(4)  # k is 33 in the fourth cycle: beyond a DWORD's 32 bits
+    values = pair.native.variables.values()
+    main = [values[f"Main.{x}"] for x in ("a", "b", "f", "g", "by")]
+    assert main == [0, 0, 0, -1, 0x10]
+    wide = [values[f"Wide.{x}"] for x in ("a", "b", "c", "d", "f", "g")]
+    assert wide == [0, 0, 1 << 63, 0, 0, -1]
+
+
 FUNCTIONS = """
 FUNCTION Scale : INT
 VAR_INPUT a : INT; b : INT; END_VAR
