@@ -59,6 +59,9 @@ TDIV = _called("_tdiv", "INT REAL", "INT", "TIME divided by a number", (ZERO,))
 POW = _called("_pow", "REAL REAL", "REAL", "`**`: an overflow is an infinity")
 F32 = _called("_f32", "REAL", "REAL", "rounding to IEEE single precision (REAL)")
 ROUND = _called("_round", "REAL", "INT", "to the nearest integer, halves away from zero")
+SAFE_MATH = _called(
+    "_safe_math", "ANY REAL", "REAL", "a function of `_math`, NaN out of its domain"
+)
 IX = _called("_ix", "INT INT INT", "INT", "the offset of an index within its bounds", (BOUNDS,))
 TICK = _object("_tick", "None, or the slice meter's tick, called at each loop pass")
 
@@ -96,7 +99,7 @@ INTRINSICS: tuple[Intrinsic, ...] = (
     _called("_delete", "STRING INT INT", "STRING", "DELETE"),
     _called("_replace", "STRING STRING INT INT", "STRING", "REPLACE"),
     _called("_find", "STRING STRING", "INT", "FIND (0 when not found)"),
-    _called("_safe_math", "ANY REAL", "REAL", "a function of `_math`, NaN out of its domain"),
+    SAFE_MATH,
     _called("_ref", "OBJECT ANY STRING *BOOL", "REFERENCE", "REF(x)", (FAULT,)),
     _called("_deref", "REFERENCE", "ANY", "what a reference refers to", (NULL,)),
     _called("_deref_set", "REFERENCE ANY", "-", "writing what a reference refers to", (NULL,)),

@@ -270,6 +270,18 @@ padt_fdiv(double a, double b)
     return a / b;
 }
 
+/* runtime.code.intrinsics._safe_math: a function of libm as Python's math module calls it,
+ * NaN where Python raises (a NaN of a number, or an infinity of a finite one: out of the
+ * domain, or an overflow). */
+static inline double
+padt_safe_math(double (*function)(double), double x)
+{
+    double r = function(x);
+    if ((isnan(r) && !isnan(x)) || (isinf(r) && isfinite(x)))
+        return __builtin_nan("");
+    return r;
+}
+
 /* A REAL taken to an integer (runtime/code/native/kinds.py, Int.stand_in): exact below 2**126;
  * beyond, a stand-in of that size that equals the true value modulo 2**64 (fmod is exact),
  * which is all a wrap to at most 64 bits keeps of it. */

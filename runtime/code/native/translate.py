@@ -44,6 +44,7 @@ from runtime.code.native.kinds import (
     join,
 )
 from runtime.contract.artifact import PouCode
+from runtime.contract.code.names import MATH_FUNCTIONS
 from runtime.contract.code.python_text import printed_lines, python_text
 from runtime.contract.code.statements import (
     Assign,
@@ -77,7 +78,7 @@ from runtime.contract.code.typed_form import (
     Wrap,
 )
 from runtime.contract.code.units import Class, Function, Unit
-from runtime.contract.intrinsic_table import F32, FDIV, IDIV, IMOD, IX, ROUND, TICK
+from runtime.contract.intrinsic_table import F32, FDIV, IDIV, IMOD, IX, ROUND, SAFE_MATH, TICK
 
 NAME_PLACEHOLDER = "padt_unit"
 WIDEN_AFTER = 3  # passes over a body before a growing local takes the whole 64-bit range
@@ -818,6 +819,8 @@ class _Body:
             a, b = _as_float(left), _as_float(right)
             return V(Float(), f"({a.c} {op} {b.c})")
         a, b = _as_int(left), _as_int(right)
+        if op in ("<<", ">>") and isinstance(b.kind, Int) and b.kind.lo < 0:
+            b = self.shift_count(b)
         assert isinstance(a.kind, Int) and isinstance(b.kind, Int)
         result = _result_range(op, a.kind, b.kind)
         if a.kind.stand_in or b.kind.stand_in:
@@ -848,6 +851,17 @@ class _Body:
         else:
             text = f"({x} {op} {y})"
         return V(result, text if wide == result.ctype else f"(({result.ctype}){text})")
+
+    def shift_count(self, count: V) -> V:
+        """A shift's count that may be negative: Python's fault where it is."""
+        assert isinstance(count.kind, Int)
+        held = self.temp(count.kind.ctype)
+        self.line(f"{held} = {count.c};")
+        self.line(f"if (PADT_UNLIKELY({held} < 0)) {{")
+        self.line('    PyErr_SetString(PyExc_ValueError, "negative shift count");')
+        self.line("    goto padt_error;")
+        self.line("}")
+        return V(_narrowed(count.kind, 0, count.kind.hi), held)
 
     def wrap(self, node: Wrap) -> V:
         """An integer brought into the range of `bits` bits as Python brings it: masked,
@@ -1031,6 +1045,13 @@ class _Body:
                 helper = "padt_round" if name == ROUND.name else "padt_trunc"
                 self.check(f"{helper}({value.c}, &{held})")
                 return V(FROM_REAL, held)
+        if name == SAFE_MATH.name and len(node.args) == len(SAFE_MATH.params):
+            match node.args[0]:
+                case Named(name=function) if (
+                    function.startswith("_math.") and function[6:] in MATH_FUNCTIONS
+                ):  # the C function of the same name, which Python's calls
+                    value = _as_float(self.expr(node.args[1]))
+                    return V(Float(), f"padt_safe_math({function[6:]}, {value.c})")
         if name == FDIV.name and len(node.args) == len(FDIV.params):
             a, b = (_as_float(self.expr(arg)) for arg in node.args)
             return V(Float(), f"padt_fdiv({a.c}, {b.c})")

@@ -345,6 +345,45 @@ END_PROGRAM
     assert wide == [0, 0, 1 << 63, 0, 0, -1]
 
 
+def test_a_negative_shift_count_is_the_same_fault_on_both_tiers(native_tier: NativeTier) -> None:
+    text = """
+PROGRAM Main
+VAR w : DWORD := 16#F0; n : DINT := 2; a, b : DWORD; i : INT := -64; c : INT; END_VAR
+n := n - 1;
+a := SHL(w, n);
+b := SHR(w, n + 1) OR SHR(w, n * 1000);
+c := SHR(i, n * 1000);
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(2)  # n 1 and 0: shifts by 1, 0, 2, 1,000 and 1
+    assert not program_error(pair.native)
+    pair.cycle_and_compare(1)
+    assert "negative shift count in POU Main (prog.st:5)" in program_error(pair.native)
+
+
+def test_the_real_functions_run_as_c_nan_out_of_their_domain_as_in_python(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+PROGRAM Main
+VAR
+  x : LREAL := -3.0; r : REAL := 0.5; big : LREAL := 700.0;
+  a, b, c, d, e, f, g, h, i, j, k : LREAL; q : REAL;
+END_VAR
+x := x + 0.75;
+big := big + 5.0;  (* EXP overflows past 709.78: NaN, as Python's OverflowError *)
+a := SQRT(x); b := LN(x); c := LOG(x); d := EXP(big); e := SIN(x * 1.0E308 * 10.0);
+f := COS(x); g := TAN(x); h := ASIN(x); i := ACOS(x / 4.0); j := ATAN(x); k := LN(x - x);
+q := SQRT(r) + SIN(r);
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(8)  # x from -2.25 to 3.0, through 0: every domain's edge
+
+
 FUNCTIONS = """
 FUNCTION Scale : INT
 VAR_INPUT a : INT; b : INT; END_VAR
