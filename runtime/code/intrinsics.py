@@ -203,11 +203,13 @@ def _tdiv(a: int, b: float) -> int:
 
 
 def _pow(a: float, b: float) -> float:
+    """EXPT: zero to a negative power and an overflow +inf, a negative base to a power that
+    is no whole number NaN (Python's power is a complex number there, which a REAL held)."""
     try:
-        result: float = float(a) ** b
-        return result
+        result = float(a) ** b
     except (ZeroDivisionError, OverflowError):
         return math.inf
+    return result if type(result) is float else math.nan
 
 
 def _ix(index: int, low: int, high: int) -> int:

@@ -56,7 +56,12 @@ IDIV = _called("_idiv", "INT INT", "INT", "integer division, truncating toward z
 IMOD = _called("_imod", "INT INT", "INT", "the remainder of `_idiv`", (ZERO,))
 FDIV = _called("_fdiv", "REAL REAL", "REAL", "REAL division, IEEE results")
 TDIV = _called("_tdiv", "INT REAL", "INT", "TIME divided by a number", (ZERO,))
-POW = _called("_pow", "REAL REAL", "REAL", "`**`: an overflow is an infinity")
+POW = _called(
+    "_pow", "REAL REAL", "REAL", "`**`: +inf past the range, NaN of a negative base's fraction"
+)
+COPY = _called("_copy", "ANY", "ANY", "a deep copy: value semantics of arrays and structures")
+ROL = _called("_rol", "INT INT INT", "INT", "ROL over a width")
+ROR = _called("_ror", "INT INT INT", "INT", "ROR over a width")
 F32 = _called("_f32", "REAL", "REAL", "rounding to IEEE single precision (REAL)")
 ROUND = _called("_round", "REAL", "INT", "to the nearest integer, halves away from zero")
 SAFE_MATH = _called(
@@ -75,10 +80,10 @@ INTRINSICS: tuple[Intrinsic, ...] = (
     ROUND,
     IX,
     _called("_setbits", "INT INT INT INT", "INT", "a bit or part of a bit string written"),
-    _called("_copy", "ANY", "ANY", "a deep copy: value semantics of arrays and structures"),
+    COPY,
     _called("_init", "OBJECT ANY", "OBJECT", "a structure initializer applied"),
-    _called("_rol", "INT INT INT", "INT", "ROL over a width"),
-    _called("_ror", "INT INT INT", "INT", "ROR over a width"),
+    ROL,
+    ROR,
     _called("_mux", "INT *ANY", "ANY", "MUX", (BOUNDS,)),
     _called("_bcd_to_int", "INT", "INT", "BCD_TO_INT", (FAULT,)),
     _called("_int_to_bcd", "INT", "INT", "INT_TO_BCD", (FAULT,)),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from backend.compiler.pipeline import compile_sources
@@ -72,3 +73,14 @@ def test_max_and_min_of_one_value_are_that_value() -> None:
         "hi := MAX(x); lo := MIN(REAL#2.5);\nEND_PROGRAM\n"
     )
     assert (values["Main.hi"], values["Main.lo"]) == (7, 2.5)
+
+
+def test_expt_of_a_negative_base_to_a_fraction_is_nan_not_a_complex_number() -> None:
+    # Python's power is a complex number there, which the REAL then held (the online
+    # values showed `(1.7e-16+2.8j)`)
+    values = run(
+        "PROGRAM Main\nVAR x : LREAL := -8.0; y : LREAL; r : REAL := -8.0; z : REAL; END_VAR\n"
+        "y := EXPT(x, 0.5); z := EXPT(r, REAL#0.5);\nEND_PROGRAM\n"
+    )
+    assert all(type(values[f"Main.{n}"]) is float for n in "yz"), values
+    assert all(math.isnan(values[f"Main.{n}"]) for n in "yz"), values  # type: ignore[arg-type]

@@ -282,6 +282,68 @@ padt_safe_math(double (*function)(double), double x)
     return r;
 }
 
+/* runtime.code.intrinsics._pow (EXPT), as Python's power of floats computes it (on the
+ * magnitude of a negative base, the sign put back for an odd power), with the helper's
+ * +inf where Python raises (zero to a negative power, an overflow) and NaN where Python's
+ * result is a complex number (a negative base to a power that is no whole number). */
+static inline double
+padt_pow(double a, double b)
+{
+    if (b == 0.0)
+        return 1.0;
+    if (isnan(a))
+        return a;
+    if (isnan(b))
+        return a == 1.0 ? 1.0 : b;
+    if (isinf(b)) {
+        a = fabs(a);
+        if (a == 1.0)
+            return 1.0;
+        return (a > 1.0) == (b > 0.0) ? __builtin_inf() : 0.0;
+    }
+    int odd = fmod(fabs(b), 2.0) == 1.0;
+    if (isinf(a))
+        return b > 0.0 ? (odd ? a : fabs(a)) : (odd ? copysign(0.0, a) : 0.0);
+    if (a == 0.0)
+        return b < 0.0 ? __builtin_inf() : (odd ? a : 0.0);
+    int negate = 0;
+    if (a < 0.0) {
+        if (b != floor(b))
+            return __builtin_nan("");
+        a = -a;
+        negate = odd;
+    }
+    if (a == 1.0)
+        return negate ? -1.0 : 1.0;
+    double r = pow(a, b);
+    if (isinf(r))
+        return __builtin_inf();
+    return negate ? -r : r;
+}
+
+/* runtime.code.intrinsics._rol and _ror: a value within `bits` (1..63) rotated by n modulo
+ * the width (Python's modulo: never negative). */
+static inline int64_t
+padt_rol(int64_t value, int64_t n, int bits)
+{
+    uint64_t v = (uint64_t)value, mask = (UINT64_C(1) << bits) - 1;
+    int64_t k = n % bits;
+    if (k < 0)
+        k += bits;
+    if (k == 0)
+        return (int64_t)(v & mask);
+    return (int64_t)(((v << k) | (v >> (bits - k))) & mask);
+}
+
+static inline int64_t
+padt_ror(int64_t value, int64_t n, int bits)
+{
+    int64_t k = n % bits;
+    if (k < 0)
+        k += bits;
+    return padt_rol(value, bits - k, bits);
+}
+
 /* A REAL taken to an integer (runtime/code/native/kinds.py, Int.stand_in): exact below 2**126;
  * beyond, a stand-in of that size that equals the true value modulo 2**64 (fmod is exact),
  * which is all a wrap to at most 64 bits keeps of it. */

@@ -78,7 +78,20 @@ from runtime.contract.code.typed_form import (
     Wrap,
 )
 from runtime.contract.code.units import Class, Function, Unit
-from runtime.contract.intrinsic_table import F32, FDIV, IDIV, IMOD, IX, ROUND, SAFE_MATH, TICK
+from runtime.contract.intrinsic_table import (
+    COPY,
+    F32,
+    FDIV,
+    IDIV,
+    IMOD,
+    IX,
+    POW,
+    ROL,
+    ROR,
+    ROUND,
+    SAFE_MATH,
+    TICK,
+)
 
 NAME_PLACEHOLDER = "padt_unit"
 WIDEN_AFTER = 3  # passes over a body before a growing local takes the whole 64-bit range
@@ -411,6 +424,10 @@ class _Body:
                 )
             setter = "padt_set_int" if value.kind.fits64 else "padt_set_int128"
             self.check(f"{setter}({place}, {value.c})")
+            return
+        if isinstance(declared, Instance | Array) and value.kind == declared:
+            # a whole array or structure (a copy): the place takes it as Python's store does
+            self.check(f"padt_put({place}, Py_NewRef({value.c}))")
             return
         _refuse(f"a {_kind_name(value.kind)} stored into {_kind_name(declared)}")
 
@@ -1045,6 +1062,15 @@ class _Body:
                 helper = "padt_round" if name == ROUND.name else "padt_trunc"
                 self.check(f"{helper}({value.c}, &{held})")
                 return V(FROM_REAL, held)
+            if isinstance(value.kind, Bool | Int):  # an integer already (BOOL_TO_INT: 0, 1)
+                return _as_int(value)
+        if name == COPY.name and len(node.args) == len(COPY.params):
+            return self.copy(node.args[0])
+        if name in (ROL.name, ROR.name) and len(node.args) == len(ROL.params):
+            return self.rotation(name, node)
+        if name == POW.name and len(node.args) == len(POW.params):
+            a, b = (_as_float(self.expr(arg)) for arg in node.args)
+            return V(Float(), f"padt_pow({a.c}, {b.c})")
         if name == SAFE_MATH.name and len(node.args) == len(SAFE_MATH.params):
             match node.args[0]:
                 case Named(name=function) if (
@@ -1068,6 +1094,32 @@ class _Body:
             if isinstance(target.kind, Range):
                 return self.range_length(target)
         _refuse(f"a call of {_callee_text(node)}")
+
+    def copy(self, node: Expr) -> V:
+        """`_copy(x)`: an array or structure assigned as a whole, copied by the Python helper
+        (a new object, which the temporary owns)."""
+        value = self.expr(node)
+        if not isinstance(value.kind, Instance | Array):
+            _refuse(f"{COPY.name} of a {_kind_name(value.kind)}")
+        copied = self.temp("PyObject *", "NULL")
+        helper = self.module.key(COPY.name)
+        call = f"padt_call_function({helper}, (PyObject *[]){{{value.c}}}, 1, NULL)"
+        self.line(f"Py_XSETREF({copied}, {call});")
+        self.line(f"if (PADT_UNLIKELY({copied} == NULL)) goto padt_error;")
+        return V(value.kind, copied)
+
+    def rotation(self, name: str, node: Call) -> V:
+        """`_rol(value, n, bits)`: the compiler's value is masked to its width already."""
+        value, count = (self.int_value(arg) for arg in node.args[:2])
+        bits = _constant_int(node.args[2])
+        assert isinstance(value.kind, Int) and isinstance(count.kind, Int)
+        if bits is None or not 1 <= bits <= 63:
+            _refuse(f"{name} over a width other than a constant of 1 to 63 bits")
+        mask = (1 << bits) - 1
+        if value.kind.stand_in or count.kind.stand_in or not value.kind.within(Int(0, mask)):
+            _refuse(f"{name} of a value not within its width")
+        helper = "padt_rol" if name == ROL.name else "padt_ror"
+        return V(Int(0, mask), f"{helper}({value.c}, {count.c}, {bits})")
 
     def function_call(self, node: Call) -> tuple[FunctionInfo, str]:
         """A FUNCTION of the artifact called as Python calls it, with the values boxed;

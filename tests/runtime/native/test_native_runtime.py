@@ -384,6 +384,69 @@ END_PROGRAM
     pair.cycle_and_compare(8)  # x from -2.25 to 3.0, through 0: every domain's edge
 
 
+def test_expt_rotations_and_conversions_run_as_c_with_the_python_values(
+    native_tier: NativeTier,
+) -> None:
+    # EXPT of a negative base to a fraction was a complex number held in a REAL
+    text = """
+PROGRAM Main
+VAR
+  x : LREAL := -2.5; y : LREAL := -3.0; big : LREAL := 1.0E300; z : LREAL := -0.0;
+  p, q, o, u, v, m : LREAL; r : REAL := -8.0; rq : REAL; i : INT := 3; n : DINT := -70;
+  w : DWORD := 16#8000_0001; by : BYTE := 16#81; a, b : DWORD; c, d : BYTE; e : BOOL;
+  k : INT; t : TIME := T#1s; t2 : TIME;
+END_VAR
+x := x + 0.5; y := y + 1.0; n := n + 13; e := NOT e;
+p := EXPT(x, y); q := EXPT(x, 0.5); o := EXPT(big, 2.0); u := EXPT(z, -1.0);
+v := EXPT(y, 3); m := EXPT(1.0 / y, x); rq := EXPT(r, REAL#1.0 / 3.0) + EXPT(r, i);
+a := ROL(w, n); b := ROR(w, n); c := ROL(by, i); d := ROR(by, n);
+k := BOOL_TO_INT(e) + BOOL_TO_INT(NOT e) * 2;
+t2 := t * (2 * i);
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(8)  # x and y from negative through 0 to positive, n past 0
+
+
+def test_arrays_and_structures_assigned_whole_are_copies_on_both_tiers(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+TYPE Pair : STRUCT a : INT; b : REAL; END_STRUCT; END_TYPE
+FUNCTION_BLOCK Sum
+VAR_INPUT p : Pair; values : ARRAY[1..3] OF DINT; END_VAR
+VAR_OUTPUT total : DINT; last : Pair; END_VAR
+total := values[1] + values[2] + values[3] + p.a;
+last := p;
+p.a := 0;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR
+  x, y : Pair; list, other : ARRAY[1..3] OF DINT; pairs : ARRAY[0..2] OF Pair;
+  s : Sum; n : INT; kept : Pair;
+END_VAR
+n := n + 1;
+x.a := x.a + n; x.b := x.b + 0.5;
+list[1 + n MOD 3] := n * 10;
+y := x;             (* a copy: changing x later leaves y *)
+x.a := x.a * 2;
+other := list;
+list[1] := -1;
+pairs[n MOD 3] := y;
+kept := pairs[(n + 1) MOD 3];
+s(p := y, values := other);
+kept.b := kept.b + REAL#1.0;
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert set(pair.report.bodies) == {"Main", "Sum"}
+    pair.cycle_and_compare(6)
+    values = pair.native.variables.values()
+    assert values["Main.y.a"] != values["Main.x.a"] and values["Main.other"][0] != -1
+    assert values["Main.s.last.a"] == values["Main.y.a"] != 0 == values["Main.s.p.a"]
+
+
 FUNCTIONS = """
 FUNCTION Scale : INT
 VAR_INPUT a : INT; b : INT; END_VAR
