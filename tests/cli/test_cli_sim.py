@@ -443,7 +443,7 @@ END_PROGRAM
 
 @pytest.mark.usefixtures("native_tier")
 def test_native_says_which_bodies_run_as_python_and_why(tmp_path: Path) -> None:
-    """Strings are not C yet: on the native tier `padt sim` says, once, that the block
+    """INT_TO_STRING is not C yet: on the native tier `padt sim` says, once, that the block
     runs as Python and why, as the runtime's event does; the values are those of Python."""
     path = write(tmp_path, LABELLED)
     env = {"PADT_NATIVE_CACHE": str(tmp_path / "native")}

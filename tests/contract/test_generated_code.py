@@ -12,6 +12,7 @@ text; each case that check refused is a form refused here."""
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 import threading
@@ -532,19 +533,25 @@ def test_a_name_that_reached_the_translator_stays_in_its_comment() -> None:
 
 
 def test_no_text_of_a_source_reaches_the_c_of_the_native_tier_unchecked() -> None:
-    """A string constant with C in it stays Python (the tier translates no strings); a
-    source that does not pass is not translated at all."""
+    """A string constant with C in it reaches the C only as a string literal, escaped
+    (what is left without the literals and comments has none of it); a source that does
+    not pass is not translated at all."""
     artifact = _artifact(
         FB.replace("y := x * 2;", 'y := x * 2; s := \'"); system("x"); ("\';').replace(
             "VAR_OUTPUT y : DINT;", "VAR_OUTPUT y : DINT; s : STRING;"
         )
     )
     translation = ArtifactTranslation.of(artifact)
-    for unit in translation.units:
-        assert "system(" not in translation.translate(unit).source
+    sources = [translation.translate(unit).source for unit in translation.units]
+    assert any('\\"); system(\\"x\\"); (\\"' in source for source in sources)
+    for source in sources:
+        assert "system(" not in _LITERALS_AND_COMMENTS.sub("", source)
     imported = Evaluate(Call("__import__", (Const("os", "STRING"),), ""), 0)
     with pytest.raises(ArtifactError, match=r"the form of FUNCTION_BLOCK Fb: Class\.functions"):
         load_artifact(first_in_body(_fb_first(artifact), imported).to_json())
+
+
+_LITERALS_AND_COMMENTS = re.compile(r'/\*.*?\*/|"(?:\\.|[^"\\])*"', re.DOTALL)
 
 
 def _fb_first(artifact: Artifact) -> Artifact:

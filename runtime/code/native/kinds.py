@@ -76,6 +76,11 @@ class Array:
 
 
 @dataclass(frozen=True)
+class Text:
+    """A STRING or WSTRING: a Python str, whose length the compiler's cuts keep."""
+
+
+@dataclass(frozen=True)
 class Hook:
     """A name of the namespace that holds None or something to call (`_tick`)."""
 
@@ -89,7 +94,7 @@ class Range:
     step: int
 
 
-Kind = Int | Bool | Float | Instance | Array | Hook | Range
+Kind = Int | Bool | Float | Text | Instance | Array | Hook | Range
 
 # integers a double holds exactly: Python converts and compares beyond them exactly, C not
 EXACT_IN_DOUBLE = Int(-(1 << 53), 1 << 53)
@@ -165,12 +170,14 @@ def _extended_blocks(units: list[PouCode], forms: Forms) -> set[str]:
 
 def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
     """The kind of a variable of a declared type; None for what the tier leaves to Python
-    (REAL, strings, references, enumerations)."""
+    (references, enumerations, integers beyond 64 bits)."""
     name, _ = base_type(type_name)
     if name == "BOOL":
         return Bool()
     if name in ("REAL", "LREAL"):
         return Float()
+    if name in ("STRING", "WSTRING"):
+        return Text()
     limits = int_range(name)
     if limits is not None:
         return Int(*limits) if Int(*limits).fits64 else None

@@ -156,6 +156,12 @@ padt_class(const char *name)
             goto padt_bad;                                                                \
     } while (0)
 
+#define PADT_CHECK_TEXT(o)                                                                \
+    do {                                                                                  \
+        if (PADT_UNLIKELY((o) == NULL || !PyUnicode_CheckExact(o)))                       \
+            goto padt_bad;                                                                \
+    } while (0)
+
 #define PADT_CHECK_LIST(o)                                                                \
     do {                                                                                  \
         if (PADT_UNLIKELY((o) == NULL || !PyList_CheckExact(o)))                          \
@@ -280,6 +286,15 @@ padt_safe_math(double (*function)(double), double x)
     if ((isnan(r) && !isnan(x)) || (isinf(r) && isfinite(x)))
         return __builtin_nan("");
     return r;
+}
+
+/* `text[:stop]`, a new reference: the text itself where it is no longer. */
+static inline PyObject *
+padt_cut(PyObject *text, Py_ssize_t stop)
+{
+    if (PyUnicode_GET_LENGTH(text) <= stop)
+        return Py_NewRef(text);
+    return PyUnicode_Substring(text, 0, stop);
 }
 
 /* runtime.code.intrinsics._pow (EXPT), as Python's power of floats computes it (on the

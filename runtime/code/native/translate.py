@@ -41,6 +41,7 @@ from runtime.code.native.kinds import (
     Int,
     Kind,
     Range,
+    Text,
     join,
 )
 from runtime.contract.artifact import PouCode
@@ -96,6 +97,7 @@ from runtime.contract.intrinsic_table import (
 NAME_PLACEHOLDER = "padt_unit"
 WIDEN_AFTER = 3  # passes over a body before a growing local takes the whole 64-bit range
 _RELATIONS = frozenset({"==", "!=", "<", "<=", ">", ">="})
+_PY_OPS = {"==": "Py_EQ", "!=": "Py_NE", "<": "Py_LT", "<=": "Py_LE", ">": "Py_GT", ">=": "Py_GE"}
 _BIT_OPS = frozenset({"&", "|", "^"})
 
 
@@ -425,8 +427,9 @@ class _Body:
             setter = "padt_set_int" if value.kind.fits64 else "padt_set_int128"
             self.check(f"{setter}({place}, {value.c})")
             return
-        if isinstance(declared, Instance | Array) and value.kind == declared:
-            # a whole array or structure (a copy): the place takes it as Python's store does
+        if isinstance(declared, Instance | Array | Text) and value.kind == declared:
+            # a text, a whole array or structure (a copy): the place takes the object as
+            # Python's store does
             self.check(f"padt_put({place}, Py_NewRef({value.c}))")
             return
         _refuse(f"a {_kind_name(value.kind)} stored into {_kind_name(declared)}")
@@ -683,6 +686,8 @@ class _Body:
     # -- expressions
     def expr(self, node: Expr) -> V:
         match node:
+            case Const(value=str() as text):
+                return self.text_constant(text)
             case Const():
                 return _constant(node)
             case Var(where="local", name=name):
@@ -736,8 +741,8 @@ class _Body:
                 return self.wrap(node)
             case Call():
                 return self.call_value(node)
-            case Slice():
-                self.expr(node.value)  # a string's refusal names the variable
+            case Slice(start=None, stop=int() as stop):
+                return self.cut(self.expr(node.value), stop)
         _refuse(f"a {type(node).__name__} expression ({python_text(node)})")
 
     def local_value(self, name: str) -> V:
@@ -803,6 +808,12 @@ class _Body:
             self.line(f"PADT_GET_FLOAT({obj}, {held});")
             return V(kind, held)
         held = self.temp("PyObject *", "NULL")
+        if isinstance(kind, Text):
+            # owned: a FUNCTION called later in the statement may store another text into
+            # a global's slot, which then frees this one
+            self.line(f"Py_XSETREF({held}, Py_XNewRef({obj}));")
+            self.line(f"PADT_CHECK_TEXT({held});")
+            return V(kind, held)
         self.objects.remove(held)  # borrowed from the slot, which keeps it during the statement
         self.line(f"{held} = {obj};")
         if isinstance(kind, Instance):
@@ -828,6 +839,12 @@ class _Body:
         return self.unboxed(element, array.kind.element, "an array element")
 
     def binary(self, op: str, left: V, right: V) -> V:
+        if isinstance(left.kind, Text) or isinstance(right.kind, Text):
+            if op != "+" or left.kind != right.kind:
+                _refuse(
+                    f"the operator {op} on a {_kind_name(left.kind)} and a {_kind_name(right.kind)}"
+                )
+            return self.owned(Text(), f"PyUnicode_Concat({left.c}, {right.c})")
         if isinstance(left.kind, Bool) and isinstance(right.kind, Bool) and op in _BIT_OPS:
             return V(Bool(), f"({left.c} {op} {right.c})")
         if isinstance(left.kind, Float) or isinstance(right.kind, Float):
@@ -927,8 +944,14 @@ class _Body:
         comparisons before hold."""
         if op not in _RELATIONS:
             _refuse(f"a comparison {op}")
-        left = self.comparable(self.expr(nodes[0]))
-        right = self.comparable(self.expr(nodes[1]))
+        left, right = self.expr(nodes[0]), self.expr(nodes[1])
+        if isinstance(left.kind, Text) and isinstance(right.kind, Text) and len(nodes) == 2:
+            # str's own order, by code points, as Python compares them
+            flag = self.temp("int")
+            self.line(f"{flag} = PyObject_RichCompareBool({left.c}, {right.c}, {_PY_OPS[op]});")
+            self.line(f"if (PADT_UNLIKELY({flag} < 0)) goto padt_error;")
+            return V(Bool(), flag)
+        left, right = self.comparable(left), self.comparable(right)
         if len(nodes) == 2:
             return V(Bool(), _comparison(left, op, right))
         right = self.held(right)
@@ -1018,7 +1041,7 @@ class _Body:
         name = node.callee if isinstance(node.callee, str) else None
         if name is not None and name in self.module.functions:
             info, returned = self.function_call(node)
-            if not isinstance(info.result, Int | Bool | Float):
+            if not isinstance(info.result, Int | Bool | Float | Text):
                 why = "a FUNCTION whose result the tier leaves to Python"
                 _refuse(f"a call of {name}, {why}")
             return self.unboxed(returned, info.result, f"the result of {name}")
@@ -1093,7 +1116,29 @@ class _Body:
             target = self.expr(node.args[0])
             if isinstance(target.kind, Range):
                 return self.range_length(target)
+            if isinstance(target.kind, Text):
+                return V(Int(0, INT64_MAX), f"((int64_t)PyUnicode_GET_LENGTH({target.c}))")
         _refuse(f"a call of {_callee_text(node)}")
+
+    def text_constant(self, text: str) -> V:
+        """A text of the program: a str made once as the module is bound (a C string
+        literal, which ends at a NUL and is read as UTF-8, which has no surrogates)."""
+        if "\0" in text or any("\ud800" <= ch <= "\udfff" for ch in text):
+            _refuse("a text with a NUL or a surrogate")
+        return V(Text(), self.module.key(text))
+
+    def cut(self, value: V, stop: int) -> V:
+        """`text[:stop]`: a STRING cut to its length (the same object where it fits)."""
+        if not isinstance(value.kind, Text) or not 0 <= stop <= INT64_MAX:
+            _refuse(f"a slice of a {_kind_name(value.kind)}")
+        return self.owned(Text(), f"padt_cut({value.c}, {c_int(stop)})")
+
+    def owned(self, kind: Kind, call: str) -> V:
+        """The new object `call` makes, in a temporary that owns it (NULL: an error)."""
+        held = self.temp("PyObject *", "NULL")
+        self.line(f"Py_XSETREF({held}, {call});")
+        self.line(f"if (PADT_UNLIKELY({held} == NULL)) goto padt_error;")
+        return V(kind, held)
 
     def copy(self, node: Expr) -> V:
         """`_copy(x)`: an array or structure assigned as a whole, copied by the Python helper
@@ -1140,6 +1185,8 @@ class _Body:
                 box = f"PADT_BOOL_OBJECT({value.c})"
             elif isinstance(kind, Float):
                 box = f"PyFloat_FromDouble({value.c})"
+            elif isinstance(kind, Text):
+                box = f"Py_NewRef({value.c})"
             else:
                 _refuse(f"an argument of {name} that holds a {_kind_name(kind)}")
             held = self.temp("PyObject *", "NULL")

@@ -447,6 +447,42 @@ END_PROGRAM
     assert values["Main.s.last.a"] == values["Main.y.a"] != 0 == values["Main.s.p.a"]
 
 
+def test_strings_run_as_c_with_the_python_values(native_tier: NativeTier) -> None:
+    text = """
+FUNCTION Tag : STRING[12]
+VAR_INPUT n : INT; END_VAR
+IF n MOD 2 = 0 THEN Tag := 'even'; ELSE Tag := 'odd'; END_IF;
+END_FUNCTION
+FUNCTION_BLOCK Join
+VAR_INPUT a, b : STRING[8]; END_VAR
+VAR_OUTPUT both : STRING[10]; longer : BOOL; END_VAR
+both := CONCAT(a, b);
+longer := LEN(a) > LEN(b);
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR
+  s : STRING[5]; t : STRING := 'Grüße$N'; w : WSTRING[6] := "Ωmega"; n : INT;
+  j : Join; same, less : BOOL; l : DINT; kept, odd : STRING;
+END_VAR
+n := n + 1;
+odd := 'q"\\??=*/é$$$N$T';  (* C's quote, escape, trigraph and comment end, UTF-8 *)
+s := CONCAT(s, 'ab');   (* cut to 5 *)
+IF LEN(s) = 5 THEN s := ''; END_IF;
+same := s = 'abab'; less := s < t;
+w := CONCAT(w, "λ");
+j(a := s, b := Tag(n));
+kept := j.both;
+l := LEN(kept) + LEN(w) + LEN(t);
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert set(pair.report.bodies) == {"Main", "Join"}
+    pair.cycle_and_compare(7)
+    values = pair.native.variables.values()
+    assert values["Main.kept"] == "abodd" and values["Main.w"] == "Ωmegaλ"
+    assert values["Main.odd"] == 'q"\\??=*/\u00c3\u00a9$\n\t'  # a STRING holds bytes: é in UTF-8
+
+
 FUNCTIONS = """
 FUNCTION Scale : INT
 VAR_INPUT a : INT; b : INT; END_VAR

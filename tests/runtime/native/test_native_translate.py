@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from runtime.code.native.kinds import class_table, function_table
+from runtime.code.native.kinds import Text, class_table, function_table
 from runtime.code.native.translate import c_int, translate_unit
 from tests.support.native_runs import compiled
 
@@ -65,6 +65,7 @@ def translated(body: str, declarations: str = "") -> tuple[bool, str]:
         "i := MAX(i, j, 3) - MIN(i, ABS(j)); r := MIN(r, 2.0, REAL#-1.5); d := ABS(d);",
         "i := Twice(i + 1) - Twice(v := j);",
         "x := SQRT(x) + LN(x) - EXP(x) * SIN(x) + EXPT(x, 2.0);",
+        "s := CONCAT(s, 'x'); b := s < 'abc' OR Named(i) = 'n'; i := LEN(s);",
         "RETURN;",
     ],
 )
@@ -76,8 +77,7 @@ def test_bodies_of_these_constructs_are_translated(body: str) -> None:
 @pytest.mark.parametrize(
     ("body", "reason"),
     [
-        ("s := CONCAT(s, 'x');", "the variable s, of a type the tier leaves to Python"),
-        ("b := Named(i) = 'n';", "a FUNCTION whose result the tier leaves to Python"),
+        ("s := LEFT(s, 2);", "a call of _left"),
         ("b := Split(v := i, q => j);", "a FUNCTION with VAR_OUTPUT or VAR_IN_OUT"),
     ],
 )
@@ -88,7 +88,7 @@ def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> No
 
 def test_a_body_left_to_python_names_the_st_line_of_the_statement_refused() -> None:
     body_line = FUNCTIONS.count("\n") + 3  # PROGRAM Main, then VAR, then the body
-    ok, why = translated("i := 1;\ns := CONCAT(s, 'x');")
+    ok, why = translated("i := 1;\ns := LEFT(s, 2);")
     assert not ok and why.endswith(f"(ST line {body_line + 1})")
 
 
@@ -130,7 +130,7 @@ def test_the_artifact_names_a_function_result_and_the_tier_reads_outputs_off_the
     }  # fmt: skip
     table = function_table(units, {unit.class_name: unit.unit for unit in units})
     assert not table["FN_TWICE"].outputs and table["FN_SPLIT"].outputs
-    assert table["FN_NAMED"].result is None  # a string: read by Python only
+    assert table["FN_NAMED"].result == Text()
 
 
 def test_the_same_unit_gives_the_same_c_and_module_name() -> None:
