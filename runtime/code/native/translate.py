@@ -97,6 +97,18 @@ from runtime.contract.intrinsic_table import (
 NAME_PLACEHOLDER = "padt_unit"
 WIDEN_AFTER = 3  # passes over a body before a growing local takes the whole 64-bit range
 _RELATIONS = frozenset({"==", "!=", "<", "<=", ">", ">="})
+# the runtime's string functions called from C, by the kind of their result (an integer
+# one only where its range is known: a position, a character's code)
+_HELPER_RESULTS: dict[str, Kind] = {
+    **dict.fromkeys(
+        ("_left", "_right", "_mid", "_insert", "_delete", "_replace", "_w2s", "_s2w"), Text()
+    ),
+    **dict.fromkeys(("_real_to_str", "_time_to_str", "_date_to_str"), Text()),
+    "_str_to_real": Float(),
+    "_str_to_bool": Bool(),
+    "_find": Int(0, INT64_MAX),
+    "_ord": Int(0, 0x10FFFF),
+}
 _PY_OPS = {"==": "Py_EQ", "!=": "Py_NE", "<": "Py_LT", "<=": "Py_LE", ">": "Py_GT", ">=": "Py_GE"}
 _BIT_OPS = frozenset({"&", "|", "^"})
 
@@ -1112,6 +1124,12 @@ class _Body:
                 return self.absolute(self.held(value))
         if name in ("min", "max") and len(node.args) >= 2:
             return self.extreme(name, node)
+        if name in _HELPER_RESULTS and node.args:
+            return self.helper_call(name, node)
+        if name == "str" and len(node.args) == 1:  # INT_TO_STRING and the like
+            value = self.expr(node.args[0])
+            if isinstance(value.kind, Int):
+                return self.owned(Text(), f"PyObject_Str({self.boxed(value, name)})")
         if name == "len" and len(node.args) == 1:
             target = self.expr(node.args[0])
             if isinstance(target.kind, Range):
@@ -1146,12 +1164,7 @@ class _Body:
         value = self.expr(node)
         if not isinstance(value.kind, Instance | Array):
             _refuse(f"{COPY.name} of a {_kind_name(value.kind)}")
-        copied = self.temp("PyObject *", "NULL")
-        helper = self.module.key(COPY.name)
-        call = f"padt_call_function({helper}, (PyObject *[]){{{value.c}}}, 1, NULL)"
-        self.line(f"Py_XSETREF({copied}, {call});")
-        self.line(f"if (PADT_UNLIKELY({copied} == NULL)) goto padt_error;")
-        return V(value.kind, copied)
+        return self.owned(value.kind, _vector_call(self.module.key(COPY.name), [value.c]))
 
     def rotation(self, name: str, node: Call) -> V:
         """`_rol(value, n, bits)`: the compiler's value is masked to its width already."""
@@ -1175,24 +1188,7 @@ class _Body:
         if info.outputs:
             _refuse(f"a call of {name}, a FUNCTION with VAR_OUTPUT or VAR_IN_OUT")
         values = [*node.args, *(value for _, value in node.keywords)]
-        boxed: list[str] = []
-        for value_node in values:
-            value = self.expr(value_node)
-            kind = value.kind
-            if isinstance(kind, Int) and kind.fits64 and not kind.stand_in:
-                box = f"PyLong_FromLongLong({value.c})"
-            elif isinstance(kind, Bool):
-                box = f"PADT_BOOL_OBJECT({value.c})"
-            elif isinstance(kind, Float):
-                box = f"PyFloat_FromDouble({value.c})"
-            elif isinstance(kind, Text):
-                box = f"Py_NewRef({value.c})"
-            else:
-                _refuse(f"an argument of {name} that holds a {_kind_name(kind)}")
-            held = self.temp("PyObject *", "NULL")
-            self.line(f"Py_XSETREF({held}, {box});")
-            self.line(f"if (PADT_UNLIKELY({held} == NULL)) goto padt_error;")
-            boxed.append(held)
+        boxed = [self.boxed(self.expr(value), name) for value in values]
         keywords = tuple(keyword for keyword, _ in node.keywords)
         names = self.module.names(keywords) if keywords else "NULL"
         args = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
@@ -1203,6 +1199,29 @@ class _Body:
         )
         self.line(f"if (PADT_UNLIKELY({result} == NULL)) goto padt_error;")
         return info, result
+
+    def boxed(self, value: V, callee: str) -> str:
+        """`value` as the Python object a call of `callee` takes, in a temporary that owns it."""
+        kind = value.kind
+        if isinstance(kind, Int) and kind.fits64 and not kind.stand_in:
+            box = f"PyLong_FromLongLong({value.c})"
+        elif isinstance(kind, Bool):
+            box = f"PADT_BOOL_OBJECT({value.c})"
+        elif isinstance(kind, Float):
+            box = f"PyFloat_FromDouble({value.c})"
+        elif isinstance(kind, Text):
+            box = f"Py_NewRef({value.c})"
+        else:
+            _refuse(f"an argument of {callee} that holds a {_kind_name(kind)}")
+        return self.owned(kind, box).c
+
+    def helper_call(self, name: str, node: Call) -> V:
+        """A string function of the runtime's (`_left`, `_find`, ...), called from C as the
+        Python tier calls it, the arguments boxed; its result read with the type check of
+        a slot."""
+        args = [self.boxed(self.expr(arg), name) for arg in node.args]
+        result = self.owned(_HELPER_RESULTS[name], _vector_call(self.module.key(name), args))
+        return self.unboxed(result.c, result.kind, f"the result of {name}")
 
     def absolute(self, value: V) -> V:
         kind = value.kind
@@ -1251,6 +1270,13 @@ class _Body:
 
 
 # ---- helpers of expressions ----------------------------------------------------------------------
+
+
+def _vector_call(function_key: str, args: list[str]) -> str:
+    """A call of the namespace's function `function_key` with the objects `args` (a new
+    reference, NULL on an error)."""
+    vector = f"(PyObject *[]){{{', '.join(args)}}}"
+    return f"padt_call_function({function_key}, {vector}, {len(args)}, NULL)"
 
 
 def _callee_text(call: Call) -> str:

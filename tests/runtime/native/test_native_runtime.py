@@ -462,7 +462,8 @@ END_FUNCTION_BLOCK
 PROGRAM Main
 VAR
   s : STRING[5]; t : STRING := 'Grüße$N'; w : WSTRING[6] := "Ωmega"; n : INT;
-  j : Join; same, less : BOOL; l : DINT; kept, odd : STRING;
+  j : Join; same, less : BOOL; l : DINT; kept, odd, f1, f2, f3, f4 : STRING; r : REAL;
+  ws : WSTRING;
 END_VAR
 n := n + 1;
 odd := 'q"\\??=*/é$$$N$T';  (* C's quote, escape, trigraph and comment end, UTF-8 *)
@@ -472,7 +473,15 @@ same := s = 'abab'; less := s < t;
 w := CONCAT(w, "λ");
 j(a := s, b := Tag(n));
 kept := j.both;
-l := LEN(kept) + LEN(w) + LEN(t);
+l := LEN(kept) + LEN(w) + LEN(t) + FIND(t, 'ß');
+(* the string functions: the runtime's helpers, called from C *)
+f1 := CONCAT(LEFT(t, n), RIGHT(kept, 2), MID(t, 3, n));
+f2 := REPLACE(INSERT(f1, 'xy', n), '-', 1, n MOD 4);
+f3 := DELETE(f2, 2, n);
+f4 := CONCAT(INT_TO_STRING(n * 1000), REAL_TO_STRING(INT_TO_REAL(n) / 3.0),
+             TIME_TO_STRING(T#1s * n));
+r := STRING_TO_REAL('2.5') * INT_TO_REAL(n);
+ws := STRING_TO_WSTRING(f1);
 END_PROGRAM
 """
     pair = side_by_side(text, native_tier)
