@@ -427,18 +427,15 @@ def test_both_tiers_give_the_same_output_and_fault(tmp_path: Path) -> None:
 
 
 LABELLED = """
-FUNCTION Split : BOOL
-VAR_INPUT n : INT; END_VAR
-VAR_OUTPUT half : INT; END_VAR
-half := n / 2;
-Split := n MOD 2 = 1;
-END_FUNCTION
-
 FUNCTION_BLOCK Label
 VAR_INPUT n : INT; END_VAR
-VAR_OUTPUT text : STRING[20]; odd : BOOL; half : INT; END_VAR
+VAR_OUTPUT text : STRING[20]; twice : INT; END_VAR
+METHOD Double : INT
+VAR_INPUT v : INT; END_VAR
+Double := v * 2;
+END_METHOD
 text := CONCAT('n=', INT_TO_STRING(n));
-odd := Split(n := n, half => half);
+twice := THIS^.Double(n);
 END_FUNCTION_BLOCK
 
 PROGRAM Main
@@ -451,9 +448,9 @@ END_PROGRAM
 
 @pytest.mark.usefixtures("native_tier")
 def test_native_says_which_bodies_run_as_python_and_why(tmp_path: Path) -> None:
-    """A FUNCTION with an output is not called from C yet: on the native tier `padt sim`
-    says, once, that the block runs as Python and why, as the runtime's event does; the
-    values are those of Python."""
+    """Methods are not called from C yet: on the native tier `padt sim` says, once, that
+    the block runs as Python and why, as the runtime's event does; the values are those of
+    Python."""
     path = write(tmp_path, LABELLED)
     env = {"PADT_NATIVE_CACHE": str(tmp_path / "native")}
     native = padt("sim", path, "--cycles", "2", "--tier", "native", env=env)

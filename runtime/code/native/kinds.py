@@ -81,6 +81,14 @@ class Text:
 
 
 @dataclass(frozen=True)
+class Outputs:
+    """What a call of a FUNCTION with VAR_OUTPUT or VAR_IN_OUT gives: a tuple of its result
+    and those values, each of its kind (None: one the tier leaves to Python)."""
+
+    items: tuple[Kind | None, ...]
+
+
+@dataclass(frozen=True)
 class Hook:
     """A name of the namespace that holds None or something to call (`_tick`)."""
 
@@ -94,7 +102,7 @@ class Range:
     step: int
 
 
-Kind = Int | Bool | Float | Text | Instance | Array | Hook | Range
+Kind = Int | Bool | Float | Text | Instance | Array | Outputs | Hook | Range
 
 # integers a double holds exactly: Python converts and compares beyond them exactly, C not
 EXACT_IN_DOUBLE = Int(-(1 << 53), 1 << 53)
@@ -196,27 +204,32 @@ def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
 class FunctionInfo:
     """A FUNCTION as a caller sees it: the name it has in the namespace, and what its call
     gives: `result` None for no result, or one the tier leaves to Python; `outputs` when
-    the call gives a tuple (the result with VAR_OUTPUT and VAR_IN_OUT values)."""
+    the call gives a tuple (the result with VAR_OUTPUT and VAR_IN_OUT values), the kinds
+    of its items (None: the FUNCTION returns tuples of more than one shape)."""
 
     name: str
     result: Kind | None
-    outputs: bool
+    outputs: Outputs | None = None
 
 
 def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo]:
     """Every FUNCTION of an artifact, by its name in the namespace. Whether a call gives a
-    tuple is read off the form's `return` statements (the artifact names the result type,
-    not the outputs)."""
+    tuple, and of what, is read off the form's `return` statements (the artifact names the
+    result type, not the outputs): the declared types of the variables returned."""
     table: dict[str, FunctionInfo] = {}
     for unit in units:
         if unit.kind != "FUNCTION" or not isinstance(unit.returns, str):
             continue
-        outputs = any(
-            isinstance(line.header, Return)
-            and isinstance(line.header.value, Sequence)
-            and line.header.value.as_tuple
+        shapes = {
+            tuple(kind_of_type(item.type, {}) if item.type else None for item in value.items)
             for line in printed_lines(forms[unit.class_name])
-        )
+            if isinstance(line.header, Return)
+            and isinstance(value := line.header.value, Sequence)
+            and value.as_tuple
+        }
+        outputs = None
+        if shapes:
+            outputs = Outputs(shapes.pop() if len(shapes) == 1 else ())
         result = kind_of_type(unit.returns, {}) if unit.returns else None
         table[unit.class_name] = FunctionInfo(unit.class_name, result, outputs)
     return table

@@ -162,6 +162,12 @@ padt_class(const char *name)
             goto padt_bad;                                                                \
     } while (0)
 
+#define PADT_CHECK_TUPLE(o, n)                                                            \
+    do {                                                                                  \
+        if (PADT_UNLIKELY((o) == NULL || !PyTuple_CheckExact(o) || PyTuple_GET_SIZE(o) != (n))) \
+            goto padt_bad;                                                                \
+    } while (0)
+
 #define PADT_CHECK_LIST(o)                                                                \
     do {                                                                                  \
         if (PADT_UNLIKELY((o) == NULL || !PyList_CheckExact(o)))                          \

@@ -40,6 +40,7 @@ from runtime.code.native.kinds import (
     Instance,
     Int,
     Kind,
+    Outputs,
     Range,
     Text,
     join,
@@ -469,7 +470,7 @@ class _Body:
                 self.check(f"padt_narrow({value.c}, &{local})")
         elif isinstance(local_kind, Bool | Float) and value.kind == local_kind:
             self.line(f"{local} = {value.c};")
-        elif isinstance(local_kind, Instance | Hook) and value.kind == local_kind:
+        elif isinstance(local_kind, Instance | Outputs | Hook) and value.kind == local_kind:
             self.line(f"Py_XSETREF({local}, Py_NewRef({value.c}));")
         else:
             _refuse(f"local {name} takes a {_kind_name(value.kind)}")
@@ -498,7 +499,7 @@ class _Body:
                 self.frame[c] = f"int {c};"
             elif isinstance(kind, Float):
                 self.frame[c] = f"double {c};"
-            elif isinstance(kind, Instance | Hook):
+            elif isinstance(kind, Instance | Outputs | Hook):
                 self.frame[c] = f"PyObject *{c};"
                 self.frame_objects.append(c)
             elif isinstance(kind, Range):
@@ -764,7 +765,7 @@ class _Body:
         if kind is None:
             _refuse(f"the name {name}")
         local = self.local_ref(name)
-        if isinstance(kind, Instance | Hook):
+        if isinstance(kind, Instance | Outputs | Hook):
             self.line(f"if (PADT_UNLIKELY({local} == NULL)) goto padt_unbound;")
         narrowed = self.narrowed.get(name)
         return V(narrowed if narrowed is not None else kind, local)
@@ -844,6 +845,14 @@ class _Body:
 
     def subscript(self, node: Index) -> V:
         array = self.expr(node.base)
+        if isinstance(array.kind, Outputs):  # `t[k]`: the result or an output of a call
+            k = _constant_int(node.offset)
+            if k is None or not 0 <= k < len(array.kind.items):
+                _refuse("an item of a FUNCTION's outputs at an offset not a constant of them")
+            item = array.kind.items[k]
+            if item is None:
+                _refuse("an output of a FUNCTION of a type the tier leaves to Python")
+            return self.unboxed(f"PyTuple_GET_ITEM({array.c}, {k})", item, "an output")
         if not isinstance(array.kind, Array) or array.kind.element is None:
             _refuse("an index into something else than an array the tier knows")
         offset = self.list_offset(array, node.offset)
@@ -1053,6 +1062,11 @@ class _Body:
         name = node.callee if isinstance(node.callee, str) else None
         if name is not None and name in self.module.functions:
             info, returned = self.function_call(node)
+            if info.outputs is not None:  # a tuple of the result and the outputs
+                if not info.outputs.items:
+                    _refuse(f"a call of {name}, whose returns differ in shape")
+                self.line(f"PADT_CHECK_TUPLE({returned}, {len(info.outputs.items)});")
+                return V(info.outputs, returned)
             if not isinstance(info.result, Int | Bool | Float | Text):
                 why = "a FUNCTION whose result the tier leaves to Python"
                 _refuse(f"a call of {name}, {why}")
@@ -1185,8 +1199,6 @@ class _Body:
         name = node.callee
         assert isinstance(name, str)
         info = self.module.functions[name]
-        if info.outputs:
-            _refuse(f"a call of {name}, a FUNCTION with VAR_OUTPUT or VAR_IN_OUT")
         values = [*node.args, *(value for _, value in node.keywords)]
         boxed = [self.boxed(self.expr(value), name) for value in values]
         keywords = tuple(keyword for keyword, _ in node.keywords)

@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from runtime.code.native.kinds import Text, class_table, function_table
+from runtime.code.native.kinds import Bool, Int, Outputs, Text, class_table, function_table
 from runtime.code.native.translate import c_int, translate_unit
 from tests.support.native_runs import compiled
 
@@ -66,6 +66,7 @@ def translated(body: str, declarations: str = "") -> tuple[bool, str]:
         "i := Twice(i + 1) - Twice(v := j);",
         "x := SQRT(x) + LN(x) - EXP(x) * SIN(x) + EXPT(x, 2.0);",
         "s := CONCAT(s, 'x'); b := s < 'abc' OR Named(i) = 'n'; i := LEN(s);",
+        "b := Split(v := i, q => j) OR Split(v := j, q => i);",
         "s := LEFT(s, i); i := FIND(s, 'a') + LEN(INT_TO_STRING(i)); x := STRING_TO_LREAL(s);",
         "RETURN;",
     ],
@@ -78,7 +79,7 @@ def test_bodies_of_these_constructs_are_translated(body: str) -> None:
 @pytest.mark.parametrize(
     ("body", "reason"),
     [
-        ("b := Split(v := i, q => j);", "a FUNCTION with VAR_OUTPUT or VAR_IN_OUT"),
+        ("i := STRING_TO_INT(s);", "a call of _str_to_int"),
     ],
 )
 def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> None:
@@ -88,7 +89,7 @@ def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> No
 
 def test_a_body_left_to_python_names_the_st_line_of_the_statement_refused() -> None:
     body_line = FUNCTIONS.count("\n") + 3  # PROGRAM Main, then VAR, then the body
-    ok, why = translated("i := 1;\nb := Split(v := i, q => j);")
+    ok, why = translated("i := 1;\ni := STRING_TO_INT(s);")
     assert not ok and why.endswith(f"(ST line {body_line + 1})")
 
 
@@ -129,7 +130,8 @@ def test_the_artifact_names_a_function_result_and_the_tier_reads_outputs_off_the
         "Twice": "INT", "Named": "STRING[80]", "Split": "BOOL", "Main": ""
     }  # fmt: skip
     table = function_table(units, {unit.class_name: unit.unit for unit in units})
-    assert not table["FN_TWICE"].outputs and table["FN_SPLIT"].outputs
+    assert not table["FN_TWICE"].outputs
+    assert table["FN_SPLIT"].outputs == Outputs((Bool(), Int(-32768, 32767)))
     assert table["FN_NAMED"].result == Text()
 
 
