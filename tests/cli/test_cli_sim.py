@@ -430,12 +430,10 @@ LABELLED = """
 FUNCTION_BLOCK Label
 VAR_INPUT n : INT; END_VAR
 VAR_OUTPUT text : STRING[20]; twice : INT; END_VAR
-METHOD Double : INT
-VAR_INPUT v : INT; END_VAR
-Double := v * 2;
-END_METHOD
+VAR r : REF_TO INT; END_VAR
 text := CONCAT('n=', INT_TO_STRING(n));
-twice := THIS^.Double(n);
+r := REF(n);
+twice := r^ * 2;
 END_FUNCTION_BLOCK
 
 PROGRAM Main
@@ -448,9 +446,8 @@ END_PROGRAM
 
 @pytest.mark.usefixtures("native_tier")
 def test_native_says_which_bodies_run_as_python_and_why(tmp_path: Path) -> None:
-    """Methods are not called from C yet: on the native tier `padt sim` says, once, that
-    the block runs as Python and why, as the runtime's event does; the values are those of
-    Python."""
+    """References are not C yet: on the native tier `padt sim` says, once, that the block
+    runs as Python and why, as the runtime's event does; the values are those of Python."""
     path = write(tmp_path, LABELLED)
     env = {"PADT_NATIVE_CACHE": str(tmp_path / "native")}
     native = padt("sim", path, "--cycles", "2", "--tier", "native", env=env)

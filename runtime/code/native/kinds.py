@@ -7,13 +7,13 @@ of its type) and from the arithmetic between them, so the translator can prove t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from runtime.contract.artifact import PouCode, VarInfo
 from runtime.contract.code.python_text import printed_lines
 from runtime.contract.code.statements import Return
 from runtime.contract.code.typed_form import Sequence
-from runtime.contract.code.units import Class, Unit
+from runtime.contract.code.units import Class, Function, Inherited, Unit
 from runtime.contract.values import array_shape, base_type, int_range
 
 INT64_MIN, INT64_MAX = -(1 << 63), (1 << 63) - 1
@@ -136,6 +136,8 @@ def join(a: Kind, b: Kind) -> Kind | None:
 class ClassInfo:
     name: str  # the class in the namespace
     members: dict[str, Kind | None]  # attribute -> kind (None: a type not translated)
+    # its methods and property accessors, its own and inherited, by name (`M__X`)
+    methods: dict[str, FunctionInfo] = field(default_factory=dict)
 
 
 Forms = dict[str, Unit]
@@ -147,12 +149,30 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
     """Every generated class of an artifact with the kinds of its declared variables."""
     by_type = {unit.name.upper(): unit.class_name for unit in units if unit.kind != "FUNCTION"}
     extended = _extended_blocks(units, forms)
+    own = {
+        name: {
+            f.name: _returned(f, f.name, by_type) for f in form.functions if isinstance(f, Function)
+        }
+        for name, form in forms.items()
+        if isinstance(form, Class)
+    }
     table: dict[str, ClassInfo] = {}
     for unit in units:
         if unit.kind == "FUNCTION":
             continue
         members = {v.attr: _member_kind(v, by_type, extended) for v in unit.variables}
-        table[unit.class_name] = ClassInfo(unit.class_name, members)
+        methods = dict(own.get(unit.class_name, {}))
+        form = forms.get(unit.class_name)
+        for inherited in form.functions if isinstance(form, Class) else ():
+            found = (
+                own.get(inherited.owner, {}).get(inherited.name)
+                if isinstance(inherited, Inherited)
+                else None
+            )
+            if found is not None:
+                methods[inherited.name] = found
+        methods.pop("__call__", None)
+        table[unit.class_name] = ClassInfo(unit.class_name, members, methods)
     return table
 
 
@@ -220,16 +240,29 @@ def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo
     for unit in units:
         if unit.kind != "FUNCTION" or not isinstance(unit.returns, str):
             continue
-        shapes = {
-            tuple(kind_of_type(item.type, {}) if item.type else None for item in value.items)
-            for line in printed_lines(forms[unit.class_name])
-            if isinstance(line.header, Return)
-            and isinstance(value := line.header.value, Sequence)
-            and value.as_tuple
-        }
-        outputs = None
-        if shapes:
-            outputs = Outputs(shapes.pop() if len(shapes) == 1 else ())
+        form = forms[unit.class_name]
+        if not isinstance(form, Function):
+            continue
+        returned = _returned(form, unit.class_name, {})
         result = kind_of_type(unit.returns, {}) if unit.returns else None
-        table[unit.class_name] = FunctionInfo(unit.class_name, result, outputs)
+        table[unit.class_name] = FunctionInfo(unit.class_name, result, returned.outputs)
     return table
+
+
+def _returned(function: Function, name: str, classes: dict[str, str]) -> FunctionInfo:
+    """What a call of `function` gives, read off its `return` statements: the declared
+    types of the variables it returns (a tuple of them: the result with the outputs)."""
+    values = [
+        line.header.value
+        for line in printed_lines(function)
+        if isinstance(line.header, Return) and line.header.value is not None
+    ]
+    shapes = {
+        tuple(kind_of_type(item.type, classes) if item.type else None for item in value.items)
+        for value in values
+        if isinstance(value, Sequence) and value.as_tuple
+    }
+    if shapes:
+        return FunctionInfo(name, None, Outputs(shapes.pop() if len(shapes) == 1 else ()))
+    results = {kind_of_type(v.type, classes) if v.type else None for v in values}
+    return FunctionInfo(name, results.pop() if len(results) == 1 else None)

@@ -567,6 +567,13 @@ padt_call_function(PyObject *key, PyObject *const *args, size_t nargs, PyObject 
     return PyObject_Vectorcall(function, args, nargs, kwnames);
 }
 
+/* A method of `args[0]`, looked up on it as Python looks it up (an override included). */
+static inline PyObject *
+padt_call_method(PyObject *name, PyObject *const *args, size_t nargs, PyObject *kwnames)
+{
+    return PyObject_VectorcallMethod(name, args, nargs, kwnames);
+}
+
 #define PADT_BOOL_OBJECT(v) Py_NewRef((v) ? Py_True : Py_False)
 
 static int

@@ -46,7 +46,7 @@ from runtime.code.native.kinds import (
     join,
 )
 from runtime.contract.artifact import PouCode
-from runtime.contract.code.names import MATH_FUNCTIONS
+from runtime.contract.code.names import MATH_FUNCTIONS, METHOD_NAME
 from runtime.contract.code.python_text import printed_lines, python_text
 from runtime.contract.code.statements import (
     Assign,
@@ -509,9 +509,14 @@ class _Body:
         return f"f->{c}"
 
     def call_statement(self, call: Expr) -> None:
+        if isinstance(call, Index):  # `t[0]`: a call's unused result, read and dropped
+            self.expr(call)
+            return
         if not isinstance(call, Call):
             _refuse("an expression statement that is no call")
-        if isinstance(call.callee, str) and call.callee in self.module.functions:
+        if (
+            isinstance(call.callee, str) and call.callee in self.module.functions
+        ) or self.is_method_call(call):
             self.function_call(call)  # its result, if any, dropped at the chunk's end
             return
         if call.keywords:
@@ -1060,17 +1065,18 @@ class _Body:
 
     def call_value(self, node: Call) -> V:
         name = node.callee if isinstance(node.callee, str) else None
-        if name is not None and name in self.module.functions:
+        if (name is not None and name in self.module.functions) or self.is_method_call(node):
             info, returned = self.function_call(node)
+            called = _callee_text(node)
             if info.outputs is not None:  # a tuple of the result and the outputs
                 if not info.outputs.items:
-                    _refuse(f"a call of {name}, whose returns differ in shape")
+                    _refuse(f"a call of {called}, whose returns differ in shape")
                 self.line(f"PADT_CHECK_TUPLE({returned}, {len(info.outputs.items)});")
                 return V(info.outputs, returned)
             if not isinstance(info.result, Int | Bool | Float | Text):
                 why = "a FUNCTION whose result the tier leaves to Python"
-                _refuse(f"a call of {name}, {why}")
-            return self.unboxed(returned, info.result, f"the result of {name}")
+                _refuse(f"a call of {called}, {why}")
+            return self.unboxed(returned, info.result, f"the result of {called}")
         if node.keywords:
             _refuse(f"a call of {_callee_text(node)} with keywords")
         if name == IX.name and len(node.args) == len(IX.params):
@@ -1193,24 +1199,51 @@ class _Body:
         helper = "padt_rol" if name == ROL.name else "padt_ror"
         return V(Int(0, mask), f"{helper}({value.c}, {count.c}, {bits})")
 
+    def is_method_call(self, node: Call) -> bool:
+        """`x.M__X(...)`: a method or property accessor of a generated object (not
+        `POU_BASE.M__X(s, ...)`, SUPER^'s, which stays Python)."""
+        match node.callee:
+            case Member(base=base, name=name) if not isinstance(base, Named):
+                return METHOD_NAME.match(name) is not None
+        return False
+
     def function_call(self, node: Call) -> tuple[FunctionInfo, str]:
-        """A FUNCTION of the artifact called as Python calls it, with the values boxed;
-        the result in a temporary that owns it."""
-        name = node.callee
-        assert isinstance(name, str)
-        info = self.module.functions[name]
+        """A FUNCTION of the artifact, or a method of an object, called as Python calls it,
+        with the values boxed; the result in a temporary that owns it. A method is looked
+        up on the object as Python does (an override of a derived block's)."""
+        callee = node.callee
+        if isinstance(callee, Member):
+            owner = self.expr(callee.base)
+            name = callee.name
+            info = self.method_info(owner, name)
+            first = [owner.c]
+        else:
+            assert isinstance(callee, str)
+            name = callee
+            info, first = self.module.functions[name], []
         values = [*node.args, *(value for _, value in node.keywords)]
-        boxed = [self.boxed(self.expr(value), name) for value in values]
+        boxed = first + [self.boxed(self.expr(value), name) for value in values]
         keywords = tuple(keyword for keyword, _ in node.keywords)
         names = self.module.names(keywords) if keywords else "NULL"
         args = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
+        positional = len(first) + len(node.args)
+        caller = "padt_call_method" if first else "padt_call_function"
         result = self.temp("PyObject *", "NULL")
         self.line(
-            f"Py_XSETREF({result}, padt_call_function({self.module.key(name)}, {args}, "
-            f"{len(node.args)}, {names}));"
+            f"Py_XSETREF({result}, {caller}({self.module.key(name)}, {args}, "
+            f"{positional}, {names}));"
         )
         self.line(f"if (PADT_UNLIKELY({result} == NULL)) goto padt_error;")
         return info, result
+
+    def method_info(self, owner: V, name: str) -> FunctionInfo:
+        if not isinstance(owner.kind, Instance):
+            _refuse(f"a call of {name} of a {_kind_name(owner.kind)}")
+        info = self.module.classes.get(owner.kind.cls)
+        method = info.methods.get(name) if info is not None else None
+        if method is None:
+            _refuse(f"a call of {name}, which {owner.kind.cls} does not have")
+        return method
 
     def boxed(self, value: V, callee: str) -> str:
         """`value` as the Python object a call of `callee` takes, in a temporary that owns it."""

@@ -77,7 +77,10 @@ class ArtifactTranslation:
 
     def shape(self) -> str:
         """All of it a translation depends on but the unit's form (a cache key's part)."""
-        members = [(name, sorted(c.members.items(), key=str)) for name, c in self.classes.items()]
+        members = [
+            (name, sorted(c.members.items(), key=str), sorted(c.methods.items()))
+            for name, c in self.classes.items()
+        ]
         return repr((self.globals_class, sorted(members), sorted(self.functions.items())))
 
     def translate(self, unit: PouCode) -> Translated:

@@ -66,6 +66,7 @@ END_PROGRAM
 def test_a_base_body_called_with_super_runs_on_both_tiers(native_tier: NativeTier) -> None:
     pair = run_alike(CHAIN, native_tier, 4)
     assert "Base" in pair.report.bodies  # as C: called as the others' SUPER^()
+    assert "Main" in pair.report.bodies  # its calls of Count look the method up, as Python
     found = values(pair)
     # the edge every other cycle: n grows by the step in cycles 1 and 3
     assert [found["Main.b.n"], found["Main.m.n"], found["Main.t.n"]] == [2, 4, 6]
@@ -73,6 +74,49 @@ def test_a_base_body_called_with_super_runs_on_both_tiers(native_tier: NativeTie
     assert found["Main.t.m"] == 3 + 3 + 6 + 6 and found["Main.t.t"] == 4
     # the base's Count calls THIS^.Code(): Base 1, Mid 11, Top 111, each cycle
     assert [found["Main.b.codes"], found["Main.m.codes"], found["Main.t.codes"]] == [4, 44, 444]
+
+
+def test_methods_with_outputs_and_properties_are_called_from_c_a_fault_in_one_named(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+FUNCTION_BLOCK Tank
+VAR level : REAL; high : REAL := 10.0; calls : INT; END_VAR
+METHOD PUBLIC Fill : BOOL
+VAR_INPUT amount : REAL; END_VAR
+VAR_OUTPUT over : REAL; END_VAR
+level := level + amount;
+over := MAX(level - high, 0.0);
+Fill := over = 0.0;
+calls := calls + 1;
+END_METHOD
+METHOD PUBLIC Ratio : INT
+VAR_INPUT d : INT; END_VAR
+Ratio := REAL_TO_INT(level) / d;
+END_METHOD
+PROPERTY PUBLIC Limit : REAL
+GET Limit := high; END_GET
+SET high := Limit; END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR t : Tank; ok : BOOL; over : REAL; n, r : INT; cap : REAL; END_VAR
+n := n + 1;
+ok := t.Fill(amount := 2.5, over => over);
+t.Fill(1.0);
+IF n = 3 THEN t.Limit := 20.0; END_IF;
+cap := t.Limit;
+r := t.Ratio(d := 5 - n);
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert set(pair.report.bodies) >= {"Main"}
+    pair.cycle_and_compare(4)  # n = 5 in the fifth cycle: Ratio divides by zero
+    found = values(pair)
+    assert (found["Main.t.calls"], found["Main.cap"], found["Main.ok"]) == (8, 20.0, True)
+    assert not program_error(pair.native)
+    pair.cycle_and_compare(1)
+    assert "division by zero in POU Tank (prog.st:14)" in program_error(pair.native)
 
 
 def test_a_block_extending_a_standard_block_runs_its_timer_on_both_tiers(
