@@ -81,8 +81,8 @@ def converted(value: Expr, source: Type, target: ElementaryType) -> Expr:
             return value
         return intrinsic("str", name, value)
     if tcat in ("time", "date"):
-        if cat == "string":
-            return intrinsic("_str_to_time", name, value)
+        if cat == "string":  # a literal of any length: wrapped as every store is
+            return wrapped(intrinsic("_str_to_time", name, value), target)
         million = Const(1_000_000, "LINT")
         if cat == "real":  # REAL ms -> ns
             return wrapped(intrinsic("_round", name, Binary("*", value, million, "LREAL")), target)

@@ -59,6 +59,7 @@ TDIV = _called("_tdiv", "INT REAL", "INT", "TIME divided by a number", (ZERO,))
 POW = _called(
     "_pow", "REAL REAL", "REAL", "`**`: +inf past the range, NaN of a negative base's fraction"
 )
+MUX = _called("_mux", "INT *ANY", "ANY", "MUX", (BOUNDS,))
 COPY = _called("_copy", "ANY", "ANY", "a deep copy: value semantics of arrays and structures")
 ROL = _called("_rol", "INT INT INT", "INT", "ROL over a width")
 ROR = _called("_ror", "INT INT INT", "INT", "ROR over a width")
@@ -84,7 +85,7 @@ INTRINSICS: tuple[Intrinsic, ...] = (
     _called("_init", "OBJECT ANY", "OBJECT", "a structure initializer applied"),
     ROL,
     ROR,
-    _called("_mux", "INT *ANY", "ANY", "MUX", (BOUNDS,)),
+    MUX,
     _called("_bcd_to_int", "INT", "INT", "BCD_TO_INT", (FAULT,)),
     _called("_int_to_bcd", "INT", "INT", "INT_TO_BCD", (FAULT,)),
     _called("_str_to_int", "STRING", "INT", "a string's integer (0 when none)"),

@@ -379,6 +379,38 @@ padt_whole(double whole) /* a non-negative integral double */
     return ((padt_i128)1 << 126) + (padt_i128)(uint64_t)fmod(whole, PADT_TWO_64);
 }
 
+/* An int of any size (the result of a helper such as STRING_TO_INT's, which a wrap takes
+ * to at most 64 bits at once): exact within 2**126, beyond a stand-in as padt_whole makes
+ * one, of that size and equal to the true value modulo 2**64. */
+static int
+padt_any_int(PyObject *o, padt_i128 *out)
+{
+    unsigned char bytes[16];
+    if (_PyLong_AsByteArray((PyLongObject *)o, bytes, sizeof bytes, 1, 1) == 0) {
+        unsigned __int128 bits = 0;
+        for (int i = (int)sizeof bytes - 1; i >= 0; i--)
+            bits = (bits << 8) | bytes[i];
+        padt_i128 v = (padt_i128)bits;
+        if (v > -((padt_i128)1 << 126) && v < ((padt_i128)1 << 126)) {
+            *out = v;
+            return 0;
+        }
+    } else if (!PyErr_ExceptionMatches(PyExc_OverflowError)) {
+        return -1;
+    }
+    PyErr_Clear();
+    PyObject *magnitude = PyNumber_Absolute(o);
+    if (magnitude == NULL)
+        return -1;
+    uint64_t low = PyLong_AsUnsignedLongLongMask(magnitude);
+    Py_DECREF(magnitude);
+    if (low == (uint64_t)-1 && PyErr_Occurred())
+        return -1;
+    padt_i128 stand_in = ((padt_i128)1 << 126) + (padt_i128)low;
+    *out = _PyLong_Sign(o) < 0 ? -stand_in : stand_in;
+    return 0;
+}
+
 /* runtime.code.intrinsics._round: to the nearest, halves away from zero; NaN and infinities 0 */
 static inline int
 padt_round(double x, padt_i128 *out)

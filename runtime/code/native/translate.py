@@ -87,6 +87,7 @@ from runtime.contract.intrinsic_table import (
     IDIV,
     IMOD,
     IX,
+    MUX,
     POW,
     ROL,
     ROR,
@@ -109,6 +110,10 @@ _HELPER_RESULTS: dict[str, Kind] = {
     "_str_to_bool": Bool(),
     "_find": Int(0, INT64_MAX),
     "_ord": Int(0, 0x10FFFF),
+    # integers of any size, which the compiler wraps to their type at once: read as a REAL's
+    # integer is (Int.stand_in), exact within 2**126
+    **dict.fromkeys(("_str_to_int", "_str_to_time", "_bcd_to_int", "_int_to_bcd"), FROM_REAL),
+    "_setbits": FROM_REAL,
 }
 _PY_OPS = {"==": "Py_EQ", "!=": "Py_NE", "<": "Py_LT", "<=": "Py_LE", ">": "Py_GT", ">=": "Py_GE"}
 _BIT_OPS = frozenset({"&", "|", "^"})
@@ -811,6 +816,11 @@ class _Body:
     def unboxed(self, obj: str, kind: Kind, what: str) -> V:
         """The value of a Python object that holds a `kind` (of type checked on the way in:
         a wrong one is a fault, `padt_bad`)."""
+        if isinstance(kind, Int) and kind.stand_in:  # an integer of any size
+            held = self.temp("padt_i128")
+            self.line(f"if (PADT_UNLIKELY(!PyLong_Check({obj}))) goto padt_bad;")
+            self.check(f"padt_any_int({obj}, &{held})")
+            return V(kind, held)
         if isinstance(kind, Int):
             held = self.temp("int64_t")
             small = Int(-(1 << 30) + 1, (1 << 30) - 1)
@@ -1144,7 +1154,7 @@ class _Body:
                 return self.absolute(self.held(value))
         if name in ("min", "max") and len(node.args) >= 2:
             return self.extreme(name, node)
-        if name in _HELPER_RESULTS and node.args:
+        if (name in _HELPER_RESULTS or name == MUX.name) and node.args:
             return self.helper_call(name, node)
         if name == "str" and len(node.args) == 1:  # INT_TO_STRING and the like
             value = self.expr(node.args[0])
@@ -1261,11 +1271,21 @@ class _Body:
         return self.owned(kind, box).c
 
     def helper_call(self, name: str, node: Call) -> V:
-        """A string function of the runtime's (`_left`, `_find`, ...), called from C as the
-        Python tier calls it, the arguments boxed; its result read with the type check of
-        a slot."""
-        args = [self.boxed(self.expr(arg), name) for arg in node.args]
-        result = self.owned(_HELPER_RESULTS[name], _vector_call(self.module.key(name), args))
+        """A function of the runtime's (`_left`, `_find`, `_mux`, ...), called from C as
+        the Python tier calls it, the arguments boxed; its result read with the type check
+        of a slot (MUX's as the kind of the inputs it chooses from)."""
+        values = [self.expr(arg) for arg in node.args]
+        if name == MUX.name:
+            kinds = {type(v.kind) for v in values[1:]}
+            if len(kinds) != 1 or not kinds <= {Int, Bool, Float, Text}:
+                _refuse(f"{name} of inputs of different kinds")
+            kind = values[1].kind
+            for value in values[2:]:
+                kind = join(kind, value.kind) or kind
+        else:
+            kind = _HELPER_RESULTS[name]
+        args = [self.boxed(value, name) for value in values]
+        result = self.owned(kind, _vector_call(self.module.key(name), args))
         return self.unboxed(result.c, result.kind, f"the result of {name}")
 
     def absolute(self, value: V) -> V:

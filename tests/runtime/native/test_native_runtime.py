@@ -492,6 +492,37 @@ END_PROGRAM
     assert values["Main.odd"] == 'q"\\??=*/\u00c3\u00a9$\n\t'  # a STRING holds bytes: é in UTF-8
 
 
+def test_the_rest_of_the_standard_functions_run_from_c_with_the_python_values(
+    native_tier: NativeTier,
+) -> None:
+    # integers of any size from a string, wrapped to the type: exact below 2**126, beyond a
+    # stand-in equal to them modulo 2**64 (STRING_TO_TIME's was stored whole, unwrapped)
+    text = """
+PROGRAM Main
+VAR
+  i : INT := 5; w : WORD; b : BOOL := TRUE; n : INT; k, k2, k3 : DINT; l : LINT;
+  d : WORD := 16#0012; x, m : INT; t : TIME;
+  huge : STRING := '-99999999999999999999999999999999999999999999';
+  mid : STRING := '170141183460469231731687303715884105727';
+END_VAR
+n := n + 1;
+b := NOT b;
+i.15 := b; w.%B1 := INT_TO_BYTE(n * 40); i.3 := NOT b;
+k := STRING_TO_DINT(huge); k2 := STRING_TO_DINT(mid); k3 := STRING_TO_DINT('16#7FFF_FFFF');
+l := STRING_TO_LINT(CONCAT('-', mid)) + STRING_TO_LINT('1e3');
+x := BCD_TO_INT(d); d := INT_TO_BCD(x + n);
+t := STRING_TO_TIME('T#5s') + STRING_TO_TIME('T#999999999999d');
+m := MUX(n - 1, x, i, 7);  (* the fourth cycle: no fourth input, the same fault *)
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(3)
+    assert not program_error(pair.native)
+    pair.cycle_and_compare(1)
+    assert "Main" in program_error(pair.native)
+
+
 FUNCTIONS = """
 FUNCTION Scale : INT
 VAR_INPUT a : INT; b : INT; END_VAR
