@@ -606,6 +606,20 @@ padt_call_method(PyObject *name, PyObject *const *args, size_t nargs, PyObject *
     return PyObject_VectorcallMethod(name, args, nargs, kwnames);
 }
 
+/* A method as the class `cls` has it, not the instance's (SUPER^.X(): args[0] is the
+ * instance, of a class derived from cls). */
+static inline PyObject *
+padt_call_in_class(PyObject *cls, PyObject *name, PyObject *const *args, size_t nargs,
+                   PyObject *kwnames)
+{
+    PyObject *function = PyObject_GetAttr(cls, name);
+    if (function == NULL)
+        return NULL;
+    PyObject *result = PyObject_Vectorcall(function, args, nargs, kwnames);
+    Py_DECREF(function);
+    return result;
+}
+
 #define PADT_BOOL_OBJECT(v) Py_NewRef((v) ? Py_True : Py_False)
 
 static int

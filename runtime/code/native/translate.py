@@ -46,7 +46,7 @@ from runtime.code.native.kinds import (
     join,
 )
 from runtime.contract.artifact import PouCode
-from runtime.contract.code.names import MATH_FUNCTIONS, METHOD_NAME
+from runtime.contract.code.names import CLASS_NAME, MATH_FUNCTIONS, METHOD_NAME
 from runtime.contract.code.python_text import printed_lines, python_text
 from runtime.contract.code.statements import (
     Assign,
@@ -1210,10 +1210,12 @@ class _Body:
         return V(Int(0, mask), f"{helper}({value.c}, {count.c}, {bits})")
 
     def is_method_call(self, node: Call) -> bool:
-        """`x.M__X(...)`: a method or property accessor of a generated object (not
-        `POU_BASE.M__X(s, ...)`, SUPER^'s, which stays Python)."""
+        """`x.M__X(...)`: a method or property accessor of a generated object; or
+        `POU_BASE.M__X(s, ...)`, SUPER^.X(): the base's own, on this instance."""
         match node.callee:
-            case Member(base=base, name=name) if not isinstance(base, Named):
+            case Member(base=Named(), name=name):
+                return METHOD_NAME.match(name) is not None and _is_super_call(node)
+            case Member(name=name):
                 return METHOD_NAME.match(name) is not None
         return False
 
@@ -1221,26 +1223,30 @@ class _Body:
         """A FUNCTION of the artifact, or a method of an object, called as Python calls it,
         with the values boxed; the result in a temporary that owns it. A method is looked
         up on the object as Python does (an override of a derived block's)."""
-        callee = node.callee
-        if isinstance(callee, Member):
+        callee, passed = node.callee, node.args
+        if isinstance(callee, Member) and isinstance(callee.base, Named):  # SUPER^.X()
+            name, base = callee.name, callee.base.name
+            info = self.method_info(V(Instance(base), "s"), name)
+            first, passed = ["s"], passed[1:]
+            caller = f"padt_call_in_class({self.module.type_ref(base)}, "
+        elif isinstance(callee, Member):
             owner = self.expr(callee.base)
             name = callee.name
             info = self.method_info(owner, name)
-            first = [owner.c]
+            first, caller = [owner.c], "padt_call_method("
         else:
             assert isinstance(callee, str)
             name = callee
-            info, first = self.module.functions[name], []
-        values = [*node.args, *(value for _, value in node.keywords)]
+            info, first, caller = self.module.functions[name], [], "padt_call_function("
+        values = [*passed, *(value for _, value in node.keywords)]
         boxed = first + [self.boxed(self.expr(value), name) for value in values]
         keywords = tuple(keyword for keyword, _ in node.keywords)
         names = self.module.names(keywords) if keywords else "NULL"
         args = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
-        positional = len(first) + len(node.args)
-        caller = "padt_call_method" if first else "padt_call_function"
+        positional = len(first) + len(passed)
         result = self.temp("PyObject *", "NULL")
         self.line(
-            f"Py_XSETREF({result}, {caller}({self.module.key(name)}, {args}, "
+            f"Py_XSETREF({result}, {caller}{self.module.key(name)}, {args}, "
             f"{positional}, {names}));"
         )
         self.line(f"if (PADT_UNLIKELY({result} == NULL)) goto padt_error;")
@@ -1335,6 +1341,14 @@ class _Body:
 
 
 # ---- helpers of expressions ----------------------------------------------------------------------
+
+
+def _is_super_call(node: Call) -> bool:
+    """`POU_BASE.M__X(s, ...)`: a base's method called on the instance the code runs on."""
+    match node.callee, node.args:
+        case Member(base=Named(name=base)), (This(), *_):
+            return CLASS_NAME.match(base) is not None
+    return False
 
 
 def _vector_call(function_key: str, args: list[str]) -> str:

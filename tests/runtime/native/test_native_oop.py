@@ -99,9 +99,20 @@ GET Limit := high; END_GET
 SET high := Limit; END_SET
 END_PROPERTY
 END_FUNCTION_BLOCK
+FUNCTION_BLOCK BigTank EXTENDS Tank
+VAR_OUTPUT own, base : INT; END_VAR
+METHOD PUBLIC OVERRIDE Ratio : INT
+VAR_INPUT d : INT; END_VAR
+Ratio := 1000 + d;
+END_METHOD
+own := THIS^.Ratio(2);
+base := SUPER^.Ratio(d := 1);
+END_FUNCTION_BLOCK
 PROGRAM Main
-VAR t : Tank; ok : BOOL; over : REAL; n, r : INT; cap : REAL; END_VAR
+VAR t : Tank; big : BigTank; ok : BOOL; over : REAL; n, r : INT; cap : REAL; END_VAR
 n := n + 1;
+big.Fill(amount := 4.0);
+big();
 ok := t.Fill(amount := 2.5, over => over);
 t.Fill(1.0);
 IF n = 3 THEN t.Limit := 20.0; END_IF;
@@ -110,10 +121,11 @@ r := t.Ratio(d := 5 - n);
 END_PROGRAM
 """
     pair = side_by_side(text, native_tier)
-    assert set(pair.report.bodies) >= {"Main"}
+    assert set(pair.report.bodies) >= {"Main", "BigTank"}
     pair.cycle_and_compare(4)  # n = 5 in the fifth cycle: Ratio divides by zero
     found = values(pair)
     assert (found["Main.t.calls"], found["Main.cap"], found["Main.ok"]) == (8, 20.0, True)
+    assert (found["Main.big.own"], found["Main.big.base"]) == (1002, 16)  # its level 16.0
     assert not program_error(pair.native)
     pair.cycle_and_compare(1)
     assert "division by zero in POU Tank (prog.st:14)" in program_error(pair.native)
