@@ -59,6 +59,11 @@ TDIV = _called("_tdiv", "INT REAL", "INT", "TIME divided by a number", (ZERO,))
 POW = _called(
     "_pow", "REAL REAL", "REAL", "`**`: +inf past the range, NaN of a negative base's fraction"
 )
+REF = _called("_ref", "OBJECT ANY STRING *BOOL", "REFERENCE", "REF(x)", (FAULT,))
+DEREF = _called("_deref", "REFERENCE", "ANY", "what a reference refers to", (NULL,))
+DEREF_SET = _called(
+    "_deref_set", "REFERENCE ANY", "-", "writing what a reference refers to", (NULL,)
+)
 MUX = _called("_mux", "INT *ANY", "ANY", "MUX", (BOUNDS,))
 COPY = _called("_copy", "ANY", "ANY", "a deep copy: value semantics of arrays and structures")
 ROL = _called("_rol", "INT INT INT", "INT", "ROL over a width")
@@ -106,9 +111,9 @@ INTRINSICS: tuple[Intrinsic, ...] = (
     _called("_replace", "STRING STRING INT INT", "STRING", "REPLACE"),
     _called("_find", "STRING STRING", "INT", "FIND (0 when not found)"),
     SAFE_MATH,
-    _called("_ref", "OBJECT ANY STRING *BOOL", "REFERENCE", "REF(x)", (FAULT,)),
-    _called("_deref", "REFERENCE", "ANY", "what a reference refers to", (NULL,)),
-    _called("_deref_set", "REFERENCE ANY", "-", "writing what a reference refers to", (NULL,)),
+    REF,
+    DEREF,
+    DEREF_SET,
     _called("_printf", "STRING *ANY", "INT", "the test helper of `padt exec`"),
     _called("_ActionControl", "", "OBJECT", "a new IEC action control block"),
     _called("_step_time", "OBJECT INT", "INT", "an SFC step's time"),

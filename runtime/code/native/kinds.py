@@ -10,9 +10,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from runtime.contract.artifact import PouCode, VarInfo
+from runtime.contract.code.names import IDENTIFIER
 from runtime.contract.code.python_text import printed_lines
 from runtime.contract.code.statements import Return
-from runtime.contract.code.typed_form import Sequence
+from runtime.contract.code.typed_form import Const, Expr, Repeated, Sequence
 from runtime.contract.code.units import Class, Function, Inherited, Unit
 from runtime.contract.values import array_shape, base_type, int_range
 
@@ -81,6 +82,15 @@ class Text:
 
 
 @dataclass(frozen=True)
+class Ref:
+    """A REF_TO or REFERENCE TO: None (NULL) or the runtime's Reference object, followed by
+    its helpers; `target` the kind of what it refers to (None: one the tier leaves to
+    Python)."""
+
+    target: Kind | None
+
+
+@dataclass(frozen=True)
 class Outputs:
     """What a call of a FUNCTION with VAR_OUTPUT or VAR_IN_OUT gives: a tuple of its result
     and those values, each of its kind (None: one the tier leaves to Python)."""
@@ -102,7 +112,7 @@ class Range:
     step: int
 
 
-Kind = Int | Bool | Float | Text | Instance | Array | Outputs | Hook | Range
+Kind = Int | Bool | Float | Text | Instance | Array | Ref | Outputs | Hook | Range
 
 # integers a double holds exactly: Python converts and compares beyond them exactly, C not
 EXACT_IN_DOUBLE = Int(-(1 << 53), 1 << 53)
@@ -160,9 +170,10 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
     for unit in units:
         if unit.kind == "FUNCTION":
             continue
-        members = {v.attr: _member_kind(v, by_type, extended) for v in unit.variables}
-        methods = dict(own.get(unit.class_name, {}))
         form = forms.get(unit.class_name)
+        starts = _integer_slots(form) if isinstance(form, Class) else set()
+        members = {v.attr: _member_kind(v, by_type, extended, starts) for v in unit.variables}
+        methods = dict(own.get(unit.class_name, {}))
         for inherited in form.functions if isinstance(form, Class) else ():
             found = (
                 own.get(inherited.owner, {}).get(inherited.name)
@@ -176,8 +187,40 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
     return table
 
 
-def _member_kind(variable: VarInfo, classes: dict[str, str], extended: set[str]) -> Kind | None:
+def _integer_slots(form: Class) -> set[str]:
+    """The slots of a class that start as an integer constant, or a list of them."""
+    return {slot.name for slot in form.slots if _integers(slot.initial)}
+
+
+def _enumeration(type_name: str) -> bool:
+    """A named type that is no elementary one (ULINT and LWORD are integers beyond 64 bits,
+    which the tier leaves to Python)."""
+    return IDENTIFIER.match(type_name) is not None and int_range(type_name) is None
+
+
+def _integers(node: Expr) -> bool:
+    match node:
+        case Const(value=value):
+            return type(value) is int
+        case Repeated(item=item):
+            return _integers(item)
+        case Sequence(items=items):
+            return all(_integers(item) for item in items)
+    return False
+
+
+def _member_kind(
+    variable: VarInfo, classes: dict[str, str], extended: set[str], integers: set[str]
+) -> Kind | None:
     kind = kind_of_type(variable.type, classes)
+    if variable.attr in integers:
+        # an enumeration (its values are integers of the compiler's choosing), or an array
+        # of them: any 64-bit integer, each read checked as every slot's is
+        if kind is None and _enumeration(variable.type):
+            return FULL64
+        shape = array_shape(variable.type)
+        if isinstance(kind, Array) and kind.element is None and shape is not None:
+            return Array(FULL64, kind.length) if _enumeration(shape.element) else kind
     if variable.kind == "VAR_IN_OUT" and variable.type.upper() in extended:
         # the instance connected may be of a block derived from the declared one, whose
         # class has slots of its own: left to Python, which reads them by name
@@ -199,6 +242,9 @@ def _extended_blocks(units: list[PouCode], forms: Forms) -> set[str]:
 def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
     """The kind of a variable of a declared type; None for what the tier leaves to Python
     (references, enumerations, integers beyond 64 bits)."""
+    for prefix in ("REF_TO ", "REFERENCE TO "):
+        if type_name.upper().startswith(prefix):
+            return Ref(kind_of_type(type_name[len(prefix) :].strip(), classes))
     name, _ = base_type(type_name)
     if name == "BOOL":
         return Bool()

@@ -168,6 +168,13 @@ padt_class(const char *name)
             goto padt_bad;                                                                \
     } while (0)
 
+/* A reference: None (NULL) or the runtime's Reference, a str (its helpers check the rest) */
+#define PADT_CHECK_REF(o)                                                                 \
+    do {                                                                                  \
+        if (PADT_UNLIKELY((o) == NULL || ((o) != Py_None && !PyUnicode_Check(o))))        \
+            goto padt_bad;                                                                \
+    } while (0)
+
 #define PADT_CHECK_LIST(o)                                                                \
     do {                                                                                  \
         if (PADT_UNLIKELY((o) == NULL || !PyList_CheckExact(o)))                          \

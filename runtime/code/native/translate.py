@@ -42,6 +42,7 @@ from runtime.code.native.kinds import (
     Kind,
     Outputs,
     Range,
+    Ref,
     Text,
     join,
 )
@@ -73,6 +74,7 @@ from runtime.contract.code.typed_form import (
     Logic,
     Member,
     Named,
+    Sequence,
     Slice,
     This,
     Unary,
@@ -82,6 +84,8 @@ from runtime.contract.code.typed_form import (
 from runtime.contract.code.units import Class, Function, Unit
 from runtime.contract.intrinsic_table import (
     COPY,
+    DEREF,
+    DEREF_SET,
     F32,
     FDIV,
     IDIV,
@@ -89,6 +93,7 @@ from runtime.contract.intrinsic_table import (
     IX,
     MUX,
     POW,
+    REF,
     ROL,
     ROR,
     ROUND,
@@ -406,7 +411,7 @@ class _Body:
         if isinstance(target, Var) and target.where == "local":
             self.assign_local(target.name, value_node)
             return
-        value = self.expr(value_node)
+        value = self.null() if _is_none(value_node) else self.expr(value_node)
         if isinstance(target, Var | Member):
             owner = self.owner(target)
             if not isinstance(owner.kind, Instance):
@@ -445,7 +450,10 @@ class _Body:
             setter = "padt_set_int" if value.kind.fits64 else "padt_set_int128"
             self.check(f"{setter}({place}, {value.c})")
             return
-        if isinstance(declared, Instance | Array | Text) and value.kind == declared:
+        if isinstance(declared, Ref) and value.kind == Ref(None) and value.c == "Py_None":
+            self.check(f"padt_put({place}, Py_NewRef(Py_None))")  # NULL, REF= 0
+            return
+        if isinstance(declared, Instance | Array | Text | Ref) and value.kind == declared:
             # a text, a whole array or structure (a copy): the place takes the object as
             # Python's store does
             self.check(f"padt_put({place}, Py_NewRef({value.c}))")
@@ -516,6 +524,17 @@ class _Body:
     def call_statement(self, call: Expr) -> None:
         if isinstance(call, Index):  # `t[0]`: a call's unused result, read and dropped
             self.expr(call)
+            return
+        if isinstance(call, Call) and call.callee == DEREF_SET.name and len(call.args) == 2:
+            held, value = (self.expr(arg) for arg in call.args)
+            if not isinstance(held.kind, Ref) or held.kind.target is None:
+                _refuse(f"{DEREF_SET.name} of a {_kind_name(held.kind)}")
+            if value.kind != held.kind.target and not (
+                isinstance(value.kind, Int) and isinstance(held.kind.target, Int)
+            ):
+                _refuse(f"a {_kind_name(value.kind)} written through a reference")
+            args = [held.c, self.boxed(value, DEREF_SET.name)]
+            self.owned_object(_vector_call(self.module.key(DEREF_SET.name), args))
             return
         if not isinstance(call, Call):
             _refuse("an expression statement that is no call")
@@ -836,11 +855,12 @@ class _Body:
             self.line(f"PADT_GET_FLOAT({obj}, {held});")
             return V(kind, held)
         held = self.temp("PyObject *", "NULL")
-        if isinstance(kind, Text):
+        if isinstance(kind, Text | Ref):
             # owned: a FUNCTION called later in the statement may store another text into
             # a global's slot, which then frees this one
             self.line(f"Py_XSETREF({held}, Py_XNewRef({obj}));")
-            self.line(f"PADT_CHECK_TEXT({held});")
+            check = "PADT_CHECK_TEXT" if isinstance(kind, Text) else "PADT_CHECK_REF"
+            self.line(f"{check}({held});")
             return V(kind, held)
         self.objects.remove(held)  # borrowed from the slot, which keeps it during the statement
         self.line(f"{held} = {obj};")
@@ -980,7 +1000,14 @@ class _Body:
         comparisons before hold."""
         if op not in _RELATIONS:
             _refuse(f"a comparison {op}")
-        left, right = self.expr(nodes[0]), self.expr(nodes[1])
+        left, right = (self.null() if _is_none(n) else self.expr(n) for n in nodes[:2])
+        if isinstance(left.kind, Ref) and isinstance(right.kind, Ref) and len(nodes) == 2:
+            if op not in ("==", "!="):
+                _refuse(f"references compared with {op}")
+            if "Py_None" in (left.c, right.c):  # with NULL: whether it is None
+                return V(Bool(), f"({left.c} {op} {right.c})")
+            both = (Text(), left.c), (Text(), right.c)  # the same place (Reference.__eq__)
+            left, right = (V(kind, c) for kind, c in both)
         if isinstance(left.kind, Text) and isinstance(right.kind, Text) and len(nodes) == 2:
             # str's own order, by code points, as Python compares them
             flag = self.temp("int")
@@ -1024,7 +1051,7 @@ class _Body:
         if not _is_none(node.right):
             _refuse("`is` with something else than None")
         value = self.expr(node.left)
-        if not isinstance(value.kind, Hook):
+        if not isinstance(value.kind, Hook | Ref):
             _refuse(f"`is None` of a {_kind_name(value.kind)}")
         symbol = "==" if node.op == "is" else "!="
         return V(Bool(), f"({value.c} {symbol} Py_None)")
@@ -1154,6 +1181,10 @@ class _Body:
                 return self.absolute(self.held(value))
         if name in ("min", "max") and len(node.args) >= 2:
             return self.extreme(name, node)
+        if name == REF.name:
+            return self.reference(node)
+        if name == DEREF.name and len(node.args) == 1:
+            return self.dereference(node.args[0])
         if (name in _HELPER_RESULTS or name == MUX.name) and node.args:
             return self.helper_call(name, node)
         if name == "str" and len(node.args) == 1:  # INT_TO_STRING and the like
@@ -1182,11 +1213,15 @@ class _Body:
         return self.owned(Text(), f"padt_cut({value.c}, {c_int(stop)})")
 
     def owned(self, kind: Kind, call: str) -> V:
-        """The new object `call` makes, in a temporary that owns it (NULL: an error)."""
+        """The new object `call` makes, a value of `kind`, in a temporary that owns it."""
+        return V(kind, self.owned_object(call))
+
+    def owned_object(self, call: str) -> str:
+        """The temporary that owns the new object `call` makes (NULL: an error)."""
         held = self.temp("PyObject *", "NULL")
         self.line(f"Py_XSETREF({held}, {call});")
         self.line(f"if (PADT_UNLIKELY({held} == NULL)) goto padt_error;")
-        return V(kind, held)
+        return held
 
     def copy(self, node: Expr) -> V:
         """`_copy(x)`: an array or structure assigned as a whole, copied by the Python helper
@@ -1270,11 +1305,63 @@ class _Body:
             box = f"PADT_BOOL_OBJECT({value.c})"
         elif isinstance(kind, Float):
             box = f"PyFloat_FromDouble({value.c})"
-        elif isinstance(kind, Text):
+        elif isinstance(kind, Text | Ref | Instance | Array):  # the object itself, as Python
             box = f"Py_NewRef({value.c})"
         else:
             _refuse(f"an argument of {callee} that holds a {_kind_name(kind)}")
-        return self.owned(kind, box).c
+        return self.owned_object(box)
+
+    def dereference(self, node: Expr) -> V:
+        """`_deref(r)`: what a reference refers to, read by the runtime's helper (NULL its
+        fault), of the kind of the place it refers to."""
+        reference = self.expr(node)
+        if not isinstance(reference.kind, Ref) or reference.kind.target is None:
+            _refuse(f"{DEREF.name} of a {_kind_name(reference.kind)}")
+        referred = reference.kind.target
+        read = self.owned(referred, _vector_call(self.module.key(DEREF.name), [reference.c]))
+        return self.unboxed(read.c, referred, "what a reference refers to")
+
+    def null(self) -> V:
+        """NULL: None, where a reference is stored or compared."""
+        return V(Ref(None), "Py_None")
+
+    def reference(self, node: Call) -> V:
+        """`_ref(root, (steps...), label[, whole])`: REF(x), made by the runtime's helper
+        (which checks the root and the steps); of the kind of the place the steps reach."""
+        if not 3 <= len(node.args) <= 4:
+            _refuse(f"{REF.name} of {len(node.args)} arguments")
+        root_node, steps_node, *rest = node.args
+        if isinstance(root_node, Named) and root_node.name == "_G":
+            if self.module.globals_class is None:
+                _refuse("_G without globals")
+            self.uses_globals = True
+            self.module.type_ref(self.module.globals_class)
+            root = V(Instance(self.module.globals_class), "padt_g")
+        else:
+            root = self.expr(root_node)
+        if not isinstance(steps_node, Sequence) or not steps_node.as_tuple:
+            _refuse(f"{REF.name} of steps that are no tuple")
+        kind: Kind | None = root.kind
+        steps: list[str] = []
+        for step in steps_node.items:
+            if (
+                isinstance(kind, Instance)
+                and isinstance(step, Const)
+                and isinstance(step.value, str)
+            ):
+                kind = self.member_kind(kind, step.value)
+                steps.append(self.module.key(step.value))
+            elif isinstance(kind, Array):
+                steps.append(self.boxed(self.int_value(step), REF.name))
+                kind = kind.element
+            else:
+                _refuse(f"{REF.name} through a {_kind_name(kind)}")
+        if not isinstance(root.kind, Instance | Array):
+            _refuse(f"{REF.name} into a {_kind_name(root.kind)}")
+        packed = self.owned_object(f"PyTuple_Pack({len(steps)}{''.join(', ' + c for c in steps)})")
+        label = [self.boxed(self.expr(value), REF.name) for value in rest]
+        made = _vector_call(self.module.key(REF.name), [root.c, packed, *label])
+        return self.owned(Ref(kind), made)
 
     def helper_call(self, name: str, node: Call) -> V:
         """A function of the runtime's (`_left`, `_find`, `_mux`, ...), called from C as

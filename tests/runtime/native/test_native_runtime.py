@@ -523,6 +523,71 @@ END_PROGRAM
     assert "Main" in program_error(pair.native)
 
 
+def test_references_run_as_c_with_the_python_values_null_the_same_fault(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+TYPE Pt : STRUCT x : INT; y : REAL; END_STRUCT; END_TYPE
+VAR_GLOBAL g : DINT; END_VAR
+FUNCTION_BLOCK Holder
+VAR_INPUT r : REF_TO INT; END_VAR
+VAR_OUTPUT v : INT; ok : BOOL; END_VAR
+ok := r <> NULL;
+IF ok THEN v := r^; r^ := v + 1; END_IF;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR
+  n : INT; a : ARRAY[1..3] OF INT; h : Holder; rg : REF_TO DINT; p : Pt; rp : REF_TO Pt;
+  i : INT := 1; rr : REFERENCE TO INT; same : BOOL; other : REF_TO INT; k : INT;
+END_VAR
+k := k + 1;
+h(r := REF(n));
+h(r := REF(a[i]));
+i := i MOD 3 + 1;
+rg := REF(g); rg^ := rg^ + 1;
+rp := REF(p); rp^.x := rp^.x + 5; rp^.y := rp^.y + 0.5;
+rr REF= n; rr := rr + 7;
+other := REF(a[2]);
+same := other = h.r;
+IF k = 5 THEN other := NULL; END_IF;
+IF other = NULL THEN n := other^; END_IF;  (* NULL: the same fault on both tiers *)
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert set(pair.report.bodies) == {"Main", "Holder"}
+    pair.cycle_and_compare(4)
+    found = pair.native.variables.values()
+    assert found["g"] == 4 and found["Main.p.x"] == 20 and found["Main.rp"] == "Main.p"
+    assert not program_error(pair.native)
+    pair.cycle_and_compare(1)
+    assert "dereference of NULL in POU Main (prog.st:25)" in program_error(pair.native)
+
+
+def test_enumerations_run_as_c_with_the_python_values(native_tier: NativeTier) -> None:
+    text = """
+TYPE Mode : (Idle, Filling, Draining := 7); END_TYPE
+FUNCTION_BLOCK Valve
+VAR_INPUT mode : Mode; END_VAR
+VAR_OUTPUT open : BOOL; END_VAR
+open := mode = Filling;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR state : Mode; n : INT; v : Valve; seen : ARRAY[0..2] OF Mode; END_VAR
+n := n + 1;
+CASE state OF
+  Idle: IF n MOD 2 = 0 THEN state := Filling; END_IF;
+  Filling: state := Draining;
+ELSE state := Idle;
+END_CASE;
+v(mode := state);
+seen[n MOD 3] := state;
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert set(pair.report.bodies) == {"Main", "Valve"}
+    pair.cycle_and_compare(7)
+
+
 FUNCTIONS = """
 FUNCTION Scale : INT
 VAR_INPUT a : INT; b : INT; END_VAR
