@@ -194,10 +194,11 @@ def bench_native_coverage(sources: list[SourceFile]) -> None:
                 cause = reason.split(" (ST line")[0]
                 reasons[cause] = reasons.get(cause, 0) + 1
     common = sorted(reasons.items(), key=lambda item: (-item[1], item[0]))[:3]
+    rest = "; ".join(f"{cause} ({count})" for cause, count in common)
     print(
         f"native tier on OSCAT: {translated} of {total} program and function block bodies "
-        f"translate ({time.perf_counter() - started:.1f} s); the rest mostly: "
-        + "; ".join(f"{cause} ({count})" for cause, count in common)
+        f"translate ({time.perf_counter() - started:.1f} s)"
+        + (f"; the rest mostly: {rest}" if rest else "")
     )
     print(
         f"  goal every body native (issue 34): {total - translated} of {total} still Python, "
