@@ -85,6 +85,12 @@ class Pair:
             assert not differences, f"cycle {cycle}: Python vs native {differences}"
             assert _states(self.python) == _states(self.native), f"cycle {cycle}"
 
+    def fault_of_the_next_cycle(self) -> str:
+        """The program error the next cycle ends in, on both tiers alike (none before)."""
+        assert not program_error(self.native), program_error(self.native)
+        self.cycle_and_compare(1)
+        return program_error(self.native)
+
 
 def _states(resource: Resource) -> list[object]:
     """The resource's state and error, and each program's."""

@@ -126,9 +126,7 @@ END_PROGRAM
     found = values(pair)
     assert (found["Main.t.calls"], found["Main.cap"], found["Main.ok"]) == (8, 20.0, True)
     assert (found["Main.big.own"], found["Main.big.base"]) == (1002, 16)  # its level 16.0
-    assert not program_error(pair.native)
-    pair.cycle_and_compare(1)
-    assert "division by zero in POU Tank (prog.st:14)" in program_error(pair.native)
+    assert "division by zero in POU Tank (prog.st:14)" in pair.fault_of_the_next_cycle()
 
 
 def test_a_block_extending_a_standard_block_runs_its_timer_on_both_tiers(
