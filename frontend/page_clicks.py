@@ -233,9 +233,12 @@ class PageClicks:
                     self.on_click(click)
                 except Exception:  # not into viser's thread: the next clicks still count
                     log.exception("a page click failed: %s", click)
-            page, last = self.handled.page, self.handled.last
-        ack = f"window.__padtClickAck&&window.__padtClickAck({script_json(page)},{last})"
-        run(self.client, ACK_CHANNEL, ack)
+            page, last = script_json(self.handled.page), self.handled.last
+            run(
+                self.client,
+                ACK_CHANNEL,
+                f"window.__padtClickAck&&window.__padtClickAck({page},{last})",
+            )
 
     def remove(self) -> None:
         self.box.remove()
