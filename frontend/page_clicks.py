@@ -47,7 +47,6 @@ MAX_PAGE = 32  # characters of a page's id
 MAX_N = 2**53  # JavaScript's integers
 MAX_BATCH_CHARS = 64 * 1024  # MAX_QUEUE clicks of MAX_NAME characters, and room
 RESEND_MS = 400  # an unacknowledged queue is written again after this
-QUIET_MS = 80  # written only this long after another input changed or a click (viser: 50)
 ACK_CHANNEL = "page-clicks-ack"  # frontend/page_push.py: only the newest matters
 REPLACED = ("window", "layout")  # kinds of which only the newest click matters
 
@@ -60,13 +59,10 @@ REPLACED = ("window", "layout")  # kinds of which only the newest click matters
 # "<left>x<folded>x<right>x<folded>" (a folded panel's width 0: the width it had is kept).
 # Whether the editor's toolbar shows the plant drawing is said after each press of its
 # toggle ("on" or "off"); the toggle is in the editor's shadow root, where a click's target
-# is the root's host: its path tells. `tell` queues a click; `flush` writes the queue, and
-# again after RESEND_MS while it is not empty, once the page was quiet for QUIET_MS (a
-# write just after another input changed or a button was pressed would replace that value
-# in viser's sender before it went, and no one sends a value typed or a press again);
-# `__padtClickAck` drops what the server acknowledged; `__padtClicksWaiting` says how many
-# clicks wait for it (the server answers a click before it acknowledges it: none waiting,
-# the page has the answers).
+# is the root's host: its path tells. `tell` queues a click, `flush` writes the queue (and
+# again after RESEND_MS while it is not empty), `__padtClickAck` drops what the server
+# acknowledged; `__padtClicksWaiting` says how many clicks wait for it (the server answers
+# a click before it acknowledges it: none waiting, the page has the answers).
 _SCRIPT = (
     "var find=function(){var l=Array.from(document.querySelectorAll('label')).find("
     f"function(x){{return x.textContent==='{LABEL}'}});"
@@ -74,8 +70,6 @@ _SCRIPT = (
     "var row=find();if(row)row.style.display='none';"
     "if(!window.__padtClicks){window.__padtClicks=1;"
     "var n=0,queue=[],w=0,resend=null,page=Math.floor(Math.random()*1e15).toString(36);"
-    "var busy=0,mine=null;['input','change','click'].forEach(function(t){"
-    "document.addEventListener(t,function(e){if(e.target!==mine)busy=Date.now()},true)});"
     "document.addEventListener('click',function(e){"
     "var at=e.target.closest?e.target:e.target.parentElement;var said=null;"
     "var tab=at.closest('[role=tab]');"
@@ -102,8 +96,7 @@ _SCRIPT = (
     "return e[1].split('|')[0]!==kind});"
     f"queue.push([n,said]);if(queue.length>{MAX_QUEUE})queue=queue.slice(-{MAX_QUEUE});flush()}};"
     "var flush=function(){clearTimeout(resend);resend=null;if(!queue.length)return;"
-    f"var wait=busy+{QUIET_MS}-Date.now();if(wait>0){{resend=setTimeout(flush,wait);return}}"
-    "var box=find();var input=box&&box.querySelector('input');if(input){w+=1;mine=input;"
+    "var box=find();var input=box&&box.querySelector('input');if(input){w+=1;"
     "Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value').set.call("
     "input,JSON.stringify({p:page,s:queue,w:w}));"
     "input.dispatchEvent(new Event('input',{bubbles:true}))}"

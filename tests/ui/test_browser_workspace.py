@@ -110,9 +110,8 @@ def test_the_tree_shows_the_project(plant: Plant) -> None:
 
 
 # viser sends the page's inputs through one sender that keeps, within 50 ms, only the
-# newest value of any input: a write of the editor's hidden input goes at once, a click
-# written at once after it waits, and a second write of the editor's input replaced it
-# (the page now waits for a quiet moment, and writes again until acknowledged)
+# newest value of any input: a write of the editor's hidden input goes at once, the click
+# written after it waits, and a second write of the editor's input replaces it
 _DROPPED_CLICK = """(entry, label) => {
     const at = [...document.querySelectorAll('label')].find(l => l.textContent === label);
     const input = at.parentElement.parentElement.parentElement.querySelector('input');
