@@ -1,0 +1,50 @@
+"""What the server tells one browser's page: a script viser runs in it
+(`RunJavascriptMessage`), on a channel.
+
+viser keeps every RunJavascriptMessage in the client's buffer for as long as the page
+lives (it never culls them); pushed at each keystroke or click they would grow without
+end. Each push here has a channel instead, and a newer push on the channel replaces the
+older one in the buffer: a channel is chosen so that only its newest message matters (the
+diagnostics, an acknowledgement, the live values of a file, the answer to a question)."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import viser
+from viser import _messages
+
+
+class _ChannelScript(_messages.RunJavascriptMessage):
+    """A RunJavascriptMessage that a newer one of its channel replaces. The leading
+    underscore keeps it out of viser's table of message types; it goes on the wire as a
+    RunJavascriptMessage."""
+
+    channel = ""
+
+    def redundancy_key(self) -> str:
+        return f"padt-page:{self.channel}"
+
+    def as_serializable_dict(self, binary_buffers: Any = None) -> dict[str, Any]:
+        out = super().as_serializable_dict(binary_buffers)
+        out["type"] = "RunJavascriptMessage"
+        return out
+
+
+def run(client: viser.ClientHandle, channel: str, source: str) -> None:
+    """Run `source` in the client's page; it replaces the last script of `channel` in the
+    buffer viser keeps for the page (a channel's name is the page's, whoever pushes)."""
+    connection = client._websock_connection  # viser is pinned below 1.2
+    if connection.get_message_buffer().done:
+        return  # the page is gone (a worker's answer may come after it)
+    message = _ChannelScript(source=source)
+    message.channel = channel
+    connection.queue_message(message)
+
+
+def script_json(data: Any) -> str:
+    """`data` as a JavaScript expression: JSON, with the two line separators JavaScript
+    once did not allow in strings and `</` (a script's end) escaped."""
+    text = json.dumps(data, ensure_ascii=False, separators=(",", ":"))
+    return text.replace("\u2028", "\\u2028").replace("\u2029", "\\u2029").replace("</", "<\\/")
