@@ -202,7 +202,11 @@ def test_download_in_stop_start_then_an_online_change_keeps_the_values(
         # the engineer speeds the cycle up online
         open_tab(page, "Parameters")
         choose(page, "Parameter", "Target Cycle Time, ms (target_cycle_ms)")
-        field(page, "New value").fill("50")
+        # the field offers the current value once the server has the choice; typed before
+        # that, "50" was overwritten by "100 ms" (as a user sees and types again)
+        new_value = field(page, "New value")
+        wait_until("the current value is offered", lambda: new_value.input_value() == "100 ms")
+        new_value.fill("50")
         # viser sends a field's value at most every 50 ms: a click that reaches the server
         # before the value asks nothing, so Set is pressed again until its dialog comes
         set_button = page.get_by_role("button", name="Set parameter")
@@ -210,6 +214,8 @@ def test_download_in_stop_start_then_an_online_change_keeps_the_values(
         def asked() -> bool:
             if page.get_by_role("dialog").count():
                 return True
+            if new_value.input_value() != "50":
+                new_value.fill("50")
             if button_enabled(page, "Set parameter"):
                 set_button.click()
             page.wait_for_timeout(1_000)
