@@ -15,10 +15,9 @@ before the editor's hidden input was written was never sent), and drops the valu
 when the panel is drawn anew. So the page numbers its clicks and keeps those the server
 has not acknowledged (the last MAX_QUEUE; a newer window size or layout replaces an older
 one), writes them all at once as `{"p": page, "s": [[n, "kind|name"], ...], "w": writes}`
-and again every RESEND_MS (once the page was quiet for QUIET_MS, so that no value typed
-or button pressed is dropped in turn) until the server acknowledges n, counting its
-writes in "w" so that the same queue is a new value for the input (an input that keeps
-its value sends nothing). The server takes the clicks past the last n it handled, in order, and
+and again every RESEND_MS until the server acknowledges n, counting its writes in "w" so
+that the same queue is a new value for the input (an input that keeps its value sends
+nothing). The server takes the clicks past the last n it handled, in order, and
 acknowledges the newest by a script run in the page (frontend/page_push.py). The page's
 id `p`, drawn at random when the page starts, tells a page loaded anew (whose n starts at
 1 again) from the one the server was counting for. The editor's messages travel the same
@@ -48,7 +47,6 @@ MAX_PAGE = 32  # characters of a page's id
 MAX_N = 2**53  # JavaScript's integers
 MAX_BATCH_CHARS = 64 * 1024  # MAX_QUEUE clicks of MAX_NAME characters, and room
 RESEND_MS = 400  # an unacknowledged queue is written again after this
-QUIET_MS = 80  # ... once no other input changed and nothing was clicked for this long
 ACK_CHANNEL = "page-clicks-ack"  # frontend/page_push.py: only the newest matters
 REPLACED = ("window", "layout")  # kinds of which only the newest click matters
 
@@ -61,14 +59,10 @@ REPLACED = ("window", "layout")  # kinds of which only the newest click matters
 # "<left>x<folded>x<right>x<folded>" (a folded panel's width 0: the width it had is kept).
 # Whether the editor's toolbar shows the plant drawing is said after each press of its
 # toggle ("on" or "off"); the toggle is in the editor's shadow root, where a click's target
-# is the root's host: its path tells. `tell` queues a click and `flush` writes the queue
-# at once; while it is not empty, it is written again after RESEND_MS, but only once the
-# page was quiet for QUIET_MS: a write within 50 ms of a value typed, a choice or a press
-# of a button would replace that in viser's sender, and nobody sends those again (a
-# value seen in its field but never sent: a login refused again and again). The first
-# write goes at the click itself, which sends nothing else. `__padtClickAck` drops what the
-# server acknowledged; `__padtClicksWaiting` says how many clicks wait for it (the server
-# answers a click before it acknowledges it: none waiting, the page has the answers).
+# is the root's host: its path tells. `tell` queues a click, `flush` writes the queue (and
+# again after RESEND_MS while it is not empty), `__padtClickAck` drops what the server
+# acknowledged; `__padtClicksWaiting` says how many clicks wait for it (the server answers
+# a click before it acknowledges it: none waiting, the page has the answers).
 _SCRIPT = (
     "var find=function(){var l=Array.from(document.querySelectorAll('label')).find("
     f"function(x){{return x.textContent==='{LABEL}'}});"
@@ -76,8 +70,6 @@ _SCRIPT = (
     "var row=find();if(row)row.style.display='none';"
     "if(!window.__padtClicks){window.__padtClicks=1;"
     "var n=0,queue=[],w=0,resend=null,page=Math.floor(Math.random()*1e15).toString(36);"
-    "var busy=0,mine=null;['input','change','click'].forEach(function(t){"
-    "document.addEventListener(t,function(e){if(e.target!==mine)busy=Date.now()},true)});"
     "document.addEventListener('click',function(e){"
     "var at=e.target.closest?e.target:e.target.parentElement;var said=null;"
     "var tab=at.closest('[role=tab]');"
@@ -103,15 +95,12 @@ _SCRIPT = (
     f"if({script_json(list(REPLACED))}.indexOf(kind)>=0)queue=queue.filter(function(e){{"
     "return e[1].split('|')[0]!==kind});"
     f"queue.push([n,said]);if(queue.length>{MAX_QUEUE})queue=queue.slice(-{MAX_QUEUE});flush()}};"
-    "var again=function(){flush(true)};"
-    "var flush=function(later){clearTimeout(resend);resend=null;if(!queue.length)return;"
-    f"var wait=later?busy+{QUIET_MS}-Date.now():0;"
-    "if(wait>0){resend=setTimeout(again,wait);return}"
-    "var box=find();var input=box&&box.querySelector('input');if(input){w+=1;mine=input;"
+    "var flush=function(){clearTimeout(resend);resend=null;if(!queue.length)return;"
+    "var box=find();var input=box&&box.querySelector('input');if(input){w+=1;"
     "Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value').set.call("
     "input,JSON.stringify({p:page,s:queue,w:w}));"
     "input.dispatchEvent(new Event('input',{bubbles:true}))}"
-    f"resend=setTimeout(again,{RESEND_MS})}};"
+    f"resend=setTimeout(flush,{RESEND_MS})}};"
     "window.__padtClickAck=function(p,k){if(p!==page)return;"
     "queue=queue.filter(function(e){return e[0]>k});"
     "if(!queue.length){clearTimeout(resend);resend=null}};"

@@ -108,11 +108,8 @@ def log_in_to_resource(page: Page, user: str, password: str) -> None:
     deadline = time.monotonic() + START_S
     answers: list[str] = []  # the toasts of the attempts, for the message if none holds
     while True:
-        # emptied first: a value viser's page dropped stays in the field, and filling in the
-        # same value again would change nothing, hence send nothing
-        for label, value in (("User", user), ("Password", password)):
-            field(page, label).fill("", timeout=START_S * 1000)
-            field(page, label).fill(value, timeout=START_S * 1000)
+        field(page, "User").fill(user, timeout=START_S * 1000)
+        field(page, "Password").fill(password, timeout=START_S * 1000)
         page.get_by_role("button", name="Log in to resource").click(timeout=START_S * 1000)
         answer = _login_answer(page)
         if answer == "logged in":
