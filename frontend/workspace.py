@@ -161,7 +161,7 @@ class Workspace:
             for path in self.layout.open_files:
                 self.editor_area.open_file(self.layout.project, path, keyboard=False)
         # last: the page then reports the window's size, and clicks, to a whole workspace
-        self.page_clicks = page_clicks.build(client, self._clicked)
+        self.page_clicks = page_clicks.build(gui, self._clicked)
 
     def screen(self, kind: type[S]) -> S | None:
         """The screen of that kind in this workspace (a screen that reads another's)."""

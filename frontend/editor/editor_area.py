@@ -61,8 +61,6 @@ from frontend.editor.messages import (
     View,
     read_batch,
 )
-from frontend.page_push import run as run_in_page
-from frontend.page_push import script_json
 from frontend.permissions import Allowed
 from frontend.resource_feed import ResourceFeed
 from runtime.contract.refusal import Refusal
@@ -525,7 +523,7 @@ class EditorArea:
         message = self.missing or "Open a file of a project from the tree."
         page_push.send(self.client, "show", {"k": "show", "on": on, "message": message})
         if self.missing and on:
-            run_in_page(self.client, "missing", _missing_script(self.missing))
+            page_push.run(self.client, "missing", _missing_script(self.missing))
 
     def _notice(self, text: str) -> None:
         page_push.send(self.client, "notice", {"k": "notice", "text": text})
@@ -543,5 +541,5 @@ def _missing_script(message: str) -> str:
         "transform:translate(-50%,-50%);z-index:90;background:#fff9db;border:1px solid "
         "#ffe066;padding:16px 20px;border-radius:6px;font:14px system-ui,sans-serif;max-width:"
         "520px';document.body.append(d)}"
-        f"d.textContent={script_json(message)};"
+        f"d.textContent={page_push.script_json(message)};"
     )

@@ -56,15 +56,6 @@ def field(page: Page, label: str) -> Locator:
     return page.locator(f"div:has(> div > p > label:text-is('{label}')) input").first
 
 
-def clicks_answered(page: Page) -> None:
-    """Until the server acknowledged every click the page reported (frontend/page_clicks.py):
-    what it did for them is in the page then."""
-    wait_until(
-        "the page's clicks are acknowledged",
-        lambda: page.evaluate("window.__padtClicksWaiting ? window.__padtClicksWaiting() : 0") == 0,
-    )
-
-
 def text_of(page: Page, selector: str) -> str:
     return page.locator(selector).first.inner_text(timeout=WAIT_S * 1000)
 

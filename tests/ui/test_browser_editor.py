@@ -20,7 +20,6 @@ from tests.ui.browser_steps import (
     PASSWORD,
     Demo,
     Plant,
-    clicks_answered,
     log_in,
     log_in_to_resource,
     shoot_both,
@@ -40,10 +39,8 @@ def open_in_editor(page: Page, url: str, user: str, password: str) -> None:
     page.locator('[data-tree^="file:TankControl@"]').first.click(timeout=30_000)
     page.locator("#padt-editor .cm-content").wait_for(timeout=30_000)
     wait_until("TankControl is in view", lambda: "PROGRAM TankControl" in editor_text(page))
-    # the workspace opened it already at login, at its declaration: the click's effect is
-    # the cursor moved there, after the server answered it (a cursor placed before that
-    # would be moved)
-    clicks_answered(page)
+    # the workspace opened it already at login: the click's effect is the cursor moved to
+    # its declaration (a cursor placed before that would be moved)
     declared = editor_text(page).split("\n").index("PROGRAM TankControl") + 1
     wait_until("the cursor is at TankControl", lambda: cursor_line(page) == declared)
 

@@ -2,10 +2,9 @@
 as a tab and is drawn; the project tree shows the project's POUs, resource, program
 instances, Modbus devices and accounts; a FUNCTION_BLOCK added from the tree is a file on
 disk and an entry of the tree, renamed and deleted there, a program the resource runs is
-not deleted, and a read-only user cannot change anything; a click whose write viser's
-throttle drops reaches the server all the same; at 1400x900 and 1920x1080 nothing of the
-navigation or the work panel is cut off by the window, and no browser, logged in or not,
-sees viser's Share or settings."""
+not deleted, and a read-only user cannot change anything; at 1400x900 and 1920x1080
+nothing of the navigation or the work panel is cut off by the window, and no browser,
+logged in or not, sees viser's Share or settings."""
 
 from __future__ import annotations
 
@@ -17,7 +16,6 @@ import viser
 from playwright.sync_api import Locator, Page
 
 from frontend import screens
-from frontend.editor.messages import INPUT_LABEL
 from frontend.screen_registry import Now, Screen, Work
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
@@ -105,40 +103,6 @@ def test_the_tree_shows_the_project(plant: Plant) -> None:
                     "e => getComputedStyle(e).backgroundColor"
                 )
                 == "rgb(208, 235, 255)"
-            ),
-        )
-
-
-# viser sends the page's inputs through one sender that keeps, within 50 ms, only the
-# newest value of any input: a write of the editor's hidden input goes at once, the click
-# written after it waits, and a second write of the editor's input replaces it
-_DROPPED_CLICK = """(entry, label) => {
-    const at = [...document.querySelectorAll('label')].find(l => l.textContent === label);
-    const input = at.parentElement.parentElement.parentElement.querySelector('input');
-    const set = Object.getOwnPropertyDescriptor(HTMLInputElement.prototype, 'value').set;
-    const write = value => {
-        set.call(input, value);
-        input.dispatchEvent(new Event('input', {bubbles: true}));
-    };
-    write('{"s":[],"w":900001}');
-    entry.click();
-    write('{"s":[],"w":900002}');
-}"""
-
-
-def test_a_click_viser_drops_is_told_again(plant: Plant) -> None:
-    """A click written between two writes of another hidden input is lost by viser's
-    throttle: the page writes it again until the server acknowledges it."""
-    with chromium() as browser:
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        open_as(page, plant, "admin")
-        wait_until("the tree is read", lambda: "POUs" in _tree(page))
-        entry = page.locator('[data-tree^="program:TankControl"]')
-        entry.evaluate(_DROPPED_CLICK, INPUT_LABEL)
-        wait_until(
-            "the program instance is selected",
-            lambda: (
-                entry.evaluate("e => getComputedStyle(e).backgroundColor") == "rgb(208, 235, 255)"
             ),
         )
 
