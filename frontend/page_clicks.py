@@ -3,8 +3,8 @@
 on the Logic screen or a place on its drawing (in the drawing's units), an entry of the
 project tree and a test or a failure's place on the Tests screen (plain HTML), and the
 window's size (viser does not tell the server; the workspace chooses its panels' widths by
-it). A small script reports each through a text input it hides; the server reads it like
-any input from a browser, as untrusted text.
+it). A small script reports each as the value of a hidden text input (page_writer.py); the
+server reads it like any input from a browser, as untrusted text.
 
 Knowing the tab in view, the workspace redraws that screen only: ten browsers drawing
 every screen ten times a second cost most of two cores."""
@@ -22,8 +22,9 @@ KINDS = ("tab", "variable", "tree", "window", "layout", "drawing", "logic", "pla
 MAX_NAME = 1000  # longer than any tab name, variable path or tree entry
 
 # Installed once per page (a later workspace after logging in again finds the new input by
-# its label at each click). React takes a value only through the input's native setter
-# followed by an input event; a counter makes a second click on the same row a change.
+# its label at each click); each report is written past viser's throttle (page_writer.py),
+# which viser_lockdown's page script installs first. A counter makes a second click on the
+# same row a change.
 # "|" separates: tab names, variable paths and tree entries have none. The window's size
 # is said when the page starts (once the hidden input is there) and after each resize has
 # settled; the panels' widths and whether they are folded after the user dragged an edge
@@ -32,10 +33,8 @@ MAX_NAME = 1000  # longer than any tab name, variable path or tree entry
 # the plant drawing is said after each press of its toggle ("on" or "off"); the toggle is in
 # the editor's shadow root, where a click's target is the root's host: its path tells.
 _SCRIPT = (
-    "var find=function(){var l=Array.from(document.querySelectorAll('label')).find("
-    f"function(x){{return x.textContent==='{LABEL}'}});"
-    "return l?l.parentElement.parentElement.parentElement:null};"
-    "var row=find();if(row)row.style.display='none';"
+    "var find=function(){return Array.from(document.querySelectorAll('label')).find("
+    f"function(x){{return x.textContent==='{LABEL}'}})}};"
     "if(!window.__padtClicks){window.__padtClicks=1;var n=0;"
     "document.addEventListener('click',function(e){"
     "var at=e.target.closest?e.target:e.target.parentElement;var said=null;"
@@ -58,10 +57,9 @@ _SCRIPT = (
     "tell(said)},true);"
     "var wait=null;window.addEventListener('resize',function(){clearTimeout(wait);"
     "wait=setTimeout(window.__padtSized,300)});"
-    "var tell=function(said){var box=find();if(!said||!box)return;"
-    "var input=box.querySelector('input');"
-    "n+=1;Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value').set.call("
-    "input,said+'|'+n);input.dispatchEvent(new Event('input',{bubbles:true}))};"
+    "var tell=function(said){var label=find();if(!said||!label)return;"
+    "if(!window.__padtWrite){setTimeout(function(){tell(said)},100);return}"
+    "n+=1;window.__padtWrite(label,said+'|'+n)};"
     "window.__padtSized=function(tries){if(!find()&&(tries||0)<50){"
     "setTimeout(function(){window.__padtSized((tries||0)+1)},100);return}"
     "tell('window|'+window.innerWidth+'x'+window.innerHeight)};"

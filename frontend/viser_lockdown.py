@@ -19,7 +19,7 @@ import viser
 from viser import _messages
 from viser.infra import ClientId
 
-from frontend import page_clicks
+from frontend import page_clicks, page_writer
 from frontend.editor.messages import INPUT_LABEL
 
 log = logging.getLogger("padt.ui")
@@ -80,7 +80,7 @@ _SCRIPT = (
 # hidden: it takes no room at the top of the panel (a hidden image loads all the same)
 PAGE_HTML = (
     f'<div style="display:none">{_STYLE}'
-    f'<img alt="" src="data:," onerror="{html.escape(_SCRIPT)}"></div>'
+    f'<img alt="" src="data:," onerror="{html.escape(page_writer.SCRIPT + _SCRIPT)}"></div>'
 )
 
 

@@ -202,17 +202,16 @@ class PadtEditor {
   }
 
   flushOutbox() {
-    const input = this.input();
-    if (!input) {
+    const label = this.inputLabel();
+    if (!label || !window.__padtWrite) {
       setTimeout(() => this.flushOutbox(), 200);
       return;
     }
     this.writes += 1; // the same queue written again is still a change of the input's value
-    const value = JSON.stringify({ s: this.outbox, w: this.writes });
-    Object.getOwnPropertyDescriptor(HTMLInputElement.prototype, "value").set.call(input, value);
-    input.dispatchEvent(new Event("input", { bubbles: true }));
-    // viser's input may drop the last value (its throttle is cancelled when the input is
-    // drawn anew): written again until the server acknowledges it
+    // past viser's throttle of the panel's inputs (frontend/page_writer.py)
+    window.__padtWrite(label, JSON.stringify({ s: this.outbox, w: this.writes }));
+    // a message sent while the websocket reconnects is lost: written again until the
+    // server acknowledges it
     if (!this.resend) {
       this.resend = setTimeout(() => {
         this.resend = null;
@@ -221,14 +220,13 @@ class PadtEditor {
     }
   }
 
-  input() {
-    if (this.box && this.box.isConnected) return this.box; // found again when viser redraws
-    const label = Array.from(document.querySelectorAll("label")).find((x) => x.textContent === INPUT_LABEL);
-    if (!label) return null;
-    const row = label.parentElement.parentElement.parentElement;
+  inputLabel() {
+    if (this.label && this.label.isConnected) return this.label; // found again when viser redraws
+    this.label = Array.from(document.querySelectorAll("label")).find((x) => x.textContent === INPUT_LABEL);
+    if (!this.label) return null;
+    const row = this.label.parentElement.parentElement.parentElement;
     if (row.style.display !== "none") row.style.display = "none";
-    this.box = row.querySelector("input");
-    return this.box;
+    return this.label;
   }
 
   ask(message) {
