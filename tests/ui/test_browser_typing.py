@@ -5,6 +5,8 @@ use."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 from playwright.sync_api import Page
 
@@ -57,6 +59,14 @@ def editor_file(page: Page) -> str:
     return found
 
 
+def file_open(page: Page, file: str) -> Callable[[], bool]:
+    return lambda: editor_file(page) == file
+
+
+def lists_counted(plant: Plant, count: int) -> Callable[[], bool]:
+    return lambda: len(lists_of(plant, "viewer")) == count
+
+
 def test_a_file_opened_while_the_editor_reports_opens_and_a_list_is_created(
     plant: Plant,
 ) -> None:
@@ -74,9 +84,7 @@ def test_a_file_opened_while_the_editor_reports_opens_and_a_list_is_created(
             entry, file = FILES[(number - 1) % 2]
             page.wait_for_timeout(300)  # the page idle: no message of the user's under way
             page.evaluate(AT_ONCE, [list_name, entry])
-            wait_until(f"{file} is open", lambda f=file: editor_file(page) == f)
-            wait_until(
-                f"{list_name} is created", lambda n=number: len(lists_of(plant, "viewer")) == n
-            )
+            wait_until(f"{file} is open", file_open(page, file))
+            wait_until(f"{list_name} is created", lists_counted(plant, number))
             wait_until("the field is empty again", lambda: name.input_value() == "")
         assert lists_of(plant, "viewer") == list(NAMES)
