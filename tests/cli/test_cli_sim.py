@@ -427,14 +427,25 @@ def test_both_tiers_give_the_same_output_and_fault(tmp_path: Path) -> None:
 
 
 LABELLED = """
+INTERFACE IText
+METHOD Text : STRING[20]
+VAR_INPUT n : INT; END_VAR
+END_METHOD
+END_INTERFACE
+
+FUNCTION_BLOCK Shower IMPLEMENTS IText
+METHOD PUBLIC Text : STRING[20]
+VAR_INPUT n : INT; END_VAR
+Text := CONCAT('n=', INT_TO_STRING(n));
+END_METHOD
+END_FUNCTION_BLOCK
+
 FUNCTION_BLOCK Label
 VAR_INPUT n : INT; END_VAR
 VAR_OUTPUT text : STRING[20]; END_VAR
-INITIAL_STEP Idle: END_STEP
-TRANSITION FROM Idle TO Shown := n > 0; END_TRANSITION
-STEP Shown: Show(N); END_STEP
-TRANSITION FROM Shown TO Idle := FALSE; END_TRANSITION
-ACTION Show: text := CONCAT('n=', INT_TO_STRING(n)); END_ACTION
+VAR shower : Shower; shown : IText; END_VAR
+shown := shower;
+IF n > 1 THEN text := shown.Text(n := n); END_IF;
 END_FUNCTION_BLOCK
 
 PROGRAM Main
@@ -447,15 +458,16 @@ END_PROGRAM
 
 @pytest.mark.usefixtures("native_tier")
 def test_native_says_which_bodies_run_as_python_and_why(tmp_path: Path) -> None:
-    """Charts (SFC) are not C yet: on the native tier `padt sim` says, once, that the block
-    runs as Python and why, as the runtime's event does; the values are those of Python."""
+    """Interface variables are not C yet: on the native tier `padt sim` says, once, that the
+    block runs as Python and why, as the runtime's event does; the values are those of
+    Python."""
     path = write(tmp_path, LABELLED)
     env = {"PADT_NATIVE_CACHE": str(tmp_path / "native")}
     native = padt("sim", path, "--cycles", "2", "--tier", "native", env=env)
     python = padt("sim", path, "--cycles", "2", "--tier", "python", env=env)
     assert native.returncode == python.returncode == 0, native.stderr
     assert native.stdout == python.stdout
-    assert column(lines(native.stdout), "Main.label.text") == ["", "n=2"]  # the step's action
+    assert column(lines(native.stdout), "Main.label.text") == ["", "n=2"]  # the method's
     said = native.stderr.splitlines()
     assert len(said) == 1 and said[0].startswith("padt sim: Label runs as Python: "), said
     assert python.stderr == ""

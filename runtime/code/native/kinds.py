@@ -13,7 +13,7 @@ from runtime.contract.artifact import PouCode, VarInfo
 from runtime.contract.code.names import IDENTIFIER
 from runtime.contract.code.python_text import printed_lines
 from runtime.contract.code.statements import Return
-from runtime.contract.code.typed_form import Const, Expr, Repeated, Sequence
+from runtime.contract.code.typed_form import Call, Const, Expr, Repeated, Sequence
 from runtime.contract.code.units import Class, Function, Inherited, Unit
 from runtime.contract.values import array_shape, base_type, int_range
 
@@ -156,7 +156,8 @@ translation needs (a decode takes about half of a translation's time)."""
 
 
 def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
-    """Every generated class of an artifact with the kinds of its declared variables."""
+    """Every generated class of an artifact with the kinds of its declared variables (and
+    the action control blocks of its chart, when it has one)."""
     by_type = {unit.name.upper(): unit.class_name for unit in units if unit.kind != "FUNCTION"}
     extended = _extended_blocks(units, forms)
     own = {
@@ -173,6 +174,8 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
         form = forms.get(unit.class_name)
         starts = _integer_slots(form) if isinstance(form, Class) else set()
         members = {v.attr: _member_kind(v, by_type, extended, starts) for v in unit.variables}
+        if isinstance(form, Class):
+            members.update(dict.fromkeys(_action_controls(form), Instance(ACTION_CONTROL)))
         methods = dict(own.get(unit.class_name, {}))
         for inherited in form.functions if isinstance(form, Class) else ():
             found = (
@@ -184,7 +187,13 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
                 methods[inherited.name] = found
         methods.pop("__call__", None)
         table[unit.class_name] = ClassInfo(unit.class_name, members, methods)
+    table[ACTION_CONTROL] = ACTION_CONTROL_INFO
     return table
+
+
+def _action_controls(form: Class) -> list[str]:
+    """The slots of a class that start as an SFC action's control block."""
+    return [slot.name for slot in form.slots if slot.initial == Call(ACTION_CONTROL, (), "")]
 
 
 def _integer_slots(form: Class) -> set[str]:
@@ -276,6 +285,17 @@ class FunctionInfo:
     name: str
     result: Kind | None
     outputs: Outputs | None = None
+
+
+# The runtime's action control block of an SFC action (runtime.code.intrinsics): a chart's
+# body reads its flags A and Q and calls its `update` (a Python method, no result); an
+# instance's slot `_ac_X` holds one from its start (`_ActionControl()`).
+ACTION_CONTROL = "_ActionControl"
+ACTION_CONTROL_INFO = ClassInfo(
+    ACTION_CONTROL,
+    {"A": Bool(), "Q": Bool()},
+    {"update": FunctionInfo("update", None)},
+)
 
 
 def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo]:

@@ -119,7 +119,12 @@ _HELPER_RESULTS: dict[str, Kind] = {
     # integer is (Int.stand_in), exact within 2**126
     **dict.fromkeys(("_str_to_int", "_str_to_time", "_bcd_to_int", "_int_to_bcd"), FROM_REAL),
     "_setbits": FROM_REAL,
+    # an SFC step's time: now less when it became active, both times of the clock (64 bits)
+    "_step_time": FULL64,
 }
+# functions of the runtime's called as a statement, their result (None) dropped: an SFC step
+# becoming active
+_HELPER_STATEMENTS = frozenset({"_step_enter"})
 _PY_OPS = {"==": "Py_EQ", "!=": "Py_NE", "<": "Py_LT", "<=": "Py_LE", ">": "Py_GT", ">=": "Py_GE"}
 _BIT_OPS = frozenset({"&", "|", "^"})
 
@@ -546,6 +551,10 @@ class _Body:
         if call.keywords:
             _refuse("an expression statement that is no call")
         callee = call.callee
+        if isinstance(callee, str) and callee in _HELPER_STATEMENTS:
+            args = [self.boxed(self.expr(arg), callee) for arg in call.args]
+            self.owned_object(_vector_call(self.module.key(callee), args))
+            return
         if isinstance(callee, Member) and callee.name == "__call__" and not call.args:
             target = self.expr(callee.base)
             if not isinstance(target.kind, Instance):
@@ -1246,10 +1255,13 @@ class _Body:
 
     def is_method_call(self, node: Call) -> bool:
         """`x.M__X(...)`: a method or property accessor of a generated object; or
-        `POU_BASE.M__X(s, ...)`, SUPER^.X(): the base's own, on this instance."""
+        `POU_BASE.M__X(s, ...)`, SUPER^.X(): the base's own, on this instance; or
+        `s._ac_X.update(now, N=...)`: an SFC action's control block told its step flags."""
         match node.callee:
             case Member(base=Named(), name=name):
                 return METHOD_NAME.match(name) is not None and _is_super_call(node)
+            case Member(base=Member(base=This(), name=slot), name="update"):
+                return slot.startswith("_ac_")
             case Member(name=name):
                 return METHOD_NAME.match(name) is not None
         return False

@@ -642,3 +642,32 @@ def test_function_calls_run_from_c_and_faults_in_them_name_the_function_line(
     assert pair.report.bodies == ("Main", "Outputs")  # outputs: the result and q, a tuple
     pair.cycle_and_compare(6)  # n = 7 in the seventh cycle: Scale divides by zero
     assert "division by zero in POU Scale (prog.st:6)" in pair.fault_of_the_next_cycle()
+
+
+# A chart of a block, run by a program: timed and stored qualifiers, a step's time in a
+# transition, and a transition that divides by the block's input (zero in the fifth cycle)
+CHART = """
+FUNCTION_BLOCK Mixer
+VAR_INPUT speed : INT; END_VAR
+VAR stirring, warm : BOOL; turns : INT; END_VAR
+INITIAL_STEP Wait: warm(R); END_STEP
+TRANSITION FROM Wait TO Stir := Wait.T >= T#200ms; END_TRANSITION
+STEP Stir: stirring(L, T#300ms); warm(S); Turn(N); END_STEP
+TRANSITION FROM Stir TO Wait := 100 / speed > 30 AND Stir.T >= T#100ms; END_TRANSITION
+ACTION Turn: turns := turns + speed; END_ACTION
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR mixer : Mixer; n : INT; END_VAR
+n := n + 1;
+mixer(speed := 5 - n);
+END_PROGRAM
+"""
+
+
+def test_a_chart_runs_as_c_with_the_python_values_and_the_same_fault(
+    native_tier: NativeTier,
+) -> None:
+    pair = side_by_side(CHART, native_tier)
+    assert pair.report.bodies == ("Main", "Mixer")  # the chart's body as C
+    pair.cycle_and_compare(4)  # speed 4, 3, 2, 1; in the fifth cycle 0
+    assert "division by zero in POU Mixer (prog.st:8)" in pair.fault_of_the_next_cycle()

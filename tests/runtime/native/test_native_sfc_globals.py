@@ -70,6 +70,7 @@ def history(resource: Resource, names: list[str], cycles: int) -> dict[str, list
 
 def test_a_steps_actions_on_globals_set_them_on_both_tiers(native_tier: NativeTier) -> None:
     pair = side_by_side(GLOBALS + CHART + OPERATOR, native_tier, PROGRAMS)
+    assert pair.report.bodies == ("Operator", "Q")  # the chart as C too
     names = ["Q.Run.X", "Q.qN", "Q.qL", "eN", "eS", "eL", "eD", "eP", "eSD", "eDS", "eSL"]
     names += ["eP0", "eP1", "gN", "gS", "valve", "image valve"]
     python = history(pair.python, names, 8)
@@ -103,6 +104,7 @@ def test_a_sliced_program_sets_the_globals_of_its_steps(native_tier: NativeTier)
     """One program alone, but sliced: its own view of the globals too."""
     sliced = [ProgramConfig("Alone", "Alone", 1, max_duration_us=1_000_000, max_cycles=2)]
     pair = side_by_side(SLICED, native_tier, sliced)
+    assert pair.report.bodies == ("Alone",)
     names = ["Alone.Run.X", "eN", "gN", "valve"]
     python = history(pair.python, names, 3)
     assert python == {
@@ -137,7 +139,7 @@ END_PROGRAM
 def test_a_blocks_chart_sets_a_global_another_program_reads(native_tier: NativeTier) -> None:
     programs = [ProgramConfig("Batch", "Batch", 1), ProgramConfig("Counter", "Counter", 2, 1)]
     pair = side_by_side(BLOCK, native_tier, programs)
-    assert pair.report.bodies == ("Batch", "Counter")  # native programs, a Python block
+    assert pair.report.bodies == ("Batch", "Counter", "Filler")  # the block's chart too
     python = history(pair.python, ["Batch.filler.Fill.X", "inlet", "seen"], 4)
     assert python == {
         "Batch.filler.Fill.X": flags("T T T T"),

@@ -26,14 +26,27 @@ VAR_INPUT v : INT; END_VAR
 VAR_OUTPUT q : INT; END_VAR
 q := v;
 END_FUNCTION
+INTERFACE IGo
+METHOD Go : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Runner IMPLEMENTS IGo
+METHOD PUBLIC Go : INT
+Go := 7;
+END_METHOD
+END_FUNCTION_BLOCK
 """
 
 
-# a chart (SFC), which the tier leaves to Python
+# a chart (SFC): its steps, its actions' control blocks
 CHART = """INITIAL_STEP S1: END_STEP
 TRANSITION FROM S1 TO S2 := b; END_TRANSITION
 STEP S2: END_STEP
 TRANSITION FROM S2 TO S1 := NOT b; END_TRANSITION"""
+
+
+# a method called through an interface, which the tier leaves to Python
+INTERFACE_CALL = "g := rn; i := g.Go();"
 
 
 def translated(body: str, declarations: str = "") -> tuple[bool, str]:
@@ -41,6 +54,7 @@ def translated(body: str, declarations: str = "") -> tuple[bool, str]:
     text = (
         f"{FUNCTIONS}PROGRAM Main\nVAR i, j : INT; d : DINT; l : LINT; u : UINT; b, c : BOOL; "
         "r : REAL; x : LREAL; s : STRING; t : TIME; a : ARRAY[1..4] OF INT; tn : TON; "
+        "g : IGo; rn : Runner; "
         f"{declarations}END_VAR\n{body}\nEND_PROGRAM\n"
     )
     artifact = compiled(text)
@@ -77,6 +91,7 @@ def translated(body: str, declarations: str = "") -> tuple[bool, str]:
         "i := STRING_TO_INT(s); s := LEFT(s, i); i := FIND(s, 'a') + LEN(INT_TO_STRING(i));",
         "x := STRING_TO_LREAL(s);",
         "RETURN;",
+        CHART,
     ],
 )
 def test_bodies_of_these_constructs_are_translated(body: str) -> None:
@@ -87,7 +102,7 @@ def test_bodies_of_these_constructs_are_translated(body: str) -> None:
 @pytest.mark.parametrize(
     ("body", "reason"),
     [
-        (CHART, "a call of _step_time"),
+        (INTERFACE_CALL, "the variable g, of a type the tier leaves to Python"),
     ],
 )
 def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> None:
@@ -97,7 +112,7 @@ def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> No
 
 def test_a_body_left_to_python_names_the_st_line_of_the_statement_refused() -> None:
     body_line = FUNCTIONS.count("\n") + 3  # PROGRAM Main, then VAR, then the body
-    ok, why = translated(CHART)
+    ok, why = translated(INTERFACE_CALL)
     assert not ok and why.endswith(f"(ST line {body_line})")
 
 
@@ -135,7 +150,7 @@ def test_the_native_tier_parses_no_python() -> None:
 def test_the_artifact_names_a_function_result_and_the_tier_reads_outputs_off_the_code() -> None:
     units = [*compiled(FUNCTIONS + "PROGRAM Main\nEND_PROGRAM\n").pous]
     assert {unit.name: unit.returns for unit in units} == {
-        "Twice": "INT", "Named": "STRING[80]", "Split": "BOOL", "Main": ""
+        "Twice": "INT", "Named": "STRING[80]", "Split": "BOOL", "Runner": "", "Main": ""
     }  # fmt: skip
     table = function_table(units, {unit.class_name: unit.unit for unit in units})
     assert not table["FN_TWICE"].outputs
