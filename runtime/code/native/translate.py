@@ -1015,6 +1015,7 @@ class _Body:
                 return self.binary(node.op, left, right), False  # BOOLs, REALs, texts
             if node.op == "<<" and right.kind.lo < 0:
                 right = self.shift_count(right)
+            assert isinstance(left.kind, Int) and isinstance(right.kind, Int)
             if (node.op != "<<" or right.kind.hi <= 127) and _result_range(
                 node.op, left.kind, right.kind
             ).fits128:
@@ -1028,6 +1029,7 @@ class _Body:
                 _refuse("a shift by a REAL's integer")
             if count.kind.lo < 0:
                 count = self.shift_count(count)
+            assert isinstance(count.kind, Int)
             shifted = f"({x} << {count.c})"
             if count.kind.hi >= 64:  # a shift by the width or more: undefined in C, 0 here
                 shifted = f"({count.c} >= 64 ? (uint64_t)0 : {shifted})"
