@@ -1478,10 +1478,14 @@ class _Body:
         relation = "<" if name == "min" else ">"
         if all(isinstance(v.kind, Float) for v in values):
             kind: Kind = Float()
-        elif all(_exact128(v.kind) for v in values):  # a ULINT's in a padt_i128
+        elif all(_exact128(v.kind) for v in values) or _one_stand_in(values):
+            # integers of up to 128 bits (a ULINT's), or a REAL's or a text's integer with
+            # 64-bit ones (STRING_TO_ULINT: max(_str_to_int(s), 0)), which a stand-in is
+            # compared with as the true value is (_comparison)
             bounds = [v.kind for v in values if isinstance(v.kind, Int)]
             pick = min if name == "min" else max
-            kind = Int(pick(k.lo for k in bounds), pick(k.hi for k in bounds))
+            stand_in = any(k.stand_in for k in bounds)
+            kind = Int(pick(k.lo for k in bounds), pick(k.hi for k in bounds), stand_in)
         else:
             _refuse(f"{name}() of mixed or wide values")
         held = self.temp(_ctype(kind))
@@ -1583,6 +1587,12 @@ def _plain64(kind: Kind) -> bool:
 
 def _exact128(kind: Kind) -> bool:
     return isinstance(kind, Int) and kind.fits128 and not kind.stand_in
+
+
+def _one_stand_in(values: list[V]) -> bool:
+    """One stand-in among integers of 64 bits: each pair compares as the true values do."""
+    stand_ins = [v for v in values if isinstance(v.kind, Int) and v.kind.stand_in]
+    return len(stand_ins) == 1 and all(_plain64(v.kind) for v in values if v not in stand_ins)
 
 
 def _narrowed(kind: Int, lo: int, hi: int) -> Int:
