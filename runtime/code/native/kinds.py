@@ -202,8 +202,7 @@ def _integer_slots(form: Class) -> set[str]:
 
 
 def _enumeration(type_name: str) -> bool:
-    """A named type that is no elementary one (ULINT and LWORD are integers beyond 64 bits,
-    which the tier leaves to Python)."""
+    """A named type that is no elementary one."""
     return IDENTIFIER.match(type_name) is not None and int_range(type_name) is None
 
 
@@ -250,7 +249,7 @@ def _extended_blocks(units: list[PouCode], forms: Forms) -> set[str]:
 
 def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
     """The kind of a variable of a declared type; None for what the tier leaves to Python
-    (references, enumerations, integers beyond 64 bits)."""
+    (enumerations, which `_member_kind` knows by their initial values)."""
     for prefix in ("REF_TO ", "REFERENCE TO "):
         if type_name.upper().startswith(prefix):
             return Ref(kind_of_type(type_name[len(prefix) :].strip(), classes))
@@ -263,7 +262,8 @@ def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
         return Text()
     limits = int_range(name)
     if limits is not None:
-        return Int(*limits) if Int(*limits).fits64 else None
+        # ULINT and LWORD (0..2**64-1) too: a padt_i128 in C (Int.ctype)
+        return Int(*limits) if Int(*limits).fits128 else None
     if type_name.upper() in classes:
         return Instance(classes[type_name.upper()])
     shape = array_shape(type_name)

@@ -130,6 +130,19 @@ padt_class(const char *name)
             goto padt_bad;                                                                \
     } while (0)
 
+/* An integer of ULINT or LWORD (0..2**64-1), into a padt_i128: a negative one or one
+ * beyond 64 bits (which no checked writer stores) is a fault like a value of another type. */
+#define PADT_GET_U64(o, out)                                                              \
+    do {                                                                                  \
+        PyObject *padt_o_ = (o);                                                          \
+        if (PADT_UNLIKELY(padt_o_ == NULL || !Py_IS_TYPE(padt_o_, &PyLong_Type)))         \
+            goto padt_bad;                                                                \
+        if (PADT_LIKELY(PADT_SMALL(padt_o_) && PADT_SMALL_VALUE(padt_o_) >= 0))           \
+            (out) = PADT_SMALL_VALUE(padt_o_);                                            \
+        else if (padt_u64_slow(padt_o_, &(out)) < 0)                                      \
+            goto padt_bad;                                                                \
+    } while (0)
+
 #define PADT_GET_BOOL(o, out)                                                             \
     do {                                                                                  \
         PyObject *padt_o_ = (o);                                                          \
@@ -194,6 +207,18 @@ padt_int_slow(PyObject *o, int64_t *out)
     return 0;
 }
 
+static int
+padt_u64_slow(PyObject *o, padt_i128 *out)
+{
+    unsigned long long v = PyLong_AsUnsignedLongLong(o);
+    if (v == (unsigned long long)-1 && PyErr_Occurred()) {
+        PyErr_Clear();
+        return -1;
+    }
+    *out = (padt_i128)v;
+    return 0;
+}
+
 /* The fault of a read that found a value of another type. */
 static void
 padt_bad_read(void)
@@ -223,6 +248,8 @@ padt_box128(padt_i128 v)
 {
     if (v >= INT64_MIN && v <= INT64_MAX)
         return PyLong_FromLongLong((long long)v);
+    if (v > 0 && v <= (padt_i128)UINT64_MAX) /* a ULINT or LWORD beyond 2**63 */
+        return PyLong_FromUnsignedLongLong((unsigned long long)v);
     return _PyLong_FromByteArray((const unsigned char *)&v, sizeof v, 1, 1);
 }
 
@@ -370,6 +397,37 @@ padt_ror(int64_t value, int64_t n, int bits)
     if (k < 0)
         k += bits;
     return padt_rol(value, bits - k, bits);
+}
+
+/* The same over 64 bits (LWORD): a value within 0..2**64-1, as a padt_i128. */
+static inline padt_i128
+padt_rol64(padt_i128 value, int64_t n)
+{
+    uint64_t v = (uint64_t)value;
+    int64_t k = n % 64;
+    if (k < 0)
+        k += 64;
+    if (k == 0) /* a shift by 64 bits is undefined in C */
+        return (padt_i128)v;
+    return (padt_i128)((v << k) | (v >> (64 - k)));
+}
+
+static inline padt_i128
+padt_ror64(padt_i128 value, int64_t n)
+{
+    int64_t k = n % 64;
+    if (k < 0)
+        k += 64;
+    return padt_rol64(value, 64 - k);
+}
+
+/* An integer within +-(2**64-1) as Python converts it to a float: the nearest double, ties
+ * to even, which C's conversion of its magnitude (an unsigned 64-bit integer) is, and
+ * rounding to the nearest is the same for either sign. */
+static inline double
+padt_double_wide(padt_i128 v)
+{
+    return v < 0 ? -(double)(uint64_t)(-v) : (double)(uint64_t)v;
 }
 
 /* A REAL taken to an integer (runtime/code/native/kinds.py, Int.stand_in): exact below 2**126;
@@ -549,6 +607,46 @@ padt_imod(int64_t a, int64_t b, int64_t *out)
     if (PADT_UNLIKELY(b == 0))
         return padt_raise_through("_imod", 2, a, b, 0);
     *out = b == -1 ? 0 : a % b;
+    return 0;
+}
+
+/* The same for operands beyond 64 bits (ULINT, LWORD): by zero, the helper's fault, called
+ * with the operands as Python has them. The translator keeps both within +-2**127 and
+ * the quotient too (never the smallest 128-bit integer by -1). */
+static int
+padt_raise_through128(const char *helper, padt_i128 a, padt_i128 b)
+{
+    PyObject *fn = PyDict_GetItemString(padt_ns, helper);
+    if (fn == NULL) {
+        PyErr_Format(PyExc_SystemError, "native code: no %s", helper);
+        return -1;
+    }
+    PyObject *x = padt_box128(a), *y = x != NULL ? padt_box128(b) : NULL;
+    PyObject *result = y != NULL ? PyObject_CallFunctionObjArgs(fn, x, y, NULL) : NULL;
+    Py_XDECREF(x);
+    Py_XDECREF(y);
+    if (result == NULL)
+        return -1;
+    Py_DECREF(result);
+    PyErr_Format(PyExc_SystemError, "native code: %s did not raise", helper);
+    return -1;
+}
+
+static inline int
+padt_idiv_wide(padt_i128 a, padt_i128 b, padt_i128 *out)
+{
+    if (PADT_UNLIKELY(b == 0))
+        return padt_raise_through128("_idiv", a, b);
+    *out = a / b; /* toward zero, as the helper */
+    return 0;
+}
+
+static inline int
+padt_imod_wide(padt_i128 a, padt_i128 b, padt_i128 *out)
+{
+    if (PADT_UNLIKELY(b == 0))
+        return padt_raise_through128("_imod", a, b);
+    *out = a % b; /* a - b * (a / b), the sign of a, as the helper */
     return 0;
 }
 

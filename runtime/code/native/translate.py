@@ -125,6 +125,11 @@ _HELPER_RESULTS: dict[str, Kind] = {
 # functions of the runtime's called as a statement, their result (None) dropped: an SFC step
 # becoming active
 _HELPER_STATEMENTS = frozenset({"_step_enter"})
+# ULINT and LWORD, which C holds in a padt_i128
+UNSIGNED64 = Int(0, (1 << 64) - 1)
+# the operations whose result modulo 2**64 needs only the operands modulo 2**64 (`<<` by
+# an exact count)
+_RING_OPS = frozenset({"+", "-", "*", "&", "|", "^", "<<"})
 _PY_OPS = {"==": "Py_EQ", "!=": "Py_NE", "<": "Py_LT", "<=": "Py_LE", ">": "Py_GT", ">=": "Py_GE"}
 _BIT_OPS = frozenset({"&", "|", "^"})
 
@@ -683,6 +688,16 @@ class _Body:
         self.line(f"{held_start} = {start.c};")  # Python evaluates start before stop
         return V(start.kind, held_start), stop
 
+    def division_operand(self, node: Expr) -> V:
+        """An operand of integer division or MOD: an exact integer of up to 128 bits (a
+        ULINT's in a padt_i128)."""
+        value = self.expr(node)
+        if isinstance(value.kind, Bool):
+            return V(Int(0, 1), value.c)
+        if not isinstance(value.kind, Int) or value.kind.stand_in or not value.kind.fits128:
+            _refuse(f"an integer division of a {_kind_name(value.kind)} not exact in 128 bits")
+        return value
+
     def int_value(self, node: Expr) -> V:
         value = self.expr(node)
         if isinstance(value.kind, Bool):
@@ -849,6 +864,12 @@ class _Body:
             self.line(f"if (PADT_UNLIKELY(!PyLong_Check({obj}))) goto padt_bad;")
             self.check(f"padt_any_int({obj}, &{held})")
             return V(kind, held)
+        if isinstance(kind, Int) and not kind.fits64:
+            if not kind.within(UNSIGNED64):
+                _refuse(f"an integer beyond 64 bits of another range than ULINT's read from {what}")
+            held = self.temp("padt_i128")
+            self.line(f"PADT_GET_U64({obj}, {held});")  # ULINT, LWORD
+            return V(kind, held)
         if isinstance(kind, Int):
             held = self.temp("int64_t")
             small = Int(-(1 << 30) + 1, (1 << 30) - 1)
@@ -966,7 +987,13 @@ class _Body:
         """An integer brought into the range of `bits` bits as Python brings it: masked,
         the sign taken back by adding and subtracting half the range (with the offset, in
         one constant); nothing to do where its range is proven within the type's."""
-        value = _as_int(self.expr(node.value))
+        if node.bits <= 64:
+            value, modular = self.ring(node.value)
+            if modular:  # all the wrap keeps of the value is in its low 64 bits
+                value = V(UNSIGNED64, f"((padt_i128){value.c})")
+        else:
+            value = self.expr(node.value)
+        value = _as_int(value)
         mask, half = (1 << node.bits) - 1, 1 << (node.bits - 1)
         moved = self.binary("+", value, _int_constant(node.offset)) if node.offset else value
         assert isinstance(moved.kind, Int)
@@ -977,6 +1004,47 @@ class _Body:
         shifted = self.binary("+", value, _int_constant(half + node.offset))
         masked = self.binary("&", shifted, _int_constant(mask))
         return self.binary("-", masked, _int_constant(half))
+
+    def ring(self, node: Expr) -> tuple[V, bool]:
+        """`node` where only its value modulo 2**64 matters (what a wrap to at most 64 bits
+        keeps): exact wherever its range fits 128 bits, as `expr` makes it (False); else
+        (True) a uint64_t congruent to it modulo 2**64, the additions, subtractions,
+        products, bit operations and shifts left of unsigned C arithmetic keeping that
+        congruence (ULINT * ULINT, SHL of an LWORD by up to 64, chains of them: Python
+        computes them exact before the wrap masks them)."""
+        if not (isinstance(node, Binary) and node.op in _RING_OPS):
+            return self.expr(node), False
+        left, left_modular = self.ring(node.left)
+        # a shift's count is taken as it is, never modulo anything
+        right, right_modular = (
+            (self.expr(node.right), False) if node.op == "<<" else self.ring(node.right)
+        )
+        if not (left_modular or right_modular):
+            if not (isinstance(left.kind, Int) and isinstance(right.kind, Int)):
+                return self.binary(node.op, left, right), False  # BOOLs, REALs, texts
+            if node.op == "<<" and right.kind.lo < 0:
+                right = self.shift_count(right)
+            assert isinstance(left.kind, Int) and isinstance(right.kind, Int)
+            if (node.op != "<<" or right.kind.hi <= 127) and _result_range(
+                node.op, left.kind, right.kind
+            ).fits128:
+                return self.binary(node.op, left, right), False
+        # a stand-in (a REAL's integer) is congruent to the true value modulo 2**64 too
+        x = left.c if left_modular else f"((uint64_t){_as_int(left).c})"
+        if node.op == "<<":
+            count = _as_int(right)
+            assert isinstance(count.kind, Int)
+            if count.kind.stand_in:
+                _refuse("a shift by a REAL's integer")
+            if count.kind.lo < 0:
+                count = self.shift_count(count)
+            assert isinstance(count.kind, Int)
+            shifted = f"({x} << {count.c})"
+            if count.kind.hi >= 64:  # a shift by the width or more: undefined in C, 0 here
+                shifted = f"({count.c} >= 64 ? (uint64_t)0 : {shifted})"
+            return V(UNSIGNED64, shifted), True
+        y = right.c if right_modular else f"((uint64_t){_as_int(right).c})"
+        return V(UNSIGNED64, f"((uint64_t)({x} {node.op} {y}))"), True
 
     def unary(self, node: Unary) -> V:
         value = self.expr(node.operand)
@@ -1140,12 +1208,20 @@ class _Body:
             self.line("}")
             return V(Int(0, max(0, high - low)), held)
         if name in (IDIV.name, IMOD.name) and len(node.args) == len(IDIV.params):
-            a, b = (self.int_value(arg) for arg in node.args)
+            a, b = (self.division_operand(arg) for arg in node.args)
             assert isinstance(a.kind, Int) and isinstance(b.kind, Int)
             top = max(abs(a.kind.lo), abs(a.kind.hi))
             if name == IMOD.name:  # smaller than the divisor
                 top = min(top, max(0, max(abs(b.kind.lo), abs(b.kind.hi)) - 1))
             result = Int(-top, top)  # the smallest 64-bit integer / -1: 2**63, in 128 bits
+            if not result.fits128:
+                _refuse("an integer beyond 128 bits")
+            if not (a.kind.fits64 and b.kind.fits64):  # ULINT, LWORD: in 128 bits
+                helper = "padt_idiv_wide" if name == IDIV.name else "padt_imod_wide"
+                held = self.temp("padt_i128")  # what the helper writes, whatever the result
+                self.check(f"{helper}({a.c}, {b.c}, &{held})")
+                # a remainder by a small divisor fits 64 bits: in the C type of its kind
+                return V(result, held if not result.fits64 else f"((int64_t){held})")
             held = self.temp(result.ctype)
             helper = f"padt{name}" if result.fits64 else "padt_idiv128"  # padt_idiv, padt_imod
             self.check(f"{helper}({a.c}, {b.c}, &{held})")
@@ -1242,15 +1318,18 @@ class _Body:
 
     def rotation(self, name: str, node: Call) -> V:
         """`_rol(value, n, bits)`: the compiler's value is masked to its width already."""
-        value, count = (self.int_value(arg) for arg in node.args[:2])
+        value = _as_int(self.expr(node.args[0]))  # of up to 64 bits: an LWORD's in 128
+        count = self.int_value(node.args[1])
         bits = _constant_int(node.args[2])
         assert isinstance(value.kind, Int) and isinstance(count.kind, Int)
-        if bits is None or not 1 <= bits <= 63:
-            _refuse(f"{name} over a width other than a constant of 1 to 63 bits")
+        if bits is None or not 1 <= bits <= 64:
+            _refuse(f"{name} over a width other than a constant of 1 to 64 bits")
         mask = (1 << bits) - 1
         if value.kind.stand_in or count.kind.stand_in or not value.kind.within(Int(0, mask)):
             _refuse(f"{name} of a value not within its width")
         helper = "padt_rol" if name == ROL.name else "padt_ror"
+        if bits == 64:  # LWORD: a padt_i128 (padt_rol64, padt_ror64)
+            return V(Int(0, mask), f"{helper}64({value.c}, {count.c})")
         return V(Int(0, mask), f"{helper}({value.c}, {count.c}, {bits})")
 
     def is_method_call(self, node: Call) -> bool:
@@ -1313,6 +1392,8 @@ class _Body:
         kind = value.kind
         if isinstance(kind, Int) and kind.fits64 and not kind.stand_in:
             box = f"PyLong_FromLongLong({value.c})"
+        elif isinstance(kind, Int) and kind.fits128 and not kind.stand_in:  # ULINT, LWORD
+            box = f"padt_box128({value.c})"
         elif isinstance(kind, Bool):
             box = f"PADT_BOOL_OBJECT({value.c})"
         elif isinstance(kind, Float):
@@ -1409,10 +1490,14 @@ class _Body:
         relation = "<" if name == "min" else ">"
         if all(isinstance(v.kind, Float) for v in values):
             kind: Kind = Float()
-        elif all(_plain64(v.kind) for v in values):
+        elif all(_exact128(v.kind) for v in values) or _one_stand_in(values):
+            # integers of up to 128 bits (a ULINT's), or a REAL's or a text's integer with
+            # 64-bit ones (STRING_TO_ULINT: max(_str_to_int(s), 0)), which a stand-in is
+            # compared with as the true value is (_comparison)
             bounds = [v.kind for v in values if isinstance(v.kind, Int)]
             pick = min if name == "min" else max
-            kind = Int(pick(k.lo for k in bounds), pick(k.hi for k in bounds))
+            stand_in = any(k.stand_in for k in bounds)
+            kind = Int(pick(k.lo for k in bounds), pick(k.hi for k in bounds), stand_in)
         else:
             _refuse(f"{name}() of mixed or wide values")
         held = self.temp(_ctype(kind))
@@ -1512,6 +1597,16 @@ def _plain64(kind: Kind) -> bool:
     return isinstance(kind, Int) and kind.fits64 and not kind.stand_in
 
 
+def _exact128(kind: Kind) -> bool:
+    return isinstance(kind, Int) and kind.fits128 and not kind.stand_in
+
+
+def _one_stand_in(values: list[V]) -> bool:
+    """One stand-in among integers of 64 bits: each pair compares as the true values do."""
+    stand_ins = [v for v in values if isinstance(v.kind, Int) and v.kind.stand_in]
+    return len(stand_ins) == 1 and all(_plain64(v.kind) for v in values if v not in stand_ins)
+
+
 def _narrowed(kind: Int, lo: int, hi: int) -> Int:
     """`kind` known to lie in lo..hi: exact there when that is short of the stand-ins."""
     exact = lo > -STAND_IN_FROM and hi < STAND_IN_FROM
@@ -1593,6 +1688,13 @@ def _as_float(value: V) -> V:
         return value
     if isinstance(value.kind, Bool) or (isinstance(value.kind, Int) and value.kind.fits64):
         return V(Float(), f"((double){value.c})")
+    if isinstance(value.kind, Int) and value.kind.within(UNSIGNED64):
+        # a ULINT: C converts an unsigned 64-bit integer to the nearest double, ties to
+        # even, as Python converts an int
+        return V(Float(), f"((double)(uint64_t){value.c})")
+    if isinstance(value.kind, Int) and value.kind.within(Int(-UNSIGNED64.hi, UNSIGNED64.hi)):
+        # a ULINT's remainder or difference: its magnitude so, the sign put back
+        return V(Float(), f"padt_double_wide({value.c})")
     _refuse(f"a {_kind_name(value.kind)} in REAL arithmetic")
 
 

@@ -313,7 +313,8 @@ def test_shifts_by_the_width_or_more_are_zero_at_once_on_both_tiers(
 ) -> None:
     # SHL by a DINT of two thousand million made a 250 MB number before the wrap masked
     # it, by a LINT of 10**15 a MemoryError that stopped the program. Counts that cannot
-    # be negative run as C; the others (and LWORD) are left to Python on the native tier
+    # be negative run as C, and so do LWORD's (shifted left by up to 64, computed modulo
+    # 2**64 in C, which is all the wrap keeps of Python's exact 128 bits)
     text = """
 PROGRAM Main
 VAR
@@ -334,7 +335,7 @@ END_PROGRAM
 """
     programs = [ProgramConfig(name, name, n) for n, name in enumerate(("Main", "Wide"), 1)]
     pair = side_by_side(text, native_tier, programs)
-    assert pair.report.bodies == ("Main",)
+    assert pair.report.bodies == ("Main", "Wide")
     pair.cycle_and_compare(4)  # k is 33 in the fourth cycle: beyond a DWORD's 32 bits
     values = pair.native.variables.values()
     main = [values[f"Main.{x}"] for x in ("a", "b", "f", "g", "by")]
@@ -671,3 +672,139 @@ def test_a_chart_runs_as_c_with_the_python_values_and_the_same_fault(
     assert pair.report.bodies == ("Main", "Mixer")  # the chart's body as C
     pair.cycle_and_compare(4)  # speed 4, 3, 2, 1; in the fifth cycle 0
     assert "division by zero in POU Mixer (prog.st:8)" in pair.fault_of_the_next_cycle()
+
+
+WIDE = """
+FUNCTION Twice : ULINT
+VAR_INPUT v : ULINT; END_VAR
+Twice := v * 2;
+END_FUNCTION
+FUNCTION_BLOCK Holder
+VAR_INPUT w : LWORD; END_VAR
+VAR_OUTPUT q : LWORD; END_VAR
+VAR kept : LWORD := 16#F0F0_0000_0000_000F; END_VAR
+q := ROL(w XOR kept, 13);
+kept := kept + w;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR
+  a : ULINT := 18446744073709551000; b : ULINT := 4294967311;
+  big : ULINT := 9223372036854775809; sum, dif, prod, quo, rem, tw, mx, mn : ULINT;
+  lt, eq, ge : BOOL; n : DINT := -9;
+  w : LWORD := 16#8000_0000_0000_0001; bits, andw, orw, xorw, notw : LWORD;
+  shl1, shr1, rol1, ror1, shln, shrn : LWORD;
+  l : LINT := -5; ul : ULINT; back : LINT; dw : DWORD := 16#FFFF_FFFF; lw : LWORD;
+  dw2 : DWORD; r : LREAL; fromr : ULINT; si : SINT; s : STRING;
+  arr : ARRAY[1..5] OF ULINT; i : INT; total : ULINT; h : Holder; hq : LWORD; dig : INT;
+END_VAR
+a := a + 97;  (* past 2**64 in the seventh cycle: wrapped *)
+b := b * 65537 + 3;  (* beyond 64 bits before the wrap, and beyond 128 with big *)
+n := n + 9;  (* 0 to 72: shifts and rotations by the width and more *)
+sum := a + big; dif := b - a; prod := a * b * big + 7; tw := Twice(a);
+quo := a / (b MOD 1000 + 1); rem := a MOD b;
+dig := ULINT_TO_INT(a MOD 10) * 100 + ULINT_TO_INT(b / 1000000000000000000);
+lt := a < b; eq := a = sum - big; ge := a >= 16#FFFF_FFFF_FFFF_FF00;
+mx := MAX(a, b, big); mn := MIN(a, b);
+bits := ULINT_TO_LWORD(a);
+andw := w AND bits; orw := w OR ULINT_TO_LWORD(b); xorw := bits XOR ULINT_TO_LWORD(b);
+notw := NOT bits;
+shl1 := SHL(bits, 3); shr1 := SHR(bits, 5); shln := SHL(w, n); shrn := SHR(bits, n);
+rol1 := ROL(w, n); ror1 := ROR(bits, n + 1);
+w := w + 16#0101_0101_0101_0101;
+l := l * 7 - 3; ul := LINT_TO_ULINT(l); back := ULINT_TO_LINT(a);
+lw := DWORD_TO_LWORD(dw); dw2 := LWORD_TO_DWORD(bits); si := ULINT_TO_SINT(b);
+r := ULINT_TO_LREAL(a) - ULINT_TO_LREAL(b MOD a);
+fromr := LREAL_TO_ULINT(r / 3.0); s := ULINT_TO_STRING(a);
+FOR i := 1 TO 5 DO
+  arr[i] := arr[i] * 3 + a;
+  total := total + arr[i];
+END_FOR;
+h.w := bits;  (* a member of another POU's instance, written and read *)
+h();
+hq := h.q;
+h(w := hq XOR w);
+END_PROGRAM
+"""
+
+
+def test_ulint_and_lword_run_as_c_with_the_python_values(native_tier: NativeTier) -> None:
+    """ULINT and LWORD (0..2**64-1) are padt_i128 in C: exact where Python's value fits
+    128 bits, modulo 2**64 where only the wrap's 64 bits of it are kept (a product of
+    three ULINTs)."""
+    pair = side_by_side(WIDE, native_tier)
+    assert pair.report.bodies == ("Holder", "Main") and not pair.report.left
+    pair.cycle_and_compare(12)
+    values = pair.native.variables.values()
+    assert values["Main.a"] == (18446744073709551000 + 12 * 97) % 2**64  # wrapped
+    assert values["Main.shln"] == 0 and values["Main.rol1"] != 0  # by 99: 0, rotated
+    assert min(values["Main.arr"]) > 2**63 and values["Main.h.q"] != 0
+
+
+def test_ulint_division_by_zero_is_the_same_fault_on_both_tiers(native_tier: NativeTier) -> None:
+    text = """
+PROGRAM Main
+VAR a : ULINT := 18446744073709551615; z : ULINT := 3; q, r : ULINT; END_VAR
+z := z - 1;
+r := a MOD (z + 1);
+q := a / z;
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(2)  # z = 0 in the third cycle
+    assert "division by zero in POU Main (prog.st:6)" in pair.fault_of_the_next_cycle()
+
+    modulo = text.replace("r := a MOD (z + 1);", "r := a MOD z;")
+    pair = side_by_side(modulo, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(2)
+    assert "division by zero in POU Main (prog.st:5)" in pair.fault_of_the_next_cycle()
+
+
+def test_a_ulint_variable_beyond_its_range_is_a_fault_not_a_wrong_value(
+    native_tier: NativeTier,
+) -> None:
+    text = "PROGRAM Main\nVAR n, m : ULINT; END_VAR\nm := n + 1;\nEND_PROGRAM\n"
+    for wrong in (-1, 2**64, "not a ULINT"):  # what no checked writer would store
+        resource = running(compiled(text), native_tier)
+        resource.programs[0].instance.n = wrong
+        resource.cycle()
+        error = program_error(resource)
+        assert "another type" in error and "prog.st:3" in error, wrong
+
+
+WIDE_PLACES = """VAR_GLOBAL gU : ULINT := 18446744073709551615; gW : ARRAY[0..2] OF LWORD; END_VAR
+TYPE Pair : STRUCT lo, hi : ULINT; END_STRUCT; END_TYPE
+FUNCTION Split : BOOL
+VAR_INPUT v : ULINT; END_VAR
+VAR_OUTPUT hi, lo : ULINT; END_VAR
+hi := v / 4294967296; lo := v MOD 4294967296;
+Split := hi > lo;
+END_FUNCTION
+PROGRAM Main
+VAR
+  a : ULINT := 18446744073709551000; r : REF_TO ULINT; p : Pair; q : ULINT; bo : BOOL;
+  k : INT; m : ULINT; st : STRING := '18446744073709551615'; n : INT;
+  texts : ARRAY[0..3] OF STRING := ['18446744073709551617', '-5',
+    '170141183460469231731687303715884105729', '-170141183460469231731687303715884105729'];
+END_VAR
+a := a + 101;
+r := REF(a); q := r^ * 3; r^ := r^ + 5;
+bo := Split(v := a, hi => p.hi, lo => p.lo);
+m := MUX(k, a, p.hi, p.lo); k := (k + 1) MOD 3;
+CASE a MOD 4 OF 0: n := 1; 1, 2: n := 2; ELSE n := 3; END_CASE;
+WHILE m > 1000 DO m := m / 1000; END_WHILE;
+gU := gU - 1 + a; gW[k] := ULINT_TO_LWORD(gU) XOR gW[(k + 1) MOD 3];
+m := m + STRING_TO_ULINT(st);  (* beyond 2**126 too: a stand-in in max() *)
+st := texts[ULINT_TO_INT(a MOD 4)];
+IF a > 18446744073709551000 THEN n := n + 10; END_IF;
+END_PROGRAM
+"""
+
+
+def test_ulint_through_references_outputs_globals_and_strings_runs_as_c(
+    native_tier: NativeTier,
+) -> None:
+    pair = side_by_side(WIDE_PLACES, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(12)  # a MOD 4 takes every text

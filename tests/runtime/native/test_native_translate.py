@@ -110,6 +110,37 @@ def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> No
     assert not ok and reason in why
 
 
+WIDE = "ul, um : ULINT; lw : LWORD; arr : ARRAY[1..3] OF ULINT; "
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        "ul := ul + um * 3 - 1; b := ul > um; um := ul / um + ul MOD 7;",
+        "ul := ul * um * ul;",  # beyond 128 bits: modulo 2**64, all the wrap keeps
+        "lw := SHL(lw, i) OR SHR(lw, d) OR ROL(lw, 3) XOR NOT lw;",
+        "l := ULINT_TO_LINT(ul); ul := LINT_TO_ULINT(l); lw := DWORD_TO_LWORD(16#FFFF);",
+        "FOR i := 1 TO 3 DO arr[i] := arr[i] + ul; END_FOR; x := ULINT_TO_LREAL(ul);",
+        "x := ULINT_TO_LREAL(ul MOD um) + ULINT_TO_LREAL(ul - um); i := ul MOD 7;",
+    ],
+)
+def test_bodies_with_ulint_and_lword_are_translated(body: str) -> None:
+    ok, reason = translated(body, WIDE)
+    assert ok, reason
+
+
+@pytest.mark.parametrize(
+    ("body", "reason"),
+    [
+        ("FOR ul := 1 TO 3 DO i := i + 1; END_FOR;", "a range over values beyond 64 bits"),
+        ("i := a[ul];", "an integer beyond 64 bits where 64 are needed"),
+    ],
+)
+def test_ulint_where_64_bits_are_needed_stays_python(body: str, reason: str) -> None:
+    ok, why = translated(body, WIDE)
+    assert not ok and reason in why
+
+
 def test_a_body_left_to_python_names_the_st_line_of_the_statement_refused() -> None:
     body_line = FUNCTIONS.count("\n") + 3  # PROGRAM Main, then VAR, then the body
     ok, why = translated(INTERFACE_CALL)
