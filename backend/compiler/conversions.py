@@ -30,6 +30,27 @@ def wrapped(value: Expr, t: ElementaryType, offset: int = 0) -> Expr:
     return Wrap(value, t.bits, t.signed, offset, name)
 
 
+def wrap_constant(value: int, t: ElementaryType) -> int:
+    """A literal's value as stored in `t` (16#FFFF in an INT is -1)."""
+    if not (t.is_integer or t.category in ("time", "date")):
+        return value
+    value &= (1 << t.bits) - 1
+    if t.signed and value >= 1 << (t.bits - 1):
+        value -= 1 << t.bits
+    return value
+
+
+def literal_in(value: Expr, t: ElementaryType) -> Expr:
+    """An integer expression of literals in type `t`: a constant as stored in `t`,
+    anything else wrapped to it (`-79 MOD 100`; `LWORD_TO_DWORD(16#FFFF_FFFF_FFFF_FFFF)`
+    is 16#FFFF_FFFF, as the literal taken as an LWORD and converted)."""
+    if isinstance(value, Const) and type(value.value) is int:
+        if t.min <= value.value <= t.max:
+            return value
+        return Const(wrap_constant(value.value, t), artifact_type_text(t))
+    return wrapped(value, t)
+
+
 def converted(value: Expr, source: Type, target: ElementaryType) -> Expr:
     """`value` of type `source` converted to `target` (X_TO_Y semantics)."""
     src = integer_like(source) or source
@@ -52,9 +73,9 @@ def converted(value: Expr, source: Type, target: ElementaryType) -> Expr:
             return wrapped(number, target)
         if cat == "bool":
             return intrinsic("int", name, value)
-        if src.is_any_literal or (
-            src.is_integer and (src.bits < target.bits and (target.signed or not src.signed))
-        ):
+        if src.is_any_literal:
+            return literal_in(value, target)
+        if src.is_integer and (src.bits < target.bits and (target.signed or not src.signed)):
             return value
         return wrapped(value, target)
     if tcat == "real":

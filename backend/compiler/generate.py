@@ -20,7 +20,7 @@ from backend.compiler import ast, builtins
 from backend.compiler.ast import key
 from backend.compiler.codes import Code
 from backend.compiler.constants import is_zero_literal
-from backend.compiler.conversions import converted, intrinsic, wrapped
+from backend.compiler.conversions import converted, intrinsic, literal_in, wrap_constant, wrapped
 from backend.compiler.diagnostics import Diagnostic
 from backend.compiler.infer import (
     ActionCall,
@@ -1462,16 +1462,6 @@ def _eno_targets(call: ast.Call, callee: PouSymbols | None) -> list[ast.Argument
     ]
 
 
-def wrap_constant(value: int, t: ElementaryType) -> int:
-    """A literal's value as stored in `t` (16#FFFF in an INT is -1)."""
-    if not (t.is_integer or t.category in ("time", "date")):
-        return value
-    value &= (1 << t.bits) - 1
-    if t.signed and value >= 1 << (t.bits - 1):
-        value -= 1 << t.bits
-    return value
-
-
 def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> Expr:
     """An elementary value as stored in a variable of `target`: wrapped to its width,
     converted between types, strings cut to their length."""
@@ -1489,13 +1479,7 @@ def convert_value(raw: _Value, target: Type, already_fits: bool = False) -> Expr
     if isinstance(source, ElementaryType) and source != target_elem:
         if source == ANY_INT and target_elem.is_integer:
             # an expression of literals (`-79 MOD 100`) may lie outside the target's range
-            in_range = (
-                _is_int_constant(node)
-                and isinstance(node, Const)
-                and isinstance(node.value, int)
-                and target_elem.min <= node.value <= target_elem.max
-            )
-            node = node if in_range else wrapped(node, target_elem)
+            node = literal_in(node, target_elem)
         elif not (source == ANY_REAL and target_elem == ANY_REAL):
             node = converted(node, source, target_elem)
     length = target_elem.max_length

@@ -808,3 +808,26 @@ def test_ulint_through_references_outputs_globals_and_strings_runs_as_c(
     pair = side_by_side(WIDE_PLACES, native_tier)
     assert pair.report.bodies == ("Main",)
     pair.cycle_and_compare(12)  # a MOD 4 takes every text
+
+
+def test_a_literal_converted_is_what_its_type_keeps_of_it_on_both_tiers(
+    native_tier: NativeTier,
+) -> None:
+    """A literal is taken as the conversion's input type, then converted: what the target
+    keeps of it (the Python tier stored LWORD_TO_DWORD(16#FFFF_FFFF_FFFF_FFFF) whole in a
+    DWORD, where the C faulted on its range check)."""
+    text = """
+PROGRAM Main
+VAR u : UINT := 7; d : DWORD; l : LINT; i : INT; s : SINT; END_VAR
+u := WORD_TO_UINT(NOT 16#FFFF);
+d := LWORD_TO_DWORD(16#FFFF_FFFF_FFFF_FFFF);
+l := ULINT_TO_LINT(18446744073709551615);
+i := DINT_TO_INT(16#1_8000 + 1);
+s := INT_TO_SINT(-129);
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(2)
+    values = pair.python.variables.values()
+    assert [values[f"Main.{name}"] for name in "udlis"] == [0, 0xFFFF_FFFF, -1, -32767, 127]
