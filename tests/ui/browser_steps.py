@@ -196,6 +196,14 @@ def open_as(page: Page, plant: Plant, user: str) -> None:
     wait_for_text(page, '[data-testid="user"]', user, timeout_s=START_S)
 
 
+def open_online_test(page: Page, plant: Plant) -> None:
+    """The plant's UI as `viewer`, logged in to the resource, the Online test in front."""
+    open_as(page, plant, "viewer")
+    log_in_to_resource(page, "viewer", PASSWORD)
+    wait_for_text(page, '[data-testid="resource-state"]', "RUN")
+    page.get_by_role("tab", name="Online test").click()
+
+
 def choose(page: Page, label: str, option: str) -> None:
     """Pick `option` in the viser dropdown (a Mantine select) labelled `label`. A list
     opened before the screen offered the option (the Code screen's instances come once

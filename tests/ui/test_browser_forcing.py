@@ -25,9 +25,8 @@ from tests.ui.browser_steps import (
     confirm,
     edit_value,
     field,
-    log_in_to_resource,
-    open_as,
     open_demo_as_admin,
+    open_online_test,
     shoot_both,
     text_of,
     value,
@@ -168,10 +167,7 @@ def test_a_read_user_sees_write_and_force_disabled_and_the_resource_refuses_them
 ) -> None:
     with chromium() as browser:
         page = browser.new_page(viewport={"width": 1400, "height": 900})
-        open_as(page, plant, "viewer")
-        log_in_to_resource(page, "viewer", PASSWORD)
-        wait_for_text(page, '[data-testid="resource-state"]', "RUN")
-        page.get_by_role("tab", name="Online test").click()
+        open_online_test(page, plant)
         edit_value(page, "TankControl.pump", "FALSE")
         wait_until(
             "the reason is shown",

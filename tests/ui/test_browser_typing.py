@@ -12,12 +12,9 @@ from playwright.sync_api import Page
 
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
-    PASSWORD,
     Plant,
     field,
-    log_in_to_resource,
-    open_as,
-    wait_for_text,
+    open_online_test,
     wait_until,
 )
 
@@ -72,10 +69,7 @@ def test_a_file_opened_while_the_editor_reports_opens_and_a_list_is_created(
 ) -> None:
     with chromium() as browser:
         page = browser.new_page(viewport={"width": 1400, "height": 900})
-        open_as(page, plant, "viewer")
-        log_in_to_resource(page, "viewer", PASSWORD)
-        wait_for_text(page, '[data-testid="resource-state"]', "RUN")
-        page.get_by_role("tab", name="Online test").click()
+        open_online_test(page, plant)
         page.get_by_text("Compose watch lists", exact=True).click()
         name = field(page, "New list")
         name.wait_for()

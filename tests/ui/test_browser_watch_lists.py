@@ -14,12 +14,10 @@ from playwright.sync_api import Page
 from runtime.contract.keyspace import watches_key_expr
 from tests.support.browser import chromium
 from tests.ui.browser_steps import (
-    PASSWORD,
     Plant,
     choose,
     field,
-    log_in_to_resource,
-    open_as,
+    open_online_test,
     shoot,
     text_of,
     value,
@@ -61,13 +59,6 @@ def code_variables(page: Page) -> list[str]:
         "[data-code-var]", "cells => cells.map(c => c.dataset.codeVar)"
     )
     return found
-
-
-def open_online_test(page: Page, plant: Plant) -> None:
-    open_as(page, plant, "viewer")
-    log_in_to_resource(page, "viewer", PASSWORD)
-    wait_for_text(page, '[data-testid="resource-state"]', "RUN")
-    page.get_by_role("tab", name="Online test").click()
 
 
 def test_compose_a_watch_list_and_find_it_again(plant: Plant) -> None:

@@ -558,24 +558,36 @@ padt_global(PyObject *key)
     return found;
 }
 
-/* A helper of the namespace (`_ix`, `_idiv`) called to raise its own error, so that the
- * fault is the one the Python tier raises. */
+/* A helper of the namespace (`_ix`, `_idiv`) called with `args` (a new tuple, taken; NULL:
+ * an error already set) to raise its own error, so that the fault is the one the Python
+ * tier raises. */
 static int
-padt_raise_through(const char *helper, int n, int64_t a, int64_t b, int64_t c)
+padt_raise_with(const char *helper, PyObject *args)
 {
     PyObject *fn = PyDict_GetItemString(padt_ns, helper);
     if (fn == NULL) {
+        Py_XDECREF(args);
         PyErr_Format(PyExc_SystemError, "native code: no %s", helper);
         return -1;
     }
-    PyObject *result = n == 2 ? PyObject_CallFunction(fn, "LL", (long long)a, (long long)b)
-                              : PyObject_CallFunction(fn, "LLL", (long long)a, (long long)b,
-                                                      (long long)c);
+    if (args == NULL)
+        return -1;
+    PyObject *result = PyObject_Call(fn, args, NULL);
+    Py_DECREF(args);
     if (result == NULL)
         return -1;
     Py_DECREF(result);
     PyErr_Format(PyExc_SystemError, "native code: %s did not raise", helper);
     return -1;
+}
+
+/* The same with two or three 64-bit integers. */
+static int
+padt_raise_through(const char *helper, int n, int64_t a, int64_t b, int64_t c)
+{
+    return padt_raise_with(helper, n == 2 ? Py_BuildValue("(LL)", (long long)a, (long long)b)
+                                          : Py_BuildValue("(LLL)", (long long)a, (long long)b,
+                                                          (long long)c));
 }
 
 /* IEC division of integers: toward zero; by zero, the Python helper's fault. */
@@ -616,20 +628,11 @@ padt_imod(int64_t a, int64_t b, int64_t *out)
 static int
 padt_raise_through128(const char *helper, padt_i128 a, padt_i128 b)
 {
-    PyObject *fn = PyDict_GetItemString(padt_ns, helper);
-    if (fn == NULL) {
-        PyErr_Format(PyExc_SystemError, "native code: no %s", helper);
-        return -1;
-    }
     PyObject *x = padt_box128(a), *y = x != NULL ? padt_box128(b) : NULL;
-    PyObject *result = y != NULL ? PyObject_CallFunctionObjArgs(fn, x, y, NULL) : NULL;
+    PyObject *args = y != NULL ? PyTuple_Pack(2, x, y) : NULL;
     Py_XDECREF(x);
     Py_XDECREF(y);
-    if (result == NULL)
-        return -1;
-    Py_DECREF(result);
-    PyErr_Format(PyExc_SystemError, "native code: %s did not raise", helper);
-    return -1;
+    return padt_raise_with(helper, args);
 }
 
 static inline int

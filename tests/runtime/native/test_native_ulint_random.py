@@ -5,10 +5,10 @@ wrap (products of ULINTs, shifts left by up to 64), which C computes modulo 2**6
 DIV, MOD, MIN, MAX, comparisons, conversions to and from LINT, DWORD and LREAL, shifts and
 rotations by counts of 0 to beyond the width, and a FUNCTION of a ULINT.
 
-A literal is never a whole operand of a conversion or a shift here: the compiler types and
-folds those without the wrap of their type (`LWORD_TO_DWORD(16#FFFF_FFFF_FFFF_FFFF)` leaves
-2**64-1 in a DWORD on the Python tier, which the native tier's check of the range refuses),
-a difference of the compiler's, not of the tiers."""
+A literal is never a whole operand of a shift here: the compiler takes a literal shifted
+or rotated as a DINT whatever its size (docs/language.md), which both tiers then do alike.
+A literal converted is what the conversion's target keeps of it (test_native_runtime.py:
+test_a_literal_converted_is_what_its_type_keeps_of_it_on_both_tiers)."""
 
 from __future__ import annotations
 
