@@ -112,7 +112,16 @@ class Range:
     step: int
 
 
-Kind = Int | Bool | Float | Text | Instance | Array | Ref | Outputs | Hook | Range
+@dataclass(frozen=True)
+class Implementer:
+    """What an interface variable's reference refers to: an instance of any class that
+    conforms to the interface `name` (upper case), whose methods are looked up on the
+    object as Python looks them up."""
+
+    name: str
+
+
+Kind = Int | Bool | Float | Text | Instance | Array | Ref | Outputs | Hook | Range | Implementer
 
 # integers a double holds exactly: Python converts and compares beyond them exactly, C not
 EXACT_IN_DOUBLE = Int(-(1 << 53), 1 << 53)
@@ -188,7 +197,29 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
         methods.pop("__call__", None)
         table[unit.class_name] = ClassInfo(unit.class_name, members, methods)
     table[ACTION_CONTROL] = ACTION_CONTROL_INFO
+    table.update(_interfaces(forms, table))
     return table
+
+
+def interface_key(name: str) -> str:
+    """The entry of an interface in the class table (no class is named with a space)."""
+    return f"{INTERFACE_PREFIX}{name}"
+
+
+def _interfaces(forms: Forms, table: dict[str, ClassInfo]) -> dict[str, ClassInfo]:
+    """Per interface some class conforms to, the methods a call through it may take: those
+    every conforming class has alike (a call of another is left to Python)."""
+    conforming: dict[str, list[ClassInfo]] = {}
+    for name, form in sorted(forms.items()):
+        if isinstance(form, Class) and name in table:
+            for kind in form.kinds:
+                conforming.setdefault(kind, []).append(table[name])
+    found = {}
+    for interface, infos in sorted(conforming.items()):
+        shared = set.intersection(*(set(info.methods.items()) for info in infos))
+        key = interface_key(interface)
+        found[key] = ClassInfo(key, {}, dict(sorted(shared)))
+    return found
 
 
 def _action_controls(form: Class) -> list[str]:
@@ -253,6 +284,8 @@ def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
     for prefix in ("REF_TO ", "REFERENCE TO "):
         if type_name.upper().startswith(prefix):
             return Ref(kind_of_type(type_name[len(prefix) :].strip(), classes))
+    if type_name.upper().startswith(INTERFACE_PREFIX):  # a reference to an implementer
+        return Ref(Implementer(type_name[len(INTERFACE_PREFIX) :].strip().upper()))
     name, _ = base_type(type_name)
     if name == "BOOL":
         return Bool()
@@ -286,6 +319,9 @@ class FunctionInfo:
     result: Kind | None
     outputs: Outputs | None = None
 
+
+# how the artifact names an interface variable's type (`INTERFACE IText`)
+INTERFACE_PREFIX = "INTERFACE "
 
 # The runtime's action control block of an SFC action (runtime.code.intrinsics): a chart's
 # body reads its flags A and Q and calls its `update` (a Python method, no result); an

@@ -37,6 +37,7 @@ from runtime.code.native.kinds import (
     Float,
     FunctionInfo,
     Hook,
+    Implementer,
     Instance,
     Int,
     Kind,
@@ -44,6 +45,7 @@ from runtime.code.native.kinds import (
     Range,
     Ref,
     Text,
+    interface_key,
     join,
 )
 from runtime.contract.artifact import PouCode
@@ -462,6 +464,15 @@ class _Body:
             return
         if isinstance(declared, Ref) and value.kind == Ref(None) and value.c == "Py_None":
             self.check(f"padt_put({place}, Py_NewRef(Py_None))")  # NULL, REF= 0
+            return
+        if (
+            isinstance(declared, Ref)
+            and isinstance(declared.target, Implementer)
+            and isinstance(value.kind, Ref)
+        ):
+            # a reference to an instance into an interface variable (the compiler checked
+            # that its class conforms): the place takes the reference, as Python's store
+            self.check(f"padt_put({place}, Py_NewRef({value.c}))")
             return
         if isinstance(declared, Instance | Array | Text | Ref) and value.kind == declared:
             # a text, a whole array or structure (a copy): the place takes the object as
@@ -884,6 +895,8 @@ class _Body:
             held = self.temp("double")
             self.line(f"PADT_GET_FLOAT({obj}, {held});")
             return V(kind, held)
+        if isinstance(kind, Implementer):  # any object: its methods are looked up on it
+            return V(kind, obj)
         held = self.temp("PyObject *", "NULL")
         if isinstance(kind, Text | Ref):
             # owned: a FUNCTION called later in the statement may store another text into
@@ -1379,12 +1392,16 @@ class _Body:
         return info, result
 
     def method_info(self, owner: V, name: str) -> FunctionInfo:
-        if not isinstance(owner.kind, Instance):
+        if isinstance(owner.kind, Implementer):  # through an interface
+            cls = interface_key(owner.kind.name)
+        elif isinstance(owner.kind, Instance):
+            cls = owner.kind.cls
+        else:
             _refuse(f"a call of {name} of a {_kind_name(owner.kind)}")
-        info = self.module.classes.get(owner.kind.cls)
+        info = self.module.classes.get(cls)
         method = info.methods.get(name) if info is not None else None
         if method is None:
-            _refuse(f"a call of {name}, which {owner.kind.cls} does not have")
+            _refuse(f"a call of {name}, which {cls} does not have alike")
         return method
 
     def boxed(self, value: V, callee: str) -> str:

@@ -266,6 +266,7 @@ def test_a_derived_instance_is_an_in_out_of_its_base_type_on_both_tiers(
     # name, as Python
     assert "Vet" not in pair.report.bodies
     assert any("patient" in reason for pou, reason in pair.report.left if pou == "Vet")
+    assert "Main" not in pair.report.bodies  # it binds v's patient
     found = values(pair)
     assert found["Main.x"] == 2 * 10 + 1  # Dog's Speak through v, Animal's through w
     assert found["Main.y"] == 2 * 10 + 2 and found["Main.z"] == 1 * 10 + 2
@@ -328,3 +329,55 @@ END_PROGRAM
     found = values(pair)
     assert found["Main.x"] == 1003 and found["Main.v.heard"] == 1003
     assert found["Main.d.sound"] == found["Main.v.patient.sound"] == 3
+
+
+INTERFACES = """
+INTERFACE IShape
+PROPERTY Sides : INT
+GET END_GET
+END_PROPERTY
+METHOD Area : REAL
+VAR_INPUT scale : REAL; END_VAR
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Square IMPLEMENTS IShape
+VAR_INPUT side : REAL; END_VAR
+PROPERTY PUBLIC Sides : INT
+GET Sides := 4; END_GET
+END_PROPERTY
+METHOD PUBLIC Area : REAL
+VAR_INPUT scale : REAL; END_VAR
+Area := side * side * scale;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Triangle IMPLEMENTS IShape
+VAR_INPUT base, height : REAL; END_VAR
+PROPERTY PUBLIC Sides : INT
+GET Sides := 3; END_GET
+END_PROPERTY
+METHOD PUBLIC Area : REAL
+VAR_INPUT scale : REAL; END_VAR
+Area := base * height / 2.0 * scale;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR
+  sq : Square := (side := 3.0); tr : Triangle := (base := 4.0, height := 5.0);
+  shape, none : IShape; k, sides : INT; area : REAL;
+END_VAR
+k := k + 1;
+IF k MOD 2 = 1 THEN shape := sq; ELSE shape := tr; END_IF;
+sides := shape.Sides;
+area := shape.Area(scale := INT_TO_REAL(k));
+IF k = 5 THEN sides := none.Sides; END_IF;  (* never assigned: NULL, a fault *)
+END_PROGRAM
+"""
+
+
+def test_methods_and_properties_through_an_interface_run_as_c(native_tier: NativeTier) -> None:
+    pair = side_by_side(INTERFACES, native_tier)
+    assert pair.report.bodies == ("Main", "Square", "Triangle"), pair.report.left
+    pair.cycle_and_compare(4)
+    found = values(pair)
+    assert found["Main.sides"] == 3 and found["Main.area"] == 4.0 * 5.0 / 2.0 * 4
+    assert "dereference of NULL in POU Main (prog.st:39)" in pair.fault_of_the_next_cycle()

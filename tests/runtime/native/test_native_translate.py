@@ -45,7 +45,7 @@ STEP S2: END_STEP
 TRANSITION FROM S2 TO S1 := NOT b; END_TRANSITION"""
 
 
-# a method called through an interface, which the tier leaves to Python
+# a method called through an interface
 INTERFACE_CALL = "g := rn; i := g.Go();"
 
 
@@ -92,22 +92,12 @@ def translated(body: str, declarations: str = "") -> tuple[bool, str]:
         "x := STRING_TO_LREAL(s);",
         "RETURN;",
         CHART,
+        INTERFACE_CALL,
     ],
 )
 def test_bodies_of_these_constructs_are_translated(body: str) -> None:
     ok, reason = translated(body)
     assert ok, reason
-
-
-@pytest.mark.parametrize(
-    ("body", "reason"),
-    [
-        (INTERFACE_CALL, "the variable g, of a type the tier leaves to Python"),
-    ],
-)
-def test_bodies_with_these_stay_python_and_say_why(body: str, reason: str) -> None:
-    ok, why = translated(body)
-    assert not ok and reason in why
 
 
 WIDE = "ul, um : ULINT; lw : LWORD; arr : ARRAY[1..3] OF ULINT; "
@@ -143,7 +133,7 @@ def test_ulint_where_64_bits_are_needed_stays_python(body: str, reason: str) -> 
 
 def test_a_body_left_to_python_names_the_st_line_of_the_statement_refused() -> None:
     body_line = FUNCTIONS.count("\n") + 3  # PROGRAM Main, then VAR, then the body
-    ok, why = translated(INTERFACE_CALL)
+    ok, why = translated("FOR ul := 1 TO 3 DO i := i + 1; END_FOR;", WIDE)
     assert not ok and why.endswith(f"(ST line {body_line})")
 
 
