@@ -166,7 +166,8 @@ translation needs (a decode takes about half of a translation's time)."""
 
 def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
     """Every generated class of an artifact with the kinds of its declared variables (and
-    the action control blocks of its chart, when it has one)."""
+    the action control blocks of its chart, when it has one); the runtime's action control
+    block; per interface, the methods a call through it takes (`interface_key`)."""
     by_type = {unit.name.upper(): unit.class_name for unit in units if unit.kind != "FUNCTION"}
     extended = _extended_blocks(units, forms)
     own = {
