@@ -1,12 +1,13 @@
 """What the editor's page script tells the server, read as hostile text: one typed
 dataclass per message, each field checked, anything else refused with the reason.
 
-The page writes every message not yet acknowledged into a hidden text input at once,
-as `{"s": [[seq, message], ...]}` (viser sends an input's value at most every 50 ms and
-drops the values in between); the server takes the messages past the last sequence
-number it handled and acknowledges the newest. The page writes the queue again while it is
-not acknowledged, counting its writes in "w" so that the same queue is a new value for the
-input (an input that keeps its value sends nothing)."""
+The page sends every message not yet acknowledged at once, as the value of a hidden text
+input, `{"s": [[seq, message], ...]}`, past viser's throttle of the panel's inputs
+(frontend/page_writer.py); the server takes the messages past the last sequence number it
+handled and acknowledges the newest. The page sends the queue again while it is not
+acknowledged (a message sent while the websocket reconnects is lost), counting its writes
+in "w" so that the same queue is a new value for the input (an input that keeps its value
+sends nothing)."""
 
 from __future__ import annotations
 
