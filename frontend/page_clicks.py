@@ -12,6 +12,7 @@ every screen ten times a second cost most of two cores."""
 from __future__ import annotations
 
 import html
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -20,11 +21,15 @@ import viser
 LABEL = "Page click"
 KINDS = ("tab", "variable", "tree", "window", "layout", "drawing", "logic", "place", "test")
 MAX_NAME = 1000  # longer than any tab name, variable path or tree entry
+RECENT = 8  # reports a value holds: more than come between two callbacks of viser's
 
 # Installed once per page (a later workspace after logging in again finds the new input by
 # its label at each click); each report is written past viser's throttle (page_writer.py),
-# which viser_lockdown's page script installs first. A counter makes a second click on the
-# same row a change.
+# which viser_lockdown's page script installs first. Reports are numbered, and the value
+# holds the last RECENT of them ("kind|name|n|kind|name|n..."; the first of a new input's):
+# viser runs each update's callback on a thread of its own, which reads the input's value
+# as it is then, so two reports close together would be read as the second twice. The
+# server handles each number once, in order.
 # "|" separates: tab names, variable paths and tree entries have none. The window's size
 # is said when the page starts (once the hidden input is there) and after each resize has
 # settled; the panels' widths and whether they are folded after the user dragged an edge
@@ -57,9 +62,12 @@ _SCRIPT = (
     "tell(said)},true);"
     "var wait=null;window.addEventListener('resize',function(){clearTimeout(wait);"
     "wait=setTimeout(window.__padtSized,300)});"
+    "var recent=[],box=null;"
     "var tell=function(said){var label=find();if(!said||!label)return;"
     "if(!window.__padtWrite){setTimeout(function(){tell(said)},100);return}"
-    "n+=1;window.__padtWrite(label,said+'|'+n)};"
+    "if(label.htmlFor!==box){box=label.htmlFor;recent=[]}"
+    f"n+=1;recent.push(said+'|'+n);if(recent.length>{RECENT})recent.shift();"
+    "window.__padtWrite(label,recent.join('|'))};"
     "window.__padtSized=function(tries){if(!find()&&(tries||0)<50){"
     "setTimeout(function(){window.__padtSized((tries||0)+1)},100);return}"
     "tell('window|'+window.innerWidth+'x'+window.innerHeight)};"
@@ -82,14 +90,29 @@ class Click:
     name: str  # the tab's label, the variable's path, the tree entry, a size, a layout, ...
 
 
+def read_reports(text: str) -> list[tuple[int, Click]] | None:
+    """The numbered reports a value holds, in the page's order; None for anything else."""
+    parts = text.split("|")  # "|" separates: tab names, paths and tree entries have none
+    if not text or len(parts) % 3 or len(parts) > 3 * RECENT:
+        return None
+    reports = []
+    for kind, name, number in zip(parts[::3], parts[1::3], parts[2::3], strict=True):
+        if kind not in KINDS or not name or len(name) > MAX_NAME or not _number(number):
+            return None
+        reports.append((int(number), Click(kind, name)))
+    return reports
+
+
+def _number(text: str) -> bool:
+    """A report's number: ASCII digits of a JavaScript integer (int() takes "²" as no
+    number but isdigit() as a digit)."""
+    return 0 < len(text) <= 15 and text.isascii() and text.isdigit()
+
+
 def read(text: str) -> Click | None:
-    """A click as the page reported it; None for anything else."""
-    parts = text.split("|")  # an input's value cannot hold a line break
-    if len(parts) != 3 or parts[0] not in KINDS or not parts[2].isdigit():
-        return None
-    if not parts[1] or len(parts[1]) > MAX_NAME:
-        return None
-    return Click(parts[0], parts[1])
+    """One report as the page said it, "kind|name|n"; None for anything else."""
+    reports = read_reports(text)
+    return reports[0][1] if reports is not None and len(reports) == 1 else None
 
 
 @dataclass
@@ -103,13 +126,18 @@ class PageClicks:
 
 
 def build(gui: viser.GuiApi, on_click: Callable[[Click], None]) -> PageClicks:
-    """The hidden input and its script; `on_click` at each click the page reports."""
+    """The hidden input and its script; `on_click` at each click the page reports, once
+    and in order."""
     box = gui.add_text(LABEL, "")
+    lock = threading.Lock()  # viser's callbacks run on threads of their own
+    handled = [0]  # the newest number handled
 
     def heard(_: object) -> None:
-        click = read(box.value)
-        if click is not None:
-            on_click(click)
+        with lock:
+            for number, click in read_reports(box.value) or ():
+                if number > handled[0]:
+                    handled[0] = number
+                    on_click(click)
 
     box.on_update(heard)
     script = gui.add_html(f'<img alt="" src="data:," onerror="{html.escape(_SCRIPT)}">')
