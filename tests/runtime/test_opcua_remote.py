@@ -269,6 +269,8 @@ def test_subscribed_values_arrive_and_outputs_are_written(
     assert (plant.read("speed"), plant.read("pump"), plant.read("setpoint")) == (120, True, 1.5)
     run.outputs = {"speed": -7, "pump": True, "setpoint": 1.5}  # one changed: it goes again
     until(lambda: plant.read("speed") == -7, "a changed output written")
+    # the server applies a write before it answers; the client notes it on the answer
+    until(lambda: remote.sent["speed"] == -7, "the write's answer taken")
     assert remote.sent["speed"] == -7
     assert remote.requests > 0 and remote.round_trip_ms > 0 and remote.failures == 0
 
