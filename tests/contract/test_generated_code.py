@@ -64,6 +64,7 @@ from runtime.contract.code.typed_form import (
 )
 from runtime.contract.code.units import Alias, Class, Function, Inherited, Param, Slot, Unit
 from runtime.contract.generated_code import GeneratedCodeError, check_artifact_names, compile_unit
+from runtime.contract.layout import Layouts, class_layouts, image_layout
 from runtime.contract.wire import depth
 from tests.compiler.test_corpus_iec import FOLDERS, KNOWN, name_of, st_files
 from tests.compiler.test_differential import programs
@@ -71,6 +72,7 @@ from tests.compiler.test_generated_names import KITCHEN_SINK
 from tests.compiler.test_oop import DRIVES, MACHINES, MOTOR
 from tests.compiler.test_sfc import QUALIFIERS
 from tests.conftest import REPO
+from tests.support.c_structs import compile_errors, struct_source
 from tests.support.corpus_paths import corpus_dir
 from tests.support.crafted_units import escape, first_in_body
 
@@ -562,12 +564,18 @@ def _fb_first(artifact: Artifact) -> Artifact:
 # ---- every artifact the compiler makes passes
 
 
-def _check_all(artifact: Artifact) -> None:
+def _check_all(artifact: Artifact, laid_out: list[Layouts] | None = None) -> None:
     """Every unit of the compiler's `artifact` passes: its form as the compiler built it
-    (the compiler's own code is not checked as it runs, `PouCode.knowing`)."""
+    (the compiler's own code is not checked as it runs, `PouCode.knowing`); and every
+    class gets a layout in native memory, the configuration an image (into `laid_out`,
+    for a C compiler to check)."""
     check_artifact_names(artifact)
     for unit in artifact.units():
         check_unit(unit.unit, unit.kind, unit.class_name, f"the form of {unit.kind} {unit.name}")
+    layouts = class_layouts(artifact.units())
+    image_layout(artifact, layouts)
+    if laid_out is not None:
+        laid_out.append(layouts)
 
 
 def test_every_unit_of_the_demo_the_language_tests_and_the_feature_samples_passes() -> None:
@@ -575,6 +583,7 @@ def test_every_unit_of_the_demo_the_language_tests_and_the_feature_samples_passe
         p for p in REPO.rglob("*.st") if ".venv" not in p.parts and "node_modules" not in p.parts
     )
     assert len(files) >= 10
+    laid_out: list[Layouts] = []
     # a project's files (a folder with its padt.toml) compile together: one may declare the
     # globals another names (the SFC template does)
     projects = sorted({p.parent for p in files if (p.parent / "padt.toml").is_file()})
@@ -589,10 +598,10 @@ def test_every_unit_of_the_demo_the_language_tests_and_the_feature_samples_passe
             for p in files
             if p.parent == folder or tests.get(p) == folder
         ]
-        _check_all(_compiled(together))
+        _check_all(_compiled(together), laid_out)
     for path in files:
         if path.parent not in projects and path not in tests:
-            _check_all(_artifact(path.read_text()))
+            _check_all(_artifact(path.read_text()), laid_out)
     samples = [
         KITCHEN_SINK.format(names=""),
         DRIVES + "PROGRAM Main\nVAR s : Servo; END_VAR\ns(speed := 1); s.Run();\nEND_PROGRAM\n",
@@ -604,7 +613,8 @@ def test_every_unit_of_the_demo_the_language_tests_and_the_feature_samples_passe
         QUALIFIERS,
     ]
     for sample in samples:
-        _check_all(_artifact(sample))
+        _check_all(_artifact(sample), laid_out)
+    assert compile_errors(struct_source(laid_out)) == ""
 
 
 def test_every_unit_of_the_corpus_passes() -> None:
@@ -612,15 +622,17 @@ def test_every_unit_of_the_corpus_passes() -> None:
     CI)."""
     corpus_dir("oscat")
     checked = 0
+    laid_out: list[Layouts] = []
     for folder, together in sorted(FOLDERS.items()):
         files = [p for p in st_files(corpus_dir(folder)) if name_of(p) not in KNOWN]
         sets = [files] if together else [[p] for p in files]
         for paths in sets:
             result = compile_sources([read_source(p, name_of(p)) for p in paths], programs=[])
             assert result.artifact is not None, paths
-            _check_all(result.artifact)
+            _check_all(result.artifact, laid_out)
             checked += len(result.artifact.pous)
     assert checked > 500
+    assert compile_errors(struct_source(laid_out)) == ""
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
