@@ -49,6 +49,10 @@ from runtime.contract.values import ArrayShape, array_shape, base_type, int_rang
 # struct's format characters (native sizes, as C's types on x86-64 and AArch64)
 SCALAR_SIZES = {"?": 1, "b": 1, "B": 1, "h": 2, "H": 2, "i": 4, "I": 4, "q": 8, "Q": 8}
 SCALAR_SIZES |= {"f": 4, "d": 8}
+# not struct's: an int64_t that is None at INT64_MIN, a time of the runtime's own classes
+# that has not started (an SFC step's, an action control block's)
+NULLABLE_TIME = "o"
+SCALAR_SIZES[NULLABLE_TIME] = 8
 _INTEGER_CODES = {(8, True): "b", (16, True): "h", (32, True): "i", (64, True): "q"}
 _INTEGER_CODES |= {(8, False): "B", (16, False): "H", (32, False): "I", (64, False): "Q"}
 
@@ -59,7 +63,6 @@ INTERFACE_TYPE = "INTERFACE "
 SFC_STEP = "_SfcStep"  # the runtime's class of a step (runtime/code/intrinsics.py)
 ACTION_CONTROL = "_ActionControl"  # the runtime's action control block of an SFC action
 HEADER = "_SYS"  # the image's header
-NO_SINCE = -(1 << 63)  # a runtime class's `since` that is None
 
 
 class LayoutRefused(ValueError):
@@ -174,13 +177,13 @@ def _scalar_code(type_name: str) -> str:
 
 
 _RUNTIME_CLASSES: dict[str, tuple[tuple[str, Shape], ...]] = {
-    # `since`, None until the step's first active cycle, is NO_SINCE then
-    SFC_STEP: (("X", Scalar("?")), ("T", Scalar("q")), ("since", Scalar("q"))),
+    # `since` is None until the step's first active cycle
+    SFC_STEP: (("X", Scalar("?")), ("T", Scalar("q")), ("since", Scalar(NULLABLE_TIME))),
     ACTION_CONTROL: (
         *((flag, Scalar("?")) for flag in ("A", "Q", "held", "stored", "sd_set", "ds_stored")),
         *((flag, Scalar("?")) for flag in ("sl_set", "p_prev", "p1_prev", "p0_prev")),
-        *((since, Scalar("q")) for since in ("l_since", "d_since", "sd_since", "ds_since")),
-        ("sl_since", Scalar("q")),
+        *((t, Scalar(NULLABLE_TIME)) for t in ("l_since", "d_since", "sd_since", "ds_since")),
+        ("sl_since", Scalar(NULLABLE_TIME)),
     ),
     HEADER: (
         ("now_ns", Scalar("q")),

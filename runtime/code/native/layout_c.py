@@ -25,7 +25,7 @@ from runtime.contract.layout import (
 C_TYPES = {
     "?": "uint8_t", "b": "int8_t", "B": "uint8_t", "h": "int16_t", "H": "uint16_t",
     "i": "int32_t", "I": "uint32_t", "q": "int64_t", "Q": "uint64_t", "f": "float",
-    "d": "double",
+    "d": "double", "o": "int64_t",
 }  # fmt: skip
 
 PRELUDE = """\

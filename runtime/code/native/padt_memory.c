@@ -1,0 +1,501 @@
+/* Views of a configuration's memory image (docs/native-code.md, "Variables in native
+ * memory"): Python objects that read and write the image's bytes where generated Python
+ * code, the debugger and the services read and write the attributes of slot objects.
+ *
+ * A view is (image, offset): the image a bytearray that never changes its size, the
+ * offset where the instance's struct begins. Its class is made per generated class
+ * (image_views.py): a subclass of View whose attributes are Field descriptors, one per
+ * member, each knowing the member's type code, offset and size. An array reads as an
+ * Elements view (length, index, assignment; deepcopy gives a list). Every store checks the
+ * value as the checked writers do (its type, its range, a string's length and characters),
+ * so a view never holds what the slot object would refuse to be given.
+ *
+ * Included after `#define PADT_INIT PyInit_<module name>` (the module is named by the
+ * hash of its source, as every module of the native tier).
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <stdint.h>
+#include <string.h>
+
+typedef struct {
+    PyObject_HEAD
+    PyObject *image; /* a bytearray */
+    Py_ssize_t offset;
+} ViewObject;
+
+/* What a Field reads and writes. */
+enum {
+    K_BOOL = '?', K_I8 = 'b', K_U8 = 'B', K_I16 = 'h', K_U16 = 'H', K_I32 = 'i',
+    K_U32 = 'I', K_I64 = 'q', K_U64 = 'Q', K_F32 = 'f', K_F64 = 'd',
+    K_SINCE = 'o',  /* an int64_t that is None at INT64_MIN (the runtime's step times) */
+    K_CHARS = 's', K_WCHARS = 'w', /* a length and `length` + 1 characters */
+    K_NESTED = 'n', /* a struct: a view of `view_type` */
+    K_ARRAY = 'a',  /* `count` elements of `element`, `stride` bytes apart */
+};
+
+typedef struct FieldObject {
+    PyObject_HEAD
+    int code;
+    Py_ssize_t offset; /* in the struct that holds it */
+    Py_ssize_t size;   /* bytes */
+    Py_ssize_t length; /* K_CHARS, K_WCHARS: the most characters */
+    PyObject *view_type; /* K_NESTED */
+    struct FieldObject *element; /* K_ARRAY: the element at offset 0 */
+    Py_ssize_t count, stride;    /* K_ARRAY */
+} FieldObject;
+
+typedef struct {
+    PyObject_HEAD
+    PyObject *image;
+    Py_ssize_t offset;
+    FieldObject *element;
+    Py_ssize_t count, stride;
+} ElementsObject;
+
+static PyTypeObject ViewType;
+static PyTypeObject FieldType;
+static PyTypeObject ElementsType;
+
+static char *at(PyObject *image, Py_ssize_t offset) {
+    return PyByteArray_AS_STRING(image) + offset;
+}
+
+static PyObject *view_at(PyObject *view_type, PyObject *image, Py_ssize_t offset) {
+    PyTypeObject *type = (PyTypeObject *)view_type;
+    ViewObject *view = (ViewObject *)type->tp_alloc(type, 0);
+    if (view == NULL) return NULL;
+    Py_INCREF(image);
+    view->image = image;
+    view->offset = offset;
+    return (PyObject *)view;
+}
+
+static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) {
+    char *p = at(image, offset);
+    switch (f->code) {
+    case K_BOOL: return PyBool_FromLong(*(uint8_t *)p != 0);
+    case K_I8: return PyLong_FromLong(*(int8_t *)p);
+    case K_U8: return PyLong_FromLong(*(uint8_t *)p);
+    case K_I16: { int16_t v; memcpy(&v, p, 2); return PyLong_FromLong(v); }
+    case K_U16: { uint16_t v; memcpy(&v, p, 2); return PyLong_FromLong(v); }
+    case K_I32: { int32_t v; memcpy(&v, p, 4); return PyLong_FromLong(v); }
+    case K_U32: { uint32_t v; memcpy(&v, p, 4); return PyLong_FromUnsignedLong(v); }
+    case K_I64: { int64_t v; memcpy(&v, p, 8); return PyLong_FromLongLong(v); }
+    case K_U64: { uint64_t v; memcpy(&v, p, 8); return PyLong_FromUnsignedLongLong(v); }
+    case K_F32: { float v; memcpy(&v, p, 4); return PyFloat_FromDouble(v); }
+    case K_F64: { double v; memcpy(&v, p, 8); return PyFloat_FromDouble(v); }
+    case K_SINCE: {
+        int64_t v; memcpy(&v, p, 8);
+        if (v == INT64_MIN) Py_RETURN_NONE;
+        return PyLong_FromLongLong(v);
+    }
+    case K_CHARS: case K_WCHARS: {
+        uint16_t n; memcpy(&n, p, 2);
+        if (n > f->length) n = (uint16_t)f->length; /* a length no writer stores */
+        /* the characters follow the length at an even offset: aligned for Py_UCS2 */
+        int kind = f->code == K_CHARS ? PyUnicode_1BYTE_KIND : PyUnicode_2BYTE_KIND;
+        return PyUnicode_FromKindAndData(kind, p + 2, n);
+    }
+    case K_NESTED: return view_at(f->view_type, image, offset);
+    case K_ARRAY: {
+        ElementsObject *e = PyObject_New(ElementsObject, &ElementsType);
+        if (e == NULL) return NULL;
+        Py_INCREF(image);
+        Py_INCREF(f->element);
+        e->image = image;
+        e->offset = offset;
+        e->element = f->element;
+        e->count = f->count;
+        e->stride = f->stride;
+        return (PyObject *)e;
+    }
+    }
+    PyErr_SetString(PyExc_SystemError, "padt_memory: a field of no known kind");
+    return NULL;
+}
+
+static int refuse(const char *what, PyObject *value) {
+    PyErr_Format(PyExc_TypeError, "a variable of %s cannot hold %R", what, value);
+    return -1;
+}
+
+/* an exact int within [low, high] (bool is no integer here: the slot holds an int) */
+static int integer(PyObject *value, long long low, long long high, long long *out) {
+    if (!PyLong_CheckExact(value)) return refuse("an integer type", value);
+    int overflow = 0;
+    long long v = PyLong_AsLongLongAndOverflow(value, &overflow);
+    if (v == -1 && PyErr_Occurred()) return -1;
+    if (overflow || v < low || v > high) {
+        PyErr_Format(PyExc_OverflowError, "%R is outside the range of the variable", value);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value) {
+    char *p = at(image, offset);
+    long long v;
+    switch (f->code) {
+    case K_BOOL:
+        if (!PyBool_Check(value)) return refuse("BOOL", value);
+        *(uint8_t *)p = value == Py_True;
+        return 0;
+    case K_I8:
+        if (integer(value, INT8_MIN, INT8_MAX, &v)) return -1;
+        *(int8_t *)p = (int8_t)v; return 0;
+    case K_U8:
+        if (integer(value, 0, UINT8_MAX, &v)) return -1;
+        *(uint8_t *)p = (uint8_t)v; return 0;
+    case K_I16: { if (integer(value, INT16_MIN, INT16_MAX, &v)) return -1;
+        int16_t w = (int16_t)v; memcpy(p, &w, 2); return 0; }
+    case K_U16: { if (integer(value, 0, UINT16_MAX, &v)) return -1;
+        uint16_t w = (uint16_t)v; memcpy(p, &w, 2); return 0; }
+    case K_I32: { if (integer(value, INT32_MIN, INT32_MAX, &v)) return -1;
+        int32_t w = (int32_t)v; memcpy(p, &w, 4); return 0; }
+    case K_U32: { if (integer(value, 0, UINT32_MAX, &v)) return -1;
+        uint32_t w = (uint32_t)v; memcpy(p, &w, 4); return 0; }
+    case K_I64: { if (integer(value, INT64_MIN, INT64_MAX, &v)) return -1;
+        int64_t w = (int64_t)v; memcpy(p, &w, 8); return 0; }
+    case K_SINCE: {
+        int64_t w = INT64_MIN;
+        if (value != Py_None) {
+            if (integer(value, INT64_MIN + 1, INT64_MAX, &v)) return -1;
+            w = (int64_t)v;
+        }
+        memcpy(p, &w, 8);
+        return 0;
+    }
+    case K_U64: {
+        if (!PyLong_CheckExact(value)) return refuse("an integer type", value);
+        unsigned long long u = PyLong_AsUnsignedLongLong(value);
+        if (u == (unsigned long long)-1 && PyErr_Occurred()) {
+            PyErr_Format(PyExc_OverflowError, "%R is outside the range of the variable", value);
+            return -1;
+        }
+        uint64_t w = (uint64_t)u; memcpy(p, &w, 8); return 0;
+    }
+    case K_F32: case K_F64: {
+        if (!PyFloat_CheckExact(value)) return refuse("REAL or LREAL", value);
+        double d = PyFloat_AS_DOUBLE(value);
+        if (f->code == K_F64) { memcpy(p, &d, 8); return 0; }
+        float s = (float)d;
+        if ((double)s != d && !(d != d)) /* the slot holds REALs rounded to 32 bits */
+            return refuse("REAL (a value rounded to 32 bits)", value);
+        memcpy(p, &s, 4);
+        return 0;
+    }
+    case K_CHARS: case K_WCHARS: {
+        if (!PyUnicode_Check(value)) return refuse("STRING or WSTRING", value);
+        Py_ssize_t n = PyUnicode_GET_LENGTH(value);
+        if (n > f->length) {
+            PyErr_Format(PyExc_ValueError, "%R is longer than the variable's %zd characters",
+                         value, f->length);
+            return -1;
+        }
+        int kind = PyUnicode_KIND(value);
+        const void *data = PyUnicode_DATA(value);
+        Py_UCS4 most = f->code == K_CHARS ? 0xFF : 0xFFFF;
+        for (Py_ssize_t i = 0; i < n; i++) {
+            Py_UCS4 c = PyUnicode_READ(kind, data, i);
+            if (c > most) {
+                PyErr_Format(PyExc_ValueError, "%R has a character beyond %s", value,
+                             f->code == K_CHARS ? "one byte" : "two bytes");
+                return -1;
+            }
+            if (f->code == K_CHARS) ((uint8_t *)(p + 2))[i] = (uint8_t)c;
+            else { uint16_t u = (uint16_t)c; memcpy(p + 2 + 2 * i, &u, 2); }
+        }
+        uint16_t len = (uint16_t)n;
+        memcpy(p, &len, 2);
+        return 0;
+    }
+    case K_NESTED:
+        /* a whole structure or instance: from a view of the same class (a copy) */
+        if (Py_TYPE(value) != (PyTypeObject *)f->view_type)
+            return refuse(((PyTypeObject *)f->view_type)->tp_name, value);
+        memmove(p, at(((ViewObject *)value)->image, ((ViewObject *)value)->offset), f->size);
+        return 0;
+    case K_ARRAY: {
+        /* a whole array: from a sequence of as many elements (a list, another view),
+           written into a copy first, so an element refused leaves the array as it was */
+        PyObject *items = PySequence_Fast(value, "an array takes a sequence");
+        if (items == NULL) return -1;
+        if (PySequence_Fast_GET_SIZE(items) != f->count) {
+            PyErr_Format(PyExc_ValueError, "an array of %zd elements cannot take %zd",
+                         f->count, PySequence_Fast_GET_SIZE(items));
+            Py_DECREF(items);
+            return -1;
+        }
+        PyObject *scratch = PyByteArray_FromStringAndSize(p, f->size);
+        if (scratch == NULL) {
+            Py_DECREF(items);
+            return -1;
+        }
+        int failed = 0;
+        for (Py_ssize_t i = 0; i < f->count && !failed; i++) {
+            PyObject *item = PySequence_Fast_GET_ITEM(items, i);
+            failed = write_field(f->element, scratch, i * f->stride, item);
+        }
+        if (!failed) memcpy(at(image, offset), PyByteArray_AS_STRING(scratch), f->size);
+        Py_DECREF(scratch);
+        Py_DECREF(items);
+        return failed ? -1 : 0;
+    }
+    }
+    PyErr_SetString(PyExc_SystemError, "padt_memory: a field of no known kind");
+    return -1;
+}
+
+/* ---- Field: the descriptor of one member ---- */
+
+static PyObject *field_get(PyObject *self, PyObject *obj, PyObject *type) {
+    if (obj == NULL || obj == Py_None) {
+        Py_INCREF(self);
+        return self;
+    }
+    if (!PyObject_TypeCheck(obj, &ViewType)) return PyErr_Format(PyExc_TypeError, "not a view");
+    ViewObject *view = (ViewObject *)obj;
+    FieldObject *f = (FieldObject *)self;
+    return read_field(f, view->image, view->offset + f->offset);
+}
+
+static int field_set(PyObject *self, PyObject *obj, PyObject *value) {
+    if (value == NULL) {
+        PyErr_SetString(PyExc_AttributeError, "a variable of the image cannot be deleted");
+        return -1;
+    }
+    if (!PyObject_TypeCheck(obj, &ViewType)) {
+        PyErr_SetString(PyExc_TypeError, "not a view");
+        return -1;
+    }
+    ViewObject *view = (ViewObject *)obj;
+    FieldObject *f = (FieldObject *)self;
+    return write_field(f, view->image, view->offset + f->offset, value);
+}
+
+static PyObject *field_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
+    static char *names[] = {"code", "offset", "size", "length", "view_type", "element",
+                            "count", "stride", NULL};
+    int code;
+    Py_ssize_t offset, size, length = 0, count = 0, stride = 0;
+    PyObject *view_type = Py_None, *element = Py_None;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "Cnn|nOOnn", names, &code, &offset, &size,
+                                     &length, &view_type, &element, &count, &stride))
+        return NULL;
+    if (code == K_NESTED && !(PyType_Check(view_type) &&
+                              PyType_IsSubtype((PyTypeObject *)view_type, &ViewType)))
+        return PyErr_Format(PyExc_TypeError, "a nested field needs a view type");
+    if (code == K_ARRAY && !PyObject_TypeCheck(element, &FieldType))
+        return PyErr_Format(PyExc_TypeError, "an array field needs an element field");
+    if (offset < 0 || size < 0 || length < 0 || length > UINT16_MAX || count < 0 || stride < 0)
+        return PyErr_Format(PyExc_ValueError, "a field's sizes are no sizes");
+    FieldObject *f = (FieldObject *)type->tp_alloc(type, 0);
+    if (f == NULL) return NULL;
+    f->code = code;
+    f->offset = offset;
+    f->size = size;
+    f->length = length;
+    f->count = count;
+    f->stride = stride;
+    f->view_type = code == K_NESTED ? Py_NewRef(view_type) : NULL;
+    f->element = code == K_ARRAY ? (FieldObject *)Py_NewRef(element) : NULL;
+    return (PyObject *)f;
+}
+
+static void field_dealloc(PyObject *self) {
+    FieldObject *f = (FieldObject *)self;
+    Py_XDECREF(f->view_type);
+    Py_XDECREF(f->element);
+    Py_TYPE(self)->tp_free(self);
+}
+
+static PyTypeObject FieldType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "padt_memory.Field",
+    .tp_basicsize = sizeof(FieldObject),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = "One member of a view's class: its type code, offset and size.",
+    .tp_new = field_new,
+    .tp_dealloc = field_dealloc,
+    .tp_descr_get = field_get,
+    .tp_descr_set = field_set,
+};
+
+/* ---- View: an instance in the image ---- */
+
+static PyObject *view_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
+    PyObject *image;
+    Py_ssize_t offset;
+    if (!PyArg_ParseTuple(args, "O!n", &PyByteArray_Type, &image, &offset)) return NULL;
+    PyObject *size = PyObject_GetAttrString((PyObject *)type, "__size__");
+    if (size == NULL) return NULL;
+    Py_ssize_t bytes = PyLong_AsSsize_t(size);
+    Py_DECREF(size);
+    if (bytes == -1 && PyErr_Occurred()) return NULL;
+    if (offset < 0 || offset + bytes > PyByteArray_GET_SIZE(image))
+        return PyErr_Format(PyExc_ValueError, "a view beyond its image");
+    return view_at((PyObject *)type, image, offset);
+}
+
+static void view_dealloc(PyObject *self) {
+    Py_XDECREF(((ViewObject *)self)->image);
+    Py_TYPE(self)->tp_free(self);
+}
+
+static PyObject *view_deepcopy(PyObject *self, PyObject *memo) {
+    /* a copy of the instance's bytes, detached from the image (what `_copy` makes of a
+       structure to assign it whole) */
+    ViewObject *view = (ViewObject *)self;
+    PyObject *size = PyObject_GetAttrString((PyObject *)Py_TYPE(self), "__size__");
+    if (size == NULL) return NULL;
+    Py_ssize_t bytes = PyLong_AsSsize_t(size);
+    Py_DECREF(size);
+    if (bytes == -1 && PyErr_Occurred()) return NULL;
+    PyObject *copy = PyByteArray_FromStringAndSize(at(view->image, view->offset), bytes);
+    if (copy == NULL) return NULL;
+    PyObject *detached = view_at((PyObject *)Py_TYPE(self), copy, 0);
+    Py_DECREF(copy);
+    return detached;
+}
+
+static PyObject *view_where(PyObject *self, PyObject *unused) {
+    ViewObject *view = (ViewObject *)self;
+    return Py_BuildValue("(On)", view->image, view->offset);
+}
+
+static PyMethodDef view_methods[] = {
+    {"__deepcopy__", view_deepcopy, METH_O, "A copy detached from the image."},
+    {"__padt_where__", view_where, METH_NOARGS, "(image, offset)"},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyTypeObject ViewType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "padt_memory.View",
+    .tp_basicsize = sizeof(ViewObject),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_BASETYPE,
+    .tp_doc = "An instance in a memory image: (image, offset).",
+    .tp_new = view_new,
+    .tp_dealloc = view_dealloc,
+    .tp_methods = view_methods,
+};
+
+/* ---- Elements: an array in the image ---- */
+
+static Py_ssize_t elements_length(PyObject *self) { return ((ElementsObject *)self)->count; }
+
+static int elements_index(ElementsObject *e, Py_ssize_t i) {
+    if (i < 0 || i >= e->count) {
+        PyErr_SetString(PyExc_IndexError, "list index out of range");
+        return -1;
+    }
+    return 0;
+}
+
+static PyObject *elements_item(PyObject *self, Py_ssize_t i) {
+    ElementsObject *e = (ElementsObject *)self;
+    if (elements_index(e, i)) return NULL;
+    return read_field(e->element, e->image, e->offset + i * e->stride);
+}
+
+static int elements_assign(PyObject *self, Py_ssize_t i, PyObject *value) {
+    ElementsObject *e = (ElementsObject *)self;
+    if (value == NULL) {
+        PyErr_SetString(PyExc_TypeError, "an element of an array cannot be deleted");
+        return -1;
+    }
+    if (elements_index(e, i)) return -1;
+    return write_field(e->element, e->image, e->offset + i * e->stride, value);
+}
+
+static PyObject *elements_deepcopy(PyObject *self, PyObject *memo) {
+    /* a list, as the Python tier holds an array: elements that are arrays or instances
+       copied too */
+    ElementsObject *e = (ElementsObject *)self;
+    PyObject *list = PyList_New(e->count);
+    if (list == NULL) return NULL;
+    for (Py_ssize_t i = 0; i < e->count; i++) {
+        PyObject *item = read_field(e->element, e->image, e->offset + i * e->stride);
+        if (item != NULL && (e->element->code == K_ARRAY || e->element->code == K_NESTED)) {
+            PyObject *copied = PyObject_CallMethod(item, "__deepcopy__", "O", memo);
+            Py_DECREF(item);
+            item = copied;
+        }
+        if (item == NULL) {
+            Py_DECREF(list);
+            return NULL;
+        }
+        PyList_SET_ITEM(list, i, item);
+    }
+    return list;
+}
+
+static void elements_dealloc(PyObject *self) {
+    ElementsObject *e = (ElementsObject *)self;
+    Py_XDECREF(e->image);
+    Py_XDECREF(e->element);
+    PyObject_Free(self);
+}
+
+static PyObject *elements_richcompare(PyObject *self, PyObject *other, int op) {
+    /* equal to a list or another view of the same values, as lists compare */
+    if (op != Py_EQ && op != Py_NE) Py_RETURN_NOTIMPLEMENTED;
+    PyObject *mine = elements_deepcopy(self, Py_None);
+    if (mine == NULL) return NULL;
+    PyObject *theirs = PyObject_TypeCheck(other, &ElementsType)
+                           ? elements_deepcopy(other, Py_None)
+                           : Py_NewRef(other);
+    if (theirs == NULL) {
+        Py_DECREF(mine);
+        return NULL;
+    }
+    PyObject *result = PyObject_RichCompare(mine, theirs, op);
+    Py_DECREF(mine);
+    Py_DECREF(theirs);
+    return result;
+}
+
+static PySequenceMethods elements_sequence = {
+    .sq_length = elements_length,
+    .sq_item = elements_item,
+    .sq_ass_item = elements_assign,
+};
+
+static PyMethodDef elements_methods[] = {
+    {"__deepcopy__", elements_deepcopy, METH_O, "The values as a list."},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyTypeObject ElementsType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "padt_memory.Elements",
+    .tp_basicsize = sizeof(ElementsObject),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = "An array in a memory image.",
+    .tp_dealloc = elements_dealloc,
+    .tp_as_sequence = &elements_sequence,
+    .tp_methods = elements_methods,
+    .tp_richcompare = elements_richcompare,
+    .tp_hash = PyObject_HashNotImplemented,
+};
+
+static struct PyModuleDef module = {
+    PyModuleDef_HEAD_INIT, .m_name = "padt_memory", .m_size = -1,
+};
+
+PyMODINIT_FUNC PADT_INIT(void) {
+    if (PyType_Ready(&ViewType) < 0 || PyType_Ready(&FieldType) < 0 ||
+        PyType_Ready(&ElementsType) < 0)
+        return NULL;
+    PyObject *m = PyModule_Create(&module);
+    if (m == NULL) return NULL;
+    if (PyModule_AddObjectRef(m, "View", (PyObject *)&ViewType) < 0 ||
+        PyModule_AddObjectRef(m, "Field", (PyObject *)&FieldType) < 0 ||
+        PyModule_AddObjectRef(m, "Elements", (PyObject *)&ElementsType) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
+}
