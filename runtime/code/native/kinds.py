@@ -7,6 +7,7 @@ of its type) and from the arithmetic between them, so the translator can prove t
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from runtime.contract.artifact import PouCode, VarInfo
@@ -300,6 +301,8 @@ def kind_of_type(type_name: str, classes: dict[str, str]) -> Kind | None:
         return Int(*limits) if Int(*limits).fits128 else None
     if type_name.upper() in classes:
         return Instance(classes[type_name.upper()])
+    if OPEN_ARRAY.fullmatch(type_name):  # ARRAY[*] OF T: its bounds come with the call
+        return None
     shape = array_shape(type_name)
     if shape is not None:
         length = 1
@@ -320,6 +323,8 @@ class FunctionInfo:
     result: Kind | None
     outputs: Outputs | None = None
 
+
+OPEN_ARRAY = re.compile(r"ARRAY\[\s*\*[\s,*]*\] OF .+", re.IGNORECASE)
 
 # how the artifact names an interface variable's type (`INTERFACE IText`)
 INTERFACE_PREFIX = "INTERFACE "

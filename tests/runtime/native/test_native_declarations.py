@@ -55,3 +55,33 @@ END_PROGRAM
     pair = run_alike(text, native_tier, 3)
     assert "F" in pair.report.bodies
     assert values(pair)["Main.x"] == 3 + 6
+
+
+def test_a_function_with_an_open_array_leaves_only_its_caller_to_python(
+    native_tier: NativeTier,
+) -> None:
+    """A FUNCTION whose in-out is an open array (`ARRAY[*] OF INT`) once made the whole
+    artifact's translation fail, every body staying Python; now only the body that passes
+    the array is left to Python, with its reason."""
+    text = """
+FUNCTION First : INT
+VAR_IN_OUT a : ARRAY[*] OF INT; END_VAR
+First := a[LOWER_BOUND(a, 1)];
+a[LOWER_BOUND(a, 1)] := First + 1;
+END_FUNCTION
+FUNCTION_BLOCK Tick
+VAR_OUTPUT n : INT; END_VAR
+n := n + 1;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR q : ARRAY[1..3] OF INT; r : INT; t : Tick; END_VAR
+r := First(q) + q[2];
+q[2] := q[2] + 10;
+t();
+END_PROGRAM
+"""
+    pair = run_alike(text, native_tier, 3)
+    assert "Tick" in pair.report.bodies
+    assert [pou for pou, _ in pair.report.left] == ["Main"]
+    found = values(pair)
+    assert (found["Main.q"], found["Main.r"], found["Main.t.n"]) == ([3, 30, 0], 2 + 20, 3)
