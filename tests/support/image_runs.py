@@ -4,7 +4,11 @@ will see once the image is live, compared with what it sees today."""
 
 from __future__ import annotations
 
+import importlib.machinery
+import importlib.util
+import math
 import struct
+from pathlib import Path
 from types import ModuleType
 from typing import Any
 
@@ -13,7 +17,11 @@ from backend.compiler.source import SourceFile
 from runtime.code.code_image import CodeImage
 from runtime.code.instances import Instances, instances_of
 from runtime.code.intrinsics import SystemView, _ActionControl, _SfcStep
+from runtime.code.native.build import build
+from runtime.code.native.image_body import translate_image_unit
 from runtime.code.native.image_views import copy_into, view_classes
+from runtime.code.native.tier import NativeTier, _breathe
+from runtime.code.native.worker import ArtifactTranslation
 from runtime.contract.artifact import Artifact
 from runtime.contract.layout import (
     ACTION_CONTROL,
@@ -35,9 +43,10 @@ def compiled(text: str) -> Artifact:
 
 def values(instance: Any) -> Any:
     """An instance's values as plain data: a dict per instance, a list per array, a REAL's
-    bytes (NaN equal to NaN, bit for bit)."""
+    bytes (bit for bit; every NaN one value, as tests/support/native_runs.py's `same` has
+    it: C may give a NaN the other sign, `x / -y` as `-(x / y)`)."""
     if isinstance(instance, float):
-        return struct.pack("<d", instance)
+        return "NaN" if math.isnan(instance) else struct.pack("<d", instance)
     if instance is None or isinstance(instance, bool | int | str):
         return instance
     if isinstance(instance, list) or type(instance).__name__ == "Elements":
@@ -60,6 +69,7 @@ class ImageRun:
             HEADER: SystemView,
         }
         views = view_classes(memory, layouts, classes)
+        self.memory, self.layouts, self.views = memory, layouts, views
         placement = image_layout(artifact, layouts)
         self.image = bytearray(placement.size)
         placed = {p.name: views[p.cls](self.image, p.offset) for p in placement.placements}
@@ -90,6 +100,45 @@ def _cycle(instances: Instances) -> str:
         instances.image.use(program.view, None)
         try:
             program.instance.__call__()
-        except Exception as fault:  # a program fault, to be the same on both
-            return f"{type(fault).__name__}: {fault}"
+        except Exception as fault:  # a program fault, to be the same on both, at one place
+            return f"{type(fault).__name__}: {fault} at {instances.image.locate(fault)}"
     return ""
+
+
+def load(path: Path, name: str) -> ModuleType:
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, path, loader=loader)
+    assert spec is not None
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+def with_c_bodies(run: ImageRun, tier: NativeTier) -> list[tuple[str, str]]:
+    """The bodies of `run`'s image translated in image mode, built and put in place on the
+    view classes; the bodies left to Python, with the reasons."""
+    assert tier.toolchain is not None
+    artifact = run.viewed.image.artifact
+    translation = ArtifactTranslation.of(artifact)
+    registry: dict[str, Any] = {}
+    namespace = run.viewed.image._namespace  # what the tier binds modules to
+    left: list[tuple[str, str]] = []
+    for unit in translation.units:
+        form = translation.forms[unit.class_name]
+        translated = translate_image_unit(
+            unit,
+            form,
+            translation.classes,
+            translation.globals_class,
+            run.layouts,
+            translation.functions,
+        )
+        left.extend(translated.left)
+        if not translated.source:
+            continue
+        path = build(translated.module, translated.source, tier.cache, tier.toolchain)
+        module = load(path, translated.module)
+        bodies = module.bind(namespace, _breathe, run.views, registry, run.memory.View)
+        for (cls, name), body in bodies.items():
+            setattr(run.views[cls], name, body)
+    return left

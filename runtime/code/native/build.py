@@ -23,6 +23,7 @@ from pathlib import Path
 from stat import S_ISREG
 
 HEADER = Path(__file__).with_name("padt_native.h")
+IMAGE_HEADER = HEADER.with_name("padt_image.h")  # which HEADER includes
 SUFFIX = ".so"
 # -O1: a tenth of -O2's compile time for generated code of this shape, and within a few
 # per cent of its speed (make bench, bench_language)
@@ -45,7 +46,14 @@ class Toolchain:
     def fingerprint(self) -> str:
         """What a cached shared object depends on besides its source."""
         text = "\n".join(
-            (HEADER.read_text(), sys.version, self.compiler, " ".join(FLAGS), self.include)
+            (
+                HEADER.read_text(),
+                IMAGE_HEADER.read_text(),
+                sys.version,
+                self.compiler,
+                " ".join(FLAGS),
+                self.include,
+            )
         )
         return hashlib.sha256(text.encode()).hexdigest()[:12]
 

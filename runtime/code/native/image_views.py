@@ -36,6 +36,7 @@ from runtime.contract.layout import (
 )
 
 SOURCE = Path(__file__).with_name("padt_memory.c")
+SHARED = Path(__file__).with_name("padt_image.h")
 # what a class may have besides its slots: the generated code's functions, `KIND__`
 _NOT_COPIED = frozenset({"__slots__", "__init__", "__dict__", "__weakref__", "__doc__"})
 
@@ -50,7 +51,8 @@ class ViewsRefused(ValueError):
 def memory_module(cache: Path, toolchain: Toolchain) -> ModuleType:
     """padt_memory, built into `cache` unless it is there, loaded once per process."""
     source = SOURCE.read_text()
-    name = "padt_memory_" + hashlib.sha256(source.encode()).hexdigest()[:16]
+    shared = SHARED.read_text()  # included: the module is named by both
+    name = "padt_memory_" + hashlib.sha256((shared + source).encode()).hexdigest()[:16]
     with _loading:
         module = _loaded.get(name)
         if module is None:

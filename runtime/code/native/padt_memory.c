@@ -13,16 +13,9 @@
  * Included after `#define PADT_INIT PyInit_<module name>` (the module is named by the
  * hash of its source, as every module of the native tier).
  */
-#define PY_SSIZE_T_CLEAN
-#include <Python.h>
-#include <stdint.h>
-#include <string.h>
+#include "padt_image.h"
 
-typedef struct {
-    PyObject_HEAD
-    PyObject *image; /* a bytearray */
-    Py_ssize_t offset;
-} ViewObject;
+typedef padt_view ViewObject;
 
 /* What a Field reads and writes. */
 enum {
@@ -90,13 +83,7 @@ static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) 
         if (v == INT64_MIN) Py_RETURN_NONE;
         return PyLong_FromLongLong(v);
     }
-    case K_CHARS: case K_WCHARS: {
-        uint16_t n; memcpy(&n, p, 2);
-        if (n > f->length) n = (uint16_t)f->length; /* a length no writer stores */
-        /* the characters follow the length at an even offset: aligned for Py_UCS2 */
-        int kind = f->code == K_CHARS ? PyUnicode_1BYTE_KIND : PyUnicode_2BYTE_KIND;
-        return PyUnicode_FromKindAndData(kind, p + 2, n);
-    }
+    case K_CHARS: case K_WCHARS: return padt_chars_get(p, f->length, f->code == K_WCHARS);
     case K_NESTED: return view_at(f->view_type, image, offset);
     case K_ARRAY: {
         ElementsObject *e = PyObject_New(ElementsObject, &ElementsType);
@@ -186,31 +173,7 @@ static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObj
         memcpy(p, &s, 4);
         return 0;
     }
-    case K_CHARS: case K_WCHARS: {
-        if (!PyUnicode_Check(value)) return refuse("STRING or WSTRING", value);
-        Py_ssize_t n = PyUnicode_GET_LENGTH(value);
-        if (n > f->length) {
-            PyErr_Format(PyExc_ValueError, "%R is longer than the variable's %zd characters",
-                         value, f->length);
-            return -1;
-        }
-        int kind = PyUnicode_KIND(value);
-        const void *data = PyUnicode_DATA(value);
-        Py_UCS4 most = f->code == K_CHARS ? 0xFF : 0xFFFF;
-        for (Py_ssize_t i = 0; i < n; i++) {
-            Py_UCS4 c = PyUnicode_READ(kind, data, i);
-            if (c > most) {
-                PyErr_Format(PyExc_ValueError, "%R has a character beyond %s", value,
-                             f->code == K_CHARS ? "one byte" : "two bytes");
-                return -1;
-            }
-            if (f->code == K_CHARS) ((uint8_t *)(p + 2))[i] = (uint8_t)c;
-            else { uint16_t u = (uint16_t)c; memcpy(p + 2 + 2 * i, &u, 2); }
-        }
-        uint16_t len = (uint16_t)n;
-        memcpy(p, &len, 2);
-        return 0;
-    }
+    case K_CHARS: case K_WCHARS: return padt_chars_set(p, f->length, f->code == K_WCHARS, value);
     case K_NESTED:
         /* a whole structure or instance: from a view of the same class (a copy) */
         if (Py_TYPE(value) != (PyTypeObject *)f->view_type)

@@ -780,4 +780,137 @@ padt_add_method(PyObject *bodies, const char *class_name, PyMethodDef *def)
     return failed ? -1 : 0;
 }
 
+/* ---- bodies on a memory image (translate.py's image mode) -----------------------------
+ *
+ * A body of image mode takes the address of its instance's bytes in the image and the
+ * context of the call: the image, where it begins, and where the globals the running
+ * program sees begin (from `_G`, a view). It returns 0, or -1 with the exception set. A
+ * block's call goes to the callee's C body through the registry of bodies (a class name's
+ * capsule), or, for a body left to Python, to the `__call__` of a view of the callee.
+ */
+#include "padt_image.h"
+
+typedef struct padt_mctx {
+    PyObject *image; /* borrowed: the view the call began with holds it */
+    char *base;
+    char *g; /* NULL: `_G` is no view of this image */
+} padt_mctx;
+
+typedef int (*padt_mbody)(char *, padt_mctx *);
+
+/* A call site of a block's body: the C body, once found, or the view class to call. */
+typedef struct {
+    padt_mbody body;
+    PyObject *view_type; /* borrowed: padt_views holds it */
+} padt_msite;
+
+static PyObject *padt_views;        /* class name -> view class */
+static PyObject *padt_registry;     /* class name -> capsule of its C body */
+static PyTypeObject *padt_view_type; /* padt_memory.View */
+static PyObject *padt_str_g;        /* "_G" */
+
+#define PADT_BODY_CAPSULE "padt_body"
+
+static int
+padt_bind_image(PyObject *views, PyObject *registry, PyObject *view_type)
+{
+    if (!PyDict_Check(views) || !PyDict_Check(registry) || !PyType_Check(view_type)) {
+        PyErr_SetString(PyExc_TypeError, "bind(namespace, breathe, views, registry, View)");
+        return -1;
+    }
+    Py_XSETREF(padt_views, Py_NewRef(views));
+    Py_XSETREF(padt_registry, Py_NewRef(registry));
+    Py_XSETREF(padt_view_type, (PyTypeObject *)Py_NewRef(view_type));
+    if (padt_str_g == NULL && (padt_str_g = PyUnicode_InternFromString("_G")) == NULL)
+        return -1;
+    return 0;
+}
+
+/* A body into the registry, for the calls of other modules. */
+static int
+padt_register(const char *class_name, padt_mbody body)
+{
+    PyObject *capsule = PyCapsule_New((void *)body, PADT_BODY_CAPSULE, NULL);
+    if (capsule == NULL)
+        return -1;
+    int failed = PyDict_SetItemString(padt_registry, class_name, capsule);
+    Py_DECREF(capsule);
+    return failed;
+}
+
+/* The context of a call that begins at `view`. */
+static int
+padt_mctx_enter(padt_mctx *ctx, PyObject *view)
+{
+    padt_view *v = (padt_view *)view;
+    ctx->image = v->image;
+    ctx->base = PyByteArray_AS_STRING(v->image);
+    ctx->g = NULL;
+    PyObject *g = PyDict_GetItemWithError(padt_ns, padt_str_g);
+    if (g == NULL)
+        return PyErr_Occurred() ? -1 : 0;
+    if (PyObject_TypeCheck(g, padt_view_type) && ((padt_view *)g)->image == v->image)
+        ctx->g = ctx->base + ((padt_view *)g)->offset;
+    return 0;
+}
+
+static int
+padt_mcall(padt_msite *site, PyObject *class_name, char *p, padt_mctx *ctx)
+{
+    if (PADT_LIKELY(site->body != NULL))
+        return site->body(p, ctx);
+    if (site->view_type == NULL) {
+        PyObject *capsule = PyDict_GetItemWithError(padt_registry, class_name);
+        if (capsule != NULL) {
+            site->body = (padt_mbody)PyCapsule_GetPointer(capsule, PADT_BODY_CAPSULE);
+            return site->body == NULL ? -1 : site->body(p, ctx);
+        }
+        if (PyErr_Occurred())
+            return -1;
+        site->view_type = PyDict_GetItemWithError(padt_views, class_name);
+        if (site->view_type == NULL) {
+            if (!PyErr_Occurred())
+                PyErr_Format(PyExc_TypeError, "native code: no view class %R", class_name);
+            return -1;
+        }
+    }
+    PyObject *view = PyObject_CallFunction(site->view_type, "On", ctx->image,
+                                           (Py_ssize_t)(p - ctx->base));
+    if (view == NULL)
+        return -1;
+    PyObject *result = PyObject_CallMethodNoArgs(view, padt_str_call);
+    Py_DECREF(view);
+    if (result == NULL)
+        return -1;
+    Py_DECREF(result);
+    return 0;
+}
+
+/* An array's element out of its bounds: the fault a Python list gives. */
+static int
+padt_index_error(void)
+{
+    PyErr_SetString(PyExc_IndexError, "list index out of range");
+    return -1;
+}
+
+/* The body as the `__call__` of its view class (a method descriptor of that class). */
+static int
+padt_add_view_method(PyObject *bodies, const char *class_name, PyMethodDef *def)
+{
+    PyObject *view_class = PyDict_GetItemString(padt_views, class_name);
+    if (view_class == NULL || !PyType_Check(view_class)) {
+        PyErr_Format(PyExc_TypeError, "native code: no view class %s", class_name);
+        return -1;
+    }
+    PyObject *descr = PyDescr_NewMethod((PyTypeObject *)view_class, def);
+    if (descr == NULL)
+        return -1;
+    PyObject *key = Py_BuildValue("(ss)", class_name, def->ml_name);
+    int failed = key == NULL || PyDict_SetItem(bodies, key, descr) < 0;
+    Py_XDECREF(key);
+    Py_DECREF(descr);
+    return failed ? -1 : 0;
+}
+
 #endif /* PADT_NATIVE_H */

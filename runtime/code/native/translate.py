@@ -17,7 +17,7 @@ import hashlib
 import itertools
 import math
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 from typing import NoReturn
 
@@ -102,6 +102,7 @@ from runtime.contract.intrinsic_table import (
     SAFE_MATH,
     TICK,
 )
+from runtime.contract.layout import Shape
 
 NAME_PLACEHOLDER = "padt_unit"
 WIDEN_AFTER = 3  # passes over a body before a growing local takes the whole 64-bit range
@@ -163,10 +164,12 @@ class Translated:
 
 @dataclass(frozen=True)
 class V:
-    """A value: its kind, and a C expression without side effects that yields it."""
+    """A value: its kind, and a C expression without side effects that yields it (in image
+    mode, an array's is where it begins, and `shape` says how its elements lie)."""
 
     kind: Kind
     c: str
+    shape: Shape | None = None
 
 
 def c_int(value: int) -> str:
@@ -428,19 +431,26 @@ class _Body:
             owner = self.owner(target)
             if not isinstance(owner.kind, Instance):
                 _refuse("a store into something else than a generated object")
-            member = self.member_kind(owner.kind, target.name)
-            slot = self.module.offset(owner.kind.cls, target.name)
-            place = f"PADT_PLACE({owner.c}, {slot})"
-            self.store(place, value, member, f"{owner.kind.cls}.{target.name}")
+            self.store_member(owner, target.name, value)
         elif isinstance(target, Index):
-            array = self.expr(target.base)
-            if not isinstance(array.kind, Array) or array.kind.element is None:
-                _refuse("a store into something else than an array of elementary values")
-            offset = self.list_offset(array, target.offset)
-            place = f"PADT_ITEM_PLACE({array.c}, {offset})"
-            self.store(place, value, array.kind.element, "an array element")
+            self.store_element(self.expr(target.base), target.offset, value)
         else:
             _refuse(f"a store into a {type(target).__name__}")
+
+    def store_member(self, owner: V, attr: str, value: V) -> None:
+        """`value` into the variable `attr` of the instance `owner`."""
+        assert isinstance(owner.kind, Instance)
+        member = self.member_kind(owner.kind, attr)
+        place = f"PADT_PLACE({owner.c}, {self.module.offset(owner.kind.cls, attr)})"
+        self.store(place, value, member, f"{owner.kind.cls}.{attr}")
+
+    def store_element(self, array: V, index_node: Expr, value: V) -> None:
+        """`value` into the element at offset `index_node` of `array`."""
+        if not isinstance(array.kind, Array) or array.kind.element is None:
+            _refuse("a store into something else than an array of elementary values")
+        offset = self.list_offset(array, index_node)
+        place = f"PADT_ITEM_PLACE({array.c}, {offset})"
+        self.store(place, value, array.kind.element, "an array element")
 
     def store(self, place: str, value: V, declared: Kind | None, what: str) -> None:
         """`value` into a slot or list item of a variable of `declared`, as Python holds it."""
@@ -505,9 +515,13 @@ class _Body:
         elif isinstance(local_kind, Bool | Float) and value.kind == local_kind:
             self.line(f"{local} = {value.c};")
         elif isinstance(local_kind, Instance | Outputs | Hook) and value.kind == local_kind:
-            self.line(f"Py_XSETREF({local}, Py_NewRef({value.c}));")
+            self.keep(local, value)
         else:
             _refuse(f"local {name} takes a {_kind_name(value.kind)}")
+
+    def keep(self, local: str, value: V) -> None:
+        """An instance, a FUNCTION's outputs or a hook into a local of the frame."""
+        self.line(f"Py_XSETREF({local}, Py_NewRef({value.c}));")
 
     def note_assigned(self, name: str, kind: Kind) -> None:
         known = self.assigned.get(name)
@@ -575,7 +589,7 @@ class _Body:
             target = self.expr(callee.base)
             if not isinstance(target.kind, Instance):
                 _refuse("a call of something else than a generated object")
-            self.check(f"padt_call({target.c}, &{self.module.site()})")
+            self.call_instance(target)
             return
         if not isinstance(callee, str) and not call.args:
             hook = self.expr(callee)
@@ -583,6 +597,10 @@ class _Body:
                 self.check(f"padt_call_any({hook.c})")
                 return
         _refuse(f"a call of {_callee_text(call)}")
+
+    def call_instance(self, target: V) -> None:
+        """The body of the instance `target` (a block's call)."""
+        self.check(f"padt_call({target.c}, &{self.module.site()})")
 
     def if_statement(self, node: If) -> None:
         """IF with its ELSIFs, each nested in the ELSE of the one before, as Python runs
@@ -778,9 +796,7 @@ class _Body:
                     return V(bound, f"{owner.c}_{node.name}")
                 if not isinstance(owner.kind, Instance):
                     _refuse(f"the attribute {node.name} of a {_kind_name(owner.kind)}")
-                kind = self.member_kind(owner.kind, node.name)
-                slot = f"PADT_SLOT({owner.c}, {self.module.offset(owner.kind.cls, node.name)})"
-                return self.unboxed(slot, kind, node.name)
+                return self.member_value(owner, node.name)
             case This():
                 return V(Instance(self.cls.name), "s")
             case Named(name=name) if name == TICK.name:
@@ -821,6 +837,13 @@ class _Body:
             case Slice(start=None, stop=int() as stop):
                 return self.cut(self.expr(node.value), stop)
         _refuse(f"a {type(node).__name__} expression ({python_text(node)})")
+
+    def member_value(self, owner: V, attr: str) -> V:
+        """The value of the variable `attr` of the instance `owner`."""
+        assert isinstance(owner.kind, Instance)
+        kind = self.member_kind(owner.kind, attr)
+        slot = f"PADT_SLOT({owner.c}, {self.module.offset(owner.kind.cls, attr)})"
+        return self.unboxed(slot, kind, attr)
 
     def local_value(self, name: str) -> V:
         if name in self.named:
@@ -1722,9 +1745,16 @@ def _kind_name(kind: Kind | None) -> str:
 # ---- a unit --------------------------------------------------------------------------------------
 
 
-def _translate_body(module: _Module, cls: ClassInfo, func: _Numbered) -> str:
+def _translate_body(
+    module: _Module,
+    cls: ClassInfo,
+    func: _Numbered,
+    body_class: type[_Body] | None = None,
+    text: Callable[[_Body, _Numbered], str] | None = None,
+) -> str:
     """The C function of one `__call__`; NotTranslated when it cannot be. The statics it
-    needs join `module` only when it is translated."""
+    needs join `module` only when it is translated. (`body_class` and `text`: image
+    mode's, image_body.py.)"""
     if func.function.params or not func.function.method:
         _refuse("a body with arguments")
     kinds: dict[str, Kind] = {}
@@ -1735,7 +1765,7 @@ def _translate_body(module: _Module, cls: ClassInfo, func: _Numbered) -> str:
             offsets=dict(module.offsets),
             keys=dict(module.keys),
         )
-        body = _Body(trial, cls, func, kinds)
+        body = (body_class or _Body)(trial, cls, func, kinds)
         try:
             body.body()
         except NotTranslated as refused:
@@ -1759,7 +1789,7 @@ def _translate_body(module: _Module, cls: ClassInfo, func: _Numbered) -> str:
         if merged == kinds:
             module.types, module.offsets, module.keys = trial.types, trial.offsets, trial.keys
             module.sites = trial.sites
-            return _function_text(body, func)
+            return (text or _function_text)(body, func)
         kinds = merged
     _refuse("the kinds of the locals do not settle")
 
@@ -1785,55 +1815,10 @@ def _function_text(body: _Body, func: _Numbered) -> str:
     in turn. The Python locals are in a frame the chunks share."""
     name = _function_name(body.cls.name)
     module = body.module
-    frame = [
-        "typedef struct {",
-        "    int line;",
-        "    PyObject *g, *sys;",
-        *(f"    {field}" for field in body.frame.values()),
-        f"}} {name}_frame;",
-        "",
-    ]
-    chunk_texts: list[str] = []
-    chunk_names: list[str] = []
-    for n, lines in enumerate(_chunks(body)):
-        used = set(_TEMP.findall("\n".join(lines)))
-        temps = [decl for temp, decl in body.decls.items() if temp in used]
-        owned = [temp for temp in body.objects if temp in used]
-        cleanup = [f"    Py_XDECREF({temp});" for temp in owned]
-        chunk = f"{name}_{n}"
-        chunk_names.append(chunk)
-        chunk_texts.append(
-            "\n".join(
-                [
-                    "static __attribute__((noinline)) int",
-                    f"{chunk}(PyObject *s, {name}_frame *f)",
-                    "{",
-                    "    int padt_line = f->line;",
-                    "    int padt_breath = PADT_BREATH;",
-                    "    PyObject *padt_g = f->g, *padt_sys = f->sys;",
-                    "    (void)padt_g; (void)padt_sys; (void)padt_breath;",
-                    *(f"    {decl}" for decl in temps),
-                    *lines,
-                    *cleanup,
-                    "    return 0;",
-                    "padt_done:",
-                    *cleanup,
-                    "    return 1;",
-                    "padt_unbound:",
-                    '    PyErr_SetString(PyExc_UnboundLocalError, "native code: a local read before'
-                    ' it is set");',
-                    "    goto padt_error;",
-                    "padt_bad:",
-                    "    padt_bad_read();",
-                    "padt_error:",
-                    "    f->line = padt_line;",
-                    *cleanup,
-                    "    return -1;",
-                    "}",
-                    "",
-                ]
-            )
-        )
+    frame = _frame(body, name, ["PyObject *g, *sys;"])
+    chunk_names, chunk_texts = _chunk_functions(
+        body, name, "PyObject *s", ["PyObject *padt_g = f->g, *padt_sys = f->sys;"]
+    )
     setup: list[str] = []
     if body.uses_globals:
         globals_type = module.types[module.globals_class or ""]
@@ -1876,6 +1861,68 @@ def _function_text(body: _Body, func: _Numbered) -> str:
         "}",
     ]
     return "\n".join([*frame, *chunk_texts, *main])
+
+
+def _frame(body: _Body, name: str, fields: list[str]) -> list[str]:
+    """The frame the chunks of a body share: the line, `fields`, the Python locals."""
+    return [
+        "typedef struct {",
+        "    int line;",
+        *(f"    {field}" for field in fields),
+        *(f"    {field}" for field in body.frame.values()),
+        f"}} {name}_frame;",
+        "",
+    ]
+
+
+def _chunk_functions(
+    body: _Body, name: str, instance: str, prologue: list[str]
+) -> tuple[list[str], list[str]]:
+    """The names and C texts of a body's chunks, each taking the instance (`instance`, its
+    C declaration) and the frame, and beginning with `prologue`; each returns 0 to go on,
+    1 where the body returned, -1 on an error (the line in the frame)."""
+    names: list[str] = []
+    texts: list[str] = []
+    for n, lines in enumerate(_chunks(body)):
+        used = set(_TEMP.findall("\n".join(lines)))
+        temps = [decl for temp, decl in body.decls.items() if temp in used]
+        owned = [temp for temp in body.objects if temp in used]
+        cleanup = [f"    Py_XDECREF({temp});" for temp in owned]
+        chunk = f"{name}_{n}"
+        names.append(chunk)
+        texts.append(
+            "\n".join(
+                [
+                    "static __attribute__((noinline)) int",
+                    f"{chunk}({instance}, {name}_frame *f)",
+                    "{",
+                    "    int padt_line = f->line;",
+                    "    int padt_breath = PADT_BREATH;",
+                    *(f"    {line}" for line in prologue),
+                    "    (void)padt_g; (void)padt_sys; (void)padt_breath;",
+                    *(f"    {decl}" for decl in temps),
+                    *lines,
+                    *cleanup,
+                    "    return 0;",
+                    "padt_done:",
+                    *cleanup,
+                    "    return 1;",
+                    "padt_unbound:",
+                    '    PyErr_SetString(PyExc_UnboundLocalError, "native code: a local read before'
+                    ' it is set");',
+                    "    goto padt_error;",
+                    "padt_bad:",
+                    "    padt_bad_read();",
+                    "padt_error:",
+                    "    f->line = padt_line;",
+                    *cleanup,
+                    "    return -1;",
+                    "}",
+                    "",
+                ]
+            )
+        )
+    return names, texts
 
 
 def _function_name(class_name: str) -> str:

@@ -35,7 +35,7 @@ from runtime.contract.artifact import Artifact, PouCode, load_artifact
 from runtime.contract.generated_code import GeneratedCodeError, check_artifact_names
 
 WORKER_NICE = 10  # background work: below the runtime and below normal programs
-_SOURCES = ("translate.py", "kinds.py", "padt_native.h", "build.py")
+_SOURCES = ("translate.py", "kinds.py", "padt_native.h", "padt_image.h", "build.py")
 # the C is made from the typed form and numbers lines as the printer does
 _FORM_SOURCES = ("python_text.py", "typed_form.py", "statements.py", "units.py")
 

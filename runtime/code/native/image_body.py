@@ -1,0 +1,429 @@
+"""Image mode of the translator (issue 34, step 5: docs/native-code.md, "Variables in
+native memory"): the C of a body that reads and writes its variables in a memory image, at
+the offsets of the layouts (runtime/contract/layout.py), instead of the slots of Python
+objects.
+
+Everything but the variables is translate.py's: the same kinds, the same proofs that every
+integer fits its C type, the same faults at the same printed lines. What differs:
+
+- an instance is the address of its bytes (`char *`); a member is read and written at its
+  offset, as its C type (a BOOL one byte, an INT an `int16_t`...), with no check on the
+  way in (every bit pattern of the image is a value), and a store is range-checked where
+  the value is not proven in range, as in slot mode;
+- a STRING is read as a str and written back with its length and characters checked
+  (padt_image.h); an array's element is at its offset, out of bounds the fault a Python
+  list gives (a negative index counted from the end, as a list counts it); a structure or
+  array assigned whole is copied with `memmove` (`_copy` copies nothing more);
+- a block's call goes to the callee's C body (found once per call site in the registry of
+  bodies), or to the `__call__` of a view of it where its body is Python.
+
+Not yet in image mode (the body is left to the caller's choice, with the reason):
+references, interfaces and in-outs of aggregates, methods and property accessors, SFC
+charts, instances passed to FUNCTIONs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+
+from runtime.code.fault_location import code_filename
+from runtime.code.native.kinds import (
+    Array,
+    Bool,
+    ClassInfo,
+    Float,
+    FunctionInfo,
+    Instance,
+    Int,
+    Kind,
+    Outputs,
+    Text,
+)
+from runtime.code.native.layout_c import C_TYPES
+from runtime.code.native.translate import (
+    NAME_PLACEHOLDER,
+    NotTranslated,
+    Translated,
+    V,
+    _Body,
+    _chunk_functions,
+    _frame,
+    _function_name,
+    _kind_name,
+    _Module,
+    _Numbered,
+    _numbered,
+    _refuse,
+    _translate_body,
+    c_comment,
+    c_int,
+    c_string,
+)
+from runtime.contract.artifact import PouCode
+from runtime.contract.code.typed_form import Call, Expr, Index
+from runtime.contract.code.units import Class, Function, Unit
+from runtime.contract.layout import (
+    NULLABLE_TIME,
+    Chars,
+    Elements,
+    Layout,
+    Layouts,
+    Nested,
+    Scalar,
+    Shape,
+    size_and_align,
+)
+from runtime.contract.layout import Member as LayoutMember
+
+
+@dataclass
+class _ImageModule(_Module):
+    layouts: Layouts = field(default_factory=dict)
+
+    def layout(self, cls: str) -> Layout:
+        found = self.layouts.get(cls)
+        if found is None:
+            _refuse(f"the class {cls}, which has no layout")
+        return found
+
+    def statics(self) -> list[str]:
+        return [
+            line.replace("static padt_site ", "static padt_msite ") for line in super().statics()
+        ]
+
+
+class _ImageBody(_Body):
+    module: _ImageModule
+
+    # -- reading and writing the image
+    def member_value(self, owner: V, attr: str) -> V:
+        assert isinstance(owner.kind, Instance)
+        member = self.member(owner.kind.cls, attr)
+        kind = self.member_kind(owner.kind, attr)
+        return self.read(f"({owner.c} + {member.offset})", member.shape, kind, attr)
+
+    def store_member(self, owner: V, attr: str, value: V) -> None:
+        assert isinstance(owner.kind, Instance)
+        member = self.member(owner.kind.cls, attr)
+        kind = self.member_kind(owner.kind, attr)
+        at = f"({owner.c} + {member.offset})"
+        self.write(at, member.shape, kind, value, f"{owner.kind.cls}.{attr}")
+
+    def member(self, cls: str, attr: str) -> LayoutMember:
+        layout = self.module.layout(cls)
+        for member in layout.members:
+            if member.name == attr:
+                return member
+        _refuse(f"the variable {attr}, which {cls}'s layout does not have")
+
+    def read(self, at: str, shape: Shape, kind: Kind, what: str) -> V:
+        """The value of `kind` whose bytes, of `shape`, are at `at`."""
+        match shape, kind:
+            case Scalar(code=code), Bool() if code == "?":
+                return V(kind, f"(*(uint8_t *){at} != 0)")
+            case Scalar(code=code), Int() if code not in ("?", "f", "d", NULLABLE_TIME):
+                return V(kind, f"(({kind.ctype})*({C_TYPES[code]} *){at})")
+            case Scalar(code=code), Float() if code in ("f", "d"):
+                return V(kind, f"((double)*({C_TYPES[code]} *){at})")
+            case Chars(length=length, wide=wide), Text():
+                return self.owned(kind, f"padt_chars_get({at}, {length}, {int(wide)})")
+            case Nested(cls=cls), Instance() if cls == kind.cls:
+                return V(kind, at)
+            case Elements(), Array():
+                return V(kind, at, shape)
+        _refuse(f"{what}, a {_kind_name(kind)} laid out as {type(shape).__name__}")
+
+    def write(self, at: str, shape: Shape, declared: Kind, value: V, what: str) -> None:
+        """`value` into the bytes, of `shape`, at `at` of a variable of `declared`."""
+        match shape, declared, value.kind:
+            case Scalar(code="?"), Bool(), Bool():
+                self.line(f"*(uint8_t *){at} = (uint8_t)(({value.c}) != 0);")
+                return
+            case Scalar(code=code), Float(), Float() if code in ("f", "d"):
+                self.line(f"*({C_TYPES[code]} *){at} = ({C_TYPES[code]})({value.c});")
+                return
+            case Scalar(code=code), Int(), Int() if code not in ("?", "f", "d", NULLABLE_TIME):
+                if value.kind.stand_in:
+                    _refuse("a REAL's integer stored without a wrap")
+                if not value.kind.within(declared):
+                    self.check(
+                        f"padt_in_range((padt_i128)({value.c}), {c_int(declared.lo)}, "
+                        f"{c_int(declared.hi)}, {c_string(what)})"
+                    )
+                self.line(f"*({C_TYPES[code]} *){at} = ({C_TYPES[code]})({value.c});")
+                return
+            case Chars(length=length, wide=wide), Text(), Text():
+                self.check(f"padt_chars_set({at}, {length}, {int(wide)}, {value.c})")
+                return
+            case ((Nested() | Elements()), (Instance() | Array()), _) if value.kind == declared:
+                # a structure or array assigned whole: the bytes copied (they may overlap)
+                size, _ = size_and_align(shape, self.module.layouts.__getitem__)
+                self.line(f"memmove({at}, {value.c}, {size});")
+                return
+        _refuse(f"a {_kind_name(value.kind)} stored into {_kind_name(declared)}")
+
+    def subscript(self, node: Index) -> V:
+        array = self.expr(node.base)
+        if isinstance(array.kind, Outputs):
+            return super().subscript(node)
+        at, shape, kind = self.element(array, node.offset)
+        return self.read(at, shape, kind, "an array element")
+
+    def store_element(self, array: V, index_node: Expr, value: V) -> None:
+        at, shape, kind = self.element(array, index_node)
+        self.write(at, shape, kind, value, "an array element")
+
+    def element(self, array: V, index_node: Expr) -> tuple[str, Shape, Kind]:
+        """Where an element of `array` is, its shape and its kind; out of bounds the fault
+        of a Python list (a negative offset counted from the end first, as a list does)."""
+        if (
+            not isinstance(array.kind, Array)
+            or array.kind.element is None
+            or not isinstance(array.shape, Elements)
+        ):
+            _refuse("an index into something else than an array the tier knows")
+        count = array.shape.count
+        stride, _ = size_and_align(array.shape.element, self.module.layouts.__getitem__)
+        index = self.int_value(index_node)
+        assert isinstance(index.kind, Int)
+        offset = index.c
+        if not index.kind.within(Int(0, count - 1)):
+            offset = self.temp("int64_t")
+            self.line(f"{offset} = {index.c};")
+            self.line(f"if ({offset} < 0) {offset} += {count};")
+            self.line(f"if (PADT_UNLIKELY((uint64_t){offset} >= {count}U)) {{")
+            self.line("    padt_index_error();")
+            self.line("    goto padt_error;")
+            self.line("}")
+        at = f"({array.c} + {offset} * {stride})"
+        return at, array.shape.element, array.kind.element
+
+    def copy(self, node: Expr) -> V:
+        """`_copy(x)`: the store copies the bytes of what is assigned whole."""
+        value = self.expr(node)
+        if not isinstance(value.kind, Instance | Array):
+            _refuse(f"a copy of a {_kind_name(value.kind)}")
+        return value
+
+    def call_instance(self, target: V) -> None:
+        assert isinstance(target.kind, Instance)
+        self.module.layout(target.kind.cls)
+        key = self.module.key(target.kind.cls)
+        self.check(f"padt_mcall(&{self.module.site()}, {key}, {target.c}, padt_ctx)")
+
+    # -- locals that hold an instance: its address
+    def local_ref(self, name: str) -> str:
+        if isinstance(self.local_kind(name), Instance):
+            c = f"l_{''.join(ch if ch.isalnum() else '_' for ch in name if ch.isascii())}"
+            self.frame.setdefault(c, f"char *{c};")
+            return f"f->{c}"
+        return super().local_ref(name)
+
+    def keep(self, local: str, value: V) -> None:
+        if isinstance(value.kind, Instance):
+            self.line(f"{local} = {value.c};")
+            return
+        super().keep(local, value)
+
+    # -- what image mode does not do yet
+    def is_method_call(self, node: Call) -> bool:
+        return False  # a method's call is then refused as a call of what it names
+
+    def boxed(self, value: V, callee: str) -> str:
+        if isinstance(value.kind, Instance | Array):
+            _refuse(f"an instance or array passed to {callee} (not yet in image mode)")
+        return super().boxed(value, callee)
+
+    def unboxed(self, obj: str, kind: Kind, what: str) -> V:
+        if isinstance(kind, Instance | Array):
+            _refuse(f"{what}, an instance or array from Python (not yet in image mode)")
+        return super().unboxed(obj, kind, what)
+
+    def reference(self, node: Call) -> V:
+        _refuse("a reference (not yet in image mode)")
+
+    def dereference(self, node: Expr) -> V:
+        _refuse("a reference (not yet in image mode)")
+
+
+def _image_function_text(body: _Body, func: _Numbered) -> str:
+    """The body as C in image mode: its chunks as in slot mode, and the body's own
+    function, `int F(char *s, padt_mctx *ctx)`, which C callers call directly."""
+    name = _function_name(body.cls.name)
+    module = body.module
+    frame = _frame(body, name, ["char *g;", "PyObject *sys;", "padt_mctx *ctx;"])
+    prologue = [
+        "char *padt_g = f->g;",
+        "PyObject *padt_sys = f->sys;",
+        "padt_mctx *padt_ctx = f->ctx;",
+        "(void)padt_ctx;",
+    ]
+    chunk_names, chunk_texts = _chunk_functions(body, name, "char *s", prologue)
+    setup: list[str] = []
+    if body.uses_globals:
+        setup += [
+            "    f->g = ctx->g;",
+            "    if (f->g == NULL) {",
+            '        PyErr_SetString(PyExc_TypeError, "native code: _G is no view of the image");',
+            "        goto padt_error;",
+            "    }",
+        ]
+    if any("padt_sys" in line for line in body.out):
+        setup += [
+            f"    f->sys = padt_global({module.key('_SYS')});",
+            "    if (f->sys == NULL) goto padt_error;",
+            "    Py_INCREF(f->sys);",
+        ]
+    cleanup = [f"    Py_XDECREF(f->{o});" for o in ("sys", *body.frame_objects)]
+    main = [
+        "static int",
+        f"{name}(char *s, padt_mctx *ctx)",
+        "{",
+        f"    {name}_frame frame;",
+        f"    {name}_frame *f = &frame;",
+        "    int done = 0;",
+        "    memset(f, 0, sizeof frame);",
+        f"    f->line = {func.line};",
+        "    f->ctx = ctx;",
+        *setup,
+        *(f"    if ((done = {chunk}(s, f)) != 0) goto padt_end;" for chunk in chunk_names),
+        "padt_end:",
+        "    if (done < 0) goto padt_error;",
+        *cleanup,
+        "    return 0;",
+        "padt_error:",
+        f"    _PyTraceback_Add({c_string(body.cls.name + '.__call__')}, "
+        f"{c_string(module.filename)}, f->line);",
+        *cleanup,
+        "    return -1;",
+        "}",
+    ]
+    return "\n".join([*frame, *chunk_texts, *main])
+
+
+def translate_image_unit(
+    unit: PouCode,
+    form: Unit,
+    classes: dict[str, ClassInfo],
+    globals_class: str | None,
+    layouts: Layouts,
+    functions: dict[str, FunctionInfo] | None = None,
+) -> Translated:
+    """The C module of one unit in image mode: the `__call__` of its class, working on the
+    image at `layouts`' offsets, when it can be translated."""
+    module = _ImageModule(
+        classes,
+        code_filename(unit),
+        globals_class=globals_class,
+        functions=functions or {},
+        layouts=layouts,
+    )
+    bodies: list[tuple[str, str]] = []
+    left: list[tuple[str, str]] = []
+    functions_of = form.functions if isinstance(form, Class) else ()
+    for call in (f for f in functions_of if isinstance(f, Function) and f.name == "__call__"):
+        assert isinstance(form, Class)
+        body_name = f"{form.name}.__call__"
+        info = classes.get(form.name)
+        if info is None or form.name not in layouts:
+            left.append((body_name, "a class the artifact does not describe"))
+            continue
+        try:
+            text = _translate_body(
+                module, info, _numbered(form, call), _ImageBody, _image_function_text
+            )
+            bodies.append((form.name, text))
+        except NotTranslated as reason:
+            left.append((body_name, str(reason)))
+        except RecursionError:
+            left.append((body_name, "an expression nested too deep"))
+    if not bodies:
+        return Translated(unit.name, "", "", (), tuple(left))
+    source = _image_module_text(module, bodies)
+    digest = hashlib.sha256(source.encode()).hexdigest()[:24]
+    name = f"padt_{digest}"
+    return Translated(
+        unit.name,
+        name,
+        source.replace(NAME_PLACEHOLDER, name),
+        tuple(f"{cls}.__call__" for cls, _ in bodies),
+        tuple(left),
+    )
+
+
+def _image_module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
+    lines = [
+        c_comment(f"image-mode code of {module.filename}: written by runtime/code/native/"),
+        '#include "padt_native.h"',
+        "",
+        *module.statics(),
+        "",
+    ]
+    lines += [f"static PyObject *VC{n}; {c_comment(cls)}" for n, (cls, _) in enumerate(functions)]
+    for _, text in functions:
+        lines += [text, ""]
+    for n, (cls, _) in enumerate(functions):
+        # the entry from Python: a view of the class, the context from it
+        lines += [
+            "static PyObject *",
+            f"W{n}(PyObject *view, PyObject *ignored)",
+            "{",
+            "    padt_mctx ctx;",
+            f"    if (!PyObject_TypeCheck(view, (PyTypeObject *)VC{n})) {{",
+            f'        PyErr_SetString(PyExc_TypeError, "native code: a body of {cls} called on'
+            ' another object");',
+            "        return NULL;",
+            "    }",
+            "    if (padt_mctx_enter(&ctx, view) < 0) return NULL;",
+            f"    if ({_function_name(cls)}(ctx.base + ((padt_view *)view)->offset, &ctx) < 0)",
+            "        return NULL;",
+            "    Py_RETURN_NONE;",
+            "}",
+            "",
+            f'static PyMethodDef M{n} = {{"__call__", (PyCFunction)W{n}, METH_NOARGS, NULL}};',
+            "",
+        ]
+    lines += [
+        "static PyObject *",
+        "padt_bind(PyObject *module, PyObject *args)",
+        "{",
+        "    PyObject *ns, *breathe, *views, *registry, *view_type, *bodies;",
+        '    if (!PyArg_ParseTuple(args, "OOOOO", &ns, &breathe, &views, &registry, &view_type))',
+        "        return NULL;",
+        "    if (padt_bind_common(ns, breathe) < 0) return NULL;",
+        "    if (padt_bind_image(views, registry, view_type) < 0) return NULL;",
+        *module.binding(),
+        "    if ((bodies = PyDict_New()) == NULL) return NULL;",
+    ]
+    for n, (cls, _) in enumerate(functions):
+        lines += [
+            f"    if ((VC{n} = PyDict_GetItemString(views, {c_string(cls)})) == NULL) {{",
+            f'        PyErr_SetString(PyExc_TypeError, "native code: no view class {cls}");',
+            "        Py_DECREF(bodies);",
+            "        return NULL;",
+            "    }",
+            f"    if (padt_register({c_string(cls)}, {_function_name(cls)}) < 0"
+            f" || padt_add_view_method(bodies, {c_string(cls)}, &M{n}) < 0)",
+            "        { Py_DECREF(bodies); return NULL; }",
+        ]
+    lines += [
+        "    return bodies;",
+        "}",
+        "",
+        "static PyMethodDef padt_methods[] = {",
+        '    {"bind", padt_bind, METH_VARARGS, NULL},',
+        "    {NULL, NULL, 0, NULL},",
+        "};",
+        "",
+        "static struct PyModuleDef padt_module = {",
+        f'    PyModuleDef_HEAD_INIT, "{NAME_PLACEHOLDER}", NULL, -1, padt_methods,',
+        "};",
+        "",
+        f"PyMODINIT_FUNC PyInit_{NAME_PLACEHOLDER}(void)",
+        "{",
+        "    return PyModule_Create(&padt_module);",
+        "}",
+        "",
+    ]
+    return "\n".join(lines)
