@@ -11,7 +11,6 @@ from typing import Any
 from runtime.code.instances import BoundVariable
 from runtime.contract.protocol import LETTER_OF_QUALITY, ProgramState, Quality
 from runtime.force_table import ForceTable
-from runtime.value_reader import value_reader
 from runtime.variables import Variables
 from runtime.watch_sets import WatchSet, WatchSets, WatchSnapshot
 
@@ -144,7 +143,7 @@ class OnlineValues:
                 paths=watch_set.paths,
                 bound_of=bound_of,
                 found=found,
-                read=value_reader(present, lambda: variables.globals),
+                read=variables.memory.reader(present),
                 owners=[
                     -1 if b is None else id(b.program) if b.program is not None else 0
                     for b in found

@@ -44,7 +44,6 @@ from runtime.contract.recording import (
 from runtime.contract.refusal import Refusal
 from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.trace_writer import CycleGate, Inputs, Logged, TraceWriter, Values
-from runtime.value_reader import value_reader
 
 if TYPE_CHECKING:
     from runtime.resource import Resource
@@ -197,7 +196,7 @@ class Recordings:
             header=header,
             bound=bound,
             of_variables=variables.bound,
-            read=value_reader(bound, lambda: variables.globals),
+            read=variables.memory.reader(bound),
             writer=writer,
             started_ns=header.started_ns,
             clock_at_start=resource.clock.now_ns(),

@@ -3,10 +3,10 @@ taking a valid one back at power-up. Safety-related programs always cold-start."
 
 from __future__ import annotations
 
-from runtime.code.user_program import share_globals
 from runtime.context import Context
-from runtime.context_snapshot import ContextMismatch, capture, restore, snapshot
+from runtime.context_snapshot import ContextMismatch
 from runtime.contract.protocol import ProgramState
+from runtime.memory import ValueTrees
 from runtime.resource import Resource
 
 
@@ -16,18 +16,17 @@ def take_context(resource: Resource, *, deferred: bool = False) -> Context | Non
     the context is encoded (`capture`): what the periodic save on the cycle thread uses."""
     if resource.artifact is None:
         return None
-    take = capture if deferred else snapshot
+    trees = resource.variables.memory.take(deferred=deferred)
     programs = {
-        p.name: {"state": p.state.value, "time_ns": p.time_ns, "values": take(p.instance)}
+        p.name: {"state": p.state.value, "time_ns": p.time_ns, "values": trees.programs[p.name]}
         for p in resource.programs
     }
-    globals_ = resource.variables.globals
     return Context(
         signature=resource.artifact.crc,
         saved_ns=resource.clock.wall_ns(),
         resource={"state": resource.state.value, "cycle": resource.cycle_count},
         programs=programs,
-        globals=take(globals_) if globals_ is not None else None,
+        globals=trees.globals,
     )
 
 
@@ -36,25 +35,25 @@ def warm_start(resource: Resource, context: Context) -> list[str]:
     start. Safety-related programs keep their initial values: they always cold-start.
     Returns the programs restored."""
     resource.require_stop("a warm start")
-    restored = []
+    taken = [
+        (program, saved)
+        for program in resource.programs
+        if (saved := context.programs.get(program.name)) is not None
+        and not program.config.safety_related
+    ]
     try:
-        restore(resource.variables.globals, context.globals)
-        for program in resource.programs:
-            saved = context.programs.get(program.name)
-            if saved is None or program.config.safety_related:
-                continue
-            restore(program.instance, saved["values"])
+        values = {program.name: saved["values"] for program, saved in taken}
+        resource.variables.memory.restore(ValueTrees(context.globals, values))
+        for program, saved in taken:
             # timers and step times hold absolute program time: it comes back too
             program.time_ns = int(saved["time_ns"])
             program.held = saved["state"] in (ProgramState.STOP, ProgramState.ERROR)
-            restored.append(program.name)
     except (ContextMismatch, KeyError, TypeError, ValueError) as exc:
         resource.instantiate()  # nothing half-restored
         resource.recorder.record("state", f"cold start: the saved context does not fit ({exc})")
         return []
-    share_globals(resource.variables.globals, resource.programs)
     resource.start_kind = "warm"
     resource.recorder.record(
         "state", f"warm start prepared from the context saved at {context.saved_ns}"
     )
-    return restored
+    return [program.name for program, _ in taken]

@@ -8,7 +8,7 @@ import copy
 from collections.abc import Callable
 from typing import Any
 
-from runtime.code.code_image import CodeImage, read_path, write_path
+from runtime.code.code_image import CodeImage
 from runtime.code.instances import (
     BoundVariable,
     Instances,
@@ -22,7 +22,7 @@ from runtime.contract.artifact import AccessPath
 from runtime.contract.protocol import VariableInfo
 from runtime.contract.refusal import Refusal
 from runtime.contract.values import ValueRejected, representation
-from runtime.value_reader import value_reader
+from runtime.memory import Memory, ObjectMemory
 
 
 class Variables:
@@ -31,6 +31,7 @@ class Variables:
         self.code: CodeImage | None = None
         self.programs: list[UserProgram] = []  # by priority, then Program ID
         self.globals: Any = None  # the globals as all programs see them between cycles
+        self.memory: Memory = ObjectMemory(None, [])  # where the variables' values are
         self.bound: list[BoundVariable] = []
         self._by_name: dict[str, BoundVariable] = {}
         # the configuration's VAR_ACCESS by upper-case name: more names for variables
@@ -50,6 +51,7 @@ class Variables:
             instances.programs,
             instances.globals,
         )
+        self.memory = ObjectMemory(self.globals, self.programs)
         # `bound` last: a reading plan made on another thread (online_values.py) takes it
         # first, and counts as current only while it is the same, so the lookups it made
         # after it cannot be those of the configuration before
@@ -69,6 +71,7 @@ class Variables:
     def replace_program(self, old: UserProgram, new: UserProgram) -> None:
         """A program restarted from fresh instances (it leaves ERROR by a start)."""
         self.programs[self.programs.index(old)] = new
+        self.memory = ObjectMemory(self.globals, self.programs)
         self.bound = [BoundVariable(new, b.path) if b.program is old else b for b in self.bound]
         self._by_name = index(self.bound)
         if self.code is not None:
@@ -105,8 +108,7 @@ class Variables:
         return self.read(self.lookup(name))
 
     def read(self, bound: BoundVariable) -> Any:
-        owner = bound.program.instance if bound.program is not None else self.globals
-        return read_path(owner, bound.path)
+        return self.memory.read(bound)
 
     def store(self, bound: BoundVariable, value: Any) -> None:
         """Write a variable where every reader sees it: a global into the globals and into
@@ -114,13 +116,7 @@ class Variables:
         if self.tap is not None:
             kept = copy.deepcopy(value) if isinstance(value, list) else value
             self.tap.append((bound.path.path, kept))
-        if bound.program is not None:
-            write_path(bound.program.instance, bound.path, value)
-            return
-        write_path(self.globals, bound.path, value)
-        for program in self.programs:
-            if program.view is not self.globals:
-                write_path(program.view, bound.path, value)
+        self.memory.store(bound, value)
 
     def checked(self, bound: BoundVariable, value: Any) -> Any:
         """`value` as the variable holds it; Refusal when it cannot hold it."""
@@ -150,7 +146,7 @@ class Variables:
         bound = self.bound
         if self._all_of is not bound:  # read through one reader, made once per configuration
             self._all_of = bound
-            self._read_all = value_reader(bound, lambda: self.globals)
+            self._read_all = self.memory.reader(bound)
             self._all_paths = [b.path.path for b in bound]
         paths, got = self._all_paths, self._read_all()
 

@@ -21,8 +21,7 @@ from typing import Any
 from backend.engineering.tiers import left_as_python
 from runtime.clock import VirtualClock
 from runtime.code.native.tier import NativeTier
-from runtime.code.user_program import share_globals
-from runtime.context_snapshot import ContextMismatch, restore
+from runtime.context_snapshot import ContextMismatch
 from runtime.contract.artifact import Artifact, ArtifactError, load_artifact
 from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.contract.recording import (
@@ -33,6 +32,7 @@ from runtime.contract.recording import (
 )
 from runtime.contract.refusal import Refusal
 from runtime.contract.system_variables import SYSTEM_VARIABLES
+from runtime.memory import ValueTrees
 from runtime.reload_switch import reload
 from runtime.resource import Resource
 
@@ -182,15 +182,12 @@ def _started(artifact: Artifact, recording: Recording, native: NativeTier | None
     resource.tier_up(wait=True)
     context = start.context
     try:
-        if context["globals"] is not None:
-            restore(resource.variables.globals, context["globals"])
-        for program in resource.programs:
-            restore(program.instance, context["programs"][program.name]["values"])
+        values = {p.name: context["programs"][p.name]["values"] for p in resource.programs}
+        resource.variables.memory.restore(ValueTrees(context["globals"], values))
     except (ContextMismatch, KeyError, TypeError) as exc:
         raise ReplayError(
             f"the recorded start state does not fit its configuration: {exc}"
         ) from None
-    share_globals(resource.variables.globals, resource.programs)
     resource.state = ResourceState.RUN
     for program in resource.programs:
         saved = start.programs[program.name]

@@ -3,7 +3,6 @@ plus the flat variable paths used for OLT values."""
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -307,22 +306,3 @@ def slot_names(target: Any) -> Iterator[str]:
     """The attributes of a generated object (its class's and its bases' `__slots__`)."""
     for kind in type(target).__mro__:
         yield from getattr(kind, "__slots__", ())
-
-
-def read_path(instance: Any, path: VariablePath) -> Any:
-    value = instance
-    for accessor in path.attrs:
-        value = value[accessor] if isinstance(accessor, int) else getattr(value, accessor)
-    # a copy: whoever reads values must not hold (and change) the program's own lists
-    return copy.deepcopy(value) if isinstance(value, list) else value
-
-
-def write_path(instance: Any, path: VariablePath, value: Any) -> None:
-    target = instance
-    for accessor in path.attrs[:-1]:
-        target = target[accessor] if isinstance(accessor, int) else getattr(target, accessor)
-    last = path.attrs[-1]
-    if isinstance(last, int):
-        target[last] = value
-    else:
-        setattr(target, last, value)

@@ -1,5 +1,5 @@
 """The two halves of recording a cycle's values: reading them on the cycle thread
-(`value_reader`) and encoding them as JSON on the writer thread (`ValuesEncoder`). Both
+(`ObjectMemory.reader`) and encoding them as JSON on the writer thread (`ValuesEncoder`). Both
 are tuned for thousands of variables every 10 ms; these tests hold them to the plain
 definitions: the values `Variables.read` gives, the text `json.dumps` of the nested
 message gives. And the writer keeps out of the cycle's way (`CycleGate`)."""
@@ -25,7 +25,6 @@ from runtime.contract.artifact import ProgramConfig, ResourceConfig
 from runtime.contract.recording import RecordingHeader, nest, read_recording
 from runtime.resource import Resource
 from runtime.trace_writer import CycleGate, TraceWriter, Values, ValuesEncoder, _json
-from runtime.value_reader import value_reader
 
 PLANT = """
 TYPE Point : STRUCT x : REAL; n : DINT; name : STRING[8]; END_STRUCT; END_TYPE
@@ -72,7 +71,7 @@ def test_the_values_read_are_those_of_the_variables_in_any_order() -> None:
     assert {"level", "mode", "A.t.Q", "B.k", "A.history"} <= set(paths)
     assert any(path.startswith("points[") for path in paths)
     orders = [everything, everything[::-1], everything[1::2] + everything[::2], everything[:1]]
-    readers = [(order, value_reader(order, lambda: variables.globals)) for order in orders]
+    readers = [(order, variables.memory.reader(order)) for order in orders]
     clock = resource.clock
     assert isinstance(clock, VirtualClock)
     for _ in range(5):
@@ -83,7 +82,7 @@ def test_the_values_read_are_those_of_the_variables_in_any_order() -> None:
             assert read() == [variables.read(b) for b in order]
     # an array is copied: what was read does not change with the program
     [history] = [b for b in everything if b.path.path == "A.history"]
-    read = value_reader([history], lambda: variables.globals)
+    read = variables.memory.reader([history])
     kept = read()
     resource.cycle()
     assert kept != read()

@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 import pytest
 
-from runtime import online_values
+from runtime.memory import ObjectMemory
 from runtime.watch_sets import WatchSet
 from tests.support.resource_harness import Harness, compiled, harness
 
@@ -82,7 +82,7 @@ def test_a_plan_that_fails_elsewhere_is_made_where_the_set_is_read(
     def broken(*args: object) -> object:
         raise RuntimeError("no reader")
 
-    monkeypatch.setattr(online_values, "value_reader", broken)
+    monkeypatch.setattr(ObjectMemory, "reader", broken)
     assert not online.planned(watch_set, elsewhere)
     elsewhere.run()  # fails there, quietly
     assert online.planned(watch_set, elsewhere)  # so the set is read here, and

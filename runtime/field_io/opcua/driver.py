@@ -41,7 +41,6 @@ class OpcuaDriver(ServerAndDevices):
                 folder,
                 port,
                 context.accounts,
-                lambda: context.variables.globals,
             )
         outputs = lambda: context.io.outputs  # noqa: E731  # replaced, never changed
         self.remotes = [
@@ -53,7 +52,8 @@ class OpcuaDriver(ServerAndDevices):
     # ---- the cycle thread
     def _rebind_server(self) -> None:
         assert self.server is not None
-        self.server.rebind(self._context.variables.bound)
+        variables = self._context.variables
+        self.server.rebind(variables.bound, variables.memory)
 
     def before_cycle(self) -> None:
         self._devices.before_cycle()

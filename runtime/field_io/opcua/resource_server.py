@@ -69,7 +69,7 @@ from runtime.field_io.opcua.types import (
     to_opcua,
     variant_type,
 )
-from runtime.value_reader import value_reader
+from runtime.memory import Memory
 
 log = logging.getLogger(__name__)
 # asyncua tells every request at INFO: what goes wrong is reported as events instead
@@ -151,7 +151,6 @@ class ResourceServer:
         folder: Path,
         port: int,
         accounts: Callable[[], tuple[UserAccount, ...]],
-        globals_of: Callable[[], Any],
     ) -> None:
         self.config, self.resource, self.folder = config, resource, folder
         self.host, self.requested_port = config.host, port
@@ -163,7 +162,6 @@ class ResourceServer:
         self.writes: queue.SimpleQueue[PendingWrite] = queue.SimpleQueue()
         self._pending = 0  # writes queued and not yet taken (only the I/O thread's)
         self._accounts = accounts
-        self._globals_of = globals_of
         self._server: Server | None = None
         self._internal_write: Callable[..., Awaitable[list[ua.StatusCode]]] | None = None
         self._namespace = 0
@@ -195,11 +193,12 @@ class ResourceServer:
         return f"urn:padt:{self.resource}"
 
     # ---- the cycle thread
-    def rebind(self, bound: list[BoundVariable]) -> None:
-        """The variables were bound anew: the nodes follow (on the I/O thread)."""
+    def rebind(self, bound: list[BoundVariable], memory: Memory) -> None:
+        """The variables were bound anew (`memory` holds their values): the nodes follow
+        (on the I/O thread)."""
         self._plan = plan(bound, self.config)
         nodes = [node.variable for node in self._plan.variables if node.variable is not None]
-        self._read = value_reader(nodes, self._globals_of)
+        self._read = memory.reader(nodes)
         self._read_plan = self._plan
         self.snapshot = None
         loop = self._loop
