@@ -1,6 +1,7 @@
 """padt beside its peers (../shared/peers): the bench program of 1,001 statements and the
 same without its 48 TONs, per CPU cycle on padt's native tier, on its Python tier, as
-matiec's C and on ironplc's VM, measured in the same run, alternately, the best of a few
+matiec's C and on ironplc's VM, and the body alone as image-mode C (issue 34 step 5, not
+yet live in the runtime), measured in the same run, alternately, the best of a few
 rounds each (padt's rounds each in a process of its own, `cycle_probe.py`); with the goals
 of issue 34 (native no slower than matiec, the bench program built in under 3 s) and
 whether padt's values after the check cycles are the peers'.
@@ -33,17 +34,20 @@ BUILD_GOAL_S = 3.0  # issue 34: the bench program built in under 3 s
 class Rounds:
     python: list[dict[str, Any]]
     native: list[dict[str, Any]]  # the first built into an empty cache, the others from it
+    image: list[dict[str, Any]]  # the body as image-mode C, each built into an empty cache
     matiec_us: list[float]
     ironplc_us: list[float]
 
 
 def measure(program: PeerProgram) -> Rounds:
     request = {"program": program.text, "cycles": CYCLES, "check_cycles": CHECK_CYCLES}
-    rounds = Rounds([], [], [], [])
+    rounds = Rounds([], [], [], [], [])
     with tempfile.TemporaryDirectory(prefix="padt-bench-peers-") as cache:
         for _ in range(ROUNDS):
             rounds.python.append(probe(REPO, request))
             rounds.native.append(probe(REPO, {**request, "native_cache": cache}))
+            with tempfile.TemporaryDirectory(prefix="padt-bench-image-") as image_cache:
+                rounds.image.append(probe(REPO, {**request, "image_cache": image_cache}))
             rounds.matiec_us.append(program.matiec_us(*MATIEC_RUN))
             rounds.ironplc_us.append(program.ironplc_us(*IRONPLC_RUN))
     return rounds
@@ -76,6 +80,15 @@ def report(program: PeerProgram, rounds: Rounds) -> None:
     print(
         f"  padt Python   {python_us:8.1f} us: ratio {python_us / matiec_us:.2f} to matiec, "
         f"{python_us / native_us:.1f}x padt native's"
+    )
+    image = min(rounds.image, key=lambda reply: float(reply["image_body_us"]))
+    image_us = float(image["image_body_us"])
+    image_built_s = min(float(reply["image_build_s"]) for reply in rounds.image)
+    stayed = ", ".join(body for body, _ in image["image_left"]) or "nothing"
+    print(
+        f"  padt image C  {image_us:8.1f} us: the body alone on a memory image (step 5, not "
+        f"yet live in the runtime; as Python: {stayed}), ratio {image_us / matiec_us:.2f} to "
+        f"matiec; built in {image_built_s:.1f} s into an empty cache"
     )
     print(f"  matiec (C)    {matiec_us:8.1f} us")
     print(

@@ -7,14 +7,16 @@ It uses only what every version of the project since the artifact's version 3 ha
 today's code beside the same figure of an older commit, measured in the same run.
 
 Request: {"program": ST text, "cycles": n, "check_cycles": m, "fixed_cycles": f,
-"native_cache": folder, "state_variables": v, "reload": r}, each part left out when empty
-or 0; with
+"native_cache": folder, "image_cache": folder, "state_variables": v, "reload": r}, each part
+left out when empty or 0; with
 `native_cache` (today's code only) the program runs on the native tier, its modules
-compiled into that folder.
+compiled into that folder; with `image_cache` (today's code only) its body is timed alone
+as image-mode C too (`image_body`).
 Reply: {"program_us": median us per cycle of the program (virtual clock), "values": every
 variable after `check_cycles` cycles, "fixed_us": median us per cycle of a resource with one
 empty program (real clock), "native_build_s": how long the native bodies took to be in
-place, "native_bodies": the POUs that run as C, "read_ms", "values_ms", "take_ms",
+place, "native_bodies": the POUs that run as C, "image_body_us", "image_build_s",
+"image_left": `image_body`'s figures, "read_ms", "values_ms", "take_ms",
 "save_ms", "pause_ms": for a resource of `state_variables` variables (`scale_source`), the
 best of a few rounds of reading every value (the online test's `values`: the read on the
 cycle thread, and the whole read with the values built), taking the periodic context
@@ -101,6 +103,32 @@ def program_cycles(
     return _median_us(cycle, cycles), values
 
 
+def image_body(text: str, cycles: int, cache: str, reply: dict[str, Any]) -> None:
+    """The program's body as image-mode C (issue 34 step 5: not yet live in the runtime),
+    on a memory image beside the Python tier's objects: the time it takes to translate,
+    build and put the bodies in place into `cache`, what stays Python, and the median
+    time of the body alone per cycle (no cycle around it: the fixed cost of a cycle adds
+    to it once it runs in the runtime)."""
+    from runtime.code.native.image_views import memory_module  # today's code only
+    from runtime.code.native.tier import NativeTier
+    from tests.support.image_runs import ImageRun, compiled, with_c_bodies
+
+    tier = NativeTier(Path(cache))
+    assert tier.toolchain is not None
+    run = ImageRun(compiled(text), memory_module(tier.cache, tier.toolchain))
+    started = time.perf_counter()
+    reply["image_left"] = with_c_bodies(run, tier)
+    reply["image_build_s"] = time.perf_counter() - started
+    program = run.viewed.programs[0]
+
+    def body() -> None:
+        run.system.now_ns += CYCLE_NS
+        run.viewed.image.use(program.view, None)
+        program.instance.__call__()
+
+    reply["image_body_us"] = _median_us(body, cycles)
+
+
 def fixed_cycles(cycles: int) -> float:
     program = ProgramConfig(name="Empty", pou="Empty", program_id=1)
     resource = _running(EMPTY, RealClock(), [program])
@@ -181,6 +209,8 @@ def main() -> None:
             reply,
         )
         reply.update(program_us=program_us, values=values)
+    if request.get("image_cache"):
+        image_body(request["program"], request["cycles"], request["image_cache"], reply)
     if request.get("fixed_cycles"):
         reply["fixed_us"] = fixed_cycles(request["fixed_cycles"])
     if request.get("state_variables"):
