@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 
 from runtime.code.fault_location import code_filename
 from runtime.code.native.kinds import (
+    FULL64,
     Array,
     Bool,
     ClassInfo,
@@ -206,6 +207,19 @@ class _ImageBody(_Body):
             _refuse(f"a copy of a {_kind_name(value.kind)}")
         return value
 
+    def system_value(self, name: str) -> V:
+        """`_SYS.now_ns` read once per call from Python (every timer of a program reads
+        it), and again after the slice meter, which may resume the program later."""
+        if name != "now_ns":
+            return super().system_value(name)
+        held = self.temp("int64_t")
+        self.check(f"padt_mnow(padt_ctx, padt_sys, {self.module.key(name)}, &{held})")
+        return V(FULL64, held)
+
+    def call_hook(self, hook: V) -> None:
+        super().call_hook(hook)
+        self.line("padt_ctx->now_known = 0;")
+
     def call_instance(self, target: V) -> None:
         assert isinstance(target.kind, Instance)
         self.module.layout(target.kind.cls)
@@ -271,11 +285,13 @@ def _image_function_text(body: _Body, func: _Numbered) -> str:
         ]
     if any("padt_sys" in line for line in body.out):
         setup += [
-            f"    f->sys = padt_global({module.key('_SYS')});",
-            "    if (f->sys == NULL) goto padt_error;",
-            "    Py_INCREF(f->sys);",
+            "    f->sys = ctx->sys;  /* borrowed: the namespace holds it during the call */",
+            "    if (f->sys == NULL) {",
+            '        PyErr_SetString(PyExc_NameError, "native code: no _SYS");',
+            "        goto padt_error;",
+            "    }",
         ]
-    cleanup = [f"    Py_XDECREF(f->{o});" for o in ("sys", *body.frame_objects)]
+    cleanup = [f"    Py_XDECREF(f->{o});" for o in body.frame_objects]
     main = [
         "static int",
         f"{name}(char *s, padt_mctx *ctx)",

@@ -794,6 +794,9 @@ typedef struct padt_mctx {
     PyObject *image; /* borrowed: the view the call began with holds it */
     char *base;
     char *g; /* NULL: `_G` is no view of this image */
+    PyObject *sys; /* `_SYS`, borrowed from the namespace (NULL: none) */
+    int now_known; /* `_SYS.now_ns` read in this call (padt_mnow) */
+    int64_t now_ns;
 } padt_mctx;
 
 typedef int (*padt_mbody)(char *, padt_mctx *);
@@ -808,6 +811,7 @@ static PyObject *padt_views;        /* class name -> view class */
 static PyObject *padt_registry;     /* class name -> capsule of its C body */
 static PyTypeObject *padt_view_type; /* padt_memory.View */
 static PyObject *padt_str_g;        /* "_G" */
+static PyObject *padt_str_sys;      /* "_SYS" */
 
 #define PADT_BODY_CAPSULE "padt_body"
 
@@ -822,6 +826,8 @@ padt_bind_image(PyObject *views, PyObject *registry, PyObject *view_type)
     Py_XSETREF(padt_registry, Py_NewRef(registry));
     Py_XSETREF(padt_view_type, (PyTypeObject *)Py_NewRef(view_type));
     if (padt_str_g == NULL && (padt_str_g = PyUnicode_InternFromString("_G")) == NULL)
+        return -1;
+    if (padt_str_sys == NULL && (padt_str_sys = PyUnicode_InternFromString("_SYS")) == NULL)
         return -1;
     return 0;
 }
@@ -846,11 +852,43 @@ padt_mctx_enter(padt_mctx *ctx, PyObject *view)
     ctx->image = v->image;
     ctx->base = PyByteArray_AS_STRING(v->image);
     ctx->g = NULL;
+    ctx->now_known = 0;
+    ctx->sys = PyDict_GetItemWithError(padt_ns, padt_str_sys);
+    if (ctx->sys == NULL && PyErr_Occurred())
+        return -1;
     PyObject *g = PyDict_GetItemWithError(padt_ns, padt_str_g);
     if (g == NULL)
         return PyErr_Occurred() ? -1 : 0;
     if (PyObject_TypeCheck(g, padt_view_type) && ((padt_view *)g)->image == v->image)
         ctx->g = ctx->base + ((padt_view *)g)->offset;
+    return 0;
+}
+
+/* `_SYS.now_ns`: the running program's time, which the scheduler sets between program
+ * cycles, read once per call (each timer of a program reads it), and again after the
+ * slice meter (the body clears now_known), which may resume the program in a later CPU
+ * cycle. */
+static int
+padt_mnow(padt_mctx *ctx, PyObject *sys, PyObject *key, int64_t *out)
+{
+    if (PADT_LIKELY(ctx->now_known)) {
+        *out = ctx->now_ns;
+        return 0;
+    }
+    PyObject *now = PyObject_GetAttr(sys, key);
+    if (now == NULL)
+        return -1;
+    int overflow = 0, is_int = PyLong_Check(now);
+    long long value = is_int ? PyLong_AsLongLongAndOverflow(now, &overflow) : -1;
+    Py_DECREF(now);
+    if (!is_int || overflow || (value == -1 && PyErr_Occurred())) {
+        if (!PyErr_Occurred())
+            padt_bad_read();
+        return -1;
+    }
+    ctx->now_ns = value;
+    ctx->now_known = 1;
+    *out = value;
     return 0;
 }
 

@@ -594,9 +594,13 @@ class _Body:
         if not isinstance(callee, str) and not call.args:
             hook = self.expr(callee)
             if isinstance(hook.kind, Hook):
-                self.check(f"padt_call_any({hook.c})")
+                self.call_hook(hook)
                 return
         _refuse(f"a call of {_callee_text(call)}")
+
+    def call_hook(self, hook: V) -> None:
+        """`t()` of a hook (`_tick`: the slice meter, which may suspend the program)."""
+        self.check(f"padt_call_any({hook.c})")
 
     def call_instance(self, target: V) -> None:
         """The body of the instance `target` (a block's call)."""
