@@ -335,7 +335,7 @@ class _Layouter:
             form = unit.unit
             if not isinstance(form, Class):
                 continue
-            starts = {s.name for s in form.slots if _integers(s.initial)}
+            starts = {s.name for s in form.slots if starts_as_integers(s.initial)}
             for variable in unit.variables:
                 if variable.attr not in starts:
                     continue
@@ -372,14 +372,17 @@ def _open_array(type_name: str) -> tuple[int, str] | None:
     return type_name[: match.start(1)].count("*"), match.group(1)
 
 
-def _integers(node: Expr) -> bool:
+def starts_as_integers(node: Expr) -> bool:
+    """Whether a slot's initial value is an integer constant, or a list of them: how an
+    enumeration's variable (or an array of them) starts, its values integers of the
+    compiler's choosing."""
     match node:
         case Const(value=value):
             return type(value) is int
         case Repeated(item=item):
-            return _integers(item)
+            return starts_as_integers(item)
         case Sequence(items=items):
-            return bool(items) and all(_integers(item) for item in items)
+            return all(starts_as_integers(item) for item in items)
     return False
 
 

@@ -4,11 +4,8 @@ will see once the image is live, compared with what it sees today."""
 
 from __future__ import annotations
 
-import importlib.machinery
-import importlib.util
 import math
 import struct
-from pathlib import Path
 from types import ModuleType
 from typing import Any
 
@@ -17,7 +14,7 @@ from backend.compiler.source import SourceFile
 from runtime.code.code_image import CodeImage
 from runtime.code.instances import Instances, instances_of
 from runtime.code.intrinsics import SystemView, _ActionControl, _SfcStep
-from runtime.code.native.build import build
+from runtime.code.native.build import build, load
 from runtime.code.native.image_body import translate_image_unit
 from runtime.code.native.image_views import copy_into, view_classes
 from runtime.code.native.tier import NativeTier, _breathe
@@ -105,15 +102,6 @@ def _cycle(instances: Instances) -> str:
     return ""
 
 
-def load(path: Path, name: str) -> ModuleType:
-    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
-    spec = importlib.util.spec_from_file_location(name, path, loader=loader)
-    assert spec is not None
-    module = importlib.util.module_from_spec(spec)
-    loader.exec_module(module)
-    return module
-
-
 def with_c_bodies(run: ImageRun, tier: NativeTier) -> list[tuple[str, str]]:
     """The bodies of `run`'s image translated in image mode, built and put in place on the
     view classes; the bodies left to Python, with the reasons."""
@@ -137,7 +125,7 @@ def with_c_bodies(run: ImageRun, tier: NativeTier) -> list[tuple[str, str]]:
         if not translated.source:
             continue
         path = build(translated.module, translated.source, tier.cache, tier.toolchain)
-        module = load(path, translated.module)
+        module = load(translated.module, path)
         bodies = module.bind(namespace, _breathe, run.views, registry, run.memory.View)
         for (cls, name), body in bodies.items():
             setattr(run.views[cls], name, body)

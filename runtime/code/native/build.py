@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import importlib.machinery
+import importlib.util
 import os
 import shutil
 import subprocess
@@ -21,6 +23,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from stat import S_ISREG
+from types import ModuleType
 
 HEADER = Path(__file__).with_name("padt_native.h")
 IMAGE_HEADER = HEADER.with_name("padt_image.h")  # which HEADER includes
@@ -103,6 +106,16 @@ def build(module: str, source: str, cache: Path, toolchain: Toolchain) -> Path:
             raise BuildError(f"{module}: {done.stderr.strip()[-2000:]}")
         os.replace(output, target)  # atomic: another process may build the same module
     return target
+
+
+def load(name: str, path: Path) -> ModuleType:
+    """The extension module `name` of the shared object at `path`, loaded and run."""
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, path, loader=loader)
+    assert spec is not None
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
 
 
 def mark_used(path: Path) -> None:

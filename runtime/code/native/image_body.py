@@ -24,7 +24,6 @@ charts, instances passed to FUNCTIONs.
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass, field
 
 from runtime.code.fault_location import code_filename
@@ -43,8 +42,7 @@ from runtime.code.native.kinds import (
 )
 from runtime.code.native.layout_c import C_TYPES
 from runtime.code.native.translate import (
-    NAME_PLACEHOLDER,
-    NotTranslated,
+    Mode,
     Translated,
     V,
     _Body,
@@ -54,16 +52,16 @@ from runtime.code.native.translate import (
     _kind_name,
     _Module,
     _Numbered,
-    _numbered,
     _refuse,
-    _translate_body,
     c_comment,
-    c_int,
     c_string,
+    module_end,
+    module_start,
+    translate_with,
 )
 from runtime.contract.artifact import PouCode
 from runtime.contract.code.typed_form import Call, Expr, Index
-from runtime.contract.code.units import Class, Function, Unit
+from runtime.contract.code.units import Unit
 from runtime.contract.layout import (
     NULLABLE_TIME,
     Chars,
@@ -145,13 +143,7 @@ class _ImageBody(_Body):
                 self.line(f"*({C_TYPES[code]} *){at} = ({C_TYPES[code]})({value.c});")
                 return
             case Scalar(code=code), Int(), Int() if code not in ("?", "f", "d", NULLABLE_TIME):
-                if value.kind.stand_in:
-                    _refuse("a REAL's integer stored without a wrap")
-                if not value.kind.within(declared):
-                    self.check(
-                        f"padt_in_range((padt_i128)({value.c}), {c_int(declared.lo)}, "
-                        f"{c_int(declared.hi)}, {c_string(what)})"
-                    )
+                self.storable(value, declared, what)
                 self.line(f"*({C_TYPES[code]} *){at} = ({C_TYPES[code]})({value.c});")
                 return
             case Chars(length=length, wide=wide), Text(), Text():
@@ -335,50 +327,14 @@ def translate_image_unit(
         functions=functions or {},
         layouts=layouts,
     )
-    bodies: list[tuple[str, str]] = []
-    left: list[tuple[str, str]] = []
-    functions_of = form.functions if isinstance(form, Class) else ()
-    for call in (f for f in functions_of if isinstance(f, Function) and f.name == "__call__"):
-        assert isinstance(form, Class)
-        body_name = f"{form.name}.__call__"
-        info = classes.get(form.name)
-        if info is None or form.name not in layouts:
-            left.append((body_name, "a class the artifact does not describe"))
-            continue
-        try:
-            text = _translate_body(
-                module, info, _numbered(form, call), _ImageBody, _image_function_text
-            )
-            bodies.append((form.name, text))
-        except NotTranslated as reason:
-            left.append((body_name, str(reason)))
-        except RecursionError:
-            left.append((body_name, "an expression nested too deep"))
-    if not bodies:
-        return Translated(unit.name, "", "", (), tuple(left))
-    source = _image_module_text(module, bodies)
-    digest = hashlib.sha256(source.encode()).hexdigest()[:24]
-    name = f"padt_{digest}"
-    return Translated(
-        unit.name,
-        name,
-        source.replace(NAME_PLACEHOLDER, name),
-        tuple(f"{cls}.__call__" for cls, _ in bodies),
-        tuple(left),
-    )
+    return translate_with(unit, form, module, IMAGE_MODE)
 
 
 def _image_module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
-    lines = [
-        c_comment(f"image-mode code of {module.filename}: written by runtime/code/native/"),
-        '#include "padt_native.h"',
-        "",
-        *module.statics(),
-        "",
-    ]
+    writer = "image-mode code of {}: written by runtime/code/native/image_body.py"
+    lines = module_start(module, writer, functions)
+    # the view class of each body, bound once
     lines += [f"static PyObject *VC{n}; {c_comment(cls)}" for n, (cls, _) in enumerate(functions)]
-    for _, text in functions:
-        lines += [text, ""]
     for n, (cls, _) in enumerate(functions):
         # the entry from Python: a view of the class, the context from it
         lines += [
@@ -423,23 +379,7 @@ def _image_module_text(module: _Module, functions: list[tuple[str, str]]) -> str
             f" || padt_add_view_method(bodies, {c_string(cls)}, &M{n}) < 0)",
             "        { Py_DECREF(bodies); return NULL; }",
         ]
-    lines += [
-        "    return bodies;",
-        "}",
-        "",
-        "static PyMethodDef padt_methods[] = {",
-        '    {"bind", padt_bind, METH_VARARGS, NULL},',
-        "    {NULL, NULL, 0, NULL},",
-        "};",
-        "",
-        "static struct PyModuleDef padt_module = {",
-        f'    PyModuleDef_HEAD_INIT, "{NAME_PLACEHOLDER}", NULL, -1, padt_methods,',
-        "};",
-        "",
-        f"PyMODINIT_FUNC PyInit_{NAME_PLACEHOLDER}(void)",
-        "{",
-        "    return PyModule_Create(&padt_module);",
-        "}",
-        "",
-    ]
-    return "\n".join(lines)
+    return "\n".join(lines + module_end())
+
+
+IMAGE_MODE = Mode(_ImageBody, _image_function_text, _image_module_text)

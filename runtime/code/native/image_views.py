@@ -15,15 +15,13 @@ image) have no view yet: `ViewsRefused` says which member.
 from __future__ import annotations
 
 import hashlib
-import importlib.machinery
-import importlib.util
 import threading
 from collections.abc import Mapping
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from runtime.code.native.build import Toolchain, build
+from runtime.code.native.build import Toolchain, build, load
 from runtime.contract.layout import (
     Chars,
     Elements,
@@ -57,12 +55,7 @@ def memory_module(cache: Path, toolchain: Toolchain) -> ModuleType:
         module = _loaded.get(name)
         if module is None:
             path = build(name, f"#define PADT_INIT PyInit_{name}\n{source}", cache, toolchain)
-            loader = importlib.machinery.ExtensionFileLoader(name, str(path))
-            spec = importlib.util.spec_from_file_location(name, path, loader=loader)
-            assert spec is not None
-            module = importlib.util.module_from_spec(spec)
-            loader.exec_module(module)
-            _loaded[name] = module
+            module = _loaded[name] = load(name, path)
     return module
 
 

@@ -14,8 +14,9 @@ from runtime.contract.artifact import PouCode, VarInfo
 from runtime.contract.code.names import IDENTIFIER
 from runtime.contract.code.python_text import printed_lines
 from runtime.contract.code.statements import Return
-from runtime.contract.code.typed_form import Call, Const, Expr, Repeated, Sequence
+from runtime.contract.code.typed_form import Call, Sequence
 from runtime.contract.code.units import Class, Function, Inherited, Unit
+from runtime.contract.layout import starts_as_integers
 from runtime.contract.values import array_shape, base_type, int_range
 
 INT64_MIN, INT64_MAX = -(1 << 63), (1 << 63) - 1
@@ -231,23 +232,12 @@ def _action_controls(form: Class) -> list[str]:
 
 def _integer_slots(form: Class) -> set[str]:
     """The slots of a class that start as an integer constant, or a list of them."""
-    return {slot.name for slot in form.slots if _integers(slot.initial)}
+    return {slot.name for slot in form.slots if starts_as_integers(slot.initial)}
 
 
 def _enumeration(type_name: str) -> bool:
     """A named type that is no elementary one."""
     return IDENTIFIER.match(type_name) is not None and int_range(type_name) is None
-
-
-def _integers(node: Expr) -> bool:
-    match node:
-        case Const(value=value):
-            return type(value) is int
-        case Repeated(item=item):
-            return _integers(item)
-        case Sequence(items=items):
-            return all(_integers(item) for item in items)
-    return False
 
 
 def _member_kind(

@@ -766,11 +766,10 @@ padt_python_body(PyObject *type, PyObject *o)
  * `POU_BASE.__call__(s)` with the derived block's `s`); the function it wraps checks the
  * class itself (translate.py) and hands any other instance to padt_python_body. */
 static int
-padt_add_method(PyObject *bodies, const char *class_name, PyMethodDef *def)
+padt_add_method_of(PyObject *bodies, const char *class_name, PyMethodDef *def,
+                   PyTypeObject *owner)
 {
-    if (padt_class(class_name) == NULL)
-        return -1;
-    PyObject *descr = PyDescr_NewMethod(&PyBaseObject_Type, def);
+    PyObject *descr = PyDescr_NewMethod(owner, def);
     if (descr == NULL)
         return -1;
     PyObject *key = Py_BuildValue("(ss)", class_name, def->ml_name);
@@ -778,6 +777,14 @@ padt_add_method(PyObject *bodies, const char *class_name, PyMethodDef *def)
     Py_XDECREF(key);
     Py_DECREF(descr);
     return failed ? -1 : 0;
+}
+
+static int
+padt_add_method(PyObject *bodies, const char *class_name, PyMethodDef *def)
+{
+    if (padt_class(class_name) == NULL)
+        return -1;
+    return padt_add_method_of(bodies, class_name, def, &PyBaseObject_Type);
 }
 
 /* ---- bodies on a memory image (translate.py's image mode) -----------------------------
@@ -941,14 +948,7 @@ padt_add_view_method(PyObject *bodies, const char *class_name, PyMethodDef *def)
         PyErr_Format(PyExc_TypeError, "native code: no view class %s", class_name);
         return -1;
     }
-    PyObject *descr = PyDescr_NewMethod((PyTypeObject *)view_class, def);
-    if (descr == NULL)
-        return -1;
-    PyObject *key = Py_BuildValue("(ss)", class_name, def->ml_name);
-    int failed = key == NULL || PyDict_SetItem(bodies, key, descr) < 0;
-    Py_XDECREF(key);
-    Py_DECREF(descr);
-    return failed ? -1 : 0;
+    return padt_add_method_of(bodies, class_name, def, (PyTypeObject *)view_class);
 }
 
 #endif /* PADT_NATIVE_H */

@@ -11,8 +11,6 @@ a cold start) rather than loading yet another.
 from __future__ import annotations
 
 import atexit
-import importlib.machinery
-import importlib.util
 import json
 import shutil
 import subprocess
@@ -26,7 +24,7 @@ from types import ModuleType
 from typing import Any
 
 from runtime.code.compile_worker import child_environment
-from runtime.code.native.build import Toolchain, find_toolchain
+from runtime.code.native.build import Toolchain, find_toolchain, load
 from runtime.contract.artifact import Artifact
 
 # Attributes the tier sets on a bound class. Their names have `__`, which no ST name has
@@ -178,12 +176,7 @@ class NativeTier:
             path = self._scratch / f"{name}-{number}{shared.suffix}"
         # a copy, not a link: the dynamic loader takes a file it knows (same inode) once
         shutil.copyfile(shared, path)
-        loader = importlib.machinery.ExtensionFileLoader(name, str(path))
-        spec = importlib.util.spec_from_file_location(name, path, loader=loader)
-        assert spec is not None
-        module = importlib.util.module_from_spec(spec)
-        loader.exec_module(module)
-        return module
+        return load(name, path)
 
     def _release(self, name: str, module: ModuleType) -> None:
         with self._lock:

@@ -461,14 +461,7 @@ class _Body:
             self.check(f"padt_set_float({place}, {value.c})")
             return
         if isinstance(declared, Int) and isinstance(value.kind, Int):
-            if value.kind.stand_in:
-                _refuse("a REAL's integer stored without a wrap")
-            if not value.kind.within(declared):
-                # not proven in range: the contract says it is; a value outside is a fault
-                self.check(
-                    f"padt_in_range((padt_i128)({value.c}), {c_int(declared.lo)}, "
-                    f"{c_int(declared.hi)}, {c_string(what)})"
-                )
+            self.storable(value, declared, what)
             setter = "padt_set_int" if value.kind.fits64 else "padt_set_int128"
             self.check(f"{setter}({place}, {value.c})")
             return
@@ -490,6 +483,18 @@ class _Body:
             self.check(f"padt_put({place}, Py_NewRef({value.c}))")
             return
         _refuse(f"a {_kind_name(value.kind)} stored into {_kind_name(declared)}")
+
+    def storable(self, value: V, declared: Int, what: str) -> None:
+        """An integer about to be stored into a variable of `declared`: a fault where it is
+        outside its range (the contract says it is not; checked where not proven)."""
+        assert isinstance(value.kind, Int)
+        if value.kind.stand_in:
+            _refuse("a REAL's integer stored without a wrap")
+        if not value.kind.within(declared):
+            self.check(
+                f"padt_in_range((padt_i128)({value.c}), {c_int(declared.lo)}, "
+                f"{c_int(declared.hi)}, {c_string(what)})"
+            )
 
     def assign_local(self, name: str, value_node: Expr) -> None:
         if name == "s" or (name.startswith("_") and not name.startswith("__")):
@@ -1749,16 +1754,9 @@ def _kind_name(kind: Kind | None) -> str:
 # ---- a unit --------------------------------------------------------------------------------------
 
 
-def _translate_body(
-    module: _Module,
-    cls: ClassInfo,
-    func: _Numbered,
-    body_class: type[_Body] | None = None,
-    text: Callable[[_Body, _Numbered], str] | None = None,
-) -> str:
+def _translate_body(module: _Module, cls: ClassInfo, func: _Numbered, mode: Mode) -> str:
     """The C function of one `__call__`; NotTranslated when it cannot be. The statics it
-    needs join `module` only when it is translated. (`body_class` and `text`: image
-    mode's, image_body.py.)"""
+    needs join `module` only when it is translated."""
     if func.function.params or not func.function.method:
         _refuse("a body with arguments")
     kinds: dict[str, Kind] = {}
@@ -1769,7 +1767,7 @@ def _translate_body(
             offsets=dict(module.offsets),
             keys=dict(module.keys),
         )
-        body = (body_class or _Body)(trial, cls, func, kinds)
+        body = mode.body(trial, cls, func, kinds)
         try:
             body.body()
         except NotTranslated as refused:
@@ -1793,7 +1791,7 @@ def _translate_body(
         if merged == kinds:
             module.types, module.offsets, module.keys = trial.types, trial.offsets, trial.keys
             module.sites = trial.sites
-            return (text or _function_text)(body, func)
+            return mode.function_text(body, func)
         kinds = merged
     _refuse("the kinds of the locals do not settle")
 
@@ -1933,6 +1931,16 @@ def _function_name(class_name: str) -> str:
     return f"F_{_identifier(class_name)}"
 
 
+@dataclass(frozen=True)
+class Mode:
+    """How the C of a unit is made: slot mode's (here: bodies on the slots of Python
+    objects) or image mode's (image_body.py: bodies on a memory image)."""
+
+    body: type[_Body]
+    function_text: Callable[[_Body, _Numbered], str]
+    module_text: Callable[[_Module, list[tuple[str, str]]], str]
+
+
 def translate_unit(
     unit: PouCode,
     form: Unit,
@@ -1945,25 +1953,30 @@ def translate_unit(
     module = _Module(
         classes, code_filename(unit), globals_class=globals_class, functions=functions or {}
     )
+    return translate_with(unit, form, module, SLOT_MODE)
+
+
+def translate_with(unit: PouCode, form: Unit, module: _Module, mode: Mode) -> Translated:
+    """The C module of one unit in `mode`, its statics in `module`."""
     bodies: list[tuple[str, str]] = []  # (class name, C text)
     left: list[tuple[str, str]] = []
     functions_of = form.functions if isinstance(form, Class) else ()
     for call in (f for f in functions_of if isinstance(f, Function) and f.name == "__call__"):
         assert isinstance(form, Class)
         body_name = f"{form.name}.__call__"
-        info = classes.get(form.name)
+        info = module.classes.get(form.name)
         if info is None:
             left.append((body_name, "a class the artifact does not describe"))
             continue
         try:
-            bodies.append((form.name, _translate_body(module, info, _numbered(form, call))))
+            bodies.append((form.name, _translate_body(module, info, _numbered(form, call), mode)))
         except NotTranslated as reason:
             left.append((body_name, str(reason)))
         except RecursionError:
             left.append((body_name, "an expression nested too deep"))
     if not bodies:
         return Translated(unit.name, "", "", (), tuple(left))
-    source = _module_text(module, bodies)
+    source = mode.module_text(module, bodies)
     digest = hashlib.sha256(source.encode()).hexdigest()[:24]
     name = f"padt_{digest}"
     return Translated(
@@ -1977,15 +1990,8 @@ def translate_unit(
 
 def _module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
     types = [module.type_ref(cls) for cls, _ in functions]
-    lines = [
-        c_comment(f"native code of {module.filename}: written by runtime/code/native/translate.py"),
-        '#include "padt_native.h"',
-        "",
-        *module.statics(),
-        "",
-    ]
-    for _, text in functions:
-        lines += [text, ""]
+    writer = "native code of {}: written by runtime/code/native/translate.py"
+    lines = module_start(module, writer, functions)
     for n, (cls, _) in enumerate(functions):
         # the C body on an instance of its class only (its slots' offsets): the Python body
         # on any other, a derived block's in its SUPER^() (padt_native.h, padt_python_body)
@@ -2017,7 +2023,27 @@ def _module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
             f"    if (padt_add_method(bodies, {c_string(cls)}, &M{n}) < 0) "
             "{ Py_DECREF(bodies); return NULL; }"
         )
-    lines += [
+    return "\n".join(lines + module_end())
+
+
+def module_start(module: _Module, what: str, functions: list[tuple[str, str]]) -> list[str]:
+    """The beginning of a module's text: what it is (`what`: the code and who writes it),
+    its statics, its bodies' functions."""
+    lines = [
+        c_comment(what.format(module.filename)),
+        '#include "padt_native.h"',
+        "",
+        *module.statics(),
+        "",
+    ]
+    for _, text in functions:
+        lines += [text, ""]
+    return lines
+
+
+def module_end() -> list[str]:
+    """The end of a module's text: `bind` returns the bodies, and the module itself."""
+    return [
         "    return bodies;",
         "}",
         "",
@@ -2036,4 +2062,6 @@ def _module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
         "}",
         "",
     ]
-    return "\n".join(lines)
+
+
+SLOT_MODE = Mode(_Body, _function_text, _module_text)
