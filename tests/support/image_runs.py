@@ -67,7 +67,8 @@ class ImageRun:
         }
         views = view_classes(memory, layouts, classes)
         self.memory, self.layouts, self.views = memory, layouts, views
-        placement = image_layout(artifact, layouts)
+        self.class_names = {name: kind.__name__ for name, kind in classes.items()}
+        self.placement = placement = image_layout(artifact, layouts)
         self.image = bytearray(placement.size)
         placed = {p.name: views[p.cls](self.image, p.offset) for p in placement.placements}
         if self.viewed.globals is not None:

@@ -1,0 +1,310 @@
+"""The values of a configuration in its memory image (docs/native-code.md, "Who reaches a
+value, and how"): `ImageMemory`, the `Memory` of the C tier, which reads and writes the
+image's bytes at the offsets of the layouts (runtime/contract/layout.py) with `struct`,
+in C, without a Python object per instance. Values are the contract's representations, as
+`ObjectMemory` gives them (bool, int, float, str, lists for arrays), and the context's
+trees are the ones `context_snapshot.snapshot` makes of the objects, so a context saved
+on either side warm-starts the other.
+
+Not yet live: the tier switch that puts a configuration's values into an image is to do
+(docs/native-code.md, "Image mode").
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+import struct
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from runtime.code.instances import BoundVariable
+from runtime.context_snapshot import ContextMismatch, Records
+from runtime.contract.layout import (
+    NULLABLE_TIME,
+    Chars,
+    Elements,
+    ImageLayout,
+    Layouts,
+    Nested,
+    Scalar,
+    Shape,
+    size_and_align,
+)
+from runtime.memory import ValueTrees
+
+_NO_TIME = -(1 << 63)  # a runtime class's time that is None (layout.NULLABLE_TIME)
+_DOUBLE, _BITS = struct.Struct("<d"), struct.Struct("<Q")
+_LENGTH = struct.Struct("<H")
+
+
+@dataclass(frozen=True)
+class _Place:
+    """Where a variable's bytes are in the image, and their shape."""
+
+    offset: int
+    shape: Shape
+
+
+class ImageMemory:
+    """The values in one memory image: the globals (`_G`), each user program's instance
+    and, where programs have them, their own copies of the globals (`<program>._G`)."""
+
+    def __init__(
+        self,
+        image: bytearray,
+        layouts: Layouts,
+        placement: ImageLayout,
+        class_names: Mapping[str, str],
+        programs: list[str],
+    ) -> None:
+        """`class_names`: the name each layout's class has in Python (an SFC step's
+        structure is the runtime's `_SfcStep`), which the context's trees name;
+        `programs`: the user programs' names."""
+        self._image = image
+        self._layouts = layouts
+        self._names = class_names
+        self._programs = programs
+        self._at = {p.name: p for p in placement.placements}
+        self._copies = [self._at[f"{name}._G"] for name in programs if f"{name}._G" in self._at]
+
+    # -- reading and writing variables
+    def reader(self, bounds: list[BoundVariable]) -> Callable[[], list[Any]]:
+        """The elementary values in one `struct` call over the image (in offset order,
+        put back in the bounds' order by one `itemgetter`); texts and arrays after it."""
+        places = [self._place(bound) for bound in bounds]
+        scalars = sorted({p.offset: p.shape for p in places if isinstance(p.shape, Scalar)}.items())
+        layout, end = ["<"], 0
+        for offset, shape in scalars:
+            assert isinstance(shape, Scalar)
+            layout.append(f"{offset - end}x" if offset > end else "")
+            layout.append(_code(shape.code))
+            end = offset + size_and_align(shape, self._layouts.__getitem__)[0]
+        packed = struct.Struct("".join(layout))
+        order = {offset: n for n, (offset, _) in enumerate(scalars)}
+        others = [(n, p) for n, p in enumerate(places) if not isinstance(p.shape, Scalar)]
+        # where each variable's value is in the row (a text's or an array's: a stand-in)
+        pick = [order[p.offset] if isinstance(p.shape, Scalar) else 0 for p in places]
+        gather = operator.itemgetter(*pick, 0)  # a tuple, however many variables
+        image, value = self._image, self._value
+
+        def read() -> list[Any]:
+            row = packed.unpack_from(image, 0) if scalars else (None,)
+            got = list(gather(row))
+            got.pop()
+            for n, place in others:
+                got[n] = value(place.offset, place.shape)
+            return got
+
+        return read
+
+    def read(self, bound: BoundVariable) -> Any:
+        place = self._place(bound)
+        return self._value(place.offset, place.shape)
+
+    def writer(self, bound: BoundVariable) -> Callable[[Any], None]:
+        places = [self._place(bound, root) for root in self._roots(bound)]
+
+        def write(value: Any) -> None:
+            for place in places:
+                self._put(self._image, place.offset, place.shape, value)
+
+        return write
+
+    def store(self, bound: BoundVariable, value: Any) -> None:
+        """A global goes into the globals and into every program's own copy of them."""
+        self.writer(bound)(value)
+
+    def _roots(self, bound: BoundVariable) -> list[str]:
+        if bound.program is not None:
+            return [bound.program.name]
+        return ["_G", *(copy.name for copy in self._copies)]
+
+    def _place(self, bound: BoundVariable, root: str | None = None) -> _Place:
+        if root is None:
+            root = bound.program.name if bound.program is not None else "_G"
+        placed = self._at[root]
+        offset = placed.offset
+        shape: Shape = Nested(placed.cls)
+        for step in bound.path.attrs:
+            if isinstance(step, int):
+                if not isinstance(shape, Elements) or not 0 <= step < shape.count:
+                    raise KeyError(f"{bound.path.path}: no element {step}")
+                offset += step * size_and_align(shape.element, self._layouts.__getitem__)[0]
+                shape = shape.element
+            else:
+                if not isinstance(shape, Nested):
+                    raise KeyError(f"{bound.path.path}: no member {step}")
+                member = self._layouts[shape.cls].member(step)
+                offset, shape = offset + member.offset, member.shape
+        return _Place(offset, shape)
+
+    def _value(self, offset: int, shape: Shape, image: bytearray | None = None) -> Any:
+        image = self._image if image is None else image
+        match shape:
+            case Scalar(code=code):
+                value = struct.unpack_from(f"<{_code(code)}", image, offset)[0]
+                return None if code == NULLABLE_TIME and value == _NO_TIME else value
+            case Chars(length=length, wide=wide):
+                count = min(_LENGTH.unpack_from(image, offset)[0], length)
+                unit = 2 if wide else 1
+                raw = bytes(image[offset + 2 : offset + 2 + unit * count])
+                return raw.decode("utf-16-le" if wide else "latin-1")
+            case Elements(element=element, count=count):
+                stride = size_and_align(element, self._layouts.__getitem__)[0]
+                if isinstance(element, Scalar) and element.code != NULLABLE_TIME:
+                    return list(struct.unpack_from(f"<{count}{_code(element.code)}", image, offset))
+                return [self._value(offset + n * stride, element, image) for n in range(count)]
+        raise TypeError(f"no value of a {type(shape).__name__}")
+
+    def _put(self, image: bytearray, offset: int, shape: Shape, value: Any) -> None:
+        """`value` (of the contract's representation) into the bytes at `offset`."""
+        match shape:
+            case Scalar(code=code):
+                if code == NULLABLE_TIME and value is None:
+                    value = _NO_TIME
+                struct.pack_into(f"<{_code(code)}", image, offset, value)
+                return
+            case Chars(length=length, wide=wide):
+                if not isinstance(value, str) or len(value) > length:
+                    raise ValueError(f"{value!r} is no text of at most {length} characters")
+                data = value.encode("utf-16-le" if wide else "latin-1")
+                if wide and len(data) != 2 * len(value):
+                    raise ValueError(f"{value!r} has a character beyond two bytes")
+                image[offset + 2 : offset + 2 + len(data)] = data
+                _LENGTH.pack_into(image, offset, len(value))
+                return
+            case Elements(element=element, count=count):
+                if not isinstance(value, list) or len(value) != count:
+                    raise ValueError(f"an array of {count} elements cannot take {value!r}")
+                stride = size_and_align(element, self._layouts.__getitem__)[0]
+                for n, item in enumerate(value):
+                    self._put(image, offset + n * stride, element, item)
+                return
+        raise TypeError(f"no value into a {type(shape).__name__}")
+
+    # -- the context
+    def take(self, *, deferred: bool = False) -> ValueTrees:
+        """Every value as `context_snapshot.snapshot` takes it of the objects (`deferred`
+        changes nothing: the trees are made at once)."""
+        programs = {
+            name: self._tree(self._at[name].offset, Nested(self._at[name].cls))
+            for name in self._programs
+        }
+        the_globals = self._at.get("_G")
+        globals_tree = (
+            None if the_globals is None else self._tree(the_globals.offset, Nested(the_globals.cls))
+        )
+        return ValueTrees(globals_tree, programs)
+
+    def _tree(self, offset: int, shape: Shape) -> Any:
+        match shape:
+            case Nested(cls=cls):
+                layout = self._layouts[cls]
+                fields = {
+                    m.name: self._tree(offset + m.offset, m.shape)
+                    for m in sorted(layout.members, key=lambda m: m.name)
+                }
+                return {"c": self._names.get(cls, cls), "v": fields}
+            case Elements(element=element, count=count) if not isinstance(element, Scalar):
+                stride = size_and_align(element, self._layouts.__getitem__)[0]
+                return [self._tree(offset + n * stride, element) for n in range(count)]
+        value = self._value(offset, shape)
+        if isinstance(value, list):
+            return [_node(item) for item in value]
+        return _node(value)
+
+    def restore(self, trees: ValueTrees) -> None:
+        """Into a copy of the image first: a tree that does not fit (ContextMismatch)
+        leaves the image as it was."""
+        scratch = bytearray(self._image)
+        if trees.globals is not None and "_G" in self._at:
+            self._restore_node(
+                scratch, self._at["_G"].offset, Nested(self._at["_G"].cls), trees.globals
+            )
+        for name, tree in trees.programs.items():
+            if name not in self._programs:
+                raise ContextMismatch(f"no program {name}")
+            place = self._at[name]
+            self._restore_node(scratch, place.offset, Nested(place.cls), tree)
+        if "_G" in self._at:  # the programs' copies of the globals see them too
+            start, size = self._at["_G"].offset, self._layouts[self._at["_G"].cls].size
+            for copy in self._copies:
+                scratch[copy.offset : copy.offset + size] = scratch[start : start + size]
+        self._image[:] = scratch
+
+    def _restore_node(self, image: bytearray, offset: int, shape: Shape, node: Any) -> None:
+        if type(node) is Records:
+            node = node.nodes()
+        match shape:
+            case Nested(cls=cls):
+                layout = self._layouts[cls]
+                name = self._names.get(cls, cls)
+                if (
+                    type(node) is not dict
+                    or node.get("c") != name
+                    or type(node.get("v")) is not dict
+                ):
+                    raise ContextMismatch(f"expected an instance of {name}")
+                fields = node["v"]
+                if fields.keys() != {m.name for m in layout.members}:
+                    raise ContextMismatch(f"{name} fields differ")
+                for member in layout.members:
+                    try:
+                        self._restore_node(
+                            image, offset + member.offset, member.shape, fields[member.name]
+                        )
+                    except ContextMismatch as exc:
+                        exc.path.insert(0, member.name)
+                        raise
+                return
+            case Elements(element=element, count=count):
+                if type(node) is not list or len(node) != count:
+                    raise ContextMismatch(f"expected an array of {count}")
+                stride = size_and_align(element, self._layouts.__getitem__)[0]
+                for n, item in enumerate(node):
+                    try:
+                        self._restore_node(image, offset + n * stride, element, item)
+                    except ContextMismatch as exc:
+                        exc.path.insert(0, n)
+                        raise
+                return
+        value = _value_of(node, shape)
+        try:
+            self._put(image, offset, shape, value)
+        except (struct.error, ValueError) as exc:  # out of the range, a text too long
+            raise ContextMismatch(f"{value!r} does not fit: {exc}") from None
+
+
+def _code(code: str) -> str:
+    """The `struct` character of a layout's scalar code."""
+    return "q" if code == NULLABLE_TIME else code
+
+
+def _node(value: Any) -> Any:
+    """A value as the context's tree holds it: a NaN or an infinity by its bits."""
+    if type(value) is float and not math.isfinite(value):
+        return {"ieee": f"{_BITS.unpack(_DOUBLE.pack(value))[0]:016x}"}
+    return value
+
+
+def _value_of(node: Any, shape: Shape) -> Any:
+    """The value a tree's node stands for, of the kind the variable holds."""
+    if type(node) is dict and node.keys() == {"ieee"}:
+        bits = node["ieee"]
+        if not (isinstance(bits, str) and len(bits) == 16):
+            raise ContextMismatch(f"malformed NaN or infinity {bits!r}")
+        return _DOUBLE.unpack(_BITS.pack(int(bits, 16)))[0]
+    if isinstance(shape, Scalar):
+        if shape.code == "?":
+            if type(node) is not bool:
+                raise ContextMismatch(f"expected TRUE or FALSE, found {node!r}")
+            return node
+        if shape.code in ("f", "d"):
+            if type(node) not in (int, float):
+                raise ContextMismatch(f"expected a number, found {node!r}")
+            return float(node)
+        if type(node) is not int and not (shape.code == NULLABLE_TIME and node is None):
+            raise ContextMismatch(f"expected a whole number, found {node!r}")
+    return node
