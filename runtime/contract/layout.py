@@ -176,7 +176,7 @@ def _scalar_code(type_name: str) -> str:
     return _INTEGER_CODES.get((bits, low < 0), "")
 
 
-_RUNTIME_CLASSES: dict[str, tuple[tuple[str, Shape], ...]] = {
+RUNTIME_CLASSES: dict[str, tuple[tuple[str, Shape], ...]] = {
     # `since` is None until the step's first active cycle
     SFC_STEP: (("X", Scalar("?")), ("T", Scalar("q")), ("since", Scalar(NULLABLE_TIME))),
     ACTION_CONTROL: (
@@ -228,8 +228,8 @@ class _Layouter:
         return made
 
     def _fields(self, cls: str) -> tuple[tuple[str, Shape], ...]:
-        if cls in _RUNTIME_CLASSES:
-            return _RUNTIME_CLASSES[cls]
+        if cls in RUNTIME_CLASSES:
+            return RUNTIME_CLASSES[cls]
         unit = self._units.get(cls)
         if unit is None:
             raise LayoutRefused(f"no class {cls} in the artifact")
@@ -237,7 +237,7 @@ class _Layouter:
         if isinstance(form, Alias):
             if form.target != SFC_STEP:
                 raise LayoutRefused(f"class {cls} is an alias of {form.target}")
-            return _RUNTIME_CLASSES[SFC_STEP]
+            return RUNTIME_CLASSES[SFC_STEP]
         if not isinstance(form, Class):
             raise LayoutRefused(f"unit {unit.name} is no class")
         declared = {v.attr: v for v in unit.variables}
@@ -435,7 +435,7 @@ def runtime_layouts() -> Layouts:
     """The layouts of the runtime's own classes (the header, an SFC step, an action
     control block)."""
     made: Layouts = {}
-    for name, fields in _RUNTIME_CLASSES.items():  # none holds another
+    for name, fields in RUNTIME_CLASSES.items():  # none holds another
         made[name] = place(name, fields, made.__getitem__)
     return made
 

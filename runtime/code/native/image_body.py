@@ -17,9 +17,13 @@ integer fits its C type, the same faults at the same printed lines. What differs
 - a block's call goes to the callee's C body (found once per call site in the registry of
   bodies), or to the `__call__` of a view of it where its body is Python.
 
-Not yet in image mode (the body is left to the caller's choice, with the reason):
-references, interfaces and in-outs of aggregates, methods and property accessors, SFC
-charts, instances passed to FUNCTIONs.
+An instance given to Python (a method or property accessor called on it, a FUNCTION or a
+helper of the runtime's it is passed to) is a view of it; an SFC step's time and entry and
+an action control block's update are C on their bytes (padt_native.h, asserted to match
+the runtime's fixed layouts), as the runtime's Python classes do them.
+
+Not yet in image mode (the body is left to Python, with the reason): references,
+interfaces and in-outs of aggregates, and an array passed to Python code.
 """
 
 from __future__ import annotations
@@ -60,10 +64,13 @@ from runtime.code.native.translate import (
     translate_with,
 )
 from runtime.contract.artifact import PouCode
-from runtime.contract.code.typed_form import Call, Expr, Index
+from runtime.contract.code.typed_form import Call, Expr, Index, Member
 from runtime.contract.code.units import Unit
 from runtime.contract.layout import (
+    ACTION_CONTROL,
     NULLABLE_TIME,
+    RUNTIME_CLASSES,
+    SFC_STEP,
     Chars,
     Elements,
     Layout,
@@ -79,6 +86,10 @@ from runtime.contract.layout import Member as LayoutMember
 @dataclass
 class _ImageModule(_Module):
     layouts: Layouts = field(default_factory=dict)
+    view_classes: dict[str, str] = field(default_factory=dict)  # class -> C static
+    # classes laid out as the runtime's SFC classes, whose C struct (padt_native.h) the
+    # module asserts to match the layout
+    asserted: set[str] = field(default_factory=set)
 
     def layout(self, cls: str) -> Layout:
         found = self.layouts.get(cls)
@@ -86,10 +97,46 @@ class _ImageModule(_Module):
             _refuse(f"the class {cls}, which has no layout")
         return found
 
+    def view_class(self, cls: str) -> str:
+        """The C static of the view class of `cls`, bound with the module."""
+        self.layout(cls)
+        return self.view_classes.setdefault(cls, f"V{len(self.view_classes)}")
+
     def statics(self) -> list[str]:
-        return [
+        lines = [
             line.replace("static padt_site ", "static padt_msite ") for line in super().statics()
         ]
+        views = self.view_classes.items()
+        lines += [f"static PyObject *{ref}; {c_comment(cls)}" for cls, ref in views]
+        for cls in sorted(self.asserted):
+            layout = self.layouts[cls]
+            struct = _RUNTIME_STRUCTS[tuple(m.name for m in layout.members)]
+            lines += [
+                f"_Static_assert(offsetof({struct}, {m.name}) == {m.offset}, {c_string(cls)});"
+                for m in layout.members
+            ]
+            lines.append(f"_Static_assert(sizeof({struct}) == {layout.size}, {c_string(cls)});")
+        return lines
+
+    def binding(self) -> list[str]:
+        return super().binding() + [
+            f"    if (({ref} = PyDict_GetItemString(padt_views, {c_string(cls)})) == NULL) {{"
+            f' PyErr_SetString(PyExc_TypeError, "native code: no view class {cls}");'
+            " return NULL; }"
+            for cls, ref in self.view_classes.items()
+        ]
+
+
+# an action control block's flags and times, in padt_action_update's order
+_FLAGS = ("N", "R", "S", "P", "P0", "P1", "L", "D", "SD", "DS", "SL")
+_TIMES = ("TL", "TD", "TSD", "TDS", "TSL")
+_RUNTIME_MEMBERS = {
+    name: [member for member, _ in fields] for name, fields in RUNTIME_CLASSES.items()
+}
+_RUNTIME_STRUCTS = {
+    tuple(_RUNTIME_MEMBERS[SFC_STEP]): "padt_sfc_step",
+    tuple(_RUNTIME_MEMBERS[ACTION_CONTROL]): "padt_action_control",
+}
 
 
 class _ImageBody(_Body):
@@ -232,14 +279,70 @@ class _ImageBody(_Body):
             return
         super().keep(local, value)
 
-    # -- what image mode does not do yet
-    def is_method_call(self, node: Call) -> bool:
-        return False  # a method's call is then refused as a call of what it names
+    # -- the runtime's SFC classes, in C on their bytes (padt_native.h)
+    def helper_call(self, name: str, node: Call) -> V:
+        if name == "_step_time" and len(node.args) == 2:
+            step, now = self.sfc_instance(node.args[0], SFC_STEP), self.int_value(node.args[1])
+            return V(FULL64, f"padt_step_time({step}, {now.c})")
+        return super().helper_call(name, node)
+
+    def helper_statement(self, callee: str, call: Call) -> None:
+        if callee == "_step_enter" and len(call.args) == 1:
+            self.line(f"padt_step_enter({self.sfc_instance(call.args[0], SFC_STEP)});")
+            return
+        super().helper_statement(callee, call)
+
+    def function_call(self, node: Call) -> tuple[FunctionInfo, str]:
+        callee = node.callee
+        if isinstance(callee, Member) and callee.name == "update" and len(node.args) == 1:
+            control = self.sfc_instance(callee.base, ACTION_CONTROL)
+            now = self.int_value(node.args[0])
+            given = dict(node.keywords)
+            if not given.keys() <= set(_FLAGS + _TIMES):
+                _refuse(f"an action control block told {sorted(given)}")
+            flags = [self.flag(given[name]) if name in given else "0" for name in _FLAGS]
+            times = [self.int_value(given[name]).c if name in given else "0" for name in _TIMES]
+            args = ", ".join([control, now.c, *flags, *times])
+            self.line(f"padt_action_update({args});")
+            return FunctionInfo("update", None), "Py_None"
+        return super().function_call(node)
+
+    def sfc_instance(self, node: Expr, runtime_class: str) -> str:
+        """Where an SFC step or action control block is (its layout the runtime's fixed
+        one, which padt_native.h's struct is asserted to match)."""
+        value = self.expr(node)
+        if not isinstance(value.kind, Instance):
+            _refuse(f"{runtime_class} of a {_kind_name(value.kind)}")
+        layout = self.module.layout(value.kind.cls)
+        if [m.name for m in layout.members] != _RUNTIME_MEMBERS[runtime_class]:
+            _refuse(f"{value.kind.cls} laid out otherwise than the runtime's {runtime_class}")
+        self.module.asserted.add(value.kind.cls)
+        return value.c
+
+    def flag(self, node: Expr) -> str:
+        value = self.expr(node)
+        if not isinstance(value.kind, Bool):
+            _refuse("an action qualifier's flag that is no BOOL")
+        return f"({value.c})"
+
+    # -- instances given to Python: as views
+    def instance_object(self, value: V) -> str:
+        assert isinstance(value.kind, Instance)
+        view_class = self.module.view_class(value.kind.cls)
+        return self.owned_object(
+            f"padt_view_new({view_class}, padt_ctx->image, {value.c} - padt_ctx->base)"
+        )
 
     def boxed(self, value: V, callee: str) -> str:
-        if isinstance(value.kind, Instance | Array):
-            _refuse(f"an instance or array passed to {callee} (not yet in image mode)")
+        """An instance passed to Python code (a method, a FUNCTION, the runtime's SFC
+        helpers) is a view of it."""
+        if isinstance(value.kind, Instance):
+            return self.instance_object(value)
+        if isinstance(value.kind, Array):
+            _refuse(f"an array passed to {callee} (not yet in image mode)")
         return super().boxed(value, callee)
+
+    # -- what image mode does not do yet
 
     def unboxed(self, obj: str, kind: Kind, what: str) -> V:
         if isinstance(kind, Instance | Array):

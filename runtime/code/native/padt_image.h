@@ -19,6 +19,20 @@ typedef struct {
     Py_ssize_t offset;
 } padt_view;
 
+/* A view of class `type` (a subclass of padt_memory.View) of the instance at `offset` of
+ * `image` (a new reference; the offset is the caller's to have checked). */
+static inline PyObject *
+padt_view_new(PyObject *type, PyObject *image, Py_ssize_t offset)
+{
+    PyTypeObject *kind = (PyTypeObject *)type;
+    padt_view *view = (padt_view *)kind->tp_alloc(kind, 0);
+    if (view == NULL)
+        return NULL;
+    view->image = Py_NewRef(image);
+    view->offset = offset;
+    return (PyObject *)view;
+}
+
 /* The str a string variable holds (a new reference); a length beyond the most the
  * variable holds, which no writer stores, is read as that most. */
 static inline PyObject *

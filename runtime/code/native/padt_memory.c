@@ -54,15 +54,7 @@ static char *at(PyObject *image, Py_ssize_t offset) {
     return PyByteArray_AS_STRING(image) + offset;
 }
 
-static PyObject *view_at(PyObject *view_type, PyObject *image, Py_ssize_t offset) {
-    PyTypeObject *type = (PyTypeObject *)view_type;
-    ViewObject *view = (ViewObject *)type->tp_alloc(type, 0);
-    if (view == NULL) return NULL;
-    Py_INCREF(image);
-    view->image = image;
-    view->offset = offset;
-    return (PyObject *)view;
-}
+#define view_at padt_view_new
 
 static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) {
     char *p = at(image, offset);

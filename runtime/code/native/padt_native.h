@@ -931,6 +931,81 @@ padt_mcall(padt_msite *site, PyObject *class_name, char *p, padt_mctx *ctx)
     return 0;
 }
 
+/* The runtime's SFC classes in the image (runtime/contract/layout.py's fixed layouts; each
+ * module asserts the offsets its layouts give): a time that is None in Python is
+ * INT64_MIN. What their Python methods do (runtime/code/intrinsics.py: _step_time,
+ * _step_enter, _ActionControl.update), on the bytes. */
+#define PADT_NO_TIME INT64_MIN
+
+typedef struct {
+    uint8_t X;
+    int64_t T;
+    int64_t since;
+} padt_sfc_step;
+
+typedef struct {
+    uint8_t A, Q, held, stored, sd_set, ds_stored, sl_set, p_prev, p1_prev, p0_prev;
+    int64_t l_since, d_since, sd_since, ds_since, sl_since;
+} padt_action_control;
+
+static inline int64_t
+padt_step_time(char *p, int64_t now)
+{
+    padt_sfc_step *step = (padt_sfc_step *)p;
+    if (step->since == PADT_NO_TIME) /* the first cycle in which the step is active */
+        step->since = now;
+    return now - step->since;
+}
+
+static inline void
+padt_step_enter(char *p)
+{
+    padt_sfc_step *step = (padt_sfc_step *)p;
+    step->X = 1;
+    step->T = 0;
+    step->since = PADT_NO_TIME;
+}
+
+static inline int64_t
+padt_elapsed(int on, int64_t *since, int64_t now)
+{
+    if (!on) {
+        *since = PADT_NO_TIME;
+        return -1;
+    }
+    if (*since == PADT_NO_TIME)
+        *since = now;
+    return now - *since;
+}
+
+static inline void
+padt_action_update(char *p, int64_t now, int N, int R, int S, int P, int P0, int P1, int L,
+                   int D, int SD, int DS, int SL, int64_t TL, int64_t TD, int64_t TSD,
+                   int64_t TDS, int64_t TSL)
+{
+    padt_action_control *a = (padt_action_control *)p;
+    a->stored = !R && (S || a->stored);
+    int64_t l_elapsed = padt_elapsed(L, &a->l_since, now);
+    int64_t d_elapsed = padt_elapsed(D, &a->d_since, now);
+    a->sd_set = !R && (SD || a->sd_set);
+    int64_t sd_elapsed = padt_elapsed(a->sd_set, &a->sd_since, now);
+    int64_t ds_elapsed = padt_elapsed(DS, &a->ds_since, now);
+    a->ds_stored = !R && ((ds_elapsed >= TDS && TDS >= 0 && DS) || a->ds_stored);
+    a->sl_set = !R && (SL || a->sl_set);
+    int64_t sl_elapsed = padt_elapsed(a->sl_set, &a->sl_since, now);
+    int pulse = (P && !a->p_prev) || (P1 && !a->p1_prev) || (a->p0_prev && !P0);
+    a->p_prev = P != 0;
+    a->p1_prev = P1 != 0;
+    a->p0_prev = P0 != 0;
+    int active = !R && (N || (L && l_elapsed < TL) || (D && d_elapsed >= TD) || a->stored
+                        || (a->sd_set && sd_elapsed >= TSD) || a->ds_stored
+                        || (a->sl_set && sl_elapsed < TSL));
+    int final_scan = a->held && !active;
+    a->held = active != 0;
+    a->Q = active || pulse;
+    a->A = active || pulse || final_scan;
+}
+
 /* An array's element out of its bounds: the fault a Python list gives. */
 static int
 padt_index_error(void)

@@ -587,8 +587,7 @@ class _Body:
             _refuse("an expression statement that is no call")
         callee = call.callee
         if isinstance(callee, str) and callee in _HELPER_STATEMENTS:
-            args = [self.boxed(self.expr(arg), callee) for arg in call.args]
-            self.owned_object(_vector_call(self.module.key(callee), args))
+            self.helper_statement(callee, call)
             return
         if isinstance(callee, Member) and callee.name == "__call__" and not call.args:
             target = self.expr(callee.base)
@@ -602,6 +601,11 @@ class _Body:
                 self.call_hook(hook)
                 return
         _refuse(f"a call of {_callee_text(call)}")
+
+    def helper_statement(self, callee: str, call: Call) -> None:
+        """A function of the runtime's called for what it does (`_step_enter`)."""
+        args = [self.boxed(self.expr(arg), callee) for arg in call.args]
+        self.owned_object(_vector_call(self.module.key(callee), args))
 
     def call_hook(self, hook: V) -> None:
         """`t()` of a hook (`_tick`: the slice meter, which may suspend the program)."""
@@ -1398,13 +1402,13 @@ class _Body:
         if isinstance(callee, Member) and isinstance(callee.base, Named):  # SUPER^.X()
             name, base = callee.name, callee.base.name
             info = self.method_info(V(Instance(base), "s"), name)
-            first, passed = ["s"], passed[1:]
+            first, passed = [self.instance_object(V(Instance(self.cls.name), "s"))], passed[1:]
             caller = f"padt_call_in_class({self.module.type_ref(base)}, "
         elif isinstance(callee, Member):
             owner = self.expr(callee.base)
             name = callee.name
             info = self.method_info(owner, name)
-            first, caller = [owner.c], "padt_call_method("
+            first, caller = [self.instance_object(owner)], "padt_call_method("
         else:
             assert isinstance(callee, str)
             name = callee
@@ -1422,6 +1426,11 @@ class _Body:
         )
         self.line(f"if (PADT_UNLIKELY({result} == NULL)) goto padt_error;")
         return info, result
+
+    def instance_object(self, value: V) -> str:
+        """The Python object of an instance a method is called on (borrowed or owned by a
+        temporary of the statement)."""
+        return value.c
 
     def method_info(self, owner: V, name: str) -> FunctionInfo:
         if isinstance(owner.kind, Implementer):  # through an interface

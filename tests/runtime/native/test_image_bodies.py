@@ -13,6 +13,8 @@ from hypothesis import HealthCheck, given, settings
 
 from runtime.code.native.tier import NativeTier
 from tests.compiler.test_differential import CYCLES, programs
+from tests.compiler.test_sfc import QUALIFIERS
+from tests.conftest import REPO
 from tests.runtime.native.test_image_views import EVERY_TYPE
 from tests.support.corpus_paths import SHARED, shared_dir
 from tests.support.image_runs import ImageRun, compiled, with_c_bodies
@@ -81,7 +83,31 @@ END_PROGRAM
     assert "index" in run_alike(run, 10) and left == []
 
 
-def test_what_image_mode_does_not_do_yet_runs_as_python_on_views(
+def test_every_action_qualifier_and_the_batch_chart_as_c_in_the_image(
+    padt_memory: ModuleType, native_tier: NativeTier
+) -> None:
+    """Steps' times and entries and the action control blocks in C on their bytes
+    (padt_native.h), beside the runtime's Python classes on objects."""
+    run, left = side_by_side(QUALIFIERS, padt_memory, native_tier)
+    assert left == []
+    schedule = {2: ("go", True), 3: ("go", False), 6: ("stop", True), 7: ("stop", False)}
+    for cycle in range(1, 12):
+        if cycle in schedule:
+            name, value = schedule[cycle]
+            for side in (run.objects, run.viewed):
+                setattr(side.programs[0].instance, name, value)
+        assert run.cycle() == ("", "")
+        run.compare()
+    assert (run.viewed.programs[0].instance.runs, run.viewed.programs[0].instance.pulses) == (5, 1)
+    sequence = REPO / "backend" / "projects" / "templates" / "sequence"
+    text = "\n".join(path.read_text() for path in sorted(sequence.glob("*.st")))
+    run, left = side_by_side(text, padt_memory, native_tier)
+    assert left == []
+    assert run_alike(run, 150) == ""
+    assert run.viewed.programs[0].instance.batches >= 1
+
+
+def test_a_method_is_called_on_a_view_and_an_array_to_a_function_stays_python(
     padt_memory: ModuleType, native_tier: NativeTier
 ) -> None:
     text = """
@@ -93,16 +119,28 @@ Bump := n;
 END_METHOD
 n := n + 10;
 END_FUNCTION_BLOCK
+FUNCTION Total : INT
+VAR_INPUT a : ARRAY[1..3] OF INT; END_VAR
+Total := a[1] + a[2] + a[3];
+END_FUNCTION
 PROGRAM Main
 VAR c : Counter; k : INT; END_VAR
 c();
 k := c.Bump();
 END_PROGRAM
+PROGRAM Sums
+VAR q : ARRAY[1..3] OF INT := [1, 2, 3]; t : INT; END_VAR
+q[2] := q[2] + 1;
+t := Total(q);
+END_PROGRAM
 """
     run, left = side_by_side(text, padt_memory, native_tier)
-    assert [(body, "M__BUMP" in why) for body, why in left] == [("POU_MAIN.__call__", True)], left
+    assert [(body, "an array passed to FN_TOTAL" in why) for body, why in left] == [
+        ("POU_SUMS.__call__", True)
+    ]
     run_alike(run, 5)
     assert run.viewed.programs[0].instance.k == 55
+    assert run.viewed.programs[1].instance.t == 11
 
 
 def test_the_benchmark_program_in_the_image_as_on_objects(
