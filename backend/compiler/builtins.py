@@ -20,10 +20,13 @@ from backend.compiler.types import (
     BOOL,
     DINT,
     INT,
+    LINT,
     LREAL,
+    LWORD,
     REAL,
     STRING,
     TIME,
+    ULINT,
     WSTRING,
     ArrayType,
     ElementaryType,
@@ -203,6 +206,21 @@ def _compare_chain(op: BinaryOp) -> Emitting:
         return Chain(op, tuple(values))
 
     return emit
+
+
+SHIFTS = frozenset({"SHL", "SHR", "ROL", "ROR"})
+
+
+def shifted_literal_type(value: int | None, based: bool) -> ElementaryType:
+    """The type an integer literal without one is shifted or rotated as: DINT, as every
+    such literal (a based one a bit pattern of 32 bits: `16#FFFF_FFFF` is -1), unless its
+    value needs more bits: LWORD for a based literal (a bit pattern of 64 bits), LINT for
+    another, ULINT beyond LINT (`ROR(16#8000_0000_0000_0001, 1)` once lost its high bits)."""
+    if value is None or -(1 << 31) <= value < (1 << 32 if based else 1 << 31):
+        return ANY_INT
+    if based and 0 <= value < 1 << 64:
+        return LWORD
+    return LINT if -(1 << 63) <= value < 1 << 63 else ULINT
 
 
 def _shift(kind: str) -> Builtin:

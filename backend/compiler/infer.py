@@ -765,6 +765,9 @@ class Scope:
         if isinstance(args, Misfit):
             return args
         types = [self.type_of(arg) for arg in args]
+        if builtin.name in builtins.SHIFTS and types and types[0] == ANY_INT:
+            based = isinstance(args[0], ast.IntLiteral) and args[0].based
+            types[0] = builtins.shifted_literal_type(self.constant_int(args[0]), based)
         known = [t for t in types if t is not None]
         if len(known) < len(types):
             return None

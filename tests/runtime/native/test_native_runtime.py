@@ -831,3 +831,32 @@ END_PROGRAM
     pair.cycle_and_compare(2)
     values = pair.python.variables.values()
     assert [values[f"Main.{name}"] for name in "udlis"] == [0, 0xFFFF_FFFF, -1, -32767, 127]
+
+
+def test_a_literal_too_large_for_a_dint_is_shifted_and_rotated_whole_on_both_tiers(
+    native_tier: NativeTier,
+) -> None:
+    """A literal without a type that needs more than 32 bits is shifted and rotated as
+    LWORD (a based literal), LINT or ULINT: ROR(16#8000_0000_0000_0001, 1) kept only the
+    bits of a DINT until December 2026. One that fits 32 bits is a DINT as before."""
+    text = """
+PROGRAM Main
+VAR a, b : LWORD; c : LINT; d : DINT; e : ULINT; END_VAR
+a := ROR(16#8000_0000_0000_0001, 1);
+b := SHR(16#FFFF_FFFF_FFFF_FFFF, 60);
+c := SHL(5000000000, 1);
+d := SHR(16#FFFF_FFFF, 4);
+e := ROL(18446744073709551615, 4);
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main",)
+    pair.cycle_and_compare(2)
+    values = pair.python.variables.values()
+    assert [values[f"Main.{name}"] for name in "abcde"] == [
+        0xC000_0000_0000_0000,
+        15,
+        10_000_000_000,
+        0x0FFF_FFFF,
+        2**64 - 1,
+    ]
