@@ -53,6 +53,7 @@ from runtime.code.native.translate import (
     _chunk_functions,
     _frame,
     _function_name,
+    _is_super_call,
     _kind_name,
     _Module,
     _Numbered,
@@ -64,7 +65,7 @@ from runtime.code.native.translate import (
     translate_with,
 )
 from runtime.contract.artifact import PouCode
-from runtime.contract.code.typed_form import Call, Expr, Index, Member
+from runtime.contract.code.typed_form import Call, Expr, Index, Member, Named
 from runtime.contract.code.units import Unit
 from runtime.contract.layout import (
     ACTION_CONTROL,
@@ -258,6 +259,26 @@ class _ImageBody(_Body):
     def call_hook(self, hook: V) -> None:
         super().call_hook(hook)
         self.line("padt_ctx->now_known = 0;")
+
+    def call_statement(self, call: Expr) -> None:
+        """SUPER^(): the base's body on this very instance, whose bytes begin with the
+        base's members (layout.py), as C where the base's body is C."""
+        if (
+            isinstance(call, Call)
+            and _is_super_call(call)
+            and isinstance(call.callee, Member)
+            and isinstance(call.callee.base, Named)
+            and call.callee.name == "__call__"
+            and len(call.args) == 1
+        ):
+            base = call.callee.base.name
+            own, theirs = self.module.layout(self.cls.name), self.module.layout(base)
+            if own.members[: len(theirs.members)] != theirs.members:
+                _refuse(f"{self.cls.name} does not begin with the members of {base}")
+            site, key = self.module.site(), self.module.key(base)
+            self.check(f"padt_mcall(&{site}, {key}, s, padt_ctx)")
+            return
+        super().call_statement(call)
 
     def call_instance(self, target: V) -> None:
         assert isinstance(target.kind, Instance)

@@ -16,6 +16,7 @@ from tests.compiler.test_differential import CYCLES, programs
 from tests.compiler.test_sfc import QUALIFIERS
 from tests.conftest import REPO
 from tests.runtime.native.test_image_views import EVERY_TYPE
+from tests.runtime.native.test_native_oop import CHAIN
 from tests.support.corpus_paths import SHARED, shared_dir
 from tests.support.image_runs import ImageRun, compiled, with_c_bodies
 
@@ -105,6 +106,17 @@ def test_every_action_qualifier_and_the_batch_chart_as_c_in_the_image(
     assert left == []
     assert run_alike(run, 150) == ""
     assert run.viewed.programs[0].instance.batches >= 1
+
+
+def test_super_runs_the_bases_c_body_on_the_derived_instance(
+    padt_memory: ModuleType, native_tier: NativeTier
+) -> None:
+    """Three generations, each calling SUPER^(): a derived block's bytes begin with its
+    base's members, so the base's C body runs on them (the slot tier leaves these bodies
+    to Python: a derived class's slots lie elsewhere)."""
+    run, left = side_by_side(CHAIN, padt_memory, native_tier)
+    assert left == []
+    assert run_alike(run, 10) == ""
 
 
 def test_a_method_is_called_on_a_view_and_an_array_to_a_function_stays_python(
