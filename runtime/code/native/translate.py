@@ -7,7 +7,8 @@ only when every construct in it is one the translator knows and every integer it
 provably fits the C type it is computed in (`runtime/code/native/kinds.py`); anything else
 leaves the body to Python, with the reason. The C code works on the same objects as the
 Python code (slots of the generated classes), so both tiers can run side by side and every
-service of the runtime sees one kind of data.
+service of the runtime sees one kind of data. Image mode (image_body.py: the C of a body
+on a memory image) is this translator with its own reads, stores and calls (`Mode`).
 """
 
 from __future__ import annotations
