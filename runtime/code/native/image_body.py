@@ -58,6 +58,7 @@ from runtime.code.native.translate import (
     _Module,
     _Numbered,
     _refuse,
+    body_function,
     c_comment,
     c_string,
     module_end,
@@ -381,7 +382,6 @@ def _image_function_text(body: _Body, func: _Numbered) -> str:
     """The body as C in image mode: its chunks as in slot mode, and the body's own
     function, `int F(char *s, padt_mctx *ctx)`, which C callers call directly."""
     name = _function_name(body.cls.name)
-    module = body.module
     frame = _frame(body, name, ["char *g;", "PyObject *sys;", "padt_mctx *ctx;"])
     prologue = [
         "char *padt_g = f->g;",
@@ -408,29 +408,9 @@ def _image_function_text(body: _Body, func: _Numbered) -> str:
             "    }",
         ]
     cleanup = [f"    Py_XDECREF(f->{o});" for o in body.frame_objects]
-    main = [
-        "static int",
-        f"{name}(char *s, padt_mctx *ctx)",
-        "{",
-        f"    {name}_frame frame;",
-        f"    {name}_frame *f = &frame;",
-        "    int done = 0;",
-        "    memset(f, 0, sizeof frame);",
-        f"    f->line = {func.line};",
-        "    f->ctx = ctx;",
-        *setup,
-        *(f"    if ((done = {chunk}(s, f)) != 0) goto padt_end;" for chunk in chunk_names),
-        "padt_end:",
-        "    if (done < 0) goto padt_error;",
-        *cleanup,
-        "    return 0;",
-        "padt_error:",
-        f"    _PyTraceback_Add({c_string(body.cls.name + '.__call__')}, "
-        f"{c_string(module.filename)}, f->line);",
-        *cleanup,
-        "    return -1;",
-        "}",
-    ]
+    setup.insert(0, "    f->ctx = ctx;")
+    head = f"static int\n{name}(char *s, padt_mctx *ctx)"
+    main = body_function(body, func, head, setup, chunk_names, cleanup, ("return 0;", "return -1;"))
     return "\n".join([*frame, *chunk_texts, *main])
 
 

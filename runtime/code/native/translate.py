@@ -1850,9 +1850,28 @@ def _function_text(body: _Body, func: _Numbered) -> str:
             "    Py_INCREF(f->sys);",
         ]
     cleanup = [f"    Py_XDECREF(f->{field});" for field in ("g", "sys", *body.frame_objects)]
-    main = [
-        "static PyObject *",
-        f"{name}(PyObject *s, PyObject *Py_UNUSED(ignored))",
+    head = f"static PyObject *\n{name}(PyObject *s, PyObject *Py_UNUSED(ignored))"
+    main = body_function(
+        body, func, head, setup, chunk_names, cleanup, ("Py_RETURN_NONE;", "return NULL;")
+    )
+    return "\n".join([*frame, *chunk_texts, *main])
+
+
+def body_function(
+    body: _Body,
+    func: _Numbered,
+    head: str,
+    setup: list[str],
+    chunk_names: list[str],
+    cleanup: list[str],
+    returns: tuple[str, str],
+) -> list[str]:
+    """The body's own C function (`head` its declaration): the frame, `setup`, its chunks
+    in turn, `cleanup`, then `returns` (on success, on an error: the traceback names the
+    line the frame holds)."""
+    name = _function_name(body.cls.name)
+    return [
+        *head.split("\n"),
         "{",
         f"    {name}_frame frame;",
         f"    {name}_frame *f = &frame;",
@@ -1864,15 +1883,14 @@ def _function_text(body: _Body, func: _Numbered) -> str:
         "padt_end:",
         "    if (done < 0) goto padt_error;",
         *cleanup,
-        "    Py_RETURN_NONE;",
+        f"    {returns[0]}",
         "padt_error:",
         f"    _PyTraceback_Add({c_string(body.cls.name + '.__call__')}, "
-        f"{c_string(module.filename)}, f->line);",
+        f"{c_string(body.module.filename)}, f->line);",
         *cleanup,
-        "    return NULL;",
+        f"    {returns[1]}",
         "}",
     ]
-    return "\n".join([*frame, *chunk_texts, *main])
 
 
 def _frame(body: _Body, name: str, fields: list[str]) -> list[str]:
