@@ -143,24 +143,35 @@ def _field(
     raise ViewsRefused(f"no view of {type(shape).__name__} yet")
 
 
-def copy_into(view: Any, instance: Any) -> None:
-    """Every value of a slot object (and of the objects and lists it holds) into the view
-    of its class: the image takes over what the Python instances hold."""
-    for name in type(view).__slots__:
-        value = getattr(instance, name)
-        if isinstance(value, list):
-            _copy_list(getattr(view, name), value)
-        elif hasattr(type(value), "__slots__") and not isinstance(value, str):
-            copy_into(getattr(view, name), value)
+def copy_into(target: Any, source: Any) -> None:
+    """Every value of `source` (and of the instances and arrays it holds) into `target`,
+    an instance of the same class: a slot object's into its view as the image takes them
+    over, or a view's into a slot object as the objects take them back."""
+    for name in type(target).__slots__:
+        value = getattr(source, name)
+        if _is_array(value):
+            _copy_array(getattr(target, name), value)
+        elif _is_instance(value):
+            copy_into(getattr(target, name), value)
         else:
-            setattr(view, name, value)
+            setattr(target, name, value)
 
 
-def _copy_list(elements: Any, values: list[Any]) -> None:
+def _copy_array(elements: Any, values: Any) -> None:
     for index, value in enumerate(values):
-        if isinstance(value, list):
-            _copy_list(elements[index], value)
-        elif hasattr(type(value), "__slots__") and not isinstance(value, str):
+        if _is_array(value):
+            _copy_array(elements[index], value)
+        elif _is_instance(value):
             copy_into(elements[index], value)
         else:
             elements[index] = value
+
+
+def _is_array(value: object) -> bool:
+    """A list, or an array of an image (padt_memory's Elements): a sequence, no text."""
+    return hasattr(value, "__len__") and not isinstance(value, str)
+
+
+def _is_instance(value: object) -> bool:
+    """A slot object or a view: its class names its members."""
+    return hasattr(type(value), "__slots__") and not isinstance(value, str)

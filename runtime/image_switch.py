@@ -1,0 +1,102 @@
+"""A configuration's values moved into its memory image, and back to objects
+(docs/native-code.md, "The tier switch"): between two cycles, every value kept, every
+place that holds an instance given the view (or the object) in its stead: the programs'
+instances and their views of the globals, the globals (`_G`), the programs ST calls by
+name (`_P`). The services then reach the values through `ImageMemory` (or `ObjectMemory`),
+and a reading plan made before is made again (`Variables.bound` is a new list).
+
+Not yet called by the runtime: the tier puts the image in place once the cases the docs
+list are handled (the debugger, a reload, a restarted program).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from runtime.code.native.image_plan import ImagePlan
+from runtime.code.native.image_views import copy_into
+from runtime.contract.refusal import Refusal
+from runtime.image_memory import ImageMemory
+from runtime.memory import ObjectMemory
+from runtime.variables import Variables
+
+
+def enter_image(variables: Variables, plan: ImagePlan) -> bytearray:
+    """The values of `variables`' objects into a new image of `plan`, and its views in
+    their places; the image."""
+    code = _idle(variables)
+    image = bytearray(plan.placement.size)
+    views = {
+        p.name: plan.views[p.cls](image, p.offset)
+        for p in plan.placement.placements
+        if p.cls in plan.views
+    }
+    _move(variables, views, lambda name, old: _into(views[name], old))
+    variables.memory = ImageMemory(
+        image, plan.layouts, plan.placement, plan.class_names, [p.name for p in variables.programs]
+    )
+    variables.bound = list(variables.bound)
+    assert code is variables.code
+    return image
+
+
+def leave_image(variables: Variables) -> None:
+    """The values of the image into fresh objects of the generated classes, in their
+    places (the reverse of `enter_image`)."""
+    code = _idle(variables)
+    fresh: dict[str, Any] = {}
+    if variables.globals is not None:
+        fresh["_G"] = code.new_globals()
+    for program in variables.programs:
+        fresh[program.name] = code.new_instance(program.config.pou)
+        if program.view is not variables.globals:
+            fresh[f"{program.name}._G"] = code.new_globals()
+    for pou in code.artifact.pous:
+        if pou.kind == "PROGRAM" and pou.name.upper() not in _run(variables):
+            fresh[f"_P.{pou.name}"] = code.new_instance(pou.name)
+    # every object made before a value is copied: making one may run code (FB_INIT)
+    _move(variables, fresh, lambda name, view: _into(fresh[name], view))
+    variables.memory = ObjectMemory(variables.globals, variables.programs)
+    variables.bound = list(variables.bound)
+
+
+def _idle(variables: Variables) -> Any:
+    code = variables.code
+    assert code is not None
+    busy = [p.name for p in variables.programs if p.in_progress]
+    if busy:  # a suspended program cycle's frame holds the instances it began with
+        raise Refusal("busy", f"program {busy[0]} is in the middle of its program cycle")
+    return code
+
+
+def _run(variables: Variables) -> set[str]:
+    return {program.config.pou.upper() for program in variables.programs}
+
+
+def _into(target: Any, source: Any) -> Any:
+    copy_into(target, source)
+    return target
+
+
+def _move(variables: Variables, names: dict[str, Any], moved: Any) -> None:
+    """Each instance of `variables` replaced by `moved(name, instance)` (the instance of
+    the same name in `names`, its values copied), in every place that holds it."""
+    code = variables.code
+    assert code is not None
+    old_globals = variables.globals
+    new_globals = moved("_G", old_globals) if old_globals is not None else None
+    for program in variables.programs:
+        instance = moved(program.name, program.instance)
+        code.adopt_program(program.instance, instance)
+        program.instance = instance
+        if program.view is old_globals:
+            program.view = new_globals
+        else:
+            program.view = moved(f"{program.name}._G", program.view)
+    for pou in code.artifact.pous:
+        if pou.kind == "PROGRAM" and pou.name.upper() not in _run(variables):
+            old = code.program_instance(pou.name)
+            code.adopt_program(old, moved(f"_P.{pou.name}", old))
+    if new_globals is not None:
+        code.adopt_globals(new_globals)
+    variables.globals = new_globals
