@@ -23,8 +23,8 @@ from runtime.code.intrinsics import Reference
 
 # Node tags. Slot names are identifiers, so no tag can be taken for a field; a dict node is
 # told apart by its keys.
-_IEEE = "ieee"  # {"ieee": "7ff8000000000000"}: NaN or an infinity, by its bits
-_CLASS, _FIELDS = "c", "v"  # {"c": class name, "v": {field: node}}: an instance
+IEEE = "ieee"  # {"ieee": "7ff8000000000000"}: NaN or an infinity, by its bits
+CLASS, FIELDS = "c", "v"  # {"c": class name, "v": {field: node}}: an instance
 _ALIAS = "@"  # {"@": n}: the container met n-th (pre-order), met again
 
 _PLAIN = frozenset({type(None), bool, int, str})
@@ -160,13 +160,13 @@ class Records:
         if not _only_values(chain.from_iterable(rows)):
             rows = [tuple(map(_value_node, row)) for row in rows]
         name, slots = self.name, self.slots
-        return [{_CLASS: name, _FIELDS: dict(zip(slots, row, strict=True))} for row in rows]
+        return [{CLASS: name, FIELDS: dict(zip(slots, row, strict=True))} for row in rows]
 
 
 def _value_node(value: Any) -> Any:
     kind = type(value)
     if kind is float:
-        return value if isfinite(value) else _nonfinite(value)
+        return value if isfinite(value) else nonfinite_node(value)
     if kind in _PLAIN:
         return value
     raise UnsupportedValue(f"cannot save a value of type {kind.__qualname__}")
@@ -201,8 +201,8 @@ def snapshot(root: Any) -> Any:
     return _node(root, {}, False)
 
 
-def _nonfinite(value: float) -> dict[str, str]:
-    return {_IEEE: f"{_BITS.unpack(_DOUBLE.pack(value))[0]:016x}"}
+def nonfinite_node(value: float) -> dict[str, str]:
+    return {IEEE: f"{_BITS.unpack(_DOUBLE.pack(value))[0]:016x}"}
 
 
 def _only_values(values: Iterable[Any]) -> bool:
@@ -225,7 +225,7 @@ def _node(value: Any, seen: dict[int, int], defer: bool) -> Any:
     if kind is Reference:
         return None  # a warm start begins with every reference NULL (docs/context.md)
     if kind is float:
-        return value if isfinite(value) else _nonfinite(value)
+        return value if isfinite(value) else nonfinite_node(value)
     if id(value) in seen:
         return {_ALIAS: seen[id(value)]}
     plan = None if kind is list else _plan(kind)
@@ -235,7 +235,7 @@ def _node(value: Any, seen: dict[int, int], defer: bool) -> Any:
     seen[id(value)] = len(seen)
     if plan is None:
         return _list_node(value, seen, defer)
-    return {_CLASS: plan.name, _FIELDS: _fields_node(value, plan, seen, defer)}
+    return {CLASS: plan.name, FIELDS: _fields_node(value, plan, seen, defer)}
 
 
 def _fields_node(instance: Any, plan: _Plan, seen: dict[int, int], defer: bool) -> dict[str, Any]:
@@ -256,7 +256,7 @@ def _fields_node(instance: Any, plan: _Plan, seen: dict[int, int], defer: bool) 
         if item_kind in _PLAIN:
             fields[name] = item
         elif item_kind is float:
-            fields[name] = item if isfinite(item) else _nonfinite(item)
+            fields[name] = item if isfinite(item) else nonfinite_node(item)
         else:
             try:
                 fields[name] = _node(item, seen, defer)
@@ -279,7 +279,7 @@ def _list_node(items: list[Any], seen: dict[int, int], defer: bool) -> list[Any]
         if item_kind in _PLAIN:
             append(item)
         elif item_kind is float:
-            append(item if isfinite(item) else _nonfinite(item))
+            append(item if isfinite(item) else nonfinite_node(item))
         else:
             try:
                 append(_node(item, seen, defer))
@@ -318,7 +318,7 @@ def _records_node(
     name, slots = plan.name, plan.slots
     if defer:
         return Records(name, slots, rows)
-    return [{_CLASS: name, _FIELDS: dict(zip(slots, row, strict=True))} for row in rows]
+    return [{CLASS: name, FIELDS: dict(zip(slots, row, strict=True))} for row in rows]
 
 
 # ---- restore
@@ -349,8 +349,8 @@ def _clip(node: Any) -> str:
 def _kind_name(node: Any) -> str:
     if isinstance(node, list):
         return f"an array of {len(node)}"
-    if isinstance(node, dict) and _CLASS in node:
-        return f"an instance of {node[_CLASS]}"
+    if isinstance(node, dict) and CLASS in node:
+        return f"an instance of {node[CLASS]}"
     if isinstance(node, dict) and _ALIAS in node:
         return "an alias"
     return "a value"
@@ -371,11 +371,11 @@ class _Restorer:
         plan = _plan(type(target))
         if plan is None:
             raise ContextMismatch(f"cannot restore into a {type(target).__qualname__}")
-        if not (type(node) is dict and node.keys() == {_CLASS, _FIELDS}):
+        if not (type(node) is dict and node.keys() == {CLASS, FIELDS}):
             raise ContextMismatch(f"expected an instance of {plan.name}, found {_kind_name(node)}")
-        if node[_CLASS] != plan.name:
-            raise ContextMismatch(f"expected an instance of {plan.name}, found {node[_CLASS]}")
-        fields = node[_FIELDS]
+        if node[CLASS] != plan.name:
+            raise ContextMismatch(f"expected an instance of {plan.name}, found {node[CLASS]}")
+        fields = node[FIELDS]
         if type(fields) is not dict:
             raise ContextMismatch(f"the fields of {plan.name} are not an object")
         if self._values_only(target, plan, fields):
@@ -433,17 +433,17 @@ class _Restorer:
         """The value that goes where `current` is: a decoded value, `current` itself once
         checked (a container, filled in place), or the container an alias names."""
         kind = type(node)
-        is_ieee = kind is dict and len(node) == 1 and _IEEE in node
+        is_ieee = kind is dict and len(node) == 1 and IEEE in node
         if kind in _VALUES or is_ieee:
             if not self._is_value(current):
                 raise ContextMismatch(f"expected {self._describe(current)}, found a value")
-            return _as_kind_of(current, _nonfinite_value(node[_IEEE]) if is_ieee else node)
+            return _as_kind_of(current, nonfinite_value(node[IEEE]) if is_ieee else node)
         if kind is dict and len(node) == 1 and _ALIAS in node:
             return self._alias(current, node[_ALIAS])
         if (
             kind is not list
             and kind is not Records
-            and not (kind is dict and node.keys() == {_CLASS, _FIELDS})
+            and not (kind is dict and node.keys() == {CLASS, FIELDS})
         ):
             raise ContextMismatch(f"malformed node {_clip(node)}")
         if self._is_value(current):
@@ -501,7 +501,7 @@ def _as_kind_of(current: Any, value: Any) -> Any:
     raise ContextMismatch(f"expected {kind}, found {_clip(value)}")
 
 
-def _nonfinite_value(bits: Any) -> float:
+def nonfinite_value(bits: Any) -> float:
     try:
         if isinstance(bits, str) and len(bits) == 16:
             value: float = _DOUBLE.unpack(_BITS.pack(int(bits, 16)))[0]

@@ -20,7 +20,15 @@ from dataclasses import dataclass
 from typing import Any
 
 from runtime.code.instances import BoundVariable
-from runtime.context_snapshot import ContextMismatch, Records
+from runtime.context_snapshot import (
+    CLASS,
+    FIELDS,
+    IEEE,
+    ContextMismatch,
+    Records,
+    nonfinite_node,
+    nonfinite_value,
+)
 from runtime.contract.layout import (
     NULLABLE_TIME,
     Chars,
@@ -35,7 +43,6 @@ from runtime.contract.layout import (
 from runtime.memory import ValueTrees
 
 _NO_TIME = -(1 << 63)  # a runtime class's time that is None (layout.NULLABLE_TIME)
-_DOUBLE, _BITS = struct.Struct("<d"), struct.Struct("<Q")
 _LENGTH = struct.Struct("<H")
 
 
@@ -206,7 +213,7 @@ class ImageMemory:
                     m.name: self._tree(offset + m.offset, m.shape)
                     for m in sorted(layout.members, key=lambda m: m.name)
                 }
-                return {"c": self._names.get(cls, cls), "v": fields}
+                return {CLASS: self._names.get(cls, cls), FIELDS: fields}
             case Elements(element=element, count=count) if not isinstance(element, Scalar):
                 stride = size_and_align(element, self._layouts.__getitem__)[0]
                 return [self._tree(offset + n * stride, element) for n in range(count)]
@@ -243,11 +250,11 @@ class ImageMemory:
                 name = self._names.get(cls, cls)
                 if (
                     type(node) is not dict
-                    or node.get("c") != name
-                    or type(node.get("v")) is not dict
+                    or node.get(CLASS) != name
+                    or type(node.get(FIELDS)) is not dict
                 ):
                     raise ContextMismatch(f"expected an instance of {name}")
-                fields = node["v"]
+                fields = node[FIELDS]
                 if fields.keys() != {m.name for m in layout.members}:
                     raise ContextMismatch(f"{name} fields differ")
                 for member in layout.members:
@@ -285,17 +292,14 @@ def _code(code: str) -> str:
 def _node(value: Any) -> Any:
     """A value as the context's tree holds it: a NaN or an infinity by its bits."""
     if type(value) is float and not math.isfinite(value):
-        return {"ieee": f"{_BITS.unpack(_DOUBLE.pack(value))[0]:016x}"}
+        return nonfinite_node(value)
     return value
 
 
 def _value_of(node: Any, shape: Shape) -> Any:
     """The value a tree's node stands for, of the kind the variable holds."""
-    if type(node) is dict and node.keys() == {"ieee"}:
-        bits = node["ieee"]
-        if not (isinstance(bits, str) and len(bits) == 16):
-            raise ContextMismatch(f"malformed NaN or infinity {bits!r}")
-        return _DOUBLE.unpack(_BITS.pack(int(bits, 16)))[0]
+    if type(node) is dict and node.keys() == {IEEE}:
+        return nonfinite_value(node[IEEE])
     if isinstance(shape, Scalar):
         if shape.code == "?":
             if type(node) is not bool:

@@ -197,7 +197,10 @@ RUNTIME_CLASSES: dict[str, tuple[tuple[str, Shape], ...]] = {
 def class_layouts(units: Iterable[PouCode]) -> Layouts:
     """The layout of every class of an artifact's units (PROGRAMs, function blocks,
     structures, the globals) and of the runtime's classes they hold, by class name."""
-    return _Layouter(units).all()
+    try:
+        return _Layouter(units).all()
+    except RecursionError:  # a type nested deeper than any compiler writes
+        raise LayoutRefused("a type nested too deep") from None
 
 
 class _Layouter:

@@ -53,6 +53,7 @@ from runtime.code.native.translate import (
     _chunk_functions,
     _frame,
     _function_name,
+    _identifier,
     _is_super_call,
     _kind_name,
     _Module,
@@ -290,7 +291,7 @@ class _ImageBody(_Body):
     # -- locals that hold an instance: its address
     def local_ref(self, name: str) -> str:
         if isinstance(self.local_kind(name), Instance):
-            c = f"l_{''.join(ch if ch.isalnum() else '_' for ch in name if ch.isascii())}"
+            c = f"l_{_identifier(name)}"
             self.frame.setdefault(c, f"char *{c};")
             return f"f->{c}"
         return super().local_ref(name)
