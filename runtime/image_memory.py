@@ -80,6 +80,8 @@ class ImageMemory:
     def reader(self, bounds: list[BoundVariable]) -> Callable[[], list[Any]]:
         """The elementary values in one `struct` call over the image (in offset order,
         put back in the bounds' order by one `itemgetter`); texts and arrays after it."""
+        if not bounds:  # (an `itemgetter` of one index gives no tuple)
+            return list
         places = [self._place(bound) for bound in bounds]
         scalars = sorted({p.offset: p.shape for p in places if isinstance(p.shape, Scalar)}.items())
         layout, end = ["<"], 0

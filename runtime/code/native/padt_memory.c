@@ -56,7 +56,18 @@ static char *at(PyObject *image, Py_ssize_t offset) {
 
 #define view_at padt_view_new
 
+/* A Field the cycle collector cleared (its class being freed) reads and writes nothing. */
+static int field_cleared(FieldObject *f) {
+    if ((f->code == K_NESTED && f->view_type == NULL) ||
+        (f->code == K_ARRAY && f->element == NULL)) {
+        PyErr_SetString(PyExc_ReferenceError, "a member of a view class being freed");
+        return 1;
+    }
+    return 0;
+}
+
 static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) {
+    if (field_cleared(f)) return NULL;
     char *p = at(image, offset);
     switch (f->code) {
     case K_BOOL: return PyBool_FromLong(*(uint8_t *)p != 0);
@@ -114,6 +125,7 @@ static int integer(PyObject *value, long long low, long long high, long long *ou
 }
 
 static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value) {
+    if (field_cleared(f)) return -1;
     char *p = at(image, offset);
     long long v;
     switch (f->code) {
@@ -259,10 +271,27 @@ static PyObject *field_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
     return (PyObject *)f;
 }
 
-static void field_dealloc(PyObject *self) {
+/* A Field is seen by the cycle collector: a view class's dict holds its Fields, a nested
+ * Field holds another view class, and the classes of a configuration reach each other
+ * through their generated code's namespace. Unseen, that edge would keep every class of a
+ * configuration (and the C modules bound to them) alive after a cold start. */
+static int field_traverse(PyObject *self, visitproc visit, void *arg) {
     FieldObject *f = (FieldObject *)self;
-    Py_XDECREF(f->view_type);
-    Py_XDECREF(f->element);
+    Py_VISIT(f->view_type);
+    Py_VISIT(f->element);
+    return 0;
+}
+
+static int field_clear(PyObject *self) {
+    FieldObject *f = (FieldObject *)self;
+    Py_CLEAR(f->view_type);
+    Py_CLEAR(f->element);
+    return 0;
+}
+
+static void field_dealloc(PyObject *self) {
+    PyObject_GC_UnTrack(self);
+    field_clear(self);
     Py_TYPE(self)->tp_free(self);
 }
 
@@ -270,7 +299,9 @@ static PyTypeObject FieldType = {
     PyVarObject_HEAD_INIT(NULL, 0)
     .tp_name = "padt_memory.Field",
     .tp_basicsize = sizeof(FieldObject),
-    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC,
+    .tp_traverse = field_traverse,
+    .tp_clear = field_clear,
     .tp_doc = "One member of a view's class: its type code, offset and size.",
     .tp_new = field_new,
     .tp_dealloc = field_dealloc,

@@ -49,6 +49,10 @@ def same_reads(run: ImageRun) -> None:
     )
     for objects_bound, image_bound in zip(run.objects.bound, run.viewed.bound, strict=True):
         assert values(on_objects.read(objects_bound)) == values(in_image.read(image_bound))
+        # a reader of one variable (a text or an array alone: no elementary value at all)
+        alone = in_image.reader([image_bound])()
+        assert values(on_objects.reader([objects_bound])()) == values(alone)
+    assert on_objects.reader([])() == in_image.reader([])() == []  # what an empty watch reads
     assert on_objects.take() == in_image.take()
 
 
