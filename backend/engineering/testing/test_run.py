@@ -19,6 +19,7 @@ from backend.engineering.testing.test_build import UnitTest
 from runtime.clock import VirtualClock
 from runtime.code.fault_location import locate
 from runtime.code.instances import instances_of
+from runtime.code.native.image_views import is_array, is_instance
 from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import ProgramState, ResourceState
@@ -73,23 +74,26 @@ class WatchStop(Exception):
 
 def same(a: Any, b: Any) -> bool:
     """ST equality of two values of one type: REALs by value (a NaN equals no value),
-    arrays element by element, structures and blocks member by member."""
-    if isinstance(a, list) and isinstance(b, list):
+    arrays element by element, structures and blocks member by member; each held as a
+    Python object or in the memory image (a view), as the test's own locals and the
+    programs' variables may be."""
+    if is_array(a) and is_array(b):
         return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b, strict=True))
-    slots = getattr(type(a), "__slots__", None)
-    if slots is not None and type(a) is type(b):
-        return all(same(getattr(a, s), getattr(b, s)) for s in slots)
+    if is_instance(a) and is_instance(b) and type(a).__name__ == type(b).__name__:
+        return all(same(getattr(a, s), getattr(b, s)) for s in type(a).__slots__)
     return bool(a == b)
 
 
 def shown(value: Any, type_name: str) -> str:
     """A value as an ST literal, structures as `(a := 1, b := TRUE)`."""
-    slots = getattr(type(value), "__slots__", None)
-    if slots is not None and not isinstance(value, str):
+    if is_instance(value):
         members = ", ".join(
-            f"{s.removesuffix('__')} := {shown(getattr(value, s), '')}" for s in slots
+            f"{s.removesuffix('__')} := {shown(getattr(value, s), '')}"
+            for s in type(value).__slots__
         )
         return f"({members})"
+    if is_array(value) and not isinstance(value, list):  # an array in the memory image
+        value = list(value)
     if isinstance(value, float) and type_name.startswith("ANY"):
         type_name = "LREAL"
     return format_value(value, type_name)
@@ -330,6 +334,7 @@ class UnitTestBench:
         resource.forcing.reset()
         self.image.renew()
         resource.variables.adopt(instances_of(self.image))
+        resource.tier_up()  # the fresh values into the memory image, as the runtime has them
         self.clock.rewind()
         resource.start()
         between_cycles(resource)

@@ -149,9 +149,9 @@ def copy_into(target: Any, source: Any) -> None:
     over, or a view's into a slot object as the objects take them back."""
     for name in type(target).__slots__:
         value = getattr(source, name)
-        if _is_array(value):
+        if is_array(value):
             _copy_array(getattr(target, name), value)
-        elif _is_instance(value):
+        elif is_instance(value):
             copy_into(getattr(target, name), value)
         else:
             setattr(target, name, value)
@@ -159,19 +159,19 @@ def copy_into(target: Any, source: Any) -> None:
 
 def _copy_array(elements: Any, values: Any) -> None:
     for index, value in enumerate(values):
-        if _is_array(value):
+        if is_array(value):
             _copy_array(elements[index], value)
-        elif _is_instance(value):
+        elif is_instance(value):
             copy_into(elements[index], value)
         else:
             elements[index] = value
 
 
-def _is_array(value: object) -> bool:
+def is_array(value: object) -> bool:
     """A list, or an array of an image (padt_memory's Elements): a sequence, no text."""
     return hasattr(value, "__len__") and not isinstance(value, str)
 
 
-def _is_instance(value: object) -> bool:
+def is_instance(value: object) -> bool:
     """A slot object or a view: its class names its members."""
     return hasattr(type(value), "__slots__") and not isinstance(value, str)
