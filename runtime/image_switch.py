@@ -5,8 +5,9 @@ instances and their views of the globals, the globals (`_G`), the programs ST ca
 name (`_P`). The services then reach the values through `ImageMemory` (or `ObjectMemory`),
 and a reading plan made before is made again (`Variables.bound` is a new list).
 
-Not yet called by the runtime: the tier puts the image in place once the cases the docs
-list are handled (the debugger, a reload, a restarted program).
+The resource moves the values into the image once the tier's C for it is in place
+(`Resource.tier_up`), and back to objects while it is debugged, while a reload plans and
+before a program restarts.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ def enter_image(variables: Variables, plan: ImagePlan) -> bytearray:
         image, plan.layouts, plan.placement, plan.class_names, [p.name for p in variables.programs]
     )
     variables.bound = list(variables.bound)
+    variables.image = image
     assert code is variables.code
     return image
 
@@ -58,6 +60,24 @@ def leave_image(variables: Variables) -> None:
     _move(variables, fresh, lambda name, view: _into(fresh[name], view))
     variables.memory = ObjectMemory(variables.globals, variables.programs)
     variables.bound = list(variables.bound)
+    variables.image = None
+
+
+def may_enter(variables: Variables) -> ImagePlan | None:
+    """The plan of the running code's image, when its values may go there now: between two
+    program cycles, not while the resource is debugged (the debugger knows instances by
+    identity, a view is a new object at each access) nor while a reload plans against the
+    objects."""
+    code = variables.code
+    if code is None or code.image is None or variables.image is not None or code.python_only:
+        return None
+    if variables.image_held is not None:
+        if variables.image_held() is not None:
+            return None
+        variables.image_held = None
+    if any(program.in_progress for program in variables.programs):
+        return None
+    return code.image
 
 
 def _idle(variables: Variables) -> Any:

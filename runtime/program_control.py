@@ -7,6 +7,7 @@ from __future__ import annotations
 from runtime.code.user_program import UserProgram
 from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.contract.refusal import Refusal
+from runtime.image_switch import leave_image
 from runtime.resource import Resource
 
 
@@ -40,6 +41,8 @@ def stop_program(resource: Resource, name: str) -> None:
 def _restart_cold(resource: Resource, program: UserProgram) -> UserProgram:
     """A program leaves ERROR by a start: from its initial values (its state after the
     error is not to be trusted)."""
+    if resource.variables.image is not None:  # back to objects: the tier moves them again
+        leave_image(resource.variables)
     code = resource.variables.code
     assert code is not None
     fresh = code.new_instance(program.config.pou)

@@ -326,9 +326,14 @@ class Recordings:
     ) -> None:
         """After the outputs of a CPU cycle that ran programs were written."""
         for recording in list(self._running.values()):
-            if recording.of_variables is not resource.variables.bound:
-                self._end(resource, recording, "ended: the configuration changed")
-                continue
+            bound = resource.variables.bound
+            if recording.of_variables is not bound:
+                if recording.of_variables != bound:
+                    self._end(resource, recording, "ended: the configuration changed")
+                    continue
+                # the same variables, their values moved (into the memory image, or back)
+                recording.read = resource.variables.memory.reader(recording.bound)
+                recording.of_variables = bound
             self._capture(resource, recording, begin_ns, before, after)
         self._gate.ends()
 

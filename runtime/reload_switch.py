@@ -6,6 +6,7 @@ between two cycles, all or nothing, within the time the cycle leaves."""
 from __future__ import annotations
 
 import time
+import weakref
 from dataclasses import replace
 
 from runtime.code.code_image import reusing
@@ -19,6 +20,7 @@ from runtime.contract.artifact import Artifact
 from runtime.contract.protocol import ProgramState, ReloadOutcome
 from runtime.contract.refusal import Refusal
 from runtime.disposal import DISPOSAL
+from runtime.image_switch import leave_image
 from runtime.reload import (
     SwitchOver,
     SwitchOverTooLong,
@@ -187,10 +189,15 @@ def reload(
 def _job(resource: Resource, artifact: Artifact, renames: dict[str, str]) -> ReloadJob:
     """A job against the running configuration and its live chart state."""
     assert resource.artifact is not None
+    if resource.variables.image is not None:
+        # the job plans against the objects (adoption): the values go back to them and
+        # stay there while the job lives
+        leave_image(resource.variables)
     old = resource.variables.instances()
     live = live_state(resource.artifact, old)
     job = ReloadJob(artifact, renames, old, resource.artifact, resource.system, live)
     job.native = resource.native
+    resource.variables.image_held = weakref.ref(job)
     return job
 
 

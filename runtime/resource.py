@@ -39,6 +39,7 @@ from runtime.event_recorder import EventRecorder
 from runtime.force_table import GLOBAL
 from runtime.forcing import Forcing
 from runtime.identity import Identity
+from runtime.image_switch import enter_image, may_enter
 from runtime.login_audit import LoginAudit
 from runtime.online_values import OnlineValues
 from runtime.process_image import ProcessImage
@@ -275,6 +276,9 @@ class Resource:
                 native=list(report.bodies),
                 python=[f"{pou}: {reason}" for pou, reason in report.left],
             )
+        plan = may_enter(self.variables)
+        if plan is not None:
+            enter_image(self.variables, plan)
 
     @property
     def native_report(self) -> NativeReport | None:

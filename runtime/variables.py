@@ -32,6 +32,10 @@ class Variables:
         self.programs: list[UserProgram] = []  # by priority, then Program ID
         self.globals: Any = None  # the globals as all programs see them between cycles
         self.memory: Memory = ObjectMemory(None, [])  # where the variables' values are
+        # the memory image the values are in (runtime/image_switch.py); None: the objects
+        self.image: bytearray | None = None
+        # while a reload job plans against the objects, the values stay there (the job)
+        self.image_held: Callable[[], object] | None = None
         self.bound: list[BoundVariable] = []
         self._by_name: dict[str, BoundVariable] = {}
         # the configuration's VAR_ACCESS by upper-case name: more names for variables
@@ -52,6 +56,7 @@ class Variables:
             instances.globals,
         )
         self.memory = ObjectMemory(self.globals, self.programs)
+        self.image = None
         # `bound` last: a reading plan made on another thread (online_values.py) takes it
         # first, and counts as current only while it is the same, so the lookups it made
         # after it cannot be those of the configuration before

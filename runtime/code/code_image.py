@@ -13,6 +13,7 @@ from runtime.code.code_warmup import unspecialized, warm_up
 from runtime.code.compile_worker import compile_here
 from runtime.code.fault_location import SourceLocation, code_filename, locate
 from runtime.code.intrinsics import Namespace, SystemView, namespace
+from runtime.code.native.image_plan import ImagePlan
 from runtime.code.native.tier import NativeJob, NativeReport, NativeTier
 from runtime.contract.artifact import Artifact, PouCode, VarInfo
 from runtime.contract.generated_code import check_artifact_names
@@ -61,10 +62,13 @@ class CodeImage:
         printf: Callable[..., int] | None = None,
         compile_units: Callable[[list[tuple[str, str]]], list[CodeType]] = compile_here,
         native: NativeTier | None = None,
+        memory_image: bool = False,
     ) -> None:
         """`compile_units`: how the generated source becomes code (a reload prepared
         while cycles run passes the compile worker's); `native`: the tier that binds C
-        bodies to the classes, where it can."""
+        bodies to the classes, where it can; `memory_image`: its C works on a memory image
+        a resource moves the values into (image_switch.py), where the configuration can
+        have one, else on the slot objects."""
         check_artifact_names(artifact)  # the code: where its forms are decoded
         self.artifact = artifact
         self.system = system
@@ -85,10 +89,13 @@ class CodeImage:
         # Python; `tier_up` puts them in place
         self.native: NativeReport | None = None
         self.native_job: NativeJob | None = None
+        # where the values go once the bodies are in place, when they go into an image
+        # (image_plan.py): the resource moves them there between two cycles
+        self.image: ImagePlan | None = None
         self._installed: NativeJob | None = None  # the job whose C bodies are in place
         self.python_only = False
         if native is not None and native.available:
-            self.native_job = native.start(artifact, self._namespace)
+            self.native_job = native.start(artifact, self._namespace, memory_image)
         self.globals: Any = None
         if artifact.globals is not None:
             self.globals = self._namespace[artifact.globals.class_name]()
@@ -108,6 +115,7 @@ class CodeImage:
         self.native_job = None
         self.native = job.install()
         self._installed = job
+        self.image = job.image
         if self.python_only:
             job.bodies(native=False)
         return self.native

@@ -43,7 +43,10 @@ def instantiate(
     native: NativeTier | None = None,
 ) -> Instances:
     """Fresh instances of everything: every variable at its initial value."""
-    return instances_of(CodeImage(artifact, system, compile_units=compile_units, native=native))
+    image = CodeImage(
+        artifact, system, compile_units=compile_units, native=native, memory_image=True
+    )
+    return instances_of(image)
 
 
 def instances_of(image: CodeImage) -> Instances:

@@ -67,6 +67,7 @@ class ImageRun:
         }
         views = view_classes(memory, layouts, classes)
         self.memory, self.layouts, self.views = memory, layouts, views
+        self.registry: dict[str, Any] = {}  # of the C bodies bound to this run (with_c_bodies)
         self.class_names = {name: kind.__name__ for name, kind in classes.items()}
         self.placement = placement = image_layout(artifact, layouts)
         self.image = bytearray(placement.size)
@@ -109,7 +110,7 @@ def with_c_bodies(run: ImageRun, tier: NativeTier) -> list[tuple[str, str]]:
     assert tier.toolchain is not None
     artifact = run.viewed.image.artifact
     translation = ArtifactTranslation.of(artifact)
-    registry: dict[str, Any] = {}
+    registry: dict[str, Any] = run.registry  # the modules' statics borrow it
     namespace = run.viewed.image._namespace  # what the tier binds modules to
     left: list[tuple[str, str]] = []
     for unit in translation.units:

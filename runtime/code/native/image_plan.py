@@ -7,9 +7,10 @@ configuration stays on objects, and the reason is said."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 from runtime.code.intrinsics import _ActionControl, _SfcStep
 from runtime.code.native.build import Toolchain
@@ -31,13 +32,15 @@ from runtime.contract.layout import (
 @dataclass(frozen=True)
 class ImagePlan:
     """A configuration's image: its layouts, where each instance lies, the view class of
-    each class and the name the class has in Python (which the context's trees name)."""
+    each class and the name the class has in Python (which the context's trees name);
+    `registry`, the C bodies the modules bound to it registered (image_body.py)."""
 
     layouts: Layouts
     placement: ImageLayout
     views: dict[str, type]
     class_names: dict[str, str]
     memory: ModuleType  # padt_memory
+    registry: dict[str, Any] = field(default_factory=dict)
 
 
 def plan_image(

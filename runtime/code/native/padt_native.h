@@ -814,9 +814,9 @@ typedef struct {
     PyObject *view_type; /* borrowed: padt_views holds it */
 } padt_msite;
 
-static PyObject *padt_views;        /* class name -> view class */
-static PyObject *padt_registry;     /* class name -> capsule of its C body */
-static PyTypeObject *padt_view_type; /* padt_memory.View */
+static PyObject *padt_views;        /* class name -> view class (borrowed) */
+static PyObject *padt_registry;     /* class name -> capsule of its C body (borrowed) */
+static PyTypeObject *padt_view_type; /* padt_memory.View (borrowed) */
 static PyObject *padt_str_g;        /* "_G" */
 static PyObject *padt_str_sys;      /* "_SYS" */
 
@@ -829,9 +829,11 @@ padt_bind_image(PyObject *views, PyObject *registry, PyObject *view_type)
         PyErr_SetString(PyExc_TypeError, "bind(namespace, breathe, views, registry, View)");
         return -1;
     }
-    Py_XSETREF(padt_views, Py_NewRef(views));
-    Py_XSETREF(padt_registry, Py_NewRef(registry));
-    Py_XSETREF(padt_view_type, (PyTypeObject *)Py_NewRef(view_type));
+    /* borrowed, as the namespace: each bound view class holds them (tier.py), so the
+     * module copy is free again once its classes are gone */
+    padt_views = views;
+    padt_registry = registry;
+    padt_view_type = (PyTypeObject *)view_type;
     if (padt_str_g == NULL && (padt_str_g = PyUnicode_InternFromString("_G")) == NULL)
         return -1;
     if (padt_str_sys == NULL && (padt_str_sys = PyUnicode_InternFromString("_SYS")) == NULL)

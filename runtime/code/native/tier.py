@@ -18,18 +18,21 @@ import sys
 import tempfile
 import threading
 import weakref
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
 from runtime.code.compile_worker import child_environment
 from runtime.code.native.build import Toolchain, find_toolchain, load
+from runtime.code.native.image_plan import ImagePlan, plan_image
 from runtime.contract.artifact import Artifact
 
 # Attributes the tier sets on a bound class. Their names have `__`, which no ST name has
 # (E0004): a variable of the block is a slot of the same class, which a class attribute of
 # its name would replace.
+IN_IMAGE = "image"  # NativeReport.memory: the variables go into the memory image
+IMAGE_ATTR = "_native_image"  # on a view class: what its module's statics borrow
 NAMESPACE_ATTR = "native__namespace"  # a bound class holds its namespace through it
 # the Python body, for a derived block's SUPER^(), which runs it on an instance of another
 # class (padt_native.h)
@@ -49,10 +52,17 @@ class NativeReport:
     bodies: tuple[str, ...]  # the POUs (programs, function blocks) whose bodies run as C
     left: tuple[tuple[str, str], ...]  # (POU, reason): bodies that run as Python
     failed: tuple[str, ...] = ()  # what did not build or bind, with the compiler's words
+    # where the variables are once the bodies run: "image" (native memory), or why they
+    # stay on objects; "" where no image was asked for
+    memory: str = ""
 
     def summary(self) -> str:
         total = len(self.bodies) + len(self.left)
         text = f"native code in place: {len(self.bodies)} of {total} POU bodies run as C"
+        if self.memory == IN_IMAGE:
+            text += ", the variables in native memory"
+        elif self.memory:
+            text += f", the variables on Python objects ({self.memory})"
         if self.left:
             pou, reason = self.left[0]
             more = f" and {len(self.left) - 1} more" if len(self.left) > 1 else ""
@@ -85,22 +95,27 @@ class NativeTier:
     def available(self) -> bool:
         return self.toolchain is not None
 
-    def start(self, artifact: Artifact, namespace: dict[str, Any]) -> NativeJob:
+    def start(
+        self, artifact: Artifact, namespace: dict[str, Any], memory_image: bool = False
+    ) -> NativeJob:
         """The native bodies of the classes of `namespace` (made from `artifact`),
-        prepared on a thread of their own; `NativeJob.install` puts them in place."""
-        return NativeJob(self, artifact, namespace)
+        prepared on a thread of their own; `NativeJob.install` puts them in place. With
+        `memory_image`, bodies on the configuration's image where it can have one."""
+        return NativeJob(self, artifact, namespace, memory_image)
 
     def prepare(
-        self, artifact: Artifact, namespace: dict[str, Any]
+        self, artifact: Artifact, namespace: dict[str, Any], image: ImagePlan | None = None
     ) -> tuple[list[tuple[type, str, Any]], NativeReport]:
         """Translated and built by the worker process, then loaded and bound here (the C
-        statics; no class changes yet): the bodies to install, and the report."""
+        statics; no class changes yet): the bodies to install, and the report. With
+        `image`, the bodies of image mode, to install on its view classes."""
         if not any(pou.kind != "FUNCTION" for pou in artifact.pous):
             # no body a class runs (FUNCTIONs stay Python): nothing to start a worker for
             return [], NativeReport((), ())
+        mode = ["image"] if image is not None else []
         try:
             done = subprocess.run(
-                [sys.executable, "-m", "runtime.code.native.worker", str(self.cache)],
+                [sys.executable, "-m", "runtime.code.native.worker", str(self.cache), *mode],
                 input=artifact.to_json().encode(),
                 capture_output=True,
                 env=child_environment(),
@@ -128,7 +143,7 @@ class NativeTier:
             if "module" not in unit:
                 continue
             try:
-                found.extend(self._bind(str(unit["module"]), Path(unit["path"]), namespace))
+                found.extend(self._bind(str(unit["module"]), Path(unit["path"]), namespace, image))
             except (OSError, ImportError, TypeError, ValueError) as exc:
                 failed.append(f"{pou}: {exc}")
                 left.append((pou, "its C module did not bind"))
@@ -137,20 +152,30 @@ class NativeTier:
         return found, NativeReport(tuple(sorted(bodies)), tuple(sorted(left)), tuple(failed))
 
     def _bind(
-        self, name: str, shared: Path, namespace: dict[str, Any]
+        self, name: str, shared: Path, namespace: dict[str, Any], image: ImagePlan | None
     ) -> list[tuple[type, str, Any]]:
         if not shared.resolve().is_relative_to(self.cache.resolve()):
             raise ValueError(f"{shared} is not in the cache")
         module = self._copy(name, shared)
+        classes = namespace if image is None else image.views
         try:
-            found: dict[tuple[str, str], Any] = module.bind(namespace, _breathe)
+            found: dict[tuple[str, str], Any] = (
+                module.bind(namespace, _breathe)
+                if image is None
+                else module.bind(
+                    namespace, _breathe, image.views, image.registry, image.memory.View
+                )
+            )
         except BaseException:
             self._release(name, module)
             raise
-        bound = {namespace[cls] for cls, _ in found}
+        bound = {classes[cls] for cls, _ in found}
         for kind in bound:
-            # the C statics borrow the namespace: a class it was bound to keeps it alive
+            # the C statics borrow the namespace (and an image's view classes and registry):
+            # a class it was bound to keeps them alive
             setattr(kind, NAMESPACE_ATTR, namespace)
+            if image is not None:
+                setattr(kind, IMAGE_ATTR, (image.views, image.registry))
         # the copy is free again once every class it was bound to is gone
         remaining = [len(bound)]
 
@@ -161,7 +186,7 @@ class NativeTier:
 
         for kind in bound:
             weakref.finalize(kind, gone)
-        return [(namespace[cls], method, body) for (cls, method), body in sorted(found.items())]
+        return [(classes[cls], method, body) for (cls, method), body in sorted(found.items())]
 
     def _copy(self, name: str, shared: Path) -> ModuleType:
         with self._lock:
@@ -187,24 +212,45 @@ class NativeJob:
     """The native bodies of one image, prepared on a thread of its own while the image
     runs as Python; the thread that runs the image installs them (between two cycles)."""
 
-    def __init__(self, tier: NativeTier, artifact: Artifact, namespace: dict[str, Any]) -> None:
+    def __init__(
+        self,
+        tier: NativeTier,
+        artifact: Artifact,
+        namespace: dict[str, Any],
+        memory_image: bool = False,
+    ) -> None:
         self._done = threading.Event()
         self._found: list[tuple[type, str, Any]] = []
         self.report: NativeReport | None = None
+        # the configuration's memory image, when its values go there (image_plan.py)
+        self.image: ImagePlan | None = None
         self.installed = False
         # (class, method, Python body, C body) of every installed body
         self.swaps: list[tuple[type, str, Any, Any]] = []
         self._thread = threading.Thread(
             target=self._run,
-            args=(tier, artifact, namespace),
+            args=(tier, artifact, namespace, memory_image),
             name="padt-native",
             daemon=True,
         )
         self._thread.start()
 
-    def _run(self, tier: NativeTier, artifact: Artifact, namespace: dict[str, Any]) -> None:
+    def _run(
+        self, tier: NativeTier, artifact: Artifact, namespace: dict[str, Any], memory_image: bool
+    ) -> None:
         try:
-            self._found, self.report = tier.prepare(artifact, namespace)
+            plan = _plan(tier, artifact, namespace) if memory_image else ""
+            image = plan if isinstance(plan, ImagePlan) else None
+            memory = plan if isinstance(plan, str) else IN_IMAGE
+            self._found, report = tier.prepare(artifact, namespace, image)
+            if image is not None and report.failed:
+                # what built stays C, on the slot objects: a defect of image mode costs
+                # the image, not the bodies
+                memory = f"its image-mode C did not build: {report.failed[0][:200]}"
+                self._found, report = tier.prepare(artifact, namespace)
+            else:
+                self.image = image
+            self.report = replace(report, memory=memory)
         except Exception as exc:  # a defect of the tier: the image stays Python
             self.report = NativeReport(
                 (), (), (f"the native tier failed: {type(exc).__name__}: {exc}",)
@@ -239,3 +285,14 @@ class NativeJob:
         in the instances, not in the code, so they are the same on either side."""
         for kind, method, python, body in self.swaps:
             setattr(kind, method, body if native else python)
+
+
+def _plan(tier: NativeTier, artifact: Artifact, namespace: dict[str, Any]) -> ImagePlan | str:
+    """The image of the configuration whose classes `namespace` holds, or why it has none."""
+    assert tier.toolchain is not None
+    classes = {
+        unit.class_name: namespace[unit.class_name]
+        for unit in artifact.units()
+        if isinstance(namespace.get(unit.class_name), type)
+    }
+    return plan_image(artifact, classes, tier.cache, tier.toolchain)

@@ -29,13 +29,22 @@ from typing import Any
 
 from runtime.code.fault_location import code_filename
 from runtime.code.native.build import BuildError, build, find_toolchain, mark_used, prune
+from runtime.code.native.image_body import translate_image_unit
 from runtime.code.native.kinds import ClassInfo, Forms, FunctionInfo, class_table, function_table
 from runtime.code.native.translate import Translated, translate_unit
 from runtime.contract.artifact import Artifact, PouCode, load_artifact
 from runtime.contract.generated_code import GeneratedCodeError, check_artifact_names
+from runtime.contract.layout import LayoutRefused, Layouts, class_layouts, runtime_layouts
 
 WORKER_NICE = 10  # background work: below the runtime and below normal programs
-_SOURCES = ("translate.py", "kinds.py", "padt_native.h", "padt_image.h", "build.py")
+_SOURCES = (
+    "translate.py",
+    "image_body.py",
+    "kinds.py",
+    "padt_native.h",
+    "padt_image.h",
+    "build.py",
+)
 # the C is made from the typed form and numbers lines as the printer does
 _FORM_SOURCES = ("python_text.py", "typed_form.py", "statements.py", "units.py")
 
@@ -83,8 +92,13 @@ class ArtifactTranslation:
         ]
         return repr((self.globals_class, sorted(members), sorted(self.functions.items())))
 
-    def translate(self, unit: PouCode) -> Translated:
+    def translate(self, unit: PouCode, layouts: Layouts | None = None) -> Translated:
+        """The unit's C: on the slots of objects, or in image mode at `layouts`' offsets."""
         form = self.forms[unit.class_name]
+        if layouts is not None:
+            return translate_image_unit(
+                unit, form, self.classes, self.globals_class, layouts, self.functions
+            )
         return translate_unit(unit, form, self.classes, self.globals_class, self.functions)
 
 
@@ -125,17 +139,21 @@ def _write_atomically(path: Path, text: str) -> None:
             scratch.unlink()
 
 
-def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
+def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]:
     """Per program and function block: the POU, its module (name and built shared object)
-    when a body translated, the bodies left to Python with the reasons, a build failure."""
+    when a body translated, the bodies left to Python with the reasons, a build failure.
+    With `image`, the bodies in image mode, on the configuration's memory image."""
     toolchain = find_toolchain()
     if toolchain is None:
         return {"error": "no C compiler or no Python.h on this machine"}
     try:
         translation = ArtifactTranslation.of(artifact)
-    except GeneratedCodeError as exc:
+        layouts = {**runtime_layouts(), **class_layouts(artifact.units())} if image else None
+    except (GeneratedCodeError, LayoutRefused) as exc:
         return {"error": str(exc)}
     shape = translation.shape()
+    if layouts is not None:  # every offset a body reads is in its C
+        shape += "image" + repr(sorted(layouts.items()))
     fingerprint = _translator_fingerprint()
     index = cache / toolchain.fingerprint / "index"
     index.mkdir(parents=True, exist_ok=True)
@@ -148,7 +166,7 @@ def make(artifact: Artifact, cache: Path) -> dict[str, Any]:
         known = index / f"{key}.json"
         answer = _known(known)
         if answer is None:
-            translated = translation.translate(unit)
+            translated = translation.translate(unit, layouts)
             answer = {"pou": unit.name, "left": [reason for _, reason in translated.left]}
             if translated.source:
                 try:
@@ -168,8 +186,9 @@ def main() -> None:
     with contextlib.suppress(OSError):
         os.setpriority(os.PRIO_PROCESS, 0, WORKER_NICE)
     cache = Path(sys.argv[1])
+    image = sys.argv[2:] == ["image"]
     artifact = load_artifact(sys.stdin.buffer.read())
-    json.dump(make(artifact, cache), sys.stdout)
+    json.dump(make(artifact, cache, image), sys.stdout)
 
 
 if __name__ == "__main__":

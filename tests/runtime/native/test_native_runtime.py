@@ -199,15 +199,20 @@ END_PROGRAM
     assert 0 < pair.native.variables.values()["Slow.rounds"] < 40
 
 
+# a reference keeps a configuration on objects, its bodies C on their slots (image_plan.py):
+# in an image no variable can hold a value of another type (its view refuses it)
+ON_SLOTS = "VAR_GLOBAL keep_on_slots : REF_TO INT; END_VAR\n"
+
+
 def test_a_variable_that_holds_a_wrong_type_is_a_fault_not_a_crash(
     native_tier: NativeTier,
 ) -> None:
-    text = "PROGRAM Main\nVAR n : INT; m : INT; END_VAR\nm := n + 1;\nEND_PROGRAM\n"
+    text = ON_SLOTS + "PROGRAM Main\nVAR n : INT; m : INT; END_VAR\nm := n + 1;\nEND_PROGRAM\n"
     resource = running(compiled(text), native_tier)
     resource.programs[0].instance.n = "not an INT"  # what no checked writer would store
     resource.cycle()
     error = program_error(resource)
-    assert "another type" in error and "prog.st:3" in error
+    assert "another type" in error and "prog.st:4" in error
 
 
 PLANT = """
@@ -290,6 +295,24 @@ def test_module_copies_are_bound_again_once_their_classes_are_gone(
         gc.collect()
     loaded = [copies.loaded for copies in fresh_tier._copies.values()]
     assert loaded and max(loaded) <= 3  # not one per cold start
+
+
+def test_the_variables_go_into_native_memory_and_the_event_says_where_they_are(
+    native_tier: NativeTier,
+) -> None:
+    resource = running(compiled(PLANT), native_tier)
+    native = [e.message for e in resource.events.recent() if e.kind == "native"]
+    assert native[-1].endswith("5 of 5 POU bodies run as C, the variables in native memory")
+    assert resource.variables.image is not None
+    kept = running(compiled(ON_SLOTS + PLANT), native_tier)
+    native = [e.message for e in kept.events.recent() if e.kind == "native"]
+    assert "5 of 5 POU bodies run as C, the variables on Python objects (no view" in native[-1]
+    assert kept.variables.image is None
+    for _ in range(3):  # the same values either way
+        resource.cycle()
+        kept.cycle()
+    values = {k: v for k, v in kept.variables.values().items() if "keep_on_slots" not in k}
+    assert resource.variables.values() == values
 
 
 def test_integer_division_at_the_limits_of_64_bits(native_tier: NativeTier) -> None:
@@ -764,13 +787,13 @@ END_PROGRAM
 def test_a_ulint_variable_beyond_its_range_is_a_fault_not_a_wrong_value(
     native_tier: NativeTier,
 ) -> None:
-    text = "PROGRAM Main\nVAR n, m : ULINT; END_VAR\nm := n + 1;\nEND_PROGRAM\n"
+    text = ON_SLOTS + "PROGRAM Main\nVAR n, m : ULINT; END_VAR\nm := n + 1;\nEND_PROGRAM\n"
     for wrong in (-1, 2**64, "not a ULINT"):  # what no checked writer would store
         resource = running(compiled(text), native_tier)
         resource.programs[0].instance.n = wrong
         resource.cycle()
         error = program_error(resource)
-        assert "another type" in error and "prog.st:3" in error, wrong
+        assert "another type" in error and "prog.st:4" in error, wrong
 
 
 WIDE_PLACES = """VAR_GLOBAL gU : ULINT := 18446744073709551615; gW : ARRAY[0..2] OF LWORD; END_VAR
