@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from runtime.context_snapshot import Records
+from runtime.context_snapshot import Deferred, Records
 from runtime.contract.outside_json import JsonRefused, read_json
 
 CONTEXT_FORMAT = "padt-context"
@@ -35,7 +35,8 @@ class Context:
     # per user program: {"state", "time_ns", "values": snapshot tree, ...}, opaque here
     programs: dict[str, dict[str, Any]]
     globals: Any  # snapshot tree of the GLOBALS instance, or None
-    # (the trees may hold `Records` when the cycle thread took them with `capture`)
+    # (the trees may hold `Records` when the cycle thread took them with `capture`, or be
+    # `Deferred` when it copied a memory image)
 
 
 @dataclass(frozen=True)
@@ -53,7 +54,9 @@ def _canonical(value: Any) -> bytes:
     deferred: list[Records] = []
     marker = f"\x00records-{secrets.token_hex(8)}-"  # no saved string can hold it by chance
 
-    def later(item: Any) -> str:
+    def later(item: Any) -> Any:
+        if type(item) is Deferred:
+            return item.build()  # a tree, which the encoder then writes in its place
         if type(item) is not Records:
             raise TypeError(f"cannot save a value of type {type(item).__qualname__}")
         deferred.append(item)

@@ -145,6 +145,15 @@ def _no_fast_path(instance: Any) -> tuple[Any, ...]:
 
 
 @dataclass(frozen=True)
+class Deferred:
+    """A tree the cycle thread left for the thread that encodes the context: `build` makes
+    it from what was copied between two cycles (a memory image's bytes: image_memory.py),
+    so the periodic save's share of the cycle thread is that copy."""
+
+    build: Callable[[], Any]
+
+
+@dataclass(frozen=True)
 class Records:
     """An array of records of one class that hold values only, as `capture` took it: the
     rows of their slots' values (tuples: later changes of the instances do not reach them).

@@ -12,6 +12,7 @@ from types import ModuleType
 import pytest
 from hypothesis import HealthCheck, given, settings
 
+from runtime.context import Context, encode_context
 from runtime.context_snapshot import ContextMismatch
 from runtime.contract.artifact import ProgramConfig
 from runtime.image_memory import ImageMemory
@@ -96,6 +97,28 @@ def test_every_type_and_two_programs_read_stored_and_restored_alike(
         _, fresh_image = memories(fresh)
         fresh_image.restore(on_objects.take())
         assert fresh_image.take() == on_objects.take()
+
+
+def encoded(trees: ValueTrees) -> bytes:
+    programs = {name: {"values": tree} for name, tree in trees.programs.items()}
+    return encode_context(Context("00", 0, {}, programs, trees.globals))
+
+
+def test_the_periodic_save_copies_the_image_and_builds_its_trees_when_encoded(
+    padt_memory: ModuleType,
+) -> None:
+    two = [ProgramConfig("Fill", "Fill", 1), ProgramConfig("Watch", "Watch", 2)]
+    # EVERY_TYPE: arrays of structures with a text (as trees) and of blocks (as rows)
+    for text, configs in ((EVERY_TYPE, None), (TWO_PROGRAMS, two)):
+        run = ImageRun(compiled(text, configs), padt_memory)
+        for _ in range(3):
+            run.cycle()
+        on_objects, in_image = memories(run)
+        taken = in_image.take(deferred=True)  # the cycle thread's share: a copy of the bytes
+        expected = encoded(in_image.take())
+        assert encoded(on_objects.take(deferred=True)) == expected
+        run.cycle()  # what the programs change after the take is not in it
+        assert encoded(taken) == expected != encoded(in_image.take())
 
 
 def test_a_tree_that_does_not_fit_is_refused_and_the_image_kept(padt_memory: ModuleType) -> None:
