@@ -1,7 +1,8 @@
 """padt beside its peers (../shared/peers): the bench program of 1,001 statements and the
 same without its 48 TONs, per CPU cycle on padt's native tier, on its Python tier, as
-matiec's C and on ironplc's VM, and the body alone as image-mode C (issue 34 step 5, not
-yet live in the runtime), measured in the same run, alternately, the best of a few
+matiec's C and on ironplc's VM, and the native body alone (image-mode C on a memory image,
+no cycle around it: what padt native's cycle costs beyond it is the fixed cost of a
+cycle), measured in the same run, alternately, the best of a few
 rounds each (padt's rounds each in a process of its own, `cycle_probe.py`); with the goals
 of issue 34 (native no slower than matiec, the bench program built in under 3 s) and
 whether padt's values after the check cycles are the peers'.
@@ -86,9 +87,9 @@ def report(program: PeerProgram, rounds: Rounds) -> None:
     image_built_s = min(float(reply["image_build_s"]) for reply in rounds.image)
     stayed = ", ".join(body for body, _ in image["image_left"]) or "nothing"
     print(
-        f"  padt image C  {image_us:8.1f} us: the body alone on a memory image (step 5, not "
-        f"yet live in the runtime; as Python: {stayed}), ratio {image_us / matiec_us:.2f} to "
-        f"matiec; built in {image_built_s:.1f} s into an empty cache"
+        f"  padt C body   {image_us:8.1f} us: padt native's body alone, no cycle around it "
+        f"(as Python: {stayed}), ratio {image_us / matiec_us:.2f} to matiec; built in "
+        f"{image_built_s:.1f} s into an empty cache"
     )
     print(f"  matiec (C)    {matiec_us:8.1f} us")
     print(

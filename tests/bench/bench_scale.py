@@ -36,7 +36,7 @@ from runtime.reload_switch import reload
 from runtime.resource import Resource
 from runtime.restart import take_context, warm_start
 from runtime.watch_sets import WatchSet
-from tests.bench.baseline import ISSUE_34_COMMIT, alternate, baseline
+from tests.bench.baseline import ISSUE_34_COMMIT, REPO, Replies, alternate, baseline, probe
 from tests.bench.cycle_probe import BEST_OF, STATE_ROUNDS, best_ms, scale_source
 
 SIZES = (10_000, 100_000)
@@ -181,27 +181,49 @@ KEPT_FIGURES = {
 }
 
 
+# the moves of the values between the memory image and objects (cycle thread), which a
+# reload's job and the debugger cost on the native tier besides the figures above
+IMAGE_MOVES = (
+    ("leave_ms", "values out of the image (a reload's start)"),
+    ("enter_ms", "values into the image (the next tier-up)"),
+)
+
+
 def bench_against_issue_34(rounds: int = 2) -> None:
     """The figures of KEPT_FIGURES, today's code beside the code before issue 34, each in
-    processes of its own, alternately (tests/bench/baseline.py); per figure the best."""
+    processes of its own, alternately (tests/bench/baseline.py); per figure the best.
+    Today's code twice: on Python objects as the baseline, and on the native tier with the
+    values in its memory image."""
     other = baseline(ISSUE_34_COMMIT)
     print(
         f"beside the baseline of issue 34 ({other.name if other else 'none'}), {rounds} "
         f"processes each, alternately, best of {rounds} x {STATE_ROUNDS} (ms; ratio: today / "
-        "baseline):"
+        "baseline; then today with the variables in native memory):"
     )
-    width = max(len(label) for figures in KEPT_FIGURES.values() for _, label in figures)
-    for variables, figures in KEPT_FIGURES.items():
-        reloads = any(key == "pause_ms" for key, _ in figures)
-        request = {"state_variables": variables, "reload": reloads}
-        now, before = alternate(request, rounds, ISSUE_34_COMMIT)
-        for key, label in figures:
-            best = min(float(reply[key]) for reply in now)
-            line = f"  {variables:>7,} variables, {label + ':':<{width + 1}} {best:8.2f}"
-            if before:
-                was = min(float(reply[key]) for reply in before)
-                line += f"   baseline {was:8.2f}   ratio {best / was:5.2f}"
-            print(line)
+    width = max(
+        len(label) for figures in (*KEPT_FIGURES.values(), IMAGE_MOVES) for _, label in figures
+    )
+    with tempfile.TemporaryDirectory(prefix="padt-bench-native-") as cache:
+        for variables, figures in KEPT_FIGURES.items():
+            reloads = any(key == "pause_ms" for key, _ in figures)
+            request = {"state_variables": variables, "reload": reloads}
+            now, before = alternate(request, rounds, ISSUE_34_COMMIT)
+            native = {**request, "state_native_cache": cache}
+            in_image = [probe(REPO, native) for _ in range(rounds)]
+            for key, label in figures:
+                best = _best(now, key)
+                line = f"  {variables:>7,} variables, {label + ':':<{width + 1}} {best:8.2f}"
+                if before:
+                    was = _best(before, key)
+                    line += f"   baseline {was:8.2f}   ratio {best / was:5.2f}"
+                print(f"{line}   native memory {_best(in_image, key):8.2f}")
+            for key, label in IMAGE_MOVES:
+                best = _best(in_image, key)
+                print(f"  {variables:>7,} variables, {label + ':':<{width + 1}} {best:8.2f}")
+
+
+def _best(replies: Replies, key: str) -> float:
+    return min(float(reply[key]) for reply in replies)
 
 
 def main() -> None:

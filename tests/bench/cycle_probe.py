@@ -7,7 +7,8 @@ It uses only what every version of the project since the artifact's version 3 ha
 today's code beside the same figure of an older commit, measured in the same run.
 
 Request: {"program": ST text, "cycles": n, "check_cycles": m, "fixed_cycles": f,
-"native_cache": folder, "image_cache": folder, "state_variables": v, "reload": r}, each part
+"native_cache": folder, "image_cache": folder, "state_variables": v, "reload": r,
+"state_native_cache": folder}, each part
 left out when empty or 0; with
 `native_cache` (today's code only) the program runs on the native tier, its modules
 compiled into that folder; with `image_cache` (today's code only) its body is timed alone
@@ -21,8 +22,10 @@ place, "native_bodies": the POUs that run as C, "image_body_us", "image_build_s"
 best of a few rounds of reading every value (the online test's `values`: the read on the
 cycle thread, and the whole read with the values built), taking the periodic context
 (cycle thread), encoding and saving it (saver thread), and with `reload` the pause of a
-reload of its small program}. The state figures take what every version since the issue 34
-baseline (tests/bench/baseline.py) has.
+reload of its small program; with `state_native_cache` (today's code only) the same on the
+native tier, the values in the memory image, and "leave_ms", "enter_ms": the moves of the
+values out of the image and back in}. The state figures take what every version since the
+issue 34 baseline (tests/bench/baseline.py) has.
 """
 
 from __future__ import annotations
@@ -104,8 +107,8 @@ def program_cycles(
 
 
 def image_body(text: str, cycles: int, cache: str, reply: dict[str, Any]) -> None:
-    """The program's body as image-mode C (issue 34 step 5: not yet live in the runtime),
-    on a memory image beside the Python tier's objects: the time it takes to translate,
+    """The program's body as image-mode C on a memory image beside the Python tier's
+    objects: the time it takes to translate,
     build and put the bodies in place into `cache`, what stays Python, and the median
     time of the body alone per cycle (no cycle around it: the fixed cost of a cycle adds
     to it once it runs in the runtime)."""
@@ -165,7 +168,7 @@ def best_ms(work: Callable[[], object], rounds: int = BEST_OF) -> float:
     return min(times) * 1000
 
 
-def state_figures(variables: int, reloads: bool) -> dict[str, float]:
+def state_figures(variables: int, reloads: bool, native_cache: str = "") -> dict[str, float]:
     config = ResourceConfig(name="R", target_cycle_ms=10, watchdog_ms=60_000)
     program = [ProgramConfig("Small", "Small", 1)]
     artifacts = []
@@ -175,11 +178,19 @@ def state_figures(variables: int, reloads: bool) -> dict[str, float]:
         assert result.artifact is not None, [str(d) for d in result.diagnostics]
         artifacts.append(result.artifact)
     resource = Resource("R", VirtualClock())
+    figures: dict[str, float] = {}
+    if native_cache:
+        from runtime.code.native.tier import NativeTier  # today's code only
+
+        resource.native = NativeTier(Path(native_cache))
     resource.load(artifacts[0])
+    if native_cache:
+        resource.tier_up(wait=True)
+        figures.update(image_moves(resource))
     resource.start()
     for _ in range(20):  # past Python's warm-up of new code
         resource.cycle()
-    figures = {"read_ms": best_ms(resource.variables.read_values, STATE_ROUNDS)}
+    figures["read_ms"] = best_ms(resource.variables.read_values, STATE_ROUNDS)
     figures["values_ms"] = best_ms(resource.variables.values, STATE_ROUNDS)
     figures["take_ms"] = best_ms(lambda: take_context(resource, deferred=True), STATE_ROUNDS)
     context = take_context(resource, deferred=True)
@@ -193,8 +204,29 @@ def state_figures(variables: int, reloads: bool) -> dict[str, float]:
             pauses.append(reload(resource, artifacts[(n + 1) % 2], {}).pause_us / 1000)
             for _ in range(20):
                 resource.cycle()
+                resource.tier_up(wait=True)  # a reload's values back into the image
         figures["pause_ms"] = min(pauses)
     return figures
+
+
+def image_moves(resource: Resource) -> dict[str, float]:
+    """With the values in the memory image: how long the cycle thread takes to move them
+    out to objects (as a reload's job and the debugger begin) and back in (the next
+    `tier_up`), the best of a few rounds each."""
+    from runtime.image_switch import enter_image, leave_image  # today's code only
+
+    variables = resource.variables
+    code = variables.code
+    assert variables.image is not None and code is not None and code.image is not None
+    leave, enter = [], []
+    for _ in range(STATE_ROUNDS):
+        started = time.perf_counter()
+        leave_image(variables)
+        left = time.perf_counter()
+        enter_image(variables, code.image)
+        leave.append(left - started)
+        enter.append(time.perf_counter() - left)
+    return {"leave_ms": min(leave) * 1000, "enter_ms": min(enter) * 1000}
 
 
 def main() -> None:
@@ -214,7 +246,13 @@ def main() -> None:
     if request.get("fixed_cycles"):
         reply["fixed_us"] = fixed_cycles(request["fixed_cycles"])
     if request.get("state_variables"):
-        reply.update(state_figures(request["state_variables"], request.get("reload", False)))
+        reply.update(
+            state_figures(
+                request["state_variables"],
+                request.get("reload", False),
+                request.get("state_native_cache", ""),
+            )
+        )
     json.dump(reply, sys.stdout)
 
 
