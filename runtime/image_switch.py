@@ -15,7 +15,6 @@ from __future__ import annotations
 from typing import Any
 
 from runtime.code.native.image_plan import ImagePlan
-from runtime.code.native.image_views import copy_into
 from runtime.contract.refusal import Refusal
 from runtime.image_memory import ImageMemory
 from runtime.memory import ObjectMemory
@@ -32,12 +31,16 @@ def enter_image(variables: Variables, plan: ImagePlan) -> bytearray:
         for p in plan.placement.placements
         if p.cls in plan.views
     }
-    _move(variables, views, lambda name, old: _into(views[name], old))
+    # every value packed (in C) before any instance is replaced: a value a view refuses
+    # (of another type, out of its range) leaves the configuration as it was
+    for name, instance in _held(variables).items():
+        plan.memory.pack(views[name], instance)
+    _move(variables, views)
     variables.memory = ImageMemory(
         image, plan.layouts, plan.placement, plan.class_names, [p.name for p in variables.programs]
     )
     variables.bound = list(variables.bound)
-    variables.image = image
+    variables.image = plan
     assert code is variables.code
     return image
 
@@ -46,18 +49,19 @@ def leave_image(variables: Variables) -> None:
     """The values of the image into fresh objects of the generated classes, in their
     places (the reverse of `enter_image`)."""
     code = _idle(variables)
-    fresh: dict[str, Any] = {}
-    if variables.globals is not None:
-        fresh["_G"] = code.new_globals()
-    for program in variables.programs:
-        fresh[program.name] = code.new_instance(program.config.pou)
-        if program.view is not variables.globals:
-            fresh[f"{program.name}._G"] = code.new_globals()
-    for pou in code.artifact.pous:
-        if pou.kind == "PROGRAM" and pou.name.upper() not in _run(variables):
-            fresh[f"_P.{pou.name}"] = code.new_instance(pou.name)
+    assert variables.image is not None, "the values are on objects"
+    held = _held(variables)
+    pous = {program.name: program.config.pou for program in variables.programs}
     # every object made before a value is copied: making one may run code (FB_INIT)
-    _move(variables, fresh, lambda name, view: _into(fresh[name], view))
+    fresh = {
+        name: code.new_globals()
+        if name == "_G" or name.endswith("._G")  # the globals or a program's copy of them
+        else code.new_instance(pous.get(name) or name.removeprefix("_P."))
+        for name in held
+    }
+    for name, view in held.items():
+        variables.image.memory.unpack(view, fresh[name])  # every value, in C
+    _move(variables, fresh)
     variables.memory = ObjectMemory(variables.globals, variables.programs)
     variables.bound = list(variables.bound)
     variables.image = None
@@ -93,30 +97,39 @@ def _run(variables: Variables) -> set[str]:
     return {program.config.pou.upper() for program in variables.programs}
 
 
-def _into(target: Any, source: Any) -> Any:
-    copy_into(target, source)
-    return target
+def _held(variables: Variables) -> dict[str, Any]:
+    """Every instance `_move` replaces, by the name it has in the image's placement."""
+    code = variables.code
+    assert code is not None
+    held = {"_G": variables.globals} if variables.globals is not None else {}
+    for program in variables.programs:
+        held[program.name] = program.instance
+        if program.view is not variables.globals:
+            held[f"{program.name}._G"] = program.view
+    for pou in code.artifact.pous:
+        if pou.kind == "PROGRAM" and pou.name.upper() not in _run(variables):
+            held[f"_P.{pou.name}"] = code.program_instance(pou.name)
+    return held
 
 
-def _move(variables: Variables, names: dict[str, Any], moved: Any) -> None:
-    """Each instance of `variables` replaced by `moved(name, instance)` (the instance of
-    the same name in `names`, its values copied), in every place that holds it."""
+def _move(variables: Variables, replacements: dict[str, Any]) -> None:
+    """Each instance of `variables` replaced by the one of the same name in
+    `replacements` (`_held`'s names), in every place that holds it."""
     code = variables.code
     assert code is not None
     old_globals = variables.globals
-    new_globals = moved("_G", old_globals) if old_globals is not None else None
+    new_globals = replacements["_G"] if old_globals is not None else None
     for program in variables.programs:
-        instance = moved(program.name, program.instance)
+        instance = replacements[program.name]
         code.adopt_program(program.instance, instance)
         program.instance = instance
         if program.view is old_globals:
             program.view = new_globals
         else:
-            program.view = moved(f"{program.name}._G", program.view)
+            program.view = replacements[f"{program.name}._G"]
     for pou in code.artifact.pous:
         if pou.kind == "PROGRAM" and pou.name.upper() not in _run(variables):
-            old = code.program_instance(pou.name)
-            code.adopt_program(old, moved(f"_P.{pou.name}", old))
+            code.adopt_program(code.program_instance(pou.name), replacements[f"_P.{pou.name}"])
     if new_globals is not None:
         code.adopt_globals(new_globals)
     variables.globals = new_globals

@@ -277,8 +277,14 @@ class Resource:
                 python=[f"{pou}: {reason}" for pou, reason in report.left],
             )
         plan = may_enter(self.variables)
-        if plan is not None:
-            enter_image(self.variables, plan)
+        if plan is not None and code is not None:
+            try:
+                enter_image(self.variables, plan)
+            except (TypeError, ValueError, OverflowError) as refused:
+                # a value no checked writer stores (a view refuses it): nothing moved, and
+                # this code's values stay on objects
+                code.image = None
+                self.recorder.record("native", f"the variables stay on Python objects: {refused}")
 
     @property
     def native_report(self) -> NativeReport | None:

@@ -16,6 +16,7 @@ from runtime.code.instances import (
     name_reference_roots,
     output_points,
 )
+from runtime.code.native.image_plan import ImagePlan
 from runtime.code.user_program import UserProgram
 from runtime.collector import COLLECTOR
 from runtime.contract.artifact import AccessPath
@@ -32,8 +33,9 @@ class Variables:
         self.programs: list[UserProgram] = []  # by priority, then Program ID
         self.globals: Any = None  # the globals as all programs see them between cycles
         self.memory: Memory = ObjectMemory(None, [])  # where the variables' values are
-        # the memory image the values are in (runtime/image_switch.py); None: the objects
-        self.image: bytearray | None = None
+        # the plan of the memory image the values are in (runtime/image_switch.py; its
+        # bytes are `memory`'s); None: they are on the objects
+        self.image: ImagePlan | None = None
         # while a reload job plans against the objects, the values stay there (the job)
         self.image_held: Callable[[], object] | None = None
         self.bound: list[BoundVariable] = []

@@ -16,7 +16,7 @@ from runtime.code.instances import Instances, instances_of
 from runtime.code.intrinsics import SystemView, _ActionControl, _SfcStep
 from runtime.code.native.build import build, load
 from runtime.code.native.image_body import translate_image_unit
-from runtime.code.native.image_views import copy_into, view_classes
+from runtime.code.native.image_views import view_classes
 from runtime.code.native.tier import NativeTier, _breathe
 from runtime.code.native.worker import ArtifactTranslation
 from runtime.contract.artifact import Artifact
@@ -73,9 +73,9 @@ class ImageRun:
         self.image = bytearray(placement.size)
         placed = {p.name: views[p.cls](self.image, p.offset) for p in placement.placements}
         if self.viewed.globals is not None:
-            copy_into(placed["_G"], self.viewed.globals)
+            memory.pack(placed["_G"], self.viewed.globals)
         for program in self.viewed.programs:
-            copy_into(placed[program.name], program.instance)
+            memory.pack(placed[program.name], program.instance)
             program.instance = placed[program.name]
             shared = program.view is self.viewed.globals
             program.view = placed["_G"] if shared else placed[f"{program.name}._G"]

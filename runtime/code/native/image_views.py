@@ -143,30 +143,6 @@ def _field(
     raise ViewsRefused(f"no view of {type(shape).__name__} yet")
 
 
-def copy_into(target: Any, source: Any) -> None:
-    """Every value of `source` (and of the instances and arrays it holds) into `target`,
-    an instance of the same class: a slot object's into its view as the image takes them
-    over, or a view's into a slot object as the objects take them back."""
-    for name in type(target).__slots__:
-        value = getattr(source, name)
-        if is_array(value):
-            _copy_array(getattr(target, name), value)
-        elif is_instance(value):
-            copy_into(getattr(target, name), value)
-        else:
-            setattr(target, name, value)
-
-
-def _copy_array(elements: Any, values: Any) -> None:
-    for index, value in enumerate(values):
-        if is_array(value):
-            _copy_array(elements[index], value)
-        elif is_instance(value):
-            copy_into(elements[index], value)
-        else:
-            elements[index] = value
-
-
 def is_array(value: object) -> bool:
     """A list, or an array of an image (padt_memory's Elements): a sequence, no text."""
     return hasattr(value, "__len__") and not isinstance(value, str)

@@ -11,9 +11,11 @@ import time
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime import reload_switch
+from runtime.clock import VirtualClock
 from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 from runtime.contract.protocol import ResourceState
+from runtime.resource import Resource
 from tests.bench.bench_language import thousand_statements
 from tests.support.native_runs import compiled, program_error, running, side_by_side
 from tests.support.resource_harness import compiled as harness_artifact
@@ -313,6 +315,25 @@ def test_the_variables_go_into_native_memory_and_the_event_says_where_they_are(
         kept.cycle()
     values = {k: v for k, v in kept.variables.values().items() if "keep_on_slots" not in k}
     assert resource.variables.values() == values
+
+
+def test_a_value_the_image_refuses_keeps_the_variables_on_objects_whole(
+    native_tier: NativeTier,
+) -> None:
+    text = "PROGRAM Main\nVAR n : INT; m : INT; END_VAR\nm := m + 1;\nEND_PROGRAM\n"
+    resource = Resource("R", VirtualClock())
+    resource.native = native_tier
+    resource.load(compiled(text))
+    resource.programs[0].instance.n = "not an INT"  # what no checked writer would store
+    resource.tier_up(wait=True)
+    native = [e.message for e in resource.events.recent() if e.kind == "native"]
+    assert "the variables stay on Python objects: a variable of an integer" in native[-1]
+    assert resource.variables.image is None
+    resource.start()
+    resource.cycle()
+    resource.tier_up()  # not tried again
+    assert resource.variables.image is None
+    assert resource.variables.values()["Main.m"] == 1
 
 
 def test_integer_division_at_the_limits_of_64_bits(native_tier: NativeTier) -> None:
