@@ -6,8 +6,6 @@ again. (The client against a plain asyncua server: test_opcua_remote.py.)"""
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +21,7 @@ from tests.support.runtime_process import (
     router,
     runtime_process,
     store_artifact,
+    wait_for,
     wait_until_answering,
 )
 
@@ -93,13 +92,6 @@ def project(folder: Path, settings: str, source: str, accounts: list[UserAccount
     state = folder.parent / f"{folder.name}-state"
     store_artifact(state, result.artifact)
     return state
-
-
-def wait_for(what: str, check: Callable[[], bool], timeout_s: float = 30) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not check():
-        assert time.monotonic() < deadline, f"timed out: {what}"
-        time.sleep(0.05)
 
 
 def test_a_resource_reads_and_writes_another_over_opc_ua_and_survives_its_loss(

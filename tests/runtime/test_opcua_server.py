@@ -13,7 +13,6 @@ import asyncio
 import hashlib
 import shutil
 import socket
-import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -34,7 +33,7 @@ from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
 from runtime.contract.protocol import GetEvents, GetIo, GetValues
 from tests.conftest import free_port, padt
-from tests.support.runtime_process import running_resource, store_artifact
+from tests.support.runtime_process import running_resource, store_artifact, wait_for
 
 PASSWORD = "opc-ua-test"
 SOURCE = """TYPE Point : STRUCT
@@ -149,13 +148,6 @@ def serving(tmp: Path, log: IO[bytes] | None = None) -> Iterator[Served]:
 def listening(client: ResourceClient) -> bool:
     io = client.ask(GetIo()).io
     return io is not None and any(s.protocol == "opcua" and s.listening for s in io.servers)
-
-
-def wait_for(what: str, check: Callable[[], bool], timeout_s: float = 30) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not check():
-        assert time.monotonic() < deadline, f"timed out: {what}"
-        time.sleep(0.05)
 
 
 async def connected(

@@ -13,7 +13,6 @@ import json
 import os
 import signal
 import time
-from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -45,7 +44,7 @@ from runtime.contract.state_folder import recordings_path
 from runtime.recorder import Recordings
 from runtime.resource import Resource
 from tests.support.mcap_node import node_or_skip, read_with_node
-from tests.support.runtime_process import running_resource, store_artifact
+from tests.support.runtime_process import running_resource, store_artifact, wait_for
 
 PLANT = """
 TYPE Reading : STRUCT raw : INT; scaled : REAL; ok : BOOL; END_STRUCT; END_TYPE
@@ -91,13 +90,6 @@ def compiled(source: str, program: str) -> Artifact:
     )
     assert result.artifact is not None, [str(d) for d in result.diagnostics]
     return result.artifact
-
-
-def wait_for(what: str, check: Callable[[], bool], timeout_s: float = 30) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not check():
-        assert time.monotonic() < deadline, f"waited {timeout_s:g} s for {what}"
-        time.sleep(0.05)
 
 
 def info_of(client: ResourceClient, recording_id: str) -> p.RecordingInfo:

@@ -6,7 +6,8 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO
@@ -84,6 +85,14 @@ def commissioning(client: ResourceClient, state_dir: Path) -> ResourceClient:
 
 def wait_until_answering(client: ResourceClient, timeout_s: float = 30) -> None:
     client.wait_until_answering(timeout_s)
+
+
+def wait_for(what: str, check: Callable[[], bool], timeout_s: float = 30) -> None:
+    """Until `check()` holds (what a process does takes its time), at most `timeout_s`."""
+    deadline = time.monotonic() + timeout_s
+    while not check():
+        assert time.monotonic() < deadline, f"waited {timeout_s:g} s for {what}"
+        time.sleep(0.05)
 
 
 @contextmanager

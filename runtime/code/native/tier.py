@@ -25,6 +25,7 @@ from typing import Any
 
 from runtime.code.compile_worker import child_environment
 from runtime.code.native.build import Toolchain, find_toolchain, load
+from runtime.code.native.image_body import NOT_YET
 from runtime.code.native.image_plan import ImagePlan, plan_image
 from runtime.contract.artifact import Artifact
 
@@ -243,10 +244,15 @@ class NativeJob:
             image = plan if isinstance(plan, ImagePlan) else None
             memory = plan if isinstance(plan, str) else IN_IMAGE
             self._found, report = tier.prepare(artifact, namespace, image)
-            if image is not None and report.failed:
-                # what built stays C, on the slot objects: a defect of image mode costs
-                # the image, not the bodies
-                memory = f"its image-mode C did not build: {report.failed[0][:200]}"
+            # a body image mode leaves to Python is C on slots: the image would cost more
+            # than it gives, and a defect of image mode costs the image, not the bodies
+            held = [(pou, reason) for pou, reason in report.left if NOT_YET in reason]
+            if image is not None and (report.failed or held):
+                memory = (
+                    f"its image-mode C did not build: {report.failed[0][:200]}"
+                    if report.failed
+                    else f"in native memory {held[0][0]} would run as Python: {held[0][1]}"
+                )
                 self._found, report = tier.prepare(artifact, namespace)
             else:
                 self.image = image

@@ -8,8 +8,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +21,7 @@ from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.state_folder import context_path
 from runtime.resource import Resource
 from runtime.restart import warm_start
-from tests.support.runtime_process import running_resource, store_artifact
+from tests.support.runtime_process import running_resource, store_artifact, wait_for
 
 PLANT = """
 TYPE Pt : STRUCT x : REAL; ok : BOOL; END_STRUCT; END_TYPE
@@ -52,13 +50,6 @@ def compiled() -> Artifact:
     return result.artifact
 
 
-def wait_for(what: str, check: Callable[[], bool], timeout_s: float = 120) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not check():
-        assert time.monotonic() < deadline, f"never: {what}"
-        time.sleep(0.05)
-
-
 def in_native_memory(client: ResourceClient) -> bool:
     events = client.command("events")["events"]
     return any(e["kind"] == "native" and IN_NATIVE_MEMORY in e["message"] for e in events)
@@ -81,7 +72,7 @@ def test_writes_forcing_and_a_warm_start_after_sigkill_in_native_memory(
     store_artifact(tmp_path, artifact)
     saving = ("--context-period-ms", "5")
     with running_resource("Plant", tmp_path, zenoh_endpoint, *saving) as (process, client):
-        wait_for("the variables in native memory", lambda: in_native_memory(client))
+        wait_for("the variables in native memory", lambda: in_native_memory(client), 120)
         assert client.command("write", variable="level", value=7)["ok"]
         assert client.command("start")["ok"]
 
@@ -101,6 +92,6 @@ def test_writes_forcing_and_a_warm_start_after_sigkill_in_native_memory(
     start, expected = restored(artifact, tmp_path)
     assert start == "warm" and expected["Main.seen"] == 9 and expected["Main.n"] > 20
     with running_resource("Plant", tmp_path, zenoh_endpoint) as (_process, client):
-        wait_for("the variables in native memory again", lambda: in_native_memory(client))
+        wait_for("the variables in native memory again", lambda: in_native_memory(client), 120)
         assert client.command("status")["status"]["start"] == "warm"
         assert client.command("values")["values"] == expected  # in STOP: as restored

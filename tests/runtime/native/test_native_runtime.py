@@ -317,6 +317,31 @@ def test_the_variables_go_into_native_memory_and_the_event_says_where_they_are(
     assert resource.variables.values() == values
 
 
+def test_a_body_image_mode_would_leave_to_python_keeps_the_configuration_on_slots(
+    native_tier: NativeTier,
+) -> None:
+    text = """FUNCTION Total : DINT
+VAR_INPUT a : ARRAY[1..3] OF DINT; END_VAR
+Total := a[1] + a[2] + a[3];
+END_FUNCTION
+PROGRAM Main
+VAR xs : ARRAY[1..3] OF DINT := [1, 2, 3]; s : DINT; END_VAR
+xs[1] := xs[1] + 1;
+s := Total(xs);
+END_PROGRAM
+"""
+    resource = running(compiled(text), native_tier)
+    native = [e.message for e in resource.events.recent() if e.kind == "native"]
+    assert native[-1].startswith(
+        "native code in place: 1 of 1 POU bodies run as C, the variables on Python objects "
+        "(in native memory Main would run as Python: an array passed to"
+    )
+    assert resource.variables.image is None
+    for _ in range(3):
+        resource.cycle()
+    assert resource.variables.values()["Main.s"] == 9  # (1 + 3) + 2 + 3
+
+
 def test_a_value_the_image_refuses_keeps_the_variables_on_objects_whole(
     native_tier: NativeTier,
 ) -> None:
