@@ -28,7 +28,7 @@ interfaces and in-outs of aggregates, and an array passed to Python code.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from runtime.code.fault_location import code_filename
 from runtime.code.native.kinds import (
@@ -251,7 +251,7 @@ class _ImageBody(_Body):
         value = self.expr(node)
         if not isinstance(value.kind, Instance | Array):
             _refuse(f"a copy of a {_kind_name(value.kind)}")
-        return value
+        return replace(value, copied=True)
 
     def system_value(self, name: str) -> V:
         """`_SYS.now_ns` read once per call from Python (every timer of a program reads
@@ -366,8 +366,28 @@ class _ImageBody(_Body):
         if isinstance(value.kind, Instance):
             return self.instance_object(value)
         if isinstance(value.kind, Array):
-            _refuse(f"an array passed to {callee} ({NOT_YET})")
+            shape = self.list_shape(value.shape) if value.copied else None
+            if shape is None:
+                _refuse(f"an array passed to {callee} ({NOT_YET})")
+            return self.owned_object(f"padt_list_from({value.c}, {c_string(shape)})")
         return super().boxed(value, callee)
+
+    def list_shape(self, shape: Shape | None) -> str | None:
+        """What padt_list_of reads of an array of elementary values or texts (padt_image.h);
+        None for any other (its elements instances: views would share the image's bytes)."""
+        match shape:
+            case Scalar(code=code) if code != NULLABLE_TIME:
+                return code
+            case Chars(length=length, wide=wide):
+                return f"{'w' if wide else 's'}{length};"
+            case Elements(element=element, count=count):
+                inner = self.list_shape(element)
+                if inner is None:
+                    return None
+                stride, _ = size_and_align(element, self.module.layouts.__getitem__)
+                inner = f"[{inner}]" if isinstance(element, Elements) else inner
+                return f"{count}x{stride}:{inner}"
+        return None
 
     # -- what image mode does not do yet
 

@@ -70,22 +70,9 @@ static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) 
     if (field_cleared(f)) return NULL;
     char *p = at(image, offset);
     switch (f->code) {
-    case K_BOOL: return PyBool_FromLong(*(uint8_t *)p != 0);
-    case K_I8: return PyLong_FromLong(*(int8_t *)p);
-    case K_U8: return PyLong_FromLong(*(uint8_t *)p);
-    case K_I16: { int16_t v; memcpy(&v, p, 2); return PyLong_FromLong(v); }
-    case K_U16: { uint16_t v; memcpy(&v, p, 2); return PyLong_FromLong(v); }
-    case K_I32: { int32_t v; memcpy(&v, p, 4); return PyLong_FromLong(v); }
-    case K_U32: { uint32_t v; memcpy(&v, p, 4); return PyLong_FromUnsignedLong(v); }
-    case K_I64: { int64_t v; memcpy(&v, p, 8); return PyLong_FromLongLong(v); }
-    case K_U64: { uint64_t v; memcpy(&v, p, 8); return PyLong_FromUnsignedLongLong(v); }
-    case K_F32: { float v; memcpy(&v, p, 4); return PyFloat_FromDouble(v); }
-    case K_F64: { double v; memcpy(&v, p, 8); return PyFloat_FromDouble(v); }
-    case K_SINCE: {
-        int64_t v; memcpy(&v, p, 8);
-        if (v == INT64_MIN) Py_RETURN_NONE;
-        return PyLong_FromLongLong(v);
-    }
+    case K_BOOL: case K_I8: case K_U8: case K_I16: case K_U16: case K_I32: case K_U32:
+    case K_I64: case K_U64: case K_F32: case K_F64: case K_SINCE:
+        return padt_scalar_get(f->code, p);
     case K_CHARS: case K_WCHARS: return padt_chars_get(p, f->length, f->code == K_WCHARS);
     case K_NESTED: return view_at(f->view_type, image, offset);
     case K_ARRAY: {

@@ -171,6 +171,9 @@ class V:
     kind: Kind
     c: str
     shape: Shape | None = None
+    # an array or instance `_copy` made: Python code given it may have one of its own (in
+    # image mode a list of its values; without `_copy`, Python code would hold the place)
+    copied: bool = False
 
 
 def c_int(value: int) -> str:

@@ -119,7 +119,7 @@ def test_super_runs_the_bases_c_body_on_the_derived_instance(
     assert run_alike(run, 10) == ""
 
 
-def test_a_method_is_called_on_a_view_and_an_array_to_a_function_stays_python(
+def test_a_method_is_called_on_a_view_and_arrays_go_to_functions_as_lists(
     padt_memory: ModuleType, native_tier: NativeTier
 ) -> None:
     text = """
@@ -132,8 +132,16 @@ END_METHOD
 n := n + 10;
 END_FUNCTION_BLOCK
 FUNCTION Total : INT
-VAR_INPUT a : ARRAY[1..3] OF INT; END_VAR
-Total := a[1] + a[2] + a[3];
+VAR_INPUT
+  a : ARRAY[1..3] OF INT; r : ARRAY[0..1] OF REAL; g : ARRAY[1..2, 1..2] OF SINT;
+  w : ARRAY[1..2] OF STRING[5]; b : ARRAY[1..2] OF BOOL;
+END_VAR
+a[1] := 100; (* the function's own copy: the caller's array stays as it was *)
+Total := a[1] + a[2] + a[3] + REAL_TO_INT(r[1]) + g[2, 1] + LEN(w[2]) + BOOL_TO_INT(b[2]);
+END_FUNCTION
+FUNCTION Fill : BOOL
+VAR_IN_OUT a : ARRAY[1..3] OF INT; END_VAR
+a[1] := a[1] + 1;
 END_FUNCTION
 PROGRAM Main
 VAR c : Counter; k : INT; END_VAR
@@ -141,18 +149,30 @@ c();
 k := c.Bump();
 END_PROGRAM
 PROGRAM Sums
-VAR q : ARRAY[1..3] OF INT := [1, 2, 3]; t : INT; END_VAR
+VAR
+  q : ARRAY[1..3] OF INT := [1, 2, 3]; t : INT; r : ARRAY[0..1] OF REAL := [0.5, 2.5];
+  g : ARRAY[1..2, 1..2] OF SINT := [1, 2, -3, 4]; w : ARRAY[1..2] OF STRING[5] := ['a', 'bcd'];
+  b : ARRAY[1..2] OF BOOL := [FALSE, TRUE];
+END_VAR
 q[2] := q[2] + 1;
-t := Total(q);
+t := Total(q, r, g, w, b);
+END_PROGRAM
+PROGRAM Fills
+VAR q : ARRAY[1..3] OF INT; done : BOOL; END_VAR
+done := Fill(q);
 END_PROGRAM
 """
     run, left = side_by_side(text, padt_memory, native_tier)
-    assert [(body, "an array passed to FN_TOTAL" in why) for body, why in left] == [
-        ("POU_SUMS.__call__", True)
+    # an array in-out comes back from Python as a list: not yet in image mode
+    assert [(body, "an instance or array from Python" in why) for body, why in left] == [
+        ("POU_FILLS.__call__", True)
     ]
     run_alike(run, 5)
     assert run.viewed.programs[0].instance.k == 55
-    assert run.viewed.programs[1].instance.t == 11
+    # 100 + (2 + 5) + 3 + 3 (REAL_TO_INT of 2.5) - 3 + 3 + 1, on both sides
+    assert run.viewed.programs[1].instance.t == 114
+    assert list(run.viewed.programs[1].instance.q) == [1, 7, 3]
+    assert list(run.viewed.programs[2].instance.q) == [5, 0, 0]
 
 
 def test_the_benchmark_program_in_the_image_as_on_objects(

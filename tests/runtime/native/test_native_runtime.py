@@ -321,12 +321,12 @@ def test_a_body_image_mode_would_leave_to_python_keeps_the_configuration_on_slot
     native_tier: NativeTier,
 ) -> None:
     text = """FUNCTION Total : DINT
-VAR_INPUT a : ARRAY[1..3] OF DINT; END_VAR
+VAR_IN_OUT a : ARRAY[1..3] OF DINT; END_VAR
+a[1] := a[1] + 1;
 Total := a[1] + a[2] + a[3];
 END_FUNCTION
 PROGRAM Main
 VAR xs : ARRAY[1..3] OF DINT := [1, 2, 3]; s : DINT; END_VAR
-xs[1] := xs[1] + 1;
 s := Total(xs);
 END_PROGRAM
 """
@@ -334,8 +334,9 @@ END_PROGRAM
     native = [e.message for e in resource.events.recent() if e.kind == "native"]
     assert native[-1].startswith(
         "native code in place: 1 of 1 POU bodies run as C, the variables on Python objects "
-        "(in native memory Main would run as Python: an array passed to"
+        "(in native memory Main would run as Python: "
     )
+    assert "not yet in image mode" in native[-1]
     assert resource.variables.image is None
     for _ in range(3):
         resource.cycle()
