@@ -203,6 +203,13 @@ class _ImageBody(_Body):
             case Chars(length=length, wide=wide), Text(), Text():
                 self.check(f"padt_chars_set({at}, {length}, {int(wide)}, {value.c})")
                 return
+            case Elements(), Array(), Array() if value.kind == declared and value.shape is None:
+                # an array Python code gave back (an in-out's value after the call)
+                described = self.list_shape(shape)
+                if described is None:
+                    _refuse(f"{what}, an array of instances from Python ({NOT_YET})")
+                self.check(f"padt_list_into({at}, {c_string(described)}, {value.c})")
+                return
             case ((Nested() | Elements()), (Instance() | Array()), _) if value.kind == declared:
                 # a structure or array assigned whole: the bytes copied (they may overlap)
                 size, _ = size_and_align(shape, self.module.layouts.__getitem__)
@@ -224,6 +231,8 @@ class _ImageBody(_Body):
     def element(self, array: V, index_node: Expr) -> tuple[str, Shape, Kind]:
         """Where an element of `array` is, its shape and its kind; out of bounds the fault
         of a Python list (a negative offset counted from the end first, as a list does)."""
+        if isinstance(array.kind, Array) and array.shape is None:  # a list from Python
+            _refuse(f"an index into an array from Python ({NOT_YET})")
         if (
             not isinstance(array.kind, Array)
             or array.kind.element is None
@@ -392,8 +401,14 @@ class _ImageBody(_Body):
     # -- what image mode does not do yet
 
     def unboxed(self, obj: str, kind: Kind, what: str) -> V:
-        if isinstance(kind, Instance | Array):
-            _refuse(f"{what}, an instance or array from Python ({NOT_YET})")
+        """An array from Python code is the list itself (no `shape`), which only a store of
+        the whole array takes (`write`)."""
+        if isinstance(kind, Array):  # owned: until the store has read it
+            held = self.temp("PyObject *", "NULL")
+            self.line(f"Py_XSETREF({held}, Py_XNewRef({obj}));")
+            return V(kind, held)
+        if isinstance(kind, Instance):
+            _refuse(f"{what}, an instance from Python ({NOT_YET})")
         return super().unboxed(obj, kind, what)
 
     def reference(self, node: Call) -> V:

@@ -64,6 +64,91 @@ padt_scalar_get(int code, const char *p)
     return NULL;
 }
 
+/* A TypeError: a variable of `what` cannot hold `value`; -1. */
+static inline int
+padt_refuse(const char *what, PyObject *value)
+{
+    PyErr_Format(PyExc_TypeError, "a variable of %s cannot hold %R", what, value);
+    return -1;
+}
+
+/* an exact int within [low, high] (bool is no integer here: the slot holds an int) */
+static inline int
+padt_integer(PyObject *value, long long low, long long high, long long *out)
+{
+    if (!PyLong_CheckExact(value)) return padt_refuse("an integer type", value);
+    int overflow = 0;
+    long long v = PyLong_AsLongLongAndOverflow(value, &overflow);
+    if (v == -1 && PyErr_Occurred()) return -1;
+    if (overflow || v < low || v > high) {
+        PyErr_Format(PyExc_OverflowError, "%R is outside the range of the variable", value);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+/* `value` into an elementary variable of a layout's type code at `p`, checked as the
+ * checked writers check it (its Python type, its range, a REAL rounded to 32 bits); -1
+ * with the error, and the bytes as they were, for a value the variable cannot hold. */
+static inline int
+padt_scalar_set(int code, char *p, PyObject *value)
+{
+    long long v;
+    switch (code) {
+    case '?':
+        if (!PyBool_Check(value)) return padt_refuse("BOOL", value);
+        *(uint8_t *)p = value == Py_True;
+        return 0;
+    case 'b':
+        if (padt_integer(value, INT8_MIN, INT8_MAX, &v)) return -1;
+        *(int8_t *)p = (int8_t)v; return 0;
+    case 'B':
+        if (padt_integer(value, 0, UINT8_MAX, &v)) return -1;
+        *(uint8_t *)p = (uint8_t)v; return 0;
+    case 'h': { if (padt_integer(value, INT16_MIN, INT16_MAX, &v)) return -1;
+        int16_t w = (int16_t)v; memcpy(p, &w, 2); return 0; }
+    case 'H': { if (padt_integer(value, 0, UINT16_MAX, &v)) return -1;
+        uint16_t w = (uint16_t)v; memcpy(p, &w, 2); return 0; }
+    case 'i': { if (padt_integer(value, INT32_MIN, INT32_MAX, &v)) return -1;
+        int32_t w = (int32_t)v; memcpy(p, &w, 4); return 0; }
+    case 'I': { if (padt_integer(value, 0, UINT32_MAX, &v)) return -1;
+        uint32_t w = (uint32_t)v; memcpy(p, &w, 4); return 0; }
+    case 'q': { if (padt_integer(value, INT64_MIN, INT64_MAX, &v)) return -1;
+        int64_t w = (int64_t)v; memcpy(p, &w, 8); return 0; }
+    case 'o': {
+        int64_t w = INT64_MIN;
+        if (value != Py_None) {
+            if (padt_integer(value, INT64_MIN + 1, INT64_MAX, &v)) return -1;
+            w = (int64_t)v;
+        }
+        memcpy(p, &w, 8);
+        return 0;
+    }
+    case 'Q': {
+        if (!PyLong_CheckExact(value)) return padt_refuse("an integer type", value);
+        unsigned long long u = PyLong_AsUnsignedLongLong(value);
+        if (u == (unsigned long long)-1 && PyErr_Occurred()) {
+            PyErr_Format(PyExc_OverflowError, "%R is outside the range of the variable", value);
+            return -1;
+        }
+        uint64_t w = (uint64_t)u; memcpy(p, &w, 8); return 0;
+    }
+    case 'f': case 'd': {
+        if (!PyFloat_CheckExact(value)) return padt_refuse("REAL or LREAL", value);
+        double d = PyFloat_AS_DOUBLE(value);
+        if (code == 'd') { memcpy(p, &d, 8); return 0; }
+        float s = (float)d;
+        if ((double)s != d && !(d != d)) /* the slot holds REALs rounded to 32 bits */
+            return padt_refuse("REAL (a value rounded to 32 bits)", value);
+        memcpy(p, &s, 4);
+        return 0;
+    }
+    }
+    PyErr_Format(PyExc_SystemError, "padt: no elementary type of code %d", code);
+    return -1;
+}
+
 /* The str a string variable holds (a new reference); a length beyond the most the
  * variable holds, which no writer stores, is read as that most. */
 static inline PyObject *
@@ -161,6 +246,82 @@ padt_list_of(const char *at, const char **shape)
     }
     *shape = after;
     return list;
+}
+
+/* The values of `list` into the array at `at` that `*shape` describes (padt_list_of's),
+ * each checked as a store is; `*shape` left past what was read of it. 0, or -1 with the
+ * error (part of the array written: padt_list_into writes into a copy). */
+static inline int
+padt_list_write(char *at, const char **shape, PyObject *list)
+{
+    char *end;
+    long count = strtol(*shape, &end, 10);
+    long stride = *end == 'x' ? strtol(end + 1, &end, 10) : -1;
+    if (count < 1 || stride < 0 || *end != ':') {
+        PyErr_SetString(PyExc_SystemError, "padt: an array's shape that cannot be read");
+        return -1;
+    }
+    PyObject *items = PySequence_Fast(list, "an array takes a sequence");
+    if (items == NULL)
+        return -1;
+    int failed = 0;
+    if (PySequence_Fast_GET_SIZE(items) != count) {
+        PyErr_Format(PyExc_ValueError, "an array of %ld elements cannot take %zd", count,
+                     PySequence_Fast_GET_SIZE(items));
+        failed = -1;
+    }
+    const char *element = end + 1, *after = element;
+    for (long i = 0; !failed && i < count; i++) {
+        char *p = at + i * stride;
+        const char *s = element;
+        PyObject *item = PySequence_Fast_GET_ITEM(items, i);
+        if (*s == '[') {
+            s++;
+            failed = padt_list_write(p, &s, item);
+            if (!failed && *s++ != ']') {
+                PyErr_SetString(PyExc_SystemError, "padt: an array's shape without its ]");
+                failed = -1;
+            }
+        } else if (*s == 's' || *s == 'w') {
+            long most = strtol(s + 1, &end, 10);
+            failed = padt_chars_set(p, most, *s == 'w', item);
+            s = end + 1;
+        } else {
+            failed = padt_scalar_set(*s++, p, item);
+        }
+        after = s;
+    }
+    Py_DECREF(items);
+    *shape = after;
+    return failed ? -1 : 0;
+}
+
+/* `list` (what Python code gave back for an array: an in-out of a FUNCTION or a method)
+ * into the array at `at` of `shape`, written into a copy first: a value refused leaves
+ * the array as it was. */
+static inline int
+padt_list_into(char *at, const char *shape, PyObject *list)
+{
+    char *end;
+    long count = strtol(shape, &end, 10);
+    long stride = *end == 'x' ? strtol(end + 1, &end, 10) : -1;
+    if (count < 1 || stride < 0) {
+        PyErr_SetString(PyExc_SystemError, "padt: an array's shape that cannot be read");
+        return -1;
+    }
+    size_t size = (size_t)count * (size_t)stride;
+    char *scratch = PyMem_Malloc(size ? size : 1);
+    if (scratch == NULL) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    memcpy(scratch, at, size);
+    const char *s = shape;
+    int failed = padt_list_write(scratch, &s, list);
+    if (!failed)
+        memcpy(at, scratch, size);
+    PyMem_Free(scratch);
+    return failed;
 }
 
 /* padt_list_of, from the whole of a shape. */

@@ -92,83 +92,18 @@ static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) 
     return NULL;
 }
 
-static int refuse(const char *what, PyObject *value) {
-    PyErr_Format(PyExc_TypeError, "a variable of %s cannot hold %R", what, value);
-    return -1;
-}
-
-/* an exact int within [low, high] (bool is no integer here: the slot holds an int) */
-static int integer(PyObject *value, long long low, long long high, long long *out) {
-    if (!PyLong_CheckExact(value)) return refuse("an integer type", value);
-    int overflow = 0;
-    long long v = PyLong_AsLongLongAndOverflow(value, &overflow);
-    if (v == -1 && PyErr_Occurred()) return -1;
-    if (overflow || v < low || v > high) {
-        PyErr_Format(PyExc_OverflowError, "%R is outside the range of the variable", value);
-        return -1;
-    }
-    *out = v;
-    return 0;
-}
-
 static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value) {
     if (field_cleared(f)) return -1;
     char *p = at(image, offset);
-    long long v;
     switch (f->code) {
-    case K_BOOL:
-        if (!PyBool_Check(value)) return refuse("BOOL", value);
-        *(uint8_t *)p = value == Py_True;
-        return 0;
-    case K_I8:
-        if (integer(value, INT8_MIN, INT8_MAX, &v)) return -1;
-        *(int8_t *)p = (int8_t)v; return 0;
-    case K_U8:
-        if (integer(value, 0, UINT8_MAX, &v)) return -1;
-        *(uint8_t *)p = (uint8_t)v; return 0;
-    case K_I16: { if (integer(value, INT16_MIN, INT16_MAX, &v)) return -1;
-        int16_t w = (int16_t)v; memcpy(p, &w, 2); return 0; }
-    case K_U16: { if (integer(value, 0, UINT16_MAX, &v)) return -1;
-        uint16_t w = (uint16_t)v; memcpy(p, &w, 2); return 0; }
-    case K_I32: { if (integer(value, INT32_MIN, INT32_MAX, &v)) return -1;
-        int32_t w = (int32_t)v; memcpy(p, &w, 4); return 0; }
-    case K_U32: { if (integer(value, 0, UINT32_MAX, &v)) return -1;
-        uint32_t w = (uint32_t)v; memcpy(p, &w, 4); return 0; }
-    case K_I64: { if (integer(value, INT64_MIN, INT64_MAX, &v)) return -1;
-        int64_t w = (int64_t)v; memcpy(p, &w, 8); return 0; }
-    case K_SINCE: {
-        int64_t w = INT64_MIN;
-        if (value != Py_None) {
-            if (integer(value, INT64_MIN + 1, INT64_MAX, &v)) return -1;
-            w = (int64_t)v;
-        }
-        memcpy(p, &w, 8);
-        return 0;
-    }
-    case K_U64: {
-        if (!PyLong_CheckExact(value)) return refuse("an integer type", value);
-        unsigned long long u = PyLong_AsUnsignedLongLong(value);
-        if (u == (unsigned long long)-1 && PyErr_Occurred()) {
-            PyErr_Format(PyExc_OverflowError, "%R is outside the range of the variable", value);
-            return -1;
-        }
-        uint64_t w = (uint64_t)u; memcpy(p, &w, 8); return 0;
-    }
-    case K_F32: case K_F64: {
-        if (!PyFloat_CheckExact(value)) return refuse("REAL or LREAL", value);
-        double d = PyFloat_AS_DOUBLE(value);
-        if (f->code == K_F64) { memcpy(p, &d, 8); return 0; }
-        float s = (float)d;
-        if ((double)s != d && !(d != d)) /* the slot holds REALs rounded to 32 bits */
-            return refuse("REAL (a value rounded to 32 bits)", value);
-        memcpy(p, &s, 4);
-        return 0;
-    }
+    case K_BOOL: case K_I8: case K_U8: case K_I16: case K_U16: case K_I32: case K_U32:
+    case K_I64: case K_U64: case K_F32: case K_F64: case K_SINCE:
+        return padt_scalar_set(f->code, p, value);
     case K_CHARS: case K_WCHARS: return padt_chars_set(p, f->length, f->code == K_WCHARS, value);
     case K_NESTED:
         /* a whole structure or instance: from a view of the same class (a copy) */
         if (Py_TYPE(value) != (PyTypeObject *)f->view_type)
-            return refuse(((PyTypeObject *)f->view_type)->tp_name, value);
+            return padt_refuse(((PyTypeObject *)f->view_type)->tp_name, value);
         memmove(p, at(((ViewObject *)value)->image, ((ViewObject *)value)->offset), f->size);
         return 0;
     case K_ARRAY: {

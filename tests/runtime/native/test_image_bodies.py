@@ -140,8 +140,14 @@ a[1] := 100; (* the function's own copy: the caller's array stays as it was *)
 Total := a[1] + a[2] + a[3] + REAL_TO_INT(r[1]) + g[2, 1] + LEN(w[2]) + BOOL_TO_INT(b[2]);
 END_FUNCTION
 FUNCTION Fill : BOOL
-VAR_IN_OUT a : ARRAY[1..3] OF INT; END_VAR
+VAR_IN_OUT a : ARRAY[1..3] OF INT; m : ARRAY[1..2, 1..2] OF STRING[3]; END_VAR
 a[1] := a[1] + 1;
+m[2, 1] := CONCAT(m[2, 1], 'x');
+END_FUNCTION
+TYPE Pt : STRUCT x : INT; END_STRUCT; END_TYPE
+FUNCTION Move : BOOL
+VAR_IN_OUT p : ARRAY[1..2] OF Pt; END_VAR
+p[1].x := p[1].x + 1;
 END_FUNCTION
 PROGRAM Main
 VAR c : Counter; k : INT; END_VAR
@@ -158,21 +164,27 @@ q[2] := q[2] + 1;
 t := Total(q, r, g, w, b);
 END_PROGRAM
 PROGRAM Fills
-VAR q : ARRAY[1..3] OF INT; done : BOOL; END_VAR
-done := Fill(q);
+VAR q : ARRAY[1..3] OF INT; m : ARRAY[1..2, 1..2] OF STRING[3]; done : BOOL; END_VAR
+done := Fill(q, m);
+END_PROGRAM
+PROGRAM Moves
+VAR p : ARRAY[1..2] OF Pt; done : BOOL; END_VAR
+done := Move(p);
 END_PROGRAM
 """
     run, left = side_by_side(text, padt_memory, native_tier)
-    # an array in-out comes back from Python as a list: not yet in image mode
-    assert [(body, "an instance or array from Python" in why) for body, why in left] == [
-        ("POU_FILLS.__call__", True)
+    # arrays of values and texts to and from Python code as lists; of structures, not yet
+    assert [(body, "not yet in image mode" in why) for body, why in left] == [
+        ("POU_MOVES.__call__", True)
     ]
     run_alike(run, 5)
     assert run.viewed.programs[0].instance.k == 55
     # 100 + (2 + 5) + 3 + 3 (REAL_TO_INT of 2.5) - 3 + 3 + 1, on both sides
     assert run.viewed.programs[1].instance.t == 114
     assert list(run.viewed.programs[1].instance.q) == [1, 7, 3]
-    assert list(run.viewed.programs[2].instance.q) == [5, 0, 0]
+    fills = run.viewed.programs[2].instance
+    assert list(fills.q) == [5, 0, 0]
+    assert list(fills.m) == ["", "", "xxx", ""]  # row-major; at most 3 characters
 
 
 def test_the_benchmark_program_in_the_image_as_on_objects(

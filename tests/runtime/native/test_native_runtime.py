@@ -320,13 +320,14 @@ def test_the_variables_go_into_native_memory_and_the_event_says_where_they_are(
 def test_a_body_image_mode_would_leave_to_python_keeps_the_configuration_on_slots(
     native_tier: NativeTier,
 ) -> None:
-    text = """FUNCTION Total : DINT
-VAR_IN_OUT a : ARRAY[1..3] OF DINT; END_VAR
-a[1] := a[1] + 1;
-Total := a[1] + a[2] + a[3];
+    text = """TYPE Pt : STRUCT x : DINT; END_STRUCT; END_TYPE
+FUNCTION Total : DINT
+VAR_INPUT a : ARRAY[1..3] OF Pt; END_VAR
+Total := a[1].x + a[2].x + a[3].x;
 END_FUNCTION
 PROGRAM Main
-VAR xs : ARRAY[1..3] OF DINT := [1, 2, 3]; s : DINT; END_VAR
+VAR xs : ARRAY[1..3] OF Pt := [(x := 1), (x := 2), (x := 3)]; s : DINT; END_VAR
+xs[1].x := xs[1].x + 1;
 s := Total(xs);
 END_PROGRAM
 """
