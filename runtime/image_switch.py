@@ -67,6 +67,20 @@ def leave_image(variables: Variables) -> None:
     variables.image = None
 
 
+def must_leave(variables: Variables) -> bool:
+    """Whether the values must go back to objects now: they are in the image while the
+    code runs as Python for the debugger (its breakpoints know instances by identity, and
+    a view is a new object at each access), and no program is in the middle of its program
+    cycle (a sliced one is left once its cycle ends)."""
+    code = variables.code
+    return (
+        variables.image is not None
+        and code is not None
+        and code.python_only
+        and not any(program.in_progress for program in variables.programs)
+    )
+
+
 def may_enter(variables: Variables) -> ImagePlan | None:
     """The plan of the running code's image, when its values may go there now: between two
     program cycles, not while the resource is debugged (the debugger knows instances by

@@ -39,7 +39,7 @@ from runtime.event_recorder import EventRecorder
 from runtime.force_table import GLOBAL
 from runtime.forcing import Forcing
 from runtime.identity import Identity
-from runtime.image_switch import enter_image, may_enter
+from runtime.image_switch import enter_image, leave_image, may_enter, must_leave
 from runtime.login_audit import LoginAudit
 from runtime.online_values import OnlineValues
 from runtime.process_image import ProcessImage
@@ -266,7 +266,9 @@ class Resource:
 
     def tier_up(self, wait: bool = False) -> None:
         """The native bodies of the running code in place once they are made (between two
-        cycles; `wait`: until they are), with an event that says what runs as C."""
+        cycles; `wait`: until they are), with an event that says what runs as C; and the
+        values moved into the memory image, or out of it, as the code's state wants
+        (runtime/image_switch.py)."""
         code = self.variables.code
         report = code.tier_up(wait) if code is not None else None
         if report is not None:
@@ -276,6 +278,8 @@ class Resource:
                 native=list(report.bodies),
                 python=[f"{pou}: {reason}" for pou, reason in report.left],
             )
+        if must_leave(self.variables):  # debugged: a sliced program's cycle has ended
+            leave_image(self.variables)
         plan = may_enter(self.variables)
         if plan is not None and code is not None:
             try:

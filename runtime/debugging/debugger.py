@@ -31,7 +31,7 @@ from runtime.debugging.statements import StatementMap
 from runtime.debugging.tracer import DebugRun, ProgramTracer, TraceState
 from runtime.event_recorder import EventRecorder
 from runtime.forcing import Forcing
-from runtime.image_switch import leave_image
+from runtime.image_switch import leave_image, must_leave
 from runtime.process_image import ProcessImage
 from runtime.scheduler import Scheduler
 from runtime.variables import Variables
@@ -310,13 +310,7 @@ class Debugger:
         code_image = resource.variables.code
         self._entries.remove()
         code_image.run_as_python(bool(armed) or self.pause is not None)
-        if (
-            code_image.python_only
-            and resource.variables.image is not None
-            and not any(program.in_progress for program in resource.programs)
-        ):
-            # debugged on objects: breakpoints know instances by identity, and a view is a
-            # new object at each access (the tier moves the values back once it ends)
+        if must_leave(resource.variables):  # debugged on objects (else at the next tier-up)
             leave_image(resource.variables)
         self._entries.install(code_image, self._files, self._trace)
         if self._at and not self.heard_ns:

@@ -13,11 +13,13 @@ from backend.compiler.source import SourceFile
 from runtime import reload_switch
 from runtime.clock import VirtualClock
 from runtime.code.native.tier import NativeTier
+from runtime.commands import HANDLERS
+from runtime.contract import protocol as p
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 from runtime.contract.protocol import ResourceState
 from runtime.resource import Resource
 from tests.bench.bench_language import thousand_statements
-from tests.support.native_runs import compiled, program_error, running, side_by_side
+from tests.support.native_runs import advance, compiled, program_error, running, side_by_side
 from tests.support.resource_harness import compiled as harness_artifact
 from tests.support.resource_harness import harness
 
@@ -199,6 +201,38 @@ END_PROGRAM
     assert pair.report.bodies == ("Slow",)
     pair.cycle_and_compare(40)
     assert 0 < pair.native.variables.values()["Slow.rounds"] < 40
+
+
+def test_a_breakpoint_armed_mid_cycle_stops_once_the_values_are_back_on_objects(
+    native_tier: NativeTier,
+) -> None:
+    text = """
+PROGRAM Slow
+VAR i : DINT; total : DINT; rounds : INT; END_VAR
+FOR i := 1 TO 900 DO total := total + i; END_FOR;
+rounds := rounds + 1;
+END_PROGRAM
+"""
+    programs = [
+        ProgramConfig(name="Slow", pou="Slow", program_id=1, max_duration_us=500, max_cycles=10)
+    ]
+    config = ResourceConfig(name="R", watchdog_ms=5_000, safety_operation=False)
+    built = compile_sources([SourceFile("prog.st", text)], resource=config, programs=programs)
+    assert built.artifact is not None
+    resource = running(built.artifact, native_tier)
+    assert resource.variables.image is not None
+    advance(resource)
+    assert resource.programs[0].in_progress  # suspended in its loop, in the image
+    answer = HANDLERS[p.DebugSet](resource, p.DebugSet("prog.st", [p.BreakpointSpec(5)]))
+    assert answer.debug.breakpoints[0].verified
+    assert resource.variables.image is not None  # a program cycle holds its instances
+    for _ in range(4):  # the cycle ends; the values go back to objects; the next one stops
+        advance(resource)
+        resource.tier_up()
+    assert HANDLERS[p.DebugGet](resource, p.DebugGet()).debug.paused is not None
+    assert resource.variables.image is None
+    HANDLERS[p.DebugClear](resource, p.DebugClear())
+    resource.stop()
 
 
 # a reference keeps a configuration on objects, its bodies C on their slots (image_plan.py):
