@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import operator
 import struct
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
 from typing import Any
@@ -86,13 +86,7 @@ class ImageMemory:
             return list
         places = [self._place(bound) for bound in bounds]
         scalars = sorted({p.offset: p.shape for p in places if isinstance(p.shape, Scalar)}.items())
-        layout, end = ["<"], 0
-        for offset, shape in scalars:
-            assert isinstance(shape, Scalar)
-            layout.append(f"{offset - end}x" if offset > end else "")
-            layout.append(_code(shape.code))
-            end = offset + size_and_align(shape, self._layouts.__getitem__)[0]
-        packed = struct.Struct("".join(layout))
+        packed = self._packing(scalars)
         order = {offset: n for n, (offset, _) in enumerate(scalars)}
         others = [(n, p) for n, p in enumerate(places) if not isinstance(p.shape, Scalar)]
         # where each variable's value is in the row (a text's or an array's: a stand-in)
@@ -218,21 +212,26 @@ class ImageMemory:
         place = self._at[name]
         return self._tree(place.offset, Nested(place.cls), rows)
 
+    def _packing(self, scalars: Sequence[tuple[int, Shape]], size: int = 0) -> struct.Struct:
+        """The `struct` of elementary values at offsets (ascending), the bytes between them
+        skipped, `size` bytes in all at least."""
+        codes, end = ["<"], 0
+        for offset, shape in scalars:
+            assert isinstance(shape, Scalar)
+            codes.append(f"{offset - end}x" if offset > end else "")
+            codes.append(_code(shape.code))
+            end = offset + size_and_align(shape, self._layouts.__getitem__)[0]
+        codes.append(f"{size - end}x" if size > end else "")
+        return struct.Struct("".join(codes))
+
     def _records(self, offset: int, element: Nested, count: int) -> Records | None:
         """An array of structures whose members are all elementary, in one `struct` pass
         over its bytes; None for any other."""
         members = sorted(self._layouts[element.cls].members, key=lambda m: m.offset)
-        codes, end = ["<"], 0
-        for member in members:
-            shape = member.shape
-            if not isinstance(shape, Scalar) or shape.code == NULLABLE_TIME:
-                return None
-            codes.append(f"{member.offset - end}x" if member.offset > end else "")
-            codes.append(_code(shape.code))
-            end = member.offset + size_and_align(shape, self._layouts.__getitem__)[0]
+        if not all(isinstance(m.shape, Scalar) and m.shape.code != NULLABLE_TIME for m in members):
+            return None
         stride = size_and_align(element, self._layouts.__getitem__)[0]
-        codes.append(f"{stride - end}x" if stride > end else "")
-        row = struct.Struct("".join(codes))
+        row = self._packing([(m.offset, m.shape) for m in members], stride)
         data = self._image[offset : offset + count * stride]
         name = self._names.get(element.cls, element.cls)
         return Records(name, tuple(m.name for m in members), list(row.iter_unpack(data)))

@@ -103,7 +103,7 @@ def _idle(variables: Variables) -> Any:
     assert code is not None
     busy = [p.name for p in variables.programs if p.in_progress]
     if busy:  # a suspended program cycle's frame holds the instances it began with
-        raise Refusal("busy", f"program {busy[0]} is in the middle of its program cycle")
+        raise Refusal("busy", f"program {busy[0]} is in the middle of its program cycle; try again")
     return code
 
 
