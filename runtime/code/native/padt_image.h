@@ -203,6 +203,22 @@ padt_chars_set(char *p, Py_ssize_t most, int wide, PyObject *text)
     return 0;
 }
 
+/* The head of an array's shape (padt_list_of's grammar): its count and stride, and
+ * where its element's begins; -1 with SystemError for a shape that cannot be read. */
+static inline int
+padt_array_head(const char *shape, long *count, long *stride, const char **element)
+{
+    char *end;
+    *count = strtol(shape, &end, 10);
+    *stride = *end == 'x' ? strtol(end + 1, &end, 10) : -1;
+    if (*count < 1 || *stride < 0 || *end != ':') {
+        PyErr_SetString(PyExc_SystemError, "padt: an array's shape that cannot be read");
+        return -1;
+    }
+    *element = end + 1;
+    return 0;
+}
+
 /* A new list of the array at `at`, as `_copy` hands an array to Python code (an input or
  * an in-out of a FUNCTION or a method): `*shape` says what it holds, and is left past
  * what was read of it. Made by runtime/code/native/image_body.py (`list_shape`):
@@ -212,13 +228,11 @@ static inline PyObject *
 padt_list_of(const char *at, const char **shape)
 {
     char *end;
-    long count = strtol(*shape, &end, 10);
-    long stride = *end == 'x' ? strtol(end + 1, &end, 10) : -1;
-    if (count < 1 || stride < 0 || *end != ':') {
-        PyErr_SetString(PyExc_SystemError, "padt: an array's shape that cannot be read");
+    long count, stride;
+    const char *element;
+    if (padt_array_head(*shape, &count, &stride, &element) < 0)
         return NULL;
-    }
-    const char *element = end + 1, *after = element;
+    const char *after = element;
     PyObject *list = PyList_New(count);
     for (long i = 0; list != NULL && i < count; i++) {
         const char *p = at + i * stride, *s = element;
@@ -255,12 +269,10 @@ static inline int
 padt_list_write(char *at, const char **shape, PyObject *list)
 {
     char *end;
-    long count = strtol(*shape, &end, 10);
-    long stride = *end == 'x' ? strtol(end + 1, &end, 10) : -1;
-    if (count < 1 || stride < 0 || *end != ':') {
-        PyErr_SetString(PyExc_SystemError, "padt: an array's shape that cannot be read");
+    long count, stride;
+    const char *element;
+    if (padt_array_head(*shape, &count, &stride, &element) < 0)
         return -1;
-    }
     PyObject *items = PySequence_Fast(list, "an array takes a sequence");
     if (items == NULL)
         return -1;
@@ -270,7 +282,7 @@ padt_list_write(char *at, const char **shape, PyObject *list)
                      PySequence_Fast_GET_SIZE(items));
         failed = -1;
     }
-    const char *element = end + 1, *after = element;
+    const char *after = element;
     for (long i = 0; !failed && i < count; i++) {
         char *p = at + i * stride;
         const char *s = element;
@@ -302,13 +314,10 @@ padt_list_write(char *at, const char **shape, PyObject *list)
 static inline int
 padt_list_into(char *at, const char *shape, PyObject *list)
 {
-    char *end;
-    long count = strtol(shape, &end, 10);
-    long stride = *end == 'x' ? strtol(end + 1, &end, 10) : -1;
-    if (count < 1 || stride < 0) {
-        PyErr_SetString(PyExc_SystemError, "padt: an array's shape that cannot be read");
+    long count, stride;
+    const char *element;
+    if (padt_array_head(shape, &count, &stride, &element) < 0)
         return -1;
-    }
     size_t size = (size_t)count * (size_t)stride;
     char *scratch = PyMem_Malloc(size ? size : 1);
     if (scratch == NULL) {
