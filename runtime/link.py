@@ -71,6 +71,11 @@ class ResourceLink:
         # made-up ids (anyone may declare them, no login needed) never reach this process
         self.watchers: set[str] = set()
         self._followed: dict[str, zenoh.Subscriber[None]] = {}
+        # the ids whose tokens count, each in it before its subscriber is declared: Zenoh
+        # may deliver the token already there (the history) on its own thread before
+        # `declare_subscriber` returns; taken for a stray sample then, the set was dropped
+        # 2 s after it came (WATCHER_GRACE_NS) with its client still there (CI run 79)
+        self._following: set[str] = set()
         self._token = session.liveliness().declare_token(alive_key(resource))
 
     def follow_watchers(self, ids: KeysView[str]) -> None:
@@ -80,9 +85,11 @@ class ResourceLink:
             return
         liveliness = self._session.liveliness()
         for watch_id in self._followed.keys() - ids:
+            self._following.discard(watch_id)
             self._followed.pop(watch_id).undeclare()
             self.watchers.discard(watch_id)
         for watch_id in ids - self._followed.keys():
+            self._following.add(watch_id)
             self._followed[watch_id] = liveliness.declare_subscriber(
                 watcher_key(self._resource, watch_id),
                 functools.partial(self._on_watcher, watch_id),
@@ -90,7 +97,7 @@ class ResourceLink:
             )
 
     def _on_watcher(self, watch_id: str, sample: zenoh.Sample) -> None:
-        if sample.kind == zenoh.SampleKind.PUT and watch_id in self._followed:
+        if sample.kind == zenoh.SampleKind.PUT and watch_id in self._following:
             self.watchers.add(watch_id)
         else:
             self.watchers.discard(watch_id)
