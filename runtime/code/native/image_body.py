@@ -271,9 +271,14 @@ class _ImageBody(_Body):
         self.check(f"padt_mnow(padt_ctx, padt_sys, {self.module.key(name)}, &{held})")
         return V(FULL64, held)
 
+    def tick_read(self, key: str) -> str:
+        """`_tick` read once per call (every loop reads it: a dictionary lookup each, a
+        third of the benchmark program's body), and again after the slice meter."""
+        return f"padt_mtick(padt_ctx, {key})"
+
     def call_hook(self, hook: V) -> None:
         super().call_hook(hook)
-        self.line("padt_ctx->now_known = 0;")
+        self.line("padt_ctx->now_known = padt_ctx->tick_known = 0;")
 
     def call_statement(self, call: Expr) -> None:
         """SUPER^(): the base's body on this very instance, whose bytes begin with the

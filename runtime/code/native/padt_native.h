@@ -804,6 +804,8 @@ typedef struct padt_mctx {
     PyObject *sys; /* `_SYS`, borrowed from the namespace (NULL: none) */
     int now_known; /* `_SYS.now_ns` read in this call (padt_mnow) */
     int64_t now_ns;
+    int tick_known; /* `_tick` read in this call (padt_mtick) */
+    PyObject *tick; /* borrowed: the namespace holds it */
 } padt_mctx;
 
 typedef int (*padt_mbody)(char *, padt_mctx *);
@@ -862,6 +864,7 @@ padt_mctx_enter(padt_mctx *ctx, PyObject *view)
     ctx->base = PyByteArray_AS_STRING(v->image);
     ctx->g = NULL;
     ctx->now_known = 0;
+    ctx->tick_known = 0;
     ctx->sys = PyDict_GetItemWithError(padt_ns, padt_str_sys);
     if (ctx->sys == NULL && PyErr_Occurred())
         return -1;
@@ -871,6 +874,23 @@ padt_mctx_enter(padt_mctx *ctx, PyObject *view)
     if (PyObject_TypeCheck(g, padt_view_type) && ((padt_view *)g)->image == v->image)
         ctx->g = ctx->base + ((padt_view *)g)->offset;
     return 0;
+}
+
+/* `_tick`: the slice meter, or None where loop passes are not metered. The scheduler sets
+ * it between program cycles and slices only, so it is read once per call (every loop
+ * reads it), and again after the meter's call (the body clears tick_known), which may
+ * resume the program in a later slice. Borrowed, as `padt_global` gives it. */
+static inline PyObject *
+padt_mtick(padt_mctx *ctx, PyObject *key)
+{
+    if (PADT_LIKELY(ctx->tick_known))
+        return ctx->tick;
+    PyObject *tick = padt_global(key);
+    if (tick != NULL) {
+        ctx->tick = tick;
+        ctx->tick_known = 1;
+    }
+    return tick;
 }
 
 /* `_SYS.now_ns`: the running program's time, which the scheduler sets between program

@@ -819,7 +819,7 @@ class _Body:
             case Named(name=name) if name == TICK.name:
                 held = self.temp("PyObject *", "NULL")
                 self.objects.remove(held)  # borrowed: the namespace holds it
-                self.line(f"{held} = padt_global({self.module.key(TICK.name)});")
+                self.line(f"{held} = {self.tick_read(self.module.key(TICK.name))};")
                 self.line(f"if (PADT_UNLIKELY({held} == NULL)) goto padt_error;")
                 return V(Hook(), held)
             case Index():
@@ -887,6 +887,10 @@ class _Body:
             self.module.type_ref(self.module.globals_class)
             return V(Instance(self.module.globals_class), "padt_g")
         _refuse(f"a variable of {node.where}")
+
+    def tick_read(self, key: str) -> str:
+        """The C that reads `_tick` (borrowed; NULL: an error), before a loop."""
+        return f"padt_global({key})"
 
     def system_value(self, name: str) -> V:
         if name in SYSTEM_BOOLS:
