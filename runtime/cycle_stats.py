@@ -10,7 +10,7 @@ from runtime.contract.protocol import CycleStatistics
 MIN_TOLERANCE_NS = 1_000_000
 
 
-@dataclass
+@dataclass(slots=True)  # slots: the CPU cycle in C writes them (padt_cycle.c)
 class CycleStats:
     count: int = 0
     last_ns: int = 0  # duration of the last CPU cycle (inputs to outputs)

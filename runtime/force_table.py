@@ -32,6 +32,12 @@ class ForceLevel:
 
 
 class ForceTable:
+    # slots: the CPU cycle in C reads them at their offsets (padt_cycle.c)
+    __slots__ = (
+        "_entries",
+        "levels",
+    )
+
     def __init__(self) -> None:
         self._entries: dict[str, ForceEntry] = {}  # by upper-case path
         self.levels: dict[str, ForceLevel] = {}  # levels where forcing is started

@@ -31,6 +31,16 @@ class ForcingSettings(Protocol):
 
 
 class Forcing:
+    # slots: the CPU cycle in C reads them at their offsets (padt_cycle.c)
+    __slots__ = (
+        "_clock",
+        "_recorder",
+        "_settings",
+        "_variables",
+        "deactivated",
+        "table",
+    )
+
     def __init__(
         self,
         settings: ForcingSettings,

@@ -23,10 +23,19 @@ def default_value(type_name: str) -> Any:
 
 
 class ProcessImage:
+    # slots: the CPU cycle in C reads them at their offsets (padt_cycle.c)
+    __slots__ = (
+        "_safe_values",
+        "_variables",
+        "delivered",
+        "outputs",
+    )
+
     def __init__(self, variables: Variables) -> None:
         self._variables = variables
         self.outputs: dict[str, Any] = {}  # the output image as last written to the field
-        self._inputs: dict[str, Any] = {}  # what the I/O last delivered
+        # what the I/O delivered since the last CPU cycle read it (the cycle tests it)
+        self.delivered: dict[str, Any] = {}
         self._safe_values: dict[str, Any] = {}  # configured safe values by upper-case path
 
     def configure(self, artifact: Artifact) -> None:
@@ -34,21 +43,19 @@ class ProcessImage:
 
     def set_inputs(self, values: dict[str, Any]) -> None:
         """What the I/O delivered for located inputs; read at the next cycle's start."""
-        self._inputs.update(values)
+        self.delivered.update(values)
 
     def read_inputs(self) -> None:
-        if not self._inputs:  # nothing new from the I/O (and none without I/O)
-            return
-        for path, value in sorted(self._inputs.items()):
+        for path, value in sorted(self.delivered.items()):
             bound = self._variables.find(path)
             if bound is not None:
                 self._variables.store(bound, value)
-        self._inputs.clear()
+        self.delivered.clear()
 
     def write_outputs(self, safe: bool) -> None:
         """The output image (located %Q variables) as the I/O sends it to the field."""
         outputs = self._variables.outputs
-        if not outputs and not self.outputs:  # none: the empty image stays (it is never changed)
+        if not outputs and not self.outputs:  # none: the empty image stays (never changed)
             return
         image: dict[str, Any] = {}
         for bound in outputs:

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from runtime.clock import Clock
 from runtime.code.instances import Instances, instantiate, instantiated
 from runtime.code.intrinsics import EMERGENCY_STOPS, SystemView
+from runtime.code.native.build import BuildError
 from runtime.code.native.tier import NativeReport, NativeTier
 from runtime.code.user_program import UserProgram
 from runtime.commissioning import SetupSecret
@@ -31,6 +32,7 @@ from runtime.contract.artifact import Artifact, ResourceConfig
 from runtime.contract.protocol import ProgramState, ProgramStatus, ResourceState, Status
 from runtime.contract.recording import LoggedHit
 from runtime.contract.refusal import Refusal
+from runtime.cycle_core import CycleCore, cycle_core
 from runtime.cycle_stats import CycleStats
 from runtime.debugging.debugger import Debugger
 from runtime.event_log import EventLog
@@ -80,6 +82,44 @@ class CycleRecorder(Protocol):
 
 
 class Resource:
+    # slots: the CPU cycle in C reads them at their offsets (padt_cycle.c)
+    __slots__ = (
+        "_boot_ns",
+        "_core",
+        "_first_cycle",
+        "_last_start_ns",
+        "access",
+        "artifact",
+        "clock",
+        "cycle_count",
+        "debugger",
+        "error",
+        "events",
+        "field_io",
+        "forcing",
+        "host",
+        "identity",
+        "incoming",
+        "io",
+        "last_start",
+        "login_audit",
+        "name",
+        "native",
+        "online",
+        "params",
+        "recorder",
+        "recordings",
+        "scheduler",
+        "setup",
+        "start_kind",
+        "state",
+        "stats",
+        "store",
+        "system",
+        "variables",
+        "zenoh_id",
+    )
+
     def __init__(
         self,
         name: str,
@@ -126,6 +166,8 @@ class Resource:
         self.recordings: CycleRecorder | None = None
         # the native tier (runtime/code/native/), when the runtime was started with it
         self.native: NativeTier | None = None
+        # the usual CPU cycle in C, once the native tier has put code in place
+        self._core: CycleCore | None = None
 
     @property
     def programs(self) -> list[UserProgram]:
@@ -278,6 +320,8 @@ class Resource:
                 native=list(report.bodies),
                 python=[f"{pou}: {reason}" for pou, reason in report.left],
             )
+            if self._core is None:
+                self._core = self._cycle_core()
         if must_leave(self.variables):  # debugged: a sliced program's cycle has ended
             leave_image(self.variables)
         plan = may_enter(self.variables)
@@ -289,6 +333,16 @@ class Resource:
                 # this code's values stay on objects
                 code.image = None
                 self.recorder.record("native", f"the variables stay on Python objects: {refused}")
+
+    def _cycle_core(self) -> CycleCore | None:
+        """The usual CPU cycle in C, where the native tier can build it (its job has)."""
+        if self.native is None or not self.native.available:
+            return None
+        try:
+            return cycle_core(self.native.cycle_module(), self)
+        except (BuildError, OSError, ImportError) as exc:
+            self.recorder.record("native", f"the CPU cycle stays Python: {exc}")
+            return None
 
     @property
     def native_report(self) -> NativeReport | None:
@@ -403,37 +457,59 @@ class Resource:
 
     # ---- the CPU cycle
     def cycle(self) -> None:
-        """One CPU cycle; in STOP only inputs are read (outputs stay safe). What the usual
-        cycle does not need (forcing, recording, the tap of outside stores) costs a test
-        of an attribute each."""
-        clock, stats, recordings = self.clock, self.stats, self.recordings
+        """One CPU cycle; in STOP only inputs are read (outputs stay safe). Written out for
+        the usual cycle, whose every Python call is a fiftieth of an empty one: what it
+        does not need (inputs from the I/O, outputs, forcing, recording, debugging, the tap
+        of outside stores) costs a test each."""
+        core = self._core
+        if core is not None and core.cycle():  # a usual cycle, in C (cycle_core.py)
+            return
+        clock, stats, recordings, io = self.clock, self.stats, self.recordings, self.io
         begin = clock.now_ns()
-        self.io.read_inputs()
+        if io.delivered:  # inputs from the I/O since the last cycle (none without I/O)
+            io.read_inputs()
         recording = recordings is not None and recordings.active
         if self.state not in _RUNNING:
             if recording:
                 assert recordings is not None
                 recordings.idle(self)
             return
-        if self._last_start_ns is not None:
-            target_ns = self.params.target_cycle_ms * 1_000_000
-            stats.record_period(begin - self._last_start_ns, target_ns)
+        last_start = self._last_start_ns
+        if last_start is not None:
+            stats.record_period(begin - last_start, self.params.target_cycle_ms * 1_000_000)
         self._last_start_ns = begin
-        self._update_system(begin)
-        if self.forcing.table.levels:  # forcing started: time limits, values in force
+        # the system variables the programs read in this cycle
+        system, first = self.system, self._first_cycle
+        if first or system.START_CYCLE:  # set in a start's first cycle, cleared in its second
+            system.START_CYCLE = first
+            system.COLDSTART = first and self.start_kind == "cold"
+            system.WARMSTART = first and self.start_kind == "warm"
+        system.CYCLE_TIME_LAST = stats.last_ns
+        system.CYCLE_TIME_MIN = stats.min_ns
+        system.CYCLE_TIME_MAX = stats.max_ns
+        system.CYCLE_TIME_MEAN = stats.mean_ns
+        system.SYSTEM_TICK = ((begin - self._boot_ns) // 1_000_000) & 0xFFFFFFFF
+        system.DATE_AND_TIME = clock.wall_ns()
+        forcing = self.forcing
+        if forcing.table.levels:  # forcing started: time limits, values in force
+            system.FORCE_TIME_REMAINING = forcing.table.remaining_ns(GLOBAL, begin) or 0
             self._react_to_force_timeouts(begin)
-            self.forcing.apply()
+            forcing.apply()
+        else:
+            system.FORCE_TIME_REMAINING = 0
         if self.debugger.active:  # a silent debugging client: the program continues
             self.debugger.watch(self, begin)
-        tapped = self.variables.tap is not None  # stores from outside, for a recording
-        before = self.variables.tapped() if tapped else []
+        variables = self.variables
+        tapped = variables.tap is not None  # stores from outside, for a recording
+        before = variables.tapped() if tapped else []
         if recording:
             assert recordings is not None
             recordings.before_programs(self)
         if not self.run_programs(begin):
             return
-        after = self.variables.tapped() if tapped else []
-        self.io.write_outputs(safe=False)
+        after = variables.tapped() if tapped else []
+        if variables.outputs or io.outputs:  # an output image to write
+            io.write_outputs(safe=False)
         if self._first_cycle:
             self._first_cycle = False
             self.start_kind = None
@@ -475,21 +551,6 @@ class Resource:
         self.recorder.record(
             "state", f"resource stepped one cycle in STOP (cycle {self.cycle_count})"
         )
-
-    def _update_system(self, begin: int) -> None:
-        system, stats, first = self.system, self.stats, self._first_cycle
-        if first or system.START_CYCLE:  # set in a start's first cycle, cleared in its second
-            system.START_CYCLE = first
-            system.COLDSTART = first and self.start_kind == "cold"
-            system.WARMSTART = first and self.start_kind == "warm"
-        system.CYCLE_TIME_LAST = stats.last_ns
-        system.CYCLE_TIME_MIN = stats.min_ns
-        system.CYCLE_TIME_MAX = stats.max_ns
-        system.CYCLE_TIME_MEAN = stats.mean_ns
-        system.SYSTEM_TICK = ((begin - self._boot_ns) // 1_000_000) & 0xFFFFFFFF
-        forces = self.forcing.table
-        system.FORCE_TIME_REMAINING = (forces.levels and forces.remaining_ns(GLOBAL, begin)) or 0
-        system.DATE_AND_TIME = self.clock.wall_ns()
 
     def _react_to_force_timeouts(self, now: int) -> None:
         """Force time limits: stop forcing, or stop the resource / program."""

@@ -10,7 +10,12 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from runtime.clock import Clock
-from runtime.code.intrinsics import ProgramFault, SystemView, emergency_switches
+from runtime.code.intrinsics import (
+    EMERGENCY_STOPS,
+    ProgramFault,
+    SystemView,
+    emergency_switches,
+)
 from runtime.code.user_program import UserProgram
 from runtime.contract.artifact import ResourceConfig
 from runtime.contract.protocol import ProgramState
@@ -24,6 +29,8 @@ log = logging.getLogger("runtime.resource")
 # read every CPU cycle for every program: a member of an enum class costs a lookup that a
 # module constant does not (in CPython 3.11 as long as an empty program's whole call)
 _RUN = ProgramState.RUN
+# the switches `run` tests by name, as BOOL values (every writer stores a bool)
+assert tuple(f"EMERGENCY_STOP_{n}" for n in (1, 2, 3, 4)) == EMERGENCY_STOPS, EMERGENCY_STOPS
 
 
 class SchedulerHost(Protocol):
@@ -52,6 +59,17 @@ class Halted(BaseException):
 
 
 class Scheduler:
+    # slots: the CPU cycle in C reads them at their offsets (padt_cycle.c)
+    __slots__ = (
+        "_clock",
+        "_host",
+        "_recorder",
+        "_variables",
+        "meter",
+        "used_ns",
+        "watchdog",
+    )
+
     def __init__(
         self, host: SchedulerHost, variables: Variables, recorder: EventRecorder, clock: Clock
     ) -> None:
@@ -68,15 +86,48 @@ class Scheduler:
         return self._host.params.watchdog_ms * 1_000_000
 
     def run(self, begin: int, finished: list[UserProgram]) -> bool:
-        """The programs of a CPU cycle under the resource watchdog, as `guarded` runs other
-        work: written out for the CPU cycle, since a call through `guarded` with its
-        arguments passed on costs a twentieth of an empty CPU cycle. False when the
-        resource halted."""
-        watchdog = self.watchdog
+        """The programs of a CPU cycle by priority, each in its slice, under the resource
+        watchdog, as `guarded` runs other work; multitasking modes 2 and 3 decide what
+        happens with the time a program leaves unused. Written out for the CPU cycle, the
+        usual program (no slice, no debugging) in one call (`UserProgram.run_whole`): each
+        Python call saved is a fiftieth of an empty CPU cycle. False when the resource
+        halted."""
+        watchdog, host, variables = self.watchdog, self._host, self._variables
         try:
-            watchdog.arm(self._host.params.watchdog_ms * 1_000_000)
+            watchdog.arm(host.params.watchdog_ms * 1_000_000)
             try:
-                self._by_priority(begin, finished)
+                self.used_ns = unused_ns = 0
+                code, system, master = variables.code, host.system, variables.globals
+                assert code is not None
+                names = code.namespace
+                # no copy of the list: a program run never changes it (a restart replaces a
+                # program between cycles, and in place)
+                for program in variables.programs:
+                    if program.state is not _RUN:
+                        continue
+                    if program.run is None:  # a new program cycle: its time advances by
+                        # the clock's time since its last program cycle started
+                        last = program.last_start_ns
+                        program.last_start_ns = begin
+                        delta = host.cycle_ns if last is None else begin - last
+                        if program.whole:
+                            try:
+                                program.run_whole(delta, master, system, names)
+                                finished.append(program)
+                            except (Exception, RecursionError) as exc:
+                                self._program_fault(program, exc)
+                            if (  # `emergency_switches` written out (a fifth of the loop)
+                                system.EMERGENCY_STOP_1
+                                or system.EMERGENCY_STOP_2
+                                or system.EMERGENCY_STOP_3
+                                or system.EMERGENCY_STOP_4
+                            ) and host.emergency_stopped():
+                                raise Halted()
+                            continue
+                        program.begin_cycle(delta, master)
+                    unused_ns += self._sliced(program, finished)
+                if host.params.multitasking_mode == 2:
+                    self._extra_slices(unused_ns, finished)
             finally:
                 fired = watchdog.disarm()
             if fired:  # it fired just as the work ended: too long all the same
@@ -88,41 +139,32 @@ class Scheduler:
             self._watchdog_expired(exc)
             return False
 
-    def _by_priority(self, begin: int, finished: list[UserProgram]) -> None:
-        """Programs by priority, each in its slice; multitasking modes 2 and 3 decide what
-        happens with the time a program leaves unused."""
-        mode = self._host.params.multitasking_mode
-        self.used_ns = 0
-        unused_ns = 0
-        # no copy of the list: a program run never changes it (a restart replaces a program
-        # between cycles, and in place)
-        for program in self._variables.programs:
-            if program.state is not _RUN:
-                continue
-            if program.run is None and program.whole:
-                self._run_whole(program, begin, finished)
-                continue
-            budget = program.config.max_duration_us * 1000 or None
-            if program.run is None:  # a new program cycle
-                program.begin_cycle(self._delta(program, begin), self._variables.globals)
-            used, done = self._slice(program, budget)
-            if done:
-                finished.append(program)
-            elif program.state is _RUN:
-                self._check_program_watchdog(program)
-            if budget is not None:
-                unused_ns += max(0, budget - used)
-                if mode == 3 and used < budget:
-                    self._wait(budget - used)  # every cycle as long as the worst case
-        if mode == 2:
-            for program in list(self._variables.programs):
-                if unused_ns <= 0:
-                    break
-                if program.state is _RUN and program.in_progress:
-                    used, done = self._slice(program, unused_ns, extra=True)
-                    unused_ns -= used
-                    if done:
-                        finished.append(program)
+    def _sliced(self, program: UserProgram, finished: list[UserProgram]) -> int:
+        """A program with a time slice (or debugged) on in its slice; the time it left
+        unused, which mode 3 waits out."""
+        budget = program.config.max_duration_us * 1000 or None
+        used, done = self._slice(program, budget)
+        if done:
+            finished.append(program)
+        elif program.state is _RUN:
+            self._check_program_watchdog(program)
+        if budget is None:
+            return 0
+        if self._host.params.multitasking_mode == 3 and used < budget:
+            self._wait(budget - used)  # every cycle as long as the worst case
+        return max(0, budget - used)
+
+    def _extra_slices(self, unused_ns: int, finished: list[UserProgram]) -> None:
+        """Mode 2: the time the programs left unused goes to those still in their program
+        cycle, by priority."""
+        for program in list(self._variables.programs):
+            if unused_ns <= 0:
+                break
+            if program.state is _RUN and program.in_progress:
+                used, done = self._slice(program, unused_ns, extra=True)
+                unused_ns -= used
+                if done:
+                    finished.append(program)
 
     def run_to_end(self, program: UserProgram, step_ns: int | None = None) -> None:
         """A whole program cycle at once (single step, a debugging step): no slice limit."""
@@ -190,23 +232,6 @@ class Scheduler:
             raise Halted()
         return used, done
 
-    def _run_whole(self, program: UserProgram, begin: int, finished: list[UserProgram]) -> None:
-        """The usual case, kept short: a program without a time slice runs its whole
-        program cycle in one call, its loop passes not metered and its time not taken (the
-        cycle's duration covers it); what `_slice` does for a slice that has no limit."""
-        code, system = self._variables.code, self._host.system
-        assert code is not None
-        program.begin_cycle(self._delta(program, begin), self._variables.globals)
-        system.now_ns = program.cycle_time_ns
-        code.use(program.view, None)
-        try:
-            program.resume()
-            finished.append(program)
-        except (Exception, RecursionError) as exc:
-            self._program_fault(program, exc)
-        if True in emergency_switches(self._host.system) and self._host.emergency_stopped():
-            raise Halted()
-
     def _check_program_watchdog(self, program: UserProgram) -> None:
         """A program cycle may span Max. Cycles CPU cycles of Max. Duration each."""
         config = program.config
@@ -243,15 +268,6 @@ class Scheduler:
             "error", f"program {program.name}: {program.error}", long_term=True, **details
         )
         log.error("program %s: %s", program.name, program.error)
-
-    def _delta(self, program: UserProgram, begin: int) -> int:
-        """How far a program's time advances at the start of its program cycle: the
-        clock's time since its last program cycle started."""
-        delta = (
-            self._host.cycle_ns if program.last_start_ns is None else begin - program.last_start_ns
-        )
-        program.last_start_ns = begin
-        return delta
 
     def _wait(self, duration_ns: int) -> None:
         if self._clock.virtual:

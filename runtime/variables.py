@@ -27,6 +27,25 @@ from runtime.memory import Memory, ObjectMemory
 
 
 class Variables:
+    # slots: the CPU cycle in C reads them at their offsets (padt_cycle.c)
+    __slots__ = (
+        "_all_of",
+        "_all_paths",
+        "_by_name",
+        "_read_all",
+        "_resource",
+        "access",
+        "bound",
+        "code",
+        "globals",
+        "image",
+        "image_held",
+        "memory",
+        "outputs",
+        "programs",
+        "tap",
+    )
+
     def __init__(self, resource: str) -> None:
         self._resource = resource
         self.code: CodeImage | None = None
@@ -172,5 +191,7 @@ class Variables:
     def publish(self, finished: list[UserProgram]) -> None:
         """The writes of programs whose program cycle ended become visible to the others
         (in their next program cycle: one CPU cycle later at the earliest)."""
+        master = self.globals
         for program in finished:
-            program.publish(self.globals)
+            if program.view is not master:  # a test here, not a call: every CPU cycle
+                program.publish(master)

@@ -66,12 +66,25 @@ def _take_back() -> None:
 
 
 class Watchdog:
+    # slots: the CPU cycle in C reads them at their offsets (padt_cycle.c)
+    __slots__ = (
+        "_budget_ns",
+        "_fired",
+        "_lock",
+        "_next_look_ns",
+        "_thread",
+        "_wake",
+        "deadlines",
+    )
+
     def __init__(self) -> None:
         # a plain lock (a C object: `with` costs no Python call) for the armed deadlines,
         # and an event that wakes the thread for a deadline earlier than it sleeps to
         self._lock = threading.Lock()
         self._wake = threading.Event()
-        self._deadlines: dict[int, int] = {}  # thread id -> monotonic ns
+        # thread id -> monotonic ns; the CPU cycle in C (padt_cycle.c) arms and disarms
+        # through it as `arm` and `disarm` do
+        self.deadlines: dict[int, int] = {}
         self._fired: set[int] = set()
         self._next_look_ns = 0  # when the thread looks next (0 while it looks)
         # the last budget armed: nothing armed, the thread sleeps that long, since an
@@ -85,7 +98,7 @@ class Watchdog:
         # no lock: one dict store is atomic, and `_fired` never holds this thread here
         # (`disarm` took it out), so the watching thread sees the old deadline or the new
         deadline = monotonic_ns() + budget_ns
-        self._deadlines[get_ident()] = deadline
+        self.deadlines[get_ident()] = deadline
         self._budget_ns = budget_ns
         if deadline < self._next_look_ns:  # a shorter budget than the thread sleeps for
             self._wake.set()
@@ -93,10 +106,10 @@ class Watchdog:
     def disarm(self) -> bool:
         """True when the watchdog fired; a still pending exception is taken back."""
         thread_id = get_ident()
-        if self._deadlines.pop(thread_id, None) is not None:
+        if self.deadlines.pop(thread_id, None) is not None:
             return False  # claimed in time: the watchdog can no longer fire it
         with self._lock:  # the watchdog claimed it: wait until it fired, or put it back
-            self._deadlines.pop(thread_id, None)
+            self.deadlines.pop(thread_id, None)
             if thread_id not in self._fired:
                 return False
             self._fired.discard(thread_id)
@@ -113,25 +126,25 @@ class Watchdog:
             with self._lock:
                 self._fire_expired()
             now = monotonic_ns()
-            next_look = min(self._deadlines.values(), default=now + self._budget_ns)
+            next_look = min(self.deadlines.values(), default=now + self._budget_ns)
             self._next_look_ns = next_look
-            if min(self._deadlines.values(), default=next_look) < next_look:
+            if min(self.deadlines.values(), default=next_look) < next_look:
                 continue
             self._wake.wait(max(0, next_look - now) / 1e9)
 
     def _fire_expired(self) -> None:
         now = monotonic_ns()
-        for thread_id, deadline in list(self._deadlines.items()):
+        for thread_id, deadline in list(self.deadlines.items()):
             if now <= deadline:
                 continue
-            claimed = self._deadlines.pop(thread_id, None)  # atomic, as in `disarm`
+            claimed = self.deadlines.pop(thread_id, None)  # atomic, as in `disarm`
             if claimed is None:
                 continue  # disarmed in time meanwhile
             if now > claimed:
                 self._fired.add(thread_id)
                 _raise_in(thread_id, WatchdogExpired)
             else:  # disarmed and armed afresh meanwhile: not due; `disarm` waits for this
-                self._deadlines[thread_id] = claimed
+                self.deadlines[thread_id] = claimed
 
 
 _shared: Watchdog | None = None

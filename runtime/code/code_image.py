@@ -72,7 +72,8 @@ class CodeImage:
         check_artifact_names(artifact)  # the code: where its forms are decoded
         self.artifact = artifact
         self.system = system
-        self._namespace = namespace(system) if printf is None else namespace(system, printf)
+        # the generated code's module globals: its classes, `_SYS`, `_G`, `_tick`, `_P`
+        self.namespace = namespace(system) if printf is None else namespace(system, printf)
         self._pous = {pou.name.upper(): pou for pou in (*artifact.types, *artifact.pous)}
         # Functions come last: their default arguments may read globals, which need the
         # classes of structs and function blocks first.
@@ -84,7 +85,7 @@ class CodeImage:
         codes = compile_units([(unit.source, code_filename(unit)) for unit in units])
         self._codes = dict(zip(self.units, codes, strict=True))
         for code in codes[: len(first)]:
-            exec(code, self._namespace)
+            exec(code, self.namespace)
         # the native bodies are made on a thread of their own, while this image runs as
         # Python; `tier_up` puts them in place
         self.native: NativeReport | None = None
@@ -95,13 +96,13 @@ class CodeImage:
         self._installed: NativeJob | None = None  # the job whose C bodies are in place
         self.python_only = False
         if native is not None and native.available:
-            self.native_job = native.start(artifact, self._namespace, memory_image)
+            self.native_job = native.start(artifact, self.namespace, memory_image)
         self.globals: Any = None
         if artifact.globals is not None:
-            self.globals = self._namespace[artifact.globals.class_name]()
-            self._namespace["_G"] = self.globals
+            self.globals = self.namespace[artifact.globals.class_name]()
+            self.namespace["_G"] = self.globals
         for code in codes[len(first) :]:
-            exec(code, self._namespace)
+            exec(code, self.namespace)
         # only code that makes references (REF) reads `reference_roots`; naming them walks
         # every variable, 20 ms of a reload's pause with 100,000 of them
         self.makes_references = any("_ref(" in unit.source for unit in self.units.values())
@@ -142,14 +143,14 @@ class CodeImage:
         (edge memories, action control blocks, step start times) are internal state."""
         declared: dict[type, frozenset[str]] = {}
         for unit in self._units():
-            kind = self._namespace.get(unit.class_name)
+            kind = self.namespace.get(unit.class_name)
             if isinstance(kind, type):
                 declared[kind] = frozenset(v.attr for v in unit.variables)
         return declared
 
     def classes(self) -> dict[str, type]:
         """The generated classes (structs, function blocks, programs, the globals) by name."""
-        found = {unit.class_name: self._namespace.get(unit.class_name) for unit in self._units()}
+        found = {unit.class_name: self.namespace.get(unit.class_name) for unit in self._units()}
         return {name: kind for name, kind in found.items() if isinstance(kind, type)}
 
     def object_attrs(self) -> dict[type, tuple[str, ...]]:
@@ -167,14 +168,14 @@ class CodeImage:
     def adopt_program(self, fresh: Any, adopted: Any) -> None:
         """A program instance carried over from the configuration before a reload takes
         the place of the fresh one `prog();` calls reach."""
-        programs = self._namespace["_P"]
+        programs = self.namespace["_P"]
         for name, instance in list(vars(programs).items()):
             if instance is fresh:
                 setattr(programs, name, adopted)
 
     def adopt_globals(self, adopted: Any) -> None:
         """The globals carried over from the configuration before a reload become these."""
-        self.globals = self._namespace["_G"] = adopted
+        self.globals = self.namespace["_G"] = adopted
 
     def _units(self) -> list[PouCode]:
         units = [*self.artifact.types, *self.artifact.pous]
@@ -185,56 +186,56 @@ class CodeImage:
     def reference_roots(self) -> dict[int, str]:
         """The paths of instances by id, that references made by the code read as paths
         (`runtime.code.instances.name_reference_roots` fills it)."""
-        roots: dict[int, str] = self._namespace["_reference_roots"]
+        roots: dict[int, str] = self.namespace["_reference_roots"]
         return roots
 
     def new_globals(self) -> Any:
         """Another instance of the globals: a user program's own view of them."""
         assert self.artifact.globals is not None
-        return self._namespace[self.artifact.globals.class_name]()
+        return self.namespace[self.artifact.globals.class_name]()
 
     def use(self, globals_view: Any, tick: Callable[[], None] | None) -> None:
         """What `_G` and `_tick` mean for the code that runs next (`_tick` None: loop
         passes are not metered)."""
-        self._namespace["_G"] = globals_view
-        self._namespace["_tick"] = tick
+        self.namespace["_G"] = globals_view
+        self.namespace["_tick"] = tick
 
     def register_program(self, pou_name: str, instance: Any) -> None:
         """Make a program instance callable from ST by its POU name (`prog();`)."""
         class_name = self._pous[pou_name.upper()].class_name
-        programs = self._namespace["_P"]
+        programs = self.namespace["_P"]
         if not hasattr(programs, class_name):
             setattr(programs, class_name, instance)
 
     def program_instance(self, pou_name: str) -> Any:
         class_name = self._pous[pou_name.upper()].class_name
-        return getattr(self._namespace["_P"], class_name)
+        return getattr(self.namespace["_P"], class_name)
 
     def function(self, pou_name: str) -> Callable[..., Any]:
         pou = self._pous[pou_name.upper()]
-        function: Callable[..., Any] = self._namespace[pou.class_name]
+        function: Callable[..., Any] = self.namespace[pou.class_name]
         return function
 
     def replace_function(self, pou_name: str, function: Callable[..., Any]) -> None:
         """What calls of a FUNCTION reach from now on (a debugger's traced entry)."""
-        self._namespace[self._pous[pou_name.upper()].class_name] = function
+        self.namespace[self._pous[pou_name.upper()].class_name] = function
 
     def renew(self) -> None:
         """Forget the instances made so far: fresh globals, and the program instances
         registered again by whoever makes them next (`padt test` starts every test from
         fresh instances of one image)."""
-        self._namespace["_P"] = Namespace()
+        self.namespace["_P"] = Namespace()
         if self.artifact.globals is not None:
-            self.globals = self._namespace["_G"] = self.new_globals()
+            self.globals = self.namespace["_G"] = self.new_globals()
 
     def run_tests_with(self, runner: Callable[..., Any]) -> None:
         """`padt test`: the test functions of test files call `runner` (the `_test`
         intrinsic; docs/testing.md)."""
-        self._namespace["_test"] = runner
+        self.namespace["_test"] = runner
 
     def new_instance(self, pou_name: str) -> Any:
         pou = self._pous[pou_name.upper()]
-        return self._namespace[pou.class_name]()
+        return self.namespace[pou.class_name]()
 
     def variable_paths(self, program: str, pou_name: str) -> list[VariablePath]:
         """Every elementary variable of a program instance, FB members included."""

@@ -142,7 +142,7 @@ EMERGENCY_STOPS = tuple(v.name for v in SYSTEM_VARIABLES if v.name.startswith("E
 emergency_switches = attrgetter(*EMERGENCY_STOPS)
 
 
-@dataclass
+@dataclass(slots=True)  # slots: the CPU cycle in C writes them (padt_cycle.c)
 class SystemView:
     """The system values a program sees; the scheduler sets them before each program cycle.
 

@@ -138,9 +138,29 @@ class _Roots:
 
 
 class Debugger:
+    # slots: the CPU cycle in C reads them at their offsets (padt_cycle.c)
+    __slots__ = (
+        "_at",
+        "_code",
+        "_entries",
+        "_files",
+        "_next_id",
+        "_pause",
+        "_resource",
+        "_trace",
+        "active",
+        "heard_ns",
+        "points",
+        "stepping",
+        "timeout_s",
+    )
+
     def __init__(self) -> None:
         self.points: dict[str, list[Breakpoint]] = {}  # by ST file
-        self.pause: Pause | None = None
+        self._pause: Pause | None = None
+        # something to watch each cycle: armed points or a program in BKPT (an attribute
+        # the CPU cycle reads, kept by `pause`'s setter and `rearm`)
+        self.active = False
         self.stepping: Stepping | None = None
         self.timeout_s = DEFAULT_TIMEOUT_S
         self.heard_ns = 0  # when a debug command last came
@@ -155,9 +175,14 @@ class Debugger:
     # ---- state
 
     @property
-    def active(self) -> bool:
-        """Something to watch each cycle: armed points or a program in BKPT."""
-        return bool(self._at) or self.pause is not None
+    def pause(self) -> Pause | None:
+        """The program standing in BKPT, and where."""
+        return self._pause
+
+    @pause.setter
+    def pause(self, pause: Pause | None) -> None:
+        self._pause = pause
+        self.active = bool(self._at) or pause is not None
 
     def state(self, now_ns: int) -> DebugState:
         points = [p.info() for file in sorted(self.points) for p in self.points[file]]
@@ -284,6 +309,7 @@ class Debugger:
         if resource.variables.code is None:
             self._code = None
             self._at, self._files = {}, set()
+            self.active = self._pause is not None
             return
         code = self._code = _Code(resource)
         where = Resolution(
@@ -291,14 +317,15 @@ class Debugger:
             {p.name.upper() for p in resource.programs},
             lambda path: locate(path, _Roots(resource, code.table)).value,
         )
-        self._at = {}
+        at: dict[tuple[str, int], list[Breakpoint]] = {}
         for points in self.points.values():
             for point in points:
                 resolve(point, where)
                 if point.armed:
                     for filename in point.code_files:
-                        self._at.setdefault((filename, point.line), []).append(point)
-        self._files = {filename for filename, _ in self._at}
+                        at.setdefault((filename, point.line), []).append(point)
+        self._at, self._files = at, {filename for filename, _ in at}
+        self.active = bool(self._at) or self._pause is not None
         armed = [p for file in self.points.values() for p in file if p.armed]
         for program in resource.programs:
             wanted = any(

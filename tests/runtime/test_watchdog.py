@@ -125,12 +125,12 @@ def test_a_deadline_is_claimed_by_the_disarm_in_time_or_by_the_watchdog_never_bo
     watchdog = Watchdog()
     watchdog.arm(10_000_000_000)
     assert watchdog.disarm() is False  # in time: claimed without the lock
-    watchdog._deadlines[FOREIGN] = time.monotonic_ns() - 1  # a thread that overran
-    watchdog._deadlines[FOREIGN + 1] = time.monotonic_ns() + 10_000_000_000  # one in time
+    watchdog.deadlines[FOREIGN] = time.monotonic_ns() - 1  # a thread that overran
+    watchdog.deadlines[FOREIGN + 1] = time.monotonic_ns() + 10_000_000_000  # one in time
     with watchdog._lock:
         watchdog._fire_expired()
     assert watchdog._fired == {FOREIGN}  # fired once, its deadline claimed
-    assert list(watchdog._deadlines) == [FOREIGN + 1]
+    assert list(watchdog.deadlines) == [FOREIGN + 1]
 
 
 def _wakeups(thread: threading.Thread) -> int:

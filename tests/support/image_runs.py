@@ -111,7 +111,7 @@ def with_c_bodies(run: ImageRun, tier: NativeTier) -> list[tuple[str, str]]:
     artifact = run.viewed.image.artifact
     translation = ArtifactTranslation.of(artifact)
     registry: dict[str, Any] = run.registry  # the modules' statics borrow it
-    namespace = run.viewed.image._namespace  # what the tier binds modules to
+    namespace = run.viewed.image.namespace  # what the tier binds modules to
     left: list[tuple[str, str]] = []
     for unit in translation.units:
         form = translation.forms[unit.class_name]

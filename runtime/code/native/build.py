@@ -20,6 +20,7 @@ import subprocess
 import sys
 import sysconfig
 import tempfile
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from stat import S_ISREG
@@ -34,6 +35,10 @@ SUFFIX = ".so"
 FLAGS = ("-O1", "-shared", "-fPIC", "-fwrapv", "-fno-strict-aliasing", "-ffp-contract=off", "-w")
 COMPILE_TIMEOUT_S = 300
 CACHE_LIMIT_BYTES = 128 * 2**20  # a thousand units of the size of the benchmark program's
+
+
+_runtime_modules: dict[str, ModuleType] = {}  # the runtime's own C, loaded, by name
+_loading = threading.Lock()
 
 
 class BuildError(Exception):
@@ -148,3 +153,18 @@ def prune(cache: Path, limit: int = CACHE_LIMIT_BYTES) -> int:
             removed += 1
         total -= size
     return removed
+
+
+def runtime_module(prefix: str, source: Path, cache: Path, toolchain: Toolchain) -> ModuleType:
+    """A C module of the runtime itself (not of a unit: `padt_memory`, `padt_cycle`), built
+    into `cache` unless it is there and loaded once per process. It is named by the hash of
+    its source and of `padt_image.h`, which it may include."""
+    text = source.read_text()
+    hashed = IMAGE_HEADER.read_text() + text
+    name = f"{prefix}_{hashlib.sha256(hashed.encode()).hexdigest()[:16]}"
+    with _loading:
+        module = _runtime_modules.get(name)
+        if module is None:
+            path = build(name, f"#define PADT_INIT PyInit_{name}\n{text}", cache, toolchain)
+            module = _runtime_modules[name] = load(name, path)
+    return module

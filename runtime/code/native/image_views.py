@@ -14,14 +14,12 @@ image) have no view yet: `ViewsRefused` says which member.
 
 from __future__ import annotations
 
-import hashlib
-import threading
 from collections.abc import Mapping
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from runtime.code.native.build import Toolchain, build, load
+from runtime.code.native.build import Toolchain, runtime_module
 from runtime.contract.layout import (
     Chars,
     Elements,
@@ -34,12 +32,8 @@ from runtime.contract.layout import (
 )
 
 SOURCE = Path(__file__).with_name("padt_memory.c")
-SHARED = Path(__file__).with_name("padt_image.h")
 # what a class may have besides its slots: the generated code's functions, `KIND__`
 _NOT_COPIED = frozenset({"__slots__", "__init__", "__dict__", "__weakref__", "__doc__"})
-
-_loaded: dict[str, ModuleType] = {}
-_loading = threading.Lock()
 
 
 class ViewsRefused(ValueError):
@@ -48,15 +42,7 @@ class ViewsRefused(ValueError):
 
 def memory_module(cache: Path, toolchain: Toolchain) -> ModuleType:
     """padt_memory, built into `cache` unless it is there, loaded once per process."""
-    source = SOURCE.read_text()
-    shared = SHARED.read_text()  # included: the module is named by both
-    name = "padt_memory_" + hashlib.sha256((shared + source).encode()).hexdigest()[:16]
-    with _loading:
-        module = _loaded.get(name)
-        if module is None:
-            path = build(name, f"#define PADT_INIT PyInit_{name}\n{source}", cache, toolchain)
-            module = _loaded[name] = load(name, path)
-    return module
+    return runtime_module("padt_memory", SOURCE, cache, toolchain)
 
 
 def view_classes(

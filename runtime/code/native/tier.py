@@ -11,6 +11,7 @@ a cold start) rather than loading yet another.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import json
 import shutil
 import subprocess
@@ -24,7 +25,13 @@ from types import ModuleType
 from typing import Any
 
 from runtime.code.compile_worker import child_environment
-from runtime.code.native.build import Toolchain, find_toolchain, load
+from runtime.code.native.build import (
+    BuildError,
+    Toolchain,
+    find_toolchain,
+    load,
+    runtime_module,
+)
 from runtime.code.native.image_body import NOT_YET
 from runtime.code.native.image_plan import ImagePlan, plan_image
 from runtime.contract.artifact import Artifact
@@ -39,6 +46,7 @@ NAMESPACE_ATTR = "native__namespace"  # a bound class holds its namespace throug
 # class (padt_native.h)
 PYTHON_BODY_ATTR = "python__call"
 WORKER_TIMEOUT_S = 1800  # a very large project compiles for minutes; never for ever
+CYCLE_SOURCE = Path(__file__).with_name("padt_cycle.c")
 
 
 def _breathe() -> None:
@@ -95,6 +103,12 @@ class NativeTier:
     @property
     def available(self) -> bool:
         return self.toolchain is not None
+
+    def cycle_module(self) -> ModuleType:
+        """padt_cycle, the usual CPU cycle in C (runtime/cycle_core.py), built into the
+        cache unless it is there (BuildError), loaded once per process."""
+        assert self.toolchain is not None
+        return runtime_module("padt_cycle", CYCLE_SOURCE, self.cache, self.toolchain)
 
     def start(
         self, artifact: Artifact, namespace: dict[str, Any], memory_image: bool = False
@@ -240,6 +254,10 @@ class NativeJob:
         self, tier: NativeTier, artifact: Artifact, namespace: dict[str, Any], memory_image: bool
     ) -> None:
         try:
+            # the CPU cycle's C, here rather than on the cycle thread (a compiler run the first
+            # time on a machine); a resource takes it once its code is native
+            with contextlib.suppress(BuildError, OSError, ImportError):
+                tier.cycle_module()
             plan = _plan(tier, artifact, namespace) if memory_image else ""
             image = plan if isinstance(plan, ImagePlan) else None
             memory = plan if isinstance(plan, str) else IN_IMAGE
