@@ -7,6 +7,7 @@ It uses only what every version of the project since the artifact's version 3 ha
 today's code beside the same figure of an older commit, measured in the same run.
 
 Request: {"program": ST text, "cycles": n, "check_cycles": m, "fixed_cycles": f,
+"fixed_native_cache": folder,
 "native_cache": folder, "image_cache": folder, "state_variables": v, "reload": r,
 "state_native_cache": folder}, each part
 left out when empty or 0; with
@@ -15,7 +16,8 @@ compiled into that folder; with `image_cache` (today's code only) its body is ti
 as image-mode C too (`image_body`).
 Reply: {"program_us": median us per cycle of the program (virtual clock), "values": every
 variable after `check_cycles` cycles, "fixed_us": median us per cycle of a resource with one
-empty program (real clock), "native_build_s": how long the native bodies took to be in
+empty program (real clock; with `fixed_native_cache`, today's code only, on the native tier,
+its usual cycle in C), "native_build_s": how long the native bodies took to be in
 place, "native_bodies": the POUs that run as C, "image_body_us", "image_build_s",
 "image_left": `image_body`'s figures, "read_ms", "values_ms", "take_ms",
 "save_ms", "pause_ms": for a resource of `state_variables` variables (`scale_source`), the
@@ -132,9 +134,11 @@ def image_body(text: str, cycles: int, cache: str, reply: dict[str, Any]) -> Non
     reply["image_body_us"] = _median_us(body, cycles)
 
 
-def fixed_cycles(cycles: int) -> float:
+def fixed_cycles(cycles: int, native_cache: str = "") -> float:
+    """The median CPU cycle of a resource with one empty program on a real clock; with
+    `native_cache` (today's code only), on the native tier, whose usual cycle is C."""
     program = ProgramConfig(name="Empty", pou="Empty", program_id=1)
-    resource = _running(EMPTY, RealClock(), [program])
+    resource = _running(EMPTY, RealClock(), [program], native_cache=native_cache, reply={})
     for _ in range(1_000):  # caches, the watchdog thread waking up
         resource.cycle()
     return _median_us(resource.cycle, cycles)
@@ -244,7 +248,8 @@ def main() -> None:
     if request.get("image_cache"):
         image_body(request["program"], request["cycles"], request["image_cache"], reply)
     if request.get("fixed_cycles"):
-        reply["fixed_us"] = fixed_cycles(request["fixed_cycles"])
+        native_cache = request.get("fixed_native_cache", "")
+        reply["fixed_us"] = fixed_cycles(request["fixed_cycles"], native_cache)
     if request.get("state_variables"):
         reply.update(
             state_figures(

@@ -253,11 +253,12 @@ class NativeJob:
     def _run(
         self, tier: NativeTier, artifact: Artifact, namespace: dict[str, Any], memory_image: bool
     ) -> None:
+        # the CPU cycle's C, built here rather than on the cycle thread (a compiler run the
+        # first time on a machine), beside the worker; a resource takes it once its code is
+        # in place (runtime/cycle_core.py)
+        cycle = threading.Thread(target=_build_cycle, args=(tier,), name="padt-native-cycle")
+        cycle.start()
         try:
-            # the CPU cycle's C, here rather than on the cycle thread (a compiler run the first
-            # time on a machine); a resource takes it once its code is native
-            with contextlib.suppress(BuildError, OSError, ImportError):
-                tier.cycle_module()
             plan = _plan(tier, artifact, namespace) if memory_image else ""
             image = plan if isinstance(plan, ImagePlan) else None
             memory = plan if isinstance(plan, str) else IN_IMAGE
@@ -280,6 +281,7 @@ class NativeJob:
                 (), (), (f"the native tier failed: {type(exc).__name__}: {exc}",)
             )
         finally:
+            cycle.join()
             self._done.set()
 
     @property
@@ -309,6 +311,13 @@ class NativeJob:
         in the instances, not in the code, so they are the same on either side."""
         for kind, method, python, body in self.swaps:
             setattr(kind, method, body if native else python)
+
+
+def _build_cycle(tier: NativeTier) -> None:
+    """padt_cycle built and loaded; where it cannot be, `Resource.tier_up` says why."""
+    if tier.available:
+        with contextlib.suppress(BuildError, OSError, ImportError):
+            tier.cycle_module()
 
 
 def _plan(tier: NativeTier, artifact: Artifact, namespace: dict[str, Any]) -> ImagePlan | str:
