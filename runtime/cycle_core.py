@@ -3,20 +3,16 @@
 the cycle when it is a usual one and leaves any other to the Python cycle, the reference.
 
 `padt_cycle.c` is compiled once per machine into the native cache, like `padt_memory`, and
-loaded once per process.
+loaded once per process (`NativeTier.cycle_module`).
 """
 
 from __future__ import annotations
 
-import hashlib
-import threading
-from pathlib import Path
 from types import ModuleType
 from typing import Any, Protocol
 
 from runtime.clock import RealClock, VirtualClock
 from runtime.code.intrinsics import SystemView
-from runtime.code.native.build import Toolchain, build, load
 from runtime.code.user_program import DIRECT, ProgramCycleStats, UserProgram, copy_globals
 from runtime.contract.protocol import ProgramState, ResourceState
 from runtime.cycle_stats import MIN_TOLERANCE_NS, CycleStats
@@ -24,11 +20,7 @@ from runtime.force_table import ForceTable
 from runtime.scheduler import Halted
 from runtime.watchdog import WatchdogExpired
 
-SOURCE = Path(__file__).parent / "code" / "native" / "padt_cycle.c"
 _CLOCK_KINDS = {RealClock: 0, VirtualClock: 1}  # padt_cycle.c's CLOCK_REAL, CLOCK_VIRTUAL
-
-_loaded: dict[str, ModuleType] = {}
-_loading = threading.Lock()
 
 
 class CycleCore(Protocol):
@@ -36,18 +28,6 @@ class CycleCore(Protocol):
         """The usual CPU cycle, run: True; False when it is not a usual one (nothing
         changed), for the Python cycle to run."""
         ...
-
-
-def cycle_module(cache: Path, toolchain: Toolchain) -> ModuleType:
-    """padt_cycle, built into `cache` unless it is there, loaded once per process."""
-    source = SOURCE.read_text()
-    name = "padt_cycle_" + hashlib.sha256(source.encode()).hexdigest()[:16]
-    with _loading:
-        module = _loaded.get(name)
-        if module is None:
-            path = build(name, f"#define PADT_INIT PyInit_{name}\n{source}", cache, toolchain)
-            module = _loaded[name] = load(name, path)
-    return module
 
 
 def cycle_core(module: ModuleType, resource: Any) -> CycleCore | None:

@@ -15,6 +15,7 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from backend.engineering.replay import ReplayError, replay
 from runtime.clock import VirtualClock
+from runtime.code.native.tier import NativeTier
 from runtime.contract import protocol as p
 from runtime.contract.artifact import Artifact, ProgramConfig, ResourceConfig
 from runtime.contract.recording import read_recording
@@ -61,12 +62,18 @@ def compiled(source: str = PLANT) -> Artifact:
     return result.artifact
 
 
-def started(tmp_path: Path, artifact: Artifact | None = None) -> Resource:
+def started(
+    tmp_path: Path, artifact: Artifact | None = None, native: NativeTier | None = None
+) -> Resource:
+    """With `native`, the bodies C and the variables in native memory from the start."""
     resource = Resource(
         "Plant", VirtualClock(start_ns=5_000_000_000, epoch_ns=1_700_000_000 * 10**9)
     )
     resource.recordings = Recordings(tmp_path / "recordings")
+    resource.native = native
     resource.load(artifact or compiled())
+    resource.tier_up(wait=True)
+    assert (resource.variables.image is not None) == (native is not None)
     resource.start()
     return resource
 
@@ -168,9 +175,9 @@ def test_a_writer_that_falls_behind_drops_and_counts(
     assert len(rows) == info.cycles
 
 
-def recorded_run(tmp_path: Path) -> Path:
+def recorded_run(tmp_path: Path, native: NativeTier | None = None) -> Path:
     """300 cycles with all inputs: inputs from the plant, a write, forcing on and off."""
-    resource = started(tmp_path)
+    resource = started(tmp_path, native=native)
     recordings = recordings_of(resource)
     level = [500]
     run(resource, 30, level)  # the recording starts in the middle of a run
@@ -198,6 +205,19 @@ def test_all_inputs_replay_identically(tmp_path: Path) -> None:
     result = replay(recording, compiled())
     assert result.difference is None and result.cycles == 300, result.summary()
     assert result.summary() == "replay: 300 cycles, identical"
+
+
+@pytest.mark.parametrize("replayed_on", ["native", "python"])
+def test_a_recording_of_native_memory_replays_identically_on_either_tier(
+    tmp_path: Path, native_tier: NativeTier, replayed_on: str
+) -> None:
+    """Recorded with the variables in native memory (its reader made from the image), the
+    same 300 cycles replay to the bit with the variables in native memory or on objects."""
+    recording = read_recording(recorded_run(tmp_path, native_tier))
+    assert len(recording.rows) == 300 and max(recording.column("alarms")) >= 40
+    result = replay(recording, compiled(), native_tier if replayed_on == "native" else None)
+    assert result.summary() == "replay: 300 cycles, identical"
+    assert read_recording(recorded_run(tmp_path / "objects")).rows == recording.rows
 
 
 def test_a_changed_program_is_named_at_its_first_different_cycle(tmp_path: Path) -> None:

@@ -17,8 +17,8 @@
  * integer out of that range takes the Python method (`record`, `record_period`), which
  * computes with Python's integers.
  *
- * Included after `#define PADT_INIT PyInit_<module name>` (cycle_core.py names the module
- * by the hash of its source).
+ * Included after `#define PADT_INIT PyInit_<module name>` (build.py's `runtime_module` names
+ * the module by the hash of its source).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -90,27 +90,55 @@ typedef struct {
 } Core;
 
 /* Attribute names, interned once. */
-static PyObject *N_active, *N_read_inputs, *N_target_ms, *N_levels, *N_namespace, *N_watchdog_ms, *N_set, *N_disarm, *N_cycle_ns, *N_program_fault, *N_emergency_stopped, *N_watchdog_expired_m, *N_publish, *N_check_deactivation, *N_apply, *N_write_outputs, *N_record, *N_record_period, *N_cycled, *N_now, *N_epoch, *N_reads, *N_G, *N_tick, *N_cold, *N_warm;
+static PyObject *N_active, *N_read_inputs, *N_target_ms, *N_levels, *N_namespace,
+    *N_watchdog_ms, *N_set, *N_disarm, *N_cycle_ns, *N_program_fault,
+    *N_emergency_stopped, *N_watchdog_expired_m, *N_publish, *N_check_deactivation,
+    *N_apply, *N_write_outputs, *N_record, *N_record_period, *N_cycled, *N_now,
+    *N_epoch, *N_reads, *N_G, *N_tick, *N_cold, *N_warm;
 
 static PyObject *ZERO, *ONE; /* the ints 0 and 1 */
 
+static const struct {
+    PyObject **name;
+    const char *text;
+} NAMES[] = {
+    {&N_active, "active"},
+    {&N_read_inputs, "read_inputs"},
+    {&N_target_ms, "target_cycle_ms"},
+    {&N_levels, "levels"},
+    {&N_namespace, "namespace"},
+    {&N_watchdog_ms, "watchdog_ms"},
+    {&N_set, "set"},
+    {&N_disarm, "disarm"},
+    {&N_cycle_ns, "cycle_ns"},
+    {&N_program_fault, "_program_fault"},
+    {&N_emergency_stopped, "emergency_stopped"},
+    {&N_watchdog_expired_m, "_watchdog_expired"},
+    {&N_publish, "publish"},
+    {&N_check_deactivation, "check_deactivation"},
+    {&N_apply, "apply"},
+    {&N_write_outputs, "write_outputs"},
+    {&N_record, "record"},
+    {&N_record_period, "record_period"},
+    {&N_cycled, "cycled"},
+    {&N_now, "_now"},
+    {&N_epoch, "_epoch"},
+    {&N_reads, "reads"},
+    {&N_G, "_G"},
+    {&N_tick, "_tick"},
+    {&N_cold, "cold"},
+    {&N_warm, "warm"},
+};
+
 static int intern_names(void) {
-    if (ZERO == NULL && ((ZERO = PyLong_FromLong(0)) == NULL || (ONE = PyLong_FromLong(1)) == NULL))
+    if (ZERO == NULL && (ZERO = PyLong_FromLong(0)) == NULL)
         return -1;
-#define I(var, text) if (var == NULL && (var = PyUnicode_InternFromString(text)) == NULL) return -1;
-    I(N_active, "active")
-    I(N_read_inputs, "read_inputs")
-    I(N_target_ms, "target_cycle_ms")
-    I(N_levels, "levels") I(N_namespace, "namespace") I(N_watchdog_ms, "watchdog_ms") I(N_set, "set")
-    I(N_disarm, "disarm") I(N_cycle_ns, "cycle_ns")
-    I(N_program_fault, "_program_fault") I(N_emergency_stopped, "emergency_stopped")
-    I(N_watchdog_expired_m, "_watchdog_expired") I(N_publish, "publish")
-    I(N_check_deactivation, "check_deactivation")
-    I(N_apply, "apply") I(N_write_outputs, "write_outputs")
-    I(N_record, "record") I(N_record_period, "record_period")
-    I(N_cycled, "cycled") I(N_now, "_now") I(N_epoch, "_epoch") I(N_reads, "reads")
-    I(N_G, "_G") I(N_tick, "_tick") I(N_cold, "cold") I(N_warm, "warm")
-#undef I
+    if (ONE == NULL && (ONE = PyLong_FromLong(1)) == NULL)
+        return -1;
+    for (size_t i = 0; i < sizeof NAMES / sizeof NAMES[0]; i++)
+        if (*NAMES[i].name == NULL &&
+            (*NAMES[i].name = PyUnicode_InternFromString(NAMES[i].text)) == NULL)
+            return -1;
     return 0;
 }
 
@@ -646,8 +674,9 @@ static int scheduler_run(Core *core, Usual *u, PyObject *begin, PyObject *finish
             switched = on ? PyObject_IsTrue(on) : -1;
         }
         if (switched) {
-            PyObject *stopped =
-                switched < 0 ? NULL : PyObject_CallMethodNoArgs(core->resource, N_emergency_stopped);
+            PyObject *stopped = switched < 0 ? NULL
+                                              : PyObject_CallMethodNoArgs(core->resource,
+                                                                          N_emergency_stopped);
             int truth = stopped ? PyObject_IsTrue(stopped) : -1;
             Py_XDECREF(stopped);
             failed = truth < 0;
@@ -705,8 +734,9 @@ static int run_programs(Core *core, Usual *u, PyObject *begin) {
     if (check < 0 || (check && call0(core->forcing, N_check_deactivation) < 0))
         return -1;
     PyObject *table = get(core->forcing, core->forcing_off[F_TABLE], "table");
-    int forcing = table == NULL ? -1
-                  : Py_IS_TYPE(table, core->table_type) ? truth(get(table, core->table_off[0], "levels"))
+    int forcing = table == NULL                          ? -1
+                  : Py_IS_TYPE(table, core->table_type) ? truth(get(table, core->table_off[0],
+                                                                    "levels"))
                                                         : attr_true(table, N_levels);
     if (forcing < 0 || (forcing && call0(core->forcing, N_apply) < 0))
         return -1;
@@ -715,7 +745,7 @@ static int run_programs(Core *core, Usual *u, PyObject *begin) {
 
 /* The system variables of a cycle that begins at `begin`. */
 static int system_of(Core *core, Usual *u, PyObject *begin) {
-    PyObject *r = core->resource, *system = core->system;
+    PyObject *system = core->system;
     const Py_ssize_t *s = core->sys_off, *c = core->stats_off;
     PyObject *first = RES(core, R_FIRST);
     if (first == NULL)

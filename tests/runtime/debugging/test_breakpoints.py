@@ -28,9 +28,16 @@ PROGRAMS = [
 ]
 
 
-def artifact(safety: bool = False) -> Artifact:
+# the same lines without the interface variable, which keeps a configuration's values on
+# objects: this one's go into native memory on the native tier
+IN_NATIVE_MEMORY = (
+    SOURCE.replace(" c : ICount;", "").replace("c := a;", "i := 0;").replace("c.Bump(", "a.Bump(")
+)
+
+
+def artifact(safety: bool = False, source: str = SOURCE) -> Artifact:
     config = ResourceConfig(name="R", watchdog_ms=5_000, safety_operation=safety)
-    result = compile_sources([SourceFile(FILE, SOURCE)], resource=config, programs=PROGRAMS)
+    result = compile_sources([SourceFile(FILE, source)], resource=config, programs=PROGRAMS)
     assert result.artifact is not None, result.diagnostics
     return result.artifact
 
@@ -87,11 +94,10 @@ def program(resource: Resource, name: str) -> p.ProgramStatus:
 
 
 def native_bodies(resource: Resource) -> bool:
-    """Whether the bodies run as C now (the class's call is not the Python function)."""
-    code = resource.variables.code
-    assert code is not None
-    kind = code.classes()["POU_COUNTER"]  # Main stays Python: it makes a reference
-    return not hasattr(kind.__dict__["__call__"], "__code__")
+    """Whether the bodies run as C now: the call of Main's counter's class (a view class
+    while the values are in native memory) is not the Python function."""
+    counter = resource.variables.program("Main").instance.a
+    return not hasattr(type(counter).__dict__["__call__"], "__code__")
 
 
 def test_a_breakpoint_for_one_instance_stops_only_there(tier: NativeTier | None) -> None:
@@ -216,6 +222,14 @@ def test_hit_count_and_writes_at_a_break(tier: NativeTier | None) -> None:
     assert state.breakpoints[0].spec.hit_count == 5
 
 
+def assert_seven_cycles_alike(debugged: Resource, plain: Resource) -> None:
+    """Main had seven program cycles on both, and every value is the same."""
+    assert program(debugged, "Main").cycles == program(plain, "Main").cycles == 7
+    ours, theirs = debugged.variables.read_values()(), plain.variables.read_values()()
+    assert sorted(ours) == sorted(theirs)
+    assert all(same(ours[path], theirs[path]) for path in ours), (ours, theirs)
+
+
 def test_native_bodies_give_way_while_armed_and_the_values_are_the_same(
     native_tier: NativeTier,
 ) -> None:
@@ -233,10 +247,34 @@ def test_native_bodies_give_way_while_armed_and_the_values_are_the_same(
     assert native_bodies(debugged)
     cycles(debugged, 3)
     cycles(plain, 4)
-    assert program(debugged, "Main").cycles == program(plain, "Main").cycles == 7
-    ours, theirs = debugged.variables.read_values()(), plain.variables.read_values()()
-    assert sorted(ours) == sorted(theirs)
-    assert all(same(ours[path], theirs[path]) for path in ours), (ours, theirs)
+    assert_seven_cycles_alike(debugged, plain)
+
+
+def test_in_native_memory_the_values_leave_for_a_breakpoint_and_come_back_after(
+    native_tier: NativeTier,
+) -> None:
+    """Armed, the values move to objects between two cycles (the debugger knows instances
+    by identity), the program stops and steps there; cleared, they go back into native
+    memory and the bodies run as C on it again, the values those of a run never debugged."""
+    built = artifact(source=IN_NATIVE_MEMORY)
+    debugged = running(built, NativeTier(native_tier.cache, native_tier.toolchain))
+    plain = running(built, None)
+    assert debugged.variables.image is not None and native_bodies(debugged)
+    cycles(debugged, 3)
+    cycles(plain, 3)
+    debug_set(debugged, p.BreakpointSpec(18))
+    debugged.tier_up()  # between two cycles, as the cycle driver does
+    assert debugged.variables.image is None and not native_bodies(debugged)
+    cycles(debugged, 1)
+    pause = paused(debugged)
+    assert pause is not None and pause.line == 18
+    ask(debugged, p.DebugStep("Main", "cycle"))
+    ask(debugged, p.DebugClear())
+    debugged.tier_up()
+    assert debugged.variables.image is not None and native_bodies(debugged)
+    cycles(debugged, 3)
+    cycles(plain, 4)
+    assert_seven_cycles_alike(debugged, plain)
 
 
 def test_a_logpoint_records_without_stopping_and_is_rate_bounded() -> None:

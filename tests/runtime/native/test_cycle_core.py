@@ -6,6 +6,7 @@ states, errors and statistics, the outputs and the events."""
 
 from __future__ import annotations
 
+import random
 import time
 from collections.abc import Callable
 from dataclasses import asdict, replace
@@ -15,7 +16,9 @@ import pytest
 from runtime.clock import RealClock
 from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import ProgramConfig
+from runtime.contract.refusal import Refusal
 from runtime.online_writes import simulate
+from runtime.program_control import start_program, stop_program
 from runtime.resource import Resource
 from tests.support.native_runs import CYCLE_NS, compiled, running, same
 
@@ -98,21 +101,32 @@ def in_python(resource: Resource) -> None:
 Step = Callable[[Resource], None]
 
 
-def run_side_by_side(tier: NativeTier, cycles: int, before: dict[int, Step]) -> list[bool]:
-    """Both resources through `cycles` cycles, `before[n]` done to both before cycle n;
-    which cycles ran in C."""
+def run_side_by_side(
+    tier: NativeTier, cycles: int, before: dict[int, Step], periods: list[int] | None = None
+) -> list[bool]:
+    """Both resources through `cycles` cycles, `before[n]` done to both before cycle n,
+    the clock `periods[n - 1]` further after it (100 ms), the values moved into native
+    memory or out between two cycles as the cycle driver has them (`tier_up`); which
+    cycles ran in C."""
     artifact = compiled(SOURCE, PROGRAMS)
     c_side, python_side = running(artifact, tier), running(artifact, tier)
     ran_in_c = []
     for cycle in range(1, cycles + 1):
+        refused = []
         for resource in (c_side, python_side):
             step = before.get(cycle)
-            if step is not None:
-                step(resource)
+            try:
+                if step is not None:
+                    step(resource)
+            except Refusal as refusal:  # as a command is refused: the same on both sides
+                refused.append(str(refusal))
+            resource.tier_up()
+        assert len(refused) in (0, 2) and len(set(refused)) < 2, refused
         ran_in_c.append(in_c(c_side))
         in_python(python_side)
         for resource in (c_side, python_side):
-            resource.clock.advance(CYCLE_NS)  # type: ignore[attr-defined]
+            period = periods[cycle - 1] if periods else CYCLE_NS
+            resource.clock.advance(period)  # type: ignore[attr-defined]
         assert seen(c_side) == seen(python_side), f"cycle {cycle}"
         expected, found = python_side.variables.values(), c_side.variables.values()
         assert expected.keys() == found.keys()
@@ -167,6 +181,55 @@ def test_an_unusual_cycle_is_left_to_python(native_tier: NativeTier, unusual: st
 
     ran_in_c = run_side_by_side(native_tier, 4, {3: make_unusual})
     assert ran_in_c == [True, True, False, False]
+
+
+def _force(resource: Resource) -> None:
+    resource.params = replace(resource.params, safety_operation=False, global_forcing_allowed=True)
+    resource.forcing.force("lamp", True)
+    resource.forcing.start()
+
+
+def _target(ms: int) -> Step:
+    def target(resource: Resource) -> None:
+        resource.params = replace(resource.params, target_cycle_ms=ms)
+
+    return target
+
+
+# what may happen between two cycles, as commands and the I/O do it
+ACTIONS: dict[str, Step] = {
+    "inputs": lambda r: r.io.set_inputs({"level": r.cycle_count % 30}),
+    "write": lambda r: simulate(r, "seen_tick", 7),
+    "force": _force,
+    "unforce": lambda r: r.forcing.stop(),
+    "reset statistics": lambda r: r.reset_stats(),
+    "target 50 ms": _target(50),
+    "no target": _target(0),
+    "stop Other": lambda r: stop_program(r, "Other"),
+    "start Other": lambda r: start_program(r, "Other"),
+    "restart Main": lambda r: start_program(r, "Main"),  # from ERROR: its fresh instance
+    "stop": lambda r: r.stop(),
+    "start": lambda r: r.start(),
+}
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_random_commands_between_cycles_leave_both_cycles_alike(
+    native_tier: NativeTier, seed: int
+) -> None:
+    """Commands drawn at random between cycles of random lengths (inputs, writes, forcing,
+    statistics reset, target cycle time, programs stopped, started and restarted from
+    ERROR, the resource stopped and started): after every cycle both sides alike."""
+    draw = random.Random(seed)
+    cycles = 60
+    before = {
+        n: ACTIONS[draw.choice(sorted(ACTIONS))]
+        for n in range(2, cycles + 1)
+        if draw.random() < 0.4
+    }
+    periods = [draw.choice([CYCLE_NS, 20_000_000, 170_000_000]) for _ in range(cycles)]
+    ran_in_c = run_side_by_side(native_tier, cycles, before, periods)
+    assert any(ran_in_c) and not all(ran_in_c)
 
 
 def test_on_a_real_clock_the_statistics_of_cycles_in_c_add_up(native_tier: NativeTier) -> None:

@@ -279,10 +279,16 @@ EVERYTHING = ONE_POU.replace("count : INT;", "count : INT; extra : INT;").replac
 )
 
 
+MIGRATED = ONE_POU.replace("VAR count : INT;", "VAR count : DINT;")  # a type changes
+
+
 def test_a_reload_carries_every_value_and_runs_as_c_from_its_first_cycle(
     native_tier: NativeTier,
 ) -> None:
-    for text in (ONE_POU, EVERYTHING):
+    """A reload of one POU's body, of new variables, and of a type that changes (the value
+    migrated): the values adopted from native memory are the Python tier's, and go back
+    into native memory for the cycles after."""
+    for text in (ONE_POU, EVERYTHING, MIGRATED):
         python, native = harness(PLANT), harness(PLANT, native=native_tier)
         python.cycle(6)
         native.cycle(6)
@@ -291,12 +297,15 @@ def test_a_reload_carries_every_value_and_runs_as_c_from_its_first_cycle(
             job.prepare()
             assert job.failure is None, job.failure
             reload_switch.finish(h.resource, job)
+            del job  # done with, as the cycle driver is: the values may go back
+            h.resource.tier_up()  # between two cycles, as the cycle driver does
         code = native.resource.variables.code
         assert code is not None and code.native is not None
         assert set(code.native.bodies) == {"Main", "Counter", "Small", "TON", "R_TRIG"}
         assert native.resource.variables.values() == python.resource.variables.values()
         for _ in range(5):
             assert native.cycle() == python.cycle()
+            assert native.resource.variables.image is not None  # back in native memory
         assert native.value("Main.s.y") == 3 * native.value("Main.n")
 
 
