@@ -82,8 +82,9 @@ class Watchdog:
         # and an event that wakes the thread for a deadline earlier than it sleeps to
         self._lock = threading.Lock()
         self._wake = threading.Event()
-        # thread id -> monotonic ns; the CPU cycle in C (padt_cycle.c) arms and disarms
-        # through it as `arm` and `disarm` do
+        # thread id -> monotonic ns. The CPU cycle in C (padt_cycle.c) arms and disarms
+        # as `arm` and `disarm` do, through it, `_budget_ns`, `_next_look_ns` and `_wake`:
+        # a change of either side is a change of both
         self.deadlines: dict[int, int] = {}
         self._fired: set[int] = set()
         self._next_look_ns = 0  # when the thread looks next (0 while it looks)

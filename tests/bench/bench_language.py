@@ -178,13 +178,14 @@ def bench_native_coverage(sources: list[SourceFile]) -> None:
     """The program and function block bodies of OSCAT, file by file, that the native tier
     translates (translation only: the C compiler's time is `bench_native`'s), and the
     most common reasons for the rest."""
-    translated = total = 0
+    translated = total = functions = 0
     reasons: dict[str, int] = {}
     started = time.perf_counter()
     for source in sources:
         artifact = compile_sources([source], programs=[]).artifact
         if artifact is None:
             continue
+        functions += sum(1 for pou in artifact.pous if pou.kind == "FUNCTION")
         translation = ArtifactTranslation.of(artifact)
         for unit in translation.units:
             result = translation.translate(unit)
@@ -202,7 +203,8 @@ def bench_native_coverage(sources: list[SourceFile]) -> None:
     )
     print(
         f"  goal every body native (issue 34): {total - translated} of {total} still Python, "
-        f"{verdict(translated == total)}"
+        f"{verdict(translated == total)}; not counted: the bodies of OSCAT's {functions} "
+        "FUNCTIONs, Python called from C (not yet C)"
     )
 
 
