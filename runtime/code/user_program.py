@@ -18,7 +18,12 @@ _SCALARS = (bool, int, float, str)
 
 def copy_globals(source: Any, target: Any, attrs: tuple[str, ...]) -> None:
     """Copy globals between views by value: a view must never share a list or a struct
-    with another, or a write in one program would show in another at once."""
+    with another, or a write in one program would show in another at once. Views of a
+    memory image copy their members' bytes (padt_memory's `__padt_copy__`), at once."""
+    by_bytes = getattr(source, "__padt_copy__", None)
+    if by_bytes is not None and type(target) is type(source):
+        by_bytes(target, attrs)
+        return
     for attr in attrs:
         value = getattr(source, attr)
         setattr(target, attr, value if isinstance(value, _SCALARS) else copy.deepcopy(value))

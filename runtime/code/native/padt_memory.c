@@ -273,9 +273,32 @@ static PyObject *view_where(PyObject *self, PyObject *unused) {
     return Py_BuildValue("(On)", view->image, view->offset);
 }
 
+/* `copy_globals` between two views of one class (a program's own view of the globals and
+   the globals): each named member's bytes at once, which is a copy by value (arrays and
+   structures are inline), of values the target's own fields would store as they are. */
+static PyObject *view_copy(PyObject *self, PyObject *args) {
+    PyObject *target, *names;
+    if (!PyArg_ParseTuple(args, "OO!", &target, &PyTuple_Type, &names)) return NULL;
+    if (Py_TYPE(target) != Py_TYPE(self))
+        return PyErr_Format(PyExc_TypeError, "a copy between views of two classes");
+    ViewObject *from = (ViewObject *)self, *to = (ViewObject *)target;
+    for (Py_ssize_t i = 0; i < PyTuple_GET_SIZE(names); i++) {
+        PyObject *name = PyTuple_GET_ITEM(names, i);
+        PyObject *found = PyUnicode_Check(name) ? _PyType_Lookup(Py_TYPE(self), name) : NULL;
+        if (found == NULL || !PyObject_TypeCheck(found, &FieldType))
+            return PyErr_Format(PyExc_AttributeError, "no member %R to copy", name);
+        FieldObject *f = (FieldObject *)found;
+        if (field_cleared(f)) return NULL;
+        memmove(at(to->image, to->offset + f->offset), at(from->image, from->offset + f->offset),
+                f->size);
+    }
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef view_methods[] = {
     {"__deepcopy__", view_deepcopy, METH_O, "A copy detached from the image."},
     {"__padt_where__", view_where, METH_NOARGS, "(image, offset)"},
+    {"__padt_copy__", view_copy, METH_VARARGS, "(target, names): members copied by value."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -974,3 +974,42 @@ END_PROGRAM
         0x0FFF_FFFF,
         2**64 - 1,
     ]
+
+
+SHARED_GLOBALS = """
+TYPE Pair : STRUCT a : INT; b : STRING[8]; END_STRUCT; END_TYPE
+VAR_GLOBAL buf : ARRAY[1..6] OF INT; name : STRING[12]; p : Pair; n : DINT; r : LREAL; END_VAR
+PROGRAM Writer
+VAR k : INT; END_VAR
+k := k + 1;
+n := n + 1;
+buf[(k MOD 6) + 1] := k;
+IF k MOD 2 = 0 THEN name := 'even'; ELSE name := 'odd one'; END_IF;
+p.a := k * 2;
+p.b := name;
+r := r + 0.5;
+END_PROGRAM
+PROGRAM Reader
+VAR seen : DINT; total : INT; copy : Pair; last : STRING[12]; i : INT; x : LREAL; END_VAR
+seen := n;
+total := 0;
+FOR i := 1 TO 6 DO total := total + buf[i]; END_FOR;
+copy := p;
+last := name;
+x := r;
+END_PROGRAM
+"""
+
+
+def test_programs_own_globals_are_copied_by_their_bytes_in_native_memory(
+    native_tier: NativeTier,
+) -> None:
+    """Two programs, each with a view of its own of the globals (an array, a text, a
+    structure, numbers), copied in and published every cycle: in native memory as bytes
+    (`__padt_copy__`), with every value the Python tier's on objects."""
+    programs = [ProgramConfig("Writer", "Writer", 1), ProgramConfig("Reader", "Reader", 2)]
+    pair = side_by_side(SHARED_GLOBALS, native_tier, programs)
+    native = pair.native
+    assert native.variables.image is not None
+    assert all(program.view is not native.variables.globals for program in native.programs)
+    pair.cycle_and_compare(12)
