@@ -314,14 +314,14 @@ class Resource:
         code = self.variables.code
         report = code.tier_up(wait) if code is not None else None
         if report is not None:
+            if self._core is None:
+                self._core = self._cycle_core()
             self.recorder.record(
                 "native",
-                report.summary(),
+                report.summary(cycle_in_c=self._core is not None),
                 native=list(report.bodies),
                 python=[f"{pou}: {reason}" for pou, reason in report.left],
             )
-            if self._core is None:
-                self._core = self._cycle_core()
         if must_leave(self.variables):  # debugged: a sliced program's cycle has ended
             leave_image(self.variables)
         plan = may_enter(self.variables)

@@ -65,13 +65,17 @@ class NativeReport:
     # stay on objects; "" where no image was asked for
     memory: str = ""
 
-    def summary(self) -> str:
+    def summary(self, cycle_in_c: bool = False) -> str:
+        """What the event log says; `cycle_in_c`: the resource's usual cycle runs in C
+        (runtime/cycle_core.py)."""
         total = len(self.bodies) + len(self.left)
         text = f"native code in place: {len(self.bodies)} of {total} POU bodies run as C"
         if self.memory == IN_IMAGE:
             text += ", the variables in native memory"
         elif self.memory:
             text += f", the variables on Python objects ({self.memory})"
+        if cycle_in_c:
+            text += ", the usual CPU cycle in C"
         if self.left:
             pou, reason = self.left[0]
             more = f" and {len(self.left) - 1} more" if len(self.left) > 1 else ""

@@ -347,7 +347,9 @@ def test_the_variables_go_into_native_memory_and_the_event_says_where_they_are(
 ) -> None:
     resource = running(compiled(PLANT), native_tier)
     native = [e.message for e in resource.events.recent() if e.kind == "native"]
-    assert native[-1].endswith("5 of 5 POU bodies run as C, the variables in native memory")
+    assert native[-1].endswith(
+        "5 of 5 POU bodies run as C, the variables in native memory, the usual CPU cycle in C"
+    )
     assert resource.variables.image is not None
     kept = running(compiled(ON_SLOTS + PLANT), native_tier)
     native = [e.message for e in kept.events.recent() if e.kind == "native"]
