@@ -22,7 +22,6 @@ from typing import TYPE_CHECKING, Any, Protocol
 from runtime.clock import Clock
 from runtime.code.instances import Instances, instantiate, instantiated
 from runtime.code.intrinsics import EMERGENCY_STOPS, SystemView
-from runtime.code.native.build import BuildError
 from runtime.code.native.tier import NativeReport, NativeTier
 from runtime.code.user_program import UserProgram
 from runtime.commissioning import SetupSecret
@@ -335,14 +334,14 @@ class Resource:
                 self.recorder.record("native", f"the variables stay on Python objects: {refused}")
 
     def _cycle_core(self) -> CycleCore | None:
-        """The usual CPU cycle in C, where the native tier can build it (its job has)."""
+        """The usual CPU cycle in C, where the native tier's job built it."""
         if self.native is None or not self.native.available:
             return None
-        try:
-            return cycle_core(self.native.cycle_module(), self)
-        except (BuildError, OSError, ImportError) as exc:
-            self.recorder.record("native", f"the CPU cycle stays Python: {exc}")
+        built = self.native.built_cycle_module()
+        if isinstance(built, str):
+            self.recorder.record("native", f"the CPU cycle stays Python: {built}")
             return None
+        return cycle_core(built, self)
 
     @property
     def native_report(self) -> NativeReport | None:

@@ -11,7 +11,6 @@ a cold start) rather than loading yet another.
 from __future__ import annotations
 
 import atexit
-import contextlib
 import json
 import shutil
 import subprocess
@@ -30,6 +29,7 @@ from runtime.code.native.build import (
     Toolchain,
     find_toolchain,
     load,
+    loaded_runtime_module,
     runtime_module,
 )
 from runtime.code.native.image_body import NOT_YET
@@ -103,6 +103,8 @@ class NativeTier:
         self._lock = threading.Lock()
         self._copies: dict[str, _Copies] = {}
         self._scratch: Path | None = None
+        # why padt_cycle did not build (a job tried), for the event of a resource without it
+        self.cycle_refused = "its C is not built yet"
 
     @property
     def available(self) -> bool:
@@ -113,6 +115,12 @@ class NativeTier:
         cache unless it is there (BuildError), loaded once per process."""
         assert self.toolchain is not None
         return runtime_module("padt_cycle", CYCLE_SOURCE, self.cache, self.toolchain)
+
+    def built_cycle_module(self) -> ModuleType | str:
+        """padt_cycle as a native job built it (the cycle thread never waits for a
+        compiler), or why there is none."""
+        module = loaded_runtime_module("padt_cycle", CYCLE_SOURCE)
+        return module if module is not None else self.cycle_refused
 
     def start(
         self, artifact: Artifact, namespace: dict[str, Any], memory_image: bool = False
@@ -320,8 +328,10 @@ class NativeJob:
 def _build_cycle(tier: NativeTier) -> None:
     """padt_cycle built and loaded; where it cannot be, `Resource.tier_up` says why."""
     if tier.available:
-        with contextlib.suppress(BuildError, OSError, ImportError):
+        try:
             tier.cycle_module()
+        except (BuildError, OSError, ImportError) as exc:
+            tier.cycle_refused = str(exc)[:300]
 
 
 def _plan(tier: NativeTier, artifact: Artifact, namespace: dict[str, Any]) -> ImagePlan | str:
