@@ -337,7 +337,7 @@ class Resource:
         """The usual CPU cycle in C, where the native tier's job built it."""
         if self.native is None or not self.native.available:
             return None
-        built = self.native.built_cycle_module()
+        built = self.native.cycle_built
         if isinstance(built, str):
             self.recorder.record("native", f"the CPU cycle stays Python: {built}")
             return None

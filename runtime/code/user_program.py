@@ -146,10 +146,9 @@ class UserProgram:
     def run_whole(self, delta_ns: int, master: Any, system: Any, names: dict[str, Any]) -> None:
         """A whole program cycle in one call: what `begin_cycle`, `CodeImage.use` (into
         `names`, its namespace) and `resume` do for a program without a time slice or
-        debugging, written out, since it
-        is the usual case of every CPU cycle (each Python call saved is a fiftieth of an
-        empty one). Raises what the program raises, leaving the program cycle in progress
-        (the scheduler abandons it)."""
+        debugging, written out, since it is the usual case of every CPU cycle (each Python
+        call saved is a fiftieth of an empty one). Raises what the program raises, leaving
+        the program cycle in progress (the scheduler abandons it)."""
         stats = self.stats
         if stats.count > 0:
             self.time_ns += delta_ns

@@ -38,9 +38,9 @@ CACHE_LIMIT_BYTES = 128 * 2**20  # a thousand units of the size of the benchmark
 
 
 _runtime_modules: dict[str, ModuleType] = {}  # the runtime's own C, loaded, by name
-# one lock per module of the runtime's own C: a thread building one never waits for
-# another's build
-_loading = {prefix: threading.Lock() for prefix in ("padt_memory", "padt_cycle")}
+# one lock per module of the runtime's own C (by prefix): a thread building one never
+# waits for another's build
+_loading: dict[str, threading.Lock] = {}
 
 
 class BuildError(Exception):
@@ -162,21 +162,11 @@ def runtime_module(prefix: str, source: Path, cache: Path, toolchain: Toolchain)
     into `cache` unless it is there and loaded once per process. It is named by the hash of
     its source and of `padt_image.h`, which it may include."""
     text = source.read_text()
-    name = _runtime_name(prefix, text)
-    with _loading[prefix]:
+    hashed = IMAGE_HEADER.read_text() + text
+    name = f"{prefix}_{hashlib.sha256(hashed.encode()).hexdigest()[:16]}"
+    with _loading.setdefault(prefix, threading.Lock()):  # setdefault: atomic
         module = _runtime_modules.get(name)
         if module is None:
             path = build(name, f"#define PADT_INIT PyInit_{name}\n{text}", cache, toolchain)
             module = _runtime_modules[name] = load(name, path)
     return module
-
-
-def loaded_runtime_module(prefix: str, source: Path) -> ModuleType | None:
-    """That module if this process has loaded it, without waiting for a build (the cycle
-    thread asks)."""
-    return _runtime_modules.get(_runtime_name(prefix, source.read_text()))
-
-
-def _runtime_name(prefix: str, text: str) -> str:
-    hashed = IMAGE_HEADER.read_text() + text
-    return f"{prefix}_{hashlib.sha256(hashed.encode()).hexdigest()[:16]}"

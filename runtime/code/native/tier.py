@@ -29,7 +29,6 @@ from runtime.code.native.build import (
     Toolchain,
     find_toolchain,
     load,
-    loaded_runtime_module,
     runtime_module,
 )
 from runtime.code.native.image_body import NOT_YET
@@ -103,8 +102,9 @@ class NativeTier:
         self._lock = threading.Lock()
         self._copies: dict[str, _Copies] = {}
         self._scratch: Path | None = None
-        # why padt_cycle did not build (a job tried), for the event of a resource without it
-        self.cycle_refused = "its C is not built yet"
+        # padt_cycle as a native job left it (the cycle thread takes it from here, never
+        # waiting for a compiler or a disk), or why there is none
+        self.cycle_built: ModuleType | str = "its C is not built yet"
 
     @property
     def available(self) -> bool:
@@ -115,12 +115,6 @@ class NativeTier:
         cache unless it is there (BuildError), loaded once per process."""
         assert self.toolchain is not None
         return runtime_module("padt_cycle", CYCLE_SOURCE, self.cache, self.toolchain)
-
-    def built_cycle_module(self) -> ModuleType | str:
-        """padt_cycle as a native job built it (the cycle thread never waits for a
-        compiler), or why there is none."""
-        module = loaded_runtime_module("padt_cycle", CYCLE_SOURCE)
-        return module if module is not None else self.cycle_refused
 
     def start(
         self, artifact: Artifact, namespace: dict[str, Any], memory_image: bool = False
@@ -329,9 +323,9 @@ def _build_cycle(tier: NativeTier) -> None:
     """padt_cycle built and loaded; where it cannot be, `Resource.tier_up` says why."""
     if tier.available:
         try:
-            tier.cycle_module()
+            tier.cycle_built = tier.cycle_module()
         except (BuildError, OSError, ImportError) as exc:
-            tier.cycle_refused = str(exc)[:300]
+            tier.cycle_built = str(exc)[:300]
 
 
 def _plan(tier: NativeTier, artifact: Artifact, namespace: dict[str, Any]) -> ImagePlan | str:
