@@ -42,6 +42,7 @@ from runtime.code.native.kinds import (
     Int,
     Kind,
     Outputs,
+    Results,
     Text,
 )
 from runtime.code.native.layout_c import C_TYPES
@@ -51,6 +52,8 @@ from runtime.code.native.translate import (
     V,
     _Body,
     _chunk_functions,
+    _constant,
+    _ctype,
     _frame,
     _function_name,
     _identifier,
@@ -67,7 +70,7 @@ from runtime.code.native.translate import (
     translate_with,
 )
 from runtime.contract.artifact import PouCode
-from runtime.contract.code.typed_form import Call, Expr, Index, Member, Named
+from runtime.contract.code.typed_form import Call, Const, Expr, Index, Member, Named
 from runtime.contract.code.units import Unit
 from runtime.contract.layout import (
     ACTION_CONTROL,
@@ -219,7 +222,7 @@ class _ImageBody(_Body):
 
     def subscript(self, node: Index) -> V:
         array = self.expr(node.base)
-        if isinstance(array.kind, Outputs):
+        if isinstance(array.kind, Outputs | Results):
             return super().subscript(node)
         at, shape, kind = self.element(array, node.offset)
         return self.read(at, shape, kind, "an array element")
@@ -283,6 +286,9 @@ class _ImageBody(_Body):
     def call_statement(self, call: Expr) -> None:
         """SUPER^(): the base's body on this very instance, whose bytes begin with the
         base's members (layout.py), as C where the base's body is C."""
+        if isinstance(call, Call) and self.scalar_function(call) is not None:
+            self.scalar_call(call)  # what it gives dropped
+            return
         if (
             isinstance(call, Call)
             and _is_super_call(call)
@@ -299,6 +305,93 @@ class _ImageBody(_Body):
             self.check(f"padt_mcall(&{site}, {key}, s, padt_ctx)")
             return
         super().call_statement(call)
+
+    # -- FUNCTIONs of numbers and BOOLs: their C bodies, called directly (function_body.py)
+    def call_value(self, node: Call) -> V:
+        if self.scalar_function(node) is not None:
+            return self.scalar_call(node)
+        return super().call_value(node)
+
+    def scalar_function(self, node: Call) -> FunctionInfo | None:
+        """The FUNCTION `node` calls when its body may be C: every parameter, its result
+        and its outputs numbers or BOOLs (`FunctionInfo.native`)."""
+        info = self.module.functions.get(node.callee) if isinstance(node.callee, str) else None
+        return info if info is not None and info.native else None
+
+    def scalar_call(self, node: Call) -> V:
+        """A call of a FUNCTION of numbers and BOOLs: its C body where it has one (found
+        once per call site in the image's registry) and where every argument is of its
+        parameter's kind, else its Python, with the values boxed; either way its result and
+        outputs as C values (`Results` where Python has a tuple)."""
+        info = self.scalar_function(node)
+        assert info is not None and isinstance(node.callee, str)
+        name = node.callee
+        if len(node.args) > len(info.params):
+            _refuse(f"a call of {name} with more arguments than it takes")
+        passed = [
+            *zip((param.name for param in info.params), node.args, strict=False),
+            *node.keywords,
+        ]
+        params = {param.name: param for param in info.params}
+        if len({keyword for keyword, _ in passed}) < len(passed) or not all(
+            keyword in params for keyword, _ in passed
+        ):
+            _refuse(f"a call of {name} with arguments it does not take")
+        given: dict[str, V] = {}
+        for keyword, arg in passed:  # in the call's order, each held as Python holds it
+            value = self.expr(arg)
+            if isinstance(value.kind, Int | Bool | Float):
+                held = self.temp(_ctype(value.kind))
+                self.line(f"{held} = {value.c};")
+                value = V(value.kind, held)
+            given[keyword] = value
+        items: tuple[Int | Bool | Float, ...]
+        if info.outputs is not None:
+            items = tuple(k for k in info.outputs.items if isinstance(k, Int | Bool | Float))
+        else:
+            items = (info.result,) if isinstance(info.result, Int | Bool | Float) else ()
+        outs = [self.temp(_ctype(kind)) for kind in items]
+        direct = all(_fits(given[p.name].kind, p.kind) for p in info.params if p.name in given)
+        if direct:
+            site = self.module.site()
+            args = [
+                given[p.name].c if p.name in given else _constant(Const(p.default, "")).c
+                for p in info.params
+            ]
+            ctypes = ", ".join(
+                ["padt_mctx *", *(_ctype(p.kind) for p in info.params)]
+                + [f"{_ctype(kind)} *" for kind in items]
+            )
+            call = f"((int (*)({ctypes})){site}.function)"
+            everything = ", ".join(["padt_ctx", *args, *(f"&{out}" for out in outs)])
+            self.check(f"padt_function_site(&{site}, {self.module.key(info.native)})")
+            self.line(f"if (PADT_LIKELY({site}.function != NULL)) {{")
+            self.line(f"    if (PADT_UNLIKELY({call}({everything}) < 0)) goto padt_error;")
+            self.line("} else {")
+            self.depth += 1
+        boxed = [self.boxed(value, name) for value in given.values()]
+        keywords = self.module.names(tuple(given)) if given else "NULL"
+        array = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
+        returned = self.owned_object(
+            f"padt_call_function({self.module.key(name)}, {array}, 0, {keywords})"
+        )
+        if info.outputs is not None:
+            self.line(f"PADT_CHECK_TUPLE({returned}, {len(items)});")
+            found = [
+                self.unboxed(f"PyTuple_GET_ITEM({returned}, {n})", kind, f"an output of {name}")
+                for n, kind in enumerate(items)
+            ]
+        else:
+            found = [self.unboxed(returned, kind, f"the result of {name}") for kind in items]
+        for out, value in zip(outs, found, strict=True):
+            self.line(f"{out} = {value.c};")
+        if direct:
+            self.depth -= 1
+            self.line("}")
+        parts = tuple(V(kind, out) for kind, out in zip(items, outs, strict=True))
+        if info.outputs is not None or not parts:
+            return V(Results(items), "", parts=parts)
+        return parts[0]
 
     def call_instance(self, target: V) -> None:
         assert isinstance(target.kind, Instance)
@@ -423,11 +516,28 @@ class _ImageBody(_Body):
         _refuse(f"a reference ({NOT_YET})")
 
 
+def _fits(value: Kind, param: Int | Bool | Float) -> bool:
+    """A value of kind `value` is one the parameter's C type and kind hold, as Python would
+    pass it (an integer within the declared range; a BOOL, a REAL as itself)."""
+    if isinstance(param, Int):
+        return isinstance(value, Int) and not value.stand_in and value.within(param)
+    return type(value) is type(param)
+
+
 def _image_function_text(body: _Body, func: _Numbered) -> str:
     """The body as C in image mode: its chunks as in slot mode, and the body's own
     function, `int F(char *s, padt_mctx *ctx)`, which C callers call directly."""
+    head = f"static int\n{_function_name(body.cls.name)}(char *s, padt_mctx *ctx)"
+    return image_function_text(body, func, head, [], [])
+
+
+def image_function_text(
+    body: _Body, func: _Numbered, head: str, fields: list[str], entry: list[str]
+) -> str:
+    """The C of a body in image mode, `head` its declaration (which declares `s` and `ctx`),
+    with `fields` in its frame, set by `entry` as it begins."""
     name = _function_name(body.cls.name)
-    frame = _frame(body, name, ["char *g;", "PyObject *sys;", "padt_mctx *ctx;"])
+    frame = _frame(body, name, ["char *g;", "PyObject *sys;", "padt_mctx *ctx;", *fields])
     prologue = [
         "char *padt_g = f->g;",
         "PyObject *padt_sys = f->sys;",
@@ -453,8 +563,7 @@ def _image_function_text(body: _Body, func: _Numbered) -> str:
             "    }",
         ]
     cleanup = [f"    Py_XDECREF(f->{o});" for o in body.frame_objects]
-    setup.insert(0, "    f->ctx = ctx;")
-    head = f"static int\n{name}(char *s, padt_mctx *ctx)"
+    setup[:0] = ["    f->ctx = ctx;", *entry]
     main = body_function(body, func, head, setup, chunk_names, cleanup, ("return 0;", "return -1;"))
     return "\n".join([*frame, *chunk_texts, *main])
 

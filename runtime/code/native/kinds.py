@@ -7,17 +7,19 @@ of its type) and from the arithmetic between them, so the translator can prove t
 
 from __future__ import annotations
 
+import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from runtime.contract.artifact import PouCode, VarInfo
 from runtime.contract.code.names import IDENTIFIER
 from runtime.contract.code.python_text import printed_lines
 from runtime.contract.code.statements import Return
-from runtime.contract.code.typed_form import Call, Sequence
+from runtime.contract.code.typed_form import Call, Const, Expr, Sequence
 from runtime.contract.code.units import Class, Function, Inherited, Unit
+from runtime.contract.intrinsic_table import F32
 from runtime.contract.layout import starts_as_integers
-from runtime.contract.values import array_shape, base_type, int_range
+from runtime.contract.values import array_shape, base_type, int_range, to_real32
 
 INT64_MIN, INT64_MAX = -(1 << 63), (1 << 63) - 1
 INT128_MIN, INT128_MAX = -(1 << 127), (1 << 127) - 1
@@ -123,7 +125,28 @@ class Implementer:
     name: str
 
 
-Kind = Int | Bool | Float | Text | Instance | Array | Ref | Outputs | Hook | Range | Implementer
+@dataclass(frozen=True)
+class Results:
+    """What a call of a FUNCTION's C body gives (image mode, function_body.py): its result
+    and outputs as C values, each of its declared kind, where Python has a tuple."""
+
+    items: tuple[Int | Bool | Float, ...]
+
+
+Kind = (
+    Int
+    | Bool
+    | Float
+    | Text
+    | Instance
+    | Array
+    | Ref
+    | Outputs
+    | Results
+    | Hook
+    | Range
+    | Implementer
+)
 
 # integers a double holds exactly: Python converts and compares beyond them exactly, C not
 EXACT_IN_DOUBLE = Int(-(1 << 53), 1 << 53)
@@ -312,6 +335,67 @@ class FunctionInfo:
     name: str
     result: Kind | None
     outputs: Outputs | None = None
+    # a FUNCTION whose inputs, in-outs, result and outputs are all numbers or BOOLs (its
+    # body may be C in image mode, function_body.py): its parameters in order, and the key
+    # its C body has in the registry (`native_key`); () and "" for any other
+    params: tuple[ParamInfo, ...] = ()
+    native: str = ""
+
+
+@dataclass(frozen=True)
+class ParamInfo:
+    """An input or in-out of a FUNCTION whose body may be C: its declared kind, and the
+    constant it takes where a call does not give it."""
+
+    name: str
+    kind: Int | Bool | Float
+    default: bool | int | float
+
+
+SCALAR = (Int, Bool, Float)
+
+
+def c_code(kind: Kind) -> str:
+    """A letter for the C type of a number or BOOL, as a FUNCTION's C signature has it."""
+    if isinstance(kind, Int):
+        return "q" if kind.fits64 else "Q"
+    return "b" if isinstance(kind, Bool) else "d"
+
+
+def native_key(name: str, params: tuple[ParamInfo, ...], returned: tuple[Kind, ...]) -> str:
+    """The key of a FUNCTION's C body in an image's registry: its name and C signature, so
+    that a call site compiled for another signature never finds it."""
+    codes = "".join(c_code(param.kind) for param in params)
+    return f"{name}({codes}){''.join(c_code(kind) for kind in returned)}"
+
+
+def _native_params(function: Function) -> tuple[ParamInfo, ...] | None:
+    """The parameters of a FUNCTION whose every one is a number or BOOL with a constant
+    default of its kind; None otherwise."""
+    found = []
+    for param in function.params:
+        default = param.default
+        kind = kind_of_type(default.type, {})
+        value = _constant_value(default)
+        if not isinstance(kind, SCALAR) or value is None:
+            return None
+        python = {Int: int, Bool: bool, Float: float}[type(kind)]
+        if type(value) is not python or (python is float and not math.isfinite(value)):
+            return None
+        found.append(ParamInfo(param.name, kind, value))
+    return tuple(found)
+
+
+def _constant_value(node: Expr) -> bool | int | float | None:
+    """The value of a parameter's default: a constant, or a REAL's (`_f32(2.5)`)."""
+    match node:
+        case Const(value=bool() | int() | float() as value):
+            return value
+        case Call(callee=F32.name, args=(Const(value=float() | int() as value),)) if (
+            type(value) is not bool
+        ):
+            return to_real32(float(value))
+    return None
 
 
 OPEN_ARRAY = re.compile(r"ARRAY\[\s*\*[\s,*]*\] OF .+", re.IGNORECASE)
@@ -343,7 +427,20 @@ def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo
             continue
         returned = _returned(form, unit.class_name, {})
         result = kind_of_type(unit.returns, {}) if unit.returns else None
-        table[unit.class_name] = FunctionInfo(unit.class_name, result, returned.outputs)
+        info = FunctionInfo(unit.class_name, result, returned.outputs)
+        params = _native_params(form)
+        if returned.outputs is not None:
+            values: tuple[Kind | None, ...] | None = returned.outputs.items or None
+        else:
+            values = (result,) if unit.returns else ()
+        if (
+            params is not None
+            and values is not None
+            and all(isinstance(kind, SCALAR) for kind in values)
+        ):
+            key = native_key(unit.class_name, params, tuple(k for k in values if k is not None))
+            info = replace(info, params=params, native=key)
+        table[unit.class_name] = info
     return table
 
 

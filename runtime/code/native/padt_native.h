@@ -810,10 +810,13 @@ typedef struct padt_mctx {
 
 typedef int (*padt_mbody)(char *, padt_mctx *);
 
-/* A call site of a block's body: the C body, once found, or the view class to call. */
+/* A call site of a block's body: the C body, once found, or the view class to call; or
+ * of a FUNCTION's C body (function_body.py), once looked for (NULL: its body is Python). */
 typedef struct {
     padt_mbody body;
     PyObject *view_type; /* borrowed: padt_views holds it */
+    void *function;
+    int looked;
 } padt_msite;
 
 static PyObject *padt_views;        /* class name -> view class (borrowed) */
@@ -853,6 +856,38 @@ padt_register(const char *class_name, padt_mbody body)
     int failed = PyDict_SetItemString(padt_registry, class_name, capsule);
     Py_DECREF(capsule);
     return failed;
+}
+
+/* A FUNCTION's C body into the registry, by its name and C signature (`key`): a call
+ * site of another signature never finds it. */
+#define PADT_FUNCTION_CAPSULE "padt_function"
+
+static int
+padt_register_function(const char *key, void *function)
+{
+    PyObject *capsule = PyCapsule_New(function, PADT_FUNCTION_CAPSULE, NULL);
+    if (capsule == NULL)
+        return -1;
+    int failed = PyDict_SetItemString(padt_registry, key, capsule);
+    Py_DECREF(capsule);
+    return failed;
+}
+
+/* The C body a call site of a FUNCTION calls, looked for once; none where the FUNCTION's
+ * body stays Python (the site then calls its Python). */
+static inline int
+padt_function_site(padt_msite *site, PyObject *key)
+{
+    if (PADT_LIKELY(site->looked))
+        return 0;
+    PyObject *capsule = PyDict_GetItemWithError(padt_registry, key);
+    if (capsule == NULL && PyErr_Occurred())
+        return -1;
+    if (capsule != NULL
+        && (site->function = PyCapsule_GetPointer(capsule, PADT_FUNCTION_CAPSULE)) == NULL)
+        return -1;
+    site->looked = 1;
+    return 0;
 }
 
 /* The context of a call that begins at `view`. */

@@ -191,6 +191,9 @@ class NativeTier:
             self._release(name, module)
             raise
         bound = {classes[cls] for cls, _ in found}
+        if not bound and image is not None:
+            # a FUNCTION's module binds no class: it lives as long as the image's views
+            bound = set(image.views.values())
         for kind in bound:
             # the C statics borrow the namespace (and an image's view classes and registry):
             # a class it was bound to keeps them alive

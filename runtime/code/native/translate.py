@@ -45,6 +45,7 @@ from runtime.code.native.kinds import (
     Outputs,
     Range,
     Ref,
+    Results,
     Text,
     interface_key,
     join,
@@ -174,6 +175,8 @@ class V:
     # an array or instance `_copy` made: Python code given it may have one of its own (in
     # image mode a list of its values; without `_copy`, Python code would hold the place)
     copied: bool = False
+    # of `Results`: the value of each item
+    parts: tuple[V, ...] = ()
 
 
 def c_int(value: int) -> str:
@@ -307,7 +310,7 @@ class _Numbered:
     headers: tuple[tuple[Stmt | Elif, int], ...]
 
 
-def _numbered(form: Class, function: Function) -> _Numbered:
+def _numbered(form: Class | Function, function: Function) -> _Numbered:
     line, headers, inside = 0, [], False
     for number, printed in enumerate(printed_lines(form), start=1):
         if isinstance(printed.header, Function):
@@ -344,6 +347,11 @@ class _Body:
         self.uses_globals = False
         self.headers = iter(func.headers)
         self.st_line = 0  # of the statement being translated: where a refusal is
+
+    @property
+    def qualname(self) -> str:
+        """The function a fault's traceback names."""
+        return f"{self.cls.name}.__call__"
 
     # -- emission
     def line(self, text: str) -> None:
@@ -420,11 +428,15 @@ class _Body:
                 loop = self.loops[-1]
                 self.line(f"goto {loop.end_label if isinstance(node, Break) else loop.next_label};")
             case Return(value=value):
-                if value is not None and not _is_none(value):
-                    _refuse("a body that returns a value")
+                self.returned(value)
                 self.line("goto padt_done;")
             case Pass():
                 pass
+
+    def returned(self, value: Expr | None) -> None:
+        """What a `return` gives back (a `__call__` gives nothing)."""
+        if value is not None and not _is_none(value):
+            _refuse("a body that returns a value")
 
     def assign(self, target: Expr, value_node: Expr) -> None:
         if isinstance(target, Var) and target.where == "local":
@@ -523,6 +535,9 @@ class _Body:
                 self.check(f"padt_narrow({value.c}, &{local})")
         elif isinstance(local_kind, Bool | Float) and value.kind == local_kind:
             self.line(f"{local} = {value.c};")
+        elif isinstance(local_kind, Results) and value.kind == local_kind:
+            for n, part in enumerate(value.parts):
+                self.line(f"{local}_{n} = {part.c};")
         elif isinstance(local_kind, Instance | Outputs | Hook) and value.kind == local_kind:
             self.keep(local, value)
         else:
@@ -561,6 +576,9 @@ class _Body:
                 self.frame_objects.append(c)
             elif isinstance(kind, Range):
                 self.frame[c] = f"int64_t {c}_start, {c}_stop;"
+            elif isinstance(kind, Results):
+                items = enumerate(kind.items)
+                self.frame[c] = " ".join(f"{_ctype(item)} {c}_{n};" for n, item in items)
             else:
                 _refuse(f"local {name} holds a {_kind_name(kind)}")
         return f"f->{c}"
@@ -869,6 +887,9 @@ class _Body:
         if kind is None:
             _refuse(f"the name {name}")
         local = self.local_ref(name)
+        if isinstance(kind, Results):
+            parts = tuple(V(item, f"{local}_{n}") for n, item in enumerate(kind.items))
+            return V(kind, local, parts=parts)
         if isinstance(kind, Instance | Outputs | Hook):
             self.line(f"if (PADT_UNLIKELY({local} == NULL)) goto padt_unbound;")
         narrowed = self.narrowed.get(name)
@@ -967,6 +988,11 @@ class _Body:
 
     def subscript(self, node: Index) -> V:
         array = self.expr(node.base)
+        if isinstance(array.kind, Results):  # `t[k]` of a call of a FUNCTION's C body
+            k = _constant_int(node.offset)
+            if k is None or not 0 <= k < len(array.parts):
+                _refuse("an item of a FUNCTION's outputs at an offset not a constant of them")
+            return array.parts[k]
         if isinstance(array.kind, Outputs):  # `t[k]`: the result or an output of a call
             k = _constant_int(node.offset)
             if k is None or not 0 <= k < len(array.kind.items):
@@ -1776,7 +1802,19 @@ def _translate_body(module: _Module, cls: ClassInfo, func: _Numbered, mode: Mode
     needs join `module` only when it is translated."""
     if func.function.params or not func.function.method:
         _refuse("a body with arguments")
-    kinds: dict[str, Kind] = {}
+    return mode.function_text(settled(module, cls, func, mode.body, {}), func)
+
+
+def settled(
+    module: _Module,
+    cls: ClassInfo,
+    func: _Numbered,
+    make: Callable[[_Module, ClassInfo, _Numbered, dict[str, Kind]], _Body],
+    given: dict[str, Kind],
+) -> _Body:
+    """The body translated once the kinds of its locals settle (`given`: those known
+    before, a FUNCTION's parameters), pass after pass; its statics joined to `module`."""
+    kinds = dict(given)
     for attempt in range(2 * WIDEN_AFTER + 2):
         trial = replace(
             module,
@@ -1784,7 +1822,7 @@ def _translate_body(module: _Module, cls: ClassInfo, func: _Numbered, mode: Mode
             offsets=dict(module.offsets),
             keys=dict(module.keys),
         )
-        body = mode.body(trial, cls, func, kinds)
+        body = make(trial, cls, func, kinds)
         try:
             body.body()
         except NotTranslated as refused:
@@ -1808,7 +1846,7 @@ def _translate_body(module: _Module, cls: ClassInfo, func: _Numbered, mode: Mode
         if merged == kinds:
             module.types, module.offsets, module.keys = trial.types, trial.offsets, trial.keys
             module.sites = trial.sites
-            return mode.function_text(body, func)
+            return body
         kinds = merged
     _refuse("the kinds of the locals do not settle")
 
@@ -1892,7 +1930,7 @@ def body_function(
         *cleanup,
         f"    {returns[0]}",
         "padt_error:",
-        f"    _PyTraceback_Add({c_string(body.cls.name + '.__call__')}, "
+        f"    _PyTraceback_Add({c_string(body.qualname)}, "
         f"{c_string(body.module.filename)}, f->line);",
         *cleanup,
         f"    {returns[1]}",

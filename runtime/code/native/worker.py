@@ -29,6 +29,7 @@ from typing import Any
 
 from runtime.code.fault_location import code_filename
 from runtime.code.native.build import BuildError, build, find_toolchain, mark_used, prune
+from runtime.code.native.function_body import translate_image_function
 from runtime.code.native.image_body import translate_image_unit
 from runtime.code.native.kinds import ClassInfo, Forms, FunctionInfo, class_table, function_table
 from runtime.code.native.translate import Translated, translate_unit
@@ -40,6 +41,7 @@ WORKER_NICE = 10  # background work: below the runtime and below normal programs
 _SOURCES = (
     "translate.py",
     "image_body.py",
+    "function_body.py",
     "kinds.py",
     "padt_native.h",
     "padt_image.h",
@@ -61,6 +63,7 @@ class ArtifactTranslation:
     classes the bodies read and the FUNCTIONs they call."""
 
     units: list[PouCode]  # the programs and function blocks, whose bodies are translated
+    function_units: list[PouCode]  # the FUNCTIONs, whose bodies image mode translates
     forms: Forms
     classes: dict[str, ClassInfo]
     functions: dict[str, FunctionInfo]
@@ -78,6 +81,7 @@ class ArtifactTranslation:
         forms = {unit.class_name: unit.unit for unit in [*bodies, *functions]}
         return cls(
             bodies,
+            functions,
             forms,
             class_table(units, forms),
             function_table(functions, forms),
@@ -93,8 +97,14 @@ class ArtifactTranslation:
         return repr((self.globals_class, sorted(members), sorted(self.functions.items())))
 
     def translate(self, unit: PouCode, layouts: Layouts | None = None) -> Translated:
-        """The unit's C: on the slots of objects, or in image mode at `layouts`' offsets."""
+        """The unit's C: on the slots of objects, or in image mode at `layouts`' offsets
+        (a FUNCTION's own body only in image mode)."""
         form = self.forms[unit.class_name]
+        if unit.kind == "FUNCTION":
+            assert layouts is not None, "a FUNCTION's body is C in image mode only"
+            return translate_image_function(
+                unit, form, self.classes, self.globals_class, layouts, self.functions
+            )
         if layouts is not None:
             return translate_image_unit(
                 unit, form, self.classes, self.globals_class, layouts, self.functions
@@ -158,7 +168,7 @@ def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]
     index = cache / toolchain.fingerprint / "index"
     index.mkdir(parents=True, exist_ok=True)
     answers = []
-    for unit in translation.units:
+    for unit in [*translation.units, *(translation.function_units if layouts else [])]:
         # the unit's name too: it is in the C text (a module built before names were
         # checked could otherwise serve another unit of the same form)
         named = (fingerprint, shape, code_filename(unit), unit.form)

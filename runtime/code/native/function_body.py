@@ -1,0 +1,241 @@
+"""A FUNCTION's own body as C, in image mode (issue 34, step 6: docs/native-code.md,
+"FUNCTION bodies as C").
+
+A FUNCTION whose inputs, in-outs, result and outputs are all numbers or BOOLs
+(`FunctionInfo.native`) gets a C function of its body,
+
+    int F(padt_mctx *ctx, <its parameters as C values>, <a pointer per result and output>)
+
+which its module puts into the image's registry by the FUNCTION's name and C signature
+(`kinds.native_key`). A call site of image-mode C finds it once and calls it directly
+(image_body.py, `scalar_call`): no boxing, no tuple, no Python frame. Python code (the
+Python tier, a body left to Python, a debugged resource) still calls the FUNCTION's
+Python, which stays the reference: both are made from the same typed form.
+
+The body is image mode's translation (its locals C values in its frame; `_tick`, `_SYS`
+and the globals from the caller's context), but for three things: the parameters begin as
+the values given, of their declared kinds; a `return` writes the result and outputs
+through the pointers; a fault adds the FUNCTION's own frame to the traceback, so that it
+names the FUNCTION's ST line, as on the Python tier.
+"""
+
+from __future__ import annotations
+
+import hashlib
+
+from runtime.code.fault_location import code_filename
+from runtime.code.native.image_body import (
+    NOT_YET,
+    _ImageBody,
+    _ImageModule,
+    image_function_text,
+)
+from runtime.code.native.kinds import (
+    Bool,
+    ClassInfo,
+    Float,
+    FunctionInfo,
+    Int,
+    Kind,
+    kind_of_type,
+)
+from runtime.code.native.translate import (
+    NAME_PLACEHOLDER,
+    NotTranslated,
+    Translated,
+    _ctype,
+    _function_name,
+    _is_none,
+    _kind_name,
+    _Module,
+    _Numbered,
+    _numbered,
+    _refuse,
+    c_string,
+    module_end,
+    module_start,
+    settled,
+)
+from runtime.contract.artifact import PouCode
+from runtime.contract.code.statements import Assign, ForEach, If, Return, Stmt, While
+from runtime.contract.code.typed_form import Expr, Sequence, Var
+from runtime.contract.code.units import Function, Unit
+from runtime.contract.layout import Layouts
+
+LEFT = "a FUNCTION whose parameters, result or outputs are not all numbers or BOOLs"
+
+
+class _FunctionBody(_ImageBody):
+    """The translation of a FUNCTION's body: `info` says what it takes and gives."""
+
+    def __init__(
+        self,
+        module: _Module,
+        cls: ClassInfo,
+        func: _Numbered,
+        local_kinds: dict[str, Kind],
+        info: FunctionInfo,
+        declared: dict[str, Kind],
+    ) -> None:
+        super().__init__(module, cls, func, local_kinds)
+        self.info = info
+        self.declared = declared
+
+    def assign_local(self, name: str, value_node: Expr) -> None:
+        """A declared variable keeps its declared kind, as a block's slot does: a value
+        not proven within its range is checked (the compiler's wraps keep it there), where
+        an inferred local would take the value's kind, growing pass by pass."""
+        declared = self.declared.get(name)
+        if declared is None:
+            super().assign_local(name, value_node)
+            return
+        value = self.expr(value_node)
+        if isinstance(declared, Int) and isinstance(value.kind, Int):
+            self.storable(value, declared, name)
+        elif type(value.kind) is not type(declared):
+            _refuse(f"{name}, a {_kind_name(declared)}, takes a {_kind_name(value.kind)}")
+        self.note_assigned(name, declared)
+        self.line(f"{self.local_ref(name)} = {value.c};")
+
+    @property
+    def qualname(self) -> str:
+        return self.cls.name
+
+    @property
+    def items(self) -> tuple[Int | Bool | Float, ...]:
+        """The kinds of what a call gives: the result, then the outputs and in-outs."""
+        if self.info.outputs is not None:
+            return tuple(k for k in self.info.outputs.items if isinstance(k, Int | Bool | Float))
+        result = self.info.result
+        return (result,) if isinstance(result, Int | Bool | Float) else ()
+
+    def returned(self, value: Expr | None) -> None:
+        """The result and outputs through the caller's pointers."""
+        items = self.items
+        if value is None or _is_none(value):
+            if items:
+                _refuse("a FUNCTION that returns nothing where it has a result")
+            return
+        if self.info.outputs is not None:
+            if not isinstance(value, Sequence) or len(value.items) != len(items):
+                _refuse("a FUNCTION's return of another shape than its outputs")
+            nodes = value.items
+        elif len(items) == 1:
+            nodes = (value,)
+        else:
+            _refuse("a FUNCTION without result that returns a value")
+        values = [self.expr(node) for node in nodes]  # all, then the stores: as a tuple
+        for n, (found, declared) in enumerate(zip(values, items, strict=True)):
+            what = f"what {self.cls.name} gives"
+            if isinstance(declared, Int) and isinstance(found.kind, Int):
+                self.storable(found, declared, what)
+            elif type(found.kind) is not type(declared):
+                _refuse(f"a {_kind_name(found.kind)} returned as a {_kind_name(declared)}")
+            self.line(f"*f->o{n} = ({_ctype(declared)})({found.c});")
+
+
+def translate_image_function(
+    unit: PouCode,
+    form: Unit,
+    classes: dict[str, ClassInfo],
+    globals_class: str | None,
+    layouts: Layouts,
+    functions: dict[str, FunctionInfo],
+) -> Translated:
+    """The C module of one FUNCTION in image mode, when its body can be translated."""
+    info = functions.get(unit.class_name)
+    if info is None or not info.native or not isinstance(form, Function):
+        return Translated(unit.name, "", "", (), ((unit.name, LEFT),))
+    module = _ImageModule(
+        classes,
+        code_filename(unit),
+        globals_class=globals_class,
+        functions=functions,
+        layouts=layouts,
+    )
+    try:
+        text = _function_text(module, form, info)
+    except NotTranslated as refused:
+        # its body stays Python whichever mode the configuration runs in, so this is never
+        # a reason to leave the image (tier.py leaves it for what slot mode makes C)
+        return Translated(
+            unit.name, "", "", (), ((unit.name, str(refused).replace(NOT_YET, "not yet C")),)
+        )
+    except RecursionError:
+        return Translated(unit.name, "", "", (), ((unit.name, "an expression nested too deep"),))
+    source = _module_text(module, info, text)
+    name = f"padt_{hashlib.sha256(source.encode()).hexdigest()[:24]}"
+    return Translated(unit.name, name, source.replace(NAME_PLACEHOLDER, name), (form.name,), ())
+
+
+def _function_text(module: _ImageModule, form: Function, info: FunctionInfo) -> str:
+    gives = info.result is not None or info.outputs is not None
+    if gives and (not form.body or not isinstance(form.body[-1], Return)):
+        _refuse("a FUNCTION that may end without its return")
+    func = _numbered(form, form)
+    cls = ClassInfo(form.name, {})
+    given = _declared(form.body)
+    given.update((param.name, param.kind) for param in info.params)
+    body = settled(
+        module,
+        cls,
+        func,
+        lambda trial, c, f, kinds: _FunctionBody(trial, c, f, kinds, info, given),
+        given,
+    )
+    assert isinstance(body, _FunctionBody)
+    params = [f"{_ctype(param.kind)} p{n}" for n, param in enumerate(info.params)]
+    outs = [f"{_ctype(kind)} *o{n}" for n, kind in enumerate(body.items)]
+    head = (
+        f"static int\n{_function_name(form.name)}({', '.join(['padt_mctx *ctx', *params, *outs])})"
+    )
+    entry = ["    char *s = NULL;"]
+    entry += [f"    f->o{n} = o{n};" for n in range(len(outs))]
+    entry += [f"    {body.local_ref(param.name)} = p{n};" for n, param in enumerate(info.params)]
+    fields = [f"{_ctype(kind)} *o{n};" for n, kind in enumerate(body.items)]
+    return image_function_text(body, func, head, fields, entry)
+
+
+def _declared(statements: tuple[Stmt, ...]) -> dict[str, Kind]:
+    """The declared kinds of the FUNCTION's variables that are numbers or BOOLs, read off
+    its assignments: a loop counter's range is then known from the first pass (a local's
+    kind otherwise grows pass by pass, which a FOR's range cannot follow)."""
+    found: dict[str, Kind] = {}
+    for statement in statements:
+        match statement:
+            case Assign(target=Var(where="local", name=name, type=declared)) if declared:
+                kind = kind_of_type(declared, {})
+                if isinstance(kind, Int | Bool | Float):
+                    found.setdefault(name, kind)
+            case If(body=body, elifs=elifs, orelse=orelse):
+                found.update(_declared(body))
+                for branch in elifs:
+                    found.update(_declared(branch.body))
+                found.update(_declared(orelse))
+            case While(body=body):
+                found.update(_declared(body))
+            case ForEach(body=body, orelse=orelse):
+                found.update(_declared(body))
+                found.update(_declared(orelse))
+    return found
+
+
+def _module_text(module: _ImageModule, info: FunctionInfo, text: str) -> str:
+    writer = "C of the FUNCTION {}: written by runtime/code/native/function_body.py"
+    lines = module_start(module, writer, [(info.name, text)])
+    lines += [
+        "static PyObject *",
+        "padt_bind(PyObject *module, PyObject *args)",
+        "{",
+        "    PyObject *ns, *breathe, *views, *registry, *view_type, *bodies;",
+        '    if (!PyArg_ParseTuple(args, "OOOOO", &ns, &breathe, &views, &registry, &view_type))',
+        "        return NULL;",
+        "    if (padt_bind_common(ns, breathe) < 0) return NULL;",
+        "    if (padt_bind_image(views, registry, view_type) < 0) return NULL;",
+        *module.binding(),
+        "    if ((bodies = PyDict_New()) == NULL) return NULL;",
+        f"    if (padt_register_function({c_string(info.native)},"
+        f" (void *){_function_name(info.name)}) < 0)",
+        "        { Py_DECREF(bodies); return NULL; }",
+    ]
+    return "\n".join(lines + module_end())

@@ -1,0 +1,159 @@
+"""FUNCTION bodies as C (runtime/code/native/function_body.py): with the variables in native
+memory, a FUNCTION of numbers and BOOLs is C, called directly from C; every value equal to
+the Python tier's after every cycle, the same faults naming the same ST lines."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from runtime.code.native.tier import IN_IMAGE, NativeTier
+from tests.compiler.test_differential import (
+    ACC,
+    CYCLES,
+    MAIN,
+    TEMPLATE,
+    Features,
+    _declarations,
+    _Writer,
+)
+from tests.support.native_runs import side_by_side
+
+FUNCTIONS = """
+FUNCTION Lerp : REAL
+VAR_INPUT a, b : REAL; t : REAL := 0.5; END_VAR
+Lerp := a + (b - a) * t;
+END_FUNCTION
+FUNCTION Smooth : REAL
+VAR_INPUT x, target : REAL; steps : INT := 3; END_VAR
+VAR k : INT; END_VAR
+FOR k := 1 TO steps DO
+  x := Lerp(x, target, 0.25);   (* a FUNCTION's C calling another's *)
+  IF ABS(x - target) < 0.01 THEN EXIT; END_IF;
+END_FOR;
+Smooth := x;
+END_FUNCTION
+FUNCTION Wrap : INT
+VAR_INPUT v : DINT; END_VAR
+VAR w : INT; END_VAR
+w := DINT_TO_INT(v * 3);
+WHILE w > 1000 DO w := w - 700; END_WHILE;
+Wrap := w;
+END_FUNCTION
+FUNCTION Count : UDINT
+VAR_INPUT on : BOOL; END_VAR
+VAR_IN_OUT n : UDINT; seen : BOOL; END_VAR
+VAR_OUTPUT twice : ULINT; END_VAR
+IF on THEN n := n + 1; END_IF;
+seen := seen OR on;
+twice := UDINT_TO_ULINT(n) * 2;
+Count := n MOD 7;
+END_FUNCTION
+FUNCTION Later : TIME
+VAR_INPUT t : TIME; END_VAR
+Later := t + T#250ms;
+END_FUNCTION
+FUNCTION Shout : STRING
+VAR_INPUT s : STRING; END_VAR
+Shout := CONCAT(s, '!');
+END_FUNCTION
+FUNCTION Ratio : DINT
+VAR_INPUT a, b : DINT; END_VAR
+Ratio := Wrap(a) / b;
+END_FUNCTION
+PROGRAM Main
+VAR
+  r, s : REAL := 10.0; i : INT; n : UDINT; seen, on : BOOL; m : UDINT; big : ULINT;
+  d : DINT := 40000; t : TIME; text : STRING := 'go'; q : DINT; b : DINT := 4;
+END_VAR
+r := Lerp(r, 20.0);
+s := Smooth(s, r, steps := 5);
+i := Wrap(d);
+d := d + 12345;
+on := NOT on;
+m := Count(on, n, seen, twice => big);
+t := Later(t);
+text := Shout(LEFT(text, 5));
+b := b - 1;
+q := Ratio(d, b);
+END_PROGRAM
+"""
+
+
+def test_functions_of_numbers_run_as_c_with_the_python_values(native_tier: NativeTier) -> None:
+    pair = side_by_side(FUNCTIONS, native_tier)
+    assert pair.report.memory == IN_IMAGE
+    c = ("Count", "Later", "Lerp", "Main", "Ratio", "Smooth", "Wrap")
+    assert pair.report.bodies == c
+    # a FUNCTION of texts stays Python, called from C, and says so
+    assert [pou for pou, _ in pair.report.left] == ["Shout"]
+    pair.cycle_and_compare(3)
+    values = pair.native.variables.values()
+    assert (values["Main.m"], values["Main.big"], values["Main.text"]) == (2, 4, "go!!!")
+    # b is 0 in the fourth cycle: the fault names Ratio's line on both tiers
+    assert "division by zero in POU Ratio (prog.st:41)" in pair.fault_of_the_next_cycle()
+
+
+def test_c_calls_the_functions_c_not_their_python(native_tier: NativeTier) -> None:
+    """The call goes to the FUNCTION's C: with its Python replaced by one that fails,
+    the native resource runs on with the Python tier's values."""
+    pair = side_by_side(FUNCTIONS, native_tier)
+    namespace: dict[str, Any] = pair.native.variables.code.namespace  # type: ignore[union-attr]
+
+    def broken(**_: object) -> None:
+        raise AssertionError("the Python of a FUNCTION whose C is in place")
+
+    for name in ("FN_LERP", "FN_SMOOTH", "FN_WRAP", "FN_COUNT", "FN_LATER"):
+        assert name in namespace
+        namespace[name] = broken
+    pair.cycle_and_compare(3)
+
+
+# The random bodies of the differential test's function block, as the body of a FUNCTION
+# whose in-outs are the block's variables (the block calls it): the same statements, on
+# the locals of a C function instead of an instance's bytes.
+FUNCTION_OF_ACC = """\
+FUNCTION AccF : BOOL
+VAR_INPUT inc : INT; reset : BOOL; gain : REAL; END_VAR
+VAR_IN_OUT total : DINT; big : BOOL; n : UINT; x : REAL; j : INT; END_VAR
+VAR k0, k1, w0, w1 : INT; END_VAR
+{acc_body}
+AccF := big AND NOT reset;
+END_FUNCTION
+
+FUNCTION_BLOCK Acc
+VAR_INPUT inc : INT; reset : BOOL; gain : REAL; END_VAR
+VAR_OUTPUT total : DINT; big : BOOL; END_VAR
+VAR n : UINT; x : REAL; j : INT; last : BOOL; END_VAR
+last := AccF(inc := inc, reset := reset, gain := gain, total := total, big := big,
+             n := n, x := x, j := j);
+END_FUNCTION_BLOCK
+
+"""
+
+
+@st.composite
+def function_programs(draw: st.DrawFn) -> str:
+    acc = _Writer(draw, ACC, Features())
+    main = _Writer(draw, MAIN, Features())
+    acc_body = "\n".join(acc.block(2, (), most=4))
+    program = TEMPLATE[TEMPLATE.index("PROGRAM Main") :].format(
+        main_vars="\n".join(_declarations(draw)), main_body="\n".join(main.block(3, (), most=8))
+    )
+    return FUNCTION_OF_ACC.format(acc_body=acc_body) + program
+
+
+@settings(
+    max_examples=10,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+@given(function_programs())
+def test_random_function_bodies_run_alike_on_both_tiers(
+    native_tier: NativeTier, program: str
+) -> None:
+    pair = side_by_side(program, native_tier)
+    assert "AccF" in pair.report.bodies, pair.report.left
+    pair.cycle_and_compare(CYCLES)
