@@ -43,6 +43,7 @@ from runtime.code.native.translate import (
     NAME_PLACEHOLDER,
     NotTranslated,
     Translated,
+    _Body,
     _ctype,
     _function_name,
     _is_none,
@@ -55,6 +56,7 @@ from runtime.code.native.translate import (
     module_end,
     module_start,
     settled,
+    slot_function_text,
 )
 from runtime.contract.artifact import PouCode
 from runtime.contract.code.statements import Assign, ForEach, If, Return, Stmt, While
@@ -65,8 +67,9 @@ from runtime.contract.layout import Layouts
 LEFT = "a FUNCTION whose parameters, result or outputs are not all numbers or BOOLs"
 
 
-class _FunctionBody(_ImageBody):
-    """The translation of a FUNCTION's body: `info` says what it takes and gives."""
+class _FunctionParts(_Body):
+    """What a FUNCTION's body translates otherwise than a block's, in either mode: `info`
+    says what it takes and gives, `declared` the kinds of its variables."""
 
     def __init__(
         self,
@@ -134,33 +137,42 @@ class _FunctionBody(_ImageBody):
             self.line(f"*f->o{n} = ({_ctype(declared)})({found.c});")
 
 
-def translate_image_function(
+class _SlotFunction(_FunctionParts):
+    """A FUNCTION's body in slot mode (its context NULL)."""
+
+
+class _ImageFunction(_FunctionParts, _ImageBody):
+    """A FUNCTION's body in image mode."""
+
+
+def translate_function(
     unit: PouCode,
     form: Unit,
     classes: dict[str, ClassInfo],
     globals_class: str | None,
-    layouts: Layouts,
     functions: dict[str, FunctionInfo],
+    layouts: Layouts | None = None,
 ) -> Translated:
-    """The C module of one FUNCTION in image mode, when its body can be translated."""
+    """The C module of one FUNCTION, when its body can be translated: in slot mode, or in
+    image mode at `layouts`' offsets."""
     info = functions.get(unit.class_name)
     if info is None or not info.native or not isinstance(form, Function):
         return Translated(unit.name, "", "", (), ((unit.name, LEFT),))
-    module = _ImageModule(
-        classes,
-        code_filename(unit),
-        globals_class=globals_class,
-        functions=functions,
-        layouts=layouts,
+    filename = code_filename(unit)
+    module = (
+        _Module(classes, filename, globals_class=globals_class, functions=functions)
+        if layouts is None
+        else _ImageModule(
+            classes, filename, globals_class=globals_class, functions=functions, layouts=layouts
+        )
     )
     try:
         text = _function_text(module, form, info)
     except NotTranslated as refused:
-        # its body stays Python whichever mode the configuration runs in, so this is never
-        # a reason to leave the image (tier.py leaves it for what slot mode makes C)
-        return Translated(
-            unit.name, "", "", (), ((unit.name, str(refused).replace(NOT_YET, "not yet C")),)
-        )
+        # its body stays Python, while the image stays: tier.py leaves the image only for
+        # a block's body that slot mode makes C
+        reason = str(refused).replace(NOT_YET, "not yet C")
+        return Translated(unit.name, "", "", (), ((unit.name, reason),))
     except RecursionError:
         return Translated(unit.name, "", "", (), ((unit.name, "an expression nested too deep"),))
     source = _module_text(module, info, text)
@@ -168,7 +180,7 @@ def translate_image_function(
     return Translated(unit.name, name, source.replace(NAME_PLACEHOLDER, name), (form.name,), ())
 
 
-def _function_text(module: _ImageModule, form: Function, info: FunctionInfo) -> str:
+def _function_text(module: _Module, form: Function, info: FunctionInfo) -> str:
     gives = info.result is not None or info.outputs is not None
     if gives and (not form.body or not isinstance(form.body[-1], Return)):
         _refuse("a FUNCTION that may end without its return")
@@ -176,24 +188,28 @@ def _function_text(module: _ImageModule, form: Function, info: FunctionInfo) -> 
     cls = ClassInfo(form.name, {})
     given = _declared(form.body)
     given.update((param.name, param.kind) for param in info.params)
+    image = isinstance(module, _ImageModule)
+    kind = _ImageFunction if image else _SlotFunction
     body = settled(
         module,
         cls,
         func,
-        lambda trial, c, f, kinds: _FunctionBody(trial, c, f, kinds, info, given),
+        lambda trial, c, f, kinds: kind(trial, c, f, kinds, info, given),
         given,
     )
-    assert isinstance(body, _FunctionBody)
+    assert isinstance(body, _FunctionParts)
     params = [f"{_ctype(param.kind)} p{n}" for n, param in enumerate(info.params)]
     outs = [f"{_ctype(kind)} *o{n}" for n, kind in enumerate(body.items)]
     head = (
         f"static int\n{_function_name(form.name)}({', '.join(['padt_mctx *ctx', *params, *outs])})"
     )
-    entry = ["    char *s = NULL;"]
+    entry = ["    char *s = NULL;" if image else "    PyObject *s = NULL;", "    (void)ctx;"]
     entry += [f"    f->o{n} = o{n};" for n in range(len(outs))]
     entry += [f"    {body.local_ref(param.name)} = p{n};" for n, param in enumerate(info.params)]
     fields = [f"{_ctype(kind)} *o{n};" for n, kind in enumerate(body.items)]
-    return image_function_text(body, func, head, fields, entry)
+    if image:
+        return image_function_text(body, func, head, fields, entry)
+    return slot_function_text(body, func, head, fields, entry, ("return 0;", "return -1;"))
 
 
 def _declared(statements: tuple[Stmt, ...]) -> dict[str, Kind]:
@@ -220,18 +236,30 @@ def _declared(statements: tuple[Stmt, ...]) -> dict[str, Kind]:
     return found
 
 
-def _module_text(module: _ImageModule, info: FunctionInfo, text: str) -> str:
+def _module_text(module: _Module, info: FunctionInfo, text: str) -> str:
     writer = "C of the FUNCTION {}: written by runtime/code/native/function_body.py"
     lines = module_start(module, writer, [(info.name, text)])
+    if isinstance(module, _ImageModule):
+        binding = [
+            "    PyObject *ns, *breathe, *views, *registry, *view_type, *bodies;",
+            '    if (!PyArg_ParseTuple(args, "OOOOO", &ns, &breathe, &views, &registry,'
+            " &view_type))",
+            "        return NULL;",
+            "    if (padt_bind_common(ns, breathe) < 0) return NULL;",
+            "    if (padt_bind_image(views, registry, view_type) < 0) return NULL;",
+        ]
+    else:
+        binding = [
+            "    PyObject *ns, *breathe, *functions, *bodies;",
+            '    if (!PyArg_ParseTuple(args, "OOO", &ns, &breathe, &functions)) return NULL;',
+            "    if (padt_bind_common(ns, breathe) < 0 || padt_bind_functions(functions) < 0)",
+            "        return NULL;",
+        ]
     lines += [
         "static PyObject *",
         "padt_bind(PyObject *module, PyObject *args)",
         "{",
-        "    PyObject *ns, *breathe, *views, *registry, *view_type, *bodies;",
-        '    if (!PyArg_ParseTuple(args, "OOOOO", &ns, &breathe, &views, &registry, &view_type))',
-        "        return NULL;",
-        "    if (padt_bind_common(ns, breathe) < 0) return NULL;",
-        "    if (padt_bind_image(views, registry, view_type) < 0) return NULL;",
+        *binding,
         *module.binding(),
         "    if ((bodies = PyDict_New()) == NULL) return NULL;",
         f"    if (padt_register_function({c_string(info.native)},"

@@ -52,8 +52,6 @@ from runtime.code.native.translate import (
     V,
     _Body,
     _chunk_functions,
-    _constant,
-    _ctype,
     _frame,
     _function_name,
     _identifier,
@@ -70,7 +68,7 @@ from runtime.code.native.translate import (
     translate_with,
 )
 from runtime.contract.artifact import PouCode
-from runtime.contract.code.typed_form import Call, Const, Expr, Index, Member, Named
+from runtime.contract.code.typed_form import Call, Expr, Index, Member, Named
 from runtime.contract.code.units import Unit
 from runtime.contract.layout import (
     ACTION_CONTROL,
@@ -151,6 +149,7 @@ _RUNTIME_STRUCTS = {
 
 class _ImageBody(_Body):
     module: _ImageModule
+    context = "padt_ctx"
 
     # -- reading and writing the image
     def member_value(self, owner: V, attr: str) -> V:
@@ -286,9 +285,6 @@ class _ImageBody(_Body):
     def call_statement(self, call: Expr) -> None:
         """SUPER^(): the base's body on this very instance, whose bytes begin with the
         base's members (layout.py), as C where the base's body is C."""
-        if isinstance(call, Call) and self.scalar_function(call) is not None:
-            self.scalar_call(call)  # what it gives dropped
-            return
         if (
             isinstance(call, Call)
             and _is_super_call(call)
@@ -305,93 +301,6 @@ class _ImageBody(_Body):
             self.check(f"padt_mcall(&{site}, {key}, s, padt_ctx)")
             return
         super().call_statement(call)
-
-    # -- FUNCTIONs of numbers and BOOLs: their C bodies, called directly (function_body.py)
-    def call_value(self, node: Call) -> V:
-        if self.scalar_function(node) is not None:
-            return self.scalar_call(node)
-        return super().call_value(node)
-
-    def scalar_function(self, node: Call) -> FunctionInfo | None:
-        """The FUNCTION `node` calls when its body may be C: every parameter, its result
-        and its outputs numbers or BOOLs (`FunctionInfo.native`)."""
-        info = self.module.functions.get(node.callee) if isinstance(node.callee, str) else None
-        return info if info is not None and info.native else None
-
-    def scalar_call(self, node: Call) -> V:
-        """A call of a FUNCTION of numbers and BOOLs: its C body where it has one (found
-        once per call site in the image's registry) and where every argument is of its
-        parameter's kind, else its Python, with the values boxed; either way its result and
-        outputs as C values (`Results` where Python has a tuple)."""
-        info = self.scalar_function(node)
-        assert info is not None and isinstance(node.callee, str)
-        name = node.callee
-        if len(node.args) > len(info.params):
-            _refuse(f"a call of {name} with more arguments than it takes")
-        passed = [
-            *zip((param.name for param in info.params), node.args, strict=False),
-            *node.keywords,
-        ]
-        params = {param.name: param for param in info.params}
-        if len({keyword for keyword, _ in passed}) < len(passed) or not all(
-            keyword in params for keyword, _ in passed
-        ):
-            _refuse(f"a call of {name} with arguments it does not take")
-        given: dict[str, V] = {}
-        for keyword, arg in passed:  # in the call's order, each held as Python holds it
-            value = self.expr(arg)
-            if isinstance(value.kind, Int | Bool | Float):
-                held = self.temp(_ctype(value.kind))
-                self.line(f"{held} = {value.c};")
-                value = V(value.kind, held)
-            given[keyword] = value
-        items: tuple[Int | Bool | Float, ...]
-        if info.outputs is not None:
-            items = tuple(k for k in info.outputs.items if isinstance(k, Int | Bool | Float))
-        else:
-            items = (info.result,) if isinstance(info.result, Int | Bool | Float) else ()
-        outs = [self.temp(_ctype(kind)) for kind in items]
-        direct = all(_fits(given[p.name].kind, p.kind) for p in info.params if p.name in given)
-        if direct:
-            site = self.module.site()
-            args = [
-                given[p.name].c if p.name in given else _constant(Const(p.default, "")).c
-                for p in info.params
-            ]
-            ctypes = ", ".join(
-                ["padt_mctx *", *(_ctype(p.kind) for p in info.params)]
-                + [f"{_ctype(kind)} *" for kind in items]
-            )
-            call = f"((int (*)({ctypes})){site}.function)"
-            everything = ", ".join(["padt_ctx", *args, *(f"&{out}" for out in outs)])
-            self.check(f"padt_function_site(&{site}, {self.module.key(info.native)})")
-            self.line(f"if (PADT_LIKELY({site}.function != NULL)) {{")
-            self.line(f"    if (PADT_UNLIKELY({call}({everything}) < 0)) goto padt_error;")
-            self.line("} else {")
-            self.depth += 1
-        boxed = [self.boxed(value, name) for value in given.values()]
-        keywords = self.module.names(tuple(given)) if given else "NULL"
-        array = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
-        returned = self.owned_object(
-            f"padt_call_function({self.module.key(name)}, {array}, 0, {keywords})"
-        )
-        if info.outputs is not None:
-            self.line(f"PADT_CHECK_TUPLE({returned}, {len(items)});")
-            found = [
-                self.unboxed(f"PyTuple_GET_ITEM({returned}, {n})", kind, f"an output of {name}")
-                for n, kind in enumerate(items)
-            ]
-        else:
-            found = [self.unboxed(returned, kind, f"the result of {name}") for kind in items]
-        for out, value in zip(outs, found, strict=True):
-            self.line(f"{out} = {value.c};")
-        if direct:
-            self.depth -= 1
-            self.line("}")
-        parts = tuple(V(kind, out) for kind, out in zip(items, outs, strict=True))
-        if info.outputs is not None or not parts:
-            return V(Results(items), "", parts=parts)
-        return parts[0]
 
     def call_instance(self, target: V) -> None:
         assert isinstance(target.kind, Instance)
@@ -514,14 +423,6 @@ class _ImageBody(_Body):
 
     def dereference(self, node: Expr) -> V:
         _refuse(f"a reference ({NOT_YET})")
-
-
-def _fits(value: Kind, param: Int | Bool | Float) -> bool:
-    """A value of kind `value` is one the parameter's C type and kind hold, as Python would
-    pass it (an integer within the declared range; a BOOL, a REAL as itself)."""
-    if isinstance(param, Int):
-        return isinstance(value, Int) and not value.stand_in and value.within(param)
-    return type(value) is type(param)
 
 
 def _image_function_text(body: _Body, func: _Numbered) -> str:

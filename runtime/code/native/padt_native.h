@@ -58,6 +58,59 @@ padt_bind_common(PyObject *ns, PyObject *breathe)
     return 0;
 }
 
+/* ---- FUNCTIONs' C bodies (function_body.py) -------------------------------------------
+ *
+ * A FUNCTION of numbers and BOOLs has a C body, `int F(padt_mctx *ctx, <its parameters>,
+ * <a pointer per result and output>)` (ctx NULL in slot mode), which its module puts into
+ * the binding's table of FUNCTIONs by its name and C signature: a call site made for
+ * another signature never finds it. A call site looks once; where the FUNCTION has no C
+ * body (it stays Python), it calls the Python. */
+#define PADT_FUNCTION_CAPSULE "padt_function"
+
+static PyObject *padt_functions; /* key -> capsule of a C body (borrowed, as padt_ns) */
+
+typedef struct {
+    void *function;
+    int looked;
+} padt_fsite;
+
+static int
+padt_bind_functions(PyObject *functions)
+{
+    if (!PyDict_Check(functions)) {
+        PyErr_SetString(PyExc_TypeError, "native code: the FUNCTIONs' table is no dict");
+        return -1;
+    }
+    padt_functions = functions;
+    return 0;
+}
+
+static int
+padt_register_function(const char *key, void *function)
+{
+    PyObject *capsule = PyCapsule_New(function, PADT_FUNCTION_CAPSULE, NULL);
+    if (capsule == NULL)
+        return -1;
+    int failed = PyDict_SetItemString(padt_functions, key, capsule);
+    Py_DECREF(capsule);
+    return failed;
+}
+
+static inline int
+padt_function_site(padt_fsite *site, PyObject *key)
+{
+    if (PADT_LIKELY(site->looked))
+        return 0;
+    PyObject *capsule = PyDict_GetItemWithError(padt_functions, key);
+    if (capsule == NULL && PyErr_Occurred())
+        return -1;
+    if (capsule != NULL
+        && (site->function = PyCapsule_GetPointer(capsule, PADT_FUNCTION_CAPSULE)) == NULL)
+        return -1;
+    site->looked = 1;
+    return 0;
+}
+
 /* The offset of slot `name` of `type` (a __slots__ member), or -1 with an exception. */
 static Py_ssize_t
 padt_offset(PyObject *type, const char *name)
@@ -810,13 +863,10 @@ typedef struct padt_mctx {
 
 typedef int (*padt_mbody)(char *, padt_mctx *);
 
-/* A call site of a block's body: the C body, once found, or the view class to call; or
- * of a FUNCTION's C body (function_body.py), once looked for (NULL: its body is Python). */
+/* A call site of a block's body: the C body, once found, or the view class to call. */
 typedef struct {
     padt_mbody body;
     PyObject *view_type; /* borrowed: padt_views holds it */
-    void *function;
-    int looked;
 } padt_msite;
 
 static PyObject *padt_views;        /* class name -> view class (borrowed) */
@@ -839,6 +889,8 @@ padt_bind_image(PyObject *views, PyObject *registry, PyObject *view_type)
     padt_views = views;
     padt_registry = registry;
     padt_view_type = (PyTypeObject *)view_type;
+    if (padt_bind_functions(registry) < 0) /* the FUNCTIONs' C bodies beside the blocks' */
+        return -1;
     if (padt_str_g == NULL && (padt_str_g = PyUnicode_InternFromString("_G")) == NULL)
         return -1;
     if (padt_str_sys == NULL && (padt_str_sys = PyUnicode_InternFromString("_SYS")) == NULL)
@@ -856,38 +908,6 @@ padt_register(const char *class_name, padt_mbody body)
     int failed = PyDict_SetItemString(padt_registry, class_name, capsule);
     Py_DECREF(capsule);
     return failed;
-}
-
-/* A FUNCTION's C body into the registry, by its name and C signature (`key`): a call
- * site of another signature never finds it. */
-#define PADT_FUNCTION_CAPSULE "padt_function"
-
-static int
-padt_register_function(const char *key, void *function)
-{
-    PyObject *capsule = PyCapsule_New(function, PADT_FUNCTION_CAPSULE, NULL);
-    if (capsule == NULL)
-        return -1;
-    int failed = PyDict_SetItemString(padt_registry, key, capsule);
-    Py_DECREF(capsule);
-    return failed;
-}
-
-/* The C body a call site of a FUNCTION calls, looked for once; none where the FUNCTION's
- * body stays Python (the site then calls its Python). */
-static inline int
-padt_function_site(padt_msite *site, PyObject *key)
-{
-    if (PADT_LIKELY(site->looked))
-        return 0;
-    PyObject *capsule = PyDict_GetItemWithError(padt_registry, key);
-    if (capsule == NULL && PyErr_Occurred())
-        return -1;
-    if (capsule != NULL
-        && (site->function = PyCapsule_GetPointer(capsule, PADT_FUNCTION_CAPSULE)) == NULL)
-        return -1;
-    site->looked = 1;
-    return 0;
 }
 
 /* The context of a call that begins at `view`. */

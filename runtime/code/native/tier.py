@@ -40,6 +40,7 @@ from runtime.contract.artifact import Artifact
 # its name would replace.
 IN_IMAGE = "image"  # NativeReport.memory: the variables go into the memory image
 IMAGE_ATTR = "_native_image"  # on a view class: what its module's statics borrow
+FUNCTIONS_ATTR = "native__functions"  # on a class bound in slot mode: its FUNCTIONs' table
 NAMESPACE_ATTR = "native__namespace"  # a bound class holds its namespace through it
 # the Python body, for a derived block's SUPER^(), which runs it on an instance of another
 # class (padt_native.h)
@@ -131,7 +132,7 @@ class NativeTier:
         statics; no class changes yet): the bodies to install, and the report. With
         `image`, the bodies of image mode, to install on its view classes."""
         if not any(pou.kind != "FUNCTION" for pou in artifact.pous):
-            # no body a class runs (FUNCTIONs stay Python): nothing to start a worker for
+            # no body a class runs, so no C that calls a FUNCTION: nothing to start a worker for
             return [], NativeReport((), ())
         mode = ["image"] if image is not None else []
         try:
@@ -155,7 +156,13 @@ class NativeTier:
         bodies: list[str] = []
         left: list[tuple[str, str]] = []
         failed: list[str] = []
-        for unit in answer["units"]:
+        # the FUNCTIONs' C bodies by name and C signature (function_body.py): an image's
+        # registry, beside its blocks' bodies
+        functions: dict[str, Any] = image.registry if image is not None else {}
+        # a FUNCTION's module binds no class: it lives as long as the classes whose C
+        # calls it, so it is bound after them
+        units = sorted(answer["units"], key=lambda unit: bool(unit.get("function")))
+        for unit in units:
             pou = str(unit["pou"])
             left.extend((pou, str(reason)) for reason in unit["left"])
             if "failed" in unit:
@@ -163,8 +170,25 @@ class NativeTier:
                 left.append((pou, "its C module did not build"))
             if "module" not in unit:
                 continue
+            keep_with = None
+            if unit.get("function"):
+                keep_with = (
+                    set(image.views.values()) if image is not None else {k for k, _, _ in found}
+                )
+                if not keep_with:
+                    left.append((pou, "no body's C calls it"))
+                    continue
             try:
-                found.extend(self._bind(str(unit["module"]), Path(unit["path"]), namespace, image))
+                found.extend(
+                    self._bind(
+                        str(unit["module"]),
+                        Path(unit["path"]),
+                        namespace,
+                        image,
+                        functions,
+                        keep_with,
+                    )
+                )
             except (OSError, ImportError, TypeError, ValueError) as exc:
                 failed.append(f"{pou}: {exc}")
                 left.append((pou, "its C module did not bind"))
@@ -173,15 +197,23 @@ class NativeTier:
         return found, NativeReport(tuple(sorted(bodies)), tuple(sorted(left)), tuple(failed))
 
     def _bind(
-        self, name: str, shared: Path, namespace: dict[str, Any], image: ImagePlan | None
+        self,
+        name: str,
+        shared: Path,
+        namespace: dict[str, Any],
+        image: ImagePlan | None,
+        functions: dict[str, Any],
+        keep_with: set[type] | None = None,
     ) -> list[tuple[type, str, Any]]:
+        """The bodies a module binds; `keep_with`: the classes a module that binds none
+        (a FUNCTION's) lives as long as."""
         if not shared.resolve().is_relative_to(self.cache.resolve()):
             raise ValueError(f"{shared} is not in the cache")
         module = self._copy(name, shared)
         classes = namespace if image is None else image.views
         try:
             found: dict[tuple[str, str], Any] = (
-                module.bind(namespace, _breathe)
+                module.bind(namespace, _breathe, functions)
                 if image is None
                 else module.bind(
                     namespace, _breathe, image.views, image.registry, image.memory.View
@@ -190,16 +222,15 @@ class NativeTier:
         except BaseException:
             self._release(name, module)
             raise
-        bound = {classes[cls] for cls, _ in found}
-        if not bound and image is not None:
-            # a FUNCTION's module binds no class: it lives as long as the image's views
-            bound = set(image.views.values())
+        bound = {classes[cls] for cls, _ in found} | (keep_with or set())
         for kind in bound:
-            # the C statics borrow the namespace (and an image's view classes and registry):
-            # a class it was bound to keeps them alive
+            # the C statics borrow the namespace (and an image's view classes and registry,
+            # or the FUNCTIONs' table): a class it was bound to keeps them alive
             setattr(kind, NAMESPACE_ATTR, namespace)
             if image is not None:
                 setattr(kind, IMAGE_ATTR, (image.views, image.registry))
+            else:
+                setattr(kind, FUNCTIONS_ATTR, functions)
         # the copy is free again once every class it was bound to is gone
         remaining = [len(bound)]
 

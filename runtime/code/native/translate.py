@@ -224,6 +224,7 @@ class _Module:
     offsets: dict[tuple[str, str], str] = field(default_factory=dict)
     keys: dict[str, str] = field(default_factory=dict)  # interned strings
     sites: int = 0
+    function_sites: int = 0
     globals_class: str | None = None
     functions: dict[str, FunctionInfo] = field(default_factory=dict)
     kwnames: dict[tuple[str, ...], str] = field(default_factory=dict)  # -> C static tuple
@@ -248,6 +249,11 @@ class _Module:
         self.sites += 1
         return f"S{self.sites - 1}"
 
+    def function_site(self) -> str:
+        """A call site of a FUNCTION of numbers and BOOLs."""
+        self.function_sites += 1
+        return f"FS{self.function_sites - 1}"
+
     def statics(self) -> list[str]:
         lines = [f"static PyObject *{ref}; {c_comment(cls)}" for cls, ref in self.types.items()]
         lines += [
@@ -262,6 +268,7 @@ class _Module:
             for names, ref in self.kwnames.items()
         ]
         lines += [f"static padt_site S{n};" for n in range(self.sites)]
+        lines += [f"static padt_fsite FS{n};" for n in range(self.function_sites)]
         return lines
 
     def binding(self) -> list[str]:
@@ -286,6 +293,7 @@ class _Module:
                 " return NULL;"
             )
         lines += [f"    memset(&S{n}, 0, sizeof S{n});" for n in range(self.sites)]
+        lines += [f"    memset(&FS{n}, 0, sizeof FS{n});" for n in range(self.function_sites)]
         return lines
 
 
@@ -324,6 +332,8 @@ def _numbered(form: Class | Function, function: Function) -> _Numbered:
 class _Body:
     """The translation of one `__call__`, given the kinds of its locals; `assigned` collects
     the kinds the body gives them, for the next pass."""
+
+    context = "NULL"  # what a FUNCTION's C body is given as its context (image mode's)
 
     def __init__(
         self, module: _Module, cls: ClassInfo, func: _Numbered, local_kinds: dict[str, Kind]
@@ -600,6 +610,9 @@ class _Body:
             return
         if not isinstance(call, Call):
             _refuse("an expression statement that is no call")
+        if self.scalar_function(call) is not None:
+            self.scalar_call(call)  # what it gives dropped
+            return
         if (
             isinstance(call.callee, str) and call.callee in self.module.functions
         ) or self.is_method_call(call):
@@ -1260,7 +1273,91 @@ class _Body:
         self.line("}")
         return V(kind, held)
 
+    # -- FUNCTIONs of numbers and BOOLs: their C bodies, called directly (function_body.py)
+    def scalar_function(self, node: Call) -> FunctionInfo | None:
+        """The FUNCTION `node` calls when its body may be C: every parameter, its result
+        and its outputs numbers or BOOLs (`FunctionInfo.native`)."""
+        info = self.module.functions.get(node.callee) if isinstance(node.callee, str) else None
+        return info if info is not None and info.native else None
+
+    def scalar_call(self, node: Call) -> V:
+        """A call of a FUNCTION of numbers and BOOLs: its C body where it has one (found
+        once per call site in the image's registry) and where every argument is of its
+        parameter's kind, else its Python, with the values boxed; either way its result and
+        outputs as C values (`Results` where Python has a tuple)."""
+        info = self.scalar_function(node)
+        assert info is not None and isinstance(node.callee, str)
+        name = node.callee
+        if len(node.args) > len(info.params):
+            _refuse(f"a call of {name} with more arguments than it takes")
+        passed = [
+            *zip((param.name for param in info.params), node.args, strict=False),
+            *node.keywords,
+        ]
+        params = {param.name: param for param in info.params}
+        if len({keyword for keyword, _ in passed}) < len(passed) or not all(
+            keyword in params for keyword, _ in passed
+        ):
+            _refuse(f"a call of {name} with arguments it does not take")
+        given: dict[str, V] = {}
+        for keyword, arg in passed:  # in the call's order, each held as Python holds it
+            value = self.expr(arg)
+            if isinstance(value.kind, Int | Bool | Float):
+                held = self.temp(_ctype(value.kind))
+                self.line(f"{held} = {value.c};")
+                value = V(value.kind, held)
+            given[keyword] = value
+        items: tuple[Int | Bool | Float, ...]
+        if info.outputs is not None:
+            items = tuple(k for k in info.outputs.items if isinstance(k, Int | Bool | Float))
+        else:
+            items = (info.result,) if isinstance(info.result, Int | Bool | Float) else ()
+        outs = [self.temp(_ctype(kind)) for kind in items]
+        direct = all(_fits(given[p.name].kind, p.kind) for p in info.params if p.name in given)
+        if direct:
+            site = self.module.function_site()
+            args = [
+                given[p.name].c if p.name in given else _constant(Const(p.default, "")).c
+                for p in info.params
+            ]
+            ctypes = ", ".join(
+                ["padt_mctx *", *(_ctype(p.kind) for p in info.params)]
+                + [f"{_ctype(kind)} *" for kind in items]
+            )
+            call = f"((int (*)({ctypes})){site}.function)"
+            everything = ", ".join([self.context, *args, *(f"&{out}" for out in outs)])
+            self.check(f"padt_function_site(&{site}, {self.module.key(info.native)})")
+            self.line(f"if (PADT_LIKELY({site}.function != NULL)) {{")
+            self.line(f"    if (PADT_UNLIKELY({call}({everything}) < 0)) goto padt_error;")
+            self.line("} else {")
+            self.depth += 1
+        boxed = [self.boxed(value, name) for value in given.values()]
+        keywords = self.module.names(tuple(given)) if given else "NULL"
+        array = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
+        returned = self.owned_object(
+            f"padt_call_function({self.module.key(name)}, {array}, 0, {keywords})"
+        )
+        if info.outputs is not None:
+            self.line(f"PADT_CHECK_TUPLE({returned}, {len(items)});")
+            found = [
+                self.unboxed(f"PyTuple_GET_ITEM({returned}, {n})", kind, f"an output of {name}")
+                for n, kind in enumerate(items)
+            ]
+        else:
+            found = [self.unboxed(returned, kind, f"the result of {name}") for kind in items]
+        for out, value in zip(outs, found, strict=True):
+            self.line(f"{out} = {value.c};")
+        if direct:
+            self.depth -= 1
+            self.line("}")
+        parts = tuple(V(kind, out) for kind, out in zip(items, outs, strict=True))
+        if info.outputs is not None or not parts:
+            return V(Results(items), "", parts=parts)
+        return parts[0]
+
     def call_value(self, node: Call) -> V:
+        if self.scalar_function(node) is not None:
+            return self.scalar_call(node)
         name = node.callee if isinstance(node.callee, str) else None
         if (name is not None and name in self.module.functions) or self.is_method_call(node):
             info, returned = self.function_call(node)
@@ -1749,6 +1846,14 @@ def _result_range(op: str, a: Int, b: Int) -> Int:
     _refuse(f"the operator {op}")
 
 
+def _fits(value: Kind, param: Int | Bool | Float) -> bool:
+    """A value of kind `value` is one the parameter's C type and kind hold, as Python would
+    pass it (an integer within the declared range; a BOOL, a REAL as itself)."""
+    if isinstance(param, Int):
+        return isinstance(value, Int) and not value.stand_in and value.within(param)
+    return type(value) is type(param)
+
+
 def _comparison(left: V, op: str, right: V) -> str:
     for one, other in ((left, right), (right, left)):
         # a stand-in is beyond 2**126 where the true value is: on the same side of any
@@ -1845,7 +1950,7 @@ def settled(
             merged[name] = joined
         if merged == kinds:
             module.types, module.offsets, module.keys = trial.types, trial.offsets, trial.keys
-            module.sites = trial.sites
+            module.sites, module.function_sites = trial.sites, trial.function_sites
             return body
         kinds = merged
     _refuse("the kinds of the locals do not settle")
@@ -1871,8 +1976,23 @@ def _function_text(body: _Body, func: _Numbered) -> str:
     the whole body would take the compiler minutes), and the body's own, which calls them
     in turn. The Python locals are in a frame the chunks share."""
     name = _function_name(body.cls.name)
+    head = f"static PyObject *\n{name}(PyObject *s, PyObject *Py_UNUSED(ignored))"
+    return slot_function_text(body, func, head, [], [], ("Py_RETURN_NONE;", "return NULL;"))
+
+
+def slot_function_text(
+    body: _Body,
+    func: _Numbered,
+    head: str,
+    fields: list[str],
+    entry: list[str],
+    returns: tuple[str, str],
+) -> str:
+    """The C of a body in slot mode, `head` its declaration (which declares `s`), with
+    `fields` in its frame, set by `entry` as it begins; `returns` as body_function's."""
+    name = _function_name(body.cls.name)
     module = body.module
-    frame = _frame(body, name, ["PyObject *g, *sys;"])
+    frame = _frame(body, name, ["PyObject *g, *sys;", *fields])
     chunk_names, chunk_texts = _chunk_functions(
         body, name, "PyObject *s", ["PyObject *padt_g = f->g, *padt_sys = f->sys;"]
     )
@@ -1895,10 +2015,7 @@ def _function_text(body: _Body, func: _Numbered) -> str:
             "    Py_INCREF(f->sys);",
         ]
     cleanup = [f"    Py_XDECREF(f->{field});" for field in ("g", "sys", *body.frame_objects)]
-    head = f"static PyObject *\n{name}(PyObject *s, PyObject *Py_UNUSED(ignored))"
-    main = body_function(
-        body, func, head, setup, chunk_names, cleanup, ("Py_RETURN_NONE;", "return NULL;")
-    )
+    main = body_function(body, func, head, [*entry, *setup], chunk_names, cleanup, returns)
     return "\n".join([*frame, *chunk_texts, *main])
 
 
@@ -2085,9 +2202,10 @@ def _module_text(module: _Module, functions: list[tuple[str, str]]) -> str:
         "static PyObject *",
         "padt_bind(PyObject *module, PyObject *args)",
         "{",
-        "    PyObject *ns, *breathe, *bodies;",
-        '    if (!PyArg_ParseTuple(args, "OO", &ns, &breathe)) return NULL;',
-        "    if (padt_bind_common(ns, breathe) < 0) return NULL;",
+        "    PyObject *ns, *breathe, *functions, *bodies;",
+        '    if (!PyArg_ParseTuple(args, "OOO", &ns, &breathe, &functions)) return NULL;',
+        "    if (padt_bind_common(ns, breathe) < 0 || padt_bind_functions(functions) < 0)",
+        "        return NULL;",
         *module.binding(),
         "    if ((bodies = PyDict_New()) == NULL) return NULL;",
     ]

@@ -29,7 +29,7 @@ from typing import Any
 
 from runtime.code.fault_location import code_filename
 from runtime.code.native.build import BuildError, build, find_toolchain, mark_used, prune
-from runtime.code.native.function_body import translate_image_function
+from runtime.code.native.function_body import translate_function
 from runtime.code.native.image_body import translate_image_unit
 from runtime.code.native.kinds import ClassInfo, Forms, FunctionInfo, class_table, function_table
 from runtime.code.native.translate import Translated, translate_unit
@@ -63,7 +63,7 @@ class ArtifactTranslation:
     classes the bodies read and the FUNCTIONs they call."""
 
     units: list[PouCode]  # the programs and function blocks, whose bodies are translated
-    function_units: list[PouCode]  # the FUNCTIONs, whose bodies image mode translates
+    function_units: list[PouCode]  # the FUNCTIONs, whose bodies are translated too
     forms: Forms
     classes: dict[str, ClassInfo]
     functions: dict[str, FunctionInfo]
@@ -97,13 +97,11 @@ class ArtifactTranslation:
         return repr((self.globals_class, sorted(members), sorted(self.functions.items())))
 
     def translate(self, unit: PouCode, layouts: Layouts | None = None) -> Translated:
-        """The unit's C: on the slots of objects, or in image mode at `layouts`' offsets
-        (a FUNCTION's own body only in image mode)."""
+        """The unit's C: on the slots of objects, or in image mode at `layouts`' offsets."""
         form = self.forms[unit.class_name]
         if unit.kind == "FUNCTION":
-            assert layouts is not None, "a FUNCTION's body is C in image mode only"
-            return translate_image_function(
-                unit, form, self.classes, self.globals_class, layouts, self.functions
+            return translate_function(
+                unit, form, self.classes, self.globals_class, self.functions, layouts
             )
         if layouts is not None:
             return translate_image_unit(
@@ -150,8 +148,9 @@ def _write_atomically(path: Path, text: str) -> None:
 
 
 def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]:
-    """Per program and function block: the POU, its module (name and built shared object)
-    when a body translated, the bodies left to Python with the reasons, a build failure.
+    """Per program, function block and FUNCTION: the POU, its module (name and built shared
+    object) when a body translated, the bodies left to Python with the reasons, a build
+    failure.
     With `image`, the bodies in image mode, on the configuration's memory image."""
     toolchain = find_toolchain()
     if toolchain is None:
@@ -168,7 +167,7 @@ def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]
     index = cache / toolchain.fingerprint / "index"
     index.mkdir(parents=True, exist_ok=True)
     answers = []
-    for unit in [*translation.units, *(translation.function_units if layouts else [])]:
+    for unit in [*translation.units, *translation.function_units]:
         # the unit's name too: it is in the C text (a module built before names were
         # checked could otherwise serve another unit of the same form)
         named = (fingerprint, shape, code_filename(unit), unit.form)
@@ -178,6 +177,8 @@ def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]
         if answer is None:
             translated = translation.translate(unit, layouts)
             answer = {"pou": unit.name, "left": [reason for _, reason in translated.left]}
+            if unit.kind == "FUNCTION":  # its module binds to no class (tier.py)
+                answer["function"] = True
             if translated.source:
                 try:
                     path = build(translated.module, translated.source, cache, toolchain)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -82,9 +83,18 @@ END_PROGRAM
 """
 
 
-def test_functions_of_numbers_run_as_c_with_the_python_values(native_tier: NativeTier) -> None:
-    pair = side_by_side(FUNCTIONS, native_tier)
-    assert pair.report.memory == IN_IMAGE
+# a reference keeps a configuration on the slots of Python objects (image_plan.py): there
+# the FUNCTIONs' C is slot mode's
+ON_SLOTS = ("q : DINT; b : DINT := 4;", "q : DINT; b : DINT := 4; p : REF_TO DINT;")
+
+
+@pytest.mark.parametrize("memory", ["image", "slots"])
+def test_functions_of_numbers_run_as_c_with_the_python_values(
+    native_tier: NativeTier, memory: str
+) -> None:
+    text = FUNCTIONS if memory == "image" else FUNCTIONS.replace(*ON_SLOTS)
+    pair = side_by_side(text, native_tier)
+    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
     c = ("Count", "Later", "Lerp", "Main", "Ratio", "Smooth", "Wrap")
     assert pair.report.bodies == c
     # a FUNCTION of texts stays Python, called from C, and says so
@@ -96,10 +106,12 @@ def test_functions_of_numbers_run_as_c_with_the_python_values(native_tier: Nativ
     assert "division by zero in POU Ratio (prog.st:41)" in pair.fault_of_the_next_cycle()
 
 
-def test_c_calls_the_functions_c_not_their_python(native_tier: NativeTier) -> None:
+@pytest.mark.parametrize("memory", ["image", "slots"])
+def test_c_calls_the_functions_c_not_their_python(native_tier: NativeTier, memory: str) -> None:
     """The call goes to the FUNCTION's C: with its Python replaced by one that fails,
     the native resource runs on with the Python tier's values."""
-    pair = side_by_side(FUNCTIONS, native_tier)
+    text = FUNCTIONS if memory == "image" else FUNCTIONS.replace(*ON_SLOTS)
+    pair = side_by_side(text, native_tier)
     namespace: dict[str, Any] = pair.native.variables.code.namespace  # type: ignore[union-attr]
 
     def broken(**_: object) -> None:
@@ -146,14 +158,17 @@ def function_programs(draw: st.DrawFn) -> str:
 
 
 @settings(
-    max_examples=10,
+    max_examples=16,
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
-@given(function_programs())
+@given(function_programs(), st.booleans())
 def test_random_function_bodies_run_alike_on_both_tiers(
-    native_tier: NativeTier, program: str
+    native_tier: NativeTier, program: str, on_slots: bool
 ) -> None:
+    if on_slots:  # slot mode's C of the FUNCTION (a reference keeps the image away)
+        program = program.replace("  acc : Acc;", "  acc : Acc;\n  p : REF_TO INT;")
     pair = side_by_side(program, native_tier)
+    assert (pair.report.memory == IN_IMAGE) != on_slots, pair.report.memory
     assert "AccF" in pair.report.bodies, pair.report.left
     pair.cycle_and_compare(CYCLES)
