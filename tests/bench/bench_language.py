@@ -260,9 +260,7 @@ def bench_function_calls(cycles: int = 300, check_cycles: int = 10, rounds: int 
     """1,000 calls of two small FUNCTIONs a cycle: their bodies as C, called from C
     (runtime/code/native/function_body.py), beside the Python tier."""
     request = {"program": FUNCTION_CALLS, "cycles": cycles, "check_cycles": check_cycles}
-    python = min(
-        (probe(CODE_BASE, request) for _ in range(rounds)), key=lambda r: r["program_us"]
-    )
+    python = min((probe(CODE_BASE, request) for _ in range(rounds)), key=lambda r: r["program_us"])
     with tempfile.TemporaryDirectory(prefix="padt-bench-native-") as cache:
         replies = [probe(CODE_BASE, {**request, "native_cache": cache}) for _ in range(rounds)]
     native = min(replies, key=lambda reply: float(reply["program_us"]))
