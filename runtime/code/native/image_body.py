@@ -68,7 +68,7 @@ from runtime.code.native.translate import (
     translate_with,
 )
 from runtime.contract.artifact import PouCode
-from runtime.contract.code.typed_form import Call, Expr, Index, Member, Named
+from runtime.contract.code.typed_form import Call, Expr, Index, Member, Named, This
 from runtime.contract.code.units import Unit
 from runtime.contract.layout import (
     ACTION_CONTROL,
@@ -348,6 +348,16 @@ class _ImageBody(_Body):
             args = ", ".join([control, now.c, *flags, *times])
             self.line(f"padt_action_update({args});")
             return FunctionInfo("update", None), "Py_None"
+        if (
+            isinstance(callee, Member)
+            and isinstance(callee.base, This)
+            and callee.name in self.cls.overridden
+        ):
+            # this body may run on an instance of the derived block (its SUPER^()), whose
+            # bytes do not say so: a view of this class would call this class's method
+            _refuse(
+                f"a call of {callee.name} of its own, which a derived block overrides ({NOT_YET})"
+            )
         return super().function_call(node)
 
     def sfc_instance(self, node: Expr, runtime_class: str) -> str:

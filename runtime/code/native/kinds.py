@@ -182,6 +182,9 @@ class ClassInfo:
     members: dict[str, Kind | None]  # attribute -> kind (None: a type not translated)
     # its methods and property accessors, its own and inherited, by name (`M__X`)
     methods: dict[str, FunctionInfo] = field(default_factory=dict)
+    # those of its methods a block that extends it overrides: on its own instance, a call
+    # of one takes the derived block's where the instance is one (its SUPER^())
+    overridden: frozenset[str] = frozenset()
 
 
 Forms = dict[str, Unit]
@@ -221,10 +224,24 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
             if found is not None:
                 methods[inherited.name] = found
         methods.pop("__call__", None)
-        table[unit.class_name] = ClassInfo(unit.class_name, members, methods)
+        overridden = _overridden(unit.class_name, forms, own, by_type)
+        table[unit.class_name] = ClassInfo(unit.class_name, members, methods, overridden)
     table[ACTION_CONTROL] = ACTION_CONTROL_INFO
     table.update(_interfaces(forms, table))
     return table
+
+
+def _overridden(
+    name: str, forms: Forms, own: dict[str, dict[str, FunctionInfo]], by_type: dict[str, str]
+) -> frozenset[str]:
+    """The methods of class `name` that the class of a block extending it defines anew."""
+    found: set[str] = set()
+    for other, form in forms.items():
+        ancestors = form.kinds[1:] if isinstance(form, Class) else ()
+        if other != name and any(by_type.get(kind) == name for kind in ancestors):
+            found.update(own.get(other, {}).keys() & own.get(name, {}).keys())
+    found.discard("__call__")
+    return frozenset(found)
 
 
 def interface_key(name: str) -> str:

@@ -91,7 +91,12 @@ class ArtifactTranslation:
     def shape(self) -> str:
         """All of it a translation depends on but the unit's form (a cache key's part)."""
         members = [
-            (name, sorted(c.members.items(), key=str), sorted(c.methods.items()))
+            (
+                name,
+                sorted(c.members.items(), key=str),
+                sorted(c.methods.items()),
+                sorted(c.overridden),
+            )
             for name, c in self.classes.items()
         ]
         return repr((self.globals_class, sorted(members), sorted(self.functions.items())))

@@ -76,6 +76,44 @@ def test_a_base_body_called_with_super_runs_on_both_tiers(native_tier: NativeTie
     assert [found["Main.b.codes"], found["Main.m.codes"], found["Main.t.codes"]] == [4, 44, 444]
 
 
+OVERRIDE_FROM_THE_BODY = """
+FUNCTION_BLOCK Tank
+VAR_OUTPUT level : REAL; END_VAR
+METHOD PUBLIC Fill : REAL
+VAR_INPUT amount : REAL; END_VAR
+level := level + amount;
+Fill := amount;
+END_METHOD
+Fill(1.0);
+THIS^.Fill(1.0);
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK BigTank EXTENDS Tank
+METHOD PUBLIC Fill : REAL
+VAR_INPUT amount : REAL; END_VAR
+level := level + 10.0 * amount;
+Fill := amount;
+END_METHOD
+SUPER^();
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR t : Tank; b : BigTank; END_VAR
+t(); b();
+END_PROGRAM
+"""
+
+
+def test_a_base_body_calling_an_overridden_method_takes_the_override_on_both_tiers(
+    native_tier: NativeTier,
+) -> None:
+    """The base's body, run on a derived instance by its SUPER^(), calls the derived
+    block's Fill. In native memory the bytes do not say whose instance they are (the C
+    called the base's Fill there: 2.0 where 20.0 is right), so such a configuration stays
+    on objects, and says why."""
+    pair = run_alike(OVERRIDE_FROM_THE_BODY, native_tier, 3)
+    assert (values(pair)["Main.t.level"], values(pair)["Main.b.level"]) == (6.0, 60.0)
+    assert "which a derived block overrides" in pair.report.memory
+
+
 def test_methods_with_outputs_and_properties_are_called_from_c_a_fault_in_one_named(
     native_tier: NativeTier,
 ) -> None:
