@@ -60,6 +60,7 @@ from runtime.code.native.translate import (
     _Module,
     _Numbered,
     _refuse,
+    _vector_call,
     body_function,
     c_comment,
     c_string,
@@ -70,6 +71,7 @@ from runtime.code.native.translate import (
 from runtime.contract.artifact import PouCode
 from runtime.contract.code.typed_form import Call, Expr, Index, Member, Named, This
 from runtime.contract.code.units import Unit
+from runtime.contract.intrinsic_table import COPY
 from runtime.contract.layout import (
     ACTION_CONTROL,
     NULLABLE_TIME,
@@ -388,9 +390,14 @@ class _ImageBody(_Body):
 
     def boxed(self, value: V, callee: str) -> str:
         """An instance passed to Python code (a method, a FUNCTION, the runtime's SFC
-        helpers) is a view of it."""
+        helpers) is a view of it; one the code passes as `_copy(x)` (a structure given as
+        an input) a copy of its bytes, detached from the image, as Python's `_copy` gives
+        a copy of the object: what the callee writes into it is its own."""
         if isinstance(value.kind, Instance):
-            return self.instance_object(value)
+            view = self.instance_object(value)
+            if value.copied:
+                return self.owned_object(_vector_call(self.module.key(COPY.name), [view]))
+            return view
         if isinstance(value.kind, Array):
             shape = self.list_shape(value.shape) if value.copied else None
             if shape is None:

@@ -172,3 +172,34 @@ def test_random_function_bodies_run_alike_on_both_tiers(
     assert (pair.report.memory == IN_IMAGE) != on_slots, pair.report.memory
     assert "AccF" in pair.report.bodies, pair.report.left
     pair.cycle_and_compare(CYCLES)
+
+
+STRUCTURE_GIVEN = """
+TYPE Pt : STRUCT x : REAL; y : REAL; END_STRUCT; END_TYPE
+FUNCTION Moved : REAL
+VAR_INPUT a : Pt; END_VAR
+a.x := a.x + 99.0;   (* its own copy: the caller's p stays *)
+Moved := a.x + a.y;
+END_FUNCTION
+PROGRAM Main
+VAR p : Pt := (x := 1.0, y := 0.5); r : REAL; END_VAR
+p.y := p.y + 1.0;
+r := Moved(p);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("memory", ["image", "slots"])
+def test_a_structure_given_to_a_function_is_its_own_copy(
+    native_tier: NativeTier, memory: str
+) -> None:
+    """In native memory the FUNCTION (Python: it takes a structure) once got a view of the
+    caller's bytes, and its write to its input changed the caller's p.x (100 for 1)."""
+    text = STRUCTURE_GIVEN
+    if memory == "slots":
+        text = text.replace("r : REAL; END_VAR", "r : REAL; q : REF_TO REAL; END_VAR")
+    pair = side_by_side(text, native_tier)
+    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
+    pair.cycle_and_compare(3)
+    values = pair.native.variables.values()
+    assert (values["Main.p.x"], values["Main.r"]) == (1.0, 100.0 + 3.5)
