@@ -11,6 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from runtime.code.native.tier import IN_IMAGE, NativeTier
+from runtime.contract.artifact import ProgramConfig
 from tests.compiler.test_differential import (
     ACC,
     CYCLES,
@@ -203,3 +204,43 @@ def test_a_structure_given_to_a_function_is_its_own_copy(
     pair.cycle_and_compare(3)
     values = pair.native.variables.values()
     assert (values["Main.p.x"], values["Main.r"]) == (1.0, 100.0 + 3.5)
+
+
+GLOBALS = """
+VAR_GLOBAL gain : REAL := 2.0; calls : DINT; END_VAR
+FUNCTION Scaled : REAL
+VAR_INPUT x : REAL; END_VAR
+VAR_EXTERNAL gain : REAL; END_VAR
+Scaled := x * gain;
+END_FUNCTION
+FUNCTION Counted : DINT
+VAR_EXTERNAL calls : DINT; END_VAR
+calls := calls + 1;
+Counted := calls;
+END_FUNCTION
+PROGRAM Main
+VAR r : REAL := 1.0; n : DINT; END_VAR
+r := Scaled(r);
+n := Counted();
+gain := gain + 0.5;
+END_PROGRAM
+PROGRAM Other
+VAR s : REAL := 3.0; seen : DINT; END_VAR
+s := Scaled(s) - 1.0;
+seen := calls;
+END_PROGRAM
+"""
+
+
+def test_a_function_reads_and_writes_the_globals_of_the_program_that_calls_it(
+    native_tier: NativeTier,
+) -> None:
+    """Two programs, each with its own view of the globals during its cycle: the FUNCTION's
+    C reads and writes the calling program's, as its Python does."""
+    programs = [ProgramConfig(name="Main", pou="Main", program_id=1),
+                ProgramConfig(name="Other", pou="Other", program_id=2)]  # fmt: skip
+    pair = side_by_side(GLOBALS, native_tier, programs)
+    assert pair.report.memory == IN_IMAGE
+    assert {"Counted", "Scaled"} <= set(pair.report.bodies)
+    pair.cycle_and_compare(4)
+    assert pair.native.variables.values()["calls"] == 4
