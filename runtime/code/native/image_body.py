@@ -69,7 +69,7 @@ from runtime.code.native.translate import (
     translate_with,
 )
 from runtime.contract.artifact import PouCode
-from runtime.contract.code.typed_form import Call, Expr, Index, Member, Named, This
+from runtime.contract.code.typed_form import Call, Expr, Index, Member, Named
 from runtime.contract.code.units import Unit
 from runtime.contract.intrinsic_table import COPY
 from runtime.contract.layout import (
@@ -350,16 +350,6 @@ class _ImageBody(_Body):
             args = ", ".join([control, now.c, *flags, *times])
             self.line(f"padt_action_update({args});")
             return FunctionInfo("update", None), "Py_None"
-        if (
-            isinstance(callee, Member)
-            and isinstance(callee.base, This)
-            and callee.name in self.cls.overridden
-        ):
-            # this body may run on an instance of the derived block (its SUPER^()), whose
-            # bytes do not say so: a view of this class would call this class's method
-            _refuse(
-                f"a call of {callee.name} of its own, which a derived block overrides ({NOT_YET})"
-            )
         return super().function_call(node)
 
     def sfc_instance(self, node: Expr, runtime_class: str) -> str:
@@ -383,6 +373,13 @@ class _ImageBody(_Body):
     # -- instances given to Python: as views
     def instance_object(self, value: V) -> str:
         assert isinstance(value.kind, Instance)
+        if value.c == "s" and self.cls.overridden:
+            # this body may run on an instance of a derived block (its SUPER^()), whose
+            # bytes do not say so: a view of this class would find this class's methods,
+            # where the derived block overrides some
+            method = sorted(self.cls.overridden)[0]
+            why = f"its own instance given to Python, a derived block overriding {method}"
+            _refuse(f"{why} ({NOT_YET})")
         view_class = self.module.view_class(value.kind.cls)
         return self.owned_object(
             f"padt_view_new({view_class}, padt_ctx->image, {value.c} - padt_ctx->base)"

@@ -224,24 +224,32 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
             if found is not None:
                 methods[inherited.name] = found
         methods.pop("__call__", None)
-        overridden = _overridden(unit.class_name, forms, own, by_type)
-        table[unit.class_name] = ClassInfo(unit.class_name, members, methods, overridden)
+        table[unit.class_name] = ClassInfo(unit.class_name, members, methods)
+    _mark_overridden(table, forms, own, by_type)
     table[ACTION_CONTROL] = ACTION_CONTROL_INFO
     table.update(_interfaces(forms, table))
     return table
 
 
-def _overridden(
-    name: str, forms: Forms, own: dict[str, dict[str, FunctionInfo]], by_type: dict[str, str]
-) -> frozenset[str]:
-    """The methods of class `name` that the class of a block extending it defines anew."""
-    found: set[str] = set()
-    for other, form in forms.items():
-        ancestors = form.kinds[1:] if isinstance(form, Class) else ()
-        if other != name and any(by_type.get(kind) == name for kind in ancestors):
-            found.update(own.get(other, {}).keys() & own.get(name, {}).keys())
-    found.discard("__call__")
-    return frozenset(found)
+def _mark_overridden(
+    table: dict[str, ClassInfo],
+    forms: Forms,
+    own: dict[str, dict[str, FunctionInfo]],
+    by_type: dict[str, str],
+) -> None:
+    """Each class's `overridden`: its methods (its own and inherited) that the class of a
+    block extending it, at any depth, defines anew."""
+    found: dict[str, set[str]] = {}
+    for name, form in forms.items():
+        if not isinstance(form, Class):
+            continue
+        for kind in form.kinds[1:]:  # the blocks it extends
+            ancestor = by_type.get(kind)
+            if ancestor in table and ancestor != name:
+                mine = own.get(name, {}).keys() - {"__call__"}
+                found.setdefault(ancestor, set()).update(mine & table[ancestor].methods.keys())
+    for name, methods in found.items():
+        table[name] = replace(table[name], overridden=frozenset(methods))
 
 
 def interface_key(name: str) -> str:

@@ -6,6 +6,8 @@ gives. Real C compiles, real resources on virtual clocks."""
 
 from __future__ import annotations
 
+import pytest
+
 from runtime.code.native.tier import NativeTier
 from tests.support.native_runs import Pair, program_error, side_by_side
 
@@ -102,16 +104,23 @@ END_PROGRAM
 """
 
 
+# the override reached through a method the derived block does not override
+THROUGH_A_METHOD = OVERRIDE_FROM_THE_BODY.replace(
+    "Fill(1.0);\nTHIS^.Fill(1.0);", "METHOD PUBLIC Run\nFill(1.0);\nEND_METHOD\nRun();\nRun();"
+)
+
+
+@pytest.mark.parametrize("text", [OVERRIDE_FROM_THE_BODY, THROUGH_A_METHOD])
 def test_a_base_body_calling_an_overridden_method_takes_the_override_on_both_tiers(
-    native_tier: NativeTier,
+    native_tier: NativeTier, text: str
 ) -> None:
     """The base's body, run on a derived instance by its SUPER^(), calls the derived
-    block's Fill. In native memory the bytes do not say whose instance they are (the C
-    called the base's Fill there: 2.0 where 20.0 is right), so such a configuration stays
-    on objects, and says why."""
-    pair = run_alike(OVERRIDE_FROM_THE_BODY, native_tier, 3)
+    block's Fill (directly, or through a method of its own). In native memory the bytes
+    do not say whose instance they are (the C called the base's Fill there: 2.0 where
+    20.0 is right), so such a configuration stays on objects, and says why."""
+    pair = run_alike(text, native_tier, 3)
     assert (values(pair)["Main.t.level"], values(pair)["Main.b.level"]) == (6.0, 60.0)
-    assert "which a derived block overrides" in pair.report.memory
+    assert "a derived block overriding M__FILL" in pair.report.memory
 
 
 def test_methods_with_outputs_and_properties_are_called_from_c_a_fault_in_one_named(
