@@ -37,6 +37,7 @@ from runtime.code.native.kinds import (
     FunctionInfo,
     Int,
     Kind,
+    Nothing,
     kind_of_type,
 )
 from runtime.code.native.translate import (
@@ -45,7 +46,7 @@ from runtime.code.native.translate import (
     Translated,
     _Body,
     _ctype,
-    _function_name,
+    _identifier,
     _is_none,
     _kind_name,
     _Module,
@@ -55,21 +56,23 @@ from runtime.code.native.translate import (
     c_string,
     module_end,
     module_start,
+    returned_items,
     settled,
     slot_function_text,
 )
 from runtime.contract.artifact import PouCode
 from runtime.contract.code.statements import Assign, ForEach, If, Return, Stmt, While
 from runtime.contract.code.typed_form import Expr, Sequence, Var
-from runtime.contract.code.units import Function, Unit
+from runtime.contract.code.units import Class, Function, Unit
 from runtime.contract.layout import Layouts
 
 LEFT = "a FUNCTION whose parameters, result or outputs are not all numbers or BOOLs"
 
 
 class _FunctionParts(_Body):
-    """What a FUNCTION's body translates otherwise than a block's, in either mode: `info`
-    says what it takes and gives, `declared` the kinds of its variables."""
+    """What a FUNCTION's (or a method's) body translates otherwise than a block's, in
+    either mode: `info` says what it takes and gives, `declared` the kinds of its
+    variables."""
 
     def __init__(
         self,
@@ -102,15 +105,19 @@ class _FunctionParts(_Body):
 
     @property
     def qualname(self) -> str:
-        return self.cls.name
+        function = self.func.function
+        return function.name if function.method else self.cls.name
 
     @property
-    def items(self) -> tuple[Int | Bool | Float, ...]:
+    def c_name(self) -> str:
+        function = self.func.function
+        own = f"_{_identifier(function.name)}" if function.method else ""
+        return super().c_name + own
+
+    @property
+    def items(self) -> tuple[Int | Bool | Float | Nothing, ...]:
         """The kinds of what a call gives: the result, then the outputs and in-outs."""
-        if self.info.outputs is not None:
-            return tuple(k for k in self.info.outputs.items if isinstance(k, Int | Bool | Float))
-        result = self.info.result
-        return (result,) if isinstance(result, Int | Bool | Float) else ()
+        return returned_items(self.info)
 
     def returned(self, value: Expr | None) -> None:
         """The result and outputs through the caller's pointers."""
@@ -127,8 +134,15 @@ class _FunctionParts(_Body):
             nodes = (value,)
         else:
             _refuse("a FUNCTION without result that returns a value")
-        values = [self.expr(node) for node in nodes]  # all, then the stores: as a tuple
+        values = [
+            self.expr(node) if not isinstance(declared, Nothing) or not _is_none(node) else None
+            for node, declared in zip(nodes, items, strict=True)
+        ]  # all, then the stores: as a tuple
         for n, (found, declared) in enumerate(zip(values, items, strict=True)):
+            if found is None:  # None where it has no result
+                continue
+            if isinstance(declared, Nothing):
+                _refuse("a FUNCTION's return of a value where it has no result")
             what = f"what {self.cls.name} gives"
             if isinstance(declared, Int) and isinstance(found.kind, Int):
                 self.storable(found, declared, what)
@@ -167,26 +181,87 @@ def translate_function(
         )
     )
     try:
-        text = _function_text(module, form, info)
+        made = _function_text(module, form, form, info, ClassInfo(form.name, {}))
     except NotTranslated as refused:
-        # its body stays Python, while the image stays: tier.py leaves the image only for
-        # a block's body that slot mode makes C
-        reason = str(refused).replace(NOT_YET, "not yet C")
-        return Translated(unit.name, "", "", (), ((unit.name, reason),))
+        return Translated(unit.name, "", "", (), ((unit.name, _refusal(refused)),))
     except RecursionError:
         return Translated(unit.name, "", "", (), ((unit.name, "an expression nested too deep"),))
-    source = _module_text(module, info, text)
+    return _translated(unit, module, "the FUNCTION", [(info.native, made)], (form.name,), ())
+
+
+def translate_methods(
+    unit: PouCode,
+    form: Unit,
+    classes: dict[str, ClassInfo],
+    globals_class: str | None,
+    functions: dict[str, FunctionInfo],
+    layouts: Layouts,
+) -> Translated:
+    """The C module of the methods (and property accessors) of one block's class that
+    take and give numbers and BOOLs, in image mode: each registered by its class, name and
+    C signature, for the call sites of image-mode C to call directly. `bodies` names the
+    methods translated; the others stay Python, as a caller's `left` says nothing of."""
+    cls = classes.get(form.name) if isinstance(form, Class) else None
+    if cls is None or not isinstance(form, Class):
+        return Translated(unit.name, "", "", (), ())
+    module = _ImageModule(
+        classes,
+        code_filename(unit),
+        globals_class=globals_class,
+        functions=functions,
+        layouts=layouts,
+    )
+    made: list[tuple[str, tuple[str, str]]] = []
+    names: list[str] = []
+    left: list[tuple[str, str]] = []
+    for function in form.functions:
+        if not isinstance(function, Function) or function.name == "__call__":
+            continue
+        info = cls.methods.get(function.name)
+        if info is None or not info.native or info.owner != form.name:
+            continue
+        try:
+            made.append((info.native, _function_text(module, form, function, info, cls)))
+        except NotTranslated as refused:
+            left.append((function.name, _refusal(refused)))
+            continue
+        except RecursionError:
+            left.append((function.name, "an expression nested too deep"))
+            continue
+        names.append(function.name)
+    if not made:
+        return Translated(unit.name, "", "", (), tuple(left))
+    return _translated(unit, module, "the methods of", made, tuple(names), tuple(left))
+
+
+def _refusal(refused: NotTranslated) -> str:
+    """Why a FUNCTION's or method's body stays Python: never a reason to leave the image
+    (tier.py leaves it for a block's body only, which slot mode makes C)."""
+    return str(refused).replace(NOT_YET, "not yet C")
+
+
+def _translated(
+    unit: PouCode,
+    module: _Module,
+    what: str,
+    made: list[tuple[str, tuple[str, str]]],
+    bodies: tuple[str, ...],
+    left: tuple[tuple[str, str], ...],
+) -> Translated:
+    source = _module_text(module, what, made)
     name = f"padt_{hashlib.sha256(source.encode()).hexdigest()[:24]}"
-    return Translated(unit.name, name, source.replace(NAME_PLACEHOLDER, name), (form.name,), ())
+    return Translated(unit.name, name, source.replace(NAME_PLACEHOLDER, name), bodies, left)
 
 
-def _function_text(module: _Module, form: Function, info: FunctionInfo) -> str:
+def _function_text(
+    module: _Module, form: Class | Function, function: Function, info: FunctionInfo, cls: ClassInfo
+) -> tuple[str, str]:
+    """The C function of a FUNCTION's or method's body: its name and text."""
     gives = info.result is not None or info.outputs is not None
-    if gives and (not form.body or not isinstance(form.body[-1], Return)):
+    if gives and (not function.body or not isinstance(function.body[-1], Return)):
         _refuse("a FUNCTION that may end without its return")
-    func = _numbered(form, form)
-    cls = ClassInfo(form.name, {})
-    given = _declared(form.body)
+    func = _numbered(form, function)
+    given = _declared(function.body)
     given.update((param.name, param.kind) for param in info.params)
     image = isinstance(module, _ImageModule)
     kind = _ImageFunction if image else _SlotFunction
@@ -198,18 +273,23 @@ def _function_text(module: _Module, form: Function, info: FunctionInfo) -> str:
         given,
     )
     assert isinstance(body, _FunctionParts)
+    instance = ["char *s"] if function.method else []
     params = [f"{_ctype(param.kind)} p{n}" for n, param in enumerate(info.params)]
-    outs = [f"{_ctype(kind)} *o{n}" for n, kind in enumerate(body.items)]
-    head = (
-        f"static int\n{_function_name(form.name)}({', '.join(['padt_mctx *ctx', *params, *outs])})"
+    valued = [(n, kind) for n, kind in enumerate(body.items) if not isinstance(kind, Nothing)]
+    outs = [f"{_ctype(kind)} *o{n}" for n, kind in valued]
+    head = f"static int\n{body.c_name}({', '.join(['padt_mctx *ctx', *instance, *params, *outs])})"
+    entry = (
+        [] if function.method else ["    char *s = NULL;" if image else "    PyObject *s = NULL;"]
     )
-    entry = ["    char *s = NULL;" if image else "    PyObject *s = NULL;", "    (void)ctx;"]
-    entry += [f"    f->o{n} = o{n};" for n in range(len(outs))]
+    entry += ["    (void)ctx;"]
+    entry += [f"    f->o{n} = o{n};" for n, _ in valued]
     entry += [f"    {body.local_ref(param.name)} = p{n};" for n, param in enumerate(info.params)]
-    fields = [f"{_ctype(kind)} *o{n};" for n, kind in enumerate(body.items)]
+    fields = [f"{_ctype(kind)} *o{n};" for n, kind in valued]
     if image:
-        return image_function_text(body, func, head, fields, entry)
-    return slot_function_text(body, func, head, fields, entry, ("return 0;", "return -1;"))
+        return body.c_name, image_function_text(body, func, head, fields, entry)
+    return body.c_name, slot_function_text(
+        body, func, head, fields, entry, ("return 0;", "return -1;")
+    )
 
 
 def _declared(statements: tuple[Stmt, ...]) -> dict[str, Kind]:
@@ -236,9 +316,11 @@ def _declared(statements: tuple[Stmt, ...]) -> dict[str, Kind]:
     return found
 
 
-def _module_text(module: _Module, info: FunctionInfo, text: str) -> str:
-    writer = "C of the FUNCTION {}: written by runtime/code/native/function_body.py"
-    lines = module_start(module, writer, [(info.name, text)])
+def _module_text(module: _Module, what: str, made: list[tuple[str, tuple[str, str]]]) -> str:
+    """The module of C bodies `made` (key, (C name, text)), each put into the binding's
+    table of FUNCTIONs by its key; it binds no class."""
+    writer = f"C of {what} {{}}: written by runtime/code/native/function_body.py"
+    lines = module_start(module, writer, [text for _, text in made])
     if isinstance(module, _ImageModule):
         binding = [
             "    PyObject *ns, *breathe, *views, *registry, *view_type, *bodies;",
@@ -262,8 +344,10 @@ def _module_text(module: _Module, info: FunctionInfo, text: str) -> str:
         *binding,
         *module.binding(),
         "    if ((bodies = PyDict_New()) == NULL) return NULL;",
-        f"    if (padt_register_function({c_string(info.native)},"
-        f" (void *){_function_name(info.name)}) < 0)",
-        "        { Py_DECREF(bodies); return NULL; }",
     ]
+    for key, (c_name, _) in made:
+        lines += [
+            f"    if (padt_register_function({c_string(key)}, (void *){c_name}) < 0)",
+            "        { Py_DECREF(bodies); return NULL; }",
+        ]
     return "\n".join(lines + module_end())

@@ -152,6 +152,22 @@ _RUNTIME_STRUCTS = {
 class _ImageBody(_Body):
     module: _ImageModule
     context = "padt_ctx"
+    native_methods = True
+
+    def runs_on(self, owner: V, info: FunctionInfo) -> bool:
+        """A method's C body works on the bytes of an instance of its class, or of a
+        block that extends it (whose bytes begin with its members); not on this body's
+        own instance where a derived block overrides a method (whose bytes may be a
+        derived instance's, `instance_object`)."""
+        assert isinstance(owner.kind, Instance)
+        if owner.c == "s" and self.cls.overridden:
+            return False
+        if owner.kind.cls == info.owner:
+            return True
+        own, theirs = self.module.layouts.get(owner.kind.cls), self.module.layouts.get(info.owner)
+        if own is None or theirs is None:
+            return False
+        return own.members[: len(theirs.members)] == theirs.members
 
     # -- reading and writing the image
     def member_value(self, owner: V, attr: str) -> V:
@@ -451,7 +467,7 @@ def image_function_text(
 ) -> str:
     """The C of a body in image mode, `head` its declaration (which declares `s` and `ctx`),
     with `fields` in its frame, set by `entry` as it begins."""
-    name = _function_name(body.cls.name)
+    name = body.c_name
     frame = _frame(body, name, ["char *g;", "PyObject *sys;", "padt_mctx *ctx;", *fields])
     prologue = [
         "char *padt_g = f->g;",

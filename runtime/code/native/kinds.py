@@ -126,11 +126,17 @@ class Implementer:
 
 
 @dataclass(frozen=True)
+class Nothing:
+    """None where a method or FUNCTION without a result puts its result in the tuple of
+    its outputs (`return (None, q)`): what a caller drops."""
+
+
+@dataclass(frozen=True)
 class Results:
     """What a call of a FUNCTION's C body gives (image mode, function_body.py): its result
     and outputs as C values, each of its declared kind, where Python has a tuple."""
 
-    items: tuple[Int | Bool | Float, ...]
+    items: tuple[Int | Bool | Float | Nothing, ...]
 
 
 Kind = (
@@ -143,6 +149,7 @@ Kind = (
     | Ref
     | Outputs
     | Results
+    | Nothing
     | Hook
     | Range
     | Implementer
@@ -200,7 +207,9 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
     extended = _extended_blocks(units, forms)
     own = {
         name: {
-            f.name: _returned(f, f.name, by_type) for f in form.functions if isinstance(f, Function)
+            f.name: _method_info(f, name, by_type)
+            for f in form.functions
+            if isinstance(f, Function)
         }
         for name, form in forms.items()
         if isinstance(form, Class)
@@ -243,7 +252,7 @@ def _mark_overridden(
     for name, form in forms.items():
         if not isinstance(form, Class):
             continue
-        for kind in form.kinds[1:]:  # the blocks it extends
+        for kind in form.kinds:  # what it conforms to: itself, the blocks it extends
             ancestor = by_type.get(kind)
             if ancestor in table and ancestor != name:
                 mine = own.get(name, {}).keys() - {"__call__"}
@@ -267,10 +276,18 @@ def _interfaces(forms: Forms, table: dict[str, ClassInfo]) -> dict[str, ClassInf
                 conforming.setdefault(kind, []).append(table[name])
     found = {}
     for interface, infos in sorted(conforming.items()):
-        shared = set.intersection(*(set(info.methods.items()) for info in infos))
+        # alike as a caller through the interface sees them (each class's own C aside)
+        shared = set.intersection(
+            *({(name, _as_seen(m)) for name, m in info.methods.items()} for info in infos)
+        )
         key = interface_key(interface)
         found[key] = ClassInfo(key, {}, dict(sorted(shared)))
     return found
+
+
+def _as_seen(method: FunctionInfo) -> FunctionInfo:
+    """A method as a call through an interface sees it: what it gives, not whose C it is."""
+    return replace(method, params=(), native="", owner="")
 
 
 def _action_controls(form: Class) -> list[str]:
@@ -360,11 +377,12 @@ class FunctionInfo:
     name: str
     result: Kind | None
     outputs: Outputs | None = None
-    # a FUNCTION whose inputs, in-outs, result and outputs are all numbers or BOOLs (its
-    # body may be C in image mode, function_body.py): its parameters in order, and the key
-    # its C body has in the registry (`native_key`); () and "" for any other
+    # a FUNCTION (or method) whose inputs, in-outs, result and outputs are all numbers or
+    # BOOLs (its body may be C, function_body.py): its parameters in order, and the key its
+    # C body has in the table of FUNCTIONs (`native_key`); () and "" for any other
     params: tuple[ParamInfo, ...] = ()
     native: str = ""
+    owner: str = ""  # a method's: the class that defines it
 
 
 @dataclass(frozen=True)
@@ -381,7 +399,10 @@ SCALAR = (Int, Bool, Float)
 
 
 def c_code(kind: Kind) -> str:
-    """A letter for the C type of a number or BOOL, as a FUNCTION's C signature has it."""
+    """A letter for the C type of a number or BOOL, as a FUNCTION's C signature has it (a
+    result it does not have: `n`, no C value)."""
+    if isinstance(kind, Nothing):
+        return "n"
     if isinstance(kind, Int):
         return "q" if kind.fits64 else "Q"
     return "b" if isinstance(kind, Bool) else "d"
@@ -453,20 +474,45 @@ def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo
         returned = _returned(form, unit.class_name, {})
         result = kind_of_type(unit.returns, {}) if unit.returns else None
         info = FunctionInfo(unit.class_name, result, returned.outputs)
-        params = _native_params(form)
-        if returned.outputs is not None:
-            values: tuple[Kind | None, ...] | None = returned.outputs.items or None
-        else:
-            values = (result,) if unit.returns else ()
-        if (
-            params is not None
-            and values is not None
-            and all(isinstance(kind, SCALAR) for kind in values)
-        ):
-            key = native_key(unit.class_name, params, tuple(k for k in values if k is not None))
-            info = replace(info, params=params, native=key)
-        table[unit.class_name] = info
+        table[unit.class_name] = _with_native(info, form, unit.class_name, bool(unit.returns))
     return table
+
+
+def _with_native(info: FunctionInfo, function: Function, key: str, gives: bool) -> FunctionInfo:
+    """`info` with its parameters and C key where everything its call takes and gives is a
+    number or a BOOL (`gives`: it has a result)."""
+    params = _native_params(function)
+    if info.outputs is not None:
+        values: tuple[Kind | None, ...] | None = info.outputs.items or None
+    else:
+        values = (info.result,) if gives else ()
+    if params is None or values is None:
+        return info
+    if not all(
+        isinstance(kind, SCALAR) or (n == 0 and isinstance(kind, Nothing))
+        for n, kind in enumerate(values)
+    ):
+        return info
+    given = tuple(kind for kind in values if kind is not None)
+    return replace(info, params=params, native=native_key(key, params, given))
+
+
+def _method_info(function: Function, cls: str, by_type: dict[str, str]) -> FunctionInfo:
+    """A method of class `cls` as a caller sees it; its C key names the class."""
+    info = replace(_returned(function, function.name, by_type), owner=cls)
+    gives = any(
+        isinstance(line.header, Return) and line.header.value is not None
+        and not (isinstance(line.header.value, Const) and line.header.value.value is None)
+        for line in printed_lines(function)
+    )  # fmt: skip
+    return _with_native(info, function, f"{cls}.{function.name}", gives)
+
+
+def _item_kind(item: Expr, classes: dict[str, str]) -> Kind | None:
+    """The kind of an item of the tuple a call gives: its declared type's, or None's."""
+    if isinstance(item, Const) and item.value is None:
+        return Nothing()
+    return kind_of_type(item.type, classes) if item.type else None
 
 
 def _returned(function: Function, name: str, classes: dict[str, str]) -> FunctionInfo:
@@ -478,7 +524,7 @@ def _returned(function: Function, name: str, classes: dict[str, str]) -> Functio
         if isinstance(line.header, Return) and line.header.value is not None
     ]
     shapes = {
-        tuple(kind_of_type(item.type, classes) if item.type else None for item in value.items)
+        tuple(_item_kind(item, classes) for item in value.items)
         for value in values
         if isinstance(value, Sequence) and value.as_tuple
     }

@@ -64,12 +64,15 @@ class NativeReport:
     # where the variables are once the bodies run: "image" (native memory), or why they
     # stay on objects; "" where no image was asked for
     memory: str = ""
+    methods: tuple[str, ...] = ()  # "POU.M__X": the methods whose bodies run as C
 
     def summary(self, cycle_in_c: bool = False) -> str:
         """What the event log says; `cycle_in_c`: the resource's usual cycle runs in C
         (runtime/cycle_core.py)."""
         total = len(self.bodies) + len(self.left)
         text = f"native code in place: {len(self.bodies)} of {total} POU bodies run as C"
+        if self.methods:
+            text += f" (and {len(self.methods)} methods)"
         if self.memory == IN_IMAGE:
             text += ", the variables in native memory"
         elif self.memory:
@@ -154,6 +157,7 @@ class NativeTier:
             return [], NativeReport((), (), (f"the native worker failed: {why}",))
         found: list[tuple[type, str, Any]] = []
         bodies: list[str] = []
+        methods: list[str] = []
         left: list[tuple[str, str]] = []
         failed: list[str] = []
         # the FUNCTIONs' C bodies by name and C signature (function_body.py): an image's
@@ -193,8 +197,12 @@ class NativeTier:
                 failed.append(f"{pou}: {exc}")
                 left.append((pou, "its C module did not bind"))
                 continue
-            bodies.append(pou)
-        return found, NativeReport(tuple(sorted(bodies)), tuple(sorted(left)), tuple(failed))
+            if "methods" in unit:
+                methods.extend(f"{pou}.{method}" for method in unit["methods"])
+            else:
+                bodies.append(pou)
+        report = NativeReport(tuple(sorted(bodies)), tuple(sorted(left)), tuple(failed))
+        return found, replace(report, methods=tuple(sorted(methods)))
 
     def _bind(
         self,

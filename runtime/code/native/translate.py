@@ -42,6 +42,7 @@ from runtime.code.native.kinds import (
     Instance,
     Int,
     Kind,
+    Nothing,
     Outputs,
     Range,
     Ref,
@@ -363,6 +364,11 @@ class _Body:
         """The function a fault's traceback names."""
         return f"{self.cls.name}.__call__"
 
+    @property
+    def c_name(self) -> str:
+        """The C function of the body (its chunks and frame named after it)."""
+        return _function_name(self.cls.name)
+
     # -- emission
     def line(self, text: str) -> None:
         self.out.append("    " * self.depth + text)
@@ -610,9 +616,8 @@ class _Body:
             return
         if not isinstance(call, Call):
             _refuse("an expression statement that is no call")
-        if self.scalar_function(call) is not None:
-            self.scalar_call(call)  # what it gives dropped
-            return
+        if self.direct_call(call) is not None:
+            return  # what it gives dropped
         if (
             isinstance(call.callee, str) and call.callee in self.module.functions
         ) or self.is_method_call(call):
@@ -1011,6 +1016,8 @@ class _Body:
             if k is None or not 0 <= k < len(array.kind.items):
                 _refuse("an item of a FUNCTION's outputs at an offset not a constant of them")
             item = array.kind.items[k]
+            if isinstance(item, Nothing):  # the result of a call without one: dropped
+                return V(item, "0")
             if item is None:
                 _refuse("an output of a FUNCTION of a type the tier leaves to Python")
             return self.unboxed(f"PyTuple_GET_ITEM({array.c}, {k})", item, "an output")
@@ -1273,21 +1280,44 @@ class _Body:
         self.line("}")
         return V(kind, held)
 
-    # -- FUNCTIONs of numbers and BOOLs: their C bodies, called directly (function_body.py)
-    def scalar_function(self, node: Call) -> FunctionInfo | None:
-        """The FUNCTION `node` calls when its body may be C: every parameter, its result
-        and its outputs numbers or BOOLs (`FunctionInfo.native`)."""
-        info = self.module.functions.get(node.callee) if isinstance(node.callee, str) else None
-        return info if info is not None and info.native else None
+    # -- FUNCTIONs and methods of numbers and BOOLs: their C bodies, called directly
+    # (function_body.py)
+    native_methods = False  # methods' C bodies called directly (image mode's)
 
-    def scalar_call(self, node: Call) -> V:
-        """A call of a FUNCTION of numbers and BOOLs: its C body where it has one (found
-        once per call site in the image's registry) and where every argument is of its
-        parameter's kind, else its Python, with the values boxed; either way its result and
-        outputs as C values (`Results` where Python has a tuple)."""
-        info = self.scalar_function(node)
-        assert info is not None and isinstance(node.callee, str)
-        name = node.callee
+    def direct_call(self, node: Call) -> V | None:
+        """A call of a FUNCTION, or of a method of an instance, whose body may be C: every
+        parameter, its result and its outputs numbers or BOOLs (`FunctionInfo.native`);
+        None (and nothing emitted) for any other call."""
+        callee = node.callee
+        if isinstance(callee, str):
+            info = self.module.functions.get(callee)
+            return self.scalar_call(node, info, None) if info and info.native else None
+        if not (
+            self.native_methods
+            and isinstance(callee, Member)
+            and not isinstance(callee.base, Named)  # SUPER^.X(): the base's, by its class
+            and METHOD_NAME.match(callee.name) is not None
+        ):
+            return None
+        with self.captured():  # the kind of the instance only: read below
+            kind = self.expr(callee.base).kind
+        found = self.module.classes.get(kind.cls) if isinstance(kind, Instance) else None
+        info = found.methods.get(callee.name) if found is not None else None
+        if info is None or not info.native:
+            return None
+        return self.scalar_call(node, info, self.expr(callee.base))
+
+    def runs_on(self, owner: V, info: FunctionInfo) -> bool:
+        """A method's C body (of class `info.owner`) may run on the instance `owner`."""
+        return False
+
+    def scalar_call(self, node: Call, info: FunctionInfo, owner: V | None) -> V:
+        """A call of a FUNCTION (or of a method of `owner`) of numbers and BOOLs: its C body
+        where it has one (found once per call site in the binding's table of FUNCTIONs) and
+        where every argument is of its parameter's kind, else its Python, with the values
+        boxed; either way its result and outputs as C values (`Results` where Python has a
+        tuple)."""
+        name = _callee_text(node)
         if len(node.args) > len(info.params):
             _refuse(f"a call of {name} with more arguments than it takes")
         passed = [
@@ -1307,25 +1337,25 @@ class _Body:
                 self.line(f"{held} = {value.c};")
                 value = V(value.kind, held)
             given[keyword] = value
-        items: tuple[Int | Bool | Float, ...]
-        if info.outputs is not None:
-            items = tuple(k for k in info.outputs.items if isinstance(k, Int | Bool | Float))
-        else:
-            items = (info.result,) if isinstance(info.result, Int | Bool | Float) else ()
-        outs = [self.temp(_ctype(kind)) for kind in items]
+        items = returned_items(info)
+        outs = [self.temp(_ctype(kind)) if _valued(kind) else "" for kind in items]
         direct = all(_fits(given[p.name].kind, p.kind) for p in info.params if p.name in given)
+        if owner is not None:
+            direct = direct and self.runs_on(owner, info)
         if direct:
             site = self.module.function_site()
             args = [
                 given[p.name].c if p.name in given else _constant(Const(p.default, "")).c
                 for p in info.params
             ]
+            instance = ["char *"] if owner is not None else []
             ctypes = ", ".join(
-                ["padt_mctx *", *(_ctype(p.kind) for p in info.params)]
-                + [f"{_ctype(kind)} *" for kind in items]
+                ["padt_mctx *", *instance, *(_ctype(p.kind) for p in info.params)]
+                + [f"{_ctype(kind)} *" for kind in items if _valued(kind)]
             )
             call = f"((int (*)({ctypes})){site}.function)"
-            everything = ", ".join([self.context, *args, *(f"&{out}" for out in outs)])
+            first = [self.context, *([owner.c] if owner is not None else [])]
+            everything = ", ".join([*first, *args, *(f"&{out}" for out in outs if out)])
             self.check(f"padt_function_site(&{site}, {self.module.key(info.native)})")
             self.line(f"if (PADT_LIKELY({site}.function != NULL)) {{")
             self.line(f"    if (PADT_UNLIKELY({call}({everything}) < 0)) goto padt_error;")
@@ -1333,31 +1363,35 @@ class _Body:
             self.depth += 1
         boxed = [self.boxed(value, name) for value in given.values()]
         keywords = self.module.names(tuple(given)) if given else "NULL"
-        array = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
-        returned = self.owned_object(
-            f"padt_call_function({self.module.key(name)}, {array}, 0, {keywords})"
-        )
+        if owner is None:
+            array = f"(PyObject *[]){{{', '.join(boxed)}}}" if boxed else "NULL"
+            call = f"padt_call_function({self.module.key(info.name)}, {array}, 0, {keywords})"
+        else:
+            array = f"(PyObject *[]){{{', '.join([self.instance_object(owner), *boxed])}}}"
+            call = f"padt_call_method({self.module.key(info.name)}, {array}, 1, {keywords})"
+        returned = self.owned_object(call)
         if info.outputs is not None:
             self.line(f"PADT_CHECK_TUPLE({returned}, {len(items)});")
-            found = [
-                self.unboxed(f"PyTuple_GET_ITEM({returned}, {n})", kind, f"an output of {name}")
-                for n, kind in enumerate(items)
-            ]
-        else:
-            found = [self.unboxed(returned, kind, f"the result of {name}") for kind in items]
-        for out, value in zip(outs, found, strict=True):
-            self.line(f"{out} = {value.c};")
+            for n, (kind, out) in enumerate(zip(items, outs, strict=True)):
+                if out:
+                    obj = f"PyTuple_GET_ITEM({returned}, {n})"
+                    value = self.unboxed(obj, kind, f"an output of {name}")
+                    self.line(f"{out} = {value.c};")
+        elif outs:
+            value = self.unboxed(returned, items[0], f"the result of {name}")
+            self.line(f"{outs[0]} = {value.c};")
         if direct:
             self.depth -= 1
             self.line("}")
-        parts = tuple(V(kind, out) for kind, out in zip(items, outs, strict=True))
+        parts = tuple(V(kind, out or "0") for kind, out in zip(items, outs, strict=True))
         if info.outputs is not None or not parts:
             return V(Results(items), "", parts=parts)
         return parts[0]
 
     def call_value(self, node: Call) -> V:
-        if self.scalar_function(node) is not None:
-            return self.scalar_call(node)
+        direct = self.direct_call(node)
+        if direct is not None:
+            return direct
         name = node.callee if isinstance(node.callee, str) else None
         if (name is not None and name in self.module.functions) or self.is_method_call(node):
             info, returned = self.function_call(node)
@@ -1854,6 +1888,19 @@ def _fits(value: Kind, param: Int | Bool | Float) -> bool:
     return type(value) is type(param)
 
 
+def returned_items(info: FunctionInfo) -> tuple[Int | Bool | Float | Nothing, ...]:
+    """What a call of a FUNCTION or method of numbers and BOOLs gives, in order: its result
+    (Nothing where it has none but outputs), then its outputs and in-outs."""
+    if info.outputs is not None:
+        return tuple(k for k in info.outputs.items if isinstance(k, Int | Bool | Float | Nothing))
+    return (info.result,) if isinstance(info.result, Int | Bool | Float) else ()
+
+
+def _valued(kind: Kind) -> bool:
+    """An item a call gives as a C value (not Nothing)."""
+    return not isinstance(kind, Nothing)
+
+
 def _comparison(left: V, op: str, right: V) -> str:
     for one, other in ((left, right), (right, left)):
         # a stand-in is beyond 2**126 where the true value is: on the same side of any
@@ -1921,11 +1968,12 @@ def settled(
     before, a FUNCTION's parameters), pass after pass; its statics joined to `module`."""
     kinds = dict(given)
     for attempt in range(2 * WIDEN_AFTER + 2):
-        trial = replace(
+        trial = replace(  # what a refused body asked for goes with it
             module,
             types=dict(module.types),
             offsets=dict(module.offsets),
             keys=dict(module.keys),
+            kwnames=dict(module.kwnames),
         )
         body = make(trial, cls, func, kinds)
         try:
@@ -1950,6 +1998,7 @@ def settled(
             merged[name] = joined
         if merged == kinds:
             module.types, module.offsets, module.keys = trial.types, trial.offsets, trial.keys
+            module.kwnames = trial.kwnames
             module.sites, module.function_sites = trial.sites, trial.function_sites
             return body
         kinds = merged
@@ -1975,7 +2024,7 @@ def _function_text(body: _Body, func: _Numbered) -> str:
     """The body as C: a function per chunk of statements (never inlined: one function of
     the whole body would take the compiler minutes), and the body's own, which calls them
     in turn. The Python locals are in a frame the chunks share."""
-    name = _function_name(body.cls.name)
+    name = body.c_name
     head = f"static PyObject *\n{name}(PyObject *s, PyObject *Py_UNUSED(ignored))"
     return slot_function_text(body, func, head, [], [], ("Py_RETURN_NONE;", "return NULL;"))
 
@@ -1990,7 +2039,7 @@ def slot_function_text(
 ) -> str:
     """The C of a body in slot mode, `head` its declaration (which declares `s`), with
     `fields` in its frame, set by `entry` as it begins; `returns` as body_function's."""
-    name = _function_name(body.cls.name)
+    name = body.c_name
     module = body.module
     frame = _frame(body, name, ["PyObject *g, *sys;", *fields])
     chunk_names, chunk_texts = _chunk_functions(
@@ -2031,7 +2080,7 @@ def body_function(
     """The body's own C function (`head` its declaration): the frame, `setup`, its chunks
     in turn, `cleanup`, then `returns` (on success, on an error: the traceback names the
     line the frame holds)."""
-    name = _function_name(body.cls.name)
+    name = body.c_name
     return [
         *head.split("\n"),
         "{",

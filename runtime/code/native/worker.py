@@ -29,7 +29,7 @@ from typing import Any
 
 from runtime.code.fault_location import code_filename
 from runtime.code.native.build import BuildError, build, find_toolchain, mark_used, prune
-from runtime.code.native.function_body import translate_function
+from runtime.code.native.function_body import translate_function, translate_methods
 from runtime.code.native.image_body import translate_image_unit
 from runtime.code.native.kinds import ClassInfo, Forms, FunctionInfo, class_table, function_table
 from runtime.code.native.translate import Translated, translate_unit
@@ -101,6 +101,14 @@ class ArtifactTranslation:
         ]
         return repr((self.globals_class, sorted(members), sorted(self.functions.items())))
 
+    def translate_methods(self, unit: PouCode, layouts: Layouts) -> Translated:
+        """The C of the methods of a block's class that take and give numbers and BOOLs,
+        in image mode."""
+        form = self.forms[unit.class_name]
+        return translate_methods(
+            unit, form, self.classes, self.globals_class, self.functions, layouts
+        )
+
     def translate(self, unit: PouCode, layouts: Layouts | None = None) -> Translated:
         """The unit's C: on the slots of objects, or in image mode at `layouts`' offsets."""
         form = self.forms[unit.class_name]
@@ -155,8 +163,8 @@ def _write_atomically(path: Path, text: str) -> None:
 def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]:
     """Per program, function block and FUNCTION: the POU, its module (name and built shared
     object) when a body translated, the bodies left to Python with the reasons, a build
-    failure.
-    With `image`, the bodies in image mode, on the configuration's memory image."""
+    failure. With `image`, the bodies in image mode, on the configuration's memory image,
+    and per block the methods whose bodies are C (`methods`)."""
     toolchain = find_toolchain()
     if toolchain is None:
         return {"error": "no C compiler or no Python.h on this machine"}
@@ -172,17 +180,28 @@ def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]
     index = cache / toolchain.fingerprint / "index"
     index.mkdir(parents=True, exist_ok=True)
     answers = []
-    for unit in [*translation.units, *translation.function_units]:
+    work: list[tuple[PouCode, str]] = [
+        *((unit, "") for unit in [*translation.units, *translation.function_units]),
+        # in image mode, each block's methods of numbers and BOOLs too: a module of their own
+        *((unit, "methods") for unit in (translation.units if layouts is not None else [])),
+    ]
+    for unit, part in work:
         # the unit's name too: it is in the C text (a module built before names were
         # checked could otherwise serve another unit of the same form)
-        named = (fingerprint, shape, code_filename(unit), unit.form)
+        named = (fingerprint, shape, code_filename(unit), part, unit.form)
         key = hashlib.sha256("\n".join(named).encode()).hexdigest()[:32]
         known = index / f"{key}.json"
         answer = _known(known)
         if answer is None:
-            translated = translation.translate(unit, layouts)
+            if part:
+                assert layouts is not None
+                translated = translation.translate_methods(unit, layouts)
+            else:
+                translated = translation.translate(unit, layouts)
             answer = {"pou": unit.name, "left": [reason for _, reason in translated.left]}
-            if unit.kind == "FUNCTION":  # its module binds to no class (tier.py)
+            if part:  # the methods translated; the others stay Python, as before
+                answer.update(function=True, methods=list(translated.bodies), left=[])
+            elif unit.kind == "FUNCTION":  # its module binds to no class (tier.py)
                 answer["function"] = True
             if translated.source:
                 try:

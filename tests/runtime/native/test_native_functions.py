@@ -244,3 +244,72 @@ def test_a_function_reads_and_writes_the_globals_of_the_program_that_calls_it(
     assert {"Counted", "Scaled"} <= set(pair.report.bodies)
     pair.cycle_and_compare(4)
     assert pair.native.variables.values()["calls"] == 4
+
+
+METHODS = """
+FUNCTION_BLOCK Tank
+VAR_INPUT cap : REAL := 100.0; END_VAR
+VAR_OUTPUT level : REAL; END_VAR
+VAR n : INT; END_VAR
+METHOD PUBLIC Fill : REAL
+VAR_INPUT amount : REAL; END_VAR
+VAR room : REAL; END_VAR
+room := cap - level;
+IF amount > room THEN amount := room; END_IF;
+level := level + amount;
+n := n + 1;
+Fill := amount;
+END_METHOD
+METHOD PUBLIC Drain
+VAR_INPUT by : REAL := 1.0; END_VAR
+VAR_OUTPUT left : REAL; END_VAR
+level := level - by;
+IF level < 0.0 THEN level := 0.0; END_IF;
+left := level;
+END_METHOD
+METHOD PUBLIC Share : DINT
+VAR_INPUT parts : DINT; END_VAR
+Share := REAL_TO_DINT(level) / parts;   (* parts 0: a fault in the method *)
+END_METHOD
+level := level * 0.99;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Mixer EXTENDS Tank
+VAR speed : INT; END_VAR
+speed := speed + 1;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR t : Tank; m : Mixer; got, l : REAL; k : INT; parts : DINT := 3; s : DINT; END_VAR
+FOR k := 1 TO 10 DO
+  got := got + t.Fill(5.0) + m.Fill(1.0);   (* m: Tank's Fill on a Mixer's bytes *)
+END_FOR;
+t.Drain(by := 2.0, left => l);
+m.Drain();
+parts := parts - 1;
+s := t.Share(parts) + m.Share(1);
+t(); m();
+END_PROGRAM
+"""
+
+
+def test_methods_of_numbers_run_as_c_in_native_memory(native_tier: NativeTier) -> None:
+    pair = side_by_side(METHODS, native_tier)
+    assert pair.report.memory == IN_IMAGE
+    assert pair.report.bodies == ("Main", "Mixer", "Tank")
+    assert pair.report.methods == ("Tank.M__DRAIN", "Tank.M__FILL", "Tank.M__SHARE")
+    assert "3 of 3 POU bodies run as C (and 3 methods)" in pair.report.summary()
+    # with the methods' Python (on the views of the image) failing, C calls the C
+    image = pair.native.variables.code.image  # type: ignore[union-attr]
+    assert image is not None
+    views = image.views
+
+    def broken(*_: object, **__: object) -> None:
+        raise AssertionError("the Python of a method whose C is in place")
+
+    for method in ("M__FILL", "M__DRAIN", "M__SHARE"):
+        setattr(views["POU_TANK"], method, broken)
+        setattr(views["POU_MIXER"], method, broken)
+    pair.cycle_and_compare(2)
+    values = pair.native.variables.values()
+    assert (values["Main.t.n"], values["Main.m.n"]) == (20, 20)  # ten Fills a cycle each
+    # parts is 0 in the third cycle: the fault names the method's line, on both tiers
+    assert "division by zero in POU Tank (prog.st:24)" in pair.fault_of_the_next_cycle()
