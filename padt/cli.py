@@ -310,8 +310,9 @@ def _tier_argument(parser: argparse.ArgumentParser) -> None:
         "--tier",
         choices=("native", "python"),
         default="native",
-        help="run the bodies of programs and function blocks as C compiled here where they "
-        "translate, as padt runtime does (native, the default; without a C compiler or "
+        help="run the bodies of programs, function blocks, FUNCTIONs and methods as C "
+        "compiled here where they translate, as padt runtime does (native, the default; "
+        "without a C compiler or "
         "Python.h all run as Python, said on stderr), or all as Python",
     )
 

@@ -121,8 +121,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--native-code",
         action=argparse.BooleanOptionalAction,
         default=True,
-        help="run the bodies of programs and function blocks as C compiled on this machine "
-        "where they translate, the variables in native memory and the usual CPU cycle in C "
+        help="run the bodies of programs, function blocks, FUNCTIONs and methods as C "
+        "compiled on this machine where they translate, the variables in native memory and "
+        "the usual CPU cycle in C "
         "(the default; needs a C compiler and Python's headers, else and until they are "
         "built they run as Python; --no-native-code: all as Python; docs/native-code.md)",
     )

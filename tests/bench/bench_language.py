@@ -256,20 +256,50 @@ END_PROGRAM
 """
 
 
-def bench_function_calls(cycles: int = 300, check_cycles: int = 10, rounds: int = 2) -> None:
-    """1,000 calls of two small FUNCTIONs a cycle: their bodies as C, called from C
-    (runtime/code/native/function_body.py), beside the Python tier."""
-    request = {"program": FUNCTION_CALLS, "cycles": cycles, "check_cycles": check_cycles}
-    python = min((probe(CODE_BASE, request) for _ in range(rounds)), key=lambda r: r["program_us"])
-    with tempfile.TemporaryDirectory(prefix="padt-bench-native-") as cache:
-        replies = [probe(CODE_BASE, {**request, "native_cache": cache}) for _ in range(rounds)]
-    native = min(replies, key=lambda reply: float(reply["program_us"]))
-    native_us, python_us = native["program_us"], python["program_us"]
-    print(
-        f"1,000 FUNCTION calls a cycle ({', '.join(native['native_bodies'])} as C): "
-        f"{native_us:,.1f} us per cycle native, {python_us:,.1f} us Python "
-        f"({python_us / native_us:.0f}x); the same values: {native['values'] == python['values']}"
-    )
+METHOD_CALLS = """\
+FUNCTION_BLOCK Axis
+VAR_OUTPUT pos : REAL; END_VAR
+VAR moves : DINT; END_VAR
+METHOD PUBLIC MoveBy : REAL
+VAR_INPUT d : REAL; END_VAR
+pos := pos + d;
+moves := moves + 1;
+MoveBy := pos;
+END_METHOD
+METHOD PUBLIC Limit : BOOL
+VAR_INPUT lo, hi : REAL; END_VAR
+IF pos < lo THEN pos := lo; Limit := TRUE; ELSIF pos > hi THEN pos := hi; Limit := TRUE; END_IF;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Calls
+VAR a : Axis; i : INT; r : REAL; hits : DINT; END_VAR
+FOR i := 1 TO 500 DO
+  r := a.MoveBy(INT_TO_REAL(i MOD 7) - 3.0);
+  IF a.Limit(-100.0, 100.0) THEN hits := hits + 1; END_IF;
+END_FOR;
+END_PROGRAM
+"""
+
+
+def bench_calls(cycles: int = 300, check_cycles: int = 10, rounds: int = 2) -> None:
+    """1,000 calls a cycle of two small FUNCTIONs, and of two methods of a block: their
+    bodies as C, called from C (runtime/code/native/function_body.py), beside the Python
+    tier."""
+    for what, program in (("FUNCTION", FUNCTION_CALLS), ("method", METHOD_CALLS)):
+        request = {"program": program, "cycles": cycles, "check_cycles": check_cycles}
+        python = min(
+            (probe(CODE_BASE, request) for _ in range(rounds)), key=lambda r: r["program_us"]
+        )
+        with tempfile.TemporaryDirectory(prefix="padt-bench-native-") as cache:
+            replies = [probe(CODE_BASE, {**request, "native_cache": cache}) for _ in range(rounds)]
+        native = min(replies, key=lambda reply: float(reply["program_us"]))
+        native_us, python_us = native["program_us"], python["program_us"]
+        same = native["values"] == python["values"]
+        print(
+            f"1,000 {what} calls a cycle, their bodies as C: {native_us:,.1f} us per cycle "
+            f"native, {python_us:,.1f} us Python ({python_us / native_us:.0f}x); "
+            f"the same values: {same}"
+        )
 
 
 def main() -> None:
@@ -280,7 +310,7 @@ def main() -> None:
         bench_native_coverage(sources)
     bench_cycles()
     bench_array_loop()
-    bench_function_calls()
+    bench_calls()
 
 
 if __name__ == "__main__":
