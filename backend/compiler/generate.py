@@ -705,6 +705,13 @@ class _Emitter:
             if arg is not None and arg.value is not None and isinstance(param.type, OpenArrayType):
                 keywords.append((param.attr, self.open_array_argument(param, arg.value)))
                 continue
+            if (arg is None or arg.value is None) and param.kind == "VAR_INPUT":
+                if is_aggregate(param.type):
+                    # an input left out takes its initial value at each call: a fresh one,
+                    # where the function's default is one object every call would share
+                    # (and keep what the function wrote into it)
+                    keywords.append((param.attr, self.initial(param.type, param.init)))
+                continue
             if arg is None or arg.value is None or param.kind == "VAR_OUTPUT" or arg.is_output:
                 continue
             if binds_reference(param, arg):

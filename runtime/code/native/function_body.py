@@ -152,7 +152,9 @@ class _FunctionParts(_Body):
 
 
 class _SlotFunction(_FunctionParts):
-    """A FUNCTION's body in slot mode (its context NULL)."""
+    """A FUNCTION's body in slot mode: its context only counts the nested calls."""
+
+    context = "f->ctx"
 
 
 class _ImageFunction(_FunctionParts, _ImageBody):
@@ -281,15 +283,23 @@ def _function_text(
     entry = (
         [] if function.method else ["    char *s = NULL;" if image else "    PyObject *s = NULL;"]
     )
-    entry += ["    (void)ctx;"]
+    entry += [
+        "    padt_mctx padt_own;  /* a slot-mode body calls with none: the nesting from here */",
+        "    if (ctx == NULL) {",
+        "        memset(&padt_own, 0, sizeof padt_own);",
+        "        ctx = &padt_own;",
+        "    }",
+        "    if (padt_enter(ctx) < 0) return -1;",
+    ]
     entry += [f"    f->o{n} = o{n};" for n, _ in valued]
     entry += [f"    {body.local_ref(param.name)} = p{n};" for n, param in enumerate(info.params)]
     fields = [f"{_ctype(kind)} *o{n};" for n, kind in valued]
+    returns = ("ctx->depth--; return 0;", "ctx->depth--; return -1;")
     if image:
-        return body.c_name, image_function_text(body, func, head, fields, entry)
-    return body.c_name, slot_function_text(
-        body, func, head, fields, entry, ("return 0;", "return -1;")
-    )
+        return body.c_name, image_function_text(body, func, head, fields, entry, returns)
+    fields.append("padt_mctx *ctx;")
+    entry.append("    f->ctx = ctx;")
+    return body.c_name, slot_function_text(body, func, head, fields, entry, returns)
 
 
 def _declared(statements: tuple[Stmt, ...]) -> dict[str, Kind]:

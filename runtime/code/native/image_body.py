@@ -459,14 +459,21 @@ def _image_function_text(body: _Body, func: _Numbered) -> str:
     """The body as C in image mode: its chunks as in slot mode, and the body's own
     function, `int F(char *s, padt_mctx *ctx)`, which C callers call directly."""
     head = f"static int\n{_function_name(body.cls.name)}(char *s, padt_mctx *ctx)"
-    return image_function_text(body, func, head, [], [])
+    entry = ["    if (padt_stack_check() < 0) return -1;"]  # a recursion (padt_native.h)
+    return image_function_text(body, func, head, [], entry, ("return 0;", "return -1;"))
 
 
 def image_function_text(
-    body: _Body, func: _Numbered, head: str, fields: list[str], entry: list[str]
+    body: _Body,
+    func: _Numbered,
+    head: str,
+    fields: list[str],
+    entry: list[str],
+    returns: tuple[str, str],
 ) -> str:
     """The C of a body in image mode, `head` its declaration (which declares `s` and `ctx`),
-    with `fields` in its frame, set by `entry` as it begins."""
+    with `fields` in its frame, set by `entry` as it begins (before the frame takes `ctx`);
+    `returns` as body_function's."""
     name = body.c_name
     frame = _frame(body, name, ["char *g;", "PyObject *sys;", "padt_mctx *ctx;", *fields])
     prologue = [
@@ -494,8 +501,8 @@ def image_function_text(
             "    }",
         ]
     cleanup = [f"    Py_XDECREF(f->{o});" for o in body.frame_objects]
-    setup[:0] = ["    f->ctx = ctx;", *entry]
-    main = body_function(body, func, head, setup, chunk_names, cleanup, ("return 0;", "return -1;"))
+    setup[:0] = [*entry, "    f->ctx = ctx;"]
+    main = body_function(body, func, head, setup, chunk_names, cleanup, returns)
     return "\n".join([*frame, *chunk_texts, *main])
 
 

@@ -14,6 +14,7 @@
 #include <Python.h>
 #include <structmember.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 
 #define PADT_LIKELY(x) __builtin_expect(!!(x), 1)
@@ -56,6 +57,48 @@ padt_bind_common(PyObject *ns, PyObject *breathe)
         && (padt_str_python_body = PyUnicode_InternFromString("python__call")) == NULL)
         return -1;
     return 0;
+}
+
+/* ---- the C stack ----------------------------------------------------------------------
+ *
+ * A block's body calls the bodies of the blocks it calls on the C stack, and IEC allows a
+ * recursion (through a reference, an in-out): where it does not end, the Python tier
+ * faults (RecursionError) while C would run off the end of its thread's stack and kill the
+ * process. Each body therefore looks, as it begins, at how much of its thread's stack is
+ * left: below the margin, a RecursionError, as the Python tier's. */
+#define PADT_STACK_MARGIN (512 * 1024)
+
+static _Thread_local char *padt_stack_low; /* this thread's stack's end, plus the margin */
+
+static void
+padt_stack_find(void)
+{
+    pthread_attr_t attr;
+    void *low = NULL;
+    size_t size = 0;
+    if (pthread_getattr_np(pthread_self(), &attr) == 0) {
+        if (pthread_attr_getstack(&attr, &low, &size) != 0)
+            low = NULL;
+        pthread_attr_destroy(&attr);
+    }
+    /* unknown (never on Linux): only the depth counters of FUNCTIONs remain */
+    padt_stack_low = low != NULL && size > 2 * PADT_STACK_MARGIN
+                         ? (char *)low + PADT_STACK_MARGIN
+                         : (char *)1;
+}
+
+/* 0, or -1 with a RecursionError where the body's thread has little stack left (no frame
+ * of the body's own on the traceback: the caller's line is the fault's, as Python's). */
+static inline int
+padt_stack_check(void)
+{
+    char here;
+    if (PADT_UNLIKELY(padt_stack_low == NULL))
+        padt_stack_find();
+    if (PADT_LIKELY(&here > padt_stack_low))
+        return 0;
+    PyErr_SetString(PyExc_RecursionError, "maximum recursion depth exceeded in native code");
+    return -1;
 }
 
 /* ---- FUNCTIONs' C bodies (function_body.py) -------------------------------------------
@@ -859,7 +902,25 @@ typedef struct padt_mctx {
     int64_t now_ns;
     int tick_known; /* `_tick` read in this call (padt_mtick) */
     PyObject *tick; /* borrowed: the namespace holds it */
+    int depth; /* C FUNCTION and method calls nested in this call (padt_enter) */
 } padt_mctx;
+
+/* Nested C calls of FUNCTIONs and methods (function_body.py), each on the C stack: a
+ * recursion (which IEC allows) is a RecursionError beyond Python's default recursion
+ * limit, as on the Python tier, never the stack's end. */
+#define PADT_MAX_DEPTH 1000
+
+/* A C FUNCTION's or method's entry: -1 with a RecursionError where calls nest too deep
+ * (no frame of its own on the traceback: the caller's line is the fault's, as Python's). */
+static inline int
+padt_enter(padt_mctx *ctx)
+{
+    if (PADT_LIKELY(++ctx->depth <= PADT_MAX_DEPTH))
+        return 0;
+    ctx->depth--;
+    PyErr_SetString(PyExc_RecursionError, "maximum recursion depth exceeded in native code");
+    return -1;
+}
 
 typedef int (*padt_mbody)(char *, padt_mctx *);
 
@@ -920,6 +981,7 @@ padt_mctx_enter(padt_mctx *ctx, PyObject *view)
     ctx->g = NULL;
     ctx->now_known = 0;
     ctx->tick_known = 0;
+    ctx->depth = 0;
     ctx->sys = PyDict_GetItemWithError(padt_ns, padt_str_sys);
     if (ctx->sys == NULL && PyErr_Occurred())
         return -1;

@@ -2026,7 +2026,8 @@ def _function_text(body: _Body, func: _Numbered) -> str:
     in turn. The Python locals are in a frame the chunks share."""
     name = body.c_name
     head = f"static PyObject *\n{name}(PyObject *s, PyObject *Py_UNUSED(ignored))"
-    return slot_function_text(body, func, head, [], [], ("Py_RETURN_NONE;", "return NULL;"))
+    entry = ["    if (padt_stack_check() < 0) return NULL;"]  # a recursion (padt_native.h)
+    return slot_function_text(body, func, head, [], entry, ("Py_RETURN_NONE;", "return NULL;"))
 
 
 def slot_function_text(

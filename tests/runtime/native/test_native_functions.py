@@ -313,3 +313,39 @@ def test_methods_of_numbers_run_as_c_in_native_memory(native_tier: NativeTier) -
     assert (values["Main.t.n"], values["Main.m.n"]) == (20, 20)  # ten Fills a cycle each
     # parts is 0 in the third cycle: the fault names the method's line, on both tiers
     assert "division by zero in POU Tank (prog.st:24)" in pair.fault_of_the_next_cycle()
+
+
+RECURSION = """
+FUNCTION Deeper : DINT
+VAR_INPUT n : DINT; END_VAR
+Deeper := Deeper(n + 1);
+END_FUNCTION
+FUNCTION Fact : LREAL
+VAR_INPUT n : INT; END_VAR
+IF n <= 1 THEN Fact := 1.0; ELSE Fact := INT_TO_LREAL(n) * Fact(n - 1); END_IF;
+END_FUNCTION
+PROGRAM Main
+VAR r : DINT; f : LREAL; k : INT; END_VAR
+k := k + 10;
+f := Fact(k);
+IF k > 30 THEN r := Deeper(0); END_IF;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("memory", ["image", "slots"])
+def test_a_recursion_in_c_is_a_program_error_as_in_python(
+    native_tier: NativeTier, memory: str
+) -> None:
+    """A FUNCTION's C calls itself on the C stack: an endless recursion once ran it out (the
+    process died of SIGSEGV); now it is the program error of the Python tier, at the same
+    ST line, and a recursion that ends gives the Python tier's values."""
+    text = RECURSION
+    if memory == "slots":
+        text = text.replace("k : INT; END_VAR", "k : INT; p : REF_TO INT; END_VAR")
+    pair = side_by_side(text, native_tier)
+    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
+    assert {"Deeper", "Fact"} <= set(pair.report.bodies)
+    pair.cycle_and_compare(3)  # Fact(10), Fact(20), Fact(30) as C
+    fault = pair.fault_of_the_next_cycle()
+    assert fault == "calls nested too deep (recursion) in POU Deeper (prog.st:4)"

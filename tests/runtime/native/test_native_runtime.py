@@ -1017,3 +1017,36 @@ def test_programs_own_globals_are_copied_by_their_bytes_in_native_memory(
     assert native.variables.image is not None
     assert all(program.view is not native.variables.globals for program in native.programs)
     pair.cycle_and_compare(12)
+
+
+def test_an_endless_recursion_of_blocks_is_a_program_error_not_a_dead_process(
+    native_tier: NativeTier,
+) -> None:
+    """A block calling itself through a reference: its C body called its C body on the C
+    stack until the process died of SIGSEGV (the Python tier faults). Now each body looks
+    at the stack left as it begins: the same program error, at the same ST line. The depth
+    it faults at is not the Python tier's (its recursion limit counts Python's frames), so
+    what the recursion wrote before differs: only the fault is compared."""
+    text = """
+FUNCTION_BLOCK Node
+VAR_INPUT next : REF_TO Node; END_VAR
+VAR d : INT; END_VAR
+d := d + 1;
+IF next <> NULL THEN next^(); END_IF;
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR a : Node; k : INT; END_VAR
+k := k + 1;
+IF k > 2 THEN a.next := REF(a); END_IF;
+a();
+END_PROGRAM
+"""
+    pair = side_by_side(text, native_tier)
+    assert pair.report.bodies == ("Main", "Node")
+    pair.cycle_and_compare(2)
+    for resource in (pair.python, pair.native):
+        advance(resource)
+        assert (
+            program_error(resource) == "calls nested too deep (recursion) in POU Node (prog.st:6)"
+        )
+    assert pair.native.state == pair.python.state  # the resource goes on, as on Python
