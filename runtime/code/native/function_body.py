@@ -174,14 +174,7 @@ def translate_function(
     info = functions.get(unit.class_name)
     if info is None or not info.native or not isinstance(form, Function):
         return Translated(unit.name, "", "", (), ((unit.name, LEFT),))
-    filename = code_filename(unit)
-    module = (
-        _Module(classes, filename, globals_class=globals_class, functions=functions)
-        if layouts is None
-        else _ImageModule(
-            classes, filename, globals_class=globals_class, functions=functions, layouts=layouts
-        )
-    )
+    module = _module(unit, classes, globals_class, functions, layouts)
     try:
         made = _function_text(module, form, form, info, ClassInfo(form.name, {}))
     except NotTranslated as refused:
@@ -206,13 +199,7 @@ def translate_methods(
     cls = classes.get(form.name) if isinstance(form, Class) else None
     if cls is None or not isinstance(form, Class):
         return Translated(unit.name, "", "", (), ())
-    module = _ImageModule(
-        classes,
-        code_filename(unit),
-        globals_class=globals_class,
-        functions=functions,
-        layouts=layouts,
-    )
+    module = _module(unit, classes, globals_class, functions, layouts)
     made: list[tuple[str, tuple[str, str]]] = []
     names: list[str] = []
     left: list[tuple[str, str]] = []
@@ -234,6 +221,22 @@ def translate_methods(
     if not made:
         return Translated(unit.name, "", "", (), tuple(left))
     return _translated(unit, module, "the methods of", made, tuple(names), tuple(left))
+
+
+def _module(
+    unit: PouCode,
+    classes: dict[str, ClassInfo],
+    globals_class: str | None,
+    functions: dict[str, FunctionInfo],
+    layouts: Layouts | None,
+) -> _Module:
+    """The statics of a unit's module: slot mode's, or image mode's at `layouts`."""
+    filename = code_filename(unit)
+    if layouts is None:
+        return _Module(classes, filename, globals_class=globals_class, functions=functions)
+    return _ImageModule(
+        classes, filename, globals_class=globals_class, functions=functions, layouts=layouts
+    )
 
 
 def _refusal(refused: NotTranslated) -> str:
