@@ -96,11 +96,13 @@ class Tests(Screen):
         test = gui.add_dropdown("Test", (NO_SUITE,))
         tier = gui.add_dropdown("Tiers", tuple(TIERS))
         why = None if allowed else "running tests needs Read+Write on the PADT"
-        run_all = gui.add_button("Run all", color="blue", disabled=not allowed, hint=why)
-        run_suite = gui.add_button("Run suite", disabled=not allowed, hint=why)
-        run_test = gui.add_button("Run test", disabled=not allowed, hint=why)
+        # pressable once the tab is open and the project's tests are read (`refresh`): all
+        # screens are made at the login, and a press before that would find no list
+        run_all = gui.add_button("Run all", color="blue", disabled=True, hint=why)
+        run_suite = gui.add_button("Run suite", disabled=True, hint=why)
+        run_test = gui.add_button("Run test", disabled=True, hint=why)
         covered = why or "run all and shade the lines they ran in the editor (Python tier)"
-        run_coverage = gui.add_button("Run with coverage", disabled=not allowed, hint=covered)
+        run_coverage = gui.add_button("Run with coverage", disabled=True, hint=covered)
         status = gui.add_html("")
         results = gui.add_html("")
         self.screen = TestsScreen(
@@ -205,9 +207,11 @@ class Tests(Screen):
             tier = "python"  # coverage is measured on the Python tier
         chosen = UnitTestChoice(choice.suite, choice.test, tier, choice.coverage)
         with screen.lock:
+            if screen.found.project != project:  # chosen on the left since the last list
+                screen.found = Found(project)
             found = screen.found
-            if found.running is not None or found.project != project:
-                return
+            if found.running is not None:
+                return  # the buttons are disabled while a run is under way
             found.running = (0, -1)
             found.said = ("", "")
             found.version += 1

@@ -6,6 +6,7 @@ the test file in the editor at the failing line; one test chosen from the list r
 from __future__ import annotations
 
 import shutil
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
@@ -19,6 +20,8 @@ from backend.engineering.project import demo_project_path
 from backend.engineering.resource_directory import ResourceDirectory
 from backend.engineering.watch_lists import WatchLists
 from frontend.app import PadtUi
+from frontend.screen_registry import Now
+from frontend.screens.tests import Tests
 from frontend.ui_context import UiContext
 from runtime.contract.accounts import hash_password
 from runtime.contract.artifact import UserAccount
@@ -60,11 +63,16 @@ def run(page: Page, button: str, wanted: str) -> None:
     pressed = page.get_by_role("button", name=button, exact=True)
     wait_until(f"{button} can be pressed", pressed.is_enabled, timeout_s=RUN_S)
     pressed.click()
-    wait_until(
-        f"the totals say {wanted!r}",
-        lambda: text_of(page, STATUS).startswith(wanted),
-        timeout_s=RUN_S,
-    )
+    shown: list[str] = []  # what the status said last, for the message if it never holds
+
+    def totals() -> bool:
+        shown[:] = [text_of(page, STATUS)]
+        return shown[0].startswith(wanted)
+
+    try:
+        wait_until(f"the totals say {wanted!r}", totals, timeout_s=RUN_S)
+    except AssertionError as never:
+        raise AssertionError(f"{never}; the status says {shown}") from None
 
 
 def editor_at(page: Page) -> tuple[str, int, str]:
@@ -124,6 +132,35 @@ def failing_ui(tmp_path: Path) -> Iterator[str]:
     assert RIGHT in text
     with serving(tmp_path, text.replace(RIGHT, WRONG)) as url:
         yield url
+
+
+def test_the_run_buttons_wait_until_the_tests_are_read(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Every screen is made at the login and drawn once its tab is open. Under load that
+    drawing comes late: a Run button pressable before it took a press that ran nothing (seen
+    in CI as a run that never began). Here the screen's first drawing is held back."""
+    drawn = threading.Event()
+    draw = Tests.refresh
+
+    def late(screen: Tests, now: Now) -> None:
+        drawn.wait(RUN_S)
+        draw(screen, now)
+
+    monkeypatch.setattr(Tests, "refresh", late)
+    tests = (demo_project_path() / TEST_FILE).read_text(encoding="utf-8")
+    with serving(tmp_path, tests) as url, chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(url)
+        log_in(page, "admin", PASSWORD)
+        page.get_by_role("tab", name="Tests").wait_for(timeout=START_S * 1000)
+        open_tab(page, "Tests")
+        for name in ("Run all", "Run suite", "Run test", "Run with coverage"):
+            button = page.get_by_role("button", name=name, exact=True)
+            assert button.is_disabled(), f"{name} can be pressed before the tests are read"
+        drawn.set()
+        wait_for_text(page, STATUS, "6 tests in 1 suite: not run yet.", timeout_s=RUN_S)
+        run(page, "Run all", "6 passed of 6 tests (native and python) in ")
 
 
 def test_a_failure_shows_expected_and_actual_and_opens_at_its_line(failing_ui: str) -> None:
