@@ -439,12 +439,10 @@ def live_count(screen: EventsScreen, resource: str | None, kind: str) -> int:
 
 
 def _options(dropdown: viser.GuiDropdownHandle[str], options: tuple[str, ...]) -> None:
+    """New options; viser keeps the filter chosen while it is offered. Writing the value
+    read before back would undo a choice the browser made meanwhile."""
     if tuple(dropdown.options) != options:
-        chosen = dropdown.value
         dropdown.options = options
-        if chosen in options:  # a new kind or user must not reset the filter
-            # viser defines the setter apart from the getter: mypy reads it as read-only
-            dropdown.value = chosen  # type: ignore[misc]
 
 
 def _update(screen: EventsScreen, key: tuple[object, ...], chain: str, table: str) -> None:

@@ -89,10 +89,7 @@ def refresh(
     points = reply.points if reply is not None else []
     sources = (ALL_SOURCES, *sorted({x.source for x in points}, key=_source_order))
     if tuple(screen.source.options) != sources:
-        chosen = screen.source.value
-        screen.source.options = sources
-        if chosen in sources:  # a new device must not reset the choice
-            screen.source.value = chosen  # type: ignore[misc]  # viser's setter
+        screen.source.options = sources  # the choice kept while offered (events.py)
     chosen = screen.source.value
     shown = [x for x in points if chosen in (ALL_SOURCES, x.source)]
     table = render_points(shown, error) if reply is not None or error else _note("reading ...")

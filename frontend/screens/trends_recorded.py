@@ -267,10 +267,7 @@ def refresh(
     screen.target, screen.listed, screen.relist = target, listed, relist
     ids = [x.id for x in listed] or [NONE_YET]
     if tuple(screen.choice.options) != tuple(ids):
-        chosen = screen.choice.value
-        screen.choice.options = tuple(ids)
-        if chosen in ids:  # a new recording must not change the choice
-            screen.choice.value = chosen  # type: ignore[misc]  # viser's setter
+        screen.choice.options = tuple(ids)  # the choice kept while offered (events.py)
     _show(screen, "listing", screen.listing, render_listing(listed, error))
     _refresh_manage(screen)
     opened = screen.opened

@@ -8,14 +8,17 @@ from datetime import datetime
 from functools import partial
 
 import pytest
+import viser
 
 from backend.engineering.resource_client import ResourceLogin
+from frontend.gui_value import set_value
 from frontend.permissions import Allowed, allowed
 from frontend.screens import events, parameters
 from frontend.state_rules import program_allows
 from runtime.contract import protocol as p
 from runtime.contract.artifact import ProgramConfig, ResourceConfig
 from runtime.contract.parameters import RESOURCE_BY_NAME, ParameterError
+from tests.conftest import free_port
 
 RESOURCE = ResourceConfig("Tank1", safety_time_ms=600, watchdog_ms=200, target_cycle_ms=100)
 PROGRAMS = [ProgramConfig("Main", "Main", 1, max_duration_us=50_000)]
@@ -151,3 +154,18 @@ def test_a_program_at_a_breakpoint_can_be_stopped_not_frozen() -> None:
                       "open", None, [held])  # fmt: skip
     assert program_allows(p.StopProgram, status, held).ok
     assert program_allows(p.Freeze, status, held) == Allowed(False, "Main is not running")
+
+
+def test_a_filter_chosen_stays_when_new_users_come_and_goes_with_its_user() -> None:
+    """New options keep the choice while it is offered (viser does; the screen writes no
+    value back, which would undo a choice the browser made meanwhile)."""
+    server = viser.ViserServer(port=free_port(), verbose=False)
+    try:
+        user = server.gui.add_dropdown("By user", (events.ALL_USERS, "admin"))
+        set_value(user, "admin")
+        events._options(user, (events.ALL_USERS, "admin", "anna", events.NO_USER))
+        assert user.value == "admin"
+        events._options(user, (events.ALL_USERS, "anna"))
+        assert user.value == events.ALL_USERS
+    finally:
+        server.stop()
