@@ -92,6 +92,34 @@ static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) 
     return NULL;
 }
 
+static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value);
+
+/* A whole structure or instance from an object of the class the view class stands for (of
+ * the same name: a structure a FUNCTION's Python made, a slot object), member by member into
+ * a copy first, so that a member refused leaves the bytes as they were. */
+static int write_members(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value) {
+    PyTypeObject *view_type = (PyTypeObject *)f->view_type;
+    if (PyObject_TypeCheck(value, &ViewType) ||
+        strcmp(Py_TYPE(value)->tp_name, view_type->tp_name) != 0)
+        return padt_refuse(view_type->tp_name, value);
+    PyObject *names = PyObject_GetAttrString(f->view_type, "__slots__");
+    if (names == NULL) return -1;
+    PyObject *scratch = PyByteArray_FromStringAndSize(at(image, offset), f->size);
+    PyObject *copy = scratch != NULL ? view_at(f->view_type, scratch, 0) : NULL;
+    int failed = copy == NULL || !PyTuple_Check(names);
+    for (Py_ssize_t i = 0; !failed && i < PyTuple_GET_SIZE(names); i++) {
+        PyObject *name = PyTuple_GET_ITEM(names, i);
+        PyObject *member = PyObject_GetAttr(value, name);
+        failed = member == NULL || PyObject_SetAttr(copy, name, member) < 0;
+        Py_XDECREF(member);
+    }
+    if (!failed) memcpy(at(image, offset), PyByteArray_AS_STRING(scratch), f->size);
+    Py_XDECREF(copy);
+    Py_XDECREF(scratch);
+    Py_DECREF(names);
+    return failed ? -1 : 0;
+}
+
 static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value) {
     if (field_cleared(f)) return -1;
     char *p = at(image, offset);
@@ -101,9 +129,10 @@ static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObj
         return padt_scalar_set(f->code, p, value);
     case K_CHARS: case K_WCHARS: return padt_chars_set(p, f->length, f->code == K_WCHARS, value);
     case K_NESTED:
-        /* a whole structure or instance: from a view of the same class (a copy) */
+        /* a whole structure or instance: from a view of the same class (a copy), or from
+           an object of its class */
         if (Py_TYPE(value) != (PyTypeObject *)f->view_type)
-            return padt_refuse(((PyTypeObject *)f->view_type)->tp_name, value);
+            return write_members(f, image, offset, value);
         memmove(p, at(((ViewObject *)value)->image, ((ViewObject *)value)->offset), f->size);
         return 0;
     case K_ARRAY: {

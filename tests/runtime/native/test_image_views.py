@@ -140,6 +140,16 @@ def test_arrays_copy_as_lists_structures_whole_and_the_members_are_listed(
     assert main.pts[2].x == 0  # a copy: the image keeps its value
     main.pts[0] = detached  # a structure assigned whole
     assert (main.pts[0].x, main.pts[0].tag) == (7, "ok")
+    # an object of the structure's own class (what a FUNCTION's Python gives) assigned
+    # whole: its members written; one the variable cannot hold leaves the bytes as they were
+    made = run.objects.image.classes()["STRUCT_PT"]()
+    made.x, made.tag = 11, "new"
+    main.pts[1] = made
+    assert (main.pts[1].x, main.pts[1].y, main.pts[1].tag) == (11, 0.0, "new")
+    made.x, made.tag = 12, 3
+    with pytest.raises(TypeError, match="cannot hold 3"):
+        main.pts[1] = made
+    assert (main.pts[1].x, main.pts[1].tag) == (11, "new")
     assert type(main).__slots__[:3] == ("b", "s8", "u8")
     main.lr = math.nan
     assert math.isnan(main.lr)
