@@ -31,13 +31,16 @@ from runtime.code.native.image_body import (
     image_function_text,
 )
 from runtime.code.native.kinds import (
+    Array,
     Bool,
     ClassInfo,
     Float,
     FunctionInfo,
+    Instance,
     Int,
     Kind,
     Nothing,
+    Text,
     kind_of_type,
 )
 from runtime.code.native.translate import (
@@ -48,6 +51,7 @@ from runtime.code.native.translate import (
     _ctype,
     _identifier,
     _is_none,
+    _is_object,
     _kind_name,
     _Module,
     _Numbered,
@@ -66,7 +70,13 @@ from runtime.contract.code.typed_form import Expr, Sequence, Var
 from runtime.contract.code.units import Class, Function, Unit
 from runtime.contract.layout import Layouts
 
-LEFT = "a FUNCTION whose parameters, result or outputs are not all numbers or BOOLs"
+LEFT = (
+    "a FUNCTION whose parameters, result or outputs are not all numbers, BOOLs, texts, "
+    "structures or arrays of fixed bounds"
+)
+# in native memory a structure is bytes of the image, and the C of a FUNCTION there takes
+# and gives C values only (never a reason to leave the image: `_refusal`)
+IMAGE_LEFT = "a FUNCTION of texts or structures in native memory (not yet C)"
 
 
 class _FunctionParts(_Body):
@@ -96,6 +106,12 @@ class _FunctionParts(_Body):
             super().assign_local(name, value_node)
             return
         value = self.expr(value_node)
+        if _is_object(declared):  # a text, a structure: the local holds the object
+            if value.kind != declared:
+                _refuse(f"{name}, a {_kind_name(declared)}, takes a {_kind_name(value.kind)}")
+            self.note_assigned(name, declared)
+            self.keep(self.local_ref(name), value)
+            return
         if isinstance(declared, Int) and isinstance(value.kind, Int):
             self.storable(value, declared, name)
         elif type(value.kind) is not type(declared):
@@ -115,7 +131,7 @@ class _FunctionParts(_Body):
         return super().c_name + own
 
     @property
-    def items(self) -> tuple[Int | Bool | Float | Nothing, ...]:
+    def items(self) -> tuple[Int | Bool | Float | Text | Instance | Array | Nothing, ...]:
         """The kinds of what a call gives: the result, then the outputs and in-outs."""
         return returned_items(self.info)
 
@@ -144,6 +160,11 @@ class _FunctionParts(_Body):
             if isinstance(declared, Nothing):
                 _refuse("a FUNCTION's return of a value where it has no result")
             what = f"what {self.cls.name} gives"
+            if _is_object(declared):  # a new reference into the caller's temporary
+                if found.kind != declared:
+                    _refuse(f"a {_kind_name(found.kind)} returned as a {_kind_name(declared)}")
+                self.line(f"Py_XSETREF(*f->o{n}, Py_NewRef({found.c}));")
+                continue
             if isinstance(declared, Int) and isinstance(found.kind, Int):
                 self.storable(found, declared, what)
             elif type(found.kind) is not type(declared):
@@ -174,6 +195,8 @@ def translate_function(
     info = functions.get(unit.class_name)
     if info is None or not info.native or not isinstance(form, Function):
         return Translated(unit.name, "", "", (), ((unit.name, LEFT),))
+    if layouts is not None and not info.scalar:
+        return Translated(unit.name, "", "", (), ((unit.name, IMAGE_LEFT),))
     module = _module(unit, classes, globals_class, functions, layouts)
     try:
         made = _function_text(module, form, form, info, ClassInfo(form.name, {}))
@@ -295,7 +318,24 @@ def _function_text(
         "    if (padt_enter(ctx) < 0) return -1;",
     ]
     entry += [f"    f->o{n} = o{n};" for n, _ in valued]
-    entry += [f"    {body.local_ref(param.name)} = p{n};" for n, param in enumerate(info.params)]
+    for n, param in enumerate(info.params):
+        local = body.local_ref(param.name)
+        # a structure of its class (its members at their offsets), an array a list
+        if isinstance(param.kind, Instance):
+            check = f"Py_IS_TYPE(p{n}, (PyTypeObject *){module.type_ref(param.kind.cls)})"
+        elif isinstance(param.kind, Array):
+            check = f"PyList_CheckExact(p{n})"
+        else:
+            check = ""
+        if check:
+            entry += [
+                f"    if (PADT_UNLIKELY(!{check})) {{",
+                "        padt_bad_read();",
+                "        goto padt_error;",
+                "    }",
+            ]
+        value = f"Py_NewRef(p{n})" if _is_object(param.kind) else f"p{n}"
+        entry.append(f"    {local} = {value};")
     fields = [f"{_ctype(kind)} *o{n};" for n, kind in valued]
     returns = ("ctx->depth--; return 0;", "ctx->depth--; return -1;")
     if image:
@@ -312,9 +352,11 @@ def _declared(statements: tuple[Stmt, ...]) -> dict[str, Kind]:
     found: dict[str, Kind] = {}
     for statement in statements:
         match statement:
-            case Assign(target=Var(where="local", name=name, type=declared)) if declared:
+            case Assign(target=Var(where="local", name=name, type=declared)) if (
+                declared and not name.startswith("__")  # the compiler's temporaries: inferred
+            ):
                 kind = kind_of_type(declared, {})
-                if isinstance(kind, Int | Bool | Float):
+                if isinstance(kind, Int | Bool | Float | Text):
                     found.setdefault(name, kind)
             case If(body=body, elifs=elifs, orelse=orelse):
                 found.update(_declared(body))

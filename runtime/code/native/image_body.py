@@ -153,6 +153,7 @@ class _ImageBody(_Body):
     module: _ImageModule
     context = "padt_ctx"
     native_methods = True
+    objects_direct = False  # a structure here is bytes of the image, not an object
 
     def runs_on(self, owner: V, info: FunctionInfo) -> bool:
         """A method's C body works on the bytes of an instance of its class, or of a
@@ -275,6 +276,15 @@ class _ImageBody(_Body):
         at = f"({array.c} + {offset} * {stride})"
         return at, array.shape.element, array.kind.element
 
+    def new_structure(self, cls: str) -> V:
+        _refuse(f"a structure made afresh, {cls}() (an object, not bytes of the image)")
+
+    def list_literal(self, items: tuple[Expr, ...], declared: str) -> V:
+        _refuse("a list of values (an object, not bytes of the image)")
+
+    def repeated(self, item: Expr, count: int, declared: str) -> V:
+        _refuse("a list of values (an object, not bytes of the image)")
+
     def copy(self, node: Expr) -> V:
         """`_copy(x)`: the store copies the bytes of what is assigned whole."""
         value = self.expr(node)
@@ -328,10 +338,13 @@ class _ImageBody(_Body):
 
     # -- locals that hold an instance: its address
     def local_ref(self, name: str) -> str:
-        if isinstance(self.local_kind(name), Instance):
+        kind = self.local_kind(name)
+        if isinstance(kind, Instance):
             c = f"l_{_identifier(name)}"
             self.frame.setdefault(c, f"char *{c};")
             return f"f->{c}"
+        if isinstance(kind, Array):  # bytes of the image, which a local does not hold yet
+            _refuse(f"local {name} holds an array")
         return super().local_ref(name)
 
     def keep(self, local: str, value: V) -> None:

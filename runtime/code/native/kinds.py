@@ -136,7 +136,7 @@ class Results:
     """What a call of a FUNCTION's C body gives (image mode, function_body.py): its result
     and outputs as C values, each of its declared kind, where Python has a tuple."""
 
-    items: tuple[Int | Bool | Float | Nothing, ...]
+    items: tuple[Int | Bool | Float | Text | Instance | Array | Nothing, ...]
 
 
 Kind = (
@@ -192,6 +192,7 @@ class ClassInfo:
     # those of its methods a block that extends it overrides: on its own instance, a call
     # of one takes the derived block's where the instance is one (its SUPER^())
     overridden: frozenset[str] = frozenset()
+    structure: bool = False  # a STRUCT's class: a value, made afresh by calling the class
 
 
 Forms = dict[str, Unit]
@@ -233,7 +234,9 @@ def class_table(units: list[PouCode], forms: Forms) -> dict[str, ClassInfo]:
             if found is not None:
                 methods[inherited.name] = found
         methods.pop("__call__", None)
-        table[unit.class_name] = ClassInfo(unit.class_name, members, methods)
+        table[unit.class_name] = ClassInfo(
+            unit.class_name, members, methods, structure=unit.kind == "STRUCT"
+        )
     _mark_overridden(table, forms, own, by_type)
     table[ACTION_CONTROL] = ACTION_CONTROL_INFO
     table.update(_interfaces(forms, table))
@@ -378,31 +381,59 @@ class FunctionInfo:
     result: Kind | None
     outputs: Outputs | None = None
     # a FUNCTION (or method) whose inputs, in-outs, result and outputs are all numbers or
-    # BOOLs (its body may be C, function_body.py): its parameters in order, and the key its
-    # C body has in the table of FUNCTIONs (`native_key`); () and "" for any other
+    # BOOLs, or (a FUNCTION's, on slots) texts and structures (its body may be C,
+    # function_body.py): its parameters in order, and the key its C body has in the table
+    # of FUNCTIONs (`native_key`); () and "" for any other
     params: tuple[ParamInfo, ...] = ()
     native: str = ""
     owner: str = ""  # a method's: the class that defines it
+
+    @property
+    def scalar(self) -> bool:
+        """Its parameters, result and outputs all numbers or BOOLs: C values in either
+        mode (a text or a structure is a Python object, which native memory has not)."""
+        given = self.outputs.items if self.outputs is not None else (self.result,)
+        return all(isinstance(p.kind, SCALAR) for p in self.params) and not any(
+            isinstance(kind, OBJECTS) for kind in given
+        )
 
 
 @dataclass(frozen=True)
 class ParamInfo:
     """An input or in-out of a FUNCTION whose body may be C: its declared kind, and the
-    constant it takes where a call does not give it."""
+    constant it takes where a call does not give it (None for a structure: the compiler's
+    call gives it always, a fresh initial value where the ST leaves it out)."""
 
     name: str
-    kind: Int | Bool | Float
-    default: bool | int | float
+    kind: Int | Bool | Float | Text | Instance | Array
+    default: bool | int | float | str | None
 
 
 SCALAR = (Int, Bool, Float)
+# what a FUNCTION's C on slots takes and gives as a Python object: a text, a structure, an
+# array of numbers, BOOLs or texts (a list)
+OBJECTS = (Text, Instance, Array)
+
+
+def _takes(kind: Kind | None) -> bool:
+    """A number, BOOL or text, a structure, an array of elementary values: what a
+    FUNCTION's C on slots takes and gives."""
+    if isinstance(kind, Array):
+        return isinstance(kind.element, (*SCALAR, Text))
+    return isinstance(kind, (*SCALAR, *OBJECTS))
 
 
 def c_code(kind: Kind) -> str:
     """A letter for the C type of a number or BOOL, as a FUNCTION's C signature has it (a
-    result it does not have: `n`, no C value)."""
+    result it does not have: `n`, no C value); a text `t`, a structure its class."""
     if isinstance(kind, Nothing):
         return "n"
+    if isinstance(kind, Text):
+        return "t"
+    if isinstance(kind, Instance):
+        return f"[{kind.cls}]"
+    if isinstance(kind, Array) and kind.element is not None:
+        return f"[{kind.length}{c_code(kind.element)}]"
     if isinstance(kind, Int):
         return "q" if kind.fits64 else "Q"
     return "b" if isinstance(kind, Bool) else "d"
@@ -415,27 +446,33 @@ def native_key(name: str, params: tuple[ParamInfo, ...], returned: tuple[Kind, .
     return f"{name}({codes}){''.join(c_code(kind) for kind in returned)}"
 
 
-def _native_params(function: Function) -> tuple[ParamInfo, ...] | None:
-    """The parameters of a FUNCTION whose every one is a number or BOOL with a constant
-    default of its kind; None otherwise."""
+def _native_params(function: Function, structures: dict[str, str]) -> tuple[ParamInfo, ...] | None:
+    """The parameters of a FUNCTION whose every one is a number, BOOL or text with a
+    constant default of its kind, or a structure (of `structures`: type -> class) or an
+    array of elementary values; None otherwise."""
     found = []
     for param in function.params:
         default = param.default
-        kind = kind_of_type(default.type, {})
+        kind = kind_of_type(default.type, structures)
+        if isinstance(kind, Instance | Array):
+            if not _takes(kind):
+                return None
+            found.append(ParamInfo(param.name, kind, None))
+            continue
         value = _constant_value(default)
-        if not isinstance(kind, SCALAR) or value is None:
+        if not isinstance(kind, (*SCALAR, Text)) or value is None:
             return None
-        python = {Int: int, Bool: bool, Float: float}[type(kind)]
-        if type(value) is not python or (python is float and not math.isfinite(value)):
+        python = {Int: int, Bool: bool, Float: float, Text: str}[type(kind)]
+        if type(value) is not python or (isinstance(value, float) and not math.isfinite(value)):
             return None
         found.append(ParamInfo(param.name, kind, value))
     return tuple(found)
 
 
-def _constant_value(node: Expr) -> bool | int | float | None:
+def _constant_value(node: Expr) -> bool | int | float | str | None:
     """The value of a parameter's default: a constant, or a REAL's (`_f32(2.5)`)."""
     match node:
-        case Const(value=bool() | int() | float() as value):
+        case Const(value=bool() | int() | float() | str() as value):
             return value
         case Call(callee=F32.name, args=(Const(value=float() | int() as value),)) if (
             type(value) is not bool
@@ -461,9 +498,13 @@ ACTION_CONTROL_INFO = ClassInfo(
 
 
 def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo]:
-    """Every FUNCTION of an artifact, by its name in the namespace. Whether a call gives a
-    tuple, and of what, is read off the form's `return` statements (the artifact names the
-    result type, not the outputs): the declared types of the variables returned."""
+    """Every FUNCTION of `units` (an artifact's), by its name in the namespace. Whether a
+    call gives a tuple, and of what, is read off the form's `return` statements (the
+    artifact names the result type, not the outputs): the declared types of the variables
+    returned."""
+    # the structures by type name: a FUNCTION's C on slots takes and gives them (the
+    # outputs keep the kinds they had, which native memory reads)
+    structures = {unit.name.upper(): unit.class_name for unit in units if unit.kind == "STRUCT"}
     table: dict[str, FunctionInfo] = {}
     for unit in units:
         if unit.kind != "FUNCTION" or not isinstance(unit.returns, str):
@@ -472,24 +513,35 @@ def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo
         if not isinstance(form, Function):
             continue
         returned = _returned(form, unit.class_name, {})
-        result = kind_of_type(unit.returns, {}) if unit.returns else None
+        result = kind_of_type(unit.returns, structures) if unit.returns else None
         info = FunctionInfo(unit.class_name, result, returned.outputs)
-        table[unit.class_name] = _with_native(info, form, unit.class_name, bool(unit.returns))
+        gives = bool(unit.returns)
+        table[unit.class_name] = _with_native(info, form, unit.class_name, gives, structures)
     return table
 
 
-def _with_native(info: FunctionInfo, function: Function, key: str, gives: bool) -> FunctionInfo:
+def _with_native(
+    info: FunctionInfo,
+    function: Function,
+    key: str,
+    gives: bool,
+    structures: dict[str, str] | None = None,
+) -> FunctionInfo:
     """`info` with its parameters and C key where everything its call takes and gives is a
-    number or a BOOL (`gives`: it has a result)."""
-    params = _native_params(function)
+    number or a BOOL, or (given `structures`, a FUNCTION's) a text or a structure
+    (`gives`: it has a result)."""
+    params = _native_params(function, structures or {})
     if info.outputs is not None:
         values: tuple[Kind | None, ...] | None = info.outputs.items or None
     else:
         values = (info.result,) if gives else ()
     if params is None or values is None:
         return info
+    if structures is None and not all(isinstance(p.kind, SCALAR) for p in params):
+        return info
     if not all(
-        isinstance(kind, SCALAR) or (n == 0 and isinstance(kind, Nothing))
+        (isinstance(kind, SCALAR) or (structures is not None and _takes(kind)))
+        or (n == 0 and isinstance(kind, Nothing))
         for n, kind in enumerate(values)
     ):
         return info
@@ -498,7 +550,8 @@ def _with_native(info: FunctionInfo, function: Function, key: str, gives: bool) 
 
 
 def _method_info(function: Function, cls: str, by_type: dict[str, str]) -> FunctionInfo:
-    """A method of class `cls` as a caller sees it; its C key names the class."""
+    """A method of class `cls` as a caller sees it; its C key names the class. Its body is
+    C in native memory only, so of numbers and BOOLs only."""
     info = replace(_returned(function, function.name, by_type), owner=cls)
     gives = any(
         isinstance(line.header, Return) and line.header.value is not None

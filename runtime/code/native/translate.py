@@ -50,6 +50,7 @@ from runtime.code.native.kinds import (
     Text,
     interface_key,
     join,
+    kind_of_type,
 )
 from runtime.contract.artifact import PouCode
 from runtime.contract.code.names import CLASS_NAME, MATH_FUNCTIONS, METHOD_NAME
@@ -79,6 +80,7 @@ from runtime.contract.code.typed_form import (
     Logic,
     Member,
     Named,
+    Repeated,
     Sequence,
     Slice,
     This,
@@ -109,6 +111,7 @@ from runtime.contract.layout import Shape
 
 NAME_PLACEHOLDER = "padt_unit"
 WIDEN_AFTER = 3  # passes over a body before a growing local takes the whole 64-bit range
+MAX_LIST = 1 << 24  # elements of a list a body makes afresh (a FUNCTION's local array)
 _RELATIONS = frozenset({"==", "!=", "<", "<=", ">", ">="})
 # the runtime's string functions called from C, by the kind of their result (an integer
 # one only where its range is known: a position, a character's code)
@@ -335,6 +338,9 @@ class _Body:
     the kinds the body gives them, for the next pass."""
 
     context = "NULL"  # what a FUNCTION's C body is given as its context (image mode's)
+    # a text or a structure is a Python object here, which a FUNCTION's C body on slots
+    # takes and gives (native memory holds structures as bytes: image_body.py)
+    objects_direct = True
 
     def __init__(
         self, module: _Module, cls: ClassInfo, func: _Numbered, local_kinds: dict[str, Kind]
@@ -553,14 +559,19 @@ class _Body:
             self.line(f"{local} = {value.c};")
         elif isinstance(local_kind, Results) and value.kind == local_kind:
             for n, part in enumerate(value.parts):
-                self.line(f"{local}_{n} = {part.c};")
-        elif isinstance(local_kind, Instance | Outputs | Hook) and value.kind == local_kind:
+                if _is_object(part.kind):
+                    self.keep(f"{local}_{n}", part)
+                else:
+                    self.line(f"{local}_{n} = {part.c};")
+        elif isinstance(local_kind, Instance | Outputs | Hook | Text | Array) and (
+            value.kind == local_kind
+        ):
             self.keep(local, value)
         else:
             _refuse(f"local {name} takes a {_kind_name(value.kind)}")
 
     def keep(self, local: str, value: V) -> None:
-        """An instance, a FUNCTION's outputs or a hook into a local of the frame."""
+        """An instance, a text, a FUNCTION's outputs or a hook into a local of the frame."""
         self.line(f"Py_XSETREF({local}, Py_NewRef({value.c}));")
 
     def note_assigned(self, name: str, kind: Kind) -> None:
@@ -587,14 +598,15 @@ class _Body:
                 self.frame[c] = f"int {c};"
             elif isinstance(kind, Float):
                 self.frame[c] = f"double {c};"
-            elif isinstance(kind, Instance | Outputs | Hook):
+            elif isinstance(kind, Instance | Outputs | Hook | Text | Array):
                 self.frame[c] = f"PyObject *{c};"
                 self.frame_objects.append(c)
             elif isinstance(kind, Range):
                 self.frame[c] = f"int64_t {c}_start, {c}_stop;"
             elif isinstance(kind, Results):
-                items = enumerate(kind.items)
+                items = list(enumerate(kind.items))
                 self.frame[c] = " ".join(f"{_ctype(item)} {c}_{n};" for n, item in items)
+                self.frame_objects += [f"{c}_{n}" for n, item in items if _is_object(item)]
             else:
                 _refuse(f"local {name} holds a {_kind_name(kind)}")
         return f"f->{c}"
@@ -864,6 +876,8 @@ class _Body:
                 return self.compare(op, (node.left, node.right))
             case Binary(op="is" | "is not"):
                 return self.identity(node)
+            case Binary(op="+", left=Sequence() | Repeated(), right=Sequence() | Repeated()):
+                return self.joined_lists(node)
             case Binary():
                 return self.binary(node.op, self.expr(node.left), self.expr(node.right))
             case Unary():
@@ -889,7 +903,65 @@ class _Body:
                 return self.call_value(node)
             case Slice(start=None, stop=int() as stop):
                 return self.cut(self.expr(node.value), stop)
+            case Sequence(as_tuple=False, items=items) if items:
+                return self.list_literal(items, node.type)
+            case Repeated(each_new=False, count=count) if 0 < count <= MAX_LIST:
+                return self.repeated(node.item, count, node.type)
         _refuse(f"a {type(node).__name__} expression ({python_text(node)})")
+
+    def list_literal(self, items: tuple[Expr, ...], declared: str) -> V:
+        """`[a, b, ...]`: an array's values (a FUNCTION's constant array), a new list of the
+        values boxed, each evaluated in turn as Python does."""
+        values = [self.expr(item) for item in items]
+        kind = self.list_kind(declared, len(values), [value.kind for value in values])
+        boxed = [self.boxed(value, "a list") for value in values]  # each before the list
+        made = self.owned_object(f"PyList_New({len(values)})")
+        for n, item in enumerate(boxed):
+            self.line(f"PyList_SET_ITEM({made}, {n}, Py_NewRef({item}));")
+        return V(kind, made)
+
+    def repeated(self, item: Expr, count: int, declared: str) -> V:
+        """`[v] * n`: an array at its initial value, a new list of `count` times the value
+        (one object, as Python's)."""
+        value = self.expr(item)
+        kind = self.list_kind(declared, count, [value.kind])
+        boxed = self.boxed(value, "a list")
+        made = self.owned_object(f"PyList_New({count})")
+        n = self.temp("Py_ssize_t")
+        self.line(f"for ({n} = 0; {n} < {count}; {n}++)")
+        self.line(f"    PyList_SET_ITEM({made}, {n}, Py_NewRef({boxed}));")
+        return V(kind, made)
+
+    def joined_lists(self, node: Binary) -> V:
+        """`[a, b] + [0] * n`: an array's values, those not given at their initial value."""
+        left, right = self.expr(node.left), self.expr(node.right)
+        assert isinstance(left.kind, Array) and isinstance(right.kind, Array)
+        kinds = [kind for kind in (left.kind.element, right.kind.element) if kind is not None]
+        length = left.kind.length + right.kind.length
+        kind = self.list_kind(node.type, length, kinds)
+        return V(kind, self.owned_object(f"PySequence_Concat({left.c}, {right.c})"))
+
+    def list_kind(self, declared: str, length: int, kinds: list[Kind]) -> Array:
+        """The kind of a list of `length` values of `kinds`: its declared array type's
+        where each value fits its element (so that it is the kind of a variable or a
+        parameter of that type), else the values' own."""
+        kind = kind_of_type(declared, {}) if declared else None
+        if (
+            isinstance(kind, Array)
+            and kind.length == length
+            and isinstance(kind.element, Int | Bool | Float | Text)
+            and all(_fits(found, kind.element) for found in kinds)
+        ):
+            return kind
+        element = kinds[0]
+        for found in kinds[1:]:
+            joined = join(element, found)
+            if joined is None:
+                _refuse("a list of values of different kinds")
+            element = joined
+        if not isinstance(element, Int | Bool | Float | Text):
+            _refuse(f"a list of {_kind_name(element)}")
+        return Array(element, length)
 
     def member_value(self, owner: V, attr: str) -> V:
         """The value of the variable `attr` of the instance `owner`."""
@@ -908,7 +980,7 @@ class _Body:
         if isinstance(kind, Results):
             parts = tuple(V(item, f"{local}_{n}") for n, item in enumerate(kind.items))
             return V(kind, local, parts=parts)
-        if isinstance(kind, Instance | Outputs | Hook):
+        if isinstance(kind, Instance | Outputs | Hook | Text | Array):
             self.line(f"if (PADT_UNLIKELY({local} == NULL)) goto padt_unbound;")
         narrowed = self.narrowed.get(name)
         return V(narrowed if narrowed is not None else kind, local)
@@ -1291,7 +1363,9 @@ class _Body:
         callee = node.callee
         if isinstance(callee, str):
             info = self.module.functions.get(callee)
-            return self.scalar_call(node, info, None) if info and info.native else None
+            if info is None or not info.native or not (info.scalar or self.objects_direct):
+                return None
+            return self.scalar_call(node, info, None)
         if not (
             self.native_methods
             and isinstance(callee, Member)
@@ -1312,11 +1386,12 @@ class _Body:
         return False
 
     def scalar_call(self, node: Call, info: FunctionInfo, owner: V | None) -> V:
-        """A call of a FUNCTION (or of a method of `owner`) of numbers and BOOLs: its C body
-        where it has one (found once per call site in the binding's table of FUNCTIONs) and
-        where every argument is of its parameter's kind, else its Python, with the values
-        boxed; either way its result and outputs as C values (`Results` where Python has a
-        tuple)."""
+        """A call of a FUNCTION (or of a method of `owner`) of numbers and BOOLs (or, a
+        FUNCTION's on slots, texts and structures): its C body where it has one (found once
+        per call site in the binding's table of FUNCTIONs) and where every argument is of
+        its parameter's kind, else its Python, with the values boxed; either way its result
+        and outputs as C values (`Results` where Python has a tuple), a text or structure as
+        an object a temporary owns."""
         name = _callee_text(node)
         if len(node.args) > len(info.params):
             _refuse(f"a call of {name} with more arguments than it takes")
@@ -1336,16 +1411,30 @@ class _Body:
                 held = self.temp(_ctype(value.kind))
                 self.line(f"{held} = {value.c};")
                 value = V(value.kind, held)
+            elif _is_object(value.kind) and self.objects_direct:  # an argument of its own
+                held = self.temp("PyObject *", "NULL")
+                self.line(f"Py_XSETREF({held}, Py_NewRef({value.c}));")
+                value = V(value.kind, held)
             given[keyword] = value
         items = returned_items(info)
-        outs = [self.temp(_ctype(kind)) if _valued(kind) else "" for kind in items]
-        direct = all(_fits(given[p.name].kind, p.kind) for p in info.params if p.name in given)
+        outs = [
+            (self.temp(_ctype(kind), "NULL" if _is_object(kind) else "0") if _valued(kind) else "")
+            for kind in items
+        ]
+        direct = all(
+            _fits(given[p.name].kind, p.kind) if p.name in given else p.default is not None
+            for p in info.params
+        )
         if owner is not None:
             direct = direct and self.runs_on(owner, info)
         if direct:
             site = self.module.function_site()
             args = [
-                given[p.name].c if p.name in given else _constant(Const(p.default, "")).c
+                given[p.name].c
+                if p.name in given
+                else self.text_constant(p.default).c
+                if isinstance(p.default, str)
+                else _constant(Const(p.default, "")).c
                 for p in info.params
             ]
             instance = ["char *"] if owner is not None else []
@@ -1375,11 +1464,9 @@ class _Body:
             for n, (kind, out) in enumerate(zip(items, outs, strict=True)):
                 if out:
                     obj = f"PyTuple_GET_ITEM({returned}, {n})"
-                    value = self.unboxed(obj, kind, f"an output of {name}")
-                    self.line(f"{out} = {value.c};")
+                    self.given_back(out, self.unboxed(obj, kind, f"an output of {name}"))
         elif outs:
-            value = self.unboxed(returned, items[0], f"the result of {name}")
-            self.line(f"{outs[0]} = {value.c};")
+            self.given_back(outs[0], self.unboxed(returned, items[0], f"the result of {name}"))
         if direct:
             self.depth -= 1
             self.line("}")
@@ -1388,11 +1475,22 @@ class _Body:
             return V(Results(items), "", parts=parts)
         return parts[0]
 
+    def given_back(self, out: str, value: V) -> None:
+        """What a FUNCTION's Python gave into the temporary its C would have written."""
+        if _is_object(value.kind):
+            self.line(f"Py_XSETREF({out}, Py_NewRef({value.c}));")
+        else:
+            self.line(f"{out} = {value.c};")
+
     def call_value(self, node: Call) -> V:
         direct = self.direct_call(node)
         if direct is not None:
             return direct
         name = node.callee if isinstance(node.callee, str) else None
+        if name is not None and not node.args and not node.keywords:
+            made = self.module.classes.get(name)
+            if made is not None and made.structure:
+                return self.new_structure(made.name)
         if (name is not None and name in self.module.functions) or self.is_method_call(node):
             info, returned = self.function_call(node)
             called = _callee_text(node)
@@ -1497,6 +1595,10 @@ class _Body:
             if isinstance(target.kind, Text):
                 return V(Int(0, INT64_MAX), f"((int64_t)PyUnicode_GET_LENGTH({target.c}))")
         _refuse(f"a call of {_callee_text(node)}")
+
+    def new_structure(self, cls: str) -> V:
+        """`STRUCT_X()`: a structure at its initial values, a new object."""
+        return self.owned(Instance(cls), f"PyObject_CallNoArgs({self.module.type_ref(cls)})")
 
     def text_constant(self, text: str) -> V:
         """A text of the program: a str made once as the module is bound (a C string
@@ -1880,20 +1982,31 @@ def _result_range(op: str, a: Int, b: Int) -> Int:
     _refuse(f"the operator {op}")
 
 
-def _fits(value: Kind, param: Int | Bool | Float) -> bool:
+def _fits(value: Kind, param: Kind) -> bool:
     """A value of kind `value` is one the parameter's C type and kind hold, as Python would
-    pass it (an integer within the declared range; a BOOL, a REAL as itself)."""
+    pass it (an integer within the declared range; a BOOL, a REAL, a text, a structure of
+    the parameter's class as itself)."""
     if isinstance(param, Int):
         return isinstance(value, Int) and not value.stand_in and value.within(param)
+    if isinstance(param, Instance | Array):
+        return value == param
     return type(value) is type(param)
 
 
-def returned_items(info: FunctionInfo) -> tuple[Int | Bool | Float | Nothing, ...]:
-    """What a call of a FUNCTION or method of numbers and BOOLs gives, in order: its result
+def _is_object(kind: Kind) -> bool:
+    """A text, a structure or an array: a FUNCTION's C takes and gives the Python object."""
+    return isinstance(kind, Text | Instance | Array)
+
+
+def returned_items(
+    info: FunctionInfo,
+) -> tuple[Int | Bool | Float | Text | Instance | Array | Nothing, ...]:
+    """What a call of a FUNCTION or method whose body may be C gives, in order: its result
     (Nothing where it has none but outputs), then its outputs and in-outs."""
+    given = Int | Bool | Float | Text | Instance | Array
     if info.outputs is not None:
-        return tuple(k for k in info.outputs.items if isinstance(k, Int | Bool | Float | Nothing))
-    return (info.result,) if isinstance(info.result, Int | Bool | Float) else ()
+        return tuple(k for k in info.outputs.items if isinstance(k, given | Nothing))
+    return (info.result,) if isinstance(info.result, given) else ()
 
 
 def _valued(kind: Kind) -> bool:
@@ -1922,6 +2035,8 @@ def _comparison(left: V, op: str, right: V) -> str:
 def _ctype(kind: Kind) -> str:
     if isinstance(kind, Int):
         return kind.ctype
+    if _is_object(kind):
+        return "PyObject *"
     return "double" if isinstance(kind, Float) else "int"
 
 

@@ -84,7 +84,7 @@ class ArtifactTranslation:
             functions,
             forms,
             class_table(units, forms),
-            function_table(functions, forms),
+            function_table([*units, *functions], forms),
             artifact.globals.class_name if artifact.globals is not None else None,
         )
 

@@ -62,8 +62,8 @@ def test_a_function_with_an_open_array_leaves_only_its_caller_to_python(
 ) -> None:
     """A FUNCTION whose in-out is an open array (`ARRAY[*] OF INT`) once made the whole
     artifact's translation fail, every body staying Python; now only the body that passes
-    the array is left to Python, with its reason, beside the FUNCTION's own body (C only
-    for FUNCTIONs of numbers and BOOLs)."""
+    the array is left to Python, with its reason, beside the FUNCTION's own body (an
+    open array is no parameter a FUNCTION's C takes)."""
     text = """
 FUNCTION First : INT
 VAR_IN_OUT a : ARRAY[*] OF INT; END_VAR
@@ -84,6 +84,6 @@ END_PROGRAM
     pair = run_alike(text, native_tier, 3)
     assert "Tick" in pair.report.bodies
     assert [pou for pou, _ in pair.report.left] == ["First", "Main"]
-    assert "not all numbers or BOOLs" in dict(pair.report.left)["First"]
+    assert "arrays of fixed bounds" in dict(pair.report.left)["First"]
     found = values(pair)
     assert (found["Main.q"], found["Main.r"], found["Main.t.n"]) == ([3, 30, 0], 2 + 20, 3)
