@@ -74,9 +74,9 @@ LEFT = (
     "a FUNCTION whose parameters, result or outputs are not all numbers, BOOLs, texts, "
     "structures or arrays of fixed bounds"
 )
-# in native memory a structure is bytes of the image, and the C of a FUNCTION there takes
-# and gives C values only (never a reason to leave the image: `_refusal`)
-IMAGE_LEFT = "a FUNCTION of texts or structures in native memory (not yet C)"
+# in native memory a structure or an array is bytes of the image, which the C of a
+# FUNCTION there does not take or give yet (never a reason to leave the image: `_refusal`)
+IMAGE_LEFT = "a FUNCTION of structures or arrays in native memory (not yet C)"
 
 
 class _FunctionParts(_Body):
@@ -195,7 +195,7 @@ def translate_function(
     info = functions.get(unit.class_name)
     if info is None or not info.native or not isinstance(form, Function):
         return Translated(unit.name, "", "", (), ((unit.name, LEFT),))
-    if layouts is not None and not info.scalar:
+    if layouts is not None and not info.in_image:
         return Translated(unit.name, "", "", (), ((unit.name, IMAGE_LEFT),))
     module = _module(unit, classes, globals_class, functions, layouts)
     try:

@@ -389,12 +389,13 @@ class FunctionInfo:
     owner: str = ""  # a method's: the class that defines it
 
     @property
-    def scalar(self) -> bool:
-        """Its parameters, result and outputs all numbers or BOOLs: C values in either
-        mode (a text or a structure is a Python object, which native memory has not)."""
+    def in_image(self) -> bool:
+        """Its parameters, result and outputs all numbers, BOOLs or texts: its C may work in
+        native memory too, where a text is the str a read of its bytes makes, but a
+        structure or an array is bytes of the image, not a Python object."""
         given = self.outputs.items if self.outputs is not None else (self.result,)
-        return all(isinstance(p.kind, SCALAR) for p in self.params) and not any(
-            isinstance(kind, OBJECTS) for kind in given
+        return not any(
+            isinstance(kind, Instance | Array) for kind in (*(p.kind for p in self.params), *given)
         )
 
 
@@ -528,7 +529,7 @@ def _with_native(
     structures: dict[str, str] | None = None,
 ) -> FunctionInfo:
     """`info` with its parameters and C key where everything its call takes and gives is a
-    number or a BOOL, or (given `structures`, a FUNCTION's) a text or a structure
+    number, a BOOL or a text, or (given `structures`, a FUNCTION's) a structure or an array
     (`gives`: it has a result)."""
     params = _native_params(function, structures or {})
     if info.outputs is not None:
@@ -537,12 +538,10 @@ def _with_native(
         values = (info.result,) if gives else ()
     if params is None or values is None:
         return info
-    if structures is None and not all(isinstance(p.kind, SCALAR) for p in params):
-        return info
+    kinds = [*(p.kind for p in params), *(v for n, v in enumerate(values) if n or v != Nothing())]
     if not all(
-        (isinstance(kind, SCALAR) or (structures is not None and _takes(kind)))
-        or (n == 0 and isinstance(kind, Nothing))
-        for n, kind in enumerate(values)
+        isinstance(kind, (*SCALAR, Text)) or (structures is not None and _takes(kind))
+        for kind in kinds
     ):
         return info
     given = tuple(kind for kind in values if kind is not None)
@@ -551,7 +550,7 @@ def _with_native(
 
 def _method_info(function: Function, cls: str, by_type: dict[str, str]) -> FunctionInfo:
     """A method of class `cls` as a caller sees it; its C key names the class. Its body is
-    C in native memory only, so of numbers and BOOLs only."""
+    C in native memory only, so of numbers, BOOLs and texts only."""
     info = replace(_returned(function, function.name, by_type), owner=cls)
     gives = any(
         isinstance(line.header, Return) and line.header.value is not None

@@ -338,8 +338,8 @@ class _Body:
     the kinds the body gives them, for the next pass."""
 
     context = "NULL"  # what a FUNCTION's C body is given as its context (image mode's)
-    # a text or a structure is a Python object here, which a FUNCTION's C body on slots
-    # takes and gives (native memory holds structures as bytes: image_body.py)
+    # a structure or an array is a Python object here, which a FUNCTION's C body on slots
+    # takes and gives (native memory holds them as bytes: image_body.py)
     objects_direct = True
 
     def __init__(
@@ -1363,7 +1363,7 @@ class _Body:
         callee = node.callee
         if isinstance(callee, str):
             info = self.module.functions.get(callee)
-            if info is None or not info.native or not (info.scalar or self.objects_direct):
+            if info is None or not info.native or not (info.in_image or self.objects_direct):
                 return None
             return self.scalar_call(node, info, None)
         if not (
@@ -1411,7 +1411,8 @@ class _Body:
                 held = self.temp(_ctype(value.kind))
                 self.line(f"{held} = {value.c};")
                 value = V(value.kind, held)
-            elif _is_object(value.kind) and self.objects_direct:  # an argument of its own
+            elif isinstance(value.kind, Text) or (self.objects_direct and _is_object(value.kind)):
+                # an argument of its own (in native memory a structure is bytes, not this)
                 held = self.temp("PyObject *", "NULL")
                 self.line(f"Py_XSETREF({held}, Py_NewRef({value.c}));")
                 value = V(value.kind, held)

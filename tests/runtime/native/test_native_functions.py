@@ -97,12 +97,8 @@ def test_functions_of_numbers_run_as_c_with_the_python_values(
     text = FUNCTIONS if memory == "image" else FUNCTIONS.replace(*ON_SLOTS)
     pair = side_by_side(text, native_tier)
     assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
-    c = ("Count", "Later", "Lerp", "Main", "Ratio", "Smooth", "Wrap")
-    if memory == "image":  # a FUNCTION of texts stays Python there, called from C
-        assert pair.report.bodies == c
-        assert pair.report.left == (("Shout", IMAGE_LEFT),)
-    else:
-        assert pair.report.bodies == tuple(sorted((*c, "Shout")))
+    c = ("Count", "Later", "Lerp", "Main", "Ratio", "Shout", "Smooth", "Wrap")
+    assert pair.report.bodies == c, pair.report.left
     pair.cycle_and_compare(3)
     values = pair.native.variables.values()
     assert (values["Main.m"], values["Main.big"], values["Main.text"]) == (2, 4, "go!!!")
@@ -121,7 +117,7 @@ def test_c_calls_the_functions_c_not_their_python(native_tier: NativeTier, memor
     def broken(**_: object) -> None:
         raise AssertionError("the Python of a FUNCTION whose C is in place")
 
-    for name in ("FN_LERP", "FN_SMOOTH", "FN_WRAP", "FN_COUNT", "FN_LATER"):
+    for name in ("FN_LERP", "FN_SMOOTH", "FN_WRAP", "FN_COUNT", "FN_LATER", "FN_SHOUT"):
         assert name in namespace
         namespace[name] = broken
     pair.cycle_and_compare(3)
@@ -330,26 +326,35 @@ def test_functions_of_texts_structures_and_arrays_run_as_c_on_slots(
 ) -> None:
     """On slots a text, a structure or an array is a Python object, which a FUNCTION's C
     takes and gives: each C body is called from C, with the Python replaced by one that
-    fails. In native memory those FUNCTIONs stay Python (a structure or an array is bytes
-    of the image there), and a structure one gives is stored into the image whole (which
-    faulted before: "a variable of STRUCT_VEC cannot hold <STRUCT_VEC object>")."""
+    fails. In native memory the FUNCTIONs of texts are C too (their C called from C:
+    `test_c_calls_the_functions_c_not_their_python`); those of structures and arrays stay
+    Python (a structure or an array is bytes of the image there), and a structure one
+    gives is stored into the image whole (which faulted before: "a variable of STRUCT_VEC
+    cannot hold <STRUCT_VEC object>")."""
     text = TEXTS_AND_STRUCTURES
     if memory == "slots":
         text = text.replace("sorted : BOOL;", "sorted : BOOL; ref : REF_TO REAL;")
     pair = side_by_side(text, native_tier)
     assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
-    functions = ("Bump", "Interp", "Short", "Sort", "Table", "Tag", "VAdd", "VLen", "VScale")
+    texts = ("Short", "Tag")
+    functions = ("Bump", "Interp", "Sort", "Table", "VAdd", "VLen", "VScale", *texts)
     if memory == "image":
-        assert set(functions) <= {pou for pou, _ in pair.report.left}
+        left = dict(pair.report.left)
+        assert {pou for pou in functions if pou in left} == set(functions) - set(texts)
+        assert left["VAdd"] == left["Sort"] == IMAGE_LEFT
+        assert left["Table"].startswith("a list of values")  # its constant array
+        assert set(texts) <= set(pair.report.bodies)
+        in_c: tuple[str, ...] = ()  # Main stays Python there: it calls their Python
     else:
         assert pair.report.bodies == tuple(sorted((*functions, "Main"))), pair.report.left
-        namespace: dict[str, Any] = pair.native.variables.code.namespace  # type: ignore[union-attr]
+        in_c = functions
+    namespace: dict[str, Any] = pair.native.variables.code.namespace  # type: ignore[union-attr]
 
-        def broken(**_: object) -> None:
-            raise AssertionError("the Python of a FUNCTION whose C is in place")
+    def broken(**_: object) -> None:
+        raise AssertionError("the Python of a FUNCTION whose C is in place")
 
-        for name in functions:
-            namespace[f"FN_{name.upper()}"] = broken
+    for name in in_c:
+        namespace[f"FN_{name.upper()}"] = broken
     pair.cycle_and_compare(4)
     values = pair.native.variables.values()
     assert values["Main.p.x"] == 1.0 and values["Main.b"] == 101.0
@@ -423,6 +428,10 @@ METHOD PUBLIC Share : DINT
 VAR_INPUT parts : DINT; END_VAR
 Share := REAL_TO_DINT(level) / parts;   (* parts 0: a fault in the method *)
 END_METHOD
+METHOD PUBLIC Label : STRING
+VAR_INPUT prefix : STRING := 'T'; END_VAR
+Label := CONCAT(prefix, INT_TO_STRING(n));
+END_METHOD
 level := level * 0.99;
 END_FUNCTION_BLOCK
 FUNCTION_BLOCK Mixer EXTENDS Tank
@@ -430,7 +439,9 @@ VAR speed : INT; END_VAR
 speed := speed + 1;
 END_FUNCTION_BLOCK
 PROGRAM Main
-VAR t : Tank; m : Mixer; got, l : REAL; k : INT; parts : DINT := 3; s : DINT; END_VAR
+VAR
+  t : Tank; m : Mixer; got, l : REAL; k : INT; parts : DINT := 3; s : DINT; a, b : STRING;
+END_VAR
 FOR k := 1 TO 10 DO
   got := got + t.Fill(5.0) + m.Fill(1.0);   (* m: Tank's Fill on a Mixer's bytes *)
 END_FOR;
@@ -438,6 +449,8 @@ t.Drain(by := 2.0, left => l);
 m.Drain();
 parts := parts - 1;
 s := t.Share(parts) + m.Share(1);
+a := t.Label('tank ');
+b := m.Label();
 t(); m();
 END_PROGRAM
 """
@@ -447,8 +460,9 @@ def test_methods_of_numbers_run_as_c_in_native_memory(native_tier: NativeTier) -
     pair = side_by_side(METHODS, native_tier)
     assert pair.report.memory == IN_IMAGE
     assert pair.report.bodies == ("Main", "Mixer", "Tank")
-    assert pair.report.methods == ("Tank.M__DRAIN", "Tank.M__FILL", "Tank.M__SHARE")
-    assert "3 of 3 POU bodies run as C (and 3 methods)" in pair.report.summary()
+    methods = ("M__DRAIN", "M__FILL", "M__LABEL", "M__SHARE")
+    assert pair.report.methods == tuple(f"Tank.{method}" for method in methods)
+    assert "3 of 3 POU bodies run as C (and 4 methods)" in pair.report.summary()
     # with the methods' Python (on the views of the image) failing, C calls the C
     image = pair.native.variables.code.image  # type: ignore[union-attr]
     assert image is not None
@@ -457,12 +471,13 @@ def test_methods_of_numbers_run_as_c_in_native_memory(native_tier: NativeTier) -
     def broken(*_: object, **__: object) -> None:
         raise AssertionError("the Python of a method whose C is in place")
 
-    for method in ("M__FILL", "M__DRAIN", "M__SHARE"):
+    for method in methods:
         setattr(views["POU_TANK"], method, broken)
         setattr(views["POU_MIXER"], method, broken)
     pair.cycle_and_compare(2)
     values = pair.native.variables.values()
     assert (values["Main.t.n"], values["Main.m.n"]) == (20, 20)  # ten Fills a cycle each
+    assert (values["Main.a"], values["Main.b"]) == ("tank 20", "T20")  # a method of texts
     # parts is 0 in the third cycle: the fault names the method's line, on both tiers
     assert "division by zero in POU Tank (prog.st:24)" in pair.fault_of_the_next_cycle()
 

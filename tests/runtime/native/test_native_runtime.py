@@ -598,7 +598,7 @@ ws := STRING_TO_WSTRING(f1);
 END_PROGRAM
 """
     pair = side_by_side(text, native_tier)
-    assert set(pair.report.bodies) == {"Main", "Join"}
+    assert set(pair.report.bodies) == {"Main", "Join", "Tag"}  # Tag: a FUNCTION of texts
     pair.cycle_and_compare(7)
     values = pair.native.variables.values()
     assert values["Main.kept"] == "abodd" and values["Main.w"] == "Ωmegaλ"
