@@ -23,6 +23,7 @@ import hashlib
 import json
 import os
 import sys
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -179,40 +180,48 @@ def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]
     fingerprint = _translator_fingerprint()
     index = cache / toolchain.fingerprint / "index"
     index.mkdir(parents=True, exist_ok=True)
-    answers = []
     work: list[tuple[PouCode, str]] = [
         *((unit, "") for unit in [*translation.units, *translation.function_units]),
         # in image mode, each block's methods of numbers and BOOLs too: a module of their own
         *((unit, "methods") for unit in (translation.units if layouts is not None else [])),
     ]
-    for unit, part in work:
-        # the unit's name too: it is in the C text (a module built before names were
-        # checked could otherwise serve another unit of the same form)
-        named = (fingerprint, shape, code_filename(unit), part, unit.form)
-        key = hashlib.sha256("\n".join(named).encode()).hexdigest()[:32]
-        known = index / f"{key}.json"
-        answer = _known(known)
-        if answer is None:
-            if part:
-                assert layouts is not None
-                translated = translation.translate_methods(unit, layouts)
-            else:
-                translated = translation.translate(unit, layouts)
-            answer = {"pou": unit.name, "left": [reason for _, reason in translated.left]}
-            if part:  # the methods translated; the others stay Python, as before
-                answer.update(function=True, methods=list(translated.bodies), left=[])
-            elif unit.kind == "FUNCTION":  # its module binds to no class (tier.py)
-                answer["function"] = True
-            if translated.source:
+    answers: list[dict[str, Any]] = []
+    # each module compiled on a thread of its own while the next units translate: the C
+    # compilers run on every core, the translation (Python) beside them
+    pending: list[tuple[dict[str, Any], Path, str, Future[Path] | None]] = []
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as builds:
+        for unit, part in work:
+            # the unit's name too: it is in the C text (a module built before names were
+            # checked could otherwise serve another unit of the same form)
+            named = (fingerprint, shape, code_filename(unit), part, unit.form)
+            key = hashlib.sha256("\n".join(named).encode()).hexdigest()[:32]
+            known = index / f"{key}.json"
+            answer = _known(known)
+            if answer is None:
+                if part:
+                    assert layouts is not None
+                    translated = translation.translate_methods(unit, layouts)
+                else:
+                    translated = translation.translate(unit, layouts)
+                answer = {"pou": unit.name, "left": [reason for _, reason in translated.left]}
+                if part:  # the methods translated; the others stay Python, as before
+                    answer.update(function=True, methods=list(translated.bodies), left=[])
+                elif unit.kind == "FUNCTION":  # its module binds to no class (tier.py)
+                    answer["function"] = True
+                source, module = translated.source, translated.module
+                compiled = (
+                    builds.submit(build, module, source, cache, toolchain) if source else None
+                )
+                pending.append((answer, known, module, compiled))
+            answers.append(answer)  # a pending one is completed below, in place
+        for answer, known, module, compiled in pending:
+            if compiled is not None:
                 try:
-                    path = build(translated.module, translated.source, cache, toolchain)
+                    answer.update(module=module, path=str(compiled.result()))
                 except BuildError as exc:
                     answer["failed"] = str(exc)
-                else:
-                    answer.update(module=translated.module, path=str(path))
             if "failed" not in answer:
                 _write_atomically(known, json.dumps(answer))
-        answers.append(answer)
     prune(cache)
     return {"units": answers}
 
