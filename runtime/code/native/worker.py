@@ -182,7 +182,8 @@ def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]
     index.mkdir(parents=True, exist_ok=True)
     work: list[tuple[PouCode, str]] = [
         *((unit, "") for unit in [*translation.units, *translation.function_units]),
-        # in image mode, each block's methods of numbers and BOOLs too: a module of their own
+        # in image mode, each block's methods of numbers, BOOLs and texts too: a module of
+        # their own
         *((unit, "methods") for unit in (translation.units if layouts is not None else [])),
     ]
     answers: list[dict[str, Any]] = []
