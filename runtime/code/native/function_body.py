@@ -213,12 +213,13 @@ def translate_methods(
     classes: dict[str, ClassInfo],
     globals_class: str | None,
     functions: dict[str, FunctionInfo],
-    layouts: Layouts,
+    layouts: Layouts | None = None,
 ) -> Translated:
     """The C module of the methods (and property accessors) of one block's class that
-    take and give numbers and BOOLs, in image mode: each registered by its class, name and
-    C signature, for the call sites of image-mode C to call directly. `bodies` names the
-    methods translated; the others stay Python, as a caller's `left` says nothing of."""
+    take and give numbers, BOOLs and texts, on objects or in image mode at `layouts`'
+    offsets: each registered by its class, name and C signature, for the call sites of C
+    to call directly. `bodies` names the methods translated; the others stay Python, as a
+    caller's `left` says nothing of."""
     cls = classes.get(form.name) if isinstance(form, Class) else None
     if cls is None or not isinstance(form, Class):
         return Translated(unit.name, "", "", (), ())
@@ -301,7 +302,7 @@ def _function_text(
         given,
     )
     assert isinstance(body, _FunctionParts)
-    instance = ["char *s"] if function.method else []
+    instance = [f"{body.instance_ctype}s"] if function.method else []
     params = [f"{_ctype(param.kind)} p{n}" for n, param in enumerate(info.params)]
     valued = [(n, kind) for n, kind in enumerate(body.items) if not isinstance(kind, Nothing)]
     outs = [f"{_ctype(kind)} *o{n}" for n, kind in valued]

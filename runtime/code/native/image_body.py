@@ -152,23 +152,24 @@ _RUNTIME_STRUCTS = {
 class _ImageBody(_Body):
     module: _ImageModule
     context = "padt_ctx"
-    native_methods = True
     objects_direct = False  # a structure here is bytes of the image, not an object
+    instance_ctype = "char *"
 
-    def runs_on(self, owner: V, info: FunctionInfo) -> bool:
+    def runs_on(self, owner: V, info: FunctionInfo) -> str | None:
         """A method's C body works on the bytes of an instance of its class, or of a
-        block that extends it (whose bytes begin with its members); not on this body's
-        own instance where a derived block overrides a method (whose bytes may be a
-        derived instance's, `instance_object`)."""
+        block that extends it (whose bytes begin with its members): an instance variable
+        in native memory holds one of its declared type, so no check is needed at the
+        call ("" ); not on this body's own instance where a derived block overrides a
+        method (whose bytes may be a derived instance's, `instance_object`)."""
         assert isinstance(owner.kind, Instance)
         if owner.c == "s" and self.cls.overridden:
-            return False
+            return None
         if owner.kind.cls == info.owner:
-            return True
+            return ""
         own, theirs = self.module.layouts.get(owner.kind.cls), self.module.layouts.get(info.owner)
         if own is None or theirs is None:
-            return False
-        return own.members[: len(theirs.members)] == theirs.members
+            return None
+        return "" if own.members[: len(theirs.members)] == theirs.members else None
 
     # -- reading and writing the image
     def member_value(self, owner: V, attr: str) -> V:

@@ -1352,9 +1352,8 @@ class _Body:
         self.line("}")
         return V(kind, held)
 
-    # -- FUNCTIONs and methods of numbers and BOOLs: their C bodies, called directly
-    # (function_body.py)
-    native_methods = False  # methods' C bodies called directly (image mode's)
+    # -- FUNCTIONs and methods: their C bodies, called directly (function_body.py)
+    instance_ctype = "PyObject *"  # what a method's C body takes as its instance
 
     def direct_call(self, node: Call) -> V | None:
         """A call of a FUNCTION, or of a method of an instance, whose body may be C: every
@@ -1367,8 +1366,7 @@ class _Body:
                 return None
             return self.scalar_call(node, info, None)
         if not (
-            self.native_methods
-            and isinstance(callee, Member)
+            isinstance(callee, Member)
             and not isinstance(callee.base, Named)  # SUPER^.X(): the base's, by its class
             and METHOD_NAME.match(callee.name) is not None
         ):
@@ -1381,9 +1379,16 @@ class _Body:
             return None
         return self.scalar_call(node, info, self.expr(callee.base))
 
-    def runs_on(self, owner: V, info: FunctionInfo) -> bool:
-        """A method's C body (of class `info.owner`) may run on the instance `owner`."""
-        return False
+    def runs_on(self, owner: V, info: FunctionInfo) -> str | None:
+        """Whether a method's C body (of class `info.owner`, found on the class the
+        instance `owner` is declared of) may run on it: None never, else the condition in
+        C, checked at each call. On objects the instance may be of a derived block (an
+        in-out, a reference's), which may override the method: the C is taken where the
+        object's class is exactly the declared one (a derived block's instance inherits
+        the base's slots first, at the base's offsets), else the method is looked up as
+        Python does."""
+        assert isinstance(owner.kind, Instance)
+        return f"Py_IS_TYPE({owner.c}, (PyTypeObject *){self.module.type_ref(owner.kind.cls)})"
 
     def scalar_call(self, node: Call, info: FunctionInfo, owner: V | None) -> V:
         """A call of a FUNCTION (or of a method of `owner`) of numbers and BOOLs (or, a
@@ -1426,8 +1431,8 @@ class _Body:
             _fits(given[p.name].kind, p.kind) if p.name in given else p.default is not None
             for p in info.params
         )
-        if owner is not None:
-            direct = direct and self.runs_on(owner, info)
+        guard = self.runs_on(owner, info) if owner is not None else ""
+        direct = direct and guard is not None
         if direct:
             site = self.module.function_site()
             args = [
@@ -1438,7 +1443,7 @@ class _Body:
                 else _constant(Const(p.default, "")).c
                 for p in info.params
             ]
-            instance = ["char *"] if owner is not None else []
+            instance = [self.instance_ctype] if owner is not None else []
             ctypes = ", ".join(
                 ["padt_mctx *", *instance, *(_ctype(p.kind) for p in info.params)]
                 + [f"{_ctype(kind)} *" for kind in items if _valued(kind)]
@@ -1447,7 +1452,8 @@ class _Body:
             first = [self.context, *([owner.c] if owner is not None else [])]
             everything = ", ".join([*first, *args, *(f"&{out}" for out in outs if out)])
             self.check(f"padt_function_site(&{site}, {self.module.key(info.native)})")
-            self.line(f"if (PADT_LIKELY({site}.function != NULL)) {{")
+            found = f"{site}.function != NULL" + (f" && {guard}" if guard else "")
+            self.line(f"if (PADT_LIKELY({found})) {{")
             self.line(f"    if (PADT_UNLIKELY({call}({everything}) < 0)) goto padt_error;")
             self.line("} else {")
             self.depth += 1

@@ -102,9 +102,9 @@ class ArtifactTranslation:
         ]
         return repr((self.globals_class, sorted(members), sorted(self.functions.items())))
 
-    def translate_methods(self, unit: PouCode, layouts: Layouts) -> Translated:
-        """The C of the methods of a block's class that take and give numbers and BOOLs,
-        in image mode."""
+    def translate_methods(self, unit: PouCode, layouts: Layouts | None = None) -> Translated:
+        """The C of the methods of a block's class that take and give numbers, BOOLs and
+        texts: on the slots of objects, or in image mode at `layouts`' offsets."""
         form = self.forms[unit.class_name]
         return translate_methods(
             unit, form, self.classes, self.globals_class, self.functions, layouts
@@ -182,9 +182,8 @@ def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]
     index.mkdir(parents=True, exist_ok=True)
     work: list[tuple[PouCode, str]] = [
         *((unit, "") for unit in [*translation.units, *translation.function_units]),
-        # in image mode, each block's methods of numbers, BOOLs and texts too: a module of
-        # their own
-        *((unit, "methods") for unit in (translation.units if layouts is not None else [])),
+        # each block's methods of numbers, BOOLs and texts too: a module of their own
+        *((unit, "methods") for unit in translation.units),
     ]
     answers: list[dict[str, Any]] = []
     # each module compiled on a thread of its own while the next units translate: the C
@@ -200,7 +199,6 @@ def make(artifact: Artifact, cache: Path, image: bool = False) -> dict[str, Any]
             answer = _known(known)
             if answer is None:
                 if part:
-                    assert layouts is not None
                     translated = translation.translate_methods(unit, layouts)
                 else:
                     translated = translation.translate(unit, layouts)

@@ -456,30 +456,75 @@ END_PROGRAM
 """
 
 
-def test_methods_of_numbers_run_as_c_in_native_memory(native_tier: NativeTier) -> None:
-    pair = side_by_side(METHODS, native_tier)
-    assert pair.report.memory == IN_IMAGE
+@pytest.mark.parametrize("memory", ["image", "slots"])
+def test_methods_of_numbers_and_texts_run_as_c(native_tier: NativeTier, memory: str) -> None:
+    """In native memory, and on objects (where a call takes the C when the instance is
+    exactly of its declared class, else looks the method up as Python does)."""
+    text = METHODS
+    if memory == "slots":
+        text = text.replace("a, b : STRING;", "a, b : STRING; r : REF_TO REAL;")
+    pair = side_by_side(text, native_tier)
+    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
     assert pair.report.bodies == ("Main", "Mixer", "Tank")
     methods = ("M__DRAIN", "M__FILL", "M__LABEL", "M__SHARE")
     assert pair.report.methods == tuple(f"Tank.{method}" for method in methods)
     assert "3 of 3 POU bodies run as C (and 4 methods)" in pair.report.summary()
-    # with the methods' Python (on the views of the image) failing, C calls the C
-    image = pair.native.variables.code.image  # type: ignore[union-attr]
-    assert image is not None
-    views = image.views
+    # with the methods' Python failing (on the views of the image, or the classes), C
+    # calls the C
+    code = pair.native.variables.code
+    assert code is not None
+    classes = code.image.views if code.image is not None else code.namespace
 
     def broken(*_: object, **__: object) -> None:
         raise AssertionError("the Python of a method whose C is in place")
 
     for method in methods:
-        setattr(views["POU_TANK"], method, broken)
-        setattr(views["POU_MIXER"], method, broken)
+        setattr(classes["POU_TANK"], method, broken)
+        setattr(classes["POU_MIXER"], method, broken)
     pair.cycle_and_compare(2)
     values = pair.native.variables.values()
     assert (values["Main.t.n"], values["Main.m.n"]) == (20, 20)  # ten Fills a cycle each
     assert (values["Main.a"], values["Main.b"]) == ("tank 20", "T20")  # a method of texts
     # parts is 0 in the third cycle: the fault names the method's line, on both tiers
     assert "division by zero in POU Tank (prog.st:24)" in pair.fault_of_the_next_cycle()
+
+
+INHERITED = """
+FUNCTION_BLOCK Base
+VAR_OUTPUT n : INT; END_VAR
+METHOD PUBLIC Step : INT
+Step := THIS^.Size() + 1;     (* on a Derived: Derived's Size *)
+n := n + Step;
+END_METHOD
+METHOD PUBLIC Size : INT
+Size := 1;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Derived EXTENDS Base
+METHOD PUBLIC OVERRIDE Size : INT
+Size := 10;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR b : Base; d : Derived; x, y : INT; r : REF_TO INT; END_VAR
+x := b.Step();
+y := d.Step();                (* Base's Step, inherited, on a Derived *)
+END_PROGRAM
+"""
+
+
+def test_an_inherited_method_on_slots_calls_the_override_of_its_instance(
+    native_tier: NativeTier,
+) -> None:
+    """Base's Step runs as C on a Derived (its declared class's method, inherited), and
+    its call of THIS^.Size() takes Derived's override: the object's class is not exactly
+    Base there, so the call looks the method up as Python does."""
+    pair = side_by_side(INHERITED, native_tier)
+    assert pair.report.memory != IN_IMAGE  # the reference keeps it on objects
+    assert "Base.M__STEP" in pair.report.methods
+    pair.cycle_and_compare(2)
+    values = pair.native.variables.values()
+    assert (values["Main.x"], values["Main.y"], values["Main.d.n"]) == (2, 11, 22)
 
 
 RECURSION = """
