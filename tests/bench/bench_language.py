@@ -19,6 +19,7 @@ from backend.compiler.parse import parse_source
 from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile, read_source
 from runtime.code.native.worker import ArtifactTranslation
+from runtime.contract.layout import class_layouts, runtime_layouts
 from tests.bench.baseline import REPO as CODE_BASE
 from tests.bench.baseline import Compared, compare, probe, verdict
 
@@ -186,14 +187,14 @@ def bench_native_coverage(sources: list[SourceFile]) -> None:
         if artifact is None:
             continue
         translation = ArtifactTranslation.of(artifact)
+        layouts = {**runtime_layouts(), **class_layouts(artifact.units())}
         for unit in [*translation.units, *translation.function_units]:
             result = translation.translate(unit)
             if unit.kind == "FUNCTION":
                 functions += 1
                 functions_c += len(result.bodies)
-                # in native memory not those of structures or arrays (function_body.py)
-                info = translation.functions.get(unit.class_name)
-                functions_image += bool(result.bodies) and info is not None and info.in_image
+                # in native memory too: not those of structures or arrays (function_body.py)
+                functions_image += len(translation.translate(unit, layouts).bodies)
             else:
                 translated += len(result.bodies)
                 total += len(result.bodies) + len(result.left)
