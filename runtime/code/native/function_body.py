@@ -106,7 +106,7 @@ class _FunctionParts(_Body):
             super().assign_local(name, value_node)
             return
         value = self.expr(value_node)
-        if _is_object(declared):  # a text, a structure: the local holds the object
+        if _is_object(declared):  # a text, structure or array: the local holds the object
             if value.kind != declared:
                 _refuse(f"{name}, a {_kind_name(declared)}, takes a {_kind_name(value.kind)}")
             self.note_assigned(name, declared)

@@ -158,9 +158,9 @@ class _ImageBody(_Body):
     def runs_on(self, owner: V, info: FunctionInfo) -> str | None:
         """A method's C body works on the bytes of an instance of its class, or of a
         block that extends it (whose bytes begin with its members): an instance variable
-        in native memory holds one of its declared type, so no check is needed at the
-        call ("" ); not on this body's own instance where a derived block overrides a
-        method (whose bytes may be a derived instance's, `instance_object`)."""
+        in native memory holds one of its declared type, so the call checks nothing ("");
+        not on this body's own instance where a derived block overrides a method (whose
+        bytes may be a derived instance's, `instance_object`)."""
         assert isinstance(owner.kind, Instance)
         if owner.c == "s" and self.cls.overridden:
             return None

@@ -381,7 +381,7 @@ class FunctionInfo:
     result: Kind | None
     outputs: Outputs | None = None
     # a FUNCTION (or method) whose inputs, in-outs, result and outputs are all numbers or
-    # BOOLs, or (a FUNCTION's, on slots) texts and structures (its body may be C,
+    # BOOLs or texts, or (a FUNCTION's, on slots) structures and arrays (its body may be C,
     # function_body.py): its parameters in order, and the key its C body has in the table
     # of FUNCTIONs (`native_key`); () and "" for any other
     params: tuple[ParamInfo, ...] = ()
@@ -402,8 +402,8 @@ class FunctionInfo:
 @dataclass(frozen=True)
 class ParamInfo:
     """An input or in-out of a FUNCTION whose body may be C: its declared kind, and the
-    constant it takes where a call does not give it (None for a structure: the compiler's
-    call gives it always, a fresh initial value where the ST leaves it out)."""
+    constant it takes where a call does not give it (None for a structure or an array: the
+    compiler's call gives it always, a fresh initial value where the ST leaves it out)."""
 
     name: str
     kind: Int | Bool | Float | Text | Instance | Array
@@ -426,7 +426,8 @@ def _takes(kind: Kind | None) -> bool:
 
 def c_code(kind: Kind) -> str:
     """A letter for the C type of a number or BOOL, as a FUNCTION's C signature has it (a
-    result it does not have: `n`, no C value); a text `t`, a structure its class."""
+    result it does not have: `n`, no C value); a text `t`, in brackets a structure's class
+    or an array's length and element."""
     if isinstance(kind, Nothing):
         return "n"
     if isinstance(kind, Text):

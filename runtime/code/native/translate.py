@@ -1357,8 +1357,9 @@ class _Body:
 
     def direct_call(self, node: Call) -> V | None:
         """A call of a FUNCTION, or of a method of an instance, whose body may be C: every
-        parameter, its result and its outputs numbers or BOOLs (`FunctionInfo.native`);
-        None (and nothing emitted) for any other call."""
+        parameter, its result and its outputs numbers, BOOLs or texts, or on slots a
+        FUNCTION's structures and arrays too (`FunctionInfo.native`); None (and nothing
+        emitted) for any other call."""
         callee = node.callee
         if isinstance(callee, str):
             info = self.module.functions.get(callee)
@@ -1391,12 +1392,13 @@ class _Body:
         return f"Py_IS_TYPE({owner.c}, (PyTypeObject *){self.module.type_ref(owner.kind.cls)})"
 
     def scalar_call(self, node: Call, info: FunctionInfo, owner: V | None) -> V:
-        """A call of a FUNCTION (or of a method of `owner`) of numbers and BOOLs (or, a
-        FUNCTION's on slots, texts and structures): its C body where it has one (found once
-        per call site in the binding's table of FUNCTIONs) and where every argument is of
-        its parameter's kind, else its Python, with the values boxed; either way its result
-        and outputs as C values (`Results` where Python has a tuple), a text or structure as
-        an object a temporary owns."""
+        """A call of a FUNCTION (or of a method of `owner`) of numbers, BOOLs and texts (or,
+        a FUNCTION's on slots, structures and arrays): its C body where it has one (found
+        once per call site in the binding's table of FUNCTIONs), where every argument is of
+        its parameter's kind and the instance one it may run on (`runs_on`), else its
+        Python, with the values boxed; either way its result and outputs as C values
+        (`Results` where Python has a tuple), a text, structure or array as an object a
+        temporary owns."""
         name = _callee_text(node)
         if len(node.args) > len(info.params):
             _refuse(f"a call of {name} with more arguments than it takes")
