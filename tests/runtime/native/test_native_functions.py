@@ -22,7 +22,7 @@ from tests.compiler.test_differential import (
     _declarations,
     _Writer,
 )
-from tests.support.native_runs import side_by_side
+from tests.support.native_runs import Pair, side_by_side
 
 FUNCTIONS = """
 FUNCTION Lerp : REAL
@@ -85,18 +85,23 @@ END_PROGRAM
 """
 
 
-# a reference keeps a configuration on the slots of Python objects (image_plan.py): there
-# the FUNCTIONs' C is slot mode's
-ON_SLOTS = ("q : DINT; b : DINT := 4;", "q : DINT; b : DINT := 4; p : REF_TO DINT;")
+def in_memory(text: str, tier: NativeTier, memory: str, after: str) -> Pair:
+    """`text` side by side on both tiers, the native one in native memory ("image") or on
+    the slots of Python objects ("slots"): there with a reference declared `after` the
+    given declaration, which keeps a configuration on objects (image_plan.py)."""
+    if memory == "slots":
+        assert after in text
+        text = text.replace(after, f"{after} onObjects : REF_TO INT;", 1)
+    pair = side_by_side(text, tier)
+    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
+    return pair
 
 
 @pytest.mark.parametrize("memory", ["image", "slots"])
 def test_functions_of_numbers_run_as_c_with_the_python_values(
     native_tier: NativeTier, memory: str
 ) -> None:
-    text = FUNCTIONS if memory == "image" else FUNCTIONS.replace(*ON_SLOTS)
-    pair = side_by_side(text, native_tier)
-    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
+    pair = in_memory(FUNCTIONS, native_tier, memory, "b : DINT := 4;")
     c = ("Count", "Later", "Lerp", "Main", "Ratio", "Shout", "Smooth", "Wrap")
     assert pair.report.bodies == c, pair.report.left
     pair.cycle_and_compare(3)
@@ -110,8 +115,7 @@ def test_functions_of_numbers_run_as_c_with_the_python_values(
 def test_c_calls_the_functions_c_not_their_python(native_tier: NativeTier, memory: str) -> None:
     """The call goes to the FUNCTION's C: with its Python replaced by one that fails,
     the native resource runs on with the Python tier's values."""
-    text = FUNCTIONS if memory == "image" else FUNCTIONS.replace(*ON_SLOTS)
-    pair = side_by_side(text, native_tier)
+    pair = in_memory(FUNCTIONS, native_tier, memory, "b : DINT := 4;")
     namespace: dict[str, Any] = pair.native.variables.code.namespace  # type: ignore[union-attr]
 
     def broken(**_: object) -> None:
@@ -195,11 +199,7 @@ def test_a_structure_given_to_a_function_is_its_own_copy(
 ) -> None:
     """In native memory the FUNCTION (Python: it takes a structure) once got a view of the
     caller's bytes, and its write to its input changed the caller's p.x (100 for 1)."""
-    text = STRUCTURE_GIVEN
-    if memory == "slots":
-        text = text.replace("r : REAL; END_VAR", "r : REAL; q : REF_TO REAL; END_VAR")
-    pair = side_by_side(text, native_tier)
-    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
+    pair = in_memory(STRUCTURE_GIVEN, native_tier, memory, "r : REAL;")
     pair.cycle_and_compare(3)
     values = pair.native.variables.values()
     assert (values["Main.p.x"], values["Main.r"]) == (1.0, 100.0 + 3.5)
@@ -232,12 +232,9 @@ def test_an_input_left_out_takes_its_initial_value_at_every_call_on_both_tiers(
 ) -> None:
     """A structure or array input left out of a call is a fresh initial value at every
     call (tests/compiler/test_compiler_regressions.py), on the native tier too: the caller
-    that leaves one out stays Python there (a call of a structure's initial value)."""
-    text = LEFT_OUT
-    if memory == "slots":
-        text = text.replace("b : Box; END_VAR", "b : Box; p : REF_TO REAL; END_VAR")
-    pair = side_by_side(text, native_tier)
-    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
+    that leaves one out makes the fresh value in C on slots, and stays Python in native
+    memory (a structure made afresh is an object, not bytes of the image)."""
+    pair = in_memory(LEFT_OUT, native_tier, memory, "b : Box;")
     pair.cycle_and_compare(3)
     values = pair.native.variables.values()
     assert (values["Main.r"], values["Main.q"]) == (2.5, 1.0)
@@ -331,11 +328,7 @@ def test_functions_of_texts_structures_and_arrays_run_as_c_on_slots(
     Python (a structure or an array is bytes of the image there), and a structure one
     gives is stored into the image whole (which faulted before: "a variable of STRUCT_VEC
     cannot hold <STRUCT_VEC object>")."""
-    text = TEXTS_AND_STRUCTURES
-    if memory == "slots":
-        text = text.replace("sorted : BOOL;", "sorted : BOOL; ref : REF_TO REAL;")
-    pair = side_by_side(text, native_tier)
-    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
+    pair = in_memory(TEXTS_AND_STRUCTURES, native_tier, memory, "sorted : BOOL;")
     texts = ("Short", "Tag")
     functions = ("Bump", "Interp", "Sort", "Table", "VAdd", "VLen", "VScale", *texts)
     if memory == "image":
@@ -460,11 +453,7 @@ END_PROGRAM
 def test_methods_of_numbers_and_texts_run_as_c(native_tier: NativeTier, memory: str) -> None:
     """In native memory, and on objects (where a call takes the C when the instance is
     exactly of its declared class, else looks the method up as Python does)."""
-    text = METHODS
-    if memory == "slots":
-        text = text.replace("a, b : STRING;", "a, b : STRING; r : REF_TO REAL;")
-    pair = side_by_side(text, native_tier)
-    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
+    pair = in_memory(METHODS, native_tier, memory, "a, b : STRING;")
     assert pair.report.bodies == ("Main", "Mixer", "Tank")
     methods = ("M__DRAIN", "M__FILL", "M__LABEL", "M__SHARE")
     assert pair.report.methods == tuple(f"Tank.{method}" for method in methods)
@@ -552,11 +541,7 @@ def test_a_recursion_in_c_is_a_program_error_as_in_python(
     """A FUNCTION's C calls itself on the C stack: an endless recursion once ran it out (the
     process died of SIGSEGV); now it is the program error of the Python tier, at the same
     ST line, and a recursion that ends gives the Python tier's values."""
-    text = RECURSION
-    if memory == "slots":
-        text = text.replace("k : INT; END_VAR", "k : INT; p : REF_TO INT; END_VAR")
-    pair = side_by_side(text, native_tier)
-    assert (pair.report.memory == IN_IMAGE) == (memory == "image"), pair.report.memory
+    pair = in_memory(RECURSION, native_tier, memory, "k : INT;")
     assert {"Deeper", "Fact"} <= set(pair.report.bodies)
     pair.cycle_and_compare(3)  # Fact(10), Fact(20), Fact(30) as C
     fault = pair.fault_of_the_next_cycle()
