@@ -8,8 +8,8 @@ A FUNCTION whose inputs, in-outs, result and outputs are all numbers or BOOLs
 
 which its module puts into the image's registry by the FUNCTION's name and C signature
 (`kinds.native_key`). A call site of image-mode C finds it once and calls it directly
-(image_body.py, `scalar_call`): no boxing, no tuple, no Python frame. Python code (the
-Python tier, a body left to Python, a debugged resource) still calls the FUNCTION's
+(translate.py, `direct_function_call`): no boxing, no tuple, no Python frame. Python code
+(the Python tier, a body left to Python, a debugged resource) still calls the FUNCTION's
 Python, which stays the reference: both are made from the same typed form.
 
 The body is image mode's translation (its locals C values in its frame; `_tick`, `_SYS`

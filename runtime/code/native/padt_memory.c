@@ -92,31 +92,24 @@ static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) 
     return NULL;
 }
 
-static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value);
+static PyObject *members_of(PyObject *view_type);
+static int pack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *source);
 
 /* A whole structure or instance from an object of the class the view class stands for (of
- * the same name: a structure a FUNCTION's Python made, a slot object), member by member into
- * a copy first, so that a member refused leaves the bytes as they were. */
+ * the same name: a structure a FUNCTION's Python made), packed as the tier switch packs a
+ * slot object, into a copy first, so that a member refused leaves the bytes as they were. */
 static int write_members(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value) {
     PyTypeObject *view_type = (PyTypeObject *)f->view_type;
     if (PyObject_TypeCheck(value, &ViewType) ||
         strcmp(Py_TYPE(value)->tp_name, view_type->tp_name) != 0)
         return padt_refuse(view_type->tp_name, value);
-    PyObject *names = PyObject_GetAttrString(f->view_type, "__slots__");
-    if (names == NULL) return -1;
+    PyObject *members = members_of(f->view_type);
+    if (members == NULL) return -1;
     PyObject *scratch = PyByteArray_FromStringAndSize(at(image, offset), f->size);
-    PyObject *copy = scratch != NULL ? view_at(f->view_type, scratch, 0) : NULL;
-    int failed = copy == NULL || !PyTuple_Check(names);
-    for (Py_ssize_t i = 0; !failed && i < PyTuple_GET_SIZE(names); i++) {
-        PyObject *name = PyTuple_GET_ITEM(names, i);
-        PyObject *member = PyObject_GetAttr(value, name);
-        failed = member == NULL || PyObject_SetAttr(copy, name, member) < 0;
-        Py_XDECREF(member);
-    }
+    int failed = scratch == NULL || pack_members(members, scratch, 0, value) < 0;
     if (!failed) memcpy(at(image, offset), PyByteArray_AS_STRING(scratch), f->size);
-    Py_XDECREF(copy);
     Py_XDECREF(scratch);
-    Py_DECREF(names);
+    Py_DECREF(members);
     return failed ? -1 : 0;
 }
 
@@ -479,7 +472,6 @@ static PyObject *members_of(PyObject *view_type) {
     return members;
 }
 
-static int pack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *source);
 static int unpack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *target);
 
 /* The members of a nested field's view class, or NULL with no error for any other field:

@@ -1365,7 +1365,7 @@ class _Body:
             info = self.module.functions.get(callee)
             if info is None or not info.native or not (info.in_image or self.objects_direct):
                 return None
-            return self.scalar_call(node, info, None)
+            return self.direct_function_call(node, info, None)
         if not (
             isinstance(callee, Member)
             and not isinstance(callee.base, Named)  # SUPER^.X(): the base's, by its class
@@ -1378,7 +1378,7 @@ class _Body:
         info = found.methods.get(callee.name) if found is not None else None
         if info is None or not info.native:
             return None
-        return self.scalar_call(node, info, self.expr(callee.base))
+        return self.direct_function_call(node, info, self.expr(callee.base))
 
     def runs_on(self, owner: V, info: FunctionInfo) -> str | None:
         """Whether a method's C body (of class `info.owner`, found on the class the
@@ -1391,7 +1391,7 @@ class _Body:
         assert isinstance(owner.kind, Instance)
         return f"Py_IS_TYPE({owner.c}, (PyTypeObject *){self.module.type_ref(owner.kind.cls)})"
 
-    def scalar_call(self, node: Call, info: FunctionInfo, owner: V | None) -> V:
+    def direct_function_call(self, node: Call, info: FunctionInfo, owner: V | None) -> V:
         """A call of a FUNCTION (or of a method of `owner`) of numbers, BOOLs and texts (or,
         a FUNCTION's on slots, structures and arrays): its C body where it has one (found
         once per call site in the binding's table of FUNCTIONs), where every argument is of
