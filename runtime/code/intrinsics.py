@@ -226,6 +226,33 @@ def _setbits(value: int, shift: int, width: int, part: int) -> int:
     return (value & ~mask) | ((int(part) << shift) & mask)
 
 
+def _fill(target: Any, value: Any) -> None:
+    """`x := v` where x is a block's in-out of an array or a structure: v's values written
+    into what x refers to (the caller's variable, as IEC 61131-3 passes an in-out), member
+    by member and element by element, so that every object held within keeps its identity
+    (another in-out may refer to it). `value` is the compiler's: of x's type, never x's own
+    object or one within it."""
+    if isinstance(value, list):  # an array (the target a list or an image's Elements)
+        for index, item in enumerate(value):
+            if _is_aggregate(item):
+                _fill(target[index], item)
+            else:
+                target[index] = item
+        return
+    for name in type(target).__slots__:
+        item = getattr(value, name)
+        if _is_aggregate(item):
+            _fill(getattr(target, name), item)
+        else:
+            setattr(target, name, item)
+
+
+def _is_aggregate(value: Any) -> bool:
+    """An array or a structure, as a copy holds it: a list, or an object of a generated
+    class (a slot object, a view); not a number, a text or a reference."""
+    return isinstance(value, list) or type(value).__module__ == GENERATED_MODULE
+
+
 def _init(target: Any, values: dict[str, Any]) -> Any:
     """Apply a structure initializer `(a := 1, b := 2)` to a fresh object."""
     for name, value in values.items():
@@ -570,6 +597,7 @@ def namespace(system: SystemView, printf: Callable[..., int] = _stdout_printf) -
         "_deref_set": _deref_set,
         "_setbits": _setbits,
         "_copy": copy.deepcopy,
+        "_fill": _fill,
         "_init": _init,
         "_round": _round,
         "_rol": _rol,

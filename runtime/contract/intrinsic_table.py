@@ -66,6 +66,12 @@ DEREF_SET = _called(
 )
 MUX = _called("_mux", "INT *ANY", "ANY", "MUX", (BOUNDS,))
 COPY = _called("_copy", "ANY", "ANY", "a deep copy: value semantics of arrays and structures")
+FILL = _called(
+    "_fill",
+    "ANY ANY",
+    "-",
+    "an array or structure written whole into the place an in-out refers to",
+)
 ROL = _called("_rol", "INT INT INT", "INT", "ROL over a width")
 ROR = _called("_ror", "INT INT INT", "INT", "ROR over a width")
 F32 = _called("_f32", "REAL", "REAL", "rounding to IEEE single precision (REAL)")
@@ -87,6 +93,7 @@ INTRINSICS: tuple[Intrinsic, ...] = (
     IX,
     _called("_setbits", "INT INT INT INT", "INT", "a bit or part of a bit string written"),
     COPY,
+    FILL,
     _called("_init", "OBJECT ANY", "OBJECT", "a structure initializer applied"),
     ROL,
     ROR,

@@ -95,6 +95,7 @@ from runtime.contract.intrinsic_table import (
     DEREF_SET,
     F32,
     FDIV,
+    FILL,
     IDIV,
     IMOD,
     IX,
@@ -132,8 +133,8 @@ _HELPER_RESULTS: dict[str, Kind] = {
     "_step_time": FULL64,
 }
 # functions of the runtime's called as a statement, their result (None) dropped: an SFC step
-# becoming active
-_HELPER_STATEMENTS = frozenset({"_step_enter"})
+# becoming active, an array or structure written whole into what a block's in-out refers to
+_HELPER_STATEMENTS = frozenset({"_step_enter", FILL.name})
 # ULINT and LWORD, which C holds in a padt_i128
 UNSIGNED64 = Int(0, (1 << 64) - 1)
 # the operations whose result modulo 2**64 needs only the operands modulo 2**64 (`<<` by
