@@ -3,13 +3,16 @@ it (VAR_EXTERNAL, the global named directly, a located output), with every quali
 each program runs on its own view of the globals (more than one program, or a sliced one:
 runtime/code/instances.py). A step's time (L, D, SD, DS, SL) read from a global another program
 writes is the value that program wrote (docs/language.md, SFC). The same set of the globals a
-program writes holds those it passes to an in-out."""
+program writes holds those it passes to an in-out. An action's own body runs as C."""
 
 from __future__ import annotations
+
+import pytest
 
 from runtime.code.native.tier import NativeTier
 from runtime.contract.artifact import ProgramConfig
 from runtime.resource import Resource
+from tests.runtime.native.test_native_functions import in_memory
 from tests.support.native_runs import advance, side_by_side
 
 GLOBALS = """
@@ -182,3 +185,48 @@ def test_a_global_bound_to_an_in_out_is_written_beside_another_program(
     python = history(pair.python, ["total", "count", "other"], 3)
     assert python == {"total": [1, 2, 3], "count": [2, 4, 6], "other": [1, 2, 3]}
     assert history(pair.native, ["total", "count", "other"], 3) == python
+
+
+ACTIONS = """
+FUNCTION_BLOCK Dosing
+VAR_INPUT go : BOOL; END_VAR
+VAR n : INT; total : REAL; label : STRING[12]; END_VAR
+INITIAL_STEP Idle: END_STEP
+TRANSITION FROM Idle TO Dose := go; END_TRANSITION
+STEP Dose: Count(N); Stamp(P); END_STEP
+TRANSITION FROM Dose TO Idle := n MOD 4 = 0; END_TRANSITION
+ACTION Count:
+  n := n + 1;
+  total := total + 0.5 * INT_TO_REAL(n);
+END_ACTION
+ACTION Stamp:
+  label := CONCAT('dose ', INT_TO_STRING(n));
+END_ACTION
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR d : Dosing; cycle : INT; END_VAR
+cycle := cycle + 1;
+d(go := cycle MOD 3 <> 0);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("memory", ["image", "slots"])
+def test_the_actions_bodies_run_as_c(native_tier: NativeTier, memory: str) -> None:
+    """An action's body is a method of its block (`_action_<NAME>`), C as the block's other
+    methods are: with its Python replaced by one that fails, the chart runs on with the
+    Python tier's values."""
+    pair = in_memory(ACTIONS, native_tier, memory, "cycle : INT;")
+    assert pair.report.bodies == ("Dosing", "Main"), pair.report.left
+
+    def python_action(_: object) -> None:
+        raise AssertionError("the Python of an action whose C is in place")
+
+    image = pair.native.variables.image
+    code = pair.native.variables.code
+    assert code is not None
+    for cls in (code.classes()["POU_DOSING"], *([image.views["POU_DOSING"]] if image else [])):
+        cls._action_COUNT = cls._action_STAMP = python_action  # type: ignore[attr-defined]
+    pair.cycle_and_compare(12)
+    values = pair.native.variables.values()
+    assert values["Main.d.n"] > 4 and values["Main.d.label"].startswith("dose ")
