@@ -6,6 +6,12 @@ in C, without a Python object per instance. Values are the contract's representa
 trees are the ones `context_snapshot.snapshot` makes of the objects, so a context saved
 on either side warm-starts the other.
 
+A block's in-out of an array or a structure is where a call bound it (layout.py's
+`Bound`): a path through one is found at each read and write, as the objects' path goes
+through the caller's very variable; the context holds the values it refers to, as the
+objects' snapshot does, and a restore puts them into the in-out's own storage (a restored
+block holds a variable of its own until its next call, as on objects).
+
 A resource's values go into an image once its C is in place (runtime/image_switch.py).
 """
 
@@ -32,6 +38,7 @@ from runtime.context_snapshot import (
 )
 from runtime.contract.layout import (
     NULLABLE_TIME,
+    Bound,
     Chars,
     Elements,
     ImageLayout,
@@ -45,14 +52,17 @@ from runtime.memory import ValueTrees
 
 _NO_TIME = -(1 << 63)  # a runtime class's time that is None (layout.NULLABLE_TIME)
 _LENGTH = struct.Struct("<H")
+_BOUND = struct.Struct("<I")  # where an in-out is bound (layout.Bound)
 
 
 @dataclass(frozen=True)
 class _Place:
-    """Where a variable's bytes are in the image, and their shape."""
+    """Where a variable's bytes are in the image, and their shape; `through_in_out`: found
+    through an in-out, so only until a call binds it elsewhere."""
 
     offset: int
     shape: Shape
+    through_in_out: bool = False
 
 
 class ImageMemory:
@@ -85,12 +95,22 @@ class ImageMemory:
         if not bounds:  # (an `itemgetter` of one index gives no tuple)
             return list
         places = [self._place(bound) for bound in bounds]
-        scalars = sorted({p.offset: p.shape for p in places if isinstance(p.shape, Scalar)}.items())
+        fixed = [isinstance(p.shape, Scalar) and not p.through_in_out for p in places]
+        scalars = sorted(
+            {p.offset: p.shape for p, f in zip(places, fixed, strict=True) if f}.items()
+        )
         packed = self._packing(scalars)
         order = {offset: n for n, (offset, _) in enumerate(scalars)}
-        others = [(n, p) for n, p in enumerate(places) if not isinstance(p.shape, Scalar)]
+        others = [
+            (n, p)
+            for n, p in enumerate(places)
+            if not isinstance(p.shape, Scalar) and not p.through_in_out
+        ]
+        moving = [
+            (n, b) for n, (b, p) in enumerate(zip(bounds, places, strict=True)) if p.through_in_out
+        ]
         # where each variable's value is in the row (a text's or an array's: a stand-in)
-        pick = [order[p.offset] if isinstance(p.shape, Scalar) else 0 for p in places]
+        pick = [order[p.offset] if f else 0 for p, f in zip(places, fixed, strict=True)]
         gather = operator.itemgetter(*pick, 0)  # a tuple, however many variables
         image, value = self._image, self._value
 
@@ -100,6 +120,8 @@ class ImageMemory:
             got.pop()
             for n, place in others:
                 got[n] = value(place.offset, place.shape)
+            for n, bound in moving:
+                got[n] = self.read(bound)
             return got
 
         return read
@@ -109,10 +131,13 @@ class ImageMemory:
         return self._value(place.offset, place.shape)
 
     def writer(self, bound: BoundVariable) -> Callable[[Any], None]:
-        places = [self._place(bound, root) for root in self._roots(bound)]
+        roots = self._roots(bound)
+        places = [self._place(bound, root) for root in roots]
 
         def write(value: Any) -> None:
-            for place in places:
+            for root, place in zip(roots, places, strict=True):
+                if place.through_in_out:  # where its in-out is bound now
+                    place = self._place(bound, root)
                 self._put(self._image, place.offset, place.shape, value)
 
         return write
@@ -132,7 +157,10 @@ class ImageMemory:
         placed = self._at[root]
         offset = placed.offset
         shape: Shape = Nested(placed.cls)
+        through = False
         for step in bound.path.attrs:
+            if isinstance(shape, Bound):
+                offset, shape, through = self._target(offset, shape), shape.target, True
             if isinstance(step, int):
                 if not isinstance(shape, Elements) or not 0 <= step < shape.count:
                     raise KeyError(f"{bound.path.path}: no element {step}")
@@ -143,7 +171,18 @@ class ImageMemory:
                     raise KeyError(f"{bound.path.path}: no member {step}")
                 member = self._layouts[shape.cls].member(step)
                 offset, shape = offset + member.offset, member.shape
-        return _Place(offset, shape)
+        if isinstance(shape, Bound):
+            offset, shape, through = self._target(offset, shape), shape.target, True
+        return _Place(offset, shape, through)
+
+    def _target(self, offset: int, bound: Bound, image: bytearray | None = None) -> int:
+        """Where the in-out at `offset` is bound, checked to lie in the image."""
+        image = self._image if image is None else image
+        target = _BOUND.unpack_from(image, offset)[0]
+        size, _ = size_and_align(bound.target, self._layouts.__getitem__)
+        if target == 0 or target + size > len(image):
+            raise KeyError("an in-out bound to no variable of the image")
+        return int(target)
 
     def _value(self, offset: int, shape: Shape, image: bytearray | None = None) -> Any:
         image = self._image if image is None else image
@@ -161,6 +200,8 @@ class ImageMemory:
                 if isinstance(element, Scalar) and element.code != NULLABLE_TIME:
                     return list(struct.unpack_from(f"<{count}{_code(element.code)}", image, offset))
                 return [self._value(offset + n * stride, element, image) for n in range(count)]
+            case Bound(target=target):
+                return self._value(self._target(offset, shape, image), target, image)
         raise TypeError(f"no value of a {type(shape).__name__}")
 
     def _put(self, image: bytearray, offset: int, shape: Shape, value: Any) -> None:
@@ -186,6 +227,9 @@ class ImageMemory:
                 stride = size_and_align(element, self._layouts.__getitem__)[0]
                 for n, item in enumerate(value):
                     self._put(image, offset + n * stride, element, item)
+                return
+            case Bound(target=target):
+                self._put(image, self._target(offset, shape, image), target, value)
                 return
         raise TypeError(f"no value into a {type(shape).__name__}")
 
@@ -254,6 +298,8 @@ class ImageMemory:
             case Elements(element=element, count=count) if not isinstance(element, Scalar):
                 stride = size_and_align(element, self._layouts.__getitem__)[0]
                 return [self._tree(offset + n * stride, element, rows) for n in range(count)]
+            case Bound(target=target):  # the values of the variable it refers to
+                return self._tree(self._target(offset, shape), target, rows)
         value = self._value(offset, shape)
         if isinstance(value, list):
             return [_node(item) for item in value]
@@ -313,6 +359,11 @@ class ImageMemory:
                     except ContextMismatch as exc:
                         exc.path.insert(0, n)
                         raise
+                return
+            case Bound(target=target):  # into its own storage, where it is bound until a call
+                own = offset + shape.own(self._layouts.__getitem__)
+                self._restore_node(image, own, target, node)
+                _BOUND.pack_into(image, offset, own)
                 return
         value = _value_of(node, shape)
         try:

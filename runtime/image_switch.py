@@ -31,10 +31,10 @@ def enter_image(variables: Variables, plan: ImagePlan) -> bytearray:
         for p in plan.placement.placements
         if p.cls in plan.views
     }
-    # every value packed (in C) before any instance is replaced: a value a view refuses
-    # (of another type, out of its range) leaves the configuration as it was
-    for name, instance in _held(variables).items():
-        plan.memory.pack(views[name], instance)
+    # every value packed (in C, all at once: an in-out is bound where its variable went)
+    # before any instance is replaced: a value a view refuses (of another type, out of its
+    # range) leaves the configuration as it was
+    plan.memory.pack([(views[name], instance) for name, instance in _held(variables).items()])
     _move(variables, views)
     variables.memory = ImageMemory(
         image, plan.layouts, plan.placement, plan.class_names, [p.name for p in variables.programs]
@@ -59,8 +59,8 @@ def leave_image(variables: Variables) -> None:
         else code.new_instance(pous.get(name) or name.removeprefix("_P."))
         for name in held
     }
-    for name, view in held.items():
-        variables.image.memory.unpack(view, fresh[name])  # every value, in C
+    # every value, in C, all at once: an in-out gets the object unpacked where it is bound
+    variables.image.memory.unpack([(view, fresh[name]) for name, view in held.items()])
     _move(variables, fresh)
     variables.memory = ObjectMemory(variables.globals, variables.programs)
     variables.bound = list(variables.bound)

@@ -18,10 +18,14 @@ build rather than corrupt memory.
   (IEC 61131-3's single-byte and double-byte strings); CHAR and WCHAR are strings of one.
 - A structure or function block instance is its class's struct, inline; an array is its
   elements, inline, row-major, however many dimensions it has.
-- A reference (REF_TO, REFERENCE TO, POINTER TO), and an in-out of an array or a structure
-  (which the code passes as the very object), is a `uint32_t` offset into the image, 0 for
-  NULL (the header is at 0, so no variable is). An interface variable, and an in-out of a
-  function block (a derived block's instance may come), is an offset and a `uint32_t`
+- A reference (REF_TO, REFERENCE TO, POINTER TO) is a `uint32_t` offset into the image, 0
+  for NULL (the header is at 0, so no variable is).
+- A block's in-out of an array, a structure or a block no other block extends (which the
+  code passes as the very variable) is the `uint32_t` offset of the variable a call bound
+  it to, then storage of its own of the variable's type: what the offset points at until
+  a call binds it (a block never called, a context restored), as the Python tier gives
+  such an in-out an object of its own. An interface variable, and an in-out of a block
+  another extends (a derived block's instance may come), is an offset and a `uint32_t`
   class number. An in-out of an open array (`ARRAY[*] OF T`) is an offset and the bounds
   of each dimension (`int64_t`).
 - A class without slots takes one byte, so each instance has an address of its own.
@@ -105,6 +109,17 @@ class Offset:
 
 
 @dataclass(frozen=True, slots=True)
+class Bound:
+    """A block's in-out of an array or structure: the offset of the `target` it is bound to,
+    then a `target` of its own, `own` bytes from the start (the offset's own first)."""
+
+    target: Shape
+
+    def own(self, layout_of: Callable[[str], Layout]) -> int:
+        return _round_up(4, size_and_align(self.target, layout_of)[1])
+
+
+@dataclass(frozen=True, slots=True)
 class Handle:
     """An interface value or a function block's in-out: an offset and a class number."""
 
@@ -117,7 +132,7 @@ class Slice:
     dims: int
 
 
-Shape = Scalar | Chars | Nested | Elements | Offset | Handle | Slice
+Shape = Scalar | Chars | Nested | Elements | Offset | Bound | Handle | Slice
 
 
 @dataclass(frozen=True, slots=True)
@@ -212,6 +227,7 @@ class _Layouter:
         self._done: Layouts = {}
         self._making: list[str] = []
         self._enumerations = self._enumeration_names()
+        self._extended = self._extended_blocks()
 
     def all(self) -> Layouts:
         for name in sorted(self._units):
@@ -291,10 +307,14 @@ class _Layouter:
             return self.shape(type_name)
         shape = self.shape(type_name)
         if isinstance(shape, Elements):
-            return Offset()
+            return Bound(shape)
         if isinstance(shape, Nested):
+            # of a block another extends, an instance of the derived block may come: its
+            # class must be known (a Handle); of any other, its class is the declared one
             unit = self._units.get(shape.cls)
-            return Handle() if unit is not None and unit.kind == "FUNCTION_BLOCK" else Offset()
+            if unit is not None and unit.kind == "FUNCTION_BLOCK":
+                return Handle() if unit.name.upper() in self._extended else Bound(shape)
+            return Bound(shape)
         return shape
 
     def shape(self, type_name: str) -> Shape:
@@ -329,6 +349,15 @@ class _Layouter:
         if upper in self._enumerations:
             return Scalar("q")
         raise LayoutRefused(f"no layout for the type {type_name}")
+
+    def _extended_blocks(self) -> set[str]:
+        """The blocks (by upper-case name) another block extends: what an instance conforms
+        to is its class's `kinds` (its block, its bases, its interfaces)."""
+        found: set[str] = set()
+        for unit in self._units.values():
+            if unit.kind == "FUNCTION_BLOCK" and isinstance(unit.unit, Class):
+                found.update(kind for kind in unit.unit.kinds if kind != unit.name.upper())
+        return found
 
     def _enumeration_names(self) -> set[str]:
         """The named types that are enumerations: those of a slot that starts as an integer
@@ -406,6 +435,10 @@ def size_and_align(shape: Shape, layout_of: Callable[[str], Layout]) -> tuple[in
             return size * count, align
         case Offset():
             return 4, 4
+        case Bound(target=target):  # as C lays out `struct { uint32_t at; T own; }`
+            size, align = size_and_align(target, layout_of)
+            align = max(4, align)
+            return _round_up(_round_up(4, align) + size, align), align
         case Handle():
             return 8, 4
         case Slice(dims=dims):

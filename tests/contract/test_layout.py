@@ -15,6 +15,7 @@ from backend.compiler.pipeline import compile_sources
 from backend.compiler.source import SourceFile
 from runtime.contract.artifact import Artifact, PouCode, ProgramConfig, VarInfo
 from runtime.contract.layout import (
+    Bound,
     Chars,
     Elements,
     Handle,
@@ -88,8 +89,9 @@ def test_each_kind_of_variable_has_its_c_type_size_and_alignment() -> None:
     # an elementary one is copied in and out, so it is the value itself
     assert sum_block["a"] == (Slice(Scalar("h"), 1), 0, 24)
     assert sum_block["m"] == (Handle(), 24, 8)
-    assert sum_block["p"] == (Offset(), 32, 4)
-    assert sum_block["n"] == (Scalar("h"), 36, 2)
+    # the structure's in-out: where a call bound it, then a structure of its own (aligned)
+    assert sum_block["p"] == (Bound(Nested("STRUCT_PT")), 32, 24)
+    assert sum_block["n"] == (Scalar("h"), 56, 2)
     point = class_layouts(artifact.units())["STRUCT_PT"]
     assert (point.size, point.align) == (16, 8)
 

@@ -72,10 +72,11 @@ class ImageRun:
         self.placement = placement = image_layout(artifact, layouts)
         self.image = bytearray(placement.size)
         placed = {p.name: views[p.cls](self.image, p.offset) for p in placement.placements}
+        held = [(placed[program.name], program.instance) for program in self.viewed.programs]
         if self.viewed.globals is not None:
-            memory.pack(placed["_G"], self.viewed.globals)
+            held.append((placed["_G"], self.viewed.globals))
+        memory.pack(held)
         for program in self.viewed.programs:
-            memory.pack(placed[program.name], program.instance)
             program.instance = placed[program.name]
             shared = program.view is self.viewed.globals
             program.view = placed["_G"] if shared else placed[f"{program.name}._G"]

@@ -71,12 +71,13 @@ from runtime.code.native.translate import (
 from runtime.contract.artifact import PouCode
 from runtime.contract.code.typed_form import Call, Expr, Index, Member, Named
 from runtime.contract.code.units import Unit
-from runtime.contract.intrinsic_table import COPY
+from runtime.contract.intrinsic_table import COPY, FILL
 from runtime.contract.layout import (
     ACTION_CONTROL,
     NULLABLE_TIME,
     RUNTIME_CLASSES,
     SFC_STEP,
+    Bound,
     Chars,
     Elements,
     Layout,
@@ -207,7 +208,21 @@ class _ImageBody(_Body):
                 return V(kind, at)
             case Elements(), Array():
                 return V(kind, at, shape)
+            case Bound(target=target), (Instance() | Array()):
+                return self.read(self.bound_address(at, target), target, kind, what)
         _refuse(f"{what}, a {_kind_name(kind)} laid out as {type(shape).__name__}")
+
+    def bound_address(self, at: str, target: Shape) -> str:
+        """Where the block's in-out at `at` is bound: the variable of the image a call bound
+        it to, or its own storage (layout.Bound)."""
+        size, _ = size_and_align(target, self.module.layouts.__getitem__)
+        offset = self.temp("uint32_t")
+        self.line(f"{offset} = *(uint32_t *){at};")
+        self.line(f"if (PADT_UNLIKELY({offset} == 0 || {offset} > padt_ctx->size - {size})) {{")
+        self.line("    padt_unbound_error();")
+        self.line("    goto padt_error;")
+        self.line("}")
+        return f"(padt_ctx->base + {offset})"
 
     def write(self, at: str, shape: Shape, declared: Kind, value: V, what: str) -> None:
         """`value` into the bytes, of `shape`, at `at` of a variable of `declared`."""
@@ -232,12 +247,38 @@ class _ImageBody(_Body):
                     _refuse(f"{what}, an array of instances from Python ({NOT_YET})")
                 self.check(f"padt_list_into({at}, {c_string(described)}, {value.c})")
                 return
+            case Bound(target=target), (Instance() | Array()), _ if value.kind == declared:
+                if value.shape is None and isinstance(value.kind, Array):
+                    _refuse(f"{what}, an in-out bound to an array from Python ({NOT_YET})")
+                if not value.copied:  # a call binding the in-out to a variable of the image
+                    self.line(f"*(uint32_t *){at} = (uint32_t)({value.c} - padt_ctx->base);")
+                    return
+                # a copy given to the in-out (`fb.pt := x`): into its own storage, bound
+                # there, as the slot tier binds it to the copy's object
+                own = f"({at} + {shape.own(self.module.layouts.__getitem__)})"
+                self.write(own, target, declared, value, what)
+                self.line(f"*(uint32_t *){at} = (uint32_t)({own} - padt_ctx->base);")
+                return
             case ((Nested() | Elements()), (Instance() | Array()), _) if value.kind == declared:
                 # a structure or array assigned whole: the bytes copied (they may overlap)
+                if self.holds_in_out(shape):  # whose offsets would point at the source's
+                    _refuse(f"{what}, an instance with in-outs assigned whole ({NOT_YET})")
                 size, _ = size_and_align(shape, self.module.layouts.__getitem__)
                 self.line(f"memmove({at}, {value.c}, {size});")
                 return
         _refuse(f"a {_kind_name(value.kind)} stored into {_kind_name(declared)}")
+
+    def holds_in_out(self, shape: Shape) -> bool:
+        """Whether a value of `shape` holds a block's in-out (`Bound`): a copy of its bytes
+        would be bound where the original is, or to the original's own storage."""
+        match shape:
+            case Bound():
+                return True
+            case Elements(element=element):
+                return self.holds_in_out(element)
+            case Nested(cls=cls):
+                return any(self.holds_in_out(m.shape) for m in self.module.layout(cls).members)
+        return False
 
     def subscript(self, node: Index) -> V:
         array = self.expr(node.base)
@@ -364,6 +405,14 @@ class _ImageBody(_Body):
     def helper_statement(self, callee: str, call: Call) -> None:
         if callee == "_step_enter" and len(call.args) == 1:
             self.line(f"padt_step_enter({self.sfc_instance(call.args[0], SFC_STEP)});")
+            return
+        if callee == FILL.name and len(call.args) == 2:
+            # `_fill(in_out, v)`: v's bytes into the variable the in-out is bound to
+            target, value = self.expr(call.args[0]), self.expr(call.args[1])
+            shape = Nested(target.kind.cls) if isinstance(target.kind, Instance) else target.shape
+            if shape is None:
+                _refuse(f"{FILL.name} of a {_kind_name(target.kind)}")
+            self.write(target.c, shape, target.kind, value, "an in-out written whole")
             return
         super().helper_statement(callee, call)
 

@@ -8,8 +8,10 @@ loaded once per process. A view class is a subclass of its `View` with a `Field`
 descriptor per member of the class's layout and the functions of the generated class (its
 body, methods, actions), so `view.__call__()` runs the generated Python on the image. Its
 `__slots__` names the members, as a slot object's class does, for whoever lists them
-(the context snapshot). References, interfaces and in-outs of aggregates (offsets into the
-image) have no view yet: `ViewsRefused` says which member.
+(the context snapshot). A block's in-out of an array, a structure or a block no block
+extends reads as a view of the variable it is bound to. References, interfaces, in-outs
+of blocks another block extends and of open arrays have no view yet: `ViewsRefused` says
+which member.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from typing import Any
 
 from runtime.code.native.build import Toolchain, runtime_module
 from runtime.contract.layout import (
+    Bound,
     Chars,
     Elements,
     Layout,
@@ -94,7 +97,7 @@ def _held(shape: Shape) -> str | None:
     match shape:
         case Nested(cls=cls):
             return cls
-        case Elements(element=element):
+        case Elements(element=element) | Bound(target=element):
             return _held(element)
     return None
 
@@ -126,6 +129,10 @@ def _field(
             stride, _ = size_and_align(element, layouts.__getitem__)
             inner = _field(memory, layouts, element, 0, made)
             return memory.Field("a", offset, size, element=inner, count=count, stride=stride)
+        case Bound(target=target):
+            inner = _field(memory, layouts, target, 0, made)
+            own = shape.own(layouts.__getitem__)
+            return memory.Field("r", offset, size, element=inner, own=own)
     raise ViewsRefused(f"no view of {type(shape).__name__} yet")
 
 

@@ -10,6 +10,7 @@ as a keyword of C: `auto`, `long`, `union`).
 from __future__ import annotations
 
 from runtime.contract.layout import (
+    Bound,
     Chars,
     Elements,
     Handle,
@@ -69,7 +70,7 @@ def _held_class(shape: Shape) -> str | None:
     match shape:
         case Nested(cls=cls):
             return cls
-        case Elements(element=element):
+        case Elements(element=element) | Bound(target=element):
             return _held_class(element)
     return None
 
@@ -109,6 +110,8 @@ def _type(shape: Shape) -> str:
             return f"struct {struct_name(cls)}"
         case Offset():
             return "uint32_t"
+        case Bound(target=target):
+            return f"struct {{ uint32_t at; {_declarator(target, 'own')}; }}"
         case Handle():
             return "padt_handle"
         case Slice(dims=dims):

@@ -10,6 +10,11 @@
  * value as the checked writers do (its type, its range, a string's length and characters),
  * so a view never holds what the slot object would refuse to be given.
  *
+ * A block's in-out of an array or structure (layout.py's Bound) is the offset of the
+ * variable a call bound it to, then storage of its own: it reads as a view of that
+ * variable, and a store of a variable of the image binds it there (what the code's
+ * `f.data = s.arr` before a call does); a store of anything else goes into its own storage.
+ *
  * Included after `#define PADT_INIT PyInit_<module name>` (the module is named by the
  * hash of its source, as every module of the native tier).
  */
@@ -25,6 +30,7 @@ enum {
     K_CHARS = 's', K_WCHARS = 'w', /* a length and `length` + 1 characters */
     K_NESTED = 'n', /* a struct: a view of `view_type` */
     K_ARRAY = 'a',  /* `count` elements of `element`, `stride` bytes apart */
+    K_BOUND = 'r',  /* an in-out: the uint32_t offset of an `element`, one of its own at `own` */
 };
 
 typedef struct FieldObject {
@@ -34,8 +40,9 @@ typedef struct FieldObject {
     Py_ssize_t size;   /* bytes */
     Py_ssize_t length; /* K_CHARS, K_WCHARS: the most characters */
     PyObject *view_type; /* K_NESTED */
-    struct FieldObject *element; /* K_ARRAY: the element at offset 0 */
+    struct FieldObject *element; /* K_ARRAY: the element at offset 0; K_BOUND: the target */
     Py_ssize_t count, stride;    /* K_ARRAY */
+    Py_ssize_t own;              /* K_BOUND: where its own target begins, from its start */
 } FieldObject;
 
 typedef struct {
@@ -59,11 +66,40 @@ static char *at(PyObject *image, Py_ssize_t offset) {
 /* A Field the cycle collector cleared (its class being freed) reads and writes nothing. */
 static int field_cleared(FieldObject *f) {
     if ((f->code == K_NESTED && f->view_type == NULL) ||
-        (f->code == K_ARRAY && f->element == NULL)) {
+        ((f->code == K_ARRAY || f->code == K_BOUND) && f->element == NULL)) {
         PyErr_SetString(PyExc_ReferenceError, "a member of a view class being freed");
         return 1;
     }
     return 0;
+}
+
+/* Where the in-out at `offset` is bound: the offset of its target, checked to lie in the
+ * image (only the views, pack and the C bodies write it, each an offset they found there;
+ * the check keeps a defect from reading beyond the image); -1 with an error. */
+static Py_ssize_t bound_target(FieldObject *f, PyObject *image, Py_ssize_t offset) {
+    uint32_t target;
+    memcpy(&target, at(image, offset), sizeof target);
+    if (target == 0 || (Py_ssize_t)target + f->element->size > PyByteArray_GET_SIZE(image)) {
+        PyErr_SetString(PyExc_ReferenceError, "an in-out bound to no variable of the image");
+        return -1;
+    }
+    return target;
+}
+
+static void bind_at(PyObject *image, Py_ssize_t offset, Py_ssize_t target) {
+    uint32_t where = (uint32_t)target;
+    memcpy(at(image, offset), &where, sizeof where);
+}
+
+/* Whether two fields read and write the same type (an in-out takes a variable of its own
+ * type only). */
+static int same_type(FieldObject *a, FieldObject *b) {
+    if (a == b) return 1;
+    if (a == NULL || b == NULL || a->code != b->code || a->size != b->size ||
+        a->length != b->length || a->count != b->count || a->stride != b->stride ||
+        a->view_type != b->view_type)
+        return 0;
+    return a->element == NULL ? b->element == NULL : same_type(a->element, b->element);
 }
 
 static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) {
@@ -87,13 +123,19 @@ static PyObject *read_field(FieldObject *f, PyObject *image, Py_ssize_t offset) 
         e->stride = f->stride;
         return (PyObject *)e;
     }
+    case K_BOUND: {
+        Py_ssize_t target = bound_target(f, image, offset);
+        return target < 0 ? NULL : read_field(f->element, image, target);
+    }
     }
     PyErr_SetString(PyExc_SystemError, "padt_memory: a field of no known kind");
     return NULL;
 }
 
 static PyObject *members_of(PyObject *view_type);
-static int pack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *source);
+typedef struct moving moving;
+static int pack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *source,
+                        moving *mv);
 
 /* A whole structure or instance from an object of the class the view class stands for (of
  * the same name: a structure a FUNCTION's Python made), packed as the tier switch packs a
@@ -106,11 +148,35 @@ static int write_members(FieldObject *f, PyObject *image, Py_ssize_t offset, PyO
     PyObject *members = members_of(f->view_type);
     if (members == NULL) return -1;
     PyObject *scratch = PyByteArray_FromStringAndSize(at(image, offset), f->size);
-    int failed = scratch == NULL || pack_members(members, scratch, 0, value) < 0;
+    int failed = scratch == NULL || pack_members(members, scratch, 0, value, NULL) < 0;
     if (!failed) memcpy(at(image, offset), PyByteArray_AS_STRING(scratch), f->size);
     Py_XDECREF(scratch);
     Py_DECREF(members);
     return failed ? -1 : 0;
+}
+
+static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value);
+
+/* An in-out bound: to a variable of the image of its type (a view, an array's Elements),
+ * or else `value` written into its own storage, to which it is bound. */
+static int bind_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value) {
+    FieldObject *target = f->element;
+    if (target->code == K_NESTED && Py_TYPE(value) == (PyTypeObject *)target->view_type &&
+        ((ViewObject *)value)->image == image) {
+        bind_at(image, offset, ((ViewObject *)value)->offset);
+        return 0;
+    }
+    if (target->code == K_ARRAY && Py_IS_TYPE(value, &ElementsType)) {
+        ElementsObject *e = (ElementsObject *)value;
+        if (e->image == image && e->count == target->count && e->stride == target->stride &&
+            same_type(e->element, target->element)) {
+            bind_at(image, offset, e->offset);
+            return 0;
+        }
+    }
+    if (write_field(target, image, offset + f->own, value) < 0) return -1;
+    bind_at(image, offset, offset + f->own);
+    return 0;
 }
 
 static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value) {
@@ -154,6 +220,7 @@ static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObj
         Py_DECREF(items);
         return failed ? -1 : 0;
     }
+    case K_BOUND: return bind_field(f, image, offset, value);
     }
     PyErr_SetString(PyExc_SystemError, "padt_memory: a field of no known kind");
     return -1;
@@ -188,19 +255,23 @@ static int field_set(PyObject *self, PyObject *obj, PyObject *value) {
 
 static PyObject *field_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
     static char *names[] = {"code", "offset", "size", "length", "view_type", "element",
-                            "count", "stride", NULL};
+                            "count", "stride", "own", NULL};
     int code;
-    Py_ssize_t offset, size, length = 0, count = 0, stride = 0;
+    Py_ssize_t offset, size, length = 0, count = 0, stride = 0, own = 0;
     PyObject *view_type = Py_None, *element = Py_None;
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "Cnn|nOOnn", names, &code, &offset, &size,
-                                     &length, &view_type, &element, &count, &stride))
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "Cnn|nOOnnn", names, &code, &offset, &size,
+                                     &length, &view_type, &element, &count, &stride, &own))
         return NULL;
     if (code == K_NESTED && !(PyType_Check(view_type) &&
                               PyType_IsSubtype((PyTypeObject *)view_type, &ViewType)))
         return PyErr_Format(PyExc_TypeError, "a nested field needs a view type");
-    if (code == K_ARRAY && !PyObject_TypeCheck(element, &FieldType))
-        return PyErr_Format(PyExc_TypeError, "an array field needs an element field");
-    if (offset < 0 || size < 0 || length < 0 || length > UINT16_MAX || count < 0 || stride < 0)
+    if ((code == K_ARRAY || code == K_BOUND) && !PyObject_TypeCheck(element, &FieldType))
+        return PyErr_Format(PyExc_TypeError, "an array or in-out field needs an element field");
+    if (code == K_BOUND &&
+        (((FieldObject *)element)->code != K_NESTED && ((FieldObject *)element)->code != K_ARRAY))
+        return PyErr_Format(PyExc_TypeError, "an in-out field of an array or structure only");
+    if (offset < 0 || size < 0 || length < 0 || length > UINT16_MAX || count < 0 || stride < 0 ||
+        own < 0 || (code == K_BOUND && (own < 4 || own + ((FieldObject *)element)->size > size)))
         return PyErr_Format(PyExc_ValueError, "a field's sizes are no sizes");
     FieldObject *f = (FieldObject *)type->tp_alloc(type, 0);
     if (f == NULL) return NULL;
@@ -210,8 +281,9 @@ static PyObject *field_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
     f->length = length;
     f->count = count;
     f->stride = stride;
+    f->own = own;
     f->view_type = code == K_NESTED ? Py_NewRef(view_type) : NULL;
-    f->element = code == K_ARRAY ? (FieldObject *)Py_NewRef(element) : NULL;
+    f->element = code == K_ARRAY || code == K_BOUND ? (FieldObject *)Py_NewRef(element) : NULL;
     return (PyObject *)f;
 }
 
@@ -472,7 +544,17 @@ static PyObject *members_of(PyObject *view_type) {
     return members;
 }
 
-static int unpack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *target);
+/* An identity map kept across a whole configuration's pack or unpack: where each array and
+ * structure went, and the in-outs to bind once all have gone. An in-out bound to a
+ * variable of another instance (a global, another program's) is bound to it however the
+ * instances are ordered. */
+struct moving {
+    PyObject *seen;    /* pack: id of an object -> (offset, Field); unpack: key -> object */
+    PyObject *pending; /* pack: (offset, Field, object); unpack: (offset, Field, holder, name) */
+};
+
+static int unpack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *target,
+                          moving *mv);
 
 /* The members of a nested field's view class, or NULL with no error for any other field:
  * found once for all the elements of an array. */
@@ -484,13 +566,54 @@ static PyObject *nested_members(FieldObject *f, int *failed) {
     return members;
 }
 
+/* What unpack knows a place of the image by: its offset and what its type is made of (a
+ * structure and its first member begin at one offset; two fields of one type are two
+ * Field objects). */
+static PyObject *place_key(FieldObject *f, Py_ssize_t offset) {
+    FieldObject *e = f->element;
+    PyObject *of = f->view_type ? f->view_type : (e && e->view_type ? e->view_type : Py_None);
+    return Py_BuildValue("(ninnnOi)", offset, f->code, f->size, f->count, f->stride, of,
+                         e ? e->code : 0);
+}
+
+static int remember(moving *mv, PyObject *key, PyObject *value) {
+    if (key == NULL || value == NULL) {
+        Py_XDECREF(key);
+        Py_XDECREF(value);
+        return -1;
+    }
+    int failed = PyDict_SetItem(mv->seen, key, value);
+    Py_DECREF(key);
+    Py_DECREF(value);
+    return failed;
+}
+
+/* An array or structure object packed at `offset`, for the in-outs bound to it. */
+static int packed_at(moving *mv, FieldObject *f, Py_ssize_t offset, PyObject *object) {
+    return remember(mv, PyLong_FromVoidPtr(object), Py_BuildValue("(nO)", offset, f));
+}
+
 /* `value`, held by slot objects (an instance, a list), into the bytes at `offset`;
- * `members`: those of `f`'s class when it is nested, else NULL. */
+ * `members`: those of `f`'s class when it is nested, else NULL. `mv` NULL: an instance
+ * with in-outs is refused (a structure given whole has none). */
 static int pack_value(FieldObject *f, PyObject *members, PyObject *image, Py_ssize_t offset,
-                      PyObject *value) {
+                      PyObject *value, moving *mv) {
     if (field_cleared(f)) return -1;
+    if (f->code == K_BOUND) {
+        if (mv == NULL) {
+            PyErr_SetString(PyExc_TypeError, "an instance with in-outs given whole");
+            return -1;
+        }
+        PyObject *entry = Py_BuildValue("(nOO)", offset, f, value);
+        int failed = entry == NULL || PyList_Append(mv->pending, entry) < 0;
+        Py_XDECREF(entry);
+        return failed ? -1 : 0;
+    }
+    if ((f->code == K_NESTED || f->code == K_ARRAY) && mv != NULL &&
+        packed_at(mv, f, offset, value) < 0)
+        return -1;
     if (f->code == K_NESTED && Py_TYPE(value) != (PyTypeObject *)f->view_type)
-        return pack_members(members, image, offset, value);
+        return pack_members(members, image, offset, value, mv);
     FieldObject *element = f->element;
     if (f->code != K_ARRAY || (element->code != K_NESTED && element->code != K_ARRAY))
         return write_field(f, image, offset, value); /* checked; an array of values whole */
@@ -505,13 +628,14 @@ static int pack_value(FieldObject *f, PyObject *members, PyObject *image, Py_ssi
     PyObject *inner = failed ? NULL : nested_members(element, &failed);
     for (Py_ssize_t i = 0; !failed && i < f->count; i++)
         failed = pack_value(element, inner, image, offset + i * f->stride,
-                            PySequence_Fast_GET_ITEM(items, i));
+                            PySequence_Fast_GET_ITEM(items, i), mv);
     Py_XDECREF(inner);
     Py_DECREF(items);
     return failed ? -1 : 0;
 }
 
-static int pack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *source) {
+static int pack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *source,
+                        moving *mv) {
     for (Py_ssize_t i = 0; i < PyList_GET_SIZE(members); i++) {
         PyObject *pair = PyList_GET_ITEM(members, i);
         FieldObject *f = (FieldObject *)PyTuple_GET_ITEM(pair, 1);
@@ -519,7 +643,7 @@ static int pack_members(PyObject *members, PyObject *image, Py_ssize_t offset, P
         if (value == NULL) return -1;
         int failed;
         PyObject *inner = nested_members(f, &failed);
-        if (!failed) failed = pack_value(f, inner, image, offset + f->offset, value);
+        if (!failed) failed = pack_value(f, inner, image, offset + f->offset, value, mv);
         Py_XDECREF(inner);
         Py_DECREF(value);
         if (failed) return -1;
@@ -527,12 +651,43 @@ static int pack_members(PyObject *members, PyObject *image, Py_ssize_t offset, P
     return 0;
 }
 
+/* Each in-out packed bound: to where its object was packed, when it was and is of its type;
+ * else its object into its own storage (the object of its own, or one no variable holds),
+ * where another in-out given the same object finds it too. Pending entries may grow on
+ * the way (an array of blocks with in-outs of their own). */
+static int bind_packed(moving *mv, PyObject *image) {
+    for (Py_ssize_t i = 0; i < PyList_GET_SIZE(mv->pending); i++) {
+        PyObject *entry = PyList_GET_ITEM(mv->pending, i);
+        Py_ssize_t offset = PyLong_AsSsize_t(PyTuple_GET_ITEM(entry, 0));
+        FieldObject *f = (FieldObject *)PyTuple_GET_ITEM(entry, 1);
+        PyObject *object = PyTuple_GET_ITEM(entry, 2);
+        PyObject *id = PyLong_FromVoidPtr(object);
+        if (id == NULL) return -1;
+        PyObject *found = PyDict_GetItemWithError(mv->seen, id);
+        Py_DECREF(id);
+        if (found == NULL && PyErr_Occurred()) return -1;
+        if (found != NULL && same_type((FieldObject *)PyTuple_GET_ITEM(found, 1), f->element)) {
+            bind_at(image, offset, PyLong_AsSsize_t(PyTuple_GET_ITEM(found, 0)));
+            continue;
+        }
+        int failed;
+        PyObject *inner = nested_members(f->element, &failed);
+        if (!failed)
+            failed = pack_value(f->element, inner, image, offset + f->own, object, mv) < 0;
+        Py_XDECREF(inner);
+        if (failed) return -1;
+        bind_at(image, offset, offset + f->own);
+    }
+    return 0;
+}
+
 /* The bytes at `offset` into `target`, the instance or list slot objects hold there;
  * `members` as for pack_value. */
 static int unpack_into(FieldObject *f, PyObject *members, PyObject *image, Py_ssize_t offset,
-                       PyObject *target) {
+                       PyObject *target, moving *mv) {
     if (field_cleared(f)) return -1;
-    if (f->code == K_NESTED) return unpack_members(members, image, offset, target);
+    if (mv != NULL && remember(mv, place_key(f, offset), Py_NewRef(target)) < 0) return -1;
+    if (f->code == K_NESTED) return unpack_members(members, image, offset, target, mv);
     FieldObject *element = f->element;
     int failed;
     PyObject *inner = nested_members(element, &failed);
@@ -540,7 +695,7 @@ static int unpack_into(FieldObject *f, PyObject *members, PyObject *image, Py_ss
         Py_ssize_t at_i = offset + i * f->stride;
         if (element->code == K_NESTED || element->code == K_ARRAY) {
             PyObject *item = PySequence_GetItem(target, i);
-            failed = item == NULL || unpack_into(element, inner, image, at_i, item) < 0;
+            failed = item == NULL || unpack_into(element, inner, image, at_i, item, mv) < 0;
             Py_XDECREF(item);
         } else {
             PyObject *value = read_field(element, image, at_i);
@@ -552,17 +707,26 @@ static int unpack_into(FieldObject *f, PyObject *members, PyObject *image, Py_ss
     return failed ? -1 : 0;
 }
 
-static int unpack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *target) {
+static int unpack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *target,
+                          moving *mv) {
     for (Py_ssize_t i = 0; i < PyList_GET_SIZE(members); i++) {
         PyObject *pair = PyList_GET_ITEM(members, i);
         PyObject *name = PyTuple_GET_ITEM(pair, 0);
         FieldObject *f = (FieldObject *)PyTuple_GET_ITEM(pair, 1);
         int failed;
-        if (f->code == K_NESTED || f->code == K_ARRAY) {
+        if (f->code == K_BOUND) {
+            if (mv == NULL) {
+                PyErr_SetString(PyExc_TypeError, "an instance with in-outs taken whole");
+                return -1;
+            }
+            PyObject *entry = Py_BuildValue("(nOOO)", offset + f->offset, f, target, name);
+            failed = entry == NULL || PyList_Append(mv->pending, entry) < 0;
+            Py_XDECREF(entry);
+        } else if (f->code == K_NESTED || f->code == K_ARRAY) {
             PyObject *held = PyObject_GetAttr(target, name);
             PyObject *inner = held == NULL ? NULL : nested_members(f, &failed);
             if (held == NULL) failed = 1;
-            if (!failed) failed = unpack_into(f, inner, image, offset + f->offset, held) < 0;
+            if (!failed) failed = unpack_into(f, inner, image, offset + f->offset, held, mv) < 0;
             Py_XDECREF(inner);
             Py_XDECREF(held);
         } else {
@@ -575,29 +739,86 @@ static int unpack_members(PyObject *members, PyObject *image, Py_ssize_t offset,
     return 0;
 }
 
-static PyObject *move(PyObject *args, int packing) {
-    PyObject *view, *object;
-    if (!PyArg_ParseTuple(args, "O!O", &ViewType, &view, &object)) return NULL;
-    PyObject *members = members_of((PyObject *)Py_TYPE(view));
-    if (members == NULL) return NULL;
-    ViewObject *v = (ViewObject *)view;
-    int failed = packing ? pack_members(members, v->image, v->offset, object)
-                         : unpack_members(members, v->image, v->offset, object);
-    Py_DECREF(members);
+/* Each in-out unpacked: first those bound to their own storage, whose values go into the
+ * object the fresh instance holds of its own; then every other, given the object unpacked
+ * where it is bound, as the slot tier holds the caller's very object. One bound where no
+ * object was unpacked (a defect) gets the values into an object of its own. */
+static int bind_unpacked(moving *mv, PyObject *image) {
+    for (int own_first = 1; own_first >= 0; own_first--) {
+        for (Py_ssize_t i = 0; i < PyList_GET_SIZE(mv->pending); i++) {
+            PyObject *entry = PyList_GET_ITEM(mv->pending, i);
+            Py_ssize_t offset = PyLong_AsSsize_t(PyTuple_GET_ITEM(entry, 0));
+            FieldObject *f = (FieldObject *)PyTuple_GET_ITEM(entry, 1);
+            PyObject *holder = PyTuple_GET_ITEM(entry, 2), *name = PyTuple_GET_ITEM(entry, 3);
+            Py_ssize_t target = bound_target(f, image, offset);
+            if (target < 0) return -1;
+            if ((target == offset + f->own) != own_first) continue;
+            PyObject *key = place_key(f->element, target);
+            if (key == NULL) return -1;
+            PyObject *found = own_first ? NULL : PyDict_GetItemWithError(mv->seen, key);
+            Py_DECREF(key);
+            if (found == NULL && PyErr_Occurred()) return -1;
+            if (found != NULL) {
+                if (PyObject_SetAttr(holder, name, found) < 0) return -1;
+                continue;
+            }
+            PyObject *own = PyObject_GetAttr(holder, name);
+            int failed = own == NULL;
+            PyObject *inner = failed ? NULL : nested_members(f->element, &failed);
+            if (!failed) failed = unpack_into(f->element, inner, image, target, own, mv) < 0;
+            Py_XDECREF(inner);
+            Py_XDECREF(own);
+            if (failed) return -1;
+        }
+    }
+    return 0;
+}
+
+/* pack or unpack of [(view, object)]: a configuration's instances, all of one image. */
+static PyObject *move(PyObject *pairs, int packing) {
+    if (!PyList_Check(pairs)) return PyErr_Format(PyExc_TypeError, "a list of (view, object)");
+    moving mv = {PyDict_New(), PyList_New(0)};
+    PyObject *image = NULL;
+    int failed = mv.seen == NULL || mv.pending == NULL;
+    for (Py_ssize_t i = 0; !failed && i < PyList_GET_SIZE(pairs); i++) {
+        PyObject *pair = PyList_GET_ITEM(pairs, i), *view, *object;
+        if (!PyArg_ParseTuple(pair, "O!O", &ViewType, &view, &object)) {
+            failed = 1;
+            break;
+        }
+        ViewObject *v = (ViewObject *)view;
+        if (image != NULL && v->image != image) {
+            PyErr_SetString(PyExc_ValueError, "views of two images");
+            failed = 1;
+            break;
+        }
+        image = v->image;
+        PyObject *members = members_of((PyObject *)Py_TYPE(view));
+        failed = members == NULL ||
+                 (packing ? pack_members(members, image, v->offset, object, &mv)
+                          : unpack_members(members, image, v->offset, object, &mv)) < 0;
+        Py_XDECREF(members);
+    }
+    if (!failed && image != NULL)
+        failed = (packing ? bind_packed(&mv, image) : bind_unpacked(&mv, image)) < 0;
+    Py_XDECREF(mv.seen);
+    Py_XDECREF(mv.pending);
     if (failed) return NULL;
     Py_RETURN_NONE;
 }
 
-static PyObject *pack(PyObject *module, PyObject *args) { return move(args, 1); }
-static PyObject *unpack(PyObject *module, PyObject *args) { return move(args, 0); }
+static PyObject *pack(PyObject *module, PyObject *pairs) { return move(pairs, 1); }
+static PyObject *unpack(PyObject *module, PyObject *pairs) { return move(pairs, 0); }
 
 static PyMethodDef module_methods[] = {
-    {"pack", pack, METH_VARARGS,
-     "pack(view, object): every value of a slot object (its instances and arrays too) into "
-     "the view's bytes, each checked as a store is."},
-    {"unpack", unpack, METH_VARARGS,
-     "unpack(view, object): every value of the view into a slot object of its class and "
-     "the instances and arrays it holds."},
+    {"pack", pack, METH_O,
+     "pack([(view, object)]): every value of slot objects (their instances and arrays too) "
+     "into the views' bytes, each checked as a store is; an in-out bound where the object it "
+     "holds went."},
+    {"unpack", unpack, METH_O,
+     "unpack([(view, object)]): every value of the views into slot objects of their classes "
+     "and the instances and arrays they hold; an in-out given the object unpacked where it "
+     "is bound."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -896,6 +896,7 @@ padt_add_method(PyObject *bodies, const char *class_name, PyMethodDef *def)
 typedef struct padt_mctx {
     PyObject *image; /* borrowed: the view the call began with holds it */
     char *base;
+    Py_ssize_t size; /* of the image, which never changes its size */
     char *g; /* NULL: `_G` is no view of this image */
     PyObject *sys; /* `_SYS`, borrowed from the namespace (NULL: none) */
     int now_known; /* `_SYS.now_ns` read in this call (padt_mnow) */
@@ -978,6 +979,7 @@ padt_mctx_enter(padt_mctx *ctx, PyObject *view)
     padt_view *v = (padt_view *)view;
     ctx->image = v->image;
     ctx->base = PyByteArray_AS_STRING(v->image);
+    ctx->size = PyByteArray_GET_SIZE(v->image);
     ctx->g = NULL;
     ctx->now_known = 0;
     ctx->tick_known = 0;
@@ -1150,6 +1152,15 @@ static int
 padt_index_error(void)
 {
     PyErr_SetString(PyExc_IndexError, "list index out of range");
+    return -1;
+}
+
+/* A block's in-out whose offset lies outside the image (what padt_memory's views refuse
+ * too: only a defect would write one). */
+static int
+padt_unbound_error(void)
+{
+    PyErr_SetString(PyExc_ReferenceError, "an in-out bound to no variable of the image");
     return -1;
 }
 
