@@ -37,10 +37,15 @@ INTERFACE IRun END_INTERFACE
 FUNCTION_BLOCK Motor IMPLEMENTS IRun
 VAR_INPUT on : BOOL; END_VAR
 END_FUNCTION_BLOCK
+FUNCTION_BLOCK FastMotor EXTENDS Motor
+END_FUNCTION_BLOCK
 FUNCTION_BLOCK Sum
-VAR_IN_OUT a : ARRAY[*] OF INT; m : Motor; p : Pt; n : INT; END_VAR
+VAR_IN_OUT a : ARRAY[*] OF INT; m : Motor; p : Pt; n : INT; total : Sum2; END_VAR
 VAR_OUTPUT s : DINT; END_VAR
 s := a[LOWER_BOUND(a, 1)] + n;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Sum2
+VAR_INPUT x : DINT; END_VAR
 END_FUNCTION_BLOCK
 PROGRAM Main
 VAR
@@ -48,8 +53,9 @@ VAR
   name : STRING[10]; wide : WSTRING[3]; ch : CHAR;
   r : REF_TO INT; i : IRun; motors : ARRAY[1..2] OF Motor;
   grid : ARRAY[1..2, 0..1] OF ARRAY[1..3] OF BOOL; pt : Pt; sum : Sum; q : ARRAY[1..3] OF INT;
+  s2 : Sum2;
 END_VAR
-sum(a := q, m := motors[1], p := pt, n := q[1]);
+sum(a := q, m := motors[1], p := pt, n := q[1], total := s2);
 END_PROGRAM
 """
 
@@ -85,13 +91,15 @@ def test_each_kind_of_variable_has_its_c_type_size_and_alignment() -> None:
     assert main["grid"][2] == 12
     assert main["pt"][0] == Nested("STRUCT_PT") and main["pt"][1] % 8 == 0
     sum_block = shapes_and_offsets(artifact, "POU_SUM")
-    # in-outs: an open array, a block (a derived one may come), a structure referred to;
-    # an elementary one is copied in and out, so it is the value itself
+    # in-outs: an open array, a block another extends (a derived one may come), a structure
+    # and a block nobody extends referred to; an elementary one is copied in and out, so it
+    # is the value itself
     assert sum_block["a"] == (Slice(Scalar("h"), 1), 0, 24)
     assert sum_block["m"] == (Handle(), 24, 8)
-    # the structure's in-out: where a call bound it, then a structure of its own (aligned)
+    # where a call bound it, then one of its own (aligned)
     assert sum_block["p"] == (Bound(Nested("STRUCT_PT")), 32, 24)
     assert sum_block["n"] == (Scalar("h"), 56, 2)
+    assert sum_block["total"] == (Bound(Nested("POU_SUM2")), 60, 12)
     point = class_layouts(artifact.units())["STRUCT_PT"]
     assert (point.size, point.align) == (16, 8)
 

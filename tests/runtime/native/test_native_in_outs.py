@@ -114,7 +114,7 @@ def test_the_switch_keeps_each_in_out_bound_to_its_variable(native_tier: NativeT
     assert main.other.data[3] == main.reset.data[3] == -1
     python: Any = pair.python.variables.programs[0].instance
     python.arr[1] = 77
-    pair.python.variables.globals.shared[3] = -1  # type: ignore[union-attr]
+    pair.python.variables.globals.shared[3] = -1
     pair.cycle_and_compare(2)
     main.idle.data = [9, 9, 9, 9]  # no variable of the image: into its own storage
     assert main.idle.data == [9, 9, 9, 9] and main.arr[2] == 3
