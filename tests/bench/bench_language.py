@@ -193,7 +193,7 @@ def bench_native_coverage(sources: list[SourceFile]) -> None:
             if unit.kind == "FUNCTION":
                 functions += 1
                 functions_c += len(result.bodies)
-                # in native memory too: not those of structures or arrays (function_body.py)
+                # in native memory too: not those of arrays (function_body.py)
                 functions_image += len(translation.translate(unit, layouts).bodies)
             else:
                 translated += len(result.bodies)
@@ -216,7 +216,7 @@ def bench_native_coverage(sources: list[SourceFile]) -> None:
         f"  goal every body native (issue 34): {still} of {total + functions} still Python, "
         f"{verdict(still == 0)} (on the slots of objects; in native memory "
         f"{total - blocks_image} program and block bodies and "
-        f"{functions_c - functions_image} FUNCTIONs of structures or arrays are not C)"
+        f"{functions_c - functions_image} FUNCTIONs of arrays are not C)"
     )
 
 

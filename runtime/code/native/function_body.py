@@ -47,6 +47,7 @@ from runtime.code.native.translate import (
     NAME_PLACEHOLDER,
     NotTranslated,
     Translated,
+    V,
     _Body,
     _ctype,
     _identifier,
@@ -68,15 +69,15 @@ from runtime.contract.artifact import PouCode
 from runtime.contract.code.statements import Assign, ForEach, If, Return, Stmt, While
 from runtime.contract.code.typed_form import Expr, Sequence, Var
 from runtime.contract.code.units import Class, Function, Unit
-from runtime.contract.layout import Layouts
+from runtime.contract.layout import Layouts, Nested
 
 LEFT = (
     "a FUNCTION whose parameters, result or outputs are not all numbers, BOOLs, texts, "
     "structures or arrays of fixed bounds"
 )
-# in native memory a structure or an array is bytes of the image, which the C of a
-# FUNCTION there does not take or give yet (never a reason to leave the image: `_refusal`)
-IMAGE_LEFT = "a FUNCTION of structures or arrays in native memory (not yet C)"
+# in native memory an array is bytes of the image, which the C of a FUNCTION there does not
+# take or give yet (never a reason to leave the image: `_refusal`)
+IMAGE_LEFT = "a FUNCTION of arrays in native memory (not yet C)"
 
 
 class _FunctionParts(_Body):
@@ -160,16 +161,21 @@ class _FunctionParts(_Body):
             if isinstance(declared, Nothing):
                 _refuse("a FUNCTION's return of a value where it has no result")
             what = f"what {self.cls.name} gives"
-            if _is_object(declared):  # a new reference into the caller's temporary
+            if _is_object(declared):
                 if found.kind != declared:
                     _refuse(f"a {_kind_name(found.kind)} returned as a {_kind_name(declared)}")
-                self.line(f"Py_XSETREF(*f->o{n}, Py_NewRef({found.c}));")
+                self.give_object(n, found)
                 continue
             if isinstance(declared, Int) and isinstance(found.kind, Int):
                 self.storable(found, declared, what)
             elif type(found.kind) is not type(declared):
                 _refuse(f"a {_kind_name(found.kind)} returned as a {_kind_name(declared)}")
             self.line(f"*f->o{n} = ({_ctype(declared)})({found.c});")
+
+    def give_object(self, n: int, found: V) -> None:
+        """A text, structure or array given back: a new reference into the caller's
+        temporary."""
+        self.line(f"Py_XSETREF(*f->o{n}, Py_NewRef({found.c}));")
 
 
 class _SlotFunction(_FunctionParts):
@@ -179,7 +185,14 @@ class _SlotFunction(_FunctionParts):
 
 
 class _ImageFunction(_FunctionParts, _ImageBody):
-    """A FUNCTION's body in image mode."""
+    """A FUNCTION's body in image mode: a structure it takes is copied into bytes of its
+    frame as it begins, one it gives is written into bytes the caller's frame holds."""
+
+    def give_object(self, n: int, found: V) -> None:
+        if isinstance(found.kind, Instance):
+            self.line(f"memmove(f->o{n}, {found.c}, {self.module.size(Nested(found.kind.cls))});")
+            return
+        super().give_object(n, found)
 
 
 def translate_function(
@@ -303,9 +316,9 @@ def _function_text(
     )
     assert isinstance(body, _FunctionParts)
     instance = [f"{body.instance_ctype}s"] if function.method else []
-    params = [f"{_ctype(param.kind)} p{n}" for n, param in enumerate(info.params)]
+    params = [f"{body.param_ctype(param.kind)} p{n}" for n, param in enumerate(info.params)]
     valued = [(n, kind) for n, kind in enumerate(body.items) if not isinstance(kind, Nothing)]
-    outs = [f"{_ctype(kind)} *o{n}" for n, kind in valued]
+    outs = [f"{body.out_ctype(kind)}o{n}" for n, kind in valued]
     head = f"static int\n{body.c_name}({', '.join(['padt_mctx *ctx', *instance, *params, *outs])})"
     entry = (
         [] if function.method else ["    char *s = NULL;" if image else "    PyObject *s = NULL;"]
@@ -321,6 +334,12 @@ def _function_text(
     entry += [f"    f->o{n} = o{n};" for n, _ in valued]
     for n, param in enumerate(info.params):
         local = body.local_ref(param.name)
+        if isinstance(body, _ImageFunction) and isinstance(param.kind, Instance):
+            # the caller's bytes, copied into the frame
+            size = body.module.size(Nested(param.kind.cls))
+            own = body.frame_buffer(f"p{n}", size)
+            entry += [f"    memcpy({own}, p{n}, {size});", f"    {local} = {own};"]
+            continue
         # a structure of its class (its members at their offsets), an array a list
         if isinstance(param.kind, Instance):
             check = f"Py_IS_TYPE(p{n}, (PyTypeObject *){module.type_ref(param.kind.cls)})"
@@ -337,7 +356,7 @@ def _function_text(
             ]
         value = f"Py_NewRef(p{n})" if _is_object(param.kind) else f"p{n}"
         entry.append(f"    {local} = {value};")
-    fields = [f"{_ctype(kind)} *o{n};" for n, kind in valued]
+    fields = [f"{body.out_ctype(kind)}o{n};" for n, kind in valued]
     returns = ("ctx->depth--; return 0;", "ctx->depth--; return -1;")
     if image:
         return body.c_name, image_function_text(body, func, head, fields, entry, returns)

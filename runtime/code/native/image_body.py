@@ -101,6 +101,10 @@ class _ImageModule(_Module):
     # classes laid out as the runtime's SFC classes, whose C struct (padt_native.h) the
     # module asserts to match the layout
     asserted: set[str] = field(default_factory=set)
+    initials: dict[str, str] = field(default_factory=dict)  # structure class -> C static
+
+    def size(self, shape: Shape) -> int:
+        return size_and_align(shape, self.layouts.__getitem__)[0]
 
     def layout(self, cls: str) -> Layout:
         found = self.layouts.get(cls)
@@ -113,12 +117,22 @@ class _ImageModule(_Module):
         self.layout(cls)
         return self.view_classes.setdefault(cls, f"V{len(self.view_classes)}")
 
+    def initial(self, cls: str) -> str:
+        """The C static of the bytes of a structure of `cls` made afresh, made as the module
+        binds (padt_instance_initial)."""
+        self.view_class(cls)
+        return self.initials.setdefault(cls, f"INIT{len(self.initials)}")
+
     def statics(self) -> list[str]:
         lines = [
             line.replace("static padt_site ", "static padt_msite ") for line in super().statics()
         ]
         views = self.view_classes.items()
         lines += [f"static PyObject *{ref}; {c_comment(cls)}" for cls, ref in views]
+        lines += [
+            f"static _Alignas(8) unsigned char {ref}[{self.size(Nested(cls))}]; {c_comment(cls)}"
+            for cls, ref in self.initials.items()
+        ]
         for cls in sorted(self.asserted):
             layout = self.layouts[cls]
             struct = _RUNTIME_STRUCTS[tuple(m.name for m in layout.members)]
@@ -130,12 +144,20 @@ class _ImageModule(_Module):
         return lines
 
     def binding(self) -> list[str]:
-        return super().binding() + [
-            f"    if (({ref} = PyDict_GetItemString(padt_views, {c_string(cls)})) == NULL) {{"
-            f' PyErr_SetString(PyExc_TypeError, "native code: no view class {cls}");'
-            " return NULL; }"
-            for cls, ref in self.view_classes.items()
-        ]
+        return (
+            super().binding()
+            + [
+                f"    if (({ref} = PyDict_GetItemString(padt_views, {c_string(cls)})) == NULL) {{"
+                f' PyErr_SetString(PyExc_TypeError, "native code: no view class {cls}");'
+                " return NULL; }"
+                for cls, ref in self.view_classes.items()
+            ]
+            + [
+                f"    if (padt_instance_initial({self.view_classes[cls]}, {c_string(cls)},"
+                f" (char *){ref}, {self.size(Nested(cls))}) < 0) return NULL;"
+                for cls, ref in self.initials.items()
+            ]
+        )
 
 
 # an action control block's flags and times, in padt_action_update's order
@@ -319,7 +341,9 @@ class _ImageBody(_Body):
         return at, array.shape.element, array.kind.element
 
     def new_structure(self, cls: str) -> V:
-        _refuse(f"a structure made afresh, {cls}() (an object, not bytes of the image)")
+        """`STRUCT_X()`: the bytes of a fresh one, made once as the module binds; a value
+        to copy (`copied`), never to write into."""
+        return V(Instance(cls), f"((char *){self.module.initial(cls)})", copied=True)
 
     def list_literal(self, items: tuple[Expr, ...], declared: str) -> V:
         _refuse("a list of values (an object, not bytes of the image)")
@@ -390,10 +414,51 @@ class _ImageBody(_Body):
         return super().local_ref(name)
 
     def keep(self, local: str, value: V) -> None:
+        """An instance into a local: where it is (an instance of the image, an alias), or,
+        a value of its own (a copy, a fresh structure, a FUNCTION's result), its bytes into
+        the local's own bytes of the frame (a FUNCTION's structure, function_body.py)."""
+        if isinstance(value.kind, Instance) and value.copied:
+            size = self.module.size(Nested(value.kind.cls))
+            own = self.frame_buffer(local.removeprefix("f->"), size)
+            self.line(f"memmove({own}, {value.c}, {size});")
+            self.line(f"{local} = {own};")
+            return
         if isinstance(value.kind, Instance):
             self.line(f"{local} = {value.c};")
             return
         super().keep(local, value)
+
+    def frame_buffer(self, name: str, size: int) -> str:
+        """Bytes of the frame, aligned as the image's, that a structure of a FUNCTION's own
+        lives in (a parameter's copy, a local, a call's result)."""
+        c = f"b_{_identifier(name)}"
+        self.frame.setdefault(c, f"_Alignas(8) unsigned char {c}[{size}];")
+        return f"((char *)f->{c})"
+
+    # -- a FUNCTION's structures: bytes, not objects (function_body.py)
+    def out_temp(self, kind: Kind) -> str:
+        if isinstance(kind, Instance):  # bytes of the frame, which the callee writes
+            return self.frame_buffer(f"r{len(self.frame)}", self.module.size(Nested(kind.cls)))
+        return super().out_temp(kind)
+
+    def param_ctype(self, kind: Kind) -> str:
+        return "char *" if isinstance(kind, Instance) else super().param_ctype(kind)
+
+    def out_ctype(self, kind: Kind) -> str:
+        return "char *" if isinstance(kind, Instance) else super().out_ctype(kind)
+
+    def out_arg(self, kind: Kind, out: str) -> str:
+        return out if isinstance(kind, Instance) else super().out_arg(kind, out)
+
+    def given_back(self, out: str, obj: str, kind: Kind, what: str) -> None:
+        """A structure a FUNCTION's Python gave: into the bytes its C would have written,
+        each member checked as a store is."""
+        if isinstance(kind, Instance):
+            view_class = self.module.view_class(kind.cls)
+            size = self.module.size(Nested(kind.cls))
+            self.check(f"padt_instance_into({view_class}, {out}, {size}, {obj})")
+            return
+        super().given_back(out, obj, kind, what)
 
     # -- the runtime's SFC classes, in C on their bytes (padt_native.h)
     def helper_call(self, name: str, node: Call) -> V:
@@ -460,9 +525,8 @@ class _ImageBody(_Body):
             why = f"its own instance given to Python, a derived block overriding {method}"
             _refuse(f"{why} ({NOT_YET})")
         view_class = self.module.view_class(value.kind.cls)
-        return self.owned_object(
-            f"padt_view_new({view_class}, padt_ctx->image, {value.c} - padt_ctx->base)"
-        )
+        size = self.module.size(Nested(value.kind.cls))
+        return self.owned_object(f"padt_instance_object(padt_ctx, {view_class}, {value.c}, {size})")
 
     def boxed(self, value: V, callee: str) -> str:
         """An instance passed to Python code (a method, a FUNCTION, the runtime's SFC

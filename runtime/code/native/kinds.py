@@ -390,13 +390,12 @@ class FunctionInfo:
 
     @property
     def in_image(self) -> bool:
-        """Its parameters, result and outputs all numbers, BOOLs or texts: its C may work in
-        native memory too, where a text is the str a read of its bytes makes, but a
-        structure or an array is bytes of the image, not a Python object."""
+        """Its parameters, result and outputs all numbers, BOOLs, texts or structures: its C
+        may work in native memory too, where a text is the str a read of its bytes makes
+        and a structure bytes (of the image, or of a FUNCTION's frame), but an array is
+        bytes of the image, not yet taken or given there."""
         given = self.outputs.items if self.outputs is not None else (self.result,)
-        return not any(
-            isinstance(kind, Instance | Array) for kind in (*(p.kind for p in self.params), *given)
-        )
+        return not any(isinstance(kind, Array) for kind in (*(p.kind for p in self.params), *given))
 
 
 @dataclass(frozen=True)
@@ -504,8 +503,8 @@ def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo
     call gives a tuple, and of what, is read off the form's `return` statements (the
     artifact names the result type, not the outputs): the declared types of the variables
     returned."""
-    # the structures by type name: a FUNCTION's C on slots takes and gives them (the
-    # outputs keep the kinds they had, which native memory reads)
+    # the structures by type name: a FUNCTION's C takes and gives them, as its result and
+    # its outputs
     structures = {unit.name.upper(): unit.class_name for unit in units if unit.kind == "STRUCT"}
     table: dict[str, FunctionInfo] = {}
     for unit in units:
@@ -514,7 +513,7 @@ def function_table(units: list[PouCode], forms: Forms) -> dict[str, FunctionInfo
         form = forms[unit.class_name]
         if not isinstance(form, Function):
             continue
-        returned = _returned(form, unit.class_name, {})
+        returned = _returned(form, unit.class_name, structures)
         result = kind_of_type(unit.returns, structures) if unit.returns else None
         info = FunctionInfo(unit.class_name, result, returned.outputs)
         gives = bool(unit.returns)

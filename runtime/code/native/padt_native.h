@@ -1155,6 +1155,77 @@ padt_index_error(void)
     return -1;
 }
 
+/* ---- structures outside the image: a FUNCTION's own (function_body.py) ---------------
+ *
+ * A FUNCTION of structures works in native memory on bytes of its frame (a parameter's
+ * copy, a local, a result the caller's frame holds), laid out as the image's structures. */
+
+/* The structure at `at` given to Python code: a view of the image where it lies there,
+ * else of a copy of its bytes (a frame's: the callee gets a value of its own, as every
+ * input and a FUNCTION's in-out are). A new reference. */
+static PyObject *
+padt_instance_object(padt_mctx *ctx, PyObject *view_class, char *at, Py_ssize_t size)
+{
+    if (at >= ctx->base && at + size <= ctx->base + ctx->size)
+        return padt_view_new(view_class, ctx->image, at - ctx->base);
+    PyObject *copy = PyByteArray_FromStringAndSize(at, size);
+    if (copy == NULL)
+        return NULL;
+    PyObject *view = padt_view_new(view_class, copy, 0);
+    Py_DECREF(copy);
+    return view;
+}
+
+/* A structure Python code gave (a view of its class, or an object of the generated class
+ * of the same name) into the `size` bytes at `at`: member by member through a view of a
+ * scratch copy, whose fields check every value as a store does (padt_memory.c), then
+ * copied whole, so that a value refused leaves the bytes as they were. */
+static int
+padt_instance_into(PyObject *view_class, char *at, Py_ssize_t size, PyObject *value)
+{
+    PyTypeObject *type = (PyTypeObject *)view_class;
+    if (Py_TYPE(value) == type) {
+        padt_view *v = (padt_view *)value;
+        memmove(at, PyByteArray_AS_STRING(v->image) + v->offset, size);
+        return 0;
+    }
+    if (strcmp(Py_TYPE(value)->tp_name, type->tp_name) != 0)
+        return padt_refuse(type->tp_name, value);
+    PyObject *scratch = PyByteArray_FromStringAndSize(at, size);
+    PyObject *view = scratch == NULL ? NULL : padt_view_new(view_class, scratch, 0);
+    PyObject *names = view == NULL ? NULL : PyObject_GetAttrString(view_class, "__slots__");
+    PyObject *seq = names == NULL ? NULL : PySequence_Fast(names, "__slots__ is no sequence");
+    int failed = seq == NULL;
+    for (Py_ssize_t i = 0; !failed && i < PySequence_Fast_GET_SIZE(seq); i++) {
+        PyObject *name = PySequence_Fast_GET_ITEM(seq, i);
+        PyObject *member = PyObject_GetAttr(value, name);
+        failed = member == NULL || PyObject_SetAttr(view, name, member) < 0;
+        Py_XDECREF(member);
+    }
+    if (!failed)
+        memcpy(at, PyByteArray_AS_STRING(scratch), size);
+    Py_XDECREF(seq);
+    Py_XDECREF(names);
+    Py_XDECREF(view);
+    Py_XDECREF(scratch);
+    return failed ? -1 : 0;
+}
+
+/* The bytes of a structure made afresh (`STRUCT_X()`: its members' initial values), made
+ * once as the module binds: the generated class's object, into `at` as a store takes it. */
+static int
+padt_instance_initial(PyObject *view_class, const char *class_name, char *at, Py_ssize_t size)
+{
+    PyObject *cls = padt_class(class_name);
+    PyObject *fresh = cls == NULL ? NULL : PyObject_CallNoArgs(cls);
+    if (fresh == NULL)
+        return -1;
+    memset(at, 0, size);
+    int failed = padt_instance_into(view_class, at, size, fresh);
+    Py_DECREF(fresh);
+    return failed;
+}
+
 /* A block's in-out whose offset lies outside the image (what padt_memory's views refuse
  * too: only a defect would write one). */
 static int

@@ -1426,10 +1426,7 @@ class _Body:
                 value = V(value.kind, held)
             given[keyword] = value
         items = returned_items(info)
-        outs = [
-            (self.temp(_ctype(kind), "NULL" if _is_object(kind) else "0") if _valued(kind) else "")
-            for kind in items
-        ]
+        outs = [self.out_temp(kind) if _valued(kind) else "" for kind in items]
         direct = all(
             _fits(given[p.name].kind, p.kind) if p.name in given else p.default is not None
             for p in info.params
@@ -1448,12 +1445,13 @@ class _Body:
             ]
             instance = [self.instance_ctype] if owner is not None else []
             ctypes = ", ".join(
-                ["padt_mctx *", *instance, *(_ctype(p.kind) for p in info.params)]
-                + [f"{_ctype(kind)} *" for kind in items if _valued(kind)]
+                ["padt_mctx *", *instance, *(self.param_ctype(p.kind) for p in info.params)]
+                + [self.out_ctype(kind) for kind in items if _valued(kind)]
             )
             call = f"((int (*)({ctypes})){site}.function)"
             first = [self.context, *([owner.c] if owner is not None else [])]
-            everything = ", ".join([*first, *args, *(f"&{out}" for out in outs if out)])
+            pointers = [self.out_arg(kind, out) for kind, out in zip(items, outs, strict=True)]
+            everything = ", ".join([*first, *args, *(p for p in pointers if p)])
             self.check(f"padt_function_site(&{site}, {self.module.key(info.native)})")
             found = f"{site}.function != NULL" + (f" && {guard}" if guard else "")
             self.line(f"if (PADT_LIKELY({found})) {{")
@@ -1474,9 +1472,9 @@ class _Body:
             for n, (kind, out) in enumerate(zip(items, outs, strict=True)):
                 if out:
                     obj = f"PyTuple_GET_ITEM({returned}, {n})"
-                    self.given_back(out, self.unboxed(obj, kind, f"an output of {name}"))
+                    self.given_back(out, obj, kind, f"an output of {name}")
         elif outs:
-            self.given_back(outs[0], self.unboxed(returned, items[0], f"the result of {name}"))
+            self.given_back(outs[0], returned, items[0], f"the result of {name}")
         if direct:
             self.depth -= 1
             self.line("}")
@@ -1485,8 +1483,26 @@ class _Body:
             return V(Results(items), "", parts=parts)
         return parts[0]
 
-    def given_back(self, out: str, value: V) -> None:
-        """What a FUNCTION's Python gave into the temporary its C would have written."""
+    def out_temp(self, kind: Kind) -> str:
+        """The temporary a FUNCTION's C writes a result or output of `kind` into."""
+        return self.temp(_ctype(kind), "NULL" if _is_object(kind) else "0")
+
+    def param_ctype(self, kind: Kind) -> str:
+        """The C type a FUNCTION's C takes a parameter of `kind` as."""
+        return _ctype(kind)
+
+    def out_ctype(self, kind: Kind) -> str:
+        """The C type of the pointer a FUNCTION's C writes a result or output through."""
+        return f"{_ctype(kind)} *"
+
+    def out_arg(self, kind: Kind, out: str) -> str:
+        """That pointer, to the temporary `out` ("" where the call gives no value)."""
+        return f"&{out}" if out else ""
+
+    def given_back(self, out: str, obj: str, kind: Kind, what: str) -> None:
+        """What a FUNCTION's Python gave (`obj`) into the temporary its C would have
+        written."""
+        value = self.unboxed(obj, kind, what)
         if _is_object(value.kind):
             self.line(f"Py_XSETREF({out}, Py_NewRef({value.c}));")
         else:

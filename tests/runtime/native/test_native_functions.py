@@ -323,20 +323,21 @@ def test_functions_of_texts_structures_and_arrays_run_as_c_on_slots(
 ) -> None:
     """On slots a text, a structure or an array is a Python object, which a FUNCTION's C
     takes and gives: each C body is called from C, with the Python replaced by one that
-    fails. In native memory the FUNCTIONs of texts are C too (their C called from C:
-    `test_c_calls_the_functions_c_not_their_python`); those of structures and arrays stay
-    Python (a structure or an array is bytes of the image there), and a structure one
-    gives is stored into the image whole (which faulted before: "a variable of STRUCT_VEC
-    cannot hold <STRUCT_VEC object>")."""
+    fails. In native memory the FUNCTIONs of texts and structures are C too (their C
+    called from C: `test_functions_of_structures_are_c_in_native_memory_too`); those of
+    arrays stay Python (an array is bytes of the image there), and Main with them, which
+    calls the others' Python, and a structure one gives is stored into the image whole
+    (which faulted before: "a variable of STRUCT_VEC cannot hold <STRUCT_VEC object>")."""
     pair = in_memory(TEXTS_AND_STRUCTURES, native_tier, memory, "sorted : BOOL;")
     texts = ("Short", "Tag")
-    functions = ("Bump", "Interp", "Sort", "Table", "VAdd", "VLen", "VScale", *texts)
+    arrays = ("Interp", "Sort", "Table")
+    functions = ("Bump", "VAdd", "VLen", "VScale", *arrays, *texts)
     if memory == "image":
         left = dict(pair.report.left)
-        assert {pou for pou in functions if pou in left} == set(functions) - set(texts)
-        assert left["VAdd"] == left["Sort"] == IMAGE_LEFT
+        assert {pou for pou in functions if pou in left} == set(arrays)
+        assert left["Interp"] == left["Sort"] == IMAGE_LEFT
         assert left["Table"].startswith("a list of values")  # its constant array
-        assert set(texts) <= set(pair.report.bodies)
+        assert set(functions) - set(arrays) <= set(pair.report.bodies)
         in_c: tuple[str, ...] = ()  # Main stays Python there: it calls their Python
     else:
         assert pair.report.bodies == tuple(sorted((*functions, "Main"))), pair.report.left
@@ -354,6 +355,84 @@ def test_functions_of_texts_structures_and_arrays_run_as_c_on_slots(
     assert values["Main.q.x"] == 4.0 and values["Main.r.x"] == 4.0
     assert (values["Main.s"], values["Main.u"], values["Main.w"]) == ("-1--23-4", "-1--", "-1--+1")
     assert (values["Main.t"], values["Main.arr"]) == (2.5, [-2, -4, -5])
+
+
+STRUCTURES = """
+TYPE Vec : STRUCT x, y, z : REAL; tag : STRING[8] := 'v'; n : INT := 7; END_STRUCT; END_TYPE
+FUNCTION VAdd : Vec
+VAR_INPUT a, b : Vec; END_VAR
+VAdd.x := a.x + b.x; VAdd.y := a.y + b.y; VAdd.z := a.z + b.z;
+VAdd.n := a.n + b.n;
+END_FUNCTION
+FUNCTION VLen : REAL
+VAR_INPUT a : Vec; END_VAR
+VLen := SQRT(a.x * a.x + a.y * a.y + a.z * a.z);
+END_FUNCTION
+FUNCTION VScale : Vec
+VAR_INPUT a : Vec; k : REAL; END_VAR
+VAR t : Vec; END_VAR
+t := a;
+t.x := t.x * k; t.y := t.y * k; t.z := t.z * k;
+a.x := 0.0;  (* its own copy: the caller's stays *)
+VScale := t;
+END_FUNCTION
+FUNCTION VNorm : Vec
+VAR_INPUT a : Vec; END_VAR
+VAR l : REAL; END_VAR
+l := VLen(a);
+IF l > 0.0 THEN VNorm := VScale(a, 1.0 / l); ELSE VNorm := a; END_IF;
+END_FUNCTION
+FUNCTION Split : BOOL
+VAR_INPUT a : Vec; END_VAR
+VAR_OUTPUT left, right : Vec; END_VAR
+VAR_IN_OUT count : Vec; END_VAR
+left := a; left.x := 0.0;
+right := a; right.y := 0.0; right.tag := 'right';
+count.n := count.n + 1;
+Split := a.x > a.y;
+END_FUNCTION
+PROGRAM Main
+VAR
+  p : Vec := (x := 1.0, y := 2.0, z := 2.0); q, r, fresh, l, rr, c : Vec; len : REAL;
+  more : BOOL;
+END_VAR
+q := VAdd(p, q);
+len := VLen(q);
+r := VNorm(q);
+p.x := p.x + 0.5;
+fresh := VScale(fresh, 2.0);
+more := Split(p, left => l, right => rr, count := c);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("memory", ["image", "slots"])
+def test_functions_of_structures_are_c_in_native_memory_too(
+    native_tier: NativeTier, memory: str
+) -> None:
+    """In native memory a structure is bytes: a FUNCTION's C takes the caller's (copied
+    into its frame as it begins), writes its result and outputs into bytes the caller's
+    frame holds, and makes a fresh one from bytes made once as its module binds (the
+    members' initial values: `tag`, `n`). Each C body is called from C, with the Python
+    replaced by one that fails."""
+    pair = in_memory(STRUCTURES, native_tier, memory, "more : BOOL;")
+    functions = ("Split", "VAdd", "VLen", "VNorm", "VScale")
+    assert pair.report.bodies == ("Main", *functions), pair.report.left
+    namespace: dict[str, Any] = pair.native.variables.code.namespace  # type: ignore[union-attr]
+
+    def broken(**_: object) -> None:
+        raise AssertionError("the Python of a FUNCTION whose C is in place")
+
+    for name in functions:
+        namespace[f"FN_{name.upper()}"] = broken
+    pair.cycle_and_compare(4)
+    values = pair.native.variables.values()
+    assert (values["Main.p.x"], values["Main.q.x"], values["Main.q.n"]) == (3.0, 7.0, 35)
+    assert (values["Main.fresh.tag"], values["Main.fresh.n"]) == ("v", 7)
+    assert (values["Main.rr.tag"], values["Main.l.x"], values["Main.c.n"]) == ("right", 0.0, 11)
+    assert (
+        round(values["Main.r.x"] ** 2 + values["Main.r.y"] ** 2 + values["Main.r.z"] ** 2, 5) == 1
+    )
 
 
 GLOBALS = """
