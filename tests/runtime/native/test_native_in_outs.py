@@ -8,6 +8,7 @@ either side."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import pytest
@@ -163,3 +164,21 @@ def test_a_context_restores_an_in_out_into_its_own_storage_on_either_side(
     for twin in (restarted.python, restarted.native):
         twin.start()
     restarted.cycle_and_compare(3)
+
+
+def test_a_value_forced_through_an_in_out_is_forced_in_its_variable(
+    native_tier: NativeTier,
+) -> None:
+    """Forcing writes a path through an in-out where the in-out is bound at each cycle, in
+    native memory as on objects: the caller's variable holds the forced value."""
+    pair = in_memory(IN_OUTS, native_tier, "image", "n : INT;")
+    pair.cycle_and_compare(1)  # Sum's in-out bound to pts[2]
+    for twin in (pair.python, pair.native):
+        twin.params = replace(twin.params, safety_operation=False)
+        program = twin.variables.program("Main")
+        program.config = replace(program.config, local_forcing_allowed=True)
+        twin.forcing.force("Main.sum.p.x", 1000)
+        twin.forcing.start("Main")
+    pair.cycle_and_compare(3)
+    values = pair.native.variables.values()
+    assert values["Main.pts[2].x"] == values["Main.sum.p.x"] == 1000
