@@ -34,7 +34,8 @@ def enter_image(variables: Variables, plan: ImagePlan) -> bytearray:
     # every value packed (in C, all at once: an in-out is bound where its variable went)
     # before any instance is replaced: a value a view refuses (of another type, out of its
     # range) leaves the configuration as it was
-    plan.memory.pack([(views[name], instance) for name, instance in _held(variables).items()])
+    held = [(views[name], instance) for name, instance in _held(variables).items()]
+    plan.memory.pack(held, plan.in_outs)
     _move(variables, views)
     variables.memory = ImageMemory(
         image, plan.layouts, plan.placement, plan.class_names, [p.name for p in variables.programs]
@@ -60,7 +61,8 @@ def leave_image(variables: Variables) -> None:
         for name in held
     }
     # every value, in C, all at once: an in-out gets the object unpacked where it is bound
-    variables.image.memory.unpack([(view, fresh[name]) for name, view in held.items()])
+    pairs = [(view, fresh[name]) for name, view in held.items()]
+    variables.image.memory.unpack(pairs, variables.image.in_outs)
     _move(variables, fresh)
     variables.memory = ObjectMemory(variables.globals, variables.programs)
     variables.bound = list(variables.bound)

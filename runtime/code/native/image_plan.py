@@ -20,6 +20,7 @@ from runtime.contract.layout import (
     ACTION_CONTROL,
     HEADER,
     SFC_STEP,
+    Bound,
     ImageLayout,
     LayoutRefused,
     Layouts,
@@ -40,6 +41,9 @@ class ImagePlan:
     views: dict[str, type]
     class_names: dict[str, str]
     memory: ModuleType  # padt_memory
+    # whether a class has a block's in-out (`Bound`), which the moves between objects and
+    # the image bind through an identity map
+    in_outs: bool
     registry: dict[str, Any] = field(default_factory=dict)
 
 
@@ -64,4 +68,5 @@ def plan_image(
     except ViewsRefused as refused:
         return f"no view: {refused}"
     names = {name: known[name].__name__ for name in viewed}
-    return ImagePlan(layouts, placement, views, names, memory)
+    in_outs = any(isinstance(m.shape, Bound) for lay in layouts.values() for m in lay.members)
+    return ImagePlan(layouts, placement, views, names, memory, in_outs)

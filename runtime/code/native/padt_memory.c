@@ -549,7 +549,8 @@ static PyObject *members_of(PyObject *view_type) {
  * variable of another instance (a global, another program's) is bound to it however the
  * instances are ordered. */
 struct moving {
-    PyObject *seen;    /* pack: id of an object -> (offset, Field); unpack: key -> object */
+    PyObject *seen;    /* pack: id of an object -> (offset, Field); unpack: key -> object;
+                          NULL where no class has an in-out (nothing to bind) */
     PyObject *pending; /* pack: (offset, Field, object); unpack: (offset, Field, holder, name) */
 };
 
@@ -577,6 +578,11 @@ static PyObject *place_key(FieldObject *f, Py_ssize_t offset) {
 }
 
 static int remember(moving *mv, PyObject *key, PyObject *value) {
+    if (mv->seen == NULL) { /* (made for nothing: the caller's arguments are new) */
+        Py_XDECREF(key);
+        Py_XDECREF(value);
+        return 0;
+    }
     if (key == NULL || value == NULL) {
         Py_XDECREF(key);
         Py_XDECREF(value);
@@ -609,7 +615,7 @@ static int pack_value(FieldObject *f, PyObject *members, PyObject *image, Py_ssi
         Py_XDECREF(entry);
         return failed ? -1 : 0;
     }
-    if ((f->code == K_NESTED || f->code == K_ARRAY) && mv != NULL &&
+    if ((f->code == K_NESTED || f->code == K_ARRAY) && mv != NULL && mv->seen != NULL &&
         packed_at(mv, f, offset, value) < 0)
         return -1;
     if (f->code == K_NESTED && Py_TYPE(value) != (PyTypeObject *)f->view_type)
@@ -686,7 +692,9 @@ static int bind_packed(moving *mv, PyObject *image) {
 static int unpack_into(FieldObject *f, PyObject *members, PyObject *image, Py_ssize_t offset,
                        PyObject *target, moving *mv) {
     if (field_cleared(f)) return -1;
-    if (mv != NULL && remember(mv, place_key(f, offset), Py_NewRef(target)) < 0) return -1;
+    if (mv != NULL && mv->seen != NULL &&
+        remember(mv, place_key(f, offset), Py_NewRef(target)) < 0)
+        return -1;
     if (f->code == K_NESTED) return unpack_members(members, image, offset, target, mv);
     FieldObject *element = f->element;
     int failed;
@@ -774,12 +782,16 @@ static int bind_unpacked(moving *mv, PyObject *image) {
     return 0;
 }
 
-/* pack or unpack of [(view, object)]: a configuration's instances, all of one image. */
-static PyObject *move(PyObject *pairs, int packing) {
-    if (!PyList_Check(pairs)) return PyErr_Format(PyExc_TypeError, "a list of (view, object)");
-    moving mv = {PyDict_New(), PyList_New(0)};
+/* pack or unpack of [(view, object)]: a configuration's instances, all of one image;
+ * `in_outs`: whether any of its classes has an in-out (the identity map costs a third of
+ * the move where none has). */
+static PyObject *move(PyObject *args, int packing) {
+    PyObject *pairs;
+    int in_outs = 1;
+    if (!PyArg_ParseTuple(args, "O!|p", &PyList_Type, &pairs, &in_outs)) return NULL;
+    moving mv = {in_outs ? PyDict_New() : NULL, PyList_New(0)};
     PyObject *image = NULL;
-    int failed = mv.seen == NULL || mv.pending == NULL;
+    int failed = (in_outs && mv.seen == NULL) || mv.pending == NULL;
     for (Py_ssize_t i = 0; !failed && i < PyList_GET_SIZE(pairs); i++) {
         PyObject *pair = PyList_GET_ITEM(pairs, i), *view, *object;
         if (!PyArg_ParseTuple(pair, "O!O", &ViewType, &view, &object)) {
@@ -799,6 +811,10 @@ static PyObject *move(PyObject *pairs, int packing) {
                           : unpack_members(members, image, v->offset, object, &mv)) < 0;
         Py_XDECREF(members);
     }
+    if (!failed && image != NULL && PyList_GET_SIZE(mv.pending) > 0 && mv.seen == NULL) {
+        PyErr_SetString(PyExc_ValueError, "in-outs moved without their identity map");
+        failed = 1;
+    }
     if (!failed && image != NULL)
         failed = (packing ? bind_packed(&mv, image) : bind_unpacked(&mv, image)) < 0;
     Py_XDECREF(mv.seen);
@@ -807,16 +823,16 @@ static PyObject *move(PyObject *pairs, int packing) {
     Py_RETURN_NONE;
 }
 
-static PyObject *pack(PyObject *module, PyObject *pairs) { return move(pairs, 1); }
-static PyObject *unpack(PyObject *module, PyObject *pairs) { return move(pairs, 0); }
+static PyObject *pack(PyObject *module, PyObject *args) { return move(args, 1); }
+static PyObject *unpack(PyObject *module, PyObject *args) { return move(args, 0); }
 
 static PyMethodDef module_methods[] = {
-    {"pack", pack, METH_O,
-     "pack([(view, object)]): every value of slot objects (their instances and arrays too) "
+    {"pack", pack, METH_VARARGS,
+     "pack([(view, object)], in_outs=True): every value of slot objects (their instances and arrays too) "
      "into the views' bytes, each checked as a store is; an in-out bound where the object it "
      "holds went."},
-    {"unpack", unpack, METH_O,
-     "unpack([(view, object)]): every value of the views into slot objects of their classes "
+    {"unpack", unpack, METH_VARARGS,
+     "unpack([(view, object)], in_outs=True): every value of the views into slot objects of their classes "
      "and the instances and arrays they hold; an in-out given the object unpacked where it "
      "is bound."},
     {NULL, NULL, 0, NULL},
