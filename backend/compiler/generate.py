@@ -1074,23 +1074,18 @@ class _Emitter:
         held = self.held_reference(target)
         if held is not None:
             return Evaluate(intrinsic("_deref_set", "", held, value), line)
-        if self._in_out_aggregate(target):  # the caller's variable takes the values
-            return Evaluate(intrinsic("_fill", "", self.expr(target).node, value), line)
-        return Assign(self.expr(target).node, value, line)
-
-    def _in_out_aggregate(self, target: ast.Expr) -> bool:
-        """Whether `target` names a block's in-out of an array or a structure, which holds
-        the caller's very variable: a store into it whole writes the caller's variable.
-        (A FUNCTION's or method's in-out is a local, copied in and given back.)"""
-        if not isinstance(target, ast.NameRef):
-            return False
-        binding = self.scope.lookup(target.name)
-        return (
-            isinstance(binding, Variable)
-            and binding.kind == "VAR_IN_OUT"
-            and isinstance(binding.type, ArrayType | StructType)
-            and self.var_node(binding).where == "instance"
-        )
+        node = self.expr(target).node
+        if isinstance(_type(self.scope, target), ArrayType | StructType) and not (
+            isinstance(node, Var) and node.where == "local"
+        ):
+            # an array or structure of an instance, the globals or an element, written
+            # whole: its values into the object there, which a block's in-out may hold (the
+            # caller's very variable); a Python local of a FUNCTION or method is a value
+            # of its own, which the assignment may replace
+            if isinstance(value, Call) and value.callee == "_copy":
+                value = value.args[0]  # `_fill` copies the values
+            return Evaluate(intrinsic("_fill", "", node, value), line)
+        return Assign(node, value, line)
 
     def held_reference(self, expr: ast.Expr) -> Expr | None:
         """The slot of a REFERENCE TO variable `expr` names (None: it names no such

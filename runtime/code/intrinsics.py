@@ -227,29 +227,32 @@ def _setbits(value: int, shift: int, width: int, part: int) -> int:
 
 
 def _fill(target: Any, value: Any) -> None:
-    """`x := v` where x is a block's in-out of an array or a structure: v's values written
-    into what x refers to (the caller's variable, as IEC 61131-3 passes an in-out), member
-    by member and element by element, so that every object held within keeps its identity
-    (another in-out may refer to it). `value` is the compiler's: of x's type, never x's own
-    object or one within it."""
-    if isinstance(value, list):  # an array (the target a list or an image's Elements)
-        for index, item in enumerate(value):
+    """`x := v` of an array or a structure x of an instance, the globals or an element: v's
+    values written into x's object (or view), member by member and element by element, so
+    that x and every object within keep their identity: a block's in-out may hold x (the
+    caller's very variable, as IEC 61131-3 passes an in-out). `value` is of x's type."""
+    if type(value).__module__ == GENERATED_MODULE:  # a structure (an object or a view)
+        for name in type(target).__slots__:
+            item = getattr(value, name)
             if _is_aggregate(item):
-                _fill(target[index], item)
+                _fill(getattr(target, name), item)
             else:
-                target[index] = item
+                setattr(target, name, item)
         return
-    for name in type(target).__slots__:
-        item = getattr(value, name)
+    if type(target) is list and not (value and _is_aggregate(value[0])):
+        target[:] = value  # elementary values, at once
+        return
+    for index, item in enumerate(value):  # an image's array, or one of aggregates
         if _is_aggregate(item):
-            _fill(getattr(target, name), item)
+            _fill(target[index], item)
         else:
-            setattr(target, name, item)
+            target[index] = item
 
 
 def _is_aggregate(value: Any) -> bool:
-    """An array or a structure, as a copy holds it: a list, or an object of a generated
-    class (a slot object, a view); not a number, a text or a reference."""
+    """An array (a list) or a structure (an object of a generated class, a view), whose
+    values go into the target's own; not a number, a text, a reference or an image's array
+    (whose store copies its values)."""
     return isinstance(value, list) or type(value).__module__ == GENERATED_MODULE
 
 

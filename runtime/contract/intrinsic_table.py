@@ -70,7 +70,7 @@ FILL = _called(
     "_fill",
     "ANY ANY",
     "-",
-    "an array or structure written whole into the place an in-out refers to",
+    "an array or structure written whole into a variable, in place",
 )
 ROL = _called("_rol", "INT INT INT", "INT", "ROL over a width")
 ROR = _called("_ror", "INT INT INT", "INT", "ROR over a width")

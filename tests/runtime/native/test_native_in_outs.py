@@ -182,3 +182,38 @@ def test_a_value_forced_through_an_in_out_is_forced_in_its_variable(
     pair.cycle_and_compare(3)
     values = pair.native.variables.values()
     assert values["Main.pts[2].x"] == values["Main.sum.p.x"] == 1000
+
+
+REBOUND = """\
+FUNCTION_BLOCK Sum
+VAR_IN_OUT data : ARRAY[0..3] OF INT; END_VAR
+VAR_OUTPUT s : INT; END_VAR
+s := data[0] + data[1] + data[2] + data[3];
+END_FUNCTION_BLOCK
+PROGRAM Main
+VAR
+  arr : ARRAY[0..3] OF INT := [1, 2, 3, 4]; zeros : ARRAY[0..3] OF INT; f : Sum;
+  a, b, n : INT;
+END_VAR
+n := n + 1;
+IF n = 1 THEN f(data := arr); END_IF;  (* bound once *)
+a := f.s;
+arr := zeros;  (* written whole: the in-out still holds arr *)
+arr[0] := n;
+f();  (* called again without binding it anew *)
+b := f.s;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("memory", ["image", "slots"])
+def test_a_variable_written_whole_stays_the_one_an_in_out_holds(
+    native_tier: NativeTier, memory: str
+) -> None:
+    """`arr := zeros` writes zeros' values into arr, in place on both tiers (`_fill`): an
+    in-out bound to arr sees them. (The Python tier gave arr a new list, and the in-out
+    kept the old one; native memory wrote the bytes in place: the tiers differed.)"""
+    pair = in_memory(REBOUND, native_tier, memory, "a, b, n : INT;")
+    pair.cycle_and_compare(4)
+    values = pair.native.variables.values()
+    assert (values["Main.a"], values["Main.b"], values["Main.f.data"]) == (3, 4, [4, 0, 0, 0])
