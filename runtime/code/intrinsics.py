@@ -20,6 +20,7 @@ from runtime.contract.system_variables import SYSTEM_VARIABLES
 from runtime.contract.values import format_time, to_real32
 
 GENERATED_MODULE = "padt_generated"  # `__name__` of generated code: its classes' module
+VIEWS_MODULE = "padt_memory"  # the module of the views of a memory image (padt_memory.c)
 
 
 class ProgramFault(Exception):
@@ -230,8 +231,16 @@ def _fill(target: Any, value: Any) -> None:
     """`x := v` of an array or a structure x of an instance, the globals or an element: v's
     values written into x's object (or view), member by member and element by element, so
     that x and every object within keep their identity: a block's in-out may hold x (the
-    caller's very variable, as IEC 61131-3 passes an in-out). `value` is of x's type."""
-    if type(value).__module__ == GENERATED_MODULE:  # a structure (an object or a view)
+    caller's very variable, as IEC 61131-3 passes an in-out). `value` is of x's type.
+
+    The target is checked as `_deref_set`'s root is: a structure of a generated class (a
+    view's class is one too), a list, an image's array; never the runtime's objects the
+    code may name (`_SYS`, whose read-only members its checked stores never write)."""
+    structure = type(value).__module__ == GENERATED_MODULE  # (an object or a view)
+    kind = type(target)
+    if not (kind.__module__ == GENERATED_MODULE if structure else kind is list or _in_image(kind)):
+        raise ProgramFault(f"a whole store into a {kind.__name__}")
+    if structure:
         for name in type(target).__slots__:
             item = getattr(value, name)
             if _is_aggregate(item):
@@ -247,6 +256,11 @@ def _fill(target: Any, value: Any) -> None:
             _fill(target[index], item)
         else:
             target[index] = item
+
+
+def _in_image(kind: type) -> bool:
+    """An array of a memory image (padt_memory.c's `Elements`)."""
+    return kind.__module__ == VIEWS_MODULE and kind.__name__ == "Elements"
 
 
 def _is_aggregate(value: Any) -> bool:

@@ -447,6 +447,26 @@ def test_a_reference_made_at_run_time_keeps_to_variables_of_generated_objects() 
         made.root = names["_idiv"]
 
 
+def test_a_whole_store_writes_into_variables_of_generated_objects_only() -> None:
+    """`_fill` (an array or structure written whole, in place) takes a structure of a
+    generated class, a list or an image's array, never the runtime's objects: not `_SYS`
+    (whose read-only members the checked stores never write), nor a dict the code names."""
+    code = compile_unit(_printed(replace(block(), slots=block().slots[:2])), "<PROGRAM M>")
+    names = namespace(SystemView())
+    exec(code, names)
+    fill, first, second = names["_fill"], names["POU_M"](), names["POU_M"]()
+    second.n = 7
+    fill(first, second)
+    assert first.n == 7
+    numbers = [1, 2]
+    fill(numbers, [3, 4])
+    assert numbers == [3, 4]
+    with pytest.raises(ProgramFault, match="a whole store into a SystemView"):
+        fill(names["_SYS"], second)
+    with pytest.raises(ProgramFault, match="a whole store into a dict"):
+        fill(names["_reference_roots"], [1, 2])
+
+
 # ---- the names an artifact gives its units, which the runtime and the native tier use
 
 
