@@ -275,8 +275,8 @@ class _ImageBody(_Body):
                 if not value.copied:  # a call binding the in-out to a variable of the image
                     self.line(f"*(uint32_t *){at} = (uint32_t)({value.c} - padt_ctx->base);")
                     return
-                # a copy given to the in-out (`fb.pt := x`): into its own storage, bound
-                # there, as the slot tier binds it to the copy's object
+                # a copy given to a block's in-out of a block (`fb.m := other`): into its
+                # own storage, bound there, as the slot tier binds it to the copy's object
                 own = f"({at} + {shape.own(self.module.layouts.__getitem__)})"
                 self.write(own, target, declared, value, what)
                 self.line(f"*(uint32_t *){at} = (uint32_t)({own} - padt_ctx->base);")
@@ -472,12 +472,12 @@ class _ImageBody(_Body):
             self.line(f"padt_step_enter({self.sfc_instance(call.args[0], SFC_STEP)});")
             return
         if callee == FILL.name and len(call.args) == 2:
-            # `_fill(in_out, v)`: v's bytes into the variable the in-out is bound to
+            # `_fill(x, v)`: v's bytes into x's (where a block's in-out is bound, there)
             target, value = self.expr(call.args[0]), self.expr(call.args[1])
             shape = Nested(target.kind.cls) if isinstance(target.kind, Instance) else target.shape
             if shape is None:
                 _refuse(f"{FILL.name} of a {_kind_name(target.kind)}")
-            self.write(target.c, shape, target.kind, value, "an in-out written whole")
+            self.write(target.c, shape, target.kind, value, "an array or structure written whole")
             return
         super().helper_statement(callee, call)
 

@@ -111,19 +111,25 @@ def test_functions_of_numbers_run_as_c_with_the_python_values(
     assert "division by zero in POU Ratio (prog.st:41)" in pair.fault_of_the_next_cycle()
 
 
-@pytest.mark.parametrize("memory", ["image", "slots"])
-def test_c_calls_the_functions_c_not_their_python(native_tier: NativeTier, memory: str) -> None:
-    """The call goes to the FUNCTION's C: with its Python replaced by one that fails,
-    the native resource runs on with the Python tier's values."""
-    pair = in_memory(FUNCTIONS, native_tier, memory, "b : DINT := 4;")
+def python_broken(pair: Pair, functions: tuple[str, ...]) -> None:
+    """The Python of each FUNCTION named replaced, on the native tier, by one that fails:
+    a call that reaches it (not its C) faults the program, and the tiers differ."""
     namespace: dict[str, Any] = pair.native.variables.code.namespace  # type: ignore[union-attr]
 
     def broken(**_: object) -> None:
         raise AssertionError("the Python of a FUNCTION whose C is in place")
 
-    for name in ("FN_LERP", "FN_SMOOTH", "FN_WRAP", "FN_COUNT", "FN_LATER", "FN_SHOUT"):
-        assert name in namespace
-        namespace[name] = broken
+    for name in functions:
+        assert f"FN_{name.upper()}" in namespace
+        namespace[f"FN_{name.upper()}"] = broken
+
+
+@pytest.mark.parametrize("memory", ["image", "slots"])
+def test_c_calls_the_functions_c_not_their_python(native_tier: NativeTier, memory: str) -> None:
+    """The call goes to the FUNCTION's C: with its Python replaced by one that fails,
+    the native resource runs on with the Python tier's values."""
+    pair = in_memory(FUNCTIONS, native_tier, memory, "b : DINT := 4;")
+    python_broken(pair, ("Lerp", "Smooth", "Wrap", "Count", "Later", "Shout"))
     pair.cycle_and_compare(3)
 
 
@@ -240,16 +246,24 @@ def test_an_input_left_out_takes_its_initial_value_at_every_call_on_both_tiers(
     assert (values["Main.r"], values["Main.q"]) == (2.5, 1.0)
 
 
-TEXTS_AND_STRUCTURES = """
+# the length of a vector, which both programs of vectors below have
+V_LEN = """
+FUNCTION VLen : REAL
+VAR_INPUT a : Vec; END_VAR
+VLen := SQRT(a.x * a.x + a.y * a.y + a.z * a.z);
+END_FUNCTION
+"""
+
+TEXTS_AND_STRUCTURES = (
+    """
 TYPE Vec : STRUCT x, y, z : REAL; END_STRUCT; END_TYPE
 FUNCTION VAdd : Vec
 VAR_INPUT a, b : Vec; END_VAR
 VAdd.x := a.x + b.x; VAdd.y := a.y + b.y; VAdd.z := a.z + b.z;
 END_FUNCTION
-FUNCTION VLen : REAL
-VAR_INPUT a : Vec; END_VAR
-VLen := SQRT(a.x * a.x + a.y * a.y + a.z * a.z);
-END_FUNCTION
+"""
+    + V_LEN
+    + """
 FUNCTION VScale : Vec
 VAR_INPUT a : Vec; m : REAL := 2.0; END_VAR
 VAR len : REAL; END_VAR
@@ -315,6 +329,7 @@ sorted := Sort(arr);
 arr[3] := arr[3] - 7;
 END_PROGRAM
 """
+)
 
 
 @pytest.mark.parametrize("memory", ["image", "slots"])
@@ -342,13 +357,7 @@ def test_functions_of_texts_structures_and_arrays_run_as_c_on_slots(
     else:
         assert pair.report.bodies == tuple(sorted((*functions, "Main"))), pair.report.left
         in_c = functions
-    namespace: dict[str, Any] = pair.native.variables.code.namespace  # type: ignore[union-attr]
-
-    def broken(**_: object) -> None:
-        raise AssertionError("the Python of a FUNCTION whose C is in place")
-
-    for name in in_c:
-        namespace[f"FN_{name.upper()}"] = broken
+    python_broken(pair, in_c)
     pair.cycle_and_compare(4)
     values = pair.native.variables.values()
     assert values["Main.p.x"] == 1.0 and values["Main.b"] == 101.0
@@ -357,17 +366,17 @@ def test_functions_of_texts_structures_and_arrays_run_as_c_on_slots(
     assert (values["Main.t"], values["Main.arr"]) == (2.5, [-2, -4, -5])
 
 
-STRUCTURES = """
+STRUCTURES = (
+    """
 TYPE Vec : STRUCT x, y, z : REAL; tag : STRING[8] := 'v'; n : INT := 7; END_STRUCT; END_TYPE
 FUNCTION VAdd : Vec
 VAR_INPUT a, b : Vec; END_VAR
 VAdd.x := a.x + b.x; VAdd.y := a.y + b.y; VAdd.z := a.z + b.z;
 VAdd.n := a.n + b.n;
 END_FUNCTION
-FUNCTION VLen : REAL
-VAR_INPUT a : Vec; END_VAR
-VLen := SQRT(a.x * a.x + a.y * a.y + a.z * a.z);
-END_FUNCTION
+"""
+    + V_LEN
+    + """
 FUNCTION VScale : Vec
 VAR_INPUT a : Vec; k : REAL; END_VAR
 VAR t : Vec; END_VAR
@@ -404,6 +413,7 @@ fresh := VScale(fresh, 2.0);
 more := Split(p, left => l, right => rr, count := c);
 END_PROGRAM
 """
+)
 
 
 @pytest.mark.parametrize("memory", ["image", "slots"])
@@ -418,13 +428,7 @@ def test_functions_of_structures_are_c_in_native_memory_too(
     pair = in_memory(STRUCTURES, native_tier, memory, "more : BOOL;")
     functions = ("Split", "VAdd", "VLen", "VNorm", "VScale")
     assert pair.report.bodies == ("Main", *functions), pair.report.left
-    namespace: dict[str, Any] = pair.native.variables.code.namespace  # type: ignore[union-attr]
-
-    def broken(**_: object) -> None:
-        raise AssertionError("the Python of a FUNCTION whose C is in place")
-
-    for name in functions:
-        namespace[f"FN_{name.upper()}"] = broken
+    python_broken(pair, functions)
     pair.cycle_and_compare(4)
     values = pair.native.variables.values()
     assert (values["Main.p.x"], values["Main.q.x"], values["Main.q.n"]) == (3.0, 7.0, 35)

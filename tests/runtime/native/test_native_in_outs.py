@@ -50,7 +50,7 @@ VAR_OUTPUT seen : INT; END_VAR
 m(on := TRUE);
 seen := m.speed;
 END_FUNCTION_BLOCK
-FUNCTION_BLOCK Median  (* OSCAT's way: an inner block's in-out given a copy, read back *)
+FUNCTION_BLOCK Median  (* OSCAT's way: into an inner block's own in-out, read back *)
 VAR_IN_OUT pt : ARRAY[0..3] OF INT; END_VAR
 VAR inner : Sum; spare : Pt; END_VAR
 inner.data := pt;
