@@ -76,7 +76,10 @@ class Reference(str):
         for step in self.steps[:-1]:
             target = target[step] if isinstance(step, int) else getattr(target, step)
         last = self.steps[-1]
-        if isinstance(last, int):
+        held = target[last] if isinstance(last, int) else getattr(target, last)
+        if _is_aggregate(held) and _is_aggregate(value):
+            _fill(held, value)  # in place, as a whole store is: an in-out may hold it
+        elif isinstance(last, int):
             target[last] = value
         else:
             setattr(target, last, value)

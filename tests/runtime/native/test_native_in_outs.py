@@ -18,7 +18,7 @@ from runtime.image_switch import enter_image, leave_image
 from runtime.restart import take_context, warm_start
 from tests.runtime.native.test_image_switch import planned, twins
 from tests.runtime.native.test_native_functions import in_memory
-from tests.support.native_runs import compiled
+from tests.support.native_runs import compiled, side_by_side
 
 IN_OUTS = """\
 TYPE Pt : STRUCT x : INT; y : REAL; END_STRUCT; END_TYPE
@@ -214,6 +214,20 @@ def test_a_variable_written_whole_stays_the_one_an_in_out_holds(
     in-out bound to arr sees them. (The Python tier gave arr a new list, and the in-out
     kept the old one; native memory wrote the bytes in place: the tiers differed.)"""
     pair = in_memory(REBOUND, native_tier, memory, "a, b, n : INT;")
+    pair.cycle_and_compare(4)
+    values = pair.native.variables.values()
+    assert (values["Main.a"], values["Main.b"], values["Main.f.data"]) == (3, 4, [4, 0, 0, 0])
+
+
+def test_a_variable_written_whole_through_a_reference_stays_the_one_an_in_out_holds(
+    native_tier: NativeTier,
+) -> None:
+    """`r^ := zeros` writes zeros' values into what r refers to, in place as `arr := zeros`
+    does (a reference keeps the configuration on slots: both tiers call the runtime's
+    `_deref_set`). It gave the place a new list, which the in-out did not hold."""
+    text = REBOUND.replace("a, b, n : INT;", "a, b, n : INT; r : REF_TO ARRAY[0..3] OF INT;")
+    text = text.replace("f(data := arr); END_IF;", "f(data := arr); r := REF(arr); END_IF;")
+    pair = side_by_side(text.replace("arr := zeros;", "r^ := zeros;"), native_tier)
     pair.cycle_and_compare(4)
     values = pair.native.variables.values()
     assert (values["Main.a"], values["Main.b"], values["Main.f.data"]) == (3, 4, [4, 0, 0, 0])
