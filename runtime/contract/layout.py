@@ -438,7 +438,7 @@ def size_and_align(shape: Shape, layout_of: Callable[[str], Layout]) -> tuple[in
         case Bound(target=target):  # as C lays out `struct { uint32_t at; T own; }`
             size, align = size_and_align(target, layout_of)
             align = max(4, align)
-            return _round_up(_round_up(4, align) + size, align), align
+            return _round_up(shape.own(layout_of) + size, align), align
         case Handle():
             return 8, 4
         case Slice(dims=dims):

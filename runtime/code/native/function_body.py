@@ -1,13 +1,16 @@
-"""A FUNCTION's own body as C, in image mode (issue 34, step 6: docs/native-code.md,
-"FUNCTION bodies as C").
+"""A FUNCTION's (or a method's) own body as C, on slots and in image mode (issue 34, step
+6: docs/native-code.md, "FUNCTION bodies as C").
 
-A FUNCTION whose inputs, in-outs, result and outputs are all numbers or BOOLs
-(`FunctionInfo.native`) gets a C function of its body,
+A FUNCTION whose inputs, in-outs, result and outputs are all numbers, BOOLs, texts,
+structures or arrays of fixed bounds (`FunctionInfo.native`; in image mode not arrays,
+`in_image`) gets a C function of its body,
 
     int F(padt_mctx *ctx, <its parameters as C values>, <a pointer per result and output>)
 
-which its module puts into the image's registry by the FUNCTION's name and C signature
-(`kinds.native_key`). A call site of image-mode C finds it once and calls it directly
+where a text, and on slots a structure or an array, is a Python object, and in image mode
+a structure the address of its bytes. Its module puts it into the registry by the
+FUNCTION's name and C signature (`kinds.native_key`). A call site of C finds it once and
+calls it directly
 (translate.py, `direct_function_call`): no boxing, no tuple, no Python frame. Python code
 (the Python tier, a body left to Python, a debugged resource) still calls the FUNCTION's
 Python, which stays the reference: both are made from the same typed form.

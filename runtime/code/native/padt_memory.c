@@ -137,19 +137,20 @@ typedef struct moving moving;
 static int pack_members(PyObject *members, PyObject *image, Py_ssize_t offset, PyObject *source,
                         moving *mv);
 
-/* A whole structure or instance from an object of the class the view class stands for (of
- * the same name: a structure a FUNCTION's Python made), packed as the tier switch packs a
- * slot object, into a copy first, so that a member refused leaves the bytes as they were. */
-static int write_members(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObject *value) {
-    PyTypeObject *view_type = (PyTypeObject *)f->view_type;
-    if (PyObject_TypeCheck(value, &ViewType) ||
-        strcmp(Py_TYPE(value)->tp_name, view_type->tp_name) != 0)
-        return padt_refuse(view_type->tp_name, value);
-    PyObject *members = members_of(f->view_type);
+/* A whole structure or instance, of `size` bytes at `offset`, from an object of the class
+ * `view_type` stands for (of the same name: a structure a FUNCTION's Python made), packed as
+ * the tier switch packs a slot object, into a copy first, so that a member refused leaves
+ * the bytes as they were. */
+static int write_members(PyObject *view_type, Py_ssize_t size, PyObject *image,
+                         Py_ssize_t offset, PyObject *value) {
+    const char *name = ((PyTypeObject *)view_type)->tp_name;
+    if (PyObject_TypeCheck(value, &ViewType) || strcmp(Py_TYPE(value)->tp_name, name) != 0)
+        return padt_refuse(name, value);
+    PyObject *members = members_of(view_type);
     if (members == NULL) return -1;
-    PyObject *scratch = PyByteArray_FromStringAndSize(at(image, offset), f->size);
+    PyObject *scratch = PyByteArray_FromStringAndSize(at(image, offset), size);
     int failed = scratch == NULL || pack_members(members, scratch, 0, value, NULL) < 0;
-    if (!failed) memcpy(at(image, offset), PyByteArray_AS_STRING(scratch), f->size);
+    if (!failed) memcpy(at(image, offset), PyByteArray_AS_STRING(scratch), size);
     Py_XDECREF(scratch);
     Py_DECREF(members);
     return failed ? -1 : 0;
@@ -191,7 +192,7 @@ static int write_field(FieldObject *f, PyObject *image, Py_ssize_t offset, PyObj
         /* a whole structure or instance: from a view of the same class (a copy), or from
            an object of its class */
         if (Py_TYPE(value) != (PyTypeObject *)f->view_type)
-            return write_members(f, image, offset, value);
+            return write_members(f->view_type, f->size, image, offset, value);
         memmove(p, at(((ViewObject *)value)->image, ((ViewObject *)value)->offset), f->size);
         return 0;
     case K_ARRAY: {
@@ -362,6 +363,21 @@ static PyObject *view_deepcopy(PyObject *self, PyObject *memo) {
     return detached;
 }
 
+/* `__padt_pack__(object)`: an object of the view's class (of the same name, a slot object)
+ * into the view's bytes, as a store of a whole structure takes it (write_members): what a
+ * FUNCTION's C in native memory makes of a structure its Python gave (padt_native.h). */
+static PyObject *view_pack(PyObject *self, PyObject *value) {
+    PyObject *size = PyObject_GetAttrString((PyObject *)Py_TYPE(self), "__size__");
+    if (size == NULL) return NULL;
+    Py_ssize_t bytes = PyLong_AsSsize_t(size);
+    Py_DECREF(size);
+    if (bytes == -1 && PyErr_Occurred()) return NULL;
+    ViewObject *view = (ViewObject *)self;
+    if (write_members((PyObject *)Py_TYPE(self), bytes, view->image, view->offset, value) < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
 static PyObject *view_where(PyObject *self, PyObject *unused) {
     ViewObject *view = (ViewObject *)self;
     return Py_BuildValue("(On)", view->image, view->offset);
@@ -392,6 +408,7 @@ static PyObject *view_copy(PyObject *self, PyObject *args) {
 static PyMethodDef view_methods[] = {
     {"__deepcopy__", view_deepcopy, METH_O, "A copy detached from the image."},
     {"__padt_where__", view_where, METH_NOARGS, "(image, offset)"},
+    {"__padt_pack__", view_pack, METH_O, "(object): a slot object of its class into its bytes."},
     {"__padt_copy__", view_copy, METH_VARARGS, "(target, names): members copied by value."},
     {NULL, NULL, 0, NULL},
 };
@@ -578,11 +595,6 @@ static PyObject *place_key(FieldObject *f, Py_ssize_t offset) {
 }
 
 static int remember(moving *mv, PyObject *key, PyObject *value) {
-    if (mv->seen == NULL) { /* (made for nothing: the caller's arguments are new) */
-        Py_XDECREF(key);
-        Py_XDECREF(value);
-        return 0;
-    }
     if (key == NULL || value == NULL) {
         Py_XDECREF(key);
         Py_XDECREF(value);
@@ -828,13 +840,13 @@ static PyObject *unpack(PyObject *module, PyObject *args) { return move(args, 0)
 
 static PyMethodDef module_methods[] = {
     {"pack", pack, METH_VARARGS,
-     "pack([(view, object)], in_outs=True): every value of slot objects (their instances and arrays too) "
-     "into the views' bytes, each checked as a store is; an in-out bound where the object it "
-     "holds went."},
+     "pack([(view, object)], in_outs=True): every value of slot objects (their instances and "
+     "arrays too) into the views' bytes, each checked as a store is; an in-out bound where "
+     "the object it holds went."},
     {"unpack", unpack, METH_VARARGS,
-     "unpack([(view, object)], in_outs=True): every value of the views into slot objects of their classes "
-     "and the instances and arrays they hold; an in-out given the object unpacked where it "
-     "is bound."},
+     "unpack([(view, object)], in_outs=True): every value of the views into slot objects of "
+     "their classes and the instances and arrays they hold; an in-out given the object "
+     "unpacked where it is bound."},
     {NULL, NULL, 0, NULL},
 };
 

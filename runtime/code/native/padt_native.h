@@ -1177,38 +1177,26 @@ padt_instance_object(padt_mctx *ctx, PyObject *view_class, char *at, Py_ssize_t 
 }
 
 /* A structure Python code gave (a view of its class, or an object of the generated class
- * of the same name) into the `size` bytes at `at`: member by member through a view of a
- * scratch copy, whose fields check every value as a store does (padt_memory.c), then
- * copied whole, so that a value refused leaves the bytes as they were. */
+ * of the same name) into the `size` bytes at `at`: through a view of a scratch copy, as a
+ * store of a whole structure takes it (padt_memory's `__padt_pack__`: every member checked),
+ * then copied whole, so that a value refused leaves the bytes as they were. */
 static int
 padt_instance_into(PyObject *view_class, char *at, Py_ssize_t size, PyObject *value)
 {
-    PyTypeObject *type = (PyTypeObject *)view_class;
-    if (Py_TYPE(value) == type) {
+    if (Py_TYPE(value) == (PyTypeObject *)view_class) {
         padt_view *v = (padt_view *)value;
         memmove(at, PyByteArray_AS_STRING(v->image) + v->offset, size);
         return 0;
     }
-    if (strcmp(Py_TYPE(value)->tp_name, type->tp_name) != 0)
-        return padt_refuse(type->tp_name, value);
     PyObject *scratch = PyByteArray_FromStringAndSize(at, size);
     PyObject *view = scratch == NULL ? NULL : padt_view_new(view_class, scratch, 0);
-    PyObject *names = view == NULL ? NULL : PyObject_GetAttrString(view_class, "__slots__");
-    PyObject *seq = names == NULL ? NULL : PySequence_Fast(names, "__slots__ is no sequence");
-    int failed = seq == NULL;
-    for (Py_ssize_t i = 0; !failed && i < PySequence_Fast_GET_SIZE(seq); i++) {
-        PyObject *name = PySequence_Fast_GET_ITEM(seq, i);
-        PyObject *member = PyObject_GetAttr(value, name);
-        failed = member == NULL || PyObject_SetAttr(view, name, member) < 0;
-        Py_XDECREF(member);
-    }
-    if (!failed)
+    PyObject *done = view == NULL ? NULL : PyObject_CallMethod(view, "__padt_pack__", "O", value);
+    if (done != NULL)
         memcpy(at, PyByteArray_AS_STRING(scratch), size);
-    Py_XDECREF(seq);
-    Py_XDECREF(names);
+    Py_XDECREF(done);
     Py_XDECREF(view);
     Py_XDECREF(scratch);
-    return failed ? -1 : 0;
+    return done == NULL ? -1 : 0;
 }
 
 /* The bytes of a structure made afresh (`STRUCT_X()`: its members' initial values), made

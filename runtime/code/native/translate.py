@@ -133,7 +133,7 @@ _HELPER_RESULTS: dict[str, Kind] = {
     "_step_time": FULL64,
 }
 # functions of the runtime's called as a statement, their result (None) dropped: an SFC step
-# becoming active, an array or structure written whole into what a block's in-out refers to
+# becoming active, an array or structure written whole into a variable, in place (`_fill`)
 _HELPER_STATEMENTS = frozenset({"_step_enter", FILL.name})
 # ULINT and LWORD, which C holds in a padt_i128
 UNSIGNED64 = Int(0, (1 << 64) - 1)
@@ -1358,9 +1358,9 @@ class _Body:
 
     def direct_call(self, node: Call) -> V | None:
         """A call of a FUNCTION, or of a method of an instance, whose body may be C: every
-        parameter, its result and its outputs numbers, BOOLs or texts, or on slots a
-        FUNCTION's structures and arrays too (`FunctionInfo.native`); None (and nothing
-        emitted) for any other call."""
+        parameter, its result and its outputs numbers, BOOLs or texts, or a FUNCTION's
+        structures too, and on slots its arrays (`FunctionInfo.native`, `in_image`); None
+        (and nothing emitted) for any other call."""
         callee = node.callee
         if isinstance(callee, str):
             info = self.module.functions.get(callee)
@@ -1394,12 +1394,13 @@ class _Body:
 
     def direct_function_call(self, node: Call, info: FunctionInfo, owner: V | None) -> V:
         """A call of a FUNCTION (or of a method of `owner`) of numbers, BOOLs and texts (or,
-        a FUNCTION's on slots, structures and arrays): its C body where it has one (found
+        a FUNCTION's, structures, and on slots arrays): its C body where it has one (found
         once per call site in the binding's table of FUNCTIONs), where every argument is of
         its parameter's kind and the instance one it may run on (`runs_on`), else its
         Python, with the values boxed; either way its result and outputs as C values
-        (`Results` where Python has a tuple), a text, structure or array as an object a
-        temporary owns."""
+        (`Results` where Python has a tuple): a text, and on slots a structure or array, as
+        an object a temporary owns; in native memory a structure as bytes of the frame
+        (`out_temp`)."""
         name = _callee_text(node)
         if len(node.args) > len(info.params):
             _refuse(f"a call of {name} with more arguments than it takes")
